@@ -1,0 +1,47 @@
+"""uvms: model-driven kinematics of underwater vehicle-manipulator systems, backed by Pinocchio.
+
+Vehicles and arms are data (xacro/URDF with a floating or planar root joint);
+Pinocchio computes every pose, Jacobian and momentum map.
+
+>>> import uvms
+>>> robot = uvms.load("hoang2011")                     # a shipped model, or any .urdf/.xacro path
+>>> q = robot.configuration(base=[0.0, 0.0, 0.0], arm=[1.0, 0.5, 0.2])
+>>> robot.fk(q).translation.round(3)
+array([ 1.254, -1.269,  0.   ])
+"""
+
+from .compose import mount_arm
+from .errors import (
+    BaseMismatchError,
+    ConfigurationError,
+    FrameNotFound,
+    JointNotFound,
+    ModelCheckError,
+    ModelFileNotFound,
+    ModelParseError,
+    UVMSError,
+    XacroError,
+)
+from .model import MissingMeshWarning, load
+from .resources import example_robot_urdf, shipped_models
+from .robot import Robot
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "BaseMismatchError",
+    "ConfigurationError",
+    "FrameNotFound",
+    "JointNotFound",
+    "MissingMeshWarning",
+    "ModelCheckError",
+    "ModelFileNotFound",
+    "ModelParseError",
+    "Robot",
+    "UVMSError",
+    "XacroError",
+    "example_robot_urdf",
+    "load",
+    "mount_arm",
+    "shipped_models",
+]

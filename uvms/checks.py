@@ -1,0 +1,233 @@
+"""Checks of a URDF document before Pinocchio sees it.
+
+Pinocchio accepts many inputs that give silently wrong kinematics or dynamics
+(a non-unit axis, a NaN in an origin, a planar joint whose axis it ignores, a
+negative mass). Each check here raises :class:`uvms.ModelCheckError` naming the
+element and saying what is valid.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import ModelCheckError, ModelParseError
+
+#: Attributes holding numbers in URDF, and how many each holds (None: any count).
+NUMERIC_ATTRIBUTES: dict[str, int | None] = {
+    "xyz": 3, "rpy": 3, "value": 1,
+    "ixx": 1, "ixy": 1, "ixz": 1, "iyy": 1, "iyz": 1, "izz": 1,
+    "lower": 1, "upper": 1, "effort": 1, "velocity": 1,
+    "damping": 1, "friction": 1, "radius": 1, "length": 1, "size": 3, "scale": 3,
+    "multiplier": 1, "offset": 1,
+}
+
+#: Relative tolerance on the norm of a joint axis.
+AXIS_NORM_TOLERANCE = 1e-6
+
+BASE_JOINT_TYPES = ("floating", "planar")
+
+
+@dataclass(frozen=True)
+class TreeSummary:
+    """The root of a URDF tree and the joint that carries the vehicle, if any."""
+
+    root_link: str
+    base_type: str  # "floating", "planar" or "fixed"
+    base_joint: str | None
+
+
+def parse_urdf(xml: str, origin: str) -> ET.Element:
+    """Parse URDF text into an element tree whose root is ``<robot>``.
+
+    Raises:
+        ModelParseError: not well-formed XML, or the root element is not ``<robot>``.
+    """
+    try:
+        root = ET.fromstring(xml)
+    except ET.ParseError as exc:
+        raise ModelParseError(f"{origin}: malformed XML ({exc})") from None
+    if root.tag != "robot":
+        raise ModelParseError(f"{origin}: the root element is <{root.tag}>, a URDF needs <robot>")
+    return root
+
+
+def parse_numbers(element: ET.Element, attribute: str, origin: str) -> np.ndarray:
+    """The finite numbers of one attribute.
+
+    Raises:
+        ModelCheckError: not numbers, the wrong count, NaN or infinite.
+    """
+    text = element.get(attribute, "")
+    where = f"{origin}: <{element.tag} {attribute}={text!r}>{describe_owner(element)}"
+    try:
+        values = np.array([float(token) for token in text.split()], dtype=float)
+    except ValueError:
+        raise ModelCheckError(f"{where} is not a list of numbers") from None
+    expected = NUMERIC_ATTRIBUTES.get(attribute)
+    if expected is not None and values.size != expected:
+        raise ModelCheckError(f"{where} holds {values.size} numbers, expected {expected}")
+    if not np.all(np.isfinite(values)):
+        raise ModelCheckError(f"{where} is not finite; every number of a model must be finite")
+    return values
+
+
+def describe_owner(element: ET.Element) -> str:
+    """A ' in link/joint NAME' suffix, filled in by :func:`check_urdf` through a parent map."""
+    owner = element.get("_owner")
+    return f" in {owner}" if owner else ""
+
+
+def tag_owners(robot: ET.Element) -> None:
+    """Annotate every element with the link or joint it belongs to, for error messages."""
+    for top in robot:
+        if top.tag in ("link", "joint"):
+            label = f"{top.tag} {top.get('name')!r}"
+            for element in top.iter():
+                element.set("_owner", label)
+
+
+def check_numbers(robot: ET.Element, origin: str) -> None:
+    """Every numeric attribute of the document is a finite number of the right count."""
+    for element in robot.iter():
+        if element.tag in ("robot", "material", "color", "texture"):
+            continue
+        for attribute in NUMERIC_ATTRIBUTES:
+            if attribute in element.attrib and not (element.tag == "mesh" and attribute == "size"):
+                parse_numbers(element, attribute, origin)
+
+
+def check_joint_axes(robot: ET.Element, origin: str) -> None:
+    """Joint axes are unit vectors; a planar joint's axis (its plane normal) is z.
+
+    Pinocchio normalizes nothing and ignores the axis of a planar joint, so a
+    wrong axis would give wrong kinematics without a word.
+    """
+    for joint in robot.findall("joint"):
+        axis = joint.find("axis")
+        if axis is None or joint.get("type") in ("fixed", "floating"):
+            continue
+        values = parse_numbers(axis, "xyz", origin)
+        norm = float(np.linalg.norm(values))
+        name = joint.get("name")
+        if norm == 0.0:
+            raise ModelCheckError(f"{origin}: joint {name!r} has a zero axis; give a unit vector such as '0 0 1'")
+        if abs(norm - 1.0) > AXIS_NORM_TOLERANCE:
+            raise ModelCheckError(
+                f"{origin}: joint {name!r} axis {axis.get('xyz')!r} has norm {norm:.6g}; "
+                f"joint axes must be unit vectors (normalize it)"
+            )
+        if joint.get("type") == "planar" and not np.allclose(values, [0.0, 0.0, 1.0], atol=1e-9):
+            raise ModelCheckError(
+                f"{origin}: planar joint {name!r} has axis {axis.get('xyz')!r}; only the x-y plane "
+                f"(axis '0 0 1') is supported — rotate the joint origin instead"
+            )
+
+
+def check_inertias(robot: ET.Element, origin: str) -> None:
+    """Masses are positive and inertia matrices positive definite.
+
+    An ``<inertial>`` with zero mass and an all-zero inertia is the common URDF
+    idiom for a massless link and is accepted as such.
+    """
+    for link in robot.findall("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        name = link.get("name")
+        mass_element = inertial.find("mass")
+        inertia_element = inertial.find("inertia")
+        if mass_element is None or inertia_element is None:
+            raise ModelCheckError(f"{origin}: link {name!r} has an <inertial> without <mass> and <inertia>")
+        mass = float(parse_numbers(mass_element, "value", origin)[0])
+        inertia = inertia_matrix(inertia_element, origin)
+        if mass == 0.0 and not inertia.any():
+            continue  # massless link
+        if mass <= 0.0:
+            raise ModelCheckError(f"{origin}: link {name!r} has mass {mass:g} kg; a mass must be positive")
+        smallest = float(np.linalg.eigvalsh(inertia)[0])
+        if smallest <= 0.0:
+            raise ModelCheckError(
+                f"{origin}: link {name!r} inertia is not positive definite (smallest eigenvalue "
+                f"{smallest:.3g} kg m^2); principal moments must be positive"
+            )
+
+
+def inertia_matrix(element: ET.Element, origin: str) -> np.ndarray:
+    """The symmetric 3x3 inertia matrix [kg m^2] of an ``<inertia>`` element."""
+    get = {key: float(parse_numbers(element, key, origin)[0]) if key in element.attrib else 0.0
+           for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+    return np.array([
+        [get["ixx"], get["ixy"], get["ixz"]],
+        [get["ixy"], get["iyy"], get["iyz"]],
+        [get["ixz"], get["iyz"], get["izz"]],
+    ])
+
+
+def summarize_tree(robot: ET.Element, origin: str) -> TreeSummary:
+    """Find the root link and whether a floating/planar joint carries the vehicle.
+
+    Raises:
+        ModelCheckError: no links, two roots, a link with two parents, an unknown
+            link in a joint, or a floating/planar joint that is not the only
+            joint at the root.
+    """
+    links = [link.get("name") for link in robot.findall("link")]
+    if not links:
+        raise ModelCheckError(f"{origin}: the model has no <link>")
+    parents: dict[str, str] = {}
+    children_of: dict[str, list[ET.Element]] = {name: [] for name in links}
+    for joint in robot.findall("joint"):
+        name = joint.get("name")
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is None or child is None:
+            raise ModelCheckError(f"{origin}: joint {name!r} needs a <parent link=...> and a <child link=...>")
+        parent_link, child_link = parent.get("link"), child.get("link")
+        for link in (parent_link, child_link):
+            if link not in children_of:
+                raise ModelCheckError(f"{origin}: joint {name!r} names link {link!r}, which is not defined")
+        if child_link in parents:
+            raise ModelCheckError(
+                f"{origin}: link {child_link!r} is the child of two joints ({parents[child_link]!r} and "
+                f"{name!r}); a URDF must be a tree"
+            )
+        parents[child_link] = name
+        children_of[parent_link].append(joint)
+    roots = [name for name in links if name not in parents]
+    if len(roots) != 1:
+        what = "no root (the joints form a cycle)" if not roots else f"{len(roots)} roots ({', '.join(roots)})"
+        raise ModelCheckError(f"{origin}: the link tree has {what}; a URDF must have exactly one root link")
+    root = roots[0]
+    for joint in robot.findall("joint"):
+        kind = joint.get("type")
+        if kind in BASE_JOINT_TYPES and joint.find("parent").get("link") != root:
+            raise ModelCheckError(
+                f"{origin}: {kind} joint {joint.get('name')!r} is not at the root link {root!r}; "
+                f"floating and planar joints can only carry the vehicle"
+            )
+    base_joints = [j for j in children_of[root] if j.get("type") in BASE_JOINT_TYPES]
+    if not base_joints:
+        return TreeSummary(root_link=root, base_type="fixed", base_joint=None)
+    if len(children_of[root]) > 1:
+        raise ModelCheckError(
+            f"{origin}: the root link {root!r} has a {base_joints[0].get('type')} joint and other joints; "
+            f"the vehicle joint must be the only joint at the root"
+        )
+    return TreeSummary(root_link=root, base_type=base_joints[0].get("type"), base_joint=base_joints[0].get("name"))
+
+
+def check_urdf(robot: ET.Element, origin: str) -> TreeSummary:
+    """Run every check on a parsed URDF and summarize its tree.
+
+    Args:
+        robot: the ``<robot>`` element (annotated in place for messages).
+        origin: file name or ``"<string>"``, quoted in messages.
+    """
+    tag_owners(robot)
+    check_numbers(robot, origin)
+    check_joint_axes(robot, origin)
+    check_inertias(robot, origin)
+    return summarize_tree(robot, origin)
+

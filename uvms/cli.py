@@ -1,0 +1,115 @@
+"""The ``uvms`` command line. Every error prints one line on stderr and exits with 2."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import UVMSError
+from .model import load
+from .robot import Robot
+
+EXIT_USAGE = 2
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line (no usage dump) and exits 2."""
+
+    def error(self, message: str) -> None:  # noqa: D102 - argparse API
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def parse_assignments(items: Sequence[str] | None) -> dict[str, str]:
+    """``["NAME=VALUE", ...]`` -> {NAME: VALUE}."""
+    assignments: dict[str, str] = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise UVMSError(f"--arg expects NAME=VALUE, got {item!r}")
+        assignments[name] = value
+    return assignments
+
+
+def format_limits(lower: np.ndarray, upper: np.ndarray) -> str:
+    """Limits of a joint as '[lo, hi]' with unbounded parts shown as '-'."""
+    if lower.size != 1 or not (np.isfinite(lower[0]) and np.isfinite(upper[0])) or abs(lower[0]) > 1e30:
+        return "-"
+    return f"[{lower[0]:+.4f}, {upper[0]:+.4f}]"
+
+
+def describe(robot: Robot) -> str:
+    """The text of ``uvms info``: joints, DOF split, frames, mass, end-effector poses."""
+    lines = [
+        f"model       {robot.name}  ({robot.source})",
+        f"base        {robot.base_type}: vehicle DOF {robot.n_vehicle}, arm DOF {robot.n_arm} "
+        f"(nq {robot.nq}, nv {robot.nv})",
+        f"total mass  {robot.total_mass:.3f} kg",
+        "joints",
+        f"  {'name':<24} {'type':<22} {'nq':>2} {'nv':>2}  limits [rad or m]",
+    ]
+    for joint in robot.joints:
+        role = "vehicle" if joint.is_vehicle else "arm"
+        kind = joint.kind.removeprefix("JointModel") + f" ({role})"
+        lines.append(f"  {joint.name:<24} {kind:<22} {joint.nq:>2} {joint.nv:>2}  {format_limits(joint.lower, joint.upper)}")
+    body_frames = [f.name for f in robot.model.frames if f.type == pin.FrameType.BODY]
+    lines.append(f"frames      {', '.join(body_frames)}")
+    q = robot.neutral()
+    lines.append("end effectors at the neutral configuration (world frame, m / rad)")
+    for frame in robot.ee_frames:
+        pose = robot.fk(q, frame)
+        rpy = pin.rpy.matrixToRpy(pose.rotation)
+        lines.append(f"  {frame:<22} xyz {np.array2string(pose.translation, precision=4, suppress_small=True)}"
+                     f"  rpy {np.array2string(rpy, precision=4, suppress_small=True)}")
+    lines.append("checks      passed (unit axes, finite numbers, positive masses and inertias, one tree, base)")
+    return "\n".join(lines)
+
+
+def command_info(options: argparse.Namespace) -> int:
+    """``uvms info MODEL``: load the model (running its checks) and describe it."""
+    robot = load(options.model, base=options.base, args=parse_assignments(options.arg), ee=options.ee or None)
+    print(describe(robot))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``uvms``."""
+    parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
+    commands = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    info = commands.add_parser("info", help="describe a model and run its checks")
+    info.add_argument("model", help="a .urdf/.xacro file or a shipped model name (e.g. hoang2011)")
+    info.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    info.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    info.add_argument("--ee", action="append", metavar="FRAME", help="end-effector frame (repeatable)")
+    info.set_defaults(handler=command_info)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``uvms`` console script."""
+    options = build_parser().parse_args(argv)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            status = options.handler(options)
+        for warning in caught:
+            print(f"uvms: warning: {warning.message}", file=sys.stderr)
+        return status
+    except UVMSError as exc:
+        print(f"uvms: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return EXIT_USAGE
+    except Exception as exc:  # noqa: BLE001 - the CLI promises one line, never a traceback
+        if os.environ.get("UVMS_DEBUG"):
+            raise
+        print(f"uvms: internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
+              f"(set UVMS_DEBUG=1 for a traceback)", file=sys.stderr)
+        return EXIT_USAGE
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,64 @@
+"""The exceptions of uvms: one root, one subclass per kind of bad input.
+
+Every message says what was wrong and what would be valid, so that the CLI can
+print it as a single line and a notebook user can act on it without a traceback.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+
+class UVMSError(Exception):
+    """Root of every error raised by uvms on bad input."""
+
+
+class ModelFileNotFound(UVMSError):
+    """A model path does not exist or cannot be read."""
+
+
+class ModelParseError(UVMSError):
+    """A model is not well-formed XML / URDF."""
+
+
+class XacroError(UVMSError):
+    """xacro failed to expand a model (undefined arg or property, bad include...)."""
+
+
+class ModelCheckError(UVMSError):
+    """A URDF element has an invalid value (axis, number, mass, inertia...)."""
+
+
+class BaseMismatchError(UVMSError):
+    """The requested vehicle base contradicts the root joint written in the file."""
+
+
+class NameNotFound(UVMSError):
+    """A frame or joint name is not in the model."""
+
+    def __init__(self, kind: str, name: str, valid: Iterable[str]) -> None:
+        valid = list(valid)
+        close = difflib.get_close_matches(name, valid, n=5, cutoff=0.4)
+        hint = f"close names: {', '.join(close)}" if close else f"valid names: {', '.join(valid[:20])}"
+        super().__init__(f"unknown {kind} {name!r}; {hint}")
+        self.name = name
+        self.valid = valid
+
+
+class FrameNotFound(NameNotFound):
+    """A frame name is not in the model; the message lists the close names."""
+
+    def __init__(self, name: str, valid: Iterable[str]) -> None:
+        super().__init__("frame", name, valid)
+
+
+class JointNotFound(NameNotFound):
+    """A joint name is not in the model; the message lists the close names."""
+
+    def __init__(self, name: str, valid: Iterable[str]) -> None:
+        super().__init__("joint", name, valid)
+
+
+class ConfigurationError(UVMSError):
+    """A configuration, velocity or pose has the wrong size or non-finite entries."""

@@ -1,0 +1,97 @@
+"""Kinematics from the Pinocchio model: poses, world-aligned Jacobians, generalized Jacobian.
+
+Everything here is computed by Pinocchio from the model; no formula of a
+particular robot appears. Twists are [linear; angular] with the linear part the
+velocity of the frame origin, both in world axes (``LOCAL_WORLD_ALIGNED``),
+and Jacobian columns in the order of the velocity vector v.
+
+Generalized Jacobian (free-floating base, no external force): with the
+centroidal momentum map h = A v = A_b v_b + A_m qdot_m,
+
+    v_b = A_b^-1 (h - A_m qdot_m)
+    twist_ee = J_b v_b + J_m qdot_m = (J_m - J_b A_b^-1 A_m) qdot_m + J_b A_b^-1 h
+
+so GJM = J_m - J_b A_b^-1 A_m. A planar base keeps only the momentum rows
+it cannot exchange with the world through its joint: x, y linear and z angular.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from .conventions import AXIS_NAMES
+from .errors import UVMSError
+
+WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+#: Rows of the centroidal momentum [linear; angular] conserved by each base type.
+CONSERVED_MOMENTUM_ROWS = {"floating": [0, 1, 2, 3, 4, 5], "planar": [0, 1, 5]}
+
+
+def axis_rows(axes: Sequence[str]) -> list[int]:
+    """Row indices in a [vx, vy, vz, wx, wy, wz] twist of named task axes.
+
+    Args:
+        axes: any subset of ``("x", "y", "z", "roll", "pitch", "yaw")``.
+
+    Raises:
+        UVMSError: unknown or repeated axis names.
+    """
+    rows = []
+    for axis in axes:
+        if axis not in AXIS_NAMES:
+            raise UVMSError(f"unknown task axis {axis!r}; valid axes: {', '.join(AXIS_NAMES)}")
+        if AXIS_NAMES.index(axis) in rows:
+            raise UVMSError(f"task axis {axis!r} is given twice")
+        rows.append(AXIS_NAMES.index(axis))
+    return rows
+
+
+def frame_pose(model: pin.Model, data: pin.Data, q: np.ndarray, frame_id: int) -> pin.SE3:
+    """Pose of a frame in the world, ``transform_frame_to_world``."""
+    pin.forwardKinematics(model, data, q)
+    return pin.updateFramePlacement(model, data, frame_id).copy()
+
+
+def frame_jacobian(model: pin.Model, data: pin.Data, q: np.ndarray, frame_id: int) -> np.ndarray:
+    """World-aligned Jacobian of a frame (6, nv): twist = J v."""
+    return pin.computeFrameJacobian(model, data, q, frame_id, WORLD_ALIGNED)
+
+
+def centroidal_map_split(
+    model: pin.Model, data: pin.Data, q: np.ndarray, base_type: str, n_vehicle: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The conserved rows of the centroidal momentum map, split into base and arm columns.
+
+    Returns:
+        A_b (k, n_vehicle) and A_m (k, nv - n_vehicle), k = 6 (floating) or 3 (planar).
+    """
+    rows = CONSERVED_MOMENTUM_ROWS[base_type]
+    centroidal_map = pin.computeCentroidalMap(model, data, q)[rows]  # (k, nv)
+    return centroidal_map[:, :n_vehicle], centroidal_map[:, n_vehicle:]
+
+
+def base_velocity_from_momentum(
+    a_base: np.ndarray, a_arm: np.ndarray, arm_velocity: np.ndarray, momentum: np.ndarray | None
+) -> np.ndarray:
+    """Base velocity v_b = A_b^-1 (h - A_m qdot_m) (n_vehicle,), in the base's local axes."""
+    rhs = -a_arm @ arm_velocity
+    if momentum is not None:
+        rhs = rhs + momentum
+    return np.linalg.solve(a_base, rhs)
+
+
+def generalized_jacobian_from_parts(
+    jacobian: np.ndarray, a_base: np.ndarray, a_arm: np.ndarray, n_vehicle: int
+) -> np.ndarray:
+    """GJM = J_m - J_b A_b^-1 A_m (rows of ``jacobian``, n_arm)."""
+    return jacobian[:, n_vehicle:] - jacobian[:, :n_vehicle] @ np.linalg.solve(a_base, a_arm)
+
+
+def manipulability_of(jacobian: np.ndarray) -> float:
+    """Yoshikawa's manipulability sqrt(det(J J^T)), computed as the product of singular values."""
+    singular_values = np.linalg.svd(jacobian, compute_uv=False)
+    return float(np.prod(singular_values[: min(jacobian.shape)]))

@@ -1,0 +1,203 @@
+"""Loading a UVMS from xacro/URDF: expand, check, choose the base, build the Pinocchio model."""
+
+from __future__ import annotations
+
+import os
+import warnings
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from xml.parsers.expat import ExpatError
+
+import pinocchio as pin
+
+from . import checks, resources
+from .errors import BaseMismatchError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
+from .robot import Robot
+
+BASE_CHOICES = ("floating", "planar", "fixed")
+ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
+#: Name given to a vehicle joint that uvms adds (base="floating"/"planar" on a plain root link).
+ADDED_BASE_JOINT = "base_joint"
+
+
+class MissingMeshWarning(UserWarning):
+    """A mesh of the model cannot be found; kinematics does not need it."""
+
+
+def load(
+    source: str | os.PathLike,
+    *,
+    base: str | None = None,
+    args: Mapping[str, object] | None = None,
+    ee: str | Sequence[str] | None = None,
+    package_dirs: Sequence[str | os.PathLike] | None = None,
+) -> Robot:
+    """Load a UVMS from a ``.xacro`` or ``.urdf`` file, a shipped model name, or URDF text.
+
+    Args:
+        source: path of a ``.urdf``/``.xacro`` file, the name of a shipped model
+            (``"hoang2011"``), or a URDF string (starting with ``<``).
+        base: "floating", "planar", "fixed", or None for the root joint written
+            in the file (a ``floating``/``planar`` joint at the root link is the
+            vehicle; a plain root link is a fixed base). A base that contradicts
+            the file is an error; "floating"/"planar" on a plain root adds the joint.
+        args: xacro arguments, ``{name: value}`` (numbers or strings).
+        ee: end-effector frame name(s); default: frames named ``ee``/``*_ee``,
+            else the last leaf link.
+        package_dirs: extra folders to resolve ``package://`` mesh URIs.
+
+    Returns:
+        The Robot.
+
+    Raises:
+        UVMSError: (a subclass) missing file, malformed XML, xacro error, invalid
+            model values, base mismatch, unknown end-effector frame.
+    """
+    xml, origin, base_dir = read_model_text(source, args)
+    robot_element = checks.parse_urdf(xml, origin)
+    tree = checks.check_urdf(robot_element, origin)
+    chosen = choose_base(base, tree, origin)
+    warn_missing_meshes(robot_element, base_dir, package_dirs, origin)
+    model = build_model(xml, chosen, tree, origin)
+    return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=xml)
+
+
+def read_model_text(
+    source: str | os.PathLike, args: Mapping[str, object] | None = None
+) -> tuple[str, str, Path | None]:
+    """URDF text of a source, with xacro expanded.
+
+    Returns:
+        (URDF text, origin for messages, folder of the file or None for a string).
+    """
+    if isinstance(source, str) and source.lstrip().startswith("<"):
+        if args:
+            raise UVMSError("xacro args were given with a URDF string; args apply to .xacro files only")
+        return source, "<string>", None
+    path = resources.resolve_model_path(source)
+    origin = str(path)
+    if path.name.endswith(".xacro"):
+        return expand_xacro(path, args or {}), origin, path.parent
+    if args:
+        raise UVMSError(f"{origin}: xacro args were given but the file is not a .xacro")
+    try:
+        return path.read_text(encoding="utf-8"), origin, path.parent
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ModelFileNotFound(f"{origin}: cannot read the model file ({exc})") from None
+
+
+def expand_xacro(path: Path, args: Mapping[str, object]) -> str:
+    """Run xacro on a file with ``args`` as its mappings.
+
+    Raises:
+        XacroError: xacro failed (its message is kept).
+        ModelParseError: the file is not well-formed XML.
+    """
+    import xacro  # imported here: it is slow to import and only needed for .xacro
+
+    mappings = {str(key): format_xacro_value(value) for key, value in args.items()}
+    declared = declared_xacro_args(path)
+    unknown = sorted(set(mappings) - declared) if declared is not None else []
+    if unknown:
+        raise XacroError(
+            f"{path}: unknown xacro arg(s) {', '.join(unknown)}; this model declares: {', '.join(sorted(declared))}"
+        )
+    try:
+        document = xacro.process_file(str(path), mappings=mappings)
+    except xacro.XacroException as exc:
+        raise XacroError(f"{path}: xacro error: {' '.join(str(exc).split())}") from None
+    except ExpatError as exc:
+        raise ModelParseError(f"{path}: malformed XML ({exc})") from None
+    except (OSError, ValueError, TypeError, NameError) as exc:
+        raise XacroError(f"{path}: xacro error: {exc}") from None
+    return document.toprettyxml(indent="  ")
+
+
+def declared_xacro_args(path: Path) -> set[str] | None:
+    """Names of the ``<xacro:arg>`` declared in a file and its static includes.
+
+    Returns None when that cannot be known here (unparsable file, an include
+    whose name is computed): the arg check is then left to xacro.
+    """
+    namespace = "{http://www.ros.org/wiki/xacro}"
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError):
+        return None  # xacro reports the real problem
+    names = {element.get("name") for element in root.iter(namespace + "arg")}
+    for include in root.iter(namespace + "include"):
+        filename = include.get("filename", "")
+        if "$" in filename:
+            return None
+        included = declared_xacro_args(path.parent / filename)
+        if included is None:
+            return None
+        names |= included
+    return names
+
+
+def format_xacro_value(value: object) -> str:
+    """A xacro mapping value: numbers printed exactly (repr), booleans as xacro spells them."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float):
+        return repr(value)
+    return str(value)
+
+
+def choose_base(requested: str | None, tree: checks.TreeSummary, origin: str) -> str:
+    """The base type to build: the file's, or the requested one when compatible."""
+    if requested is None:
+        return tree.base_type
+    if requested not in BASE_CHOICES:
+        raise UVMSError(f"unknown base {requested!r}; valid: {', '.join(BASE_CHOICES)} or None (as in the file)")
+    if tree.base_type != "fixed" and requested != tree.base_type:
+        raise BaseMismatchError(
+            f"{origin}: base={requested!r} contradicts the file, whose root joint {tree.base_joint!r} is "
+            f"{tree.base_type}; use base={tree.base_type!r} or None, or edit the model"
+        )
+    return requested
+
+
+def build_model(xml: str, base: str, tree: checks.TreeSummary, origin: str) -> pin.Model:
+    """Build the Pinocchio model, adding a vehicle joint when asked for one the file lacks."""
+    try:
+        if base in ROOT_JOINTS and tree.base_type == "fixed":
+            return pin.buildModelFromXML(xml, ROOT_JOINTS[base](), ADDED_BASE_JOINT)
+        return pin.buildModelFromXML(xml)
+    except (RuntimeError, ValueError) as exc:
+        raise ModelParseError(f"{origin}: Pinocchio cannot build the model: {exc}") from None
+
+
+def warn_missing_meshes(
+    robot_element: ET.Element,
+    base_dir: Path | None,
+    package_dirs: Sequence[str | os.PathLike] | None,
+    origin: str,
+) -> dict[str, Path]:
+    """Resolve every mesh URI; warn (once per model) about the ones that cannot be found.
+
+    Returns:
+        {URI: resolved file} for the meshes found.
+    """
+    roots = resources.package_search_roots(package_dirs)
+    found: dict[str, Path] = {}
+    missing: list[str] = []
+    for mesh in robot_element.iter("mesh"):
+        uri = mesh.get("filename", "")
+        if uri in found or uri in missing:
+            continue
+        path = resources.resolve_uri(uri, base_dir, roots)
+        if path is None:
+            missing.append(uri)
+        else:
+            found[uri] = path
+    if missing:
+        warnings.warn(
+            f"{origin}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); kinematics is unaffected. "
+            f"Pass package_dirs= or set ROS_PACKAGE_PATH to show them.",
+            MissingMeshWarning,
+            stacklevel=3,
+        )
+    return found

@@ -1,0 +1,406 @@
+"""Robot: a Pinocchio model seen as a vehicle (floating, planar or fixed base) plus arms."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from . import conventions, kinematics
+from .errors import ConfigurationError, FrameNotFound, JointNotFound, UVMSError
+
+#: Number of velocity entries of the vehicle, by base type.
+VEHICLE_DOF = {"floating": 6, "planar": 3, "fixed": 0}
+VEHICLE_NQ = {"floating": 7, "planar": 4, "fixed": 0}
+DEFAULT_AXES = {
+    "floating": conventions.AXIS_NAMES,
+    "fixed": conventions.AXIS_NAMES,
+    "planar": ("x", "y", "yaw"),
+}
+
+
+@dataclass(frozen=True)
+class JointInfo:
+    """One joint of the model, as `uvms info` shows it."""
+
+    name: str
+    kind: str  # Pinocchio short name, e.g. "JointModelRZ"
+    nq: int
+    nv: int
+    idx_q: int
+    idx_v: int
+    lower: np.ndarray  # (nq,) [rad or m]
+    upper: np.ndarray  # (nq,)
+    is_vehicle: bool
+
+
+def base_type_of(model: pin.Model) -> str:
+    """"floating", "planar" or "fixed", from the first joint of a Pinocchio model."""
+    if model.njoints > 1 and model.parents[1] == 0:
+        shortname = model.joints[1].shortname()
+        if shortname == "JointModelFreeFlyer":
+            return "floating"
+        if shortname == "JointModelPlanar":
+            return "planar"
+    return "fixed"
+
+
+def default_end_effectors(model: pin.Model) -> list[str]:
+    """Frames named ``ee`` or ``*_ee``; otherwise the body frames of the leaf links."""
+    names = [frame.name for frame in model.frames]
+    named = [n for n in names if n == "ee" or n.endswith("_ee")]
+    if named:
+        return named
+    parents = {model.frames[i].parentFrame for i in range(len(model.frames))}
+    leaves = [
+        frame.name for i, frame in enumerate(model.frames)
+        if frame.type == pin.FrameType.BODY and i not in parents and frame.name != "world"
+    ]
+    return leaves[-1:] if leaves else [model.frames[-1].name]
+
+
+class Robot:
+    """A UVMS model: Pinocchio ``model``/``data``, the vehicle/arm split and end-effector frames.
+
+    Configuration q = [vehicle (7 floating, 4 planar, 0 fixed), arm...] and
+    velocity v = [vehicle twist in its local axes (6 or 3), arm...], exactly
+    Pinocchio's. Poses are in the model's world frame (ENU, z up).
+
+    Attributes:
+        model: the Pinocchio model.
+        data: its work data (reused by every call; a Robot is not thread-safe).
+        base_type: "floating", "planar" or "fixed".
+        ee_frames: names of the end-effector frames; the first is the default.
+        name: model name; source: file it came from (or "<string>").
+        urdf: the URDF text the model was built from (None when composed).
+    """
+
+    def __init__(
+        self,
+        model: pin.Model,
+        *,
+        ee: str | Sequence[str] | None = None,
+        name: str | None = None,
+        source: str = "<model>",
+        urdf: str | None = None,
+    ) -> None:
+        self.model = model
+        self.data = model.createData()
+        self.name = name or model.name
+        self.source = source
+        self.urdf = urdf
+        self.base_type = base_type_of(model)
+        self.n_vehicle = VEHICLE_DOF[self.base_type]
+        self.nq_vehicle = VEHICLE_NQ[self.base_type]
+        self.frame_names = [frame.name for frame in model.frames]
+        requested = [ee] if isinstance(ee, str) else list(ee) if ee is not None else default_end_effectors(model)
+        self.ee_frames = requested
+        self.ee_frame_ids = [self.frame_id(frame) for frame in requested]
+        self.joints = self._collect_joints()
+        self._unit_slices = self._unit_norm_slices()
+
+    # ----------------------------------------------------------------- sizes
+    @property
+    def nq(self) -> int:
+        """Size of a configuration q."""
+        return self.model.nq
+
+    @property
+    def nv(self) -> int:
+        """Size of a velocity v (vehicle DOF + arm DOF)."""
+        return self.model.nv
+
+    @property
+    def n_arm(self) -> int:
+        """Number of arm (non-vehicle) velocity entries."""
+        return self.model.nv - self.n_vehicle
+
+    def _collect_joints(self) -> list[JointInfo]:
+        """Every joint but Pinocchio's universe, vehicle first."""
+        infos = []
+        for index in range(1, self.model.njoints):
+            joint = self.model.joints[index]
+            span = slice(joint.idx_q, joint.idx_q + joint.nq)
+            infos.append(JointInfo(
+                name=self.model.names[index], kind=joint.shortname(), nq=joint.nq, nv=joint.nv,
+                idx_q=joint.idx_q, idx_v=joint.idx_v,
+                lower=self.model.lowerPositionLimit[span].copy(), upper=self.model.upperPositionLimit[span].copy(),
+                is_vehicle=(index == 1 and self.base_type != "fixed"),
+            ))
+        return infos
+
+    def _unit_norm_slices(self) -> list[tuple[str, slice]]:
+        """Parts of q that must have unit norm: quaternions and (cos, sin) pairs."""
+        slices = []
+        for joint in self.joints:
+            end = joint.idx_q + joint.nq
+            if joint.kind in ("JointModelFreeFlyer", "JointModelSpherical"):
+                slices.append((joint.name, slice(end - 4, end)))
+            elif joint.nq == joint.nv + 1:  # planar and continuous joints hold (cos, sin)
+                slices.append((joint.name, slice(end - 2, end)))
+        return slices
+
+    @property
+    def arm_joints(self) -> list[JointInfo]:
+        """The joints that are not the vehicle's."""
+        return [joint for joint in self.joints if not joint.is_vehicle]
+
+    @property
+    def arm_joint_names(self) -> list[str]:
+        """Names of the arm joints, in the order of q and v."""
+        return [joint.name for joint in self.arm_joints]
+
+    @property
+    def arm_limits(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper limits of the arm joint values (n_arm,) [rad or m]; +-inf when unbounded."""
+        lower, upper = [], []
+        for joint in self.arm_joints:
+            if joint.nq == joint.nv:
+                lower.extend(joint.lower)
+                upper.extend(joint.upper)
+            else:  # continuous joint stored as (cos, sin)
+                lower.extend([-np.inf] * joint.nv)
+                upper.extend([np.inf] * joint.nv)
+        return np.array(lower), np.array(upper)
+
+    @property
+    def total_mass(self) -> float:
+        """Total mass [kg]."""
+        return float(pin.computeTotalMass(self.model))
+
+    # ----------------------------------------------------------------- names
+    def frame_id(self, frame: str | None = None) -> int:
+        """Index of a frame; None means the first end effector.
+
+        Raises:
+            FrameNotFound: unknown name (the message lists the close names).
+        """
+        if frame is None:
+            return self.ee_frame_ids[0]
+        if not isinstance(frame, str) or not self.model.existFrame(frame):
+            raise FrameNotFound(str(frame), self.frame_names)
+        return self.model.getFrameId(frame)
+
+    def joint_id(self, joint: str) -> int:
+        """Index of a joint. Raises JointNotFound with the close names."""
+        if not self.model.existJointName(joint):
+            raise JointNotFound(joint, list(self.model.names)[1:])
+        return self.model.getJointId(joint)
+
+    # ------------------------------------------------------- configurations
+    def check_configuration(self, q: np.ndarray) -> np.ndarray:
+        """q as a float array, after checking its size, finiteness and unit rotation parts.
+
+        Raises:
+            ConfigurationError: wrong size, NaN/inf, or a non-unit quaternion / (cos, sin) pair.
+        """
+        return self._check_vector(q, self.nq, "configuration q", check_manifold=True)
+
+    def check_velocity(self, v: np.ndarray, size: int | None = None, what: str = "velocity v") -> np.ndarray:
+        """v as a float array, after checking its size (default nv) and finiteness."""
+        return self._check_vector(v, self.nv if size is None else size, what)
+
+    def _check_vector(self, vector: np.ndarray, size: int, what: str, check_manifold: bool = False) -> np.ndarray:
+        try:
+            array = np.asarray(vector, dtype=float)
+        except (TypeError, ValueError):
+            raise ConfigurationError(f"{what} must be a vector of {size} numbers, got {vector!r}") from None
+        if array.shape != (size,):
+            raise ConfigurationError(f"{what} must have shape ({size},), got {array.shape}")
+        if not np.all(np.isfinite(array)):
+            raise ConfigurationError(f"{what} has non-finite entries at {np.flatnonzero(~np.isfinite(array)).tolist()}")
+        if check_manifold:
+            for joint_name, part in self._unit_slices:
+                norm = float(np.linalg.norm(array[part]))
+                if abs(norm - 1.0) > 1e-6:
+                    raise ConfigurationError(
+                        f"{what}: the rotation part of joint {joint_name!r} has norm {norm:.6g}; it must be a "
+                        f"unit quaternion / (cos, sin) pair — build q with robot.configuration()"
+                    )
+        return array
+
+    def neutral(self) -> np.ndarray:
+        """The neutral configuration (vehicle at the origin, arm joints at zero)."""
+        return pin.neutral(self.model)
+
+    def random_configuration(self, rng: np.random.Generator | int | None = None, position_range: float = 1.0) -> np.ndarray:
+        """A configuration with arm joints uniform inside their limits.
+
+        Args:
+            rng: a numpy Generator or seed.
+            position_range: vehicle position uniform in [-r, r] per axis [m];
+                the vehicle attitude is uniform on SO(3) (floating) or in yaw (planar).
+        """
+        rng = np.random.default_rng(rng)
+        lower, upper = self.arm_limits
+        lower = np.where(np.isfinite(lower), lower, -np.pi)
+        upper = np.where(np.isfinite(upper), upper, np.pi)
+        arm = rng.uniform(lower, upper)
+        if self.base_type == "floating":
+            quaternion = rng.normal(size=4)
+            rotation = pin.Quaternion(*(quaternion / np.linalg.norm(quaternion))).toRotationMatrix()
+            base = pin.SE3(rotation, rng.uniform(-position_range, position_range, 3))
+        elif self.base_type == "planar":
+            base = np.array([*rng.uniform(-position_range, position_range, 2), rng.uniform(-np.pi, np.pi)])
+        else:
+            base = None
+        return self.configuration(base=base, arm=arm)
+
+    def configuration(self, base: np.ndarray | pin.SE3 | None = None, arm: np.ndarray | None = None) -> np.ndarray:
+        """Build q from a vehicle pose and arm joint values.
+
+        Args:
+            base: pose of the vehicle body in the world: [x, y, psi] (planar),
+                [x, y, z, roll, pitch, yaw] with R = Rz(yaw) Ry(pitch) Rx(roll)
+                (floating) [m, rad], or a ``pin.SE3``. None: at the origin.
+            arm: arm joint values (n_arm,) [rad or m]; None: zeros.
+
+        Returns:
+            q (nq,).
+        """
+        q = self.neutral()
+        if base is not None:
+            q[: self.nq_vehicle] = self._vehicle_q(base)
+        if arm is not None:
+            arm = self.check_velocity(arm, self.n_arm, "arm joint values")
+            for joint in self.arm_joints:
+                values = arm[joint.idx_v - self.n_vehicle: joint.idx_v - self.n_vehicle + joint.nv]
+                if joint.nq == joint.nv:
+                    q[joint.idx_q: joint.idx_q + joint.nq] = values
+                else:  # continuous joint: angle -> (cos, sin)
+                    q[joint.idx_q: joint.idx_q + 2] = [np.cos(values[0]), np.sin(values[0])]
+        return q
+
+    def _vehicle_q(self, base: np.ndarray | pin.SE3) -> np.ndarray:
+        if self.base_type == "fixed":
+            raise ConfigurationError(f"{self.name} has a fixed base; give only arm values")
+        if isinstance(base, pin.SE3):
+            pose = base
+        else:
+            size = 3 if self.base_type == "planar" else 6
+            values = self.check_velocity(base, size, f"{self.base_type} base pose")
+            pose = conventions.pose_from_xyyaw(values) if size == 3 else conventions.pose_from_xyzrpy(values)
+        joint_motion = self.model.jointPlacements[1].actInv(pose)
+        if self.base_type == "floating":
+            return pin.SE3ToXYZQUAT(joint_motion)
+        rotation, translation = joint_motion.rotation, joint_motion.translation
+        if abs(translation[2]) > 1e-9 or not np.allclose(rotation[2], [0.0, 0.0, 1.0], atol=1e-9):
+            raise ConfigurationError("a planar base pose must lie in the x-y plane of the planar joint")
+        return np.array([translation[0], translation[1], rotation[0, 0], rotation[1, 0]])
+
+    def base_pose(self, q: np.ndarray) -> pin.SE3:
+        """Pose of the vehicle body in the world, ``transform_base_to_world`` (identity for a fixed base)."""
+        q = self.check_configuration(q)
+        if self.base_type == "fixed":
+            return pin.SE3.Identity()
+        if self.base_type == "floating":
+            joint_motion = pin.XYZQUATToSE3(q[:7])
+        else:
+            yaw = np.arctan2(q[3], q[2])
+            joint_motion = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, yaw), np.array([q[0], q[1], 0.0]))
+        return self.model.jointPlacements[1] * joint_motion
+
+    def arm_configuration(self, q: np.ndarray) -> np.ndarray:
+        """Arm joint values (n_arm,) [rad or m] of a configuration (angles for continuous joints)."""
+        q = self.check_configuration(q)
+        values = []
+        for joint in self.arm_joints:
+            part = q[joint.idx_q: joint.idx_q + joint.nq]
+            values.extend(part if joint.nq == joint.nv else [np.arctan2(part[1], part[0])])
+        return np.array(values)
+
+    # ------------------------------------------------------------ kinematics
+    def fk(self, q: np.ndarray, frame: str | None = None) -> pin.SE3:
+        """Pose of a frame in the world, ``transform_frame_to_world`` (default: first end effector)."""
+        return kinematics.frame_pose(self.model, self.data, self.check_configuration(q), self.frame_id(frame))
+
+    def jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
+        """World-aligned Jacobian (6, nv): [v_origin; omega] in world axes = J v."""
+        return kinematics.frame_jacobian(self.model, self.data, self.check_configuration(q), self.frame_id(frame))
+
+    def _free_floating_parts(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        if self.base_type == "fixed":
+            raise UVMSError(f"{self.name} has a fixed base: there is no free-floating base to conserve momentum")
+        return kinematics.centroidal_map_split(self.model, self.data, q, self.base_type, self.n_vehicle)
+
+    def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
+        """Generalized Jacobian (6, n_arm) of a free-floating base at zero momentum.
+
+        twist_ee (world-aligned) = GJM @ qdot_arm when the vehicle is passive and
+        the system momentum is zero; for a fixed base it is the ordinary Jacobian.
+        """
+        q = self.check_configuration(q)
+        jacobian = kinematics.frame_jacobian(self.model, self.data, q, self.frame_id(frame))
+        if self.base_type == "fixed":
+            return jacobian
+        a_base, a_arm = self._free_floating_parts(q)
+        return kinematics.generalized_jacobian_from_parts(jacobian, a_base, a_arm, self.n_vehicle)
+
+    def base_velocity(self, q: np.ndarray, arm_velocity: np.ndarray, momentum: np.ndarray | None = None) -> np.ndarray:
+        """Vehicle velocity implied by momentum conservation (n_vehicle,), local axes as in v.
+
+        Args:
+            q: configuration (nq,).
+            arm_velocity: arm joint velocities (n_arm,).
+            momentum: centroidal momentum h [N s; N m s] in world axes (6,) or
+                its planar rows [hx, hy, kz] (3,); None means zero.
+        """
+        q = self.check_configuration(q)
+        arm_velocity = self.check_velocity(arm_velocity, self.n_arm, "arm velocity")
+        if momentum is not None:
+            momentum = self.check_velocity(momentum, len(kinematics.CONSERVED_MOMENTUM_ROWS[self.base_type]), "momentum")
+        a_base, a_arm = self._free_floating_parts(q)
+        return kinematics.base_velocity_from_momentum(a_base, a_arm, arm_velocity, momentum)
+
+    def free_floating_velocity(self, q: np.ndarray, arm_velocity: np.ndarray, momentum: np.ndarray | None = None) -> np.ndarray:
+        """Full velocity v (nv,) of the free-floating system: base from momentum, arm as given."""
+        return np.concatenate([self.base_velocity(q, arm_velocity, momentum), arm_velocity])
+
+    def manipulability(self, q: np.ndarray, frame: str | None = None, axes: Sequence[str] | None = None) -> float:
+        """Yoshikawa manipulability sqrt(det(J J^T)) over the task ``axes``.
+
+        ``axes`` defaults to all six for spatial bases and (x, y, yaw) for planar ones.
+        """
+        rows = kinematics.axis_rows(axes or DEFAULT_AXES[self.base_type])
+        return kinematics.manipulability_of(self.jacobian(q, frame)[rows])
+
+    def generalized_manipulability(self, q: np.ndarray, frame: str | None = None, axes: Sequence[str] | None = None) -> float:
+        """Manipulability of the generalized Jacobian (free-floating base), same ``axes`` rule."""
+        rows = kinematics.axis_rows(axes or DEFAULT_AXES[self.base_type])
+        return kinematics.manipulability_of(self.generalized_jacobian(q, frame)[rows])
+
+    # ------------------------------------------------------ Fossen accessors
+    def eta_ned(self, q: np.ndarray) -> np.ndarray:
+        """Fossen eta of the vehicle: [x, y, z, phi, theta, psi] NED (6,) or [x, y, psi] (3,) planar."""
+        self._require_vehicle()
+        return conventions.eta_from_pose(self.base_pose(q), planar=self.base_type == "planar")
+
+    def nu_frd(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Fossen nu of the vehicle: [u, v, w, p, q, r] body FRD (6,) or [u, v, r] (3,) planar."""
+        self._require_vehicle()
+        self.check_configuration(q)
+        v = self.check_velocity(v)
+        return conventions.nu_from_twist(v[: self.n_vehicle])
+
+    def configuration_from_eta(self, eta: np.ndarray, arm: np.ndarray | None = None) -> np.ndarray:
+        """q from Fossen's eta (NED) and arm joint values: the inverse of :meth:`eta_ned`."""
+        self._require_vehicle()
+        eta = self.check_velocity(eta, self.n_vehicle, "eta")
+        return self.configuration(base=conventions.pose_from_eta(eta), arm=arm)
+
+    def velocity_from_nu(self, nu: np.ndarray, arm_velocity: np.ndarray | None = None) -> np.ndarray:
+        """v from Fossen's nu (body FRD) and arm velocities: the inverse of :meth:`nu_frd`."""
+        self._require_vehicle()
+        nu = self.check_velocity(nu, self.n_vehicle, "nu")
+        arm = np.zeros(self.n_arm) if arm_velocity is None else self.check_velocity(arm_velocity, self.n_arm, "arm velocity")
+        return np.concatenate([conventions.twist_from_nu(nu), arm])
+
+    def _require_vehicle(self) -> None:
+        if self.base_type == "fixed":
+            raise UVMSError(f"{self.name} has a fixed base: it has no vehicle state (eta, nu)")
+
+    def __repr__(self) -> str:
+        return (f"Robot({self.name!r}, base={self.base_type}, nq={self.nq}, nv={self.nv}, "
+                f"n_arm={self.n_arm}, ee={self.ee_frames})")
