@@ -51,12 +51,12 @@ def describe(robot: Robot) -> str:
         f"(nq {robot.nq}, nv {robot.nv})",
         f"total mass  {robot.total_mass:.3f} kg",
         "joints",
-        f"  {'name':<24} {'type':<22} {'nq':>2} {'nv':>2}  limits [rad or m]",
+        f"  {'name':<24} {"type":<27} {'nq':>2} {'nv':>2}  limits [rad or m]",
     ]
     for joint in robot.joints:
         role = "vehicle" if joint.is_vehicle else "arm"
         kind = joint.kind.removeprefix("JointModel") + f" ({role})"
-        lines.append(f"  {joint.name:<24} {kind:<22} {joint.nq:>2} {joint.nv:>2}  {format_limits(joint.lower, joint.upper)}")
+        lines.append(f"  {joint.name:<24} {kind:<27} {joint.nq:>2} {joint.nv:>2}  {format_limits(joint.lower, joint.upper)}")
     body_frames = [f.name for f in robot.model.frames if f.type == pin.FrameType.BODY]
     lines.append(f"frames      {', '.join(body_frames)}")
     q = robot.neutral()

@@ -1,0 +1,162 @@
+"""Bad inputs: each raises its uvms.UVMSError subclass with a useful message; the CLI exits 2 with one line."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import uvms
+from conftest import shipped
+from uvms.cli import main
+
+INERTIAL = '<inertial><mass value="{mass}"/><inertia ixx="{ixx}" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+
+
+def urdf(axis="0 0 1", xyz="1 0 0", mass="1", ixx="1", root="", extra="") -> str:
+    """A two-link URDF with knobs for the values under test."""
+    body = INERTIAL.format(mass=mass, ixx=ixx)
+    return f"""<robot name="probe">{root}
+      <link name="base_link">{body}</link>
+      <link name="l1">{body}</link>
+      <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/>
+        <origin xyz="{xyz}"/><axis xyz="{axis}"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+      {extra}</robot>"""
+
+
+FLOATING_ROOT = '<link name="world"/><joint name="float" type="floating"><parent link="world"/><child link="base_link"/></joint>'
+
+
+def test_a_valid_user_urdf_loads(tmp_path):
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdf())
+    robot = uvms.load(path)
+    assert (robot.base_type, robot.nq, robot.ee_frames) == ("fixed", 1, ["l1"])
+    assert uvms.load(path, base="floating").nv == 7
+    assert uvms.load(urdf(root=FLOATING_ROOT)).base_type == "floating"
+
+
+@pytest.mark.parametrize(
+    ("source", "error", "words"),
+    [
+        ("/nonexistent/robot.urdf", uvms.ModelFileNotFound, "does not exist"),
+        ("<robot name='x'><link name='a'></robot>", uvms.ModelParseError, "malformed XML"),
+        ("<model/>", uvms.ModelParseError, "needs <robot>"),
+        (urdf(axis="0 0 0"), uvms.ModelCheckError, "zero axis"),
+        (urdf(axis="0 0 2"), uvms.ModelCheckError, "unit vectors"),
+        (urdf(xyz="nan 0 0"), uvms.ModelCheckError, "not finite"),
+        (urdf(xyz="inf 0 0"), uvms.ModelCheckError, "not finite"),
+        (urdf(xyz="1 0"), uvms.ModelCheckError, "expected 3"),
+        (urdf(mass="-2"), uvms.ModelCheckError, "must be positive"),
+        (urdf(mass="0"), uvms.ModelCheckError, "must be positive"),
+        (urdf(ixx="-1"), uvms.ModelCheckError, "not positive definite"),
+        (urdf(extra='<joint name="j2" type="fixed"><parent link="l1"/><child link="base_link"/></joint>'),
+         uvms.ModelCheckError, "cycle"),
+        (urdf(extra='<link name="l2"/><joint name="j2" type="fixed"><parent link="l1"/><child link="l2"/></joint>'
+                    '<joint name="j3" type="fixed"><parent link="base_link"/><child link="l2"/></joint>'),
+         uvms.ModelCheckError, "child of two joints"),
+        (urdf(extra='<link name="orphan"/>'), uvms.ModelCheckError, "2 roots"),
+        (urdf(root='<link name="world"/><joint name="p" type="planar"><parent link="world"/>'
+                   '<child link="base_link"/><axis xyz="1 0 0"/></joint>'), uvms.ModelCheckError, "x-y plane"),
+    ],
+)
+def test_bad_model_raises_its_error(source, error, words):
+    with pytest.raises(error, match=words):
+        uvms.load(source)
+
+
+def test_massless_link_idiom_is_accepted():
+    assert uvms.load(urdf(extra='<link name="tip"><inertial><mass value="0"/><inertia ixx="0" iyy="0" izz="0" ixy="0" '
+                               'ixz="0" iyz="0"/></inertial></link><joint name="t" type="fixed"><parent link="l1"/>'
+                               '<child link="tip"/></joint>')).nq == 1
+
+
+@pytest.mark.parametrize(
+    ("content", "args", "words"),
+    [
+        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="a"><visual><geometry>'
+         '<box size="${w} 1 1"/></geometry></visual></link></robot>', {}, "name 'w' is not defined"),
+        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="a"><visual><geometry>'
+         '<box size="$(arg w) 1 1"/></geometry></visual></link></robot>', {}, "Undefined substitution argument w"),
+        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:include filename="missing.xacro"/></robot>',
+         {}, "No such file"),
+        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:arg name="w" default="1"/><link name="a"/></robot>',
+         {"width": 2}, "unknown xacro arg"),
+    ],
+)
+def test_xacro_errors(tmp_path, content, args, words):
+    path = tmp_path / "bad.urdf.xacro"
+    path.write_text(content)
+    with pytest.raises(uvms.XacroError, match=words):
+        uvms.load(path, args=args)
+
+
+def test_base_that_contradicts_the_file():
+    with pytest.raises(uvms.BaseMismatchError, match="contradicts"):
+        uvms.load("hoang2011", base="floating")
+    with pytest.raises(uvms.BaseMismatchError):
+        uvms.load("xiang2019", base="fixed")
+    with pytest.raises(uvms.UVMSError, match="valid: floating, planar, fixed"):
+        uvms.load("hoang2011", base="flying")
+
+
+def test_unknown_frame_lists_close_names():
+    robot = shipped("xiang2019")
+    with pytest.raises(uvms.FrameNotFound, match="close names: left_ee"):
+        robot.fk(robot.neutral(), "left_e")
+    with pytest.raises(uvms.FrameNotFound):
+        uvms.load("hoang2011", ee="tool")
+
+
+@pytest.mark.parametrize(
+    "q",
+    [np.zeros(3), np.full(7, np.nan), [0, 0, 1, 0, 0, 0, "x"], np.array([0, 0, 2.0, 0, 0, 0, 0])],
+)
+def test_bad_configuration(q):
+    robot = shipped("hoang2011")
+    with pytest.raises(uvms.ConfigurationError):
+        robot.fk(q)
+
+
+def test_bad_arm_values_and_base_pose():
+    robot = shipped("hoang2011")
+    with pytest.raises(uvms.ConfigurationError, match=r"shape \(3,\)"):
+        robot.configuration(arm=[1.0, 2.0])
+    with pytest.raises(uvms.ConfigurationError, match="non-finite"):
+        robot.configuration(base=[0.0, np.inf, 0.0])
+    with pytest.raises(uvms.ConfigurationError, match=r"shape \(3,\)"):
+        robot.base_velocity(robot.neutral(), [1.0])
+
+
+def run_cli(*argv: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "uvms.cli", *argv], capture_output=True, text=True, timeout=120)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ("info", "/nonexistent.urdf"),
+        ("info", "hoang2011", "--arg", "nosuch=1"),
+        ("info", "hoang2011", "--arg", "novalue"),
+        ("info", "hoang2011", "--base", "floating"),
+        ("info", "hoang2011", "--ee", "tool"),
+        ("info",),
+        ("frobnicate",),
+    ],
+)
+def test_cli_errors_are_one_line_and_exit_2(argv):
+    result = run_cli(*argv)
+    assert result.returncode == 2
+    assert result.stdout == ""
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in result.stderr
+
+
+def test_cli_malformed_file(tmp_path, capsys):
+    path = tmp_path / "broken.urdf"
+    path.write_text("<robot name='x'><link name='a'>")
+    assert main(["info", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "malformed XML" in err
