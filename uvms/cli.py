@@ -51,7 +51,7 @@ def describe(robot: Robot) -> str:
         f"(nq {robot.nq}, nv {robot.nv})",
         f"total mass  {robot.total_mass:.3f} kg",
         "joints",
-        f"  {'name':<24} {"type":<27} {'nq':>2} {'nv':>2}  limits [rad or m]",
+        f"  {'name':<24} {'type':<27} {'nq':>2} {'nv':>2}  limits [rad or m]",
     ]
     for joint in robot.joints:
         role = "vehicle" if joint.is_vehicle else "arm"
