@@ -7,7 +7,7 @@ Pinocchio computes every pose, Jacobian and momentum map.
 >>> robot = uvms.load("hoang2011")                     # a shipped model, or any .urdf/.xacro path
 >>> q = robot.configuration(base=[0.0, 0.0, 0.0], arm=[1.0, 0.5, 0.2])
 >>> robot.fk(q).translation.round(3)
-array([ 1.254, -1.269,  0.   ])
+array([ 1.433, -0.806,  0.   ])
 """
 
 from .compose import mount_arm
