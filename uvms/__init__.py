@@ -25,10 +25,35 @@ from .errors import (
 from .model import MissingMeshWarning, load
 from .resources import example_robot_urdf, shipped_models
 from .robot import Robot
+from .solvers import (
+    SolverInputError,
+    VariableDamping,
+    clik_step,
+    clik_velocity,
+    constrained_velocity,
+    initial_configuration,
+    priority_velocity,
+    solve_ik,
+)
+from .state import KinematicState
+from .tasks import FrameTask, JointLimitPotential, PostureTask, VehicleTask
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "FrameTask",
+    "JointLimitPotential",
+    "KinematicState",
+    "PostureTask",
+    "SolverInputError",
+    "VariableDamping",
+    "VehicleTask",
+    "clik_step",
+    "clik_velocity",
+    "constrained_velocity",
+    "initial_configuration",
+    "priority_velocity",
+    "solve_ik",
     "BaseMismatchError",
     "ConfigurationError",
     "FrameNotFound",

@@ -1,0 +1,304 @@
+"""The solver layer: inverses, CLIK, null space, task priority, constraints, IK, initial configuration."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import uvms
+from conftest import shipped
+from uvms.solvers import dls, pinv, task_priority, variable_damping, weighted_pinv
+from uvms.solvers.inverses import SolverInputError
+from uvms.solvers.screws import davies_solve, network_matrix
+
+
+def hoang_task(robot, target=(0.0, -2.0, 1.0)):
+    x, y, phi = target
+    return uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[x, y, 0, 0, 0, phi])
+
+
+# ---------------------------------------------------------------- inverses
+def test_weighted_pinv_is_the_minimum_w_norm_solution(rng):
+    for _ in range(20):
+        jacobian = rng.normal(size=(3, 6))
+        weights = np.diag(rng.uniform(0.5, 500, 6))
+        xdot = rng.normal(size=3)
+        w_inv = np.linalg.inv(weights)
+        closed_form = w_inv @ jacobian.T @ np.linalg.inv(jacobian @ w_inv @ jacobian.T)  # hoang2011 eq. 15
+        inverse = weighted_pinv(jacobian, weights)
+        assert np.allclose(inverse, closed_form, atol=1e-10)
+        qdot = inverse @ xdot
+        assert np.allclose(jacobian @ qdot, xdot, atol=1e-12)
+        null = (np.eye(6) - np.linalg.pinv(jacobian) @ jacobian) @ rng.normal(size=6)
+        other = qdot + null
+        assert np.allclose(jacobian @ other, xdot, atol=1e-10)
+        assert qdot @ weights @ qdot < other @ weights @ other
+    full = rng.normal(size=(6, 6))
+    spd = full @ full.T + np.eye(6)
+    jacobian = rng.normal(size=(3, 6))
+    assert np.allclose(weighted_pinv(jacobian, spd),
+                       np.linalg.inv(spd) @ jacobian.T @ np.linalg.inv(jacobian @ np.linalg.inv(spd) @ jacobian.T))
+
+
+@pytest.mark.parametrize("weights", [np.diag([1, 1, -1.0]), np.array([[1, 2, 0], [0, 1, 0], [0, 0, 1.0]]), np.eye(2)])
+def test_weighted_pinv_rejects_bad_weights(weights):
+    with pytest.raises(SolverInputError):
+        weighted_pinv(np.ones((2, 3)), weights)
+
+
+def test_dls_bounded_at_and_near_singularities(rng):
+    robot = shipped("hoang2011")
+    for q2 in (0.0, 1e-6, 1e-3):  # stretched arm: the planar arm is singular at q2 = q3 = 0
+        q = robot.configuration(base=[0, 0, 0.3], arm=[1.0, q2, 0.0])
+        jacobian = robot.jacobian(q)[[0, 1, 5]][:, 3:]  # arm only, (3, 3)
+        for damping in (1e-3, 0.05, 0.5):
+            for _ in range(20):
+                xdot = rng.normal(size=3)
+                qdot = dls(jacobian, damping) @ xdot
+                assert np.linalg.norm(qdot) <= np.linalg.norm(xdot) / (2 * damping) * (1 + 1e-9)
+    tall = rng.normal(size=(8, 3))
+    assert np.allclose(dls(tall, 0.1), np.linalg.solve(tall.T @ tall + 0.01 * np.eye(3), tall.T))
+    wide = rng.normal(size=(3, 8))
+    assert np.allclose(dls(wide, 0.1), wide.T @ np.linalg.inv(wide @ wide.T + 0.01 * np.eye(3)))
+
+
+def test_variable_damping_formula():
+    assert variable_damping(0.2, epsilon=0.1, lambda_max=0.5) == 0.0
+    assert variable_damping(0.1, epsilon=0.1, lambda_max=0.5) == 0.0
+    assert variable_damping(0.0, epsilon=0.1, lambda_max=0.5) == pytest.approx(0.5)
+    assert variable_damping(0.05, epsilon=0.1, lambda_max=0.5) ** 2 == pytest.approx((1 - 0.25) * 0.25)
+
+
+# -------------------------------------------------------------------- CLIK
+@pytest.mark.parametrize("weights", [None, [1, 1, 1, 100, 100, 100], [1, 1, 500, 1, 1, 1]])
+def test_clik_converges_monotonically_on_a_constant_target(weights):
+    robot = shipped("hoang2011")
+    task = hoang_task(robot)
+    q = robot.configuration(base=[-1.0, -3.0, 1.0], arm=[2.0, 0.5, -0.5])
+    norms = []
+    for _ in range(400):
+        step = uvms.clik_step(robot, q, task, 0.05, gain=2.0, weights=weights)
+        norms.append(np.linalg.norm(step.velocity.error))
+        q = step.q
+        if norms[-1] <= 1e-11:
+            break
+    assert norms[-1] <= 1e-10
+    assert all(later <= earlier for earlier, later in zip(norms, norms[1:]))
+
+
+def test_clik_spatial_pose_task_and_free_floating_gjm(rng):
+    robot = shipped("bluerov2_alpha5")
+    q = robot.configuration(arm=[np.pi, 1.5, 2.0, 1.0, 0.0])
+    target = robot.fk(q) * pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.1, 0.2), np.array([0.05, 0.03, -0.04]))
+    task = uvms.FrameTask(robot, target=target)
+    for _ in range(300):
+        q = uvms.clik_step(robot, q, task, 0.05, gain=2.0).q
+    assert np.linalg.norm(task.full_error(uvms.KinematicState(robot, q))) <= 1e-10
+    snake = shipped("amundsen2018")
+    q = snake.configuration(arm=[0.3, -0.3, 0.3, -0.3, 0.2, -0.2, 0.2, -0.2])
+    target = snake.fk(q).translation + np.array([-0.05, -0.05, 0.05])
+    position = uvms.FrameTask(snake, axes=("x", "y", "z"), target=pin.SE3(np.eye(3), target))
+    for _ in range(100):
+        step = uvms.clik_step(snake, q, position, 0.05, gain=3.0, free_floating=True)
+        momentum = pin.computeCentroidalMap(snake.model, snake.data, q) @ step.velocity.v
+        assert np.max(np.abs(momentum)) <= 1e-10  # the vehicle is passive
+        q = step.q
+    assert np.linalg.norm(snake.fk(q).translation - target) <= 1e-8
+
+
+def test_nullspace_term_leaves_the_task_velocity_unchanged(rng):
+    robot = shipped("hoang2011")
+    task = hoang_task(robot)
+    potential = uvms.JointLimitPotential(robot)
+    for weights in (None, [1, 1, 1, 100, 100, 100]):
+        for _ in range(20):
+            q = robot.random_configuration(rng)
+            plain = uvms.clik_velocity(robot, q, task, weights=weights)
+            with_null = uvms.clik_velocity(robot, q, task, weights=weights, potential=potential, alpha=10.0)
+            jacobian = task.jacobian(uvms.KinematicState(robot, q))
+            assert np.linalg.norm(jacobian @ (with_null.v - plain.v)) <= 1e-12
+            assert np.linalg.norm(with_null.v - plain.v) > 0  # the null-space motion is there
+
+
+def test_joint_limit_potential_gradient_matches_finite_differences(rng):
+    robot = shipped("hoang2011")
+    potential = uvms.JointLimitPotential(robot, weights=[1.0, 2.0, 0.5])
+    q = robot.random_configuration(rng)
+    gradient = potential.gradient(q)
+    for index in range(robot.nv):
+        step = np.zeros(robot.nv)
+        step[index] = 1e-6
+        numeric = (potential.value(pin.integrate(robot.model, q, step)) - potential.value(pin.integrate(robot.model, q, -step))) / 2e-6
+        assert numeric == pytest.approx(gradient[index], abs=1e-8)
+    assert potential.value(robot.configuration(arm=[0.75 * np.pi, 0, 0])) == 0.0
+
+
+def test_joint_limits_never_violated_when_enabled():
+    robot = shipped("hoang2011")
+    lower, upper = robot.arm_limits
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, 0, 0, 0, 0, 0])
+    q = robot.configuration(arm=[0.2, 4.5, -4.5])  # near the limits
+    clamped_any = False
+    for _ in range(200):
+        step = uvms.clik_step(robot, q, task, 0.1, gain=5.0, weights=[100, 100, 100, 1, 1, 1], enforce_limits=True)
+        q = step.q
+        arm = robot.arm_configuration(q)
+        assert np.all(arm >= lower - 1e-12) and np.all(arm <= upper + 1e-12)
+        clamped_any |= bool(step.velocity.limits_active)
+    assert clamped_any
+
+
+# ----------------------------------------------------------- task priority
+def test_robust_priority_meets_the_first_task_exactly(rng):
+    robot = shipped("santos2006")
+    ee = uvms.FrameTask(robot, axes=("x", "y", "yaw"), target=[5.0, 4.0, 0, 0, 0, 0.5])
+    rest = uvms.VehicleTask.at_rest(robot)
+    for _ in range(30):
+        q = robot.random_configuration(rng)
+        for method in ("robust", "classic"):
+            result = uvms.priority_velocity(robot, q, [ee, rest], method=method)
+            assert result.residuals[0] <= 1e-11 * (1 + np.linalg.norm(result.v))  # machine precision
+        classic = uvms.priority_velocity(robot, q, [ee, rest], method="classic")
+        assert classic.residuals[1] <= 1e-9  # 3 + 3 rows on 6 DOF: both feasible
+    jacobians = [rng.normal(size=(2, 5)), rng.normal(size=(2, 5)), rng.normal(size=(3, 5))]
+    commands = [rng.normal(size=2), rng.normal(size=2), rng.normal(size=3)]
+    three = task_priority(jacobians, commands, method="robust")
+    assert three.residuals[0] <= 1e-12 and len(three.residuals) == 3
+
+
+def test_classic_priority_and_robust_differ_only_below_the_first_level(rng):
+    jacobian_1, jacobian_2 = rng.normal(size=(2, 4)), rng.normal(size=(2, 4))
+    commands = [rng.normal(size=2), rng.normal(size=2)]
+    classic = task_priority([jacobian_1, jacobian_2], commands, "classic")
+    robust = task_priority([jacobian_1, jacobian_2], commands, "robust")
+    assert classic.residuals[1] <= 1e-12  # 2 + 2 <= 4: both met
+    assert robust.residuals[1] > 1e-6      # the robust form trades level 2 accuracy for no algorithmic singularity
+
+
+# --------------------------------------------------------- kinematic constraint
+def santos_constraint_case(robot, q, heading=0.78, gain=1.0):
+    ee = uvms.FrameTask(robot, axes=("x", "y", "yaw"), target=[6.0, 4.5, 0, 0, 0, 0.8])
+    ee.set_target_velocity([0.3, -0.2, 0, 0, 0, 0.1])
+    constraint = uvms.VehicleTask(robot, velocities={"vx": 0.0, "vy": 0.0}, heading=heading)
+    return ee, constraint, uvms.constrained_velocity(robot, q, ee, constraint, gain=gain)
+
+
+def test_kinematic_constraint_holds_exactly(rng):
+    robot = shipped("santos2006")
+    for _ in range(20):
+        q = robot.random_configuration(rng)
+        ee, constraint, result = santos_constraint_case(robot, q)
+        state = uvms.KinematicState(robot, q)
+        assert abs(result.v[0]) <= 1e-12 and abs(result.v[1]) <= 1e-12
+        yaw = np.arctan2(q[3], q[2])
+        assert result.v[2] == pytest.approx(uvms.conventions.wrap_angle(0.78 - yaw), abs=1e-12)
+        assert np.linalg.norm(ee.jacobian(state) @ result.v - result.command) <= 1e-12
+
+
+def test_kinematic_constraint_equals_the_screw_formulation(rng):
+    """santos2006: close the UVMS chain with a virtual PPPS chain and solve N_s Y_s = -N_p Y_p."""
+    robot = shipped("santos2006")
+    for _ in range(20):
+        q = robot.random_configuration(rng)
+        ee, _, result = santos_constraint_case(robot, q)
+        state = uvms.KinematicState(robot, q)
+        network = network_matrix(state, ee.frame_id, planar=True)  # (3, 6 + 3): [S_uvms | -S_virtual]
+        # primary: vehicle u, v, r (imposed) and the virtual chain magnitudes (end-effector vx, vy, wz)
+        yaw_rate = result.v[2]
+        primary = [0, 1, 2, robot.nv + 0, robot.nv + 1, robot.nv + 2]
+        values = [0.0, 0.0, yaw_rate, *result.command[:2], result.command[2]]
+        magnitudes = davies_solve(network, primary, values)
+        assert np.allclose(magnitudes[3:6], result.v[3:6], atol=1e-12)
+        assert np.allclose(network @ magnitudes, 0.0, atol=1e-12)  # the closed chain's circulation law
+
+
+# --------------------------------------------------------------------- IK
+def test_solve_ik_reaches_random_reachable_targets_within_limits(rng):
+    robot = uvms.mount_arm(shipped("bluerov2_alpha5"), "ur5", placement=[0, 0, -0.2, np.pi, 0, 0], ee="arm_tool0")
+    model = robot.model
+    for seed in range(25):
+        target = robot.fk(robot.random_configuration(rng))
+        result = uvms.solve_ik(robot, target, rng=seed)
+        assert result.success and result.error <= 1e-10
+        pose_error = pin.log6(robot.fk(result.q).actInv(target)).vector
+        assert np.linalg.norm(pose_error) <= 1e-9
+        arm = slice(robot.nq_vehicle, robot.nq)
+        assert np.all(result.q[arm] >= model.lowerPositionLimit[arm]) and np.all(result.q[arm] <= model.upperPositionLimit[arm])
+
+
+def test_solve_ik_unreachable_target_is_not_a_false_success():
+    arm = uvms.load(uvms.example_robot_urdf("ur5"))
+    result = uvms.solve_ik(arm, [3.0, 0.0, 0.0, 0.0, 0.0, 0.0], restarts=3)
+    assert not result.success
+    assert np.isfinite(result.error) and result.error > 1.0
+    assert np.all(np.isfinite(result.q))
+
+
+def test_solve_ik_two_end_effectors_at_once(rng):
+    robot = shipped("xiang2019")
+    goal = robot.random_configuration(rng)
+    targets = {"left_ee": robot.fk(goal, "left_ee"), "right_ee": robot.fk(goal, "right_ee")}
+    result = uvms.solve_ik(robot, targets, rng=1)
+    assert result.success
+    for frame, target in targets.items():
+        assert np.allclose(robot.fk(result.q, frame).homogeneous, target.homogeneous, atol=1e-9)
+
+
+def test_initial_configuration_of_hoang2011():
+    robot = shipped("hoang2011")
+    result = uvms.initial_configuration(robot, hoang_task(robot))
+    assert result.success and result.residual <= 1e-10
+    arm = robot.arm_configuration(result.q)
+    # S can reach zero: q1 at mid-range 3 pi / 4, q2 = q3 = 0, the vehicle yaw takes the rest of phi
+    assert arm == pytest.approx([0.75 * np.pi, 0.0, 0.0], abs=1e-6)
+    assert result.potential <= 1e-12
+
+
+# ------------------------------------------------------------- bad inputs
+def test_bad_solver_inputs():
+    robot = shipped("hoang2011")
+    task = hoang_task(robot)
+    q = robot.neutral()
+    with pytest.raises(SolverInputError, match="gain"):
+        uvms.clik_velocity(robot, q, task, gain=[1.0, 2.0])
+    with pytest.raises(SolverInputError, match="positive definite"):
+        uvms.clik_velocity(robot, q, task, weights=[1, 1, 1, 1, 1, -1])
+    with pytest.raises(SolverInputError, match="damping"):
+        uvms.clik_velocity(robot, q, task, damping=np.nan)
+    with pytest.raises(SolverInputError, match="dt"):
+        uvms.clik_step(robot, q, task, 0.0)
+    with pytest.raises(uvms.UVMSError, match="no target"):
+        uvms.clik_velocity(robot, q, uvms.FrameTask(robot))
+    with pytest.raises(uvms.UVMSError, match="valid: log, euler"):
+        uvms.FrameTask(robot, orientation="quaternion")
+    with pytest.raises(uvms.UVMSError, match="valid for a planar base: vx, vy, wz"):
+        uvms.VehicleTask(robot, velocities={"vz": 0.0})
+
+
+# ------------------------------------------------------ property-based tests
+finite = st.floats(-1e3, 1e3, allow_nan=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(arm=st.lists(st.floats(-4.7, 4.7), min_size=3, max_size=3), xdot=st.lists(finite, min_size=3, max_size=3),
+       singular=st.booleans(), damping=st.sampled_from([0.0, 1e-3, 0.1]))
+def test_solvers_never_return_nan(arm, xdot, singular, damping):
+    robot = shipped("hoang2011")
+    arm = np.clip(arm, *robot.arm_limits)
+    if singular:
+        arm[1:] = 0.0  # stretched arm
+    q = robot.configuration(base=[0, 0, 0.1], arm=arm)
+    task = hoang_task(robot, target=xdot)
+    for free_floating in (False, True):
+        result = uvms.clik_velocity(robot, q, task, damping=uvms.VariableDamping(0.1, 0.2) if damping else 0.0,
+                                    free_floating=free_floating, potential=uvms.JointLimitPotential(robot), alpha=10.0)
+        assert np.all(np.isfinite(result.v)) and np.isfinite(result.residual) and np.isfinite(result.sigma_min)
+    state = uvms.KinematicState(robot, q)
+    jacobian = task.jacobian(state)[:, 3:]  # arm only: singular when stretched
+    for inverse in (pinv(jacobian), dls(jacobian, damping)):
+        assert np.all(np.isfinite(inverse @ np.asarray(xdot)))
+    priority = uvms.priority_velocity(robot, q, [task, uvms.VehicleTask.at_rest(robot)], damping=damping)
+    assert np.all(np.isfinite(priority.v))

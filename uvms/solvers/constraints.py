@@ -1,0 +1,52 @@
+"""Kinematic constraints (santos2006): impose some velocity magnitudes, solve the others exactly.
+
+The constraint tasks C v = d (e.g. vehicle u = v = 0 and a yaw rate that turns
+the vehicle toward the current) and the end-effector task J v = xdot are
+solved together as one system [C; J] v = [d; xdot]: exactly when it is square
+and regular — the Davies-method solution N_s Y_s = -N_p Y_p of the paper
+(see :mod:`uvms.solvers.screws`) — and in the least-squares sense otherwise,
+with the residual reported.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..robot import Robot
+from ..state import KinematicState
+from ..tasks.task import Task
+from .inverses import RCOND, smallest_singular_value
+from .results import VelocityResult
+from .stack import as_task_list, stack
+
+
+def constrained_velocity(
+    robot: Robot,
+    q: np.ndarray | KinematicState,
+    tasks: Task | Sequence[Task],
+    constraints: Task | Sequence[Task],
+    *,
+    gain: float | np.ndarray = 1.0,
+) -> VelocityResult:
+    """Velocity meeting the constraint rows first and exactly, then the task rows.
+
+    Returns:
+        VelocityResult; ``residual`` is the task residual, ``sigma_min`` that of [C; J].
+    """
+    state = q if isinstance(q, KinematicState) else KinematicState(robot, q)
+    constraint_jacobian, _, constraint_values = stack(state, as_task_list(constraints), gain)
+    jacobian, error, command = stack(state, as_task_list(tasks), gain)
+    system = np.vstack([constraint_jacobian, jacobian])
+    rhs = np.concatenate([constraint_values, command])
+    if system.shape[0] == system.shape[1] and smallest_singular_value(system) > RCOND * np.abs(system).max():
+        v = np.linalg.solve(system, rhs)
+    else:
+        # constraints first (exact when consistent), then the task in their null space
+        constraint_inverse = np.linalg.pinv(constraint_jacobian, rcond=RCOND)
+        v = constraint_inverse @ constraint_values
+        projector = np.eye(robot.nv) - constraint_inverse @ constraint_jacobian
+        v = v + np.linalg.pinv(jacobian @ projector, rcond=RCOND) @ (command - jacobian @ v)
+    return VelocityResult(v=v, command=command, error=error, residual=float(np.linalg.norm(jacobian @ v - command)),
+                          sigma_min=smallest_singular_value(system), damping=0.0)

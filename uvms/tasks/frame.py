@@ -1,0 +1,112 @@
+"""End-effector (any frame) pose task with axis selection and two orientation errors."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..conventions import pose_from_xyzrpy, wrap_angle
+from ..errors import UVMSError
+from ..kinematics import axis_rows
+from ..robot import DEFAULT_AXES, Robot
+from ..state import KinematicState
+from .task import Task
+
+ORIENTATION_ERRORS = ("log", "euler")
+
+
+class FrameTask(Task):
+    """Drive a frame to a target pose, on any subset of x, y, z, roll, pitch, yaw.
+
+    Position rows: error p_d - p and Jacobian rows of the world-aligned Jacobian.
+    Orientation rows, ``orientation="log"``: error log3(R_d R^T) (world axes)
+    with the angular Jacobian rows. ``orientation="euler"``: error in
+    roll-pitch-yaw (R = Rz(yaw) Ry(pitch) Rx(roll)), wrapped to [-pi, pi), with
+    the matching analytic Jacobian E(rpy)^-1 J_omega — the x of hoang2011, whose
+    task vector holds angles.
+
+    Args:
+        robot: the model.
+        frame: frame name (default: the first end effector).
+        axes: task axes (default: all six; x, y, yaw for a planar base).
+        orientation: "log" or "euler".
+        target: target pose, a ``pin.SE3`` or [x, y, z, roll, pitch, yaw] [m, rad].
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        frame: str | None = None,
+        axes: Sequence[str] | None = None,
+        orientation: str = "log",
+        target: pin.SE3 | Sequence[float] | None = None,
+    ) -> None:
+        if orientation not in ORIENTATION_ERRORS:
+            raise UVMSError(f"unknown orientation error {orientation!r}; valid: {', '.join(ORIENTATION_ERRORS)}")
+        self.robot = robot
+        self.frame = frame or robot.ee_frames[0]
+        self.frame_id = robot.frame_id(frame)
+        self.axes = tuple(axes or DEFAULT_AXES[robot.base_type])
+        if not self.axes:
+            raise UVMSError("a frame task needs at least one axis")
+        self.rows = axis_rows(self.axes)
+        self.dim = len(self.rows)
+        self.orientation = orientation
+        self.target: pin.SE3 | None = None
+        self.target_twist = np.zeros(6)
+        if target is not None:
+            self.set_target(target)
+
+    def set_target(self, target: pin.SE3 | Sequence[float]) -> None:
+        """Set the target pose (``pin.SE3`` or [x, y, z, roll, pitch, yaw])."""
+        if isinstance(target, pin.SE3):
+            self.target = target.copy()
+            return
+        values = np.asarray(target, dtype=float)
+        if values.shape != (6,) or not np.all(np.isfinite(values)):
+            raise UVMSError(f"a target pose must be a pin.SE3 or 6 finite numbers [x, y, z, roll, pitch, yaw], got {target!r}")
+        self.target = pose_from_xyzrpy(values)
+
+    def set_target_velocity(self, twist: Sequence[float]) -> None:
+        """Set the target twist [v; omega] (6,) in world axes (feedforward)."""
+        values = np.asarray(twist, dtype=float)
+        if values.shape != (6,) or not np.all(np.isfinite(values)):
+            raise UVMSError(f"a target twist must be 6 finite numbers [vx, vy, vz, wx, wy, wz], got {twist!r}")
+        self.target_twist = values
+
+    def _target(self) -> pin.SE3:
+        if self.target is None:
+            raise UVMSError(f"frame task on {self.frame!r} has no target: call set_target() first")
+        return self.target
+
+    def full_error(self, state: KinematicState) -> np.ndarray:
+        """All six error rows (6,): position then orientation."""
+        target, pose = self._target(), state.pose(self.frame_id)
+        error = np.empty(6)
+        error[:3] = target.translation - pose.translation
+        if self.orientation == "log":
+            error[3:] = pin.log3(target.rotation @ pose.rotation.T)
+        else:
+            difference = pin.rpy.matrixToRpy(target.rotation) - pin.rpy.matrixToRpy(pose.rotation)
+            error[3:] = [wrap_angle(angle) for angle in difference]
+        return error
+
+    def error(self, state: KinematicState) -> np.ndarray:
+        return self.full_error(state)[self.rows]
+
+    def jacobian(self, state: KinematicState) -> np.ndarray:
+        jacobian = state.jacobian(self.frame_id)
+        if self.orientation == "euler" and any(row >= 3 for row in self.rows):
+            rpy = pin.rpy.matrixToRpy(state.pose(self.frame_id).rotation)
+            jacobian = jacobian.copy()
+            jacobian[3:] = pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD) @ jacobian[3:]
+        return jacobian[self.rows]
+
+    def feedforward(self, state: KinematicState) -> np.ndarray:
+        feedforward = self.target_twist.copy()
+        if self.orientation == "euler":
+            rpy = pin.rpy.matrixToRpy(self._target().rotation)
+            feedforward[3:] = pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD) @ feedforward[3:]
+        return feedforward[self.rows]

@@ -1,0 +1,48 @@
+"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import UVMSError
+from ..robot import Robot
+
+
+class JointLimitPotential:
+    """S(q) = 1/2 sum_i c_i ((q_i - qbar_i) / (q_iM - q_im))^2 over the arm joints.
+
+    Its negative gradient, z0 = -alpha dS/dq, projected in the null space of the
+    task, pushes the joints toward the middle of their ranges (hoang2011 eq. 20).
+    Joints without finite limits get c_i = 0.
+
+    Args:
+        robot: the model.
+        weights: c_i >= 0, a scalar or (n_arm,); default 1.
+    """
+
+    def __init__(self, robot: Robot, weights: float | np.ndarray = 1.0) -> None:
+        lower, upper = robot.arm_limits
+        weights = np.broadcast_to(np.asarray(weights, dtype=float), lower.shape).copy() if np.ndim(weights) == 0 \
+            else np.asarray(weights, dtype=float)
+        if weights.shape != lower.shape or not np.all(np.isfinite(weights)) or np.any(weights < 0):
+            raise UVMSError(f"joint-limit weights must be {lower.size} finite numbers >= 0, got {weights!r}")
+        bounded = np.isfinite(lower) & np.isfinite(upper) & (upper > lower)
+        self.robot = robot
+        self.weights = np.where(bounded, weights, 0.0)
+        self.middle = np.where(bounded, 0.5 * (lower + upper), 0.0)
+        self.range = np.where(bounded, upper - lower, 1.0)
+
+    def value(self, q: np.ndarray) -> float:
+        """S(q) [-]."""
+        normalized = (self.robot.arm_configuration(q) - self.middle) / self.range
+        return float(0.5 * np.sum(self.weights * normalized**2))
+
+    def arm_gradient(self, arm: np.ndarray) -> np.ndarray:
+        """dS/dq_arm (n_arm,) at arm joint values."""
+        return self.weights * (arm - self.middle) / self.range**2
+
+    def gradient(self, q: np.ndarray) -> np.ndarray:
+        """dS/dv (nv,): zero on the vehicle entries."""
+        gradient = np.zeros(self.robot.nv)
+        gradient[self.robot.n_vehicle:] = self.arm_gradient(self.robot.arm_configuration(q))
+        return gradient

@@ -1,0 +1,32 @@
+"""The Task interface."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from ..state import KinematicState
+
+
+class Task(ABC):
+    """Something to achieve, expressed as k scalar rows.
+
+    Subclasses give ``error`` (k,) = desired - current, ``jacobian`` (k, nv) with
+    d(current)/dt = J v, and ``feedforward`` (k,) = d(desired)/dt.
+    """
+
+    #: number of rows
+    dim: int
+
+    @abstractmethod
+    def error(self, state: KinematicState) -> np.ndarray:
+        """Task error e = desired - current (k,)."""
+
+    @abstractmethod
+    def jacobian(self, state: KinematicState) -> np.ndarray:
+        """Task Jacobian (k, nv): d(current)/dt = J v."""
+
+    def feedforward(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - state used by subclasses
+        """Desired task velocity (k,); zero unless a target velocity was set."""
+        return np.zeros(self.dim)
