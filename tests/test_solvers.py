@@ -302,3 +302,32 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
         assert np.all(np.isfinite(inverse @ np.asarray(xdot)))
     priority = uvms.priority_velocity(robot, q, [task, uvms.VehicleTask.at_rest(robot)], damping=damping)
     assert np.all(np.isfinite(priority.v))
+
+
+# -------------------------------------------------------------- hot path
+def test_pose_clik_hot_path_equals_the_general_clik(rng):
+    from uvms.solvers.pose_clik import PoseCLIK
+
+    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    potential = uvms.JointLimitPotential(robot)
+    for alpha, twist in ((0.0, None), (2.0, rng.normal(size=6))):
+        hot = PoseCLIK(robot, gain=1.5, damping=1e-3, potential=potential, alpha=alpha)
+        for _ in range(10):
+            q = robot.random_configuration(rng)
+            target = robot.fk(robot.random_configuration(rng))
+            hot.set_target(target, twist)
+            task = uvms.FrameTask(robot, target=target)
+            if twist is not None:
+                task.set_target_velocity(twist)
+            general = uvms.clik_velocity(robot, q, task, gain=1.5, damping=1e-3, potential=potential, alpha=alpha)
+            assert np.allclose(hot.velocity(q), general.v, atol=1e-12, rtol=1e-10)
+            assert np.allclose(hot.error, general.error, atol=1e-14)
+    hot = PoseCLIK(robot, gain=2.0, damping=1e-9)
+    q = robot.random_configuration(rng)
+    target = robot.fk(q) * pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, -0.1), np.array([0.1, -0.1, 0.05]))
+    hot.set_target(target)
+    for _ in range(300):
+        q = hot.step(q, 0.05)
+    assert np.linalg.norm(hot.error) <= 1e-10
+    with pytest.raises(SolverInputError):
+        PoseCLIK(robot, damping=0.0)

@@ -1,0 +1,145 @@
+"""One CLIK step and pose IK, measured side by side against Pinocchio, pink and roboticstoolbox.
+
+Model: a 6-DOF floating base carrying a UR5 (6 + 6 DOF). The step is a pose
+task with DLS, a joint-limit null-space term and integration on the manifold.
+Times are ratios to one ``pin.forwardKinematics`` call measured in the same run
+(this machine is shared and noisy: absolute times are not comparable).
+
+    pip install -e ".[bench]"
+    python benchmarks/bench_clik.py [--targets 1000] [--repeat 2000]
+
+roboticstoolbox has its own UR5 (DH parameters, rtb.models.DH.UR5) preceded by
+a 6-DOF base (tx ty tz Rz Ry Rx): the same kinematic structure, its own frames.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+import timeit
+import warnings
+
+import numpy as np
+import pinocchio as pin
+
+import uvms
+from uvms.solvers.pose_clik import PoseCLIK
+
+DT = 0.01
+
+
+def best_time(function, repeat: int) -> float:
+    """Best-of-5 mean time of one call [s]."""
+    return min(timeit.repeat(function, number=repeat, repeat=5)) / repeat
+
+
+def numpy_dls_step(robot: uvms.Robot, q: np.ndarray, target: pin.SE3, potential, damping=1e-6) -> np.ndarray:
+    """A hand-written numpy CLIK step, as users write it (the '25x' reference of the issue)."""
+    frame = robot.frame_id()
+    jacobian = pin.computeFrameJacobian(robot.model, robot.data, q, frame, pin.LOCAL_WORLD_ALIGNED)
+    pose = robot.data.oMf[frame]
+    error = np.concatenate([target.translation - pose.translation, pin.log3(target.rotation @ pose.rotation.T)])
+    inverse = jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + damping**2 * np.eye(6), np.eye(6))
+    z0 = -potential.gradient(q)
+    v = inverse @ error + (np.eye(robot.nv) - inverse @ jacobian) @ z0
+    return pin.integrate(robot.model, q, v * DT)
+
+
+def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
+    """Cost of one CLIK step per implementation, relative to pin.forwardKinematics."""
+    rng = np.random.default_rng(0)
+    q = robot.random_configuration(rng)
+    target = robot.fk(robot.random_configuration(rng))
+    potential = uvms.JointLimitPotential(robot)
+    model, data = robot.model, robot.data
+    hot = PoseCLIK(robot, gain=1.0, damping=1e-6, potential=potential, alpha=1.0)
+    hot.set_target(target)
+    task = uvms.FrameTask(robot, target=target)
+    calls = {
+        "uvms PoseCLIK.step": lambda: hot.step(q, DT),
+        "uvms clik_step (general, with diagnostics)": lambda: uvms.clik_step(
+            robot, q, task, DT, damping=1e-6, potential=potential, alpha=1.0),
+        "plain numpy DLS step": lambda: numpy_dls_step(robot, q, target, potential),
+    }
+    try:
+        import pink
+
+        configuration = pink.Configuration(robot.model.copy(), robot.model.copy().createData(), q)
+        pink_task = pink.tasks.FrameTask(robot.ee_frames[0], position_cost=1.0, orientation_cost=1.0)
+        pink_task.set_target(target)
+        posture = pink.tasks.PostureTask(cost=1e-3)
+        posture.set_target(q)
+
+        def pink_step():
+            configuration.update(q)
+            velocity = pink.solve_ik(configuration, [pink_task, posture], DT, solver="daqp")
+            return pin.integrate(configuration.model, q, velocity * DT)
+
+        calls["pink solve_ik step (daqp)"] = pink_step
+    except ImportError:
+        print("pink not installed: pip install -e '.[bench]'")
+    reference = best_time(lambda: pin.forwardKinematics(model, data, q), repeat * 5)
+    ratios = {"pin.forwardKinematics": 1.0}
+    for label, call in calls.items():
+        ratios[label] = best_time(call, repeat) / reference
+    ratios["_reference_us"] = reference * 1e6
+    return ratios
+
+
+def ik_comparison(robot: uvms.Robot, targets: int) -> list[tuple[str, float, float, float]]:
+    """(library, success rate at 1e-10, median residual, median time per solve [s]) on random reachable targets."""
+    rng = np.random.default_rng(1)
+    rows = []
+    times, errors, successes = [], [], 0
+    for index in range(targets):
+        target = robot.fk(robot.random_configuration(rng))
+        started = time.perf_counter()
+        result = uvms.solve_ik(robot, target, rng=index)
+        times.append(time.perf_counter() - started)
+        errors.append(result.error)
+        successes += result.success
+    rows.append(("uvms.solve_ik", successes / targets, statistics.median(errors), statistics.median(times)))
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            import roboticstoolbox as rtb
+            from roboticstoolbox import ET, ETS
+        arm = ETS([ET.tx(), ET.ty(), ET.tz(), ET.Rz(), ET.Ry(), ET.Rx()]) * rtb.models.DH.UR5().ets()
+        for tolerance in (1e-10, 1e-6):
+            times, errors, successes = [], [], 0
+            rng = np.random.default_rng(1)
+            for _ in range(targets):
+                goal = arm.eval(rng.uniform(-np.pi, np.pi, arm.n))
+                started = time.perf_counter()
+                solution = arm.ik_LM(goal, tol=tolerance, joint_limits=False)
+                times.append(time.perf_counter() - started)
+                errors.append(solution.residual)
+                successes += bool(solution.success) and solution.residual <= 1e-10
+            rows.append((f"roboticstoolbox ik_LM (tol {tolerance:g})", successes / targets,
+                         statistics.median(errors), statistics.median(times)))
+    except ImportError:
+        print("roboticstoolbox not installed: pip install -e '.[bench]'")
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--targets", type=int, default=1000, help="random reachable IK targets")
+    parser.add_argument("--repeat", type=int, default=2000, help="calls per timing")
+    options = parser.parse_args()
+    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    ratios = clik_step_ratios(robot, options.repeat)
+    print(f"One CLIK step, {robot.name} on a 6-DOF floating base (nv = {robot.nv}); "
+          f"pin.forwardKinematics = {ratios.pop('_reference_us'):.2f} us in this run (goal: uvms <= 10x)\n")
+    print("| implementation | time / pin.forwardKinematics |\n|---|---|")
+    for label, ratio in ratios.items():
+        print(f"| {label} | {ratio:.1f} |")
+    print(f"\nPose IK on {options.targets} random reachable targets\n")
+    print("| library | success at 1e-10 | median residual | median time per solve [ms] |\n|---|---|---|---|")
+    for label, rate, residual, seconds in ik_comparison(robot, options.targets):
+        print(f"| {label} | {100 * rate:.1f} % | {residual:.1e} | {1e3 * seconds:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
