@@ -77,6 +77,22 @@ def command_info(options: argparse.Namespace) -> int:
     return 0
 
 
+def command_run(options: argparse.Namespace) -> int:
+    """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures."""
+    from .scenario import run  # the scenario layer pulls in scipy and matplotlib
+
+    result = run(options.scenario, out=options.out, overrides=options.set or (),
+                 progress=False if options.quiet else None)
+    folder = result.files[0].parent
+    metrics = result.metrics
+    print(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)")
+    for key in ("max_position_error", "max_orientation_error", "max_joint_limit_violation", "vehicle_travel",
+                "vehicle_yaw_range", "arm_travel"):
+        print(f"  {key:<27} {metrics[key]:.3e}")
+    print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``uvms``."""
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
@@ -87,6 +103,13 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
     info.add_argument("--ee", action="append", metavar="FRAME", help="end-effector frame (repeatable)")
     info.set_defaults(handler=command_info)
+    run = commands.add_parser("run", help="run a scenario (TOML): metrics.json, trajectory.csv/.npz, figures")
+    run.add_argument("scenario", help="scenario file, e.g. scenarios/hoang2011_w1.toml")
+    run.add_argument("--out", help="output folder (default: out/<scenario name>)")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="override a scenario key, e.g. solver.gain=2 or model.args.l1=0.6 (repeatable)")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.set_defaults(handler=command_run)
     return parser
 
 

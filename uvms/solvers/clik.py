@@ -15,14 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-import scipy.linalg
 
 from ..kinematics import base_velocity_from_momentum
 from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
-from .inverses import SolverInputError, check_damping, dls, smallest_singular_value, variable_damping, weights_cholesky
+from .inverses import RCOND, SolverInputError, check_damping, variable_damping, weights_factor
 from .results import StepResult, VelocityResult
 from .stack import as_task_list, stack
 
@@ -49,15 +48,28 @@ def damped_weighted_inverse(
     Returns:
         (inverse (n, k), sigma_min of the weighted Jacobian, damping used).
     """
-    columns = jacobian.shape[1]
-    cholesky = None if weights is None else weights_cholesky(weights, columns)
-    scaled = jacobian if cholesky is None else scipy.linalg.solve_triangular(cholesky, jacobian.T, lower=True).T
-    sigma_min = smallest_singular_value(scaled)
-    value = damping(sigma_min) if isinstance(damping, VariableDamping) else check_damping(damping)
-    inverse = dls(scaled, value)
-    if cholesky is not None:
-        inverse = scipy.linalg.solve_triangular(cholesky.T, inverse, lower=False)
+    factor = None if weights is None else weights_factor(weights, jacobian.shape[1])
+    scaled = jacobian if factor is None else factor.scale(jacobian)
+    inverse, sigma_min, value = svd_inverse(scaled, damping)
+    if factor is not None:
+        inverse = factor.unscale(inverse)
     return inverse, sigma_min, value
+
+
+def svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
+    """DLS inverse V diag(s / (s^2 + l^2)) U^T from one SVD, which also gives sigma_min and the variable damping.
+
+    With l = 0, singular values below RCOND * s_max count as zero (the pseudo-inverse).
+    """
+    u, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
+    sigma_min = float(singular[-1]) if jacobian.shape[0] <= jacobian.shape[1] and singular.size else 0.0
+    value = damping(sigma_min) if isinstance(damping, VariableDamping) else check_damping(damping)
+    if value > 0.0:
+        factors = singular / (singular**2 + value**2)
+    else:
+        cutoff = RCOND * (singular[0] if singular.size else 0.0)
+        factors = np.divide(1.0, singular, out=np.zeros_like(singular), where=singular > cutoff)
+    return (vt.T * factors) @ u.T, sigma_min, value
 
 
 def clik_velocity(
@@ -106,9 +118,10 @@ def clik_velocity(
         nullspace_motion = -alpha * potential.gradient(state.q)[first:]
     free = np.arange(solved_jacobian.shape[1])
     held: dict[int, float] = {}
-    lower, upper, arm_now = limits_in_solved_coordinates(robot, state.q, first)
-    if enforce_limits and (dt is None or dt <= 0):
-        raise SolverInputError("enforce_limits needs the step dt > 0")
+    if enforce_limits:
+        if dt is None or dt <= 0:
+            raise SolverInputError("enforce_limits needs the step dt > 0")
+        lower, upper, arm_now = limits_in_solved_coordinates(robot, state.q, first)
     for _ in range(solved_jacobian.shape[1] + 1):
         solution, sigma_min, used = solve_with_held(
             solved_jacobian, command, weights, damping, nullspace_motion, free, held)

@@ -29,14 +29,18 @@ def constrained_velocity(
     constraints: Task | Sequence[Task],
     *,
     gain: float | np.ndarray = 1.0,
+    constraint_gain: float | np.ndarray | None = None,
 ) -> VelocityResult:
     """Velocity meeting the constraint rows first and exactly, then the task rows.
+
+    ``gain`` is the K of the task rows; ``constraint_gain`` that of the constraint rows (default: ``gain``).
 
     Returns:
         VelocityResult; ``residual`` is the task residual, ``sigma_min`` that of [C; J].
     """
     state = q if isinstance(q, KinematicState) else KinematicState(robot, q)
-    constraint_jacobian, _, constraint_values = stack(state, as_task_list(constraints), gain)
+    constraint_jacobian, _, constraint_values = stack(
+        state, as_task_list(constraints), gain if constraint_gain is None else constraint_gain)
     jacobian, error, command = stack(state, as_task_list(tasks), gain)
     system = np.vstack([constraint_jacobian, jacobian])
     rhs = np.concatenate([constraint_values, command])

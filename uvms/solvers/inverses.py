@@ -6,8 +6,6 @@ All return the inverse matrix (n, m) of a Jacobian J (m, n), like ``numpy.linalg
 from __future__ import annotations
 
 import numpy as np
-import scipy.linalg
-
 from ..errors import UVMSError
 
 #: Relative cut-off below which singular values count as zero.
@@ -41,24 +39,47 @@ def weighted_pinv(jacobian: np.ndarray, weights: np.ndarray, rcond: float = RCON
     Computed as L^-T (J L^-T)^+ with W = L L^T, which stays exact when J loses rank.
 
     Raises:
-        SolverInputError: W not (n, n), not symmetric or not positive definite.
+        SolverInputError: W not (n,) positive or (n, n) symmetric positive definite.
     """
     jacobian = check_matrix(jacobian, "J")
-    cholesky = weights_cholesky(weights, jacobian.shape[1])
-    scaled = scipy.linalg.solve_triangular(cholesky, jacobian.T, lower=True).T  # J L^-T
-    return scipy.linalg.solve_triangular(cholesky.T, np.linalg.pinv(scaled, rcond=rcond), lower=False)
+    factor = weights_factor(weights, jacobian.shape[1])
+    return factor.unscale(np.linalg.pinv(factor.scale(jacobian), rcond=rcond))
 
 
-def weights_cholesky(weights: np.ndarray, size: int) -> np.ndarray:
-    """Lower Cholesky factor L of a symmetric positive-definite weighting matrix W = L L^T."""
+class WeightsFactor:
+    """W = L L^T, applied as J -> J L^-T and X -> L^-T X (diagonal W: plain column scaling)."""
+
+    def __init__(self, diagonal: np.ndarray | None = None, cholesky: np.ndarray | None = None) -> None:
+        self.inverse_sqrt = None if diagonal is None else 1.0 / np.sqrt(diagonal)
+        self.cholesky = cholesky
+
+    def scale(self, jacobian: np.ndarray) -> np.ndarray:
+        """J L^-T (k, n)."""
+        if self.inverse_sqrt is not None:
+            return jacobian * self.inverse_sqrt
+        return np.linalg.solve(self.cholesky, jacobian.T).T
+
+    def unscale(self, inverse: np.ndarray) -> np.ndarray:
+        """L^-T X (n, k)."""
+        if self.inverse_sqrt is not None:
+            return inverse * self.inverse_sqrt[:, None]
+        return np.linalg.solve(self.cholesky.T, inverse)
+
+
+def weights_factor(weights: np.ndarray, size: int) -> WeightsFactor:
+    """Factor a weighting matrix: (size,) positive diagonal or (size, size) symmetric positive definite."""
     weights = np.asarray(weights, dtype=float)
     if weights.ndim == 1:
-        weights = np.diag(weights)
+        if weights.shape != (size,) or not np.all(np.isfinite(weights)):
+            raise SolverInputError(f"W must be ({size},) or ({size}, {size}) and finite, got shape {weights.shape}")
+        if np.any(weights <= 0):
+            raise SolverInputError(f"W must be positive definite: diagonal entries must be > 0, got {weights}")
+        return WeightsFactor(diagonal=weights)
     weights = check_matrix(weights, "W", (size, size))
-    if not np.allclose(weights, weights.T, rtol=1e-12, atol=1e-12 * np.abs(weights).max()):
+    if np.max(np.abs(weights - weights.T)) > 1e-12 * np.abs(weights).max():
         raise SolverInputError("W must be symmetric")
     try:
-        return np.linalg.cholesky(weights)
+        return WeightsFactor(cholesky=np.linalg.cholesky(weights))
     except np.linalg.LinAlgError:
         raise SolverInputError(f"W must be positive definite (eigenvalues {np.linalg.eigvalsh(weights).round(6)})") from None
 
@@ -75,10 +96,12 @@ def dls(jacobian: np.ndarray, damping: float) -> np.ndarray:
     if damping == 0.0:
         return np.linalg.pinv(jacobian, rcond=RCOND)
     if rows <= columns:
-        normal = jacobian @ jacobian.T + damping**2 * np.eye(rows)
-        return scipy.linalg.solve(normal, jacobian, assume_a="pos").T
-    normal = jacobian.T @ jacobian + damping**2 * np.eye(columns)
-    return scipy.linalg.solve(normal, jacobian.T, assume_a="pos")
+        normal = jacobian @ jacobian.T
+        normal[np.diag_indices(rows)] += damping**2
+        return np.linalg.solve(normal, jacobian).T
+    normal = jacobian.T @ jacobian
+    normal[np.diag_indices(columns)] += damping**2
+    return np.linalg.solve(normal, jacobian.T)
 
 
 def check_damping(damping: float) -> float:

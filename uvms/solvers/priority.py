@@ -62,15 +62,21 @@ def priority_velocity(
     q: np.ndarray | KinematicState,
     levels: Sequence[Task | Sequence[Task]],
     *,
-    gain: float = 1.0,
+    gain: float | Sequence[float] = 1.0,
     method: str = "robust",
     damping: float = 0.0,
 ) -> PriorityResult:
-    """Task priority over task levels (each a task or a list of tasks), commands xdot_d + K e."""
+    """Task priority over task levels (each a task or a list of tasks), commands xdot_d + K e.
+
+    ``gain`` is one K for every level or one per level.
+    """
     state = q if isinstance(q, KinematicState) else KinematicState(robot, q)
+    gains = list(gain) if isinstance(gain, (list, tuple)) and len(levels) > 1 else [gain] * len(levels)
+    if len(gains) != len(levels):
+        raise SolverInputError(f"{len(levels)} levels need one gain each, got {len(gains)}")
     jacobians, commands = [], []
-    for level in levels:
-        jacobian, _, command = stack(state, as_task_list(level), gain)
+    for level, level_gain in zip(levels, gains):
+        jacobian, _, command = stack(state, as_task_list(level), level_gain)
         jacobians.append(jacobian)
         commands.append(command)
     return task_priority(jacobians, commands, method=method, damping=damping)

@@ -25,9 +25,9 @@ def gain_matrix(gain: float | np.ndarray, size: int) -> np.ndarray:
     if gain_array.ndim == 0:
         gain_array = np.full(size, float(gain_array))
     if gain_array.ndim == 1:
-        if gain_array.shape != (size,):
-            raise SolverInputError(f"gain must be a scalar, ({size},) or ({size}, {size}), got shape {gain_array.shape}")
-        gain_array = np.diag(gain_array)
+        if gain_array.shape != (size,) or not np.all(np.isfinite(gain_array)) or np.any(gain_array < 0):
+            raise SolverInputError(f"gain must be a finite scalar >= 0, ({size},) or ({size}, {size}), got {gain!r}")
+        return np.diag(gain_array)
     if gain_array.shape != (size, size) or not np.all(np.isfinite(gain_array)):
         raise SolverInputError(f"gain must be a finite scalar, ({size},) or ({size}, {size}), got shape {gain_array.shape}")
     symmetric = 0.5 * (gain_array + gain_array.T)

@@ -83,7 +83,10 @@ class FrameTask(Task):
 
     def full_error(self, state: KinematicState) -> np.ndarray:
         """All six error rows (6,): position then orientation."""
-        target, pose = self._target(), state.pose(self.frame_id)
+        return self.full_error_between(self._target(), state.pose(self.frame_id))
+
+    def full_error_between(self, target: pin.SE3, pose: pin.SE3) -> np.ndarray:
+        """Six error rows (6,) of ``pose`` with respect to ``target``, in this task's orientation form."""
         error = np.empty(6)
         error[:3] = target.translation - pose.translation
         if self.orientation == "log":

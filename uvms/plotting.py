@@ -1,0 +1,95 @@
+"""Figures of a scenario run (matplotlib, Agg): desired motion, vehicle, joints, errors, path, velocities."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from . import outputs  # noqa: E402
+from .simulate import SimulationResult  # noqa: E402
+
+VEHICLE_LABELS = {
+    "planar": ("x [m]", "y [m]", "psi [rad]"),
+    "floating": ("x [m]", "y [m]", "z [m]", "roll [rad]", "pitch [rad]", "yaw [rad]"),
+}
+VELOCITY_LABELS = {
+    "planar": ("u [m/s]", "v [m/s]", "r [rad/s]"),
+    "floating": ("u [m/s]", "v [m/s]", "w [m/s]", "p [rad/s]", "q [rad/s]", "r [rad/s]"),
+}
+
+
+def stacked(t: np.ndarray, series: np.ndarray, labels, title: str, limits=None, dashed=None):
+    """One subplot per column of ``series`` against t; optional limit lines and dashed references."""
+    count = series.shape[1]
+    figure, axes = plt.subplots(count, 1, figsize=(7, 1.9 * count + 0.6), sharex=True, squeeze=False)
+    for index, axis in enumerate(axes[:, 0]):
+        axis.plot(t, series[:, index], color="C0", label="actual" if dashed is not None else None)
+        if dashed is not None:
+            axis.plot(t, dashed[:, index], "--", color="C1", label="desired")
+        if limits is not None and np.isfinite(limits[0][index]):
+            for bound in (limits[0][index], limits[1][index]):
+                axis.axhline(bound, color="0.5", linestyle=":", linewidth=1)
+        axis.set_ylabel(labels[index])
+        axis.grid(True, alpha=0.3)
+    if dashed is not None:
+        axes[0, 0].legend(loc="upper right", fontsize=8)
+    axes[-1, 0].set_xlabel("t [s]")
+    figure.suptitle(title)
+    figure.tight_layout()
+    return figure
+
+
+def scenario_figures(result: SimulationResult, trajectory, folder: str | os.PathLike, title: str = "") -> list[Path]:
+    """Write the standard figures of a run into ``folder``; returns their paths."""
+    folder = Path(folder)
+    robot, t = result.robot, result.t
+    figures = {}
+    speed = np.array([np.linalg.norm(trajectory(time_).twist[:3]) for time_ in t])
+    desired = np.column_stack([speed, result.desired_position[:, :2], result.desired_rpy[:, 2]])
+    figures["desired_motion.png"] = stacked(
+        t, desired, ("speed [m/s]", "x_d [m]", "y_d [m]", "yaw_d [rad]"), f"{title}: desired end-effector motion")
+    if robot.base_type != "fixed":
+        figures["vehicle.png"] = stacked(t, result.vehicle_pose(), VEHICLE_LABELS[robot.base_type],
+                                         f"{title}: vehicle pose")
+        figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], VELOCITY_LABELS[robot.base_type],
+                                                  f"{title}: vehicle body velocities (FLU)")
+    figures["joints.png"] = stacked(t, result.arm(), [f"{name} [rad]" for name in robot.arm_joint_names],
+                                    f"{title}: arm joints (dotted: limits)", limits=robot.arm_limits)
+    figure, axis = plt.subplots(figsize=(7, 3.2))
+    floor = 1e-17  # log axes: exact zeros are drawn at the floor
+    axis.semilogy(t, np.maximum(result.position_error, floor), label="position error [m]")
+    if np.any(result.orientation_error > 0):
+        axis.semilogy(t, np.maximum(result.orientation_error, floor), label="orientation error [rad]")
+    axis.set_xlabel("t [s]")
+    axis.grid(True, which="both", alpha=0.3)
+    axis.legend()
+    axis.set_title(f"{title}: tracking error")
+    figure.tight_layout()
+    figures["errors.png"] = figure
+    figure, axis = plt.subplots(figsize=(6, 6))
+    axis.plot(result.desired_position[:, 0], result.desired_position[:, 1], "--", color="C1", label="desired")
+    axis.plot(result.ee_position[:, 0], result.ee_position[:, 1], color="C0", linewidth=1, label="end effector")
+    if robot.base_type != "fixed":
+        vehicle = result.vehicle_pose()
+        axis.plot(vehicle[:, 0], vehicle[:, 1], color="C2", label="vehicle")
+        axis.plot(vehicle[0, 0], vehicle[0, 1], "o", color="C2")
+    axis.set_aspect("equal", adjustable="datalim")
+    axis.set_xlabel("x [m]")
+    axis.set_ylabel("y [m]")
+    axis.grid(True, alpha=0.3)
+    axis.legend()
+    axis.set_title(f"{title}: paths in the x-y plane")
+    figure.tight_layout()
+    figures["path.png"] = figure
+    written = []
+    for name, figure in figures.items():
+        outputs.save_figure(figure, folder / name)
+        plt.close(figure)
+        written.append(folder / name)
+    return written

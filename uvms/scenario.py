@@ -1,0 +1,433 @@
+"""Scenarios: one TOML file names a model, a task, a trajectory and a solver; ``run`` computes it.
+
+The schema (sections, keys, types, defaults) is :data:`SCHEMA`; unknown keys
+are rejected with the list of valid ones, and ``--set KEY=VALUE`` overrides any
+key (dotted path, e.g. ``solver.gain=2`` or ``model.args.l1=0.6``).
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import sys
+import time
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from . import outputs
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+from .errors import UVMSError
+from .model import load
+from .robot import Robot
+from .simulate import SimulationResult, simulate
+from .solvers import (
+    VariableDamping,
+    clik_velocity,
+    constrained_velocity,
+    initial_configuration,
+    priority_velocity,
+)
+from .tasks import FrameTask, JointLimitPotential, VehicleTask
+from .trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw
+
+NUMBER = (int, float)
+NUMBERS = "numbers"  # a list of numbers
+REQUIRED = object()
+
+
+class ScenarioError(UVMSError):
+    """A scenario file or override is invalid (unknown key, wrong type, impossible value)."""
+
+
+#: section -> key -> (accepted types, default, allowed values or None). "args"/"velocities" hold free tables.
+SCHEMA: dict[str, dict[str, tuple]] = {
+    "scenario": {
+        "name": (str, "", None),
+        "description": (str, "", None),
+    },
+    "model": {
+        "path": (str, REQUIRED, None),
+        "base": (str, "", ("", "floating", "planar", "fixed")),
+        "ee": (str, "", None),
+        "args": (dict, {}, None),
+    },
+    "task": {
+        "frame": (str, "", None),
+        "axes": (list, [], None),
+        "orientation_error": (str, "log", ("log", "euler")),
+    },
+    "trajectory": {
+        "type": (str, "circle", ("circle", "line", "pose")),
+        "start": (NUMBERS, [], None),
+        "center": (NUMBERS, [], None),
+        "center_offset": (NUMBERS, [], None),
+        "normal": (NUMBERS, [0.0, 0.0, 1.0], None),
+        "end": (NUMBERS, [], None),
+        "end_offset": (NUMBERS, [], None),
+        "orientation": (NUMBERS, [], None),
+        "end_orientation": (NUMBERS, [], None),
+        "law": (str, "trapezoid", ("trapezoid", "cubic", "quintic")),
+        "speed": (NUMBER, 0.0, None),
+        "laps": (NUMBER, 0.0, None),
+        "duration": (NUMBER, REQUIRED, None),
+        "accel_time": (NUMBER, 0.0, None),
+    },
+    "solver": {
+        "method": (str, "clik", ("clik", "task_priority", "kinematic_constraint")),
+        "gain": ((int, float, list), 1.0, None),
+        "weights": (NUMBERS, [], None),
+        "damping": (NUMBER, 0.0, None),
+        "damping_epsilon": (NUMBER, 0.0, None),
+        "damping_max": (NUMBER, 0.0, None),
+        "alpha": (NUMBER, 0.0, None),
+        "joint_limit_weights": ((int, float, list), 1.0, None),
+        "free_floating": (bool, False, None),
+        "enforce_limits": (bool, False, None),
+        "priority": (str, "robust", ("robust", "classic")),
+    },
+    "vehicle": {
+        "velocities": (dict, {}, None),
+        "heading": (NUMBER, None, None),
+        "depth": (NUMBER, None, None),
+        "gain": (NUMBER, 1.0, None),
+    },
+    "initial": {
+        "method": (str, "given", ("given", "optimize")),
+        "base": (NUMBERS, [], None),
+        "arm": (NUMBERS, [], None),
+    },
+    "simulation": {
+        "dt": (NUMBER, REQUIRED, None),
+        "duration": (NUMBER, 0.0, None),
+        "integrator": (str, "rk4", ("euler", "rk4")),
+    },
+    "outputs": {
+        "figures": (bool, True, None),
+    },
+}
+REQUIRED_SECTIONS = ("model", "trajectory", "simulation")
+
+
+# ------------------------------------------------------------------ parsing
+def read_scenario(path: str | os.PathLike, overrides: Sequence[str] = ()) -> dict:
+    """Read, override and validate a scenario file; relative model paths become absolute.
+
+    Raises:
+        ScenarioError: unreadable file, bad TOML, unknown key, wrong type, impossible value.
+    """
+    path = Path(path)
+    try:
+        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ScenarioError(f"scenario file {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"cannot read scenario {str(path)!r}: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
+    for override in overrides:
+        apply_override(raw, override)
+    scenario = validate(raw, str(path))
+    model_path = Path(scenario["model"]["path"])
+    if not model_path.is_absolute() and (path.parent / model_path).exists():
+        scenario["model"]["path"] = str((path.parent / model_path).resolve())
+    scenario["scenario"]["name"] = scenario["scenario"]["name"] or path.stem
+    return scenario
+
+
+def parse_value(text: str) -> Any:
+    """A --set value as TOML (number, bool, list, quoted string); bare words stay strings."""
+    try:
+        return tomllib.loads(f"value = {text}")["value"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_override(raw: dict, assignment: str) -> None:
+    """Apply ``section.key[.sub]=VALUE`` to the raw scenario."""
+    key, sep, text = assignment.partition("=")
+    parts = key.strip().split(".")
+    if not sep or len(parts) < 2 or not all(parts):
+        raise ScenarioError(f"--set expects SECTION.KEY=VALUE (e.g. solver.gain=2, model.args.l1=0.6), got {assignment!r}")
+    node = raw
+    for part in parts[:-1]:
+        node = node.setdefault(part, {})
+        if not isinstance(node, dict):
+            raise ScenarioError(f"--set {key}: {part!r} is not a table")
+    node[parts[-1]] = parse_value(text.strip())
+
+
+def validate(raw: Mapping, origin: str) -> dict:
+    """Check sections, keys and types against :data:`SCHEMA`; fill the defaults."""
+    unknown = sorted(set(raw) - set(SCHEMA))
+    if unknown:
+        raise ScenarioError(f"{origin}: unknown section(s) {', '.join(unknown)}; valid: {', '.join(SCHEMA)}")
+    missing = [section for section in REQUIRED_SECTIONS if section not in raw]
+    if missing:
+        raise ScenarioError(f"{origin}: missing section(s) {', '.join(missing)}")
+    scenario: dict = {}
+    for section, keys in SCHEMA.items():
+        given = raw.get(section, {})
+        if not isinstance(given, dict):
+            raise ScenarioError(f"{origin}: [{section}] must be a table")
+        unknown = sorted(set(given) - set(keys))
+        if unknown:
+            raise ScenarioError(f"{origin}: unknown key(s) {', '.join(f'{section}.{k}' for k in unknown)}; "
+                                f"valid in [{section}]: {', '.join(keys)}")
+        scenario[section] = {}
+        for key, (kinds, default, allowed) in keys.items():
+            if key not in given:
+                if default is REQUIRED:
+                    raise ScenarioError(f"{origin}: {section}.{key} is required")
+                scenario[section][key] = copy.deepcopy(default)
+                continue
+            scenario[section][key] = check_value(f"{section}.{key}", given[key], kinds, allowed, origin)
+    return scenario
+
+
+def check_value(name: str, value: Any, kinds, allowed, origin: str) -> Any:
+    """One value against its type and allowed set."""
+    if kinds == NUMBERS:
+        if not isinstance(value, list) or not all(isinstance(v, NUMBER) and not isinstance(v, bool) for v in value):
+            raise ScenarioError(f"{origin}: {name} must be a list of numbers, got {value!r}")
+        if not all(np.isfinite(value)):
+            raise ScenarioError(f"{origin}: {name} must be finite, got {value!r}")
+        return [float(v) for v in value]
+    kinds = kinds if isinstance(kinds, tuple) else (kinds,)
+    if isinstance(value, bool) and bool not in kinds:
+        raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
+    if not isinstance(value, kinds):
+        raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
+    if isinstance(value, (int, float)) and not isinstance(value, bool) and not np.isfinite(value):
+        raise ScenarioError(f"{origin}: {name} must be finite, got {value!r}")
+    if allowed is not None and value not in allowed:
+        raise ScenarioError(f"{origin}: {name} = {value!r} is not valid; valid: {', '.join(map(repr, allowed))}")
+    return value
+
+
+def type_names(kinds: tuple) -> str:
+    names = {int: "a number", float: "a number", str: "a string", bool: "true/false", list: "a list", dict: "a table"}
+    return " or ".join(dict.fromkeys(names[kind] for kind in kinds))
+
+
+# ------------------------------------------------------------------ building
+@dataclass
+class Setup:
+    """Everything a run needs, built from a validated scenario."""
+
+    robot: Robot
+    task: FrameTask
+    trajectory: PathTrajectory | SE3Trajectory
+    q0: np.ndarray
+    controller: Any
+    duration: float
+    initial_residual: float
+
+
+def build(scenario: dict) -> Setup:
+    """Model, task, initial configuration, trajectory and controller of a scenario."""
+    model = scenario["model"]
+    robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
+    task_section = scenario["task"]
+    task = FrameTask(robot, task_section["frame"] or None, axes=task_section["axes"] or None,
+                     orientation=task_section["orientation_error"])
+    q0, residual = initial_q(robot, task, scenario)
+    trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
+    controller = make_controller(robot, task, trajectory, scenario)
+    duration = scenario["simulation"]["duration"] or trajectory.duration
+    return Setup(robot, task, trajectory, q0, controller, float(duration), residual)
+
+
+def initial_q(robot: Robot, task: FrameTask, scenario: dict) -> tuple[np.ndarray, float]:
+    """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start."""
+    initial = scenario["initial"]
+    base = initial["base"] or None
+    arm = initial["arm"] or None
+    try:
+        q_given = robot.configuration(base=np.array(base) if base else None, arm=np.array(arm) if arm else None)
+    except UVMSError as exc:
+        raise ScenarioError(f"initial.base/initial.arm: {exc}") from None
+    if initial["method"] == "given":
+        return q_given, 0.0
+    trajectory = scenario["trajectory"]
+    if not trajectory["start"] or not trajectory["orientation"]:
+        raise ScenarioError("initial.method = 'optimize' needs trajectory.start and trajectory.orientation")
+    task.set_target(np.concatenate([trajectory["start"], trajectory["orientation"]]))
+    potential = JointLimitPotential(robot, weights=np.asarray(scenario["solver"]["joint_limit_weights"], dtype=float))
+    result = initial_configuration(robot, task, potential, q_given)
+    if not result.success:
+        raise ScenarioError(f"no initial configuration reaches the trajectory start (residual {result.residual:.3g})")
+    return result.q, result.residual
+
+
+def vector(values: list[float], size: int, name: str) -> np.ndarray:
+    if len(values) != size:
+        raise ScenarioError(f"trajectory.{name} must have {size} numbers, got {len(values)}")
+    return np.array(values, dtype=float)
+
+
+def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3Trajectory:
+    """The desired end-effector motion; start and orientation default to the frame's initial pose."""
+    start = vector(section["start"], 3, "start") if section["start"] else start_pose.translation.copy()
+    orientation = (vector(section["orientation"], 3, "orientation") if section["orientation"]
+                   else pin.rpy.matrixToRpy(start_pose.rotation))
+    kind = section["type"]
+    if kind == "circle":
+        if section["center"]:
+            center = vector(section["center"], 3, "center")
+        elif section["center_offset"]:
+            center = start + vector(section["center_offset"], 3, "center_offset")
+        else:
+            raise ScenarioError("a circle trajectory needs trajectory.center or trajectory.center_offset")
+        path = CirclePath(center, start, vector(section["normal"], 3, "normal"))
+    else:
+        if section["end"]:
+            end = vector(section["end"], 3, "end")
+        elif section["end_offset"]:
+            end = start + vector(section["end_offset"], 3, "end_offset")
+        else:
+            raise ScenarioError(f"a {kind} trajectory needs trajectory.end or trajectory.end_offset")
+        path = LinePath(start, end)
+    law = make_law(section, path.length)
+    if kind == "pose":
+        end_orientation = (vector(section["end_orientation"], 3, "end_orientation") if section["end_orientation"]
+                           else orientation)
+        return SE3Trajectory(np.concatenate([start, orientation]), np.concatenate([path(path.length).point, end_orientation]),
+                             law)
+    return PathTrajectory(path, law, orientation)
+
+
+def make_law(section: dict, path_length: float):
+    """Time law: trapezoid from a speed, or any law from laps (circle) / the path length."""
+    duration, accel_time = section["duration"], section["accel_time"]
+    distance = section["laps"] * path_length if section["laps"] else path_length
+    if section["law"] == "trapezoid":
+        if section["speed"]:
+            return TrapezoidLaw(speed=section["speed"], duration=duration, accel_time=accel_time)
+        return TrapezoidLaw.from_distance(distance, duration, accel_time)
+    return PolynomialLaw(distance=distance, duration=duration, degree=3 if section["law"] == "cubic" else 5)
+
+
+def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
+    """(q, t) -> (v, diagnostics) for the scenario's solver method."""
+    solver, vehicle = scenario["solver"], scenario["vehicle"]
+    dt = scenario["simulation"]["dt"]
+    gain = np.asarray(solver["gain"], dtype=float)
+    damping: float | VariableDamping = solver["damping"]
+    if solver["damping_epsilon"] > 0:
+        damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
+    potential = JointLimitPotential(robot, weights=np.asarray(solver["joint_limit_weights"], dtype=float))
+    weights = np.asarray(solver["weights"], dtype=float) if solver["weights"] else None
+    method = solver["method"]
+    vehicle_task = None
+    if method != "clik":
+        if not vehicle["velocities"] and vehicle["heading"] is None and vehicle["depth"] is None:
+            raise ScenarioError(f"solver.method = {method!r} needs a [vehicle] task (velocities, heading or depth)")
+        vehicle_task = VehicleTask(robot, velocities=vehicle["velocities"], heading=vehicle["heading"],
+                                   depth=vehicle["depth"])
+
+    def follow(t: float) -> None:
+        sample = trajectory(t)
+        task.set_target(sample.pose)
+        task.set_target_velocity(sample.twist)
+
+    def controller(q: np.ndarray, t: float):
+        follow(t)
+        if method == "clik":
+            result = clik_velocity(robot, q, task, gain=gain, weights=weights, damping=damping, potential=potential,
+                                   alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
+                                   enforce_limits=solver["enforce_limits"])
+        elif method == "task_priority":
+            result = priority_velocity(robot, q, [task, vehicle_task], gain=[gain, vehicle["gain"]],
+                                       method=solver["priority"], damping=float(solver["damping"]))
+        else:
+            result = constrained_velocity(robot, q, task, vehicle_task, gain=gain, constraint_gain=vehicle["gain"])
+        return result.v, result
+
+    return controller
+
+
+# ------------------------------------------------------------------ running
+@dataclass
+class RunResult:
+    """A scenario run: its simulation, metrics and the files written."""
+
+    scenario: dict
+    setup: Setup
+    simulation: SimulationResult
+    metrics: dict
+    files: list[Path]
+
+
+def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) -> dict:
+    """The numbers of ``metrics.json``."""
+    robot = result.robot
+    arm = result.arm()
+    lower, upper = robot.arm_limits
+    violation = np.maximum(np.maximum(lower - arm, arm - upper), 0.0)
+    metrics = {
+        "max_position_error": float(result.position_error.max()),
+        "max_orientation_error": float(result.orientation_error.max()),
+        "final_position_error": float(result.position_error[-1]),
+        "rms_position_error": float(np.sqrt(np.mean(result.position_error**2))),
+        "max_joint_limit_violation": float(np.nan_to_num(violation, nan=0.0).max(initial=0.0)),
+        "arm_travel": float(np.abs(np.diff(arm, axis=0)).sum()),
+        "steps": int(len(result.t) - 1),
+        "wall_time": float(wall_time),
+        "initial_configuration": setup.q0.tolist(),
+        "initial_residual": float(setup.initial_residual),
+        "min_sigma_min": float(result.sigma_min.min()),
+        "max_damping": float(result.damping.max()),
+    }
+    if robot.base_type != "fixed":
+        vehicle = result.vehicle_pose()
+        position = vehicle[:, :2] if robot.base_type == "planar" else vehicle[:, :3]
+        yaw = vehicle[:, -1]  # unwrapped
+        metrics["vehicle_travel"] = float(np.linalg.norm(np.diff(position, axis=0), axis=1).sum())
+        metrics["vehicle_yaw_range"] = float(yaw.max() - yaw.min())
+    else:
+        metrics["vehicle_travel"] = 0.0
+        metrics["vehicle_yaw_range"] = 0.0
+    return metrics
+
+
+def run(
+    scenario_path: str | os.PathLike,
+    out: str | os.PathLike | None = None,
+    overrides: Sequence[str] = (),
+    progress: bool | None = None,
+) -> RunResult:
+    """Run a scenario file and write ``metrics.json``, ``trajectory.csv``/``.npz`` and figures into ``out``.
+
+    Args:
+        scenario_path: the TOML file.
+        out: output folder (default ``out/<scenario name>``).
+        overrides: ``SECTION.KEY=VALUE`` strings.
+        progress: progress bar (None: on a terminal only).
+    """
+    scenario = read_scenario(scenario_path, overrides)
+    out = Path(out) if out is not None else Path("out") / scenario["scenario"]["name"]
+    started = time.perf_counter()
+    setup = build(scenario)
+    simulation_section = scenario["simulation"]
+    result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration, dt=simulation_section["dt"],
+                      task=setup.task, desired=lambda t: setup.trajectory(t).pose,
+                      integrator=simulation_section["integrator"], progress=progress)
+    metrics = compute_metrics(result, setup, time.perf_counter() - started)
+    metrics["scenario"] = scenario["scenario"]["name"]
+    files = list(result.save(out))
+    if scenario["outputs"]["figures"]:
+        from .plotting import scenario_figures  # matplotlib only when figures are asked for
+
+        files += scenario_figures(result, setup.trajectory, out, title=scenario["scenario"]["name"])
+    outputs.write_json(out / "metrics.json", metrics)
+    files.append(out / "metrics.json")
+    return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files)

@@ -1,0 +1,254 @@
+"""Trajectories: time laws s(t), geometric paths p(s), and their composition into pose trajectories.
+
+A time law gives the travelled distance s(t) along a path with its first two
+derivatives; a path gives the point p(s) with dp/ds and d2p/ds2. Composed,
+they give the position, velocity and acceleration of the desired end-effector
+motion; a constant or SE(3)-interpolated orientation completes the pose.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .conventions import pose_from_xyzrpy
+from .errors import UVMSError
+
+
+@dataclass(frozen=True)
+class LawSample:
+    """s(t) [m or -], s'(t), s''(t)."""
+
+    s: float
+    ds: float
+    dds: float
+
+
+class TimeLaw:
+    """Distance s(t) from 0 to ``distance`` over ``duration``; constant outside [0, duration]."""
+
+    distance: float
+    duration: float
+
+    def __call__(self, t: float) -> LawSample:
+        if t <= 0.0:
+            return LawSample(0.0, 0.0, 0.0)
+        if t >= self.duration:
+            return LawSample(self.distance, 0.0, 0.0)
+        return self.inside(t)
+
+    def inside(self, t: float) -> LawSample:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+def check_positive(value: float, what: str, allow_zero: bool = False) -> float:
+    """A finite float > 0 (or >= 0)."""
+    value = float(value)
+    if not np.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
+        raise UVMSError(f"{what} must be finite and {'>=' if allow_zero else '>'} 0, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class TrapezoidLaw(TimeLaw):
+    """Trapezoidal speed: constant acceleration for ``accel_time``, cruise, symmetric deceleration.
+
+    Args:
+        speed: cruise speed [m/s].
+        duration: total time [s] (acceleration + cruise + deceleration).
+        accel_time: acceleration time = deceleration time [s], 0 <= accel_time <= duration / 2.
+    """
+
+    speed: float
+    duration: float
+    accel_time: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_positive(self.speed, "speed")
+        check_positive(self.duration, "duration")
+        check_positive(self.accel_time, "accel_time", allow_zero=True)
+        if self.accel_time > self.duration / 2:
+            raise UVMSError(f"accel_time {self.accel_time} s exceeds half the duration {self.duration} s")
+
+    @classmethod
+    def from_distance(cls, distance: float, duration: float, accel_time: float = 0.0) -> TrapezoidLaw:
+        """The trapezoid covering ``distance`` [m] in ``duration`` [s]."""
+        check_positive(distance, "distance")
+        return cls(speed=distance / (duration - accel_time), duration=duration, accel_time=accel_time)
+
+    @property
+    def distance(self) -> float:  # type: ignore[override]
+        return self.speed * (self.duration - self.accel_time)
+
+    def inside(self, t: float) -> LawSample:
+        v, ta, tf = self.speed, self.accel_time, self.duration
+        if ta > 0 and t < ta:
+            a = v / ta
+            return LawSample(0.5 * a * t * t, a * t, a)
+        if ta > 0 and t > tf - ta:
+            a = v / ta
+            remaining = tf - t
+            return LawSample(self.distance - 0.5 * a * remaining**2, a * remaining, -a)
+        return LawSample(v * (t - 0.5 * ta), v, 0.0)
+
+
+@dataclass(frozen=True)
+class PolynomialLaw(TimeLaw):
+    """Cubic (zero end velocities) or quintic (zero end velocities and accelerations) rest-to-rest law."""
+
+    distance: float
+    duration: float
+    degree: int = 5
+
+    def __post_init__(self) -> None:
+        check_positive(self.duration, "duration")
+        if not np.isfinite(self.distance):
+            raise UVMSError(f"distance must be finite, got {self.distance!r}")
+        if self.degree not in (3, 5):
+            raise UVMSError(f"polynomial time law degree must be 3 (cubic) or 5 (quintic), got {self.degree}")
+
+    def inside(self, t: float) -> LawSample:
+        tau, d, tf = t / self.duration, self.distance, self.duration
+        if self.degree == 3:
+            return LawSample(d * (3 * tau**2 - 2 * tau**3), d * (6 * tau - 6 * tau**2) / tf, d * (6 - 12 * tau) / tf**2)
+        return LawSample(
+            d * (10 * tau**3 - 15 * tau**4 + 6 * tau**5),
+            d * (30 * tau**2 - 60 * tau**3 + 30 * tau**4) / tf,
+            d * (60 * tau - 180 * tau**2 + 120 * tau**3) / tf**2,
+        )
+
+
+@dataclass(frozen=True)
+class PathSample:
+    """p(s) (3,), dp/ds (3,), d2p/ds2 (3,)."""
+
+    point: np.ndarray
+    tangent: np.ndarray
+    curvature: np.ndarray
+
+
+class CirclePath:
+    """Circle through ``start`` around ``center`` in the plane normal to ``normal`` (counter-clockwise about it).
+
+    Args:
+        center: (3,) [m]; start: (3,) [m], radius = |start - center| > 0.
+        normal: (3,) plane normal (right-hand rule gives the direction of travel).
+    """
+
+    def __init__(self, center: np.ndarray, start: np.ndarray, normal: np.ndarray = (0.0, 0.0, 1.0)) -> None:
+        self.center = np.asarray(center, dtype=float)
+        start = np.asarray(start, dtype=float)
+        normal = np.asarray(normal, dtype=float)
+        radial = start - self.center
+        self.radius = float(np.linalg.norm(radial))
+        if self.radius == 0 or np.linalg.norm(normal) == 0:
+            raise UVMSError("a circle needs start != center and a non-zero normal")
+        normal = normal / np.linalg.norm(normal)
+        if abs(radial @ normal) > 1e-9 * self.radius:
+            raise UVMSError("the circle's start point must lie in the plane through the centre normal to `normal`")
+        self.e1 = radial / self.radius
+        self.e2 = np.cross(normal, self.e1)
+
+    @property
+    def length(self) -> float:
+        """Circumference [m]."""
+        return 2 * np.pi * self.radius
+
+    def __call__(self, s: float) -> PathSample:
+        angle = s / self.radius
+        c, sn = np.cos(angle), np.sin(angle)
+        return PathSample(
+            self.center + self.radius * (c * self.e1 + sn * self.e2),
+            -sn * self.e1 + c * self.e2,
+            (-c * self.e1 - sn * self.e2) / self.radius,
+        )
+
+
+class LinePath:
+    """Straight segment from ``start`` to ``end``, parametrized by arc length."""
+
+    def __init__(self, start: np.ndarray, end: np.ndarray) -> None:
+        self.start = np.asarray(start, dtype=float)
+        delta = np.asarray(end, dtype=float) - self.start
+        self.length = float(np.linalg.norm(delta))
+        if self.length == 0:
+            raise UVMSError("a line needs start != end")
+        self.direction = delta / self.length
+
+    def __call__(self, s: float) -> PathSample:
+        return PathSample(self.start + s * self.direction, self.direction.copy(), np.zeros(3))
+
+
+@dataclass(frozen=True)
+class PoseSample:
+    """Desired pose, twist [v; omega] (6,) and acceleration (6,) in world axes."""
+
+    pose: pin.SE3
+    twist: np.ndarray
+    acceleration: np.ndarray
+
+
+class PathTrajectory:
+    """A path travelled with a time law, at a constant orientation.
+
+    Args:
+        path: CirclePath, LinePath or any callable s -> PathSample.
+        law: a TimeLaw giving s(t).
+        orientation: constant rotation (3x3) or [roll, pitch, yaw] [rad].
+    """
+
+    def __init__(self, path, law: TimeLaw, orientation: np.ndarray | Sequence[float] = (0.0, 0.0, 0.0)) -> None:
+        self.path, self.law = path, law
+        orientation = np.asarray(orientation, dtype=float)
+        self.rotation = orientation if orientation.shape == (3, 3) else pin.rpy.rpyToMatrix(*orientation)
+        self.duration = law.duration
+
+    def __call__(self, t: float) -> PoseSample:
+        timing = self.law(t)
+        sample = self.path(timing.s)
+        velocity = sample.tangent * timing.ds
+        acceleration = sample.tangent * timing.dds + sample.curvature * timing.ds**2
+        return PoseSample(
+            pin.SE3(self.rotation, sample.point),
+            np.concatenate([velocity, np.zeros(3)]),
+            np.concatenate([acceleration, np.zeros(3)]),
+        )
+
+
+class SE3Trajectory:
+    """Screw-free SE(3) interpolation: position on a straight line, rotation by the SO(3) geodesic.
+
+    M(s) = (R0 exp(s log(R0^T R1)), p0 + s (p1 - p0)), s = law(t) / law.distance in [0, 1]
+    (the ``ctraj`` of the robotics toolboxes).
+    """
+
+    def __init__(self, start: pin.SE3 | Sequence[float], end: pin.SE3 | Sequence[float], law: TimeLaw) -> None:
+        self.start = start if isinstance(start, pin.SE3) else pose_from_xyzrpy(np.asarray(start, dtype=float))
+        self.end = end if isinstance(end, pin.SE3) else pose_from_xyzrpy(np.asarray(end, dtype=float))
+        if law.distance == 0:
+            raise UVMSError("an SE(3) interpolation needs a time law with a non-zero distance")
+        self.law = law
+        self.duration = law.duration
+        self.rotation_log = pin.log3(self.start.rotation.T @ self.end.rotation)  # body axes of the start
+        self.translation = self.end.translation - self.start.translation
+
+    def __call__(self, t: float) -> PoseSample:
+        timing = self.law(t)
+        fraction, rate, rate2 = (timing.s / self.law.distance, timing.ds / self.law.distance,
+                                 timing.dds / self.law.distance)
+        rotation = self.start.rotation @ pin.exp3(fraction * self.rotation_log)
+        omega_world = self.start.rotation @ self.rotation_log  # constant axis: R0 log, in world axes
+        pose = pin.SE3(rotation, self.start.translation + fraction * self.translation)
+        twist = np.concatenate([rate * self.translation, rate * omega_world])
+        acceleration = np.concatenate([rate2 * self.translation, rate2 * omega_world])
+        return PoseSample(pose, twist, acceleration)
+
+
+def hold(pose: pin.SE3, duration: float) -> PathTrajectory:
+    """A trajectory that stays at ``pose`` for ``duration`` [s]."""
+    law = PolynomialLaw(distance=0.0, duration=duration, degree=5)
+    return PathTrajectory(lambda s: PathSample(pose.translation.copy(), np.zeros(3), np.zeros(3)), law, pose.rotation)
+
