@@ -1,18 +1,19 @@
-"""Figures of a scenario run (matplotlib, Agg): desired motion, vehicle, joints, errors, path, velocities."""
+"""Figures of a scenario run: desired motion, vehicle, joints, errors, path, velocities.
+
+Figures are built with matplotlib's object interface (``matplotlib.figure.Figure``), not pyplot, so
+writing them needs no display and leaves the caller's backend (e.g. a notebook's inline one) alone.
+"""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from . import outputs  # noqa: E402
-from .simulate import SimulationResult  # noqa: E402
+from . import outputs
+from .simulate import SimulationResult
 
 VEHICLE_LABELS = {
     "planar": ("x [m]", "y [m]", "psi [rad]"),
@@ -27,7 +28,8 @@ VELOCITY_LABELS = {
 def stacked(t: np.ndarray, series: np.ndarray, labels, title: str, limits=None, dashed=None):
     """One subplot per column of ``series`` against t; optional limit lines and dashed references."""
     count = series.shape[1]
-    figure, axes = plt.subplots(count, 1, figsize=(7, 1.9 * count + 0.6), sharex=True, squeeze=False)
+    figure = Figure(figsize=(7, 1.9 * count + 0.6))
+    axes = figure.subplots(count, 1, sharex=True, squeeze=False)
     for index, axis in enumerate(axes[:, 0]):
         axis.plot(t, series[:, index], color="C0", label="actual" if dashed is not None else None)
         if dashed is not None:
@@ -61,7 +63,8 @@ def scenario_figures(result: SimulationResult, trajectory, folder: str | os.Path
                                                   f"{title}: vehicle body velocities (FLU)")
     figures["joints.png"] = stacked(t, result.arm(), [f"{name} [rad]" for name in robot.arm_joint_names],
                                     f"{title}: arm joints (dotted: limits)", limits=robot.arm_limits)
-    figure, axis = plt.subplots(figsize=(7, 3.2))
+    figure = Figure(figsize=(7, 3.2))
+    axis = figure.subplots()
     floor = 1e-17  # log axes: exact zeros are drawn at the floor
     axis.semilogy(t, np.maximum(result.position_error, floor), label="position error [m]")
     if np.any(result.orientation_error > 0):
@@ -72,7 +75,8 @@ def scenario_figures(result: SimulationResult, trajectory, folder: str | os.Path
     axis.set_title(f"{title}: tracking error")
     figure.tight_layout()
     figures["errors.png"] = figure
-    figure, axis = plt.subplots(figsize=(6, 6))
+    figure = Figure(figsize=(6, 6))
+    axis = figure.subplots()
     axis.plot(result.desired_position[:, 0], result.desired_position[:, 1], "--", color="C1", label="desired")
     axis.plot(result.ee_position[:, 0], result.ee_position[:, 1], color="C0", linewidth=1, label="end effector")
     if robot.base_type != "fixed":
@@ -90,6 +94,5 @@ def scenario_figures(result: SimulationResult, trajectory, folder: str | os.Path
     written = []
     for name, figure in figures.items():
         outputs.save_figure(figure, folder / name)
-        plt.close(figure)
         written.append(folder / name)
     return written

@@ -18,7 +18,11 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-from tqdm.auto import tqdm
+import warnings
+
+with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
+    warnings.simplefilter("ignore")
+    from tqdm.auto import tqdm
 
 from . import outputs
 from .errors import UVMSError

@@ -1,0 +1,147 @@
+"""Scenarios and `uvms run`: the hoang2011 and santos2006 reproductions, outputs, overrides and bad input."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import uvms
+from uvms.scenario import ScenarioError, read_scenario, run
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIOS = ROOT / "scenarios"
+HOANG = ("w1", "w100", "w500", "wpsi500")
+
+
+@pytest.fixture(scope="module")
+def hoang_runs(tmp_path_factory):
+    """The four hoang2011 runs (figures only for W = I, to keep the suite short)."""
+    out = tmp_path_factory.mktemp("hoang")
+    runs = {}
+    for name in HOANG:
+        overrides = [] if name == "w1" else ["outputs.figures=false"]
+        runs[name] = run(SCENARIOS / f"hoang2011_{name}.toml", out=out / name, overrides=overrides, progress=False)
+    return runs
+
+
+@pytest.mark.parametrize("name", HOANG)
+def test_hoang2011_tracks_to_1e8_inside_the_limits(hoang_runs, name):
+    metrics = hoang_runs[name].metrics
+    assert metrics["max_position_error"] <= 1e-8  # paper: about 1e-6
+    assert metrics["max_orientation_error"] <= 1e-12
+    assert metrics["max_joint_limit_violation"] == 0.0
+    assert metrics["initial_residual"] <= 1e-10
+    assert metrics["steps"] == 9500
+
+
+def test_hoang2011_weights_shape_the_motion_as_in_the_paper(hoang_runs):
+    m = {name: run_.metrics for name, run_ in hoang_runs.items()}
+    # Figs. 5-7: the arm moves less as its weights grow; Fig. 7: the arm almost at rest relative to the vehicle
+    assert m["w1"]["arm_travel"] > m["w100"]["arm_travel"] > m["w500"]["arm_travel"]
+    assert m["w500"]["arm_travel"] < 0.01 * m["w1"]["arm_travel"]
+    # Fig. 8: the vehicle orientation nearly constant with the yaw weight 500 (here 1.5 degrees over 190 s)
+    assert m["wpsi500"]["vehicle_yaw_range"] < 0.03
+    assert m["wpsi500"]["vehicle_yaw_range"] < m["w100"]["vehicle_yaw_range"] / 4 < m["w1"]["vehicle_yaw_range"]
+    # and it lets the arm move: a frozen vehicle heading is paid for by the arm
+    assert m["wpsi500"]["arm_travel"] > 100 * m["w500"]["arm_travel"]
+
+
+def test_hoang2011_outputs(hoang_runs):
+    result = hoang_runs["w1"]
+    folder = result.files[0].parent
+    metrics = json.loads((folder / "metrics.json").read_text())
+    for key in ("max_position_error", "max_orientation_error", "max_joint_limit_violation", "vehicle_travel",
+                "vehicle_yaw_range", "arm_travel", "steps", "wall_time"):
+        assert key in metrics
+    with open(folder / "trajectory.csv") as handle:
+        rows = list(csv.reader(handle))
+    assert rows[0][:4] == ["t", "base_x", "base_y", "base_yaw"] and len(rows) == 9502
+    assert float(rows[-1][0]) == pytest.approx(190.0)
+    arrays = np.load(folder / "trajectory.npz")
+    assert arrays["q"].shape == (9501, 7)
+    assert np.allclose(arrays["position_error"], [float(r[rows[0].index("position_error")]) for r in rows[1:]])
+    for figure in ("desired_motion", "vehicle", "joints", "errors", "path", "vehicle_velocity"):
+        assert (folder / f"{figure}.png").stat().st_size > 10_000
+
+
+def test_santos2006_kinematic_constraint_keeps_the_vehicle_still_and_task_priority_does_not(tmp_path):
+    constraint = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc", progress=False).metrics
+    priority = run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "tp", progress=False).metrics
+    assert constraint["vehicle_travel"] <= 1e-12
+    assert priority["vehicle_travel"] > 0.1
+    assert constraint["steps"] == priority["steps"] == 100
+    for metrics in (constraint, priority):
+        assert metrics["max_joint_limit_violation"] == 0.0
+        assert metrics["max_position_error"] < 0.1  # Euler steps of 0.1 s on a 0.63 m/s circle
+    # the vehicle turns toward the current (0.78 rad) at K = 1 1/s: 1 - exp(-10) of the way
+    series = np.load(tmp_path / "kc" / "trajectory.npz")
+    yaw = np.arctan2(series["q"][:, 3], series["q"][:, 2])
+    assert yaw[-1] == pytest.approx(0.78 * (1 - 0.9**100), abs=1e-9)  # explicit Euler of psi' = 0.78 - psi
+
+
+def test_set_overrides_change_the_run(tmp_path):
+    base = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "a", progress=False,
+               overrides=["outputs.figures=false"])
+    longer = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "b", progress=False,
+                 overrides=["outputs.figures=false", "model.args.l1=2.5", "vehicle.heading=0.5"])
+    assert longer.setup.robot.fk(longer.setup.q0).translation[1] > base.setup.robot.fk(base.setup.q0).translation[1] + 0.4
+    assert longer.metrics["arm_travel"] != base.metrics["arm_travel"]
+    assert np.arctan2(longer.simulation.q[-1, 3], longer.simulation.q[-1, 2]) == pytest.approx(0.5 * (1 - 0.9**100))
+
+
+def test_rk4_on_the_manifold_is_fourth_order(tmp_path):
+    """Open loop (K = 0, no null space): the tracking error is the integration error alone."""
+    errors = []
+    for dt in (0.2, 0.1):
+        result = run(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / str(dt), progress=False, overrides=[
+            "outputs.figures=false", "solver.gain=0.0", "solver.alpha=0.0", f"simulation.dt={dt}",
+            "trajectory.duration=20.0"])
+        errors.append(result.metrics["max_position_error"])
+    assert errors[0] / errors[1] > 12  # 2^4 = 16 for a fourth-order method
+
+
+@pytest.mark.parametrize(
+    ("overrides", "words"),
+    [
+        (["solver.gian=2"], "unknown key.*solver.gian.*valid in \\[solver\\]: method, gain"),
+        (["solvers.gain=2"], "unknown section.*solvers"),
+        (["solver.alpha=fast"], "solver.alpha must be a number"),
+        (["solver.method=newton"], "not valid; valid: 'clik', 'task_priority', 'kinematic_constraint'"),
+        (["trajectory.center=[1, 2]"], "trajectory.center must have 3 numbers"),
+        (["initial.arm=[1.0, 2.0]"], "initial.base/initial.arm"),
+        (["model.args.nosuch=1"], "unknown xacro arg"),
+        (["solver"], "SECTION.KEY=VALUE"),
+    ],
+)
+def test_bad_scenarios_are_rejected_with_the_valid_choices(tmp_path, overrides, words):
+    with pytest.raises(uvms.UVMSError, match=words):
+        run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path, overrides=overrides, progress=False)
+
+
+def test_missing_required_key(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text('[model]\npath = "hoang2011"\n[trajectory]\ntype = "circle"\n[simulation]\ndt = 0.1\n')
+    with pytest.raises(ScenarioError, match="trajectory.duration is required"):
+        read_scenario(path)
+    path.write_text("[model\n")
+    with pytest.raises(ScenarioError, match="invalid TOML"):
+        read_scenario(path)
+
+
+def test_cli_run_and_its_errors(tmp_path):
+    command = [sys.executable, "-m", "uvms.cli", "run", str(SCENARIOS / "santos2006_task_priority.toml"),
+               "--out", str(tmp_path / "cli"), "--quiet", "--set", "outputs.figures=false"]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert "vehicle_travel" in result.stdout and (tmp_path / "cli" / "metrics.json").exists()
+    bad = subprocess.run(command + ["--set", "solver.gain=[1, 2, 3, 4]"], capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1 and "Traceback" not in bad.stderr
+    unwritable = subprocess.run(command[:5] + ["--out", "/proc/uvms-cannot-write"], capture_output=True, text=True,
+                                timeout=300)
+    assert unwritable.returncode == 2 and "cannot write" in unwritable.stderr
