@@ -179,19 +179,20 @@ def test_classic_priority_and_robust_differ_only_below_the_first_level(rng):
 
 
 # --------------------------------------------------------- kinematic constraint
-def santos_constraint_case(robot, q, heading=0.78, gain=1.0):
-    ee = uvms.FrameTask(robot, axes=("x", "y", "yaw"), target=[6.0, 4.5, 0, 0, 0, 0.8])
-    ee.set_target_velocity([0.3, -0.2, 0, 0, 0, 0.1])
-    constraint = uvms.VehicleTask(robot, velocities={"vx": 0.0, "vy": 0.0}, heading=heading)
-    return ee, constraint, uvms.constrained_velocity(robot, q, ee, constraint, gain=gain)
+def santos_constraint_cases(rng, count=20):
+    """Random santos2006 configurations with the end-effector task, the vehicle constraint and their solution."""
+    robot = shipped("santos2006")
+    for _ in range(count):
+        q = robot.random_configuration(rng)
+        ee = uvms.FrameTask(robot, axes=("x", "y", "yaw"), target=[6.0, 4.5, 0, 0, 0, 0.8])
+        ee.set_target_velocity([0.3, -0.2, 0, 0, 0, 0.1])
+        constraint = uvms.VehicleTask(robot, velocities={"vx": 0.0, "vy": 0.0}, heading=0.78)
+        result = uvms.constrained_velocity(robot, q, ee, constraint)
+        yield robot, q, ee, result, uvms.KinematicState(robot, q)
 
 
 def test_kinematic_constraint_holds_exactly(rng):
-    robot = shipped("santos2006")
-    for _ in range(20):
-        q = robot.random_configuration(rng)
-        ee, constraint, result = santos_constraint_case(robot, q)
-        state = uvms.KinematicState(robot, q)
+    for _, q, ee, result, state in santos_constraint_cases(rng):
         assert abs(result.v[0]) <= 1e-12 and abs(result.v[1]) <= 1e-12
         yaw = np.arctan2(q[3], q[2])
         assert result.v[2] == pytest.approx(uvms.conventions.wrap_angle(0.78 - yaw), abs=1e-12)
@@ -200,16 +201,11 @@ def test_kinematic_constraint_holds_exactly(rng):
 
 def test_kinematic_constraint_equals_the_screw_formulation(rng):
     """santos2006: close the UVMS chain with a virtual PPPS chain and solve N_s Y_s = -N_p Y_p."""
-    robot = shipped("santos2006")
-    for _ in range(20):
-        q = robot.random_configuration(rng)
-        ee, _, result = santos_constraint_case(robot, q)
-        state = uvms.KinematicState(robot, q)
+    for robot, _, ee, result, state in santos_constraint_cases(rng):
         network = network_matrix(state, ee.frame_id, planar=True)  # (3, 6 + 3): [S_uvms | -S_virtual]
         # primary: vehicle u, v, r (imposed) and the virtual chain magnitudes (end-effector vx, vy, wz)
-        yaw_rate = result.v[2]
         primary = [0, 1, 2, robot.nv + 0, robot.nv + 1, robot.nv + 2]
-        values = [0.0, 0.0, yaw_rate, *result.command[:2], result.command[2]]
+        values = [0.0, 0.0, result.v[2], *result.command[:2], result.command[2]]
         magnitudes = davies_solve(network, primary, values)
         assert np.allclose(magnitudes[3:6], result.v[3:6], atol=1e-12)
         assert np.allclose(network @ magnitudes, 0.0, atol=1e-12)  # the closed chain's circulation law

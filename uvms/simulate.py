@@ -28,11 +28,15 @@ from . import outputs
 from .errors import UVMSError
 from .robot import Robot
 from .tasks.frame import FrameTask
+from .tasks.vehicle import VELOCITY_NAMES
 
 #: A controller maps (q, t) to the velocity v (nv,) and a diagnostics object
 #: (a VelocityResult or PriorityResult: fields sigma_min, damping, limits_active).
 Controller = Callable[[np.ndarray, float], tuple[np.ndarray, object]]
 INTEGRATORS = ("euler", "rk4")
+#: The time series recorded at every step, in the order of the NPZ file.
+SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",
+          "position_error", "orientation_error", "sigma_min", "damping", "limits_active")
 
 
 @dataclass
@@ -42,6 +46,7 @@ class SimulationResult:
     Attributes:
         t: (N,) [s]; q: (N, nq); v: (N, nv).
         ee_position, desired_position: (N, 3) [m]; ee_rpy, desired_rpy: (N, 3) [rad].
+        task_error: (N, k) desired - actual on the task axes [m, rad] (``axes`` names them).
         position_error: (N,) [m] norm over the task's position axes.
         orientation_error: (N,) [rad] norm over the task's orientation axes.
         sigma_min, damping: (N,); limits_active: (N,) number of joints held at a limit.
@@ -55,19 +60,19 @@ class SimulationResult:
     ee_rpy: np.ndarray
     desired_position: np.ndarray
     desired_rpy: np.ndarray
+    task_error: np.ndarray
     position_error: np.ndarray
     orientation_error: np.ndarray
     sigma_min: np.ndarray
     damping: np.ndarray
     limits_active: np.ndarray
     robot: Robot = field(repr=False)
+    axes: tuple[str, ...] = ()
     wall_time: float = 0.0
 
     def arrays(self) -> dict[str, np.ndarray]:
         """Every saved array by name."""
-        return {name: getattr(self, name) for name in (
-            "t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy",
-            "position_error", "orientation_error", "sigma_min", "damping", "limits_active")}
+        return {name: getattr(self, name) for name in SERIES}
 
     def vehicle_pose(self) -> np.ndarray:
         """Vehicle pose per row: [x, y, yaw] (planar) or [x, y, z, roll, pitch, yaw] (floating), world ENU.
@@ -95,15 +100,16 @@ class SimulationResult:
         vehicle_names = (["base_x", "base_y", "base_yaw"] if robot.base_type == "planar" else
                          ["base_x", "base_y", "base_z", "base_roll", "base_pitch", "base_yaw"]
                          if robot.base_type == "floating" else [])
-        velocity_names = [f"v_{i}" for i in range(robot.nv)]
+        velocity_names = [f"v_{name}" for name in velocity_labels(robot)]
         header = (["t"] + vehicle_names + robot.arm_joint_names + velocity_names
                   + [f"ee_{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
                   + [f"desired_{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
+                  + [f"error_{axis}" for axis in self.axes]
                   + ["position_error", "orientation_error", "sigma_min", "damping", "limits_active"])
         vehicle = self.vehicle_pose() if vehicle_names else np.zeros((len(self.t), 0))
         table = np.column_stack([
             self.t, vehicle, self.arm(), self.v, self.ee_position, self.ee_rpy, self.desired_position,
-            self.desired_rpy, self.position_error, self.orientation_error, self.sigma_min, self.damping,
+            self.desired_rpy, self.task_error, self.position_error, self.orientation_error, self.sigma_min, self.damping,
             self.limits_active])
         buffer = io.StringIO()
         writer = csv.writer(buffer, lineterminator="\n")
@@ -117,6 +123,14 @@ class SimulationResult:
         outputs.write_text(folder / "trajectory.csv", self.csv_text())
         outputs.write_npz(folder / "trajectory.npz", **self.arrays())
         return folder / "trajectory.csv", folder / "trajectory.npz"
+
+
+def velocity_labels(robot: Robot) -> list[str]:
+    """A name per entry of v: the vehicle's body twist (vx, vy, ... local) then the arm joints."""
+    labels = list(VELOCITY_NAMES.get(robot.base_type, ()))
+    for joint in robot.arm_joints:
+        labels += [joint.name] if joint.nv == 1 else [f"{joint.name}_{i}" for i in range(joint.nv)]
+    return labels
 
 
 def rk4_step(model: pin.Model, q: np.ndarray, t: float, dt: float, velocity: Callable[[np.ndarray, float], np.ndarray],
@@ -167,9 +181,7 @@ def simulate(
     model = robot.model
     position_rows = [r for r in task.rows if r < 3]
     orientation_rows = [r for r in task.rows if r >= 3]
-    records: dict[str, list] = {name: [] for name in (
-        "t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "position_error",
-        "orientation_error", "sigma_min", "damping", "limits_active")}
+    records: dict[str, list] = {name: [] for name in SERIES}
     started = time.perf_counter()
     velocity_only = lambda configuration, time_: controller(configuration, time_)[0]  # noqa: E731
     for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None,
@@ -183,7 +195,7 @@ def simulate(
         for name, value in (
             ("t", t), ("q", q.copy()), ("v", v.copy()), ("ee_position", pose.translation.copy()),
             ("ee_rpy", pin.rpy.matrixToRpy(pose.rotation)), ("desired_position", target.translation.copy()),
-            ("desired_rpy", pin.rpy.matrixToRpy(target.rotation)),
+            ("desired_rpy", pin.rpy.matrixToRpy(target.rotation)), ("task_error", full_error[task.rows]),
             ("position_error", float(np.linalg.norm(full_error[position_rows]))),
             ("orientation_error", float(np.linalg.norm(full_error[orientation_rows]))),
             ("sigma_min", float(np.min(info.sigma_min))), ("damping", float(info.damping)),
@@ -197,4 +209,4 @@ def simulate(
         else:
             q = rk4_step(model, q, t, dt, velocity_only, first=v)
     arrays = {name: np.array(values) for name, values in records.items()}
-    return SimulationResult(**arrays, robot=robot, wall_time=time.perf_counter() - started)
+    return SimulationResult(**arrays, robot=robot, axes=task.axes, wall_time=time.perf_counter() - started)
