@@ -11,12 +11,14 @@ from .constraints import constrained_velocity
 from .ik import solve_ik
 from .initial import initial_configuration
 from .inverses import SolverInputError, dls, pinv, variable_damping, weighted_pinv
+from .pose_clik import PoseCLIK
 from .priority import priority_velocity, task_priority
 from .results import InitialConfigurationResult, IKResult, PriorityResult, StepResult, VelocityResult
 
 __all__ = [
     "IKResult",
     "InitialConfigurationResult",
+    "PoseCLIK",
     "PriorityResult",
     "SolverInputError",
     "StepResult",
