@@ -93,6 +93,41 @@ def command_run(options: argparse.Namespace) -> int:
     return 0
 
 
+def command_workspace(options: argparse.Namespace) -> int:
+    """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, points and figures."""
+    from pathlib import Path
+
+    from . import outputs
+    from .plotting import workspace_figure
+    from .workspace import monte_carlo
+
+    robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
+    frames = options.ee or robot.ee_frames
+    result = monte_carlo(robot, frames, options.samples, seed=options.seed, voxel=options.voxel,
+                         progress=False if options.quiet else None)
+    out = Path(options.out or Path("out") / f"workspace_{robot.name}")
+    arrays = {}
+    for frame in frames:
+        arrays[f"q_{frame}"] = result.joints[frame]
+        arrays[f"position_{frame}"] = result.positions[frame]
+    outputs.write_npz(out / "points.npz", **arrays)
+    metrics = {
+        "model": robot.name, "frames": frames, "samples": result.samples, "voxel": result.voxel,
+        "volume": {**result.volume, **({"common": result.common_volume} if result.common_volume is not None else {})},
+        "volume_convergence": {frame: [[n, v] for n, v in series] for frame, series in result.convergence.items()},
+        "samples_per_second": result.samples_per_second,
+    }
+    outputs.write_json(out / "metrics.json", metrics)
+    workspace_figure(result.positions, out / "workspace.png",
+                     title=f"{robot.name}: reachable workspace, {result.samples} samples per arm")
+    for frame in frames:
+        print(f"{frame:<12} volume {result.volume[frame]:.4f} m^3 ({result.voxel} m voxels)")
+    if result.common_volume is not None:
+        print(f"{'common':<12} volume {result.common_volume:.4f} m^3")
+    print(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, workspace.png)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``uvms``."""
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
@@ -110,6 +145,17 @@ def build_parser() -> argparse.ArgumentParser:
                      help="override a scenario key, e.g. solver.gain=2 or model.args.l1=0.6 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(handler=command_run)
+    workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
+    workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
+    workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")
+    workspace.add_argument("-n", "--samples", type=int, default=10_000, help="joint samples per frame")
+    workspace.add_argument("--seed", type=int, default=0, help="random seed")
+    workspace.add_argument("--voxel", type=float, default=0.05, help="voxel edge for the volume [m]")
+    workspace.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    workspace.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    workspace.add_argument("--out", help="output folder (default: out/workspace_<model>)")
+    workspace.add_argument("--quiet", action="store_true", help="no progress bar")
+    workspace.set_defaults(handler=command_workspace)
     return parser
 
 

@@ -96,3 +96,34 @@ def scenario_figures(result: SimulationResult, trajectory, folder: str | os.Path
         outputs.save_figure(figure, folder / name)
         written.append(folder / name)
     return written
+
+
+#: Cloud colours in frame order: xiang2019 draws the left arm blue and the right arm red.
+CLOUD_COLOURS = ("tab:blue", "tab:red", "tab:green", "tab:orange")
+
+
+def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, title: str = "",
+                     max_points: int = 20_000) -> Path:
+    """A 3-D cloud and its x-z, x-y, y-z projections (xiang2019 Fig. 4), one colour per frame."""
+    figure = Figure(figsize=(11, 9))
+    cloud = figure.add_subplot(2, 2, 1, projection="3d")
+    planes = [figure.add_subplot(2, 2, k) for k in (2, 3, 4)]
+    for (frame, points), colour in zip(positions.items(), CLOUD_COLOURS):
+        shown = points[:: max(1, len(points) // max_points)]  # a plot needs no more points than pixels
+        cloud.scatter(shown[:, 0], shown[:, 1], shown[:, 2], s=0.3, color=colour, label=frame, alpha=0.5)
+        for axis, (a, b) in zip(planes, ((0, 2), (0, 1), (1, 2))):
+            axis.scatter(shown[:, a], shown[:, b], s=0.3, color=colour, alpha=0.5)
+    cloud.set_xlabel("x [m]")
+    cloud.set_ylabel("y [m]")
+    cloud.set_zlabel("z [m]")
+    cloud.legend(markerscale=15, fontsize=8)
+    for axis, (a, b) in zip(planes, ("xz", "xy", "yz")):
+        axis.set_xlabel(f"{a} [m]")
+        axis.set_ylabel(f"{b} [m]")
+        axis.set_aspect("equal", adjustable="datalim")
+        axis.grid(True, alpha=0.3)
+        axis.set_title(f"{a}-o-{b} projection")
+    figure.suptitle(title)
+    figure.tight_layout()
+    outputs.save_figure(figure, path)
+    return Path(path)
