@@ -1,0 +1,79 @@
+"""Workspace sampling speed: batched FK vs a Python loop over Pinocchio FK vs roboticstoolbox's batched fkine.
+
+One arm of xiang2019 (4 revolute joints, modified D-H), samples per second measured in one run.
+
+    pip install -e ".[bench]"
+    python benchmarks/bench_workspace.py [--samples 200000]
+
+Goals (issue 5): >= 5x the Pinocchio loop, >= 10x roboticstoolbox, one million samples of both arms in about a second.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+import warnings
+
+import numpy as np
+import pinocchio as pin
+
+import uvms
+from uvms.workspace import BatchKinematics
+
+
+def rate(function, count: int) -> float:
+    """Samples per second of one call that handles ``count`` samples (best of 3)."""
+    best = min(timed(function) for _ in range(3))
+    return count / best
+
+
+def timed(function) -> float:
+    started = time.perf_counter()
+    function()
+    return time.perf_counter() - started
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--samples", type=int, default=200_000)
+    options = parser.parse_args()
+    robot = uvms.load("xiang2019")
+    batch = BatchKinematics(robot, "left_ee")
+    values = batch.sample(options.samples, 0)
+    rows = [("uvms BatchKinematics.positions", rate(lambda: batch.positions(values), len(values)))]
+    model, data = robot.model, robot.data
+    frame = robot.frame_id("left_ee")
+    names = robot.arm_joint_names
+    columns = [robot.nq_vehicle + names.index(name) for name in batch.joint_names]
+    loop_count = min(len(values), 20_000)
+    q = robot.neutral()
+
+    def pinocchio_loop():
+        for sample in values[:loop_count]:
+            q[columns] = sample
+            pin.framesForwardKinematics(model, data, q)
+            data.oMf[frame].translation.copy()
+
+    rows.append(("Python loop of pin.framesForwardKinematics", rate(pinocchio_loop, loop_count)))
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            import roboticstoolbox as rtb
+            from spatialmath import SE3
+        links = [rtb.RevoluteMDH(a=a, alpha=alpha) for a, alpha in ((0, 0), (0.08, -np.pi / 2), (0.37, 0), (0.22, 0))]
+        arm = rtb.DHRobot(links, tool=SE3.Tx(0.308), name="xiang2019_left")
+        rows.append(("roboticstoolbox DHRobot.fkine (batched)", rate(lambda: arm.fkine(values), len(values))))
+    except ImportError:
+        print("roboticstoolbox not installed: pip install -e '.[bench]'")
+    both = robot, BatchKinematics(robot, "right_ee")
+    million = batch.sample(1_000_000, 1)
+    seconds = timed(lambda: (batch.positions(million), both[1].positions(million)))
+    reference = rows[0][1]
+    print(f"| implementation | samples/s | uvms speed-up |\n|---|---|---|")
+    for label, samples_per_second in rows:
+        print(f"| {label} | {samples_per_second:,.0f} | {reference / samples_per_second:.1f}x |")
+    print(f"\nOne million samples of both arms: {seconds:.2f} s")
+
+
+if __name__ == "__main__":
+    main()
