@@ -8,7 +8,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-import uvms
 from conftest import shipped
 from test_fk_papers import xiang_eq6
 from uvms.cli import main
