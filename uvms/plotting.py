@@ -127,3 +127,36 @@ def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, 
     figure.tight_layout()
     outputs.save_figure(figure, path)
     return Path(path)
+
+
+def joint_trajectory_figure(samples, path: str | os.PathLike | None = None, title: str = "",
+                            names: list[str] | None = None, marks=None) -> Figure:
+    """Position, velocity and acceleration of every joint (xiang2019 Figs. 5-6), in degrees.
+
+    Args:
+        samples: a ``JointSamples`` (t (N,), q, qd, qdd (N, n) in rad).
+        path: where to save the PNG (atomically); None to only return the figure.
+        names: joint names for the column titles; marks: times [s] drawn as dotted lines (via points).
+    """
+    count = samples.q.shape[1]
+    figure = Figure(figsize=(3.2 * count, 7))
+    axes = figure.subplots(3, count, sharex=True, squeeze=False)
+    rows = ((samples.q, "position [deg]"), (samples.qd, "velocity [deg/s]"), (samples.qdd, "acceleration [deg/s²]"))
+    for row, (values, label) in enumerate(rows):
+        for joint in range(count):
+            axis = axes[row, joint]
+            axis.plot(samples.t, np.rad2deg(values[:, joint]), color=f"C{joint}")
+            for mark in marks if marks is not None else ():
+                axis.axvline(mark, color="0.6", linestyle=":", linewidth=1)
+            axis.grid(True, alpha=0.3)
+            if joint == 0:
+                axis.set_ylabel(label)
+            if row == 0:
+                axis.set_title(names[joint] if names else f"joint {joint + 1}")
+            if row == 2:
+                axis.set_xlabel("t [s]")
+    figure.suptitle(title)
+    figure.tight_layout()
+    if path is not None:
+        outputs.save_figure(figure, path)
+    return figure

@@ -1,0 +1,30 @@
+"""Trajectories: time laws, Cartesian paths and pose trajectories, joint-space interpolation.
+
+- ``laws``: s(t) with two derivatives (trapezoid, cubic, quintic).
+- ``cartesian``: paths (circle, line) and pose trajectories (constant orientation, SE(3) interpolation).
+- ``joint``: joint-space interpolation through via points (cubic, quintic), ``jtraj`` and ``ctraj``.
+"""
+
+from .cartesian import CirclePath, LinePath, PathSample, PathTrajectory, PoseSample, SE3Trajectory, hold
+from .joint import CartesianSamples, JointSamples, ViaPointTrajectory, ctraj, jtraj
+from .laws import LawSample, PolynomialLaw, TimeLaw, TrapezoidLaw, check_positive
+
+__all__ = [
+    "CartesianSamples",
+    "CirclePath",
+    "JointSamples",
+    "LawSample",
+    "LinePath",
+    "PathSample",
+    "PathTrajectory",
+    "PolynomialLaw",
+    "PoseSample",
+    "SE3Trajectory",
+    "TimeLaw",
+    "TrapezoidLaw",
+    "ViaPointTrajectory",
+    "check_positive",
+    "ctraj",
+    "hold",
+    "jtraj",
+]
