@@ -94,7 +94,7 @@ def test_animate_writes_a_gif_with_one_frame_per_configuration(tmp_path, rng):
     robot = shipped("xiang2019")
     configurations = np.array([robot.random_configuration(rng) for _ in range(7)])
     path = drawing.animate(robot, configurations, tmp_path / "motion.gif", fps=10, times=np.arange(7) * 0.5,
-                           trail_frame="left_ee", dpi=40, figsize=(4, 4), quiet=True)
+                           trail_frame="left_ee", dpi=40, figsize=(4, 4), progress=False)
     with Image.open(path) as image:
         assert image.format == "GIF" and image.n_frames == 7
     assert sorted(os.listdir(tmp_path)) == ["motion.gif"]  # no temporary left behind
@@ -104,14 +104,14 @@ def test_animate_rejects_bad_paths_and_inputs(tmp_path, monkeypatch):
     robot = shipped("hoang2011")
     configurations = [robot.neutral()] * 2
     with pytest.raises(UVMSError, match=r"\.gif, \.mp4"):
-        drawing.animate(robot, configurations, tmp_path / "motion.avi", quiet=True)
+        drawing.animate(robot, configurations, tmp_path / "motion.avi", progress=False)
     monkeypatch.setattr(animation.FFMpegWriter, "isAvailable", classmethod(lambda cls: False))
     with pytest.raises(UVMSError, match="mp4 needs ffmpeg on PATH"):
-        drawing.animate(robot, configurations, tmp_path / "motion.mp4", quiet=True)
+        drawing.animate(robot, configurations, tmp_path / "motion.mp4", progress=False)
     with pytest.raises(UVMSError, match="times"):
-        drawing.animate(robot, configurations, tmp_path / "motion.gif", times=[0.0], quiet=True)
+        drawing.animate(robot, configurations, tmp_path / "motion.gif", times=[0.0], progress=False)
     with pytest.raises(ConfigurationError, match="configuration 1"):
-        drawing.animate(robot, [robot.neutral(), np.zeros(robot.nq)], tmp_path / "motion.gif", quiet=True)
+        drawing.animate(robot, [robot.neutral(), np.zeros(robot.nq)], tmp_path / "motion.gif", progress=False)
     assert os.listdir(tmp_path) == []
 
 

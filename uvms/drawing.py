@@ -333,7 +333,7 @@ def _movie_writer(path: Path, fps: float) -> animation.AbstractMovieWriter:
 def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float = 20, times: np.ndarray | None = None,
             trail_frame: str | None = None, title: str = "", view: tuple[float, float] = (20.0, -60.0),
             plane: str | None = None, frames: Sequence[str] | None = None, figsize: tuple[float, float] = (6.0, 6.0),
-            dpi: int = 80, quiet: bool = False) -> Path:
+            dpi: int = 80, progress: bool | None = None) -> Path:
     """Write an animation of configurations (N, nq) to a ``.gif`` (Pillow) or ``.mp4`` (ffmpeg), atomically.
 
     The axis limits cover every frame, so the view does not jump.
@@ -347,7 +347,7 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
         trail_frame: a frame whose path so far is drawn (e.g. an end effector).
         title: title prefix; view, plane, frames: as in :func:`snapshot_figure`.
         figsize: figure size [in]; dpi: its resolution.
-        quiet: no progress bar.
+        progress: show a progress bar (None: only on a terminal).
 
     Returns:
         The written path.
@@ -379,7 +379,7 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
 
     movie = animation.FuncAnimation(figure, draw_frame, frames=len(qs), interval=1000 / fps, repeat=False,
                                     cache_frame_data=False)
-    with tqdm(total=len(qs), disable=quiet, desc="animation", leave=False) as bar, \
+    with tqdm(total=len(qs), disable=(not progress) if progress is not None else None, desc="animation", leave=False) as bar, \
             atomic_suffixed_path(path) as temporary:
         movie.save(temporary, writer=writer, dpi=dpi, progress_callback=lambda *_: bar.update(1))
     return path

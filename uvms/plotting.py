@@ -160,3 +160,37 @@ def joint_trajectory_figure(samples, path: str | os.PathLike | None = None, titl
     if path is not None:
         outputs.save_figure(figure, path)
     return figure
+
+
+def sequence_figures(result: SimulationResult, plan, folder: str | os.PathLike, title: str = "",
+                     animation: str = "", progress: bool | None = None) -> list[Path]:
+    """Figures of a phase sequence: every frame against its target, configuration snapshots, an animation.
+
+    Args:
+        result: the run; plan: its ``uvms.sequence.PhasePlan``; folder: output folder.
+        animation: file name of the animation (``.gif`` or ``.mp4``), "" for none.
+        progress: progress bar of the animation (None: on a terminal only).
+    """
+    from .drawing import animate, snapshot_figure  # 3-D drawing only when asked for
+
+    folder, robot, t = Path(folder), result.robot, result.t
+    actual = np.column_stack([[robot.fk(q, frame).translation for q in result.q] for frame in plan.frames])
+    desired = np.column_stack([[plan(time_).positions[frame][0] for time_ in t] for frame in plan.frames])
+    labels = [f"{frame} {axis} [m]" for frame in plan.frames for axis in "xyz"]
+    figure = stacked(t, actual, labels, f"{title}: frames (dashed: targets)", dashed=desired)
+    for axis in figure.axes:
+        for boundary in plan.times[1:-1]:
+            axis.axvline(boundary, color="0.6", linestyle=":", linewidth=1)
+    outputs.save_figure(figure, folder / "frames.png")
+    rows = [int(np.argmin(np.abs(t - boundary))) for boundary in plan.times]
+    titles = [f"({chr(97 + k)}) t = {t[row]:.1f} s" + (f", after {plan.phases[k - 1].name}" if k else ", start")
+              for k, row in enumerate(rows)]
+    view = (15.0, -25.0)  # from ahead and to the side: the arms move mostly across and down
+    snapshot_figure(robot, result.q[rows], titles=titles, path=folder / "snapshots.png", frames=plan.frames, view=view)
+    written = [folder / "frames.png", folder / "snapshots.png"]
+    if animation:
+        step = max(1, int(round(0.2 / (t[1] - t[0]))))  # 5 frames per second of motion
+        written.append(animate(robot, result.q[::step], folder / animation, fps=5, times=t[::step],
+                               trail_frame=plan.frames[0], title=title, frames=plan.frames, view=view,
+                               progress=progress))
+    return written

@@ -36,6 +36,8 @@ from .solvers import (
     initial_configuration,
     priority_velocity,
 )
+from .sequence import METHODS as SEQUENCE_METHODS
+from .sequence import Phase, PhasePlan, SequenceController, sequence_metrics
 from .tasks import FrameTask, JointLimitPotential, VehicleTask
 from .trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw
 
@@ -62,6 +64,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
     "task": {
         "frame": (str, "", None),
+        "frames": (list, [], None),
         "axes": (list, [], None),
         "orientation_error": (str, "log", ("log", "euler")),
     },
@@ -99,6 +102,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "heading": (NUMBER, None, None),
         "depth": (NUMBER, None, None),
         "gain": (NUMBER, 1.0, None),
+        "hold": (bool, True, None),
     },
     "initial": {
         "method": (str, "given", ("given", "optimize")),
@@ -112,9 +116,19 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
     "outputs": {
         "figures": (bool, True, None),
+        "animation": (str, "", None),
     },
 }
+#: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.sequence.
+PHASE_SCHEMA: dict[str, tuple] = {
+    "name": (str, "", None),
+    "duration": (NUMBER, REQUIRED, None),
+    "offsets": (dict, {}, None),
+    "joints": (dict, {}, None),
+    "distance": (NUMBER, None, None),
+}
 REQUIRED_SECTIONS = ("model", "trajectory", "simulation")
+SEQUENCE_REQUIRED_SECTIONS = ("model", "phases", "simulation")
 
 
 # ------------------------------------------------------------------ parsing
@@ -167,30 +181,42 @@ def apply_override(raw: dict, assignment: str) -> None:
 
 def validate(raw: Mapping, origin: str) -> dict:
     """Check sections, keys and types against :data:`SCHEMA`; fill the defaults."""
-    unknown = sorted(set(raw) - set(SCHEMA))
+    sections = [*SCHEMA, "phases"]
+    unknown = sorted(set(raw) - set(sections))
     if unknown:
-        raise ScenarioError(f"{origin}: unknown section(s) {', '.join(unknown)}; valid: {', '.join(SCHEMA)}")
-    missing = [section for section in REQUIRED_SECTIONS if section not in raw]
+        raise ScenarioError(f"{origin}: unknown section(s) {', '.join(unknown)}; valid: {', '.join(sections)}")
+    required = SEQUENCE_REQUIRED_SECTIONS if "phases" in raw else REQUIRED_SECTIONS
+    missing = [section for section in required if section not in raw]
     if missing:
         raise ScenarioError(f"{origin}: missing section(s) {', '.join(missing)}")
-    scenario: dict = {}
-    for section, keys in SCHEMA.items():
-        given = raw.get(section, {})
-        if not isinstance(given, dict):
-            raise ScenarioError(f"{origin}: [{section}] must be a table")
-        unknown = sorted(set(given) - set(keys))
-        if unknown:
-            raise ScenarioError(f"{origin}: unknown key(s) {', '.join(f'{section}.{k}' for k in unknown)}; "
-                                f"valid in [{section}]: {', '.join(keys)}")
-        scenario[section] = {}
-        for key, (kinds, default, allowed) in keys.items():
-            if key not in given:
-                if default is REQUIRED:
-                    raise ScenarioError(f"{origin}: {section}.{key} is required")
-                scenario[section][key] = copy.deepcopy(default)
-                continue
-            scenario[section][key] = check_value(f"{section}.{key}", given[key], kinds, allowed, origin)
+    skipped = {"trajectory"} if "phases" in raw and "trajectory" not in raw else set()  # a sequence has none
+    scenario = {section: validate_table(raw.get(section, {}), keys, section, origin)
+                for section, keys in SCHEMA.items() if section not in skipped}
+    phases = raw.get("phases", [])
+    if not isinstance(phases, list) or not all(isinstance(phase, dict) for phase in phases):
+        raise ScenarioError(f"{origin}: phases must be an array of tables ([[phases]])")
+    scenario["phases"] = [validate_table(phase, PHASE_SCHEMA, f"phases[{index}]", origin)
+                          for index, phase in enumerate(phases)]
     return scenario
+
+
+def validate_table(given: Any, keys: Mapping[str, tuple], section: str, origin: str) -> dict:
+    """One table against its schema (types, allowed values), defaults filled."""
+    if not isinstance(given, dict):
+        raise ScenarioError(f"{origin}: [{section}] must be a table")
+    unknown = sorted(set(given) - set(keys))
+    if unknown:
+        raise ScenarioError(f"{origin}: unknown key(s) {', '.join(f'{section}.{k}' for k in unknown)}; "
+                            f"valid in [{section}]: {', '.join(keys)}")
+    table = {}
+    for key, (kinds, default, allowed) in keys.items():
+        if key not in given:
+            if default is REQUIRED:
+                raise ScenarioError(f"{origin}: {section}.{key} is required")
+            table[key] = copy.deepcopy(default)
+            continue
+        table[key] = check_value(f"{section}.{key}", given[key], kinds, allowed, origin)
+    return table
 
 
 def check_value(name: str, value: Any, kinds, allowed, origin: str) -> Any:
@@ -230,12 +256,15 @@ class Setup:
     controller: Any
     duration: float
     initial_residual: float
+    plan: PhasePlan | None = None  # sequence scenarios only
 
 
 def build(scenario: dict) -> Setup:
     """Model, task, initial configuration, trajectory and controller of a scenario."""
     model = scenario["model"]
     robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
+    if scenario["phases"]:
+        return build_sequence(robot, scenario)
     task_section = scenario["task"]
     task = FrameTask(robot, task_section["frame"] or None, axes=task_section["axes"] or None,
                      orientation=task_section["orientation_error"])
@@ -246,7 +275,28 @@ def build(scenario: dict) -> Setup:
     return Setup(robot, task, trajectory, q0, controller, float(duration), residual)
 
 
-def initial_q(robot: Robot, task: FrameTask, scenario: dict) -> tuple[np.ndarray, float]:
+def build_sequence(robot: Robot, scenario: dict) -> Setup:
+    """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.sequence)."""
+    solver, frames = scenario["solver"], scenario["task"]["frames"] or robot.ee_frames
+    if solver["method"] not in SEQUENCE_METHODS:
+        raise ScenarioError(f"a sequence scenario needs solver.method in {', '.join(SEQUENCE_METHODS)}, "
+                            f"got {solver['method']!r}")
+    if scenario["initial"]["method"] != "given" or not isinstance(solver["gain"], NUMBER):
+        raise ScenarioError("a sequence scenario needs initial.method = 'given' and one number for solver.gain")
+    q0, _ = initial_q(robot, None, scenario)
+    phases = [Phase(name=phase["name"] or f"phase {index + 1}", duration=float(phase["duration"]),
+                    offsets=phase["offsets"], joints=phase["joints"], distance=phase["distance"])
+              for index, phase in enumerate(scenario["phases"])]
+    plan = PhasePlan(robot, q0, frames, phases)
+    controller = SequenceController(robot, plan, method=solver["method"], gain=float(solver["gain"]),
+                                    damping=float(solver["damping"]), priority=solver["priority"],
+                                    hold_vehicle=scenario["vehicle"]["hold"])
+    duration = scenario["simulation"]["duration"] or plan.duration
+    return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller, float(duration),
+                 0.0, plan)
+
+
+def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.ndarray, float]:
     """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start."""
     initial = scenario["initial"]
     base = initial["base"] or None
@@ -396,6 +446,8 @@ def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) ->
     else:
         metrics["vehicle_travel"] = 0.0
         metrics["vehicle_yaw_range"] = 0.0
+    if setup.plan is not None:
+        metrics.update(sequence_metrics(robot, setup.plan, result.t, result.q))
     return metrics
 
 
@@ -428,6 +480,11 @@ def run(
         from .plotting import scenario_figures  # matplotlib only when figures are asked for
 
         files += scenario_figures(result, setup.trajectory, out, title=scenario["scenario"]["name"])
+        if setup.plan is not None:
+            from .plotting import sequence_figures
+
+            files += sequence_figures(result, setup.plan, out, title=scenario["scenario"]["name"],
+                                      animation=scenario["outputs"]["animation"], progress=progress)
     outputs.write_json(out / "metrics.json", metrics)
     files.append(out / "metrics.json")
     return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files)

@@ -5,8 +5,10 @@ CLIK drives a task with  J v = xdot_d + K e.
 
 from .frame import FrameTask
 from .joint_limits import JointLimitPotential
+from .joints import JointTask
 from .posture import PostureTask
+from .relative import DistanceTask
 from .task import Task
 from .vehicle import VehicleTask
 
-__all__ = ["FrameTask", "JointLimitPotential", "PostureTask", "Task", "VehicleTask"]
+__all__ = ["DistanceTask", "FrameTask", "JointLimitPotential", "JointTask", "PostureTask", "Task", "VehicleTask"]
