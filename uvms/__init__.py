@@ -22,7 +22,9 @@ from .errors import (
     UVMSError,
     XacroError,
 )
+from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from .model import MissingMeshWarning, load
+from .plant import Plant, PlantResult, generalized_jacobian_added_mass, simulate_plant
 from .resources import example_robot_urdf, shipped_models
 from .robot import Robot
 from .solvers import (
@@ -36,11 +38,24 @@ from .solvers import (
     solve_ik,
 )
 from .state import KinematicState
-from .tasks import FrameTask, JointLimitPotential, PostureTask, VehicleTask
+from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
+from .trajectory import ViaPointTrajectory, ctraj, jtraj
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "DistanceTask",
+    "HydroParameters",
+    "JointTask",
+    "LinkHydrodynamics",
+    "Plant",
+    "PlantResult",
+    "ViaPointTrajectory",
+    "ctraj",
+    "generalized_jacobian_added_mass",
+    "hydrodynamics_of",
+    "jtraj",
+    "simulate_plant",
     "FrameTask",
     "JointLimitPotential",
     "KinematicState",

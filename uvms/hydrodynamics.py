@@ -1,0 +1,487 @@
+"""Hydrodynamic parameters of the links of a UVMS: buoyancy, added mass, damping (Fossen's model).
+
+Where they come from
+====================
+The model file, in the block that uuv_simulator's underwater-object plugin reads
+(``libuuv_underwater_object_ros_plugin.so``), so a model written for one works in
+the other::
+
+    <gazebo>
+      <plugin name="uuv_plugin" filename="libuuv_underwater_object_ros_plugin.so">
+        <fluid_density>1028.0</fluid_density>
+        <link name="base_link">
+          <neutrally_buoyant>0</neutrally_buoyant>     <!-- 1: volume = link mass / density -->
+          <volume>0.0134</volume>                      <!-- m^3 -->
+          <center_of_buoyancy>0 0 0.01</center_of_buoyancy>  <!-- m, link frame -->
+          <hydrodynamic_model>
+            <type>fossen</type>
+            <added_mass>36 numbers, row-major</added_mass>
+            <linear_damping>6 numbers (or 36, diagonal)</linear_damping>
+            <quadratic_damping>6 numbers (or 36, diagonal)</quadratic_damping>
+          </hydrodynamic_model>
+        </link>
+      </plugin>
+    </gazebo>
+
+or a YAML file beside the model (``hydrodynamics.yaml``, same keys and the same
+conventions; see :func:`load_hydrodynamics_yaml`).
+
+Conventions of the file (those of uuv_simulator's ``HMFossen``)
+--------------------------------------------------------------
+* ``center_of_buoyancy`` is in the link frame (ROS, x forward, y left, z up).
+* ``added_mass`` and the damping are in SNAME body axes (x forward, y starboard,
+  z down: uuv_simulator converts the link velocity with ``ToNEDConvention``),
+  order [u v w p q r], about the link frame origin.
+* Damping values are Fossen's hydrodynamic derivatives, which are negative:
+  ``linear_damping`` = [X_u, Y_v, Z_w, K_p, M_q, N_r] <= 0 and
+  ``quadratic_damping`` = [X_u|u|, ...] <= 0; the plugin applies
+  D(nu) = -diag(linear) - diag(quadratic) |nu|. A positive value would feed energy
+  into the motion and is refused.
+
+Conventions inside uvms (:class:`LinkHydrodynamics`)
+----------------------------------------------------
+Everything in the link frame, FLU (REP-103), [linear; angular] like Pinocchio's
+spatial vectors, about the link frame origin: ``added_mass`` M_A (6, 6) symmetric
+positive semi-definite, and damping *coefficients* d_l, d_q >= 0 so that the
+damping wrench on the link is -(diag(d_l) + diag(d_q) |nu_r|) nu_r. The
+conversion from the file is M_A = T M_file T with T = diag(1, -1, -1, 1, -1, -1)
+and d = -file values (a diagonal is the same in FRD and FLU).
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .errors import ModelCheckError, ModelFileNotFound, ModelParseError, NameNotFound, UVMSError
+
+if TYPE_CHECKING:
+    import pinocchio as pin
+
+    from .robot import Robot
+
+#: Fluid density of sea water [kg/m^3] (uuv_simulator's default) and gravity [m/s^2].
+SEA_WATER_DENSITY = 1028.0
+GRAVITY = 9.81
+#: Name of the YAML file looked for beside a model.
+YAML_NAME = "hydrodynamics.yaml"
+#: Hydrodynamic model types understood (uuv_simulator also has sphere, cylinder, box, spheroid).
+MODEL_TYPES = ("fossen",)
+#: Sign flip between SNAME (FRD) and ROS (FLU) body axes, per entry of [u v w p q r].
+FRD_FLU_SIGNS = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
+#: Relative tolerance of the symmetry and semi-definiteness checks of an added-mass matrix.
+MATRIX_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class LinkHydrodynamics:
+    """Hydrostatic and hydrodynamic parameters of one link (link frame, FLU, [linear; angular]).
+
+    Attributes:
+        volume: displaced volume [m^3] (buoyancy rho g V at the centre of buoyancy).
+        center_of_buoyancy: (3,) [m] in the link frame.
+        added_mass: (6, 6) M_A about the link origin, order [u v w p q r]
+            [kg, kg m, kg m^2]; symmetric positive semi-definite.
+        linear_damping: (6,) d_l >= 0 [N s/m, N m s/rad].
+        quadratic_damping: (6,) d_q >= 0 [N s^2/m^2, N m s^2/rad^2].
+
+    Raises:
+        ModelCheckError: a wrong shape, a non-finite number, a negative volume or
+            damping, an added mass that is not symmetric positive semi-definite.
+    """
+
+    volume: float = 0.0
+    center_of_buoyancy: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    added_mass: np.ndarray = field(default_factory=lambda: np.zeros((6, 6)))
+    linear_damping: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    quadratic_damping: np.ndarray = field(default_factory=lambda: np.zeros(6))
+
+    def __post_init__(self) -> None:
+        volume = _array(self.volume, (), "volume")
+        if volume < 0:
+            raise ModelCheckError(f"volume must be >= 0 m^3, got {float(volume):g}")
+        object.__setattr__(self, "volume", float(volume))
+        object.__setattr__(self, "center_of_buoyancy", _array(self.center_of_buoyancy, (3,), "center_of_buoyancy"))
+        added = _array(self.added_mass, (6, 6), "added_mass")
+        check_added_mass(added)
+        object.__setattr__(self, "added_mass", added)
+        for name in ("linear_damping", "quadratic_damping"):
+            values = _array(getattr(self, name), (6,), name)
+            if np.any(values < 0):
+                raise ModelCheckError(
+                    f"{name} coefficients must be >= 0 (damping that removes energy), got {values.tolist()}")
+            object.__setattr__(self, name, values)
+
+    def damping_wrench(self, nu_r: np.ndarray) -> np.ndarray:
+        """Fossen's damping wrench -(D_l + D_q |nu_r|) nu_r (6,) [N, N m] for a relative twist nu_r (6,)."""
+        return -(self.linear_damping + self.quadratic_damping * np.abs(nu_r)) * nu_r
+
+
+@dataclass(frozen=True)
+class HydroParameters:
+    """The fluid and the hydrodynamic parameters of every link that has some.
+
+    Attributes:
+        fluid_density: rho [kg/m^3].
+        gravity: g [m/s^2] (weight and buoyancy act along -z of the world).
+        current: (3,) constant, irrotational ocean current in the world frame (ENU) [m/s].
+        links: {link name: LinkHydrodynamics}; links not listed have none.
+        source: where the parameters were read (for messages).
+    """
+
+    fluid_density: float = SEA_WATER_DENSITY
+    gravity: float = GRAVITY
+    current: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    links: Mapping[str, LinkHydrodynamics] = field(default_factory=dict)
+    source: str = "<none>"
+
+    def __post_init__(self) -> None:
+        for name in ("fluid_density", "gravity"):
+            value = float(_array(getattr(self, name), (), name))
+            if value <= 0:
+                raise ModelCheckError(f"{name} must be > 0, got {value:g}")
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "current", _array(self.current, (3,), "current"))
+        for name, link in self.links.items():
+            if not isinstance(link, LinkHydrodynamics):
+                raise ModelCheckError(f"links[{name!r}] must be a LinkHydrodynamics, got {type(link).__name__}")
+        object.__setattr__(self, "links", dict(self.links))
+
+    def with_current(self, current: Iterable[float]) -> HydroParameters:
+        """A copy with another ocean current (3,) [m/s], world frame."""
+        return replace(self, current=np.asarray(current, dtype=float))
+
+    def check_links(self, valid: Iterable[str]) -> None:
+        """Raise NameNotFound (listing the model's links) for a link the model does not have."""
+        valid = list(valid)
+        for name in self.links:
+            if name not in valid:
+                raise NameNotFound("link (in the hydrodynamic parameters)", name, valid)
+
+
+# --------------------------------------------------------------------- checks
+def _array(value: object, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """value as a read-only float array of ``shape``, or ModelCheckError."""
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelCheckError(f"{what} must be numbers of shape {shape}, got {value!r}") from None
+    if array.shape != shape:
+        if array.size == int(np.prod(shape)) and shape:
+            array = array.reshape(shape)
+        else:
+            raise ModelCheckError(f"{what} must have shape {shape} ({int(np.prod(shape))} numbers), got {array.size}")
+    if not np.all(np.isfinite(array)):
+        raise ModelCheckError(f"{what} has non-finite entries")
+    array.setflags(write=False)
+    return array
+
+
+def check_added_mass(matrix: np.ndarray) -> None:
+    """Raise ModelCheckError unless ``matrix`` (6, 6) is symmetric positive semi-definite.
+
+    Potential-flow added mass is the Hessian of the fluid's kinetic energy, so it
+    is symmetric and semi-definite; anything else makes the mass matrix of the
+    plant indefinite (or asymmetric) and the simulation meaningless.
+    """
+    scale = max(1.0, float(np.max(np.abs(matrix))))
+    asymmetry = np.abs(matrix - matrix.T)
+    if np.max(asymmetry) > MATRIX_TOLERANCE * scale:
+        i, j = np.unravel_index(int(np.argmax(asymmetry)), matrix.shape)
+        raise ModelCheckError(
+            f"added_mass must be symmetric: entry ({i},{j}) = {matrix[i, j]:g} but ({j},{i}) = {matrix[j, i]:g}")
+    smallest = float(np.min(np.linalg.eigvalsh(0.5 * (matrix + matrix.T))))
+    if smallest < -MATRIX_TOLERANCE * scale:
+        raise ModelCheckError(f"added_mass must be positive semi-definite; its smallest eigenvalue is {smallest:g}")
+
+
+def flip_frd_flu(matrix: np.ndarray) -> np.ndarray:
+    """A (6, 6) body matrix from SNAME (FRD) to ROS (FLU) axes or back: T M T, T = diag(1,-1,-1,1,-1,-1)."""
+    return FRD_FLU_SIGNS[:, None] * matrix * FRD_FLU_SIGNS[None, :] + 0.0  # + 0.0: no -0.0 entries
+
+
+# --------------------------------------------------------- uuv_simulator form
+def link_from_uuv(
+    values: Mapping[str, object], *, fluid_density: float, link_mass: float | None, where: str
+) -> LinkHydrodynamics:
+    """A LinkHydrodynamics from the values of one uuv_simulator ``<link>`` entry (file conventions).
+
+    Args:
+        values: ``volume``, ``center_of_buoyancy``, ``neutrally_buoyant`` and
+            ``hydrodynamic_model`` = {``type``, ``added_mass``, ``linear_damping``,
+            ``quadratic_damping``, ``linear_damping_forward_speed``}, as numbers or
+            whitespace-separated text.
+        fluid_density: rho [kg/m^3], for ``neutrally_buoyant``.
+        link_mass: the link's mass [kg] in the model, for ``neutrally_buoyant`` (None: unknown).
+        where: prefix of error messages.
+
+    Raises:
+        ModelCheckError: a missing or invalid value (the message says which and what is valid).
+    """
+    try:
+        model = values.get("hydrodynamic_model") or {}
+        if not isinstance(model, Mapping):
+            raise ModelCheckError("hydrodynamic_model must hold type, added_mass, linear_damping, quadratic_damping")
+        kind = str(model.get("type", "fossen")).strip()
+        if kind not in MODEL_TYPES:
+            raise ModelCheckError(f"hydrodynamic model type {kind!r} is not supported; valid: {', '.join(MODEL_TYPES)}")
+        forward = model.get("linear_damping_forward_speed")
+        if forward is not None and np.any(_numbers(forward, "linear_damping_forward_speed") != 0):
+            raise ModelCheckError("linear_damping_forward_speed is not supported (give zeros or leave it out)")
+        volume = float(_numbers(values.get("volume", 0.0), "volume", 1)[0])
+        if _flag(values.get("neutrally_buoyant", False)):
+            if link_mass is None:
+                raise ModelCheckError("neutrally_buoyant needs the link's mass, which is unknown here; give volume")
+            volume = link_mass / fluid_density  # as uuv_simulator's BuoyantObject::SetNeutrallyBuoyant
+        added = _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6)
+        linear = _diagonal(model.get("linear_damping", np.zeros(6)), "linear_damping")
+        quadratic = _diagonal(model.get("quadratic_damping", np.zeros(6)), "quadratic_damping")
+        for name, derivatives in (("linear_damping", linear), ("quadratic_damping", quadratic)):
+            if np.any(derivatives > 0):
+                raise ModelCheckError(
+                    f"{name} holds positive values {derivatives.tolist()}: uuv_simulator's form takes Fossen's "
+                    f"hydrodynamic derivatives (X_u, Y_v, ... <= 0) and a positive one would add energy; "
+                    f"negate them")
+        return LinkHydrodynamics(
+            volume=volume,
+            center_of_buoyancy=_numbers(values.get("center_of_buoyancy", np.zeros(3)), "center_of_buoyancy", 3),
+            added_mass=flip_frd_flu(added),
+            linear_damping=-linear,
+            quadratic_damping=-quadratic,
+        )
+    except ModelCheckError as exc:
+        raise ModelCheckError(f"{where}: {exc}") from None
+
+
+def _numbers(value: object, what: str, count: int | None = None) -> np.ndarray:
+    """Numbers from text ("1 2 3") or a (nested) list; ModelCheckError when not ``count`` finite numbers."""
+    try:
+        if isinstance(value, str):
+            array = np.array([float(token) for token in value.split()], dtype=float)
+        else:
+            array = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ModelCheckError(f"{what} is not a list of numbers: {value!r}") from None
+    if count is not None and array.size != count:
+        raise ModelCheckError(f"{what} holds {array.size} numbers, expected {count}")
+    if not np.all(np.isfinite(array)):
+        raise ModelCheckError(f"{what} has non-finite entries")
+    return array
+
+
+def _diagonal(value: object, what: str) -> np.ndarray:
+    """6 damping values, or the diagonal of 36 (uuv_simulator accepts both) when nothing is off it."""
+    array = _numbers(value, what)
+    if array.size == 6:
+        return array
+    if array.size == 36:
+        matrix = array.reshape(6, 6)
+        if np.any(matrix - np.diag(np.diag(matrix)) != 0):
+            raise ModelCheckError(f"{what}: only a diagonal is supported; its 36 values have off-diagonal entries")
+        return np.diag(matrix).copy()
+    raise ModelCheckError(f"{what} holds {array.size} numbers, expected 6 (or 36 for a diagonal matrix)")
+
+
+def _flag(value: object) -> bool:
+    """uuv_simulator's boolean text: 1/0, true/false."""
+    if isinstance(value, bool):
+        return value
+    text = str(value).strip().lower()
+    if text in ("1", "true"):
+        return True
+    if text in ("0", "false", ""):
+        return False
+    raise ModelCheckError(f"neutrally_buoyant must be 0/1 or true/false, got {value!r}")
+
+
+def _is_uuv_plugin(plugin: ET.Element) -> bool:
+    return "underwater_object" in plugin.get("filename", "")
+
+
+def parse_hydrodynamics(urdf: str, origin: str = "<string>") -> HydroParameters | None:
+    """The hydrodynamic parameters written in a URDF's uuv_simulator plugin block(s).
+
+    Args:
+        urdf: URDF text (xacro already expanded).
+        origin: name of the model for messages.
+
+    Returns:
+        The parameters (link names not yet checked against a model), or None
+        when the URDF has no underwater-object plugin.
+
+    Raises:
+        ModelParseError: not well-formed XML.
+        ModelCheckError: an invalid value, a link given twice, two plugins with different densities.
+    """
+    try:
+        root = ET.fromstring(urdf)
+    except ET.ParseError as exc:
+        raise ModelParseError(f"{origin}: malformed XML ({exc})") from None
+    plugins = [plugin for gazebo in root.findall("gazebo") for plugin in gazebo.findall("plugin")
+               if _is_uuv_plugin(plugin)]
+    if not plugins:
+        return None
+    masses = urdf_link_masses(root)
+    densities = {float(_numbers(p.findtext("fluid_density", str(SEA_WATER_DENSITY)), "fluid_density", 1)[0])
+                 for p in plugins}
+    if len(densities) > 1:
+        raise ModelCheckError(
+            f"{origin}: the underwater-object plugins give different fluid densities {sorted(densities)}")
+    density = densities.pop()
+    links: dict[str, LinkHydrodynamics] = {}
+    for plugin in plugins:
+        for element in plugin.findall("link"):
+            name = element.get("name", "")
+            where = f"{origin}: hydrodynamics of link {name!r}"
+            if name in links:
+                raise ModelCheckError(f"{where}: the link is given twice")
+            values: dict[str, object] = {child.tag: (child.text or "") for child in element}
+            model = element.find("hydrodynamic_model")
+            if model is not None:
+                values["hydrodynamic_model"] = {child.tag: (child.text or "") for child in model}
+            links[name] = link_from_uuv(values, fluid_density=density, link_mass=masses.get(name), where=where)
+    return HydroParameters(fluid_density=density, links=links, source=origin)
+
+
+def urdf_link_masses(root: ET.Element) -> dict[str, float]:
+    """{link name: mass [kg]} of the URDF links that have an ``<inertial>``."""
+    masses = {}
+    for link in root.findall("link"):
+        mass = link.find("inertial/mass")
+        if mass is not None:
+            masses[link.get("name", "")] = float(mass.get("value", "0"))
+    return masses
+
+
+# ---------------------------------------------------------------------- YAML
+def load_hydrodynamics_yaml(path: str | os.PathLike, link_masses: Mapping[str, float] | None = None) -> HydroParameters:
+    """Hydrodynamic parameters from a YAML file, in the conventions of the uuv_simulator block.
+
+    The file::
+
+        fluid_density: 1028.0          # optional [kg/m^3]
+        gravity: 9.81                  # optional [m/s^2]
+        current: [0.0, 0.0, 0.0]       # optional, world ENU [m/s]
+        links:
+          base_link:
+            volume: 0.0134                       # [m^3]
+            neutrally_buoyant: false             # optional: volume = link mass / density
+            center_of_buoyancy: [0.0, 0.0, 0.01] # [m], link frame
+            hydrodynamic_model:
+              type: fossen
+              added_mass: [36 numbers or 6 rows of 6]   # SNAME axes
+              linear_damping: [6 numbers <= 0]
+              quadratic_damping: [6 numbers <= 0]
+
+    Args:
+        path: the YAML file.
+        link_masses: {link: mass [kg]}, needed only by ``neutrally_buoyant``.
+
+    Raises:
+        ModelFileNotFound: the file cannot be read.
+        ModelParseError: not YAML, or not of the form above.
+        ModelCheckError: an invalid value.
+    """
+    try:
+        import yaml
+    except ImportError:  # pragma: no cover - pyyaml is installed with the test dependencies
+        raise UVMSError("reading hydrodynamics from YAML needs PyYAML: pip install pyyaml") from None
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ModelFileNotFound(f"{path}: cannot read the hydrodynamics file ({exc})") from None
+    try:
+        document = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ModelParseError(f"{path}: malformed YAML ({' '.join(str(exc).split())})") from None
+    origin = str(path)
+    top_keys = ("fluid_density", "gravity", "current", "links")
+    if not isinstance(document, Mapping) or not isinstance(document.get("links"), Mapping):
+        raise ModelParseError(f"{origin}: expected a mapping with a 'links' mapping (keys: {', '.join(top_keys)})")
+    _check_keys(document, top_keys, origin)
+    density = float(_numbers(document.get("fluid_density", SEA_WATER_DENSITY), "fluid_density", 1)[0])
+    links = {}
+    for name, values in document["links"].items():
+        where = f"{origin}: hydrodynamics of link {name!r}"
+        if not isinstance(values, Mapping):
+            raise ModelParseError(f"{where}: expected a mapping")
+        _check_keys(values, ("volume", "neutrally_buoyant", "center_of_buoyancy", "hydrodynamic_model", "box"), where)
+        model = values.get("hydrodynamic_model") or {}
+        if isinstance(model, Mapping):
+            _check_keys(model, ("type", "added_mass", "linear_damping", "quadratic_damping",
+                                "linear_damping_forward_speed"), where + " hydrodynamic_model")
+        mass = None if link_masses is None else link_masses.get(str(name))
+        links[str(name)] = link_from_uuv(values, fluid_density=density, link_mass=mass, where=where)
+    try:
+        return HydroParameters(
+            fluid_density=density,
+            gravity=float(_numbers(document.get("gravity", GRAVITY), "gravity", 1)[0]),
+            current=_numbers(document.get("current", [0.0, 0.0, 0.0]), "current", 3),
+            links=links,
+            source=origin,
+        )
+    except ModelCheckError as exc:
+        raise ModelCheckError(f"{origin}: {exc}") from None
+
+
+def _check_keys(mapping: Mapping, valid: tuple[str, ...], where: str) -> None:
+    unknown = sorted(str(key) for key in mapping if key not in valid)
+    if unknown:
+        raise ModelParseError(f"{where}: unknown key(s) {', '.join(unknown)}; valid: {', '.join(valid)}")
+
+
+# ------------------------------------------------------------- for a robot
+def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, required: bool = True) -> HydroParameters:
+    """The hydrodynamic parameters of a loaded Robot, checked against its links.
+
+    Looked for in this order: ``path`` (a YAML file) when given; else the
+    uuv_simulator block of the robot's URDF; else ``hydrodynamics.yaml`` in the
+    folder of the model file. A model with both a block and that YAML is
+    ambiguous and refused: pass ``path`` to choose.
+
+    Args:
+        robot: a :class:`uvms.Robot` (uses ``urdf``, ``source`` and its Pinocchio frames).
+        path: a YAML file to use instead of what the model holds.
+        required: when False, a model with no parameters gets empty ones (no
+            hydrodynamics) instead of an error.
+
+    Raises:
+        UVMSError: no parameters (and ``required``), or both a block and a YAML file.
+        NameNotFound: a link that the model does not have (the message lists close names).
+        ModelCheckError, ModelParseError: invalid parameters.
+    """
+    masses = urdf_link_masses(ET.fromstring(robot.urdf)) if robot.urdf else {}
+    if path is not None:
+        hydro = load_hydrodynamics_yaml(path, masses)
+    else:
+        from_urdf = parse_hydrodynamics(robot.urdf, robot.source) if robot.urdf else None
+        folder = Path(robot.source).parent if robot.source and not robot.source.startswith("<") else None
+        beside = folder / YAML_NAME if folder is not None and (folder / YAML_NAME).is_file() else None
+        if from_urdf is not None and beside is not None:
+            raise UVMSError(
+                f"{robot.source}: hydrodynamic parameters are both in the model's uuv_simulator block and in "
+                f"{beside}; pass path= to choose the YAML, or remove one")
+        hydro = from_urdf if from_urdf is not None else (
+            load_hydrodynamics_yaml(beside, masses) if beside is not None else None)
+    if hydro is None:
+        if required:
+            raise UVMSError(
+                f"{robot.source}: the model has no hydrodynamic parameters; add a uuv_simulator underwater-object "
+                f"plugin block to the URDF or a {YAML_NAME} beside it (see uvms.hydrodynamics)")
+        return HydroParameters(source=f"{robot.source} (no hydrodynamic parameters)")
+    hydro.check_links(body_frame_names(robot.model))
+    return hydro
+
+
+def body_frame_names(model: pin.Model) -> list[str]:
+    """Names of the link (BODY) frames of a Pinocchio model, in model order."""
+    import pinocchio as pin
+
+    return [frame.name for frame in model.frames if frame.type == pin.FrameType.BODY]

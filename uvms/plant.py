@@ -1,0 +1,510 @@
+"""Free-floating dynamics of a UVMS in a fluid: the plant that the kinematic controllers drive.
+
+Model
+=====
+The vehicle is passive (no thrusters): only the joints are actuated, and each
+follows its commanded velocity through a first-order motor, qdd_m = (u - qd_m) / tau
+(the joint servo of amundsen2018, tau = 100 ms). Every link l may carry Fossen's
+hydrodynamics (:mod:`uvms.hydrodynamics`), written in its own frame with nu_l = J_l v
+its body twist (Pinocchio ``LOCAL``), nu_c = [R_l^T v_c; 0] the ocean current and
+nu_r = nu_l - nu_c::
+
+    f_l = - M_A nu_r' - C_A(nu_r) nu_r - (D_l + D_q |nu_r|) nu_r + g_l      (link frame)
+    C_A(nu) nu = nu x* (M_A nu) = [w x a1; v x a1 + w x a2],  a = M_A nu  (Fossen 2011, eq. 6.43)
+    nu_r' = J_l v' + Jdot_l v - nu_c',  nu_c' = [-w x R_l^T v_c; 0]       (constant current)
+    g_l   = buoyancy rho g V (up, world) at the centre of buoyancy; the weight is Pinocchio's gravity
+
+Summed over links with the principle of virtual work, the equations of motion are
+
+    Mbar(q) v' + nbar(q, v) = [0; tau_m],   Mbar = M + sum_l J_l^T M_A,l J_l
+
+where M is Pinocchio's rigid-body mass matrix (``crba``) and nbar = Pinocchio's
+``rnea(q, v, 0, fext)`` with fext_l = the velocity-dependent part of f_l (all of f_l
+but -M_A J_l v'). The added mass goes into the mass matrix rather than into
+``fext`` because it multiplies the unknown acceleration: uuv_simulator applies
+-M_A nu' with the filtered acceleration of the previous step and warns that this
+can oscillate, the more so as M_A approaches the link's mass (it exceeds it for
+the snake's modules); in the mass matrix it is exact.
+
+Why not ``pin.aba``: the joint *accelerations* are prescribed (by the motor) and
+the base acceleration is unknown, a hybrid problem; ABA wants all torques. And
+Fossen's M_A is not a rigid-body inertia (surge and sway added masses differ, and
+there are couplings no mass distribution produces), so it cannot be folded into
+Pinocchio's link inertias for ABA. With M_A in Mbar the base rows give
+
+    Mbar_bb a_b = - Mbar_bm a_m - nbar_b,     tau_m = Mbar_mb a_b + Mbar_mm a_m + nbar_m
+
+a solve of the vehicle's 6 x 6 (3 x 3 planar) block.
+
+Conserved quantities. With no current, damping or gravity, the base rows of
+Mbar v are the total momentum (rigid + added mass) expressed in the base frame,
+and the joints exert only internal wrenches, so the *added-mass-augmented* momentum
+sum_l X_l^* (I_l + M_A,l) nu_l is conserved; with M_A = 0 it is the rigid momentum
+behind the generalized Jacobian. :func:`generalized_jacobian_added_mass` is the GJM
+of that augmented momentum.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import UVMSError
+from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
+from .robot import Robot
+
+LOCAL = pin.ReferenceFrame.LOCAL
+METHODS = ("rk4", "euler")
+#: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
+Command = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class HydroLink:
+    """A link with hydrodynamic parameters, placed on the Pinocchio model."""
+
+    name: str
+    frame_id: int
+    joint_id: int
+    placement: pin.SE3  # link frame in its parent joint's frame
+    params: LinkHydrodynamics
+
+
+def resolve_links(model: pin.Model, hydro: HydroParameters) -> list[HydroLink]:
+    """The links of ``hydro`` as (frame, joint, placement) of ``model``.
+
+    Raises:
+        NameNotFound: a link the model does not have.
+    """
+    hydro.check_links(frame.name for frame in model.frames if frame.type == pin.FrameType.BODY)
+    links = []
+    for name, params in hydro.links.items():
+        frame_id = model.getFrameId(name, pin.FrameType.BODY)
+        frame = model.frames[frame_id]
+        links.append(HydroLink(name, frame_id, frame.parentJoint, frame.placement.copy(), params))
+    return links
+
+
+def added_mass_coriolis(added_mass: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """Fossen's C_A(nu) nu = nu x* (M_A nu) (6,) for a body twist nu (6,) = [v; w].
+
+    Args:
+        added_mass: M_A (6, 6), same frame as nu.
+        nu: [linear; angular] velocity [m/s, rad/s].
+
+    Returns:
+        [w x a1; v x a1 + w x a2] with a = M_A nu [N, N m].
+    """
+    a = added_mass @ nu
+    return np.concatenate([_cross(nu[3:], a[:3]), _cross(nu[:3], a[:3]) + _cross(nu[3:], a[3:])])
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two (3,) vectors: numpy's cross is ten times slower on them, and this runs per link and stage."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def augmented_mass_matrix(model: pin.Model, data: pin.Data, links: list[HydroLink], q: np.ndarray) -> np.ndarray:
+    """Mbar = M + sum_l J_l^T M_A,l J_l (nv, nv): the rigid mass matrix with the links' added mass."""
+    matrix = pin.crba(model, data, q)
+    matrix = np.triu(matrix) + np.triu(matrix, 1).T  # crba may fill only the upper triangle
+    if links:
+        pin.computeJointJacobians(model, data, q)
+        for link in links:
+            jacobian = pin.getFrameJacobian(model, data, link.frame_id, LOCAL)
+            matrix += jacobian.T @ link.params.added_mass @ jacobian
+    return matrix
+
+
+def generalized_jacobian_added_mass(
+    robot: Robot, hydro: HydroParameters | None, q: np.ndarray, frame: str | None = None
+) -> np.ndarray:
+    """Generalized Jacobian (6, n_arm) at zero *added-mass-augmented* momentum.
+
+    GJM_A = J_m - J_b Mbar_bb^-1 Mbar_bm with Mbar = M + sum_l J_l^T M_A,l J_l; it maps
+    the arm rates to the world-aligned end-effector twist of a free-floating UVMS
+    in a still, inviscid fluid at rest (no damping, no current, no restoring
+    forces). With M_A = 0 it equals ``robot.generalized_jacobian``.
+
+    Args:
+        robot: a floating- or planar-base Robot.
+        hydro: the parameters (None: the model's own, see :func:`uvms.hydrodynamics.hydrodynamics_of`).
+        q: configuration (nq,).
+        frame: end-effector frame (default: the first).
+
+    Raises:
+        UVMSError: fixed base; invalid parameters or link names.
+    """
+    if robot.base_type == "fixed":
+        raise UVMSError(f"{robot.name} has a fixed base: there is no free-floating base to conserve momentum")
+    q = robot.check_configuration(q)
+    hydro = hydrodynamics_of(robot, required=False) if hydro is None else hydro
+    mass = augmented_mass_matrix(robot.model, robot.data, resolve_links(robot.model, hydro), q)
+    return _gjm_from_mass(robot.jacobian(q, frame), mass, robot.n_vehicle)
+
+
+def _gjm_from_mass(jacobian: np.ndarray, mass: np.ndarray, nb: int) -> np.ndarray:
+    return jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:])
+
+
+@dataclass(frozen=True)
+class PlantDynamics:
+    """What the plant computes at one (q, v, u): accelerations and the motor torques that produce them.
+
+    Attributes:
+        acceleration: v' (nv,) [m/s^2, rad/s^2] (vehicle body twist rate, local; joint accelerations).
+        joint_torque: tau_m (n_arm,) [N m or N] the motors exert.
+        mass_matrix: Mbar (nv, nv), rigid + added mass.
+    """
+
+    acceleration: np.ndarray
+    joint_torque: np.ndarray
+    mass_matrix: np.ndarray
+
+
+class Plant:
+    """Free-floating UVMS dynamics with Fossen hydrodynamics and first-order joint motors.
+
+    Args:
+        robot: a floating- or planar-base Robot (its model is copied, never changed).
+        hydro: hydrodynamic parameters; None reads the model's (uuv_simulator block
+            or ``hydrodynamics.yaml``) and uses none when it has none.
+        gravity: False (default): neutral buoyancy everywhere — weight and
+            buoyancy cancel on every link, no restoring forces (the idealisation of
+            amundsen2018's GJM). True: the weight of every link (Pinocchio) and the
+            buoyancy rho g V of the links with parameters, at their centres of
+            buoyancy, hence restoring moments and net heave.
+        motor_time_constant: tau [s] > 0 of the joint velocity servos.
+        current: (3,) ocean current [m/s] in the world frame; None: ``hydro.current``.
+        added_mass: include the links' added mass (mass matrix and C_A).
+        damping: include linear and quadratic damping.
+
+    Raises:
+        UVMSError: a fixed base, tau <= 0, invalid parameters or link names.
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        hydro: HydroParameters | None = None,
+        *,
+        gravity: bool = False,
+        motor_time_constant: float = 0.1,
+        current: np.ndarray | None = None,
+        added_mass: bool = True,
+        damping: bool = True,
+    ) -> None:
+        if robot.base_type == "fixed":
+            raise UVMSError(f"{robot.name} has a fixed base: the plant needs a floating or planar vehicle")
+        tau = float(motor_time_constant)
+        if not (np.isfinite(tau) and tau > 0):
+            raise UVMSError(f"motor_time_constant must be a finite number > 0 s, got {motor_time_constant!r}")
+        hydro = hydrodynamics_of(robot, required=False) if hydro is None else hydro
+        if not isinstance(hydro, HydroParameters):
+            raise UVMSError(f"hydro must be HydroParameters or None, got {type(hydro).__name__}")
+        if current is not None:
+            hydro = hydro.with_current(current)
+        self.robot = robot
+        self.hydro = hydro
+        self.gravity = bool(gravity)
+        self.motor_time_constant = tau
+        self.added_mass = bool(added_mass)
+        self.damping = bool(damping)
+        self.model = robot.model.copy()
+        self.model.gravity = pin.Motion(np.array([0.0, 0.0, -hydro.gravity, 0.0, 0.0, 0.0]) if gravity
+                                        else np.zeros(6))
+        self.data = self.model.createData()  # kinematics, Jacobians
+        self._dynamics_data = self.model.createData()  # crba / rnea, which overwrite kinematic quantities
+        self.links = resolve_links(self.model, hydro)
+        self.nb = robot.n_vehicle
+        self._current = hydro.current
+        self._moving_fluid = bool(np.any(hydro.current != 0.0))
+
+    # ----------------------------------------------------------------- sizes
+    @property
+    def n_arm(self) -> int:
+        """Number of actuated joint velocities."""
+        return self.model.nv - self.nb
+
+    # -------------------------------------------------------------- dynamics
+    def _link_motion(self, link: HydroLink) -> tuple[np.ndarray, np.ndarray, pin.SE3]:
+        """Body twist nu (6,) and bias acceleration Jdot v (6,) of a link, and its pose, after forwardKinematics."""
+        placement = link.placement
+        nu = placement.actInv(self.data.v[link.joint_id]).vector
+        bias = placement.actInv(self.data.a[link.joint_id]).vector
+        return nu, bias, self.data.oMi[link.joint_id] * placement
+
+    def _relative_twist(self, nu: np.ndarray, pose: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
+        """nu_r = nu - [R^T v_c; 0] and the current's body-frame rate nu_c' = [-w x R^T v_c; 0]."""
+        if not self._moving_fluid:
+            return nu, np.zeros(6)
+        current = pose.rotation.T @ self._current
+        nu_r = nu.copy()
+        nu_r[:3] -= current
+        return nu_r, np.concatenate([-_cross(nu[3:], current), np.zeros(3)])
+
+    def evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> PlantDynamics:
+        """Accelerations and motor torques at (q, v) under a joint-velocity command.
+
+        Args:
+            q: configuration (nq,); v: velocity (nv,).
+            command: commanded joint velocities u (n_arm,) [rad/s or m/s].
+
+        Raises:
+            ConfigurationError: wrong sizes, non-finite values, a non-unit quaternion.
+        """
+        robot = self.robot
+        return self._evaluate(robot.check_configuration(q), robot.check_velocity(v),
+                              robot.check_velocity(command, self.n_arm, "joint-velocity command"))
+
+    def _evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> PlantDynamics:
+        """:meth:`evaluate` without the input checks (the integrator's inner loop)."""
+        model, data = self.model, self.data
+        nv, nb = model.nv, self.nb
+        pin.forwardKinematics(model, data, q, v, np.zeros(nv))  # data.a = the bias accelerations Jdot v
+        if self.added_mass and self.links:
+            pin.computeJointJacobians(model, data)
+        mass = pin.crba(model, self._dynamics_data, q)
+        mass = np.triu(mass) + np.triu(mass, 1).T
+        fext = [pin.Force.Zero() for _ in range(model.njoints)]
+        for link in self.links:
+            params = link.params
+            nu, bias, pose = self._link_motion(link)
+            nu_r, current_rate = self._relative_twist(nu, pose)
+            wrench = np.zeros(6)
+            if self.added_mass:
+                jacobian = pin.getFrameJacobian(model, data, link.frame_id, LOCAL)
+                mass += jacobian.T @ params.added_mass @ jacobian
+                wrench -= params.added_mass @ (bias - current_rate) + added_mass_coriolis(params.added_mass, nu_r)
+            if self.damping:
+                wrench += params.damping_wrench(nu_r)
+            if self.gravity and params.volume > 0.0:
+                buoyancy = pose.rotation.T @ np.array([0.0, 0.0, self.hydro.fluid_density * self.hydro.gravity
+                                                       * params.volume])
+                wrench[:3] += buoyancy
+                wrench[3:] += _cross(params.center_of_buoyancy, buoyancy)
+            fext[link.joint_id] += link.placement.act(pin.Force(wrench))
+        bias_forces = pin.rnea(model, self._dynamics_data, q, v, np.zeros(nv), fext)  # h(q, v) - sum J^T fext
+        arm_acceleration = (command - v[nb:]) / self.motor_time_constant
+        base_acceleration = -np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:] @ arm_acceleration + bias_forces[:nb])
+        torque = mass[nb:, :nb] @ base_acceleration + mass[nb:, nb:] @ arm_acceleration + bias_forces[nb:]
+        return PlantDynamics(np.concatenate([base_acceleration, arm_acceleration]), torque, mass)
+
+    def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
+        """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""
+        return self.evaluate(q, v, command).acceleration
+
+    def derivative(self, state: tuple[np.ndarray, np.ndarray], command: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Time derivative of the state (q, v): (v (nv,) as a tangent vector at q, v' (nv,))."""
+        q, v = state
+        return v, self.acceleration(q, v, command)
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """Mbar (nv, nv): rigid mass matrix plus the links' added mass when ``added_mass`` is on."""
+        return augmented_mass_matrix(self.model, self.data, self.links if self.added_mass else [], q)
+
+    def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
+        """The GJM (6, n_arm) this plant conserves momentum with: added-mass-augmented when ``added_mass``."""
+        q = self.robot.check_configuration(q)
+        return _gjm_from_mass(self.robot.jacobian(q, frame), self.mass_matrix(q), self.nb)
+
+    # ------------------------------------------------------- conserved things
+    def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
+        """(kinetic, potential) energy [J].
+
+        Kinetic: 1/2 v^T M v + sum_l 1/2 nu_r^T M_A nu_r (the fluid's share, when
+        ``added_mass``). Potential (``gravity`` on): sum m g z_com - rho g V z_cob.
+        """
+        model, data = self.model, self.data
+        pin.forwardKinematics(model, data, q, v)
+        mass = pin.crba(model, self._dynamics_data, q)
+        mass = np.triu(mass) + np.triu(mass, 1).T
+        kinetic = 0.5 * float(v @ mass @ v)
+        potential = float(pin.computePotentialEnergy(model, self._dynamics_data, q)) if self.gravity else 0.0
+        for link in self.links:
+            nu, _, pose = self._link_motion(link)
+            if self.added_mass:
+                nu_r, _ = self._relative_twist(nu, pose)
+                kinetic += 0.5 * float(nu_r @ link.params.added_mass @ nu_r)
+            if self.gravity:
+                height = (pose * pin.SE3(np.eye(3), link.params.center_of_buoyancy)).translation[2]
+                potential -= self.hydro.fluid_density * self.hydro.gravity * link.params.volume * height
+        return kinetic, potential
+
+    def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Spatial momentum (6,) of the whole system, world frame, about the world origin [N s, N m s].
+
+        [linear; angular] = sum_i X_i^* I_i v_i (rigid bodies) + sum_l X_l^* M_A,l nu_r,l
+        (the fluid impulse, when ``added_mass``).
+        """
+        model, data = self.model, self.data
+        pin.forwardKinematics(model, data, q, v)
+        total = pin.Force.Zero()
+        for joint in range(1, model.njoints):
+            total += data.oMi[joint].act(model.inertias[joint] * data.v[joint])
+        if self.added_mass:
+            for link in self.links:
+                nu, _, pose = self._link_motion(link)
+                nu_r, _ = self._relative_twist(nu, pose)
+                total += pose.act(pin.Force(link.params.added_mass @ nu_r))
+        return total.vector.copy()
+
+
+# ------------------------------------------------------------------ simulation
+@dataclass
+class PlantResult:
+    """Time series of a plant simulation; row k is the state at t[k] and the command applied from it.
+
+    Attributes:
+        t: (N,) [s]; q: (N, nq); v: (N, nv); command: (N, n_arm) [rad/s or m/s].
+        joint_torque: (N, n_arm) motor torques [N m or N].
+        kinetic_energy, potential_energy: (N,) [J] (kinetic includes the added mass).
+        momentum: (N, 6) [N s, N m s] world frame about the world origin, rigid + added mass.
+        plant: the Plant that produced it (not saved); dt [s]; method; wall_time [s].
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    command: np.ndarray
+    joint_torque: np.ndarray
+    kinetic_energy: np.ndarray
+    potential_energy: np.ndarray
+    momentum: np.ndarray
+    plant: Plant = field(repr=False)
+    dt: float = 0.0
+    method: str = "rk4"
+    wall_time: float = 0.0
+
+    @property
+    def energy(self) -> np.ndarray:
+        """Mechanical energy (N,) [J]: kinetic + potential."""
+        return self.kinetic_energy + self.potential_energy
+
+    def momentum_drift(self) -> np.ndarray:
+        """max_t |h(t) - h(0)| of the linear and the angular momentum (2,) [N s, N m s]."""
+        change = self.momentum - self.momentum[0]
+        return np.array([np.max(np.linalg.norm(change[:, :3], axis=1)), np.max(np.linalg.norm(change[:, 3:], axis=1))])
+
+    def ee_position(self, frame: str | None = None) -> np.ndarray:
+        """End-effector position (N, 3) [m], world frame."""
+        robot = self.plant.robot
+        return np.array([robot.fk(q, frame).translation for q in self.q])
+
+    def ee_twist(self, frame: str | None = None) -> np.ndarray:
+        """End-effector twist (N, 6) [m/s, rad/s], world-aligned (J v)."""
+        robot = self.plant.robot
+        return np.array([robot.jacobian(q, frame) @ v for q, v in zip(self.q, self.v)])
+
+
+def _constant_command(value: np.ndarray) -> Command:
+    return lambda t, q, v: value
+
+
+def simulate_plant(
+    plant: Plant,
+    q0: np.ndarray,
+    v0: np.ndarray | None,
+    command: Command | np.ndarray | None,
+    duration: float,
+    dt: float,
+    method: str = "rk4",
+    *,
+    hold: bool = False,
+) -> PlantResult:
+    """Integrate the plant from (q0, v0) for ``duration`` with a fixed step ``dt``.
+
+    RK4 is the Runge-Kutta-Munthe-Kaas scheme of order 4 (as in :mod:`uvms.simulate`):
+    the configuration stages live in the tangent space at q_k and are mapped with
+    ``pin.integrate`` / ``pin.dIntegrate``, so the quaternion stays unit and the
+    order is 4 on the manifold. "euler" is explicit Euler, for comparison.
+
+    Args:
+        plant: the Plant.
+        q0: initial configuration (nq,); v0: initial velocity (nv,) (None: rest).
+        command: (t, q, v) -> joint-velocity command (n_arm,), a constant (n_arm,), or None (zero).
+        duration, dt: [s]; the number of steps is round(duration / dt).
+        method: "rk4" or "euler".
+        hold: sample the command once per step and hold it (a digital
+            controller at 1/dt); default: evaluate it at every stage.
+
+    Returns:
+        A PlantResult with N = steps + 1 rows.
+
+    Raises:
+        UVMSError: bad arguments, a command of the wrong size or non-finite, a state
+            that becomes non-finite (step too large).
+    """
+    if method not in METHODS:
+        raise UVMSError(f"unknown method {method!r}; valid: {', '.join(METHODS)}")
+    if not (np.isfinite(dt) and dt > 0 and np.isfinite(duration) and duration > 0):
+        raise UVMSError(f"dt and duration must be finite and > 0, got dt={dt!r}, duration={duration!r}")
+    robot, model = plant.robot, plant.model
+    q = robot.check_configuration(q0).copy()
+    v = np.zeros(model.nv) if v0 is None else robot.check_velocity(v0).copy()
+    if command is None:
+        command = np.zeros(plant.n_arm)
+    if not callable(command):
+        command = _constant_command(robot.check_velocity(command, plant.n_arm, "joint-velocity command"))
+
+    def sample(t: float, qq: np.ndarray, vv: np.ndarray) -> np.ndarray:
+        try:
+            u = np.asarray(command(t, qq, vv), dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise UVMSError(f"the command failed at t = {t:.6g} s: {exc}") from None
+        if u.shape != (plant.n_arm,) or not np.all(np.isfinite(u)):
+            raise UVMSError(
+                f"the command must return {plant.n_arm} finite joint velocities, got {u!r} at t = {t:.6g} s")
+        return u
+
+    steps = int(round(duration / dt))
+    records: dict[str, list] = {name: [] for name in
+                                ("t", "q", "v", "command", "joint_torque", "kinetic_energy", "potential_energy",
+                                 "momentum")}
+    started = time.perf_counter()
+    for k in range(steps + 1):
+        t = k * dt
+        u = sample(t, q, v)
+        state = plant._evaluate(q, v, u)
+        kinetic, potential = plant.energy(q, v)
+        for name, value in (("t", t), ("q", q.copy()), ("v", v.copy()), ("command", u),
+                            ("joint_torque", state.joint_torque), ("kinetic_energy", kinetic),
+                            ("potential_energy", potential), ("momentum", plant.momentum(q, v))):
+            records[name].append(value)
+        if k == steps:
+            break
+        held = (lambda tt, qq, vv, held_u=u: held_u) if hold else sample
+        if method == "euler":
+            q, v = pin.integrate(model, q, v * dt), v + dt * state.acceleration
+        else:
+            q, v = _rk4_step(plant, held, t, q, v, dt, state.acceleration)
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            raise UVMSError(f"the state became non-finite at t = {t + dt:.6g} s; reduce dt (now {dt:g} s)")
+    arrays = {name: np.array(values) for name, values in records.items()}
+    if arrays["command"].ndim == 1:  # no arm
+        arrays["command"] = arrays["command"].reshape(len(arrays["t"]), 0)
+        arrays["joint_torque"] = arrays["joint_torque"].reshape(len(arrays["t"]), 0)
+    return PlantResult(**arrays, plant=plant, dt=dt, method=method, wall_time=time.perf_counter() - started)
+
+
+def _rk4_step(plant: Plant, command: Command, t: float, q: np.ndarray, v: np.ndarray, dt: float,
+              first_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One RKMK4 step of (q, v): configuration stages in the tangent space at q, velocities in R^nv."""
+    model = plant.model
+
+    def stage(xi: np.ndarray, velocity: np.ndarray, time_: float) -> tuple[np.ndarray, np.ndarray]:
+        q_stage = pin.integrate(model, q, xi)
+        acceleration = plant._evaluate(q_stage, velocity, command(time_, q_stage, velocity)).acceleration
+        # xi' = dexp^-1(velocity): the tangent-space rate that moves q_stage with body velocity `velocity`
+        return np.linalg.solve(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), acceleration
+
+    k1q, k1v = v, first_acceleration
+    k2q, k2v = stage(0.5 * dt * k1q, v + 0.5 * dt * k1v, t + 0.5 * dt)
+    k3q, k3v = stage(0.5 * dt * k2q, v + 0.5 * dt * k2v, t + 0.5 * dt)
+    k4q, k4v = stage(dt * k3q, v + dt * k3v, t + dt)
+    q_next = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
+    return q_next, v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
