@@ -6,6 +6,10 @@ One arm of xiang2019 (4 revolute joints, modified D-H), samples per second measu
     python benchmarks/bench_workspace.py [--samples 200000]
 
 Goals (issue 5): >= 5x the Pinocchio loop, >= 10x roboticstoolbox, one million samples of both arms in about a second.
+
+The dexterity per voxel needs the frame's orientation too: its rows time the approach and roll
+axes carried with the point (`positions_and_axes`) against full rotation matrices (`poses`), each
+followed by the orientation binning, and a whole `monte_carlo(..., dexterity=True)` run.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ import numpy as np
 import pinocchio as pin
 
 import uvms
-from uvms.workspace import BatchKinematics
+from uvms.workspace import BatchKinematics, OrientationGrid, monte_carlo
 
 
 def rate(function, count: int) -> float:
@@ -41,6 +45,11 @@ def main() -> None:
     batch = BatchKinematics(robot, "left_ee")
     values = batch.sample(options.samples, 0)
     rows = [("uvms BatchKinematics.positions", rate(lambda: batch.positions(values), len(values)))]
+    grid = OrientationGrid()
+    rows.append(("uvms positions_and_axes + orientation cells (dexterity)",
+                 rate(lambda: grid.cells_from_axes(batch.positions_and_axes(values, grid.axes)[1]), len(values))))
+    rows.append(("uvms poses + orientation cells (dexterity)",
+                 rate(lambda: grid.cells(batch.poses(values)[0]), len(values))))
     model, data = robot.model, robot.data
     frame = robot.frame_id("left_ee")
     names = robot.arm_joint_names
@@ -73,6 +82,11 @@ def main() -> None:
     for label, samples_per_second in rows:
         print(f"| {label} | {samples_per_second:,.0f} | {reference / samples_per_second:.1f}x |")
     print(f"\nOne million samples of both arms: {seconds:.2f} s")
+    for dexterity in (False, True):
+        started = time.perf_counter()
+        monte_carlo(robot, ["left_ee", "right_ee"], 1_000_000, dexterity=dexterity, progress=False)
+        seconds = time.perf_counter() - started
+        print(f"monte_carlo, both arms, 1M samples each, volumes{' + dexterity' if dexterity else ''}: {seconds:.2f} s")
 
 
 if __name__ == "__main__":

@@ -10,8 +10,57 @@ import pytest
 
 from conftest import shipped
 from test_fk_papers import xiang_eq6
+import uvms
 from uvms.cli import main
-from uvms.workspace import BatchKinematics, common_volume, monte_carlo, voxel_volume
+from uvms.workspace import (
+    BatchKinematics,
+    HullShape,
+    OrientationGrid,
+    WorkspaceInputError,
+    common_volume,
+    dexterity_map,
+    hull_shapes,
+    monte_carlo,
+    outside_hull,
+    voxel_volume,
+)
+
+INERTIAL = '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+
+
+def chain_urdf(axes, lengths, ee_xyz="0 0 0", base_xyz="0 0 0", base_geometry=""):
+    """A fixed-base serial chain of revolute joints with limits [-pi, pi]: joint k turns about axes[k] and sits
+    lengths[k] along the previous link's x (the first one at base_xyz); frame ``ee`` at ee_xyz on the last link."""
+    links = [f'<link name="base_link">{INERTIAL}{base_geometry}</link>']
+    joints, parent = [], "base_link"
+    for k, (axis, length) in enumerate(zip(axes, lengths)):
+        origin = base_xyz if k == 0 else f"{length} 0 0"
+        links.append(f'<link name="l{k}">{INERTIAL}</link>')
+        joints.append(f'<joint name="j{k}" type="revolute"><parent link="{parent}"/><child link="l{k}"/>'
+                      f'<origin xyz="{origin}"/><axis xyz="{axis}"/>'
+                      f'<limit lower="{-np.pi}" upper="{np.pi}" effort="1" velocity="1"/></joint>')
+        parent = f"l{k}"
+    joints.append(f'<joint name="ee_joint" type="fixed"><parent link="{parent}"/><child link="ee"/>'
+                  f'<origin xyz="{ee_xyz}"/></joint>')
+    return '<robot name="chain">' + "".join(links) + '<link name="ee"/>' + "".join(joints) + "</robot>"
+
+
+def yaw_rotations(angles):
+    """Rotations Rz(angle) (N, 3, 3)."""
+    c, s, zero, one = np.cos(angles), np.sin(angles), np.zeros_like(angles), np.ones_like(angles)
+    return np.stack([np.stack([c, -s, zero], -1), np.stack([s, c, zero], -1), np.stack([zero, zero, one], -1)], 1)
+
+
+def uniform_rotations(count, rng):
+    """Haar-uniform rotations (N, 3, 3) from normalized Gaussian quaternions (w, x, y, z)."""
+    w, x, y, z = rng.normal(size=(count, 4)).T
+    norm = np.sqrt(w * w + x * x + y * y + z * z)
+    w, x, y, z = w / norm, x / norm, y / norm, z / norm
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], 1)
 
 
 def arm_vector(robot, batch, values):
@@ -31,6 +80,9 @@ def test_batched_fk_equals_robot_fk(name, frame, rng):
     base = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([1.0, -2.0, 0.5]))
     rotations, positions = batch.poses(values, base)
     only_positions = batch.positions(values, base)
+    with_axes, axes = batch.positions_and_axes(values, "zx", base)
+    assert np.allclose(with_axes, positions, atol=1e-12)
+    assert np.allclose(axes, rotations[:, :, [2, 0]].transpose(0, 2, 1), atol=1e-12)
     for k in range(0, 300, 3):
         expected = robot.fk(robot.configuration(base=base, arm=arm_vector(robot, batch, values[k])), frame)
         assert np.allclose(positions[k], expected.translation, atol=1e-12)
@@ -84,3 +136,161 @@ def test_cli_workspace_outputs(tmp_path, capsys):
     assert points["q_left_ee"].shape == (5000, 4) and points["position_right_ee"].shape == (5000, 3)
     assert (tmp_path / "workspace.png").stat().st_size > 20_000
     assert main(["workspace", "xiang2019", "--ee", "nosuch", "-n", "10"]) == 2
+
+
+@pytest.mark.parametrize("directions", [1, 2, 3, 10, 100, 200])
+def test_direction_cells_have_equal_area(directions, rng):
+    grid = OrientationGrid(directions, 1)
+    assert grid.ring_counts.sum() == directions and grid.count == directions
+    assert np.array_equal(grid.direction_cells(grid.centres), np.arange(directions))  # a centre is in its cell
+    vectors = rng.normal(size=(200 * directions, 3))  # uniform directions, 200 per cell on average
+    counts = np.bincount(grid.direction_cells(vectors), minlength=directions)
+    assert np.abs(counts / 200.0 - 1.0).max() < 6 * np.sqrt(1 / 200)  # equal area: Poisson noise only (6 sigma)
+
+
+def test_orientation_cells_have_equal_volume(rng):
+    grid = OrientationGrid()  # 100 directions x 18 roll bins
+    counts = np.bincount(grid.cells(uniform_rotations(360_000, rng)), minlength=grid.count)
+    assert grid.count == 1800 and counts.min() > 0
+    poisson = 1 / np.sqrt(counts.mean())  # relative spread of equal-volume cells
+    assert counts.std() / counts.mean() < 1.3 * poisson  # cell volumes equal to within a few per cent
+
+
+def test_dexterity_of_a_free_rotation_chain_tends_to_one():
+    # three revolute joints about z, y, x through one point, ranges [-pi, pi]: every orientation, one position
+    wrist = uvms.load(chain_urdf(["0 0 1", "0 1 0", "1 0 0"], [0, 0, 0], base_xyz="0.05 0.05 0.05"))
+    result = monte_carlo(wrist, ["ee"], 40_000, seed=1, dexterity=True, progress=False)
+    dexterity = result.dexterity["ee"]
+    assert len(dexterity.samples) == 1 and dexterity.samples[0] == 40_000
+    assert np.allclose(dexterity.centres, [[0.05, 0.05, 0.05]])
+    means = [mean for _, mean in result.dexterity_convergence["ee"]]  # 10k, 20k, 40k samples
+    assert np.all(np.diff(means) >= 0) and means[0] < 1.0  # a lower bound that grows with the samples
+    assert means[-1] >= 0.995 and dexterity.volume(0.99) == pytest.approx(0.1**3)
+    directions_only = monte_carlo(wrist, ["ee"], 5000, dexterity=OrientationGrid(200, 1), progress=False)
+    assert directions_only.dexterity["ee"].mean == 1.0
+
+
+@pytest.mark.parametrize("grid", [OrientationGrid(200, 1, "x"), OrientationGrid()], ids=["approach-x", "so3"])
+def test_dexterity_of_a_planar_arm_is_the_cells_of_a_great_circle(grid):
+    # a planar 3R arm (0.5, 0.5, 0.1 m) reaches only rotations about z: its x axis sweeps the equator
+    planar = uvms.load(chain_urdf(["0 0 1"] * 3, [0, 0.5, 0.5], ee_xyz="0.1 0 0", base_xyz="0 0 0.05"))
+    circle = np.unique(grid.cells(yaw_rotations(np.linspace(-np.pi, np.pi, 100_001))))
+    expected = len(circle) / grid.count  # 26 of 200 direction cells; 18 (one per roll bin) of 1800 cells
+    result = monte_carlo(planar, ["ee"], 100_000, seed=2, dexterity=grid, progress=False)
+    dexterity = result.dexterity["ee"]
+    batch = BatchKinematics(planar, "ee")
+    _, axes = batch.positions_and_axes(result.joints["ee"], grid.axes)
+    assert np.all(np.isin(grid.cells_from_axes(axes), circle))  # never off the great circle
+    assert dexterity.dexterity.max() == pytest.approx(expected)
+    radius = np.linalg.norm(dexterity.centres[:, :2], axis=1)
+    inner = (radius > 0.2) & (radius < 0.75)  # every yaw is reachable from every point of these voxels
+    assert inner.sum() > 100 and np.all(dexterity.dexterity[inner] == pytest.approx(expected))
+    assert np.all((dexterity.dexterity >= 0) & (dexterity.dexterity <= 1))
+
+
+def test_dexterity_of_the_4dof_xiang2019_arm_is_small():
+    result = monte_carlo(shipped("xiang2019"), ["left_ee"], 20_000, dexterity=True, progress=False)
+    dexterity = result.dexterity["left_ee"]
+    assert np.all((dexterity.dexterity > 0) & (dexterity.dexterity <= 1))
+    assert dexterity.samples.sum() == 20_000 and dexterity.reached.max() <= dexterity.samples.max()
+    # 4 joints reach a 2-D set of orientations (Rz(q1) Rx(-pi/2) Rz(q2 + q3 + q4)): a finding, not a bug
+    assert dexterity.mean < 0.01 and dexterity.volume(0.1) == 0.0
+    summary = result.metrics()["dexterity"]["frames"]["left_ee"]
+    assert summary["mean"] == dexterity.mean and summary["dexterous_volume"] == 0.0
+
+
+def test_dexterity_map_counts_distinct_cells_per_voxel():
+    positions = np.array([[0.01, 0.01, 0.01], [0.02, 0.02, 0.02], [0.03, 0.01, 0.01], [0.15, 0.01, 0.01]])
+    dexterity = dexterity_map(positions, np.array([3, 3, 7, 3]), voxel=0.1, total_cells=10)
+    assert np.allclose(dexterity.centres, [[0.05, 0.05, 0.05], [0.15, 0.05, 0.05]])
+    assert dexterity.reached.tolist() == [2, 1] and dexterity.samples.tolist() == [3, 1]
+    assert np.allclose(dexterity.dexterity, [0.2, 0.1]) and dexterity.mean == pytest.approx(0.15)
+    assert dexterity.volume(0.15) == pytest.approx(0.001)
+    with pytest.raises(WorkspaceInputError, match=r"\[0, 10\)"):
+        dexterity_map(positions, np.array([3, 3, 10, 3]), 0.1, 10)
+
+
+def test_outside_hull_removes_points_inside_the_solids():
+    box = HullShape("hull", "box", pin.rpy.rpyToMatrix(0, 0, np.pi / 2), np.array([1.0, 0, 0]), np.array([2.0, 0.6, 0.5]))
+    # rotated 90 deg about z: 0.6 m along x, 2 m along y
+    points = np.array([[1.0, 0, 0], [1.29, 0.99, 0.24], [1.31, 0, 0], [1.0, 1.01, 0], [1.0, 0, 0.26], [-5, 0, 0]])
+    assert outside_hull(points, box).tolist() == [False, False, True, True, True, True]
+    cylinder = HullShape("hull", "cylinder", np.eye(3), np.zeros(3), np.array([0.2, 1.0]))
+    sphere = HullShape("hull", "sphere", np.eye(3), np.array([0.0, 0, 1]), np.array([0.1]))
+    probe = np.array([[0.19, 0, 0.49], [0.21, 0, 0], [0, 0, 0.51], [0, 0.05, 1.05], [0, 0, 0.89]])
+    assert outside_hull(probe, [cylinder, sphere]).tolist() == [False, True, True, False, True]
+    assert box.volume == pytest.approx(0.6) and cylinder.volume == pytest.approx(np.pi * 0.04)
+    with pytest.raises(WorkspaceInputError, match="3 positive"):
+        HullShape("hull", "box", np.eye(3), np.zeros(3), np.array([1.0, 1.0]))
+
+
+def test_hull_is_read_from_the_urdf():
+    shapes = hull_shapes(shipped("xiang2019"))  # the visual box of base_link (no collision element)
+    assert [(shape.link, shape.kind) for shape in shapes] == [("base_link", "box")]
+    assert np.allclose(shapes[0].size, [2.0, 0.6, 0.5]) and np.allclose(shapes[0].centre, 0)
+    geometry = ('<collision><origin xyz="0.1 0.2 0.3" rpy="0 0 1.5707963267948966"/>'
+                '<geometry><box size="1 2 3"/></geometry></collision>'
+                '<visual><geometry><sphere radius="9"/></geometry></visual>')
+    robot = uvms.load(chain_urdf(["0 0 1"], [0], base_geometry=geometry))
+    (shape,) = hull_shapes(robot)  # collision first
+    assert shape.kind == "box" and np.allclose(shape.centre, [0.1, 0.2, 0.3])
+    assert np.allclose(np.abs(shape.rotation), [[0, 1, 0], [1, 0, 0], [0, 0, 1]], atol=1e-12)
+    assert hull_shapes(robot, element="visual")[0].kind == "sphere"
+    with pytest.raises(WorkspaceInputError, match="valid: base_link"):
+        hull_shapes(robot, links=["l0"])
+    with pytest.raises(WorkspaceInputError, match="no box, cylinder or sphere"):
+        hull_shapes(uvms.load(chain_urdf(["0 0 1"], [0])))
+
+
+def test_hull_removal_never_increases_the_volume():
+    robot = shipped("xiang2019")
+    result = monte_carlo(robot, ["left_ee", "right_ee"], 20_000, remove_hull=True, progress=False)
+    for frame in result.frames:
+        assert result.volume_outside_hull[frame] <= result.volume[frame]
+        # the arms hang below the hull (q1 in [-130, 0] deg from a mount 6 cm under it): nothing is removed
+        assert result.outside_hull[frame].all() and result.positions[frame][:, 2].max() < -0.25
+    assert result.common_volume_outside_hull <= result.common_volume
+    tall = uvms.load("xiang2019", args={"hull_height": 1.0})  # the hull now reaches 0.19 m below the shoulders
+    result = monte_carlo(tall, ["left_ee", "right_ee"], 20_000, remove_hull=True, progress=False)
+    for frame in result.frames:
+        inside = ~result.outside_hull[frame]
+        assert inside.any() and np.all(result.positions[frame][inside][:, 2] >= -0.5)
+        assert result.volume_outside_hull[frame] < result.volume[frame]
+        assert len(result.cloud(frame)) == np.count_nonzero(~inside)
+    assert result.metrics()["hull"][0]["size"] == [2.0, 0.6, 1.0]
+
+
+def test_bad_workspace_arguments_raise_workspace_errors():
+    robot = shipped("xiang2019")
+    for kwargs, words in [({"samples": 0}, "integer >= 1"), ({"voxel": 0.0}, "voxel size"),
+                          ({"dexterity_voxel": -1.0}, "dexterity voxel"), ({"frames": []}, "at least one")]:
+        arguments = {"robot": robot, "frames": ["left_ee"], "samples": 10, **kwargs}
+        with pytest.raises(WorkspaceInputError, match=words):
+            monte_carlo(**arguments)
+    with pytest.raises(uvms.FrameNotFound):
+        monte_carlo(robot, ["left_eee"], 10)
+    for kwargs, words in [({"directions": 0}, "directions"), ({"roll_bins": 1.5}, "roll_bins"),
+                          ({"approach": "w"}, "x, y, z")]:
+        with pytest.raises(WorkspaceInputError, match=words):
+            OrientationGrid(**kwargs)
+    assert issubclass(WorkspaceInputError, uvms.UVMSError)
+
+
+def test_cli_workspace_dexterity_hull_and_figures(tmp_path, capsys):
+    assert main(["workspace", "xiang2019", "--ee", "left_ee", "-n", "4000", "--figures", "1000,4000",
+                 "--dexterity", "--remove-hull", "--approach", "x", "--roll-bins", "1", "--directions", "50",
+                 "--out", str(tmp_path), "--quiet"]) == 0
+    metrics = json.loads((tmp_path / "metrics.json").read_text())
+    assert metrics["volume_outside_hull"]["left_ee"] <= metrics["volume"]["left_ee"]
+    dexterity = metrics["dexterity"]
+    assert (dexterity["cells"], dexterity["approach"], dexterity["voxel"]) == (50, "x", 0.1)
+    summary = dexterity["frames"]["left_ee"]
+    assert 0 < summary["mean"] <= summary["max"] <= 1 and [n for n, _ in summary["convergence"]] == [1000, 2000, 4000]
+    assert metrics["figures"] == ["workspace_1000.png", "workspace_4000.png", "workspace.png", "dexterity_left_ee.png"]
+    for name in metrics["figures"]:
+        assert (tmp_path / name).stat().st_size > 20_000
+    points = np.load(tmp_path / "points.npz")
+    assert points["dexterity_left_ee"].shape == (summary["voxels"],) and points["outside_hull_left_ee"].all()
+    assert "dexterity mean" in capsys.readouterr().out
+    assert main(["workspace", "xiang2019", "-n", "100", "--figures", "1000", "--out", str(tmp_path)]) == 2
+    assert "--figures expects" in capsys.readouterr().err

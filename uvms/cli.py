@@ -93,38 +93,90 @@ def command_run(options: argparse.Namespace) -> int:
     return 0
 
 
+def parse_figure_counts(text: str | None, samples: int) -> list[int]:
+    """``"10000,50000,100000"`` -> [10000, 50000, 100000], each in [1, samples]."""
+    if not text:
+        return []
+    try:
+        counts = [int(item) for item in text.split(",") if item.strip()]
+    except ValueError:
+        counts = []
+    if not counts or any(not 1 <= count <= samples for count in counts):
+        raise UVMSError(f"--figures expects comma-separated sample counts in [1, {samples}] (-n), got {text!r}")
+    return counts
+
+
 def command_workspace(options: argparse.Namespace) -> int:
-    """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, points and figures."""
+    """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, dexterity, points and figures."""
+    import shutil
     from pathlib import Path
 
     from . import outputs
     from .plotting import workspace_figure
-    from .workspace import monte_carlo
+    from .workspace import OrientationGrid, monte_carlo
 
     robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
     frames = options.ee or robot.ee_frames
+    figure_counts = parse_figure_counts(options.figures, options.samples)
+    if not 0.0 <= options.dexterous_threshold <= 1.0:
+        raise UVMSError(f"--dexterous-threshold must be in [0, 1], got {options.dexterous_threshold}")
+    grid = OrientationGrid(options.directions, options.roll_bins, options.approach) if options.dexterity else False
     result = monte_carlo(robot, frames, options.samples, seed=options.seed, voxel=options.voxel,
-                         progress=False if options.quiet else None)
+                         progress=False if options.quiet else None, remove_hull=options.remove_hull,
+                         dexterity=grid, dexterity_voxel=options.dexterity_voxel)
     out = Path(options.out or Path("out") / f"workspace_{robot.name}")
     arrays = {}
     for frame in frames:
         arrays[f"q_{frame}"] = result.joints[frame]
         arrays[f"position_{frame}"] = result.positions[frame]
+        if result.outside_hull is not None:
+            arrays[f"outside_hull_{frame}"] = result.outside_hull[frame]
+        if result.dexterity is not None:
+            arrays[f"dexterity_centre_{frame}"] = result.dexterity[frame].centres
+            arrays[f"dexterity_{frame}"] = result.dexterity[frame].dexterity
+            arrays[f"dexterity_samples_{frame}"] = result.dexterity[frame].samples
     outputs.write_npz(out / "points.npz", **arrays)
-    metrics = {
-        "model": robot.name, "frames": frames, "samples": result.samples, "voxel": result.voxel,
-        "volume": {**result.volume, **({"common": result.common_volume} if result.common_volume is not None else {})},
-        "volume_convergence": {frame: [[n, v] for n, v in series] for frame, series in result.convergence.items()},
-        "samples_per_second": result.samples_per_second,
-    }
+    outlines = [shape.outline() for shape in result.hull] if result.hull is not None else None
+    hull_note = ", hull removed" if result.hull is not None else ""
+    written, drawn = [], {}
+    for name, count in [(f"workspace_{n}.png", n) for n in figure_counts] + [("workspace.png", result.samples)]:
+        if count in drawn:  # the same cloud: copy the image instead of drawing it again
+            shutil.copyfile(out / drawn[count], out / name)
+        else:
+            workspace_figure({frame: result.cloud(frame, count) for frame in frames}, out / name, outlines=outlines,
+                             title=f"{robot.name}: reachable workspace (vehicle frame), {count} samples per arm"
+                                   f"{hull_note}")
+            drawn[count] = name
+        written.append(name)
+    for frame, dexterity in (result.dexterity or {}).items():
+        grid = result.orientation_grid
+        name = f"dexterity_{frame}.png"
+        workspace_figure({frame: dexterity.centres}, out / name, values={frame: dexterity.dexterity},
+                         value_label=f"dexterity (fraction of {grid.count} orientation cells)", outlines=outlines,
+                         marker_size=16.0,
+                         title=f"{robot.name} {frame}: dexterity per {dexterity.voxel} m voxel, "
+                               f"{result.samples} samples{hull_note} (max along the line of sight)")
+        written.append(name)
+    metrics = {"model": robot.name, **result.metrics(options.dexterous_threshold), "figures": written}
     outputs.write_json(out / "metrics.json", metrics)
-    workspace_figure(result.positions, out / "workspace.png",
-                     title=f"{robot.name}: reachable workspace, {result.samples} samples per arm")
     for frame in frames:
-        print(f"{frame:<12} volume {result.volume[frame]:.4f} m^3 ({result.voxel} m voxels)")
+        line = f"{frame:<12} volume {result.volume[frame]:.4f} m^3 ({result.voxel} m voxels)"
+        if result.volume_outside_hull is not None:
+            line += f", outside the hull {result.volume_outside_hull[frame]:.4f} m^3"
+        print(line)
     if result.common_volume is not None:
-        print(f"{'common':<12} volume {result.common_volume:.4f} m^3")
-    print(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, workspace.png)")
+        line = f"{'common':<12} volume {result.common_volume:.4f} m^3"
+        if result.common_volume_outside_hull is not None:
+            line += f", outside the hull {result.common_volume_outside_hull:.4f} m^3"
+        print(line)
+    for frame, dexterity in (result.dexterity or {}).items():
+        summary = dexterity.summary(options.dexterous_threshold)
+        print(f"{frame:<12} dexterity mean {summary['mean']:.4f}, max {summary['max']:.4f} "
+              f"({result.orientation_grid.count} orientation cells, {dexterity.voxel} m voxels, "
+              f"median {summary['median_samples_per_voxel']:.0f} samples/voxel); "
+              f"dexterous (>= {options.dexterous_threshold}) {summary['dexterous_volume']:.4f} m^3")
+    print(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, "
+          f"{', '.join(written)})")
     return 0
 
 
@@ -153,6 +205,22 @@ def build_parser() -> argparse.ArgumentParser:
     workspace.add_argument("--voxel", type=float, default=0.05, help="voxel edge for the volume [m]")
     workspace.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
     workspace.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    workspace.add_argument("--figures", metavar="N1,N2,...",
+                           help="also draw the first N1, N2, ... samples, e.g. 10000,50000,100000 "
+                                "(xiang2019 Fig. 4): workspace_<N>.png")
+    workspace.add_argument("--remove-hull", action="store_true",
+                           help="drop the points inside the vehicle link's box/cylinder/sphere (URDF collision, "
+                                "else visual) and report volume_outside_hull")
+    workspace.add_argument("--dexterity", action="store_true",
+                           help="measure the fraction of orientation cells reached per voxel (slower FK)")
+    workspace.add_argument("--dexterity-voxel", type=float, default=0.1, help="voxel edge for the dexterity [m]")
+    workspace.add_argument("--directions", type=int, default=100, help="equal-area cells of the approach direction")
+    workspace.add_argument("--roll-bins", type=int, default=18,
+                           help="bins of the roll about the approach axis (1: approach direction only)")
+    workspace.add_argument("--approach", choices=["x", "y", "z"], default="z",
+                           help="frame axis taken as the approach direction")
+    workspace.add_argument("--dexterous-threshold", type=float, default=0.9,
+                           help="dexterity from which a voxel counts as dexterous workspace")
     workspace.add_argument("--out", help="output folder (default: out/workspace_<model>)")
     workspace.add_argument("--quiet", action="store_true", help="no progress bar")
     workspace.set_defaults(handler=command_workspace)

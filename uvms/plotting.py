@@ -103,20 +103,66 @@ CLOUD_COLOURS = ("tab:blue", "tab:red", "tab:green", "tab:orange")
 
 
 def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, title: str = "",
-                     max_points: int = 20_000) -> Path:
-    """A 3-D cloud and its x-z, x-y, y-z projections (xiang2019 Fig. 4), one colour per frame."""
-    figure = Figure(figsize=(11, 9))
+                     max_points: int | None = 100_000, values: dict[str, np.ndarray] | None = None,
+                     value_label: str = "", outlines=None, marker_size: float | None = None) -> Path:
+    """A 3-D cloud and its x-z, x-y, y-z projections (xiang2019 Fig. 4), one colour per frame.
+
+    Args:
+        positions: per frame, points (N, 3) [m]; frames are drawn blue, red, green, orange in order.
+        path: the PNG to write.
+        title: figure title.
+        max_points: at most this many points per frame are drawn (evenly thinned); None: all.
+        values: per frame, one number per point (N,): points are coloured by it (viridis, one
+            colour bar) instead of by frame, highest drawn last so that each projection shows
+            the largest value along the line of sight (e.g. dexterity per voxel centre).
+        value_label: label of the colour bar.
+        outlines: polylines (K, 3) [m] drawn in grey in every panel (e.g. the vehicle hull);
+            NaN rows separate pieces.
+        marker_size: scatter marker area [pt^2]; default: smaller for denser clouds.
+
+    Returns:
+        The path written.
+    """
+    figure = Figure(figsize=(11, 9), layout="constrained" if values is not None else None)  # room for a colour bar
     cloud = figure.add_subplot(2, 2, 1, projection="3d")
     planes = [figure.add_subplot(2, 2, k) for k in (2, 3, 4)]
-    for (frame, points), colour in zip(positions.items(), CLOUD_COLOURS):
-        shown = points[:: max(1, len(points) // max_points)]  # a plot needs no more points than pixels
-        cloud.scatter(shown[:, 0], shown[:, 1], shown[:, 2], s=0.3, color=colour, label=frame, alpha=0.5)
-        for axis, (a, b) in zip(planes, ((0, 2), (0, 1), (1, 2))):
-            axis.scatter(shown[:, a], shown[:, b], s=0.3, color=colour, alpha=0.5)
+    pairs = ((0, 2), (0, 1), (1, 2))
+    shown_clouds = {}
+    for frame, points in positions.items():
+        points = np.asarray(points, dtype=float).reshape(-1, 3)
+        step = 1 if max_points is None else max(1, -(-len(points) // max_points))  # no more points than pixels
+        colour = None if values is None else np.asarray(values[frame], dtype=float)[::step]
+        shown = points[::step]
+        if colour is not None:
+            order = np.argsort(colour, kind="stable")
+            shown, colour = shown[order], colour[order]
+        shown_clouds[frame] = (shown, colour)
+    total = sum(len(shown) for shown, _ in shown_clouds.values())
+    size = marker_size if marker_size is not None else float(np.clip(3000.0 / max(total, 1), 0.2, 8.0))
+    limits = [0.0, max((float(np.max(c)) for _, c in shown_clouds.values() if c is not None and c.size), default=1.0)]
+    mappable = None
+    for (frame, (shown, colour)), frame_colour in zip(shown_clouds.items(), CLOUD_COLOURS):
+        style = ({"color": frame_colour, "alpha": 0.5} if colour is None else
+                 {"c": colour, "cmap": "viridis", "vmin": limits[0], "vmax": limits[1] or 1.0})
+        mappable = cloud.scatter(shown[:, 0], shown[:, 1], shown[:, 2], s=size, label=frame, **style)
+        for axis, (a, b) in zip(planes, pairs):
+            axis.scatter(shown[:, a], shown[:, b], s=size, **style)
+    for line in outlines or ():
+        line = np.asarray(line, dtype=float)
+        cloud.plot(line[:, 0], line[:, 1], line[:, 2], color="0.4", linewidth=0.8)
+        for axis, (a, b) in zip(planes, pairs):
+            axis.plot(line[:, a], line[:, b], color="0.4", linewidth=0.8)
+    everything = [shown for shown, _ in shown_clouds.values() if len(shown)]
+    if everything:
+        span = np.ptp(np.vstack(everything), axis=0)
+        cloud.set_box_aspect(np.maximum(span, 0.05 * max(float(span.max()), 1e-9)))  # true proportions
     cloud.set_xlabel("x [m]")
     cloud.set_ylabel("y [m]")
     cloud.set_zlabel("z [m]")
-    cloud.legend(markerscale=15, fontsize=8)
+    if values is None:
+        cloud.legend(loc="upper left", markerscale=max(1.0, np.sqrt(30.0 / size)), fontsize=8)  # "best" is slow
+    elif mappable is not None:
+        figure.colorbar(mappable, ax=[cloud, *planes], shrink=0.6, label=value_label)
     for axis, (a, b) in zip(planes, ("xz", "xy", "yz")):
         axis.set_xlabel(f"{a} [m]")
         axis.set_ylabel(f"{b} [m]")
@@ -124,7 +170,8 @@ def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, 
         axis.grid(True, alpha=0.3)
         axis.set_title(f"{a}-o-{b} projection")
     figure.suptitle(title)
-    figure.tight_layout()
+    if values is None:
+        figure.tight_layout()
     outputs.save_figure(figure, path)
     return Path(path)
 
