@@ -20,6 +20,7 @@ from .errors import (
     ModelFileNotFound,
     ModelParseError,
     UVMSError,
+    WorkspaceInputError,
     XacroError,
 )
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
@@ -40,10 +41,15 @@ from .solvers import (
 from .state import KinematicState
 from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
 from .trajectory import ViaPointTrajectory, ctraj, jtraj
+from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "BatchKinematics",
+    "WorkspaceInputError",
+    "WorkspaceResult",
+    "monte_carlo",
     "DistanceTask",
     "HydroParameters",
     "JointTask",

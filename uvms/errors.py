@@ -62,3 +62,7 @@ class JointNotFound(NameNotFound):
 
 class ConfigurationError(UVMSError):
     """A configuration, velocity or pose has the wrong size or non-finite entries."""
+
+
+class WorkspaceInputError(UVMSError):
+    """A workspace argument out of range: sample count, voxel size, orientation grid, hull."""

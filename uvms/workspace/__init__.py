@@ -1,0 +1,57 @@
+"""Monte Carlo workspace: uniform joint samples (xiang2019 eq. 8), batched forward kinematics, voxel volume,
+dexterity per voxel and removal of the vehicle hull.
+
+The batched forward kinematics is built from the Pinocchio model, not from a
+formula: for every joint on the path to the frame it takes Pinocchio's joint
+placement and motion subspace S (a revolute joint turns about S's angular
+part, a prismatic one slides along its linear part) and composes the poses of
+all samples at once with numpy, in chunks so memory stays bounded.
+
+Volumes count occupied cubic voxels. Dexterity (xiang2019 defines the dexterous
+workspace, "points an end effector can reach in any orientation", but does not
+compute it) is measured per voxel as the fraction of the cells of SO(3) that the
+samples falling in the voxel reach; see `OrientationGrid` and `dexterity_map`.
+Points are in the vehicle frame (the frame of the vehicle joint; the world for a
+fixed base), so the vehicle's own hull, read from the URDF, can be cut out
+(`hull_shapes`, `outside_hull`).
+
+Modules: ``batch`` (batched forward kinematics), ``voxels`` (volumes), ``dexterity``
+(orientation cells per voxel), ``hull`` (the vehicle's solids), ``montecarlo`` (sampling and results).
+"""
+
+from ..errors import WorkspaceInputError
+from .batch import CHUNK, BatchKinematics, JointStep, axis_rotations, rotate_points
+from .dexterity import (
+    DexterityMap,
+    OrientationGrid,
+    dexterity,
+    dexterity_map,
+    equal_area_rings,
+)
+from .hull import HullShape, hull_shapes, outside_hull, vehicle_links
+from .montecarlo import WorkspaceResult, monte_carlo
+from .voxels import common_volume, voxel_indices, voxel_keys, voxel_volume
+
+__all__ = [
+    "CHUNK",
+    "BatchKinematics",
+    "DexterityMap",
+    "HullShape",
+    "JointStep",
+    "OrientationGrid",
+    "WorkspaceInputError",
+    "WorkspaceResult",
+    "axis_rotations",
+    "common_volume",
+    "dexterity",
+    "dexterity_map",
+    "equal_area_rings",
+    "hull_shapes",
+    "monte_carlo",
+    "outside_hull",
+    "rotate_points",
+    "vehicle_links",
+    "voxel_indices",
+    "voxel_keys",
+    "voxel_volume",
+]
