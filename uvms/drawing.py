@@ -12,11 +12,9 @@ from __future__ import annotations
 import functools
 import itertools
 import os
-import tempfile
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -301,23 +299,6 @@ def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | Non
     return figure
 
 
-@contextmanager
-def atomic_suffixed_path(path: Path) -> Iterator[Path]:
-    """A temporary path beside ``path`` with the same suffix (writers pick the format from it); replaced on success."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
-    except OSError as exc:
-        raise UVMSError(f"cannot write to {str(path.parent)!r}: {exc.strerror or exc}") from None
-    os.close(handle)
-    try:
-        yield Path(temporary)
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-
-
 def _movie_writer(path: Path, fps: float) -> animation.AbstractMovieWriter:
     suffix = path.suffix.lower()
     if suffix not in WRITERS:
@@ -380,6 +361,6 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
     movie = animation.FuncAnimation(figure, draw_frame, frames=len(qs), interval=1000 / fps, repeat=False,
                                     cache_frame_data=False)
     with tqdm(total=len(qs), disable=(not progress) if progress is not None else None, desc="animation", leave=False) as bar, \
-            atomic_suffixed_path(path) as temporary:
+            outputs.atomic_path(path, keep_suffix=True) as temporary:
         movie.save(temporary, writer=writer, dpi=dpi, progress_callback=lambda *_: bar.update(1))
     return path

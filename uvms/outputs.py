@@ -18,12 +18,19 @@ from .errors import UVMSError
 
 
 @contextlib.contextmanager
-def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
-    """Yield a temporary path beside ``path``; on success it replaces ``path`` atomically."""
+def atomic_path(path: str | os.PathLike, keep_suffix: bool = False) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success it replaces ``path`` atomically.
+
+    Args:
+        path: the final file.
+        keep_suffix: give the temporary file ``path``'s suffix (for writers that pick the format from it,
+            e.g. Pillow and ffmpeg); otherwise it ends in ``.tmp``.
+    """
     path = Path(path)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        handle, temporary = tempfile.mkstemp(prefix=f".{path.stem if keep_suffix else path.name}.",
+                                             suffix=path.suffix if keep_suffix else ".tmp", dir=path.parent)
     except OSError as exc:
         raise UVMSError(f"cannot write to {str(path.parent)!r}: {exc.strerror or exc}") from None
     os.close(handle)
