@@ -11,7 +11,7 @@ from xml.parsers.expat import ExpatError
 
 import pinocchio as pin
 
-from . import checks, resources
+from . import checks, resources, sandbox
 from .errors import BaseMismatchError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from .robot import Robot
 
@@ -32,6 +32,7 @@ def load(
     args: Mapping[str, object] | None = None,
     ee: str | Sequence[str] | None = None,
     package_dirs: Sequence[str | os.PathLike] | None = None,
+    trusted: bool | None = None,
 ) -> Robot:
     """Load a UVMS from a ``.xacro`` or ``.urdf`` file, a shipped model name, or URDF text.
 
@@ -46,6 +47,10 @@ def load(
         ee: end-effector frame name(s); default: frames named ``ee``/``*_ee``,
             else the last leaf link.
         package_dirs: extra folders to resolve ``package://`` mesh URIs.
+        trusted: a xacro file is code (its expressions are Python). True expands it in this
+            process; False in a restricted child process (``uvms.sandbox``: no file writes, no
+            processes, no network, a timeout). None: trusted for the shipped models only.
+            Plain URDF is never executed.
 
     Returns:
         The Robot.
@@ -54,7 +59,7 @@ def load(
         UVMSError: (a subclass) missing file, malformed XML, xacro error, invalid
             model values, base mismatch, unknown end-effector frame.
     """
-    xml, origin, base_dir = read_model_text(source, args)
+    xml, origin, base_dir = read_model_text(source, args, trusted)
     robot_element = checks.parse_urdf(xml, origin)
     tree = checks.check_urdf(robot_element, origin)
     chosen = choose_base(base, tree, origin)
@@ -64,9 +69,9 @@ def load(
 
 
 def read_model_text(
-    source: str | os.PathLike, args: Mapping[str, object] | None = None
+    source: str | os.PathLike, args: Mapping[str, object] | None = None, trusted: bool | None = None
 ) -> tuple[str, str, Path | None]:
-    """URDF text of a source, with xacro expanded.
+    """URDF text of a source, with xacro expanded (in a sandbox unless trusted; see :func:`load`).
 
     Returns:
         (URDF text, origin for messages, folder of the file or None for a string).
@@ -78,7 +83,9 @@ def read_model_text(
     path = resources.resolve_model_path(source)
     origin = str(path)
     if path.name.endswith(".xacro"):
-        return expand_xacro(path, args or {}), origin, path.parent
+        if trusted is None:
+            trusted = path.resolve().is_relative_to(resources.MODELS_DIR)
+        return expand_xacro(path, args or {}, trusted), origin, path.parent
     if args:
         raise UVMSError(f"{origin}: xacro args were given but the file is not a .xacro")
     try:
@@ -87,8 +94,8 @@ def read_model_text(
         raise ModelFileNotFound(f"{origin}: cannot read the model file ({exc})") from None
 
 
-def expand_xacro(path: Path, args: Mapping[str, object]) -> str:
-    """Run xacro on a file with ``args`` as its mappings.
+def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -> str:
+    """Run xacro on a file with ``args`` as its mappings; untrusted files in ``uvms.sandbox``.
 
     Raises:
         XacroError: xacro failed (its message is kept).
@@ -103,6 +110,8 @@ def expand_xacro(path: Path, args: Mapping[str, object]) -> str:
         raise XacroError(
             f"{path}: unknown xacro arg(s) {', '.join(unknown)}; this model declares: {', '.join(sorted(declared))}"
         )
+    if not trusted:
+        return sandbox.expand_untrusted(path, mappings)
     try:
         document = xacro.process_file(str(path), mappings=mappings)
     except xacro.XacroException as exc:
