@@ -180,6 +180,116 @@ def command_workspace(options: argparse.Namespace) -> int:
     return 0
 
 
+def view_configuration(robot: Robot, values: Sequence[float] | None) -> np.ndarray:
+    """``--q`` values as q: nq numbers (Pinocchio's q), vehicle pose + arm (nv numbers: [x, y, yaw] or
+    [x, y, z, roll, pitch, yaw], then the arm), or the arm alone (n_arm numbers); none: neutral."""
+    if not values:
+        return robot.neutral()
+    values = np.asarray(values, dtype=float)
+    if len(values) == robot.nq:
+        return robot.check_configuration(values)
+    if len(values) == robot.nv and robot.n_vehicle:
+        return robot.configuration(base=values[: robot.n_vehicle], arm=values[robot.n_vehicle:])
+    if len(values) == robot.n_arm:
+        return robot.configuration(arm=values)
+    pose = {"floating": "6 (x y z roll pitch yaw) + ", "planar": "3 (x y yaw) + ", "fixed": ""}[robot.base_type]
+    raise UVMSError(f"--q takes {robot.nq} numbers (q), {pose}{robot.n_arm} (vehicle pose + arm) or "
+                    f"{robot.n_arm} (arm joints) for {robot.name}; got {len(values)}")
+
+
+def view_robot(options: argparse.Namespace) -> Robot:
+    """The model of ``uvms view``: a model file/name, or the model of a scenario ``.toml``."""
+    if options.model is None:
+        raise UVMSError("uvms view needs the model: `uvms view MODEL` or `uvms view MODEL|SCENARIO.toml "
+                        "--result DIR` (a run folder does not record its model file)")
+    if str(options.model).endswith(".toml"):
+        from .scenario import read_scenario
+
+        section = read_scenario(options.model)["model"]
+        args = {**section["args"], **parse_assignments(options.arg)}
+        return load(section["path"], base=options.base or section["base"] or None, args=args,
+                    ee=section["ee"] or None)
+    return load(options.model, base=options.base, args=parse_assignments(options.arg))
+
+
+def read_result(robot: Robot, folder: str) -> tuple[np.ndarray, np.ndarray]:
+    """(t (N,), q (N, nq)) of a run folder's ``trajectory.npz``, checked against the model."""
+    from pathlib import Path
+
+    path = Path(folder) / "trajectory.npz"
+    if not path.is_file():
+        raise UVMSError(f"{str(path)!r} does not exist; --result takes a run folder written by `uvms run`")
+    try:
+        with np.load(path) as arrays:
+            t, q = np.asarray(arrays["t"], dtype=float), np.asarray(arrays["q"], dtype=float)
+    except (OSError, ValueError, KeyError) as exc:
+        raise UVMSError(f"cannot read t and q from {str(path)!r}: {exc}") from None
+    if q.ndim != 2 or q.shape[1] != robot.nq or len(t) != len(q) or len(q) == 0:
+        raise UVMSError(f"{str(path)!r} holds q of shape {q.shape} and t of shape {t.shape}, but {robot.name} "
+                        f"has nq = {robot.nq}: is this the run's model (and its --arg/--base)?")
+    return t, q
+
+
+def frame_indices(t: np.ndarray, count: int) -> np.ndarray:
+    """At most ``count`` row indices evenly spaced in time, first and last included."""
+    wanted = np.linspace(t[0], t[-1], max(min(count, len(t)), 1))
+    return np.unique(np.clip(np.searchsorted(t, wanted), 0, len(t) - 1))
+
+
+def wait_for_interrupt() -> None:
+    """Keep the viewer's server alive until Ctrl-C."""
+    import time
+
+    while True:
+        time.sleep(3600)
+
+
+def command_view(options: argparse.Namespace) -> int:
+    """``uvms view MODEL [--q ...]`` / ``uvms view MODEL --result DIR``: the 3-D viewer, or a headless picture."""
+    from pathlib import Path
+
+    if options.frames < 1 or not options.fps > 0:
+        raise UVMSError(f"--frames must be >= 1 and --fps > 0, got {options.frames} and {options.fps}")
+    robot = view_robot(options)
+    q = view_configuration(robot, options.q)
+    result = read_result(robot, options.result) if options.result else None
+    if options.headless:
+        from . import drawing
+
+        out = Path(options.headless)
+        if result is None:
+            if out.suffix.lower() in drawing.WRITERS:
+                raise UVMSError(f"an animation ({out.suffix}) needs --result DIR; write a picture (.png) of one "
+                                f"configuration instead")
+            drawing.snapshot_figure(robot, [q], titles=[robot.name], path=out, ncols=1, panel_size=6.0)
+        else:
+            t, qs = result
+            if out.suffix.lower() in drawing.WRITERS:
+                rows = frame_indices(t, options.frames)
+                drawing.animate(robot, qs[rows], out, fps=options.fps, times=t[rows], trail_frame=robot.ee_frames[0],
+                                title=robot.name, progress=False if options.quiet else None)
+            else:
+                rows = frame_indices(t, 4)
+                drawing.snapshot_figure(robot, qs[rows], titles=[f"t = {t[k]:.2f} s" for k in rows], path=out)
+        print(f"wrote {out}")
+        return 0
+    from .viewer import Viewer
+
+    viewer = Viewer(robot, port=options.port)
+    try:
+        viewer.display(q)
+        print(f"viewer      {viewer.url}  (this machine only; Ctrl-C to stop)", flush=True)
+        if result is not None:
+            t, qs = result
+            viewer.play(t, qs, speed=options.speed, progress=False if options.quiet else None)
+        wait_for_interrupt()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        viewer.close()
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``uvms``."""
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
@@ -224,6 +334,23 @@ def build_parser() -> argparse.ArgumentParser:
     workspace.add_argument("--out", help="output folder (default: out/workspace_<model>)")
     workspace.add_argument("--quiet", action="store_true", help="no progress bar")
     workspace.set_defaults(handler=command_workspace)
+    view = commands.add_parser("view", help="3-D viewer of a model or a run (needs uvms[viz]), or --headless OUT")
+    view.add_argument("model", nargs="?",
+                      help="a .urdf/.xacro file, a shipped model name, or a scenario .toml (its model)")
+    view.add_argument("--result", metavar="DIR", help="play the trajectory.npz of a run folder (uvms run)")
+    view.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    view.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    view.add_argument("--q", nargs="+", type=float, metavar="V",
+                      help="configuration: nq numbers (q), vehicle pose + arm joints, or arm joints only")
+    view.add_argument("--port", type=int, default=8080, help="first port tried on 127.0.0.1 (default 8080)")
+    view.add_argument("--speed", type=float, default=1.0, help="simulated seconds per second of playback")
+    view.add_argument("--headless", metavar="OUT",
+                      help="no viewer: write OUT.png (snapshot) or OUT.gif/.mp4 (animation of --result) "
+                           "with matplotlib")
+    view.add_argument("--frames", type=int, default=100, help="--headless animation: at most this many frames")
+    view.add_argument("--fps", type=float, default=20.0, help="--headless animation: frames per second")
+    view.add_argument("--quiet", action="store_true", help="no progress bar")
+    view.set_defaults(handler=command_view)
     return parser
 
 

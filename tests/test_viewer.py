@@ -1,0 +1,280 @@
+"""3-D viewer (optional viser), `uvms view` (live and --headless) and the teach panel (optional ipywidgets).
+
+The optional packages are not in the `test` extra: tests that need them are skipped without them, and
+the missing-package errors are tested by hiding the packages.
+"""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+import socket
+import sys
+import time
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from conftest import shipped
+from PIL import Image
+
+import uvms
+from uvms import teach, viewer
+from uvms.cli import main
+
+PORT = 18080  # first port tried by the live tests (the next free one is taken when busy)
+
+MISSING_MESH = """<robot name="meshy">
+  <link name="base_link"><visual><geometry><mesh filename="package://no_such_pkg/hull.stl"/></geometry></visual>
+    <visual><geometry><box size="1 0.5 0.3"/></geometry></visual>
+    <inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l1"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/><origin xyz="0.5 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+def hide(monkeypatch, *modules: str) -> None:
+    """Make ``import module`` fail as if the package were not installed."""
+    for name in modules:
+        monkeypatch.setitem(sys.modules, name, None)
+
+
+def placements(robot, geometry, q):
+    data, geometry_data = robot.model.createData(), geometry.createData()
+    pin.forwardKinematics(robot.model, data, q)
+    pin.updateGeometryPlacements(robot.model, data, geometry, geometry_data)
+    return {item.name: geometry_data.oMg[k] for k, item in enumerate(geometry.geometryObjects)}
+
+
+def cylinder_ends(pose: pin.SE3, shape) -> np.ndarray:
+    half = shape.halfLength * pose.rotation[:, 2]
+    return np.array([pose.translation - half, pose.translation + half])
+
+
+# ------------------------------------------------------------------ geometry (no viser needed)
+def test_visuals_come_from_the_urdf_and_sit_on_their_links(rng):
+    robot = shipped("hoang2011")
+    visual, collision = viewer.geometry_models(robot)
+    assert visual.ngeoms == robot.urdf.count("<visual") and collision.ngeoms == robot.urdf.count("<collision")
+    assert not any(item.name.startswith("skeleton/") for item in visual.geometryObjects)
+    q = robot.random_configuration(rng)
+    for item, pose in zip(visual.geometryObjects, placements(robot, visual, q).values()):
+        expected = robot.fk(q, robot.model.names[item.parentJoint]) * item.placement
+        np.testing.assert_allclose(pose.homogeneous, expected.homogeneous, atol=1e-12)
+
+
+def test_a_composed_robot_is_shown_as_a_skeleton_joining_its_joints(rng):
+    robot = uvms.mount_arm(shipped("hoang2011"), "z1", placement=[0.3, 0.0, -0.2, 0.0, 0.0, 0.5])
+    assert robot.urdf is None
+    visual, _ = viewer.geometry_models(robot)
+    model = robot.model
+    links = [j for j in range(1, model.njoints) if model.parents[j] > 0
+             and np.linalg.norm(model.jointPlacements[j].translation) > 1e-6]
+    names = {item.name for item in visual.geometryObjects}
+    assert {f"skeleton/joint_{model.names[j]}" for j in range(1, model.njoints)} <= names
+    assert {f"skeleton/link_{model.names[j]}" for j in links} <= names
+    assert {f"skeleton/ee_tip_{frame}" for frame in robot.ee_frames} <= names
+    objects = {item.name: item for item in visual.geometryObjects}
+    for _ in range(3):
+        q = robot.random_configuration(rng)
+        poses = placements(robot, visual, q)
+        for j in links:  # each link cylinder runs from the parent joint origin to the joint origin
+            name = f"skeleton/link_{model.names[j]}"
+            ends = cylinder_ends(poses[name], objects[name].geometry)
+            expected = [robot.fk(q, model.names[model.parents[j]]).translation, robot.fk(q, model.names[j]).translation]
+            np.testing.assert_allclose(ends, expected, atol=1e-12)
+        for frame in robot.ee_frames:
+            np.testing.assert_allclose(poses[f"skeleton/ee_tip_{frame}"].translation, robot.fk(q, frame).translation,
+                                       atol=1e-12)
+
+
+def test_mesh_uris_are_resolved_and_missing_meshes_left_out():
+    panda = uvms.load(uvms.example_robot_urdf("panda"))
+    xml, missing = viewer.resolved_urdf(panda)
+    assert not missing and "package://" not in xml and xml.count(".dae") > 0
+    with pytest.warns(uvms.MissingMeshWarning):
+        robot = uvms.load(MISSING_MESH)
+    with pytest.warns(UserWarning, match="1 mesh file.*no_such_pkg.*not shown"):
+        visual, _ = viewer.geometry_models(robot)
+    assert [item.geometry.__class__.__name__ for item in visual.geometryObjects] == ["Box"]
+
+
+def test_missing_viser_gives_the_install_hint(monkeypatch, capsys):
+    hide(monkeypatch, "viser")
+    with pytest.raises(viewer.ViewerUnavailable, match=r"pip install uvms\[viz\]"):
+        viewer.view(shipped("hoang2011"))
+    assert issubclass(viewer.ViewerUnavailable, uvms.UVMSError)
+    assert main(["view", "hoang2011"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "uvms[viz]" in err and "--headless" in err
+
+
+# ------------------------------------------------------------------ uvms view --headless (no viser needed)
+def write_run(folder, robot, count=6):
+    folder.mkdir()
+    t = np.linspace(0.0, 1.0, count)
+    q = np.array([robot.configuration(base=[0.1 * k, 0.0, 0.1 * k], arm=[1.0, 0.2 * k, 0.0]) for k in range(count)])
+    np.savez(folder / "trajectory.npz", t=t, q=q)
+    return t, q
+
+
+def test_view_headless_writes_a_snapshot_and_an_animation(tmp_path, capsys):
+    robot = shipped("hoang2011")
+    run = tmp_path / "run"
+    write_run(run, robot)
+    assert main(["view", "hoang2011", "--q", "0", "0", "0", "1", "0.5", "0.2", "--headless", str(tmp_path / "a.png")]) == 0
+    assert Image.open(tmp_path / "a.png").size[0] > 100
+    assert main(["view", "hoang2011", "--result", str(run), "--headless", str(tmp_path / "b.gif"), "--frames", "4",
+                 "--quiet"]) == 0
+    assert Image.open(tmp_path / "b.gif").n_frames == 4
+    assert main(["view", "hoang2011", "--result", str(run), "--headless", str(tmp_path / "c.png")]) == 0
+    assert "wrote" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(("argv", "words"), [
+    (["view"], "needs the model"),
+    (["view", "hoang2011", "--headless", "x.gif"], "needs --result"),
+    (["view", "hoang2011", "--q", "1", "2"], "--q takes 7 numbers"),
+    (["view", "hoang2011", "--result", "no_such_dir", "--headless", "x.png"], "does not exist"),
+    (["view", "bluerov2_alpha5", "--result", "RUN", "--headless", "x.png"], "nq = 12"),
+    (["view", "hoang2011", "--frames", "0", "--headless", "x.png"], "--frames"),
+])
+def test_view_errors_are_one_line(argv, words, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write_run(tmp_path / "RUN", shipped("hoang2011"))
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and words in err
+
+
+def test_view_q_accepts_q_pose_and_arm_forms():
+    from uvms.cli import view_configuration
+
+    robot = shipped("xiang2019")
+    q = robot.random_configuration(3)
+    pose = teach.vehicle_pose_values(robot, q)
+    arm = robot.arm_configuration(q)
+    for values in (q, np.concatenate([pose, arm])):
+        got = view_configuration(robot, list(values))
+        np.testing.assert_allclose(robot.fk(got).homogeneous, robot.fk(q).homogeneous, atol=1e-12)
+    np.testing.assert_allclose(view_configuration(robot, list(arm)), robot.configuration(arm=arm))
+
+
+# ------------------------------------------------------------------ live viewer (needs viser)
+def outside_address() -> str | None:
+    """A non-loopback address of this machine, if it has one."""
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.connect(("10.255.255.255", 1))
+            address = probe.getsockname()[0]
+    except OSError:
+        return None
+    return None if address.startswith("127.") else address
+
+
+def accepts(host: str, port: int) -> bool:
+    with socket.socket() as client:
+        client.settimeout(1.0)
+        return client.connect_ex((host, port)) == 0
+
+
+def test_viewer_binds_to_localhost_shows_q_and_plays(rng):
+    pytest.importorskip("viser")
+    robot = uvms.mount_arm(shipped("hoang2011"), "z1")
+    q = robot.random_configuration(rng)
+    with viewer.view(robot, q, port=PORT) as shown:
+        port = shown.server.get_port()
+        assert shown.url == f"http://127.0.0.1:{port}" and accepts("127.0.0.1", port)
+        address = outside_address()
+        if address is not None:
+            assert not accepts(address, port), "the viewer must not listen on other interfaces"
+        visualizer = shown.visualizer
+        expected = placements(robot, visualizer.visual_model, q)
+        for name, pose in expected.items():
+            handle = visualizer.frames[f"{visualizer.visualRootNodeName}/{name}"]
+            np.testing.assert_allclose(handle.position, pose.translation, atol=1e-6)
+        t = np.linspace(0.0, 2.0, 11)
+        qs = np.array([robot.random_configuration(rng) for _ in t])
+        started = time.perf_counter()
+        viewer.play(robot, t, qs, speed=20.0, fps=10.0, viewer=shown, progress=False)
+        assert time.perf_counter() - started < 2.0
+        np.testing.assert_array_equal(shown.q, qs[-1])
+        assert shown._time_slider.value == pytest.approx(2.0)
+        with pytest.raises(uvms.UVMSError, match="non-decreasing"):
+            shown.play(t[::-1], qs)
+    assert not accepts("127.0.0.1", port)
+
+
+def test_view_command_serves_until_interrupted(monkeypatch, capsys, tmp_path):
+    pytest.importorskip("viser")
+    import uvms.cli
+
+    def interrupt():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(uvms.cli, "wait_for_interrupt", interrupt)
+    run = tmp_path / "run"
+    write_run(run, shipped("hoang2011"), count=3)
+    assert main(["view", "hoang2011", "--port", str(PORT), "--result", str(run), "--speed", "100", "--quiet"]) == 0
+    assert "viewer      http://127.0.0.1:" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ teach panel
+@pytest.mark.parametrize("name", ["hoang2011", "xiang2019"])
+def test_teach_state_is_the_forward_kinematics_of_the_slider_values(name, rng):
+    robot = shipped(name)
+    specs = teach.sliders(robot)
+    assert [s.name for s in specs][: robot.n_vehicle] == list(teach.VEHICLE_SLIDERS[robot.base_type])
+    lower, upper = robot.arm_limits
+    arm_specs = specs[robot.n_vehicle:]
+    np.testing.assert_array_equal([s.lower for s in arm_specs], lower)
+    np.testing.assert_array_equal([s.upper for s in arm_specs], upper)
+    for _ in range(5):
+        q = robot.random_configuration(rng)
+        values = dict(zip([s.name for s in specs], [*teach.vehicle_pose_values(robot, q), *robot.arm_configuration(q)]))
+        got, poses = teach.teach_state(robot, values)
+        assert list(poses) == robot.ee_frames
+        for frame, pose in poses.items():
+            np.testing.assert_allclose(pose.homogeneous, robot.fk(q, frame).homogeneous, atol=1e-12)
+            np.testing.assert_allclose(pose.homogeneous, robot.fk(got, frame).homogeneous, atol=0)
+    text = teach.format_poses(poses)
+    assert text.count("\n") == len(robot.ee_frames) - 1 and "rpy [deg]" in text
+    # a partial update keeps the other values of the given q
+    joint = robot.arm_joint_names[0]
+    moved, _ = teach.teach_state(robot, {joint: 0.3 * lower[0] + 0.7 * upper[0]}, q)
+    index = robot.arm_joints[0].idx_q
+    assert moved[index] == pytest.approx(0.3 * lower[0] + 0.7 * upper[0])
+    np.testing.assert_array_equal(np.delete(moved, index),
+                                  np.delete(q, index))
+    with pytest.raises(uvms.UVMSError, match="unknown teach value.*valid: base_x"):
+        teach.teach_state(robot, {"shoulder": 0.1})
+    with pytest.raises(uvms.UVMSError, match="finite"):
+        teach.teach_state(robot, {joint: float("nan")})
+
+
+def test_teach_without_ipywidgets_gives_the_install_hint(monkeypatch):
+    hide(monkeypatch, "ipywidgets")
+    with pytest.raises(teach.TeachUnavailable, match=r"pip install uvms\[viz\]"):
+        teach.teach(shipped("hoang2011"))
+
+
+def test_teach_panel_updates_on_a_slider_change():
+    pytest.importorskip("ipywidgets")
+    robot = shipped("hoang2011")
+    panel = teach.teach(robot)
+    assert set(panel.sliders) == {"base_x", "base_y", "base_yaw", *robot.arm_joint_names}
+    for spec in teach.sliders(robot):
+        slider = panel.sliders[spec.name]
+        assert (slider.min, slider.max, slider.value) == pytest.approx((spec.lower, spec.upper, spec.value))
+    before_label, before_picture = panel.poses.value, panel.picture.value
+    panel.sliders["q2"].value = 1.0
+    panel.sliders["base_x"].value = 2.0
+    q, poses = panel.state()
+    assert q[0] == pytest.approx(2.0) and robot.arm_configuration(q)[1] == pytest.approx(1.0)
+    assert panel.poses.value != before_label and panel.picture.value != before_picture
+    assert teach.format_poses(poses) in panel.poses.value
+    assert panel.picture.value[:8] == b"\x89PNG\r\n\x1a\n"
