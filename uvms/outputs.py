@@ -34,6 +34,9 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False) -> Iterator[
     except OSError as exc:
         raise UVMSError(f"cannot write to {str(path.parent)!r}: {exc.strerror or exc}") from None
     os.close(handle)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(temporary, 0o666 & ~umask)  # mkstemp makes 0600; a result file gets the usual permissions
     try:
         yield Path(temporary)
         os.replace(temporary, path)
