@@ -58,7 +58,8 @@ def frame_pose(model: pin.Model, data: pin.Data, q: np.ndarray, frame_id: int) -
 
 def frame_jacobian(model: pin.Model, data: pin.Data, q: np.ndarray, frame_id: int) -> np.ndarray:
     """World-aligned Jacobian of a frame (6, nv): twist = J v."""
-    return pin.computeFrameJacobian(model, data, q, frame_id, WORLD_ALIGNED)
+    # reshape: Pinocchio's binding returns a one-column matrix as a (6,) vector when nv = 1
+    return pin.computeFrameJacobian(model, data, q, frame_id, WORLD_ALIGNED).reshape(6, model.nv)
 
 
 def centroidal_map_split(

@@ -36,7 +36,8 @@ class KinematicState:
 
     def jacobian(self, frame_id: int) -> np.ndarray:
         """World-aligned Jacobian of a frame (6, nv)."""
-        return pin.getFrameJacobian(self.robot.model, self.robot.data, frame_id, kinematics.WORLD_ALIGNED)
+        model = self.robot.model
+        return pin.getFrameJacobian(model, self.robot.data, frame_id, kinematics.WORLD_ALIGNED).reshape(6, model.nv)
 
     def centroidal_split(self) -> tuple[np.ndarray, np.ndarray]:
         """Conserved rows of the centroidal map: A_b (k, n_vehicle), A_m (k, n_arm)."""

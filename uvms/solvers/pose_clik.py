@@ -91,7 +91,7 @@ class PoseCLIK:
 
     def velocity(self, q: np.ndarray) -> np.ndarray:
         """CLIK velocity v (nv,) at q (trusted: a configuration from ``pin.integrate``)."""
-        jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, WORLD_ALIGNED)  # (6, nv)
+        jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, WORLD_ALIGNED).reshape(6, -1)
         pose = self.data.oMf[self.frame_id]  # updated by computeFrameJacobian in world-aligned axes
         error = self._error
         error[:3] = self._target_position - pose.translation

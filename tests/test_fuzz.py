@@ -1,0 +1,93 @@
+"""Property-based tests: random valid URDF trees load with consistent kinematics; solvers never fake success."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import uvms
+
+finite = st.floats(-1.0, 1.0, allow_nan=False)
+unit_axis = st.tuples(finite, finite, finite).filter(lambda v: np.linalg.norm(v) > 0.2).map(
+    lambda v: tuple(float(x) for x in np.asarray(v) / np.linalg.norm(v)))
+KINDS = ("revolute", "prismatic", "continuous", "fixed")
+
+
+@st.composite
+def urdf_trees(draw):
+    """A random tree: 1-6 moving or fixed joints, each child hung on any earlier link; floating, planar or fixed root."""
+    count = draw(st.integers(1, 6))
+    links, joints = ["base"], []
+    for index in range(count):
+        parent = draw(st.sampled_from(links))
+        kind = draw(st.sampled_from(KINDS))
+        axis = draw(unit_axis)
+        xyz = draw(st.tuples(finite, finite, finite))
+        rpy = draw(st.tuples(finite, finite, finite))
+        lower = draw(st.floats(-2.0, 0.0))
+        joints.append((f"j{index}", kind, parent, f"l{index}", axis, xyz, rpy, lower, lower + draw(st.floats(0.1, 3.0))))
+        links.append(f"l{index}")
+    root = draw(st.sampled_from(("floating", "planar", "fixed")))
+    masses = draw(st.lists(st.floats(0.1, 10.0), min_size=len(links), max_size=len(links)))
+    body = []
+    for link, mass in zip(links, masses):
+        body.append(f'<link name="{link}"><inertial><mass value="{mass}"/>'
+                    f'<inertia ixx="{mass}" iyy="{mass}" izz="{mass}" ixy="0" ixz="0" iyz="0"/></inertial></link>')
+    for name, kind, parent, child, axis, xyz, rpy, lower, upper in joints:
+        limit = f'<limit lower="{lower}" upper="{upper}" effort="1" velocity="1"/>' if kind in ("revolute", "prismatic") else ""
+        body.append(f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
+                    f'<origin xyz="{" ".join(map(repr, xyz))}" rpy="{" ".join(map(repr, rpy))}"/>'
+                    f'<axis xyz="{" ".join(map(repr, axis))}"/>{limit}</joint>')
+    if root != "fixed":
+        body.insert(0, '<link name="world"/>')
+        body.append(f'<joint name="base_joint" type="{root}"><parent link="world"/><child link="base"/></joint>')
+    return f'<robot name="fuzz">{"".join(body)}</robot>', root, links[-1]
+
+
+def numeric_jacobian(robot: uvms.Robot, q: np.ndarray, frame: str, h: float = 1e-6) -> np.ndarray:
+    """Central differences of the frame pose on the manifold, world-aligned (6, nv)."""
+    columns = []
+    for k in range(robot.nv):
+        step = np.zeros(robot.nv)
+        step[k] = h
+        plus = robot.fk(pin.integrate(robot.model, q, step), frame)
+        minus = robot.fk(pin.integrate(robot.model, q, -step), frame)
+        linear = (plus.translation - minus.translation) / (2 * h)
+        angular = pin.log3(plus.rotation @ minus.rotation.T) / (2 * h)
+        columns.append(np.concatenate([linear, angular]))
+    return np.array(columns).T
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(tree=urdf_trees(), seed=st.integers(0, 2**31 - 1))
+def test_random_trees_load_with_consistent_kinematics(tree, seed):
+    text, root, leaf = tree
+    robot = uvms.load(text, ee=leaf)
+    assert robot.base_type == root
+    q = robot.random_configuration(np.random.default_rng(seed))
+    jacobian = robot.jacobian(q, leaf)
+    assert np.all(np.isfinite(jacobian))
+    assert np.allclose(jacobian, numeric_jacobian(robot, q, leaf), atol=1e-6)
+    assert np.allclose(robot.fk(q, leaf).rotation @ robot.fk(q, leaf).rotation.T, np.eye(3), atol=1e-12)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(tree=urdf_trees(), seed=st.integers(0, 2**31 - 1))
+def test_ik_never_reports_a_false_success(tree, seed):
+    text, _, leaf = tree
+    robot = uvms.load(text, ee=leaf)
+    rng = np.random.default_rng(seed)
+    reachable = robot.fk(robot.random_configuration(rng), leaf)
+    unreachable = pin.SE3(reachable.rotation, reachable.translation + [50.0, 0.0, 0.0])
+    for target in (reachable, unreachable):
+        result = uvms.solve_ik(robot, target, frame=leaf, restarts=2, max_iterations=60, rng=seed)
+        assert np.all(np.isfinite(result.q)) and np.isfinite(result.error)
+        error = np.concatenate([target.translation - robot.fk(result.q, leaf).translation,
+                                pin.log3(target.rotation @ robot.fk(result.q, leaf).rotation.T)])
+        axes_error = np.linalg.norm(error[uvms.kinematics.axis_rows(uvms.robot.DEFAULT_AXES[robot.base_type])])
+        assert result.success == (axes_error <= 1e-10)  # the flag is the truth
+        lower, upper = robot.arm_limits
+        arm = robot.arm_configuration(result.q)
+        assert np.all(arm >= lower - 1e-12) and np.all(arm <= upper + 1e-12)
