@@ -177,3 +177,35 @@ def test_missing_meshes_only_warn_and_package_dirs_resolve_them(tmp_path):
         assert uvms.load(source, package_dirs=[tmp_path]).nq == 1
         assert uvms.load(source, package_dirs=[tmp_path / "my_rov"]).nq == 1
         uvms.mount_arm(shipped("hoang2011"), "panda")  # example-robot-data meshes are found
+
+
+@pytest.mark.parametrize(
+    "source",
+    [urdf(axis="0 0 0"), urdf(xyz="nan 0 0"), urdf(mass="-2"), urdf(ixx="-1"), urdf(extra='<link name="orphan"/>'),
+     "<robot name='x'><link name='a'></robot>"],
+)
+def test_bad_models_through_the_cli_are_one_line(tmp_path, capsys, source):
+    path = tmp_path / "bad.urdf"
+    path.write_text(source)
+    assert main(["info", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.strip().splitlines()) == 1 and "Traceback" not in captured.err
+
+
+def test_continuous_joint_is_an_angle_for_the_user_and_cos_sin_for_pinocchio():
+    robot = uvms.load(urdf().replace('type="revolute"', 'type="continuous"').replace(
+        '<limit lower="-1" upper="1" effort="1" velocity="1"/>', ""))
+    assert (robot.nq, robot.nv) == (2, 1)
+    q = robot.configuration(arm=[2.5])  # beyond pi/2: (cos, sin) keeps the angle unambiguous
+    assert q == pytest.approx([np.cos(2.5), np.sin(2.5)])
+    assert robot.arm_configuration(q) == pytest.approx([2.5])
+    assert robot.jacobian(q).shape == (6, 1)
+    with pytest.raises(uvms.ConfigurationError):
+        robot.fk([2.0, 0.0])  # not a unit (cos, sin) pair
+
+
+def test_unreadable_model_path_is_a_directory(tmp_path):
+    folder = tmp_path / "robot.urdf"
+    folder.mkdir()
+    with pytest.raises(uvms.ModelFileNotFound, match="is not a file"):
+        uvms.load(folder)
