@@ -47,6 +47,7 @@ of that augmented momentum.
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -56,6 +57,10 @@ import pinocchio as pin
 from .errors import UVMSError
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from .robot import Robot
+
+with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
+    warnings.simplefilter("ignore")
+    from tqdm.auto import tqdm
 
 LOCAL = pin.ReferenceFrame.LOCAL
 METHODS = ("rk4", "euler")
@@ -415,6 +420,7 @@ def simulate_plant(
     method: str = "rk4",
     *,
     hold: bool = False,
+    progress: bool | None = None,
 ) -> PlantResult:
     """Integrate the plant from (q0, v0) for ``duration`` with a fixed step ``dt``.
 
@@ -431,6 +437,7 @@ def simulate_plant(
         method: "rk4" or "euler".
         hold: sample the command once per step and hold it (a digital
             controller at 1/dt); default: evaluate it at every stage.
+        progress: show a progress bar (None: only on a terminal).
 
     Returns:
         A PlantResult with N = steps + 1 rows.
@@ -466,7 +473,8 @@ def simulate_plant(
                                 ("t", "q", "v", "command", "joint_torque", "kinetic_energy", "potential_energy",
                                  "momentum")}
     started = time.perf_counter()
-    for k in range(steps + 1):
+    for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None, desc="plant",
+                  unit="step", leave=False):
         t = k * dt
         u = sample(t, q, v)
         state = plant._evaluate(q, v, u)
