@@ -93,6 +93,22 @@ def command_run(options: argparse.Namespace) -> int:
     return 0
 
 
+def command_sweep(options: argparse.Namespace) -> int:
+    """``uvms sweep SCENARIO --grid KEY=START:STOP:N ...``: run a grid of overrides, write sweep.csv and sweep.png."""
+    from .sweep import sweep  # joblib, and dask only with --backend dask
+
+    result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
+                   scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None)
+    print(result.text())
+    folder = result.files[0].parent
+    print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, point_*/)")
+    if result.failed:
+        first = result.failed[0]
+        raise UVMSError(f"{len(result.failed)} of {len(result.rows)} sweep points failed (error column of "
+                        f"{result.files[0]}); point {first['point']}: {first['error']}")
+    return 0
+
+
 def parse_figure_counts(text: str | None, samples: int) -> list[int]:
     """``"10000,50000,100000"`` -> [10000, 50000, 100000], each in [1, samples]."""
     if not text:
@@ -307,6 +323,19 @@ def build_parser() -> argparse.ArgumentParser:
                      help="override a scenario key, e.g. solver.gain=2 or model.args.l1=0.6 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.set_defaults(handler=command_run)
+    sweep = commands.add_parser("sweep", help="run a scenario on a grid of overrides: sweep.csv and sweep.png")
+    sweep.add_argument("scenario", help="scenario file, e.g. scenarios/santos2006_task_priority.toml")
+    sweep.add_argument("--grid", action="append", metavar="KEY=START:STOP:N",
+                       help="sweep a scenario key over N values from START to STOP, or KEY=[a,b,...], e.g. "
+                            "model.args.l1=1.5:2.5:5 (repeatable: the grid is the product)")
+    sweep.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
+    sweep.add_argument("--backend", choices=["loky", "dask"], default="loky",
+                       help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a local cluster of --jobs workers)")
+    sweep.add_argument("--out", help="output folder (default: out/<scenario name>_sweep)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(handler=command_sweep)
     workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
     workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
     workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")

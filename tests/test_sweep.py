@@ -1,0 +1,108 @@
+"""`uvms sweep`: the same table with 1 and 2 loky jobs and on a local Dask cluster, failures, bad input."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import pytest
+
+from uvms import UVMSError
+from uvms.cli import main
+from uvms.scenario import ScenarioError
+from uvms.sweep import METRICS, SweepError, parse_grid, sweep
+
+SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps
+GRID = ["solver.gain=0.5:1.5:2", "model.args.l1=1.5:2.0:2"]  # l1 moves the start; the gain the tracking
+
+
+def comparable(result):
+    """Every column but wall_time, which is the only one allowed to differ between runs."""
+    return [{key: value for key, value in row.items() if key != "wall_time"} for row in result.rows]
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    return sweep(SCENARIO, GRID, jobs=1, out=tmp_path_factory.mktemp("sweep1"), progress=False)
+
+
+def test_parse_grid():
+    assert parse_grid("solver.gain=0.5:1.5:3") == ("solver.gain", [0.5, 1.0, 1.5])
+    assert parse_grid("model.args.n_joints=4:8:3") == ("model.args.n_joints", [4, 6, 8])  # ints stay ints
+    assert parse_grid("model.args.l1=0.6:0.6:1") == ("model.args.l1", [0.6])
+    assert parse_grid("solver.priority=['robust', 'classic']") == ("solver.priority", ["robust", "classic"])
+    for bad in ("solver.gain", "gain=1:2:3", "solver.gain=1:2", "solver.gain=1:2:0", "solver.gain=1:2:x",
+                "solver.gain=nan:1:3", "solver.gain=1:inf:3", "solver.gain=[]", "solver.gain=[1, 1]"):
+        with pytest.raises(SweepError, match="--grid"):
+            parse_grid(bad)
+
+
+def test_sweep_table_one_row_per_point_and_the_grid_changes_the_runs(reference):
+    assert reference.columns == ["point", "solver.gain", "model.args.l1", *METRICS, "error"]
+    assert [(row["solver.gain"], row["model.args.l1"]) for row in reference.rows] == [
+        (0.5, 1.5), (0.5, 2.0), (1.5, 1.5), (1.5, 2.0)]
+    assert not reference.failed
+    rows = reference.rows
+    assert all(math.isfinite(row[key]) for row in rows for key in METRICS)
+    assert len({row["final_position_error"] for row in rows}) == 4  # every point really is another run
+    assert rows[0]["final_position_error"] > 1.5 * rows[2]["final_position_error"]  # higher gain, smaller error
+    assert abs(rows[0]["vehicle_travel"] - rows[1]["vehicle_travel"]) > 0.3  # a shorter first link moves the vehicle
+    assert rows[1]["max_position_error"] < 0.07  # the default point is the README's santos2006 run
+    folder = reference.files[0].parent
+    assert [path.name for path in reference.files] == ["sweep.csv", "sweep.png"]
+    assert (folder / "point_3" / "metrics.json").is_file() and not list(folder.glob("point_*/*.png"))
+    table = list(csv.DictReader((folder / "sweep.csv").read_text().splitlines()))
+    assert [float(row["final_position_error"]) for row in table] == [row["final_position_error"] for row in rows]
+    assert (folder / "sweep.png").read_bytes().startswith(b"\x89PNG")
+
+
+def test_two_jobs_give_the_same_table(reference, tmp_path):
+    assert comparable(sweep(SCENARIO, GRID, jobs=2, out=tmp_path, progress=False)) == comparable(reference)
+
+
+def test_dask_backend_gives_the_same_table(reference, tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+        result = sweep(SCENARIO, GRID, backend="dask", scheduler=cluster.scheduler_address, out=tmp_path,
+                       progress=False)
+    assert comparable(result) == comparable(reference)
+    assert (tmp_path / "sweep.csv").read_text().splitlines()[0] == ",".join(reference.columns)
+
+
+def test_a_failed_point_is_reported_not_fatal(tmp_path, capsys):
+    # vehicle_mass -5 passes the scenario schema but the model check rejects it, in the worker
+    result = sweep(SCENARIO, ["model.args.vehicle_mass=[2000.0, -5.0]"], out=tmp_path, progress=False)
+    ok, bad = result.rows
+    assert not ok["error"] and math.isfinite(ok["max_position_error"])
+    assert "ModelCheckError" in bad["error"] and "mass" in bad["error"]
+    assert all(math.isnan(bad[key]) for key in METRICS) and result.failed == [bad]
+    assert main(["sweep", str(SCENARIO), "--grid", "model.args.vehicle_mass=[2000.0, -5.0]", "--out", str(tmp_path),
+                 "--quiet"]) == 2
+    assert "1 of 2 sweep points failed" in capsys.readouterr().err
+
+
+def test_bad_keys_are_rejected_before_any_worker_starts(tmp_path):
+    with pytest.raises(ScenarioError, match="valid in \\[solver\\]: method, gain"):
+        sweep(SCENARIO, ["solver.gian=0.5:1.5:2"], jobs=2, out=tmp_path)
+    with pytest.raises(ScenarioError, match="unknown section"):
+        sweep(SCENARIO, ["solvr.gain=0.5:1.5:2"], out=tmp_path)
+    with pytest.raises(UVMSError, match="l1, l2, l3"):  # an unknown xacro arg: the declared ones are listed
+        sweep(SCENARIO, ["model.args.l4=1:2:2"], out=tmp_path)
+    with pytest.raises(SweepError, match="backend"):
+        sweep(SCENARIO, ["solver.gain=1:2:2"], backend="ray", out=tmp_path)
+    with pytest.raises(SweepError, match="distinct"):
+        sweep(SCENARIO, ["solver.gain=1:2:2", "solver.gain=3:4:2"], out=tmp_path)
+    assert not list(tmp_path.iterdir())  # nothing ran
+
+
+def test_cli_sweep_writes_the_table_and_the_plot(tmp_path, capsys):
+    assert main(["sweep", str(SCENARIO), "--grid", "solver.gain=[0.5, 2]", "--out", str(tmp_path), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[0].split()[:3] == ["point", "solver.gain", "max_position_error"]
+    assert (tmp_path / "sweep.csv").is_file() and (tmp_path / "sweep.png").is_file()
+    assert main(["sweep", str(SCENARIO), "--grid", "solver.gain=1:2"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("uvms: error: --grid") and len(err.splitlines()) == 1
+    assert main(["sweep", str(SCENARIO), "--grid", "solver.gain=1:2:2", "--scheduler", "tcp://x:1"]) == 2
+    assert "needs the dask backend" in capsys.readouterr().err
