@@ -23,6 +23,7 @@ from .errors import (
     WorkspaceInputError,
     XacroError,
 )
+from .gjm_control import GJMControlError, GJMController, GJMResult, VelocityRamps, simulate_gjm
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from .model import MissingMeshWarning, load
 from .plant import Plant, PlantResult, generalized_jacobian_added_mass, simulate_plant
@@ -46,6 +47,11 @@ from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
 __version__ = "0.1.0"
 
 __all__ = [
+    "GJMControlError",
+    "GJMController",
+    "GJMResult",
+    "VelocityRamps",
+    "simulate_gjm",
     "BatchKinematics",
     "WorkspaceInputError",
     "WorkspaceResult",

@@ -241,3 +241,76 @@ def sequence_figures(result: SimulationResult, plan, folder: str | os.PathLike, 
                                trail_frame=plan.frames[0], title=title, frames=plan.frames, view=view,
                                progress=progress))
     return written
+
+
+def gjm_tracking_figure(result, title: str = "", path: str | os.PathLike | None = None) -> Figure:
+    """End-effector velocity (above) and position (below) against the reference (amundsen2018 Figs. 5 and 7).
+
+    Solid: measured in the plant; dashed: the reference v_d and its integral p_d (eq. 9-11). Positions
+    are drawn relative to the start; world ENU axes (x forward, y left, z up).
+
+    Args:
+        result: a :class:`uvms.gjm_control.GJMResult`.
+        title: figure title; path: where to save the PNG (atomically), None to only return it.
+    """
+    t = result.t
+    figure = Figure(figsize=(7.5, 6.5))
+    velocity_axis, position_axis = figure.subplots(2, 1, sharex=True)
+    start = result.desired_position[0]
+    for index, name in enumerate("xyz"):
+        colour = f"C{index}"
+        velocity_axis.plot(t, result.ee_velocity[:, index], color=colour, label=f"v_{name}")
+        velocity_axis.plot(t, result.desired_velocity[:, index], "--", color=colour, label=f"v_{name},d")
+        position_axis.plot(t, result.ee_position[:, index] - start[index], color=colour, label=f"{name} - {name}(0)")
+        position_axis.plot(t, result.desired_position[:, index] - start[index], "--", color=colour,
+                           label=f"{name}_d - {name}(0)")
+    velocity_axis.set_ylabel("end-effector velocity [m/s]")
+    position_axis.set_ylabel("end-effector position [m]")
+    position_axis.set_xlabel("t [s]")
+    for axis in (velocity_axis, position_axis):
+        axis.grid(True, alpha=0.3)
+        axis.legend(ncol=3, fontsize=7, loc="best")
+    velocity_axis.set_title(f"{title}: solid measured, dashed reference; final |p_d - p| = "
+                            f"{1000 * result.final_position_error:.3g} mm", fontsize=9)
+    figure.tight_layout()
+    if path is not None:
+        outputs.save_figure(figure, path)
+    return figure
+
+
+def snapshot_rows(t: np.ndarray, count: int = 4) -> list[int]:
+    """Rows of ``t`` nearest to ``count`` evenly spaced times at the middles of equal slices (8 s -> 1, 3, 5, 7 s)."""
+    duration = float(t[-1] - t[0])
+    return [int(np.argmin(np.abs(t - (t[0] + duration * (2 * k + 1) / (2 * count))))) for k in range(count)]
+
+
+def gjm_figures(result, folder: str | os.PathLike, title: str = "", snapshots: int = 4) -> list[Path]:
+    """Figures of a GJM-controlled plant run: tracking (Figs. 5/7), joint rates, configuration snapshots (Fig. 6).
+
+    Writes ``ee_tracking.png``, ``joint_rates.png`` (measured solid, command dashed) and
+    ``snapshots.png`` (the configuration at ``snapshots`` evenly spaced times, 1, 3, 5, 7 s for 8 s).
+
+    Args:
+        result: a :class:`uvms.gjm_control.GJMResult`; folder: output folder; title: figure titles.
+
+    Returns:
+        The paths written.
+    """
+    from .drawing import snapshot_figure  # 3-D drawing only when asked for
+
+    folder = Path(folder)
+    robot, t = result.controller.robot, result.t
+    gjm_tracking_figure(result, title, folder / "ee_tracking.png")
+    labels = [f"{name} [rad/s]" for name in robot.arm_joint_names]
+    figure = stacked(t, result.joint_rates(), labels, f"{title}: joint rates (solid) and commands (dashed)",
+                     dashed=result.plant_result.command)
+    outputs.save_figure(figure, folder / "joint_rates.png")
+    rows = snapshot_rows(t, snapshots)
+    titles = [f"({chr(97 + k)}) t = {t[row]:.1f} s" for k, row in enumerate(rows)]
+    planar = robot.base_type == "planar"
+    figure = snapshot_figure(robot, result.plant_result.q[rows], titles=titles, frames=[result.controller.frame],
+                             plane="xy" if planar else None)
+    figure.subplots_adjust(top=0.84)  # room for the suptitle above the panel titles
+    figure.suptitle(f"{title}: configurations", y=0.99)
+    outputs.save_figure(figure, folder / "snapshots.png")
+    return [folder / "ee_tracking.png", folder / "joint_rates.png", folder / "snapshots.png"]

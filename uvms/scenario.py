@@ -3,6 +3,11 @@
 The schema (sections, keys, types, defaults) is :data:`SCHEMA`; unknown keys
 are rejected with the list of valid ones, and ``--set KEY=VALUE`` overrides any
 key (dotted path, e.g. ``solver.gain=2`` or ``model.args.l1=0.6``).
+
+By default the motion is integrated kinematically (:mod:`uvms.simulate`). A ``[plant]``
+section with ``type = "rigid"`` or ``"hydrodynamic"`` runs the free-floating dynamics of
+:mod:`uvms.plant` instead, the joints driven by the generalized-Jacobian controller of
+:mod:`uvms.gjm_control` (amundsen2018 eq. 4-8; the vehicle passive).
 """
 
 from __future__ import annotations
@@ -26,7 +31,10 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 from .errors import UVMSError
+from .gjm_control import GJM_KINDS, GJMController, GJMResult, VelocityRamps, simulate_gjm
+from .hydrodynamics import HydroParameters
 from .model import load
+from .plant import Plant
 from .robot import Robot
 from .simulate import SimulationResult, simulate
 from .solvers import (
@@ -42,6 +50,9 @@ from .tasks import FrameTask, JointLimitPotential, VehicleTask
 from .trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw
 
 NUMBER = (int, float)
+#: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
+#: free-floating dynamics of uvms.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
+PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
 NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
 
@@ -69,7 +80,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "orientation_error": (str, "log", ("log", "euler")),
     },
     "trajectory": {
-        "type": (str, "circle", ("circle", "line", "pose")),
+        "type": (str, "circle", ("circle", "line", "pose", "ramps")),
         "start": (NUMBERS, [], None),
         "center": (NUMBERS, [], None),
         "center_offset": (NUMBERS, [], None),
@@ -83,6 +94,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "laps": (NUMBER, 0.0, None),
         "duration": (NUMBER, REQUIRED, None),
         "accel_time": (NUMBER, 0.0, None),
+        "velocity": (NUMBERS, [], None),
     },
     "solver": {
         "method": (str, "clik", ("clik", "task_priority", "kinematic_constraint")),
@@ -113,6 +125,17 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "dt": (NUMBER, REQUIRED, None),
         "duration": (NUMBER, 0.0, None),
         "integrator": (str, "rk4", ("euler", "rk4")),
+    },
+    "plant": {
+        "type": (str, "kinematic", PLANT_TYPES),
+        "gjm": (str, "rigid", GJM_KINDS),
+        "motor_time_constant": (NUMBER, 0.1, None),
+        "motor_feedforward": (bool, False, None),
+        "control_dt": (NUMBER, 0.0, None),
+        "gravity": (bool, False, None),
+        "added_mass": (bool, None, None),
+        "damping": (bool, None, None),
+        "current": (NUMBERS, [], None),
     },
     "outputs": {
         "figures": (bool, True, None),
@@ -257,6 +280,8 @@ class Setup:
     duration: float
     initial_residual: float
     plan: PhasePlan | None = None  # sequence scenarios only
+    plant: Plant | None = None  # [plant] type rigid or hydrodynamic: the controller is a GJMController
+    control_dt: float = 0.0  # [s] sampling period of that controller (0: continuous)
 
 
 def build(scenario: dict) -> Setup:
@@ -264,15 +289,23 @@ def build(scenario: dict) -> Setup:
     model = scenario["model"]
     robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
     if scenario["phases"]:
+        if scenario["plant"]["type"] != "kinematic":
+            raise ScenarioError("a sequence scenario ([[phases]]) runs on the kinematic plant only; "
+                                "remove [plant] or set plant.type = 'kinematic'")
         return build_sequence(robot, scenario)
     task_section = scenario["task"]
     task = FrameTask(robot, task_section["frame"] or None, axes=task_section["axes"] or None,
                      orientation=task_section["orientation_error"])
     q0, residual = initial_q(robot, task, scenario)
     trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
+    duration = float(scenario["simulation"]["duration"] or trajectory.duration)
+    if scenario["plant"]["type"] != "kinematic":
+        plant, controller = make_plant_controller(robot, task, trajectory, scenario)
+        return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
+                     control_dt=float(scenario["plant"]["control_dt"]))
+    check_kinematic_plant(scenario["plant"])
     controller = make_controller(robot, task, trajectory, scenario)
-    duration = scenario["simulation"]["duration"] or trajectory.duration
-    return Setup(robot, task, trajectory, q0, controller, float(duration), residual)
+    return Setup(robot, task, trajectory, q0, controller, duration, residual)
 
 
 def build_sequence(robot: Robot, scenario: dict) -> Setup:
@@ -324,12 +357,20 @@ def vector(values: list[float], size: int, name: str) -> np.ndarray:
     return np.array(values, dtype=float)
 
 
-def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3Trajectory:
+def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3Trajectory | VelocityRamps:
     """The desired end-effector motion; start and orientation default to the frame's initial pose."""
     start = vector(section["start"], 3, "start") if section["start"] else start_pose.translation.copy()
     orientation = (vector(section["orientation"], 3, "orientation") if section["orientation"]
                    else pin.rpy.matrixToRpy(start_pose.rotation))
     kind = section["type"]
+    if kind == "ramps":
+        if not section["velocity"]:
+            raise ScenarioError("a ramps trajectory needs trajectory.velocity (the cruise velocity [m/s], world axes)")
+        if not 0 < section["accel_time"] <= section["duration"] / 2:
+            raise ScenarioError(f"a ramps trajectory needs trajectory.accel_time (the ramp time) in (0, duration/2] = "
+                                f"(0, {section['duration'] / 2:g}] s, got {section['accel_time']:g}")
+        return VelocityRamps.trapezoid(start, vector(section["velocity"], 3, "velocity"), section["duration"],
+                                       section["accel_time"], rotation=pin.rpy.rpyToMatrix(*orientation))
     if kind == "circle":
         if section["center"]:
             center = vector(section["center"], 3, "center")
@@ -364,6 +405,83 @@ def make_law(section: dict, path_length: float):
             return TrapezoidLaw(speed=section["speed"], duration=duration, accel_time=accel_time)
         return TrapezoidLaw.from_distance(distance, duration, accel_time)
     return PolynomialLaw(distance=distance, duration=duration, degree=3 if section["law"] == "cubic" else 5)
+
+
+def check_kinematic_plant(section: dict) -> None:
+    """Reject [plant] keys that only a dynamic plant uses when plant.type = 'kinematic'."""
+    defaults = {key: default for key, (_, default, _) in SCHEMA["plant"].items()}
+    unused = [key for key in ("gjm", "motor_feedforward", "control_dt", "gravity", "added_mass", "damping", "current")
+              if section[key] != defaults[key]]
+    if unused:
+        raise ScenarioError(f"plant.{unused[0]} needs a dynamic plant: the kinematic one moves the vehicle by momentum "
+                            f"conservation (solver.free_floating) or as commanded; set plant.type = 'rigid' or "
+                            f"'hydrodynamic'")
+
+
+def make_plant(robot: Robot, section: dict) -> Plant:
+    """The free-floating plant of a [plant] section (type rigid or hydrodynamic)."""
+    tau = float(section["motor_time_constant"])
+    if not tau > 0:
+        raise ScenarioError(f"plant.motor_time_constant must be > 0 s (the joint servos' time constant), got {tau:g}")
+    current = None
+    if section["current"]:
+        if len(section["current"]) != 3:
+            raise ScenarioError(f"plant.current must have 3 numbers (world ENU [m/s]), got {len(section['current'])}")
+        current = np.array(section["current"], dtype=float)
+    if robot.base_type == "fixed":
+        raise ScenarioError(f"plant.type = {section['type']!r} needs a floating or planar vehicle; "
+                            f"{robot.name} has a fixed base (set model.base or use plant.type = 'kinematic')")
+    if section["type"] == "rigid":
+        for key in ("added_mass", "damping"):
+            if section[key]:
+                raise ScenarioError(f"plant.{key} = true needs plant.type = 'hydrodynamic'; a rigid plant has no fluid")
+        if section["gravity"] or current is not None:
+            raise ScenarioError("plant.gravity and plant.current need plant.type = 'hydrodynamic' (buoyancy, fluid); "
+                                "a rigid plant floats weightless in vacuum")
+        return Plant(robot, HydroParameters(source="rigid plant (no fluid)"), gravity=False, motor_time_constant=tau,
+                     added_mass=False, damping=False)
+    added_mass = True if section["added_mass"] is None else section["added_mass"]
+    damping = True if section["damping"] is None else section["damping"]
+    plant = Plant(robot, None, gravity=section["gravity"], motor_time_constant=tau, current=current,
+                  added_mass=added_mass, damping=damping)
+    if not plant.links:
+        raise ScenarioError(f"plant.type = 'hydrodynamic' needs hydrodynamic parameters, and {robot.source} has none; "
+                            f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.hydrodynamics), "
+                            f"or use plant.type = 'rigid'")
+    return plant
+
+
+def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict) -> tuple[Plant, GJMController]:
+    """The plant and the GJM controller of amundsen2018 (eq. 4-8) for a dynamic [plant]."""
+    section, solver = scenario["plant"], scenario["solver"]
+    if solver["method"] != "clik" or not solver["free_floating"]:
+        raise ScenarioError(f"plant.type = {section['type']!r} leaves the vehicle passive: it needs solver.method = "
+                            f"'clik' and solver.free_floating = true (the joints are commanded through the "
+                            f"generalized Jacobian, plant.gjm)")
+    if solver["alpha"] or solver["enforce_limits"]:
+        raise ScenarioError("solver.alpha and solver.enforce_limits are not supported with a dynamic plant "
+                            "(the GJM controller of amundsen2018 has no null-space term or joint clamping)")
+    plant = make_plant(robot, section)
+    gain = np.asarray(solver["gain"], dtype=float)
+    if gain.shape not in ((), (3,)):
+        raise ScenarioError(f"solver.gain with a dynamic plant is K on the position error: one number or 3 "
+                            f"(x, y, z) [1/s], got {solver['gain']!r}")
+    damping: float | VariableDamping = solver["damping"]
+    if solver["damping_epsilon"] > 0:
+        damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
+    weights = np.asarray(solver["weights"], dtype=float) if solver["weights"] else None
+    control_dt, dt = float(section["control_dt"]), float(scenario["simulation"]["dt"])
+    ratio = control_dt / dt
+    if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
+        raise ScenarioError(f"plant.control_dt must be 0 (continuous controller) or a multiple of simulation.dt = "
+                            f"{dt:g} s, got {control_dt:g}")
+    try:
+        controller = GJMController(robot, trajectory, frame=task.frame, axes=task.axes, gain=gain, damping=damping,
+                                   weights=weights, gjm=section["gjm"], hydro=plant.hydro if plant.links else None,
+                                   motor_feedforward=plant.motor_time_constant if section["motor_feedforward"] else 0.0)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant/solver: {exc}") from None
+    return plant, controller
 
 
 def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
@@ -415,7 +533,7 @@ class RunResult:
     simulation: SimulationResult
     metrics: dict
     files: list[Path]
-
+    plant_run: GJMResult | None = None  # dynamic [plant] only: the GJM run with its plant series
 
 def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) -> dict:
     """The numbers of ``metrics.json``."""
@@ -459,6 +577,11 @@ def run(
 ) -> RunResult:
     """Run a scenario file and write ``metrics.json``, ``trajectory.csv``/``.npz`` and figures into ``out``.
 
+    With a dynamic ``[plant]`` (rigid or hydrodynamic) the joints are driven by the GJM
+    controller of :mod:`uvms.gjm_control` through :func:`uvms.plant.simulate_plant`, and
+    ``plant.npz`` (commands, torques, energy, momentum) and the figures of
+    :func:`uvms.plotting.gjm_figures` are added.
+
     Args:
         scenario_path: the TOML file.
         out: output folder (default ``out/<scenario name>``).
@@ -470,16 +593,32 @@ def run(
     started = time.perf_counter()
     setup = build(scenario)
     simulation_section = scenario["simulation"]
-    result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration, dt=simulation_section["dt"],
-                      task=setup.task, desired=lambda t: setup.trajectory(t).pose,
-                      integrator=simulation_section["integrator"], progress=progress)
+    plant_run: GJMResult | None = None
+    if setup.plant is not None:
+        plant_run = simulate_gjm(setup.plant, setup.controller, setup.q0, setup.duration, simulation_section["dt"],
+                                 control_dt=setup.control_dt, method=simulation_section["integrator"])
+        result = plant_run.simulation_result(setup.task)
+    else:
+        result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration,
+                          dt=simulation_section["dt"], task=setup.task, desired=lambda t: setup.trajectory(t).pose,
+                          integrator=simulation_section["integrator"], progress=progress)
     metrics = compute_metrics(result, setup, time.perf_counter() - started)
     metrics["scenario"] = scenario["scenario"]["name"]
+    if plant_run is not None:
+        metrics.update(plant=scenario["plant"]["type"], gjm=scenario["plant"]["gjm"],
+                       motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.metrics())
     files = list(result.save(out))
+    if plant_run is not None:
+        outputs.write_npz(out / "plant.npz", **plant_run.arrays())
+        files.append(out / "plant.npz")
     if scenario["outputs"]["figures"]:
         from .plotting import scenario_figures  # matplotlib only when figures are asked for
 
         files += scenario_figures(result, setup.trajectory, out, title=scenario["scenario"]["name"])
+        if plant_run is not None:
+            from .plotting import gjm_figures
+
+            files += gjm_figures(plant_run, out, title=scenario["scenario"]["name"])
         if setup.plan is not None:
             from .plotting import sequence_figures
 
@@ -487,4 +626,5 @@ def run(
                                       animation=scenario["outputs"]["animation"], progress=progress)
     outputs.write_json(out / "metrics.json", metrics)
     files.append(out / "metrics.json")
-    return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files)
+    return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files,
+                     plant_run=plant_run)
