@@ -86,8 +86,8 @@ def command_run(options: argparse.Namespace) -> int:
     folder = result.files[0].parent
     metrics = result.metrics
     print(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)")
-    for key in ("max_position_error", "max_orientation_error", "max_joint_limit_violation", "vehicle_travel",
-                "vehicle_yaw_range", "arm_travel"):
+    for key in ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
+                "vehicle_travel", "vehicle_yaw_range", "arm_travel"):
         print(f"  {key:<27} {metrics[key]:.3e}")
     print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})")
     return 0
