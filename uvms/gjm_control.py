@@ -494,8 +494,10 @@ def simulate_gjm(
     *,
     control_dt: float = 0.0,
     method: str = "rk4",
+    progress: bool | None = None,
 ) -> GJMResult:
-    """Drive the plant with the controller from rest at q0 and record the tracking.
+    """Drive the plant with the controller from rest at q0 and record the tracking (``progress``: a bar,
+    None: only on a terminal).
 
     Args:
         plant: the free-floating plant (its robot must be the controller's model).
@@ -531,7 +533,7 @@ def simulate_gjm(
             return held["u"]
 
         hold = True
-    result = simulate_plant(plant, q0, None, command, duration, dt, method, hold=hold)
+    result = simulate_plant(plant, q0, None, command, duration, dt, method, hold=hold, progress=progress)
     return record(result, controller, time.perf_counter() - started, control_dt)
 
 

@@ -596,7 +596,8 @@ def run(
     plant_run: GJMResult | None = None
     if setup.plant is not None:
         plant_run = simulate_gjm(setup.plant, setup.controller, setup.q0, setup.duration, simulation_section["dt"],
-                                 control_dt=setup.control_dt, method=simulation_section["integrator"])
+                                 control_dt=setup.control_dt, method=simulation_section["integrator"],
+                                 progress=progress)
         result = plant_run.simulation_result(setup.task)
     else:
         result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration,
