@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from test_jacobians import finite_difference_jacobian
 
 import uvms
 
@@ -46,20 +47,6 @@ def urdf_trees(draw):
     return f'<robot name="fuzz">{"".join(body)}</robot>', root, links[-1]
 
 
-def numeric_jacobian(robot: uvms.Robot, q: np.ndarray, frame: str, h: float = 1e-6) -> np.ndarray:
-    """Central differences of the frame pose on the manifold, world-aligned (6, nv)."""
-    columns = []
-    for k in range(robot.nv):
-        step = np.zeros(robot.nv)
-        step[k] = h
-        plus = robot.fk(pin.integrate(robot.model, q, step), frame)
-        minus = robot.fk(pin.integrate(robot.model, q, -step), frame)
-        linear = (plus.translation - minus.translation) / (2 * h)
-        angular = pin.log3(plus.rotation @ minus.rotation.T) / (2 * h)
-        columns.append(np.concatenate([linear, angular]))
-    return np.array(columns).T
-
-
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(tree=urdf_trees(), seed=st.integers(0, 2**31 - 1))
 def test_random_trees_load_with_consistent_kinematics(tree, seed):
@@ -69,7 +56,7 @@ def test_random_trees_load_with_consistent_kinematics(tree, seed):
     q = robot.random_configuration(np.random.default_rng(seed))
     jacobian = robot.jacobian(q, leaf)
     assert np.all(np.isfinite(jacobian))
-    assert np.allclose(jacobian, numeric_jacobian(robot, q, leaf), atol=1e-6)
+    assert np.allclose(jacobian, finite_difference_jacobian(robot, q, leaf), atol=1e-6)
     assert np.allclose(robot.fk(q, leaf).rotation @ robot.fk(q, leaf).rotation.T, np.eye(3), atol=1e-12)
 
 
