@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+from hypothesis import settings
 import pytest
 
 import uvms
@@ -21,3 +22,9 @@ def shipped(name: str) -> uvms.Robot:
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261122)
+
+
+# Property-based tests explore a fixed sequence of examples, so CI is reproducible; explore more locally with
+# `pytest --hypothesis-seed=N` (a new seed per run) — that is how the zero-DOF crash was found.
+settings.register_profile("reproducible", derandomize=True)
+settings.load_profile("reproducible")

@@ -209,3 +209,10 @@ def test_unreadable_model_path_is_a_directory(tmp_path):
     folder.mkdir()
     with pytest.raises(uvms.ModelFileNotFound, match="is not a file"):
         uvms.load(folder)
+
+
+def test_a_model_without_any_degree_of_freedom_is_refused():
+    fixed_only = urdf().replace('type="revolute"', 'type="fixed"')
+    with pytest.raises(uvms.ModelCheckError, match="no degree of freedom"):
+        uvms.load(fixed_only)
+    assert uvms.load(fixed_only, base="floating").nv == 6  # the same tree on a vehicle is fine

@@ -12,7 +12,7 @@ from xml.parsers.expat import ExpatError
 import pinocchio as pin
 
 from . import checks, resources, sandbox
-from .errors import BaseMismatchError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
+from .errors import BaseMismatchError, ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from .robot import Robot
 
 BASE_CHOICES = ("floating", "planar", "fixed")
@@ -65,6 +65,9 @@ def load(
     chosen = choose_base(base, tree, origin)
     warn_missing_meshes(robot_element, base_dir, package_dirs, origin)
     model = build_model(xml, chosen, tree, origin)
+    if model.nv == 0:  # nothing to move, and Pinocchio's Jacobians crash on an empty velocity space
+        raise ModelCheckError(f"{origin}: the model has no degree of freedom (fixed base, only fixed joints); "
+                              "a UVMS needs a floating/planar base or a moving joint")
     return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=xml)
 
 
