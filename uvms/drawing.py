@@ -13,7 +13,6 @@ import functools
 import itertools
 import os
 import warnings
-import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,8 +24,9 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from . import outputs
-from .errors import ConfigurationError, UVMSError
+from .errors import ConfigurationError, UVMSError, WorkspaceInputError
 from .robot import Robot
+from .workspace.hull import HullShape, hull_shapes
 
 with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
     warnings.simplefilter("ignore")
@@ -87,28 +87,17 @@ class Drawing:
 
 
 @functools.lru_cache(maxsize=16)
-def link_box(urdf: str | None, link: str) -> tuple[np.ndarray, pin.SE3] | None:
-    """Box size (3,) [m] and origin in the link frame of a link's first visual (else collision) box."""
-    if not urdf:
+def vehicle_box(robot: Robot) -> HullShape | None:
+    """The vehicle's first box solid from its URDF (`uvms.workspace.hull_shapes`), None without one or for a fixed base."""
+    if robot.base_type == "fixed" or robot.urdf is None:
         return None
-    element = ET.fromstring(urdf).find(f"link[@name='{link}']")
-    for kind in ("visual", "collision"):
-        for shape in element.findall(kind) if element is not None else []:
-            box = shape.find("geometry/box")
-            if box is not None:
-                origin = shape.find("origin")
-                origin = {} if origin is None else origin.attrib
-                xyz, rpy = (np.array(origin.get(key, "0 0 0").split(), dtype=float) for key in ("xyz", "rpy"))
-                return np.array(box.get("size").split(), dtype=float), pin.SE3(pin.rpy.rpyToMatrix(rpy), xyz)
-    return None
-
-
-def vehicle_frame_id(robot: Robot) -> int | None:
-    """Index of the vehicle link's body frame (the child of the root joint), None for a fixed base."""
-    if robot.base_type == "fixed":
-        return None
-    frames = robot.model.frames
-    return next(i for i, frame in enumerate(frames) if frame.parentJoint == 1 and frame.type == pin.FrameType.BODY)
+    with warnings.catch_warnings():  # meshes are skipped silently here: the drawing falls back to a triad
+        warnings.simplefilter("ignore")
+        try:
+            shapes = hull_shapes(robot)
+        except WorkspaceInputError:
+            return None
+    return next((shape for shape in shapes if shape.kind == "box"), None)
 
 
 def _triad(pose: pin.SE3, length: float) -> np.ndarray:
@@ -128,16 +117,16 @@ def configuration_geometry(robot: Robot, q: np.ndarray, frames: Sequence[str] | 
     first_arm = 1 if robot.base_type == "fixed" else 2
     segments = np.reshape([[origins[model.parents[j]], origins[j]] for j in range(first_arm, model.njoints)], (-1, 2, 3))
     ee = np.reshape([[origins[model.frames[f].parentJoint], data.oMf[f].translation] for f in frame_ids], (-1, 2, 3))
-    vehicle = vehicle_frame_id(robot)
-    box = link_box(robot.urdf, model.frames[vehicle].name) if vehicle is not None else None
+    box = vehicle_box(robot)
+    vehicle_pose = data.oMi[1] if robot.base_type != "fixed" else None  # the vehicle joint's frame
     corners = None
     if box is not None:
-        size, placement = box
-        corners = np.array([(data.oMf[vehicle] * placement).act(sign * size / 2) for sign in CORNER_SIGNS])
+        placement = vehicle_pose * pin.SE3(box.rotation, box.centre)
+        corners = np.array([placement.act(sign * box.size / 2) for sign in CORNER_SIGNS])
     if triad_length is None:
         shown = np.concatenate([origins, ee.reshape(-1, 3), np.reshape([] if corners is None else corners, (-1, 3))])
         triad_length = 0.08 * max(float(np.ptp(shown, axis=0).max()), 0.1)
-    poses = [data.oMf[f] for f in frame_ids] + ([data.oMf[vehicle]] if vehicle is not None and box is None else [])
+    poses = [data.oMf[f] for f in frame_ids] + ([vehicle_pose] if vehicle_pose is not None and box is None else [])
     triads = np.array([_triad(pose, triad_length * (2 if f >= len(frame_ids) else 1)) for f, pose in enumerate(poses)])
     return ConfigurationGeometry(list(model.names)[1:], origins[1:].copy(), segments, ee,
                                  triads.reshape(-1, 3, 2, 3), corners, float(triad_length))
