@@ -23,7 +23,8 @@ def test_readme_python_example_runs(monkeypatch):
     namespace: dict = {}
     exec(compile(blocks[0], "README.md", "exec"), namespace)  # noqa: S102 - our own README
     assert namespace["J"].shape == (6, 6) and namespace["G"].shape == (6, 3)
-    assert namespace["rov_panda"].n_arm == 5 + 9
+    # Alpha 5 (5) + panda (7 arm joints, finger 1; finger 2 mimics finger 1 and adds no degree of freedom)
+    assert namespace["rov_panda"].n_arm == 5 + 8
 
 
 def test_readme_quickstart_is_two_commands():

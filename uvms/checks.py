@@ -24,6 +24,23 @@ NUMERIC_ATTRIBUTES: dict[str, int | None] = {
     "multiplier": 1, "offset": 1,
 }
 
+#: Largest magnitude of a number in a model, in SI units (m, kg, kg m^2); joint limits may be larger
+#: (some URDFs write +-1e16 for "unbounded"). Beyond this, products overflow or lose every digit.
+MAX_MAGNITUDE = 1e9
+MAX_LIMIT_MAGNITUDE = 1e20
+LIMIT_ATTRIBUTES = ("lower", "upper", "effort", "velocity")
+
+#: Sizes no UVMS reaches, refused before Pinocchio sees the file: Pinocchio's parser recurses once per link
+#: (a 10,000-link chain overflows its stack) and its Data grows with the cube of the degrees of freedom
+#: (about 150 MiB at 100, 640 MiB at 200, 4.5 GiB at 400).
+MAX_URDF_BYTES = 32 << 20
+MAX_ELEMENTS = 200_000
+MAX_LINKS = 1_000
+MAX_DEGREES_OF_FREEDOM = 100
+
+#: Joint types of URDF and the degrees of freedom each adds.
+JOINT_DEGREES_OF_FREEDOM = {"fixed": 0, "revolute": 1, "continuous": 1, "prismatic": 1, "planar": 3, "floating": 6}
+
 #: Relative tolerance on the norm of a joint axis.
 AXIS_NORM_TOLERANCE = 1e-6
 
@@ -43,8 +60,12 @@ def parse_urdf(xml: str, origin: str) -> ET.Element:
     """Parse URDF text into an element tree whose root is ``<robot>``.
 
     Raises:
+        ModelCheckError: larger than ``MAX_URDF_BYTES``.
         ModelParseError: not well-formed XML, or the root element is not ``<robot>``.
     """
+    if len(xml) > MAX_URDF_BYTES:
+        raise ModelCheckError(f"{origin}: the URDF holds {len(xml) / 2**20:.0f} MiB of text; at most "
+                              f"{MAX_URDF_BYTES >> 20} MiB are accepted (no UVMS model is that large)")
     try:
         root = ET.fromstring(xml)
     except ET.ParseError as exc:
@@ -71,6 +92,9 @@ def parse_numbers(element: ET.Element, attribute: str, origin: str) -> np.ndarra
         raise ModelCheckError(f"{where} holds {values.size} numbers, expected {expected}")
     if not np.all(np.isfinite(values)):
         raise ModelCheckError(f"{where} is not finite; every number of a model must be finite")
+    bound = MAX_LIMIT_MAGNITUDE if attribute in LIMIT_ATTRIBUTES else MAX_MAGNITUDE
+    if values.size and np.max(np.abs(values)) > bound:
+        raise ModelCheckError(f"{where} exceeds {bound:g} in magnitude; no UVMS has such a value (SI units)")
     return values
 
 
@@ -218,6 +242,49 @@ def summarize_tree(robot: ET.Element, origin: str) -> TreeSummary:
     return TreeSummary(root_link=root, base_type=base_joints[0].get("type"), base_joint=base_joints[0].get("name"))
 
 
+def check_size(robot: ET.Element, origin: str) -> None:
+    """Element, link and degree-of-freedom counts within what any UVMS needs (see ``MAX_*``)."""
+    elements = sum(1 for _ in robot.iter())
+    if elements > MAX_ELEMENTS:
+        raise ModelCheckError(f"{origin}: the URDF has {elements} XML elements; at most {MAX_ELEMENTS} are accepted")
+    links = len(robot.findall("link"))
+    if links > MAX_LINKS:
+        raise ModelCheckError(f"{origin}: the model has {links} links; at most {MAX_LINKS} are accepted "
+                              "(no UVMS has more, and Pinocchio's parser recurses once per link)")
+    dof = sum(JOINT_DEGREES_OF_FREEDOM.get(joint.get("type"), 0) for joint in robot.findall("joint"))
+    if dof > MAX_DEGREES_OF_FREEDOM:
+        raise ModelCheckError(f"{origin}: the model has {dof} degrees of freedom; at most {MAX_DEGREES_OF_FREEDOM} "
+                              "are accepted (Pinocchio's data for 400 takes 4.5 GiB)")
+
+
+def check_joints(robot: ET.Element, origin: str) -> None:
+    """Known joint types, unique link and joint names, limits with lower <= upper.
+
+    Pinocchio's URDF parser would print several lines on stderr for duplicate names.
+    """
+    for kind in ("link", "joint"):
+        seen: set[str] = set()
+        for element in robot.findall(kind):
+            name = element.get("name")
+            if not name:
+                raise ModelCheckError(f"{origin}: a <{kind}> has no name; every {kind} needs a unique name")
+            if name in seen:
+                raise ModelCheckError(f"{origin}: two {kind}s are named {name!r}; {kind} names must be unique")
+            seen.add(name)
+    for joint in robot.findall("joint"):
+        name, kind = joint.get("name"), joint.get("type")
+        if kind not in JOINT_DEGREES_OF_FREEDOM:
+            raise ModelCheckError(f"{origin}: joint {name!r} has type {kind!r}; valid: "
+                                  f"{', '.join(JOINT_DEGREES_OF_FREEDOM)}")
+        limit = joint.find("limit")
+        if limit is not None and "lower" in limit.attrib and "upper" in limit.attrib:
+            lower = float(parse_numbers(limit, "lower", origin)[0])
+            upper = float(parse_numbers(limit, "upper", origin)[0])
+            if lower > upper:
+                raise ModelCheckError(f"{origin}: joint {name!r} has limits lower = {lower:g} > upper = {upper:g}; "
+                                      "lower must not exceed upper")
+
+
 def check_urdf(robot: ET.Element, origin: str) -> TreeSummary:
     """Run every check on a parsed URDF and summarize its tree.
 
@@ -225,8 +292,10 @@ def check_urdf(robot: ET.Element, origin: str) -> TreeSummary:
         robot: the ``<robot>`` element (annotated in place for messages).
         origin: file name or ``"<string>"``, quoted in messages.
     """
+    check_size(robot, origin)
     tag_owners(robot)
     check_numbers(robot, origin)
+    check_joints(robot, origin)
     check_joint_axes(robot, origin)
     check_inertias(robot, origin)
     return summarize_tree(robot, origin)

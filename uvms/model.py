@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
+import math
+import numbers
 import os
+import re
+import sys
+import tempfile
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from xml.parsers.expat import ExpatError
 
@@ -20,9 +26,20 @@ ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlan
 #: Name given to a vehicle joint that uvms adds (base="floating"/"planar" on a plain root link).
 ADDED_BASE_JOINT = "base_joint"
 
+#: A xacro arg given from outside the file is data: its name a plain identifier, its text a number,
+#: true/false or a plain name/path. xacro pastes arg text into ``${...}`` Python expressions, so
+#: anything else (parentheses, quotes, operators, dunders) could run code.
+ARG_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
+PLAIN_ARG_TEXT = re.compile(r"[A-Za-z0-9_.+\-/]{0,256}")
+ARG_RULE = "a number, true/false, or a plain name or path (letters, digits and _ . / + -, at most 256 characters)"
+
 
 class MissingMeshWarning(UserWarning):
     """A mesh of the model cannot be found; kinematics does not need it."""
+
+
+class ParserWarning(UserWarning):
+    """Pinocchio's URDF parser printed something while building a model it accepted."""
 
 
 def load(
@@ -106,7 +123,7 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -
     """
     import xacro  # imported here: it is slow to import and only needed for .xacro
 
-    mappings = {str(key): format_xacro_value(value) for key, value in args.items()}
+    mappings = {check_arg_name(key, path): format_xacro_value(key, value, path) for key, value in args.items()}
     declared = declared_xacro_args(path)
     unknown = sorted(set(mappings) - declared) if declared is not None else []
     if unknown:
@@ -117,6 +134,8 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -
         return sandbox.expand_untrusted(path, mappings)
     try:
         document = xacro.process_file(str(path), mappings=mappings)
+    except RecursionError:
+        raise XacroError(f"{path}: xacro recursion too deep (does the file include itself?)") from None
     except xacro.XacroException as exc:
         raise XacroError(f"{path}: xacro error: {' '.join(str(exc).split())}") from None
     except ExpatError as exc:
@@ -126,13 +145,16 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -
     return document.toprettyxml(indent="  ")
 
 
-def declared_xacro_args(path: Path) -> set[str] | None:
+def declared_xacro_args(path: Path, _seen: frozenset[Path] = frozenset()) -> set[str] | None:
     """Names of the ``<xacro:arg>`` declared in a file and its static includes.
 
     Returns None when that cannot be known here (unparsable file, an include
-    whose name is computed): the arg check is then left to xacro.
+    whose name is computed, an include cycle): the arg check is then left to xacro.
     """
     namespace = "{http://www.ros.org/wiki/xacro}"
+    resolved = path.resolve()
+    if resolved in _seen:
+        return None  # an include cycle: xacro reports it
     try:
         root = ET.parse(path).getroot()
     except (ET.ParseError, OSError):
@@ -142,20 +164,45 @@ def declared_xacro_args(path: Path) -> set[str] | None:
         filename = include.get("filename", "")
         if "$" in filename:
             return None
-        included = declared_xacro_args(path.parent / filename)
+        included = declared_xacro_args(path.parent / filename, _seen | {resolved})
         if included is None:
             return None
         names |= included
     return names
 
 
-def format_xacro_value(value: object) -> str:
-    """A xacro mapping value: numbers printed exactly (repr), booleans as xacro spells them."""
+def check_arg_name(name: object, path: Path) -> str:
+    """A xacro arg name from outside the file: a plain identifier.
+
+    Raises:
+        XacroError: anything else.
+    """
+    if not isinstance(name, str) or not ARG_NAME.fullmatch(name):
+        raise XacroError(f"{path}: xacro arg name {name!r} is not allowed; a name is letters, digits and _ "
+                         "(not starting with a digit, at most 64 characters)")
+    return name
+
+
+def format_xacro_value(name: str, value: object, path: Path | str = "<model>") -> str:
+    """The text of a xacro arg given from outside the file, which must be data (see ``ARG_RULE``).
+
+    Numbers are printed exactly (repr), booleans as xacro spells them.
+
+    Raises:
+        XacroError: a non-finite number, a string that is not a plain name/path, or another type.
+    """
     if isinstance(value, bool):
         return "true" if value else "false"
-    if isinstance(value, float):
-        return repr(value)
-    return str(value)
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        if not math.isfinite(value):
+            raise XacroError(f"{path}: xacro arg {name}={value!r} is not finite; give {ARG_RULE}")
+        return repr(float(value))
+    if isinstance(value, str) and PLAIN_ARG_TEXT.fullmatch(value) and "__" not in value:
+        return value
+    raise XacroError(f"{path}: xacro arg {name}={value!r} is not allowed: an arg from outside the file is data, "
+                     f"{ARG_RULE}")
 
 
 def choose_base(requested: str | None, tree: checks.TreeSummary, origin: str) -> str:
@@ -174,12 +221,42 @@ def choose_base(requested: str | None, tree: checks.TreeSummary, origin: str) ->
 
 def build_model(xml: str, base: str, tree: checks.TreeSummary, origin: str) -> pin.Model:
     """Build the Pinocchio model, adding a vehicle joint when asked for one the file lacks."""
-    try:
-        if base in ROOT_JOINTS and tree.base_type == "fixed":
-            return pin.buildModelFromXML(xml, ROOT_JOINTS[base](), ADDED_BASE_JOINT)
-        return pin.buildModelFromXML(xml)
-    except (RuntimeError, ValueError) as exc:
-        raise ModelParseError(f"{origin}: Pinocchio cannot build the model: {exc}") from None
+    with captured_stderr() as printed:
+        try:
+            if base in ROOT_JOINTS and tree.base_type == "fixed":
+                model = pin.buildModelFromXML(xml, ROOT_JOINTS[base](), ADDED_BASE_JOINT, mimic=True)
+            else:
+                model = pin.buildModelFromXML(xml, mimic=True)
+        except (RuntimeError, ValueError) as exc:
+            failure = " ".join(str(exc).split())
+        else:
+            failure = None
+    said = " ".join(" ".join(printed).split())
+    if failure is not None:
+        raise ModelParseError(f"{origin}: Pinocchio cannot build the model: {failure or said or 'no reason given'}")
+    if said:
+        warnings.warn(f"{origin}: Pinocchio's URDF parser said: {said[:300]}", ParserWarning, stacklevel=3)
+    return model
+
+
+@contextlib.contextmanager
+def captured_stderr() -> Iterator[list[str]]:
+    """Hold what C++ code prints on file descriptor 2 (urdfdom does) and hand it over as lines.
+
+    The messages then reach the user as one line of an error or a warning, not as raw multi-line output.
+    """
+    lines: list[str] = []
+    sys.stderr.flush()
+    with tempfile.TemporaryFile() as held:
+        saved = os.dup(2)
+        os.dup2(held.fileno(), 2)
+        try:
+            yield lines
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            held.seek(0)
+            lines.extend(held.read(1 << 16).decode(errors="replace").splitlines())
 
 
 def warn_missing_meshes(

@@ -44,6 +44,12 @@ def resolve_model_path(name_or_path: str | os.PathLike) -> Path:
         return shipped[str(name_or_path)]
     if path.exists():
         raise ModelFileNotFound(f"model path {str(path)!r} is not a file")
+    if path.is_symlink():
+        try:
+            path.resolve(strict=True)
+        except (RuntimeError, OSError) as exc:  # a loop raises RuntimeError (3.11-3.12) or OSError (ELOOP)
+            raise ModelFileNotFound(f"model path {str(path)!r} is a symbolic link that leads nowhere "
+                                    f"({getattr(exc, 'strerror', None) or exc}); give a real file") from None
     names = ", ".join(shipped) or "none found"
     raise ModelFileNotFound(
         f"model file {str(path)!r} does not exist; give a .urdf/.xacro path or a shipped model ({names})"
