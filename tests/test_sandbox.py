@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import os
+import resource
+import subprocess
+import time
 from pathlib import Path
 
 import pytest
 from test_errors import urdf
 
 import uvms
+from uvms import sandbox
 from uvms.sandbox import expand_untrusted
 
 # Escapes xacro's name filter through python.vars(python.type) to reach io.FileIO, then writes a file.
@@ -67,3 +72,71 @@ def test_plain_urdf_is_never_executed(tmp_path):
     path.write_text(urdf().replace('"l1"', '"l1${1+1}"'))  # no xacro: the text is a name, not code
     robot = uvms.load(path, ee="l1${1+1}")
     assert robot.ee_frames == ["l1${1+1}"]
+
+
+# Reaching the modules from xacro's restricted eval: a function's __globals__ through descriptors named by
+# strings (xacro only filters names written in the expression), then builtins.__import__.
+GLOBALS = ("python.vars(python.type(python.vars(python.type(abs_filename))['__globals__']))['__get__']"
+           "(python.vars(python.type(abs_filename))['__globals__'], abs_filename)")
+IMPORT = f"python.vars({GLOBALS}['sys'].modules['builtins'])['__import__']"
+
+
+def escapes(folder: Path, victim_pid: int) -> dict[str, str]:
+    """Attacks the issue lists, each as Python reachable from a xacro expression."""
+    os_ = f"{IMPORT}('os')"
+    return {
+        "write a file": f"{os_}.open('{folder / 'new.txt'}', 65)",
+        "rewrite a file": f"{IMPORT}('io').open('{folder / 'precious.txt'}', 'w')",
+        "rename over a file": f"{os_}.rename('{folder / 'other.txt'}', '{folder / 'precious.txt'}')",
+        "delete a file": f"{os_}.unlink('{folder / 'precious.txt'}')",
+        "truncate a file": f"{os_}.truncate('{folder / 'precious.txt'}', 0)",
+        "make a directory": f"{os_}.mkdir('{folder / 'dir'}')",
+        "mknod": f"{os_}.mknod('{folder / 'node'}')",
+        "mkfifo": f"{os_}.mkfifo('{folder / 'fifo'}')",
+        "setxattr": f"{os_}.setxattr('{folder / 'precious.txt'}', 'user.x', b'1')",
+        "socket": f"{IMPORT}('socket').socket()",
+        "fork_exec a shell": f"{IMPORT}('subprocess').Popen(['/bin/sh', '-c', 'sleep 2; touch {folder / 'late.txt'}'])",
+        "fork": f"{os_}.fork()",
+        "posix_spawn": f"{os_}.posix_spawn('/bin/sh', ['sh', '-c', 'touch {folder / 'spawned.txt'}'], {{}})",
+        "kill a process": f"{os_}.kill({victim_pid}, 9)",
+        "pidfd_send_signal": f"{IMPORT}('signal').pidfd_send_signal({os_}.pidfd_open({victim_pid}), 9)",
+        "raise its file-size limit": f"{IMPORT}('resource').setrlimit(1, (-1, -1))",
+        "raw syscall through ctypes": f"{IMPORT}('ctypes').CDLL(None).syscall(2, b'{folder / 'raw.txt'}', 65, 438) + "
+                                      f"python.int('refused')",
+    }
+
+
+@pytest.mark.parametrize("audit_hook", [True, False], ids=["with audit hook", "kernel alone"])
+def test_every_escape_is_refused_and_leaves_no_trace(tmp_path, audit_hook):
+    work = tmp_path / "victim"
+    work.mkdir()
+    (work / "precious.txt").write_text("keep")
+    (work / "other.txt").write_text("other")
+    victim = subprocess.Popen(["sleep", "60"])
+    try:
+        for name, attack in escapes(work, victim.pid).items():
+            path = xacro_file(tmp_path, attack)
+            with pytest.raises(uvms.XacroError, match="not permitted|may not|refused") as raised:
+                expand_untrusted(path, {}, timeout=10.0, audit_hook=audit_hook)
+            assert len(str(raised.value).splitlines()) == 1, name
+        time.sleep(2.5)  # a detached child, had one been made, would act now
+        assert victim.poll() is None  # the victim (and this process) still alive
+    finally:
+        victim.kill()
+    assert sorted(p.name for p in work.iterdir()) == ["other.txt", "precious.txt"]
+    assert (work / "precious.txt").read_text() == "keep" and "user.x" not in os.listxattr(work / "precious.txt")
+
+
+def test_memory_and_output_bombs_are_stopped(tmp_path):
+    rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    with pytest.raises(uvms.XacroError, match="memory|MemoryError"):
+        expand_untrusted(xacro_file(tmp_path, "python.len('x' * 3 * 10**9)"), {}, memory_bytes=256 << 20)
+    with pytest.raises(uvms.XacroError, match="more than 1 MiB of URDF"):
+        expand_untrusted(xacro_file(tmp_path, "'x' * 3 * 2**20"), {}, max_urdf_bytes=1 << 20)
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss < 200 << 10  # KiB: the parent stayed small
+
+
+def test_no_confinement_means_no_untrusted_expansion(tmp_path, monkeypatch):
+    monkeypatch.setattr(sandbox, "confinement_problem", lambda: "untrusted xacro needs libseccomp (test)")
+    with pytest.raises(uvms.XacroError, match="needs libseccomp.*trusted=True only if you trust"):
+        uvms.load(xacro_file(tmp_path, "1"))

@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from .conventions import AXIS_NAMES
-from .errors import UVMSError
+from .errors import ModelCheckError, UVMSError
 
 WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -82,14 +82,33 @@ def base_velocity_from_momentum(
     rhs = -a_arm @ arm_velocity
     if momentum is not None:
         rhs = rhs + momentum
-    return np.linalg.solve(a_base, rhs)
+    return solve_base_block(a_base, rhs)
 
 
 def generalized_jacobian_from_parts(
     jacobian: np.ndarray, a_base: np.ndarray, a_arm: np.ndarray, n_vehicle: int
 ) -> np.ndarray:
     """GJM = J_m - J_b A_b^-1 A_m (rows of ``jacobian``, n_arm)."""
-    return jacobian[:, n_vehicle:] - jacobian[:, :n_vehicle] @ np.linalg.solve(a_base, a_arm)
+    return jacobian[:, n_vehicle:] - jacobian[:, :n_vehicle] @ solve_base_block(a_base, a_arm)
+
+
+def solve_base_block(a_base: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """A_b^-1 rhs, the one place the vehicle block of the centroidal map is inverted.
+
+    Raises:
+        ModelCheckError: A_b is singular: the model has no mass (or no inertia) for the vehicle's
+            motion to move, so a free-floating vehicle velocity is undefined.
+    """
+    try:
+        solution = np.linalg.solve(a_base, rhs)
+    except np.linalg.LinAlgError:
+        solution = None
+    if solution is None or not np.all(np.isfinite(solution)):
+        raise ModelCheckError(
+            "the vehicle block of the centroidal momentum map is singular: the model has no mass or inertia "
+            "that a free-floating vehicle could exchange momentum with (all links massless?); the generalized "
+            "Jacobian and the free-floating vehicle velocity need an <inertial> on the vehicle or the arm links")
+    return solution
 
 
 def manipulability_of(jacobian: np.ndarray) -> float:
