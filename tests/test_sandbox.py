@@ -57,6 +57,8 @@ def test_untrusted_xacro_gives_the_same_model_and_errors(tmp_path):
     inside = uvms.load(shipped, args={"hull_height": 0.8})
     outside = uvms.load(shipped, args={"hull_height": 0.8}, trusted=False)
     assert outside.urdf == inside.urdf
+    for path in uvms.resources.shipped_models().values():  # the filter refuses nothing real xacro needs
+        assert uvms.load(path, trusted=False).urdf == uvms.load(path).urdf
     broken = tmp_path / "broken.urdf.xacro"
     broken.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="${undefined_x}"/></robot>')
     with pytest.raises(uvms.XacroError, match="undefined_x"):
