@@ -6,6 +6,7 @@ import csv
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -145,3 +146,162 @@ def test_cli_run_and_its_errors(tmp_path):
     unwritable = subprocess.run(command[:5] + ["--out", "/proc/uvms-cannot-write"], capture_output=True, text=True,
                                 timeout=300)
     assert unwritable.returncode == 2 and "cannot write" in unwritable.stderr
+
+
+# ------------------------------------------------------------------ names, step counts, numbers out of range
+GRIP = SCENARIOS / "xiang2019_grip.toml"
+
+
+def files_below(folder: Path) -> list[Path]:
+    return [path for path in folder.rglob("*") if not path.is_dir()]
+
+
+@pytest.mark.parametrize(
+    ("scenario", "key", "value"),
+    [
+        ("santos2006_task_priority", "scenario.name", "{tmp}/absolute"),
+        ("santos2006_task_priority", "scenario.name", "../x"),
+        ("santos2006_task_priority", "scenario.name", "a/b"),
+        ("santos2006_task_priority", "scenario.name", ".."),
+        ("santos2006_task_priority", "scenario.name", ".hidden"),
+        ("santos2006_task_priority", "scenario.name", "x" * 129),
+        ("xiang2019_grip", "outputs.animation", "../../x.gif"),
+        ("xiang2019_grip", "outputs.animation", "{tmp}/x.gif"),
+        ("xiang2019_grip", "outputs.animation", "sub/x.gif"),
+        ("xiang2019_grip", "outputs.animation", "grip.txt"),
+    ],
+)
+def test_names_from_a_scenario_never_become_paths(tmp_path, monkeypatch, scenario, key, value):
+    work = tmp_path / "one" / "two"
+    work.mkdir(parents=True)
+    monkeypatch.chdir(work)  # the default --out is out/<scenario name>, relative to here
+    override = f"{key}={json.dumps(value.format(tmp=tmp_path))}"
+    with pytest.raises(ScenarioError, match=f"{key} = .* is not valid: .*plain name: letters, digits"):
+        run(SCENARIOS / f"{scenario}.toml", overrides=[override, "outputs.figures=false"], progress=False)
+    assert not files_below(tmp_path) and not (tmp_path / "absolute").exists()
+
+
+def test_plain_names_are_accepted(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    result = run(SCENARIOS / "santos2006_task_priority.toml", progress=False,
+                 overrides=['scenario.name="my-run_2.v1"', "outputs.figures=false"])
+    assert result.files[0].parent == Path("out") / "my-run_2.v1" and result.metrics["scenario"] == "my-run_2.v1"
+    assert read_scenario(GRIP, ['outputs.animation="Grip.MP4"'])["outputs"]["animation"] == "Grip.MP4"
+    from uvms.scenario import name_from_stem
+
+    assert name_from_stem("hoang2011_w1") == "hoang2011_w1"  # the shipped scenarios keep their names
+    assert name_from_stem("my run (2)") == "my_run_2_" and name_from_stem("..") == "scenario"
+
+
+def test_cli_refuses_a_path_as_scenario_name_in_one_line(tmp_path):
+    bad = subprocess.run([sys.executable, "-m", "uvms.cli", "run", str(SCENARIOS / "santos2006_task_priority.toml"),
+                          "--set", 'scenario.name="../../escaped"'], capture_output=True, text=True, timeout=300,
+                         cwd=tmp_path)
+    assert bad.returncode == 2 and len(bad.stderr.splitlines()) == 1 and "scenario.name" in bad.stderr
+    assert not list(tmp_path.iterdir()) and not (tmp_path.parent / "escaped").exists()
+
+
+def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
+    from uvms import simulate as simulate_module
+    from uvms.errors import StepCountError
+
+    def never(*args, **kwargs):
+        raise AssertionError("the simulation must not start")
+
+    monkeypatch.setattr("uvms.scenario.simulate", never)
+    started = time.perf_counter()
+    with pytest.raises(StepCountError, match=r"simulation.dt = 1e-07 s over 190 s gives 1.9e\+09 steps; at most "
+                                             r"200,000 are allowed .*raise simulation.dt or shorten"):
+        run(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=["simulation.dt=1e-7"], progress=False)
+    assert time.perf_counter() - started < 30 and not (tmp_path / "run").exists()
+    with pytest.raises(StepCountError, match="longer than trajectory.duration = 10 s: the run would have no step"):
+        run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=["simulation.dt=100"])
+    with pytest.raises(StepCountError, match="simulation.dt = 1 s is longer than simulation.duration = 0.5 s"):
+        run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run",
+            overrides=["simulation.dt=1.0", "simulation.duration=0.5"])
+    for dt in ("0", "-0.1"):
+        with pytest.raises(ScenarioError, match=r"simulation.dt = .* is out of range: it is the integration step"):
+            run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=[f"simulation.dt={dt}"])
+    amundsen = SCENARIOS / "amundsen2018_rigid_open_loop.toml"  # the dynamic plant: the same check
+    monkeypatch.setattr("uvms.scenario.simulate_gjm", never)
+    with pytest.raises(StepCountError, match="at most 200,000"):
+        run(amundsen, out=tmp_path / "run", overrides=["simulation.dt=1e-6"], progress=False)
+    assert not (tmp_path / "run").exists()
+    assert simulate_module.step_count(190.0, 0.02) == 9500 and simulate_module.step_count(1.0, 1.0) == 1
+    assert simulate_module.step_count(1.0, 1.0 / simulate_module.MAX_STEPS) == simulate_module.MAX_STEPS
+
+
+def test_library_simulations_share_the_step_bound():
+    from uvms.errors import StepCountError
+    from uvms.plant import Plant, simulate_plant
+    from uvms.simulate import simulate
+
+    robot = uvms.load("hoang2011")
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"))
+
+    def never(*args):
+        raise AssertionError("nothing may run")
+
+    for dt, duration, words in ((1e-7, 190.0, "gives 1.9e\\+09 steps"), (2.0, 1.0, "no step"),
+                                (0.0, 1.0, "finite and > 0"), (0.1, float("nan"), "finite and > 0")):
+        with pytest.raises(StepCountError, match=words):
+            simulate(robot, never, robot.neutral(), duration=duration, dt=dt, task=task, desired=never)
+        with pytest.raises(StepCountError, match=words):
+            simulate_plant(Plant(robot, added_mass=False, damping=False), robot.neutral(), None, never, duration, dt)
+
+
+@pytest.mark.parametrize(
+    "override",
+    ["solver.damping=1e300", "solver.gain=1e300", "solver.gain=[1e300, 1, 1]", "solver.alpha=-1e7",
+     "solver.weights=[1, 1, 1, 1e300, 1, 1]", "trajectory.speed=1e9", "trajectory.duration=1e300",
+     "solver.gain=100000000000000000000000000000000000000000", "vehicle.gain=1e12", "simulation.duration=1e7",
+     "initial.arm=[1e300, 0, 0]"],
+)
+def test_numbers_out_of_range_are_one_scenario_error(tmp_path, override):
+    with pytest.raises(ScenarioError, match=r"is out of range: scenario numbers are SI values with \|x\| <= 1e\+06"):
+        run(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=[override], progress=False)
+    assert not (tmp_path / "run").exists()
+
+
+def test_signs_and_element_types_are_checked(tmp_path):
+    for override, words in (("solver.damping=-0.1", "solver.damping = -0.1 is out of range: it is the DLS damping"),
+                            ("solver.gain=['a']", "solver.gain must be a number or a list of numbers"),
+                            ("vehicle.velocities.surge=1e9", "vehicle.velocities.surge = 1e\\+09 is out of range")):
+        with pytest.raises(ScenarioError, match=words):
+            read_scenario(SCENARIOS / "santos2006_task_priority.toml", [override])
+    from uvms.scenario import read_toml, scenario_from_raw
+
+    raw = read_toml(GRIP)  # phases are tables of an array: not reachable by --set
+    raw["phases"][1]["offsets"] = {"left_ee": [0.0, 0.0, -1e7]}
+    with pytest.raises(ScenarioError, match="phases\\[1\\].offsets.left_ee = -1e\\+07 is out of range"):
+        scenario_from_raw(raw, GRIP)
+
+
+def test_cli_damping_1e300_is_one_line(tmp_path):
+    command = [sys.executable, "-m", "uvms.cli", "run", str(SCENARIOS / "hoang2011_w1.toml"), "--out",
+               str(tmp_path / "run"), "--set", "solver.damping=1e300"]
+    bad = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert bad.returncode == 2 and bad.stderr.startswith("uvms: error: ") and len(bad.stderr.splitlines()) == 1
+    assert "solver.damping = 1e+300 is out of range" in bad.stderr and "Traceback" not in bad.stderr
+
+
+@pytest.mark.parametrize("error", [OverflowError("(34, 'Numerical result out of range')"),
+                                   FloatingPointError("overflow encountered in multiply"),
+                                   np.linalg.LinAlgError("Singular matrix"), ZeroDivisionError("float division")])
+def test_numerical_failures_become_one_uvms_error_naming_the_scenario(tmp_path, monkeypatch, capsys, error):
+    from uvms.cli import main
+    from uvms.errors import NumericalError
+
+    def overflowing(*args, **kwargs):
+        raise error
+
+    monkeypatch.setattr("uvms.scenario.simulate", overflowing)  # the safety net behind the schema's bounds
+    folder = tmp_path / "run"
+    with pytest.raises(NumericalError, match=f"scenario 'santos2006_task_priority': the numerics failed "
+                                             f"\\({type(error).__name__}: "):
+        run(SCENARIOS / "santos2006_task_priority.toml", out=folder, progress=False)
+    assert not folder.exists()
+    assert main(["run", str(SCENARIOS / "santos2006_task_priority.toml"), "--out", str(folder), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("uvms: error: scenario 'santos2006_task_priority': the numerics failed")
+    assert len(err.splitlines()) == 1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import math
+import time
 from pathlib import Path
 
 import pytest
@@ -11,7 +12,7 @@ import pytest
 from uvms import UVMSError
 from uvms.cli import main
 from uvms.scenario import ScenarioError
-from uvms.sweep import METRICS, SweepError, parse_grid, sweep
+from uvms.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
 
 SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps
 GRID = ["solver.gain=0.5:1.5:2", "model.args.l1=1.5:2.0:2"]  # l1 moves the start; the gain the tracking
@@ -106,3 +107,19 @@ def test_cli_sweep_writes_the_table_and_the_plot(tmp_path, capsys):
     assert err.startswith("uvms: error: --grid") and len(err.splitlines()) == 1
     assert main(["sweep", str(SCENARIO), "--grid", "solver.gain=1:2:2", "--scheduler", "tcp://x:1"]) == 2
     assert "needs the dask backend" in capsys.readouterr().err
+
+
+def test_a_huge_grid_is_refused_at_once(tmp_path, capsys):
+    started = time.perf_counter()
+    assert main(["sweep", str(SCENARIO), "--grid", "solver.gain=0:1:1000", "--grid", "solver.alpha=0:1:1000",
+                 "--out", str(tmp_path / "sweep")]) == 2
+    assert time.perf_counter() - started < 1.0
+    err = capsys.readouterr().err
+    assert err.splitlines() == [
+        "uvms: error: the grid has 1,000,000 points (1,000 (solver.gain) x 1,000 (solver.alpha)); a sweep has at most "
+        "10,000: split it into several sweeps (e.g. one per value of solver.gain) or take fewer values"]
+    with pytest.raises(SweepError, match="N = 1,000,000,000 values; a sweep has at most 10,000 points"):
+        parse_grid("solver.gain=0:1:1000000000")  # refused before any array is made
+    assert time.perf_counter() - started < 1.0 and not list(tmp_path.iterdir())
+    assert MAX_POINTS == 10_000
+

@@ -66,3 +66,16 @@ class ConfigurationError(UVMSError):
 
 class WorkspaceInputError(UVMSError):
     """A workspace argument out of range: sample count, voxel size, orientation grid, hull."""
+
+
+# ------------------------------------------------- scenarios, runs and their output folders
+class ScenarioError(UVMSError):
+    """A scenario file or override is invalid (unknown key, wrong type, impossible value)."""
+
+
+class StepCountError(UVMSError):
+    """A step ``dt`` and a duration that give no step at all, or more than ``uvms.simulate.MAX_STEPS``."""
+
+
+class NumericalError(UVMSError):
+    """The numerics of a run failed (OverflowError, FloatingPointError, LinAlgError): a number out of range."""

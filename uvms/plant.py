@@ -57,6 +57,7 @@ import pinocchio as pin
 from .errors import UVMSError
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from .robot import Robot
+from .simulate import step_count
 
 with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
     warnings.simplefilter("ignore")
@@ -433,7 +434,8 @@ def simulate_plant(
         plant: the Plant.
         q0: initial configuration (nq,); v0: initial velocity (nv,) (None: rest).
         command: (t, q, v) -> joint-velocity command (n_arm,), a constant (n_arm,), or None (zero).
-        duration, dt: [s]; the number of steps is round(duration / dt).
+        duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
+            :data:`uvms.simulate.MAX_STEPS`.
         method: "rk4" or "euler".
         hold: sample the command once per step and hold it (a digital
             controller at 1/dt); default: evaluate it at every stage.
@@ -448,8 +450,7 @@ def simulate_plant(
     """
     if method not in METHODS:
         raise UVMSError(f"unknown method {method!r}; valid: {', '.join(METHODS)}")
-    if not (np.isfinite(dt) and dt > 0 and np.isfinite(duration) and duration > 0):
-        raise UVMSError(f"dt and duration must be finite and > 0, got dt={dt!r}, duration={duration!r}")
+    steps = step_count(duration, dt)  # checked before anything runs; the same bounds as uvms.simulate
     robot, model = plant.robot, plant.model
     q = robot.check_configuration(q0).copy()
     v = np.zeros(model.nv) if v0 is None else robot.check_velocity(v0).copy()
@@ -468,7 +469,6 @@ def simulate_plant(
                 f"the command must return {plant.n_arm} finite joint velocities, got {u!r} at t = {t:.6g} s")
         return u
 
-    steps = int(round(duration / dt))
     records: dict[str, list] = {name: [] for name in
                                 ("t", "q", "v", "command", "joint_torque", "kinetic_energy", "potential_energy",
                                  "momentum")}

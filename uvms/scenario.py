@@ -12,11 +12,14 @@ section with ``type = "rigid"`` or ``"hydrodynamic"`` runs the free-floating dyn
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import math
 import os
+import re
 import sys
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,13 +33,13 @@ if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
-from .errors import UVMSError
+from .errors import NumericalError, ScenarioError, UVMSError
 from .gjm_control import GJM_KINDS, GJMController, GJMResult, VelocityRamps, simulate_gjm
 from .hydrodynamics import HydroParameters
 from .model import load
 from .plant import Plant
 from .robot import Robot
-from .simulate import SimulationResult, simulate
+from .simulate import SimulationResult, simulate, step_count
 from .solvers import (
     VariableDamping,
     clik_velocity,
@@ -55,10 +58,28 @@ NUMBER = (int, float)
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
 NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
-
-
-class ScenarioError(UVMSError):
-    """A scenario file or override is invalid (unknown key, wrong type, impossible value)."""
+#: A name read from a scenario that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,
+#: ``outputs.animation``) is a plain name: one path component, never a path that leads outside ``--out``.
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
+NAME_RULE = ("a plain name: letters, digits, '.', '_' and '-', starting with a letter or a digit, at most 128 "
+             "characters, no '/' and no '..'")
+ANIMATION_SUFFIXES = (".gif", ".mp4")
+#: The largest magnitude of a number in a scenario (SI units; model.args excepted, the model checks them). No
+#: gain [1/s], damping, weight, length [m], speed [m/s], time [s] or angle [rad] of a vehicle-manipulator run
+#: comes near it, and beyond it products such as damping**2, gain * dt or weight ratios overflow or swamp the
+#: double precision of the solvers.
+MAX_MAGNITUDE = 1e6
+#: Keys that also have a sign: key -> (lowest value, whether the lowest value itself is excluded, meaning).
+LOWER_BOUNDS: dict[str, tuple[float, bool, str]] = {
+    "simulation.dt": (0.0, True, "the integration step [s]"),
+    "simulation.duration": (0.0, False, "the run length [s]; 0: the trajectory's"),
+    "trajectory.duration": (0.0, True, "the trajectory's length [s]"),
+    "trajectory.accel_time": (0.0, False, "the acceleration time [s]"),
+    "trajectory.laps": (0.0, False, "laps of the circle; 0: one pass"),
+    "solver.damping": (0.0, False, "the DLS damping"),
+    "solver.damping_epsilon": (0.0, False, "the singular-value threshold of the variable damping"),
+    "solver.damping_max": (0.0, False, "the largest variable damping"),
+}
 
 
 #: section -> key -> (accepted types, default, allowed values or None). "args"/"velocities" hold free tables.
@@ -161,23 +182,51 @@ def read_scenario(path: str | os.PathLike, overrides: Sequence[str] = ()) -> dic
     Raises:
         ScenarioError: unreadable file, bad TOML, unknown key, wrong type, impossible value.
     """
+    return scenario_from_raw(read_toml(path), path, overrides)
+
+
+def read_toml(path: str | os.PathLike) -> dict:
+    """The raw table of a scenario file (not validated)."""
     path = Path(path)
     try:
-        raw = tomllib.loads(path.read_text(encoding="utf-8"))
+        return tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ScenarioError(f"scenario file {str(path)!r} does not exist") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise ScenarioError(f"cannot read scenario {str(path)!r}: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
+
+
+def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence[str] = ()) -> dict:
+    """Override and validate the raw table of the scenario file ``path`` (left unchanged: it is copied)."""
+    path = Path(path)
+    raw = copy.deepcopy(dict(raw))
     for override in overrides:
         apply_override(raw, override)
     scenario = validate(raw, str(path))
     model_path = Path(scenario["model"]["path"])
     if not model_path.is_absolute() and (path.parent / model_path).exists():
         scenario["model"]["path"] = str((path.parent / model_path).resolve())
-    scenario["scenario"]["name"] = scenario["scenario"]["name"] or path.stem
+    scenario["scenario"]["name"] = scenario["scenario"]["name"] or name_from_stem(path.stem)
     return scenario
+
+
+def name_from_stem(stem: str) -> str:
+    """The run name of a scenario without ``scenario.name``: its file name, made a plain name ("my run" -> "my_run")."""
+    name = re.sub(r"\.{2,}", ".", re.sub(r"[^A-Za-z0-9._-]+", "_", stem)).lstrip("._-")[:128]
+    return name or "scenario"
+
+
+def check_name(name: str, value: str, origin: str, role: str, suffixes: Sequence[str] = (), example: str = "") -> str:
+    """A scenario string that becomes a file name: a plain name (:data:`NAME_PATTERN`), with one of ``suffixes``."""
+    plain = NAME_PATTERN.fullmatch(value) is not None and ".." not in value
+    suffix_ok = not suffixes or Path(value).suffix.lower() in suffixes
+    if not (plain and suffix_ok):
+        ending = f", ending in {' or '.join(suffixes)}" if suffixes else ""
+        raise ScenarioError(f"{origin}: {name} = {value!r} is not valid: {role}, so it must be {NAME_RULE}{ending} "
+                            f"(e.g. {example!r})")
+    return value
 
 
 def parse_value(text: str) -> Any:
@@ -220,6 +269,12 @@ def validate(raw: Mapping, origin: str) -> dict:
         raise ScenarioError(f"{origin}: phases must be an array of tables ([[phases]])")
     scenario["phases"] = [validate_table(phase, PHASE_SCHEMA, f"phases[{index}]", origin)
                           for index, phase in enumerate(phases)]
+    if scenario["scenario"]["name"]:
+        check_name("scenario.name", scenario["scenario"]["name"], origin,
+                   "it names the default output folder out/<name>", example="hoang2011_w1")
+    if scenario["outputs"]["animation"]:
+        check_name("outputs.animation", scenario["outputs"]["animation"], origin,
+                   "it names a file inside the output folder", ANIMATION_SUFFIXES, example="grip.gif")
     return scenario
 
 
@@ -243,23 +298,56 @@ def validate_table(given: Any, keys: Mapping[str, tuple], section: str, origin: 
 
 
 def check_value(name: str, value: Any, kinds, allowed, origin: str) -> Any:
-    """One value against its type and allowed set."""
+    """One value against its type, allowed set and range (:data:`MAX_MAGNITUDE`, :data:`LOWER_BOUNDS`)."""
     if kinds == NUMBERS:
-        if not isinstance(value, list) or not all(isinstance(v, NUMBER) and not isinstance(v, bool) for v in value):
+        if not isinstance(value, list) or not all(is_number(v) for v in value):
             raise ScenarioError(f"{origin}: {name} must be a list of numbers, got {value!r}")
-        if not all(np.isfinite(value)):
-            raise ScenarioError(f"{origin}: {name} must be finite, got {value!r}")
+        check_range(name, value, origin)
         return [float(v) for v in value]
     kinds = kinds if isinstance(kinds, tuple) else (kinds,)
     if isinstance(value, bool) and bool not in kinds:
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
     if not isinstance(value, kinds):
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
-    if isinstance(value, (int, float)) and not isinstance(value, bool) and not np.isfinite(value):
-        raise ScenarioError(f"{origin}: {name} must be finite, got {value!r}")
+    if isinstance(value, list) and kinds != (list,) and not all(is_number(v) for v in value):
+        raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)} of numbers, got {value!r}")
+    if name != "model.args":  # xacro args are checked by the model (uvms.checks)
+        check_range(name, value, origin)
     if allowed is not None and value not in allowed:
         raise ScenarioError(f"{origin}: {name} = {value!r} is not valid; valid: {', '.join(map(repr, allowed))}")
     return value
+
+
+def is_number(value: Any) -> bool:
+    return isinstance(value, NUMBER) and not isinstance(value, bool)
+
+
+def check_range(name: str, value: Any, origin: str) -> None:
+    """Every number in ``value`` (a number, or lists and tables of them) finite, |x| <= MAX_MAGNITUDE, and above
+    the lower bound of ``name`` if it has one."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            check_range(f"{name}.{key}", item, origin)
+        return
+    if isinstance(value, list):
+        for item in value:
+            check_range(name, item, origin)
+        return
+    if not is_number(value):
+        return
+    shown = f"{value:.6g}" if isinstance(value, float) or abs(value) < 10**15 else f"a {len(str(abs(value)))}-digit integer"
+    if not (isinstance(value, int) or math.isfinite(value)):
+        raise ScenarioError(f"{origin}: {name} must be finite, got {value!r}")
+    if abs(value) > MAX_MAGNITUDE:
+        raise ScenarioError(f"{origin}: {name} = {shown} is out of range: scenario numbers are SI values with "
+                            f"|x| <= {MAX_MAGNITUDE:.0e} (no gain, damping, weight, length, speed or time of a "
+                            f"vehicle-manipulator run comes near it, and beyond it the solvers overflow)")
+    bound = LOWER_BOUNDS.get(name)
+    if bound is not None:
+        low, strict, meaning = bound
+        if value < low or (strict and value == low):
+            raise ScenarioError(f"{origin}: {name} = {shown} is out of range: it is {meaning}, valid: "
+                                f"{low:g} {'<' if strict else '<='} {name} <= {MAX_MAGNITUDE:.0e}")
 
 
 def type_names(kinds: tuple) -> str:
@@ -582,16 +670,54 @@ def run(
     ``plant.npz`` (commands, torques, energy, momentum) and the figures of
     :func:`uvms.plotting.gjm_figures` are added.
 
+    The scenario is read, checked and built (model, initial configuration, step count) before anything is
+    written.
+
     Args:
         scenario_path: the TOML file.
         out: output folder (default ``out/<scenario name>``).
         overrides: ``SECTION.KEY=VALUE`` strings.
         progress: progress bar (None: on a terminal only).
+
+    Raises:
+        ScenarioError: a bad scenario or override; StepCountError: no step or too many steps;
+        NumericalError: the numerics overflowed.
     """
     scenario = read_scenario(scenario_path, overrides)
-    out = Path(out) if out is not None else Path("out") / scenario["scenario"]["name"]
+    name = scenario["scenario"]["name"]
+    out = Path(out) if out is not None else Path("out") / name
     started = time.perf_counter()
-    setup = build(scenario)
+    with numerics_guard(name):
+        setup = build(scenario)
+    check_step_count(scenario, setup.duration)
+    with numerics_guard(name):
+        return execute(scenario, setup, out, progress, started)
+
+
+@contextlib.contextmanager
+def numerics_guard(name: str) -> Iterator[None]:
+    """Turn an arithmetic failure escaping from the numerics (overflow, singular matrix...) into a NumericalError."""
+    try:
+        yield
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:
+        message = " ".join(str(exc).split())
+        raise NumericalError(f"scenario {name!r}: the numerics failed ({type(exc).__name__}"
+                             f"{': ' + message if message else ''}); a number of the scenario (gain, damping, "
+                             f"weight, dt, a model dimension) is too large or too small for the solvers") from exc
+
+
+def check_step_count(scenario: dict, duration: float) -> int:
+    """The number of steps of a run, checked before it starts (:func:`uvms.simulate.step_count`)."""
+    if scenario["simulation"]["duration"]:
+        duration_name = "simulation.duration"
+    else:
+        duration_name = "the phases' durations" if scenario["phases"] else "trajectory.duration"
+    return step_count(duration, float(scenario["simulation"]["dt"]), dt_name="simulation.dt",
+                      duration_name=duration_name)
+
+
+def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, started: float) -> RunResult:
+    """Simulate a built scenario and write its files into ``folder``."""
     simulation_section = scenario["simulation"]
     plant_run: GJMResult | None = None
     if setup.plant is not None:
@@ -608,24 +734,24 @@ def run(
     if plant_run is not None:
         metrics.update(plant=scenario["plant"]["type"], gjm=scenario["plant"]["gjm"],
                        motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.metrics())
-    files = list(result.save(out))
+    files = list(result.save(folder))
     if plant_run is not None:
-        outputs.write_npz(out / "plant.npz", **plant_run.arrays())
-        files.append(out / "plant.npz")
+        outputs.write_npz(folder / "plant.npz", **plant_run.arrays())
+        files.append(folder / "plant.npz")
     if scenario["outputs"]["figures"]:
         from .plotting import scenario_figures  # matplotlib only when figures are asked for
 
-        files += scenario_figures(result, setup.trajectory, out, title=scenario["scenario"]["name"])
+        files += scenario_figures(result, setup.trajectory, folder, title=scenario["scenario"]["name"])
         if plant_run is not None:
             from .plotting import gjm_figures
 
-            files += gjm_figures(plant_run, out, title=scenario["scenario"]["name"])
+            files += gjm_figures(plant_run, folder, title=scenario["scenario"]["name"])
         if setup.plan is not None:
             from .plotting import sequence_figures
 
-            files += sequence_figures(result, setup.plan, out, title=scenario["scenario"]["name"],
+            files += sequence_figures(result, setup.plan, folder, title=scenario["scenario"]["name"],
                                       animation=scenario["outputs"]["animation"], progress=progress)
-    outputs.write_json(out / "metrics.json", metrics)
-    files.append(out / "metrics.json")
+    outputs.write_json(folder / "metrics.json", metrics)
+    files.append(folder / "metrics.json")
     return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files,
                      plant_run=plant_run)

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 import time
 from collections.abc import Callable
@@ -25,7 +26,7 @@ with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidge
     from tqdm.auto import tqdm
 
 from . import outputs
-from .errors import UVMSError
+from .errors import StepCountError, UVMSError
 from .robot import Robot
 from .tasks.frame import FrameTask
 from .tasks.vehicle import VELOCITY_NAMES
@@ -34,6 +35,10 @@ from .tasks.vehicle import VELOCITY_NAMES
 #: (a VelocityResult or PriorityResult: fields sigma_min, damping, limits_active).
 Controller = Callable[[np.ndarray, float], tuple[np.ndarray, object]]
 INTEGRATORS = ("euler", "rk4")
+#: The most steps one run may take (kinematic or dynamic). Every step is kept in memory, about 3.5 kB with the
+#: CSV text written at the end, so a run of MAX_STEPS takes about 0.7 GB; hoang2011's 190 s at dt = 1 ms is
+#: 190,000 steps (the shipped scenarios take at most 9,500).
+MAX_STEPS = 200_000
 #: The time series recorded at every step, in the order of the NPZ file.
 SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",
           "position_error", "orientation_error", "sigma_min", "damping", "limits_active")
@@ -133,6 +138,35 @@ def velocity_labels(robot: Robot) -> list[str]:
     return labels
 
 
+def step_count(duration: float, dt: float, *, dt_name: str = "dt", duration_name: str = "duration") -> int:
+    """round(duration / dt), the number of steps of a run, checked before it starts.
+
+    Args:
+        duration, dt: [s].
+        dt_name, duration_name: how the caller calls them, for the message (e.g. "simulation.dt").
+
+    Raises:
+        StepCountError: dt or duration not finite and > 0, dt > duration (no step), or more than
+            :data:`MAX_STEPS` steps.
+    """
+    try:
+        dt, duration = float(dt), float(duration)
+    except (TypeError, ValueError):
+        raise StepCountError(f"{dt_name} and {duration_name} must be numbers [s], got {dt!r} and {duration!r}") from None
+    if not (math.isfinite(dt) and dt > 0 and math.isfinite(duration) and duration > 0):
+        raise StepCountError(f"{dt_name} and {duration_name} must be finite and > 0, got dt={dt!r}, "
+                             f"duration={duration!r}")
+    if dt > duration:
+        raise StepCountError(f"{dt_name} = {dt:g} s is longer than {duration_name} = {duration:g} s: the run would "
+                             f"have no step; choose {dt_name} <= {duration:g} s")
+    ratio = duration / dt
+    if not ratio <= MAX_STEPS + 0.5:
+        raise StepCountError(f"{dt_name} = {dt:g} s over {duration:g} s gives {ratio:.2g} steps; at most "
+                             f"{MAX_STEPS:,} are allowed (every step is kept in memory): raise {dt_name} or "
+                             f"shorten {duration_name}")
+    return int(round(ratio))
+
+
 def rk4_step(model: pin.Model, q: np.ndarray, t: float, dt: float, velocity: Callable[[np.ndarray, float], np.ndarray],
              first: np.ndarray | None = None) -> np.ndarray:
     """One Runge-Kutta-Munthe-Kaas step of order 4: q+ = integrate(q, xi), xi from four tangent-space stages."""
@@ -166,7 +200,8 @@ def simulate(
         robot: the model.
         controller: (q, t) -> (v, diagnostics).
         q0: initial configuration (nq,).
-        duration, dt: [s]; the number of steps is round(duration / dt).
+        duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
+            :data:`MAX_STEPS` (:func:`step_count`).
         task: the end-effector task (its frame and axes define the recorded errors).
         desired: t -> desired pose of the task frame (for the record).
         integrator: "euler" or "rk4".
@@ -174,9 +209,7 @@ def simulate(
     """
     if integrator not in INTEGRATORS:
         raise UVMSError(f"unknown integrator {integrator!r}; valid: {', '.join(INTEGRATORS)}")
-    if not (np.isfinite(dt) and dt > 0 and np.isfinite(duration) and duration > 0):
-        raise UVMSError(f"dt and duration must be finite and > 0, got dt={dt!r}, duration={duration!r}")
-    steps = int(round(duration / dt))
+    steps = step_count(duration, dt)
     q = robot.check_configuration(q0).copy()
     model = robot.model
     position_rows = [r for r in task.rows if r < 3]

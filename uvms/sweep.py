@@ -24,11 +24,15 @@ import numpy as np
 
 from . import outputs
 from .errors import UVMSError
-from .scenario import parse_value, read_scenario
+from .scenario import parse_value, read_scenario, read_toml, scenario_from_raw
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
 METRICS = ("max_position_error", "final_position_error", "arm_travel", "vehicle_travel", "wall_time")
 BACKENDS = ("loky", "dask")
+#: The most points of one sweep. Every point is checked before any worker starts (about 0.2 ms a point, a
+#: progress bar past one second) and is a whole scenario run (seconds to minutes) with its own folder; a larger
+#: study is several sweeps, e.g. one per value of the first key.
+MAX_POINTS = 10_000
 
 
 class SweepError(UVMSError):
@@ -60,6 +64,8 @@ def parse_grid(text: str) -> tuple[str, list]:
         if len(parts) != 3 or count < 1 or not (math.isfinite(start) and math.isfinite(stop)):
             raise SweepError(f"--grid {key}: expected START:STOP:N with finite START, STOP and an integer N >= 1, "
                              f"got {spec!r}")
+        if count > MAX_POINTS:
+            raise SweepError(f"--grid {key}: N = {count:,} values; a sweep has at most {MAX_POINTS:,} points")
         values = [float(v) for v in np.linspace(start, stop, count)]
         step = (stop - start) / (count - 1) if count > 1 else 0.0
         if all("." not in p and "e" not in p.lower() for p in parts[:2]) and step == int(step):
@@ -189,10 +195,14 @@ def sweep(
         raise SweepError(f"a scheduler address ({scheduler!r}) needs the dask backend")
     if not isinstance(jobs, int) or jobs == 0 or jobs < -1:
         raise SweepError(f"jobs must be >= 1 or -1 (all cores), got {jobs!r}")
+    count = math.prod(len(values) for _, values in grids)
+    if count > MAX_POINTS:
+        sizes = " x ".join(f"{len(values):,} ({key})" for key, values in grids)
+        raise SweepError(f"the grid has {count:,} points ({sizes}); a sweep has at most {MAX_POINTS:,}: split it "
+                         f"into several sweeps (e.g. one per value of {keys[0]}) or take fewer values")
     points = list(itertools.product(*(values for _, values in grids)))
     assignments = [[f"{key}={toml_literal(v)}" for key, v in zip(keys, point)] for point in points]
-    for overrides in assignments:  # every key and value checked in the parent, before any worker starts
-        checked = read_scenario(scenario, overrides)
+    checked = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
         from .model import load
 
@@ -211,6 +221,21 @@ def sweep(
     save_sweep_figure(result, out / "sweep.png", title=checked["scenario"]["name"])
     result.files = [out / "sweep.csv", out / "sweep.png"]
     return result
+
+
+def check_points(scenario: str | os.PathLike, assignments: list[list[str]], progress: bool | None) -> dict:
+    """Check every point's keys and values in the parent, before any worker starts; the last point's scenario.
+
+    The file is parsed once; a progress bar shows up if the checks take more than a second.
+    """
+    from tqdm.auto import tqdm
+
+    raw = read_toml(scenario)
+    checked: dict = {}
+    for overrides in tqdm(assignments, desc="checking the grid", unit="point", disable=progress is False,
+                          leave=False, delay=1.0):
+        checked = scenario_from_raw(raw, scenario, overrides)
+    return checked
 
 
 def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None, progress: bool | None) -> list[dict]:
