@@ -300,7 +300,7 @@ def test_numerical_failures_become_one_uvms_error_naming_the_scenario(tmp_path, 
     with pytest.raises(NumericalError, match=f"scenario 'santos2006_task_priority': the numerics failed "
                                              f"\\({type(error).__name__}: "):
         run(SCENARIOS / "santos2006_task_priority.toml", out=folder, progress=False)
-    assert not folder.exists()
+    assert sorted(path.name for path in tmp_path.iterdir()) == [".run.uvms-lock"]  # no run folder, no temporary
     assert main(["run", str(SCENARIOS / "santos2006_task_priority.toml"), "--out", str(folder), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("uvms: error: scenario 'santos2006_task_priority': the numerics failed")

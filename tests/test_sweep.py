@@ -123,3 +123,20 @@ def test_a_huge_grid_is_refused_at_once(tmp_path, capsys):
     assert time.perf_counter() - started < 1.0 and not list(tmp_path.iterdir())
     assert MAX_POINTS == 10_000
 
+
+def test_a_sweep_folder_is_replaced_whole_and_reports_final_paths(tmp_path, monkeypatch):
+    folder = tmp_path / "sweep"
+    first = sweep(SCENARIO, ["solver.gain=[0.5, 1.0, 1.5]"], out=folder, progress=False)
+    assert sorted(path.name for path in folder.iterdir()) == ["point_0", "point_1", "point_2", "sweep.csv", "sweep.png"]
+    assert first.files == [folder / "sweep.csv", folder / "sweep.png"]
+
+    def failing(scenario, out, **kwargs):  # jobs=1 runs the points in this process
+        raise UVMSError(f"cannot write to {out!r}")
+
+    monkeypatch.setattr("uvms.scenario.run", failing)
+    second = sweep(SCENARIO, ["solver.gain=[2.0, 3.0]"], out=folder, progress=False)
+    assert sorted(path.name for path in folder.iterdir()) == ["sweep.csv", "sweep.png"]  # no point of the first sweep
+    assert [row["error"] for row in second.rows] == [f"UVMSError: cannot write to '{folder / f'point_{k}'}'"
+                                                     for k in range(2)]  # the final paths, not the temporary ones
+    assert str(folder / "point_0") in (folder / "sweep.csv").read_text()
+    assert not list(tmp_path.glob(".sweep.uvms-tmp-*"))

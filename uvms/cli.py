@@ -16,6 +16,7 @@ from .model import load
 from .robot import Robot
 
 EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-C
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -396,6 +397,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     except UVMSError as exc:
         print(f"uvms: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return EXIT_USAGE
+    except KeyboardInterrupt as exc:  # Ctrl-C: one line saying what the output folder holds (outputs.run_folder)
+        notes = getattr(exc, "__notes__", None)
+        print(f"uvms: interrupted; {notes[-1]}" if notes else "uvms: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - the CLI promises one line, never a traceback
         if os.environ.get("UVMS_DEBUG"):
             raise

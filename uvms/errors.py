@@ -79,3 +79,11 @@ class StepCountError(UVMSError):
 
 class NumericalError(UVMSError):
     """The numerics of a run failed (OverflowError, FloatingPointError, LinAlgError): a number out of range."""
+
+
+class RunFolderError(UVMSError):
+    """An output folder cannot be replaced: unwritable, a file, or a folder that uvms did not write."""
+
+
+class RunFolderBusy(RunFolderError):
+    """Another uvms process is writing the same output folder (it holds the folder's lock)."""

@@ -662,6 +662,8 @@ def run(
     out: str | os.PathLike | None = None,
     overrides: Sequence[str] = (),
     progress: bool | None = None,
+    *,
+    lock: bool = True,
 ) -> RunResult:
     """Run a scenario file and write ``metrics.json``, ``trajectory.csv``/``.npz`` and figures into ``out``.
 
@@ -671,17 +673,20 @@ def run(
     :func:`uvms.plotting.gjm_figures` are added.
 
     The scenario is read, checked and built (model, initial configuration, step count) before anything is
-    written.
+    written; then every file goes into a temporary folder that replaces ``out`` as a whole at the end
+    (:func:`uvms.outputs.run_folder`): ``out`` holds the previous complete run until the new one is complete.
 
     Args:
         scenario_path: the TOML file.
         out: output folder (default ``out/<scenario name>``).
         overrides: ``SECTION.KEY=VALUE`` strings.
         progress: progress bar (None: on a terminal only).
+        lock: hold the lock of ``out`` (False only for a folder inside another run folder, as the points of
+            :func:`uvms.sweep.sweep`).
 
     Raises:
         ScenarioError: a bad scenario or override; StepCountError: no step or too many steps;
-        NumericalError: the numerics overflowed.
+        NumericalError: the numerics overflowed; RunFolderBusy: another uvms process writes ``out``.
     """
     scenario = read_scenario(scenario_path, overrides)
     name = scenario["scenario"]["name"]
@@ -690,8 +695,10 @@ def run(
     with numerics_guard(name):
         setup = build(scenario)
     check_step_count(scenario, setup.duration)
-    with numerics_guard(name):
-        return execute(scenario, setup, out, progress, started)
+    with outputs.run_folder(out, lock=lock) as folder, numerics_guard(name):
+        result = execute(scenario, setup, folder, progress, started)
+    result.files = [out / path.relative_to(folder) for path in result.files]
+    return result
 
 
 @contextlib.contextmanager

@@ -123,15 +123,31 @@ def run_point(scenario: str, index: int, assignments: Sequence[str], out: str) -
     """Run one grid point (in a worker); an exception becomes the row's ``error`` text, metrics NaN."""
     from .scenario import run
 
+    use_thread_lock_for_progress_bars()
     row: dict[str, Any] = {"point": index, "error": ""}
     try:
-        metrics = run(scenario, out=out, overrides=[*assignments, "outputs.figures=false"], progress=False).metrics
+        metrics = run(scenario, out=out, overrides=[*assignments, "outputs.figures=false"], progress=False,
+                      lock=False).metrics  # out is inside the sweep's own (locked) temporary folder
         row.update({key: float(metrics.get(key, math.nan)) for key in METRICS})
     except Exception as exc:  # noqa: BLE001 - one failed point must not stop the sweep; it is reported
         row.update({key: math.nan for key in METRICS})
         message = " ".join(str(exc).split())
         row["error"] = f"{type(exc).__name__}: {message}" if message else type(exc).__name__
     return row
+
+
+def use_thread_lock_for_progress_bars() -> None:
+    """In a worker (no progress bar is shown): give tqdm a thread lock instead of its default semaphore.
+
+    tqdm creates an inter-process semaphore on first use; a worker killed by a Ctrl-C never releases it, and
+    the parent's resource tracker would then print a "leaked semaphore" warning after the one-line message.
+    """
+    import threading
+
+    from tqdm.std import tqdm
+
+    if "_lock" not in vars(tqdm):
+        tqdm.set_lock(threading.RLock())
 
 
 @contextlib.contextmanager
@@ -208,17 +224,19 @@ def sweep(
 
         model = read_scenario(scenario, assignments[0])["model"]
         load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
-    out = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
-    out = out.resolve()
+    given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
+    out = given.resolve()
     width = len(str(len(points) - 1))
-    tasks = [(str(Path(scenario).resolve()), k, overrides, str(out / f"point_{k:0{width}d}"))
-             for k, overrides in enumerate(assignments)]
-    rows = run_tasks(tasks, jobs, backend, scheduler, progress)
-    for row, point in zip(rows, points):
-        row.update(zip(keys, point))
-    result = SweepResult(keys=keys, rows=rows)
-    outputs.write_text(out / "sweep.csv", result.csv())
-    save_sweep_figure(result, out / "sweep.png", title=checked["scenario"]["name"])
+    with outputs.run_folder(given) as folder:  # the sweep folder is replaced whole, point folders included
+        tasks = [(str(Path(scenario).resolve()), k, overrides, str(folder / f"point_{k:0{width}d}"))
+                 for k, overrides in enumerate(assignments)]
+        rows = run_tasks(tasks, jobs, backend, scheduler, progress)
+        for row, point in zip(rows, points):
+            row.update(zip(keys, point))
+            row["error"] = row["error"].replace(str(folder), str(out))  # the paths the user will find
+        result = SweepResult(keys=keys, rows=rows)
+        outputs.write_text(folder / "sweep.csv", result.csv())
+        save_sweep_figure(result, folder / "sweep.png", title=checked["scenario"]["name"])
     result.files = [out / "sweep.csv", out / "sweep.png"]
     return result
 
@@ -246,9 +264,12 @@ def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None
     def execute() -> list[dict]:
         parallel = Parallel(n_jobs=jobs, return_as="generator")
         results = parallel(delayed(run_point)(*task) for task in tasks)
-        bar = tqdm(results, total=len(tasks), desc="sweep", unit="point", disable=progress is False,
-                   leave=False)
-        return list(bar)
+        try:
+            return list(tqdm(results, total=len(tasks), desc="sweep", unit="point", disable=progress is False,
+                             leave=False))
+        except BaseException:  # Ctrl-C or an error: no worker may go on writing into the sweep folder
+            stop_workers(results)
+            raise
 
     if backend == "dask":
         with dask_client(scheduler, jobs), parallel_config(backend="dask"):
@@ -257,6 +278,27 @@ def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None
         with parallel_config(backend="loky"):
             rows = execute()
     return sorted(rows, key=lambda row: row["point"])
+
+
+def stop_workers(results) -> None:
+    """Abort a joblib generator and kill the loky workers (before the sweep's temporary folder is removed).
+
+    Closing the generator makes joblib abort its backend, which for loky shuts the executor down with
+    ``kill_workers=True`` and waits for the workers to exit; then any reusable loky executor left is shut down the
+    same way. A Dask cluster is closed by :func:`dask_client`.
+    """
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # joblib warns that the generator was exited early: that is the point
+        with contextlib.suppress(Exception):
+            results.close()
+        with contextlib.suppress(Exception):
+            from joblib.externals.loky import reusable_executor
+
+            executor = getattr(reusable_executor, "_executor", None)
+            if executor is not None:
+                executor.shutdown(wait=True, kill_workers=True)
 
 
 def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:
