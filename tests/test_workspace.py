@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import tracemalloc
 
 import numpy as np
 import pinocchio as pin
@@ -13,15 +14,20 @@ from test_fk_papers import xiang_eq6
 import uvms
 from uvms.cli import main
 from uvms.workspace import (
+    CHUNK,
     BatchKinematics,
     HullShape,
     OrientationGrid,
+    VoxelOccupancy,
     WorkspaceInputError,
     common_volume,
     dexterity_map,
     hull_shapes,
     monte_carlo,
+    montecarlo,
     outside_hull,
+    parse_sample_count,
+    voxel_keys,
     voxel_volume,
 )
 
@@ -262,7 +268,10 @@ def test_hull_removal_never_increases_the_volume():
 
 def test_bad_workspace_arguments_raise_workspace_errors():
     robot = shipped("xiang2019")
-    for kwargs, words in [({"samples": 0}, "integer >= 1"), ({"voxel": 0.0}, "voxel size"),
+    for kwargs, words in [({"samples": 0}, "integer >= 1"), ({"samples": -3}, "integer >= 1"),
+                          ({"samples": 1.5}, "integer >= 1"), ({"samples": 1e9}, "integer >= 1"),
+                          ({"samples": True}, "integer >= 1"), ({"samples": "10"}, "integer >= 1"),
+                          ({"keep_points": -1}, "keep_points"), ({"chunk": 0}, "chunk"), ({"voxel": 0.0}, "voxel size"),
                           ({"dexterity_voxel": -1.0}, "dexterity voxel"), ({"frames": []}, "at least one")]:
         arguments = {"robot": robot, "frames": ["left_ee"], "samples": 10, **kwargs}
         with pytest.raises(WorkspaceInputError, match=words):
@@ -294,3 +303,167 @@ def test_cli_workspace_dexterity_hull_and_figures(tmp_path, capsys):
     assert "dexterity mean" in capsys.readouterr().out
     assert main(["workspace", "xiang2019", "-n", "100", "--figures", "1000", "--out", str(tmp_path)]) == 2
     assert "--figures expects" in capsys.readouterr().err
+
+
+def streamed_result_arrays(result):
+    """Everything a WorkspaceResult holds except the timing, as comparable values."""
+    metrics = result.metrics()
+    metrics.pop("samples_per_second")
+    arrays = {f"{name}_{frame}": getattr(result, name)[frame] for name in ("joints", "positions", "outside_hull")
+              for frame in result.frames}
+    for frame, map_ in result.dexterity.items():
+        arrays.update({f"centres_{frame}": map_.centres, f"samples_{frame}": map_.samples,
+                       f"reached_{frame}": map_.reached})
+    return metrics, arrays
+
+
+def test_streamed_results_do_not_depend_on_the_chunk_size(monkeypatch):
+    tall = uvms.load("xiang2019", args={"hull_height": 1.0})  # the hull removes some samples
+    options = {"seed": 11, "dexterity": True, "remove_hull": True, "progress": False}
+    frames = ["left_ee", "right_ee"]
+    default = monte_carlo(tall, frames, 30_011, **options)  # one chunk of CHUNK per frame
+    monkeypatch.setattr(montecarlo, "CHUNK", 997)  # 31 chunks per frame, cut at the convergence counts
+    tiny = monte_carlo(tall, frames, 30_011, **options)
+    explicit = monte_carlo(tall, frames, 30_011, chunk=61, keep_points=30_011, **{**options, "dexterity": False})
+    (metrics, arrays), (tiny_metrics, tiny_arrays) = streamed_result_arrays(default), streamed_result_arrays(tiny)
+    assert metrics == tiny_metrics and 0 < metrics["fraction_inside_hull"]["left_ee"] < 1
+    assert arrays.keys() == tiny_arrays.keys()
+    for name, array in arrays.items():
+        assert array.dtype == tiny_arrays[name].dtype and array.tobytes() == tiny_arrays[name].tobytes(), name
+    assert explicit.volume == default.volume
+    assert explicit.common_volume_outside_hull == default.common_volume_outside_hull
+    # the oracle: all samples at once (one draw from the same generator) through the whole-cloud functions
+    rng = np.random.default_rng(11)
+    clouds = {}
+    for frame in frames:
+        batch = BatchKinematics(tall, frame)
+        values = batch.sample(30_011, rng)
+        assert np.array_equal(values, default.joints[frame])  # chunked draws == one draw
+        points, axes = batch.positions_and_axes(values, default.orientation_grid.axes)
+        kept = outside_hull(points, default.hull)
+        clouds[frame] = points[kept]
+        assert default.volume[frame] == voxel_volume(points, 0.05)
+        assert default.volume_outside_hull[frame] == voxel_volume(points[kept], 0.05)
+        assert default.convergence[frame][0] == (3751, voxel_volume(points[:3751], 0.05))
+        reference = dexterity_map(points[kept], default.orientation_grid.cells_from_axes(axes)[kept], 0.1,
+                                  default.orientation_grid.count)
+        streamed = tiny.dexterity[frame]
+        for name in ("centres", "samples", "reached"):
+            assert np.array_equal(getattr(streamed, name), getattr(reference, name)), name
+    assert default.common_volume_outside_hull == common_volume(clouds["left_ee"], clouds["right_ee"], 0.05)
+
+
+def test_voxel_occupancy_streams_like_the_whole_cloud(rng):
+    points = rng.normal(scale=0.3, size=(50_000, 3))
+    other = rng.normal(loc=0.2, scale=0.3, size=(20_000, 3))
+    occupancy, second = VoxelOccupancy(0.02), VoxelOccupancy(0.02)
+    cuts = np.sort(rng.choice(50_000, 40, replace=False))
+    for part in np.split(points, cuts):  # uneven chunks, some tiny
+        occupancy.add(part)
+    occupancy.add(np.empty((0, 3)))
+    second.add(other)
+    assert np.array_equal(occupancy.keys, voxel_keys(points, 0.02))
+    assert occupancy.volume == voxel_volume(points, 0.02)
+    assert occupancy.common_volume(second) == common_volume(points, other, 0.02)
+
+
+def test_memory_is_bounded_whatever_the_sample_count():
+    robot = shipped("xiang2019")
+    monte_carlo(robot, ["left_ee"], 100, dexterity=True, remove_hull=True, progress=False)  # imports, caches
+
+    def peak(samples):
+        tracemalloc.start()  # numpy reports its array buffers to tracemalloc
+        try:
+            monte_carlo(robot, ["left_ee"], samples, chunk=10_000, keep_points=1000, dexterity=True,
+                        remove_hull=True, progress=False)
+            return tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+
+    small, large = peak(100_000), peak(1_600_000)  # about 4 MB each
+    assert large < 1.25 * small  # does not grow with the samples
+    assert large < 1_600_000 * 3 * 8 / 4  # far below one (N, 3) array of positions
+
+
+def test_points_kept_are_capped_and_metrics_say_so(tmp_path, capsys, monkeypatch):
+    arguments = ["workspace", "xiang2019", "--ee", "left_ee", "--ee", "right_ee", "-n", "10_000", "--remove-hull",
+                 "--figures", "2000,5000", "--quiet"]
+    assert main([*arguments, "--out", str(tmp_path / "all")]) == 0
+    monkeypatch.setattr(montecarlo, "POINTS_KEPT", 3000)
+    assert main([*arguments, "--out", str(tmp_path / "capped")]) == 0
+    assert "keep the first 3000 of the 10000 samples" in capsys.readouterr().out
+    metrics = json.loads((tmp_path / "capped" / "metrics.json").read_text())
+    assert metrics["points_sampled"] == {"left_ee": 10_000, "right_ee": 10_000}
+    assert metrics["points_stored"] == {"left_ee": 3000, "right_ee": 3000}
+    assert "first 3000 of the 10000" in metrics["points_note"]
+    full = json.loads((tmp_path / "all" / "metrics.json").read_text())
+    assert full["points_stored"] == full["points_sampled"] and full["points_note"].startswith("all 10000")
+    for key in ("volume", "volume_outside_hull", "volume_convergence", "fraction_inside_hull"):
+        assert metrics[key] == full[key]  # every sample counts, whatever is kept
+    points, all_points = np.load(tmp_path / "capped" / "points.npz"), np.load(tmp_path / "all" / "points.npz")
+    for frame in ("left_ee", "right_ee"):
+        assert points[f"q_{frame}"].shape == (3000, 4) and points[f"outside_hull_{frame}"].shape == (3000,)
+        assert np.array_equal(points[f"position_{frame}"], all_points[f"position_{frame}"][:3000])  # the first drawn
+    assert metrics["figures"] == ["workspace_2000.png", "workspace_5000.png", "workspace.png"]
+    result = monte_carlo(shipped("xiang2019"), ["left_ee"], 5000, keep_points=100, progress=False)
+    assert result.stored("left_ee") == 100 and len(result.cloud("left_ee")) == 100
+    with pytest.raises(WorkspaceInputError, match="only the first 100 of the 5000"):
+        result.cloud("left_ee", 101)
+    assert monte_carlo(shipped("xiang2019"), ["left_ee"], 50, keep_points=0, progress=False).metrics()[
+        "points_stored"] == {"left_ee": 0}
+
+
+class StopSampling(Exception):
+    """Raised by `FirstChunkBar` to end a run after its first chunk."""
+
+
+class FirstChunkBar:
+    """A stand-in for tqdm that records the total and stops the run at the first update."""
+
+    made = []
+
+    def __init__(self, total=None, **kwargs):
+        self.total, self.updates = total, []
+        FirstChunkBar.made.append(self)
+
+    def set_postfix_str(self, *args, **kwargs):
+        pass
+
+    def update(self, count):
+        self.updates.append(count)
+        raise StopSampling
+
+    def close(self):
+        pass
+
+
+def test_a_billion_samples_start_streaming_without_allocating_them(tmp_path, monkeypatch):
+    monkeypatch.setattr(montecarlo, "tqdm", FirstChunkBar)
+    monkeypatch.setenv("UVMS_DEBUG", "1")  # let the exception through the CLI
+    FirstChunkBar.made.clear()
+    tracemalloc.start()
+    try:
+        with pytest.raises(StopSampling):
+            main(["workspace", "xiang2019", "--ee", "left_ee", "--ee", "right_ee", "-n", "1e9", "--dexterity",
+                  "--remove-hull", "--figures", "10000,1000000000", "--out", str(tmp_path), "--quiet"])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    (bar,) = FirstChunkBar.made
+    assert bar.total == 2 * 10**9 and bar.updates == [CHUNK]  # the first chunk of the first frame was done
+    assert peak < 10**9 * 3 * 8 / 100  # (10^9, 3) positions would be 24 GB
+    assert not (tmp_path / "metrics.json").exists()
+
+
+@pytest.mark.parametrize(("text", "count"), [("1000000000", 10**9), ("1e9", 10**9), ("1_000", 1000), (" 12 ", 12),
+                                             ("2.5e3", 2500), (7, 7)])
+def test_sample_counts_from_the_command_line(text, count):
+    assert parse_sample_count(text) == count
+
+
+@pytest.mark.parametrize("text", ["0", "-5", "1.5", "abc", "1e400", "nan", "", "1e-3"])
+def test_bad_sample_counts_from_the_command_line(text, capsys):
+    with pytest.raises(WorkspaceInputError, match="integer >= 1"):
+        parse_sample_count(text)
+    assert main(["workspace", "xiang2019", "-n", text, "--quiet"]) == 2
+    assert "integer >= 1" in capsys.readouterr().err

@@ -124,21 +124,27 @@ def parse_figure_counts(text: str | None, samples: int) -> list[int]:
 
 
 def command_workspace(options: argparse.Namespace) -> int:
-    """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, dexterity, points and figures."""
+    """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, dexterity, points and figures.
+
+    The samples are streamed (memory bounded for any N); points.npz and the scatter figures hold the first
+    `uvms.workspace.POINTS_KEPT` samples per frame, and metrics.json says how many were stored (points_stored)
+    of how many sampled (points_sampled).
+    """
     import shutil
     from pathlib import Path
 
     from . import outputs
     from .plotting import workspace_figure
-    from .workspace import OrientationGrid, monte_carlo
+    from .workspace import OrientationGrid, monte_carlo, parse_sample_count
 
+    samples = parse_sample_count(options.samples)
     robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
     frames = options.ee or robot.ee_frames
-    figure_counts = parse_figure_counts(options.figures, options.samples)
+    figure_counts = parse_figure_counts(options.figures, samples)
     if not 0.0 <= options.dexterous_threshold <= 1.0:
         raise UVMSError(f"--dexterous-threshold must be in [0, 1], got {options.dexterous_threshold}")
     grid = OrientationGrid(options.directions, options.roll_bins, options.approach) if options.dexterity else False
-    result = monte_carlo(robot, frames, options.samples, seed=options.seed, voxel=options.voxel,
+    result = monte_carlo(robot, frames, samples, seed=options.seed, voxel=options.voxel,
                          progress=False if options.quiet else None, remove_hull=options.remove_hull,
                          dexterity=grid, dexterity_voxel=options.dexterity_voxel)
     out = Path(options.out or Path("out") / f"workspace_{robot.name}")
@@ -155,14 +161,16 @@ def command_workspace(options: argparse.Namespace) -> int:
     outputs.write_npz(out / "points.npz", **arrays)
     outlines = [shape.outline() for shape in result.hull] if result.hull is not None else None
     hull_note = ", hull removed" if result.hull is not None else ""
+    stored = min(result.stored(frame) for frame in frames)
     written, drawn = [], {}
     for name, count in [(f"workspace_{n}.png", n) for n in figure_counts] + [("workspace.png", result.samples)]:
         if count in drawn:  # the same cloud: copy the image instead of drawing it again
             shutil.copyfile(out / drawn[count], out / name)
         else:
-            workspace_figure({frame: result.cloud(frame, count) for frame in frames}, out / name, outlines=outlines,
-                             title=f"{robot.name}: reachable workspace (vehicle frame), {count} samples per arm"
-                                   f"{hull_note}")
+            shown = min(count, stored)  # beyond the kept samples: the first ones, a uniform subsample
+            label = f"{count} samples per arm" if shown == count else f"{count} samples per arm, the first {shown} drawn"
+            workspace_figure({frame: result.cloud(frame, shown) for frame in frames}, out / name, outlines=outlines,
+                             title=f"{robot.name}: reachable workspace (vehicle frame), {label}{hull_note}")
             drawn[count] = name
         written.append(name)
     for frame, dexterity in (result.dexterity or {}).items():
@@ -192,6 +200,9 @@ def command_workspace(options: argparse.Namespace) -> int:
               f"({result.orientation_grid.count} orientation cells, {dexterity.voxel} m voxels, "
               f"median {summary['median_samples_per_voxel']:.0f} samples/voxel); "
               f"dexterous (>= {options.dexterous_threshold}) {summary['dexterous_volume']:.4f} m^3")
+    if stored < result.samples:
+        print(f"points.npz and the scatter figures keep the first {stored} of the {result.samples} samples per frame "
+              f"(volumes and dexterity use all)")
     print(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, "
           f"{', '.join(written)})")
     return 0
@@ -340,7 +351,8 @@ def build_parser() -> argparse.ArgumentParser:
     workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
     workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
     workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")
-    workspace.add_argument("-n", "--samples", type=int, default=10_000, help="joint samples per frame")
+    workspace.add_argument("-n", "--samples", default="10000",
+                           help="joint samples per frame, e.g. 100000 or 1e9 (streamed: memory does not grow with N)")
     workspace.add_argument("--seed", type=int, default=0, help="random seed")
     workspace.add_argument("--voxel", type=float, default=0.05, help="voxel edge for the volume [m]")
     workspace.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")

@@ -5,7 +5,13 @@ The batched forward kinematics is built from the Pinocchio model, not from a
 formula: for every joint on the path to the frame it takes Pinocchio's joint
 placement and motion subspace S (a revolute joint turns about S's angular
 part, a prismatic one slides along its linear part) and composes the poses of
-all samples at once with numpy, in chunks so memory stays bounded.
+all samples at once with numpy.
+
+`monte_carlo` streams: it draws the joint samples of each frame in chunks from one
+seeded generator (the same numbers as one big draw, so the result does not depend on
+the chunk size) and keeps only the occupied voxels, the (voxel, orientation cell) pairs
+of the dexterity and the first `POINTS_KEPT` samples, so memory is bounded whatever the
+sample count.
 
 Volumes count occupied cubic voxels. Dexterity (xiang2019 defines the dexterous
 workspace, "points an end effector can reach in any orientation", but does not
@@ -15,13 +21,15 @@ Points are in the vehicle frame (the frame of the vehicle joint; the world for a
 fixed base), so the vehicle's own hull, read from the URDF, can be cut out
 (`hull_shapes`, `outside_hull`).
 
-Modules: ``batch`` (batched forward kinematics), ``voxels`` (volumes), ``dexterity``
-(orientation cells per voxel), ``hull`` (the vehicle's solids), ``montecarlo`` (sampling and results).
+Modules: ``batch`` (batched forward kinematics), ``voxels`` (volumes, streamed `VoxelOccupancy`),
+``dexterity`` (orientation cells per voxel, streamed `DexterityAccumulator`), ``hull`` (the vehicle's
+solids), ``montecarlo`` (streamed sampling and results).
 """
 
 from ..errors import WorkspaceInputError
 from .batch import CHUNK, BatchKinematics, JointStep, axis_rotations, rotate_points
 from .dexterity import (
+    DexterityAccumulator,
     DexterityMap,
     OrientationGrid,
     dexterity,
@@ -29,16 +37,19 @@ from .dexterity import (
     equal_area_rings,
 )
 from .hull import HullShape, hull_shapes, outside_hull, vehicle_links
-from .montecarlo import WorkspaceResult, monte_carlo
-from .voxels import common_volume, voxel_indices, voxel_keys, voxel_volume
+from .montecarlo import POINTS_KEPT, WorkspaceResult, monte_carlo, parse_sample_count
+from .voxels import VoxelOccupancy, common_volume, voxel_indices, voxel_keys, voxel_volume
 
 __all__ = [
     "CHUNK",
+    "POINTS_KEPT",
     "BatchKinematics",
+    "DexterityAccumulator",
     "DexterityMap",
     "HullShape",
     "JointStep",
     "OrientationGrid",
+    "VoxelOccupancy",
     "WorkspaceInputError",
     "WorkspaceResult",
     "axis_rotations",
@@ -49,6 +60,7 @@ __all__ = [
     "hull_shapes",
     "monte_carlo",
     "outside_hull",
+    "parse_sample_count",
     "rotate_points",
     "vehicle_links",
     "voxel_indices",

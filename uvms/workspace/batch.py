@@ -10,7 +10,8 @@ import pinocchio as pin
 from ..errors import UVMSError, WorkspaceInputError
 from ..robot import Robot
 
-#: Samples composed at once; bounds memory to a few hundred MB whatever the sample count.
+#: Samples composed at once by `BatchKinematics` and drawn at once by `monte_carlo` (its default chunk): the
+#: work arrays of one chunk take some 50-90 MB, whatever the sample count.
 CHUNK = 200_000
 #: Frame axes by name, as columns of a rotation matrix.
 AXES = {"x": 0, "y": 1, "z": 2}
@@ -85,7 +86,10 @@ class BatchKinematics:
             expected_parent = joint_id
 
     def sample(self, count: int, rng: np.random.Generator | int | None = None) -> np.ndarray:
-        """Joint values uniform inside the limits (xiang2019 eq. 8): q_i = q_min + (q_max - q_min) rand (count, n)."""
+        """Joint values (count, n) [rad or m] uniform inside the limits, q_min + (q_max - q_min) rand (xiang2019 eq. 8).
+
+        Row after row from ``rng``: drawing 10 then 20 rows gives the same 30 rows as drawing 30 at once.
+        """
         if count < 1:
             raise UVMSError(f"the sample count must be >= 1, got {count}")
         if not (np.all(np.isfinite(self.lower)) and np.all(np.isfinite(self.upper))):

@@ -1,4 +1,9 @@
-"""Dexterity per voxel: the fraction of the cells of SO(3) the samples in a voxel reach."""
+"""Dexterity per voxel: the fraction of the cells of SO(3) the samples in a voxel reach.
+
+`dexterity_map` takes all samples at once; `DexterityAccumulator` takes them chunk by
+chunk and keeps only the distinct (voxel, orientation cell) pairs, so its memory is
+bounded by voxels x cells, not by the number of samples; both give the same map.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +13,7 @@ import numpy as np
 
 from ..errors import WorkspaceInputError
 from .batch import AXES, CHUNK
-from .voxels import check_points, check_voxel, flat_keys, voxel_indices
+from .voxels import UniqueRows, check_points, check_voxel, voxel_indices
 
 
 def equal_area_rings(count: int) -> tuple[np.ndarray, np.ndarray]:
@@ -205,26 +210,55 @@ class DexterityMap:
         }
 
 
+class DexterityAccumulator:
+    """Dexterity per voxel of a stream of samples: positions and orientation cells added chunk by chunk.
+
+    Keeps the distinct (voxel, orientation cell) pairs with their sample counts, so
+    memory is bounded by occupied voxels x ``total_cells`` whatever the number of
+    samples; `map` gives the same `DexterityMap` as `dexterity_map` of all the samples.
+
+    Args:
+        voxel: voxel edge [m].
+        total_cells: number of orientation cells (`OrientationGrid.count`).
+    """
+
+    def __init__(self, voxel: float, total_cells: int) -> None:
+        self.voxel, self.total_cells = check_voxel(voxel), int(total_cells)
+        self._pairs = UniqueRows(4, counted=True, what="(voxel, orientation cell) pairs")  # (ix, iy, iz, cell)
+
+    def add(self, positions: np.ndarray, cells: np.ndarray) -> None:
+        """Add sample positions (n, 3) [m] and their orientation cells (n,) in [0, total_cells)."""
+        positions = check_points(positions, "positions")
+        cells = np.asarray(cells)
+        outside = cells.size and (cells.min() < 0 or cells.max() >= self.total_cells)
+        if cells.shape != (positions.shape[0],) or outside:
+            raise WorkspaceInputError(f"cells must be one integer in [0, {self.total_cells}) per position "
+                                      f"({positions.shape[0]}), got shape {cells.shape}")
+        if positions.shape[0]:
+            self._pairs.add(np.column_stack([voxel_indices(positions, self.voxel), cells.astype(np.int64)]))
+
+    def map(self) -> DexterityMap:
+        """The dexterity of the samples added so far; voxels sorted by index (x first)."""
+        pairs, counts = self._pairs.rows, self._pairs.counts  # (P, 4) sorted by voxel then cell, (P,)
+        if pairs.shape[0] == 0:
+            empty = np.empty(0, dtype=np.int64)
+            return DexterityMap(np.empty((0, 3)), empty, empty, self.total_cells, self.voxel)
+        new_voxel = np.ones(pairs.shape[0], dtype=bool)
+        new_voxel[1:] = np.any(pairs[1:, :3] != pairs[:-1, :3], axis=1)
+        starts = np.flatnonzero(new_voxel)  # first pair of each voxel
+        reached = np.diff(np.append(starts, pairs.shape[0]))
+        samples = np.add.reduceat(counts, starts)
+        return DexterityMap((pairs[starts, :3] + 0.5) * self.voxel, samples, reached, self.total_cells, self.voxel)
+
+
 def dexterity_map(positions: np.ndarray, cells: np.ndarray, voxel: float, total_cells: int) -> DexterityMap:
     """Dexterity per voxel from sample positions (N, 3) [m] and their orientation cells (N,) in [0, total_cells).
 
-    One int64 key per (voxel, orientation cell) pair; ``np.unique`` counts the distinct pairs per voxel.
+    The distinct (voxel, orientation cell) pairs are counted per voxel (`DexterityAccumulator` with one chunk).
     """
-    positions = check_points(positions, "positions")
-    cells = np.asarray(cells)
-    if cells.shape != (positions.shape[0],) or (cells.size and (cells.min() < 0 or cells.max() >= total_cells)):
-        raise WorkspaceInputError(f"cells must be one integer in [0, {total_cells}) per position "
-                                  f"({positions.shape[0]}), got shape {cells.shape}")
-    voxel = check_voxel(voxel)
-    if positions.shape[0] == 0:
-        empty = np.empty(0, dtype=np.int64)
-        return DexterityMap(np.empty((0, 3)), empty, empty, int(total_cells), voxel)
-    keys, low, span = flat_keys(voxel_indices(positions, voxel))
-    voxels, rank, samples = np.unique(keys, return_inverse=True, return_counts=True)
-    pairs = np.unique(rank.ravel().astype(np.int64) * total_cells + cells.astype(np.int64))
-    reached = np.bincount(pairs // total_cells, minlength=len(voxels))
-    indices = np.column_stack(np.unravel_index(voxels, tuple(int(n) for n in span))) + low
-    return DexterityMap((indices + 0.5) * voxel, samples, reached, int(total_cells), voxel)
+    accumulator = DexterityAccumulator(voxel, total_cells)
+    accumulator.add(positions, cells)
+    return accumulator.map()
 
 
 def dexterity(rotations: np.ndarray, positions: np.ndarray, voxel: float = 0.1,
@@ -233,5 +267,3 @@ def dexterity(rotations: np.ndarray, positions: np.ndarray, voxel: float = 0.1,
     grid = grid or OrientationGrid()
     return dexterity_map(positions, grid.cells(rotations), voxel, grid.count)
 
-
-# ---------------------------------------------------------------------------------------------- hull

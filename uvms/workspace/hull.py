@@ -174,5 +174,3 @@ def outside_hull(points: np.ndarray, hull: HullShape | Sequence[HullShape]) -> n
         inside |= shape.contains(points)
     return ~inside
 
-
-# ---------------------------------------------------------------------------------------------- Monte Carlo
