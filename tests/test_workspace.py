@@ -467,3 +467,20 @@ def test_bad_sample_counts_from_the_command_line(text, capsys):
         parse_sample_count(text)
     assert main(["workspace", "xiang2019", "-n", text, "--quiet"]) == 2
     assert "integer >= 1" in capsys.readouterr().err
+
+
+def test_cli_workspace_replaces_its_folder_whole(tmp_path, capsys):
+    out = tmp_path / "ws"
+    assert main(["workspace", "xiang2019", "--ee", "left_ee", "-n", "2000", "--figures", "1000",
+                 "--out", str(out), "--quiet"]) == 0
+    assert (out / "workspace_1000.png").is_file()
+    assert main(["workspace", "xiang2019", "--ee", "right_ee", "-n", "3000", "--out", str(out), "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "points.npz", "workspace.png"]
+    assert json.loads((out / "metrics.json").read_text())["samples"] == 3000
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".ws.uvms-tmp")] == []
+    user_folder = tmp_path / "documents"
+    user_folder.mkdir()
+    (user_folder / "thesis.tex").write_text("keep")
+    assert main(["workspace", "xiang2019", "--ee", "left_ee", "-n", "10", "--out", str(user_folder), "--quiet"]) == 2
+    assert "was not written by uvms" in capsys.readouterr().err
+    assert [p.name for p in user_folder.iterdir()] == ["thesis.tex"]

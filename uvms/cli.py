@@ -7,6 +7,7 @@ import os
 import sys
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -123,31 +124,18 @@ def parse_figure_counts(text: str | None, samples: int) -> list[int]:
     return counts
 
 
-def command_workspace(options: argparse.Namespace) -> int:
-    """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, dexterity, points and figures.
+def write_workspace_outputs(robot: Robot, result, frames: Sequence[str], figure_counts: Sequence[int],
+                            threshold: float, folder: Path) -> list[str]:
+    """Write points.npz, the workspace and dexterity figures and metrics.json of a workspace run into ``folder``.
 
-    The samples are streamed (memory bounded for any N); points.npz and the scatter figures hold the first
-    `uvms.workspace.POINTS_KEPT` samples per frame, and metrics.json says how many were stored (points_stored)
-    of how many sampled (points_sampled).
+    Returns:
+        The names of the figures written.
     """
     import shutil
-    from pathlib import Path
 
     from . import outputs
     from .plotting import workspace_figure
-    from .workspace import OrientationGrid, monte_carlo, parse_sample_count
 
-    samples = parse_sample_count(options.samples)
-    robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
-    frames = options.ee or robot.ee_frames
-    figure_counts = parse_figure_counts(options.figures, samples)
-    if not 0.0 <= options.dexterous_threshold <= 1.0:
-        raise UVMSError(f"--dexterous-threshold must be in [0, 1], got {options.dexterous_threshold}")
-    grid = OrientationGrid(options.directions, options.roll_bins, options.approach) if options.dexterity else False
-    result = monte_carlo(robot, frames, samples, seed=options.seed, voxel=options.voxel,
-                         progress=False if options.quiet else None, remove_hull=options.remove_hull,
-                         dexterity=grid, dexterity_voxel=options.dexterity_voxel)
-    out = Path(options.out or Path("out") / f"workspace_{robot.name}")
     arrays = {}
     for frame in frames:
         arrays[f"q_{frame}"] = result.joints[frame]
@@ -158,32 +146,58 @@ def command_workspace(options: argparse.Namespace) -> int:
             arrays[f"dexterity_centre_{frame}"] = result.dexterity[frame].centres
             arrays[f"dexterity_{frame}"] = result.dexterity[frame].dexterity
             arrays[f"dexterity_samples_{frame}"] = result.dexterity[frame].samples
-    outputs.write_npz(out / "points.npz", **arrays)
+    outputs.write_npz(folder / "points.npz", **arrays)
     outlines = [shape.outline() for shape in result.hull] if result.hull is not None else None
     hull_note = ", hull removed" if result.hull is not None else ""
     stored = min(result.stored(frame) for frame in frames)
     written, drawn = [], {}
     for name, count in [(f"workspace_{n}.png", n) for n in figure_counts] + [("workspace.png", result.samples)]:
         if count in drawn:  # the same cloud: copy the image instead of drawing it again
-            shutil.copyfile(out / drawn[count], out / name)
+            shutil.copyfile(folder / drawn[count], folder / name)
         else:
             shown = min(count, stored)  # beyond the kept samples: the first ones, a uniform subsample
             label = f"{count} samples per arm" if shown == count else f"{count} samples per arm, the first {shown} drawn"
-            workspace_figure({frame: result.cloud(frame, shown) for frame in frames}, out / name, outlines=outlines,
+            workspace_figure({frame: result.cloud(frame, shown) for frame in frames}, folder / name, outlines=outlines,
                              title=f"{robot.name}: reachable workspace (vehicle frame), {label}{hull_note}")
             drawn[count] = name
         written.append(name)
     for frame, dexterity in (result.dexterity or {}).items():
         grid = result.orientation_grid
         name = f"dexterity_{frame}.png"
-        workspace_figure({frame: dexterity.centres}, out / name, values={frame: dexterity.dexterity},
+        workspace_figure({frame: dexterity.centres}, folder / name, values={frame: dexterity.dexterity},
                          value_label=f"dexterity (fraction of {grid.count} orientation cells)", outlines=outlines,
                          marker_size=16.0,
                          title=f"{robot.name} {frame}: dexterity per {dexterity.voxel} m voxel, "
                                f"{result.samples} samples{hull_note} (max along the line of sight)")
         written.append(name)
-    metrics = {"model": robot.name, **result.metrics(options.dexterous_threshold), "figures": written}
-    outputs.write_json(out / "metrics.json", metrics)
+    metrics = {"model": robot.name, **result.metrics(threshold), "figures": written}
+    outputs.write_json(folder / "metrics.json", metrics)
+    return written
+
+
+def command_workspace(options: argparse.Namespace) -> int:
+    """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, dexterity, points and figures.
+
+    The samples are streamed (memory bounded for any N); points.npz and the scatter figures hold the first
+    `uvms.workspace.POINTS_KEPT` samples per frame, and metrics.json says how many were stored (points_stored)
+    of how many sampled (points_sampled).
+    """
+    from . import outputs
+    from .workspace import OrientationGrid, monte_carlo, parse_sample_count
+
+    samples = parse_sample_count(options.samples)
+    robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
+    frames = options.ee or robot.ee_frames
+    figure_counts = parse_figure_counts(options.figures, samples)
+    if not 0.0 <= options.dexterous_threshold <= 1.0:
+        raise UVMSError(f"--dexterous-threshold must be in [0, 1], got {options.dexterous_threshold}")
+    grid = OrientationGrid(options.directions, options.roll_bins, options.approach) if options.dexterity else False
+    out = Path(options.out or Path("out") / f"workspace_{robot.name}")
+    with outputs.run_folder(out) as folder:  # taken first: a second writer of the folder is refused at once
+        result = monte_carlo(robot, frames, samples, seed=options.seed, voxel=options.voxel,
+                             progress=False if options.quiet else None, remove_hull=options.remove_hull,
+                             dexterity=grid, dexterity_voxel=options.dexterity_voxel)
+        written = write_workspace_outputs(robot, result, frames, figure_counts, options.dexterous_threshold, folder)
     for frame in frames:
         line = f"{frame:<12} volume {result.volume[frame]:.4f} m^3 ({result.voxel} m voxels)"
         if result.volume_outside_hull is not None:
@@ -200,6 +214,7 @@ def command_workspace(options: argparse.Namespace) -> int:
               f"({result.orientation_grid.count} orientation cells, {dexterity.voxel} m voxels, "
               f"median {summary['median_samples_per_voxel']:.0f} samples/voxel); "
               f"dexterous (>= {options.dexterous_threshold}) {summary['dexterous_volume']:.4f} m^3")
+    stored = min(result.stored(frame) for frame in frames)
     if stored < result.samples:
         print(f"points.npz and the scatter figures keep the first {stored} of the {result.samples} samples per frame "
               f"(volumes and dexterity use all)")
@@ -242,8 +257,6 @@ def view_robot(options: argparse.Namespace) -> Robot:
 
 def read_result(robot: Robot, folder: str) -> tuple[np.ndarray, np.ndarray]:
     """(t (N,), q (N, nq)) of a run folder's ``trajectory.npz``, checked against the model."""
-    from pathlib import Path
-
     path = Path(folder) / "trajectory.npz"
     if not path.is_file():
         raise UVMSError(f"{str(path)!r} does not exist; --result takes a run folder written by `uvms run`")
@@ -274,8 +287,6 @@ def wait_for_interrupt() -> None:
 
 def command_view(options: argparse.Namespace) -> int:
     """``uvms view MODEL [--q ...]`` / ``uvms view MODEL --result DIR``: the 3-D viewer, or a headless picture."""
-    from pathlib import Path
-
     if options.frames < 1 or not options.fps > 0:
         raise UVMSError(f"--frames must be >= 1 and --fps > 0, got {options.frames} and {options.fps}")
     robot = view_robot(options)
