@@ -12,8 +12,8 @@ import pytest
 
 import uvms
 from conftest import shipped
-from uvms.gjm_control import GJMControlError, GJMController, VelocityRamps, simulate_gjm
-from uvms.plant import Plant
+from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps, simulate_gjm
+from uvms.dynamics.plant import Plant
 from uvms.scenario import ScenarioError, run
 
 ROOT = Path(__file__).resolve().parent.parent

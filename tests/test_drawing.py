@@ -13,7 +13,7 @@ from matplotlib import animation
 from matplotlib.figure import Figure
 from PIL import Image
 
-from uvms import drawing
+from uvms.viz import drawing
 from uvms.errors import ConfigurationError, UVMSError
 
 #: xiang2019 hull: the xacro defaults hull_length x hull_width x hull_height [m], at the base_link origin.

@@ -13,7 +13,7 @@ from PIL import Image
 
 from uvms import UVMSError
 from uvms.scenario import ScenarioError, build, read_scenario, run
-from uvms.sequence import Phase, PhasePlan, SequenceController
+from uvms.control.sequence import Phase, PhasePlan, SequenceController
 from uvms.solvers import clik_velocity, priority_velocity
 from uvms.state import KinematicState
 from uvms.tasks import DistanceTask, FrameTask, JointTask

@@ -12,8 +12,8 @@ import pytest
 from test_errors import urdf
 
 import uvms
-from uvms import sandbox
-from uvms.sandbox import expand_untrusted
+from uvms.model import sandbox
+from uvms.model.sandbox import expand_untrusted
 
 # Escapes xacro's name filter through python.vars(python.type) to reach io.FileIO, then writes a file.
 ESCAPE = ("[f for b in python.vars(python.type)['__subclasses__'](python.type(()).mro()[1]) if 'io._IOBase' in "
@@ -53,11 +53,11 @@ def test_untrusted_xacro_times_out(tmp_path):
 
 
 def test_untrusted_xacro_gives_the_same_model_and_errors(tmp_path):
-    shipped = uvms.resources.shipped_models()["xiang2019"]
+    shipped = uvms.model.resources.shipped_models()["xiang2019"]
     inside = uvms.load(shipped, args={"hull_height": 0.8})
     outside = uvms.load(shipped, args={"hull_height": 0.8}, trusted=False)
     assert outside.urdf == inside.urdf
-    for path in uvms.resources.shipped_models().values():  # the filter refuses nothing real xacro needs
+    for path in uvms.model.resources.shipped_models().values():  # the filter refuses nothing real xacro needs
         assert uvms.load(path, trusted=False).urdf == uvms.load(path).urdf
     broken = tmp_path / "broken.urdf.xacro"
     broken.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="${undefined_x}"/></robot>')

@@ -15,7 +15,8 @@ from test_errors import FLOATING_ROOT, urdf
 from test_sandbox import ESCAPE
 
 import uvms
-from uvms import checks, model
+from uvms.model import checks
+from uvms.model import loader as model
 from uvms.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -21,7 +21,8 @@ from conftest import shipped
 from PIL import Image
 
 import uvms
-from uvms import teach, viewer
+from uvms.viz import teach
+from uvms.viz import viewer
 from uvms.cli import main
 
 PORT = 18080  # first port tried by the live tests (the next free one is taken when busy)

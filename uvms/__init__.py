@@ -8,9 +8,13 @@ Pinocchio computes every pose, Jacobian and momentum map.
 >>> q = robot.configuration(base=[0.0, 0.0, 0.0], arm=[1.0, 0.5, 0.2])
 >>> robot.fk(q).translation.round(3)
 array([ 1.433, -0.806,  0.   ])
+
+The public names, by layer (data flows down this list; no module imports one above it):
 """
 
-from .compose import mount_arm
+from . import moved
+
+# errors: one root, every exception
 from .errors import (
     BaseMismatchError,
     ConfigurationError,
@@ -23,12 +27,16 @@ from .errors import (
     WorkspaceInputError,
     XacroError,
 )
-from .gjm_control import GJMControlError, GJMController, GJMResult, VelocityRamps, simulate_gjm
-from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from .model import MissingMeshWarning, load
-from .plant import Plant, PlantResult, generalized_jacobian_added_mass, simulate_plant
-from .resources import example_robot_urdf, shipped_models
+
+# model: xacro/URDF -> checked Pinocchio model -> Robot
+from .model import MissingMeshWarning, example_robot_urdf, load, mount_arm, shipped_models
+
+# robot and kinematics
 from .robot import Robot
+from .state import KinematicState
+
+# tasks and solvers: what to achieve, how
+from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
 from .solvers import (
     SolverInputError,
     VariableDamping,
@@ -39,61 +47,50 @@ from .solvers import (
     priority_velocity,
     solve_ik,
 )
-from .state import KinematicState
-from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
+
+# trajectories
 from .trajectory import ViaPointTrajectory, ctraj, jtraj
+
+# dynamics: hydrodynamics and the free-floating plant
+from .dynamics import (
+    HydroParameters,
+    LinkHydrodynamics,
+    Plant,
+    PlantResult,
+    generalized_jacobian_added_mass,
+    hydrodynamics_of,
+    simulate_plant,
+)
+
+# control
+from .control import GJMControlError, GJMController, GJMResult, VelocityRamps, simulate_gjm
+
+# workspace
 from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
+
+moved.install()  # old module paths (uvms.plant, uvms.plotting, ...) keep working for one release
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "GJMControlError",
-    "GJMController",
-    "GJMResult",
-    "VelocityRamps",
-    "simulate_gjm",
-    "BatchKinematics",
-    "WorkspaceInputError",
-    "WorkspaceResult",
-    "monte_carlo",
-    "DistanceTask",
-    "HydroParameters",
-    "JointTask",
-    "LinkHydrodynamics",
-    "Plant",
-    "PlantResult",
-    "ViaPointTrajectory",
-    "ctraj",
-    "generalized_jacobian_added_mass",
-    "hydrodynamics_of",
-    "jtraj",
-    "simulate_plant",
-    "FrameTask",
-    "JointLimitPotential",
-    "KinematicState",
-    "PostureTask",
-    "SolverInputError",
-    "VariableDamping",
-    "VehicleTask",
-    "clik_step",
-    "clik_velocity",
-    "constrained_velocity",
-    "initial_configuration",
-    "priority_velocity",
-    "solve_ik",
-    "BaseMismatchError",
-    "ConfigurationError",
-    "FrameNotFound",
-    "JointNotFound",
-    "MissingMeshWarning",
-    "ModelCheckError",
-    "ModelFileNotFound",
-    "ModelParseError",
-    "Robot",
-    "UVMSError",
-    "XacroError",
-    "example_robot_urdf",
-    "load",
-    "mount_arm",
-    "shipped_models",
+    # errors
+    "BaseMismatchError", "ConfigurationError", "FrameNotFound", "JointNotFound", "ModelCheckError",
+    "ModelFileNotFound", "ModelParseError", "UVMSError", "WorkspaceInputError", "XacroError",
+    # model
+    "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
+    # robot and kinematics
+    "KinematicState", "Robot",
+    # tasks and solvers
+    "DistanceTask", "FrameTask", "JointLimitPotential", "JointTask", "PostureTask", "VehicleTask",
+    "SolverInputError", "VariableDamping", "clik_step", "clik_velocity", "constrained_velocity",
+    "initial_configuration", "priority_velocity", "solve_ik",
+    # trajectories
+    "ViaPointTrajectory", "ctraj", "jtraj",
+    # dynamics
+    "HydroParameters", "LinkHydrodynamics", "Plant", "PlantResult", "generalized_jacobian_added_mass",
+    "hydrodynamics_of", "simulate_plant",
+    # control
+    "GJMControlError", "GJMController", "GJMResult", "VelocityRamps", "simulate_gjm",
+    # workspace
+    "BatchKinematics", "WorkspaceResult", "monte_carlo",
 ]

@@ -13,7 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import UVMSError
-from .model import load
+from .model.loader import load
 from .robot import Robot
 
 EXIT_USAGE = 2
@@ -134,7 +134,7 @@ def write_workspace_outputs(robot: Robot, result, frames: Sequence[str], figure_
     import shutil
 
     from . import outputs
-    from .plotting import workspace_figure
+    from .viz.plotting import workspace_figure
 
     arrays = {}
     for frame in frames:
@@ -293,7 +293,7 @@ def command_view(options: argparse.Namespace) -> int:
     q = view_configuration(robot, options.q)
     result = read_result(robot, options.result) if options.result else None
     if options.headless:
-        from . import drawing
+        from .viz import drawing
 
         out = Path(options.headless)
         if result is None:
@@ -312,7 +312,7 @@ def command_view(options: argparse.Namespace) -> int:
                 drawing.snapshot_figure(robot, qs[rows], titles=[f"t = {t[k]:.2f} s" for k in rows], path=out)
         print(f"wrote {out}")
         return 0
-    from .viewer import Viewer
+    from .viz.viewer import Viewer
 
     viewer = Viewer(robot, port=options.port)
     try:

@@ -34,10 +34,10 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 from .errors import NumericalError, ScenarioError, UVMSError
-from .gjm_control import GJM_KINDS, GJMController, GJMResult, VelocityRamps, simulate_gjm
-from .hydrodynamics import HydroParameters
-from .model import load
-from .plant import Plant
+from .control.gjm import GJM_KINDS, GJMController, GJMResult, VelocityRamps, simulate_gjm
+from .dynamics.hydrodynamics import HydroParameters
+from .model.loader import load
+from .dynamics.plant import Plant
 from .robot import Robot
 from .simulate import SimulationResult, simulate, step_count
 from .solvers import (
@@ -47,8 +47,8 @@ from .solvers import (
     initial_configuration,
     priority_velocity,
 )
-from .sequence import METHODS as SEQUENCE_METHODS
-from .sequence import Phase, PhasePlan, SequenceController, sequence_metrics
+from .control.sequence import METHODS as SEQUENCE_METHODS
+from .control.sequence import Phase, PhasePlan, SequenceController, sequence_metrics
 from .tasks import FrameTask, JointLimitPotential, VehicleTask
 from .trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw
 
@@ -746,15 +746,15 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
         outputs.write_npz(folder / "plant.npz", **plant_run.arrays())
         files.append(folder / "plant.npz")
     if scenario["outputs"]["figures"]:
-        from .plotting import scenario_figures  # matplotlib only when figures are asked for
+        from .viz.plotting import scenario_figures  # matplotlib only when figures are asked for
 
         files += scenario_figures(result, setup.trajectory, folder, title=scenario["scenario"]["name"])
         if plant_run is not None:
-            from .plotting import gjm_figures
+            from .viz.plotting import gjm_figures
 
             files += gjm_figures(plant_run, folder, title=scenario["scenario"]["name"])
         if setup.plan is not None:
-            from .plotting import sequence_figures
+            from .viz.plotting import sequence_figures
 
             files += sequence_figures(result, setup.plan, folder, title=scenario["scenario"]["name"],
                                       animation=scenario["outputs"]["animation"], progress=progress)

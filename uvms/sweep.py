@@ -220,7 +220,7 @@ def sweep(
     assignments = [[f"{key}={toml_literal(v)}" for key, v in zip(keys, point)] for point in points]
     checked = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
-        from .model import load
+        from .model.loader import load
 
         model = read_scenario(scenario, assignments[0])["model"]
         load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)

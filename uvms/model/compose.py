@@ -11,10 +11,10 @@ import numpy as np
 import pinocchio as pin
 
 from . import checks, resources
-from .conventions import pose_from_xyzrpy
-from .errors import UVMSError
-from .model import build_model, read_model_text, warn_missing_meshes
-from .robot import Robot, default_end_effectors
+from ..conventions import pose_from_xyzrpy
+from ..errors import UVMSError
+from .loader import build_model, read_model_text, warn_missing_meshes
+from ..robot import Robot, default_end_effectors
 
 
 def mount_arm(

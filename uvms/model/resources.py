@@ -8,10 +8,10 @@ from collections.abc import Iterable, Sequence
 from importlib import metadata
 from pathlib import Path
 
-from .errors import ModelFileNotFound
+from ..errors import ModelFileNotFound
 
 #: The repository's `models/` folder (present in a source checkout or an editable install).
-MODELS_DIR = Path(__file__).resolve().parent.parent / "models"
+MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
 
 
 def shipped_models() -> dict[str, Path]:

@@ -44,15 +44,15 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .errors import UVMSError
-from .hydrodynamics import HydroParameters, hydrodynamics_of
-from .kinematics import AXIS_NAMES, axis_rows
-from .plant import Plant, PlantResult, augmented_mass_matrix, resolve_links, simulate_plant
-from .robot import Robot
-from .simulate import SimulationResult
-from .solvers.clik import VariableDamping, damped_weighted_inverse
-from .solvers.inverses import weights_factor
-from .trajectory.cartesian import PoseSample
+from ..errors import UVMSError
+from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
+from ..kinematics import AXIS_NAMES, axis_rows
+from ..dynamics.plant import Plant, PlantResult, augmented_mass_matrix, resolve_links, simulate_plant
+from ..robot import Robot
+from ..simulate import SimulationResult
+from ..solvers.clik import VariableDamping, damped_weighted_inverse
+from ..solvers.inverses import weights_factor
+from ..trajectory.cartesian import PoseSample
 
 #: The generalized Jacobians the controller can invert.
 GJM_KINDS = ("rigid", "added_mass", "fixed_base")

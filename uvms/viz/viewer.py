@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from . import resources
+from ..model import resources
 from .drawing import as_configurations
-from .errors import UVMSError
-from .robot import Robot
+from ..errors import UVMSError
+from ..robot import Robot
 
 with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
     warnings.simplefilter("ignore")

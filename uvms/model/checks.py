@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import ModelCheckError, ModelParseError
+from ..errors import ModelCheckError, ModelParseError
 
 #: Attributes holding numbers in URDF, and how many each holds (None: any count).
 NUMERIC_ATTRIBUTES: dict[str, int | None] = {

@@ -17,13 +17,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .errors import UVMSError
-from .robot import Robot
-from .solvers import clik_velocity, priority_velocity
-from .state import KinematicState
-from .tasks import DistanceTask, FrameTask, JointTask, VehicleTask
-from .tasks.vehicle import VELOCITY_NAMES
-from .trajectory import PolynomialLaw, PoseSample
+from ..errors import UVMSError
+from ..robot import Robot
+from ..solvers import clik_velocity, priority_velocity
+from ..state import KinematicState
+from ..tasks import DistanceTask, FrameTask, JointTask, VehicleTask
+from ..tasks.vehicle import VELOCITY_NAMES
+from ..trajectory import PolynomialLaw, PoseSample
 
 POSITION_AXES = ("x", "y", "z")
 METHODS = ("clik", "task_priority")

@@ -59,12 +59,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .errors import ModelCheckError, ModelFileNotFound, ModelParseError, NameNotFound, UVMSError
+from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, NameNotFound, UVMSError
 
 if TYPE_CHECKING:
     import pinocchio as pin
 
-    from .robot import Robot
+    from ..robot import Robot
 
 #: Fluid density of sea water [kg/m^3] (uuv_simulator's default) and gravity [m/s^2].
 SEA_WATER_DENSITY = 1028.0

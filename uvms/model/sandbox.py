@@ -3,7 +3,7 @@
 A xacro file is code: its ``${...}`` expressions are Python, and xacro's name filter can be escaped
 (``python.vars(python.type)`` reaches every class, the modules ``os`` and ``sys`` included). A Python-level
 guard cannot hold such code, so a model from someone else is expanded in a child process (source:
-``uvms/sandbox_worker.py``) on which the **kernel** enforces the boundary:
+``uvms/model/sandbox_worker.py``) on which the **kernel** enforces the boundary:
 
 - a seccomp filter (libseccomp through ``pyseccomp``) refuses, with EPERM: new processes and programs
   (fork, vfork, clone, execve), signals and handles to other processes (kill, tgkill, pidfd_*, ptrace),
@@ -37,7 +37,7 @@ import time
 from collections.abc import Mapping
 from pathlib import Path
 
-from .errors import ModelParseError, XacroError
+from ..errors import ModelParseError, XacroError
 
 #: Seconds an untrusted xacro expansion may take [s].
 DEFAULT_TIMEOUT = 30.0

@@ -54,10 +54,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from .errors import UVMSError
+from ..errors import UVMSError
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from .robot import Robot
-from .simulate import step_count
+from ..robot import Robot
+from ..simulate import step_count
 
 with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
     warnings.simplefilter("ignore")

@@ -18,8 +18,8 @@ from xml.parsers.expat import ExpatError
 import pinocchio as pin
 
 from . import checks, resources, sandbox
-from .errors import BaseMismatchError, ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
-from .robot import Robot
+from ..errors import BaseMismatchError, ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
+from ..robot import Robot
 
 BASE_CHOICES = ("floating", "planar", "fixed")
 ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}

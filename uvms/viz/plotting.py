@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from . import outputs
-from .simulate import SimulationResult
+from .. import outputs
+from ..simulate import SimulationResult
 
 VEHICLE_LABELS = {
     "planar": ("x [m]", "y [m]", "psi [rad]"),

@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .errors import UVMSError
-from .robot import Robot
+from ..errors import UVMSError
+from ..robot import Robot
 
 INSTALL_HINT = "the teach panel needs ipywidgets: `pip install uvms[viz]`"
 #: Slider names of the vehicle pose, by base type: position [m], then angles [rad].

@@ -23,10 +23,10 @@ from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from . import outputs
-from .errors import ConfigurationError, UVMSError, WorkspaceInputError
-from .robot import Robot
-from .workspace.hull import HullShape, hull_shapes
+from .. import outputs
+from ..errors import ConfigurationError, UVMSError, WorkspaceInputError
+from ..robot import Robot
+from ..workspace.hull import HullShape, hull_shapes
 
 with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
     warnings.simplefilter("ignore")

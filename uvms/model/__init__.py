@@ -1,0 +1,13 @@
+"""The model layer: xacro/URDF in, a checked Pinocchio model out.
+
+``loader`` (``load``: expand, check, choose the base, build), ``checks`` (URDF checks before Pinocchio),
+``resources`` (shipped models, example-robot-data, ``package://``), ``sandbox`` (untrusted xacro in a
+kernel-confined child process), ``compose`` (``mount_arm``).
+"""
+
+from .compose import mount_arm
+from .loader import ADDED_BASE_JOINT, BASE_CHOICES, MissingMeshWarning, ParserWarning, load, read_model_text
+from .resources import example_robot_urdf, shipped_models
+
+__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "MissingMeshWarning", "ParserWarning", "example_robot_urdf", "load",
+           "mount_arm", "read_model_text", "shipped_models"]
