@@ -81,9 +81,31 @@ class NumericalError(UVMSError):
     """The numerics of a run failed (OverflowError, FloatingPointError, LinAlgError): a number out of range."""
 
 
+class SweepError(UVMSError):
+    """A sweep is invalid (grid syntax, unknown key, backend) or cannot start."""
+
+
 class RunFolderError(UVMSError):
     """An output folder cannot be replaced: unwritable, a file, or a folder that uvms did not write."""
 
 
 class RunFolderBusy(RunFolderError):
     """Another uvms process is writing the same output folder (it holds the folder's lock)."""
+
+
+# ------------------------------------------------- solvers and controllers
+class SolverInputError(UVMSError):
+    """A Jacobian, weight, gain or damping of the wrong shape, non-finite or not positive definite."""
+
+
+class GJMControlError(UVMSError):
+    """Invalid input to the GJM controller or its reference (shape, value, option)."""
+
+
+# ------------------------------------------------- optional extras
+class ViewerUnavailable(UVMSError):
+    """The optional 3-D viewer package (viser) is not installed."""
+
+
+class TeachUnavailable(UVMSError):
+    """ipywidgets is not installed."""

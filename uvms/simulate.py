@@ -19,17 +19,14 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-import warnings
 
-with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
-    warnings.simplefilter("ignore")
-    from tqdm.auto import tqdm
 
 from . import outputs
 from .errors import StepCountError, UVMSError
 from .robot import Robot
 from .tasks.frame import FrameTask
 from .tasks.vehicle import VELOCITY_NAMES
+from .progress import tqdm
 
 #: A controller maps (q, t) to the velocity v (nv,) and a diagnostics object
 #: (a VelocityResult or PriorityResult: fields sigma_min, damping, limits_active).

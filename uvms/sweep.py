@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from . import outputs
-from .errors import UVMSError
+from .errors import SweepError
 from .scenario import parse_value, read_scenario, read_toml, scenario_from_raw
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
@@ -33,10 +33,6 @@ BACKENDS = ("loky", "dask")
 #: progress bar past one second) and is a whole scenario run (seconds to minutes) with its own folder; a larger
 #: study is several sweeps, e.g. one per value of the first key.
 MAX_POINTS = 10_000
-
-
-class SweepError(UVMSError):
-    """A sweep is invalid (grid syntax, unknown key, backend) or cannot start."""
 
 
 def parse_grid(text: str) -> tuple[str, list]:
@@ -246,7 +242,7 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]], prog
 
     The file is parsed once; a progress bar shows up if the checks take more than a second.
     """
-    from tqdm.auto import tqdm
+    from .progress import tqdm
 
     raw = read_toml(scenario)
     checked: dict = {}
@@ -259,7 +255,7 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]], prog
 def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None, progress: bool | None) -> list[dict]:
     """Run the points through joblib (loky or dask); rows sorted by point index."""
     from joblib import Parallel, delayed, parallel_config
-    from tqdm.auto import tqdm
+    from .progress import tqdm
 
     def execute() -> list[dict]:
         parallel = Parallel(n_jobs=jobs, return_as="generator")

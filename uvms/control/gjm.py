@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError
+from ..errors import GJMControlError, UVMSError
 from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
 from ..kinematics import AXIS_NAMES, axis_rows
 from ..dynamics.plant import Plant, PlantResult, augmented_mass_matrix, resolve_links, simulate_plant
@@ -56,10 +56,6 @@ from ..trajectory.cartesian import PoseSample
 
 #: The generalized Jacobians the controller can invert.
 GJM_KINDS = ("rigid", "added_mass", "fixed_base")
-
-
-class GJMControlError(UVMSError):
-    """Invalid input to the GJM controller or its reference (shape, value, option)."""
 
 
 # ------------------------------------------------------------------ reference

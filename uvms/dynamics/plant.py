@@ -47,7 +47,6 @@ of that augmented momentum.
 from __future__ import annotations
 
 import time
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -58,10 +57,8 @@ from ..errors import UVMSError
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from ..robot import Robot
 from ..simulate import step_count
+from ..progress import tqdm
 
-with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
-    warnings.simplefilter("ignore")
-    from tqdm.auto import tqdm
 
 LOCAL = pin.ReferenceFrame.LOCAL
 METHODS = ("rk4", "euler")

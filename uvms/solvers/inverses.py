@@ -6,14 +6,10 @@ All return the inverse matrix (n, m) of a Jacobian J (m, n), like ``numpy.linalg
 from __future__ import annotations
 
 import numpy as np
-from ..errors import UVMSError
+from ..errors import SolverInputError
 
 #: Relative cut-off below which singular values count as zero.
 RCOND = 1e-12
-
-
-class SolverInputError(UVMSError):
-    """A Jacobian, weight, gain or damping of the wrong shape, non-finite or not positive definite."""
 
 
 def check_matrix(matrix: np.ndarray, what: str, shape: tuple[int | None, int | None] = (None, None)) -> np.ndarray:

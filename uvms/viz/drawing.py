@@ -27,10 +27,8 @@ from .. import outputs
 from ..errors import ConfigurationError, UVMSError, WorkspaceInputError
 from ..robot import Robot
 from ..workspace.hull import HullShape, hull_shapes
+from ..progress import tqdm
 
-with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
-    warnings.simplefilter("ignore")
-    from tqdm.auto import tqdm
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 WRITERS = {".gif": animation.PillowWriter, ".mp4": animation.FFMpegWriter}

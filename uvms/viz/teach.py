@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError
+from ..errors import TeachUnavailable, UVMSError
 from ..robot import Robot
 
 INSTALL_HINT = "the teach panel needs ipywidgets: `pip install uvms[viz]`"
@@ -25,10 +25,6 @@ VEHICLE_SLIDERS = {
     "fixed": (),
 }
 ANGLE_RANGES = {"base_roll": (-np.pi, np.pi), "base_pitch": (-np.pi / 2, np.pi / 2), "base_yaw": (-np.pi, np.pi)}
-
-
-class TeachUnavailable(UVMSError):
-    """ipywidgets is not installed."""
 
 
 @dataclass(frozen=True)

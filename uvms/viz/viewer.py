@@ -27,12 +27,10 @@ import pinocchio as pin
 
 from ..model import resources
 from .drawing import as_configurations
-from ..errors import UVMSError
+from ..errors import UVMSError, ViewerUnavailable
 from ..robot import Robot
+from ..progress import tqdm
 
-with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
-    warnings.simplefilter("ignore")
-    from tqdm.auto import tqdm
 
 #: The viewer binds to this address only: never to all interfaces.
 HOST = "127.0.0.1"
@@ -40,10 +38,6 @@ DEFAULT_PORT = 8080
 INSTALL_HINT = "the 3-D viewer needs `pip install uvms[viz]` (viser)"
 SKELETON_COLOUR = np.array([0.35, 0.35, 0.4, 1.0])
 EE_COLOUR = np.array([1.0, 0.5, 0.05, 1.0])
-
-
-class ViewerUnavailable(UVMSError):
-    """The optional 3-D viewer package (viser) is not installed."""
 
 
 def require_viser():

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
@@ -24,10 +23,8 @@ from .batch import CHUNK, BatchKinematics
 from .dexterity import DexterityAccumulator, DexterityMap, OrientationGrid
 from .hull import HullShape, hull_shapes, outside_hull
 from .voxels import VoxelOccupancy, check_voxel
+from ..progress import tqdm
 
-with warnings.catch_warnings():  # tqdm.auto warns in notebooks without ipywidgets, then falls back to text
-    warnings.simplefilter("ignore")
-    from tqdm.auto import tqdm
 
 #: Samples per frame whose joint values and positions are kept (`WorkspaceResult.joints`/``positions``,
 #: ``points.npz``, the scatter figures): the first ones drawn, a uniform random subsample since the draws are
