@@ -235,7 +235,7 @@ def view_configuration(robot: Robot, values: Sequence[float] | None) -> np.ndarr
         return robot.configuration(base=values[: robot.n_vehicle], arm=values[robot.n_vehicle:])
     if len(values) == robot.n_arm:
         return robot.configuration(arm=values)
-    pose = {"floating": "6 (x y z roll pitch yaw) + ", "planar": "3 (x y yaw) + ", "fixed": ""}[robot.base_type]
+    pose = f"{robot.n_vehicle} ({' '.join(robot.base.pose_names)}) + " if robot.n_vehicle else ""
     raise UVMSError(f"--q takes {robot.nq} numbers (q), {pose}{robot.n_arm} (vehicle pose + arm) or "
                     f"{robot.n_arm} (arm joints) for {robot.name}; got {len(values)}")
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -9,16 +11,11 @@ import numpy as np
 import pinocchio as pin
 
 from . import conventions, kinematics
+from .bases import BASE_TYPES, BaseType
 from .errors import ConfigurationError, FrameNotFound, JointNotFound, UVMSError
 
-#: Number of velocity entries of the vehicle, by base type.
-VEHICLE_DOF = {"floating": 6, "planar": 3, "fixed": 0}
-VEHICLE_NQ = {"floating": 7, "planar": 4, "fixed": 0}
-DEFAULT_AXES = {
-    "floating": conventions.AXIS_NAMES,
-    "fixed": conventions.AXIS_NAMES,
-    "planar": ("x", "y", "yaw"),
-}
+#: Default task axes by base type (kept for existing imports; the facts live in `uvms.bases`).
+DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
 
 
 @dataclass(frozen=True)
@@ -71,7 +68,8 @@ class Robot:
     Attributes:
         model: the Pinocchio model.
         data: its work data (reused by every call; a Robot is not thread-safe).
-        base_type: "floating", "planar" or "fixed".
+        base: the kind of vehicle base and its facts (`uvms.bases.BaseType`); base_type: its name,
+            "floating", "planar" or "fixed".
         ee_frames: names of the end-effector frames; the first is the default.
         name: model name; source: file it came from (or "<string>").
         urdf: the URDF text the model was built from (None when composed).
@@ -91,9 +89,10 @@ class Robot:
         self.name = name or model.name
         self.source = source
         self.urdf = urdf
-        self.base_type = base_type_of(model)
-        self.n_vehicle = VEHICLE_DOF[self.base_type]
-        self.nq_vehicle = VEHICLE_NQ[self.base_type]
+        self.base: BaseType = BASE_TYPES[base_type_of(model)]
+        self.base_type = self.base.name
+        self.n_vehicle = self.base.nv
+        self.nq_vehicle = self.base.nq
         self.frame_names = [frame.name for frame in model.frames]
         requested = [ee] if isinstance(ee, str) else list(ee) if ee is not None else default_end_effectors(model)
         self.ee_frames = requested
@@ -188,6 +187,15 @@ class Robot:
         if not self.model.existJointName(joint):
             raise JointNotFound(joint, list(self.model.names)[1:])
         return self.model.getJointId(joint)
+
+    def joint(self, name: str) -> JointInfo:
+        """The joint called ``name`` (sizes, indices in q and v, limits). Raises JointNotFound."""
+        return self.joints[self.joint_id(name) - 1]
+
+    @functools.cached_property
+    def urdf_root(self) -> ET.Element | None:
+        """The ``<robot>`` element of the model's URDF, parsed once (None when the robot has no URDF)."""
+        return ET.fromstring(self.urdf) if self.urdf else None
 
     # ------------------------------------------------------- configurations
     def check_configuration(self, q: np.ndarray) -> np.ndarray:
@@ -302,6 +310,18 @@ class Robot:
             joint_motion = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, yaw), np.array([q[0], q[1], 0.0]))
         return self.model.jointPlacements[1] * joint_motion
 
+    def base_values(self, q: np.ndarray) -> np.ndarray:
+        """The vehicle pose of q as users write it (``base.pose_names``): [x, y, yaw] (planar) or
+        [x, y, z, roll, pitch, yaw] (floating) [m, rad], world ENU, R = Rz(yaw) Ry(pitch) Rx(roll); (0,) if fixed.
+
+        The inverse of ``configuration(base=...)``; angles in [-pi, pi].
+        """
+        if self.base_type == "fixed":
+            return np.zeros(0)
+        pose = self.base_pose(q)
+        rpy = pin.rpy.matrixToRpy(pose.rotation)
+        return np.array([*pose.translation[:2], rpy[2]] if self.base_type == "planar" else [*pose.translation, *rpy])
+
     def arm_configuration(self, q: np.ndarray) -> np.ndarray:
         """Arm joint values (n_arm,) [rad or m] of a configuration (angles for continuous joints)."""
         q = self.check_configuration(q)
@@ -363,12 +383,12 @@ class Robot:
 
         ``axes`` defaults to all six for spatial bases and (x, y, yaw) for planar ones.
         """
-        rows = kinematics.axis_rows(axes or DEFAULT_AXES[self.base_type])
+        rows = kinematics.axis_rows(axes or self.base.task_axes)
         return kinematics.manipulability_of(self.jacobian(q, frame)[rows])
 
     def generalized_manipulability(self, q: np.ndarray, frame: str | None = None, axes: Sequence[str] | None = None) -> float:
         """Manipulability of the generalized Jacobian (free-floating base), same ``axes`` rule."""
-        rows = kinematics.axis_rows(axes or DEFAULT_AXES[self.base_type])
+        rows = kinematics.axis_rows(axes or self.base.task_axes)
         return kinematics.manipulability_of(self.generalized_jacobian(q, frame)[rows])
 
     # ------------------------------------------------------ Fossen accessors

@@ -80,7 +80,7 @@ class PhasePlan:
         self._check_names()
         starts = {frame: robot.fk(q0, frame).translation.copy() for frame in self.frames}
         self.rotations = {frame: robot.fk(q0, frame).rotation.copy() for frame in self.frames}
-        joints = {name: float(q0[robot.joints[robot.joint_id(name) - 1].idx_q]) for name in self.joint_names}
+        joints = {name: float(q0[robot.joint(name).idx_q]) for name in self.joint_names}
         self.boundaries = [(dict(starts), dict(joints))]  # target values at the start of each phase, and the end
         for phase in self.phases:
             starts = {f: starts[f] + np.asarray(phase.offsets.get(f, np.zeros(3)), dtype=float) for f in self.frames}
@@ -253,7 +253,7 @@ def sequence_metrics(robot: Robot, plan: PhasePlan, t: np.ndarray, q: np.ndarray
         "max_frame_position_error": float(max(error.max() for error in errors.values())),
     }
     if plan.joint_names:
-        final = {name: float(q[-1, robot.joints[robot.joint_id(name) - 1].idx_q]) for name in plan.joint_names}
+        final = {name: float(q[-1, robot.joint(name).idx_q]) for name in plan.joint_names}
         metrics["final_joints"] = final
     if len(plan.frames) >= 2:
         distance = frame_distance(robot, plan.frames, q)

@@ -10,7 +10,7 @@ import pinocchio as pin
 from ..conventions import pose_from_xyzrpy, wrap_angle
 from ..errors import UVMSError
 from ..kinematics import axis_rows
-from ..robot import DEFAULT_AXES, Robot
+from ..robot import Robot
 from ..state import KinematicState
 from .task import Task
 
@@ -48,7 +48,7 @@ class FrameTask(Task):
         self.robot = robot
         self.frame = frame or robot.ee_frames[0]
         self.frame_id = robot.frame_id(frame)
-        self.axes = tuple(axes or DEFAULT_AXES[robot.base_type])
+        self.axes = tuple(axes or robot.base.task_axes)
         if not self.axes:
             raise UVMSError("a frame task needs at least one axis")
         self.rows = axis_rows(self.axes)

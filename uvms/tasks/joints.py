@@ -27,7 +27,7 @@ class JointTask(Task):
         self.names = list(targets)
         infos = []
         for name in self.names:
-            info = robot.joints[robot.joint_id(name) - 1]
+            info = robot.joint(name)
             if info.nq != 1 or info.nv != 1:
                 raise UVMSError(f"joint {name!r} has nq = {info.nq}: a joint task takes one-DOF joints only")
             infos.append(info)

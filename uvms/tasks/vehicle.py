@@ -7,14 +7,15 @@ from collections.abc import Mapping
 import numpy as np
 import pinocchio as pin
 
+from ..bases import BASE_TYPES
 from ..conventions import wrap_angle
 from ..errors import UVMSError
 from ..robot import Robot
 from ..state import KinematicState
 from .task import Task
 
-#: Names of the vehicle velocity entries (body twist in local FLU axes), per base type.
-VELOCITY_NAMES = {"floating": ("vx", "vy", "vz", "wx", "wy", "wz"), "planar": ("vx", "vy", "wz")}
+#: Names of the vehicle velocity entries (body twist in local FLU axes), per base type with a vehicle.
+VELOCITY_NAMES = {name: base.velocity_names for name, base in BASE_TYPES.items() if base.nv}
 
 
 class VehicleTask(Task):

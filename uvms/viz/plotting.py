@@ -15,14 +15,6 @@ from matplotlib.figure import Figure
 from .. import outputs
 from ..simulate import SimulationResult
 
-VEHICLE_LABELS = {
-    "planar": ("x [m]", "y [m]", "psi [rad]"),
-    "floating": ("x [m]", "y [m]", "z [m]", "roll [rad]", "pitch [rad]", "yaw [rad]"),
-}
-VELOCITY_LABELS = {
-    "planar": ("u [m/s]", "v [m/s]", "r [rad/s]"),
-    "floating": ("u [m/s]", "v [m/s]", "w [m/s]", "p [rad/s]", "q [rad/s]", "r [rad/s]"),
-}
 
 
 def stacked(t: np.ndarray, series: np.ndarray, labels, title: str, limits=None, dashed=None):
@@ -57,9 +49,9 @@ def scenario_figures(result: SimulationResult, trajectory, folder: str | os.Path
     figures["desired_motion.png"] = stacked(
         t, desired, ("speed [m/s]", "x_d [m]", "y_d [m]", "yaw_d [rad]"), f"{title}: desired end-effector motion")
     if robot.base_type != "fixed":
-        figures["vehicle.png"] = stacked(t, result.vehicle_pose(), VEHICLE_LABELS[robot.base_type],
+        figures["vehicle.png"] = stacked(t, result.vehicle_pose(), robot.base.pose_labels,
                                          f"{title}: vehicle pose")
-        figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], VELOCITY_LABELS[robot.base_type],
+        figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], robot.base.velocity_labels,
                                                   f"{title}: vehicle body velocities (FLU)")
     figures["joints.png"] = stacked(t, result.arm(), [f"{name} [rad]" for name in robot.arm_joint_names],
                                     f"{title}: arm joints (dotted: limits)", limits=robot.arm_limits)

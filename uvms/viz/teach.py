@@ -14,16 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..bases import BASE_TYPES
 from ..errors import TeachUnavailable, UVMSError
 from ..robot import Robot
 
 INSTALL_HINT = "the teach panel needs ipywidgets: `pip install uvms[viz]`"
 #: Slider names of the vehicle pose, by base type: position [m], then angles [rad].
-VEHICLE_SLIDERS = {
-    "floating": ("base_x", "base_y", "base_z", "base_roll", "base_pitch", "base_yaw"),
-    "planar": ("base_x", "base_y", "base_yaw"),
-    "fixed": (),
-}
+VEHICLE_SLIDERS = {name: tuple(f"base_{axis}" for axis in base.pose_names) for name, base in BASE_TYPES.items()}
 ANGLE_RANGES = {"base_roll": (-np.pi, np.pi), "base_pitch": (-np.pi / 2, np.pi / 2), "base_yaw": (-np.pi, np.pi)}
 
 
@@ -45,11 +42,7 @@ class Slider:
 
 def vehicle_pose_values(robot: Robot, q: np.ndarray) -> np.ndarray:
     """The vehicle pose of q as slider values: [x, y, yaw] (planar) or [x, y, z, roll, pitch, yaw] [m, rad]."""
-    if robot.base_type == "fixed":
-        return np.zeros(0)
-    pose = robot.base_pose(q)
-    rpy = pin.rpy.matrixToRpy(pose.rotation)
-    return np.array([*pose.translation[:2], rpy[2]] if robot.base_type == "planar" else [*pose.translation, *rpy])
+    return robot.base_values(q)
 
 
 def sliders(robot: Robot, q: np.ndarray | None = None, position_range: float = 5.0) -> list[Slider]:

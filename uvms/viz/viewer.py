@@ -62,7 +62,7 @@ def resolved_urdf(robot: Robot, package_dirs: Sequence[str | os.PathLike] | None
     Returns:
         (URDF text, the mesh URIs that could not be found).
     """
-    root = ET.fromstring(robot.urdf)
+    root = ET.fromstring(robot.urdf)  # a copy of its own: visuals are edited below
     source = Path(robot.source)
     base_dir = source.parent if source.is_file() else None
     roots = resources.package_search_roots(package_dirs)

@@ -119,7 +119,7 @@ def hull_shapes(robot: Robot, links: Sequence[str] | None = None, element: str =
     if unknown or not links:
         raise WorkspaceInputError(f"hull links must be rigidly attached to the vehicle; got {unknown or links}, "
                                   f"valid: {', '.join(attached)}")
-    elements = {link.get("name"): link for link in ET.fromstring(robot.urdf).iter("link")}
+    elements = {link.get("name"): link for link in robot.urdf_root.iter("link")}
     kinds = ("collision", "visual") if element == "auto" else (element,)
     for kind in kinds:
         shapes = []
