@@ -13,6 +13,7 @@ import pinocchio as pin
 from . import conventions, kinematics
 from .bases import BASE_TYPES, BaseType
 from .errors import ConfigurationError, FrameNotFound, JointNotFound, UVMSError
+from .validate import finite_array
 
 #: Default task axes by base type (kept for existing imports; the facts live in `uvms.bases`).
 DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
@@ -211,14 +212,7 @@ class Robot:
         return self._check_vector(v, self.nv if size is None else size, what)
 
     def _check_vector(self, vector: np.ndarray, size: int, what: str, check_manifold: bool = False) -> np.ndarray:
-        try:
-            array = np.asarray(vector, dtype=float)
-        except (TypeError, ValueError):
-            raise ConfigurationError(f"{what} must be a vector of {size} numbers, got {vector!r}") from None
-        if array.shape != (size,):
-            raise ConfigurationError(f"{what} must have shape ({size},), got {array.shape}")
-        if not np.all(np.isfinite(array)):
-            raise ConfigurationError(f"{what} has non-finite entries at {np.flatnonzero(~np.isfinite(array)).tolist()}")
+        array = finite_array(vector, what, (size,), error=ConfigurationError)
         if check_manifold:
             for joint_name, part in self._unit_slices:
                 norm = float(np.linalg.norm(array[part]))

@@ -16,6 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
+from ..validate import time_vector
 from .cartesian import SE3Trajectory
 from .laws import PolynomialLaw
 
@@ -62,13 +63,8 @@ def _finite_matrix(values, what: str, rows: int | None = None, columns: int | No
 
 
 def check_times(times, count: int | None = None, what: str = "times") -> np.ndarray:
-    """Strictly increasing finite times (m,) [s]."""
-    times = np.asarray(times, dtype=float).ravel()
-    if count is not None and times.size != count:
-        raise UVMSError(f"{what} needs {count} values (one per via point), got {times.size}")
-    if times.size < 2 or not np.all(np.isfinite(times)) or np.any(np.diff(times) <= 0):
-        raise UVMSError(f"{what} must be at least two finite, strictly increasing values [s], got {times.tolist()}")
-    return times
+    """Strictly increasing finite times (m,) [s], at least two."""
+    return time_vector(times, f"{what} (one per via point)" if count is not None else what, count, minimum=2)
 
 
 def cubic_coefficients(q0, q1, v0, v1, duration: float) -> np.ndarray:

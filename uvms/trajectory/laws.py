@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UVMSError
+from ..validate import positive_number
 
 
 @dataclass(frozen=True)
@@ -37,10 +38,7 @@ class TimeLaw:
 
 def check_positive(value: float, what: str, allow_zero: bool = False) -> float:
     """A finite float > 0 (or >= 0)."""
-    value = float(value)
-    if not np.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
-        raise UVMSError(f"{what} must be finite and {'>=' if allow_zero else '>'} 0, got {value!r}")
-    return value
+    return positive_number(value, what, allow_zero=allow_zero)
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from ..model import resources
 from .drawing import as_configurations
 from ..errors import UVMSError, ViewerUnavailable
 from ..robot import Robot
+from ..validate import finite_array, time_vector
 from ..progress import tqdm
 
 
@@ -171,15 +172,7 @@ def geometry_models(robot: Robot, package_dirs: Sequence[str | os.PathLike] | No
 # ------------------------------------------------------------------ viewer
 def check_times(t: np.ndarray, count: int) -> np.ndarray:
     """Times (N,) [s], finite and non-decreasing, one per configuration."""
-    try:
-        times = np.asarray(t, dtype=float)
-    except (TypeError, ValueError):
-        raise UVMSError("times must be numbers [s]") from None
-    if times.shape != (count,):
-        raise UVMSError(f"times must have shape ({count},) (one per configuration), got {times.shape}")
-    if not np.all(np.isfinite(times)) or np.any(np.diff(times) < 0):
-        raise UVMSError("times must be finite and non-decreasing [s]")
-    return times
+    return time_vector(finite_array(t, "times (one per configuration)", (count,)), "times", strict=False)
 
 
 class Viewer:

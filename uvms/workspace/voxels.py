@@ -10,21 +10,17 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import WorkspaceInputError
+from ..validate import finite_array, positive_number
 
 
 def check_voxel(voxel: float, what: str = "voxel size") -> float:
     """A voxel edge [m]: finite and > 0."""
-    if not (isinstance(voxel, (int, float, np.floating, np.integer)) and np.isfinite(voxel) and voxel > 0):
-        raise WorkspaceInputError(f"{what} must be a finite number > 0 [m], got {voxel!r}")
-    return float(voxel)
+    return positive_number(voxel, what, unit=" [m]", error=WorkspaceInputError)
 
 
 def check_points(points: np.ndarray, what: str = "points") -> np.ndarray:
-    """A finite (N, 3) float array."""
-    array = np.asarray(points, dtype=float)
-    if array.ndim != 2 or array.shape[1] != 3 or not np.all(np.isfinite(array)):
-        raise WorkspaceInputError(f"{what} must be a finite (N, 3) array [m], got shape {array.shape}")
-    return array
+    """A finite (N, 3) float array [m]."""
+    return finite_array(points, what, (None, 3), error=WorkspaceInputError, unit=" [m]")
 
 
 def voxel_indices(points: np.ndarray, voxel: float) -> np.ndarray:
