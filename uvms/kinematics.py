@@ -13,6 +13,16 @@ centroidal momentum map h = A v = A_b v_b + A_m qdot_m,
 
 so GJM = J_m - J_b A_b^-1 A_m. A planar base keeps only the momentum rows
 it cannot exchange with the world through its joint: x, y linear and z angular.
+
+The formula is written once, :func:`generalized_jacobian_from_parts`, for any
+momentum rows [A_b | A_m] (k, nv) that the vehicle conserves:
+
+* the rigid centroidal map (:func:`centroidal_map_split`, ``Robot.generalized_jacobian``);
+* the base rows of a mass matrix, rigid or augmented with the links' added mass
+  (:func:`mass_matrix_split`: [M_bb | M_bm], the momentum in the base frame; at
+  zero momentum it gives the same GJM as the centroidal rows, M_bb^-1 M_bm = A_b^-1 A_m);
+* a vehicle held still (:func:`held_vehicle_split`: [I | 0], GJM = J_m, the
+  fixed-base Jacobian of station keeping).
 """
 
 from __future__ import annotations
@@ -69,10 +79,44 @@ def centroidal_map_split(
 
     Returns:
         A_b (k, n_vehicle) and A_m (k, nv - n_vehicle), k = 6 (floating) or 3 (planar).
+
+    Raises:
+        ModelCheckError: a fixed base: the model has no vehicle whose momentum is conserved.
     """
-    rows = CONSERVED_MOMENTUM_ROWS[base_type]
+    rows = conserved_rows(base_type)
     centroidal_map = pin.computeCentroidalMap(model, data, q)[rows]  # (k, nv)
     return centroidal_map[:, :n_vehicle], centroidal_map[:, n_vehicle:]
+
+
+def conserved_rows(base_type: str) -> list[int]:
+    """Rows of the centroidal momentum [linear; angular] a vehicle of ``base_type`` conserves.
+
+    Raises:
+        ModelCheckError: a fixed base (or any kind without a free vehicle): nothing is conserved, the
+            generalized Jacobian and the free-floating vehicle velocity are undefined.
+    """
+    try:
+        return CONSERVED_MOMENTUM_ROWS[base_type]
+    except KeyError:
+        raise ModelCheckError(
+            f"the model has no vehicle (base type {base_type!r}): the generalized Jacobian and the free-floating "
+            f"vehicle velocity need a floating or planar base; load it with base='floating' or 'planar', or use "
+            f"the ordinary Jacobian") from None
+
+
+def mass_matrix_split(mass: np.ndarray, n_vehicle: int) -> tuple[np.ndarray, np.ndarray]:
+    """The vehicle rows of a mass matrix as momentum rows: M_bb (n_vehicle, n_vehicle), M_bm (n_vehicle, n_arm).
+
+    Args:
+        mass: M (nv, nv), rigid (``pin.crba``) or augmented with the links' added mass.
+        n_vehicle: velocity entries of the vehicle.
+    """
+    return mass[:n_vehicle, :n_vehicle], mass[:n_vehicle, n_vehicle:]
+
+
+def held_vehicle_split(n_vehicle: int, n_arm: int) -> tuple[np.ndarray, np.ndarray]:
+    """Momentum rows [I | 0] of a vehicle held still (station keeping): v_b = 0 and GJM = J_m exactly."""
+    return np.eye(n_vehicle), np.zeros((n_vehicle, n_arm))
 
 
 def base_velocity_from_momentum(
@@ -88,7 +132,17 @@ def base_velocity_from_momentum(
 def generalized_jacobian_from_parts(
     jacobian: np.ndarray, a_base: np.ndarray, a_arm: np.ndarray, n_vehicle: int
 ) -> np.ndarray:
-    """GJM = J_m - J_b A_b^-1 A_m (rows of ``jacobian``, n_arm)."""
+    """GJM = J_m - J_b A_b^-1 A_m (k, n_arm): the one place the generalized Jacobian is formed.
+
+    Args:
+        jacobian: J (k, nv), world-aligned rows of a task, columns in the order of v.
+        a_base, a_arm: the conserved momentum rows split into vehicle (r, n_vehicle) and arm (r, n_arm)
+            columns: :func:`centroidal_map_split`, :func:`mass_matrix_split` or :func:`held_vehicle_split`.
+        n_vehicle: velocity entries of the vehicle.
+
+    Raises:
+        ModelCheckError: A_b is singular (:func:`solve_base_block`).
+    """
     return jacobian[:, n_vehicle:] - jacobian[:, :n_vehicle] @ solve_base_block(a_base, a_arm)
 
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 import os
 import time
 from collections.abc import Callable
@@ -22,7 +21,8 @@ import pinocchio as pin
 
 
 from . import outputs
-from .errors import StepCountError, UVMSError
+from .errors import UVMSError
+from .integrate import INTEGRATORS, MAX_STEPS, STEPS, check_integrator, step_count
 from .robot import Robot
 from .tasks.frame import FrameTask
 from .tasks.vehicle import VELOCITY_NAMES
@@ -31,11 +31,6 @@ from .progress import tqdm
 #: A controller maps (q, t) to the velocity v (nv,) and a diagnostics object
 #: (a VelocityResult or PriorityResult: fields sigma_min, damping, limits_active).
 Controller = Callable[[np.ndarray, float], tuple[np.ndarray, object]]
-INTEGRATORS = ("euler", "rk4")
-#: The most steps one run may take (kinematic or dynamic). Every step is kept in memory, about 3.5 kB with the
-#: CSV text written at the end, so a run of MAX_STEPS takes about 0.7 GB; hoang2011's 190 s at dt = 1 ms is
-#: 190,000 steps (the shipped scenarios take at most 9,500).
-MAX_STEPS = 200_000
 #: The time series recorded at every step, in the order of the NPZ file.
 SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",
           "position_error", "orientation_error", "sigma_min", "damping", "limits_active")
@@ -135,50 +130,6 @@ def velocity_labels(robot: Robot) -> list[str]:
     return labels
 
 
-def step_count(duration: float, dt: float, *, dt_name: str = "dt", duration_name: str = "duration") -> int:
-    """round(duration / dt), the number of steps of a run, checked before it starts.
-
-    Args:
-        duration, dt: [s].
-        dt_name, duration_name: how the caller calls them, for the message (e.g. "simulation.dt").
-
-    Raises:
-        StepCountError: dt or duration not finite and > 0, dt > duration (no step), or more than
-            :data:`MAX_STEPS` steps.
-    """
-    try:
-        dt, duration = float(dt), float(duration)
-    except (TypeError, ValueError):
-        raise StepCountError(f"{dt_name} and {duration_name} must be numbers [s], got {dt!r} and {duration!r}") from None
-    if not (math.isfinite(dt) and dt > 0 and math.isfinite(duration) and duration > 0):
-        raise StepCountError(f"{dt_name} and {duration_name} must be finite and > 0, got dt={dt!r}, "
-                             f"duration={duration!r}")
-    if dt > duration:
-        raise StepCountError(f"{dt_name} = {dt:g} s is longer than {duration_name} = {duration:g} s: the run would "
-                             f"have no step; choose {dt_name} <= {duration:g} s")
-    ratio = duration / dt
-    if not ratio <= MAX_STEPS + 0.5:
-        raise StepCountError(f"{dt_name} = {dt:g} s over {duration:g} s gives {ratio:.2g} steps; at most "
-                             f"{MAX_STEPS:,} are allowed (every step is kept in memory): raise {dt_name} or "
-                             f"shorten {duration_name}")
-    return int(round(ratio))
-
-
-def rk4_step(model: pin.Model, q: np.ndarray, t: float, dt: float, velocity: Callable[[np.ndarray, float], np.ndarray],
-             first: np.ndarray | None = None) -> np.ndarray:
-    """One Runge-Kutta-Munthe-Kaas step of order 4: q+ = integrate(q, xi), xi from four tangent-space stages."""
-    k1 = velocity(q, t) if first is None else first
-
-    def stage(xi: np.ndarray, time_: float) -> np.ndarray:
-        rate = velocity(pin.integrate(model, q, xi), time_)
-        return np.linalg.solve(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), rate)
-
-    k2 = stage(0.5 * dt * k1, t + 0.5 * dt)
-    k3 = stage(0.5 * dt * k2, t + 0.5 * dt)
-    k4 = stage(dt * k3, t + dt)
-    return pin.integrate(model, q, dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4))
-
-
 def simulate(
     robot: Robot,
     controller: Controller,
@@ -204,8 +155,7 @@ def simulate(
         integrator: "euler" or "rk4".
         progress: show a progress bar (None: only on a terminal).
     """
-    if integrator not in INTEGRATORS:
-        raise UVMSError(f"unknown integrator {integrator!r}; valid: {', '.join(INTEGRATORS)}")
+    check_integrator(integrator)
     steps = step_count(duration, dt)
     q = robot.check_configuration(q0).copy()
     model = robot.model
@@ -213,7 +163,8 @@ def simulate(
     orientation_rows = [r for r in task.rows if r >= 3]
     records: dict[str, list] = {name: [] for name in SERIES}
     started = time.perf_counter()
-    velocity_only = lambda configuration, time_: controller(configuration, time_)[0]  # noqa: E731
+    empty = np.zeros(0)
+    rate = lambda time_, configuration, _: (controller(configuration, time_)[0], empty)  # noqa: E731
     for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None,
                   desc="simulate", unit="step", leave=False):
         t = k * dt
@@ -234,9 +185,6 @@ def simulate(
             records[name].append(value)
         if k == steps:
             break
-        if integrator == "euler":
-            q = pin.integrate(model, q, v * dt)
-        else:
-            q = rk4_step(model, q, t, dt, velocity_only, first=v)
+        q, _ = STEPS[integrator](model, rate, t, q, empty, dt, (v, empty))
     arrays = {name: np.array(values) for name, values in records.items()}
     return SimulationResult(**arrays, robot=robot, axes=task.axes, wall_time=time.perf_counter() - started)

@@ -56,12 +56,12 @@ import pinocchio as pin
 from ..errors import UVMSError
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from ..robot import Robot
-from ..simulate import step_count
+from ..integrate import STEPS, check_integrator, step_count
+from ..kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from ..progress import tqdm
 
 
 LOCAL = pin.ReferenceFrame.LOCAL
-METHODS = ("rk4", "euler")
 #: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
 Command = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
@@ -147,11 +147,8 @@ def generalized_jacobian_added_mass(
     q = robot.check_configuration(q)
     hydro = hydrodynamics_of(robot, required=False) if hydro is None else hydro
     mass = augmented_mass_matrix(robot.model, robot.data, resolve_links(robot.model, hydro), q)
-    return _gjm_from_mass(robot.jacobian(q, frame), mass, robot.n_vehicle)
-
-
-def _gjm_from_mass(jacobian: np.ndarray, mass: np.ndarray, nb: int) -> np.ndarray:
-    return jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:])
+    return generalized_jacobian_from_parts(robot.jacobian(q, frame), *mass_matrix_split(mass, robot.n_vehicle),
+                                           robot.n_vehicle)
 
 
 @dataclass(frozen=True)
@@ -313,7 +310,8 @@ class Plant:
     def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
         """The GJM (6, n_arm) this plant conserves momentum with: added-mass-augmented when ``added_mass``."""
         q = self.robot.check_configuration(q)
-        return _gjm_from_mass(self.robot.jacobian(q, frame), self.mass_matrix(q), self.nb)
+        return generalized_jacobian_from_parts(self.robot.jacobian(q, frame), *mass_matrix_split(self.mass_matrix(q), self.nb),
+                                               self.nb)
 
     # ------------------------------------------------------- conserved things
     def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
@@ -445,8 +443,7 @@ def simulate_plant(
         UVMSError: bad arguments, a command of the wrong size or non-finite, a state
             that becomes non-finite (step too large).
     """
-    if method not in METHODS:
-        raise UVMSError(f"unknown method {method!r}; valid: {', '.join(METHODS)}")
+    check_integrator(method, "method")
     steps = step_count(duration, dt)  # checked before anything runs; the same bounds as uvms.simulate
     robot, model = plant.robot, plant.model
     q = robot.check_configuration(q0).copy()
@@ -483,10 +480,8 @@ def simulate_plant(
         if k == steps:
             break
         held = (lambda tt, qq, vv, held_u=u: held_u) if hold else sample
-        if method == "euler":
-            q, v = pin.integrate(model, q, v * dt), v + dt * state.acceleration
-        else:
-            q, v = _rk4_step(plant, held, t, q, v, dt, state.acceleration)
+        rate = lambda tt, qq, vv, held=held: (vv, plant._evaluate(qq, vv, held(tt, qq, vv)).acceleration)  # noqa: E731
+        q, v = STEPS[method](model, rate, t, q, v, dt, (v, state.acceleration))
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             raise UVMSError(f"the state became non-finite at t = {t + dt:.6g} s; reduce dt (now {dt:g} s)")
     arrays = {name: np.array(values) for name, values in records.items()}
@@ -494,22 +489,3 @@ def simulate_plant(
         arrays["command"] = arrays["command"].reshape(len(arrays["t"]), 0)
         arrays["joint_torque"] = arrays["joint_torque"].reshape(len(arrays["t"]), 0)
     return PlantResult(**arrays, plant=plant, dt=dt, method=method, wall_time=time.perf_counter() - started)
-
-
-def _rk4_step(plant: Plant, command: Command, t: float, q: np.ndarray, v: np.ndarray, dt: float,
-              first_acceleration: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """One RKMK4 step of (q, v): configuration stages in the tangent space at q, velocities in R^nv."""
-    model = plant.model
-
-    def stage(xi: np.ndarray, velocity: np.ndarray, time_: float) -> tuple[np.ndarray, np.ndarray]:
-        q_stage = pin.integrate(model, q, xi)
-        acceleration = plant._evaluate(q_stage, velocity, command(time_, q_stage, velocity)).acceleration
-        # xi' = dexp^-1(velocity): the tangent-space rate that moves q_stage with body velocity `velocity`
-        return np.linalg.solve(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), acceleration
-
-    k1q, k1v = v, first_acceleration
-    k2q, k2v = stage(0.5 * dt * k1q, v + 0.5 * dt * k1v, t + 0.5 * dt)
-    k3q, k3v = stage(0.5 * dt * k2q, v + 0.5 * dt * k2v, t + 0.5 * dt)
-    k4q, k4v = stage(dt * k3q, v + dt * k3v, t + dt)
-    q_next = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
-    return q_next, v + dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)

@@ -1,0 +1,95 @@
+"""One integrator, one generalized-Jacobian formula, one loop: the restructured core keeps every number."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import uvms
+from conftest import shipped
+from uvms import kinematics
+from uvms.dynamics.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.plant import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
+from uvms.errors import ModelCheckError
+from uvms.integrate import INTEGRATORS, STEPS, check_integrator
+from uvms.state import FrameState, KinematicState
+
+FIXED_ARM = """<robot name="arm"><link name="base"/><link name="tip"><inertial><mass value="1"/>
+  <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="tip"/><axis xyz="0 0 1"/>
+  <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+
+
+# ------------------------------------------------------------ the GJM formula
+@pytest.mark.parametrize("name", ["amundsen2018", "hoang2011", "bluerov2_alpha5"])
+def test_mass_matrix_rows_and_centroidal_rows_give_one_gjm(name, rng):
+    """At zero momentum M_bb^-1 M_bm = A_b^-1 A_m (floating and planar): both are the same GJM."""
+    robot = shipped(name)
+    for _ in range(5):
+        q = robot.random_configuration(rng)
+        jacobian = robot.jacobian(q)
+        mass = pin.crba(robot.model, robot.model.createData(), q)
+        mass = np.triu(mass) + np.triu(mass, 1).T
+        from_mass = kinematics.generalized_jacobian_from_parts(
+            jacobian, *kinematics.mass_matrix_split(mass, robot.n_vehicle), robot.n_vehicle)
+        assert np.allclose(from_mass, robot.generalized_jacobian(q), atol=1e-10, rtol=1e-10)
+
+
+def test_every_caller_keeps_its_numbers_exactly(rng):
+    """The callers' own formulas of before, as oracles: bit-identical through the one function."""
+    robot = shipped("amundsen2018")
+    hydro = hydrodynamics_of(robot)
+    links = resolve_links(robot.model, hydro)
+    nb = robot.n_vehicle
+    for _ in range(5):
+        q = robot.random_configuration(rng)
+        data = robot.model.createData()
+        jacobian = pin.computeFrameJacobian(robot.model, data, q, robot.frame_id(), pin.LOCAL_WORLD_ALIGNED)
+        a_base, a_arm = kinematics.centroidal_map_split(robot.model, data, q, robot.base_type, nb)
+        assert np.array_equal(robot.generalized_jacobian(q), jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(a_base, a_arm))
+        mass = augmented_mass_matrix(robot.model, robot.model.createData(), links, q)
+        old = jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:])
+        assert np.array_equal(generalized_jacobian_added_mass(robot, hydro, q), old)
+        assert np.array_equal(uvms.Plant(robot).generalized_jacobian(q), old)
+        held = FrameState(robot, q, momentum=lambda _: kinematics.held_vehicle_split(nb, robot.n_arm))
+        assert np.array_equal(held.generalized(held.jacobian(robot.frame_id())), jacobian[:, nb:])
+        state = KinematicState(robot, q)
+        assert np.allclose(state.generalized(state.jacobian(robot.frame_id())), robot.generalized_jacobian(q), atol=1e-13)
+        frame_state = FrameState(robot, q)
+        assert np.array_equal(frame_state.generalized(frame_state.jacobian(robot.frame_id())), robot.generalized_jacobian(q))
+
+
+def test_a_fixed_base_has_no_generalized_jacobian_with_a_clear_error():
+    robot = uvms.load(FIXED_ARM)
+    state = KinematicState(robot, robot.neutral())
+    with pytest.raises(ModelCheckError, match="has no vehicle.*floating or planar"):
+        state.generalized(state.jacobian(robot.frame_id()))
+    with pytest.raises(ModelCheckError, match="has no vehicle"):
+        kinematics.centroidal_map_split(robot.model, robot.data, robot.neutral(), robot.base_type, 0)
+    with pytest.raises(uvms.UVMSError):  # the solver refuses it too, never a KeyError
+        uvms.clik_velocity(robot, robot.neutral(), uvms.FrameTask(robot, axes=("x",), target=[0.5, 0, 0, 0, 0, 0]),
+                           free_floating=True)
+
+
+# ------------------------------------------------------------ the integrator
+def test_one_step_per_scheme_serves_q_alone_and_q_with_x_exactly_on_the_manifold():
+    """A rigid body spinning about a fixed axis: q alone (kinematic), then (q, v) with v' = 0 (dynamic)."""
+    model = uvms.load(FIXED_ARM, base="floating").model  # a free vehicle (nq = 7 + 1): spin it, arm at rest
+    twist = np.concatenate([[0.2, -0.1, 0.3, 0.5, -0.4, 0.7], [0.0]])
+    exact = pin.integrate(model, pin.neutral(model), twist * 1.0)
+    empty = np.zeros(0)
+    for name in INTEGRATORS:
+        errors = []
+        for steps in (10, 20):
+            dt, q, v = 1.0 / steps, pin.neutral(model), twist.copy()
+            for k in range(steps):
+                q, v = STEPS[name](model, lambda t, qq, vv: (vv, np.zeros(7)), k * dt, q, v, dt, (v, np.zeros(7)))
+            q_alone = pin.neutral(model)
+            for k in range(steps):
+                q_alone, _ = STEPS[name](model, lambda t, qq, x: (twist, empty), k * dt, q_alone, empty, dt, (twist, empty))
+            assert np.array_equal(q, q_alone)
+            errors.append(np.linalg.norm(pin.difference(model, q, exact)))
+        assert errors[1] <= 1e-12  # a constant body twist is the exponential map: exact for both
+    with pytest.raises(uvms.UVMSError, match="unknown method 'rk45'; valid: euler, rk4"):
+        check_integrator("rk45", "method")
