@@ -80,9 +80,11 @@ def command_info(options: argparse.Namespace) -> int:
 
 
 def command_run(options: argparse.Namespace) -> int:
-    """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures."""
+    """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
     from .scenario import run  # the scenario layer pulls in scipy and matplotlib
 
+    if options.watch:
+        return watch_job(options, run_output_folder(options), scenario=Path(options.scenario))
     result = run(options.scenario, out=options.out, overrides=options.set or (),
                  progress=False if options.quiet else None)
     folder = result.files[0].parent
@@ -124,6 +126,34 @@ def parse_figure_counts(text: str | None, samples: int) -> list[int]:
     return counts
 
 
+def run_output_folder(options: argparse.Namespace) -> Path:
+    """Where ``uvms run`` writes: ``--out``, else ``out/<scenario name>`` (the file stem if it cannot be read)."""
+    if options.out:
+        return Path(options.out)
+    from .scenario import read_scenario
+
+    try:
+        return Path("out") / read_scenario(options.scenario, options.set or ())["scenario"]["name"]
+    except UVMSError:
+        return Path("out") / Path(options.scenario).stem
+
+
+def watch_job(options: argparse.Namespace, out: Path, scenario: Path | None = None, model: str | None = None) -> int:
+    """Run the command once, then again on every change of its scenario, model and model files (``--watch``).
+
+    Each run is a child process writing into ``out`` (fixed for the session); one line per run compares its
+    headline metrics with the previous run's. Ctrl-C stops the run and the watching (exit 130).
+    """
+    from .watch import Rerun, WatchedFiles, without_watch
+
+    argv = [*without_watch(options.argv), "--out", str(out), "--quiet"]
+    print(f"watching {scenario or model} and the files of its model; Ctrl-C to stop")
+    rerun = Rerun(argv, out, lambda: WatchedFiles.of(scenario=scenario, model=model, ignore=[out]),
+                  say=lambda line: print(line, flush=True))
+    rerun.loop()
+    return 0
+
+
 def command_workspace(options: argparse.Namespace) -> int:
     """``uvms workspace MODEL --ee FRAME ... -n N``: Monte Carlo workspace, volumes, dexterity, points and figures.
 
@@ -143,6 +173,8 @@ def command_workspace(options: argparse.Namespace) -> int:
         raise UVMSError(f"--dexterous-threshold must be in [0, 1], got {options.dexterous_threshold}")
     grid = OrientationGrid(options.directions, options.roll_bins, options.approach) if options.dexterity else False
     out = Path(options.out or Path("out") / f"workspace_{robot.name}")
+    if options.watch:
+        return watch_job(options, out, model=options.model)
     with outputs.run_folder(out) as folder:  # taken first: a second writer of the folder is refused at once
         result = monte_carlo(robot, frames, samples, seed=options.seed, voxel=options.voxel,
                              progress=False if options.quiet else None, remove_hull=options.remove_hull,
@@ -295,6 +327,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="override a scenario key, e.g. solver.gain=2 or model.args.l1=0.6 (repeatable)")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--watch", action="store_true",
+                     help="rerun whenever the scenario, the model or a file it includes changes (Ctrl-C stops)")
     run.set_defaults(handler=command_run)
     sweep = commands.add_parser("sweep", help="run a scenario on a grid of overrides: sweep.csv and sweep.png")
     sweep.add_argument("scenario", help="scenario file, e.g. scenarios/santos2006_task_priority.toml")
@@ -336,6 +370,8 @@ def build_parser() -> argparse.ArgumentParser:
                            help="dexterity from which a voxel counts as dexterous workspace")
     workspace.add_argument("--out", help="output folder (default: out/workspace_<model>)")
     workspace.add_argument("--quiet", action="store_true", help="no progress bar")
+    workspace.add_argument("--watch", action="store_true",
+                           help="rerun whenever the model or a file it includes changes (Ctrl-C stops)")
     workspace.set_defaults(handler=command_workspace)
     view = commands.add_parser("view", help="3-D viewer of a model or a run (needs uvms[viz]), or --headless OUT")
     view.add_argument("model", nargs="?",
@@ -360,6 +396,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``uvms`` console script."""
     options = build_parser().parse_args(argv)
+    options.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -372,6 +409,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     except KeyboardInterrupt as exc:  # Ctrl-C: one line saying what the output folder holds (outputs.run_folder)
         notes = getattr(exc, "__notes__", None)
+        if getattr(options, "watch", False):
+            notes = ["stopped watching; the output folder keeps the last complete run"]
         print(f"uvms: interrupted; {notes[-1]}" if notes else "uvms: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
     except Exception as exc:  # noqa: BLE001 - the CLI promises one line, never a traceback

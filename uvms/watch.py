@@ -1,0 +1,263 @@
+"""Edit a model and see it: rerun a job whenever its scenario, its model or a file the model uses changes.
+
+The files watched are the scenario file, the model file, the files it includes (static ``xacro:include``),
+and the data beside the model (YAML such as ``hydrodynamics.yaml``, meshes). Changes are debounced (an
+editor's several writes give one rerun) through ``watchfiles``. ``uvms run/workspace ... --watch`` runs each
+job in a child process: a change during a run stops it with SIGINT, and the run folder keeps the previous
+complete run (``uvms.outputs.run_folder``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .errors import UVMSError
+from .model import resources
+
+#: Files beside a model that a change of should rerun the job (data the model or uvms reads).
+MODEL_DATA_SUFFIXES = (".xacro", ".urdf", ".yaml", ".yml", ".stl", ".dae", ".obj", ".ply")
+#: Milliseconds of quiet before a rerun.
+DEBOUNCE_MS = 300
+#: Seconds a cancelled run has to stop after SIGINT before it is killed.
+CANCEL_GRACE = 10.0
+
+
+def xacro_includes(path: Path, seen: frozenset[Path] = frozenset()) -> set[Path]:
+    """The files a xacro includes statically, recursively (computed names such as ``$(find pkg)`` are skipped)."""
+    resolved = path.resolve()
+    if resolved in seen or not path.is_file():
+        return set()
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError):
+        return set()  # a broken file is watched itself; its includes again once it parses
+    found: set[Path] = set()
+    for include in root.iter("{http://www.ros.org/wiki/xacro}include"):
+        name = include.get("filename", "")
+        if name and "$" not in name:
+            target = (path.parent / name).resolve()
+            found |= {target} | xacro_includes(target, seen | {resolved})
+    return found
+
+
+def model_files(source: str | os.PathLike) -> set[Path]:
+    """The model file (a path or a shipped model name) and the files it includes."""
+    path = resources.resolve_model_path(source).resolve()
+    return {path} | (xacro_includes(path) if path.name.endswith(".xacro") else set())
+
+
+def scenario_model(scenario: Path) -> str | None:
+    """The ``[model] path`` of a scenario file as a path or shipped name, or None when it cannot be read."""
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        import tomli as tomllib
+
+    try:
+        model = tomllib.loads(scenario.read_text(encoding="utf-8")).get("model", {}).get("path")
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, AttributeError):
+        return None
+    if not isinstance(model, str):
+        return None
+    relative = scenario.parent / model
+    return str(relative) if relative.exists() else model
+
+
+@dataclass
+class WatchedFiles:
+    """Which changes rerun a job: listed files, and model data inside the model folders, outside ``ignore``."""
+
+    files: set[Path] = field(default_factory=set)
+    folders: set[Path] = field(default_factory=set)
+    ignore: tuple[Path, ...] = ()
+
+    @classmethod
+    def of(cls, scenario: Path | None = None, model: str | os.PathLike | None = None,
+           ignore: Sequence[Path] = ()) -> WatchedFiles:
+        """The files of a scenario and its model, or of a model alone; unreadable parts are skipped."""
+        files: set[Path] = set()
+        if scenario is not None:
+            files.add(Path(scenario).resolve())
+            model = model or scenario_model(Path(scenario))
+        if model is not None:
+            try:
+                files |= model_files(model)
+            except UVMSError:
+                pass  # the job reports it; the scenario file is still watched
+        folders = {path.parent for path in files if path.suffix in MODEL_DATA_SUFFIXES or path.name.endswith(".xacro")}
+        if scenario is not None:
+            folders.discard(Path(scenario).resolve().parent)  # a scenario folder holds other scenarios
+        return cls(files, folders, tuple(Path(p).resolve() for p in ignore))
+
+    def roots(self) -> list[Path]:
+        """The folders to hand to the watcher (the parents of the files, and the model folders)."""
+        return sorted({path.parent for path in self.files} | self.folders)
+
+    def wants(self, path: str | os.PathLike) -> bool:
+        """Whether a change of ``path`` reruns the job."""
+        path = Path(path).resolve()
+        if any(path == root or root in path.parents for root in self.ignore):
+            return False
+        if any(".uvms-" in part for part in path.parts):  # run folders being written and their locks
+            return False
+        if path in self.files:
+            return True
+        return path.suffix in MODEL_DATA_SUFFIXES and any(folder in path.parents for folder in self.folders)
+
+
+def watch(source: str | os.PathLike | WatchedFiles, callback: Callable[[list[Path]], object], *,
+          debounce_ms: int = DEBOUNCE_MS, stop_event=None, once: bool = False) -> None:
+    """Call ``callback(changed files)`` after every (debounced) change of a model or scenario and its files.
+
+    For notebooks and scripts: ``uvms.watch.watch("my_rov.urdf.xacro", lambda changed: rerun())``.
+    Blocks until ``stop_event`` (a ``threading.Event``) is set or Ctrl-C.
+
+    Args:
+        source: a model file (or shipped name), a scenario ``.toml``, or a :class:`WatchedFiles`.
+        callback: called with the changed files; the set of files is recomputed after each call
+            (an edit may add an include).
+        debounce_ms: quiet time before a change is reported [ms].
+        stop_event: set it to stop watching.
+        once: return after the first change (tests).
+    """
+    import watchfiles
+
+    def files() -> WatchedFiles:
+        if isinstance(source, WatchedFiles):
+            return source
+        path = Path(source)
+        return WatchedFiles.of(scenario=path) if path.suffix == ".toml" else WatchedFiles.of(model=source)
+
+    while stop_event is None or not stop_event.is_set():
+        watched = files()
+        for changes in watchfiles.watch(*watched.roots(), watch_filter=lambda _, p: watched.wants(p),
+                                        debounce=debounce_ms, stop_event=stop_event, yield_on_timeout=False):
+            callback(sorted({Path(p) for _, p in changes}))
+            if once:
+                return
+            break  # the files may have changed: watch the new set
+
+
+# ------------------------------------------------------------------ the CLI's rerun loop
+def headline(metrics: dict) -> dict[str, float]:
+    """The numbers one line compares between runs: errors and travel of a run, volumes of a workspace."""
+    keys = ("max_position_error", "final_position_error", "arm_travel", "vehicle_travel", "max_joint_limit_violation")
+    numbers = {key: float(metrics[key]) for key in keys if isinstance(metrics.get(key), (int, float))}
+    for frame, volume in (metrics.get("volume") or {}).items():
+        if isinstance(volume, (int, float)):
+            numbers[f"volume {frame}"] = float(volume)
+    return numbers
+
+
+UNITS = {"max_position_error": "m", "final_position_error": "m", "arm_travel": "rad", "vehicle_travel": "m",
+         "max_joint_limit_violation": "rad"}
+
+
+def compare(before: dict[str, float], after: dict[str, float]) -> str:
+    """``max_position_error 3.6e-10 → 4.1e-10 m, arm_travel 24.6 → 26.6 rad, ...`` (new keys alone)."""
+    parts = []
+    for key, value in after.items():
+        unit = UNITS.get(key, "m^3" if key.startswith("volume") else "")
+        old = f"{before[key]:.3g} → " if key in before else ""
+        parts.append(f"{key} {old}{value:.3g} {unit}".rstrip())
+    return ", ".join(parts)
+
+
+def read_metrics(folder: Path) -> dict:
+    try:
+        return json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+
+
+@dataclass
+class Rerun:
+    """Runs one CLI job (``uvms run ...`` without ``--watch``) in a child process and reports it in one line."""
+
+    argv: list[str]
+    out: Path
+    watched: Callable[[], WatchedFiles]
+    say: Callable[[str], None] = print
+    process: subprocess.Popen | None = None
+    started: float = 0.0
+    reason: str = "start"
+    last: dict[str, float] = field(default_factory=dict)
+
+    def start(self, reason: str) -> None:
+        """Start the job (cancelling a running one first)."""
+        self.cancel()
+        self.reason, self.started = reason, time.perf_counter()
+        self.process = subprocess.Popen([sys.executable, "-m", "uvms.cli", *self.argv], stdout=subprocess.PIPE,
+                                        stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+    def cancel(self) -> None:
+        """Stop a running job with SIGINT (its folder keeps the previous complete run); kill it if it hangs."""
+        if self.process is None or self.process.poll() is not None:
+            return
+        self.process.send_signal(signal.SIGINT)
+        try:
+            self.process.communicate(timeout=CANCEL_GRACE)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.process.pid, signal.SIGKILL)
+            self.process.communicate()
+        self.say(f"{time.strftime('%H:%M:%S')} run stopped: files changed again")
+        self.process = None
+
+    def poll(self) -> None:
+        """Report a finished job in one line."""
+        if self.process is None or self.process.poll() is None:
+            return
+        _, stderr = self.process.communicate()
+        seconds = time.perf_counter() - self.started
+        stamp = time.strftime("%H:%M:%S")
+        if self.process.returncode == 0:
+            numbers = headline(read_metrics(self.out))
+            self.say(f"{stamp} {self.reason}: {compare(self.last, numbers)} ({seconds:.1f} s; figures in {self.out}/)")
+            self.last = numbers
+        else:
+            lines = [line for line in stderr.strip().splitlines() if line.strip()]
+            message = lines[-1] if lines else f"exit status {self.process.returncode}"
+            self.say(f"{stamp} {self.reason}: {message} (the last good result stays in {self.out}/)")
+        self.process = None
+
+    def loop(self, debounce_ms: int = DEBOUNCE_MS, stop_event=None) -> None:
+        """Run once, then rerun on every change until Ctrl-C (which stops the job and re-raises)."""
+        import watchfiles
+
+        self.start("first run")
+        try:
+            while stop_event is None or not stop_event.is_set():
+                watched = self.watched()
+                for changes in watchfiles.watch(*watched.roots(), watch_filter=lambda _, p: watched.wants(p),
+                                                debounce=debounce_ms, rust_timeout=200, yield_on_timeout=True,
+                                                stop_event=stop_event):
+                    self.poll()
+                    if changes:
+                        names = ", ".join(sorted({Path(p).name for _, p in changes}))
+                        self.start(f"{names} changed")
+                        break
+        finally:
+            self.cancel_quietly()
+
+    def cancel_quietly(self) -> None:
+        if self.process is not None and self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.communicate(timeout=CANCEL_GRACE)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.process.pid, signal.SIGKILL)
+        self.process = None
+
+
+def without_watch(argv: Iterable[str]) -> list[str]:
+    """The command line of one job: ``--watch`` removed."""
+    return [item for item in argv if item != "--watch"]
