@@ -279,3 +279,28 @@ def test_teach_panel_updates_on_a_slider_change():
     assert panel.poses.value != before_label and panel.picture.value != before_picture
     assert teach.format_poses(poses) in panel.poses.value
     assert panel.picture.value[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_reload_shows_the_edited_model_in_place(tmp_path):
+    pytest.importorskip("viser")
+    import shutil
+
+    model = tmp_path / "uvms.urdf.xacro"
+    shutil.copy(uvms.model.resources.shipped_models()["hoang2011"], model)
+    robot = uvms.load(model)
+    q = robot.configuration(base=[0, 0, 0], arm=[0.3, 0.2, 0.1])
+    with viewer.view(robot, q, port=PORT) as shown:
+        port, server = shown.server.get_port(), shown.server
+        model.write_text(model.read_text().replace('<xacro:arg name="l1" default="0.4"/>',
+                                                   '<xacro:arg name="l1" default="0.7"/>'))
+        edited = uvms.load(model)
+        shown.reload(edited)
+        assert shown.server is server and shown.server.get_port() == port  # the same page (and camera)
+        np.testing.assert_array_equal(shown.q, q)  # the configuration shown is kept
+        visualizer = shown.visualizer
+        moved = 0
+        for name, pose in placements(edited, visualizer.visual_model, q).items():
+            handle = visualizer.frames[f"{visualizer.visualRootNodeName}/{name}"]
+            np.testing.assert_allclose(handle.position, pose.translation, atol=1e-6)
+            moved += not np.allclose(pose.translation, placements(robot, visualizer.visual_model, q)[name].translation)
+        assert moved > 0  # the links beyond link1 moved by the 0.3 m longer link

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import time
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
@@ -303,12 +304,49 @@ def command_view(options: argparse.Namespace) -> int:
         if result is not None:
             t, qs = result
             viewer.play(t, qs, speed=options.speed, progress=False if options.quiet else None)
+        if options.watch:
+            watch_viewer(options, viewer)
         wait_for_interrupt()
     except KeyboardInterrupt:
         pass
     finally:
         viewer.close()
     return 0
+
+
+def watch_viewer(options: argparse.Namespace, viewer) -> None:
+    """``uvms view ... --watch``: reload the model in place on every edit, replay ``--result`` when it is rerun.
+
+    With ``uvms run SCENARIO --watch`` in another terminal, the viewer follows both the model and the run.
+    """
+    from .watch import WatchedFiles, watch
+
+    scenario = Path(options.model) if str(options.model).endswith(".toml") else None
+    result = Path(options.result).resolve() if options.result else None
+
+    def files() -> WatchedFiles:
+        watched = WatchedFiles.of(scenario=scenario, model=None if scenario else options.model)
+        if result is not None:
+            watched.files |= {result / "trajectory.npz", result}
+        return watched
+
+    def changed(paths: list[Path]) -> None:
+        try:
+            robot = view_robot(options)
+            model_changed = any(path.name != "trajectory.npz" and path != result for path in paths)
+            if model_changed:
+                viewer.reload(robot)
+            print(f"{time.strftime('%H:%M:%S')} {', '.join(sorted({p.name for p in paths}))} changed: "
+                  f"{'model reloaded' if model_changed else 'replaying the new run'}", flush=True)
+            if result is not None and (result / "trajectory.npz").is_file():
+                t, qs = read_result(robot, str(result))
+                viewer.play(t, qs, speed=options.speed, progress=False)
+        except UVMSError as exc:
+            print(f"{time.strftime('%H:%M:%S')} {' '.join(str(exc).split())} (still showing the last good model)",
+                  flush=True)
+
+    while True:
+        watch(files(), changed, once=True)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -389,6 +427,8 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--frames", type=int, default=100, help="--headless animation: at most this many frames")
     view.add_argument("--fps", type=float, default=20.0, help="--headless animation: frames per second")
     view.add_argument("--quiet", action="store_true", help="no progress bar")
+    view.add_argument("--watch", action="store_true",
+                      help="reload the model in place when its files change; replay --result when it is rerun")
     view.set_defaults(handler=command_view)
     return parser
 

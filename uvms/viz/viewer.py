@@ -187,20 +187,40 @@ class Viewer:
 
     def __init__(self, robot: Robot, *, port: int = DEFAULT_PORT,
                  package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None) -> None:
-        viser, ViserVisualizer = require_viser()
-        visual, collision = geometry_models(robot, package_dirs, skeleton)
-        self.robot = robot
+        viser, _ = require_viser()
         self.server = viser.ViserServer(host=HOST, port=int(port), verbose=False)  # the next free port if taken
+        self._time_slider = None
+        self._trajectory: tuple[np.ndarray, np.ndarray] | None = None
+        self._playing = False
         try:
-            self.visualizer = ViserVisualizer(robot.model, collision, visual)
-            self.visualizer.initViewer(viewer=self.server, loadModel=True)
-            self._time_slider = None
-            self._trajectory: tuple[np.ndarray, np.ndarray] | None = None
-            self._playing = False
+            self._show_model(robot, package_dirs, skeleton)
             self.display(robot.neutral())
         except BaseException:
             self.server.stop()
             raise
+
+    def _show_model(self, robot: Robot, package_dirs: Sequence[str | os.PathLike] | None,
+                    skeleton: bool | None) -> None:
+        _, ViserVisualizer = require_viser()
+        visual, collision = geometry_models(robot, package_dirs, skeleton)
+        visualizer = ViserVisualizer(robot.model, collision, visual)
+        self.server.scene.reset()  # the scene only: the page, its panel and the camera stay
+        visualizer.initViewer(viewer=self.server, loadModel=True)
+        self.robot, self.visualizer = robot, visualizer
+
+    def reload(self, robot: Robot, q: np.ndarray | None = None, *,
+               package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None) -> None:
+        """Show another version of the model (e.g. after an edit of its URDF) in place: same page, same camera.
+
+        Args:
+            robot: the new robot.
+            q: configuration to show (default: the one shown, if it still fits the model, else neutral).
+        """
+        if q is None:
+            q = self.q if len(self.q) == robot.nq else robot.neutral()
+        self._trajectory = None  # a run of the old model may no longer fit
+        self._show_model(robot, package_dirs, skeleton)
+        self.display(q)
 
     @property
     def url(self) -> str:
