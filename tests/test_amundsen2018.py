@@ -12,9 +12,10 @@ import pytest
 
 import uvms
 from conftest import shipped
-from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps, simulate_gjm
+from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps
 from uvms.dynamics.plant import Plant
 from uvms.scenario import ScenarioError, run
+from uvms.simulate import simulate_gjm
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"

@@ -9,7 +9,8 @@ import uvms
 from conftest import shipped
 from uvms.errors import ModelCheckError, ModelParseError, NameNotFound, UVMSError
 from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
-from uvms.dynamics.plant import Plant, generalized_jacobian_added_mass, simulate_plant
+from uvms.dynamics.plant import Plant, generalized_jacobian_added_mass
+from uvms.simulate import simulate_plant
 
 RHO = 1000.0
 G = 9.81

@@ -6,8 +6,9 @@ key (dotted path, e.g. ``solver.gain=2`` or ``model.args.l1=0.6``).
 
 By default the motion is integrated kinematically (:mod:`uvms.simulate`). A ``[plant]``
 section with ``type = "rigid"`` or ``"hydrodynamic"`` runs the free-floating dynamics of
-:mod:`uvms.plant` instead, the joints driven by the generalized-Jacobian controller of
-:mod:`uvms.gjm_control` (amundsen2018 eq. 4-8; the vehicle passive).
+:mod:`uvms.dynamics.plant` instead, the joints driven by the generalized-Jacobian controller of
+:mod:`uvms.control.gjm` (amundsen2018 eq. 4-8; the vehicle passive); both run in the one loop of
+:mod:`uvms.simulate` and give one result.
 """
 
 from __future__ import annotations
@@ -34,12 +35,12 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 from .errors import NumericalError, ScenarioError, UVMSError
-from .control.gjm import GJM_KINDS, GJMController, GJMResult, VelocityRamps, simulate_gjm
+from .control.gjm import GJM_KINDS, GJMController, VelocityRamps
 from .dynamics.hydrodynamics import HydroParameters
 from .model.loader import load
 from .dynamics.plant import Plant
 from .robot import Robot
-from .simulate import SimulationResult, simulate, step_count
+from .simulate import SimulationResult, simulate, simulate_gjm, step_count
 from .solvers import (
     VariableDamping,
     clik_velocity,
@@ -621,7 +622,7 @@ class RunResult:
     simulation: SimulationResult
     metrics: dict
     files: list[Path]
-    plant_run: GJMResult | None = None  # dynamic [plant] only: the GJM run with its plant series
+    plant_run: SimulationResult | None = None  # dynamic [plant] only: the same run (its plant series filled)
 
 def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) -> dict:
     """The numbers of ``metrics.json``."""
@@ -668,9 +669,9 @@ def run(
     """Run a scenario file and write ``metrics.json``, ``trajectory.csv``/``.npz`` and figures into ``out``.
 
     With a dynamic ``[plant]`` (rigid or hydrodynamic) the joints are driven by the GJM
-    controller of :mod:`uvms.gjm_control` through :func:`uvms.plant.simulate_plant`, and
+    controller of :mod:`uvms.control.gjm` through :func:`uvms.simulate.simulate_gjm` (the one loop), and
     ``plant.npz`` (commands, torques, energy, momentum) and the figures of
-    :func:`uvms.plotting.gjm_figures` are added.
+    :func:`uvms.viz.plotting.gjm_figures` are added.
 
     The scenario is read, checked and built (model, initial configuration, step count) before anything is
     written; then every file goes into a temporary folder that replaces ``out`` as a whole at the end
@@ -726,12 +727,12 @@ def check_step_count(scenario: dict, duration: float) -> int:
 def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, started: float) -> RunResult:
     """Simulate a built scenario and write its files into ``folder``."""
     simulation_section = scenario["simulation"]
-    plant_run: GJMResult | None = None
+    plant_run: SimulationResult | None = None
     if setup.plant is not None:
-        plant_run = simulate_gjm(setup.plant, setup.controller, setup.q0, setup.duration, simulation_section["dt"],
-                                 control_dt=setup.control_dt, method=simulation_section["integrator"],
-                                 progress=progress)
-        result = plant_run.simulation_result(setup.task)
+        result = plant_run = simulate_gjm(setup.plant, setup.controller, setup.q0, setup.duration,
+                                          simulation_section["dt"], control_dt=setup.control_dt,
+                                          integrator=simulation_section["integrator"], progress=progress,
+                                          task=setup.task)
     else:
         result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration,
                           dt=simulation_section["dt"], task=setup.task, desired=lambda t: setup.trajectory(t).pose,
@@ -740,10 +741,10 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
     metrics["scenario"] = scenario["scenario"]["name"]
     if plant_run is not None:
         metrics.update(plant=scenario["plant"]["type"], gjm=scenario["plant"]["gjm"],
-                       motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.metrics())
+                       motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.plant_metrics())
     files = list(result.save(folder))
     if plant_run is not None:
-        outputs.write_npz(folder / "plant.npz", **plant_run.arrays())
+        outputs.write_npz(folder / "plant.npz", **plant_run.plant_arrays())
         files.append(folder / "plant.npz")
     if scenario["outputs"]["figures"]:
         from .viz.plotting import scenario_figures  # matplotlib only when figures are asked for

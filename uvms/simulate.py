@@ -1,133 +1,161 @@
-"""Run a velocity controller along a trajectory with a fixed step on the configuration manifold.
+"""ONE simulation loop, for kinematic runs (state q) and the dynamic plant (state q, v), with pluggable recording.
 
-Integrators: explicit Euler (as in santos2006) and RK4 in the Munthe-Kaas form
-(stages in the tangent space at q_k, mapped with Pinocchio's ``dIntegrate``), so
-that the continuous-time CLIK of hoang2011 is integrated to fourth order on the
-manifold and not only in a chart.
+The loop (:func:`run_loop`) integrates a *system* with one of the integrators of
+:mod:`uvms.integrate` (explicit Euler, RK4 Munthe-Kaas on the manifold) and records a
+row per step through the system and any number of recorders, into the one result
+type :class:`uvms.series.SimulationResult`. A system has
+
+* ``model``: the Pinocchio model whose configuration manifold q lives on;
+* ``sample(t, q, x)``: what is applied from (t, q, x), with ``rate`` = (w (nv,), xdot (m,)) there;
+* ``stage_rate(sample)``: (t, q, x) -> (w, xdot) at the integrator's stages;
+* ``record(t, q, x, sample)``: its own series of the row (a dict name -> value);
+* ``check(t, q, x, dt)``: refuse a state reached at t (non-finite...).
+
+:class:`KinematicSystem` is q' = controller velocity (x empty);
+:class:`uvms.dynamics.plant.PlantSystem` is (q, v)' = (v, forward dynamics under the command).
+The front-ends :func:`simulate`, :func:`simulate_plant` and :func:`simulate_gjm` build them.
 """
 
 from __future__ import annotations
 
-import csv
-import io
-import os
 import time
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-
-from . import outputs
-from .errors import UVMSError
+from .control.gjm import GJMController
+from .dynamics.plant import Command, Plant, PlantSystem
+from .errors import GJMControlError, UVMSError
 from .integrate import INTEGRATORS, MAX_STEPS, STEPS, check_integrator, step_count
-from .robot import Robot
-from .tasks.frame import FrameTask
-from .tasks.vehicle import VELOCITY_NAMES
 from .progress import tqdm
+from .robot import Robot
+from .series import PLANT_SERIES, SERIES, SimulationResult, velocity_labels
+from .tasks.frame import FrameTask
 
-#: A controller maps (q, t) to the velocity v (nv,) and a diagnostics object
+__all__ = ["INTEGRATORS", "MAX_STEPS", "PLANT_SERIES", "SERIES", "Controller", "GJMResult", "KinematicSystem",
+           "PlantResult", "SimulationResult", "TaskRecorder", "run_loop", "simulate", "simulate_gjm",
+           "simulate_plant", "step_count", "velocity_labels"]
+
+#: A kinematic controller maps (q, t) to the velocity v (nv,) and a diagnostics object
 #: (a VelocityResult or PriorityResult: fields sigma_min, damping, limits_active).
 Controller = Callable[[np.ndarray, float], tuple[np.ndarray, object]]
-#: The time series recorded at every step, in the order of the NPZ file.
-SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",
-          "position_error", "orientation_error", "sigma_min", "damping", "limits_active")
+#: A recorder maps (t, q, x, sample) to the series of a row, name -> value.
+Recorder = Callable[[float, np.ndarray, np.ndarray, object], dict]
+#: The result of a plant run and of a GJM-controlled one: the one result type (names kept for one release).
+PlantResult = SimulationResult
+GJMResult = SimulationResult
+EMPTY = np.zeros(0)
 
 
-@dataclass
-class SimulationResult:
-    """Time series of a run; row k is the state at t[k] and the velocity applied from it.
+# ------------------------------------------------------------------ the loop
+def run_loop(system, q0: np.ndarray, x0: np.ndarray, *, steps: int, dt: float, integrator: str = "rk4",
+             recorders: Sequence[Recorder] = (), progress: bool | None = None,
+             desc: str = "simulate") -> tuple[dict[str, np.ndarray], float]:
+    """Integrate ``system`` from (q0, x0) for ``steps`` steps of ``dt`` and record every row.
 
-    Attributes:
-        t: (N,) [s]; q: (N, nq); v: (N, nv).
-        ee_position, desired_position: (N, 3) [m]; ee_rpy, desired_rpy: (N, 3) [rad].
-        task_error: (N, k) desired - actual on the task axes [m, rad] (``axes`` names them).
-        position_error: (N,) [m] norm over the task's position axes.
-        orientation_error: (N,) [rad] norm over the task's orientation axes.
-        sigma_min, damping: (N,); limits_active: (N,) number of joints held at a limit.
-        robot: the model the run used (not saved).
+    Args:
+        system: a system (module docstring); q0: (nq,); x0: (m,), checked by the caller.
+        steps: the number of steps (:func:`uvms.integrate.step_count`); dt: [s].
+        integrator: "euler" or "rk4".
+        recorders: (t, q, x, sample) -> {name: value} after the system's own record, later ones win.
+        progress: show a progress bar (None: only on a terminal); desc: its label.
+
+    Returns:
+        (the series by name, N = steps + 1 rows each, the wall time [s]).
+    """
+    step = STEPS[check_integrator(integrator)]
+    q, x = q0, x0
+    records: dict[str, list] = {}
+    started = time.perf_counter()
+    for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None, desc=desc,
+                  unit="step", leave=False):
+        t = k * dt
+        sample = system.sample(t, q, x)
+        row = {"t": t, "q": q.copy(), **system.record(t, q, x, sample)}
+        for recorder in recorders:
+            row.update(recorder(t, q, x, sample))
+        for name, value in row.items():
+            records.setdefault(name, []).append(value)
+        if k == steps:
+            break
+        q, x = step(system.model, system.stage_rate(sample), t, q, x, dt, sample.rate)
+        system.check(t + dt, q, x, dt)
+    return {name: np.array(values) for name, values in records.items()}, time.perf_counter() - started
+
+
+# ------------------------------------------------------------------ kinematic runs
+@dataclass(frozen=True)
+class KinematicSample:
+    """The controller's velocity at the start of a step: rate = (v (nv,), empty) and its diagnostics."""
+
+    rate: tuple[np.ndarray, np.ndarray]
+    info: object
+
+
+class KinematicSystem:
+    """q' = v from a kinematic controller (q, t) -> (v, diagnostics); no vector state.
+
+    Args:
+        robot: the model; controller: (q, t) -> (v (nv,), diagnostics with sigma_min, damping,
+            optionally limits_active).
     """
 
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    ee_position: np.ndarray
-    ee_rpy: np.ndarray
-    desired_position: np.ndarray
-    desired_rpy: np.ndarray
-    task_error: np.ndarray
-    position_error: np.ndarray
-    orientation_error: np.ndarray
-    sigma_min: np.ndarray
-    damping: np.ndarray
-    limits_active: np.ndarray
-    robot: Robot = field(repr=False)
-    axes: tuple[str, ...] = ()
-    wall_time: float = 0.0
+    def __init__(self, robot: Robot, controller: Controller) -> None:
+        self.robot, self.model, self.controller = robot, robot.model, controller
 
-    def arrays(self) -> dict[str, np.ndarray]:
-        """Every saved array by name."""
-        return {name: getattr(self, name) for name in SERIES}
+    def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> KinematicSample:
+        """The velocity applied from q at t.
 
-    def vehicle_pose(self) -> np.ndarray:
-        """Vehicle pose per row: [x, y, yaw] (planar) or [x, y, z, roll, pitch, yaw] (floating), world ENU.
-
-        Angles are unwrapped over time (continuous, not folded into [-pi, pi)).
+        Raises:
+            UVMSError: a non-finite velocity.
         """
-        rows = []
-        for q in self.q:
-            pose = self.robot.base_pose(q)
-            rpy = pin.rpy.matrixToRpy(pose.rotation)
-            rows.append([*pose.translation[:2], rpy[2]] if self.robot.base_type == "planar"
-                        else [*pose.translation, *rpy])
-        rows = np.array(rows)
-        angles = slice(2, 3) if self.robot.base_type == "planar" else slice(3, 6)
-        rows[:, angles] = np.unwrap(rows[:, angles], axis=0)
-        return rows
+        v, info = self.controller(q, t)
+        if not np.all(np.isfinite(v)):
+            raise UVMSError(f"the controller returned a non-finite velocity at t = {t:.6g} s")
+        return KinematicSample((v, EMPTY), info)
 
-    def arm(self) -> np.ndarray:
-        """Arm joint values per row (N, n_arm)."""
-        return np.array([self.robot.arm_configuration(q) for q in self.q])
+    def stage_rate(self, sample: KinematicSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
+        """(t, q, x) -> (controller velocity, empty) at the stages."""
+        controller = self.controller
+        return lambda t, q, x: (controller(q, t)[0], EMPTY)
 
-    def csv_text(self) -> str:
-        """The time series as CSV: t, vehicle pose, arm joints, v, end effector, errors, diagnostics."""
-        robot = self.robot
-        vehicle_names = (["base_x", "base_y", "base_yaw"] if robot.base_type == "planar" else
-                         ["base_x", "base_y", "base_z", "base_roll", "base_pitch", "base_yaw"]
-                         if robot.base_type == "floating" else [])
-        velocity_names = [f"v_{name}" for name in velocity_labels(robot)]
-        header = (["t"] + vehicle_names + robot.arm_joint_names + velocity_names
-                  + [f"ee_{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
-                  + [f"desired_{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
-                  + [f"error_{axis}" for axis in self.axes]
-                  + ["position_error", "orientation_error", "sigma_min", "damping", "limits_active"])
-        vehicle = self.vehicle_pose() if vehicle_names else np.zeros((len(self.t), 0))
-        table = np.column_stack([
-            self.t, vehicle, self.arm(), self.v, self.ee_position, self.ee_rpy, self.desired_position,
-            self.desired_rpy, self.task_error, self.position_error, self.orientation_error, self.sigma_min, self.damping,
-            self.limits_active])
-        buffer = io.StringIO()
-        writer = csv.writer(buffer, lineterminator="\n")
-        writer.writerow(header)
-        writer.writerows([[f"{value:.17g}" for value in row] for row in table])
-        return buffer.getvalue()
+    def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: KinematicSample) -> dict:
+        """v and the solver's diagnostics of a row."""
+        info = sample.info
+        return {"v": sample.rate[0].copy(), "sigma_min": float(np.min(info.sigma_min)),
+                "damping": float(info.damping), "limits_active": len(getattr(info, "limits_active", ()))}
 
-    def save(self, folder: str | os.PathLike) -> tuple[Path, Path]:
-        """Write ``trajectory.csv`` and ``trajectory.npz`` atomically into ``folder``."""
-        folder = Path(folder)
-        outputs.write_text(folder / "trajectory.csv", self.csv_text())
-        outputs.write_npz(folder / "trajectory.npz", **self.arrays())
-        return folder / "trajectory.csv", folder / "trajectory.npz"
+    def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
+        """Nothing to refuse: the velocity was checked when sampled."""
 
 
-def velocity_labels(robot: Robot) -> list[str]:
-    """A name per entry of v: the vehicle's body twist (vx, vy, ... local) then the arm joints."""
-    labels = list(VELOCITY_NAMES.get(robot.base_type, ()))
-    for joint in robot.arm_joints:
-        labels += [joint.name] if joint.nv == 1 else [f"{joint.name}_{i}" for i in range(joint.nv)]
-    return labels
+class TaskRecorder:
+    """The task series of a row: end-effector pose, desired pose and the errors on the task axes.
+
+    Args:
+        robot: the model; task: the end-effector task (its frame, axes and orientation error).
+        desired: t -> desired pose of the task frame.
+        positions: also record ee_position and desired_position (False when another recorder does).
+    """
+
+    def __init__(self, robot: Robot, task: FrameTask, desired: Callable[[float], pin.SE3], positions: bool = True):
+        self.robot, self.task, self.desired, self.positions = robot, task, desired, positions
+        self.position_rows = [r for r in task.rows if r < 3]
+        self.orientation_rows = [r for r in task.rows if r >= 3]
+
+    def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
+        task = self.task
+        pose, target = self.robot.fk(q, task.frame), self.desired(t)
+        full_error = task.full_error_between(target, pose)
+        row = {"ee_rpy": pin.rpy.matrixToRpy(pose.rotation), "desired_rpy": pin.rpy.matrixToRpy(target.rotation),
+               "task_error": full_error[task.rows],
+               "position_error": float(np.linalg.norm(full_error[self.position_rows])),
+               "orientation_error": float(np.linalg.norm(full_error[self.orientation_rows]))}
+        if self.positions:
+            row.update(ee_position=pose.translation.copy(), desired_position=target.translation.copy())
+        return row
 
 
 def simulate(
@@ -158,33 +186,134 @@ def simulate(
     check_integrator(integrator)
     steps = step_count(duration, dt)
     q = robot.check_configuration(q0).copy()
-    model = robot.model
-    position_rows = [r for r in task.rows if r < 3]
-    orientation_rows = [r for r in task.rows if r >= 3]
-    records: dict[str, list] = {name: [] for name in SERIES}
-    started = time.perf_counter()
-    empty = np.zeros(0)
-    rate = lambda time_, configuration, _: (controller(configuration, time_)[0], empty)  # noqa: E731
-    for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None,
-                  desc="simulate", unit="step", leave=False):
-        t = k * dt
-        v, info = controller(q, t)
-        if not np.all(np.isfinite(v)):
-            raise UVMSError(f"the controller returned a non-finite velocity at t = {t:.6g} s")
-        pose, target = robot.fk(q, task.frame), desired(t)
-        full_error = task.full_error_between(target, pose)
-        for name, value in (
-            ("t", t), ("q", q.copy()), ("v", v.copy()), ("ee_position", pose.translation.copy()),
-            ("ee_rpy", pin.rpy.matrixToRpy(pose.rotation)), ("desired_position", target.translation.copy()),
-            ("desired_rpy", pin.rpy.matrixToRpy(target.rotation)), ("task_error", full_error[task.rows]),
-            ("position_error", float(np.linalg.norm(full_error[position_rows]))),
-            ("orientation_error", float(np.linalg.norm(full_error[orientation_rows]))),
-            ("sigma_min", float(np.min(info.sigma_min))), ("damping", float(info.damping)),
-            ("limits_active", len(getattr(info, "limits_active", ()))),
-        ):
-            records[name].append(value)
-        if k == steps:
-            break
-        q, _ = STEPS[integrator](model, rate, t, q, empty, dt, (v, empty))
-    arrays = {name: np.array(values) for name, values in records.items()}
-    return SimulationResult(**arrays, robot=robot, axes=task.axes, wall_time=time.perf_counter() - started)
+    arrays, wall_time = run_loop(KinematicSystem(robot, controller), q, EMPTY, steps=steps, dt=dt,
+                                 integrator=integrator, recorders=[TaskRecorder(robot, task, desired)],
+                                 progress=progress, desc="simulate")
+    return SimulationResult(**arrays, robot=robot, axes=task.axes, wall_time=wall_time, integrator=integrator, dt=dt)
+
+
+# ------------------------------------------------------------------ plant runs
+def simulate_plant(
+    plant: Plant,
+    q0: np.ndarray,
+    v0: np.ndarray | None,
+    command: Command | np.ndarray | None,
+    duration: float,
+    dt: float,
+    method: str = "rk4",
+    *,
+    hold: bool = False,
+    progress: bool | None = None,
+    recorders: Sequence[Recorder] = (),
+    integrator: str | None = None,
+) -> SimulationResult:
+    """Integrate the plant from (q0, v0) for ``duration`` with a fixed step ``dt``.
+
+    RK4 is the Runge-Kutta-Munthe-Kaas scheme of order 4 (:mod:`uvms.integrate`): the
+    configuration stages live in the tangent space at q_k and are mapped with
+    ``pin.integrate`` / ``pin.dIntegrate``, so the quaternion stays unit and the order
+    is 4 on the manifold. "euler" is explicit Euler, for comparison.
+
+    Args:
+        plant: the Plant.
+        q0: initial configuration (nq,); v0: initial velocity (nv,) (None: rest).
+        command: (t, q, v) -> joint-velocity command (n_arm,), a constant (n_arm,), or None (zero).
+        duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
+            :data:`uvms.integrate.MAX_STEPS`.
+        method: "rk4" or "euler" (the old name of ``integrator``).
+        hold: sample the command once per step and hold it (a digital
+            controller at 1/dt); default: evaluate it at every stage.
+        progress: show a progress bar (None: only on a terminal).
+        recorders: more series per row, (t, q, v, sample) -> {name: value}.
+        integrator: "rk4" or "euler"; wins over ``method`` when given.
+
+    Returns:
+        A SimulationResult with N = steps + 1 rows and the plant series (command, joint_torque,
+        kinetic_energy, potential_energy, momentum).
+
+    Raises:
+        UVMSError: bad arguments, a command of the wrong size or non-finite, a state
+            that becomes non-finite (step too large).
+    """
+    integrator = check_integrator(method if integrator is None else integrator, "method" if integrator is None
+                                  else "integrator")
+    steps = step_count(duration, dt)  # checked before anything runs; the same bounds as every run
+    robot = plant.robot
+    q = robot.check_configuration(q0).copy()
+    v = np.zeros(plant.model.nv) if v0 is None else robot.check_velocity(v0).copy()
+    arrays, wall_time = run_loop(PlantSystem(plant, command, hold), q, v, steps=steps, dt=dt, integrator=integrator,
+                                 recorders=recorders, progress=progress, desc="plant")
+    if arrays["command"].ndim == 1:  # no arm
+        arrays["command"] = arrays["command"].reshape(len(arrays["t"]), 0)
+        arrays["joint_torque"] = arrays["joint_torque"].reshape(len(arrays["t"]), 0)
+    return SimulationResult(**arrays, robot=robot, plant=plant, dt=dt, integrator=integrator, wall_time=wall_time)
+
+
+def simulate_gjm(
+    plant: Plant,
+    controller: GJMController,
+    q0: np.ndarray,
+    duration: float,
+    dt: float,
+    *,
+    control_dt: float = 0.0,
+    method: str = "rk4",
+    progress: bool | None = None,
+    task: FrameTask | None = None,
+    integrator: str | None = None,
+) -> SimulationResult:
+    """Drive the plant with the GJM controller from rest at q0 and record the tracking.
+
+    Args:
+        plant: the free-floating plant (its robot must be the controller's model).
+        controller: the GJM controller.
+        q0: initial configuration (nq,); the system starts at rest (zero momentum).
+        duration, dt: [s], integration step.
+        control_dt: 0 (default): a continuous controller, evaluated at every
+            integrator stage; > 0: a digital one, sampled every ``control_dt`` [s]
+            (a multiple of dt) and held in between.
+        method: "rk4" or "euler" (the old name of ``integrator``, which wins when given).
+        progress: a progress bar (None: only on a terminal).
+        task: a ``FrameTask`` on the controlled frame: also record its series (ee_rpy, task_error,
+            orientation error; position_error from its axes) as ``uvms run`` saves them; None: the
+            position error is |p_d - p| over the controller's position axes.
+
+    Returns:
+        A SimulationResult with the plant series, the tracking series (ee_position, desired_position,
+        ee_velocity, desired_velocity, rates, sigma_min, damping) and, with ``task``, the task series.
+
+    Raises:
+        GJMControlError: control_dt not 0 nor a positive multiple of dt; plant and controller on different models.
+        UVMSError: from the plant (non-finite state, bad sizes).
+    """
+    if plant.robot.model.nv != controller.model.nv or plant.robot.model.nq != controller.model.nq:
+        raise GJMControlError("the plant and the controller must use the same robot model")
+    control_dt = float(control_dt)
+    command, hold = controller, False
+    if control_dt != 0.0:
+        ratio = control_dt / dt
+        if not (np.isfinite(ratio) and ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6):
+            raise GJMControlError(f"control_dt must be 0 (continuous) or a positive multiple of dt = {dt:g} s, "
+                                  f"got {control_dt!r}")
+        every = int(round(ratio))
+        held: dict[str, np.ndarray] = {}
+
+        def command(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # called once per step (hold=True)
+            step = int(round(t / dt))
+            if step % every == 0 or "u" not in held:
+                held["u"] = controller(t, q, v)
+            return held["u"]
+
+        hold = True
+    recorders: list[Recorder] = [lambda t, q, v, sample: controller.tracking(t, q, v)]
+    if task is not None:
+        recorders.append(TaskRecorder(controller.robot, task, lambda t: controller.reference(t).pose, positions=False))
+    result = simulate_plant(plant, q0, None, command, duration, dt, method, hold=hold, progress=progress,
+                            recorders=recorders, integrator=integrator)
+    result.controller, result.control_dt = controller, control_dt
+    if task is None:
+        result.position_error = result.tracking_error()
+    else:
+        result.axes = task.axes
+        result.limits_active = np.zeros(len(result.t), dtype=int)
+    return result

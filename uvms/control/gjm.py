@@ -37,9 +37,8 @@ reference acceleration.
 from __future__ import annotations
 
 import bisect
-import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -47,9 +46,8 @@ import pinocchio as pin
 from ..errors import GJMControlError, UVMSError
 from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
 from ..kinematics import AXIS_NAMES, axis_rows
-from ..dynamics.plant import Plant, PlantResult, augmented_mass_matrix, resolve_links, simulate_plant
+from ..dynamics.plant import augmented_mass_matrix, resolve_links
 from ..robot import Robot
-from ..simulate import SimulationResult
 from ..solvers.clik import VariableDamping, damped_weighted_inverse
 from ..solvers.inverses import weights_factor
 from ..trajectory.cartesian import PoseSample
@@ -327,6 +325,16 @@ class GJMController:
         command, error = self._task_velocity(self.reference(t), pose.translation)
         return GJMSample(inverse @ command, command, error if self.position_rows else np.zeros(3), sigma_min, used)
 
+    def tracking(self, t: float, q: np.ndarray, v: np.ndarray) -> dict:
+        """The tracking series of a run's row at (t, q, v): pose and velocity of the frame and of the reference,
+        the joint rates w and the inverse's sigma_min and damping (a recorder of :func:`uvms.simulate.simulate_gjm`)."""
+        jacobian, pose = self._kinematics(q)
+        sample = self._sample(q, t)
+        reference = self.reference(t)
+        return {"ee_position": pose.translation.copy(), "desired_position": reference.pose.translation.copy(),
+                "ee_velocity": jacobian[:3] @ v, "desired_velocity": reference.twist[:3].copy(), "rates": sample.rates,
+                "sigma_min": sample.sigma_min, "damping": sample.damping}
+
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The joint-velocity command u (n_arm,) at (t, q, v): w, plus tau dw/dt with the servo feedforward.
 
@@ -363,194 +371,11 @@ def _gain_matrix(gain) -> np.ndarray:
     return array
 
 
-# ------------------------------------------------------------------ running
-@dataclass
-class GJMResult:
-    """A GJM-controlled plant run; row k is the state at t[k].
+def __getattr__(name: str):
+    """``simulate_gjm`` and ``GJMResult`` moved to :mod:`uvms.simulate` (the one loop and result); this old path
+    keeps working for one release."""
+    if name in ("simulate_gjm", "GJMResult"):
+        from ..simulate import GJMResult, simulate_gjm  # lazily: the loop sits above this layer
 
-    Attributes:
-        plant_result: the :class:`uvms.plant.PlantResult` (q, v, command u, torques, energy, momentum).
-        controller: the controller.
-        ee_position, desired_position: (N, 3) [m] world.
-        ee_velocity, desired_velocity: (N, 3) [m/s] world (linear velocity of the frame origin).
-        position_error: (N,) [m] norm of p_d - p over the task's position axes.
-        rates: (N, n_arm) joint rates w [rad/s] from the GJM (before the servo feedforward).
-        sigma_min, damping: (N,) of the inverted GJM rows.
-        wall_time: [s].
-    """
-
-    plant_result: PlantResult
-    controller: GJMController
-    ee_position: np.ndarray
-    desired_position: np.ndarray
-    ee_velocity: np.ndarray
-    desired_velocity: np.ndarray
-    position_error: np.ndarray
-    rates: np.ndarray
-    sigma_min: np.ndarray
-    damping: np.ndarray
-    wall_time: float = 0.0
-    control_dt: float = 0.0
-    extras: dict = field(default_factory=dict)
-
-    @property
-    def t(self) -> np.ndarray:
-        """(N,) [s]."""
-        return self.plant_result.t
-
-    @property
-    def final_position_error(self) -> float:
-        """|p_d - p| at the last row [m]."""
-        return float(self.position_error[-1])
-
-    @property
-    def max_position_error(self) -> float:
-        """max_t |p_d - p| [m]."""
-        return float(self.position_error.max())
-
-    @property
-    def velocity_error(self) -> np.ndarray:
-        """(N,) [m/s] norm of v_d - v over the task's position axes."""
-        axes = [row for row in self.controller.rows if row < 3]
-        return np.linalg.norm((self.desired_velocity - self.ee_velocity)[:, axes], axis=1)
-
-    def joint_rates(self) -> np.ndarray:
-        """Measured joint velocities (N, n_arm) [rad/s]."""
-        return self.plant_result.v[:, self.controller.nb:]
-
-    def simulation_result(self, task) -> SimulationResult:
-        """The run as a :class:`uvms.simulate.SimulationResult` (the series of ``uvms run``).
-
-        Args:
-            task: a ``FrameTask`` on the controlled frame: its axes and orientation
-                error define ``task_error`` and the orientation error.
-        """
-        robot, plant_result = self.controller.robot, self.plant_result
-        position_rows = [row for row in task.rows if row < 3]
-        orientation_rows = [row for row in task.rows if row >= 3]
-        records = {name: [] for name in ("ee_rpy", "desired_rpy", "task_error", "position_error", "orientation_error")}
-        for t, q in zip(plant_result.t, plant_result.q):
-            pose, target = robot.fk(q, task.frame), self.controller.reference(float(t)).pose
-            full = task.full_error_between(target, pose)
-            records["ee_rpy"].append(pin.rpy.matrixToRpy(pose.rotation))
-            records["desired_rpy"].append(pin.rpy.matrixToRpy(target.rotation))
-            records["task_error"].append(full[task.rows])
-            records["position_error"].append(float(np.linalg.norm(full[position_rows])))
-            records["orientation_error"].append(float(np.linalg.norm(full[orientation_rows])))
-        arrays = {name: np.array(values) for name, values in records.items()}
-        return SimulationResult(t=plant_result.t, q=plant_result.q, v=plant_result.v, ee_position=self.ee_position,
-                                desired_position=self.desired_position, sigma_min=self.sigma_min, damping=self.damping,
-                                limits_active=np.zeros(len(plant_result.t), dtype=int), robot=robot, axes=task.axes,
-                                wall_time=self.wall_time, **arrays)
-
-    def metrics(self) -> dict:
-        """Plant-run numbers for ``metrics.json`` (SI units; see the README)."""
-        plant_result = self.plant_result
-        energy = plant_result.energy
-        work = self.motor_work()
-        rates = self.joint_rates()
-        return {
-            "final_position_error_xyz": (self.desired_position[-1] - self.ee_position[-1]).tolist(),
-            "max_velocity_error": float(self.velocity_error.max()),
-            "final_velocity_error": float(self.velocity_error[-1]),
-            "momentum_drift": plant_result.momentum_drift().tolist(),
-            "final_kinetic_energy": float(plant_result.kinetic_energy[-1]),
-            "max_kinetic_energy": float(plant_result.kinetic_energy.max()),
-            "motor_work": work,
-            "dissipated_energy": float(work - (energy[-1] - energy[0])),
-            "max_joint_rate": float(np.abs(rates).max(initial=0.0)),
-            "max_joint_command": float(np.abs(plant_result.command).max(initial=0.0)),
-            "max_joint_torque": float(np.abs(plant_result.joint_torque).max(initial=0.0)),
-        }
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The plant-side series saved in ``plant.npz``."""
-        plant_result = self.plant_result
-        return {
-            "t": plant_result.t, "q": plant_result.q, "v": plant_result.v, "command": plant_result.command,
-            "rates": self.rates, "joint_torque": plant_result.joint_torque,
-            "kinetic_energy": plant_result.kinetic_energy, "potential_energy": plant_result.potential_energy,
-            "momentum": plant_result.momentum, "ee_position": self.ee_position, "desired_position": self.desired_position,
-            "ee_velocity": self.ee_velocity, "desired_velocity": self.desired_velocity,
-            "position_error": self.position_error, "sigma_min": self.sigma_min, "damping": self.damping,
-        }
-
-    def motor_work(self) -> float:
-        """Work done by the joint motors, integral of tau_m . qd_m (trapezoid rule) [J]."""
-        power = np.sum(self.plant_result.joint_torque * self.joint_rates(), axis=1)
-        return float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(self.t))) if len(power) > 1 else 0.0
-
-
-def simulate_gjm(
-    plant: Plant,
-    controller: GJMController,
-    q0: np.ndarray,
-    duration: float,
-    dt: float,
-    *,
-    control_dt: float = 0.0,
-    method: str = "rk4",
-    progress: bool | None = None,
-) -> GJMResult:
-    """Drive the plant with the controller from rest at q0 and record the tracking (``progress``: a bar,
-    None: only on a terminal).
-
-    Args:
-        plant: the free-floating plant (its robot must be the controller's model).
-        controller: the GJM controller.
-        q0: initial configuration (nq,); the system starts at rest (zero momentum).
-        duration, dt: [s], integration step.
-        control_dt: 0 (default): a continuous controller, evaluated at every
-            integrator stage; > 0: a digital one, sampled every ``control_dt`` [s]
-            (a multiple of dt) and held in between.
-        method: "rk4" or "euler".
-
-    Raises:
-        GJMControlError: control_dt not 0 nor a positive multiple of dt; plant and controller on different models.
-        UVMSError: from the plant (non-finite state, bad sizes).
-    """
-    if plant.robot.model.nv != controller.model.nv or plant.robot.model.nq != controller.model.nq:
-        raise GJMControlError("the plant and the controller must use the same robot model")
-    control_dt = float(control_dt)
-    started = time.perf_counter()
-    command, hold = controller, False
-    if control_dt != 0.0:
-        ratio = control_dt / dt
-        if not (np.isfinite(ratio) and ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6):
-            raise GJMControlError(f"control_dt must be 0 (continuous) or a positive multiple of dt = {dt:g} s, "
-                                  f"got {control_dt!r}")
-        every = int(round(ratio))
-        held: dict[str, np.ndarray] = {}
-
-        def command(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:  # called once per step (hold=True)
-            step = int(round(t / dt))
-            if step % every == 0 or "u" not in held:
-                held["u"] = controller(t, q, v)
-            return held["u"]
-
-        hold = True
-    result = simulate_plant(plant, q0, None, command, duration, dt, method, hold=hold, progress=progress)
-    return record(result, controller, time.perf_counter() - started, control_dt)
-
-
-def record(result: PlantResult, controller: GJMController, wall_time: float = 0.0,
-           control_dt: float = 0.0) -> GJMResult:
-    """The tracking series of a plant run driven by ``controller``."""
-    rows = {name: [] for name in ("ee_position", "desired_position", "ee_velocity", "desired_velocity", "rates",
-                                  "sigma_min", "damping")}
-    for t, q, v in zip(result.t, result.q, result.v):
-        jacobian, pose = controller._kinematics(q)
-        sample = controller._sample(q, float(t))
-        reference = controller.reference(float(t))
-        rows["ee_position"].append(pose.translation.copy())
-        rows["desired_position"].append(reference.pose.translation.copy())
-        rows["ee_velocity"].append(jacobian[:3] @ v)
-        rows["desired_velocity"].append(reference.twist[:3].copy())
-        rows["rates"].append(sample.rates)
-        rows["sigma_min"].append(sample.sigma_min)
-        rows["damping"].append(sample.damping)
-    arrays = {name: np.array(values) for name, values in rows.items()}
-    axes = [row for row in controller.rows if row < 3]
-    error = np.linalg.norm((arrays["desired_position"] - arrays["ee_position"])[:, axes], axis=1)
-    return GJMResult(plant_result=result, controller=controller, position_error=error, wall_time=wall_time,
-                     control_dt=control_dt, **arrays)
+        return {"GJMResult": GJMResult, "simulate_gjm": simulate_gjm}[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -46,9 +46,8 @@ of that augmented momentum.
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -56,9 +55,7 @@ import pinocchio as pin
 from ..errors import UVMSError
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from ..robot import Robot
-from ..integrate import STEPS, check_integrator, step_count
 from ..kinematics import generalized_jacobian_from_parts, mass_matrix_split
-from ..progress import tqdm
 
 
 LOCAL = pin.ReferenceFrame.LOCAL
@@ -355,137 +352,91 @@ class Plant:
         return total.vector.copy()
 
 
-# ------------------------------------------------------------------ simulation
-@dataclass
-class PlantResult:
-    """Time series of a plant simulation; row k is the state at t[k] and the command applied from it.
+# ------------------------------------------------------------------ the plant as a system of the loop
+@dataclass(frozen=True)
+class PlantSample:
+    """The plant at the start of a step: the command applied from it and the dynamics it gives.
 
     Attributes:
-        t: (N,) [s]; q: (N, nq); v: (N, nv); command: (N, n_arm) [rad/s or m/s].
-        joint_torque: (N, n_arm) motor torques [N m or N].
-        kinetic_energy, potential_energy: (N,) [J] (kinetic includes the added mass).
-        momentum: (N, 6) [N s, N m s] world frame about the world origin, rigid + added mass.
-        plant: the Plant that produced it (not saved); dt [s]; method; wall_time [s].
+        rate: (v (nv,), v' (nv,)): the state's derivative at (q, v), the integrator's first stage.
+        command: u (n_arm,) [rad/s or m/s]; dynamics: accelerations and motor torques.
     """
 
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
+    rate: tuple[np.ndarray, np.ndarray]
     command: np.ndarray
-    joint_torque: np.ndarray
-    kinetic_energy: np.ndarray
-    potential_energy: np.ndarray
-    momentum: np.ndarray
-    plant: Plant = field(repr=False)
-    dt: float = 0.0
-    method: str = "rk4"
-    wall_time: float = 0.0
-
-    @property
-    def energy(self) -> np.ndarray:
-        """Mechanical energy (N,) [J]: kinetic + potential."""
-        return self.kinetic_energy + self.potential_energy
-
-    def momentum_drift(self) -> np.ndarray:
-        """max_t |h(t) - h(0)| of the linear and the angular momentum (2,) [N s, N m s]."""
-        change = self.momentum - self.momentum[0]
-        return np.array([np.max(np.linalg.norm(change[:, :3], axis=1)), np.max(np.linalg.norm(change[:, 3:], axis=1))])
-
-    def ee_position(self, frame: str | None = None) -> np.ndarray:
-        """End-effector position (N, 3) [m], world frame."""
-        robot = self.plant.robot
-        return np.array([robot.fk(q, frame).translation for q in self.q])
-
-    def ee_twist(self, frame: str | None = None) -> np.ndarray:
-        """End-effector twist (N, 6) [m/s, rad/s], world-aligned (J v)."""
-        robot = self.plant.robot
-        return np.array([robot.jacobian(q, frame) @ v for q, v in zip(self.q, self.v)])
+    dynamics: PlantDynamics
 
 
-def _constant_command(value: np.ndarray) -> Command:
-    return lambda t, q, v: value
+class PlantSystem:
+    """The plant under a joint-velocity command, as the state (q, v) of :func:`uvms.simulate.run_loop`.
 
-
-def simulate_plant(
-    plant: Plant,
-    q0: np.ndarray,
-    v0: np.ndarray | None,
-    command: Command | np.ndarray | None,
-    duration: float,
-    dt: float,
-    method: str = "rk4",
-    *,
-    hold: bool = False,
-    progress: bool | None = None,
-) -> PlantResult:
-    """Integrate the plant from (q0, v0) for ``duration`` with a fixed step ``dt``.
-
-    RK4 is the Runge-Kutta-Munthe-Kaas scheme of order 4 (as in :mod:`uvms.simulate`):
-    the configuration stages live in the tangent space at q_k and are mapped with
-    ``pin.integrate`` / ``pin.dIntegrate``, so the quaternion stays unit and the
-    order is 4 on the manifold. "euler" is explicit Euler, for comparison.
+    (q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)).
 
     Args:
         plant: the Plant.
-        q0: initial configuration (nq,); v0: initial velocity (nv,) (None: rest).
-        command: (t, q, v) -> joint-velocity command (n_arm,), a constant (n_arm,), or None (zero).
-        duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
-            :data:`uvms.simulate.MAX_STEPS`.
-        method: "rk4" or "euler".
-        hold: sample the command once per step and hold it (a digital
+        command: (t, q, v) -> u (n_arm,), a constant (n_arm,), or None (zero).
+        hold: sample the command once per step and hold it over the integrator's stages (a digital
             controller at 1/dt); default: evaluate it at every stage.
-        progress: show a progress bar (None: only on a terminal).
-
-    Returns:
-        A PlantResult with N = steps + 1 rows.
 
     Raises:
-        UVMSError: bad arguments, a command of the wrong size or non-finite, a state
-            that becomes non-finite (step too large).
+        ConfigurationError: a constant command of the wrong size or non-finite.
     """
-    check_integrator(method, "method")
-    steps = step_count(duration, dt)  # checked before anything runs; the same bounds as uvms.simulate
-    robot, model = plant.robot, plant.model
-    q = robot.check_configuration(q0).copy()
-    v = np.zeros(model.nv) if v0 is None else robot.check_velocity(v0).copy()
-    if command is None:
-        command = np.zeros(plant.n_arm)
-    if not callable(command):
-        command = _constant_command(robot.check_velocity(command, plant.n_arm, "joint-velocity command"))
 
-    def sample(t: float, qq: np.ndarray, vv: np.ndarray) -> np.ndarray:
+    def __init__(self, plant: Plant, command: Command | np.ndarray | None, hold: bool = False) -> None:
+        self.plant, self.model, self.hold = plant, plant.model, bool(hold)
+        if command is None:
+            command = np.zeros(plant.n_arm)
+        if not callable(command):
+            value = plant.robot.check_velocity(command, plant.n_arm, "joint-velocity command")
+            command = lambda t, q, v: value  # noqa: E731
+        self.command = command
+
+    def command_at(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """u (n_arm,) at (t, q, v), checked.
+
+        Raises:
+            UVMSError: the command failed, or is not n_arm finite numbers.
+        """
         try:
-            u = np.asarray(command(t, qq, vv), dtype=float)
+            u = np.asarray(self.command(t, q, v), dtype=float)
         except (TypeError, ValueError) as exc:
             raise UVMSError(f"the command failed at t = {t:.6g} s: {exc}") from None
-        if u.shape != (plant.n_arm,) or not np.all(np.isfinite(u)):
+        if u.shape != (self.plant.n_arm,) or not np.all(np.isfinite(u)):
             raise UVMSError(
-                f"the command must return {plant.n_arm} finite joint velocities, got {u!r} at t = {t:.6g} s")
+                f"the command must return {self.plant.n_arm} finite joint velocities, got {u!r} at t = {t:.6g} s")
         return u
 
-    records: dict[str, list] = {name: [] for name in
-                                ("t", "q", "v", "command", "joint_torque", "kinetic_energy", "potential_energy",
-                                 "momentum")}
-    started = time.perf_counter()
-    for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None, desc="plant",
-                  unit="step", leave=False):
-        t = k * dt
-        u = sample(t, q, v)
-        state = plant._evaluate(q, v, u)
-        kinetic, potential = plant.energy(q, v)
-        for name, value in (("t", t), ("q", q.copy()), ("v", v.copy()), ("command", u),
-                            ("joint_torque", state.joint_torque), ("kinetic_energy", kinetic),
-                            ("potential_energy", potential), ("momentum", plant.momentum(q, v))):
-            records[name].append(value)
-        if k == steps:
-            break
-        held = (lambda tt, qq, vv, held_u=u: held_u) if hold else sample
-        rate = lambda tt, qq, vv, held=held: (vv, plant._evaluate(qq, vv, held(tt, qq, vv)).acceleration)  # noqa: E731
-        q, v = STEPS[method](model, rate, t, q, v, dt, (v, state.acceleration))
+    def sample(self, t: float, q: np.ndarray, v: np.ndarray) -> PlantSample:
+        """The command and the dynamics at the start of a step."""
+        u = self.command_at(t, q, v)
+        dynamics = self.plant._evaluate(q, v, u)
+        return PlantSample((v, dynamics.acceleration), u, dynamics)
+
+    def stage_rate(self, sample: PlantSample) -> Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+        """(t, q, v) -> (v, v') at the integrator's stages (the command held from ``sample`` when ``hold``)."""
+        plant = self.plant
+        if self.hold:
+            held = sample.command
+            return lambda t, q, v: (v, plant._evaluate(q, v, held).acceleration)
+        return lambda t, q, v: (v, plant._evaluate(q, v, self.command_at(t, q, v)).acceleration)
+
+    def record(self, t: float, q: np.ndarray, v: np.ndarray, sample: PlantSample) -> dict:
+        """The plant series of a row: v, the command, torques, energies, momentum."""
+        kinetic, potential = self.plant.energy(q, v)
+        return {"v": v.copy(), "command": sample.command, "joint_torque": sample.dynamics.joint_torque,
+                "kinetic_energy": kinetic, "potential_energy": potential, "momentum": self.plant.momentum(q, v)}
+
+    def check(self, t: float, q: np.ndarray, v: np.ndarray, dt: float) -> None:
+        """Raise UVMSError when the state reached at t [s] is not finite (the step dt was too large)."""
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-            raise UVMSError(f"the state became non-finite at t = {t + dt:.6g} s; reduce dt (now {dt:g} s)")
-    arrays = {name: np.array(values) for name, values in records.items()}
-    if arrays["command"].ndim == 1:  # no arm
-        arrays["command"] = arrays["command"].reshape(len(arrays["t"]), 0)
-        arrays["joint_torque"] = arrays["joint_torque"].reshape(len(arrays["t"]), 0)
-    return PlantResult(**arrays, plant=plant, dt=dt, method=method, wall_time=time.perf_counter() - started)
+            raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")
+
+
+def __getattr__(name: str):
+    """``simulate_plant`` and ``PlantResult`` moved to :mod:`uvms.simulate` (the one loop and result); this
+    old path keeps working for one release."""
+    if name in ("simulate_plant", "PlantResult"):
+        from ..simulate import PlantResult, simulate_plant  # lazily: the loop sits above this layer
+
+        return {"PlantResult": PlantResult, "simulate_plant": simulate_plant}[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -242,7 +242,7 @@ def gjm_tracking_figure(result, title: str = "", path: str | os.PathLike | None 
     are drawn relative to the start; world ENU axes (x forward, y left, z up).
 
     Args:
-        result: a :class:`uvms.gjm_control.GJMResult`.
+        result: a :class:`uvms.simulate.SimulationResult` of :func:`uvms.simulate.simulate_gjm`.
         title: figure title; path: where to save the PNG (atomically), None to only return it.
     """
     t = result.t
@@ -283,7 +283,7 @@ def gjm_figures(result, folder: str | os.PathLike, title: str = "", snapshots: i
     ``snapshots.png`` (the configuration at ``snapshots`` evenly spaced times, 1, 3, 5, 7 s for 8 s).
 
     Args:
-        result: a :class:`uvms.gjm_control.GJMResult`; folder: output folder; title: figure titles.
+        result: a :class:`uvms.simulate.SimulationResult` of :func:`uvms.simulate.simulate_gjm`; folder: output folder; title: figure titles.
 
     Returns:
         The paths written.
@@ -295,12 +295,12 @@ def gjm_figures(result, folder: str | os.PathLike, title: str = "", snapshots: i
     gjm_tracking_figure(result, title, folder / "ee_tracking.png")
     labels = [f"{name} [rad/s]" for name in robot.arm_joint_names]
     figure = stacked(t, result.joint_rates(), labels, f"{title}: joint rates (solid) and commands (dashed)",
-                     dashed=result.plant_result.command)
+                     dashed=result.command)
     outputs.save_figure(figure, folder / "joint_rates.png")
     rows = snapshot_rows(t, snapshots)
     titles = [f"({chr(97 + k)}) t = {t[row]:.1f} s" for k, row in enumerate(rows)]
     planar = robot.base_type == "planar"
-    figure = snapshot_figure(robot, result.plant_result.q[rows], titles=titles, frames=[result.controller.frame],
+    figure = snapshot_figure(robot, result.q[rows], titles=titles, frames=[result.controller.frame],
                              plane="xy" if planar else None)
     figure.subplots_adjust(top=0.84)  # room for the suptitle above the panel titles
     figure.suptitle(f"{title}: configurations", y=0.99)
