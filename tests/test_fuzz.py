@@ -93,3 +93,33 @@ def test_ik_never_reports_a_false_success(tree, seed):
         lower, upper = robot.arm_limits
         arm = robot.arm_configuration(result.q)
         assert np.all(arm >= lower - 1e-12) and np.all(arm <= upper + 1e-12)
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(tree=urdf_trees(), seed=st.integers(0, 2**31 - 1))
+def test_limits_projection_and_clamping_on_random_trees(tree, seed):
+    """One Limit for IK projection and CLIK clamping: random trees stay inside their joint limits."""
+    from uvms.limits import Limit
+
+    text, _, leaf = tree
+    robot = load_or_refuse(text, leaf)
+    if robot is None:
+        return
+    rng = np.random.default_rng(seed)
+    limit = Limit.joint_positions(robot)
+    q = robot.random_configuration(rng)
+    pushed = q.copy()
+    held = limit.q_index[limit.q_index >= 0]
+    pushed[held] += rng.normal(scale=3.0, size=held.size)
+    projected = limit.project(pushed)
+    assert limit.contains(robot.arm_configuration(projected))
+    before = pushed.copy()  # the projection of pose IK before the Limit concept: every arm entry of q clipped
+    arm = slice(robot.nq_vehicle, robot.nq)
+    before[arm] = np.clip(before[arm], robot.model.lowerPositionLimit[arm], robot.model.upperPositionLimit[arm])
+    assert np.array_equal(projected, before)
+    task = uvms.FrameTask(robot, leaf, target=robot.fk(robot.random_configuration(rng), leaf))
+    for _ in range(5):
+        step = uvms.clik_step(robot, q, task, 0.5, gain=5.0, damping=1e-3, enforce_limits=True)
+        assert np.all(np.isfinite(step.q))
+        q = step.q
+        assert limit.contains(robot.arm_configuration(q))

@@ -10,8 +10,9 @@ from hypothesis import strategies as st
 
 import uvms
 from conftest import shipped
-from uvms.solvers import dls, pinv, task_priority, variable_damping, weighted_pinv
-from uvms.solvers.inverses import SolverInputError
+from uvms.errors import SolverInputError
+from uvms.solvers import dls, dls_solve, pinv, task_priority, variable_damping, weighted_pinv
+from uvms.solvers.inverses import damped_weighted_inverse
 from uvms.solvers.screws import davies_solve, network_matrix
 
 
@@ -63,6 +64,24 @@ def test_dls_bounded_at_and_near_singularities(rng):
     assert np.allclose(dls(tall, 0.1), np.linalg.solve(tall.T @ tall + 0.01 * np.eye(3), tall.T))
     wide = rng.normal(size=(3, 8))
     assert np.allclose(dls(wide, 0.1), wide.T @ np.linalg.inv(wide @ wide.T + 0.01 * np.eye(3)))
+
+
+def test_one_inverse_module_its_forms_agree(rng):
+    """The SVD form (with diagnostics), the matrix DLS and the normal-equation form are the same inverse."""
+    for shape in ((3, 8), (6, 6), (6, 12)):
+        jacobian, rhs = rng.normal(size=shape), rng.normal(size=shape[0])
+        for damping in (1e-3, 0.1):
+            inverse, sigma_min, used = damped_weighted_inverse(jacobian, None, damping)
+            assert used == damping and sigma_min == pytest.approx(np.linalg.svd(jacobian, compute_uv=False)[-1])
+            assert np.allclose(inverse, dls(jacobian, damping), atol=1e-12)
+            assert np.allclose(dls_solve(jacobian, rhs, damping**2), inverse @ rhs, atol=1e-10)
+            assert np.array_equal(dls_solve(jacobian, rhs, damping**2 * np.eye(shape[0])),
+                                  dls_solve(jacobian, rhs, damping**2))
+        assert np.allclose(damped_weighted_inverse(jacobian, None, 0.0)[0], pinv(jacobian), atol=1e-10)
+        weights = rng.uniform(0.5, 50, shape[1])
+        assert np.allclose(damped_weighted_inverse(jacobian, weights, 0.0)[0], weighted_pinv(jacobian, weights), atol=1e-10)
+    with pytest.raises(SolverInputError, match="not positive definite"):
+        dls_solve(np.zeros((3, 4)), np.ones(3), 0.0)
 
 
 def test_variable_damping_formula():
@@ -272,6 +291,33 @@ def test_bad_solver_inputs():
         uvms.FrameTask(robot, orientation="quaternion")
     with pytest.raises(uvms.UVMSError, match="valid for a planar base: vx, vy, wz"):
         uvms.VehicleTask(robot, velocities={"vz": 0.0})
+    with pytest.raises(SolverInputError, match="alpha"):
+        uvms.clik_velocity(robot, q, task, alpha=-1.0)
+    with pytest.raises(SolverInputError, match="dt"):
+        uvms.clik_velocity(robot, q, task, enforce_limits=True)
+    with pytest.raises(SolverInputError, match="restarts must be an integer >= 0"):
+        uvms.solve_ik(robot, [0, 0, 0, 0, 0, 0], restarts=-1)
+    with pytest.raises(SolverInputError, match="tolerance must be finite and > 0"):
+        uvms.solve_ik(robot, [0, 0, 0, 0, 0, 0], tolerance=0.0)
+    with pytest.raises(SolverInputError, match="max_iterations must be an integer >= 1"):
+        uvms.initial_configuration(robot, task, max_iterations=0)
+    with pytest.raises(SolverInputError, match="valid: classic, robust"):
+        task_priority([np.eye(2)], [np.ones(2)], method="fast")
+    with pytest.raises(SolverInputError, match="level 0 command must be 2 finite numbers"):
+        task_priority([np.eye(2)], [np.array([1.0, np.nan])])
+    with pytest.raises(SolverInputError, match="level 1: the Jacobian"):
+        task_priority([np.eye(2), np.eye(3)], [np.ones(2), np.ones(3)])
+
+
+def test_free_floating_on_a_fixed_base_is_one_clear_error():
+    arm = uvms.load(uvms.example_robot_urdf("ur5"))  # fixed base: no generalized Jacobian
+    assert arm.base_type == "fixed"
+    task = uvms.FrameTask(arm, target=arm.fk(arm.neutral()))
+    with pytest.raises(SolverInputError, match="ur5 has a fixed base: free_floating=True needs a floating or planar base"):
+        uvms.clik_velocity(arm, arm.neutral(), task, free_floating=True)
+    with pytest.raises(SolverInputError, match="fixed base"):
+        uvms.clik_step(arm, arm.neutral(), task, 0.1, free_floating=True)
+    assert np.all(np.isfinite(uvms.clik_velocity(arm, arm.neutral(), task).v))  # the same call without it works
 
 
 # ------------------------------------------------------ property-based tests

@@ -17,7 +17,7 @@ import numpy as np
 from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.task import Task
-from .inverses import RCOND, smallest_singular_value
+from .inverses import RCOND, pinv, smallest_singular_value
 from .results import VelocityResult
 from .stack import as_task_list, stack
 
@@ -48,9 +48,9 @@ def constrained_velocity(
         v = np.linalg.solve(system, rhs)
     else:
         # constraints first (exact when consistent), then the task in their null space
-        constraint_inverse = np.linalg.pinv(constraint_jacobian, rcond=RCOND)
+        constraint_inverse = pinv(constraint_jacobian)
         v = constraint_inverse @ constraint_values
         projector = np.eye(robot.nv) - constraint_inverse @ constraint_jacobian
-        v = v + np.linalg.pinv(jacobian @ projector, rcond=RCOND) @ (command - jacobian @ v)
+        v = v + pinv(jacobian @ projector) @ (command - jacobian @ v)
     return VelocityResult(v=v, command=command, error=error, residual=float(np.linalg.norm(jacobian @ v - command)),
                           sigma_min=smallest_singular_value(system), damping=0.0)

@@ -8,10 +8,13 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError
+from ..errors import SolverInputError
+from ..limits import Limit
 from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.frame import FrameTask
+from .checks import check_count, check_scalar
+from .inverses import dls_solve
 from .results import IKResult
 
 Target = pin.SE3 | Sequence[float]
@@ -49,15 +52,16 @@ def solve_ik(
     started = time.perf_counter()
     targets = dict(target) if isinstance(target, Mapping) else {frame or robot.ee_frames[0]: target}
     tasks = [FrameTask(robot, name, axes=axes, target=pose) for name, pose in targets.items()]
-    if not (np.isfinite(tolerance) and tolerance > 0 and max_iterations >= 1 and restarts >= 0):
-        raise UVMSError("solve_ik needs tolerance > 0, max_iterations >= 1 and restarts >= 0")
+    check_scalar(tolerance, "tolerance", positive=True)
+    check_count(max_iterations, "max_iterations", minimum=1)
+    check_count(restarts, "restarts")
     rng = np.random.default_rng(rng)
     start = robot.neutral() if q_init is None else robot.check_configuration(q_init)
-    lower, upper = robot.model.lowerPositionLimit, robot.model.upperPositionLimit
+    limit = Limit.joint_positions(robot)
     best_q, best_error, iterations = start, np.inf, 0
     for attempt in range(restarts + 1):
-        q = project_to_limits(robot, start if attempt == 0 else random_start(robot, rng, best_q), lower, upper)
-        q, error, used = newton(robot, q, tasks, tolerance, max_iterations, lower, upper)
+        q = limit.project(start if attempt == 0 else random_start(robot, rng, best_q))
+        q, error, used = newton(robot, q, tasks, tolerance, max_iterations, limit)
         iterations += used
         if error < best_error:
             best_q, best_error = q, error
@@ -74,19 +78,19 @@ def random_start(robot: Robot, rng: np.random.Generator, best_q: np.ndarray) -> 
     return q
 
 
-def project_to_limits(robot: Robot, q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-    """Clip the bounded arm coordinates of q into their limits."""
-    q = q.copy()
-    arm = slice(robot.nq_vehicle, robot.nq)
-    q[arm] = np.clip(q[arm], lower[arm], upper[arm])
-    return q
+def project_to_limits(robot: Robot, q: np.ndarray, limit: Limit | None = None) -> np.ndarray:
+    """q (nq,) with its bounded arm coordinates clipped into ``limit`` (default: the model's joint limits)."""
+    return (Limit.joint_positions(robot) if limit is None else limit).project(q)
 
 
 def newton(
-    robot: Robot, q: np.ndarray, tasks: list[FrameTask], tolerance: float, max_iterations: int,
-    lower: np.ndarray, upper: np.ndarray,
+    robot: Robot, q: np.ndarray, tasks: list[FrameTask], tolerance: float, max_iterations: int, limit: Limit,
 ) -> tuple[np.ndarray, float, int]:
-    """Levenberg-Marquardt iterations from q: damping shrinks on success, grows on failure."""
+    """Levenberg-Marquardt iterations from q, projected into ``limit``: damping shrinks on success, grows on failure.
+
+    Each step is the DLS solution J^T (J J^T + d I)^-1 e in normal-equation form
+    (:func:`~uvms.solvers.inverses.dls_solve`), d = mu |e|^2 + 1e-14 tr(J J^T) / k.
+    """
     def evaluate(configuration):
         state = KinematicState(robot, configuration, check=False)
         return state, np.concatenate([task.error(state) for task in tasks])
@@ -98,17 +102,20 @@ def newton(
         if norm <= tolerance:
             return q, norm, iteration - 1
         jacobian = np.vstack([task.jacobian(state) for task in tasks])  # (k, nv)
-        normal = jacobian @ jacobian.T
-        damping = mu * norm**2 + 1e-14 * np.trace(normal) / max(1, normal.shape[0])
-        step = jacobian.T @ np.linalg.solve(normal + damping * np.eye(normal.shape[0]), error)
-        candidate = project_to_limits(robot, pin.integrate(robot.model, q, step), lower, upper)
-        candidate_state, candidate_error = evaluate(candidate)
-        candidate_norm = float(np.linalg.norm(candidate_error))
-        if np.isfinite(candidate_norm) and candidate_norm < norm:
-            q, state, error, norm = candidate, candidate_state, candidate_error, candidate_norm
-            mu = max(mu / 10.0, 1e-12)
-        else:
-            mu *= 10.0
-            if mu > 1e8:
-                break
+        damping = mu * norm**2 + 1e-14 * np.sum(jacobian**2) / max(1, jacobian.shape[0])  # tr(J J^T) = |J|_F^2
+        try:
+            step = dls_solve(jacobian, error, damping)
+        except SolverInputError:  # not numerically positive definite: counts as a failed step
+            step = None
+        if step is not None:
+            candidate = limit.project(pin.integrate(robot.model, q, step))
+            candidate_state, candidate_error = evaluate(candidate)
+            candidate_norm = float(np.linalg.norm(candidate_error))
+            if np.isfinite(candidate_norm) and candidate_norm < norm:
+                q, state, error, norm = candidate, candidate_state, candidate_error, candidate_norm
+                mu = max(mu / 10.0, 1e-12)
+                continue
+        mu *= 10.0
+        if mu > 1e8:
+            break
     return q, norm, max_iterations

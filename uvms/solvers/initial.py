@@ -7,17 +7,20 @@ steps on the constraint so the residual reaches the tolerance.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
 import scipy.optimize
 
 from ..conventions import pose_from_xyyaw, pose_from_xyzrpy
+from ..limits import Limit
 from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
+from .checks import check_count, check_scalar
+from .inverses import pinv
 from .results import InitialConfigurationResult
 from .stack import as_task_list
 
@@ -64,6 +67,7 @@ def initial_configuration(
     *,
     tolerance: float = 1e-10,
     max_iterations: int = 500,
+    limit: Limit | None = None,
 ) -> InitialConfigurationResult:
     """q0 minimizing S(q) with the task(s) met exactly (e = 0) and the arm inside its limits.
 
@@ -74,16 +78,19 @@ def initial_configuration(
         q_init: starting guess (default: arm at mid-range, vehicle at the origin).
         tolerance: success when |e| <= tolerance.
         max_iterations: SLSQP iterations.
+        limit: the arm position limits (n_arm,) kept by the optimizer (its bounds) and the
+            polishing; default: those of ``potential``, the model's unless it was given others.
     """
     task_list = as_task_list(tasks)
+    check_scalar(tolerance, "tolerance", positive=True)
+    check_count(max_iterations, "max_iterations", minimum=1)
     potential = potential or JointLimitPotential(robot)
-    lower, upper = robot.arm_limits
+    if limit is None:
+        limit = getattr(potential, "limit", None) or Limit.joint_positions(robot)
     if q_init is None:
-        middle = np.where(np.isfinite(lower) & np.isfinite(upper), 0.5 * (lower + upper), 0.0)
-        q_init = robot.configuration(arm=middle)
+        q_init = robot.configuration(arm=limit.middle)
     n = robot.n_vehicle
-    bounds = [(None, None)] * n + [(lo if np.isfinite(lo) else None, hi if np.isfinite(hi) else None)
-                                   for lo, hi in zip(lower, upper)]
+    bounds = limit.after_unbounded(n).bounds()  # the vehicle's chart coordinates are free
 
     def errors(chart):
         state = KinematicState(robot, configuration_of(robot, chart), check=False)
@@ -111,22 +118,29 @@ def initial_configuration(
         constraints=[{"type": "eq", "fun": constraint, "jac": constraint_jacobian}],
         options={"maxiter": max_iterations, "ftol": 1e-14},
     )
-    chart = polish(robot, solution.x, constraint, constraint_jacobian, lower, upper, n)
+    chart = polish(solution.x, constraint, constraint_jacobian, limit, n)
     residual = float(np.linalg.norm(constraint(chart)))
     q = configuration_of(robot, chart)
-    inside = bool(np.all(chart[n:] >= lower - 1e-12) and np.all(chart[n:] <= upper + 1e-12))
+    inside = limit.contains(chart[n:])
     return InitialConfigurationResult(q=q, success=bool(residual <= tolerance and inside), residual=residual,
                                       potential=potential.value(q), iterations=int(solution.nit),
                                       message=str(solution.message))
 
 
-def polish(robot, chart, constraint, constraint_jacobian, lower, upper, n, steps: int = 20) -> np.ndarray:
-    """Minimum-norm Newton corrections on e(chart) = 0, kept inside the limits."""
+def polish(
+    chart: np.ndarray,
+    constraint: Callable[[np.ndarray], np.ndarray],
+    constraint_jacobian: Callable[[np.ndarray], np.ndarray],
+    limit: Limit,
+    n: int,
+    steps: int = 20,
+) -> np.ndarray:
+    """Minimum-norm Newton corrections on e(chart) = 0 (chart (nv,)), the arm coordinates chart[n:] clamped into ``limit``."""
     chart = chart.copy()
     for _ in range(steps):
         error = constraint(chart)
         if np.linalg.norm(error) <= 1e-14:
             break
-        chart = chart - np.linalg.pinv(constraint_jacobian(chart)) @ error
-        chart[n:] = np.clip(chart[n:], lower, upper)
+        chart = chart - pinv(constraint_jacobian(chart), rcond=1e-15) @ error  # numpy's default cut-off, as before
+        chart[n:] = limit.clamp(chart[n:])
     return chart

@@ -1,53 +1,46 @@
-"""Generalized inverses: pseudo-inverse, weighted pseudo-inverse, damped least squares.
+"""Generalized inverses of a Jacobian J (k, n), the one module every solver inverts with.
 
-All return the inverse matrix (n, m) of a Jacobian J (m, n), like ``numpy.linalg.pinv``.
+- :func:`pinv`: Moore-Penrose pseudo-inverse J^+.
+- :func:`weighted_pinv`: J_W^+ = W^-1 J^T (J W^-1 J^T)^-1 (hoang2011 eq. 15), via W = L L^T.
+- :func:`dls`: damped least squares J^T (J J^T + l^2 I)^-1 with a fixed damping l.
+- :class:`VariableDamping` / :func:`variable_damping`: the damping of amundsen2018 eq. 6.
+- :func:`damped_weighted_inverse` (:func:`svd_inverse` underneath): weighted and
+  damped (fixed or variable) from one SVD, with its diagnostics sigma_min and l.
+- :func:`dls_solve`: the normal-equation form J^T (J J^T + d I)^-1 b for one
+  right-hand side, one Cholesky factorization (LAPACK dposv): cheaper when only
+  J^+ b is needed (the CLIK hot path :class:`~uvms.solvers.pose_clik.PoseCLIK`,
+  the Newton steps of :func:`~uvms.solvers.ik.solve_ik`).
+
+The matrix forms return the inverse (n, k), like ``numpy.linalg.pinv``.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+from scipy.linalg import lapack
+
 from ..errors import SolverInputError
+from .checks import check_damping, check_matrix
+
+__all__ = [
+    "RCOND", "SolverInputError", "VariableDamping", "WeightsFactor", "check_damping", "check_matrix",
+    "damped_weighted_inverse", "dls", "dls_solve", "pinv", "smallest_singular_value", "svd_inverse",
+    "variable_damping", "weighted_pinv", "weights_factor", "weights_subset",
+]
 
 #: Relative cut-off below which singular values count as zero.
 RCOND = 1e-12
 
 
-def check_matrix(matrix: np.ndarray, what: str, shape: tuple[int | None, int | None] = (None, None)) -> np.ndarray:
-    """A finite 2-D float array of the given shape (None: any)."""
-    array = np.asarray(matrix, dtype=float)
-    if array.ndim != 2 or any(size is not None and size != actual for size, actual in zip(shape, array.shape)):
-        expected = "x".join("n" if size is None else str(size) for size in shape)
-        raise SolverInputError(f"{what} must be a {expected} matrix, got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise SolverInputError(f"{what} has non-finite entries")
-    return array
-
-
-def pinv(jacobian: np.ndarray, rcond: float = RCOND) -> np.ndarray:
-    """Moore-Penrose pseudo-inverse J^+ (n, m), rank-deficient J included."""
-    return np.linalg.pinv(check_matrix(jacobian, "J"), rcond=rcond)
-
-
-def weighted_pinv(jacobian: np.ndarray, weights: np.ndarray, rcond: float = RCOND) -> np.ndarray:
-    """Weighted pseudo-inverse J_W^+ = W^-1 J^T (J W^-1 J^T)^-1 (hoang2011 eq. 15).
-
-    q_dot = J_W^+ x_dot minimizes 1/2 q_dot^T W q_dot subject to J q_dot = x_dot.
-    Computed as L^-T (J L^-T)^+ with W = L L^T, which stays exact when J loses rank.
-
-    Raises:
-        SolverInputError: W not (n,) positive or (n, n) symmetric positive definite.
-    """
-    jacobian = check_matrix(jacobian, "J")
-    factor = weights_factor(weights, jacobian.shape[1])
-    return factor.unscale(np.linalg.pinv(factor.scale(jacobian), rcond=rcond))
-
-
+# ------------------------------------------------------------------ weights
 class WeightsFactor:
     """W = L L^T, applied as J -> J L^-T and X -> L^-T X (diagonal W: plain column scaling)."""
 
     def __init__(self, diagonal: np.ndarray | None = None, cholesky: np.ndarray | None = None) -> None:
-        self.inverse_sqrt = None if diagonal is None else 1.0 / np.sqrt(diagonal)
-        self.cholesky = cholesky
+        self.inverse_sqrt = None if diagonal is None else 1.0 / np.sqrt(diagonal)  # (n,)
+        self.cholesky = cholesky  # (n, n) lower triangular L
 
     def scale(self, jacobian: np.ndarray) -> np.ndarray:
         """J L^-T (k, n)."""
@@ -63,7 +56,11 @@ class WeightsFactor:
 
 
 def weights_factor(weights: np.ndarray, size: int) -> WeightsFactor:
-    """Factor a weighting matrix: (size,) positive diagonal or (size, size) symmetric positive definite."""
+    """Factor a weighting matrix W: (size,) positive diagonal or (size, size) symmetric positive definite.
+
+    Raises:
+        SolverInputError: wrong shape, non-finite, not symmetric or not positive definite.
+    """
     weights = np.asarray(weights, dtype=float)
     if weights.ndim == 1:
         if weights.shape != (size,) or not np.all(np.isfinite(weights)):
@@ -80,11 +77,48 @@ def weights_factor(weights: np.ndarray, size: int) -> WeightsFactor:
         raise SolverInputError(f"W must be positive definite (eigenvalues {np.linalg.eigvalsh(weights).round(6)})") from None
 
 
+def weights_subset(weights: np.ndarray, indices: np.ndarray, size: int) -> np.ndarray:
+    """Rows and columns ``indices`` of W given as (size,) diagonal or (size, size): (m,) or (m, m)."""
+    weights = np.asarray(weights, dtype=float)
+    if weights.shape not in ((size,), (size, size)):
+        raise SolverInputError(f"W must be ({size},) or ({size}, {size}), got shape {weights.shape}")
+    return weights[indices] if weights.ndim == 1 else weights[np.ix_(indices, indices)]
+
+
+# --------------------------------------------------------- undamped inverses
+def pinv(jacobian: np.ndarray, rcond: float = RCOND) -> np.ndarray:
+    """Moore-Penrose pseudo-inverse J^+ (n, k), rank-deficient J included."""
+    return np.linalg.pinv(check_matrix(jacobian, "J"), rcond=rcond)
+
+
+def weighted_pinv(jacobian: np.ndarray, weights: np.ndarray, rcond: float = RCOND) -> np.ndarray:
+    """Weighted pseudo-inverse J_W^+ = W^-1 J^T (J W^-1 J^T)^-1 (n, k) (hoang2011 eq. 15).
+
+    q_dot = J_W^+ x_dot minimizes 1/2 q_dot^T W q_dot subject to J q_dot = x_dot.
+    Computed as L^-T (J L^-T)^+ with W = L L^T, which stays exact when J loses rank.
+
+    Raises:
+        SolverInputError: W not (n,) positive or (n, n) symmetric positive definite.
+    """
+    jacobian = check_matrix(jacobian, "J")
+    factor = weights_factor(weights, jacobian.shape[1])
+    return factor.unscale(np.linalg.pinv(factor.scale(jacobian), rcond=rcond))
+
+
+def smallest_singular_value(jacobian: np.ndarray) -> float:
+    """sigma_min of J over min(k, n) singular values (0 for an empty matrix)."""
+    if jacobian.size == 0:
+        return 0.0
+    return float(np.linalg.svd(jacobian, compute_uv=False)[-1])
+
+
+# ---------------------------------------------------------- damped inverses
 def dls(jacobian: np.ndarray, damping: float) -> np.ndarray:
-    """Damped least-squares inverse J^T (J J^T + l^2 I)^-1 = (J^T J + l^2 I)^-1 J^T.
+    """Damped least-squares inverse J^T (J J^T + l^2 I)^-1 = (J^T J + l^2 I)^-1 J^T (n, k).
 
     q_dot = dls(J, l) x_dot minimizes |x_dot - J q_dot|^2 + l^2 |q_dot|^2, hence
-    |q_dot| <= |x_dot| / (2 l). The smaller of the two normal matrices is factored.
+    |q_dot| <= |x_dot| / (2 l). The smaller of the two normal matrices is factored;
+    l = 0 gives the pseudo-inverse.
     """
     jacobian = check_matrix(jacobian, "J")
     damping = check_damping(damping)
@@ -92,23 +126,39 @@ def dls(jacobian: np.ndarray, damping: float) -> np.ndarray:
     if damping == 0.0:
         return np.linalg.pinv(jacobian, rcond=RCOND)
     if rows <= columns:
-        normal = jacobian @ jacobian.T
+        normal = jacobian @ jacobian.T  # (k, k)
         normal[np.diag_indices(rows)] += damping**2
         return np.linalg.solve(normal, jacobian).T
-    normal = jacobian.T @ jacobian
+    normal = jacobian.T @ jacobian  # (n, n)
     normal[np.diag_indices(columns)] += damping**2
     return np.linalg.solve(normal, jacobian.T)
 
 
-def check_damping(damping: float) -> float:
-    """A finite damping >= 0."""
-    try:
-        value = float(damping)
-    except (TypeError, ValueError):
-        raise SolverInputError(f"damping must be a number, got {damping!r}") from None
-    if not np.isfinite(value) or value < 0.0:
-        raise SolverInputError(f"damping must be finite and >= 0, got {damping!r}")
-    return value
+def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float | np.ndarray) -> np.ndarray:
+    """x = J^T (J J^T + d I)^-1 b (n,): the DLS solution for one right-hand side, in normal-equation form.
+
+    One Cholesky factorization of the (k, k) row-space matrix (LAPACK dposv), no
+    inverse formed and no validation: the caller has checked its inputs once.
+    ``np.dot`` rather than ``@``: the same BLAS calls with less overhead on small arrays.
+
+    Args:
+        jacobian: J (k, n), finite.
+        rhs: b (k,).
+        damping_squared: d = l^2 > 0 [-] (keeps the system positive definite), or the
+            matrix d I (k, k) when a hot loop allocates it once.
+
+    Raises:
+        SolverInputError: the system is not numerically positive definite (LAPACK info != 0).
+    """
+    system = np.dot(jacobian, jacobian.T)  # (k, k)
+    if isinstance(damping_squared, np.ndarray):
+        system += damping_squared
+    else:
+        system.ravel()[:: system.shape[0] + 1] += damping_squared  # the diagonal (a view: J J^T is contiguous)
+    _, solution, info = lapack.dposv(system, rhs)
+    if info != 0:  # never return garbage
+        raise SolverInputError(f"DLS system not positive definite (LAPACK info {info})")
+    return np.dot(jacobian.T, solution)
 
 
 def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> float:
@@ -123,8 +173,61 @@ def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> flo
     return float(np.sqrt(1.0 - (sigma_min / epsilon) ** 2) * lambda_max)
 
 
-def smallest_singular_value(jacobian: np.ndarray) -> float:
-    """sigma_min of J over min(m, n) singular values (0 for an empty matrix)."""
-    if jacobian.size == 0:
-        return 0.0
-    return float(np.linalg.svd(jacobian, compute_uv=False)[-1])
+@dataclass(frozen=True)
+class VariableDamping:
+    """Damping of amundsen2018 eq. 6: l^2 = (1 - (s_min/epsilon)^2) lambda_max^2 when s_min < epsilon.
+
+    Attributes:
+        epsilon: size of the singular region in sigma_min [-], > 0.
+        lambda_max: damping at the singularity [-], >= 0.
+    """
+
+    epsilon: float
+    lambda_max: float
+
+    def __call__(self, sigma_min: float) -> float:
+        return variable_damping(sigma_min, self.epsilon, self.lambda_max)
+
+
+def svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
+    """DLS inverse V diag(s / (s^2 + l^2)) U^T (n, k) from one SVD, which also gives sigma_min and the variable damping.
+
+    With l = 0, singular values below RCOND * s_max count as zero (the pseudo-inverse).
+
+    Returns:
+        (inverse (n, k), sigma_min (0 when k > n), damping l used).
+    """
+    u, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
+    sigma_min = float(singular[-1]) if jacobian.shape[0] <= jacobian.shape[1] and singular.size else 0.0
+    value = damping(sigma_min) if isinstance(damping, VariableDamping) else check_damping(damping)
+    if value > 0.0:
+        factors = singular / (singular**2 + value**2)
+    else:
+        cutoff = RCOND * (singular[0] if singular.size else 0.0)
+        factors = np.divide(1.0, singular, out=np.zeros_like(singular), where=singular > cutoff)
+    return (vt.T * factors) @ u.T, sigma_min, value
+
+
+def damped_weighted_inverse(
+    jacobian: np.ndarray, weights: np.ndarray | None, damping: float | VariableDamping
+) -> tuple[np.ndarray, float, float]:
+    """Inverse of J (k, n) weighted by W and damped: L^-T dls(J L^-T, l), W = L L^T.
+
+    With W = I and l = 0 this is the pseudo-inverse; with l = 0 the weighted
+    pseudo-inverse of hoang2011 eq. 15; with W = I the DLS of amundsen2018 eq. 4-5.
+
+    Args:
+        jacobian: J (k, n).
+        weights: W, (n,) diagonal or (n, n) SPD; None: identity.
+        damping: fixed l >= 0 or a :class:`VariableDamping`.
+
+    Returns:
+        (inverse (n, k), sigma_min of the weighted Jacobian, damping used).
+    """
+    factor = None if weights is None else weights_factor(weights, jacobian.shape[1])
+    scaled = jacobian if factor is None else factor.scale(jacobian)
+    inverse, sigma_min, value = svd_inverse(scaled, damping)
+    if factor is not None:
+        inverse = factor.unscale(inverse)
+    return inverse, sigma_min, value
+

@@ -1,26 +1,33 @@
-"""The CLIK hot path: one frame pose task, DLS, joint-limit null-space term, integration.
+"""The CLIK hot path: the CLIK of :func:`~uvms.solvers.clik.clik_velocity` specialized to one 6-D pose task.
 
 :func:`uvms.solvers.clik_velocity` is general (any tasks, weights, variable
 damping, generalized Jacobian, joint clamping, diagnostics). ``PoseCLIK`` is
-the same law restricted to what a real-time loop needs, with the inputs
-validated once in the constructor:
+the same law restricted to what a real-time loop needs, its inputs validated
+once in the constructor and its buffers allocated once:
 
-    v = z0 + J^T (J J^T + l^2 I)^-1 (xdot_d + K e - J z0),   z0 = -alpha grad S(q)
+    v = z0 + J^+ (xdot_d + K e - J z0),   z0 = -alpha grad S(q)
 
 which equals J^+ (xdot_d + K e) + (I - J^+ J) z0 with the DLS inverse J^+ of
-the 6-row world-aligned frame Jacobian (e: position and log3 rotation errors).
+the 6-row world-aligned frame Jacobian. It shares the pieces of the general
+CLIK rather than repeating them: the error is that of a
+:class:`~uvms.tasks.frame.FrameTask` (position and log3 rotation), J^+ is the
+normal-equation DLS of :func:`~uvms.solvers.inverses.dls_solve`, and z0 is the
+gradient of the :class:`~uvms.tasks.joint_limits.JointLimitPotential` over its
+:class:`~uvms.limits.Limit`, evaluated on the q entries that limit points at.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack
 
-from ..robot import Robot
-from ..tasks.joint_limits import JointLimitPotential
+from ..conventions import AXIS_NAMES
 from ..kinematics import WORLD_ALIGNED
-from .inverses import SolverInputError, check_damping
+from ..robot import Robot
+from ..tasks.frame import FrameTask
+from ..tasks.joint_limits import JointLimitPotential
+from .checks import check_damping, check_scalar, check_vector
+from .inverses import SolverInputError, dls_solve
 
 
 class PoseCLIK:
@@ -30,9 +37,12 @@ class PoseCLIK:
         robot: the model.
         frame: controlled frame (default: first end effector).
         gain: K > 0 (scalar) [1/s].
-        damping: DLS damping l > 0 (keeps the 6x6 system positive definite).
+        damping: DLS damping l > 0 (keeps the 6x6 system positive definite) [-].
         potential: joint-limit potential S(q) for the null-space term, or None.
-        alpha: null-space gain >= 0.
+        alpha: null-space gain >= 0 [-].
+
+    Attributes:
+        task: the pose task (all six axes, log3 orientation error) whose error is driven to zero.
     """
 
     def __init__(
@@ -45,57 +55,53 @@ class PoseCLIK:
         potential: JointLimitPotential | None = None,
         alpha: float = 0.0,
     ) -> None:
-        if not (np.isfinite(gain) and gain > 0):
-            raise SolverInputError(f"gain must be finite and > 0, got {gain!r}")
+        self.gain = check_scalar(gain, "gain", positive=True)
         if check_damping(damping) == 0.0:
             raise SolverInputError("PoseCLIK needs damping > 0; use clik_velocity for the exact pseudo-inverse")
-        if not (np.isfinite(alpha) and alpha >= 0):
-            raise SolverInputError(f"alpha must be finite and >= 0, got {alpha!r}")
+        check_scalar(alpha, "alpha")
         self.robot, self.model, self.data = robot, robot.model, robot.data
-        self.frame_id = robot.frame_id(frame)
-        self.gain = float(gain)
-        self._damping_matrix = damping**2 * np.eye(6)
-        self._error = np.zeros(6)
-        self._feedforward = np.zeros(6)
+        self.task = FrameTask(robot, frame, axes=AXIS_NAMES, orientation="log")
+        self.frame_id = self.task.frame_id
+        self._damping_matrix = float(damping) ** 2 * np.eye(6)  # (6, 6) l^2 I
+        self._error = np.zeros(6)  # (6,)
+        self._feedforward = np.zeros(6)  # (6,)
         self._target = pin.SE3.Identity()
-        self._target_position = np.zeros(3)
         self._has_feedforward = False
         self._nullspace = self._nullspace_terms(potential, alpha)
 
     def _nullspace_terms(self, potential: JointLimitPotential | None, alpha: float):
-        """(q indices, v indices, -alpha c / range^2, middle) of the revolute/prismatic arm joints, or None."""
+        """(q indices, v indices, -alpha c / range^2, middle) of the arm coordinates q holds itself, or None.
+
+        z0[v_index] = scale (q[q_index] - middle) is -alpha grad S(q) of the potential
+        (continuous joints, which q stores as (cos, sin), have c = 0 and no entry).
+        """
         if potential is None or alpha == 0.0:
             return None
-        q_index, v_index = [], []
-        for joint in self.robot.arm_joints:
-            if joint.nq == joint.nv == 1:
-                q_index.append(joint.idx_q)
-                v_index.append(joint.idx_v)
-        arm_offset = np.array(v_index) - self.robot.n_vehicle
-        scale = -alpha * potential.weights[arm_offset] / potential.range[arm_offset] ** 2
-        return np.array(q_index), np.array(v_index), scale, potential.middle[arm_offset]
+        limit = potential.limit
+        coordinates = np.flatnonzero(limit.q_index >= 0)
+        scale = -alpha * potential.weights[coordinates] / potential.range[coordinates] ** 2
+        return (limit.q_index[coordinates], coordinates + self.robot.n_vehicle, scale,
+                potential.middle[coordinates])
 
     def set_target(self, pose: pin.SE3, twist: np.ndarray | None = None) -> None:
-        """Target pose (``transform_target_to_world``) and feedforward twist [v; omega] (6,), world axes."""
-        self._target = pose.copy()
-        self._target_position = np.array(pose.translation)
-        self._feedforward = np.zeros(6) if twist is None else np.asarray(twist, dtype=float).copy()
-        if self._feedforward.shape != (6,) or not np.all(np.isfinite(self._feedforward)):
-            raise SolverInputError(f"the target twist must be 6 finite numbers, got {twist!r}")
-        self._has_feedforward = bool(np.any(self._feedforward))
+        """Target pose (``transform_target_to_world``) and feedforward twist [v; omega] (6,) [m/s, rad/s], world axes."""
+        feedforward = np.zeros(6) if twist is None else check_vector(twist, "the target twist", 6).copy()
+        self.task.set_target(pose)
+        self.task.set_target_velocity(feedforward)
+        self._target = self.task.target
+        self._feedforward = feedforward
+        self._has_feedforward = bool(np.any(feedforward))
 
     @property
     def error(self) -> np.ndarray:
-        """Pose error [p_d - p; log3(R_d R^T)] (6,) in world axes at the last step's configuration."""
+        """Pose error [p_d - p; log3(R_d R^T)] (6,) [m, rad] in world axes at the last step's configuration."""
         return self._error.copy()
 
     def velocity(self, q: np.ndarray) -> np.ndarray:
         """CLIK velocity v (nv,) at q (trusted: a configuration from ``pin.integrate``)."""
         jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, WORLD_ALIGNED).reshape(6, -1)
         pose = self.data.oMf[self.frame_id]  # updated by computeFrameJacobian in world-aligned axes
-        error = self._error
-        error[:3] = self._target_position - pose.translation
-        error[3:] = pin.log3((self._target * pose.inverse()).rotation)  # R_d R^T, computed in C++
+        error = self._error = self.task.full_error_between(self._target, pose)  # (6,)
         command = self.gain * error
         if self._has_feedforward:
             command += self._feedforward
@@ -104,13 +110,8 @@ class PoseCLIK:
             q_index, v_index, scale, middle = self._nullspace
             z0 = np.zeros(self.model.nv)
             z0[v_index] = scale * (q[q_index] - middle)
-            command -= jacobian @ z0
-        system = jacobian @ jacobian.T
-        system += self._damping_matrix
-        _, solution, info = lapack.dposv(system, command)
-        if info != 0:  # cannot happen with damping > 0 and finite J; never return garbage
-            raise SolverInputError(f"DLS system not positive definite (LAPACK info {info})")
-        velocity = jacobian.T @ solution
+            command -= jacobian.dot(z0)
+        velocity = dls_solve(jacobian, command, self._damping_matrix)  # (nv,)
         if z0 is not None:
             velocity += z0
         return velocity

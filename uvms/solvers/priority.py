@@ -18,7 +18,8 @@ import numpy as np
 from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.task import Task
-from .inverses import SolverInputError, check_damping, dls, smallest_singular_value
+from .checks import check_choice, check_damping, check_matrix, check_vector
+from .inverses import SolverInputError, dls, smallest_singular_value
 from .results import PriorityResult
 from .stack import as_task_list, stack
 
@@ -29,18 +30,21 @@ def task_priority(
     jacobians: Sequence[np.ndarray], commands: Sequence[np.ndarray], method: str = "robust", damping: float = 0.0
 ) -> PriorityResult:
     """Prioritized velocity from per-level Jacobians (k_i, n) and commands (k_i,), highest priority first."""
-    if method not in METHODS:
-        raise SolverInputError(f"unknown task-priority method {method!r}; valid: {', '.join(METHODS)}")
+    check_choice(method, "task-priority method", METHODS)
     if len(jacobians) != len(commands) or not jacobians:
         raise SolverInputError("task priority needs one command per Jacobian, and at least one level")
     damping = check_damping(damping)
+    jacobians = [check_matrix(jacobian, f"level {level} Jacobian") for level, jacobian in enumerate(jacobians)]
     size = jacobians[0].shape[1]
+    for level, jacobian in enumerate(jacobians):
+        if jacobian.shape[1] != size:
+            raise SolverInputError(f"level {level}: the Jacobian {jacobian.shape} must have the {size} columns of level 0")
+    commands = [check_vector(command, f"level {level} command", jacobian.shape[0])
+                for level, (jacobian, command) in enumerate(zip(jacobians, commands))]
     v = np.zeros(size)
     projector = np.eye(size)
     sigmas = []
     for level, (jacobian, command) in enumerate(zip(jacobians, commands)):
-        if jacobian.ndim != 2 or jacobian.shape[1] != size or command.shape != (jacobian.shape[0],):
-            raise SolverInputError(f"level {level}: Jacobian {jacobian.shape} and command {command.shape} do not match")
         if method == "classic":
             projected = jacobian @ projector
             inverse = dls(projected, damping)

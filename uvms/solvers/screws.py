@@ -16,7 +16,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..state import KinematicState
-from .inverses import SolverInputError
+from ..errors import SolverInputError
+from .checks import check_matrix, check_vector
 
 #: Virtual joints of the PPPS chain, in order (prismatic x, y, z; spherical as rotations about x, y, z).
 VIRTUAL_JOINTS = ("px", "py", "pz", "rx", "ry", "rz")
@@ -66,7 +67,9 @@ def davies_solve(network: np.ndarray, primary: Sequence[int], primary_values: np
     Returns:
         Y (columns,) with the primary entries as given and the secondary ones solved.
     """
+    network = check_matrix(network, "N")
     primary = list(primary)
+    primary_values = check_vector(primary_values, "Y_p", len(primary))
     secondary = [column for column in range(network.shape[1]) if column not in primary]
     n_secondary = network[:, secondary]
     if n_secondary.shape[0] != n_secondary.shape[1]:
@@ -74,5 +77,5 @@ def davies_solve(network: np.ndarray, primary: Sequence[int], primary_values: np
             f"the secondary matrix is {n_secondary.shape}: impose {len(secondary) - network.shape[0]} more magnitudes")
     magnitudes = np.zeros(network.shape[1])
     magnitudes[primary] = primary_values
-    magnitudes[secondary] = np.linalg.solve(n_secondary, -network[:, primary] @ np.asarray(primary_values, dtype=float))
+    magnitudes[secondary] = np.linalg.solve(n_secondary, -network[:, primary] @ primary_values)
     return magnitudes

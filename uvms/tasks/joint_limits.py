@@ -1,10 +1,11 @@
-"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient."""
+"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient, over the limits of :class:`uvms.limits.Limit`."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ..errors import UVMSError
+from ..limits import Limit
 from ..robot import Robot
 
 
@@ -18,19 +19,32 @@ class JointLimitPotential:
     Args:
         robot: the model.
         weights: c_i >= 0, a scalar or (n_arm,); default 1.
+        limit: the joint position limits q_im, q_iM (n_arm,); default
+            ``Limit.joint_positions(robot)``, the model's (pass one with a margin to aim inside them).
+
+    Attributes:
+        limit: the :class:`~uvms.limits.Limit` read.
+        weights: c_i (n_arm,), 0 on unbounded joints.
+        middle: qbar_i (n_arm,) [rad or m], 0 on unbounded joints.
+        range: q_iM - q_im (n_arm,) [rad or m], 1 on unbounded joints.
     """
 
-    def __init__(self, robot: Robot, weights: float | np.ndarray = 1.0) -> None:
-        lower, upper = robot.arm_limits
-        weights = np.broadcast_to(np.asarray(weights, dtype=float), lower.shape).copy() if np.ndim(weights) == 0 \
+    def __init__(self, robot: Robot, weights: float | np.ndarray = 1.0, limit: Limit | None = None) -> None:
+        limit = Limit.joint_positions(robot) if limit is None else limit
+        if limit.size != robot.n_arm or limit.kind != "position":
+            raise UVMSError(f"the joint-limit potential needs position limits of the {robot.n_arm} arm coordinates, "
+                            f"got {limit.size} {limit.kind} limits")
+        shape = limit.lower.shape
+        weights = np.broadcast_to(np.asarray(weights, dtype=float), shape).copy() if np.ndim(weights) == 0 \
             else np.asarray(weights, dtype=float)
-        if weights.shape != lower.shape or not np.all(np.isfinite(weights)) or np.any(weights < 0):
-            raise UVMSError(f"joint-limit weights must be {lower.size} finite numbers >= 0, got {weights!r}")
-        bounded = np.isfinite(lower) & np.isfinite(upper) & (upper > lower)
+        if weights.shape != shape or not np.all(np.isfinite(weights)) or np.any(weights < 0):
+            raise UVMSError(f"joint-limit weights must be {limit.size} finite numbers >= 0, got {weights!r}")
+        bounded = limit.bounded
         self.robot = robot
+        self.limit = limit
         self.weights = np.where(bounded, weights, 0.0)
-        self.middle = np.where(bounded, 0.5 * (lower + upper), 0.0)
-        self.range = np.where(bounded, upper - lower, 1.0)
+        self.middle = np.where(bounded, limit.middle, 0.0)
+        self.range = limit.span
 
     def value(self, q: np.ndarray) -> float:
         """S(q) [-]."""

@@ -1,0 +1,134 @@
+"""The Limit concept: one reading of the joint limits for the potential, CLIK clamping, IK projection and optimizer bounds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import uvms
+from conftest import shipped
+from uvms.errors import SolverInputError
+from uvms.limits import Limit
+from uvms.solvers.ik import project_to_limits
+
+CONTINUOUS_ARM = """<robot name="mixed">
+  <link name="world"/><link name="base"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="root" type="floating"><parent link="world"/><child link="base"/></joint>
+  <link name="a"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="ee"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="spin" type="continuous"><parent link="base"/><child link="a"/><origin xyz="0.1 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="lift" type="prismatic"><parent link="a"/><child link="b"/><origin xyz="0.2 0 0"/><axis xyz="1 0 0"/>
+    <limit lower="-0.1" upper="0.3" effort="1" velocity="0.5"/></joint>
+  <joint name="tilt" type="revolute"><parent link="b"/><child link="ee"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="2" effort="1" velocity="0"/></joint>
+</robot>"""
+
+
+@pytest.mark.parametrize("name", ["hoang2011", "xiang2019", "bluerov2_alpha5"])
+def test_position_limits_are_the_models(name):
+    robot = shipped(name)
+    limit = Limit.joint_positions(robot)
+    lower, upper = robot.arm_limits
+    assert limit.kind == "position" and limit.size == robot.n_arm
+    assert np.array_equal(limit.lower, lower) and np.array_equal(limit.upper, upper)
+    assert limit.names == tuple(robot.arm_joint_names)
+    arm_q = slice(robot.nq_vehicle, robot.nq)
+    assert np.array_equal(limit.q_index, np.arange(robot.nq)[arm_q])  # revolute/prismatic: one q entry each
+    assert limit.bounds() == [(lo, hi) for lo, hi in zip(lower, upper)]
+
+
+def test_continuous_joints_and_velocity_limits():
+    robot = uvms.load(CONTINUOUS_ARM)
+    limit = Limit.joint_positions(robot)
+    assert limit.names == ("spin", "lift", "tilt")
+    assert limit.q_index.tolist() == [-1, 9, 10]  # spin is (cos, sin) at q[7:9]
+    assert limit.bounded.tolist() == [False, True, True]
+    assert limit.bounds() == [(None, None), (-0.1, 0.3), (-1.0, 2.0)]
+    assert limit.middle == pytest.approx([0.0, 0.1, 0.5]) and limit.span == pytest.approx([1.0, 0.4, 3.0])
+    velocity = Limit.joint_velocities(robot)
+    assert velocity.kind == "velocity"
+    assert velocity.upper.tolist() == [np.inf, 0.5, np.inf]  # no limit tag, 0.5, and the placeholder 0
+    assert np.array_equal(velocity.lower, -velocity.upper)
+    v = np.array([3.0, -1.0, 0.2])
+    scaled = velocity.scale_into(v)
+    assert scaled == pytest.approx(0.5 * v) and velocity.contains(scaled)  # direction kept
+    assert velocity.clamp(v).tolist() == [3.0, -0.5, 0.2]
+    assert np.array_equal(velocity.scale_into(0.1 * v), 0.1 * v)
+
+
+def test_project_clips_what_q_holds_and_leaves_rotations_alone(rng):
+    robot = uvms.load(CONTINUOUS_ARM)
+    limit = Limit.joint_positions(robot)
+    for _ in range(20):
+        q = robot.random_configuration(rng)
+        q[9:] += rng.normal(scale=3.0, size=2)
+        projected = limit.project(q)
+        assert limit.contains(robot.arm_configuration(projected))
+        assert np.array_equal(projected[:9], q[:9])  # vehicle pose and the (cos, sin) of the continuous joint
+        before = q.copy()  # what pose IK did before the Limit concept: clip every arm entry of q
+        before[7:] = np.clip(before[7:], robot.model.lowerPositionLimit[7:], robot.model.upperPositionLimit[7:])
+        assert np.array_equal(projected, before)
+        assert np.array_equal(project_to_limits(robot, q), projected)
+
+
+def test_margin_and_bad_limits():
+    robot = shipped("hoang2011")
+    inner = Limit.joint_positions(robot, margin=0.1)
+    assert inner.lower == pytest.approx([0.1, -1.5 * np.pi + 0.1, -1.5 * np.pi + 0.1])
+    assert inner.upper == pytest.approx([1.5 * np.pi - 0.1, 1.5 * np.pi - 0.1, 1.5 * np.pi - 0.1])
+    assert Limit.joint_positions(robot, margin=0.0).lower.tolist() == robot.arm_limits[0].tolist()
+    with pytest.raises(SolverInputError, match="no room"):
+        Limit.joint_positions(robot, margin=3.0)
+    with pytest.raises(SolverInputError, match="margin"):
+        Limit.joint_positions(robot, margin=-0.1)
+    with pytest.raises(SolverInputError, match="lower <= upper"):
+        Limit([0.0, 1.0], [1.0, 0.5])
+    with pytest.raises(SolverInputError, match="lower <= upper"):
+        Limit([np.nan], [1.0])
+    with pytest.raises(SolverInputError, match="valid: position, velocity"):
+        Limit([0.0], [1.0], kind="torque")
+    padded = inner.after_unbounded(3)
+    assert padded.size == 6 and padded.bounds()[:3] == [(None, None)] * 3 and padded.names[3:] == inner.names
+    values = np.array([-1.0, 0.0, 9.0, -0.05, 0.0, 4.8])
+    assert padded.violated(values).tolist() == [False, False, False, True, False, True]
+    assert padded.crossed_bound(values)[[3, 5]] == pytest.approx([0.1, 1.5 * np.pi - 0.1])
+
+
+def test_every_user_reads_the_same_limit():
+    """The potential, CLIK clamping and the initial configuration all take a Limit, e.g. one with a margin."""
+    robot = shipped("hoang2011")
+    inner = Limit.joint_positions(robot, margin=0.2)
+    potential = uvms.JointLimitPotential(robot, limit=inner)
+    assert potential.limit is inner
+    assert potential.middle == pytest.approx(inner.middle) and potential.range == pytest.approx(inner.span)
+    assert uvms.JointLimitPotential(robot).limit.lower.tolist() == robot.arm_limits[0].tolist()
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, 0, 0, 0, 0, 0])
+    q = robot.configuration(arm=[0.3, 4.2, -4.2])  # inside the margin
+    clamped_any = False
+    for _ in range(100):
+        step = uvms.clik_step(robot, q, task, 0.1, gain=5.0, weights=[100, 100, 100, 1, 1, 1], enforce_limits=True,
+                              limit=inner)
+        q = step.q
+        assert inner.contains(robot.arm_configuration(q))
+        clamped_any |= bool(step.velocity.limits_active)
+    assert clamped_any
+    with pytest.raises(SolverInputError, match="position limits of the 3 arm"):
+        uvms.clik_velocity(robot, q, task, dt=0.1, enforce_limits=True, limit=Limit([0.0], [1.0]))
+    with pytest.raises(uvms.UVMSError, match="position limits of the 3 arm"):
+        uvms.JointLimitPotential(robot, limit=Limit.joint_velocities(robot))
+    # the initial configuration inside a box that excludes the paper's optimum q1 = 3 pi / 4
+    box = Limit(robot.arm_limits[0], [0.5 * np.pi, 1.5 * np.pi, 1.5 * np.pi])
+    target = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, -2, 0, 0, 0, 1.0])
+    result = uvms.initial_configuration(robot, target, limit=box)
+    assert result.success and box.contains(robot.arm_configuration(result.q))
+    assert robot.arm_configuration(result.q)[0] == pytest.approx(0.5 * np.pi, abs=1e-6)  # pressed on the new bound
+
+
+def test_pose_ik_projects_into_the_limits_it_reads():
+    arm = uvms.load(uvms.example_robot_urdf("ur5"))  # fixed base: an unreachable target pulls every joint
+    limit = Limit.joint_positions(arm)
+    for target in ([3.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, -2.0, 1.0, 0.0, 1.0, 0.0]):
+        result = uvms.solve_ik(arm, target, restarts=2, max_iterations=30)
+        assert not result.success and limit.contains(arm.arm_configuration(result.q))

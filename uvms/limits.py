@@ -1,0 +1,184 @@
+"""Joint limits as one concept: which coordinates are limited, where, and how to clamp, project and bound.
+
+A :class:`Limit` is a box ``lower <= x <= upper`` on coordinates of the robot
+(the arm's joint values or velocities, in the order of v). Every user of limits
+reads them here: the joint-limit potential S(q) of hoang2011 (its middle and
+range), the joint clamping of CLIK (which coordinates a step would push out and
+to which bound), the projection of pose IK (q clipped into the box) and the
+bounds of the initial-configuration optimizer (scipy's ``(lo, hi)`` pairs).
+
+Coordinates without a finite bound (continuous joints, the vehicle) are
+unbounded (+-inf); a continuous joint keeps its (cos, sin) pair in q, which a
+projection leaves alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import SolverInputError
+from .robot import Robot
+
+#: Slack [rad or m] within which a value on the wrong side of a bound still counts as inside.
+TOLERANCE = 1e-12
+KINDS = ("position", "velocity")
+
+
+@dataclass(frozen=True, eq=False)
+class Limit:
+    """Box limits lower <= x <= upper on n coordinates.
+
+    Build one with :meth:`joint_positions` or :meth:`joint_velocities`; the
+    constructor takes arrays for a box of your own.
+
+    Attributes:
+        lower: lower bounds (n,) [rad or m; rad/s or m/s]; -inf where unbounded.
+        upper: upper bounds (n,); +inf where unbounded.
+        names: the joint owning each coordinate (n,).
+        q_index: index in q of each coordinate (n,), -1 where q does not hold the value
+            itself (continuous joints store (cos, sin); the vehicle; velocities).
+        kind: "position" or "velocity".
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    names: tuple[str, ...] = ()
+    q_index: np.ndarray | None = None
+    kind: str = "position"
+
+    def __post_init__(self) -> None:
+        lower = np.array(self.lower, dtype=float).reshape(-1)
+        upper = np.array(self.upper, dtype=float).reshape(-1)
+        size = lower.size
+        names = tuple(self.names) if self.names else tuple(f"x{i}" for i in range(size))
+        q_index = np.full(size, -1, dtype=int) if self.q_index is None else np.array(self.q_index, dtype=int).reshape(-1)
+        if upper.size != size or len(names) != size or q_index.size != size:
+            raise SolverInputError(f"a limit needs as many lower/upper bounds, names and q indices, got "
+                                   f"{size}, {upper.size}, {len(names)}, {q_index.size}")
+        if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower > upper):
+            raise SolverInputError(f"limits must satisfy lower <= upper (+-inf for unbounded), got {lower} and {upper}")
+        if self.kind not in KINDS:
+            raise SolverInputError(f"unknown limit kind {self.kind!r}; valid: {', '.join(KINDS)}")
+        for name, value in (("lower", lower), ("upper", upper), ("names", names), ("q_index", q_index)):
+            object.__setattr__(self, name, value)
+
+    # ---------------------------------------------------------- builders
+    @classmethod
+    def joint_positions(cls, robot: Robot, margin: float = 0.0) -> Limit:
+        """The arm's joint position limits (n_arm,) from the model, optionally ``margin`` inside them.
+
+        Args:
+            robot: the model (its ``lowerPositionLimit`` / ``upperPositionLimit``).
+            margin: distance kept from each finite bound [rad or m], >= 0.
+
+        Raises:
+            SolverInputError: a negative margin, or one that leaves no room inside a joint's range.
+        """
+        lower, upper = robot.arm_limits
+        names, q_index = [], []
+        for joint in robot.arm_joints:
+            names.extend([joint.name] * joint.nv)
+            scalar = joint.nq == joint.nv
+            q_index.extend(range(joint.idx_q, joint.idx_q + joint.nq) if scalar else [-1] * joint.nv)
+        return cls(lower, upper, tuple(names), np.array(q_index, dtype=int)).shrink(margin)
+
+    @classmethod
+    def joint_velocities(cls, robot: Robot) -> Limit:
+        """The arm's joint velocity limits |v_i| <= v_max,i (n_arm,) [rad/s or m/s] from the model.
+
+        A velocity limit of 0 (the URDF placeholder for "not given") counts as unbounded.
+        """
+        v_max = np.array(robot.model.velocityLimit[robot.n_vehicle:], dtype=float)
+        v_max = np.where(v_max > 0, v_max, np.inf)
+        names = [joint.name for joint in robot.arm_joints for _ in range(joint.nv)]
+        return cls(-v_max, v_max, tuple(names), kind="velocity")
+
+    def shrink(self, margin: float) -> Limit:
+        """The box with every finite bound moved ``margin`` inward [rad or m]."""
+        if not (np.isfinite(margin) and margin >= 0):
+            raise SolverInputError(f"a limit margin must be finite and >= 0, got {margin!r}")
+        if margin == 0:
+            return self
+        bounded = self.bounded
+        too_narrow = bounded & (self.upper - self.lower <= 2 * margin)
+        if np.any(too_narrow):
+            joints = sorted({self.names[i] for i in np.flatnonzero(too_narrow)})
+            raise SolverInputError(f"margin {margin} leaves no room inside the limits of {', '.join(joints)}")
+        return Limit(np.where(np.isfinite(self.lower), self.lower + margin, self.lower),
+                     np.where(np.isfinite(self.upper), self.upper - margin, self.upper), self.names, self.q_index, self.kind)
+
+    def after_unbounded(self, count: int, name: str = "vehicle") -> Limit:
+        """This box preceded by ``count`` unbounded coordinates (the vehicle's columns of v)."""
+        unbounded = np.full(count, np.inf)
+        return Limit(np.concatenate([-unbounded, self.lower]), np.concatenate([unbounded, self.upper]),
+                     (name,) * count + self.names, np.concatenate([np.full(count, -1), self.q_index]), self.kind)
+
+    # -------------------------------------------------------------- facts
+    @property
+    def size(self) -> int:
+        """Number of coordinates n."""
+        return self.lower.size
+
+    @property
+    def bounded(self) -> np.ndarray:
+        """(n,) bool: both bounds finite and a range of positive width."""
+        return np.isfinite(self.lower) & np.isfinite(self.upper) & (self.upper > self.lower)
+
+    @property
+    def middle(self) -> np.ndarray:
+        """(lower + upper) / 2 (n,) where both bounds are finite, 0 elsewhere."""
+        finite = np.isfinite(self.lower) & np.isfinite(self.upper)
+        middle = np.zeros(self.size)
+        middle[finite] = 0.5 * (self.lower[finite] + self.upper[finite])
+        return middle
+
+    @property
+    def span(self) -> np.ndarray:
+        """upper - lower (n,) where :attr:`bounded`, 1 elsewhere (a safe divisor)."""
+        bounded = self.bounded
+        span = np.ones(self.size)
+        span[bounded] = self.upper[bounded] - self.lower[bounded]
+        return span
+
+    # ---------------------------------------------------------- operations
+    def violated(self, values: np.ndarray, tolerance: float = TOLERANCE) -> np.ndarray:
+        """(n,) bool: coordinates more than ``tolerance`` outside the box."""
+        return (values < self.lower - tolerance) | (values > self.upper + tolerance)
+
+    def contains(self, values: np.ndarray, tolerance: float = TOLERANCE) -> bool:
+        """Whether every coordinate of ``values`` (n,) is inside the box, up to ``tolerance``."""
+        return bool(np.all(values >= self.lower - tolerance) and np.all(values <= self.upper + tolerance))
+
+    def crossed_bound(self, values: np.ndarray) -> np.ndarray:
+        """(n,) the bound each coordinate is pushed against: lower where values < lower, else upper."""
+        return np.where(values < self.lower, self.lower, self.upper)
+
+    def clamp(self, values: np.ndarray) -> np.ndarray:
+        """``values`` (n,) clipped into the box."""
+        return np.clip(values, self.lower, self.upper)
+
+    def project(self, q: np.ndarray) -> np.ndarray:
+        """A copy of the configuration q (nq,) with every coordinate that q holds itself clipped into the box."""
+        q = np.array(q, dtype=float)
+        held = self.q_index >= 0
+        index = self.q_index[held]
+        q[index] = np.clip(q[index], self.lower[held], self.upper[held])
+        return q
+
+    def bounds(self) -> list[tuple[float | None, float | None]]:
+        """scipy.optimize bounds: one (lower, upper) pair per coordinate, None where unbounded."""
+        return [(lo if np.isfinite(lo) else None, hi if np.isfinite(hi) else None)
+                for lo, hi in zip(self.lower, self.upper)]
+
+    def scale_into(self, values: np.ndarray) -> np.ndarray:
+        """``values`` (n,) scaled by the largest s in [0, 1] that puts them inside a box around 0.
+
+        For velocity limits: the direction of the velocity is kept and no coordinate
+        exceeds its limit (clamping coordinate by coordinate would turn it).
+        """
+        values = np.asarray(values, dtype=float)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratios = np.where(values > 0, self.upper / values, np.where(values < 0, self.lower / values, np.inf))
+        return values * float(np.clip(np.min(ratios, initial=np.inf), 0.0, 1.0))

@@ -1,0 +1,103 @@
+"""Input validators of the solver layer: one place, one error type (:class:`uvms.errors.SolverInputError`).
+
+Each returns the value as the solver uses it (a float, an int, a float array)
+and raises with a message that names the argument and what would be valid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ..errors import SolverInputError
+from ..tasks.task import Task
+
+
+def check_scalar(value: float, what: str, *, positive: bool = False) -> float:
+    """A finite number >= 0 (``positive``: > 0).
+
+    Args:
+        value: the number given.
+        what: its name in the message, e.g. "damping", "alpha", "dt".
+        positive: refuse 0 as well.
+
+    Raises:
+        SolverInputError: not a number, not finite, negative (or zero when ``positive``).
+    """
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise SolverInputError(f"{what} must be a number, got {value!r}") from None
+    if not np.isfinite(number) or number < 0.0 or (positive and number == 0.0):
+        raise SolverInputError(f"{what} must be finite and {'>' if positive else '>='} 0, got {value!r}")
+    return number
+
+
+def check_damping(damping: float) -> float:
+    """A finite damping factor lambda >= 0 [-]."""
+    return check_scalar(damping, "damping")
+
+
+def check_count(value: int, what: str, minimum: int = 0) -> int:
+    """An integer >= ``minimum`` (iterations, restarts)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        raise SolverInputError(f"{what} must be an integer >= {minimum}, got {value!r}")
+    return int(value)
+
+
+def check_matrix(matrix: np.ndarray, what: str, shape: tuple[int | None, int | None] = (None, None)) -> np.ndarray:
+    """A finite 2-D float array of the given shape (None: any size on that axis)."""
+    try:
+        array = np.asarray(matrix, dtype=float)
+    except (TypeError, ValueError):
+        raise SolverInputError(f"{what} must be a matrix of numbers, got {matrix!r}") from None
+    if array.ndim != 2 or any(size is not None and size != actual for size, actual in zip(shape, array.shape)):
+        expected = "x".join("n" if size is None else str(size) for size in shape)
+        raise SolverInputError(f"{what} must be a {expected} matrix, got shape {array.shape}")
+    if not np.all(np.isfinite(array)):
+        raise SolverInputError(f"{what} has non-finite entries")
+    return array
+
+
+def check_vector(vector: np.ndarray, what: str, size: int) -> np.ndarray:
+    """A finite float array of shape (size,)."""
+    try:
+        array = np.asarray(vector, dtype=float)
+    except (TypeError, ValueError):
+        raise SolverInputError(f"{what} must be {size} finite numbers, got {vector!r}") from None
+    if array.shape != (size,) or not np.all(np.isfinite(array)):
+        raise SolverInputError(f"{what} must be {size} finite numbers, got {vector!r}")
+    return array
+
+
+def check_choice(value: str, what: str, valid: tuple[str, ...]) -> str:
+    """One of ``valid``; the message lists them."""
+    if value not in valid:
+        raise SolverInputError(f"unknown {what} {value!r}; valid: {', '.join(valid)}")
+    return value
+
+
+def as_task_list(tasks: Task | Sequence[Task]) -> list[Task]:
+    """One task or several -> a non-empty list of tasks."""
+    task_list = [tasks] if isinstance(tasks, Task) else list(tasks)
+    if not task_list or not all(isinstance(task, Task) for task in task_list):
+        raise SolverInputError(f"expected a Task or a sequence of Tasks, got {tasks!r}")
+    return task_list
+
+
+def gain_matrix(gain: float | np.ndarray, size: int) -> np.ndarray:
+    """The CLIK gain K as a (size, size) positive (semi-)definite matrix, from a scalar, a diagonal (size,) or a matrix [1/s]."""
+    gain_array = np.asarray(gain, dtype=float)
+    if gain_array.ndim == 0:
+        gain_array = np.full(size, float(gain_array))
+    if gain_array.ndim == 1:
+        if gain_array.shape != (size,) or not np.all(np.isfinite(gain_array)) or np.any(gain_array < 0):
+            raise SolverInputError(f"gain must be a finite scalar >= 0, ({size},) or ({size}, {size}), got {gain!r}")
+        return np.diag(gain_array)
+    if gain_array.shape != (size, size) or not np.all(np.isfinite(gain_array)):
+        raise SolverInputError(f"gain must be a finite scalar, ({size},) or ({size}, {size}), got shape {gain_array.shape}")
+    symmetric = 0.5 * (gain_array + gain_array.T)
+    if np.any(np.linalg.eigvalsh(symmetric) < 0):
+        raise SolverInputError("gain K must be positive (semi-)definite")
+    return gain_array
