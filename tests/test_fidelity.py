@@ -32,3 +32,22 @@ def test_hoang2011_printed_q0_is_the_optimum_with_q1_below_three_quarter_pi():
     other = uvms.initial_configuration(stated, uvms.FrameTask(stated, axes=("x", "y", "yaw"), orientation="euler",
                                                               target=[0, -2, 0, 0, 0, 1.0]))
     assert abs(stated.arm_configuration(other.q)[0] - 0.75 * np.pi) < 1e-6
+
+
+def test_xiang2019_trajectories_fed_with_the_printed_tables_pass_through_them():
+    from uvms.trajectory import ViaPointTrajectory
+
+    points = np.deg2rad([[0, -10, -75, -90], [0, 25, 20, 10], [0, 5, -10, -30], [0, 5, -15, -35]]).T  # (4, 4)
+    times = np.array([0.0, 10.0, 20.0, 30.0])
+    velocities, accelerations = np.zeros((4, 4)), np.zeros((4, 4))
+    velocities[1:3] = np.array([[-0.123, -0.131], [0.033, -0.025], [-0.016, -0.057], [-0.025, -0.065]]).T
+    accelerations[1:3] = np.array([[-0.0377, 0.0402], [0.01005, 0.00755], [0.01005, 0.0176], [0.01255, 0.0201]]).T
+    cubic = ViaPointTrajectory(points, times, degree=3, velocities=velocities)
+    quintic = ViaPointTrajectory(points, times, degree=5, velocities=velocities, accelerations=accelerations)
+    for trajectory in (cubic, quintic):
+        at = trajectory(times)
+        np.testing.assert_allclose(at.q, points, atol=1e-12)
+        np.testing.assert_allclose(at.qd, velocities, atol=1e-12)
+    np.testing.assert_allclose(quintic(times).qdd, accelerations, atol=1e-12)
+    assert np.rad2deg(cubic.sample(0.01).q[:, 0].min()) < -91.5  # joint 1 overshoots the final -90 deg
+    assert np.abs(quintic.sample(0.01).qdd).max() > 0.039 > np.abs(ViaPointTrajectory(points, times, 5).sample(0.01).qdd).max()
