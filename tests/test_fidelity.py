@@ -51,3 +51,20 @@ def test_xiang2019_trajectories_fed_with_the_printed_tables_pass_through_them():
     np.testing.assert_allclose(quintic(times).qdd, accelerations, atol=1e-12)
     assert np.rad2deg(cubic.sample(0.01).q[:, 0].min()) < -91.5  # joint 1 overshoots the final -90 deg
     assert np.abs(quintic.sample(0.01).qdd).max() > 0.039 > np.abs(ViaPointTrajectory(points, times, 5).sample(0.01).qdd).max()
+
+
+def test_santos2006_classic_priority_meets_the_vehicle_task_the_robust_form_does_not(tmp_path):
+    robot = uvms.load("santos2006")
+    final = {}
+    for name, overrides in (("robust", []), ("classic", ['solver.priority="classic"'])):
+        result = run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / name, progress=False,
+                     overrides=["outputs.figures=false", *overrides])
+        final[name] = (robot.base_values(result.simulation.q[-1])[2], result.metrics["vehicle_travel"])
+    constraint = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc", progress=False,
+                     overrides=["outputs.figures=false"])
+    assert abs(final["classic"][0] - 0.78) < 1e-3 and final["classic"][1] < 1e-9  # = the kinematic constraint
+    assert final["robust"][0] < 0.7 and final["robust"][1] > 1.5  # the SR form only approximates the vehicle task
+    assert constraint.metrics["vehicle_travel"] < 1e-12
+    open_loop = run(SCENARIOS / "santos2006_kinematic_constraint_open_loop.toml", out=tmp_path / "open",
+                    progress=False, overrides=["outputs.figures=false"])
+    assert open_loop.metrics["max_position_error"] > 2 * constraint.metrics["max_position_error"]
