@@ -139,7 +139,7 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float | np
 
     One Cholesky factorization of the (k, k) row-space matrix (LAPACK dposv), no
     inverse formed and no validation: the caller has checked its inputs once.
-    ``np.dot`` rather than ``@``: the same BLAS calls with less overhead on small arrays.
+    ``ndarray.dot`` rather than ``@``: the same BLAS calls with less overhead on small arrays.
 
     Args:
         jacobian: J (k, n), finite.
@@ -150,15 +150,16 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float | np
     Raises:
         SolverInputError: the system is not numerically positive definite (LAPACK info != 0).
     """
-    system = np.dot(jacobian, jacobian.T)  # (k, k)
+    system = jacobian.dot(jacobian.T)  # (k, k), symmetric
     if isinstance(damping_squared, np.ndarray):
         system += damping_squared
     else:
         system.ravel()[:: system.shape[0] + 1] += damping_squared  # the diagonal (a view: J J^T is contiguous)
-    _, solution, info = lapack.dposv(system, rhs)
+    # system.T is the Fortran-ordered matrix LAPACK wants (the same numbers): factored in place, no copy
+    _, solution, info = lapack.dposv(system.T, rhs, 0, 1)
     if info != 0:  # never return garbage
         raise SolverInputError(f"DLS system not positive definite (LAPACK info {info})")
-    return np.dot(jacobian.T, solution)
+    return solution.dot(jacobian)  # J^T y as y^T J
 
 
 def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> float:

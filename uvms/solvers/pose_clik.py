@@ -60,6 +60,7 @@ class PoseCLIK:
             raise SolverInputError("PoseCLIK needs damping > 0; use clik_velocity for the exact pseudo-inverse")
         check_scalar(alpha, "alpha")
         self.robot, self.model, self.data = robot, robot.model, robot.data
+        self._nv = robot.nv
         self.task = FrameTask(robot, frame, axes=AXIS_NAMES, orientation="log")
         self.frame_id = self.task.frame_id
         self._damping_matrix = float(damping) ** 2 * np.eye(6)  # (6, 6) l^2 I
@@ -99,7 +100,7 @@ class PoseCLIK:
 
     def velocity(self, q: np.ndarray) -> np.ndarray:
         """CLIK velocity v (nv,) at q (trusted: a configuration from ``pin.integrate``)."""
-        jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, WORLD_ALIGNED).reshape(6, -1)
+        jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, WORLD_ALIGNED)  # (6, nv)
         pose = self.data.oMf[self.frame_id]  # updated by computeFrameJacobian in world-aligned axes
         error = self._error = self.task.full_error_between(self._target, pose)  # (6,)
         command = self.gain * error
@@ -108,7 +109,7 @@ class PoseCLIK:
         z0 = None
         if self._nullspace is not None:
             q_index, v_index, scale, middle = self._nullspace
-            z0 = np.zeros(self.model.nv)
+            z0 = np.zeros(self._nv)
             z0[v_index] = scale * (q[q_index] - middle)
             command -= jacobian.dot(z0)
         velocity = dls_solve(jacobian, command, self._damping_matrix)  # (nv,)
