@@ -13,6 +13,7 @@ from uvms.dynamics.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.plant import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
 from uvms.errors import ModelCheckError
 from uvms.integrate import INTEGRATORS, STEPS, check_integrator
+from uvms.solvers import damped_weighted_inverse
 from uvms.state import FrameState, KinematicState
 
 FIXED_ARM = """<robot name="arm"><link name="base"/><link name="tip"><inertial><mass value="1"/>
@@ -93,3 +94,53 @@ def test_one_step_per_scheme_serves_q_alone_and_q_with_x_exactly_on_the_manifold
         assert errors[1] <= 1e-12  # a constant body twist is the exponential map: exact for both
     with pytest.raises(uvms.UVMSError, match="unknown method 'rk45'; valid: euler, rk4"):
         check_integrator("rk45", "method")
+
+
+# ------------------------------------------------------------ GJM control is the CLIK of the core
+def old_gjm_rates(robot, jacobian6, generalized6, reference_sample, pose, rows, gain, damping):
+    """The law GJMController computed with its own code before (eq. 4-8), as an oracle."""
+    error = reference_sample.pose.translation - pose.translation
+    command = reference_sample.twist.copy()
+    command[:3] += gain * np.eye(3) @ error
+    inverse, _, _ = damped_weighted_inverse(generalized6[rows], None, damping)
+    return inverse @ command[rows]
+
+
+@pytest.mark.parametrize("name, axes", [("amundsen2018", ("x", "y", "z")), ("hoang2011", ("x", "y")),
+                                        ("amundsen2018", ("x", "y", "z", "yaw"))])
+def test_the_gjm_controller_keeps_the_numbers_of_its_own_law(name, axes, rng):
+    from uvms.control.gjm import GJMController, VelocityRamps
+
+    robot = shipped(name)
+    q = robot.random_configuration(rng)
+    reference = VelocityRamps.trapezoid(robot.fk(q).translation + 0.01, [-0.05, -0.05, 0.05], 8.0, 1.0)
+    rows = kinematics.axis_rows(axes)
+    data = robot.model.createData()
+    jacobian = pin.computeFrameJacobian(robot.model, data, q, robot.frame_id(), pin.LOCAL_WORLD_ALIGNED)
+    pose = data.oMf[robot.frame_id()]
+    for gain, damping in ((0.0, 0.0), (3.0, uvms.VariableDamping(0.5, 0.2))):
+        controller = GJMController(robot, reference, axes=axes, gain=gain, damping=damping)
+        expected = old_gjm_rates(robot, jacobian, robot.generalized_jacobian(q), reference(3.0), pose, rows, gain, damping)
+        assert np.array_equal(controller.sample(q, 3.0).rates, expected)
+        task = uvms.FrameTask(robot, axes=axes, orientation="log", target=reference(3.0).pose)
+        task.set_target_velocity(reference(3.0).twist)
+        gains = np.array([gain if row < 3 else 0.0 for row in rows])
+        clik = uvms.clik_velocity(robot, q, task, gain=gains, damping=damping, free_floating=True)
+        assert np.allclose(clik.v[robot.n_vehicle:], expected, atol=1e-12)  # the same law through clik_velocity
+
+
+def test_one_result_type_and_the_old_paths():
+    from uvms import simulate as simulate_module
+    from uvms.control import gjm
+    from uvms.dynamics import plant
+    from uvms.series import SimulationResult
+
+    assert plant.simulate_plant is simulate_module.simulate_plant and gjm.simulate_gjm is simulate_module.simulate_gjm
+    assert uvms.PlantResult is uvms.GJMResult is SimulationResult
+    robot = shipped("hoang2011")
+    result = simulate_module.simulate_plant(uvms.Plant(robot), robot.neutral(), None, np.ones(robot.n_arm), 0.1, 0.01)
+    assert isinstance(result, SimulationResult) and result.command.shape == (11, robot.n_arm)
+    assert result.ee_position is None and result.arrays().keys() == {"t", "q", "v"}
+    assert result.integrator == result.method == "rk4"
+    with pytest.raises(AttributeError):
+        plant.no_such_name  # noqa: B018

@@ -19,10 +19,17 @@ Which GJM (``gjm``):
 
 * ``"rigid"`` — the classic one, from the rigid-body momentum (``Robot.generalized_jacobian``);
 * ``"added_mass"`` — from the momentum of the links *and the water they carry*
-  (link inertias augmented with their added mass, :func:`uvms.plant.generalized_jacobian_added_mass`):
+  (link inertias augmented with their added mass, :func:`uvms.dynamics.plant.generalized_jacobian_added_mass`):
   exact in an inviscid fluid at rest, where that augmented momentum is conserved;
 * ``"fixed_base"`` — the arm columns J_m of the ordinary Jacobian, as if the vehicle
   were held still (the traditional scheme the paper contrasts with; for comparisons).
+
+This is the CLIK of the core with a choice of Jacobian: a ``FrameTask`` (log orientation
+error, no gain on its angular rows) stacked by :func:`uvms.solvers.stack.stack` gives
+nu_c; a :class:`uvms.state.FrameState` whose momentum rows are the chosen ones (rigid
+centroidal map, added-mass-augmented mass matrix, or a vehicle held still) gives the GJM
+by the one formula of :mod:`uvms.kinematics`; the inverse is the solvers' damped weighted
+inverse (``damped_weighted_inverse`` with ``VariableDamping``), as in ``clik_velocity``.
 
 Joint servos. The plant's joints follow their commanded velocity through a
 first-order servo of time constant tau (amundsen2018: 100 ms). Sent as is, w is
@@ -36,150 +43,31 @@ reference acceleration.
 
 from __future__ import annotations
 
-import bisect
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from ..errors import GJMControlError, UVMSError
 from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
-from ..kinematics import AXIS_NAMES, axis_rows
 from ..dynamics.plant import augmented_mass_matrix, resolve_links
+from ..errors import GJMControlError, UVMSError
+from ..kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
 from ..robot import Robot
 from ..solvers.clik import VariableDamping, damped_weighted_inverse
 from ..solvers.inverses import weights_factor
+from ..solvers.stack import stack
+from ..state import FrameState, MomentumRows
+from ..tasks.frame import FrameTask
 from ..trajectory.cartesian import PoseSample
+from ..trajectory.ramps import VelocityRamps
+
+__all__ = ["GJM_KINDS", "GJMControlError", "GJMController", "GJMSample", "VelocityRamps"]
 
 #: The generalized Jacobians the controller can invert.
 GJM_KINDS = ("rigid", "added_mass", "fixed_base")
 
 
-# ------------------------------------------------------------------ reference
-class VelocityRamps:
-    """End-effector reference from velocity ramps: v(t) piecewise linear, p(t) its exact integral.
-
-    v(t) is linear between the knots (times[k], velocities[k]) and constant
-    outside them; p(t) = start + integral of v from times[0]. The orientation of
-    the desired pose is constant (``rotation``) and the desired angular velocity
-    zero: this is the reference of amundsen2018 sec. III (eq. 9-11), whose
-    positions are "the integrals of the velocity references".
-
-    The acceleration at an interior knot (and at the last one) is the mean of the
-    slopes on both sides, at the first knot the slope after it. A fixed-step
-    integrator that lands on a ramp corner then errs by +- half the jump on the
-    two sides of it, which cancel (a one-sided value would leave an error of order dt).
-
-    Args:
-        start: p(times[0]) (3,) [m], world frame.
-        times: knot times (K,) [s], strictly increasing, K >= 2.
-        velocities: (K, 3) [m/s] at the knots, world axes.
-        rotation: constant orientation of the desired pose (3, 3) (default identity).
-
-    Raises:
-        GJMControlError: wrong shapes, non-finite values, times not increasing.
-    """
-
-    def __init__(self, start: Sequence[float], times: Sequence[float], velocities: Sequence[Sequence[float]],
-                 rotation: np.ndarray | None = None) -> None:
-        self.start = _finite(start, (3,), "start")
-        self.times = _finite(times, (None,), "times")
-        self.velocities = _finite(velocities, (len(self.times), 3), "velocities")
-        if len(self.times) < 2 or np.any(np.diff(self.times) <= 0):
-            raise GJMControlError(f"times must be at least 2 strictly increasing knot times [s], got {self.times.tolist()}")
-        self.rotation = np.eye(3) if rotation is None else _finite(rotation, (3, 3), "rotation")
-        self._knots = self.times.tolist()
-        spans = np.diff(self.times)
-        self.slopes = np.diff(self.velocities, axis=0) / spans[:, None]  # (K-1, 3) [m/s^2]
-        areas = 0.5 * (self.velocities[1:] + self.velocities[:-1]) * spans[:, None]
-        self.knot_positions = self.start + np.vstack([np.zeros(3), np.cumsum(areas, axis=0)])  # (K, 3)
-
-    @classmethod
-    def trapezoid(cls, start: Sequence[float], velocity: Sequence[float], duration: float, ramp_time: float,
-                  rotation: np.ndarray | None = None) -> VelocityRamps:
-        """Ramp from rest to ``velocity`` in ``ramp_time``, cruise, ramp back to rest at ``duration``.
-
-        Args:
-            start: (3,) [m]; velocity: cruise velocity (3,) [m/s], world axes.
-            duration: total time [s] > 0; ramp_time: (0, duration / 2] [s].
-        """
-        duration, ramp_time = float(duration), float(ramp_time)
-        if not (np.isfinite(duration) and duration > 0):
-            raise GJMControlError(f"duration must be finite and > 0 s, got {duration!r}")
-        if not (np.isfinite(ramp_time) and 0 < ramp_time <= duration / 2):
-            raise GJMControlError(f"ramp_time must be in (0, duration/2] = (0, {duration / 2:g}] s, got {ramp_time!r}")
-        cruise = _finite(velocity, (3,), "velocity")
-        if ramp_time == duration / 2:
-            return cls(start, [0.0, ramp_time, duration], [np.zeros(3), cruise, np.zeros(3)], rotation)
-        return cls(start, [0.0, ramp_time, duration - ramp_time, duration],
-                   [np.zeros(3), cruise, cruise, np.zeros(3)], rotation)
-
-    @property
-    def duration(self) -> float:
-        """Time of the last knot [s]."""
-        return float(self.times[-1])
-
-    def _segment(self, t: float) -> int:
-        """Index k of the segment [times[k], times[k+1]) that holds t (clipped to the first and last)."""
-        return min(max(bisect.bisect_right(self._knots, t) - 1, 0), len(self._knots) - 2)
-
-    def velocity(self, t: float) -> np.ndarray:
-        """v_d(t) (3,) [m/s]."""
-        if t <= self.times[0]:
-            return self.velocities[0].copy()
-        if t >= self.times[-1]:
-            return self.velocities[-1].copy()
-        k = self._segment(t)
-        return self.velocities[k] + self.slopes[k] * (t - self.times[k])
-
-    def position(self, t: float) -> np.ndarray:
-        """p_d(t) (3,) [m]."""
-        if t <= self.times[0]:
-            return self.start + self.velocities[0] * (t - self.times[0])
-        if t >= self.times[-1]:
-            return self.knot_positions[-1] + self.velocities[-1] * (t - self.times[-1])
-        k = self._segment(t)
-        s = t - self.times[k]
-        return self.knot_positions[k] + self.velocities[k] * s + 0.5 * self.slopes[k] * s * s
-
-    def acceleration(self, t: float) -> np.ndarray:
-        """dv_d/dt (3,) [m/s^2]; at a knot the mean of both sides (the right side at the first knot)."""
-        knots, slopes = self._knots, self.slopes
-        tolerance = 1e-12 * max(1.0, abs(t))
-        if t < knots[0] - tolerance or t > knots[-1] + tolerance:
-            return np.zeros(3)
-        k = bisect.bisect_left(knots, t)  # knots[k - 1] < t <= knots[k]
-        if k > 0 and (k == len(knots) or t - knots[k - 1] < knots[k] - t):
-            k -= 1  # the nearer knot
-        if abs(knots[k] - t) <= tolerance:  # on a knot (up to rounding of the stage times)
-            if k == 0:
-                return slopes[0].copy()
-            after = slopes[k] if k < len(slopes) else np.zeros(3)
-            return 0.5 * (slopes[k - 1] + after)
-        return slopes[self._segment(t)].copy()
-
-    def __call__(self, t: float) -> PoseSample:
-        """Desired pose, twist [v; 0] (6,) and acceleration [a; 0] (6,) at t [s], world axes."""
-        zeros = np.zeros(3)
-        return PoseSample(pin.SE3(self.rotation, self.position(t)),
-                          np.concatenate([self.velocity(t), zeros]), np.concatenate([self.acceleration(t), zeros]))
-
-
-def _finite(values, shape: tuple, what: str) -> np.ndarray:
-    try:
-        array = np.array(values, dtype=float)
-    except (TypeError, ValueError):
-        raise GJMControlError(f"{what} must be numbers, got {values!r}") from None
-    if array.ndim != len(shape) or any(size is not None and size != actual for size, actual in zip(shape, array.shape)):
-        expected = "x".join("K" if size is None else str(size) for size in shape)
-        raise GJMControlError(f"{what} must have shape ({expected}), got {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise GJMControlError(f"{what} must be finite, got {array.tolist()}")
-    return array
-
-
-# ------------------------------------------------------------------ controller
 @dataclass(frozen=True)
 class GJMSample:
     """What the controller computes at one (q, t).
@@ -195,6 +83,18 @@ class GJMSample:
     rates: np.ndarray
     command: np.ndarray
     position_error: np.ndarray
+    sigma_min: float
+    damping: float
+
+
+@dataclass(frozen=True)
+class _Solution:
+    """One CLIK solve at (q, t): the state, the reference sample, the inverse and what it inverts."""
+
+    state: FrameState
+    reference: PoseSample
+    inverse: np.ndarray  # (n_arm, k)
+    command: np.ndarray  # (k,)
     sigma_min: float
     damping: float
 
@@ -255,6 +155,8 @@ class GJMController:
         self.axes = tuple(axes)
         self.position_rows = [i for i, row in enumerate(self.rows) if row < 3]  # indices into the task rows
         self.gain = _gain_matrix(gain)
+        self.task = FrameTask(robot, self.frame, axes=self.axes, orientation="log")  # the core's task
+        self.task_gain = _task_gain(self.gain, self.rows)  # K on the task rows: position feedback only (eq. 8)
         self.damping = damping
         self.weights = None if weights is None else np.asarray(weights, dtype=float)
         if self.weights is not None:
@@ -272,43 +174,45 @@ class GJMController:
         self._mass_data = robot.model.createData()
         self.nb = robot.n_vehicle
         self.links = []
+        self.hydro = hydro
         if gjm == "added_mass":
             self.hydro = hydrodynamics_of(robot) if hydro is None else hydro
             self.links = resolve_links(self.model, self.hydro)
-        else:
-            self.hydro = hydro
+        self._momentum = self._momentum_rows()
 
     # ------------------------------------------------------------- Jacobians
-    def _kinematics(self, q: np.ndarray) -> tuple[np.ndarray, pin.SE3]:
-        """World-aligned frame Jacobian (6, nv) and pose at q."""
-        model, data = self.model, self.data
-        jacobian = pin.computeFrameJacobian(model, data, q, self.frame_id, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
-        return jacobian, data.oMf[self.frame_id]
-
-    def _generalized(self, q: np.ndarray, jacobian: np.ndarray) -> np.ndarray:
-        nb = self.nb
+    def _momentum_rows(self) -> MomentumRows | None:
+        """The momentum rows the chosen GJM conserves (None: the rigid centroidal map)."""
+        nb, n_arm = self.nb, self.robot.n_arm
         if self.gjm == "fixed_base":
-            return jacobian[:, nb:]
+            return lambda q: held_vehicle_split(nb, n_arm)
         if self.gjm == "added_mass":
-            mass = augmented_mass_matrix(self.model, self._mass_data, self.links, q)
-            return jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:])
-        return self.robot.generalized_jacobian(q, self.frame)
+            return lambda q: mass_matrix_split(augmented_mass_matrix(self.model, self._mass_data, self.links, q), nb)
+        return None
+
+    def state(self, q: np.ndarray, check: bool = False) -> FrameState:
+        """The controller's state at q: its own data, the chosen momentum rows."""
+        return FrameState(self.robot, q, check, data=self.data, momentum=self._momentum)
 
     def generalized_jacobian(self, q: np.ndarray) -> np.ndarray:
         """The GJM (6, n_arm) this controller inverts (all six rows, world-aligned)."""
-        q = self.robot.check_configuration(q)
-        return self._generalized(q, self._kinematics(q)[0])
+        state = self.state(q, check=True)
+        return state.generalized(state.jacobian(self.frame_id))
 
     # ------------------------------------------------------------- control
-    def _task_velocity(self, sample: PoseSample, position: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """nu_c on the task rows (k,) and the position error p_d - p (3,)."""
-        error = sample.pose.translation - position
-        command = sample.twist.copy()
-        command[:3] += self.gain @ error
-        return command[self.rows], error
+    def _solve(self, state: FrameState, t: float) -> _Solution:
+        """The CLIK of the core at (state, t): nu_c = stack of the task, the damped weighted inverse of its GJM rows."""
+        reference = self.reference(t)
+        self.task.set_target(reference.pose)
+        self.task.set_target_velocity(reference.twist)
+        jacobian, _, command = stack(state, [self.task], self.task_gain)  # (k, nv), nu_c (k,)
+        inverse, sigma_min, used = damped_weighted_inverse(state.generalized(jacobian), self.weights, self.damping)
+        return _Solution(state, reference, inverse, command, sigma_min, used)
 
-    def _inverse(self, jacobian: np.ndarray) -> tuple[np.ndarray, float, float]:
-        return damped_weighted_inverse(jacobian[self.rows], self.weights, self.damping)
+    def _position_error(self, solution: _Solution) -> np.ndarray:
+        if not self.position_rows:
+            return np.zeros(3)
+        return solution.reference.pose.translation - solution.state.pose(self.frame_id).translation
 
     def sample(self, q: np.ndarray, t: float) -> GJMSample:
         """The joint rates w at (q, t) and the quantities behind them.
@@ -316,44 +220,41 @@ class GJMController:
         Raises:
             ConfigurationError: q of the wrong size or not finite.
         """
-        q = self.robot.check_configuration(q)
-        return self._sample(q, t)
+        return self._sample(self.state(q, check=True), t)
 
-    def _sample(self, q: np.ndarray, t: float) -> GJMSample:
-        jacobian, pose = self._kinematics(q)
-        inverse, sigma_min, used = self._inverse(self._generalized(q, jacobian))
-        command, error = self._task_velocity(self.reference(t), pose.translation)
-        return GJMSample(inverse @ command, command, error if self.position_rows else np.zeros(3), sigma_min, used)
+    def _sample(self, state: FrameState, t: float) -> GJMSample:
+        solution = self._solve(state, t)
+        return GJMSample(solution.inverse @ solution.command, solution.command, self._position_error(solution),
+                         solution.sigma_min, solution.damping)
 
     def tracking(self, t: float, q: np.ndarray, v: np.ndarray) -> dict:
         """The tracking series of a run's row at (t, q, v): pose and velocity of the frame and of the reference,
         the joint rates w and the inverse's sigma_min and damping (a recorder of :func:`uvms.simulate.simulate_gjm`)."""
-        jacobian, pose = self._kinematics(q)
-        sample = self._sample(q, t)
+        state = self.state(q)
+        sample = self._sample(state, t)
         reference = self.reference(t)
-        return {"ee_position": pose.translation.copy(), "desired_position": reference.pose.translation.copy(),
-                "ee_velocity": jacobian[:3] @ v, "desired_velocity": reference.twist[:3].copy(), "rates": sample.rates,
-                "sigma_min": sample.sigma_min, "damping": sample.damping}
+        return {"ee_position": state.pose(self.frame_id).translation.copy(),
+                "desired_position": reference.pose.translation.copy(),
+                "ee_velocity": state.jacobian(self.frame_id)[:3] @ v, "desired_velocity": reference.twist[:3].copy(),
+                "rates": sample.rates, "sigma_min": sample.sigma_min, "damping": sample.damping}
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The joint-velocity command u (n_arm,) at (t, q, v): w, plus tau dw/dt with the servo feedforward.
 
-        The signature of a :func:`uvms.plant.simulate_plant` command.
+        The signature of a :func:`uvms.simulate.simulate_plant` command.
         """
-        jacobian, pose = self._kinematics(q)
-        generalized = self._generalized(q, jacobian)
-        inverse, _, _ = self._inverse(generalized)
-        sample = self.reference(t)
-        command, _ = self._task_velocity(sample, pose.translation)
+        solution = self._solve(self.state(q), t)
+        inverse, command = solution.inverse, solution.command
         rates = inverse @ command
         if self.motor_feedforward == 0.0:
             return rates
         h = self.difference_step
-        ahead = pin.integrate(self.model, q, v * h)
-        inverse_ahead, _, _ = self._inverse(self._generalized(ahead, self._kinematics(ahead)[0]))
-        command_rate = sample.acceleration.copy()  # d nu_c / dt = a_d + K (v_d - p')
-        command_rate[:3] += self.gain @ (sample.twist[:3] - jacobian[:3] @ v)
-        rate_of_rates = (inverse_ahead - inverse) @ command / h + inverse @ command_rate[self.rows]
+        ahead = self._solve(self.state(pin.integrate(self.model, q, v * h)), t).inverse
+        reference = solution.reference
+        jacobian = solution.state.jacobian(self.frame_id)
+        command_rate = reference.acceleration.copy()  # d nu_c / dt = a_d + K (v_d - p')
+        command_rate[:3] += self.gain @ (reference.twist[:3] - jacobian[:3] @ v)
+        rate_of_rates = (ahead - inverse) @ command / h + inverse @ command_rate[self.rows]
         return rates + self.motor_feedforward * rate_of_rates
 
 
@@ -369,6 +270,16 @@ def _gain_matrix(gain) -> np.ndarray:
     if np.min(np.linalg.eigvalsh(0.5 * (array + array.T))) < 0:
         raise GJMControlError(f"gain K must be positive semi-definite (0 = open loop), got {gain!r}")
     return array
+
+
+def _task_gain(gain: np.ndarray, rows: list[int]) -> np.ndarray:
+    """The CLIK gain (k, k) on the task rows: the position block of K, zero on the angular rows (eq. 8)."""
+    task_gain = np.zeros((len(rows), len(rows)))
+    for i, row in enumerate(rows):
+        for j, column in enumerate(rows):
+            if row < 3 and column < 3:
+                task_gain[i, j] = gain[row, column]
+    return task_gain
 
 
 def __getattr__(name: str):

@@ -8,6 +8,7 @@
 from .cartesian import CirclePath, LinePath, PathSample, PathTrajectory, PoseSample, SE3Trajectory, hold
 from .joint import CartesianSamples, JointSamples, ViaPointTrajectory, ctraj, jtraj
 from .laws import LawSample, PolynomialLaw, TimeLaw, TrapezoidLaw, check_positive
+from .ramps import VelocityRamps
 
 __all__ = [
     "CartesianSamples",
@@ -22,6 +23,7 @@ __all__ = [
     "SE3Trajectory",
     "TimeLaw",
     "TrapezoidLaw",
+    "VelocityRamps",
     "ViaPointTrajectory",
     "check_positive",
     "ctraj",
