@@ -293,6 +293,10 @@ def test_bad_solver_inputs():
         uvms.VehicleTask(robot, velocities={"vz": 0.0})
     with pytest.raises(SolverInputError, match="alpha"):
         uvms.clik_velocity(robot, q, task, alpha=-1.0)
+    with pytest.raises(SolverInputError, match="variable damping needs epsilon > 0"):
+        uvms.VariableDamping(0.0, 0.1)
+    with pytest.raises(SolverInputError, match="W must be symmetric"):
+        uvms.clik_velocity(robot, q, task, weights=np.triu(np.ones((6, 6))), dt=0.1, enforce_limits=True)
     with pytest.raises(SolverInputError, match="dt"):
         uvms.clik_velocity(robot, q, task, enforce_limits=True)
     with pytest.raises(SolverInputError, match="restarts must be an integer >= 0"):

@@ -71,6 +71,31 @@ def check_vector(vector: np.ndarray, what: str, size: int) -> np.ndarray:
     return array
 
 
+def check_weights(weights: np.ndarray, size: int) -> np.ndarray:
+    """A weighting matrix W: (size,) positive diagonal, or (size, size) finite and symmetric.
+
+    Positive definiteness of a full W is the Cholesky factorization's to find
+    (:func:`~uvms.solvers.inverses.weights_factor`).
+    """
+    weights = np.asarray(weights, dtype=float)
+    if weights.ndim == 1:
+        if weights.shape != (size,) or not np.all(np.isfinite(weights)):
+            raise SolverInputError(f"W must be ({size},) or ({size}, {size}) and finite, got shape {weights.shape}")
+        if np.any(weights <= 0):
+            raise SolverInputError(f"W must be positive definite: diagonal entries must be > 0, got {weights}")
+        return weights
+    weights = check_matrix(weights, "W", (size, size))
+    if np.max(np.abs(weights - weights.T)) > 1e-12 * np.abs(weights).max():
+        raise SolverInputError("W must be symmetric")
+    return weights
+
+
+def check_variable_damping(epsilon: float, lambda_max: float) -> None:
+    """The parameters of the variable damping (amundsen2018 eq. 6): epsilon > 0, lambda_max >= 0."""
+    if not (np.isfinite(epsilon) and epsilon > 0 and np.isfinite(lambda_max) and lambda_max >= 0):
+        raise SolverInputError(f"variable damping needs epsilon > 0 and lambda_max >= 0, got {epsilon!r}, {lambda_max!r}")
+
+
 def check_choice(value: str, what: str, valid: tuple[str, ...]) -> str:
     """One of ``valid``; the message lists them."""
     if value not in valid:

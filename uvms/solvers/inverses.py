@@ -22,7 +22,7 @@ import numpy as np
 from scipy.linalg import lapack
 
 from ..errors import SolverInputError
-from .checks import check_damping, check_matrix
+from .checks import check_damping, check_matrix, check_variable_damping, check_weights
 
 __all__ = [
     "RCOND", "SolverInputError", "VariableDamping", "WeightsFactor", "check_damping", "check_matrix",
@@ -61,16 +61,9 @@ def weights_factor(weights: np.ndarray, size: int) -> WeightsFactor:
     Raises:
         SolverInputError: wrong shape, non-finite, not symmetric or not positive definite.
     """
-    weights = np.asarray(weights, dtype=float)
+    weights = check_weights(weights, size)
     if weights.ndim == 1:
-        if weights.shape != (size,) or not np.all(np.isfinite(weights)):
-            raise SolverInputError(f"W must be ({size},) or ({size}, {size}) and finite, got shape {weights.shape}")
-        if np.any(weights <= 0):
-            raise SolverInputError(f"W must be positive definite: diagonal entries must be > 0, got {weights}")
         return WeightsFactor(diagonal=weights)
-    weights = check_matrix(weights, "W", (size, size))
-    if np.max(np.abs(weights - weights.T)) > 1e-12 * np.abs(weights).max():
-        raise SolverInputError("W must be symmetric")
     try:
         return WeightsFactor(cholesky=np.linalg.cholesky(weights))
     except np.linalg.LinAlgError:
@@ -79,9 +72,7 @@ def weights_factor(weights: np.ndarray, size: int) -> WeightsFactor:
 
 def weights_subset(weights: np.ndarray, indices: np.ndarray, size: int) -> np.ndarray:
     """Rows and columns ``indices`` of W given as (size,) diagonal or (size, size): (m,) or (m, m)."""
-    weights = np.asarray(weights, dtype=float)
-    if weights.shape not in ((size,), (size, size)):
-        raise SolverInputError(f"W must be ({size},) or ({size}, {size}), got shape {weights.shape}")
+    weights = check_weights(weights, size)
     return weights[indices] if weights.ndim == 1 else weights[np.ix_(indices, indices)]
 
 
@@ -167,8 +158,7 @@ def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> flo
 
     l^2 = 0 when sigma_min >= epsilon, else (1 - (sigma_min / epsilon)^2) lambda_max^2.
     """
-    if not (np.isfinite(epsilon) and epsilon > 0 and np.isfinite(lambda_max) and lambda_max >= 0):
-        raise SolverInputError(f"variable damping needs epsilon > 0 and lambda_max >= 0, got {epsilon!r}, {lambda_max!r}")
+    check_variable_damping(epsilon, lambda_max)
     if sigma_min >= epsilon:
         return 0.0
     return float(np.sqrt(1.0 - (sigma_min / epsilon) ** 2) * lambda_max)
@@ -185,6 +175,9 @@ class VariableDamping:
 
     epsilon: float
     lambda_max: float
+
+    def __post_init__(self) -> None:
+        check_variable_damping(self.epsilon, self.lambda_max)
 
     def __call__(self, sigma_min: float) -> float:
         return variable_damping(sigma_min, self.epsilon, self.lambda_max)
