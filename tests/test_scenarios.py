@@ -208,7 +208,7 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
     def never(*args, **kwargs):
         raise AssertionError("the simulation must not start")
 
-    monkeypatch.setattr("uvms.scenario.simulate", never)
+    monkeypatch.setattr("uvms.scenario.runs.simulate", never)
     started = time.perf_counter()
     with pytest.raises(StepCountError, match=r"simulation.dt = 1e-07 s over 190 s gives 1.9e\+09 steps; at most "
                                              r"200,000 are allowed .*raise simulation.dt or shorten"):
@@ -223,7 +223,7 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
         with pytest.raises(ScenarioError, match=r"simulation.dt = .* is out of range: it is the integration step"):
             run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=[f"simulation.dt={dt}"])
     amundsen = SCENARIOS / "amundsen2018_rigid_open_loop.toml"  # the dynamic plant: the same check
-    monkeypatch.setattr("uvms.scenario.simulate_gjm", never)
+    monkeypatch.setattr("uvms.scenario.runs.simulate_gjm", never)
     with pytest.raises(StepCountError, match="at most 200,000"):
         run(amundsen, out=tmp_path / "run", overrides=["simulation.dt=1e-6"], progress=False)
     assert not (tmp_path / "run").exists()
@@ -295,7 +295,7 @@ def test_numerical_failures_become_one_uvms_error_naming_the_scenario(tmp_path, 
     def overflowing(*args, **kwargs):
         raise error
 
-    monkeypatch.setattr("uvms.scenario.simulate", overflowing)  # the safety net behind the schema's bounds
+    monkeypatch.setattr("uvms.scenario.runs.simulate", overflowing)  # the safety net behind the schema's bounds
     folder = tmp_path / "run"
     with pytest.raises(NumericalError, match=f"scenario 'santos2006_task_priority': the numerics failed "
                                              f"\\({type(error).__name__}: "):

@@ -12,7 +12,7 @@ import pytest
 from uvms import UVMSError
 from uvms.cli import main
 from uvms.scenario import ScenarioError
-from uvms.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
+from uvms.scenario.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
 
 SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps
 GRID = ["solver.gain=0.5:1.5:2", "model.args.l1=1.5:2.0:2"]  # l1 moves the start; the gain the tracking
@@ -133,7 +133,7 @@ def test_a_sweep_folder_is_replaced_whole_and_reports_final_paths(tmp_path, monk
     def failing(scenario, out, **kwargs):  # jobs=1 runs the points in this process
         raise UVMSError(f"cannot write to {out!r}")
 
-    monkeypatch.setattr("uvms.scenario.run", failing)
+    monkeypatch.setattr("uvms.scenario.runs.run", failing)
     second = sweep(SCENARIO, ["solver.gain=[2.0, 3.0]"], out=folder, progress=False)
     assert sorted(path.name for path in folder.iterdir()) == ["sweep.csv", "sweep.png"]  # no point of the first sweep
     assert [row["error"] for row in second.rows] == [f"UVMSError: cannot write to '{folder / f'point_{k}'}'"

@@ -100,7 +100,7 @@ def command_run(options: argparse.Namespace) -> int:
 
 def command_sweep(options: argparse.Namespace) -> int:
     """``uvms sweep SCENARIO --grid KEY=START:STOP:N ...``: run a grid of overrides, write sweep.csv and sweep.png."""
-    from .sweep import sweep  # joblib, and dask only with --backend dask
+    from .scenario.sweep import sweep  # joblib, and dask only with --backend dask
 
     result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
                    scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None)

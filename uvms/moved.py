@@ -26,6 +26,7 @@ MOVED = {
     "uvms.drawing": "uvms.viz.drawing",
     "uvms.viewer": "uvms.viz.viewer",
     "uvms.teach": "uvms.viz.teach",
+    "uvms.sweep": "uvms.scenario.sweep",
 }
 
 

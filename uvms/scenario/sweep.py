@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from . import outputs
-from .errors import SweepError
-from .scenario import parse_value, read_scenario, read_toml, scenario_from_raw
+from .. import outputs
+from ..errors import SweepError
+from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
 METRICS = ("max_position_error", "final_position_error", "arm_travel", "vehicle_travel", "wall_time")
@@ -117,7 +117,7 @@ class SweepResult:
 
 def run_point(scenario: str, index: int, assignments: Sequence[str], out: str) -> dict:
     """Run one grid point (in a worker); an exception becomes the row's ``error`` text, metrics NaN."""
-    from .scenario import run
+    from .runs import run
 
     use_thread_lock_for_progress_bars()
     row: dict[str, Any] = {"point": index, "error": ""}
@@ -216,7 +216,7 @@ def sweep(
     assignments = [[f"{key}={toml_literal(v)}" for key, v in zip(keys, point)] for point in points]
     checked = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
-        from .model.loader import load
+        from ..model.loader import load
 
         model = read_scenario(scenario, assignments[0])["model"]
         load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
@@ -242,7 +242,7 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]], prog
 
     The file is parsed once; a progress bar shows up if the checks take more than a second.
     """
-    from .progress import tqdm
+    from ..progress import tqdm
 
     raw = read_toml(scenario)
     checked: dict = {}
@@ -255,7 +255,7 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]], prog
 def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None, progress: bool | None) -> list[dict]:
     """Run the points through joblib (loky or dask); rows sorted by point index."""
     from joblib import Parallel, delayed, parallel_config
-    from .progress import tqdm
+    from ..progress import tqdm
 
     def execute() -> list[dict]:
         parallel = Parallel(n_jobs=jobs, return_as="generator")

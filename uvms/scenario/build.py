@@ -1,0 +1,282 @@
+"""Building a run from a checked scenario: model, task, initial configuration, trajectory, controller, plant."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from ..control.gjm import GJMController
+from ..control.sequence import METHODS as SEQUENCE_METHODS
+from ..control.sequence import Phase, PhasePlan, SequenceController
+from ..dynamics.hydrodynamics import HydroParameters
+from ..dynamics.plant import Plant
+from ..errors import ScenarioError, UVMSError
+from ..model.loader import load
+from ..robot import Robot
+from ..solvers import (
+    VariableDamping,
+    clik_velocity,
+    constrained_velocity,
+    initial_configuration,
+    priority_velocity,
+)
+from ..tasks import FrameTask, JointLimitPotential, VehicleTask
+from ..trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw, VelocityRamps
+from .schema import NUMBER, SCHEMA
+
+@dataclass
+class Setup:
+    """Everything a run needs, built from a validated scenario."""
+
+    robot: Robot
+    task: FrameTask
+    trajectory: PathTrajectory | SE3Trajectory
+    q0: np.ndarray
+    controller: Any
+    duration: float
+    initial_residual: float
+    plan: PhasePlan | None = None  # sequence scenarios only
+    plant: Plant | None = None  # [plant] type rigid or hydrodynamic: the controller is a GJMController
+    control_dt: float = 0.0  # [s] sampling period of that controller (0: continuous)
+
+
+def build(scenario: dict) -> Setup:
+    """Model, task, initial configuration, trajectory and controller of a scenario."""
+    model = scenario["model"]
+    robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
+    if scenario["phases"]:
+        if scenario["plant"]["type"] != "kinematic":
+            raise ScenarioError("a sequence scenario ([[phases]]) runs on the kinematic plant only; "
+                                "remove [plant] or set plant.type = 'kinematic'")
+        return build_sequence(robot, scenario)
+    task_section = scenario["task"]
+    task = FrameTask(robot, task_section["frame"] or None, axes=task_section["axes"] or None,
+                     orientation=task_section["orientation_error"])
+    q0, residual = initial_q(robot, task, scenario)
+    trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
+    duration = float(scenario["simulation"]["duration"] or trajectory.duration)
+    if scenario["plant"]["type"] != "kinematic":
+        plant, controller = make_plant_controller(robot, task, trajectory, scenario)
+        return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
+                     control_dt=float(scenario["plant"]["control_dt"]))
+    check_kinematic_plant(scenario["plant"])
+    controller = make_controller(robot, task, trajectory, scenario)
+    return Setup(robot, task, trajectory, q0, controller, duration, residual)
+
+
+def build_sequence(robot: Robot, scenario: dict) -> Setup:
+    """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.sequence)."""
+    solver, frames = scenario["solver"], scenario["task"]["frames"] or robot.ee_frames
+    if solver["method"] not in SEQUENCE_METHODS:
+        raise ScenarioError(f"a sequence scenario needs solver.method in {', '.join(SEQUENCE_METHODS)}, "
+                            f"got {solver['method']!r}")
+    if scenario["initial"]["method"] != "given" or not isinstance(solver["gain"], NUMBER):
+        raise ScenarioError("a sequence scenario needs initial.method = 'given' and one number for solver.gain")
+    q0, _ = initial_q(robot, None, scenario)
+    phases = [Phase(name=phase["name"] or f"phase {index + 1}", duration=float(phase["duration"]),
+                    offsets=phase["offsets"], joints=phase["joints"], distance=phase["distance"])
+              for index, phase in enumerate(scenario["phases"])]
+    plan = PhasePlan(robot, q0, frames, phases)
+    controller = SequenceController(robot, plan, method=solver["method"], gain=float(solver["gain"]),
+                                    damping=float(solver["damping"]), priority=solver["priority"],
+                                    hold_vehicle=scenario["vehicle"]["hold"])
+    duration = scenario["simulation"]["duration"] or plan.duration
+    return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller, float(duration),
+                 0.0, plan)
+
+
+def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.ndarray, float]:
+    """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start."""
+    initial = scenario["initial"]
+    base = initial["base"] or None
+    arm = initial["arm"] or None
+    try:
+        q_given = robot.configuration(base=np.array(base) if base else None, arm=np.array(arm) if arm else None)
+    except UVMSError as exc:
+        raise ScenarioError(f"initial.base/initial.arm: {exc}") from None
+    if initial["method"] == "given":
+        return q_given, 0.0
+    trajectory = scenario["trajectory"]
+    if not trajectory["start"] or not trajectory["orientation"]:
+        raise ScenarioError("initial.method = 'optimize' needs trajectory.start and trajectory.orientation")
+    task.set_target(np.concatenate([trajectory["start"], trajectory["orientation"]]))
+    potential = JointLimitPotential(robot, weights=np.asarray(scenario["solver"]["joint_limit_weights"], dtype=float))
+    result = initial_configuration(robot, task, potential, q_given)
+    if not result.success:
+        raise ScenarioError(f"no initial configuration reaches the trajectory start (residual {result.residual:.3g})")
+    return result.q, result.residual
+
+
+def vector(values: list[float], size: int, name: str) -> np.ndarray:
+    if len(values) != size:
+        raise ScenarioError(f"trajectory.{name} must have {size} numbers, got {len(values)}")
+    return np.array(values, dtype=float)
+
+
+def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3Trajectory | VelocityRamps:
+    """The desired end-effector motion; start and orientation default to the frame's initial pose."""
+    start = vector(section["start"], 3, "start") if section["start"] else start_pose.translation.copy()
+    orientation = (vector(section["orientation"], 3, "orientation") if section["orientation"]
+                   else pin.rpy.matrixToRpy(start_pose.rotation))
+    kind = section["type"]
+    if kind == "ramps":
+        if not section["velocity"]:
+            raise ScenarioError("a ramps trajectory needs trajectory.velocity (the cruise velocity [m/s], world axes)")
+        if not 0 < section["accel_time"] <= section["duration"] / 2:
+            raise ScenarioError(f"a ramps trajectory needs trajectory.accel_time (the ramp time) in (0, duration/2] = "
+                                f"(0, {section['duration'] / 2:g}] s, got {section['accel_time']:g}")
+        return VelocityRamps.trapezoid(start, vector(section["velocity"], 3, "velocity"), section["duration"],
+                                       section["accel_time"], rotation=pin.rpy.rpyToMatrix(*orientation))
+    if kind == "circle":
+        if section["center"]:
+            center = vector(section["center"], 3, "center")
+        elif section["center_offset"]:
+            center = start + vector(section["center_offset"], 3, "center_offset")
+        else:
+            raise ScenarioError("a circle trajectory needs trajectory.center or trajectory.center_offset")
+        path = CirclePath(center, start, vector(section["normal"], 3, "normal"))
+    else:
+        if section["end"]:
+            end = vector(section["end"], 3, "end")
+        elif section["end_offset"]:
+            end = start + vector(section["end_offset"], 3, "end_offset")
+        else:
+            raise ScenarioError(f"a {kind} trajectory needs trajectory.end or trajectory.end_offset")
+        path = LinePath(start, end)
+    law = make_law(section, path.length)
+    if kind == "pose":
+        end_orientation = (vector(section["end_orientation"], 3, "end_orientation") if section["end_orientation"]
+                           else orientation)
+        return SE3Trajectory(np.concatenate([start, orientation]), np.concatenate([path(path.length).point, end_orientation]),
+                             law)
+    return PathTrajectory(path, law, orientation)
+
+
+def make_law(section: dict, path_length: float):
+    """Time law: trapezoid from a speed, or any law from laps (circle) / the path length."""
+    duration, accel_time = section["duration"], section["accel_time"]
+    distance = section["laps"] * path_length if section["laps"] else path_length
+    if section["law"] == "trapezoid":
+        if section["speed"]:
+            return TrapezoidLaw(speed=section["speed"], duration=duration, accel_time=accel_time)
+        return TrapezoidLaw.from_distance(distance, duration, accel_time)
+    return PolynomialLaw(distance=distance, duration=duration, degree=3 if section["law"] == "cubic" else 5)
+
+
+def check_kinematic_plant(section: dict) -> None:
+    """Reject [plant] keys that only a dynamic plant uses when plant.type = 'kinematic'."""
+    defaults = {key: default for key, (_, default, _) in SCHEMA["plant"].items()}
+    unused = [key for key in ("gjm", "motor_feedforward", "control_dt", "gravity", "added_mass", "damping", "current")
+              if section[key] != defaults[key]]
+    if unused:
+        raise ScenarioError(f"plant.{unused[0]} needs a dynamic plant: the kinematic one moves the vehicle by momentum "
+                            f"conservation (solver.free_floating) or as commanded; set plant.type = 'rigid' or "
+                            f"'hydrodynamic'")
+
+
+def make_plant(robot: Robot, section: dict) -> Plant:
+    """The free-floating plant of a [plant] section (type rigid or hydrodynamic)."""
+    tau = float(section["motor_time_constant"])
+    if not tau > 0:
+        raise ScenarioError(f"plant.motor_time_constant must be > 0 s (the joint servos' time constant), got {tau:g}")
+    current = None
+    if section["current"]:
+        if len(section["current"]) != 3:
+            raise ScenarioError(f"plant.current must have 3 numbers (world ENU [m/s]), got {len(section['current'])}")
+        current = np.array(section["current"], dtype=float)
+    if robot.base_type == "fixed":
+        raise ScenarioError(f"plant.type = {section['type']!r} needs a floating or planar vehicle; "
+                            f"{robot.name} has a fixed base (set model.base or use plant.type = 'kinematic')")
+    if section["type"] == "rigid":
+        for key in ("added_mass", "damping"):
+            if section[key]:
+                raise ScenarioError(f"plant.{key} = true needs plant.type = 'hydrodynamic'; a rigid plant has no fluid")
+        if section["gravity"] or current is not None:
+            raise ScenarioError("plant.gravity and plant.current need plant.type = 'hydrodynamic' (buoyancy, fluid); "
+                                "a rigid plant floats weightless in vacuum")
+        return Plant(robot, HydroParameters(source="rigid plant (no fluid)"), gravity=False, motor_time_constant=tau,
+                     added_mass=False, damping=False)
+    added_mass = True if section["added_mass"] is None else section["added_mass"]
+    damping = True if section["damping"] is None else section["damping"]
+    plant = Plant(robot, None, gravity=section["gravity"], motor_time_constant=tau, current=current,
+                  added_mass=added_mass, damping=damping)
+    if not plant.links:
+        raise ScenarioError(f"plant.type = 'hydrodynamic' needs hydrodynamic parameters, and {robot.source} has none; "
+                            f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.hydrodynamics), "
+                            f"or use plant.type = 'rigid'")
+    return plant
+
+
+def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict) -> tuple[Plant, GJMController]:
+    """The plant and the GJM controller of amundsen2018 (eq. 4-8) for a dynamic [plant]."""
+    section, solver = scenario["plant"], scenario["solver"]
+    if solver["method"] != "clik" or not solver["free_floating"]:
+        raise ScenarioError(f"plant.type = {section['type']!r} leaves the vehicle passive: it needs solver.method = "
+                            f"'clik' and solver.free_floating = true (the joints are commanded through the "
+                            f"generalized Jacobian, plant.gjm)")
+    if solver["alpha"] or solver["enforce_limits"]:
+        raise ScenarioError("solver.alpha and solver.enforce_limits are not supported with a dynamic plant "
+                            "(the GJM controller of amundsen2018 has no null-space term or joint clamping)")
+    plant = make_plant(robot, section)
+    gain = np.asarray(solver["gain"], dtype=float)
+    if gain.shape not in ((), (3,)):
+        raise ScenarioError(f"solver.gain with a dynamic plant is K on the position error: one number or 3 "
+                            f"(x, y, z) [1/s], got {solver['gain']!r}")
+    damping: float | VariableDamping = solver["damping"]
+    if solver["damping_epsilon"] > 0:
+        damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
+    weights = np.asarray(solver["weights"], dtype=float) if solver["weights"] else None
+    control_dt, dt = float(section["control_dt"]), float(scenario["simulation"]["dt"])
+    ratio = control_dt / dt
+    if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
+        raise ScenarioError(f"plant.control_dt must be 0 (continuous controller) or a multiple of simulation.dt = "
+                            f"{dt:g} s, got {control_dt:g}")
+    try:
+        controller = GJMController(robot, trajectory, frame=task.frame, axes=task.axes, gain=gain, damping=damping,
+                                   weights=weights, gjm=section["gjm"], hydro=plant.hydro if plant.links else None,
+                                   motor_feedforward=plant.motor_time_constant if section["motor_feedforward"] else 0.0)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant/solver: {exc}") from None
+    return plant, controller
+
+
+def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
+    """(q, t) -> (v, diagnostics) for the scenario's solver method."""
+    solver, vehicle = scenario["solver"], scenario["vehicle"]
+    dt = scenario["simulation"]["dt"]
+    gain = np.asarray(solver["gain"], dtype=float)
+    damping: float | VariableDamping = solver["damping"]
+    if solver["damping_epsilon"] > 0:
+        damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
+    potential = JointLimitPotential(robot, weights=np.asarray(solver["joint_limit_weights"], dtype=float))
+    weights = np.asarray(solver["weights"], dtype=float) if solver["weights"] else None
+    method = solver["method"]
+    vehicle_task = None
+    if method != "clik":
+        if not vehicle["velocities"] and vehicle["heading"] is None and vehicle["depth"] is None:
+            raise ScenarioError(f"solver.method = {method!r} needs a [vehicle] task (velocities, heading or depth)")
+        vehicle_task = VehicleTask(robot, velocities=vehicle["velocities"], heading=vehicle["heading"],
+                                   depth=vehicle["depth"])
+
+    def follow(t: float) -> None:
+        sample = trajectory(t)
+        task.set_target(sample.pose)
+        task.set_target_velocity(sample.twist)
+
+    def controller(q: np.ndarray, t: float):
+        follow(t)
+        if method == "clik":
+            result = clik_velocity(robot, q, task, gain=gain, weights=weights, damping=damping, potential=potential,
+                                   alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
+                                   enforce_limits=solver["enforce_limits"])
+        elif method == "task_priority":
+            result = priority_velocity(robot, q, [task, vehicle_task], gain=[gain, vehicle["gain"]],
+                                       method=solver["priority"], damping=float(solver["damping"]))
+        else:
+            result = constrained_velocity(robot, q, task, vehicle_task, gain=gain, constraint_gain=vehicle["gain"])
+        return result.v, result
+
+    return controller

@@ -1,0 +1,170 @@
+"""Running a scenario: the one simulation loop, the metrics, and the files of the run folder."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import outputs
+from ..control.sequence import sequence_metrics
+from ..errors import NumericalError
+from ..simulate import SimulationResult, simulate, simulate_gjm, step_count
+from .build import Setup, build
+from .schema import read_scenario
+
+@dataclass
+class RunResult:
+    """A scenario run: its simulation, metrics and the files written."""
+
+    scenario: dict
+    setup: Setup
+    simulation: SimulationResult
+    metrics: dict
+    files: list[Path]
+    plant_run: SimulationResult | None = None  # dynamic [plant] only: the same run (its plant series filled)
+
+def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) -> dict:
+    """The numbers of ``metrics.json``."""
+    robot = result.robot
+    arm = result.arm()
+    lower, upper = robot.arm_limits
+    violation = np.maximum(np.maximum(lower - arm, arm - upper), 0.0)
+    metrics = {
+        "max_position_error": float(result.position_error.max()),
+        "max_orientation_error": float(result.orientation_error.max()),
+        "final_position_error": float(result.position_error[-1]),
+        "rms_position_error": float(np.sqrt(np.mean(result.position_error**2))),
+        "max_joint_limit_violation": float(np.nan_to_num(violation, nan=0.0).max(initial=0.0)),
+        "arm_travel": float(np.abs(np.diff(arm, axis=0)).sum()),
+        "steps": int(len(result.t) - 1),
+        "wall_time": float(wall_time),
+        "initial_configuration": setup.q0.tolist(),
+        "initial_residual": float(setup.initial_residual),
+        "min_sigma_min": float(result.sigma_min.min()),
+        "max_damping": float(result.damping.max()),
+    }
+    if robot.base_type != "fixed":
+        vehicle = result.vehicle_pose()
+        position = vehicle[:, :2] if robot.base_type == "planar" else vehicle[:, :3]
+        yaw = vehicle[:, -1]  # unwrapped
+        metrics["vehicle_travel"] = float(np.linalg.norm(np.diff(position, axis=0), axis=1).sum())
+        metrics["vehicle_yaw_range"] = float(yaw.max() - yaw.min())
+    else:
+        metrics["vehicle_travel"] = 0.0
+        metrics["vehicle_yaw_range"] = 0.0
+    if setup.plan is not None:
+        metrics.update(sequence_metrics(robot, setup.plan, result.t, result.q))
+    return metrics
+
+
+def run(
+    scenario_path: str | os.PathLike,
+    out: str | os.PathLike | None = None,
+    overrides: Sequence[str] = (),
+    progress: bool | None = None,
+    *,
+    lock: bool = True,
+) -> RunResult:
+    """Run a scenario file and write ``metrics.json``, ``trajectory.csv``/``.npz`` and figures into ``out``.
+
+    With a dynamic ``[plant]`` (rigid or hydrodynamic) the joints are driven by the GJM
+    controller of :mod:`uvms.control.gjm` through :func:`uvms.simulate.simulate_gjm` (the one loop), and
+    ``plant.npz`` (commands, torques, energy, momentum) and the figures of
+    :func:`uvms.viz.plotting.gjm_figures` are added.
+
+    The scenario is read, checked and built (model, initial configuration, step count) before anything is
+    written; then every file goes into a temporary folder that replaces ``out`` as a whole at the end
+    (:func:`uvms.outputs.run_folder`): ``out`` holds the previous complete run until the new one is complete.
+
+    Args:
+        scenario_path: the TOML file.
+        out: output folder (default ``out/<scenario name>``).
+        overrides: ``SECTION.KEY=VALUE`` strings.
+        progress: progress bar (None: on a terminal only).
+        lock: hold the lock of ``out`` (False only for a folder inside another run folder, as the points of
+            :func:`uvms.scenario.sweep.sweep`).
+
+    Raises:
+        ScenarioError: a bad scenario or override; StepCountError: no step or too many steps;
+        NumericalError: the numerics overflowed; RunFolderBusy: another uvms process writes ``out``.
+    """
+    scenario = read_scenario(scenario_path, overrides)
+    name = scenario["scenario"]["name"]
+    out = Path(out) if out is not None else Path("out") / name
+    started = time.perf_counter()
+    with numerics_guard(name):
+        setup = build(scenario)
+    check_step_count(scenario, setup.duration)
+    with outputs.run_folder(out, lock=lock) as folder, numerics_guard(name):
+        result = execute(scenario, setup, folder, progress, started)
+    result.files = [out / path.relative_to(folder) for path in result.files]
+    return result
+
+
+@contextlib.contextmanager
+def numerics_guard(name: str) -> Iterator[None]:
+    """Turn an arithmetic failure escaping from the numerics (overflow, singular matrix...) into a NumericalError."""
+    try:
+        yield
+    except (ArithmeticError, np.linalg.LinAlgError) as exc:
+        message = " ".join(str(exc).split())
+        raise NumericalError(f"scenario {name!r}: the numerics failed ({type(exc).__name__}"
+                             f"{': ' + message if message else ''}); a number of the scenario (gain, damping, "
+                             f"weight, dt, a model dimension) is too large or too small for the solvers") from exc
+
+
+def check_step_count(scenario: dict, duration: float) -> int:
+    """The number of steps of a run, checked before it starts (:func:`uvms.simulate.step_count`)."""
+    if scenario["simulation"]["duration"]:
+        duration_name = "simulation.duration"
+    else:
+        duration_name = "the phases' durations" if scenario["phases"] else "trajectory.duration"
+    return step_count(duration, float(scenario["simulation"]["dt"]), dt_name="simulation.dt",
+                      duration_name=duration_name)
+
+
+def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, started: float) -> RunResult:
+    """Simulate a built scenario and write its files into ``folder``."""
+    simulation_section = scenario["simulation"]
+    plant_run: SimulationResult | None = None
+    if setup.plant is not None:
+        result = plant_run = simulate_gjm(setup.plant, setup.controller, setup.q0, setup.duration,
+                                          simulation_section["dt"], control_dt=setup.control_dt,
+                                          integrator=simulation_section["integrator"], progress=progress,
+                                          task=setup.task)
+    else:
+        result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration,
+                          dt=simulation_section["dt"], task=setup.task, desired=lambda t: setup.trajectory(t).pose,
+                          integrator=simulation_section["integrator"], progress=progress)
+    metrics = compute_metrics(result, setup, time.perf_counter() - started)
+    metrics["scenario"] = scenario["scenario"]["name"]
+    if plant_run is not None:
+        metrics.update(plant=scenario["plant"]["type"], gjm=scenario["plant"]["gjm"],
+                       motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.plant_metrics())
+    files = list(result.save(folder))
+    if plant_run is not None:
+        outputs.write_npz(folder / "plant.npz", **plant_run.plant_arrays())
+        files.append(folder / "plant.npz")
+    if scenario["outputs"]["figures"]:
+        from ..viz.plotting import scenario_figures  # matplotlib only when figures are asked for
+
+        files += scenario_figures(result, setup.trajectory, folder, title=scenario["scenario"]["name"])
+        if plant_run is not None:
+            from ..viz.plotting import gjm_figures
+
+            files += gjm_figures(plant_run, folder, title=scenario["scenario"]["name"])
+        if setup.plan is not None:
+            from ..viz.plotting import sequence_figures
+
+            files += sequence_figures(result, setup.plan, folder, title=scenario["scenario"]["name"],
+                                      animation=scenario["outputs"]["animation"], progress=progress)
+    outputs.write_json(folder / "metrics.json", metrics)
+    files.append(folder / "metrics.json")
+    return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files,
+                     plant_run=plant_run)

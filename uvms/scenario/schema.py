@@ -1,0 +1,326 @@
+"""The scenario file: its schema (sections, keys, types, defaults, bounds), reading, overrides and checks.
+
+The schema is :data:`SCHEMA`; unknown keys are rejected with the list of valid ones, and ``--set KEY=VALUE``
+overrides any key (dotted path, e.g. ``solver.gain=2`` or ``model.args.l1=0.6``).
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+import re
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover - Python 3.10
+    import tomli as tomllib
+
+from ..control.gjm import GJM_KINDS
+from ..errors import ScenarioError
+
+NUMBER = (int, float)
+#: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
+#: free-floating dynamics of uvms.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
+PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
+NUMBERS = "numbers"  # a list of numbers
+REQUIRED = object()
+#: A name read from a scenario that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,
+#: ``outputs.animation``) is a plain name: one path component, never a path that leads outside ``--out``.
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
+NAME_RULE = ("a plain name: letters, digits, '.', '_' and '-', starting with a letter or a digit, at most 128 "
+             "characters, no '/' and no '..'")
+ANIMATION_SUFFIXES = (".gif", ".mp4")
+#: The largest magnitude of a number in a scenario (SI units; model.args excepted, the model checks them). No
+#: gain [1/s], damping, weight, length [m], speed [m/s], time [s] or angle [rad] of a vehicle-manipulator run
+#: comes near it, and beyond it products such as damping**2, gain * dt or weight ratios overflow or swamp the
+#: double precision of the solvers.
+MAX_MAGNITUDE = 1e6
+#: Keys that also have a sign: key -> (lowest value, whether the lowest value itself is excluded, meaning).
+LOWER_BOUNDS: dict[str, tuple[float, bool, str]] = {
+    "simulation.dt": (0.0, True, "the integration step [s]"),
+    "simulation.duration": (0.0, False, "the run length [s]; 0: the trajectory's"),
+    "trajectory.duration": (0.0, True, "the trajectory's length [s]"),
+    "trajectory.accel_time": (0.0, False, "the acceleration time [s]"),
+    "trajectory.laps": (0.0, False, "laps of the circle; 0: one pass"),
+    "solver.damping": (0.0, False, "the DLS damping"),
+    "solver.damping_epsilon": (0.0, False, "the singular-value threshold of the variable damping"),
+    "solver.damping_max": (0.0, False, "the largest variable damping"),
+}
+
+
+#: section -> key -> (accepted types, default, allowed values or None). "args"/"velocities" hold free tables.
+SCHEMA: dict[str, dict[str, tuple]] = {
+    "scenario": {
+        "name": (str, "", None),
+        "description": (str, "", None),
+    },
+    "model": {
+        "path": (str, REQUIRED, None),
+        "base": (str, "", ("", "floating", "planar", "fixed")),
+        "ee": (str, "", None),
+        "args": (dict, {}, None),
+    },
+    "task": {
+        "frame": (str, "", None),
+        "frames": (list, [], None),
+        "axes": (list, [], None),
+        "orientation_error": (str, "log", ("log", "euler")),
+    },
+    "trajectory": {
+        "type": (str, "circle", ("circle", "line", "pose", "ramps")),
+        "start": (NUMBERS, [], None),
+        "center": (NUMBERS, [], None),
+        "center_offset": (NUMBERS, [], None),
+        "normal": (NUMBERS, [0.0, 0.0, 1.0], None),
+        "end": (NUMBERS, [], None),
+        "end_offset": (NUMBERS, [], None),
+        "orientation": (NUMBERS, [], None),
+        "end_orientation": (NUMBERS, [], None),
+        "law": (str, "trapezoid", ("trapezoid", "cubic", "quintic")),
+        "speed": (NUMBER, 0.0, None),
+        "laps": (NUMBER, 0.0, None),
+        "duration": (NUMBER, REQUIRED, None),
+        "accel_time": (NUMBER, 0.0, None),
+        "velocity": (NUMBERS, [], None),
+    },
+    "solver": {
+        "method": (str, "clik", ("clik", "task_priority", "kinematic_constraint")),
+        "gain": ((int, float, list), 1.0, None),
+        "weights": (NUMBERS, [], None),
+        "damping": (NUMBER, 0.0, None),
+        "damping_epsilon": (NUMBER, 0.0, None),
+        "damping_max": (NUMBER, 0.0, None),
+        "alpha": (NUMBER, 0.0, None),
+        "joint_limit_weights": ((int, float, list), 1.0, None),
+        "free_floating": (bool, False, None),
+        "enforce_limits": (bool, False, None),
+        "priority": (str, "robust", ("robust", "classic")),
+    },
+    "vehicle": {
+        "velocities": (dict, {}, None),
+        "heading": (NUMBER, None, None),
+        "depth": (NUMBER, None, None),
+        "gain": (NUMBER, 1.0, None),
+        "hold": (bool, True, None),
+    },
+    "initial": {
+        "method": (str, "given", ("given", "optimize")),
+        "base": (NUMBERS, [], None),
+        "arm": (NUMBERS, [], None),
+    },
+    "simulation": {
+        "dt": (NUMBER, REQUIRED, None),
+        "duration": (NUMBER, 0.0, None),
+        "integrator": (str, "rk4", ("euler", "rk4")),
+    },
+    "plant": {
+        "type": (str, "kinematic", PLANT_TYPES),
+        "gjm": (str, "rigid", GJM_KINDS),
+        "motor_time_constant": (NUMBER, 0.1, None),
+        "motor_feedforward": (bool, False, None),
+        "control_dt": (NUMBER, 0.0, None),
+        "gravity": (bool, False, None),
+        "added_mass": (bool, None, None),
+        "damping": (bool, None, None),
+        "current": (NUMBERS, [], None),
+    },
+    "outputs": {
+        "figures": (bool, True, None),
+        "animation": (str, "", None),
+    },
+}
+#: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.sequence.
+PHASE_SCHEMA: dict[str, tuple] = {
+    "name": (str, "", None),
+    "duration": (NUMBER, REQUIRED, None),
+    "offsets": (dict, {}, None),
+    "joints": (dict, {}, None),
+    "distance": (NUMBER, None, None),
+}
+REQUIRED_SECTIONS = ("model", "trajectory", "simulation")
+SEQUENCE_REQUIRED_SECTIONS = ("model", "phases", "simulation")
+
+
+# ------------------------------------------------------------------ parsing
+def read_scenario(path: str | os.PathLike, overrides: Sequence[str] = ()) -> dict:
+    """Read, override and validate a scenario file; relative model paths become absolute.
+
+    Raises:
+        ScenarioError: unreadable file, bad TOML, unknown key, wrong type, impossible value.
+    """
+    return scenario_from_raw(read_toml(path), path, overrides)
+
+
+def read_toml(path: str | os.PathLike) -> dict:
+    """The raw table of a scenario file (not validated)."""
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ScenarioError(f"scenario file {str(path)!r} does not exist") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ScenarioError(f"cannot read scenario {str(path)!r}: {exc}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
+
+
+def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence[str] = ()) -> dict:
+    """Override and validate the raw table of the scenario file ``path`` (left unchanged: it is copied)."""
+    path = Path(path)
+    raw = copy.deepcopy(dict(raw))
+    for override in overrides:
+        apply_override(raw, override)
+    scenario = validate(raw, str(path))
+    model_path = Path(scenario["model"]["path"])
+    if not model_path.is_absolute() and (path.parent / model_path).exists():
+        scenario["model"]["path"] = str((path.parent / model_path).resolve())
+    scenario["scenario"]["name"] = scenario["scenario"]["name"] or name_from_stem(path.stem)
+    return scenario
+
+
+def name_from_stem(stem: str) -> str:
+    """The run name of a scenario without ``scenario.name``: its file name, made a plain name ("my run" -> "my_run")."""
+    name = re.sub(r"\.{2,}", ".", re.sub(r"[^A-Za-z0-9._-]+", "_", stem)).lstrip("._-")[:128]
+    return name or "scenario"
+
+
+def check_name(name: str, value: str, origin: str, role: str, suffixes: Sequence[str] = (), example: str = "") -> str:
+    """A scenario string that becomes a file name: a plain name (:data:`NAME_PATTERN`), with one of ``suffixes``."""
+    plain = NAME_PATTERN.fullmatch(value) is not None and ".." not in value
+    suffix_ok = not suffixes or Path(value).suffix.lower() in suffixes
+    if not (plain and suffix_ok):
+        ending = f", ending in {' or '.join(suffixes)}" if suffixes else ""
+        raise ScenarioError(f"{origin}: {name} = {value!r} is not valid: {role}, so it must be {NAME_RULE}{ending} "
+                            f"(e.g. {example!r})")
+    return value
+
+
+def parse_value(text: str) -> Any:
+    """A --set value as TOML (number, bool, list, quoted string); bare words stay strings."""
+    try:
+        return tomllib.loads(f"value = {text}")["value"]
+    except tomllib.TOMLDecodeError:
+        return text
+
+
+def apply_override(raw: dict, assignment: str) -> None:
+    """Apply ``section.key[.sub]=VALUE`` to the raw scenario."""
+    key, sep, text = assignment.partition("=")
+    parts = key.strip().split(".")
+    if not sep or len(parts) < 2 or not all(parts):
+        raise ScenarioError(f"--set expects SECTION.KEY=VALUE (e.g. solver.gain=2, model.args.l1=0.6), got {assignment!r}")
+    node = raw
+    for part in parts[:-1]:
+        node = node.setdefault(part, {})
+        if not isinstance(node, dict):
+            raise ScenarioError(f"--set {key}: {part!r} is not a table")
+    node[parts[-1]] = parse_value(text.strip())
+
+
+def validate(raw: Mapping, origin: str) -> dict:
+    """Check sections, keys and types against :data:`SCHEMA`; fill the defaults."""
+    sections = [*SCHEMA, "phases"]
+    unknown = sorted(set(raw) - set(sections))
+    if unknown:
+        raise ScenarioError(f"{origin}: unknown section(s) {', '.join(unknown)}; valid: {', '.join(sections)}")
+    required = SEQUENCE_REQUIRED_SECTIONS if "phases" in raw else REQUIRED_SECTIONS
+    missing = [section for section in required if section not in raw]
+    if missing:
+        raise ScenarioError(f"{origin}: missing section(s) {', '.join(missing)}")
+    skipped = {"trajectory"} if "phases" in raw and "trajectory" not in raw else set()  # a sequence has none
+    scenario = {section: validate_table(raw.get(section, {}), keys, section, origin)
+                for section, keys in SCHEMA.items() if section not in skipped}
+    phases = raw.get("phases", [])
+    if not isinstance(phases, list) or not all(isinstance(phase, dict) for phase in phases):
+        raise ScenarioError(f"{origin}: phases must be an array of tables ([[phases]])")
+    scenario["phases"] = [validate_table(phase, PHASE_SCHEMA, f"phases[{index}]", origin)
+                          for index, phase in enumerate(phases)]
+    if scenario["scenario"]["name"]:
+        check_name("scenario.name", scenario["scenario"]["name"], origin,
+                   "it names the default output folder out/<name>", example="hoang2011_w1")
+    if scenario["outputs"]["animation"]:
+        check_name("outputs.animation", scenario["outputs"]["animation"], origin,
+                   "it names a file inside the output folder", ANIMATION_SUFFIXES, example="grip.gif")
+    return scenario
+
+
+def validate_table(given: Any, keys: Mapping[str, tuple], section: str, origin: str) -> dict:
+    """One table against its schema (types, allowed values), defaults filled."""
+    if not isinstance(given, dict):
+        raise ScenarioError(f"{origin}: [{section}] must be a table")
+    unknown = sorted(set(given) - set(keys))
+    if unknown:
+        raise ScenarioError(f"{origin}: unknown key(s) {', '.join(f'{section}.{k}' for k in unknown)}; "
+                            f"valid in [{section}]: {', '.join(keys)}")
+    table = {}
+    for key, (kinds, default, allowed) in keys.items():
+        if key not in given:
+            if default is REQUIRED:
+                raise ScenarioError(f"{origin}: {section}.{key} is required")
+            table[key] = copy.deepcopy(default)
+            continue
+        table[key] = check_value(f"{section}.{key}", given[key], kinds, allowed, origin)
+    return table
+
+
+def check_value(name: str, value: Any, kinds, allowed, origin: str) -> Any:
+    """One value against its type, allowed set and range (:data:`MAX_MAGNITUDE`, :data:`LOWER_BOUNDS`)."""
+    if kinds == NUMBERS:
+        if not isinstance(value, list) or not all(is_number(v) for v in value):
+            raise ScenarioError(f"{origin}: {name} must be a list of numbers, got {value!r}")
+        check_range(name, value, origin)
+        return [float(v) for v in value]
+    kinds = kinds if isinstance(kinds, tuple) else (kinds,)
+    if isinstance(value, bool) and bool not in kinds:
+        raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
+    if not isinstance(value, kinds):
+        raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
+    if isinstance(value, list) and kinds != (list,) and not all(is_number(v) for v in value):
+        raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)} of numbers, got {value!r}")
+    if name != "model.args":  # xacro args are checked by the model (uvms.checks)
+        check_range(name, value, origin)
+    if allowed is not None and value not in allowed:
+        raise ScenarioError(f"{origin}: {name} = {value!r} is not valid; valid: {', '.join(map(repr, allowed))}")
+    return value
+
+
+def is_number(value: Any) -> bool:
+    return isinstance(value, NUMBER) and not isinstance(value, bool)
+
+
+def check_range(name: str, value: Any, origin: str) -> None:
+    """Every number in ``value`` (a number, or lists and tables of them) finite, |x| <= MAX_MAGNITUDE, and above
+    the lower bound of ``name`` if it has one."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            check_range(f"{name}.{key}", item, origin)
+        return
+    if isinstance(value, list):
+        for item in value:
+            check_range(name, item, origin)
+        return
+    if not is_number(value):
+        return
+    shown = f"{value:.6g}" if isinstance(value, float) or abs(value) < 10**15 else f"a {len(str(abs(value)))}-digit integer"
+    if not (isinstance(value, int) or math.isfinite(value)):
+        raise ScenarioError(f"{origin}: {name} must be finite, got {value!r}")
+    if abs(value) > MAX_MAGNITUDE:
+        raise ScenarioError(f"{origin}: {name} = {shown} is out of range: scenario numbers are SI values with "
+                            f"|x| <= {MAX_MAGNITUDE:.0e} (no gain, damping, weight, length, speed or time of a "
+                            f"vehicle-manipulator run comes near it, and beyond it the solvers overflow)")
+    bound = LOWER_BOUNDS.get(name)
+    if bound is not None:
+        low, strict, meaning = bound
+        if value < low or (strict and value == low):
+            raise ScenarioError(f"{origin}: {name} = {shown} is out of range: it is {meaning}, valid: "
+                                f"{low:g} {'<' if strict else '<='} {name} <= {MAX_MAGNITUDE:.0e}")
+
+
+def type_names(kinds: tuple) -> str:
+    names = {int: "a number", float: "a number", str: "a string", bool: "true/false", list: "a list", dict: "a table"}
+    return " or ".join(dict.fromkeys(names[kind] for kind in kinds))
