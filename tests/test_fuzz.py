@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from test_jacobians import finite_difference_jacobian
 
 import uvms
+from uvms.limits import Limit
 
 finite = st.floats(-1.0, 1.0, allow_nan=False)
 unit_axis = st.tuples(finite, finite, finite).filter(lambda v: np.linalg.norm(v) > 0.2).map(
@@ -76,6 +77,7 @@ def test_random_trees_load_with_consistent_kinematics(tree, seed):
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(tree=urdf_trees(), seed=st.integers(0, 2**31 - 1))
 def test_ik_never_reports_a_false_success(tree, seed):
+    """Pose IK's success flag is the truth; one Limit keeps IK projection and CLIK clamping inside the joint limits."""
     text, _, leaf = tree
     robot = load_or_refuse(text, leaf)
     if robot is None:
@@ -93,19 +95,11 @@ def test_ik_never_reports_a_false_success(tree, seed):
         lower, upper = robot.arm_limits
         arm = robot.arm_configuration(result.q)
         assert np.all(arm >= lower - 1e-12) and np.all(arm <= upper + 1e-12)
+    assert_limit_projection_and_clamping(robot, leaf, rng)
 
 
-@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(tree=urdf_trees(), seed=st.integers(0, 2**31 - 1))
-def test_limits_projection_and_clamping_on_random_trees(tree, seed):
-    """One Limit for IK projection and CLIK clamping: random trees stay inside their joint limits."""
-    from uvms.limits import Limit
-
-    text, _, leaf = tree
-    robot = load_or_refuse(text, leaf)
-    if robot is None:
-        return
-    rng = np.random.default_rng(seed)
+def assert_limit_projection_and_clamping(robot: uvms.Robot, leaf: str, rng: np.random.Generator) -> None:
+    """Limit.project equals the clipping of pose IK before the Limit concept; CLIK clamping keeps q inside."""
     limit = Limit.joint_positions(robot)
     q = robot.random_configuration(rng)
     pushed = q.copy()
@@ -113,7 +107,7 @@ def test_limits_projection_and_clamping_on_random_trees(tree, seed):
     pushed[held] += rng.normal(scale=3.0, size=held.size)
     projected = limit.project(pushed)
     assert limit.contains(robot.arm_configuration(projected))
-    before = pushed.copy()  # the projection of pose IK before the Limit concept: every arm entry of q clipped
+    before = pushed.copy()  # every arm entry of q clipped to the model's limits
     arm = slice(robot.nq_vehicle, robot.nq)
     before[arm] = np.clip(before[arm], robot.model.lowerPositionLimit[arm], robot.model.upperPositionLimit[arm])
     assert np.array_equal(projected, before)
