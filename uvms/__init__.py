@@ -52,18 +52,13 @@ from .solvers import (
 from .trajectory import ViaPointTrajectory, ctraj, jtraj
 
 # dynamics: hydrodynamics and the free-floating plant
-from .dynamics import (
-    HydroParameters,
-    LinkHydrodynamics,
-    Plant,
-    PlantResult,
-    generalized_jacobian_added_mass,
-    hydrodynamics_of,
-    simulate_plant,
-)
+from .dynamics import HydroParameters, LinkHydrodynamics, Plant, generalized_jacobian_added_mass, hydrodynamics_of
 
 # control
-from .control import GJMControlError, GJMController, GJMResult, VelocityRamps, simulate_gjm
+from .control import GJMControlError, GJMController, VelocityRamps
+
+# the one simulation loop, for kinematic and dynamic runs, and its result
+from .simulate import GJMResult, PlantResult, SimulationResult, simulate_gjm, simulate_plant
 
 # workspace
 from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
@@ -87,10 +82,11 @@ __all__ = [
     # trajectories
     "ViaPointTrajectory", "ctraj", "jtraj",
     # dynamics
-    "HydroParameters", "LinkHydrodynamics", "Plant", "PlantResult", "generalized_jacobian_added_mass",
-    "hydrodynamics_of", "simulate_plant",
+    "HydroParameters", "LinkHydrodynamics", "Plant", "generalized_jacobian_added_mass", "hydrodynamics_of",
     # control
-    "GJMControlError", "GJMController", "GJMResult", "VelocityRamps", "simulate_gjm",
+    "GJMControlError", "GJMController", "VelocityRamps",
+    # simulation
+    "GJMResult", "PlantResult", "SimulationResult", "simulate_gjm", "simulate_plant",
     # workspace
     "BatchKinematics", "WorkspaceResult", "monte_carlo",
 ]

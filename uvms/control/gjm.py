@@ -286,6 +286,9 @@ def __getattr__(name: str):
     """``simulate_gjm`` and ``GJMResult`` moved to :mod:`uvms.simulate` (the one loop and result); this old path
     keeps working for one release."""
     if name in ("simulate_gjm", "GJMResult"):
+        import warnings
+
+        warnings.warn(f"{__name__}.{name} moved to uvms.simulate.{name}", DeprecationWarning, stacklevel=2)
         from ..simulate import GJMResult, simulate_gjm  # lazily: the loop sits above this layer
 
         return {"GJMResult": GJMResult, "simulate_gjm": simulate_gjm}[name]

@@ -436,6 +436,9 @@ def __getattr__(name: str):
     """``simulate_plant`` and ``PlantResult`` moved to :mod:`uvms.simulate` (the one loop and result); this
     old path keeps working for one release."""
     if name in ("simulate_plant", "PlantResult"):
+        import warnings
+
+        warnings.warn(f"{__name__}.{name} moved to uvms.simulate.{name}", DeprecationWarning, stacklevel=2)
         from ..simulate import PlantResult, simulate_plant  # lazily: the loop sits above this layer
 
         return {"PlantResult": PlantResult, "simulate_plant": simulate_plant}[name]
