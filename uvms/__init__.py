@@ -32,6 +32,7 @@ from .errors import (
 from .model import MissingMeshWarning, example_robot_urdf, load, mount_arm, shipped_models
 
 # robot and kinematics
+from .limits import Limit
 from .robot import Robot
 from .state import KinematicState
 
@@ -74,7 +75,7 @@ __all__ = [
     # model
     "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
     # robot and kinematics
-    "KinematicState", "Robot",
+    "KinematicState", "Limit", "Robot",
     # tasks and solvers
     "DistanceTask", "FrameTask", "JointLimitPotential", "JointTask", "PostureTask", "VehicleTask",
     "SolverInputError", "VariableDamping", "clik_step", "clik_velocity", "constrained_velocity",
