@@ -102,7 +102,7 @@ def clik_velocity(
         bounds = limit.crossed_bound(predicted)
         for index in outside:  # hold the joint where the step reaches its limit
             held[index] = (bounds[index] - now[index]) / dt
-        free = np.array([i for i in free if i not in held])
+        free = np.array([i for i in free if i not in held], dtype=int)
     v = np.zeros(robot.nv)
     v[first:] = solution
     if free_floating:
@@ -127,6 +127,9 @@ def solve_with_held(
     solution = np.zeros(jacobian.shape[1])
     for index, value in held.items():
         solution[index] = value
+    if free.size == 0:  # every joint held at its limit: nothing left to solve
+        singular_values = np.linalg.svd(jacobian, compute_uv=False)
+        return solution, float(singular_values.min(initial=0.0)), 0.0
     remaining = command - jacobian @ solution
     free_jacobian = jacobian[:, free]
     free_weights = None if weights is None else weights_subset(weights, free, jacobian.shape[1])
