@@ -17,7 +17,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from . import outputs
 from .robot import Robot
@@ -94,13 +93,7 @@ class SimulationResult:
 
         Angles are unwrapped over time (continuous, not folded into [-pi, pi)).
         """
-        rows = []
-        for q in self.q:
-            pose = self.robot.base_pose(q)
-            rpy = pin.rpy.matrixToRpy(pose.rotation)
-            rows.append([*pose.translation[:2], rpy[2]] if self.robot.base_type == "planar"
-                        else [*pose.translation, *rpy])
-        rows = np.array(rows)
+        rows = np.array([self.robot.base_values(q) for q in self.q])
         angles = slice(2, 3) if self.robot.base_type == "planar" else slice(3, 6)
         rows[:, angles] = np.unwrap(rows[:, angles], axis=0)
         return rows

@@ -457,7 +457,7 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         NameNotFound: a link that the model does not have (the message lists close names).
         ModelCheckError, ModelParseError: invalid parameters.
     """
-    masses = urdf_link_masses(ET.fromstring(robot.urdf)) if robot.urdf else {}
+    masses = urdf_link_masses(robot.urdf_root) if robot.urdf_root is not None else {}
     if path is not None:
         hydro = load_hydrodynamics_yaml(path, masses)
     else:

@@ -11,6 +11,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import SolverInputError
+from ..validate import finite_array
 from ..tasks.task import Task
 
 
@@ -48,26 +49,15 @@ def check_count(value: int, what: str, minimum: int = 0) -> int:
 
 def check_matrix(matrix: np.ndarray, what: str, shape: tuple[int | None, int | None] = (None, None)) -> np.ndarray:
     """A finite 2-D float array of the given shape (None: any size on that axis)."""
-    try:
-        array = np.asarray(matrix, dtype=float)
-    except (TypeError, ValueError):
-        raise SolverInputError(f"{what} must be a matrix of numbers, got {matrix!r}") from None
-    if array.ndim != 2 or any(size is not None and size != actual for size, actual in zip(shape, array.shape)):
-        expected = "x".join("n" if size is None else str(size) for size in shape)
-        raise SolverInputError(f"{what} must be a {expected} matrix, got shape {array.shape}")
-    if not np.all(np.isfinite(array)):
-        raise SolverInputError(f"{what} has non-finite entries")
-    return array
+    return finite_array(matrix, what, shape, error=SolverInputError)
 
 
 def check_vector(vector: np.ndarray, what: str, size: int) -> np.ndarray:
-    """A finite float array of shape (size,)."""
+    """A finite float array of shape (size,); the message names the size expected."""
     try:
-        array = np.asarray(vector, dtype=float)
-    except (TypeError, ValueError):
+        array = finite_array(vector, what, (size,), error=SolverInputError)
+    except SolverInputError:
         raise SolverInputError(f"{what} must be {size} finite numbers, got {vector!r}") from None
-    if array.shape != (size,) or not np.all(np.isfinite(array)):
-        raise SolverInputError(f"{what} must be {size} finite numbers, got {vector!r}")
     return array
 
 
