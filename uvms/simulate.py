@@ -38,9 +38,11 @@ __all__ = ["INTEGRATORS", "MAX_STEPS", "PLANT_SERIES", "SERIES", "Controller", "
            "PlantResult", "SimulationResult", "TaskRecorder", "run_loop", "simulate", "simulate_gjm",
            "simulate_plant", "step_count", "velocity_labels"]
 
-#: A kinematic controller maps (q, t) to the velocity v (nv,) and a diagnostics object
-#: (a VelocityResult or PriorityResult: fields sigma_min, damping, limits_active).
-Controller = Callable[[np.ndarray, float], tuple[np.ndarray, object]]
+#: Every controller takes (t [s], q (nq,), v): the arguments of a plant command too (``Command``), v being the
+#: plant's velocity (nv,), or None in a kinematic run, which has no velocity state. A kinematic controller returns
+#: the velocity v (nv,) to integrate and a diagnostics object (a VelocityResult or PriorityResult: fields
+#: sigma_min, damping, limits_active); a plant command returns the joint-velocity command u (n_arm,).
+Controller = Callable[[float, np.ndarray, "np.ndarray | None"], tuple[np.ndarray, object]]
 #: A recorder maps (t, q, x, sample) to the series of a row, name -> value.
 Recorder = Callable[[float, np.ndarray, np.ndarray, object], dict]
 #: The result of a plant run and of a GJM-controlled one: the one result type (names kept for one release).
@@ -95,10 +97,10 @@ class KinematicSample:
 
 
 class KinematicSystem:
-    """q' = v from a kinematic controller (q, t) -> (v, diagnostics); no vector state.
+    """q' = v from a kinematic controller (t, q, None) -> (v, diagnostics); no vector state.
 
     Args:
-        robot: the model; controller: (q, t) -> (v (nv,), diagnostics with sigma_min, damping,
+        robot: the model; controller: (t, q, None) -> (v (nv,), diagnostics with sigma_min, damping,
             optionally limits_active).
     """
 
@@ -111,7 +113,7 @@ class KinematicSystem:
         Raises:
             UVMSError: a non-finite velocity.
         """
-        v, info = self.controller(q, t)
+        v, info = self.controller(t, q, None)
         if not np.all(np.isfinite(v)):
             raise UVMSError(f"the controller returned a non-finite velocity at t = {t:.6g} s")
         return KinematicSample((v, EMPTY), info)
@@ -119,7 +121,7 @@ class KinematicSystem:
     def stage_rate(self, sample: KinematicSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
         """(t, q, x) -> (controller velocity, empty) at the stages."""
         controller = self.controller
-        return lambda t, q, x: (controller(q, t)[0], EMPTY)
+        return lambda t, q, x: (controller(t, q, None)[0], EMPTY)
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: KinematicSample) -> dict:
         """v and the solver's diagnostics of a row."""
@@ -170,11 +172,11 @@ def simulate(
     integrator: str = "rk4",
     progress: bool | None = None,
 ) -> SimulationResult:
-    """Integrate q' = controller(q, t) from q0 for ``duration`` with step ``dt``.
+    """Integrate q' = controller(t, q, None) from q0 for ``duration`` with step ``dt``.
 
     Args:
         robot: the model.
-        controller: (q, t) -> (v, diagnostics).
+        controller: (t, q, None) -> (v, diagnostics) (the order of every controller, see ``Controller``).
         q0: initial configuration (nq,).
         duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
             :data:`MAX_STEPS` (:func:`step_count`).

@@ -161,7 +161,7 @@ class PhasePlan:
 
 
 class SequenceController:
-    """(q, t) -> (v, diagnostics) driving the tasks of a PhasePlan.
+    """(t, q, v=None) -> (v, diagnostics) driving the tasks of a PhasePlan (the order of every controller).
 
     Args:
         robot: the model.
@@ -208,7 +208,7 @@ class SequenceController:
                   primary]
         return [level for level in levels if level]
 
-    def __call__(self, q: np.ndarray, t: float):
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray | None = None):
         targets = self.set_targets(t)
         state = KinematicState(self.robot, q, check=False)
         levels = self.levels(targets.distance is not None)

@@ -244,7 +244,7 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: d
 
 
 def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
-    """(q, t) -> (v, diagnostics) for the scenario's solver method."""
+    """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method."""
     solver, vehicle = scenario["solver"], scenario["vehicle"]
     dt = scenario["simulation"]["dt"]
     gain = np.asarray(solver["gain"], dtype=float)
@@ -266,7 +266,7 @@ def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
         task.set_target(sample.pose)
         task.set_target_velocity(sample.twist)
 
-    def controller(q: np.ndarray, t: float):
+    def controller(t: float, q: np.ndarray, v: np.ndarray | None = None):
         follow(t)
         if method == "clik":
             result = clik_velocity(robot, q, task, gain=gain, weights=weights, damping=damping, potential=potential,
