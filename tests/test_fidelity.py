@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 import uvms
 from uvms.scenario import run
@@ -68,3 +69,14 @@ def test_santos2006_classic_priority_meets_the_vehicle_task_the_robust_form_does
     open_loop = run(SCENARIOS / "santos2006_kinematic_constraint_open_loop.toml", out=tmp_path / "open",
                     progress=False, overrides=["outputs.figures=false"])
     assert open_loop.metrics["max_position_error"] > 2 * constraint.metrics["max_position_error"]
+
+
+def test_amundsen2018_variable_damping_acts_near_the_singular_configuration(tmp_path):
+    result = run(SCENARIOS / "amundsen2018_near_singular.toml", out=tmp_path / "damped", progress=False,
+                 overrides=["outputs.figures=false"])
+    metrics = result.metrics
+    assert metrics["min_sigma_min"] < 0.05 / 10 and metrics["max_damping"] > 0.04  # eq. 6 active
+    assert metrics["max_joint_rate"] < 0.1  # rad/s: the damping keeps the rates bounded
+    with pytest.raises(uvms.NumericalError, match="diverged"):  # without damping the rates blow up
+        run(SCENARIOS / "amundsen2018_near_singular.toml", out=tmp_path / "undamped", progress=False,
+            overrides=["outputs.figures=false", "solver.damping_max=0.0"])

@@ -23,6 +23,7 @@ from .errors import (
     ModelCheckError,
     ModelFileNotFound,
     ModelParseError,
+    NumericalError,
     UVMSError,
     WorkspaceInputError,
     XacroError,
@@ -71,7 +72,7 @@ __version__ = "0.1.0"
 __all__ = [
     # errors
     "BaseMismatchError", "ConfigurationError", "FrameNotFound", "JointNotFound", "ModelCheckError",
-    "ModelFileNotFound", "ModelParseError", "UVMSError", "WorkspaceInputError", "XacroError",
+    "ModelFileNotFound", "ModelParseError", "NumericalError", "UVMSError", "WorkspaceInputError", "XacroError",
     # model
     "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
     # robot and kinematics

@@ -33,7 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from .conventions import AXIS_NAMES
-from .errors import ModelCheckError, UVMSError
+from .errors import ModelCheckError, NumericalError, UVMSError
 
 WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -146,6 +146,10 @@ def generalized_jacobian_from_parts(
     return jacobian[:, n_vehicle:] - jacobian[:, :n_vehicle] @ solve_base_block(a_base, a_arm)
 
 
+#: Entries of the momentum map beyond this [kg m^2/s] mean a diverged state, not a model (1e12 is far above any UVMS).
+DIVERGED = 1e12
+
+
 def solve_base_block(a_base: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     """A_b^-1 rhs, the one place the vehicle block of the centroidal map is inverted.
 
@@ -153,6 +157,9 @@ def solve_base_block(a_base: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         ModelCheckError: A_b is singular: the model has no mass (or no inertia) for the vehicle's
             motion to move, so a free-floating vehicle velocity is undefined.
     """
+    if not (np.all(np.isfinite(a_base)) and np.all(np.isfinite(rhs))) or np.abs(a_base).max() > DIVERGED:
+        raise NumericalError("the momentum map has non-finite or enormous entries: the configuration or the velocities "
+                             "diverged (near a singularity without damping?)")
     try:
         solution = np.linalg.solve(a_base, rhs)
     except np.linalg.LinAlgError:
