@@ -199,9 +199,10 @@ class Rerun:
         self.process = subprocess.Popen([sys.executable, "-m", "uvms.cli", *self.argv], stdout=subprocess.PIPE,
                                         stderr=subprocess.PIPE, text=True, start_new_session=True)
 
-    def cancel(self) -> None:
+    def cancel(self, announce: bool = True) -> None:
         """Stop a running job with SIGINT (its folder keeps the previous complete run); kill it if it hangs."""
         if self.process is None or self.process.poll() is not None:
+            self.process = None
             return
         self.process.send_signal(signal.SIGINT)
         try:
@@ -209,7 +210,8 @@ class Rerun:
         except subprocess.TimeoutExpired:
             os.killpg(self.process.pid, signal.SIGKILL)
             self.process.communicate()
-        self.say(f"{time.strftime('%H:%M:%S')} run stopped: files changed again")
+        if announce:
+            self.say(f"{time.strftime('%H:%M:%S')} run stopped: files changed again")
         self.process = None
 
     def poll(self) -> None:
@@ -246,17 +248,7 @@ class Rerun:
                         self.start(f"{names} changed")
                         break
         finally:
-            self.cancel_quietly()
-
-    def cancel_quietly(self) -> None:
-        if self.process is not None and self.process.poll() is None:
-            self.process.send_signal(signal.SIGINT)
-            try:
-                self.process.communicate(timeout=CANCEL_GRACE)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.process.pid, signal.SIGKILL)
-        self.process = None
-
+            self.cancel(announce=False)
 
 def without_watch(argv: Iterable[str]) -> list[str]:
     """The command line of one job: ``--watch`` removed."""

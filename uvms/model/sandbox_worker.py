@@ -108,7 +108,9 @@ def install_audit_hook():
                  "os.mknod", "os.mkfifo", "os.setxattr", "os.removexattr", "os.startfile", "subprocess.",
                  "shutil.", "socket.", "ctypes.", "pty.", "fcntl.", "signal.", "resource.setrlimit",
                  "resource.prlimit", "sqlite3.", "webbrowser.", "_posixsubprocess.")
-    write_flags = 0o1 | 0o2 | 0o100 | 0o1000 | 0o2000
+    write_flags = 0
+    for flag in O_WRITE_FLAGS:
+        write_flags |= flag
 
     def hook(event, args):
         if event == "open":
