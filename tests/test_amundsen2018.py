@@ -19,7 +19,8 @@ from uvms.simulate import simulate_gjm
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
-AMUNDSEN = ("rigid_open_loop", "hydro_open_loop", "hydro_closed_loop", "hydro_open_loop_added_mass")
+AMUNDSEN = ("rigid_open_loop", "hydro_open_loop", "hydro_open_loop_servo_inverted", "hydro_open_loop_righting",
+            "hydro_closed_loop", "hydro_open_loop_added_mass")
 NO_FIGURES = ["outputs.figures=false"]
 NO_DAMPING = ["plant.damping=false"]
 FIXED_ARM = """<robot name="arm"><link name="base"/><link name="tip"><inertial><mass value="1"/>
@@ -38,8 +39,10 @@ def runs(tmp_path_factory):
         results[name] = run(SCENARIOS / f"amundsen2018_{name}.toml", out=out / name, overrides=overrides,
                             progress=False)
     for name, gjm in (("inviscid_rigid_gjm", "rigid"), ("inviscid_added_mass_gjm", "added_mass")):
-        results[name] = run(SCENARIOS / "amundsen2018_hydro_open_loop.toml", out=out / name, progress=False,
-                            overrides=[*NO_FIGURES, *NO_DAMPING, f"plant.gjm={gjm}"])
+        results[name] = run(SCENARIOS / "amundsen2018_hydro_open_loop_servo_inverted.toml", out=out / name,
+                            progress=False, overrides=[*NO_FIGURES, *NO_DAMPING, f"plant.gjm={gjm}"])
+    results["hydrostatics_off"] = run(SCENARIOS / "amundsen2018_hydro_open_loop.toml", out=out / "no_hydrostatics",
+                                      progress=False, overrides=[*NO_FIGURES, "plant.gravity=false"])
     results["hoang2011"] = run(SCENARIOS / "hoang2011_gjm.toml", out=out / "hoang", overrides=NO_FIGURES,
                                progress=False)
     return results
@@ -56,20 +59,60 @@ def test_the_gjm_is_exact_in_the_rigid_plant(runs):
     assert abs(metrics["dissipated_energy"]) <= 1e-2 * metrics["max_kinetic_energy"]  # motor work = energy change
 
 
+def rms_velocity_error(result) -> np.ndarray:
+    """(3,) [m/s] rms over the run of desired - measured end-effector velocity, per world axis."""
+    plant_run = result.plant_run
+    return np.sqrt(np.mean((plant_run.desired_velocity - plant_run.ee_velocity) ** 2, axis=0))
+
+
 def test_the_open_loop_in_water_misses_by_centimetres(runs):
-    """Paper: 2.2 cm at t = 8 s. Here 3.3 cm with the model's strip-theory added mass and cylinder drag."""
+    """Paper: 2.2 cm at t = 8 s. Here 1.87 cm under the paper's settings (servos not inverted, hydrostatics on)."""
     metrics = runs["hydro_open_loop"].metrics
-    assert 0.02 <= metrics["final_position_error"] <= 0.05  # 0.0333 m measured
-    assert 0.01 <= metrics["max_velocity_error"] <= 0.05  # 0.026 m/s against |v_d| = 0.087 m/s
+    assert metrics["motor_feedforward"] is False
+    assert 0.015 <= metrics["final_position_error"] <= 0.025  # 0.0187 m measured
+    assert 0.01 <= metrics["max_velocity_error"] <= 0.05  # 0.027 m/s against |v_d| = 0.087 m/s
     assert metrics["dissipated_energy"] > 0.05  # [J] drag (0.15 J measured)
     assert metrics["max_damping"] == 0.0
 
 
+def test_surge_is_tracked_best_as_in_the_papers_fig5(runs):
+    """Paper: "the surge velocity follows its reference more closely than the sway and heave velocities"."""
+    surge, sway, heave = rms_velocity_error(runs["hydro_open_loop"])
+    assert surge < sway < heave  # 0.26, 0.36, 1.15 cm/s measured
+    # the final POSITION ranks sway best (0.02 cm): its velocity error changes sign and integrates away
+    final = np.abs(runs["hydro_open_loop"].metrics["final_position_error_xyz"])
+    assert final[1] < 0.1 * final[0] and final[2] > final[0]  # 0.94, 0.02, 1.61 cm
+
+
+def test_inverting_the_servos_changes_the_open_loop_error(runs):
+    """The servo lag (1.27 cm alone) partly cancels the water's error: inverted, the open loop misses by 3.3 cm."""
+    inverted, paper = runs["hydro_open_loop_servo_inverted"].metrics, runs["hydro_open_loop"].metrics
+    assert inverted["motor_feedforward"] is True
+    assert 0.025 <= inverted["final_position_error"] <= 0.045  # 0.0333 m measured
+    assert inverted["final_position_error"] > 1.5 * paper["final_position_error"]
+
+
+def test_hydrostatics_of_a_neutral_snake_with_its_cob_at_its_com_change_nothing(runs):
+    """Restoring forces on (weight at the CoM, buoyancy at the CoB = CoM, equal): the same run as without them."""
+    on, off = runs["hydro_open_loop"], runs["hydrostatics_off"]
+    assert on.metrics["plant"] == off.metrics["plant"] == "hydrodynamic"
+    assert np.abs(on.plant_run.q - off.plant_run.q).max() <= 1e-9
+    assert on.plant_run.plant.gravity and on.plant_run.plant.model.gravity.linear[2] < -9.0  # weight and buoyancy act
+    assert np.abs(on.plant_run.potential_energy).max() <= 1e-9  # [J] m g z_com - rho g V z_cob: equal, they cancel
+
+
+def test_a_righting_arm_turns_the_passive_snake(runs):
+    """CoB 1 cm above the CoM: restoring moments the GJM does not know turn the passive body, 29 cm at t = 8 s."""
+    metrics = runs["hydro_open_loop_righting"].metrics
+    assert metrics["final_position_error"] > 5 * runs["hydro_open_loop"].metrics["final_position_error"]  # 0.288 m
+    assert abs(metrics["final_position_error_xyz"][2]) > 0.2  # mostly heave: -0.283 m
+
+
 def test_position_feedback_brings_it_to_millimetres(runs):
     open_loop, closed_loop = runs["hydro_open_loop"].metrics, runs["hydro_closed_loop"].metrics
-    assert closed_loop["final_position_error"] < open_loop["final_position_error"] / 5  # 2.3 mm against 33 mm
-    assert closed_loop["max_position_error"] < 0.01  # 5.3 mm, at the end of the acceleration ramp
-    assert closed_loop["final_position_error"] < 0.005
+    assert closed_loop["final_position_error"] < open_loop["final_position_error"] / 3  # 4.7 mm against 18.7 mm
+    assert closed_loop["max_position_error"] < 0.01  # 5.9 mm
+    assert closed_loop["final_position_error"] < 0.006
 
 
 def test_the_added_mass_gjm_is_exact_without_drag(runs):
@@ -80,7 +123,7 @@ def test_the_added_mass_gjm_is_exact_without_drag(runs):
 
 
 def test_the_added_mass_gjm_removes_the_inertial_part_of_the_error_in_water(runs):
-    classic, augmented = runs["hydro_open_loop"].metrics, runs["hydro_open_loop_added_mass"].metrics
+    classic, augmented = runs["hydro_open_loop_servo_inverted"].metrics, runs["hydro_open_loop_added_mass"].metrics
     removed = 1 - augmented["final_position_error"] / classic["final_position_error"]
     assert 0.2 <= removed <= 0.6  # 37 % measured (3.3 cm -> 2.1 cm): what is left is the drag
     assert augmented["max_velocity_error"] < 0.3 * classic["max_velocity_error"]  # 5.7 against 26 mm/s
