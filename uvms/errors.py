@@ -109,3 +109,7 @@ class ViewerUnavailable(UVMSError):
 
 class TeachUnavailable(UVMSError):
     """ipywidgets is not installed."""
+
+
+class BagExportError(UVMSError):
+    """A run cannot be written as a ROS 2 bag: rosbags is not installed, or the run does not fit the robot."""
