@@ -15,7 +15,7 @@ def test_mounted_arm_kinematics_compose(arm_name, rng):
     vehicle = shipped("santos2006")
     placement = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0.0, 0.3), np.array([2.5, 0.1, -0.5]))
     robot = uvms.mount_arm(vehicle, arm_name, placement=placement, prefix="arm_")
-    arm = uvms.load(uvms.example_robot_urdf(arm_name))
+    arm = uvms.load(uvms.example_robot_urdf(arm_name), base="fixed")  # panda's root link has mass: bolt it down
     assert robot.base_type == "planar"
     assert robot.n_arm == vehicle.n_arm + arm.nv
     arm_mass = sum(inertia.mass for inertia in arm.model.inertias)  # with the fixed root link's own mass

@@ -94,7 +94,7 @@ def test_code_in_args_is_refused_through_every_cli_entry_point(tmp_path, capsys)
 
 def chain_urdf(links: int, joint_type: str = "revolute") -> str:
     body = '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
-    parts = [f'<link name="l{i}">{body}</link>' for i in range(links)]
+    parts = [f'<link name="l{i}">{body if i else ""}</link>' for i in range(links)]  # l0: a massless mount, fixed
     parts += [f'<joint name="j{i}" type="{joint_type}"><parent link="l{i}"/><child link="l{i + 1}"/>'
               f'<origin xyz="0 0 0.1"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/>'
               "</joint>" for i in range(links - 1)]

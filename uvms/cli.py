@@ -47,11 +47,12 @@ def format_limits(lower: np.ndarray, upper: np.ndarray) -> str:
 
 
 def describe(robot: Robot) -> str:
-    """The text of ``uvms info``: joints, DOF split, frames, mass, end-effector poses."""
+    """The text of ``uvms info``: joints, DOF split, why the base is what it is, frames, mass, end-effector poses."""
     lines = [
         f"model       {robot.name}  ({robot.source})",
         f"base        {robot.base_type}: vehicle DOF {robot.n_vehicle}, arm DOF {robot.n_arm} "
         f"(nq {robot.nq}, nv {robot.nv})",
+        f"base rule   {robot.base_reason}",
         f"total mass  {robot.total_mass:.3f} kg",
         "joints",
         f"  {'name':<24} {'type':<27} {'nq':>2} {'nv':>2}  limits [rad or m]",

@@ -34,14 +34,19 @@ class BaseMismatchError(UVMSError):
     """The requested vehicle base contradicts the root joint written in the file."""
 
 
+class NoVehicleError(ModelCheckError):
+    """A vehicle quantity (generalized Jacobian, vehicle velocity, eta/nu) was asked of a fixed-base model."""
+
+
 class NameNotFound(UVMSError):
     """A frame or joint name is not in the model."""
 
-    def __init__(self, kind: str, name: str, valid: Iterable[str]) -> None:
+    def __init__(self, kind: str, name: str, valid: Iterable[str], first: Iterable[str] = (), where: str = "") -> None:
         valid = list(valid)
-        close = difflib.get_close_matches(name, valid, n=5, cutoff=0.4)
+        first = [n for n in first if n in valid]  # always suggested (e.g. a model's root link), before the others
+        close = first + [n for n in difflib.get_close_matches(name, valid, n=5, cutoff=0.4) if n not in first]
         hint = f"close names: {', '.join(close)}" if close else f"valid names: {', '.join(valid[:20])}"
-        super().__init__(f"unknown {kind} {name!r}; {hint}")
+        super().__init__(f"{where + ': ' if where else ''}unknown {kind} {name!r}; {hint}")
         self.name = name
         self.valid = valid
 
@@ -49,8 +54,8 @@ class NameNotFound(UVMSError):
 class FrameNotFound(NameNotFound):
     """A frame name is not in the model; the message lists the close names."""
 
-    def __init__(self, name: str, valid: Iterable[str]) -> None:
-        super().__init__("frame", name, valid)
+    def __init__(self, name: str, valid: Iterable[str], first: Iterable[str] = ()) -> None:
+        super().__init__("frame", name, valid, first)
 
 
 class JointNotFound(NameNotFound):

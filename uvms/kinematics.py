@@ -33,7 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from .conventions import AXIS_NAMES
-from .errors import ModelCheckError, NumericalError, UVMSError
+from .errors import ModelCheckError, NoVehicleError, NumericalError, UVMSError
 
 WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -81,7 +81,7 @@ def centroidal_map_split(
         A_b (k, n_vehicle) and A_m (k, nv - n_vehicle), k = 6 (floating) or 3 (planar).
 
     Raises:
-        ModelCheckError: a fixed base: the model has no vehicle whose momentum is conserved.
+        NoVehicleError: a fixed base: the model has no vehicle whose momentum is conserved.
     """
     rows = conserved_rows(base_type)
     centroidal_map = pin.computeCentroidalMap(model, data, q)[rows]  # (k, nv)
@@ -92,16 +92,16 @@ def conserved_rows(base_type: str) -> list[int]:
     """Rows of the centroidal momentum [linear; angular] a vehicle of ``base_type`` conserves.
 
     Raises:
-        ModelCheckError: a fixed base (or any kind without a free vehicle): nothing is conserved, the
+        NoVehicleError: a fixed base (or any kind without a free vehicle): nothing is conserved, the
             generalized Jacobian and the free-floating vehicle velocity are undefined.
     """
     try:
         return CONSERVED_MOMENTUM_ROWS[base_type]
     except KeyError:
-        raise ModelCheckError(
+        raise NoVehicleError(
             f"the model has no vehicle (base type {base_type!r}): the generalized Jacobian and the free-floating "
             f"vehicle velocity need a floating or planar base; load it with base='floating' or 'planar', or use "
-            f"the ordinary Jacobian") from None
+            f"the ordinary Jacobian (jacobian)") from None
 
 
 def mass_matrix_split(mass: np.ndarray, n_vehicle: int) -> tuple[np.ndarray, np.ndarray]:

@@ -3,16 +3,19 @@
 from __future__ import annotations
 
 import functools
+import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from . import conventions, kinematics
+from . import kinematics, outputs, urdf_export
 from .bases import BASE_TYPES, BaseType
 from .errors import ConfigurationError, FrameNotFound, JointNotFound, UVMSError
+from .vehicle_pose import VehicleAccessors
 from .validate import finite_array
 
 #: Default task axes by base type (kept for existing imports; the facts live in `uvms.bases`).
@@ -59,7 +62,7 @@ def default_end_effectors(model: pin.Model) -> list[str]:
     return leaves[-1:] if leaves else [model.frames[-1].name]
 
 
-class Robot:
+class Robot(VehicleAccessors):
     """A UVMS model: Pinocchio ``model``/``data``, the vehicle/arm split and end-effector frames.
 
     Configuration q = [vehicle (7 floating, 4 planar, 0 fixed), arm...] and
@@ -71,9 +74,13 @@ class Robot:
         data: its work data (reused by every call; a Robot is not thread-safe).
         base: the kind of vehicle base and its facts (`uvms.bases.BaseType`); base_type: its name,
             "floating", "planar" or "fixed".
+        base_reason: why the base is what it is, one line (`uvms.load`'s rule), e.g. "floating (added: the
+            root link 'hull' carries 1810 kg; base='fixed' to hold it)".
         ee_frames: names of the end-effector frames; the first is the default.
         name: model name; source: file it came from (or "<string>").
-        urdf: the URDF text the model was built from (None when composed).
+        urdf: the URDF text of the model (composed by `uvms.mount_arm` for a mounted arm; None when the
+            Robot was built from a Pinocchio model alone). A base joint that uvms added is not in it:
+            :meth:`save_urdf` writes it.
     """
 
     def __init__(
@@ -84,6 +91,7 @@ class Robot:
         name: str | None = None,
         source: str = "<model>",
         urdf: str | None = None,
+        base_reason: str | None = None,
     ) -> None:
         self.model = model
         self.data = model.createData()
@@ -92,6 +100,9 @@ class Robot:
         self.urdf = urdf
         self.base: BaseType = BASE_TYPES[base_type_of(model)]
         self.base_type = self.base.name
+        self.base_reason = base_reason or (
+            f"{self.base_type} (the model's root joint {model.names[1]!r})" if self.base_type != "fixed"
+            else "fixed (the model has no vehicle joint)")
         self.n_vehicle = self.base.nv
         self.nq_vehicle = self.base.nq
         self.frame_names = [frame.name for frame in model.frames]
@@ -167,8 +178,19 @@ class Robot:
 
     @property
     def total_mass(self) -> float:
-        """Total mass [kg]."""
-        return float(pin.computeTotalMass(self.model))
+        """Total mass [kg] of every link, the root link of a fixed base included.
+
+        (Pinocchio holds a fixed root link's inertia on the universe, ``model.inertias[0]``, which
+        ``pin.computeTotalMass`` leaves out.)
+        """
+        return float(sum(inertia.mass for inertia in self.model.inertias))
+
+    @property
+    def root_link(self) -> str:
+        """The vehicle's link: the one its floating/planar joint carries; for a fixed base, the model's root link."""
+        joint = 0 if self.base_type == "fixed" else 1
+        bodies = [f.name for f in self.model.frames if f.type == pin.FrameType.BODY and f.parentJoint == joint]
+        return bodies[0] if bodies else self.model.frames[0].name
 
     # ----------------------------------------------------------------- names
     def frame_id(self, frame: str | None = None) -> int:
@@ -197,6 +219,26 @@ class Robot:
     def urdf_root(self) -> ET.Element | None:
         """The ``<robot>`` element of the model's URDF, parsed once (None when the robot has no URDF)."""
         return ET.fromstring(self.urdf) if self.urdf else None
+
+    def save_urdf(self, path: str | os.PathLike) -> Path:
+        """Write the model as a URDF file (atomically) that ``uvms.load`` reads back as the same model.
+
+        The file states the base (a vehicle joint that uvms added, or a fixed ``world`` link under a root
+        link held by ``base="fixed"``) and gives mesh files by absolute path.
+
+        Returns:
+            The path written.
+
+        Raises:
+            UVMSError: the Robot has no URDF (built from a Pinocchio model alone), or the file cannot be written.
+        """
+        if self.urdf is None:
+            raise UVMSError(f"{self.name} has no URDF (it was built from a Pinocchio model); load it from a file "
+                            "or compose it with uvms.mount_arm to save it")
+        vehicle_joint = self.model.names[1] if self.base_type != "fixed" else None
+        text = urdf_export.self_describing_urdf(self.urdf, self.base_type, vehicle_joint, self.source)
+        outputs.write_text(path, text)
+        return Path(path)
 
     # ------------------------------------------------------- configurations
     def check_configuration(self, q: np.ndarray) -> np.ndarray:
@@ -275,47 +317,6 @@ class Robot:
                     q[joint.idx_q: joint.idx_q + 2] = [np.cos(values[0]), np.sin(values[0])]
         return q
 
-    def _vehicle_q(self, base: np.ndarray | pin.SE3) -> np.ndarray:
-        if self.base_type == "fixed":
-            raise ConfigurationError(f"{self.name} has a fixed base; give only arm values")
-        if isinstance(base, pin.SE3):
-            pose = base
-        else:
-            size = 3 if self.base_type == "planar" else 6
-            values = self.check_velocity(base, size, f"{self.base_type} base pose")
-            pose = conventions.pose_from_xyyaw(values) if size == 3 else conventions.pose_from_xyzrpy(values)
-        joint_motion = self.model.jointPlacements[1].actInv(pose)
-        if self.base_type == "floating":
-            return pin.SE3ToXYZQUAT(joint_motion)
-        rotation, translation = joint_motion.rotation, joint_motion.translation
-        if abs(translation[2]) > 1e-9 or not np.allclose(rotation[2], [0.0, 0.0, 1.0], atol=1e-9):
-            raise ConfigurationError("a planar base pose must lie in the x-y plane of the planar joint")
-        return np.array([translation[0], translation[1], rotation[0, 0], rotation[1, 0]])
-
-    def base_pose(self, q: np.ndarray) -> pin.SE3:
-        """Pose of the vehicle body in the world, ``transform_base_to_world`` (identity for a fixed base)."""
-        q = self.check_configuration(q)
-        if self.base_type == "fixed":
-            return pin.SE3.Identity()
-        if self.base_type == "floating":
-            joint_motion = pin.XYZQUATToSE3(q[:7])
-        else:
-            yaw = np.arctan2(q[3], q[2])
-            joint_motion = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, yaw), np.array([q[0], q[1], 0.0]))
-        return self.model.jointPlacements[1] * joint_motion
-
-    def base_values(self, q: np.ndarray) -> np.ndarray:
-        """The vehicle pose of q as users write it (``base.pose_names``): [x, y, yaw] (planar) or
-        [x, y, z, roll, pitch, yaw] (floating) [m, rad], world ENU, R = Rz(yaw) Ry(pitch) Rx(roll); (0,) if fixed.
-
-        The inverse of ``configuration(base=...)``; angles in [-pi, pi].
-        """
-        if self.base_type == "fixed":
-            return np.zeros(0)
-        pose = self.base_pose(q)
-        rpy = pin.rpy.matrixToRpy(pose.rotation)
-        return np.array([*pose.translation[:2], rpy[2]] if self.base_type == "planar" else [*pose.translation, *rpy])
-
     def arm_configuration(self, q: np.ndarray) -> np.ndarray:
         """Arm joint values (n_arm,) [rad or m] of a configuration (angles for continuous joints)."""
         q = self.check_configuration(q)
@@ -335,20 +336,20 @@ class Robot:
         return kinematics.frame_jacobian(self.model, self.data, self.check_configuration(q), self.frame_id(frame))
 
     def _free_floating_parts(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        if self.base_type == "fixed":
-            raise UVMSError(f"{self.name} has a fixed base: there is no free-floating base to conserve momentum")
         return kinematics.centroidal_map_split(self.model, self.data, q, self.base_type, self.n_vehicle)
 
     def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
         """Generalized Jacobian (6, n_arm) of a free-floating base at zero momentum.
 
         twist_ee (world-aligned) = GJM @ qdot_arm when the vehicle is passive and
-        the system momentum is zero; for a fixed base it is the ordinary Jacobian.
+        the system momentum is zero.
+
+        Raises:
+            NoVehicleError: a fixed base has no vehicle: use :meth:`jacobian`.
         """
+        self._require_vehicle("generalized Jacobian (it needs a free-floating vehicle whose momentum is conserved)")
         q = self.check_configuration(q)
         jacobian = kinematics.frame_jacobian(self.model, self.data, q, self.frame_id(frame))
-        if self.base_type == "fixed":
-            return jacobian
         a_base, a_arm = self._free_floating_parts(q)
         return kinematics.generalized_jacobian_from_parts(jacobian, a_base, a_arm, self.n_vehicle)
 
@@ -360,7 +361,11 @@ class Robot:
             arm_velocity: arm joint velocities (n_arm,).
             momentum: centroidal momentum h [N s; N m s] in world axes (6,) or
                 its planar rows [hx, hy, kz] (3,); None means zero.
+
+        Raises:
+            NoVehicleError: a fixed base has no vehicle.
         """
+        self._require_vehicle("vehicle velocity from momentum")
         q = self.check_configuration(q)
         arm_velocity = self.check_velocity(arm_velocity, self.n_arm, "arm velocity")
         if momentum is not None:
@@ -384,36 +389,6 @@ class Robot:
         """Manipulability of the generalized Jacobian (free-floating base), same ``axes`` rule."""
         rows = kinematics.axis_rows(axes or self.base.task_axes)
         return kinematics.manipulability_of(self.generalized_jacobian(q, frame)[rows])
-
-    # ------------------------------------------------------ Fossen accessors
-    def eta_ned(self, q: np.ndarray) -> np.ndarray:
-        """Fossen eta of the vehicle: [x, y, z, phi, theta, psi] NED (6,) or [x, y, psi] (3,) planar."""
-        self._require_vehicle()
-        return conventions.eta_from_pose(self.base_pose(q), planar=self.base_type == "planar")
-
-    def nu_frd(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Fossen nu of the vehicle: [u, v, w, p, q, r] body FRD (6,) or [u, v, r] (3,) planar."""
-        self._require_vehicle()
-        self.check_configuration(q)
-        v = self.check_velocity(v)
-        return conventions.nu_from_twist(v[: self.n_vehicle])
-
-    def configuration_from_eta(self, eta: np.ndarray, arm: np.ndarray | None = None) -> np.ndarray:
-        """q from Fossen's eta (NED) and arm joint values: the inverse of :meth:`eta_ned`."""
-        self._require_vehicle()
-        eta = self.check_velocity(eta, self.n_vehicle, "eta")
-        return self.configuration(base=conventions.pose_from_eta(eta), arm=arm)
-
-    def velocity_from_nu(self, nu: np.ndarray, arm_velocity: np.ndarray | None = None) -> np.ndarray:
-        """v from Fossen's nu (body FRD) and arm velocities: the inverse of :meth:`nu_frd`."""
-        self._require_vehicle()
-        nu = self.check_velocity(nu, self.n_vehicle, "nu")
-        arm = np.zeros(self.n_arm) if arm_velocity is None else self.check_velocity(arm_velocity, self.n_arm, "arm velocity")
-        return np.concatenate([conventions.twist_from_nu(nu), arm])
-
-    def _require_vehicle(self) -> None:
-        if self.base_type == "fixed":
-            raise UVMSError(f"{self.name} has a fixed base: it has no vehicle state (eta, nu)")
 
     def __repr__(self) -> str:
         return (f"Robot({self.name!r}, base={self.base_type}, nq={self.nq}, nv={self.nv}, "

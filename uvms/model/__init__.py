@@ -6,8 +6,9 @@ kernel-confined child process), ``compose`` (``mount_arm``).
 """
 
 from .compose import mount_arm
-from .loader import ADDED_BASE_JOINT, BASE_CHOICES, MissingMeshWarning, ParserWarning, load, read_model_text
+from .loader import (ADDED_BASE_JOINT, BASE_CHOICES, BaseGuessWarning, MissingMeshWarning, ParserWarning, load,
+                     read_model_text)
 from .resources import example_robot_urdf, shipped_models
 
-__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "MissingMeshWarning", "ParserWarning", "example_robot_urdf", "load",
-           "mount_arm", "read_model_text", "shipped_models"]
+__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "MissingMeshWarning", "ParserWarning",
+           "example_robot_urdf", "load", "mount_arm", "read_model_text", "shipped_models"]

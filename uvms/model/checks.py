@@ -2,7 +2,7 @@
 
 Pinocchio accepts many inputs that give silently wrong kinematics or dynamics
 (a non-unit axis, a NaN in an origin, a planar joint whose axis it ignores, a
-negative mass). Each check here raises :class:`uvms.ModelCheckError` naming the
+negative mass, a cylinder of negative length). Each check here raises :class:`uvms.ModelCheckError` naming the
 element and saying what is valid.
 """
 
@@ -54,6 +54,7 @@ class TreeSummary:
     root_link: str
     base_type: str  # "floating", "planar" or "fixed"
     base_joint: str | None
+    root_mass: float = 0.0  # [kg] of the root link's <inertial> (0 when it has none)
 
 
 def parse_urdf(xml: str, origin: str) -> ET.Element:
@@ -179,6 +180,38 @@ def check_inertias(robot: ET.Element, origin: str) -> None:
             )
 
 
+#: Sizes of URDF geometry that must be positive [m]: a negative or zero length, radius or box side has no
+#: shape (and is how a negative link length given as a xacro arg usually shows).
+GEOMETRY_SIZES = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": ("radius",),
+                  "capsule": ("radius", "length")}
+
+
+def check_geometry(robot: ET.Element, origin: str) -> None:
+    """Box sides, cylinder/sphere/capsule radii and lengths of every visual and collision are > 0; mesh scales are not 0.
+
+    Raises:
+        ModelCheckError: naming the link, the element and the value.
+    """
+    for link in robot.findall("link"):
+        for kind in ("visual", "collision"):
+            for geometry in link.findall(f"{kind}/geometry"):
+                for shape in geometry:
+                    for attribute in GEOMETRY_SIZES.get(shape.tag, ()):
+                        if attribute not in shape.attrib:
+                            continue
+                        values = parse_numbers(shape, attribute, origin)
+                        if np.any(values <= 0):
+                            raise ModelCheckError(
+                                f"{origin}: link {link.get('name')!r} {kind} <{shape.tag} {attribute}="
+                                f"{shape.get(attribute)!r}>: a geometry size must be > 0 m (a negative or zero "
+                                f"length, radius or side)")
+                    if shape.tag == "mesh" and "scale" in shape.attrib and np.any(
+                            parse_numbers(shape, "scale", origin) == 0):
+                        raise ModelCheckError(f"{origin}: link {link.get('name')!r} {kind} <mesh scale="
+                                              f"{shape.get('scale')!r}>: a scale of 0 flattens the mesh; give non-zero "
+                                              "factors")
+
+
 def inertia_matrix(element: ET.Element, origin: str) -> np.ndarray:
     """The symmetric 3x3 inertia matrix [kg m^2] of an ``<inertia>`` element."""
     get = {key: float(parse_numbers(element, key, origin)[0]) if key in element.attrib else 0.0
@@ -224,6 +257,7 @@ def summarize_tree(robot: ET.Element, origin: str) -> TreeSummary:
         what = "no root (the joints form a cycle)" if not roots else f"{len(roots)} roots ({', '.join(roots)})"
         raise ModelCheckError(f"{origin}: the link tree has {what}; a URDF must have exactly one root link")
     root = roots[0]
+    root_mass = link_mass(robot.findall("link")[links.index(root)], origin)
     for joint in robot.findall("joint"):
         kind = joint.get("type")
         if kind in BASE_JOINT_TYPES and joint.find("parent").get("link") != root:
@@ -233,13 +267,20 @@ def summarize_tree(robot: ET.Element, origin: str) -> TreeSummary:
             )
     base_joints = [j for j in children_of[root] if j.get("type") in BASE_JOINT_TYPES]
     if not base_joints:
-        return TreeSummary(root_link=root, base_type="fixed", base_joint=None)
+        return TreeSummary(root_link=root, base_type="fixed", base_joint=None, root_mass=root_mass)
     if len(children_of[root]) > 1:
         raise ModelCheckError(
             f"{origin}: the root link {root!r} has a {base_joints[0].get('type')} joint and other joints; "
             f"the vehicle joint must be the only joint at the root"
         )
-    return TreeSummary(root_link=root, base_type=base_joints[0].get("type"), base_joint=base_joints[0].get("name"))
+    return TreeSummary(root_link=root, base_type=base_joints[0].get("type"), base_joint=base_joints[0].get("name"),
+                       root_mass=root_mass)
+
+
+def link_mass(link: ET.Element, origin: str) -> float:
+    """Mass [kg] of a link's ``<inertial>`` (0.0 when it has none)."""
+    mass = link.find("inertial/mass")
+    return 0.0 if mass is None else float(parse_numbers(mass, "value", origin)[0])
 
 
 def check_size(robot: ET.Element, origin: str) -> None:
@@ -298,5 +339,6 @@ def check_urdf(robot: ET.Element, origin: str) -> TreeSummary:
     check_joints(robot, origin)
     check_joint_axes(robot, origin)
     check_inertias(robot, origin)
+    check_geometry(robot, origin)
     return summarize_tree(robot, origin)
 

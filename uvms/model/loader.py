@@ -18,13 +18,11 @@ from xml.parsers.expat import ExpatError
 import pinocchio as pin
 
 from . import checks, resources, sandbox
-from ..errors import BaseMismatchError, ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
+from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES, choose_base, decide_base  # noqa: F401 - re-exported
+from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from ..robot import Robot
 
-BASE_CHOICES = ("floating", "planar", "fixed")
 ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
-#: Name given to a vehicle joint that uvms adds (base="floating"/"planar" on a plain root link).
-ADDED_BASE_JOINT = "base_joint"
 
 #: A xacro arg given from outside the file is data: its name a plain identifier, its text a number,
 #: true/false or a plain name/path. xacro pastes arg text into ``${...}`` Python expressions, so
@@ -32,6 +30,10 @@ ADDED_BASE_JOINT = "base_joint"
 ARG_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
 PLAIN_ARG_TEXT = re.compile(r"[A-Za-z0-9_.+\-/]{0,256}")
 ARG_RULE = "a number, true/false, or a plain name or path (letters, digits and _ . / + -, at most 256 characters)"
+
+
+class BaseGuessWarning(UserWarning):
+    """``load`` chose the vehicle base by the root-link rule and added a joint the file does not have."""
 
 
 class MissingMeshWarning(UserWarning):
@@ -53,14 +55,28 @@ def load(
 ) -> Robot:
     """Load a UVMS from a ``.xacro`` or ``.urdf`` file, a shipped model name, or URDF text.
 
+    The base rule (``base=None``), stated by ``uvms info`` and ``robot.base_reason``:
+
+    * a ``floating``/``planar`` joint at the root link is the vehicle, as written;
+    * a plain root link that carries mass (an ``<inertial>`` with mass > 0, e.g. a ``hull``) is a
+      vehicle: a free-flying joint ``base_joint`` (``ADDED_BASE_JOINT``) is added above it and a
+      :class:`BaseGuessWarning` says so;
+    * a massless plain root link (``world``, or an arm's mounting link without ``<inertial>``) is a
+      fixed base: an arm on a table.
+
+    This is a toolkit for vehicles, so an arm file whose root link has mass (example-robot-data's
+    ``panda``) loads as a free-flying body too: pass ``base="fixed"`` to bolt it to the world
+    (``mount_arm`` always mounts an arm fixed to its vehicle).
+
     Args:
         source: path of a ``.urdf``/``.xacro`` file, the name of a shipped model
             (``"hoang2011"``), or a URDF string (starting with ``<``).
-        base: "floating", "planar", "fixed", or None for the root joint written
-            in the file (a ``floating``/``planar`` joint at the root link is the
-            vehicle; a plain root link is a fixed base). A base that contradicts
-            the file is an error; "floating"/"planar" on a plain root adds the joint.
-        args: xacro arguments, ``{name: value}`` (numbers or strings).
+        base: "floating", "planar", "fixed", or None for the rule above. A base that contradicts
+            the file's root joint is an error; on a plain root link, "floating"/"planar" adds the
+            joint and "fixed" holds the root link (and its mass) in the world.
+        args: xacro arguments, ``{name: value}`` (numbers or strings); a value used in
+            arithmetic must be a number, and a length that makes a geometry size or a mass
+            non-positive is refused (the message names the element).
         ee: end-effector frame name(s); default: frames named ``ee``/``*_ee``,
             else the last leaf link.
         package_dirs: extra folders to resolve ``package://`` mesh URIs.
@@ -78,14 +94,19 @@ def load(
     """
     xml, origin, base_dir = read_model_text(source, args, trusted)
     robot_element = checks.parse_urdf(xml, origin)
-    tree = checks.check_urdf(robot_element, origin)
-    chosen = choose_base(base, tree, origin)
+    try:
+        tree = checks.check_urdf(robot_element, origin)
+    except ModelCheckError as exc:
+        raise ModelCheckError(f"{exc}{blamed_args(exc, source, args, trusted)}") from None
+    chosen, reason = decide_base(base, tree, origin)
     warn_missing_meshes(robot_element, base_dir, package_dirs, origin)
     model = build_model(xml, chosen, tree, origin)
     if model.nv == 0:  # nothing to move, and Pinocchio's Jacobians crash on an empty velocity space
         raise ModelCheckError(f"{origin}: the model has no degree of freedom (fixed base, only fixed joints); "
                               "a UVMS needs a floating/planar base or a moving joint")
-    return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=xml)
+    if base is None and chosen != tree.base_type:
+        warnings.warn(f"{origin}: the base is {reason}", BaseGuessWarning, stacklevel=2)
+    return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=xml, base_reason=reason)
 
 
 def read_model_text(
@@ -118,11 +139,10 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -
     """Run xacro on a file with ``args`` as its mappings; untrusted files in ``uvms.sandbox``.
 
     Raises:
-        XacroError: xacro failed (its message is kept).
+        XacroError: xacro failed (its message is kept, and a given arg that is text where the model's
+            default is a number is named).
         ModelParseError: the file is not well-formed XML.
     """
-    import xacro  # imported here: it is slow to import and only needed for .xacro
-
     mappings = {check_arg_name(key, path): format_xacro_value(key, value, path) for key, value in args.items()}
     declared = declared_xacro_args(path)
     unknown = sorted(set(mappings) - declared) if declared is not None else []
@@ -130,6 +150,16 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -
         raise XacroError(
             f"{path}: unknown xacro arg(s) {', '.join(unknown)}; this model declares: {', '.join(sorted(declared))}"
         )
+    try:
+        return run_xacro(path, mappings, trusted)
+    except XacroError as exc:
+        raise XacroError(f"{exc}{non_numeric_args(path, mappings)}") from None
+
+
+def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool) -> str:
+    """xacro on a file with checked ``mappings``: in this process when trusted, else in ``uvms.sandbox``."""
+    import xacro  # imported here: it is slow to import and only needed for .xacro
+
     if not trusted:
         return sandbox.expand_untrusted(path, mappings)
     try:
@@ -145,11 +175,20 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -
     return document.toprettyxml(indent="  ")
 
 
-def declared_xacro_args(path: Path, _seen: frozenset[Path] = frozenset()) -> set[str] | None:
+def declared_xacro_args(path: Path) -> set[str] | None:
     """Names of the ``<xacro:arg>`` declared in a file and its static includes.
 
     Returns None when that cannot be known here (unparsable file, an include
     whose name is computed, an include cycle): the arg check is then left to xacro.
+    """
+    defaults = declared_xacro_defaults(path)
+    return None if defaults is None else set(defaults)
+
+
+def declared_xacro_defaults(path: Path, _seen: frozenset[Path] = frozenset()) -> dict[str, str | None] | None:
+    """{name: default text (None without one)} of the ``<xacro:arg>`` of a file and its static includes.
+
+    Returns None when that cannot be known here (see :func:`declared_xacro_args`).
     """
     namespace = "{http://www.ros.org/wiki/xacro}"
     resolved = path.resolve()
@@ -159,16 +198,76 @@ def declared_xacro_args(path: Path, _seen: frozenset[Path] = frozenset()) -> set
         root = ET.parse(path).getroot()
     except (ET.ParseError, OSError):
         return None  # xacro reports the real problem
-    names = {element.get("name") for element in root.iter(namespace + "arg")}
+    names = {element.get("name"): element.get("default") for element in root.iter(namespace + "arg")}
     for include in root.iter(namespace + "include"):
         filename = include.get("filename", "")
         if "$" in filename:
             return None
-        included = declared_xacro_args(path.parent / filename, _seen | {resolved})
+        included = declared_xacro_defaults(path.parent / filename, _seen | {resolved})
         if included is None:
             return None
-        names |= included
+        names = {**included, **names}
     return names
+
+
+def is_number_text(text: str | None) -> bool:
+    """Whether xacro arg text is a number (or an expression ``${...}``, as numeric defaults often are)."""
+    if text is None:
+        return False
+    try:
+        float(text)
+    except ValueError:
+        return text.strip().startswith("${")
+    return True
+
+
+def non_numeric_args(path: Path, mappings: Mapping[str, str]) -> str:
+    """The explanation of a xacro failure by args given as text where the model's default is a number.
+
+    Returns:
+        "; xacro arg l1='abc' is not a number, but the model computes with it (its default is 0.4): give a
+        number", or "" when no given arg is such.
+    """
+    defaults = declared_xacro_defaults(path) or {}
+    suspects = [f"xacro arg {name}={value!r} is not a number, but the model computes with it (its default is "
+                f"{defaults[name]})" for name, value in mappings.items()
+                if not is_number_text(value) and value not in ("true", "false") and is_number_text(defaults.get(name))]
+    return f"; {'; '.join(suspects)}: give a number" if suspects else ""
+
+
+def blamed_args(
+    error: ModelCheckError, source: str | os.PathLike, args: Mapping[str, object] | None, trusted: bool | None
+) -> str:
+    """Which given xacro args a model check failure comes from: those without which the failure goes away.
+
+    Each arg is left out in turn (its default used) and the model expanded and checked again; this runs
+    only after a failure, once per given arg.
+
+    Returns:
+        " (from xacro arg l1=-0.4: with its default 0.4 the model passes this check)", or "".
+    """
+    if not args or len(args) > 16:
+        return ""
+    path = resources.resolve_model_path(source)
+    defaults = declared_xacro_defaults(path) or {}
+    blamed = []
+    for name in args:
+        others = {key: value for key, value in args.items() if key != name}
+        try:
+            xml, origin, _ = read_model_text(source, others, trusted)
+            checks.check_urdf(checks.parse_urdf(xml, origin), origin)
+        except ModelCheckError as again:
+            if str(again) == str(error):
+                continue
+        except UVMSError:
+            continue
+        blamed.append(name)
+    if not blamed:
+        return ""
+    given = ", ".join(f"{name}={args[name]!r}" for name in blamed)
+    default = ", ".join(f"{defaults.get(name)}" for name in blamed)
+    its = "its default" if len(blamed) == 1 else "their defaults"
+    return f" (from xacro arg {given}: with {its} {default} the model passes this check)"
 
 
 def check_arg_name(name: object, path: Path) -> str:
@@ -203,20 +302,6 @@ def format_xacro_value(name: str, value: object, path: Path | str = "<model>") -
         return value
     raise XacroError(f"{path}: xacro arg {name}={value!r} is not allowed: an arg from outside the file is data, "
                      f"{ARG_RULE}")
-
-
-def choose_base(requested: str | None, tree: checks.TreeSummary, origin: str) -> str:
-    """The base type to build: the file's, or the requested one when compatible."""
-    if requested is None:
-        return tree.base_type
-    if requested not in BASE_CHOICES:
-        raise UVMSError(f"unknown base {requested!r}; valid: {', '.join(BASE_CHOICES)} or None (as in the file)")
-    if tree.base_type != "fixed" and requested != tree.base_type:
-        raise BaseMismatchError(
-            f"{origin}: base={requested!r} contradicts the file, whose root joint {tree.base_joint!r} is "
-            f"{tree.base_type}; use base={tree.base_type!r} or None, or edit the model"
-        )
-    return requested
 
 
 def build_model(xml: str, base: str, tree: checks.TreeSummary, origin: str) -> pin.Model:
