@@ -24,7 +24,8 @@ the other::
     </gazebo>
 
 or a YAML file beside the model (``hydrodynamics.yaml``, same keys and the same
-conventions; see :func:`load_hydrodynamics_yaml`).
+conventions; see :func:`load_hydrodynamics_yaml`, README.md "Hydrodynamics of your vehicle" and the
+complete example ``models/example_hydrodynamics.yaml``).
 
 Conventions of the file (those of uuv_simulator's ``HMFossen``)
 --------------------------------------------------------------
@@ -38,14 +39,8 @@ Conventions of the file (those of uuv_simulator's ``HMFossen``)
   D(nu) = -diag(linear) - diag(quadratic) |nu|. A positive value would feed energy
   into the motion and is refused.
 
-Conventions inside uvms (:class:`LinkHydrodynamics`)
-----------------------------------------------------
-Everything in the link frame, FLU (REP-103), [linear; angular] like Pinocchio's
-spatial vectors, about the link frame origin: ``added_mass`` M_A (6, 6) symmetric
-positive semi-definite, and damping *coefficients* d_l, d_q >= 0 so that the
-damping wrench on the link is -(diag(d_l) + diag(d_q) |nu_r|) nu_r. The
-conversion from the file is M_A = T M_file T with T = diag(1, -1, -1, 1, -1, -1)
-and d = -file values (a diagonal is the same in FRD and FLU).
+The parameters themselves (:class:`LinkHydrodynamics`, :class:`HydroParameters`, in uvms's own FLU
+conventions) live in :mod:`uvms.dynamics.hydro_parameters` and are importable from here.
 """
 
 from __future__ import annotations
@@ -53,157 +48,26 @@ from __future__ import annotations
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, NameNotFound, UVMSError
+from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError
+from .hydro_parameters import (  # noqa: F401 - the public names of this module
+    FRD_FLU_SIGNS, GRAVITY, MATRIX_TOLERANCE, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_added_mass,
+    check_link_names, flip_frd_flu,
+)
 
 if TYPE_CHECKING:
     import pinocchio as pin
 
     from ..robot import Robot
 
-#: Fluid density of sea water [kg/m^3] (uuv_simulator's default) and gravity [m/s^2].
-SEA_WATER_DENSITY = 1028.0
-GRAVITY = 9.81
 #: Name of the YAML file looked for beside a model.
 YAML_NAME = "hydrodynamics.yaml"
 #: Hydrodynamic model types understood (uuv_simulator also has sphere, cylinder, box, spheroid).
 MODEL_TYPES = ("fossen",)
-#: Sign flip between SNAME (FRD) and ROS (FLU) body axes, per entry of [u v w p q r].
-FRD_FLU_SIGNS = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
-#: Relative tolerance of the symmetry and semi-definiteness checks of an added-mass matrix.
-MATRIX_TOLERANCE = 1e-9
-
-
-@dataclass(frozen=True)
-class LinkHydrodynamics:
-    """Hydrostatic and hydrodynamic parameters of one link (link frame, FLU, [linear; angular]).
-
-    Attributes:
-        volume: displaced volume [m^3] (buoyancy rho g V at the centre of buoyancy).
-        center_of_buoyancy: (3,) [m] in the link frame.
-        added_mass: (6, 6) M_A about the link origin, order [u v w p q r]
-            [kg, kg m, kg m^2]; symmetric positive semi-definite.
-        linear_damping: (6,) d_l >= 0 [N s/m, N m s/rad].
-        quadratic_damping: (6,) d_q >= 0 [N s^2/m^2, N m s^2/rad^2].
-
-    Raises:
-        ModelCheckError: a wrong shape, a non-finite number, a negative volume or
-            damping, an added mass that is not symmetric positive semi-definite.
-    """
-
-    volume: float = 0.0
-    center_of_buoyancy: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    added_mass: np.ndarray = field(default_factory=lambda: np.zeros((6, 6)))
-    linear_damping: np.ndarray = field(default_factory=lambda: np.zeros(6))
-    quadratic_damping: np.ndarray = field(default_factory=lambda: np.zeros(6))
-
-    def __post_init__(self) -> None:
-        volume = _array(self.volume, (), "volume")
-        if volume < 0:
-            raise ModelCheckError(f"volume must be >= 0 m^3, got {float(volume):g}")
-        object.__setattr__(self, "volume", float(volume))
-        object.__setattr__(self, "center_of_buoyancy", _array(self.center_of_buoyancy, (3,), "center_of_buoyancy"))
-        added = _array(self.added_mass, (6, 6), "added_mass")
-        check_added_mass(added)
-        object.__setattr__(self, "added_mass", added)
-        for name in ("linear_damping", "quadratic_damping"):
-            values = _array(getattr(self, name), (6,), name)
-            if np.any(values < 0):
-                raise ModelCheckError(
-                    f"{name} coefficients must be >= 0 (damping that removes energy), got {values.tolist()}")
-            object.__setattr__(self, name, values)
-
-    def damping_wrench(self, nu_r: np.ndarray) -> np.ndarray:
-        """Fossen's damping wrench -(D_l + D_q |nu_r|) nu_r (6,) [N, N m] for a relative twist nu_r (6,)."""
-        return -(self.linear_damping + self.quadratic_damping * np.abs(nu_r)) * nu_r
-
-
-@dataclass(frozen=True)
-class HydroParameters:
-    """The fluid and the hydrodynamic parameters of every link that has some.
-
-    Attributes:
-        fluid_density: rho [kg/m^3].
-        gravity: g [m/s^2] (weight and buoyancy act along -z of the world).
-        current: (3,) constant, irrotational ocean current in the world frame (ENU) [m/s].
-        links: {link name: LinkHydrodynamics}; links not listed have none.
-        source: where the parameters were read (for messages).
-    """
-
-    fluid_density: float = SEA_WATER_DENSITY
-    gravity: float = GRAVITY
-    current: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    links: Mapping[str, LinkHydrodynamics] = field(default_factory=dict)
-    source: str = "<none>"
-
-    def __post_init__(self) -> None:
-        for name in ("fluid_density", "gravity"):
-            value = float(_array(getattr(self, name), (), name))
-            if value <= 0:
-                raise ModelCheckError(f"{name} must be > 0, got {value:g}")
-            object.__setattr__(self, name, value)
-        object.__setattr__(self, "current", _array(self.current, (3,), "current"))
-        for name, link in self.links.items():
-            if not isinstance(link, LinkHydrodynamics):
-                raise ModelCheckError(f"links[{name!r}] must be a LinkHydrodynamics, got {type(link).__name__}")
-        object.__setattr__(self, "links", dict(self.links))
-
-    def with_current(self, current: Iterable[float]) -> HydroParameters:
-        """A copy with another ocean current (3,) [m/s], world frame."""
-        return replace(self, current=np.asarray(current, dtype=float))
-
-    def check_links(self, valid: Iterable[str]) -> None:
-        """Raise NameNotFound (listing the model's links) for a link the model does not have."""
-        valid = list(valid)
-        for name in self.links:
-            if name not in valid:
-                raise NameNotFound("link (in the hydrodynamic parameters)", name, valid)
-
-
-# --------------------------------------------------------------------- checks
-def _array(value: object, shape: tuple[int, ...], what: str) -> np.ndarray:
-    """value as a read-only float array of ``shape``, or ModelCheckError."""
-    try:
-        array = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise ModelCheckError(f"{what} must be numbers of shape {shape}, got {value!r}") from None
-    if array.shape != shape:
-        if array.size == int(np.prod(shape)) and shape:
-            array = array.reshape(shape)
-        else:
-            raise ModelCheckError(f"{what} must have shape {shape} ({int(np.prod(shape))} numbers), got {array.size}")
-    if not np.all(np.isfinite(array)):
-        raise ModelCheckError(f"{what} has non-finite entries")
-    array.setflags(write=False)
-    return array
-
-
-def check_added_mass(matrix: np.ndarray) -> None:
-    """Raise ModelCheckError unless ``matrix`` (6, 6) is symmetric positive semi-definite.
-
-    Potential-flow added mass is the Hessian of the fluid's kinetic energy, so it
-    is symmetric and semi-definite; anything else makes the mass matrix of the
-    plant indefinite (or asymmetric) and the simulation meaningless.
-    """
-    scale = max(1.0, float(np.max(np.abs(matrix))))
-    asymmetry = np.abs(matrix - matrix.T)
-    if np.max(asymmetry) > MATRIX_TOLERANCE * scale:
-        i, j = np.unravel_index(int(np.argmax(asymmetry)), matrix.shape)
-        raise ModelCheckError(
-            f"added_mass must be symmetric: entry ({i},{j}) = {matrix[i, j]:g} but ({j},{i}) = {matrix[j, i]:g}")
-    smallest = float(np.min(np.linalg.eigvalsh(0.5 * (matrix + matrix.T))))
-    if smallest < -MATRIX_TOLERANCE * scale:
-        raise ModelCheckError(f"added_mass must be positive semi-definite; its smallest eigenvalue is {smallest:g}")
-
-
-def flip_frd_flu(matrix: np.ndarray) -> np.ndarray:
-    """A (6, 6) body matrix from SNAME (FRD) to ROS (FLU) axes or back: T M T, T = diag(1,-1,-1,1,-1,-1)."""
-    return FRD_FLU_SIGNS[:, None] * matrix * FRD_FLU_SIGNS[None, :] + 0.0  # + 0.0: no -0.0 entries
 
 
 # --------------------------------------------------------- uuv_simulator form
@@ -237,7 +101,8 @@ def link_from_uuv(
         volume = float(_numbers(values.get("volume", 0.0), "volume", 1)[0])
         if _flag(values.get("neutrally_buoyant", False)):
             if link_mass is None:
-                raise ModelCheckError("neutrally_buoyant needs the link's mass, which is unknown here; give volume")
+                raise ModelCheckError("neutrally_buoyant needs the link's mass, and the model gives it none (no "
+                                      "<inertial> mass on this link); give volume [m^3] instead")
             volume = link_mass / fluid_density  # as uuv_simulator's BuoyantObject::SetNeutrallyBuoyant
         added = _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6)
         linear = _diagonal(model.get("linear_damping", np.zeros(6)), "linear_damping")
@@ -304,19 +169,22 @@ def _is_uuv_plugin(plugin: ET.Element) -> bool:
     return "underwater_object" in plugin.get("filename", "")
 
 
-def parse_hydrodynamics(urdf: str, origin: str = "<string>") -> HydroParameters | None:
+def parse_hydrodynamics(
+    urdf: str, origin: str = "<string>", link_names: Iterable[str] | None = None
+) -> HydroParameters | None:
     """The hydrodynamic parameters written in a URDF's uuv_simulator plugin block(s).
 
     Args:
         urdf: URDF text (xacro already expanded).
         origin: name of the model for messages.
+        link_names: the model's links, checked before any value (None: not checked here).
 
     Returns:
-        The parameters (link names not yet checked against a model), or None
-        when the URDF has no underwater-object plugin.
+        The parameters, or None when the URDF has no underwater-object plugin.
 
     Raises:
         ModelParseError: not well-formed XML.
+        NameNotFound: a link the model does not have (with the close names).
         ModelCheckError: an invalid value, a link given twice, two plugins with different densities.
     """
     try:
@@ -334,6 +202,7 @@ def parse_hydrodynamics(urdf: str, origin: str = "<string>") -> HydroParameters 
         raise ModelCheckError(
             f"{origin}: the underwater-object plugins give different fluid densities {sorted(densities)}")
     density = densities.pop()
+    check_link_names((e.get("name", "") for p in plugins for e in p.findall("link")), link_names, origin)
     links: dict[str, LinkHydrodynamics] = {}
     for plugin in plugins:
         for element in plugin.findall("link"):
@@ -360,8 +229,15 @@ def urdf_link_masses(root: ET.Element) -> dict[str, float]:
 
 
 # ---------------------------------------------------------------------- YAML
-def load_hydrodynamics_yaml(path: str | os.PathLike, link_masses: Mapping[str, float] | None = None) -> HydroParameters:
+def load_hydrodynamics_yaml(
+    path: str | os.PathLike,
+    link_masses: Mapping[str, float] | None = None,
+    link_names: Iterable[str] | None = None,
+) -> HydroParameters:
     """Hydrodynamic parameters from a YAML file, in the conventions of the uuv_simulator block.
+
+    README.md ("Hydrodynamics of your vehicle") documents every key, and
+    ``models/example_hydrodynamics.yaml`` is a complete file.
 
     The file::
 
@@ -382,10 +258,12 @@ def load_hydrodynamics_yaml(path: str | os.PathLike, link_masses: Mapping[str, f
     Args:
         path: the YAML file.
         link_masses: {link: mass [kg]}, needed only by ``neutrally_buoyant``.
+        link_names: the model's links, checked before any value (None: not checked here).
 
     Raises:
         ModelFileNotFound: the file cannot be read.
         ModelParseError: not YAML, or not of the form above.
+        NameNotFound: a link the model does not have (naming the file and the close names).
         ModelCheckError: an invalid value.
     """
     try:
@@ -406,6 +284,7 @@ def load_hydrodynamics_yaml(path: str | os.PathLike, link_masses: Mapping[str, f
     if not isinstance(document, Mapping) or not isinstance(document.get("links"), Mapping):
         raise ModelParseError(f"{origin}: expected a mapping with a 'links' mapping (keys: {', '.join(top_keys)})")
     _check_keys(document, top_keys, origin)
+    check_link_names((str(name) for name in document["links"]), link_names, origin)
     density = float(_numbers(document.get("fluid_density", SEA_WATER_DENSITY), "fluid_density", 1)[0])
     links = {}
     for name, values in document["links"].items():
@@ -458,10 +337,11 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         ModelCheckError, ModelParseError: invalid parameters.
     """
     masses = urdf_link_masses(robot.urdf_root) if robot.urdf_root is not None else {}
+    names = body_frame_names(robot.model)
     if path is not None:
-        hydro = load_hydrodynamics_yaml(path, masses)
+        hydro = load_hydrodynamics_yaml(path, masses, names)
     else:
-        from_urdf = parse_hydrodynamics(robot.urdf, robot.source) if robot.urdf else None
+        from_urdf = parse_hydrodynamics(robot.urdf, robot.source, names) if robot.urdf else None
         folder = Path(robot.source).parent if robot.source and not robot.source.startswith("<") else None
         beside = folder / YAML_NAME if folder is not None and (folder / YAML_NAME).is_file() else None
         if from_urdf is not None and beside is not None:
@@ -469,14 +349,14 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
                 f"{robot.source}: hydrodynamic parameters are both in the model's uuv_simulator block and in "
                 f"{beside}; pass path= to choose the YAML, or remove one")
         hydro = from_urdf if from_urdf is not None else (
-            load_hydrodynamics_yaml(beside, masses) if beside is not None else None)
+            load_hydrodynamics_yaml(beside, masses, names) if beside is not None else None)
     if hydro is None:
         if required:
             raise UVMSError(
                 f"{robot.source}: the model has no hydrodynamic parameters; add a uuv_simulator underwater-object "
                 f"plugin block to the URDF or a {YAML_NAME} beside it (see uvms.hydrodynamics)")
         return HydroParameters(source=f"{robot.source} (no hydrodynamic parameters)")
-    hydro.check_links(body_frame_names(robot.model))
+    hydro.check_links(names)
     return hydro
 
 
