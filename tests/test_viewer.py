@@ -205,7 +205,7 @@ def test_viewer_binds_to_localhost_shows_q_and_plays(rng):
         viewer.play(robot, t, qs, speed=20.0, fps=10.0, viewer=shown, progress=False)
         assert time.perf_counter() - started < 2.0
         np.testing.assert_array_equal(shown.q, qs[-1])
-        assert shown._time_slider.value == pytest.approx(2.0)
+        assert shown.playback.time_slider.value == pytest.approx(2.0)
         with pytest.raises(uvms.UVMSError, match="non-decreasing"):
             shown.play(t[::-1], qs)
     assert not accepts("127.0.0.1", port)
@@ -223,6 +223,148 @@ def test_view_command_serves_until_interrupted(monkeypatch, capsys, tmp_path):
     write_run(run, shipped("hoang2011"), count=3)
     assert main(["view", "hoang2011", "--port", str(PORT), "--result", str(run), "--speed", "100", "--quiet"]) == 0
     assert "viewer      http://127.0.0.1:" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ the page: camera, seabed, triads, panel
+CONTINUOUS = """<robot name="spinner">
+  <link name="base_link"><inertial><mass value="2"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>
+    </inertial><visual><geometry><box size="0.6 0.4 0.3"/></geometry></visual></link>
+  <link name="l1"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
+    <visual><origin xyz="0.2 0 0"/><geometry><box size="0.4 0.05 0.05"/></geometry></visual></link>
+  <link name="tool"/>
+  <joint name="spin" type="continuous"><parent link="base_link"/><child link="l1"/><origin xyz="0.3 0 0"/>
+    <axis xyz="0 0 1"/></joint>
+  <joint name="tool_joint" type="fixed"><parent link="l1"/><child link="tool"/><origin xyz="0.4 0 0"/></joint>
+</robot>"""
+
+
+def click(button) -> None:
+    """Press a viser button as the page does (its callbacks run)."""
+    button.value = True
+
+
+def test_the_panel_has_a_slider_per_pose_coordinate_and_joint_within_its_limits():
+    pytest.importorskip("viser")
+    robot = shipped("bluerov2_alpha5")
+    with viewer.Viewer(robot, port=PORT) as shown:
+        sliders = shown.teach.sliders
+        assert list(sliders) == [f"base_{axis}" for axis in robot.base.pose_names] + robot.arm_joint_names
+        lower, upper = robot.arm_limits
+        for name, low, high in zip(robot.arm_joint_names, lower, upper):
+            assert (sliders[name].min, sliders[name].max) == (low, high)
+        assert (sliders["base_roll"].min, sliders["base_roll"].max) == (-np.pi, np.pi)
+        assert (sliders["base_pitch"].min, sliders["base_pitch"].max) == (-np.pi / 2, np.pi / 2)
+        assert sliders["base_x"].min < 0 < sliders["base_x"].max
+        assert sliders["alpha_axis_a"].label == "alpha_axis_a [m]" and sliders["base_z"].label == "z [m]"
+        shown.display(robot.configuration(base=[12.0, 0.0, 0.0, 0.0, 0.0, 0.0]))  # beyond the range: widened
+        assert sliders["base_x"].value == 12.0 and sliders["base_x"].max >= 12.0
+    spinner = uvms.load(CONTINUOUS, base="floating")
+    assert spinner.joint("spin").nq == 2  # continuous: (cos, sin)
+    with viewer.Viewer(spinner, port=PORT) as shown:
+        assert (shown.teach.sliders["spin"].min, shown.teach.sliders["spin"].max) == (-np.pi, np.pi)
+        shown.teach.sliders["spin"].value = 2.5
+        np.testing.assert_allclose(shown.q[-2:], [np.cos(2.5), np.sin(2.5)], atol=1e-12)
+
+
+def test_a_panel_slider_moves_the_robot_and_its_end_effector_triads():
+    pytest.importorskip("viser")
+    robot = shipped("bluerov2_alpha5")
+    start = robot.configuration(base=[0.5, -0.2, -1.0, 0.0, 0.0, 0.3], arm=[1.0, 1.0, 1.0, 1.0, 0.0])
+    with viewer.Viewer(robot, start, port=PORT) as shown:
+        np.testing.assert_array_equal(shown.q, start)
+        assert [shown.teach.sliders[n].value for n in ("base_x", "base_yaw", "alpha_axis_d")] == \
+            pytest.approx([0.5, 0.3, 1.0])
+        shown.teach.sliders["alpha_axis_d"].value = 2.5
+        shown.teach.sliders["base_z"].value = -2.0
+        expected = robot.configuration(base=[0.5, -0.2, -2.0, 0.0, 0.0, 0.3], arm=[1.0, 2.5, 1.0, 1.0, 0.0])
+        np.testing.assert_allclose(shown.q, expected, atol=1e-12)
+        for frame, handle in shown.triads.handles.items():
+            pose = robot.fk(expected, frame)
+            np.testing.assert_allclose(handle.position, pose.translation, atol=1e-9)
+            np.testing.assert_allclose(np.abs(np.dot(handle.wxyz, pin.Quaternion(pose.rotation).coeffs()[[3, 0, 1, 2]])),
+                                       1.0, atol=1e-9)
+            assert f"{pose.translation[2]:+.3f}" in shown.teach.poses.content
+        visualizer = shown.visualizer
+        for name, pose in placements(robot, visualizer.visual_model, expected).items():
+            np.testing.assert_allclose(visualizer.frames[f"{visualizer.visualRootNodeName}/{name}"].position,
+                                       pose.translation, atol=1e-6)
+        shown.display(start)  # shown from Python: the sliders follow, the robot stays where it is put
+        assert shown.teach.sliders["alpha_axis_d"].value == pytest.approx(1.0)
+        np.testing.assert_array_equal(shown.q, start)
+        shown.teach.sliders["alpha_axis_d"].value = 2.0
+        click(shown.teach.reset_button)
+        np.testing.assert_allclose(shown.q, start, atol=1e-12)
+        assert shown.teach.sliders["alpha_axis_d"].value == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("name", ["bluerov2_alpha5", "hoang2011", "xiang2019"])
+def test_the_camera_is_framed_on_the_robot_over_a_seabed_below_it(name):
+    pytest.importorskip("viser")
+    from uvms.viz.viewer_scene import FOV, MIN_ASPECT, bounding_box, box_corners
+
+    robot = shipped(name)
+    with viewer.Viewer(robot, port=PORT) as shown:
+        lower, upper = bounding_box(robot, shown.visualizer.visual_model, shown.q)
+        camera = shown.server.initial_camera
+        np.testing.assert_allclose(camera.look_at, (lower + upper) / 2)
+        forward = (camera.look_at - camera.position) / np.linalg.norm(camera.look_at - camera.position)
+        right = np.cross(forward, [0.0, 0.0, 1.0])
+        right /= np.linalg.norm(right)
+        up = np.cross(right, forward)
+        seen = box_corners(lower, upper) - camera.position
+        depth = seen @ forward
+        x, y = seen @ right / depth, seen @ up / depth  # tangents of the view angles
+        assert np.all(depth > 0)
+        assert np.all(np.abs(y) <= np.tan(FOV / 2)) and np.all(np.abs(x) <= MIN_ASPECT * np.tan(FOV / 2))
+        # large: the robot's box spans most of the view one way or the other
+        assert max(np.ptp(x) / (2 * MIN_ASPECT * np.tan(FOV / 2)), np.ptp(y) / (2 * np.tan(FOV / 2))) > 0.6
+        seabed = shown.seabed
+        assert seabed.position[2] < lower[2] and lower[2] - seabed.position[2] < 0.1 * np.linalg.norm(upper - lower)
+        half = seabed.width / 2
+        assert np.all(np.abs(np.array([lower[:2], upper[:2]]) - seabed.position[:2]) < half)
+
+
+def test_the_time_slider_shows_frame_k_and_play_pause_drive_the_run(rng):
+    pytest.importorskip("viser")
+    robot = shipped("hoang2011")
+    t = np.linspace(0.0, 1.0, 11)
+    qs = np.array([robot.configuration(base=[0.2 * k, 0.0, 0.05 * k], arm=[1.0, 0.1 * k, 0.0]) for k in range(11)])
+    with viewer.Viewer(robot, port=PORT) as shown:
+        assert shown.playback is None
+        shown.load(t, qs, speed=0.5)
+        playback = shown.playback
+        assert (playback.time_slider.min, playback.time_slider.max) == (0.0, 1.0)
+        assert playback.speed_input.value == 0.5 and not playback.playing
+        np.testing.assert_array_equal(shown.q, qs[0])
+        for k in (3, 7, 10):
+            playback.time_slider.value = t[k] + 0.01
+            np.testing.assert_array_equal(shown.q, qs[k])
+            assert shown.teach.sliders["base_x"].value == pytest.approx(0.2 * k)
+        # the whole run is framed: the box of every configuration is inside the camera's target box
+        from uvms.viz.viewer_scene import bounding_box
+
+        lower, upper = bounding_box(robot, shown.visualizer.visual_model, qs)
+        np.testing.assert_allclose(shown.server.initial_camera.look_at, (lower + upper) / 2)
+        playback.time_slider.value = 0.0
+        click(playback.play_button)  # plays at 0.5 s per second in the background
+        time.sleep(0.5)
+        assert playback.playing and playback.pause_button.disabled is False
+        click(playback.pause_button)
+        assert not playback.playing
+        paused = playback.time_slider.value
+        assert 0.0 < paused < 1.0
+        time.sleep(0.2)
+        assert playback.time_slider.value == paused  # it stays paused
+        playback.start()  # the page's speed, 0.5
+        time.sleep(0.2)
+        assert playback.playing
+        shown.teach.sliders["q1"].value = 0.5  # touching the teach sliders pauses the run
+        assert not playback.playing and shown.robot.arm_configuration(shown.q)[0] == pytest.approx(0.5)
+        playback.run(speed=50.0, fps=100.0)  # to the end
+        np.testing.assert_array_equal(shown.q, qs[-1])
+        assert playback.time_slider.value == 1.0 and playback.play_button.disabled is False
+        with pytest.raises(uvms.UVMSError, match="speed"):
+            shown.load(t, qs, speed=0.0)
 
 
 # ------------------------------------------------------------------ teach panel

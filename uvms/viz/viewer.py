@@ -3,11 +3,11 @@
 Optional: ``pip install uvms[viz]`` (viser). The server listens on 127.0.0.1 only; open the printed
 URL on the same machine (or through an SSH tunnel, ``ssh -L 8080:127.0.0.1:8080 host``).
 
-The geometry comes from the model's URDF ``<visual>`` elements (mesh URIs resolved as
-:func:`uvms.load` does: ``package://`` through ``package_dirs``, ``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH``
-and example-robot-data; meshes that cannot be found are left out). A model without visual geometry
-(e.g. one composed by :func:`uvms.mount_arm`, which keeps no URDF) is shown as a skeleton: a cylinder per
-arm link (parent joint origin -> joint origin), a sphere per joint, and the end effectors in orange.
+The page opens with the camera framed on the robot, a seabed grid under it and a triad on every end
+effector; its panel is the teach panel (sliders for the vehicle pose and every arm joint, moving the robot
+live, and the end-effector poses) and, for a run, a time slider with play and pause. The geometry is the
+URDF's visuals, or a stick skeleton for a model without any (:mod:`uvms.viz.viewer_geometry`); the camera,
+seabed and triads are in :mod:`uvms.viz.viewer_scene`, the panel in :mod:`uvms.viz.viewer_gui`.
 
 Without the extra, :mod:`uvms.drawing` draws the same configurations headless (``uvms view --headless OUT``).
 """
@@ -16,29 +16,29 @@ from __future__ import annotations
 
 import math
 import os
-import time
-import warnings
-import xml.etree.ElementTree as ET
+import threading
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from ..model import resources
-from .drawing import as_configurations
 from ..errors import UVMSError, ViewerUnavailable
 from ..robot import Robot
 from ..validate import finite_array, time_vector
-from ..progress import tqdm
+from .drawing import as_configurations
+from .viewer_geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, resolved_urdf, skeleton_geometry
+from .viewer_gui import Playback, TeachControls
+from .viewer_scene import (EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box,
+                           framing)
+
+__all__ = ["EE_COLOUR", "SKELETON_COLOUR", "Viewer", "ViewerUnavailable", "geometry_models", "play",
+           "require_viser", "resolved_urdf", "skeleton_geometry", "view"]
 
 
 #: The viewer binds to this address only: never to all interfaces.
 HOST = "127.0.0.1"
 DEFAULT_PORT = 8080
 INSTALL_HINT = "the 3-D viewer needs `pip install uvms[viz]` (viser)"
-SKELETON_COLOUR = np.array([0.35, 0.35, 0.4, 1.0])
-EE_COLOUR = np.array([1.0, 0.5, 0.05, 1.0])
 
 
 def require_viser():
@@ -56,119 +56,6 @@ def require_viser():
     return viser, ViserVisualizer
 
 
-# ------------------------------------------------------------------ geometry
-def resolved_urdf(robot: Robot, package_dirs: Sequence[str | os.PathLike] | None = None) -> tuple[str, list[str]]:
-    """The robot's URDF text with every mesh URI made an absolute path; visuals whose mesh is missing removed.
-
-    Returns:
-        (URDF text, the mesh URIs that could not be found).
-    """
-    root = ET.fromstring(robot.urdf)  # a copy of its own: visuals are edited below
-    source = Path(robot.source)
-    base_dir = source.parent if source.is_file() else None
-    roots = resources.package_search_roots(package_dirs)
-    missing: list[str] = []
-    for link in root.iter("link"):
-        for kind in ("visual", "collision"):
-            for element in list(link.findall(kind)):
-                mesh = element.find("geometry/mesh")
-                if mesh is None:
-                    continue
-                uri = mesh.get("filename", "")
-                path = resources.resolve_uri(uri, base_dir, roots)
-                if path is None:
-                    missing.append(uri)
-                    link.remove(element)
-                else:
-                    mesh.set("filename", str(path.resolve()))
-    return ET.tostring(root, encoding="unicode"), sorted(set(missing))
-
-
-def _align_z(direction: np.ndarray) -> np.ndarray:
-    """A rotation whose z axis is the unit vector ``direction``."""
-    return pin.Quaternion.FromTwoVectors(np.array([0.0, 0.0, 1.0]), direction).toRotationMatrix()
-
-
-def skeleton_geometry(robot: Robot, radius: float | None = None) -> pin.GeometryModel:
-    """Stick geometry of any model: a cylinder per arm link, a sphere per joint, end effectors in orange.
-
-    Args:
-        robot: the robot.
-        radius: link radius [m]; default 4 % of the longest link (at least 5 mm).
-    """
-    import coal  # shipped with the pin wheel
-
-    model = robot.model
-    links = [(j, model.jointPlacements[j].translation) for j in range(1, model.njoints) if model.parents[j] > 0]
-    ee = [(robot.frame_id(name), name) for name in robot.ee_frames]
-    lengths = [np.linalg.norm(d) for _, d in links] + [np.linalg.norm(model.frames[f].placement.translation)
-                                                        for f, _ in ee]
-    if radius is None:
-        radius = max(0.04 * max(lengths, default=0.0), 0.005)
-    geometry = pin.GeometryModel()
-
-    def add(name: str, joint: int, placement: pin.SE3, shape, colour: np.ndarray) -> None:
-        frame = model.getFrameId(model.names[joint], pin.FrameType.JOINT) if joint > 0 else 0
-        item = pin.GeometryObject(name, joint, frame, placement, shape)
-        item.meshColor = colour
-        geometry.addGeometryObject(item)
-
-    def segment(name: str, joint: int, start: np.ndarray, end: np.ndarray, colour: np.ndarray) -> None:
-        offset = end - start
-        length = float(np.linalg.norm(offset))
-        if length > 1e-6:
-            add(name, joint, pin.SE3(_align_z(offset / length), (start + end) / 2),
-                coal.Cylinder(radius, length), colour)
-
-    for joint in range(1, model.njoints):
-        add(f"skeleton/joint_{model.names[joint]}", joint, pin.SE3.Identity(), coal.Sphere(1.6 * radius),
-            SKELETON_COLOUR)
-    for joint, offset in links:
-        segment(f"skeleton/link_{model.names[joint]}", model.parents[joint], np.zeros(3), offset, SKELETON_COLOUR)
-    for frame_id, name in ee:
-        frame = model.frames[frame_id]
-        placement = frame.placement
-        segment(f"skeleton/ee_{name}", frame.parentJoint, np.zeros(3), placement.translation, EE_COLOUR)
-        add(f"skeleton/ee_tip_{name}", frame.parentJoint, placement, coal.Sphere(1.8 * radius), EE_COLOUR)
-    return geometry
-
-
-def geometry_models(robot: Robot, package_dirs: Sequence[str | os.PathLike] | None = None,
-                    skeleton: bool | None = None) -> tuple[pin.GeometryModel, pin.GeometryModel]:
-    """The (visual, collision) geometry models the viewer shows.
-
-    Args:
-        robot: the robot.
-        package_dirs: extra folders for ``package://`` mesh URIs.
-        skeleton: add the stick geometry of :func:`skeleton_geometry`; None: only when the model
-            has no visual geometry (no URDF, or a URDF without ``<visual>``).
-
-    Returns:
-        The visual model (URDF visuals, plus the skeleton) and the collision model (URDF collisions;
-        hidden by the viewer unless asked).
-
-    Warns:
-        UserWarning: some meshes cannot be found (they are left out).
-    """
-    visual, collision = pin.GeometryModel(), pin.GeometryModel()
-    if robot.urdf is not None:
-        xml, missing = resolved_urdf(robot, package_dirs)
-        if missing:
-            warnings.warn(f"{robot.source}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); "
-                          f"they are not shown", UserWarning, stacklevel=2)
-        try:
-            visual = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.VISUAL)
-            collision = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.COLLISION)
-        except (RuntimeError, ValueError) as exc:
-            warnings.warn(f"{robot.source}: Pinocchio cannot read the geometry ({' '.join(str(exc).split())}); "
-                          f"showing the skeleton", UserWarning, stacklevel=2)
-            visual, collision = pin.GeometryModel(), pin.GeometryModel()
-    if skeleton or (skeleton is None and visual.ngeoms == 0):
-        for item in skeleton_geometry(robot).geometryObjects:
-            visual.addGeometryObject(item)
-    return visual, collision
-
-
 # ------------------------------------------------------------------ viewer
 def check_times(t: np.ndarray, count: int) -> np.ndarray:
     """Times (N,) [s], finite and non-decreasing, one per configuration."""
@@ -178,39 +65,88 @@ def check_times(t: np.ndarray, count: int) -> np.ndarray:
 class Viewer:
     """A running viser server on 127.0.0.1 showing one robot through ``pinocchio.visualize.ViserVisualizer``.
 
+    The page opens with the camera framed on the robot (its bounding box at the configuration shown, or
+    over a whole run), a seabed grid under it, an x-y-z triad on every end effector and, in the panel, the
+    teach sliders (vehicle pose [m, rad] and every one-DOF arm joint within its limits) that move the robot
+    live; :meth:`play` adds a time slider with play and pause buttons.
+
     Use as a context manager, or call :meth:`close` to stop the server.
+
+    Args:
+        robot: the robot.
+        q: configuration shown first and framed by the camera (nq,); default neutral.
+        port: first port tried (the next free one is taken when busy); the host is always 127.0.0.1.
+        package_dirs: extra folders for ``package://`` mesh URIs.
+        skeleton: add the stick geometry (None: only when the model has no visual geometry).
 
     Attributes:
         robot: the robot shown; visualizer: the ViserVisualizer; server: the ``viser.ViserServer``.
-        q: the configuration shown (nq,).
+        q: the configuration shown (nq,). teach: the panel's sliders (:class:`TeachControls`).
+        playback: the run's controls (:class:`Playback`), None before :meth:`play`. scene_frame: the
+        camera and seabed (:class:`~uvms.viz.viewer_scene.Framing`).
     """
 
-    def __init__(self, robot: Robot, *, port: int = DEFAULT_PORT,
+    def __init__(self, robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
                  package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None) -> None:
         viser, _ = require_viser()
         self.server = viser.ViserServer(host=HOST, port=int(port), verbose=False)  # the next free port if taken
-        self._time_slider = None
+        self.teach: TeachControls | None = None
+        self.playback: Playback | None = None
         self._trajectory: tuple[np.ndarray, np.ndarray] | None = None
-        self._playing = False
+        self._lock = threading.RLock()
         try:
-            self._show_model(robot, package_dirs, skeleton)
-            self.display(robot.neutral())
+            self.server.gui.configure_theme(show_share_button=False)
+            self.server.gui.set_panel_label("uvms")
+            self.server.gui.main_panel.dock_right()
+            self._show_model(robot, robot.neutral() if q is None else q, package_dirs, skeleton)
         except BaseException:
             self.server.stop()
             raise
 
-    def _show_model(self, robot: Robot, package_dirs: Sequence[str | os.PathLike] | None,
+    def _show_model(self, robot: Robot, q: np.ndarray, package_dirs: Sequence[str | os.PathLike] | None,
                     skeleton: bool | None) -> None:
         _, ViserVisualizer = require_viser()
+        q = robot.check_configuration(q)
         visual, collision = geometry_models(robot, package_dirs, skeleton)
         visualizer = ViserVisualizer(robot.model, collision, visual)
-        self.server.scene.reset()  # the scene only: the page, its panel and the camera stay
-        visualizer.initViewer(viewer=self.server, loadModel=True)
-        self.robot, self.visualizer = robot, visualizer
+        if self.playback is not None:  # stopped outside the lock: the playback thread displays under it
+            self.playback.remove()
+            self.playback = None
+        with self._lock:
+            self.server.scene.reset()  # the scene only: the page and the camera of open pages stay
+            visualizer.initViewer(viewer=self.server, loadModel=True)
+            add_lighting(self.server)
+            self.robot, self.visualizer = robot, visualizer
+            if self.teach is not None:
+                self.teach.remove()
+            self.frame(q)
+            self.triads = EndEffectorTriads(self.server, robot, self.scene_frame.size)
+            self.teach = TeachControls(self.server, robot, q, self.display_from_page)
+            self.display(q)
+
+    def frame(self, q: np.ndarray | None = None, *, move_cameras: bool = False) -> Framing:
+        """Frame the camera on the robot and lay the seabed grid under it.
+
+        Args:
+            q: one configuration (nq,) or a run's (N, nq); default the one shown.
+            move_cameras: also move the cameras of the pages already open (else only new pages and
+                "Reset View" use the new framing).
+
+        Returns:
+            The framing (camera position and target, seabed height) [m].
+        """
+        qs = as_configurations(self.robot, self.q if q is None else q)
+        lower, upper = bounding_box(self.robot, self.visualizer.visual_model, qs)
+        self.scene_frame = framing(lower, upper, planar=self.robot.base_type == "planar")
+        apply_camera(self.server, self.scene_frame, clients=move_cameras)
+        self.seabed = add_seabed(self.server, self.scene_frame)
+        return self.scene_frame
 
     def reload(self, robot: Robot, q: np.ndarray | None = None, *,
                package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None) -> None:
         """Show another version of the model (e.g. after an edit of its URDF) in place: same page, same camera.
+
+        The teach sliders are rebuilt for the new model; a run played before is dropped (it may no longer fit).
 
         Args:
             robot: the new robot.
@@ -218,9 +154,8 @@ class Viewer:
         """
         if q is None:
             q = self.q if len(self.q) == robot.nq else robot.neutral()
-        self._trajectory = None  # a run of the old model may no longer fit
-        self._show_model(robot, package_dirs, skeleton)
-        self.display(q)
+        self._trajectory = None
+        self._show_model(robot, q, package_dirs, skeleton)
 
     @property
     def url(self) -> str:
@@ -228,21 +163,63 @@ class Viewer:
         return f"http://{HOST}:{self.server.get_port()}"
 
     def display(self, q: np.ndarray) -> None:
-        """Show configuration q (nq,)."""
-        self.q = self.robot.check_configuration(q)
-        self.visualizer.display(self.q)
+        """Show configuration q (nq,): the robot, the end-effector triads and the panel's sliders."""
+        q = self.robot.check_configuration(q)
+        with self._lock:
+            self.q = q
+            visualizer = self.visualizer
+            visualizer.display(q)
+            pin.updateFramePlacements(visualizer.model, visualizer.data)
+            self.triads.show(visualizer.data)
+            if self.teach is not None:
+                poses = {name: visualizer.data.oMf[self.robot.frame_id(name)] for name in self.robot.ee_frames}
+                self.teach.sync(q, poses)
+
+    def display_from_page(self, q: np.ndarray) -> None:
+        """Show q (nq,) set in the page (teach sliders, reset): a run that plays is paused first."""
+        if self.playback is not None:
+            self.playback.pause()
+        self.display(q)
 
     def _show_time(self, time_: float) -> int:
+        """Show the run's configuration at time_ [s] (the last one at or before it); returns its index k."""
+        if self._trajectory is None:
+            return -1
         t, qs = self._trajectory
-        k = int(min(np.searchsorted(t, time_, side="right") - 1, len(t) - 1))
-        self.display(qs[max(k, 0)])
-        return max(k, 0)
+        k = max(int(min(np.searchsorted(t, time_, side="right") - 1, len(t) - 1)), 0)
+        self.display(qs[k])
+        return k
+
+    def load(self, t: np.ndarray, q: np.ndarray, *, speed: float = 1.0) -> None:
+        """Put a run in the page without playing it: configurations q (N, nq) at times t (N,) [s].
+
+        The time slider, play/pause buttons and speed appear in the panel; the camera and the seabed are
+        framed on the whole run; the first configuration is shown.
+
+        Args:
+            t: times (N,) [s], non-decreasing.
+            q: configurations (N, nq).
+            speed: the page's playback speed, simulated seconds per wall-clock second.
+        """
+        qs = as_configurations(self.robot, q)
+        times = check_times(t, len(qs))
+        if not (speed > 0 and math.isfinite(speed)):
+            raise UVMSError(f"speed must be finite and > 0, got speed={speed}")
+        if self.playback is None:
+            self.playback = Playback(self.server, self._show_time, speed)
+        else:
+            self.playback.pause()
+            self.playback.speed_input.value = float(speed)
+        self._trajectory = (times, qs)
+        self.frame(qs)
+        self.playback.load(times)
 
     def play(self, t: np.ndarray, q: np.ndarray, *, speed: float = 1.0, fps: float = 30.0,
              progress: bool | None = None) -> None:
         """Play configurations q (N, nq) at times t (N,) [s]; returns when the last one is shown.
 
-        A "time [s]" slider in the viewer's panel then scrubs through the run.
+        Returns earlier when the page's Pause button is pressed. The run then stays in the page: its
+        time slider scrubs through it, Play plays it again.
 
         Args:
             t: times (N,) [s], non-decreasing.
@@ -251,40 +228,15 @@ class Viewer:
             fps: frames shown per wall-clock second.
             progress: progress bar (None: only on a terminal).
         """
-        qs = as_configurations(self.robot, q)
-        times = check_times(t, len(qs))
-        if not (speed > 0 and fps > 0 and math.isfinite(speed) and math.isfinite(fps)):
+        if not (fps > 0 and math.isfinite(fps)):
             raise UVMSError(f"speed and fps must be finite and > 0, got speed={speed}, fps={fps}")
-        self._trajectory = (times, qs)
-        start, end = float(times[0]), float(times[-1])
-        step = max((end - start) / 1000, 1e-6)
-        if self._time_slider is None:
-            self._time_slider = self.server.gui.add_slider("time [s]", min=start, max=max(end, start + step),
-                                                           step=step, initial_value=start)
-
-            @self._time_slider.on_update
-            def _(_event) -> None:
-                if not self._playing and self._trajectory is not None:
-                    self._show_time(self._time_slider.value)
-        else:
-            self._time_slider.min, self._time_slider.max, self._time_slider.step = start, max(end, start + step), step
-        frames = max(math.ceil((end - start) / speed * fps), 0) + 1
-        self._playing = True
-        began = time.perf_counter()
-        try:
-            for k in tqdm(range(frames), disable=(not progress) if progress is not None else None,
-                          desc="playing", leave=False):
-                now = min(start + k * speed / fps, end) if k < frames - 1 else end
-                self._show_time(now)
-                self._time_slider.value = now
-                delay = began + (k + 1) / fps - time.perf_counter()
-                if delay > 0:
-                    time.sleep(delay)
-        finally:
-            self._playing = False
+        self.load(t, q, speed=speed)
+        self.playback.run(speed, fps, progress)
 
     def close(self) -> None:
-        """Stop the server."""
+        """Stop the playback and the server."""
+        if self.playback is not None:
+            self.playback.pause()
         self.server.stop()
 
     def __enter__(self) -> Viewer:
@@ -317,13 +269,7 @@ def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
         ViewerUnavailable: viser is not installed (``pip install uvms[viz]``).
         ConfigurationError: bad q.
     """
-    viewer = Viewer(robot, port=port, package_dirs=package_dirs, skeleton=skeleton)
-    try:
-        if q is not None:
-            viewer.display(q)
-    except BaseException:
-        viewer.close()
-        raise
+    viewer = Viewer(robot, q, port=port, package_dirs=package_dirs, skeleton=skeleton)
     if open_browser:
         import webbrowser
 
