@@ -70,7 +70,8 @@ def describe(robot: Robot) -> str:
         rpy = pin.rpy.matrixToRpy(pose.rotation)
         lines.append(f"  {frame:<22} xyz {np.array2string(pose.translation, precision=4, suppress_small=True)}"
                      f"  rpy {np.array2string(rpy, precision=4, suppress_small=True)}")
-    lines.append("checks      passed (unit axes, finite numbers, positive masses and inertias, one tree, base)")
+    lines.append("checks      passed (unit axes, finite numbers, positive masses, inertias and geometry sizes, one tree, "
+                 "base)")
     return "\n".join(lines)
 
 
