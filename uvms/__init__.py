@@ -23,6 +23,7 @@ from .errors import (
     ModelCheckError,
     ModelFileNotFound,
     ModelParseError,
+    NoVehicleError,
     NumericalError,
     UVMSError,
     WorkspaceInputError,
@@ -30,7 +31,7 @@ from .errors import (
 )
 
 # model: xacro/URDF -> checked Pinocchio model -> Robot
-from .model import MissingMeshWarning, example_robot_urdf, load, mount_arm, shipped_models
+from .model import BaseGuessWarning, MissingMeshWarning, example_robot_urdf, load, mount_arm, shipped_models
 
 # robot and kinematics
 from .limits import Limit
@@ -72,9 +73,9 @@ __version__ = "0.1.0"
 __all__ = [
     # errors
     "BaseMismatchError", "ConfigurationError", "FrameNotFound", "JointNotFound", "ModelCheckError",
-    "ModelFileNotFound", "ModelParseError", "NumericalError", "UVMSError", "WorkspaceInputError", "XacroError",
+    "ModelFileNotFound", "ModelParseError", "NoVehicleError", "NumericalError", "UVMSError", "WorkspaceInputError", "XacroError",
     # model
-    "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
+    "BaseGuessWarning", "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
     # robot and kinematics
     "KinematicState", "Limit", "Robot",
     # tasks and solvers
