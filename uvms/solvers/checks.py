@@ -61,23 +61,43 @@ def check_vector(vector: np.ndarray, what: str, size: int) -> np.ndarray:
     return array
 
 
-def check_weights(weights: np.ndarray, size: int) -> np.ndarray:
+def check_weights(weights: np.ndarray, size: int, what: str = "W", note: str = "") -> np.ndarray:
     """A weighting matrix W: (size,) positive diagonal, or (size, size) finite and symmetric.
 
     Positive definiteness of a full W is the Cholesky factorization's to find
     (:func:`~uvms.solvers.inverses.weights_factor`).
+
+    Args:
+        weights: W, (size,) or (size, size).
+        size: the number of solved columns (nv, or n_arm for the generalized Jacobian).
+        what: the name of W in the message (e.g. "weights", "solver.weights").
+        note: what the columns are, added to a wrong-shape message (e.g. "free floating: the arm joints only").
+
+    Raises:
+        SolverInputError: wrong shape, non-finite, a diagonal entry <= 0, or a full W not symmetric.
     """
     weights = np.asarray(weights, dtype=float)
+    hint = f" ({note})" if note else ""
     if weights.ndim == 1:
         if weights.shape != (size,) or not np.all(np.isfinite(weights)):
-            raise SolverInputError(f"W must be ({size},) or ({size}, {size}) and finite, got shape {weights.shape}")
+            raise SolverInputError(f"{what} must be ({size},) or ({size}, {size}) and finite{hint}, "
+                                   f"got shape {weights.shape}")
         if np.any(weights <= 0):
-            raise SolverInputError(f"W must be positive definite: diagonal entries must be > 0, got {weights}")
+            raise SolverInputError(f"{what} must be positive definite: diagonal entries must be > 0, got {weights}")
         return weights
-    weights = check_matrix(weights, "W", (size, size))
+    try:
+        weights = check_matrix(weights, what, (size, size))
+    except SolverInputError as exc:
+        raise SolverInputError(f"{exc}{hint}") from None
     if np.max(np.abs(weights - weights.T)) > 1e-12 * np.abs(weights).max():
-        raise SolverInputError("W must be symmetric")
+        raise SolverInputError(f"{what} must be symmetric")
     return weights
+
+
+def free_floating_weights_note(n_arm: int) -> str:
+    """What the weights of a free-floating (generalized-Jacobian) solve cover: the n_arm arm joints only."""
+    return (f"free floating: the generalized Jacobian has one column per arm joint, so the weights cover the "
+            f"{n_arm} arm joints only; the vehicle is not commanded, it moves by momentum conservation")
 
 
 def check_variable_damping(epsilon: float, lambda_max: float) -> None:

@@ -20,7 +20,7 @@ from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
-from .checks import check_scalar
+from .checks import check_scalar, check_weights, free_floating_weights_note
 from .inverses import SolverInputError, VariableDamping, damped_weighted_inverse, svd_inverse, weights_subset
 from .results import StepResult, VelocityResult
 from .stack import as_task_list, stack
@@ -81,6 +81,9 @@ def clik_velocity(
     jacobian, error, command = stack(state, as_task_list(tasks), gain)  # (k, nv), (k,), (k,)
     first = robot.n_vehicle if free_floating else 0
     solved_jacobian = state.generalized(jacobian) if free_floating else jacobian  # (k, n)
+    if weights is not None:
+        weights = check_weights(weights, solved_jacobian.shape[1], "W",
+                                free_floating_weights_note(robot.n_arm) if free_floating else "")
     nullspace_motion = None
     if potential is not None and alpha > 0:
         nullspace_motion = -alpha * potential.gradient(state.q)[first:]

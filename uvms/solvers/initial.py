@@ -2,7 +2,9 @@
 
 Solved with scipy's SLSQP over a flat chart of the configuration space
 (vehicle position, roll-pitch-yaw / yaw, arm joints), then polished by Newton
-steps on the constraint so the residual reaches the tolerance.
+steps on the constraint so the residual reaches the tolerance. Vehicle coordinates
+named in ``fixed_base`` (e.g. roll and pitch) are left out of the optimization and
+keep their given value exactly.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import pinocchio as pin
 import scipy.optimize
 
 from ..conventions import pose_from_xyyaw, pose_from_xyzrpy
+from ..errors import NameNotFound, SolverInputError
 from ..limits import Limit
 from ..robot import Robot
 from ..state import KinematicState
@@ -68,6 +71,7 @@ def initial_configuration(
     tolerance: float = 1e-10,
     max_iterations: int = 500,
     limit: Limit | None = None,
+    fixed_base: Sequence[str] = (),
 ) -> InitialConfigurationResult:
     """q0 minimizing S(q) with the task(s) met exactly (e = 0) and the arm inside its limits.
 
@@ -80,6 +84,13 @@ def initial_configuration(
         max_iterations: SLSQP iterations.
         limit: the arm position limits (n_arm,) kept by the optimizer (its bounds) and the
             polishing; default: those of ``potential``, the model's unless it was given others.
+        fixed_base: vehicle coordinates held at their value in ``q_init`` (names of
+            ``robot.base.pose_names``, e.g. ``("roll", "pitch")`` to keep the vehicle level);
+            the others and the arm are optimized.
+
+    Raises:
+        SolverInputError: a bad tolerance or iteration count, fixed coordinates on a fixed base or on a
+            vehicle joint placed with a rotation; NameNotFound: an unknown coordinate (close names listed).
     """
     task_list = as_task_list(tasks)
     check_scalar(tolerance, "tolerance", positive=True)
@@ -90,41 +101,76 @@ def initial_configuration(
     if q_init is None:
         q_init = robot.configuration(arm=limit.middle)
     n = robot.n_vehicle
+    fixed = fixed_chart_indices(robot, fixed_base)
+    free = np.setdiff1d(np.arange(robot.nv), fixed)  # the optimized chart coordinates, x = chart[free]
     bounds = limit.after_unbounded(n).bounds()  # the vehicle's chart coordinates are free
+    start = chart_of(robot, robot.check_configuration(q_init))
+    if fixed.size:
+        bounds = [bounds[index] for index in free]
 
-    def errors(chart):
-        state = KinematicState(robot, configuration_of(robot, chart), check=False)
+    def full(x):  # the chart (nv,) of the optimized coordinates x, the fixed ones at their start value
+        if not fixed.size:
+            return x
+        chart = start.copy()
+        chart[free] = x
+        return chart
+
+    def errors(x):
+        state = KinematicState(robot, configuration_of(robot, full(x)), check=False)
         return np.concatenate([task.error(state) for task in task_list]), state
 
-    def constraint(chart):
-        return errors(chart)[0]
+    def constraint(x):
+        return errors(x)[0]
 
-    def constraint_jacobian(chart):
-        state = errors(chart)[1]
+    def constraint_jacobian(x):
+        state = errors(x)[1]
         jacobian = np.vstack([task.jacobian(state) for task in task_list])
-        return -jacobian @ chart_tangent(robot, chart)  # e = x0 - f(q)
+        derivative = -jacobian @ chart_tangent(robot, full(x))  # e = x0 - f(q)
+        return derivative[:, free] if fixed.size else derivative
 
-    def objective(chart):
-        return potential.value(configuration_of(robot, chart))
+    def objective(x):
+        return potential.value(configuration_of(robot, full(x)))
 
-    def gradient(chart):
-        full = np.zeros(robot.nv)
-        full[n:] = potential.arm_gradient(chart[n:])
-        return full
+    def gradient(x):
+        chart = full(x)
+        whole = np.zeros(robot.nv)
+        whole[n:] = potential.arm_gradient(chart[n:])
+        return whole[free] if fixed.size else whole
 
-    start = chart_of(robot, robot.check_configuration(q_init))
     solution = scipy.optimize.minimize(
-        objective, start, jac=gradient, method="SLSQP", bounds=bounds,
+        objective, start[free] if fixed.size else start, jac=gradient, method="SLSQP", bounds=bounds,
         constraints=[{"type": "eq", "fun": constraint, "jac": constraint_jacobian}],
         options={"maxiter": max_iterations, "ftol": 1e-14},
     )
-    chart = polish(solution.x, constraint, constraint_jacobian, limit, n)
-    residual = float(np.linalg.norm(constraint(chart)))
+    free_vehicle = n - fixed.size  # the fixed coordinates are vehicle ones: x = [free vehicle, arm]
+    x = polish(solution.x, constraint, constraint_jacobian, limit, free_vehicle)
+    residual = float(np.linalg.norm(constraint(x)))
+    chart = full(x)
     q = configuration_of(robot, chart)
     inside = limit.contains(chart[n:])
     return InitialConfigurationResult(q=q, success=bool(residual <= tolerance and inside), residual=residual,
                                       potential=potential.value(q), iterations=int(solution.nit),
                                       message=str(solution.message))
+
+
+def fixed_chart_indices(robot: Robot, names: Sequence[str]) -> np.ndarray:
+    """Chart indices (k,) of the vehicle coordinates ``names`` (``robot.base.pose_names``), sorted, no repeats."""
+    if isinstance(names, str):
+        names = [names]
+    names = list(dict.fromkeys(names))
+    if not names:
+        return np.zeros(0, dtype=int)
+    valid = list(robot.base.pose_names)
+    if not valid:
+        raise SolverInputError(f"{robot.name} has a fixed base: there is no vehicle coordinate to fix "
+                               f"(got {', '.join(map(str, names))})")
+    for name in names:
+        if name not in valid:
+            raise NameNotFound("vehicle coordinate", str(name), valid)
+    if not np.allclose(robot.model.jointPlacements[1].rotation, np.eye(3), atol=1e-12):
+        raise SolverInputError(f"fixing vehicle coordinates needs the vehicle joint of {robot.name} placed without "
+                               f"a rotation (its chart then is the world pose)")
+    return np.array(sorted(valid.index(name) for name in names), dtype=int)
 
 
 def polish(
@@ -135,7 +181,11 @@ def polish(
     n: int,
     steps: int = 20,
 ) -> np.ndarray:
-    """Minimum-norm Newton corrections on e(chart) = 0 (chart (nv,)), the arm coordinates chart[n:] clamped into ``limit``."""
+    """Minimum-norm Newton corrections on e(chart) = 0, the arm coordinates chart[n:] clamped into ``limit``.
+
+    ``chart`` holds the optimized coordinates: (nv,), or fewer when vehicle coordinates are fixed (then
+    ``n`` counts the free vehicle coordinates only).
+    """
     chart = chart.copy()
     for _ in range(steps):
         error = constraint(chart)
