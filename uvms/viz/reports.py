@@ -8,13 +8,16 @@ from pathlib import Path
 
 from .. import outputs
 from ..robot import Robot
-from ..workspace import WorkspaceResult
+from ..workspace import CONVERGENCE_TOLERANCE, WorkspaceResult
 from .plotting import workspace_figure
 
 
 def write_workspace_outputs(robot: Robot, result: WorkspaceResult, frames: Sequence[str], figure_counts: Sequence[int],
-                            threshold: float, folder: Path) -> list[str]:
+                            threshold: float, folder: Path, tolerance: float = CONVERGENCE_TOLERANCE) -> list[str]:
     """Write points.npz, the workspace and dexterity figures and metrics.json of a workspace run into ``folder``.
+
+    ``threshold`` is the dexterity of a dexterous voxel; ``tolerance`` the relative volume change over the last
+    doubling of the samples below which a volume counts as converged (``volume_converged`` in metrics.json).
 
     Returns:
         The names of the figures written.
@@ -53,6 +56,6 @@ def write_workspace_outputs(robot: Robot, result: WorkspaceResult, frames: Seque
                          title=f"{robot.name} {frame}: dexterity per {dexterity.voxel} m voxel, "
                                f"{result.samples} samples{hull_note} (max along the line of sight)")
         written.append(name)
-    metrics = {"model": robot.name, **result.metrics(threshold), "figures": written}
+    metrics = {"model": robot.name, **result.metrics(threshold, tolerance), "figures": written}
     outputs.write_json(folder / "metrics.json", metrics)
     return written

@@ -23,11 +23,13 @@ fixed base), so the vehicle's own hull, read from the URDF, can be cut out
 
 Modules: ``batch`` (batched forward kinematics), ``voxels`` (volumes, streamed `VoxelOccupancy`),
 ``dexterity`` (orientation cells per voxel, streamed `DexterityAccumulator`), ``hull`` (the vehicle's
-solids), ``montecarlo`` (streamed sampling and results).
+solids), ``montecarlo`` (streamed sampling and results), ``convergence`` (whether a volume has converged:
+its change over the last doubling of the samples against a tolerance).
 """
 
 from ..errors import WorkspaceInputError
 from .batch import CHUNK, BatchKinematics, JointStep, axis_rotations, rotate_points
+from .convergence import CONVERGENCE_TOLERANCE, VolumeConvergence, volume_convergence
 from .dexterity import (
     DexterityAccumulator,
     DexterityMap,
@@ -42,6 +44,7 @@ from .voxels import VoxelOccupancy, common_volume, voxel_indices, voxel_keys, vo
 
 __all__ = [
     "CHUNK",
+    "CONVERGENCE_TOLERANCE",
     "POINTS_KEPT",
     "BatchKinematics",
     "DexterityAccumulator",
@@ -49,6 +52,7 @@ __all__ = [
     "HullShape",
     "JointStep",
     "OrientationGrid",
+    "VolumeConvergence",
     "VoxelOccupancy",
     "WorkspaceInputError",
     "WorkspaceResult",
@@ -66,4 +70,5 @@ __all__ = [
     "voxel_indices",
     "voxel_keys",
     "voxel_volume",
+    "volume_convergence",
 ]

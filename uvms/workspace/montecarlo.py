@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import WorkspaceInputError
 from ..robot import Robot
 from .batch import CHUNK, BatchKinematics
+from .convergence import CONVERGENCE_TOLERANCE, VolumeConvergence, volume_convergence
 from .dexterity import DexterityAccumulator, DexterityMap, OrientationGrid
 from .hull import HullShape, hull_shapes, outside_hull
 from .voxels import VoxelOccupancy, check_voxel
@@ -130,12 +131,17 @@ class WorkspaceResult:
         points = self.positions[frame][:count]
         return points if self.outside_hull is None else points[self.outside_hull[frame][:count]]
 
-    def metrics(self, threshold: float = 0.9) -> dict:
+    def volume_converged(self, tolerance: float = CONVERGENCE_TOLERANCE) -> dict[str, VolumeConvergence]:
+        """Per frame, whether its volume has converged: change over the last doubling <= ``tolerance`` [-]."""
+        return {frame: volume_convergence(series, tolerance) for frame, series in self.convergence.items()}
+
+    def metrics(self, threshold: float = 0.9, tolerance: float = CONVERGENCE_TOLERANCE) -> dict:
         """The numbers of the run as plain JSON types (what ``uvms workspace`` writes to metrics.json).
 
-        Besides the volumes, convergence, hull and dexterity: ``points_sampled`` and ``points_stored``
-        (per frame, samples drawn and samples whose joints and positions are kept) and ``points_note``
-        (a sentence saying what was kept).
+        Besides the volumes, convergence (``volume_converged``: per frame the verdict of
+        :func:`~uvms.workspace.convergence.volume_convergence` at ``tolerance``), hull and dexterity:
+        ``points_sampled`` and ``points_stored`` (per frame, samples drawn and samples whose joints and
+        positions are kept) and ``points_note`` (a sentence saying what was kept).
         """
         common = {"common": self.common_volume} if self.common_volume is not None else {}
         stored = {frame: self.stored(frame) for frame in self.frames}
@@ -148,6 +154,7 @@ class WorkspaceResult:
             "frames": list(self.frames), "samples": self.samples, "voxel": self.voxel,
             "volume": {**self.volume, **common},
             "volume_convergence": {frame: [[n, v] for n, v in series] for frame, series in self.convergence.items()},
+            "volume_converged": {frame: verdict.as_dict() for frame, verdict in self.volume_converged(tolerance).items()},
             "samples_per_second": self.samples_per_second,
             "points_sampled": {frame: self.samples for frame in self.frames},
             "points_stored": stored,
