@@ -7,12 +7,15 @@ writing them needs no display and leaves the caller's backend (e.g. a notebook's
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from .. import outputs
+from ..conventions import AXIS_NAMES
 from ..simulate import SimulationResult
 
 
@@ -39,15 +42,94 @@ def stacked(t: np.ndarray, series: np.ndarray, labels, title: str, limits=None, 
     return figure
 
 
+def motion_axes(axes: Sequence[str]) -> list[str]:
+    """The controlled axes (of x, y, z, roll, pitch, yaw) in that order; all six when none are named."""
+    named = [axis for axis in AXIS_NAMES if axis in axes]
+    return named or list(AXIS_NAMES)
+
+
+def path_coordinates(axes: Sequence[str], desired: np.ndarray) -> tuple[int, ...]:
+    """Which of x, y, z (indices) a path figure shows: the task's position axes when it controls two or three,
+    else the controlled one and those along which the desired path (N, 3) [m] moves most (x, y if it does not).
+
+    Returns:
+        Three indices (a 3-D path) or two in increasing order (a plane).
+    """
+    controlled = [index for index, name in enumerate("xyz") if name in axes]
+    if len(controlled) >= 2:
+        return tuple(controlled)
+    spans = np.ptp(desired, axis=0) if len(desired) else np.zeros(3)
+    ranked = [index for index in np.argsort(-spans, kind="stable") if spans[index] > 0 and index not in controlled]
+    chosen = controlled + ranked + [index for index in (0, 1, 2) if index not in controlled and index not in ranked]
+    return tuple(sorted(chosen[:2]))
+
+
+def desired_motion_figure(result: SimulationResult, trajectory, title: str = "") -> Figure:
+    """Desired speed and every controlled axis of the task against time (x_d, y_d, z_d [m], roll_d ... [rad])."""
+    t = result.t
+    speed = np.array([np.linalg.norm(trajectory(time_).twist[:3]) for time_ in t])
+    columns, labels = [speed], ["speed [m/s]"]
+    for axis in motion_axes(result.axes or result.robot.base.task_axes):
+        index = AXIS_NAMES.index(axis)
+        columns.append(result.desired_position[:, index] if index < 3 else result.desired_rpy[:, index - 3])
+        labels.append(f"{axis}_d [{'m' if index < 3 else 'rad'}]")
+    return stacked(t, np.column_stack(columns), labels, f"{title}: desired end-effector motion")
+
+
+def path_figure(result: SimulationResult, title: str = "") -> Figure:
+    """End effector, its desired path and the vehicle in the task's own axes: 3-D when the task controls x, y
+    and z, else the plane of its two position axes (or of the two along which the path moves)."""
+    robot = result.robot
+    shown = path_coordinates(result.axes or robot.base.task_axes, result.desired_position)
+    names = ["xyz"[index] for index in shown]
+    vehicle = (np.array([robot.base_pose(q).translation for q in result.q]) if robot.base_type != "fixed"
+               else None)  # (N, 3) [m] world
+    if len(shown) == 3:
+        figure = Figure(figsize=(7, 6.5))
+        axis = figure.add_subplot(projection="3d")
+    else:
+        figure = Figure(figsize=(6, 6))
+        axis = figure.subplots()
+    curves = [(result.desired_position, {"linestyle": "--", "color": "C1", "label": "desired"}),
+              (result.ee_position, {"color": "C0", "linewidth": 1, "label": "end effector"})]
+    if vehicle is not None:
+        curves.append((vehicle, {"color": "C2", "label": "vehicle"}))
+    for points, style in curves:
+        axis.plot(*(points[:, index] for index in shown), **style)
+    if vehicle is not None:
+        axis.plot(*(vehicle[:1, index] for index in shown), "o", color="C2")
+    if len(shown) == 3:
+        everything = np.vstack([points for points, _ in curves])
+        span = np.ptp(everything, axis=0)
+        box = np.maximum(span, 0.05 * max(float(span.max()), 1e-9))
+        axis.set_box_aspect(box)  # true proportions
+        for coordinate, extent in zip((axis.xaxis, axis.yaxis, axis.zaxis), box / box.max()):
+            coordinate.set_major_locator(MaxNLocator(max(2, int(round(7 * extent)))))  # no crowded ticks
+        axis.tick_params(pad=5)  # minus signs clear of the tick marks
+        axis.set_zlabel("z [m]", labelpad=14)
+        plane = "3-D (task axes x, y, z)"
+    else:
+        axis.set_aspect("equal", adjustable="datalim")
+        axis.grid(True, alpha=0.3)
+        plane = f"the {names[0]}-{names[1]} plane"
+    pad = {"labelpad": 10} if len(shown) == 3 else {}
+    axis.set_xlabel(f"{names[0]} [m]", **pad)
+    axis.set_ylabel(f"{names[1]} [m]", **pad)
+    axis.legend()
+    axis.set_title(f"{title}: paths in {plane}")
+    figure.tight_layout()
+    return figure
+
+
 def scenario_figures(result: SimulationResult, trajectory, folder: str | os.PathLike, title: str = "") -> list[Path]:
-    """Write the standard figures of a run into ``folder``; returns their paths."""
+    """Write the standard figures of a run into ``folder``; returns their paths.
+
+    ``desired_motion.png`` and ``path.png`` follow the task's axes (``result.axes``): every controlled axis
+    against time, and the path in 3-D or in the task's plane (:func:`path_figure`).
+    """
     folder = Path(folder)
     robot, t = result.robot, result.t
-    figures = {}
-    speed = np.array([np.linalg.norm(trajectory(time_).twist[:3]) for time_ in t])
-    desired = np.column_stack([speed, result.desired_position[:, :2], result.desired_rpy[:, 2]])
-    figures["desired_motion.png"] = stacked(
-        t, desired, ("speed [m/s]", "x_d [m]", "y_d [m]", "yaw_d [rad]"), f"{title}: desired end-effector motion")
+    figures = {"desired_motion.png": desired_motion_figure(result, trajectory, title)}
     if robot.base_type != "fixed":
         figures["vehicle.png"] = stacked(t, result.vehicle_pose(), robot.base.pose_labels,
                                          f"{title}: vehicle pose")
@@ -67,22 +149,7 @@ def scenario_figures(result: SimulationResult, trajectory, folder: str | os.Path
     axis.set_title(f"{title}: tracking error")
     figure.tight_layout()
     figures["errors.png"] = figure
-    figure = Figure(figsize=(6, 6))
-    axis = figure.subplots()
-    axis.plot(result.desired_position[:, 0], result.desired_position[:, 1], "--", color="C1", label="desired")
-    axis.plot(result.ee_position[:, 0], result.ee_position[:, 1], color="C0", linewidth=1, label="end effector")
-    if robot.base_type != "fixed":
-        vehicle = result.vehicle_pose()
-        axis.plot(vehicle[:, 0], vehicle[:, 1], color="C2", label="vehicle")
-        axis.plot(vehicle[0, 0], vehicle[0, 1], "o", color="C2")
-    axis.set_aspect("equal", adjustable="datalim")
-    axis.set_xlabel("x [m]")
-    axis.set_ylabel("y [m]")
-    axis.grid(True, alpha=0.3)
-    axis.legend()
-    axis.set_title(f"{title}: paths in the x-y plane")
-    figure.tight_layout()
-    figures["path.png"] = figure
+    figures["path.png"] = path_figure(result, title)
     written = []
     for name, figure in figures.items():
         outputs.save_figure(figure, folder / name)
