@@ -85,9 +85,10 @@ def command_info(options: argparse.Namespace) -> int:
 def command_run(options: argparse.Namespace) -> int:
     """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
     from .scenario import run  # the scenario layer pulls in scipy and matplotlib
+    from .scenario.verdict import verdict_line
 
     if options.watch:
-        return watch_job(options, run_output_folder(options), scenario=Path(options.scenario))
+        return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
     result = run(options.scenario, out=options.out, overrides=options.set or (),
                  progress=False if options.quiet else None)
     folder = result.files[0].parent
@@ -96,7 +97,10 @@ def command_run(options: argparse.Namespace) -> int:
     for key in ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
                 "vehicle_travel", "vehicle_yaw_range", "arm_travel"):
         print(f"  {key:<27} {metrics[key]:.3e}")
+    print(f"verdict     {verdict_line(metrics['verdict'])}")
     print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})")
+    for warning in metrics["verdict"]["warnings"]:  # said on the terminal, not only in metrics.json
+        print(f"uvms: warning: {metrics['scenario']}: {warning}", file=sys.stderr)
     return 0
 
 
@@ -127,6 +131,13 @@ def parse_figure_counts(text: str | None, samples: int) -> list[int]:
     if not counts or any(not 1 <= count <= samples for count in counts):
         raise UVMSError(f"--figures expects comma-separated sample counts in [1, {samples}] (-n), got {text!r}")
     return counts
+
+
+def scenario_file(scenario: str) -> Path:
+    """The file of a ``SCENARIO`` argument: a ``.toml`` path or a shipped scenario name (``hoang2011_w1``)."""
+    from .scenario.resources import resolve_scenario_path
+
+    return resolve_scenario_path(scenario)
 
 
 def run_output_folder(options: argparse.Namespace) -> Path:
@@ -169,6 +180,8 @@ def command_workspace(options: argparse.Namespace) -> int:
     from .workspace import OrientationGrid, monte_carlo, parse_sample_count
 
     samples = parse_sample_count(options.samples)
+    if not 0.0 < options.convergence_tolerance < 1.0:
+        raise UVMSError(f"--convergence-tolerance must be in (0, 1) (0.01: 1 %), got {options.convergence_tolerance}")
     robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
     frames = options.ee or robot.ee_frames
     figure_counts = parse_figure_counts(options.figures, samples)
@@ -182,7 +195,8 @@ def command_workspace(options: argparse.Namespace) -> int:
         result = monte_carlo(robot, frames, samples, seed=options.seed, voxel=options.voxel,
                              progress=False if options.quiet else None, remove_hull=options.remove_hull,
                              dexterity=grid, dexterity_voxel=options.dexterity_voxel)
-        written = write_workspace_outputs(robot, result, frames, figure_counts, options.dexterous_threshold, folder)
+        written = write_workspace_outputs(robot, result, frames, figure_counts, options.dexterous_threshold, folder,
+                                          tolerance=options.convergence_tolerance)
     for frame in frames:
         line = f"{frame:<12} volume {result.volume[frame]:.4f} m^3 ({result.voxel} m voxels)"
         if result.volume_outside_hull is not None:
@@ -193,6 +207,9 @@ def command_workspace(options: argparse.Namespace) -> int:
         if result.common_volume_outside_hull is not None:
             line += f", outside the hull {result.common_volume_outside_hull:.4f} m^3"
         print(line)
+    convergence = result.volume_converged(options.convergence_tolerance)
+    for frame, verdict in convergence.items():
+        print(verdict.status(frame))
     for frame, dexterity in (result.dexterity or {}).items():
         summary = dexterity.summary(options.dexterous_threshold)
         print(f"{frame:<12} dexterity mean {summary['mean']:.4f}, max {summary['max']:.4f} "
@@ -205,6 +222,9 @@ def command_workspace(options: argparse.Namespace) -> int:
               f"(volumes and dexterity use all)")
     print(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, "
           f"{', '.join(written)})")
+    for frame, verdict in convergence.items():  # said on the terminal, not only in metrics.json
+        if verdict.warning(frame):
+            print(f"uvms: warning: {verdict.warning(frame)}", file=sys.stderr)
     return 0
 
 
@@ -225,19 +245,18 @@ def view_configuration(robot: Robot, values: Sequence[float] | None) -> np.ndarr
                     f"{robot.n_arm} (arm joints) for {robot.name}; got {len(values)}")
 
 
-def view_robot(options: argparse.Namespace) -> Robot:
-    """The model of ``uvms view``: a model file/name, or the model of a scenario ``.toml``."""
-    if options.model is None:
-        raise UVMSError("uvms view needs the model: `uvms view MODEL` or `uvms view MODEL|SCENARIO.toml "
-                        "--result DIR` (a run folder does not record its model file)")
-    if str(options.model).endswith(".toml"):
-        from .scenario import read_scenario
+def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
+    """The model of ``uvms view`` and a one-line note on it (or None): with ``--result DIR``, the model the run
+    folder records (a MODEL, ``--arg`` or ``--base`` given too must describe it; an older folder without a record:
+    MODEL as given, and a note); else a model file/name or the model of a scenario ``.toml``."""
+    from .scenario.record import named_model, replay_model
 
-        section = read_scenario(options.model)["model"]
-        args = {**section["args"], **parse_assignments(options.arg)}
-        return load(section["path"], base=options.base or section["base"] or None, args=args,
-                    ee=section["ee"] or None)
-    return load(options.model, base=options.base, args=parse_assignments(options.arg))
+    if options.result:
+        return replay_model(options.result, options.model, parse_assignments(options.arg), options.base)
+    if options.model is None:
+        raise UVMSError("uvms view needs the model: `uvms view MODEL`, or `uvms view --result DIR` of a run folder "
+                        "(which records its model)")
+    return named_model(options.model, parse_assignments(options.arg), options.base), None
 
 
 def read_result(robot: Robot, folder: str) -> tuple[np.ndarray, np.ndarray]:
@@ -274,7 +293,9 @@ def command_view(options: argparse.Namespace) -> int:
     """``uvms view MODEL [--q ...]`` / ``uvms view MODEL --result DIR``: the 3-D viewer, or a headless picture."""
     if options.frames < 1 or not options.fps > 0:
         raise UVMSError(f"--frames must be >= 1 and --fps > 0, got {options.frames} and {options.fps}")
-    robot = view_robot(options)
+    robot, notice = view_robot(options)
+    if notice:
+        print(notice, flush=True)
     q = view_configuration(robot, options.q)
     result = read_result(robot, options.result) if options.result else None
     if options.headless:
@@ -321,21 +342,34 @@ def watch_viewer(options: argparse.Namespace, viewer) -> None:
 
     With ``uvms run SCENARIO --watch`` in another terminal, the viewer follows both the model and the run.
     """
+    from .scenario.record import read_run_record
     from .watch import WatchedFiles, watch
 
     scenario = Path(options.model) if str(options.model).endswith(".toml") else None
     result = Path(options.result).resolve() if options.result else None
 
+    def recorded() -> tuple | None:  # the model the result records (a rerun may change it)
+        try:
+            record = read_run_record(result) if result is not None else None
+        except UVMSError:
+            return None
+        return None if record is None else (record.source, sorted(record.args.items()), record.base, record.ee)
+
+    shown = [recorded()]
+
     def files() -> WatchedFiles:
-        watched = WatchedFiles.of(scenario=scenario, model=None if scenario else options.model)
+        model = options.model or (shown[0][0] if shown[0] else None)  # no MODEL: the recorded model's files
+        watched = WatchedFiles.of(scenario=scenario, model=None if scenario else model)
         if result is not None:
             watched.files |= {result / "trajectory.npz", result}
         return watched
 
     def changed(paths: list[Path]) -> None:
         try:
-            robot = view_robot(options)
-            model_changed = any(path.name != "trajectory.npz" and path != result for path in paths)
+            robot, _ = view_robot(options)
+            now = recorded()
+            model_changed = now != shown[0] or any(path.name != "trajectory.npz" and path != result for path in paths)
+            shown[0] = now
             if model_changed:
                 viewer.reload(robot)
             print(f"{time.strftime('%H:%M:%S')} {', '.join(sorted({p.name for p in paths}))} changed: "
@@ -362,7 +396,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--ee", action="append", metavar="FRAME", help="end-effector frame (repeatable)")
     info.set_defaults(handler=command_info)
     run = commands.add_parser("run", help="run a scenario (TOML): metrics.json, trajectory.csv/.npz, figures")
-    run.add_argument("scenario", help="scenario file, e.g. scenarios/hoang2011_w1.toml")
+    run.add_argument("scenario", help="scenario file or shipped scenario name, e.g. hoang2011_w1 or my_run.toml")
     run.add_argument("--out", help="output folder (default: out/<scenario name>)")
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="override a scenario key, e.g. solver.gain=2 or model.args.l1=0.6 (repeatable)")
@@ -371,7 +405,7 @@ def build_parser() -> argparse.ArgumentParser:
                      help="rerun whenever the scenario, the model or a file it includes changes (Ctrl-C stops)")
     run.set_defaults(handler=command_run)
     sweep = commands.add_parser("sweep", help="run a scenario on a grid of overrides: sweep.csv and sweep.png")
-    sweep.add_argument("scenario", help="scenario file, e.g. scenarios/santos2006_task_priority.toml")
+    sweep.add_argument("scenario", help="scenario file or shipped scenario name, e.g. santos2006_task_priority")
     sweep.add_argument("--grid", action="append", metavar="KEY=START:STOP:N",
                        help="sweep a scenario key over N values from START to STOP, or KEY=[a,b,...], e.g. "
                             "model.args.l1=1.5:2.5:5 (repeatable: the grid is the product)")
@@ -408,6 +442,9 @@ def build_parser() -> argparse.ArgumentParser:
                            help="frame axis taken as the approach direction")
     workspace.add_argument("--dexterous-threshold", type=float, default=0.9,
                            help="dexterity from which a voxel counts as dexterous workspace")
+    workspace.add_argument("--convergence-tolerance", type=float, default=0.01,
+                           help="a volume has converged when the last doubling of the samples changes it by at "
+                                "most this fraction (default 0.01: 1 %%); else a warning suggests more samples")
     workspace.add_argument("--out", help="output folder (default: out/workspace_<model>)")
     workspace.add_argument("--quiet", action="store_true", help="no progress bar")
     workspace.add_argument("--watch", action="store_true",
@@ -415,8 +452,10 @@ def build_parser() -> argparse.ArgumentParser:
     workspace.set_defaults(handler=command_workspace)
     view = commands.add_parser("view", help="3-D viewer of a model or a run (needs uvms[viz]), or --headless OUT")
     view.add_argument("model", nargs="?",
-                      help="a .urdf/.xacro file, a shipped model name, or a scenario .toml (its model)")
-    view.add_argument("--result", metavar="DIR", help="play the trajectory.npz of a run folder (uvms run)")
+                      help="a .urdf/.xacro file, a shipped model name, or a scenario .toml (its model); with "
+                           "--result: not needed (the run folder records its model), and if given it must match")
+    view.add_argument("--result", metavar="DIR",
+                      help="play the trajectory.npz of a run folder (uvms run) on the model it records")
     view.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
     view.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
     view.add_argument("--q", nargs="+", type=float, metavar="V",

@@ -98,6 +98,10 @@ class RunFolderBusy(RunFolderError):
     """Another uvms process is writing the same output folder (it holds the folder's lock)."""
 
 
+class RunRecordError(UVMSError):
+    """A run folder's record of its model is malformed, or contradicts the model given with the folder."""
+
+
 # ------------------------------------------------- solvers and controllers
 class SolverInputError(UVMSError):
     """A Jacobian, weight, gain or damping of the wrong shape, non-finite or not positive definite."""

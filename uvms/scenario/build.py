@@ -13,7 +13,7 @@ from ..control.sequence import METHODS as SEQUENCE_METHODS
 from ..control.sequence import Phase, PhasePlan, SequenceController
 from ..dynamics.hydrodynamics import HydroParameters
 from ..dynamics.plant import Plant
-from ..errors import ScenarioError, UVMSError
+from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..model.loader import load
 from ..robot import Robot
 from ..solvers import (
@@ -97,16 +97,29 @@ def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.
         q_given = robot.configuration(base=np.array(base) if base else None, arm=np.array(arm) if arm else None)
     except UVMSError as exc:
         raise ScenarioError(f"initial.base/initial.arm: {exc}") from None
+    fixed = initial["fixed_base"]
     if initial["method"] == "given":
+        if fixed:
+            raise ScenarioError("initial.fixed_base holds vehicle coordinates during the optimization of q0: it needs "
+                                "initial.method = 'optimize' (with 'given', initial.base is used as it is)")
         return q_given, 0.0
     trajectory = scenario["trajectory"]
     if not trajectory["start"] or not trajectory["orientation"]:
         raise ScenarioError("initial.method = 'optimize' needs trajectory.start and trajectory.orientation")
+    if not all(isinstance(name, str) for name in fixed):
+        raise ScenarioError(f"initial.fixed_base must be a list of vehicle coordinate names "
+                            f"({', '.join(robot.base.pose_names) or 'none: the base is fixed'}), got {fixed!r}")
     task.set_target(np.concatenate([trajectory["start"], trajectory["orientation"]]))
     potential = JointLimitPotential(robot, weights=np.asarray(scenario["solver"]["joint_limit_weights"], dtype=float))
-    result = initial_configuration(robot, task, potential, q_given)
+    try:
+        result = initial_configuration(robot, task, potential, q_given, fixed_base=fixed)
+    except (SolverInputError, NameNotFound) as exc:
+        raise ScenarioError(f"initial.fixed_base: {exc} (their values are those of initial.base, 0 where not "
+                            f"given)") from None
     if not result.success:
-        raise ScenarioError(f"no initial configuration reaches the trajectory start (residual {result.residual:.3g})")
+        held = f" with {', '.join(fixed)} held" if fixed else ""
+        raise ScenarioError(f"no initial configuration reaches the trajectory start{held} "
+                            f"(residual {result.residual:.3g})")
     return result.q, result.residual
 
 
@@ -228,7 +241,7 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: d
     damping: float | VariableDamping = solver["damping"]
     if solver["damping_epsilon"] > 0:
         damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
-    weights = np.asarray(solver["weights"], dtype=float) if solver["weights"] else None
+    weights = solver_weights(robot, solver, free_floating=True)
     control_dt, dt = float(section["control_dt"]), float(scenario["simulation"]["dt"])
     ratio = control_dt / dt
     if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
@@ -243,6 +256,37 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: d
     return plant, controller
 
 
+def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarray | None:
+    """``solver.weights`` as the diagonal W of the solved columns, checked against the model (None: not given).
+
+    The solved columns are v's nv (the vehicle, then the arm), or the n_arm arm joints for free-floating
+    (generalized-Jacobian) control, where the vehicle is not commanded.
+
+    Raises:
+        ScenarioError: weights with a method other than clik, the wrong count (the message says what the
+            entries are), or an entry <= 0.
+    """
+    if not solver["weights"]:
+        return None
+    if solver["method"] != "clik":
+        raise ScenarioError(f"solver.weights (the W of the weighted pseudo-inverse) is used by solver.method = "
+                            f"'clik' only, not {solver['method']!r}; remove it")
+    weights = np.asarray(solver["weights"], dtype=float)
+    if free_floating:
+        size, covered = robot.n_arm, (f"free-floating (generalized-Jacobian) weights cover the arm joints only "
+                                      f"({', '.join(robot.arm_joint_names)}); the vehicle is not commanded, it "
+                                      f"moves by momentum conservation")
+    else:
+        vehicle = f"the vehicle ({', '.join(robot.base.pose_names)}) then " if robot.n_vehicle else ""
+        size, covered = robot.nv, f"one per velocity coordinate: {vehicle}the arm ({', '.join(robot.arm_joint_names)})"
+    if weights.shape != (size,):
+        raise ScenarioError(f"solver.weights has {weights.size} numbers, {robot.name} needs {size}: {covered}")
+    if np.any(weights <= 0):
+        raise ScenarioError(f"solver.weights must all be > 0 (the diagonal of a positive definite W), "
+                            f"got {solver['weights']}")
+    return weights
+
+
 def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
     """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method."""
     solver, vehicle = scenario["solver"], scenario["vehicle"]
@@ -252,7 +296,7 @@ def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
     if solver["damping_epsilon"] > 0:
         damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
     potential = JointLimitPotential(robot, weights=np.asarray(solver["joint_limit_weights"], dtype=float))
-    weights = np.asarray(solver["weights"], dtype=float) if solver["weights"] else None
+    weights = solver_weights(robot, solver, free_floating=solver["free_floating"])
     method = solver["method"]
     vehicle_task = None
     if method != "clik":

@@ -16,7 +16,9 @@ from ..control.sequence import sequence_metrics
 from ..errors import NumericalError
 from ..simulate import SimulationResult, simulate, simulate_gjm, step_count
 from .build import Setup, build
+from .record import model_record
 from .schema import read_scenario
+from .verdict import run_verdict
 
 @dataclass
 class RunResult:
@@ -73,6 +75,10 @@ def run(
 ) -> RunResult:
     """Run a scenario file and write ``metrics.json``, ``trajectory.csv``/``.npz`` and figures into ``out``.
 
+    ``metrics.json`` also records the model the run used (``"model"``: source, xacro args, base, end effectors,
+    :mod:`uvms.scenario.record`) and the verdict (``"verdict"``: inside the joint limits, task error within
+    ``[outputs]`` position/orientation tolerance, :mod:`uvms.scenario.verdict`).
+
     With a dynamic ``[plant]`` (rigid or hydrodynamic) the joints are driven by the GJM
     controller of :mod:`uvms.control.gjm` through :func:`uvms.simulate.simulate_gjm` (the one loop), and
     ``plant.npz`` (commands, torques, energy, momentum) and the figures of
@@ -83,7 +89,7 @@ def run(
     (:func:`uvms.outputs.run_folder`): ``out`` holds the previous complete run until the new one is complete.
 
     Args:
-        scenario_path: the TOML file.
+        scenario_path: the TOML file, or the name of a shipped scenario (``"hoang2011_w1"``).
         out: output folder (default ``out/<scenario name>``).
         overrides: ``SECTION.KEY=VALUE`` strings.
         progress: progress bar (None: on a terminal only).
@@ -144,6 +150,7 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
                           integrator=simulation_section["integrator"], progress=progress)
     metrics = compute_metrics(result, setup, time.perf_counter() - started)
     metrics["scenario"] = scenario["scenario"]["name"]
+    metrics["model"] = model_record(scenario, setup.robot)  # what `uvms view --result DIR` replays the run on
     if plant_run is not None:
         metrics.update(plant=scenario["plant"]["type"], gjm=scenario["plant"]["gjm"],
                        motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.plant_metrics())
@@ -164,6 +171,7 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
 
             files += sequence_figures(result, setup.plan, folder, title=scenario["scenario"]["name"],
                                       animation=scenario["outputs"]["animation"], progress=progress)
+    metrics["verdict"] = run_verdict(metrics, scenario["outputs"])
     outputs.write_json(folder / "metrics.json", metrics)
     files.append(folder / "metrics.json")
     return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files,

@@ -22,8 +22,14 @@ else:  # pragma: no cover - Python 3.10
 
 from ..control.gjm import GJM_KINDS
 from ..errors import ScenarioError
+from .resources import resolve_scenario_path
 
 NUMBER = (int, float)
+#: Defaults of [outputs] position_tolerance [m] and orientation_tolerance [rad]: a run whose task error exceeds
+#: them is reported as not meeting its task (a terminal warning, metrics.json "verdict"). 1 cm and 1 degree: far
+#: above what closed-loop kinematic control reaches (1e-10 m), and an error a user sees in a figure.
+DEFAULT_POSITION_TOLERANCE = 0.01
+DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
 #: free-floating dynamics of uvms.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
@@ -50,6 +56,8 @@ LOWER_BOUNDS: dict[str, tuple[float, bool, str]] = {
     "solver.damping": (0.0, False, "the DLS damping"),
     "solver.damping_epsilon": (0.0, False, "the singular-value threshold of the variable damping"),
     "solver.damping_max": (0.0, False, "the largest variable damping"),
+    "outputs.position_tolerance": (0.0, True, "the largest position error [m] of a run said to meet its task"),
+    "outputs.orientation_tolerance": (0.0, True, "the largest orientation error [rad] of a run said to meet its task"),
 }
 
 
@@ -112,6 +120,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "method": (str, "given", ("given", "optimize")),
         "base": (NUMBERS, [], None),
         "arm": (NUMBERS, [], None),
+        "fixed_base": (list, [], None),
     },
     "simulation": {
         "dt": (NUMBER, REQUIRED, None),
@@ -132,6 +141,8 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     "outputs": {
         "figures": (bool, True, None),
         "animation": (str, "", None),
+        "position_tolerance": (NUMBER, DEFAULT_POSITION_TOLERANCE, None),
+        "orientation_tolerance": (NUMBER, DEFAULT_ORIENTATION_TOLERANCE, None),
     },
 }
 #: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.sequence.
@@ -150,15 +161,21 @@ SEQUENCE_REQUIRED_SECTIONS = ("model", "phases", "simulation")
 def read_scenario(path: str | os.PathLike, overrides: Sequence[str] = ()) -> dict:
     """Read, override and validate a scenario file; relative model paths become absolute.
 
+    Args:
+        path: a ``.toml`` file or the name of a shipped scenario (``"hoang2011_w1"``,
+            :func:`~uvms.scenario.resources.resolve_scenario_path`).
+        overrides: ``SECTION.KEY=VALUE`` strings.
+
     Raises:
-        ScenarioError: unreadable file, bad TOML, unknown key, wrong type, impossible value.
+        ScenarioError: unknown file or name, unreadable file, bad TOML, unknown key, wrong type, impossible value.
     """
+    path = resolve_scenario_path(path)
     return scenario_from_raw(read_toml(path), path, overrides)
 
 
 def read_toml(path: str | os.PathLike) -> dict:
-    """The raw table of a scenario file (not validated)."""
-    path = Path(path)
+    """The raw table of a scenario file or shipped scenario name (not validated)."""
+    path = resolve_scenario_path(path)
     try:
         return tomllib.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:

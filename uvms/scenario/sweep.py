@@ -24,6 +24,7 @@ import numpy as np
 
 from .. import outputs
 from ..errors import SweepError
+from .resources import resolve_scenario_path
 from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
@@ -183,7 +184,7 @@ def sweep(
     """Run a scenario on every point of a grid; write ``sweep.csv`` and ``sweep.png`` into ``out``.
 
     Args:
-        scenario: the TOML file.
+        scenario: the TOML file, or the name of a shipped scenario (``"santos2006_task_priority"``).
         grids: ``(key, values)`` pairs or ``KEY=START:STOP:N`` strings; points are their Cartesian product,
             the first key varying slowest.
         jobs: parallel jobs for loky (-1: all cores); for dask without ``scheduler``, the local workers.
@@ -197,6 +198,7 @@ def sweep(
         SweepError: bad grid, backend or jobs; ScenarioError: a key or value the scenario rejects, found
             before any worker starts.
     """
+    scenario = resolve_scenario_path(scenario)
     grids = [parse_grid(g) if isinstance(g, str) else (g[0], list(g[1])) for g in grids]
     keys = [key for key, _ in grids]
     if not grids or len(set(keys)) != len(keys):
