@@ -122,3 +122,13 @@ class TeachUnavailable(UVMSError):
 
 class BagExportError(UVMSError):
     """A run cannot be written as a ROS 2 bag: rosbags is not installed, or the run does not fit the robot."""
+
+
+# ------------------------------------------------- inequality objectives (set-based control, QP hierarchy)
+class ObjectiveError(UVMSError):
+    """An inequality objective or a velocity limit has an invalid parameter (margin, band, bound, normal,
+    gain) or does not fit the model (a vehicle objective on a fixed base)."""
+
+
+class ObjectiveNameNotFound(NameNotFound):
+    """An unknown inequality type, or an unknown parameter of one; the message lists the close names."""

@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import SolverInputError
+
 
 @dataclass(frozen=True)
 class VelocityResult:
@@ -34,10 +36,11 @@ class VelocityResult:
 
 @dataclass(frozen=True)
 class StepResult:
-    """One integration step of a velocity solver: the new configuration and the solution used."""
+    """One integration step of a velocity solver: the new configuration and the solution used
+    (a :class:`VelocityResult`, or a :class:`SetBasedResult` / :class:`HQPResult` of the hierarchies)."""
 
     q: np.ndarray
-    velocity: VelocityResult
+    velocity: VelocityResult | SetBasedResult
 
 
 @dataclass(frozen=True)
@@ -99,3 +102,88 @@ class InitialConfigurationResult:
     potential: float
     iterations: int
     message: str = field(default="")
+
+
+@dataclass(frozen=True)
+class ObjectiveStatus:
+    """An inequality objective in a solution of the set-based or QP hierarchy.
+
+    Attributes:
+        name: the objective's name.
+        level: its priority level (0 = highest).
+        value: x(q) (k,) at the configuration solved at.
+        activation: (k,) in [0, 1] (0 deep inside the valid set, 1 on its border and beyond).
+        active: set-based: some activation > 0; QP hierarchy: some constraint row binding or relaxed.
+        violation: how far x is outside its valid set (>= 0) [units of x].
+    """
+
+    name: str
+    level: int
+    value: np.ndarray
+    activation: np.ndarray
+    active: bool
+    violation: float
+
+
+@dataclass(frozen=True)
+class SetBasedResult:
+    """A solution of a priority hierarchy of equality tasks and inequality objectives.
+
+    Attributes:
+        v: velocity (nv,) in the order of Pinocchio's v (vehicle twist local, then arm).
+        objectives: the inequality objectives, in priority order, with their activations.
+        command: task-space command xdot_d + K e (k,) of the equality tasks (all levels).
+        error: task error e (k,) of the equality tasks.
+        residual: |J v - command| over the equality tasks.
+        level_residuals: per level, |A (J v - reference)| (activation-weighted; equality rows weigh 1).
+        sigma_min: smallest singular value of the (weighted, projected) Jacobian inverted for the last
+            level that holds equality tasks (0 if none).
+        scales: per level, the factor in [0, 1] its contribution was scaled by to meet the speed and
+            position-rate bounds (1: not scaled; the lowest levels are scaled first).
+        speed_ratio: max_i |v_i| / max_i over the speed limits given (0 without any).
+        free_floating: whether only the arm was solved and the vehicle followed momentum conservation.
+    """
+
+    v: np.ndarray
+    objectives: tuple[ObjectiveStatus, ...]
+    command: np.ndarray
+    error: np.ndarray
+    residual: float
+    level_residuals: tuple[float, ...]
+    sigma_min: float
+    scales: tuple[float, ...]
+    speed_ratio: float
+    free_floating: bool = False
+
+    @property
+    def active(self) -> tuple[str, ...]:
+        """Names of the active objectives."""
+        return tuple(status.name for status in self.objectives if status.active)
+
+    def status(self, name: str) -> ObjectiveStatus:
+        """The status of the objective called ``name``.
+
+        Raises:
+            SolverInputError: no objective of that name (the message lists them).
+        """
+        for status in self.objectives:
+            if status.name == name:
+                return status
+        raise SolverInputError(f"no objective {name!r} in this result; objectives: "
+                               f"{', '.join(s.name for s in self.objectives) or 'none'}")
+
+
+@dataclass(frozen=True)
+class HQPResult(SetBasedResult):
+    """A solution of the QP hierarchy: a :class:`SetBasedResult` plus the QPs' reports.
+
+    Attributes:
+        solver_status: per level, "optimal" or what happened instead (e.g. "failed: kept level 1"); a level
+            that fails keeps the solution of the levels above, which meets every hard bound.
+        slacks: per level, the norm of the optimal slack of its inequality rows (how far they were relaxed).
+        solver: the QP solver used.
+    """
+
+    solver_status: tuple[str, ...] = ()
+    slacks: tuple[float, ...] = ()
+    solver: str = ""

@@ -1,0 +1,300 @@
+"""The QP hierarchy: the levels of the set-based solver as a cascade of QPs with slacks, never infeasible.
+
+Level k (highest first) solves, over the solved velocity x (n,) and its slacks w (m_k,):
+
+    minimize    1/2 |E_k x - r_k|^2 + 1/2 |w|^2 + 1/2 rho |x|^2_W
+    subject to  G_k x + w >= b_k,  w >= 0                    its inequality objectives, relaxed by w
+                the rows of every level above at their optimum (equality rows at J x*, inequality rows
+                with their optimal slack), up to a tolerance
+                lower <= v <= upper                            the hard bounds
+
+with E_k, r_k the equality tasks' rows and commands (xdot_d + K e) and G_k x >= b_k the valid sets of
+the inequality objectives as velocity dampers (:meth:`~uvms.tasks.objectives.InequalityRows.constraint`).
+The hard bounds are the speed limits and the joint-limit objectives' valid sets turned into rate bounds
+over one step, clipped into the speed limits (:func:`~uvms.solvers.saturation.velocity_box`), so the box
+is never empty and a joint started outside its valid set comes back at the allowed speed. A free-floating
+vehicle's speed limits are rows of the arm velocity (v_b = T_b qdot_arm); they get a slacked level of
+their own above the others. Every level is feasible (its slacks absorb its inequalities, and the solution
+of the level above meets the rest); a level whose QP fails keeps that solution and says so in
+``solver_status``. The QPs go through qpsolvers (DAQP, else ProxQP).
+
+This is the optimization family of pink/mink with strict priorities (Kanoun et al. 2011, Escande et al.
+2014 style), here on the same levels as :func:`~uvms.solvers.set_based.set_based_velocity`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..robot import Robot
+from ..state import KinematicState
+from ..tasks.objectives import JointLimits, VelocityLimit
+from .checks import check_scalar, check_weights
+from .inverses import SolverInputError, smallest_singular_value
+from .results import HQPResult, StepResult
+from .saturation import speed_maximum, velocity_box
+from .set_based import (Hierarchy, LevelRows, Levels, build_hierarchy, integrate_velocity, objective_statuses,
+                        rate_bounds, speed_ratio, task_report)
+
+#: QP solvers tried, in order, when none is named.
+PREFERRED_SOLVERS = ("daqp", "proxqp")
+#: Retries of a solver whose QP failed: DAQP with proximal-point iterations copes with the degenerate
+#: feasible sets a cascade produces (a level pinned to a vertex of the box by the optimum above).
+RETRY_OPTIONS = {"daqp": {"eps_prox": 1e-6}}
+#: Looser keep tolerances tried when a level's QP fails at KEEP_TOLERANCE.
+LOOSER_KEEP_TOLERANCES = (1e-6, 1e-4)
+#: Tolerance [same units as the rows] with which the rows of the levels above are kept at their optimum.
+KEEP_TOLERANCE = 1e-9
+#: Tolerance within which a constraint row counts as binding.
+BINDING_TOLERANCE = 1e-7
+
+
+@dataclass
+class Cascade:
+    """The rows G x <= h that keep the levels solved at their optimum, and the current solution x (n,)."""
+
+    size: int
+    lower: np.ndarray
+    upper: np.ndarray
+    x: np.ndarray
+    rows: list[np.ndarray] = field(default_factory=list)
+    bounds: list[np.ndarray] = field(default_factory=list)
+
+    def keep_equalities(self, jacobian: np.ndarray) -> None:
+        """Keep J x at its value J x*."""
+        achieved = jacobian @ self.x
+        self.rows += [jacobian, -jacobian]
+        self.bounds += [achieved, -achieved]
+
+    def keep_inequalities(self, rows: np.ndarray, bounds: np.ndarray, slacks: np.ndarray) -> None:
+        """Keep G x >= b - w* (w* the optimal slacks), or G x* where the solver left x* a little short of it."""
+        kept = np.minimum(bounds - slacks, rows @ self.x)  # x* itself stays feasible
+        self.rows.append(-rows)
+        self.bounds.append(-kept)
+
+    def matrices(self, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+        """(G, h) with every kept row loosened by tolerance (1 + |h|)."""
+        if not self.rows:
+            return np.zeros((0, self.size)), np.zeros(0)
+        bounds = np.concatenate(self.bounds)
+        return np.vstack(self.rows), bounds + tolerance * (1.0 + np.abs(bounds))
+
+
+def qp_solver(name: str | None) -> str:
+    """The QP solver to use: ``name`` if qpsolvers has it, else the first of PREFERRED_SOLVERS installed.
+
+    Raises:
+        SolverInputError: qpsolvers missing, or the solver named not installed (the message lists those that are).
+    """
+    try:
+        import qpsolvers
+    except ImportError:  # pragma: no cover - a declared dependency
+        raise SolverInputError("the QP hierarchy needs qpsolvers and a QP solver: "
+                               "pip install 'qpsolvers[daqp]'") from None
+    available = list(qpsolvers.available_solvers)
+    if name is None:
+        for preferred in PREFERRED_SOLVERS:
+            if preferred in available:
+                return preferred
+        raise SolverInputError(f"no QP solver for the hierarchy: install daqp or proxsuite (found {available})")
+    if name not in available:
+        raise SolverInputError(f"QP solver {name!r} is not installed; installed: {', '.join(available) or 'none'}")
+    return name
+
+
+def solve_qp(cost: np.ndarray, linear: np.ndarray, rows: np.ndarray, bounds: np.ndarray, lower: np.ndarray,
+             upper: np.ndarray, solver: str, options: dict | None = None) -> np.ndarray | None:
+    """min 1/2 z^T P z + c^T z s.t. rows z <= bounds, lower <= z <= upper; None when not found."""
+    from qpsolvers import Problem, solve_problem
+
+    problem = Problem(cost, linear, rows if rows.size else None, bounds if rows.size else None, None, None,
+                      lower, upper)
+    try:
+        solution = solve_problem(problem, solver=solver, **(options or {}))
+    except Exception:  # noqa: BLE001 - a solver's failure is reported as a status, never raised
+        return None
+    if not solution.found or solution.x is None or not np.all(np.isfinite(solution.x)):
+        return None
+    return solution.x
+
+
+def level_attempts(solvers: Sequence[str]) -> list[tuple[str, dict, float]]:
+    """(solver, options, keep tolerance) in the order tried: the first solver as is, with its retry options,
+    then with the levels above kept to 1e-6 and 1e-4 (a cascade can pin a level to a vertex of the box,
+    a feasible set a solver may call empty), then the other solvers."""
+    first = solvers[0]
+    attempts = [(first, {}, KEEP_TOLERANCE)]
+    if first in RETRY_OPTIONS:
+        attempts.append((first, RETRY_OPTIONS[first], KEEP_TOLERANCE))
+    attempts += [(first, RETRY_OPTIONS.get(first, {}), tolerance) for tolerance in LOOSER_KEEP_TOLERANCES]
+    return attempts + [(solver, {}, KEEP_TOLERANCE) for solver in solvers[1:]]
+
+
+def solve_level(cascade: Cascade, equality: np.ndarray, command: np.ndarray, inequality: np.ndarray,
+                bound: np.ndarray, weights: np.ndarray, regularization: float,
+                solvers: Sequence[str]) -> tuple[np.ndarray, np.ndarray, str]:
+    """One level's QP over z = [x, w]: (x, w, status); if every attempt fails, the cascade's x is kept."""
+    n, m = cascade.size, inequality.shape[0]
+    cost = np.zeros((n + m, n + m))
+    cost[:n, :n] = equality.T @ equality + regularization * weights
+    cost[n:, n:] = np.eye(m)
+    linear = np.concatenate([-equality.T @ command, np.zeros(m)])
+    lower = np.concatenate([cascade.lower, np.zeros(m)])
+    upper = np.concatenate([cascade.upper, np.full(m, np.inf)])
+    for index, (solver, options, tolerance) in enumerate(level_attempts(solvers)):
+        kept_rows, kept_bounds = cascade.matrices(tolerance)
+        rows = np.vstack([np.hstack([kept_rows, np.zeros((kept_rows.shape[0], m))]),
+                          np.hstack([-inequality, -np.eye(m)])])
+        z = solve_qp(cost, linear, rows, np.concatenate([kept_bounds, -bound]), lower, upper, solver, options)
+        if z is not None:  # x* clipped into the box the solver kept to its tolerance: exactly feasible below
+            x = np.clip(z[:n], cascade.lower, cascade.upper)
+            notes = [f"{key}={value}" for key, value in options.items()]
+            notes += [f"levels above kept to {tolerance:g}"] if tolerance > KEEP_TOLERANCE else []
+            how = f" ({solver}{', ' if notes else ''}{', '.join(notes)})" if index else ""
+            return x, np.maximum(bound - inequality @ x, 0.0), f"optimal{how}"
+    return cascade.x, np.maximum(bound - inequality @ cascade.x, 0.0), "failed: kept the solution of the levels above"
+
+
+def level_constraints(hierarchy: Hierarchy, level: LevelRows) -> tuple[np.ndarray, np.ndarray, list[tuple[str, slice]]]:
+    """The level's inequality rows G x >= b in solved columns, and each objective's rows (joint limits are bounds)."""
+    blocks, bounds, spans, start = [], [], [], 0
+    for objective, rows in zip(level.inequalities, level.objectives):
+        if isinstance(objective, JointLimits):
+            continue
+        matrix, bound = rows.constraint()
+        solved = hierarchy.state.generalized(matrix) if hierarchy.free_floating else matrix
+        blocks.append(solved)
+        bounds.append(bound)
+        spans.append((rows.name, slice(start, start + bound.size)))
+        start += bound.size
+    if not blocks:
+        return np.zeros((0, hierarchy.size)), np.zeros(0), spans
+    return np.vstack(blocks), np.concatenate(bounds), spans
+
+
+def vehicle_speed_rows(hierarchy: Hierarchy, lower: np.ndarray,
+                       upper: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Free floating: the vehicle's speed box as rows G x >= b of the arm velocity (finite bounds only)."""
+    if not hierarchy.free_floating:
+        return np.zeros((0, hierarchy.size)), np.zeros(0)
+    n_vehicle = hierarchy.vehicle_map.shape[0]
+    low, high = lower[:n_vehicle], upper[:n_vehicle]
+    finite_low, finite_high = np.isfinite(low), np.isfinite(high)
+    rows = np.vstack([hierarchy.vehicle_map[finite_low], -hierarchy.vehicle_map[finite_high]])
+    return rows, np.concatenate([low[finite_low], -high[finite_high]])
+
+
+def hqp_velocity(
+    robot: Robot,
+    q: np.ndarray | KinematicState,
+    levels: Levels,
+    *,
+    dt: float,
+    gain: float | np.ndarray = 1.0,
+    weights: np.ndarray | None = None,
+    free_floating: bool = False,
+    position_fraction: float = 1.0,
+    regularization: float = 1e-9,
+    solver: str | None = None,
+    speed_limits: Sequence[VelocityLimit] = (),
+) -> HQPResult:
+    """One velocity of the QP hierarchy over the levels of :func:`~uvms.solvers.set_based.set_based_velocity`.
+
+    Args:
+        robot: the model.
+        q: configuration (nq,) or a KinematicState computed at it.
+        levels: highest priority first; each level a Task, an Inequality, or a list of them (speed limits
+            anywhere). Joint-limit objectives are hard bounds; the other inequalities are slacked rows of
+            their level.
+        dt: step [s] > 0 over which position limits become rate bounds.
+        gain: K of the equality tasks [1/s].
+        weights: W of the solved columns (n,) or (n, n), used by the regularization.
+        free_floating: solve the arm only, the vehicle passive (generalized Jacobians).
+        position_fraction: the part of the distance to a limit one step may cover, in (0, 1].
+        regularization: rho >= 0, weight of |x|^2_W in every level (a unique solution) [-].
+        solver: a qpsolvers solver name; default DAQP, then ProxQP (the other tried when one fails).
+        speed_limits: more speed limits (besides those in the levels).
+
+    Returns:
+        HQPResult: v (nv,), the objectives (active = a constraint binding or relaxed), ``solver_status``
+        and ``slacks`` per level.
+    """
+    dt = check_scalar(dt, "dt", positive=True)
+    fraction = check_scalar(position_fraction, "position_fraction", positive=True)
+    if fraction > 1:
+        raise SolverInputError(f"position_fraction must be in (0, 1], got {position_fraction!r}")
+    regularization = check_scalar(regularization, "regularization")
+    first = qp_solver(solver)
+    solvers = [first] + [s for s in PREFERRED_SOLVERS if s != first and s in _installed()]
+    hierarchy = build_hierarchy(robot, q, levels, gain, free_floating, speed_limits)
+    size = hierarchy.size
+    weight_matrix = _weight_matrix(weights, size)
+    maximum = speed_maximum(robot.nv, hierarchy.speed_limits)
+    rate_lower, rate_upper = rate_bounds(hierarchy, dt, fraction, valid_set=True)
+    lower, upper = velocity_box(maximum, rate_lower, rate_upper)
+    arm = slice(robot.n_vehicle, robot.nv) if free_floating else slice(0, robot.nv)
+    cascade = Cascade(size=size, lower=lower[arm], upper=upper[arm], x=np.clip(np.zeros(size), lower[arm], upper[arm]))
+    statuses, slacks, binding = [], [], {}
+    vehicle_rows, vehicle_bounds = vehicle_speed_rows(hierarchy, lower, upper)
+    if vehicle_bounds.size:
+        x, w, status = solve_level(cascade, np.zeros((0, size)), np.zeros(0), vehicle_rows, vehicle_bounds,
+                                   weight_matrix, regularization, solvers)
+        cascade.x = x
+        cascade.keep_inequalities(vehicle_rows, vehicle_bounds, w)
+    for level in hierarchy.levels:
+        equality = level.solved[: level.task_error.size] if level.has_tasks else np.zeros((0, size))
+        command = level.task_command if level.has_tasks else np.zeros(0)
+        inequality, bound, spans = level_constraints(hierarchy, level)
+        x, w, status = solve_level(cascade, equality, command, inequality, bound, weight_matrix, regularization,
+                                   solvers)
+        cascade.x = x
+        cascade.keep_equalities(equality)
+        cascade.keep_inequalities(inequality, bound, w)
+        statuses.append(status)
+        slacks.append(float(np.linalg.norm(w)))
+        margin = inequality @ x - bound
+        for name, span in spans:
+            binding[name] = bool(np.any(margin[span] <= BINDING_TOLERANCE) or np.any(w[span] > BINDING_TOLERANCE))
+    v = hierarchy.velocity(cascade.x)
+    binding.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
+    command, error, residual, level_residuals = task_report(hierarchy, v)
+    task_levels = [level for level in hierarchy.levels if level.has_tasks]
+    sigma = smallest_singular_value(task_levels[-1].solved[: task_levels[-1].task_error.size]) if task_levels else 0.0
+    return HQPResult(v=v, objectives=objective_statuses(hierarchy, binding), command=command, error=error,
+                     residual=residual, level_residuals=level_residuals, sigma_min=sigma,
+                     scales=(1.0,) * len(hierarchy.levels), speed_ratio=speed_ratio(v, maximum),
+                     free_floating=free_floating, solver_status=tuple(statuses), slacks=tuple(slacks), solver=first)
+
+
+def joint_limits_binding(hierarchy: Hierarchy, v: np.ndarray, rate_lower: np.ndarray, rate_upper: np.ndarray,
+                         maximum: np.ndarray) -> dict[str, bool]:
+    """Per joint-limit objective: some joint's velocity sits on a rate bound tighter than its speed limit."""
+    result = {}
+    for objective in hierarchy.joint_limits:
+        index = objective.v_index
+        low = (rate_lower[index] > -maximum[index]) & (v[index] <= rate_lower[index] + BINDING_TOLERANCE)
+        high = (rate_upper[index] < maximum[index]) & (v[index] >= rate_upper[index] - BINDING_TOLERANCE)
+        result[objective.name] = bool(np.any(low | high))
+    return result
+
+
+def _installed() -> list[str]:
+    import qpsolvers
+
+    return list(qpsolvers.available_solvers)
+
+
+def _weight_matrix(weights: np.ndarray | None, size: int) -> np.ndarray:
+    if weights is None:
+        return np.eye(size)
+    weights = check_weights(weights, size)
+    return np.diag(weights) if weights.ndim == 1 else weights
+
+
+def hqp_step(robot: Robot, q: np.ndarray, levels: Levels, dt: float, **options) -> StepResult:
+    """One explicit-Euler step of the QP hierarchy: q+ = integrate(q, v dt); ``options`` of :func:`hqp_velocity`."""
+    velocity = hqp_velocity(robot, q, levels, dt=dt, **options)
+    return StepResult(q=integrate_velocity(robot, q, velocity.v, dt), velocity=velocity)

@@ -1,0 +1,82 @@
+"""Inequality objectives: a valid set instead of a target, with a smooth activation at its border.
+
+* :class:`JointLimits` — arm joint positions, ``margin`` inside the model's limits;
+* :class:`VehicleAttitude` — the vehicle's tilt (roll and pitch) below ``max_tilt``;
+* :class:`PlaneClearance` — a frame or the vehicle at least ``min`` from a plane (seabed, wall);
+* :class:`Manipulability` — the arm's manipulability at a frame above ``min``;
+* :class:`FrameBox` — a frame inside a box;
+* :class:`JointVelocityLimits`, :class:`VehicleVelocityLimits` — speed limits, bounds of the solvers.
+
+:func:`inequalities_from_table` builds them from plain parameters (a scenario's ``[[inequalities]]`` table),
+checking the type and every key against the valid ones.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping
+
+from ...errors import ObjectiveError, ObjectiveNameNotFound
+from ...robot import Robot
+from .base import ACTIVATION_SHAPES, Inequality, InequalityRows, bell
+from .frames import FrameBox, PlaneClearance, VehicleAttitude
+from .joints import JointLimits
+from .manipulability import Manipulability
+from .velocity import JointVelocityLimits, VehicleVelocityLimits, VelocityLimit, velocity_limits
+
+#: A scenario's inequality ``type`` -> the constructor its other keys are passed to (as keywords).
+INEQUALITY_TYPES: dict[str, Callable[..., object]] = {
+    "joint_limits": JointLimits,
+    "joint_velocity": velocity_limits,
+    "vehicle_attitude": VehicleAttitude,
+    "plane_clearance": PlaneClearance,
+    "manipulability": Manipulability,
+    "frame_box": FrameBox,
+}
+
+Objective = Inequality | VelocityLimit
+
+
+def table_keys(type_name: str) -> tuple[list[str], list[str]]:
+    """(every key, the required ones) of an inequality type, from its constructor's signature."""
+    parameters = list(inspect.signature(INEQUALITY_TYPES[type_name]).parameters.values())[1:]  # after robot
+    keys = [p.name for p in parameters]
+    return keys, [p.name for p in parameters if p.default is inspect.Parameter.empty]
+
+
+def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[Objective]:
+    """The objective(s) of one ``[[inequalities]]`` table: ``type`` plus its constructor's keywords.
+
+    Args:
+        robot: the model.
+        table: {"type": one of :data:`INEQUALITY_TYPES`, key: value...}, e.g.
+            {"type": "plane_clearance", "frame": "vehicle", "point": [0, 0, -10], "normal": [0, 0, 1], "min": 0.5}.
+
+    Returns:
+        A list: one objective, or two for a ``joint_velocity`` table with ``vehicle_max``.
+
+    Raises:
+        ObjectiveNameNotFound: an unknown type or key (the message lists the close ones).
+        ObjectiveError: a required key missing, or an invalid value.
+    """
+    params = dict(table)
+    type_name = params.pop("type", None)
+    if not isinstance(type_name, str) or type_name not in INEQUALITY_TYPES:
+        raise ObjectiveNameNotFound("inequality type", str(type_name), list(INEQUALITY_TYPES), where="inequalities")
+    keys, required = table_keys(type_name)
+    for key in params:
+        if key not in keys:
+            raise ObjectiveNameNotFound(f"key of a {type_name} inequality", key, keys, where="inequalities")
+    missing = [key for key in required if key not in params]
+    if missing:
+        raise ObjectiveError(f"inequalities: a {type_name} inequality needs {', '.join(missing)} "
+                             f"(keys: {', '.join(keys)})")
+    built = INEQUALITY_TYPES[type_name](robot, **params)
+    return list(built) if isinstance(built, list) else [built]  # type: ignore[list-item]
+
+
+__all__ = [
+    "ACTIVATION_SHAPES", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
+    "JointVelocityLimits", "Manipulability", "Objective", "PlaneClearance", "VehicleAttitude",
+    "VehicleVelocityLimits", "VelocityLimit", "bell", "inequalities_from_table", "table_keys", "velocity_limits",
+]

@@ -1,0 +1,194 @@
+"""The inequality objective: a valid set lower <= x(q) <= upper instead of a target, and its activation.
+
+An inequality objective (Simetti & Casalino's *inequality control objective*) gives, at a configuration,
+its value x(q) (k,), its world-aligned Jacobian (k, nv) with xdot = J v, its valid set (per row a lower
+and/or an upper bound, +-inf where there is none), an activation in [0, 1] per row and a reference rate
+that pushes x back inside:
+
+* activation: 0 deeper inside the valid set than ``band``, rising smoothly across the band to 1 at the
+  border and staying 1 outside. The default ``"cosine"`` shape is the iCAT bell
+  a(s) = (1 + cos(pi s)) / 2, s = (distance inside the border) / band, which is C1 (zero slope at both
+  ends of the band); ``"step"`` (1 anywhere inside the band or beyond, else 0) is the hard switch that
+  the smooth shape is compared with.
+* reference: xdot_ref = gain (x* - x), x* the inner edge of the band (where the activation is 0) on the
+  side of the nearer bound.
+
+The solvers read all of it at once through :meth:`Inequality.rows` (an :class:`InequalityRows`).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ...errors import ObjectiveError
+from ...robot import Robot
+from ...state import KinematicState
+
+#: Shapes of the activation across the band.
+ACTIVATION_SHAPES = ("cosine", "step")
+
+
+def bell(depth: np.ndarray, band: np.ndarray, shape: str = "cosine") -> np.ndarray:
+    """Activation (k,) in [0, 1] of rows ``depth`` [units of x] inside their border, over ``band`` (k,) > 0.
+
+    depth <= 0 (on or outside the border): 1; depth >= band: 0; between: (1 + cos(pi depth / band)) / 2
+    (``"cosine"``, C1) or 1 (``"step"``).
+    """
+    s = np.asarray(depth, dtype=float) / band
+    if shape == "step":
+        return np.where(s < 1.0, 1.0, 0.0)
+    return np.where(s <= 0.0, 1.0, np.where(s >= 1.0, 0.0, 0.5 * (1.0 + np.cos(np.pi * np.clip(s, 0.0, 1.0)))))
+
+
+@dataclass(frozen=True)
+class InequalityRows:
+    """An inequality objective evaluated at one configuration.
+
+    Attributes:
+        name: the objective's name (as results report it).
+        value: x(q) (k,).
+        jacobian: d x / dt = J v, (k, nv) world-aligned, columns in the order of v.
+        lower, upper: the valid set (k,), -inf / +inf where unbounded.
+        activation: (k,) in [0, 1].
+        reference: reference rate xdot_ref (k,) [units of x per s].
+        gain: the reference gain [1/s].
+    """
+
+    name: str
+    value: np.ndarray
+    jacobian: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    activation: np.ndarray
+    reference: np.ndarray
+    gain: float
+
+    @property
+    def violation(self) -> float:
+        """How far x is outside its valid set (>= 0) [units of x]."""
+        outside = np.maximum(self.lower - self.value, self.value - self.upper)
+        return float(max(np.max(outside, initial=0.0), 0.0))
+
+    def constraint(self) -> tuple[np.ndarray, np.ndarray]:
+        """The valid set as velocity constraints G v >= b, G (m, nv), b (m,), one row per finite bound.
+
+        x >= lower becomes J v >= gain (lower - x) and x <= upper becomes -J v >= gain (x - upper):
+        inside the valid set x may approach a bound at a rate proportional to its distance; outside it
+        must come back at that rate (a velocity damper).
+        """
+        low, high = np.isfinite(self.lower), np.isfinite(self.upper)
+        rows = np.vstack([self.jacobian[low], -self.jacobian[high]])
+        bounds = np.concatenate([self.gain * (self.lower[low] - self.value[low]),
+                                 self.gain * (self.value[high] - self.upper[high])])
+        return rows, bounds
+
+
+class Inequality(ABC):
+    """An objective with a valid set lower <= x(q) <= upper (k rows) instead of a target.
+
+    Subclasses set their bounds with :meth:`_set_valid_set` in their constructor and give
+    :meth:`value` and :meth:`jacobian`.
+
+    Attributes:
+        name: how results name it.
+        dim: number of rows k.
+        lower, upper: the valid set (k,), +-inf where unbounded.
+        band: width (k,) > 0 of the activation band inside each bound [units of x].
+        gain: reference gain [1/s] > 0.
+        shape: "cosine" (iCAT bell, C1) or "step" (hard switch, for comparison).
+    """
+
+    name: str
+    dim: int
+    lower: np.ndarray
+    upper: np.ndarray
+    band: np.ndarray
+    gain: float
+    shape: str
+
+    def _set_valid_set(self, lower: np.ndarray, upper: np.ndarray, band: float | np.ndarray, gain: float,
+                       shape: str) -> None:
+        """Check and store the valid set, the band, the gain and the activation shape."""
+        lower, upper = np.asarray(lower, dtype=float).reshape(-1), np.asarray(upper, dtype=float).reshape(-1)
+        band = np.broadcast_to(np.asarray(band, dtype=float), lower.shape).astype(float)
+        if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower >= upper):
+            raise ObjectiveError(f"{self.name}: the valid set needs lower < upper, got {lower} and {upper}")
+        if not np.all(np.isfinite(lower) | np.isfinite(upper)):
+            raise ObjectiveError(f"{self.name}: every row needs a finite lower or upper bound, got {lower} and {upper}")
+        if not np.all(np.isfinite(band)) or np.any(band <= 0):
+            raise ObjectiveError(f"{self.name}: the activation band must be finite and > 0, got {band}")
+        two_sided = np.isfinite(lower) & np.isfinite(upper)
+        if np.any(2 * band[two_sided] > (upper - lower)[two_sided]):
+            raise ObjectiveError(f"{self.name}: the band {band} is wider than half the valid set "
+                                 f"[{lower}, {upper}]; take a band below half its width")
+        if not (np.isfinite(gain) and gain > 0):
+            raise ObjectiveError(f"{self.name}: the reference gain must be finite and > 0 [1/s], got {gain!r}")
+        if shape not in ACTIVATION_SHAPES:
+            raise ObjectiveError(f"{self.name}: unknown activation shape {shape!r}; valid: "
+                                 f"{', '.join(ACTIVATION_SHAPES)}")
+        self.lower, self.upper, self.band, self.gain, self.shape = lower, upper, band, float(gain), shape
+        self.dim = lower.size
+
+    @abstractmethod
+    def value(self, state: KinematicState) -> np.ndarray:
+        """x(q) (k,)."""
+
+    @abstractmethod
+    def jacobian(self, state: KinematicState) -> np.ndarray:
+        """dx/dt = J v: (k, nv), world-aligned."""
+
+    def _near_lower(self, value: np.ndarray) -> np.ndarray:
+        """(k,) bool: the lower bound is the nearer one (or the only one)."""
+        return (value - self.lower) <= (self.upper - value)
+
+    def activation(self, value: np.ndarray) -> np.ndarray:
+        """Activation (k,) in [0, 1] at x = ``value`` (k,): the larger of the two sides' bells."""
+        with np.errstate(invalid="ignore"):
+            low = bell(value - self.lower, self.band, self.shape)
+            high = bell(self.upper - value, self.band, self.shape)
+        return np.maximum(np.nan_to_num(low), np.nan_to_num(high))
+
+    def reference(self, value: np.ndarray) -> np.ndarray:
+        """Reference rate (k,): gain (x* - x), x* = lower + band or upper - band (the nearer side)."""
+        target = np.where(self._near_lower(value), self.lower + self.band, self.upper - self.band)
+        return self.gain * (target - value)
+
+    def rows(self, state: KinematicState) -> InequalityRows:
+        """Everything a solver reads, at ``state``."""
+        value = self.value(state)
+        return InequalityRows(name=self.name, value=value, jacobian=self.jacobian(state), lower=self.lower,
+                              upper=self.upper, activation=self.activation(value), reference=self.reference(value),
+                              gain=self.gain)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name!r}, dim={self.dim})"
+
+
+def vehicle_frame_id(robot: Robot, what: str) -> int:
+    """The frame of the vehicle body (the body its floating/planar joint carries).
+
+    Raises:
+        ObjectiveError: a fixed base (no vehicle).
+    """
+    if robot.base_type == "fixed":
+        raise ObjectiveError(f"{what} needs a vehicle, but {robot.name} has a fixed base; load it with "
+                             f"base='floating' or 'planar', or name a frame")
+    for index, frame in enumerate(robot.model.frames):
+        if frame.parentJoint == 1 and frame.type == pin.FrameType.BODY:
+            return index
+    return robot.model.getFrameId(robot.model.names[1])
+
+
+def finite_number(value: object, what: str, *, positive: bool = False) -> float:
+    """A finite float (> 0 when ``positive``), else ObjectiveError naming ``what``."""
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ObjectiveError(f"{what} must be a number, got {value!r}") from None
+    if isinstance(value, bool) or not np.isfinite(number) or (positive and number <= 0):
+        raise ObjectiveError(f"{what} must be a finite number{' > 0' if positive else ''}, got {value!r}")
+    return number

@@ -1,0 +1,136 @@
+"""Geometric inequality objectives: vehicle tilt, clearance from a plane, a frame inside a box."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ...errors import FrameNotFound, ObjectiveError
+from ...robot import Robot
+from ...state import KinematicState
+from ...validate import finite_array
+from .base import Inequality, finite_number, vehicle_frame_id
+
+#: Below this tilt [rad] the tilt's gradient is undefined (a cone's apex); the Jacobian row is taken as 0.
+LEVEL_TILT = 1e-9
+
+
+class VehicleAttitude(Inequality):
+    """Keep the vehicle level: tilt <= max_tilt, tilt = the angle between the vehicle's z axis and world z.
+
+    The tilt combines roll and pitch (cos tilt = cos roll cos pitch, yaw free). With z_b the body z axis
+    in world axes and omega the vehicle's angular velocity (world axes, from Pinocchio's world-aligned
+    Jacobian of the vehicle body frame), d tilt/dt = -u . omega, u = (z_b x e_z) / |z_b x e_z|.
+    At tilt = 0 the gradient is undefined and taken as 0 (the objective is inactive there).
+
+    Args:
+        robot: a model with a floating base (a planar vehicle cannot tilt).
+        max_tilt: the largest tilt allowed [rad], in (0, pi/2].
+        band: activation band [rad] > 0, at most max_tilt (default max_tilt / 2).
+        gain: reference gain [1/s].
+        shape: activation shape, "cosine" or "step".
+        name: the name results report.
+    """
+
+    def __init__(self, robot: Robot, max_tilt: float, band: float | None = None, gain: float = 1.0,
+                 shape: str = "cosine", name: str = "vehicle_attitude") -> None:
+        self.name = name
+        if robot.base_type != "floating":
+            raise ObjectiveError(f"{name}: needs a floating base, {robot.name} has a {robot.base_type} one "
+                                 f"(a planar vehicle cannot tilt)")
+        self.frame_id = vehicle_frame_id(robot, name)
+        max_tilt = finite_number(max_tilt, f"{name}: max_tilt", positive=True)
+        if max_tilt > np.pi / 2:
+            raise ObjectiveError(f"{name}: max_tilt must be in (0, pi/2] [rad], got {max_tilt!r}")
+        band = 0.5 * max_tilt if band is None else finite_number(band, f"{name}: band", positive=True)
+        if band > max_tilt:
+            raise ObjectiveError(f"{name}: band {band} must not exceed max_tilt {max_tilt} [rad]")
+        self.max_tilt = max_tilt
+        self._set_valid_set([-np.inf], [max_tilt], band, gain, shape)
+
+    def value(self, state: KinematicState) -> np.ndarray:
+        z_axis = state.pose(self.frame_id).rotation[:, 2]
+        return np.array([np.arccos(np.clip(z_axis[2], -1.0, 1.0))])
+
+    def jacobian(self, state: KinematicState) -> np.ndarray:
+        z_axis = state.pose(self.frame_id).rotation[:, 2]
+        axis = np.cross(z_axis, [0.0, 0.0, 1.0])  # |axis| = sin(tilt)
+        length = np.linalg.norm(axis)
+        if length < LEVEL_TILT:
+            return np.zeros((1, state.robot.nv))
+        return -((axis / length) @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
+
+
+class PlaneClearance(Inequality):
+    """A frame (or the vehicle) at least ``min`` from a plane: n . (p - p0) >= min (1 row).
+
+    Args:
+        robot: the model.
+        frame: a frame name, or "vehicle" for the vehicle body (floating or planar base).
+        point: a point p0 of the plane (3,) [m], world.
+        normal: the plane's normal n (3,) (normalized here), pointing to the allowed side.
+        min: the smallest signed distance allowed [m].
+        band: activation band [m] > 0.
+        gain: reference gain [1/s].
+        shape: activation shape, "cosine" or "step".
+        name: the name results report (default ``plane_clearance(<frame>)``).
+    """
+
+    def __init__(self, robot: Robot, frame: str, point: Sequence[float], normal: Sequence[float],
+                 min: float = 0.0, band: float = 0.2, gain: float = 1.0, shape: str = "cosine",  # noqa: A002
+                 name: str | None = None) -> None:
+        self.name = name or f"plane_clearance({frame})"
+        self.frame = frame
+        if frame == "vehicle":
+            self.frame_id = vehicle_frame_id(robot, f"{self.name} of 'vehicle'")
+        elif isinstance(frame, str) and robot.model.existFrame(frame):
+            self.frame_id = robot.frame_id(frame)
+        else:
+            raise FrameNotFound(str(frame), ["vehicle", *robot.frame_names], first=["vehicle"])
+        self.point = finite_array(point, f"{self.name}: point", (3,), error=ObjectiveError, unit=" [m]")
+        normal = finite_array(normal, f"{self.name}: normal", (3,), error=ObjectiveError)
+        length = np.linalg.norm(normal)
+        if length < 1e-12:
+            raise ObjectiveError(f"{self.name}: the normal must be a non-zero vector, got {normal.tolist()}")
+        self.normal = normal / length
+        self.min = finite_number(min, f"{self.name}: min")
+        self._set_valid_set([self.min], [np.inf], finite_number(band, f"{self.name}: band", positive=True),
+                            gain, shape)
+
+    def value(self, state: KinematicState) -> np.ndarray:
+        return np.array([self.normal @ (state.pose(self.frame_id).translation - self.point)])
+
+    def jacobian(self, state: KinematicState) -> np.ndarray:
+        return (self.normal @ state.jacobian(self.frame_id)[:3])[None, :]
+
+
+class FrameBox(Inequality):
+    """A frame's position inside a box lower <= p <= upper (3 rows, world axes) [m].
+
+    Args:
+        robot: the model.
+        frame: a frame name (default: the first end effector).
+        lower, upper: the box corners (3,) [m], -inf / +inf for an open side.
+        band: activation band [m] > 0, below half of each finite side.
+        gain: reference gain [1/s].
+        shape: activation shape, "cosine" or "step".
+        name: the name results report (default ``frame_box(<frame>)``).
+    """
+
+    def __init__(self, robot: Robot, frame: str | None = None, lower: Sequence[float] = (-np.inf,) * 3,
+                 upper: Sequence[float] = (np.inf,) * 3, band: float = 0.1, gain: float = 1.0,
+                 shape: str = "cosine", name: str | None = None) -> None:
+        self.frame = frame or robot.ee_frames[0]
+        self.name = name or f"frame_box({self.frame})"
+        self.frame_id = robot.frame_id(frame)
+        box = [np.asarray(corner, dtype=float) for corner in (lower, upper)]
+        if any(corner.shape != (3,) for corner in box):
+            raise ObjectiveError(f"{self.name}: lower and upper must be 3 numbers [m] each, got {lower!r}, {upper!r}")
+        self._set_valid_set(box[0], box[1], finite_number(band, f"{self.name}: band", positive=True), gain, shape)
+
+    def value(self, state: KinematicState) -> np.ndarray:
+        return state.pose(self.frame_id).translation.copy()
+
+    def jacobian(self, state: KinematicState) -> np.ndarray:
+        return state.jacobian(self.frame_id)[:3]

@@ -1,0 +1,111 @@
+"""Joint position limits as an inequality objective (one row per limited arm coordinate)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from ...errors import ObjectiveError, ObjectiveNameNotFound
+from ...limits import Limit
+from ...robot import Robot
+from ...state import KinematicState
+from .base import Inequality, finite_number
+
+#: The band is capped at this fraction of each joint's valid range (a narrow jaw next to wide joints).
+BAND_FRACTION_CAP = 0.25
+
+
+class JointLimits(Inequality):
+    """Arm joints within their position limits, ``margin`` inside them, activated across ``band``.
+
+    Rows: the arm coordinates with finite limits whose value q holds itself (continuous joints, stored as
+    (cos, sin), have none). x = q_i, J = the unit row of v_i. The valid set is
+    [q_min + margin, q_max - margin]; the activation rises from 0 at ``band`` inside it to 1 at its border.
+    The set-based solver also keeps the hard limits (q_min, q_max) by saturation; the QP hierarchy turns
+    the valid set into hard velocity bounds.
+
+    Args:
+        robot: the model.
+        margin: distance kept from each limit [rad or m], >= 0: one for every joint, or {joint name: margin}
+            (joints not named keep 0), e.g. when revolute joints and a narrow prismatic jaw are limited together.
+        band: activation band [rad or m] > 0, capped for each joint at a quarter of its valid range (the
+            jaw of the Alpha 5 spans 0.015 m next to joints of several rad).
+        gain: reference gain [1/s].
+        joints: names of the joints to limit (default: every arm joint with finite limits).
+        limit: position limits of the n_arm arm coordinates (default ``Limit.joint_positions(robot)``).
+        shape: activation shape, "cosine" or "step".
+        name: the name results report.
+
+    Attributes:
+        names: joint of each row (k,); v_index, q_index: its index in v and in q (k,).
+        hard_lower, hard_upper: the limits before the margin (k,).
+    """
+
+    def __init__(self, robot: Robot, margin: float | Mapping[str, float] = 0.0, band: float = 0.2, gain: float = 1.0,
+                 joints: Sequence[str] | None = None, limit: Limit | None = None, shape: str = "cosine",
+                 name: str = "joint_limits") -> None:
+        self.name = name
+        self.robot = robot
+        limit = Limit.joint_positions(robot) if limit is None else limit
+        if limit.size != robot.n_arm or limit.kind != "position":
+            raise ObjectiveError(f"{name}: needs position limits of the {robot.n_arm} arm coordinates, got "
+                                 f"{limit.size} {limit.kind} limits")
+        rows = self._selected_rows(robot, limit, joints)
+        margin = self._margins(margin, [limit.names[i] for i in rows], name)
+        too_narrow = [f"{limit.names[i]} [{limit.lower[i]:g}, {limit.upper[i]:g}]" for i, m in zip(rows, margin)
+                      if limit.upper[i] - limit.lower[i] <= 2 * m]
+        if too_narrow:
+            raise ObjectiveError(f"{name}: the margin leaves no room inside the limits of {', '.join(too_narrow)}; "
+                                 f"give a smaller one, one per joint {{joint: margin}}, or leave them out (joints=)")
+        self.names = tuple(limit.names[i] for i in rows)
+        self.q_index = limit.q_index[rows]
+        self.v_index = robot.n_vehicle + rows
+        self.hard_lower, self.hard_upper = limit.lower[rows], limit.upper[rows]
+        lower, upper = self.hard_lower + margin, self.hard_upper - margin
+        band = finite_number(band, f"{name}: band", positive=True)
+        self.margin = margin
+        self._set_valid_set(lower, upper, np.minimum(band, BAND_FRACTION_CAP * (upper - lower)), gain, shape)
+        self._jacobian = np.zeros((self.dim, robot.nv))
+        self._jacobian[np.arange(self.dim), self.v_index] = 1.0
+
+    @staticmethod
+    def _margins(margin: float | Mapping[str, float], names: list[str], where: str) -> np.ndarray:
+        """The margin of each row (k,) >= 0 from one number or {joint name: margin}."""
+        if isinstance(margin, Mapping):
+            for joint in margin:
+                if joint not in names:
+                    raise ObjectiveNameNotFound("limited joint", str(joint), sorted(set(names)), where=where)
+            values = np.array([finite_number(margin.get(joint, 0.0), f"{where}: margin of {joint}") for joint in names])
+        else:
+            values = np.full(len(names), finite_number(margin, f"{where}: margin"))
+        if np.any(values < 0):
+            raise ObjectiveError(f"{where}: margins must be >= 0 [rad or m], got {margin!r}")
+        return values
+
+    @staticmethod
+    def _selected_rows(robot: Robot, limit: Limit, joints: Sequence[str] | None) -> np.ndarray:
+        """Indices of the arm coordinates limited: bounded, held in q, and among ``joints`` if given."""
+        usable = limit.bounded & (limit.q_index >= 0)
+        if joints is None:
+            rows = np.flatnonzero(usable)
+            if rows.size == 0:
+                raise ObjectiveError(f"{robot.name} has no arm joint with finite position limits")
+            return rows
+        if isinstance(joints, str):
+            joints = [joints]
+        rows = []
+        for joint in joints:
+            robot.joint(joint)  # JointNotFound with the close names
+            found = [i for i, owner in enumerate(limit.names) if owner == joint and usable[i]]
+            if not found:
+                raise ObjectiveError(f"joint {joint!r} is not an arm joint with finite position limits; those "
+                                     f"are: {', '.join(sorted({limit.names[i] for i in np.flatnonzero(usable)}))}")
+            rows.extend(found)
+        return np.array(sorted(set(rows)), dtype=int)
+
+    def value(self, state: KinematicState) -> np.ndarray:
+        return state.q[self.q_index]
+
+    def jacobian(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - constant
+        return self._jacobian

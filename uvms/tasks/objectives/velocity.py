@@ -1,0 +1,121 @@
+"""Joint and vehicle speed limits |v_i| <= max_i: bounds of the solvers, not tasks.
+
+The set-based solver meets them by scaling the lowest-priority contributions first
+(:mod:`uvms.solvers.saturation`); the QP hierarchy by hard bounds. Place them anywhere in the levels
+(their level does not matter) or pass them on their own.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from ...errors import ObjectiveError, ObjectiveNameNotFound
+from ...limits import Limit
+from ...robot import Robot
+
+
+class VelocityLimit:
+    """A box |v_i| <= maximum_i on the entries of v.
+
+    Attributes:
+        name: how results name it.
+        maximum: (nv,) [m/s, rad/s] > 0, +inf on the entries it does not limit (vehicle entries in the
+            vehicle's local axes, the order of v).
+    """
+
+    name: str
+    maximum: np.ndarray
+
+    def _set_maximum(self, robot: Robot, entries: np.ndarray, values: np.ndarray) -> None:
+        if values.shape != entries.shape or np.any(np.isnan(values)) or np.any(values <= 0):
+            raise ObjectiveError(f"{self.name}: speed limits must be numbers > 0 (inf: none), got {values}")
+        self.maximum = np.full(robot.nv, np.inf)
+        self.maximum[entries] = values
+
+    def __repr__(self) -> str:
+        limited = np.isfinite(self.maximum)
+        return f"{type(self).__name__}({self.name!r}, {int(limited.sum())} entries limited)"
+
+
+def _numbers(value: object, what: str) -> np.ndarray:
+    """``value`` as a float array, else ObjectiveError naming ``what``."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ObjectiveError(f"{what} must be numbers [m/s or rad/s], got {value!r}") from None
+
+
+def _by_name(values: Mapping[str, float], names: Sequence[str], kind: str, where: str) -> np.ndarray:
+    """A per-entry array from {name: value}; names checked with the close ones; unnamed entries +inf."""
+    array = np.full(len(names), np.inf)
+    for key, value in values.items():
+        if key not in names:
+            raise ObjectiveNameNotFound(kind, str(key), names, where=where)
+        array[list(names).index(key)] = _numbers(value, f"{where}: {key}")
+    return array
+
+
+class JointVelocityLimits(VelocityLimit):
+    """|qdot_i| <= max_i on the arm joints [rad/s or m/s].
+
+    Args:
+        robot: the model.
+        max: None (the model's ``<limit velocity>``; 0 there means none), one number for every arm joint,
+            n_arm numbers, or {joint name: value}.
+        name: the name results report.
+    """
+
+    def __init__(self, robot: Robot, max: float | Sequence[float] | Mapping[str, float] | None = None,  # noqa: A002
+                 name: str = "joint_velocity") -> None:
+        self.name = name
+        names = [joint.name for joint in robot.arm_joints for _ in range(joint.nv)]
+        if max is None:
+            values = Limit.joint_velocities(robot).upper
+        elif isinstance(max, Mapping):
+            values = _by_name(max, names, "arm joint", name)
+        else:
+            values = _numbers(max, f"{name}: max")
+            values = np.full(robot.n_arm, float(values)) if values.ndim == 0 else values
+            if values.shape != (robot.n_arm,):
+                raise ObjectiveError(f"{name}: max must be one number or {robot.n_arm} (one per arm joint: "
+                                     f"{', '.join(names)}), got {max!r}")
+        self._set_maximum(robot, np.arange(robot.n_vehicle, robot.nv), values)
+
+
+class VehicleVelocityLimits(VelocityLimit):
+    """|nu_i| <= max_i on the vehicle twist (body axes, the vehicle entries of v) [m/s, rad/s].
+
+    Args:
+        robot: a model with a floating or planar base.
+        max: [linear m/s, angular rad/s] (two numbers), one per vehicle entry (``robot.base.velocity_names``:
+            vx, vy, vz, wx, wy, wz or vx, vy, wz), or {entry name: value}.
+        name: the name results report.
+    """
+
+    def __init__(self, robot: Robot, max: Sequence[float] | Mapping[str, float],  # noqa: A002
+                 name: str = "vehicle_velocity") -> None:
+        self.name = name
+        if robot.base_type == "fixed":
+            raise ObjectiveError(f"{name}: {robot.name} has a fixed base, it has no vehicle velocity to limit")
+        names = robot.base.velocity_names
+        if isinstance(max, Mapping):
+            values = _by_name(max, names, "vehicle velocity", name)
+        else:
+            values = _numbers(max, f"{name}: max").reshape(-1)
+            if values.size == 2:
+                values = np.array([values[0] if entry.startswith("v") else values[1] for entry in names])
+            elif values.size != len(names):
+                raise ObjectiveError(f"{name}: max must be [linear m/s, angular rad/s] or {len(names)} numbers "
+                                     f"({', '.join(names)}), got {max!r}")
+        self._set_maximum(robot, np.arange(robot.n_vehicle), values)
+
+
+def velocity_limits(robot: Robot, max: float | Sequence[float] | Mapping[str, float] | None = None,  # noqa: A002
+                    vehicle_max: Sequence[float] | Mapping[str, float] | None = None) -> list[VelocityLimit]:
+    """The ``joint_velocity`` table of a scenario: arm joint limits and, if given, vehicle limits."""
+    limits: list[VelocityLimit] = [JointVelocityLimits(robot, max)]
+    if vehicle_max is not None:
+        limits.append(VehicleVelocityLimits(robot, vehicle_max))
+    return limits
