@@ -259,3 +259,25 @@ def test_without_rosbags_the_error_gives_the_install_command(monkeypatch, tmp_pa
     monkeypatch.setitem(sys.modules, "rosbags.rosbag2", None)  # import fails as if not installed
     with pytest.raises(BagExportError, match=r"pip install 'uvms\[ros\]'"):
         write_bag(tmp_path / "bag", robot, result)
+
+
+def test_uvms_run_bag_writes_the_run_beside_its_files(tmp_path):
+    """`uvms run S --bag`: OUT/bag holds one message per sample of trajectory.npz, and the terminal says so."""
+    import json
+    import subprocess
+
+    out = tmp_path / "run"
+    command = [sys.executable, "-m", "uvms.cli", "run", "hoang2011_w1", "--bag", "--quiet", "--out", str(out),
+               "--set", "outputs.figures=false", "--set", "trajectory.duration=10"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    series = np.load(out / "trajectory.npz")
+    samples = len(series["t"])  # 501: 10 s at dt = 0.02 s
+    assert samples == 501
+    assert f"bag         {out / 'bag'}/" in done.stdout and f"/joint_states {samples}," in done.stdout
+    connections, messages = read_bag(out / "bag")
+    assert {"/joint_states", "/odom", "/tf", "/ee/desired_pose", "/robot_description"} <= set(connections)
+    assert len(messages["/joint_states"]) == len(messages["/odom"]) == samples
+    positions = np.array([message.position for _, message in messages["/joint_states"]])
+    assert np.abs(positions - series["q"][:, 4:]).max() <= 1e-12  # planar q = [x, y, cos, sin, q1..q3]
+    assert json.loads((out / "metrics.json").read_text())["bag"]["topics"]["/joint_states"] == samples

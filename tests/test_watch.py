@@ -109,3 +109,20 @@ def test_watch_api_calls_back_on_a_change(tmp_path):
 def test_compare_line():
     assert compare({"arm_travel": 24.6}, {"arm_travel": 26.6, "volume left_ee": 0.9}) == \
         "arm_travel 24.6 → 26.6 rad, volume left_ee 0.9 m^3"
+
+
+def test_a_watched_run_that_warns_says_so_under_its_line(tmp_path):
+    """A good run's terminal warnings (error above tolerance) are not swallowed by --watch."""
+    from uvms.watch import Rerun
+
+    out = tmp_path / "run"
+    lines: list[str] = []
+    rerun = Rerun(["run", "hoang2011_w1", "--out", str(out), "--quiet", "--set", "outputs.figures=false",
+                   "--set", "trajectory.duration=10", "--set", "outputs.position_tolerance=1e-15"], out,
+                  watched=lambda: None, say=lines.append)
+    rerun.start("first run")
+    rerun.process.wait(timeout=120)
+    rerun.poll()
+    assert "first run" in lines[0] and "max_position_error" in lines[0]
+    assert any(line.strip().startswith("uvms: warning: hoang2011_w1:") and "position_tolerance" in line
+               for line in lines[1:]), lines

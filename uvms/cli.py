@@ -89,8 +89,8 @@ def command_run(options: argparse.Namespace) -> int:
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
-    result = run(options.scenario, out=options.out, overrides=options.set or (),
-                 progress=False if options.quiet else None)
+    overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else [])]
+    result = run(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
     print(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)")
@@ -99,6 +99,11 @@ def command_run(options: argparse.Namespace) -> int:
         print(f"  {key:<27} {metrics[key]:.3e}")
     print(f"verdict     {verdict_line(metrics['verdict'])}")
     print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})")
+    if "bag" in metrics:
+        counts = ", ".join(f"{topic} {count}" for topic, count in metrics["bag"]["topics"].items())
+        print(f"bag         {folder / 'bag'}/ ({counts}); replay: ros2 bag play {folder / 'bag'}")
+        for item, reason in metrics["bag"]["skipped"].items():
+            print(f"uvms: note: bag without {item}: {reason}", file=sys.stderr)
     for warning in metrics["verdict"]["warnings"]:  # said on the terminal, not only in metrics.json
         print(f"uvms: warning: {metrics['scenario']}: {warning}", file=sys.stderr)
     return 0
@@ -320,9 +325,8 @@ def command_view(options: argparse.Namespace) -> int:
         return 0
     from .viz.viewer import Viewer
 
-    viewer = Viewer(robot, port=options.port)
+    viewer = Viewer(robot, q, port=options.port)  # the camera framed on the robot at q
     try:
-        viewer.display(q)
         print(f"viewer      {viewer.url}  (this machine only; Ctrl-C to stop)", flush=True)
         if result is not None:
             t, qs = result
@@ -400,6 +404,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", help="output folder (default: out/<scenario name>)")
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="override a scenario key, e.g. solver.gain=2 or model.args.l1=0.6 (repeatable)")
+    run.add_argument("--bag", action="store_true",
+                     help="also write the run as a ROS 2 bag (OUT/bag, MCAP: /joint_states, /tf, /odom, desired pose, "
+                          "/robot_description); same as --set outputs.bag=true")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--watch", action="store_true",
                      help="rerun whenever the scenario, the model or a file it includes changes (Ctrl-C stops)")

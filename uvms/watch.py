@@ -224,6 +224,9 @@ class Rerun:
         if self.process.returncode == 0:
             numbers = headline(read_metrics(self.out))
             self.say(f"{stamp} {self.reason}: {compare(self.last, numbers)} ({seconds:.1f} s; figures in {self.out}/)")
+            for line in stderr.splitlines():  # a good run's warnings (limits left, error above tolerance) still count
+                if line.startswith("uvms: warning:"):
+                    self.say(f"         {line}")
             self.last = numbers
         else:
             lines = [line for line in stderr.strip().splitlines() if line.strip()]

@@ -135,6 +135,16 @@ def check_step_count(scenario: dict, duration: float) -> int:
                       duration_name=duration_name)
 
 
+def write_run_bag(folder: Path, setup: Setup, result: SimulationResult, metrics: dict) -> Path:
+    """The run as a ROS 2 bag in ``folder/bag`` (``[outputs] bag``); its topics and counts go into the metrics."""
+    from ..rosbag import write_bag  # rosbags only when a bag is asked for
+
+    frame = setup.task.frame if setup.task is not None else None
+    bag = write_bag(folder / "bag", setup.robot, result, desired_frame=frame, lock=False)
+    metrics["bag"] = {"topics": bag.topics, "skipped": bag.skipped}
+    return bag.path
+
+
 def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, started: float) -> RunResult:
     """Simulate a built scenario and write its files into ``folder``."""
     simulation_section = scenario["simulation"]
@@ -171,6 +181,8 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
 
             files += sequence_figures(result, setup.plan, folder, title=scenario["scenario"]["name"],
                                       animation=scenario["outputs"]["animation"], progress=progress)
+    if scenario["outputs"]["bag"]:
+        files.append(write_run_bag(folder, setup, result, metrics))
     metrics["verdict"] = run_verdict(metrics, scenario["outputs"])
     outputs.write_json(folder / "metrics.json", metrics)
     files.append(folder / "metrics.json")
