@@ -263,6 +263,20 @@ def test_saturation_scales_the_lowest_level_first_and_keeps_the_higher_ones():
     assert scales == (1.0, 0.5) and np.allclose(total, [1.0, 0.5])
 
 
+def test_a_passive_vehicles_speed_limits_hold_through_momentum_conservation():
+    robot = shipped("amundsen2018")  # a swimming manipulator: its base link weighs what a link does
+    q = robot.random_configuration(3)
+    task = FrameTask(robot, axes=("x", "y", "z"), target=pin.SE3(np.eye(3), robot.fk(q).translation + [0.3, -0.2, 0.2]))
+    free = set_based_velocity(robot, q, [task], gain=2.0, free_floating=True)
+    assert np.abs(free.v[3]) > 2.0  # measured: the reaction turns the vehicle at 2.86 rad/s
+    limits = VehicleVelocityLimits(robot, [0.05, 0.1])  # [m/s, rad/s]
+    maximum = np.array([0.05] * 3 + [0.1] * 3)
+    for solve in (set_based_velocity, hqp_velocity):
+        result = solve(robot, q, [JointLimits(robot, band=0.05), task, limits], gain=2.0, free_floating=True, dt=DT)
+        assert np.all(np.abs(result.v[:6]) <= maximum * (1 + 1e-7))  # hqp: rows kept to the QP tolerance
+        assert result.speed_ratio == pytest.approx(1.0, abs=1e-7)
+
+
 # ------------------------------------------------------------------------------------ hypothesis
 def outside_distance(robot: uvms.Robot, q: np.ndarray, limit: Limit) -> np.ndarray:
     """Per arm coordinate, how far it is outside its limits (n_arm,) (0 inside)."""

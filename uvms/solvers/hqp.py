@@ -159,7 +159,7 @@ def solve_level(cascade: Cascade, equality: np.ndarray, command: np.ndarray, ine
 
 
 def level_constraints(hierarchy: Hierarchy, level: LevelRows) -> tuple[np.ndarray, np.ndarray, list[tuple[str, slice]]]:
-    """The level's inequality rows G x >= b in solved columns, and each objective's rows (joint limits are bounds)."""
+    """The level's inequality rows G x >= b (solved columns) and each objective's rows (joint limits: bounds)."""
     blocks, bounds, spans, start = [], [], [], 0
     for objective, rows in zip(level.inequalities, level.objectives):
         if isinstance(objective, JointLimits):
@@ -228,45 +228,65 @@ def hqp_velocity(
         raise SolverInputError(f"position_fraction must be in (0, 1], got {position_fraction!r}")
     regularization = check_scalar(regularization, "regularization")
     first = qp_solver(solver)
-    solvers = [first] + [s for s in PREFERRED_SOLVERS if s != first and s in _installed()]
+    solvers = [first] + [name for name in PREFERRED_SOLVERS if name != first and name in _installed()]
     hierarchy = build_hierarchy(robot, q, levels, gain, free_floating, speed_limits)
-    size = hierarchy.size
-    weight_matrix = _weight_matrix(weights, size)
+    weight_matrix = _weight_matrix(weights, hierarchy.size)
     maximum = speed_maximum(robot.nv, hierarchy.speed_limits)
     rate_lower, rate_upper = rate_bounds(hierarchy, dt, fraction, valid_set=True)
     lower, upper = velocity_box(maximum, rate_lower, rate_upper)
-    arm = slice(robot.n_vehicle, robot.nv) if free_floating else slice(0, robot.nv)
-    cascade = Cascade(size=size, lower=lower[arm], upper=upper[arm], x=np.clip(np.zeros(size), lower[arm], upper[arm]))
-    statuses, slacks, binding = [], [], {}
+    cascade = initial_cascade(hierarchy, lower, upper)
+
+    def solve(equality, command, inequality, bound):
+        return solve_level(cascade, equality, command, inequality, bound, weight_matrix, regularization, solvers)
+
     vehicle_rows, vehicle_bounds = vehicle_speed_rows(hierarchy, lower, upper)
-    if vehicle_bounds.size:
-        x, w, status = solve_level(cascade, np.zeros((0, size)), np.zeros(0), vehicle_rows, vehicle_bounds,
-                                   weight_matrix, regularization, solvers)
-        cascade.x = x
-        cascade.keep_inequalities(vehicle_rows, vehicle_bounds, w)
+    if vehicle_bounds.size:  # a slacked level of its own, above the others
+        cascade.x, slack, _ = solve(np.zeros((0, hierarchy.size)), np.zeros(0), vehicle_rows, vehicle_bounds)
+        cascade.keep_inequalities(vehicle_rows, vehicle_bounds, slack)
+    statuses, slacks, binding = [], [], {}
     for level in hierarchy.levels:
-        equality = level.solved[: level.task_error.size] if level.has_tasks else np.zeros((0, size))
-        command = level.task_command if level.has_tasks else np.zeros(0)
+        equality, command = level_equalities(hierarchy, level)
         inequality, bound, spans = level_constraints(hierarchy, level)
-        x, w, status = solve_level(cascade, equality, command, inequality, bound, weight_matrix, regularization,
-                                   solvers)
-        cascade.x = x
+        cascade.x, slack, status = solve(equality, command, inequality, bound)
         cascade.keep_equalities(equality)
-        cascade.keep_inequalities(inequality, bound, w)
+        cascade.keep_inequalities(inequality, bound, slack)
         statuses.append(status)
-        slacks.append(float(np.linalg.norm(w)))
-        margin = inequality @ x - bound
-        for name, span in spans:
-            binding[name] = bool(np.any(margin[span] <= BINDING_TOLERANCE) or np.any(w[span] > BINDING_TOLERANCE))
+        slacks.append(float(np.linalg.norm(slack)))
+        binding.update(inequalities_binding(inequality @ cascade.x - bound, slack, spans))
     v = hierarchy.velocity(cascade.x)
     binding.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
     command, error, residual, level_residuals = task_report(hierarchy, v)
-    task_levels = [level for level in hierarchy.levels if level.has_tasks]
-    sigma = smallest_singular_value(task_levels[-1].solved[: task_levels[-1].task_error.size]) if task_levels else 0.0
     return HQPResult(v=v, objectives=objective_statuses(hierarchy, binding), command=command, error=error,
-                     residual=residual, level_residuals=level_residuals, sigma_min=sigma,
+                     residual=residual, level_residuals=level_residuals, sigma_min=task_sigma_min(hierarchy),
                      scales=(1.0,) * len(hierarchy.levels), speed_ratio=speed_ratio(v, maximum),
                      free_floating=free_floating, solver_status=tuple(statuses), slacks=tuple(slacks), solver=first)
+
+
+def initial_cascade(hierarchy: Hierarchy, lower: np.ndarray, upper: np.ndarray) -> Cascade:
+    """The cascade before any level: the box on the solved columns, x = 0 clipped into it."""
+    robot = hierarchy.state.robot
+    solved = slice(robot.n_vehicle, robot.nv) if hierarchy.free_floating else slice(0, robot.nv)
+    low, high = lower[solved], upper[solved]
+    return Cascade(size=hierarchy.size, lower=low, upper=high, x=np.clip(np.zeros(hierarchy.size), low, high))
+
+
+def level_equalities(hierarchy: Hierarchy, level: LevelRows) -> tuple[np.ndarray, np.ndarray]:
+    """The level's equality-task rows E (k, n) (solved columns) and commands r (k,) (0 rows without tasks)."""
+    if not level.has_tasks:
+        return np.zeros((0, hierarchy.size)), np.zeros(0)
+    return level.solved[: level.task_error.size], level.task_command
+
+
+def inequalities_binding(margin: np.ndarray, slack: np.ndarray, spans: list[tuple[str, slice]]) -> dict[str, bool]:
+    """Per objective: some row binding (G x - b ~ 0) or relaxed (slack > 0)."""
+    return {name: bool(np.any(margin[span] <= BINDING_TOLERANCE) or np.any(slack[span] > BINDING_TOLERANCE))
+            for name, span in spans}
+
+
+def task_sigma_min(hierarchy: Hierarchy) -> float:
+    """sigma_min of the last level's equality-task rows (solved columns; 0 without tasks)."""
+    task_levels = [level for level in hierarchy.levels if level.has_tasks]
+    return smallest_singular_value(level_equalities(hierarchy, task_levels[-1])[0]) if task_levels else 0.0
 
 
 def joint_limits_binding(hierarchy: Hierarchy, v: np.ndarray, rate_lower: np.ndarray, rate_upper: np.ndarray,

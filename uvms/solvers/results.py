@@ -136,6 +136,8 @@ class SetBasedResult:
         error: task error e (k,) of the equality tasks.
         residual: |J v - command| over the equality tasks.
         level_residuals: per level, |A (J v - reference)| (activation-weighted; equality rows weigh 1).
+            This and the other per-level fields cover the levels that hold rows, in order (a level holding
+            only speed limits has none); ``ObjectiveStatus.level`` is the index in the levels given.
         sigma_min: smallest singular value of the (weighted, projected) Jacobian inverted for the last
             level that holds equality tasks (0 if none).
         scales: per level, the factor in [0, 1] its contribution was scaled by to meet the speed and

@@ -8,12 +8,13 @@ Levels, highest priority first; each level stacks its objectives' rows: Jacobian
 xdot_k (m,) and activation A_k = diag(a) (equality tasks: a = 1, reference xdot_d + K e; inequality
 objectives: their activation and reference, :mod:`uvms.tasks.objectives`). With rho_0 = 0, Q_0 = I:
 
-    X^{#,A,Q} = (X^T A X + eta (I - Q)^T (I - Q) + lambda^2 W)^# X^T A A          (the iCAT inverse)
+    X^{#,A,Q} = (X^T A X + eta (I - Q)^T (I - Q) + lambda^2 M)^# X^T A A          (the iCAT inverse)
     W_k       = J_k Q_{k-1} (J_k Q_{k-1})^{#,A_k,Q_{k-1}}          (undamped)
     rho_k     = rho_{k-1} + Q_{k-1} (J_k Q_{k-1})^{#,A_k,I} W_k (xdot_k - J_k rho_{k-1})
     Q_k       = Q_{k-1} (I - (J_k Q_{k-1})^{#,A_k,I} J_k Q_{k-1})
 
-X^{#,A,Q} minimizes |A (xdot - X y)|^2 + |X y|^2_{A (I - A)} + eta |(I - Q) y|^2 (+ lambda^2 |y|^2_W): a
+with M the weights of the solved columns (``weights``, the W of CLIK; I by default).
+X^{#,A,Q} minimizes |A (xdot - X y)|^2 + |X y|^2_{A (I - A)} + eta |(I - Q) y|^2 (+ lambda^2 |y|^2_M): a
 row whose activation falls to 0 fades out continuously, and the eta term keeps directions already used by
 the levels above from being inverted when they are only partly released, so no activation change causes a
 discontinuity. Both inverses are the library's one inverse
@@ -21,7 +22,7 @@ discontinuity. Both inverses are the library's one inverse
 since Z^T Z = X^T A X + eta (I - Q)^T (I - Q). Adaptations, stated: the paper's singular-value
 regularization V^T P V is the damping lambda of that inverse (fixed, or amundsen2018 eq. 6 variable), put
 in (J Q)^{#,A,I} only; W_k uses the undamped inverse, so that with Q = I and A = I the step is
-J^# J J^+ xdot = J^# xdot exactly (J J^+ projects on the range of J, where J^# = J_W^# lives).
+J^# J J^+ xdot = J^# xdot exactly (J J^+ projects on the range of J, on which J^# acts).
 
 Hence with every inequality inactive (A = 0: rho and Q untouched) the result is CLIK,
 :func:`~uvms.solvers.clik.clik_velocity` with the same gain, weights and damping, to rounding (that case
@@ -334,7 +335,8 @@ def set_based_velocity(
     command, error, residual, level_residuals = task_report(hierarchy, v)
     return SetBasedResult(v=v, objectives=objective_statuses(hierarchy), command=command, error=error,
                           residual=residual, level_residuals=level_residuals,
-                          sigma_min=last_task_sigma(hierarchy, sigmas), scales=scales, speed_ratio=speed_ratio(v, maximum), free_floating=free_floating)
+                          sigma_min=last_task_sigma(hierarchy, sigmas), scales=scales,
+                          speed_ratio=speed_ratio(v, maximum), free_floating=free_floating)
 
 
 def rate_bounds(hierarchy: Hierarchy, dt: float | None, fraction: float,
