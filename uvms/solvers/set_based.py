@@ -217,6 +217,11 @@ def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.nda
     return inverse[:, : jacobian.shape[0]] * activation**1.5, sigma_min
 
 
+def is_undamped(damping: float | VariableDamping) -> bool:
+    """A fixed damping of 0: the damped and undamped iCAT inverses coincide."""
+    return not isinstance(damping, VariableDamping) and float(damping) == 0.0
+
+
 def solve_levels(hierarchy: Hierarchy, weights: np.ndarray | None, damping: float | VariableDamping,
                  eta: float) -> tuple[list[np.ndarray], list[float]]:
     """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,) and sigma_min."""
@@ -235,14 +240,15 @@ def solve_levels(hierarchy: Hierarchy, weights: np.ndarray | None, damping: floa
             inverse, sigma_min, _ = damped_weighted_inverse(jacobian, weights, damping)
             contribution = inverse @ remaining
             projector = projector - inverse @ jacobian
-        else:
-            projected = jacobian @ projector
-            above = None if unrestricted else projector
-            regularized, _ = icat_inverse(projected, activation, above, weights, 0.0, eta)
-            inverse, sigma_min = icat_inverse(projected, activation, None, weights, damping, eta)
+        else:  # rows with a = 0 add nothing to Z nor to the inverse (its columns scale by a^1.5): left out
+            rows = activation > 0
+            projected = jacobian[rows] if unrestricted else jacobian[rows] @ projector
+            inverse, sigma_min = icat_inverse(projected, activation[rows], None, weights, damping, eta)
+            regularized = inverse if unrestricted and is_undamped(damping) else icat_inverse(
+                projected, activation[rows], None if unrestricted else projector, weights, 0.0, eta)[0]
             transfer = projected @ regularized  # W_k (m, m)
-            contribution = projector @ (inverse @ (transfer @ remaining))
-            projector = projector @ (np.eye(size) - inverse @ projected)
+            contribution = projector @ (inverse @ (transfer @ remaining[rows]))
+            projector = projector - projector @ (inverse @ projected)
         rho = rho + contribution
         unrestricted = False
         contributions.append(contribution)

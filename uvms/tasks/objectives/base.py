@@ -41,7 +41,7 @@ def bell(depth: np.ndarray, band: np.ndarray, shape: str = "cosine") -> np.ndarr
     s = np.asarray(depth, dtype=float) / band
     if shape == "step":
         return np.where(s < 1.0, 1.0, 0.0)
-    return np.where(s <= 0.0, 1.0, np.where(s >= 1.0, 0.0, 0.5 * (1.0 + np.cos(np.pi * np.clip(s, 0.0, 1.0)))))
+    return 0.5 * (1.0 + np.cos(np.pi * np.clip(s, 0.0, 1.0)))
 
 
 @dataclass(frozen=True)
@@ -146,11 +146,9 @@ class Inequality(ABC):
         return (value - self.lower) <= (self.upper - value)
 
     def activation(self, value: np.ndarray) -> np.ndarray:
-        """Activation (k,) in [0, 1] at x = ``value`` (k,): the larger of the two sides' bells."""
-        with np.errstate(invalid="ignore"):
-            low = bell(value - self.lower, self.band, self.shape)
-            high = bell(self.upper - value, self.band, self.shape)
-        return np.maximum(np.nan_to_num(low), np.nan_to_num(high))
+        """Activation (k,) in [0, 1] at x = ``value`` (k,): the bell of the nearer bound (the larger of the two)."""
+        depth = np.where(self._near_lower(value), value - self.lower, self.upper - value)  # >= 0 inside
+        return bell(depth, self.band, self.shape)
 
     def reference(self, value: np.ndarray) -> np.ndarray:
         """Reference rate (k,): gain (x* - x), x* = lower + band or upper - band (the nearer side)."""

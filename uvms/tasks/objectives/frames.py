@@ -55,7 +55,7 @@ class VehicleAttitude(Inequality):
 
     def jacobian(self, state: KinematicState) -> np.ndarray:
         z_axis = state.pose(self.frame_id).rotation[:, 2]
-        axis = np.cross(z_axis, [0.0, 0.0, 1.0])  # |axis| = sin(tilt)
+        axis = np.array([z_axis[1], -z_axis[0], 0.0])  # z_b x e_z, |axis| = sin(tilt)
         length = np.linalg.norm(axis)
         if length < LEVEL_TILT:
             return np.zeros((1, state.robot.nv))
