@@ -42,6 +42,9 @@ and the joints exert only internal wrenches, so the *added-mass-augmented* momen
 sum_l X_l^* (I_l + M_A,l) nu_l is conserved; with M_A = 0 it is the rigid momentum
 behind the generalized Jacobian. :func:`generalized_jacobian_added_mass` is the GJM
 of that augmented momentum.
+
+The links on the model, M_A in the mass matrix, C_A and the GJM of the augmented
+momentum live in :mod:`uvms.dynamics.added_mass` (importable from here too).
 """
 
 from __future__ import annotations
@@ -53,99 +56,22 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
+from .added_mass import (  # noqa: F401 - HydroLink ... resolve_links: also importable from here, as before
+    LOCAL,
+    HydroLink,
+    _cross,
+    added_mass_coriolis,
+    augmented_mass_matrix,
+    generalized_jacobian_added_mass,
+    resolve_links,
+)
+from .hydrodynamics import HydroParameters, hydrodynamics_of
 from ..robot import Robot
 from ..kinematics import generalized_jacobian_from_parts, mass_matrix_split
 
 
-LOCAL = pin.ReferenceFrame.LOCAL
 #: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
 Command = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
-
-
-@dataclass(frozen=True)
-class HydroLink:
-    """A link with hydrodynamic parameters, placed on the Pinocchio model."""
-
-    name: str
-    frame_id: int
-    joint_id: int
-    placement: pin.SE3  # link frame in its parent joint's frame
-    params: LinkHydrodynamics
-
-
-def resolve_links(model: pin.Model, hydro: HydroParameters) -> list[HydroLink]:
-    """The links of ``hydro`` as (frame, joint, placement) of ``model``.
-
-    Raises:
-        NameNotFound: a link the model does not have.
-    """
-    hydro.check_links(frame.name for frame in model.frames if frame.type == pin.FrameType.BODY)
-    links = []
-    for name, params in hydro.links.items():
-        frame_id = model.getFrameId(name, pin.FrameType.BODY)
-        frame = model.frames[frame_id]
-        links.append(HydroLink(name, frame_id, frame.parentJoint, frame.placement.copy(), params))
-    return links
-
-
-def added_mass_coriolis(added_mass: np.ndarray, nu: np.ndarray) -> np.ndarray:
-    """Fossen's C_A(nu) nu = nu x* (M_A nu) (6,) for a body twist nu (6,) = [v; w].
-
-    Args:
-        added_mass: M_A (6, 6), same frame as nu.
-        nu: [linear; angular] velocity [m/s, rad/s].
-
-    Returns:
-        [w x a1; v x a1 + w x a2] with a = M_A nu [N, N m].
-    """
-    a = added_mass @ nu
-    return np.concatenate([_cross(nu[3:], a[:3]), _cross(nu[:3], a[:3]) + _cross(nu[3:], a[3:])])
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b of two (3,) vectors: numpy's cross is ten times slower on them, and this runs per link and stage."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
-def augmented_mass_matrix(model: pin.Model, data: pin.Data, links: list[HydroLink], q: np.ndarray) -> np.ndarray:
-    """Mbar = M + sum_l J_l^T M_A,l J_l (nv, nv): the rigid mass matrix with the links' added mass."""
-    matrix = pin.crba(model, data, q)
-    matrix = np.triu(matrix) + np.triu(matrix, 1).T  # crba may fill only the upper triangle
-    if links:
-        pin.computeJointJacobians(model, data, q)
-        for link in links:
-            jacobian = pin.getFrameJacobian(model, data, link.frame_id, LOCAL)
-            matrix += jacobian.T @ link.params.added_mass @ jacobian
-    return matrix
-
-
-def generalized_jacobian_added_mass(
-    robot: Robot, hydro: HydroParameters | None, q: np.ndarray, frame: str | None = None
-) -> np.ndarray:
-    """Generalized Jacobian (6, n_arm) at zero *added-mass-augmented* momentum.
-
-    GJM_A = J_m - J_b Mbar_bb^-1 Mbar_bm with Mbar = M + sum_l J_l^T M_A,l J_l; it maps
-    the arm rates to the world-aligned end-effector twist of a free-floating UVMS
-    in a still, inviscid fluid at rest (no damping, no current, no restoring
-    forces). With M_A = 0 it equals ``robot.generalized_jacobian``.
-
-    Args:
-        robot: a floating- or planar-base Robot.
-        hydro: the parameters (None: the model's own, see :func:`uvms.hydrodynamics.hydrodynamics_of`).
-        q: configuration (nq,).
-        frame: end-effector frame (default: the first).
-
-    Raises:
-        UVMSError: fixed base; invalid parameters or link names.
-    """
-    if robot.base_type == "fixed":
-        raise UVMSError(f"{robot.name} has a fixed base: there is no free-floating base to conserve momentum")
-    q = robot.check_configuration(q)
-    hydro = hydrodynamics_of(robot, required=False) if hydro is None else hydro
-    mass = augmented_mass_matrix(robot.model, robot.data, resolve_links(robot.model, hydro), q)
-    return generalized_jacobian_from_parts(robot.jacobian(q, frame), *mass_matrix_split(mass, robot.n_vehicle),
-                                           robot.n_vehicle)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,165 @@
+"""The ``uvms`` command line. Every error prints one line on stderr and exits with 2.
+
+One module per command group: :mod:`.info` (``uvms info``), :mod:`.run` (``uvms run``, ``uvms sweep``,
+``--watch``), :mod:`.workspace` (``uvms workspace``), :mod:`.view` (``uvms view``); here the argument parser
+and :func:`main`, the one place that turns an error into one line and an exit status.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+from collections.abc import Sequence
+
+from ..errors import UVMSError
+from .info import command_info, describe, format_limits, parse_assignments
+from .run import command_run, command_sweep, run_output_folder, scenario_file, watch_job
+from .view import (
+    command_view,
+    frame_indices,
+    read_result,
+    view_configuration,
+    view_robot,
+    wait_for_interrupt,
+    watch_viewer,
+)
+from .workspace import command_workspace, parse_figure_counts
+
+__all__ = [
+    "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_info", "command_run",
+    "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
+    "parse_assignments", "parse_figure_counts", "read_result", "run_output_folder", "scenario_file",
+    "view_configuration", "view_robot", "wait_for_interrupt", "watch_job", "watch_viewer",
+]
+
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-C
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line (no usage dump) and exits 2."""
+
+    def error(self, message: str) -> None:  # noqa: D102 - argparse API
+        self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``uvms``."""
+    parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
+    commands = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
+    info = commands.add_parser("info", help="describe a model and run its checks")
+    info.add_argument("model", help="a .urdf/.xacro file or a shipped model name (e.g. hoang2011)")
+    info.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    info.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    info.add_argument("--ee", action="append", metavar="FRAME", help="end-effector frame (repeatable)")
+    info.set_defaults(handler=command_info)
+    run = commands.add_parser("run", help="run a scenario (TOML): metrics.json, trajectory.csv/.npz, figures")
+    run.add_argument("scenario", help="scenario file or shipped scenario name, e.g. hoang2011_w1 or my_run.toml")
+    run.add_argument("--out", help="output folder (default: out/<scenario name>)")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="override a scenario key, e.g. solver.gain=2 or model.args.l1=0.6 (repeatable)")
+    run.add_argument("--bag", action="store_true",
+                     help="also write the run as a ROS 2 bag (OUT/bag, MCAP: /joint_states, /tf, /odom, desired pose, "
+                          "/robot_description); same as --set outputs.bag=true")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--watch", action="store_true",
+                     help="rerun whenever the scenario, the model or a file it includes changes (Ctrl-C stops)")
+    run.set_defaults(handler=command_run)
+    sweep = commands.add_parser("sweep", help="run a scenario on a grid of overrides: sweep.csv and sweep.png")
+    sweep.add_argument("scenario", help="scenario file or shipped scenario name, e.g. santos2006_task_priority")
+    sweep.add_argument("--grid", action="append", metavar="KEY=START:STOP:N",
+                       help="sweep a scenario key over N values from START to STOP, or KEY=[a,b,...], e.g. "
+                            "model.args.l1=1.5:2.5:5 (repeatable: the grid is the product)")
+    sweep.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
+    sweep.add_argument("--backend", choices=["loky", "dask"], default="loky",
+                       help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
+    sweep.add_argument("--scheduler", metavar="ADDRESS",
+                       help="Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a local cluster of --jobs workers)")
+    sweep.add_argument("--out", help="output folder (default: out/<scenario name>_sweep)")
+    sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep.set_defaults(handler=command_sweep)
+    workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
+    workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
+    workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")
+    workspace.add_argument("-n", "--samples", default="10000",
+                           help="joint samples per frame, e.g. 100000 or 1e9 (streamed: memory does not grow with N)")
+    workspace.add_argument("--seed", type=int, default=0, help="random seed")
+    workspace.add_argument("--voxel", type=float, default=0.05, help="voxel edge for the volume [m]")
+    workspace.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    workspace.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    workspace.add_argument("--figures", metavar="N1,N2,...",
+                           help="also draw the first N1, N2, ... samples, e.g. 10000,50000,100000 "
+                                "(xiang2019 Fig. 4): workspace_<N>.png")
+    workspace.add_argument("--remove-hull", action="store_true",
+                           help="drop the points inside the vehicle link's box/cylinder/sphere (URDF collision, "
+                                "else visual) and report volume_outside_hull")
+    workspace.add_argument("--dexterity", action="store_true",
+                           help="measure the fraction of orientation cells reached per voxel (slower FK)")
+    workspace.add_argument("--dexterity-voxel", type=float, default=0.1, help="voxel edge for the dexterity [m]")
+    workspace.add_argument("--directions", type=int, default=100, help="equal-area cells of the approach direction")
+    workspace.add_argument("--roll-bins", type=int, default=18,
+                           help="bins of the roll about the approach axis (1: approach direction only)")
+    workspace.add_argument("--approach", choices=["x", "y", "z"], default="z",
+                           help="frame axis taken as the approach direction")
+    workspace.add_argument("--dexterous-threshold", type=float, default=0.9,
+                           help="dexterity from which a voxel counts as dexterous workspace")
+    workspace.add_argument("--convergence-tolerance", type=float, default=0.01,
+                           help="a volume has converged when the last doubling of the samples changes it by at "
+                                "most this fraction (default 0.01: 1 %%); else a warning suggests more samples")
+    workspace.add_argument("--out", help="output folder (default: out/workspace_<model>)")
+    workspace.add_argument("--quiet", action="store_true", help="no progress bar")
+    workspace.add_argument("--watch", action="store_true",
+                           help="rerun whenever the model or a file it includes changes (Ctrl-C stops)")
+    workspace.set_defaults(handler=command_workspace)
+    view = commands.add_parser("view", help="3-D viewer of a model or a run (needs uvms[viz]), or --headless OUT")
+    view.add_argument("model", nargs="?",
+                      help="a .urdf/.xacro file, a shipped model name, or a scenario .toml (its model); with "
+                           "--result: not needed (the run folder records its model), and if given it must match")
+    view.add_argument("--result", metavar="DIR",
+                      help="play the trajectory.npz of a run folder (uvms run) on the model it records")
+    view.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    view.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    view.add_argument("--q", nargs="+", type=float, metavar="V",
+                      help="configuration: nq numbers (q), vehicle pose + arm joints, or arm joints only")
+    view.add_argument("--port", type=int, default=8080, help="first port tried on 127.0.0.1 (default 8080)")
+    view.add_argument("--speed", type=float, default=1.0, help="simulated seconds per second of playback")
+    view.add_argument("--headless", metavar="OUT",
+                      help="no viewer: write OUT.png (snapshot) or OUT.gif/.mp4 (animation of --result) "
+                           "with matplotlib")
+    view.add_argument("--frames", type=int, default=100, help="--headless animation: at most this many frames")
+    view.add_argument("--fps", type=float, default=20.0, help="--headless animation: frames per second")
+    view.add_argument("--quiet", action="store_true", help="no progress bar")
+    view.add_argument("--watch", action="store_true",
+                      help="reload the model in place when its files change; replay --result when it is rerun")
+    view.set_defaults(handler=command_view)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``uvms`` console script."""
+    options = build_parser().parse_args(argv)
+    options.argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            status = options.handler(options)
+        for warning in caught:
+            print(f"uvms: warning: {warning.message}", file=sys.stderr)
+        return status
+    except UVMSError as exc:
+        print(f"uvms: error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt as exc:  # Ctrl-C: one line saying what the output folder holds (outputs.run_folder)
+        notes = getattr(exc, "__notes__", None)
+        if getattr(options, "watch", False):
+            notes = ["stopped watching; the output folder keeps the last complete run"]
+        print(f"uvms: interrupted; {notes[-1]}" if notes else "uvms: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # noqa: BLE001 - the CLI promises one line, never a traceback
+        if os.environ.get("UVMS_DEBUG"):
+            raise
+        print(f"uvms: internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
+              f"(set UVMS_DEBUG=1 for a traceback)", file=sys.stderr)
+        return EXIT_USAGE

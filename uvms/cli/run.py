@@ -1,0 +1,87 @@
+"""``uvms run`` and ``uvms sweep``: scenarios from the command line, and ``--watch`` (rerun on every edit)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..errors import UVMSError
+
+
+def command_run(options: argparse.Namespace) -> int:
+    """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
+    from ..scenario import run  # the scenario layer pulls in scipy and matplotlib
+    from ..scenario.verdict import verdict_line
+
+    if options.watch:
+        return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
+    overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else [])]
+    result = run(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
+    folder = result.files[0].parent
+    metrics = result.metrics
+    print(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)")
+    for key in ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
+                "vehicle_travel", "vehicle_yaw_range", "arm_travel"):
+        print(f"  {key:<27} {metrics[key]:.3e}")
+    print(f"verdict     {verdict_line(metrics['verdict'])}")
+    print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})")
+    if "bag" in metrics:
+        counts = ", ".join(f"{topic} {count}" for topic, count in metrics["bag"]["topics"].items())
+        print(f"bag         {folder / 'bag'}/ ({counts}); replay: ros2 bag play {folder / 'bag'}")
+        for item, reason in metrics["bag"]["skipped"].items():
+            print(f"uvms: note: bag without {item}: {reason}", file=sys.stderr)
+    for warning in metrics["verdict"]["warnings"]:  # said on the terminal, not only in metrics.json
+        print(f"uvms: warning: {metrics['scenario']}: {warning}", file=sys.stderr)
+    return 0
+
+
+def command_sweep(options: argparse.Namespace) -> int:
+    """``uvms sweep SCENARIO --grid KEY=START:STOP:N ...``: run a grid of overrides, write sweep.csv and sweep.png."""
+    from ..scenario.sweep import sweep  # joblib, and dask only with --backend dask
+
+    result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
+                   scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None)
+    print(result.text())
+    folder = result.files[0].parent
+    print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, point_*/)")
+    if result.failed:
+        first = result.failed[0]
+        raise UVMSError(f"{len(result.failed)} of {len(result.rows)} sweep points failed (error column of "
+                        f"{result.files[0]}); point {first['point']}: {first['error']}")
+    return 0
+
+
+def scenario_file(scenario: str) -> Path:
+    """The file of a ``SCENARIO`` argument: a ``.toml`` path or a shipped scenario name (``hoang2011_w1``)."""
+    from ..scenario.resources import resolve_scenario_path
+
+    return resolve_scenario_path(scenario)
+
+
+def run_output_folder(options: argparse.Namespace) -> Path:
+    """Where ``uvms run`` writes: ``--out``, else ``out/<scenario name>`` (the file stem if it cannot be read)."""
+    if options.out:
+        return Path(options.out)
+    from ..scenario import read_scenario
+
+    try:
+        return Path("out") / read_scenario(options.scenario, options.set or ())["scenario"]["name"]
+    except UVMSError:
+        return Path("out") / Path(options.scenario).stem
+
+
+def watch_job(options: argparse.Namespace, out: Path, scenario: Path | None = None, model: str | None = None) -> int:
+    """Run the command once, then again on every change of its scenario, model and model files (``--watch``).
+
+    Each run is a child process writing into ``out`` (fixed for the session); one line per run compares its
+    headline metrics with the previous run's. Ctrl-C stops the run and the watching (exit 130).
+    """
+    from ..watch import Rerun, WatchedFiles, without_watch
+
+    argv = [*without_watch(options.argv), "--out", str(out), "--quiet"]
+    print(f"watching {scenario or model} and the files of its model; Ctrl-C to stop")
+    rerun = Rerun(argv, out, lambda: WatchedFiles.of(scenario=scenario, model=model, ignore=[out]),
+                  say=lambda line: print(line, flush=True))
+    rerun.loop()
+    return 0
