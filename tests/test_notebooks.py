@@ -1,0 +1,82 @@
+"""The notebooks run, and what they show in the repository is what they print today.
+
+Each notebook is executed once (as nbmake would) and its text outputs compared with the stored ones, cell by cell.
+A failure names the notebook, the cell and the first differing line; `python notebooks/execute.py NAME` refreshes it.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+spec = importlib.util.spec_from_file_location("notebook_execute", ROOT / "notebooks" / "execute.py")
+notebook_execute = importlib.util.module_from_spec(spec)
+sys.modules["notebook_execute"] = notebook_execute  # dataclasses look their module up
+spec.loader.exec_module(notebook_execute)
+
+NOTEBOOKS = notebook_execute.notebook_paths()
+
+
+@pytest.fixture(autouse=True)
+def inline_figures(monkeypatch):
+    """The kernel draws inline figures: a headless MPLBACKEND (Agg, set by .ci/run) would hide them."""
+    monkeypatch.delenv("MPLBACKEND", raising=False)
+
+
+def test_every_notebook_is_found():
+    assert {path.stem for path in NOTEBOOKS} >= {"hoang2011", "santos2006", "xiang2019", "amundsen2018", "tutorial",
+                                                 "models"}
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[path.stem for path in NOTEBOOKS])
+def test_the_stored_outputs_are_current(path):
+    stored = notebook_execute.nbformat.read(path, as_version=4)
+    missing = notebook_execute.unexecuted(stored)
+    assert not missing, f"{path.name} is stored without outputs in cells {missing}: python notebooks/execute.py {path.stem}"
+    fresh = notebook_execute.execute(path)  # raises CellExecutionError (with the traceback) if a cell fails
+    stale = notebook_execute.differences(stored, fresh)
+    assert not stale, (f"{path.name}: stored outputs are stale, {stale[0].first_line()} "
+                       f"({len(stale)} cells); refresh: python notebooks/execute.py {path.stem}")
+    assert sum("[figure]" in notebook_execute.cell_text(cell) for _, cell in notebook_execute.code_cells(stored)) == \
+        sum("[figure]" in notebook_execute.cell_text(cell) for _, cell in notebook_execute.code_cells(fresh))
+
+
+def copy_of(notebook):
+    return notebook_execute.nbformat.reads(notebook_execute.nbformat.writes(notebook), as_version=4)
+
+
+def first_stream(notebook):
+    """(cell index, its first stream output) of the first executed code cell that prints."""
+    for index, cell in notebook_execute.code_cells(notebook):
+        for output in cell.outputs:
+            if output["output_type"] == "stream":
+                return index, output
+    raise AssertionError("no printed output")
+
+
+def test_a_changed_number_is_caught_and_a_temporary_path_is_not():
+    stored = notebook_execute.nbformat.read(ROOT / "notebooks" / "amundsen2018.ipynb", as_version=4)
+    assert notebook_execute.differences(stored, copy_of(stored)) == []
+    one, other = copy_of(stored), copy_of(stored)
+    first_stream(one)[1]["text"] += "written to /tmp/tmpabc123/out, object at 0x7f00deadbeef\n"
+    first_stream(other)[1]["text"] += "written to /tmp/tmpxyz789/out, object at 0x7f11cafef00d\n"
+    assert notebook_execute.differences(one, other) == []  # volatile parts masked
+    changed = copy_of(stored)
+    index, stream = first_stream(changed)
+    digit = next(ch for ch in stream["text"] if ch.isdigit())
+    stream["text"] = stream["text"].replace(digit, str((int(digit) + 1) % 10), 1)
+    found = notebook_execute.differences(stored, changed)
+    assert [difference.cell for difference in found] == [index]
+    assert found[0].first_line().startswith(f"cell {index}: stored ")
+
+
+def test_the_tutorial_runs_when_copied_out_of_the_repository(tmp_path):
+    """Shipped names, not ../ paths: a user's copy of the tutorial in any folder runs."""
+    copy = tmp_path / "my_tutorial.ipynb"
+    copy.write_text((ROOT / "notebooks" / "tutorial.ipynb").read_text())
+    assert "../" not in "".join("".join(cell.source) for cell in notebook_execute.nbformat.read(copy, 4).cells)
+    notebook_execute.execute(copy)  # raises CellExecutionError if a cell fails
