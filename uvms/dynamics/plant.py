@@ -146,6 +146,7 @@ class Plant:
         self.nb = robot.n_vehicle
         self._current = hydro.current
         self._moving_fluid = bool(np.any(hydro.current != 0.0))
+        self._base_placement = self.model.frames[self.model.getFrameId(robot.root_link)].placement.copy()
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -184,10 +185,22 @@ class Plant:
         return self._evaluate(robot.check_configuration(q), robot.check_velocity(v),
                               robot.check_velocity(command, self.n_arm, "joint-velocity command"))
 
-    def _evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> PlantDynamics:
-        """:meth:`evaluate` without the input checks (the integrator's inner loop)."""
+    def _evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
+                  body_wrench: np.ndarray | None = None) -> PlantDynamics:
+        """:meth:`evaluate` without the input checks (the integrator's inner loop); ``body_wrench`` (6,)
+        [N, N m]: an external wrench on the vehicle, FLU at the base frame origin (the thrusters')."""
+        mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
+        nb = self.nb
+        arm_acceleration = (command - v[nb:]) / self.motor_time_constant
+        base_acceleration = -np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:] @ arm_acceleration + bias_forces[:nb])
+        torque = mass[nb:, :nb] @ base_acceleration + mass[nb:, nb:] @ arm_acceleration + bias_forces[nb:]
+        return PlantDynamics(np.concatenate([base_acceleration, arm_acceleration]), torque, mass)
+
+    def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
+                       body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Mbar (nv, nv) and nbar (nv,) at (q, v): Mbar v' + nbar = [0; tau_m] (nbar = h - sum J^T fext)."""
         model, data = self.model, self.data
-        nv, nb = model.nv, self.nb
+        nv = model.nv
         pin.forwardKinematics(model, data, q, v, np.zeros(nv))  # data.a = the bias accelerations Jdot v
         if self.added_mass and self.links:
             pin.computeJointJacobians(model, data)
@@ -211,11 +224,9 @@ class Plant:
                 wrench[:3] += buoyancy
                 wrench[3:] += _cross(params.center_of_buoyancy, buoyancy)
             fext[link.joint_id] += link.placement.act(pin.Force(wrench))
-        bias_forces = pin.rnea(model, self._dynamics_data, q, v, np.zeros(nv), fext)  # h(q, v) - sum J^T fext
-        arm_acceleration = (command - v[nb:]) / self.motor_time_constant
-        base_acceleration = -np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:] @ arm_acceleration + bias_forces[:nb])
-        torque = mass[nb:, :nb] @ base_acceleration + mass[nb:, nb:] @ arm_acceleration + bias_forces[nb:]
-        return PlantDynamics(np.concatenate([base_acceleration, arm_acceleration]), torque, mass)
+        if body_wrench is not None:  # the base frame's placement on the vehicle joint carries it there
+            fext[1] += self._base_placement.act(pin.Force(body_wrench))
+        return mass, pin.rnea(model, self._dynamics_data, q, v, np.zeros(nv), fext)  # h(q, v) - sum J^T fext
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""

@@ -1,0 +1,199 @@
+"""An actuated vehicle in the free-floating plant: thrusters with a first-order response and saturation.
+
+The state of :class:`ActuatedPlantSystem` is (q, x) with x = [v (nv,), f (n,)], f the thrusts [N]; its rate is
+
+    q' = v,   v' = plant acceleration under the joint command u and the body wrench B f,
+    f' = (sat(f_cmd) - f) / tau,   sat = clip to [-max_reverse, +max_forward]
+
+with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.allocation_matrix`) and the wrench applied
+at the vehicle's base frame (:meth:`uvms.dynamics.plant.Plant._evaluate`). Since the command is clipped and
+f moves towards it, f stays inside the bounds. A plant without thrusters keeps its state (q, v):
+:class:`uvms.dynamics.plant.PlantSystem`, unchanged.
+
+The controller is digital: called once per step at the step's start, its command held over the
+integrator's stages, as a vehicle computer at 1/dt does; its state (integrators) advances per call.
+
+Power terms for the energy balance (no current): d(kinetic + potential)/dt = thrust power (B f . nu_base)
++ motor power (tau_m . qd_m) + damping power (sum over links of the damping wrench . nu_l, <= 0).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import UVMSError
+from .plant import Plant, PlantDynamics, PlantSample, PlantSystem
+from .thrusters import Thrusters, allocation_matrix
+
+#: The controller of an actuated plant: (t [s], q (nq,), v (nv,), f (n,) [N]) -> ActuatedCommand.
+ActuatedController = Callable[[float, np.ndarray, np.ndarray, np.ndarray], "ActuatedCommand"]
+
+
+@dataclass(frozen=True)
+class ActuatedCommand:
+    """What the controller of an actuated plant sends for one step.
+
+    Attributes:
+        arm: joint-velocity command u (n_arm,) [rad/s or m/s].
+        thrust: thrust command f_cmd (n,) [N] (clipped to the bounds by the thrusters).
+        info: series to record for the row, name -> value (e.g. the wrench asked for).
+    """
+
+    arm: np.ndarray
+    thrust: np.ndarray
+    info: dict
+
+
+class ThrusterDynamics:
+    """The thrusters on the plant's vehicle: B (6, n), bounds (n,) and time constants (n,).
+
+    Args:
+        plant: the Plant (its robot gives the frames); thrusters: their data.
+
+    Raises:
+        ModelCheckError: a thruster on an arm link, a fixed base.
+        UVMSError: no thrusters.
+    """
+
+    def __init__(self, plant: Plant, thrusters: Thrusters) -> None:
+        if len(thrusters) == 0:
+            raise UVMSError(f"{thrusters.source}: no thrusters to actuate the vehicle with")
+        self.thrusters = thrusters
+        self.matrix = allocation_matrix(plant.robot, thrusters)  # (6, n)
+        self.lower, self.upper = thrusters.lower, thrusters.upper
+        self.time_constants = thrusters.time_constants
+        self.n = len(thrusters)
+
+    def saturate(self, command: np.ndarray) -> np.ndarray:
+        """The command (n,) clipped to [lower, upper] [N]."""
+        return np.clip(command, self.lower, self.upper)
+
+    def rate(self, thrusts: np.ndarray, saturated_command: np.ndarray) -> np.ndarray:
+        """f' (n,) [N/s] = (sat(f_cmd) - f) / tau."""
+        return (saturated_command - thrusts) / self.time_constants
+
+    def wrench(self, thrusts: np.ndarray) -> np.ndarray:
+        """B f (6,) [N, N m], FLU at the base frame origin."""
+        return self.matrix @ thrusts
+
+
+# ------------------------------------------------------------------ model terms used by controllers and records
+def base_twist(plant: Plant, v: np.ndarray) -> np.ndarray:
+    """The vehicle's body twist (6,) [m/s, rad/s] in its base frame (FLU) from the velocity v (nv,)."""
+    joint_twist = pin.Motion(v[:6]) if plant.nb == 6 else pin.Motion(np.array([v[0], v[1], 0.0, 0.0, 0.0, v[2]]))
+    return plant._base_placement.actInv(joint_twist).vector
+
+
+def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
+                             arm_acceleration: np.ndarray) -> np.ndarray:
+    """The body wrench (6,) [N, N m] at the base frame that gives the vehicle ``base_acceleration``.
+
+    The vehicle rows of the plant's own equations of motion (rigid-body + added-mass inertia, Coriolis,
+    damping, restoring, current: those the Plant was built with), Mbar_bb a_b + Mbar_bm a_m + nbar_b,
+    mapped from the vehicle joint to the base frame. This is Fossen's M nu' + C(nu) nu + D(nu) nu + g(eta)
+    of the whole UVMS, the arm's reaction included when v and a_m hold the arm's motion.
+
+    Args:
+        plant: the model (its current, damping, gravity choices apply).
+        q: (nq,); v: (nv,) [m/s, rad/s] (vehicle part in the vehicle joint's local axes, as in the plant).
+        base_acceleration: (nb,) vehicle twist rate, same axes as v; arm_acceleration: (n_arm,).
+    """
+    mass, bias = plant._mass_and_bias(q, v)
+    nb = plant.nb
+    generalized = mass[:nb, :nb] @ base_acceleration + mass[:nb, nb:] @ arm_acceleration + bias[:nb]
+    if nb == 3:  # planar: the joint's (fx, fy, mz) rows
+        generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
+    return plant._base_placement.actInv(pin.Force(generalized)).vector
+
+
+def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> float:
+    """Power [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water)."""
+    if not plant.damping or not plant.links:
+        return 0.0
+    pin.forwardKinematics(plant.model, plant.data, q, v)
+    total = 0.0
+    for link in plant.links:
+        nu, _, pose = plant._link_motion(link)
+        nu_r, _ = plant._relative_twist(nu, pose)
+        total += float(link.params.damping_wrench(nu_r) @ nu)
+    return total
+
+
+# ------------------------------------------------------------------ the system of the one loop
+@dataclass(frozen=True)
+class ActuatedSample:
+    """The plant at the start of a step: the held commands and the dynamics they give.
+
+    Attributes:
+        rate: (v (nv,), [v' (nv,), f' (n,)]); command: the controller's ActuatedCommand;
+        thrust_command: sat(f_cmd) (n,) [N]; dynamics: accelerations and motor torques.
+    """
+
+    rate: tuple[np.ndarray, np.ndarray]
+    command: ActuatedCommand
+    thrust_command: np.ndarray
+    dynamics: PlantDynamics
+
+
+class ActuatedPlantSystem:
+    """The plant with thrusters under a digital controller, as the state (q, [v, f]) of
+    :func:`uvms.simulate.run_loop`.
+
+    Args:
+        plant: the Plant; thrusters: ThrusterDynamics on it.
+        controller: (t, q, v, f) -> ActuatedCommand, called once per step (see the module docstring).
+    """
+
+    def __init__(self, plant: Plant, thrusters: ThrusterDynamics, controller: ActuatedController) -> None:
+        self.plant, self.thrusters, self.controller = plant, thrusters, controller
+        self.model = plant.model
+        self.nv = plant.model.nv
+        self._passive = PlantSystem(plant, None)  # its record: energies, momentum, torques
+
+    def _command(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
+        command = self.controller(t, q, v, thrusts)
+        arm, thrust = np.asarray(command.arm, dtype=float), np.asarray(command.thrust, dtype=float)
+        if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) \
+                or not (np.all(np.isfinite(arm)) and np.all(np.isfinite(thrust))):
+            raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities and "
+                            f"{self.thrusters.n} finite thrusts [N], got {arm!r} and {thrust!r} at t = {t:.6g} s")
+        return ActuatedCommand(arm, thrust, command.info)
+
+    def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray,
+              thrust_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
+        v, thrusts = x[:self.nv], x[self.nv:]
+        dynamics = self.plant._evaluate(q, v, arm, self.thrusters.wrench(thrusts))
+        return dynamics, (v, np.concatenate([dynamics.acceleration, self.thrusters.rate(thrusts, thrust_command)]))
+
+    def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> ActuatedSample:
+        """The controller's command at the step's start and the rate it gives."""
+        command = self._command(t, q, x[:self.nv], x[self.nv:])
+        saturated = self.thrusters.saturate(command.thrust)
+        dynamics, rate = self._rate(q, x, command.arm, saturated)
+        return ActuatedSample(rate, command, saturated, dynamics)
+
+    def stage_rate(self, sample: ActuatedSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
+        """(t, q, x) -> (v, [v', f']) with the step's commands held."""
+        arm, thrust_command = sample.command.arm, sample.thrust_command
+        return lambda t, q, x: self._rate(q, x, arm, thrust_command)[1]
+
+    def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
+        """The plant series (v, command, torques, energies, momentum) and the thrusters' and controller's."""
+        v, thrusts = x[:self.nv], x[self.nv:]
+        passive = PlantSample(sample.rate, sample.command.arm, sample.dynamics)
+        row = self._passive.record(t, q, v, passive)
+        wrench = self.thrusters.wrench(thrusts)
+        row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
+                   thrust_power=float(wrench @ base_twist(self.plant, v)),
+                   motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]),
+                   damping_power=damping_power(self.plant, q, v), **sample.command.info)
+        return row
+
+    def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
+        """Raise UVMSError when the state reached at t [s] is not finite (the step dt was too large)."""
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(x))):
+            raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")

@@ -1,0 +1,204 @@
+"""Thrust allocation: the thrusts f (n,) that give a body wrench tau (6,) = B f within the thrusters' limits.
+
+Three steps, the cheap one first:
+
+1. the minimum-norm solution f = B^+ tau (one matrix-vector product with a pseudo-inverse computed once);
+   when it lies within [lower, upper] and reproduces tau, it is the answer and no solver runs;
+2. otherwise a lexicographic bounded least squares over priority groups of wrench axes: the first group
+   minimizes |W_1 (B_1 f - tau_1)| over lower <= f <= upper (scipy's ``lsq_linear``, bounded least squares),
+   each further group does the same subject to keeping the wrench of the groups above it
+   (B_j f = B_j f_j*), a QP solved by DAQP through ``qpsolvers``;
+3. the thrusts of least norm that keep the achieved wrench (a QP): among the many thrust vectors that give
+   one wrench (n > 6), the one that spends least.
+
+With one group of all six axes (the default) the achieved wrench is the bounded least-squares optimum
+B f* with f* = argmin |W (B f - tau)| s.t. bounds.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import lsq_linear
+
+from ..conventions import AXIS_NAMES
+from ..errors import SolverInputError, UVMSError
+from ..kinematics import axis_rows
+from ..solvers.inverses import pinv
+
+#: Slack [N] on the bounds and the wrench when deciding that the pseudo-inverse solution is good enough.
+TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class AllocationResult:
+    """What one allocation gives.
+
+    Attributes:
+        thrusts: f (n,) [N], within [lower, upper].
+        saturated: (n,) bool, the thrusts at a bound.
+        achieved_wrench: B f (6,) [N, N m], body FLU at the base frame origin.
+        residual: tau - B f (6,) [N, N m].
+        attainable: True when tau itself is attained (within the tolerance).
+        solver: "pinv" (no solver ran) or "bounded" (the lexicographic bounded least squares).
+    """
+
+    thrusts: np.ndarray
+    saturated: np.ndarray
+    achieved_wrench: np.ndarray
+    residual: np.ndarray
+    attainable: bool
+    solver: str
+
+
+class ThrustAllocator:
+    """Allocation of body wrenches to thrusters with bounds and axis priorities.
+
+    Args:
+        matrix: B (6, n) (:func:`uvms.dynamics.thrusters.allocation_matrix`).
+        lower, upper: (n,) thrust bounds [N], lower <= 0 <= upper.
+        priorities: groups of wrench axes, highest first, e.g. ``[("z", "roll", "pitch"), ("x", "y", "yaw")]``
+            (attitude and depth before surge, sway and yaw); the names of ``uvms.conventions.AXIS_NAMES``
+            (x, y, z forces, roll, pitch, yaw moments); axes left out are not allocated. None: one group of all six.
+        weights: (6,) > 0 per-axis weights of the least squares (e.g. 1/N and 1/(N m) scales); None: ones.
+        tolerance: [N] slack deciding that B^+ tau is within bounds and exact.
+
+    Raises:
+        SolverInputError: shapes, non-finite numbers, bounds that exclude 0, bad axis names or weights.
+    """
+
+    def __init__(self, matrix: np.ndarray, lower: np.ndarray, upper: np.ndarray, *,
+                 priorities: Sequence[Sequence[str]] | None = None, weights: np.ndarray | None = None,
+                 tolerance: float = TOLERANCE) -> None:
+        self.matrix = _finite(matrix, "allocation matrix B", 2)
+        if self.matrix.shape[0] != 6 or self.matrix.shape[1] == 0:
+            raise SolverInputError(f"B must be (6, n) with n >= 1 thrusters, got {self.matrix.shape}")
+        n = self.matrix.shape[1]
+        self.lower, self.upper = _finite(lower, "lower", 1), _finite(upper, "upper", 1)
+        if self.lower.shape != (n,) or self.upper.shape != (n,) or np.any(self.lower > 0) or np.any(self.upper < 0):
+            raise SolverInputError(f"lower and upper must be {n} bounds with lower <= 0 <= upper [N], got "
+                                   f"{self.lower.tolist()} and {self.upper.tolist()}")
+        self.weights = np.ones(6) if weights is None else _finite(weights, "weights", 1)
+        if self.weights.shape != (6,) or np.any(self.weights <= 0):
+            raise SolverInputError(f"weights must be 6 numbers > 0, got {weights!r}")
+        self.groups = _priority_groups(priorities)
+        self.tolerance = float(tolerance)
+        self.inverse = pinv(self.matrix)  # (n, 6), computed once: the attainable case is one product
+        self._rows = sorted(row for group in self.groups for row in group)
+        self._all_rows = len(self._rows) == 6
+
+    @property
+    def n(self) -> int:
+        """Number of thrusters."""
+        return self.matrix.shape[1]
+
+    def unconstrained(self, wrench: np.ndarray) -> np.ndarray:
+        """The minimum-norm thrusts B^+ tau (n,) [N], bounds ignored."""
+        return self.inverse @ _wrench(wrench)
+
+    def allocate(self, wrench: np.ndarray) -> AllocationResult:
+        """The thrusts for ``wrench`` (6,) [N, N m] within the bounds (module docstring).
+
+        Raises:
+            SolverInputError: a wrench that is not 6 finite numbers.
+            UVMSError: the QP solver failed (it should not: every stage is feasible by construction).
+        """
+        wrench = _wrench(wrench)
+        if self._all_rows:
+            thrusts = self.inverse @ wrench
+            slack = self.tolerance
+            if (thrusts >= self.lower - slack).all() and (thrusts <= self.upper + slack).all():
+                achieved = self.matrix @ thrusts
+                residual = wrench - achieved
+                if np.abs(residual).max() <= 10 * slack * max(1.0, np.abs(wrench).max()):  # B has full row rank
+                    return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, True, "pinv")
+        return self._result(self._least_norm(self._lexicographic(wrench)), wrench, "bounded")
+
+    # ------------------------------------------------------------------ the bounded stages
+    def _lexicographic(self, wrench: np.ndarray) -> np.ndarray:
+        """Thrusts minimizing each priority group's weighted residual in turn, keeping the groups above."""
+        kept: list[int] = []
+        thrusts = None
+        for group in self.groups:
+            weights = self.weights[group][:, None]
+            a, b = weights * self.matrix[group], self.weights[group] * wrench[group]
+            if not kept:
+                thrusts = lsq_linear(a, b, bounds=(self.lower, self.upper), method="bvls", tol=1e-12).x
+            else:
+                thrusts = self._solve_qp(a.T @ a, -a.T @ b, self.matrix[kept], self.matrix[kept] @ thrusts, thrusts)
+            thrusts = np.clip(thrusts, self.lower, self.upper)
+            kept += list(group)
+        return thrusts
+
+    def _least_norm(self, thrusts: np.ndarray) -> np.ndarray:
+        """The thrusts of least norm within bounds giving the same allocated wrench rows as ``thrusts``."""
+        rows = self._rows
+        if self.n <= np.linalg.matrix_rank(self.matrix[rows]):
+            return thrusts  # no freedom left: the wrench fixes the thrusts
+        return np.clip(self._solve_qp(np.eye(self.n), np.zeros(self.n), self.matrix[rows],
+                                      self.matrix[rows] @ thrusts, thrusts), self.lower, self.upper)
+
+    def _solve_qp(self, p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray, start: np.ndarray) -> np.ndarray:
+        """min 1/2 x^T P x + q^T x s.t. A x = b, bounds, by DAQP; ``start`` is feasible, and kept if DAQP fails."""
+        from qpsolvers import solve_qp
+
+        # P is only semi-definite (fewer wrench rows than thrusters): DAQP's proximal-point iterations
+        # (eps_prox > 0) solve such a QP exactly, where a regularization of P would move the optimum
+        a, b = _independent_rows(a, b)
+        solution = solve_qp(p, q, A=a, b=b, lb=self.lower, ub=self.upper, solver="daqp", eps_prox=1e-6)
+        if solution is None or not np.all(np.isfinite(solution)):
+            return start  # the previous stage's thrusts satisfy every constraint
+        return solution
+
+    def _result(self, thrusts: np.ndarray, wrench: np.ndarray, solver: str) -> AllocationResult:
+        achieved = self.matrix @ thrusts
+        residual = wrench - achieved
+        scale = max(1.0, float(np.max(np.abs(wrench))))
+        saturated = (thrusts <= self.lower + 1e-9 * scale) & (self.lower < 0) | (thrusts >= self.upper - 1e-9 * scale)
+        attainable = bool(np.max(np.abs(residual[self._rows])) <= 1e-6 * scale)
+        return AllocationResult(thrusts, saturated, achieved, residual, attainable, solver)
+
+
+# ------------------------------------------------------------------ helpers
+def _finite(value: object, what: str, ndim: int) -> np.ndarray:
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise SolverInputError(f"{what} must be numbers, got {value!r}") from None
+    if array.ndim != ndim or not np.all(np.isfinite(array)):
+        raise SolverInputError(f"{what} must be a finite {'vector' if ndim == 1 else 'matrix'}, got {value!r}")
+    return array
+
+
+def _wrench(wrench: np.ndarray) -> np.ndarray:
+    if isinstance(wrench, np.ndarray) and wrench.shape == (6,) and wrench.dtype == float \
+            and np.isfinite(wrench).all():
+        return wrench  # the hot path: the vehicle controller's own array
+    array = _finite(wrench, "wrench", 1)
+    if array.shape != (6,):
+        raise SolverInputError(f"a body wrench is 6 numbers [fx, fy, fz, mx, my, mz] (N, N m), got {array.shape}")
+    return array
+
+
+def _priority_groups(priorities: Sequence[Sequence[str]] | None) -> list[list[int]]:
+    """Rows of each priority group; every axis at most once."""
+    if priorities is None:
+        return [list(range(6))]
+    try:
+        groups = [axis_rows([group] if isinstance(group, str) else list(group)) for group in priorities]
+        axis_rows([axis for group in priorities for axis in ([group] if isinstance(group, str) else group)])
+    except UVMSError as exc:
+        raise SolverInputError(f"priorities: {exc} (groups of {', '.join(AXIS_NAMES)}, each axis once)") from None
+    if not groups or any(not group for group in groups):
+        raise SolverInputError("priorities must be non-empty groups of wrench axes, highest first")
+    return groups
+
+
+def _independent_rows(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Equality rows A x = b reduced to an independent set (DAQP refuses dependent equalities)."""
+    u, singular, vt = np.linalg.svd(a, full_matrices=False)
+    rank = int(np.sum(singular > 1e-10 * max(1.0, singular[0] if singular.size else 0.0)))
+    # A = U S V^T, so A x = b (consistent) <=> V_r^T x = S_r^-1 U_r^T b on the rank rows
+    return vt[:rank], (u[:, :rank].T @ b) / singular[:rank]
