@@ -24,7 +24,8 @@ from .tasks.vehicle import VELOCITY_NAMES
 
 #: The time series of a task, in the order of ``trajectory.npz``.
 SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",
-          "position_error", "orientation_error", "sigma_min", "damping", "limits_active")
+          "position_error", "orientation_error", "sigma_min", "damping", "limits_active", "objective_value",
+          "objective_activation", "objective_active", "speed_ratio")
 #: The series of a GJM-controlled plant run, in the order of ``plant.npz``.
 PLANT_SERIES = ("t", "q", "v", "command", "rates", "joint_torque", "kinetic_energy", "potential_energy", "momentum",
                 "ee_position", "desired_position", "ee_velocity", "desired_velocity", "position_error", "sigma_min",
@@ -43,6 +44,9 @@ class SimulationResult:
         position_error: (N,) [m] norm over the task's position axes.
         orientation_error: (N,) [rad] norm over the task's orientation axes.
         sigma_min, damping: (N,) of the inverted Jacobian; limits_active: (N,) joints held at a limit.
+        objective_value, objective_activation: (N, k) the rows of a scenario's inequality objectives (their
+            values in their units, activations in [0, 1]); objective_active: (N, n_objectives) bool;
+            speed_ratio: (N,) max_i |v_i| / max_i over the speed limits (:mod:`uvms.scenario.inequalities`).
         command: (N, n_arm) joint-velocity commands u [rad/s or m/s] (plant runs).
         joint_torque: (N, n_arm) motor torques [N m or N] (plant runs).
         kinetic_energy, potential_energy: (N,) [J] (plant runs; kinetic includes the added mass).
@@ -66,6 +70,10 @@ class SimulationResult:
     sigma_min: np.ndarray | None = None
     damping: np.ndarray | None = None
     limits_active: np.ndarray | None = None
+    objective_value: np.ndarray | None = None
+    objective_activation: np.ndarray | None = None
+    objective_active: np.ndarray | None = None
+    speed_ratio: np.ndarray | None = None
     robot: Robot = field(default=None, repr=False)
     axes: tuple[str, ...] = ()
     wall_time: float = 0.0

@@ -171,6 +171,7 @@ def simulate(
     desired: Callable[[float], pin.SE3],
     integrator: str = "rk4",
     progress: bool | None = None,
+    recorders: Sequence[Recorder] = (),
 ) -> SimulationResult:
     """Integrate q' = controller(t, q, None) from q0 for ``duration`` with step ``dt``.
 
@@ -184,12 +185,14 @@ def simulate(
         desired: t -> desired pose of the task frame (for the record).
         integrator: "euler" or "rk4".
         progress: show a progress bar (None: only on a terminal).
+        recorders: more series per row, after the task's (e.g. the inequalities of
+            :class:`uvms.scenario.inequalities.ObjectiveRecorder`); their names must be fields of SimulationResult.
     """
     check_integrator(integrator)
     steps = step_count(duration, dt)
     q = robot.check_configuration(q0).copy()
     arrays, wall_time = run_loop(KinematicSystem(robot, controller), q, EMPTY, steps=steps, dt=dt,
-                                 integrator=integrator, recorders=[TaskRecorder(robot, task, desired)],
+                                 integrator=integrator, recorders=[TaskRecorder(robot, task, desired), *recorders],
                                  progress=progress, desc="simulate")
     return SimulationResult(**arrays, robot=robot, axes=task.axes, wall_time=wall_time, integrator=integrator, dt=dt)
 

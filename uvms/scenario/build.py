@@ -20,12 +20,18 @@ from ..solvers import (
     VariableDamping,
     clik_velocity,
     constrained_velocity,
+    hqp_velocity,
     initial_configuration,
     priority_velocity,
+    set_based_velocity,
 )
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
 from ..trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw, VelocityRamps
+from .inequalities import ENFORCING_METHODS, ScenarioInequalities, build_inequalities
 from .schema import NUMBER, SCHEMA
+
+#: The methods that take solver.weights (the W of the solved columns).
+WEIGHTED_METHODS = ("clik", *ENFORCING_METHODS)
 
 @dataclass
 class Setup:
@@ -41,6 +47,7 @@ class Setup:
     plan: PhasePlan | None = None  # sequence scenarios only
     plant: Plant | None = None  # [plant] type rigid or hydrodynamic: the controller is a GJMController
     control_dt: float = 0.0  # [s] sampling period of that controller (0: continuous)
+    inequalities: ScenarioInequalities | None = None  # [[inequalities]]: enforced (set_based, hqp) or monitored
 
 
 def build(scenario: dict) -> Setup:
@@ -48,6 +55,9 @@ def build(scenario: dict) -> Setup:
     model = scenario["model"]
     robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
     if scenario["phases"]:
+        if scenario["inequalities"]:
+            raise ScenarioError("[[inequalities]] need a [task] and a [trajectory]; a sequence scenario ([[phases]]) "
+                                "has neither")
         if scenario["plant"]["type"] != "kinematic":
             raise ScenarioError("a sequence scenario ([[phases]]) runs on the kinematic plant only; "
                                 "remove [plant] or set plant.type = 'kinematic'")
@@ -59,12 +69,17 @@ def build(scenario: dict) -> Setup:
     trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
     duration = float(scenario["simulation"]["duration"] or trajectory.duration)
     if scenario["plant"]["type"] != "kinematic":
+        if scenario["inequalities"]:
+            raise ScenarioError(f"[[inequalities]] run on the kinematic plant only; plant.type = "
+                                f"{scenario['plant']['type']!r} drives a passive vehicle by the GJM controller")
         plant, controller = make_plant_controller(robot, task, trajectory, scenario)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(scenario["plant"]["control_dt"]))
     check_kinematic_plant(scenario["plant"])
-    controller = make_controller(robot, task, trajectory, scenario)
-    return Setup(robot, task, trajectory, q0, controller, duration, residual)
+    inequalities = (build_inequalities(robot, scenario["inequalities"], scenario["solver"]["method"])
+                    if scenario["inequalities"] else None)
+    controller = make_controller(robot, task, trajectory, scenario, inequalities)
+    return Setup(robot, task, trajectory, q0, controller, duration, residual, inequalities=inequalities)
 
 
 def build_sequence(robot: Robot, scenario: dict) -> Setup:
@@ -268,9 +283,9 @@ def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarra
     """
     if not solver["weights"]:
         return None
-    if solver["method"] != "clik":
+    if solver["method"] not in WEIGHTED_METHODS:
         raise ScenarioError(f"solver.weights (the W of the weighted pseudo-inverse) is used by solver.method = "
-                            f"'clik' only, not {solver['method']!r}; remove it")
+                            f"{', '.join(map(repr, WEIGHTED_METHODS))} only, not {solver['method']!r}; remove it")
     weights = np.asarray(solver["weights"], dtype=float)
     if free_floating:
         size, covered = robot.n_arm, (f"free-floating (generalized-Jacobian) weights cover the arm joints only "
@@ -287,8 +302,25 @@ def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarra
     return weights
 
 
-def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
-    """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method."""
+def check_enforcing_solver(solver: dict) -> None:
+    """Refuse the keys of solver.method = 'clik' that set_based/hqp do not take (they have their own limits)."""
+    method = solver["method"]
+    if solver["alpha"] or solver["enforce_limits"]:
+        raise ScenarioError(f"solver.alpha and solver.enforce_limits are CLIK's joint-limit handling; with "
+                            f"solver.method = {method!r} the limits are an [[inequalities]] table of type "
+                            f"'joint_limits' (margin, band [rad])")
+    if method == "hqp" and (solver["damping"] or solver["damping_epsilon"]):
+        raise ScenarioError("solver.damping and solver.damping_epsilon are not used by solver.method = 'hqp' "
+                            "(each QP is regularized by solver.regularization); remove them or use 'set_based'")
+
+
+def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict,
+                    inequalities: ScenarioInequalities | None = None):
+    """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method.
+
+    With solver.method = "set_based" or "hqp" the levels are the ``[[inequalities]]`` (highest first) and
+    then the task; any other method leaves the inequalities to the recorder (monitored, not enforced).
+    """
     solver, vehicle = scenario["solver"], scenario["vehicle"]
     dt = scenario["simulation"]["dt"]
     gain = np.asarray(solver["gain"], dtype=float)
@@ -298,8 +330,11 @@ def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
     potential = JointLimitPotential(robot, weights=np.asarray(solver["joint_limit_weights"], dtype=float))
     weights = solver_weights(robot, solver, free_floating=solver["free_floating"])
     method = solver["method"]
+    levels = [*(inequalities.levels if inequalities is not None else []), task]
+    if method in ENFORCING_METHODS:
+        check_enforcing_solver(solver)
     vehicle_task = None
-    if method != "clik":
+    if method in ("task_priority", "kinematic_constraint"):
         if not vehicle["velocities"] and vehicle["heading"] is None and vehicle["depth"] is None:
             raise ScenarioError(f"solver.method = {method!r} needs a [vehicle] task (velocities, heading or depth)")
         vehicle_task = VehicleTask(robot, velocities=vehicle["velocities"], heading=vehicle["heading"],
@@ -316,6 +351,12 @@ def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict):
             result = clik_velocity(robot, q, task, gain=gain, weights=weights, damping=damping, potential=potential,
                                    alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
                                    enforce_limits=solver["enforce_limits"])
+        elif method == "set_based":
+            result = set_based_velocity(robot, q, levels, gain=gain, weights=weights, damping=damping,
+                                        eta=solver["eta"], free_floating=solver["free_floating"], dt=dt)
+        elif method == "hqp":
+            result = hqp_velocity(robot, q, levels, dt=dt, gain=gain, weights=weights,
+                                  free_floating=solver["free_floating"], regularization=solver["regularization"])
         elif method == "task_priority":
             result = priority_velocity(robot, q, [task, vehicle_task], gain=[gain, vehicle["gain"]],
                                        method=solver["priority"], damping=float(solver["damping"]))

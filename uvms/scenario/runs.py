@@ -16,6 +16,7 @@ from ..control.sequence import sequence_metrics
 from ..errors import NumericalError
 from ..simulate import SimulationResult, simulate, simulate_gjm, step_count
 from .build import Setup, build
+from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
 from .schema import read_scenario
 from .verdict import run_verdict
@@ -57,11 +58,15 @@ def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) ->
         yaw = vehicle[:, -1]  # unwrapped
         metrics["vehicle_travel"] = float(np.linalg.norm(np.diff(position, axis=0), axis=1).sum())
         metrics["vehicle_yaw_range"] = float(yaw.max() - yaw.min())
+        if robot.base_type == "floating":
+            metrics["max_vehicle_tilt"] = float(vehicle_tilt(vehicle).max())
     else:
         metrics["vehicle_travel"] = 0.0
         metrics["vehicle_yaw_range"] = 0.0
     if setup.plan is not None:
         metrics.update(sequence_metrics(robot, setup.plan, result.t, result.q))
+    if setup.inequalities is not None:
+        metrics.update(inequality_metrics(setup.inequalities, result.arrays()))
     return metrics
 
 
@@ -155,9 +160,10 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
                                           integrator=simulation_section["integrator"], progress=progress,
                                           task=setup.task)
     else:
+        recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
         result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration,
                           dt=simulation_section["dt"], task=setup.task, desired=lambda t: setup.trajectory(t).pose,
-                          integrator=simulation_section["integrator"], progress=progress)
+                          integrator=simulation_section["integrator"], progress=progress, recorders=recorders)
     metrics = compute_metrics(result, setup, time.perf_counter() - started)
     metrics["scenario"] = scenario["scenario"]["name"]
     metrics["model"] = model_record(scenario, setup.robot)  # what `uvms view --result DIR` replays the run on
@@ -172,6 +178,12 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
         from ..viz.plotting import scenario_figures  # matplotlib only when figures are asked for
 
         files += scenario_figures(result, setup.trajectory, folder, title=scenario["scenario"]["name"])
+        if setup.inequalities is not None and setup.inequalities.objectives:
+            from ..viz.objectives import inequality_figure
+
+            inequality_figure(result, setup.inequalities.objectives, scenario["scenario"]["name"],
+                              label=scenario["solver"]["method"], path=folder / "inequalities.png")
+            files.append(folder / "inequalities.png")
         if plant_run is not None:
             from ..viz.plotting import gjm_figures
 
@@ -183,7 +195,7 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
                                       animation=scenario["outputs"]["animation"], progress=progress)
     if scenario["outputs"]["bag"]:
         files.append(write_run_bag(folder, setup, result, metrics))
-    metrics["verdict"] = run_verdict(metrics, scenario["outputs"])
+    metrics["verdict"] = run_verdict(metrics, scenario["outputs"], inequality_warnings(metrics))
     outputs.write_json(folder / "metrics.json", metrics)
     files.append(folder / "metrics.json")
     return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files,

@@ -22,6 +22,7 @@ else:  # pragma: no cover - Python 3.10
 
 from ..control.gjm import GJM_KINDS
 from ..errors import ScenarioError
+from .inequalities import check_tables
 from .resources import resolve_scenario_path
 
 NUMBER = (int, float)
@@ -33,6 +34,9 @@ DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
 #: free-floating dynamics of uvms.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
+#: solver.method values: CLIK, classic/robust task priority, santos2006's kinematic constraint, and the two that
+#: enforce [[inequalities]]: set-based task priority (iCAT) and the QP hierarchy.
+SOLVER_METHODS = ("clik", "task_priority", "kinematic_constraint", "set_based", "hqp")
 NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
 #: A name read from a scenario that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,
@@ -56,6 +60,8 @@ LOWER_BOUNDS: dict[str, tuple[float, bool, str]] = {
     "solver.damping": (0.0, False, "the DLS damping"),
     "solver.damping_epsilon": (0.0, False, "the singular-value threshold of the variable damping"),
     "solver.damping_max": (0.0, False, "the largest variable damping"),
+    "solver.eta": (0.0, False, "the weight of the iCAT regularization"),
+    "solver.regularization": (0.0, False, "the weight of |x|^2 in the QPs"),
     "outputs.position_tolerance": (0.0, True, "the largest position error [m] of a run said to meet its task"),
     "outputs.orientation_tolerance": (0.0, True, "the largest orientation error [rad] of a run said to meet its task"),
 }
@@ -97,7 +103,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "velocity": (NUMBERS, [], None),
     },
     "solver": {
-        "method": (str, "clik", ("clik", "task_priority", "kinematic_constraint")),
+        "method": (str, "clik", SOLVER_METHODS),
         "gain": ((int, float, list), 1.0, None),
         "weights": (NUMBERS, [], None),
         "damping": (NUMBER, 0.0, None),
@@ -108,6 +114,8 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "free_floating": (bool, False, None),
         "enforce_limits": (bool, False, None),
         "priority": (str, "robust", ("robust", "classic")),
+        "eta": (NUMBER, 1.0, None),  # set_based: weight of the iCAT (I - Q) regularization
+        "regularization": (NUMBER, 1e-9, None),  # hqp: weight of |x|^2_W in every level's QP
     },
     "vehicle": {
         "velocities": (dict, {}, None),
@@ -242,7 +250,7 @@ def apply_override(raw: dict, assignment: str) -> None:
 
 def validate(raw: Mapping, origin: str) -> dict:
     """Check sections, keys and types against :data:`SCHEMA`; fill the defaults."""
-    sections = [*SCHEMA, "phases"]
+    sections = [*SCHEMA, "phases", "inequalities"]
     unknown = sorted(set(raw) - set(sections))
     if unknown:
         raise ScenarioError(f"{origin}: unknown section(s) {', '.join(unknown)}; valid: {', '.join(sections)}")
@@ -258,6 +266,9 @@ def validate(raw: Mapping, origin: str) -> dict:
         raise ScenarioError(f"{origin}: phases must be an array of tables ([[phases]])")
     scenario["phases"] = [validate_table(phase, PHASE_SCHEMA, f"phases[{index}]", origin)
                           for index, phase in enumerate(phases)]
+    scenario["inequalities"] = check_tables(raw.get("inequalities", []), origin)
+    for index, table in enumerate(scenario["inequalities"]):
+        check_range(f"inequalities[{index}]", table, origin)
     if scenario["scenario"]["name"]:
         check_name("scenario.name", scenario["scenario"]["name"], origin,
                    "it names the default output folder out/<name>", example="hoang2011_w1")

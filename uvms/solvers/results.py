@@ -144,6 +144,7 @@ class SetBasedResult:
             position-rate bounds (1: not scaled; the lowest levels are scaled first).
         speed_ratio: max_i |v_i| / max_i over the speed limits given (0 without any).
         free_floating: whether only the arm was solved and the vehicle followed momentum conservation.
+        damping: the largest damping lambda of the levels' inverses (0: exact inverses; the QP hierarchy: 0).
     """
 
     v: np.ndarray
@@ -156,6 +157,7 @@ class SetBasedResult:
     scales: tuple[float, ...]
     speed_ratio: float
     free_floating: bool = False
+    damping: float = 0.0
 
     @property
     def active(self) -> tuple[str, ...]:

@@ -199,8 +199,9 @@ def build_hierarchy(robot: Robot, q: np.ndarray | KinematicState, levels: Levels
 # ----------------------------------------------------------------------------- the iCAT levels
 def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.ndarray | None,
                  weights: np.ndarray | None, damping: float | VariableDamping,
-                 eta: float) -> tuple[np.ndarray, float]:
-    """X^{#,A,Q} (n, m) of the iCAT (module docstring), and sigma_min of the weighted A^1/2 X (Q = None: I).
+                 eta: float) -> tuple[np.ndarray, float, float]:
+    """X^{#,A,Q} (n, m) of the iCAT (module docstring), sigma_min of the weighted A^1/2 X (Q = None: I) and the
+    damping used.
 
     Args:
         jacobian: X (m, n), the level's Jacobian times the projector of the levels above.
@@ -213,8 +214,8 @@ def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.nda
     rows = np.sqrt(activation)[:, None] * jacobian
     if projector is not None and eta > 0:
         rows = np.vstack([rows, np.sqrt(eta) * (np.eye(len(projector)) - projector)])  # Z (m + n, n)
-    inverse, sigma_min, _ = damped_weighted_inverse(rows, weights, damping)
-    return inverse[:, : jacobian.shape[0]] * activation**1.5, sigma_min
+    inverse, sigma_min, used = damped_weighted_inverse(rows, weights, damping)
+    return inverse[:, : jacobian.shape[0]] * activation**1.5, sigma_min, used
 
 
 def is_undamped(damping: float | VariableDamping) -> bool:
@@ -223,12 +224,13 @@ def is_undamped(damping: float | VariableDamping) -> bool:
 
 
 def solve_levels(hierarchy: Hierarchy, weights: np.ndarray | None, damping: float | VariableDamping,
-                 eta: float) -> tuple[list[np.ndarray], list[float]]:
-    """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,) and sigma_min."""
+                 eta: float) -> tuple[list[np.ndarray], list[float], float]:
+    """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,), its sigma_min, and
+    the largest damping used."""
     size = hierarchy.size
     rho, projector = np.zeros(size), np.eye(size)
     unrestricted = True  # Q = I exactly: no level above has moved anything
-    contributions, sigmas = [], []
+    contributions, sigmas, largest = [], [], 0.0
     for level in hierarchy.levels:
         jacobian, activation = level.solved, level.activation
         if not np.any(activation > 0):
@@ -237,13 +239,13 @@ def solve_levels(hierarchy: Hierarchy, weights: np.ndarray | None, damping: floa
             continue
         remaining = level.reference - jacobian @ rho
         if unrestricted and np.all(activation == 1.0):  # the CLIK case, solved exactly as clik_velocity does
-            inverse, sigma_min, _ = damped_weighted_inverse(jacobian, weights, damping)
+            inverse, sigma_min, used = damped_weighted_inverse(jacobian, weights, damping)
             contribution = inverse @ remaining
             projector = projector - inverse @ jacobian
         else:  # rows with a = 0 add nothing to Z nor to the inverse (its columns scale by a^1.5): left out
             rows = activation > 0
             projected = jacobian[rows] if unrestricted else jacobian[rows] @ projector
-            inverse, sigma_min = icat_inverse(projected, activation[rows], None, weights, damping, eta)
+            inverse, sigma_min, used = icat_inverse(projected, activation[rows], None, weights, damping, eta)
             regularized = inverse if unrestricted and is_undamped(damping) else icat_inverse(
                 projected, activation[rows], None if unrestricted else projector, weights, 0.0, eta)[0]
             transfer = projected @ regularized  # W_k (m, m)
@@ -253,7 +255,8 @@ def solve_levels(hierarchy: Hierarchy, weights: np.ndarray | None, damping: floa
         unrestricted = False
         contributions.append(contribution)
         sigmas.append(sigma_min)
-    return contributions, sigmas
+        largest = max(largest, used)
+    return contributions, sigmas, largest
 
 
 # --------------------------------------------------------------------------------- reporting
@@ -333,7 +336,7 @@ def set_based_velocity(
     hierarchy = build_hierarchy(robot, q, levels, gain, free_floating, speed_limits)
     if weights is not None:
         weights = check_weights(weights, hierarchy.size)
-    contributions, sigmas = solve_levels(hierarchy, weights, damping, eta)
+    contributions, sigmas, used = solve_levels(hierarchy, weights, damping, eta)
     maximum = speed_maximum(robot.nv, hierarchy.speed_limits)
     lower, upper = velocity_box(maximum, *rate_bounds(hierarchy, dt, fraction), contain_zero=True)
     solved, scales = saturate(hierarchy, contributions, lower, upper)
@@ -342,7 +345,7 @@ def set_based_velocity(
     return SetBasedResult(v=v, objectives=objective_statuses(hierarchy), command=command, error=error,
                           residual=residual, level_residuals=level_residuals,
                           sigma_min=last_task_sigma(hierarchy, sigmas), scales=scales,
-                          speed_ratio=speed_ratio(v, maximum), free_floating=free_floating)
+                          speed_ratio=speed_ratio(v, maximum), free_floating=free_floating, damping=used)
 
 
 def rate_bounds(hierarchy: Hierarchy, dt: float | None, fraction: float,

@@ -35,13 +35,38 @@ INEQUALITY_TYPES: dict[str, Callable[..., object]] = {
 }
 
 Objective = Inequality | VelocityLimit
+#: Constructor parameters that take Python objects, not plain data: not keys of a table.
+NOT_TABLE_KEYS = ("limit",)
 
 
 def table_keys(type_name: str) -> tuple[list[str], list[str]]:
     """(every key, the required ones) of an inequality type, from its constructor's signature."""
-    parameters = list(inspect.signature(INEQUALITY_TYPES[type_name]).parameters.values())[1:]  # after robot
+    parameters = [p for p in list(inspect.signature(INEQUALITY_TYPES[type_name]).parameters.values())[1:]
+                  if p.name not in NOT_TABLE_KEYS]  # after robot
     keys = [p.name for p in parameters]
     return keys, [p.name for p in parameters if p.default is inspect.Parameter.empty]
+
+
+def check_table(table: Mapping[str, object], where: str = "inequalities") -> tuple[str, dict]:
+    """The type and the other keys of an ``[[inequalities]]`` table, checked against the valid ones (no model needed).
+
+    Raises:
+        ObjectiveNameNotFound: an unknown type or key (the message lists the close ones).
+        ObjectiveError: a required key missing.
+    """
+    params = dict(table)
+    type_name = params.pop("type", None)
+    if not isinstance(type_name, str) or type_name not in INEQUALITY_TYPES:
+        raise ObjectiveNameNotFound("inequality type", str(type_name), list(INEQUALITY_TYPES), where=where)
+    keys, required = table_keys(type_name)
+    for key in params:
+        if key not in keys:
+            raise ObjectiveNameNotFound(f"key of a {type_name} inequality", key, keys, where=where)
+    missing = [key for key in required if key not in params]
+    if missing:
+        raise ObjectiveError(f"{where}: a {type_name} inequality needs {', '.join(missing)} "
+                             f"(keys: {', '.join(keys)})")
+    return type_name, params
 
 
 def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[Objective]:
@@ -59,18 +84,7 @@ def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[O
         ObjectiveNameNotFound: an unknown type or key (the message lists the close ones).
         ObjectiveError: a required key missing, or an invalid value.
     """
-    params = dict(table)
-    type_name = params.pop("type", None)
-    if not isinstance(type_name, str) or type_name not in INEQUALITY_TYPES:
-        raise ObjectiveNameNotFound("inequality type", str(type_name), list(INEQUALITY_TYPES), where="inequalities")
-    keys, required = table_keys(type_name)
-    for key in params:
-        if key not in keys:
-            raise ObjectiveNameNotFound(f"key of a {type_name} inequality", key, keys, where="inequalities")
-    missing = [key for key in required if key not in params]
-    if missing:
-        raise ObjectiveError(f"inequalities: a {type_name} inequality needs {', '.join(missing)} "
-                             f"(keys: {', '.join(keys)})")
+    type_name, params = check_table(table)
     built = INEQUALITY_TYPES[type_name](robot, **params)
     return list(built) if isinstance(built, list) else [built]  # type: ignore[list-item]
 
@@ -78,5 +92,5 @@ def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[O
 __all__ = [
     "ACTIVATION_SHAPES", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
     "JointVelocityLimits", "Manipulability", "Objective", "PlaneClearance", "VehicleAttitude",
-    "VehicleVelocityLimits", "VelocityLimit", "bell", "inequalities_from_table", "table_keys", "velocity_limits",
+    "VehicleVelocityLimits", "VelocityLimit", "bell", "check_table", "inequalities_from_table", "table_keys", "velocity_limits",
 ]

@@ -1,0 +1,199 @@
+"""A scenario's ``[[inequalities]]``: built on the model, recorded over the run, measured in ``metrics.json``.
+
+Each table is one priority level, highest first, all above ``[task]``::
+
+    [[inequalities]]
+    type = "vehicle_attitude"     # joint_limits, joint_velocity, vehicle_attitude, plane_clearance, manipulability
+    max_tilt = 0.0873             # [rad] (5 degrees)
+
+``solver.method = "set_based"`` (iCAT) or ``"hqp"`` (the QP cascade) enforces them. With another method they
+are *monitored*: recorded and reported exactly the same way, not enforced (``metrics.json`` says
+``"inequalities_enforced": false``), so the same scenario run with ``--set solver.method=clik`` shows what the
+inequalities change.
+
+The recorder evaluates every objective at every row from the configuration itself (not from the solver), so
+the series are comparable between methods; "active" is the solver's own report when it gives one (a QP row
+binding for hqp, an activation > 0 for set_based), else an activation > 0.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ScenarioError, UVMSError
+from ..robot import Robot
+from ..solvers.saturation import speed_maximum
+from ..state import KinematicState
+from ..tasks.objectives import Inequality, Objective, PlaneClearance, Manipulability, VelocityLimit, check_table
+from ..tasks.objectives import inequalities_from_table
+
+#: The methods that enforce the inequalities (the others monitor them).
+ENFORCING_METHODS = ("set_based", "hqp")
+#: An objective whose value is outside its valid set by more than this [its unit] is reported on the terminal:
+#: the activation keeps it inside up to the step's discretization (a tilt limit can be passed by a fraction
+#: of a degree between two solver calls), which is a result, not rounding.
+VIOLATION_SLACK = 1e-6
+
+
+def check_tables(tables: object, origin: str) -> list[dict]:
+    """The ``[[inequalities]]`` tables of a scenario file, their types and keys checked (no model needed).
+
+    Raises:
+        ScenarioError: not an array of tables, or an unknown type or key (the message lists the valid ones).
+    """
+    if not isinstance(tables, list) or not all(isinstance(table, dict) for table in tables):
+        raise ScenarioError(f"{origin}: inequalities must be an array of tables ([[inequalities]])")
+    for index, table in enumerate(tables):
+        try:
+            check_table(table, where=f"inequalities[{index}]")
+        except UVMSError as exc:
+            raise ScenarioError(f"{origin}: {exc}") from None
+    return [dict(table) for table in tables]
+
+
+@dataclass
+class ScenarioInequalities:
+    """The inequality levels of a scenario, highest priority first.
+
+    Attributes:
+        levels: one list of objectives per ``[[inequalities]]`` table (a joint_velocity table with
+            ``vehicle_max`` gives two speed limits).
+        types: the table type of each level.
+        enforced: whether the solver enforces them (set_based, hqp) or only monitors them.
+    """
+
+    levels: list[list[Objective]]
+    types: list[str]
+    enforced: bool
+
+    @property
+    def objectives(self) -> list[Inequality]:
+        """The objectives with rows (every one but the speed limits), in priority order."""
+        return [item for level in self.levels for item in level if isinstance(item, Inequality)]
+
+    @property
+    def speed_limits(self) -> list[VelocityLimit]:
+        return [item for level in self.levels for item in level if isinstance(item, VelocityLimit)]
+
+    def level_of(self, name: str) -> int:
+        """The level (0 = highest) of the objective or speed limit called ``name``."""
+        return next(index for index, level in enumerate(self.levels) if any(item.name == name for item in level))
+
+    def type_of(self, name: str) -> str:
+        return self.types[self.level_of(name)]
+
+
+def build_inequalities(robot: Robot, tables: Sequence[dict], method: str) -> ScenarioInequalities:
+    """The objectives of the scenario's tables on ``robot``.
+
+    Raises:
+        ScenarioError: an invalid value or name (frame, joint) of a table, or two objectives with one name.
+    """
+    levels, types = [], []
+    for index, table in enumerate(tables):
+        try:
+            levels.append(inequalities_from_table(robot, table))
+        except UVMSError as exc:
+            raise ScenarioError(f"inequalities[{index}] ({table.get('type')}): {exc}") from None
+        types.append(str(table["type"]))
+    names = [item.name for level in levels for item in level]
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise ScenarioError(f"inequalities: two objectives are called {repeated[0]!r}; give each its own "
+                            f"name = '...' (results and metrics.json report them by name)")
+    return ScenarioInequalities(levels, types, enforced=method in ENFORCING_METHODS)
+
+
+class ObjectiveRecorder:
+    """The inequality series of a row: every objective's value, activation and activity, and the speed ratio.
+
+    Args:
+        robot: the model; inequalities: the scenario's.
+    """
+
+    def __init__(self, robot: Robot, inequalities: ScenarioInequalities) -> None:
+        self.robot, self.objectives = robot, inequalities.objectives
+        self.maximum = speed_maximum(robot.nv, inequalities.speed_limits)  # (nv,) [m/s, rad/s], inf: none
+
+    def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
+        state = KinematicState(self.robot, q, check=False)
+        values = [objective.value(state) for objective in self.objectives]
+        activations = [objective.activation(value) for objective, value in zip(self.objectives, values)]
+        reported = {status.name: status.active for status in getattr(sample.info, "objectives", ())}
+        active = [reported.get(objective.name, bool(np.any(activation > 0)))
+                  for objective, activation in zip(self.objectives, activations)]
+        limited = np.isfinite(self.maximum)
+        v = sample.rate[0]
+        return {"objective_value": np.concatenate(values) if values else np.zeros(0),
+                "objective_activation": np.concatenate(activations) if activations else np.zeros(0),
+                "objective_active": np.array(active, dtype=bool),
+                "speed_ratio": float(np.max(np.abs(v[limited]) / self.maximum[limited], initial=0.0))}
+
+
+def vehicle_tilt(vehicle_pose: np.ndarray) -> np.ndarray:
+    """Tilt (N,) [rad] of a floating vehicle from its poses (N, 6) [x, y, z, roll, pitch, yaw]: the angle between
+    its z axis and the world's, cos tilt = cos roll cos pitch."""
+    return np.arccos(np.clip(np.cos(vehicle_pose[:, 3]) * np.cos(vehicle_pose[:, 4]), -1.0, 1.0))
+
+
+def inequality_metrics(inequalities: ScenarioInequalities, series: dict[str, np.ndarray]) -> dict:
+    """The metrics of a run's inequalities from the recorder's series.
+
+    Returns:
+        ``inequalities_enforced``; ``min_clearance`` [m] and ``min_manipulability`` over their objectives
+        (when any); ``max_joint_speed_ratio`` max_i |qdot_i| / max_i (when speed limits are given); and
+        ``inequalities``: per objective its ``type``, ``level``, ``active_fraction`` (of the rows),
+        ``max_activation``, ``max_violation`` (how far outside its valid set [its unit], 0 inside) and
+        ``value_range`` [min, max] of its value over the run and its rows.
+    """
+    objectives = inequalities.objectives
+    values, activations = series["objective_value"], series["objective_activation"]
+    metrics: dict = {"inequalities_enforced": inequalities.enforced}
+    per_objective, start = {}, 0
+    clearances, manipulabilities = [], []
+    for index, objective in enumerate(objectives):
+        rows = slice(start, start + objective.dim)
+        start += objective.dim
+        value = values[:, rows]
+        outside = np.maximum(objective.lower - value, value - objective.upper)
+        per_objective[objective.name] = {
+            "type": inequalities.type_of(objective.name),
+            "level": inequalities.level_of(objective.name),
+            "active_fraction": float(np.mean(series["objective_active"][:, index])),
+            "max_activation": float(activations[:, rows].max(initial=0.0)),
+            "max_violation": float(max(outside.max(initial=0.0), 0.0)),
+            "value_range": [float(value.min()), float(value.max())],
+        }
+        if isinstance(objective, PlaneClearance):
+            clearances.append(float(value.min()))
+        if isinstance(objective, Manipulability):
+            manipulabilities.append(float(value.min()))
+    for limit in inequalities.speed_limits:
+        per_objective[limit.name] = {"type": inequalities.type_of(limit.name),
+                                     "level": inequalities.level_of(limit.name)}
+    if clearances:
+        metrics["min_clearance"] = min(clearances)
+    if manipulabilities:
+        metrics["min_manipulability"] = min(manipulabilities)
+    if inequalities.speed_limits:
+        metrics["max_joint_speed_ratio"] = float(series["speed_ratio"].max())
+    metrics["inequalities"] = per_objective
+    return metrics
+
+
+def inequality_warnings(metrics: dict) -> list[str]:
+    """One sentence per objective that left its valid set (from :func:`inequality_metrics`)."""
+    warnings = []
+    enforced = metrics.get("inequalities_enforced", True)
+    for name, entry in metrics.get("inequalities", {}).items():
+        if entry.get("max_violation", 0.0) > VIOLATION_SLACK:
+            how = "" if enforced else " (monitored only: solver.method = 'set_based' or 'hqp' enforces it)"
+            warnings.append(f"{name} left its valid set by up to {entry['max_violation']:.3g}{how}")
+    ratio = metrics.get("max_joint_speed_ratio", 0.0)
+    if ratio > 1.0 + 1e-9:
+        how = "" if enforced else " (monitored only)"
+        warnings.append(f"a speed reached {ratio:.3g} times its limit (max_joint_speed_ratio){how}")
+    return warnings
