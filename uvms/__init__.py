@@ -55,13 +55,15 @@ from .solvers import (
 from .trajectory import ViaPointTrajectory, ctraj, jtraj
 
 # dynamics: hydrodynamics and the free-floating plant
-from .dynamics import HydroParameters, LinkHydrodynamics, Plant, generalized_jacobian_added_mass, hydrodynamics_of
+from .dynamics import (HydroParameters, LinkHydrodynamics, Plant, ThrustAllocator, allocation_matrix,
+                       generalized_jacobian_added_mass, hydrodynamics_of, thrusters_of)
 
 # control
-from .control import GJMControlError, GJMController, VelocityRamps
+from .control import GJMControlError, GJMController, StationKeeping, VelocityRamps, station_keeping
 
 # the one simulation loop, for kinematic and dynamic runs, and its result
 from .simulate import GJMResult, PlantResult, SimulationResult, simulate_gjm, simulate_plant
+from .simulate_actuated import actuation_metrics, simulate_actuated
 
 # workspace
 from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
@@ -85,11 +87,13 @@ __all__ = [
     # trajectories
     "ViaPointTrajectory", "ctraj", "jtraj",
     # dynamics
-    "HydroParameters", "LinkHydrodynamics", "Plant", "generalized_jacobian_added_mass", "hydrodynamics_of",
+    "HydroParameters", "LinkHydrodynamics", "Plant", "ThrustAllocator", "allocation_matrix",
+    "generalized_jacobian_added_mass", "hydrodynamics_of", "thrusters_of",
     # control
-    "GJMControlError", "GJMController", "VelocityRamps",
+    "GJMControlError", "GJMController", "StationKeeping", "VelocityRamps", "station_keeping",
     # simulation
-    "GJMResult", "PlantResult", "SimulationResult", "simulate_gjm", "simulate_plant",
+    "GJMResult", "PlantResult", "SimulationResult", "actuation_metrics", "simulate_actuated", "simulate_gjm",
+    "simulate_plant",
     # workspace
     "BatchKinematics", "WorkspaceResult", "monte_carlo",
 ]

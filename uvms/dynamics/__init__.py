@@ -1,10 +1,17 @@
-"""The dynamics layer: Fossen hydrodynamics of the model's links and the free-floating plant (Pinocchio).
+"""The dynamics layer: Fossen hydrodynamics of the model's links, the free-floating plant (Pinocchio), the
+vehicle's thrusters and their allocation.
 
-The loop that integrates a plant is :func:`uvms.simulate.simulate_plant` (one loop for every run).
+The loop that integrates a plant is :func:`uvms.simulate.simulate_plant` (one loop for every run); with
+thrusters, :func:`uvms.simulate_actuated.simulate_actuated` (the same loop).
 """
 
+from .actuated import ActuatedCommand, ActuatedPlantSystem, ThrusterDynamics, vehicle_inverse_dynamics
+from .allocation import AllocationResult, ThrustAllocator
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 from .plant import Plant, PlantSystem, generalized_jacobian_added_mass
+from .thrusters import Thruster, Thrusters, allocation_matrix, thrusters_of
 
-__all__ = ["HydroParameters", "LinkHydrodynamics", "Plant", "PlantSystem", "generalized_jacobian_added_mass",
-           "hydrodynamics_of"]
+__all__ = ["ActuatedCommand", "ActuatedPlantSystem", "AllocationResult", "HydroParameters", "LinkHydrodynamics",
+           "Plant", "PlantSystem", "ThrustAllocator", "Thruster", "ThrusterDynamics", "Thrusters",
+           "allocation_matrix", "generalized_jacobian_added_mass", "hydrodynamics_of", "thrusters_of",
+           "vehicle_inverse_dynamics"]

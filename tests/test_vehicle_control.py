@@ -1,0 +1,94 @@
+"""Vehicle control (uvms.control.vehicle), arm-vehicle coordination and station keeping of the BlueROV2 + Alpha 5."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import uvms
+from uvms.control.coordination import coordinated_arm_rates
+from uvms.control.station_keeping import station_keeping
+from uvms.control.vehicle import pose_velocity_reference
+from uvms.dynamics.actuated import vehicle_inverse_dynamics
+from uvms.dynamics.plant import Plant
+from uvms.dynamics.thrusters import thrusters_of
+from uvms.simulate_actuated import actuation_metrics, simulate_actuated
+
+DT = 0.01
+ARM = [3.0, 1.8, 1.8, 1.0, 0.0]  # the arm reaching forward and down, away from its limits
+
+
+@pytest.fixture(scope="module")
+def robot() -> uvms.Robot:
+    return uvms.load("bluerov2_alpha5")
+
+
+@pytest.fixture(scope="module")
+def thrusters(robot):
+    return thrusters_of(robot)
+
+
+def test_feedforward_is_the_plant_inverse_dynamics(robot, rng):
+    """The wrench vehicle_inverse_dynamics gives, applied to the plant, produces the asked vehicle acceleration."""
+    plant = Plant(robot, gravity=True, current=[0.2, -0.1, 0.05])
+    q = robot.configuration(base=[0.1, 0.2, -0.3, 0.2, -0.1, 0.5], arm=ARM)
+    v = rng.normal(size=robot.nv) * 0.3
+    base_acceleration, command = rng.normal(size=6), rng.normal(size=robot.n_arm) * 0.2
+    arm_acceleration = (command - v[6:]) / plant.motor_time_constant
+    wrench = vehicle_inverse_dynamics(plant, q, v, base_acceleration, arm_acceleration)
+    dynamics = plant._evaluate(q, v, command, wrench)
+    np.testing.assert_allclose(dynamics.acceleration[:6], base_acceleration, atol=1e-9)
+    np.testing.assert_allclose(dynamics.acceleration[6:], arm_acceleration, atol=1e-12)
+
+
+def test_pose_reference_rotates_the_world_error_into_the_body():
+    """Vehicle yawed +90 deg (body x = world y): a target 1 m along world x is 1 m along body -y."""
+    pose = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, np.pi / 2), np.zeros(3))
+    target = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, np.pi / 2 + 0.1), np.array([1.0, 0.0, 0.0]))
+    reference = pose_velocity_reference(pose, target, np.full(6, 2.0))
+    np.testing.assert_allclose(reference, [0.0, -2.0, 0.0, 0.0, 0.0, 0.2], atol=1e-12)
+
+
+def test_coordination_solves_the_arm_with_the_measured_vehicle(robot, rng):
+    q = robot.configuration(base=[0, 0, 0, 0.1, 0.0, 0.3], arm=ARM)
+    jacobian = robot.jacobian(q)[:3]
+    reference = rng.normal(size=robot.nv) * 0.1
+    measured = reference[:6] + rng.normal(size=6) * 0.05  # the vehicle off its reference
+    arm = coordinated_arm_rates(jacobian, reference, measured, 6)
+    np.testing.assert_allclose(jacobian @ np.concatenate([measured, arm]), jacobian @ reference, atol=1e-10)
+    same = coordinated_arm_rates(jacobian, reference, reference[:6], 6)  # the vehicle on its reference
+    np.testing.assert_allclose(jacobian[:, 6:] @ same, jacobian[:, 6:] @ reference[6:], atol=1e-10)
+
+
+def _run(robot, thrusters, current, coordination, *, start=None, hold_arm=False, duration=6.0):
+    plant = Plant(robot, gravity=True, current=current)
+    station = robot.configuration(base=np.zeros(6), arm=ARM)
+    controller = station_keeping(plant, thrusters, station, DT, coordination=coordination, hold_arm=hold_arm)
+    return simulate_actuated(plant, thrusters, controller, station if start is None else start, duration, DT)
+
+
+def test_station_keeping_in_still_water_converges(robot, thrusters):
+    """Started 10 cm and 0.1 rad off station, the arm held: the vehicle error goes to zero."""
+    start = robot.configuration(base=[0.1, -0.05, 0.03, 0.0, 0.0, 0.1], arm=ARM)
+    result = _run(robot, thrusters, [0.0, 0.0, 0.0], False, start=start, hold_arm=True)
+    error = result.actuation["vehicle_position_error"]
+    assert error[0] == pytest.approx(np.sqrt(0.1**2 + 0.05**2 + 0.03**2))
+    assert error[-1] < 2e-3 and result.actuation["vehicle_attitude_error"][-1] < 2e-3, (error[-1],)
+    np.testing.assert_array_equal(result.v[:, 6:], 0.0)  # no arm motion
+    metrics = actuation_metrics(result)
+    assert 0.0 < metrics["max_thrust_ratio"] <= 1.0
+
+
+def test_station_keeping_in_a_current_and_coordination(robot, thrusters):
+    """0.3 m/s current along x: the vehicle error stays bounded and decays; coordination cuts the
+    end-effector error (the arm takes up the vehicle's drift)."""
+    plain = _run(robot, thrusters, [0.3, 0.0, 0.0], False)
+    coordinated = _run(robot, thrusters, [0.3, 0.0, 0.0], True)
+    for result in (plain, coordinated):
+        error = result.actuation["vehicle_position_error"]
+        assert error.max() < 0.08 and error[-1] < 5e-3, (error.max(), error[-1])
+        assert actuation_metrics(result)["max_thrust_ratio"] <= 1.0
+    plain_ee, coordinated_ee = plain.actuation["ee_point_error"], coordinated.actuation["ee_point_error"]
+    assert coordinated_ee.max() < 0.5 * plain_ee.max(), (coordinated_ee.max(), plain_ee.max())
+    assert np.sqrt(np.mean(coordinated_ee**2)) < 0.5 * np.sqrt(np.mean(plain_ee**2))
