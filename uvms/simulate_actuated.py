@@ -80,13 +80,20 @@ def actuation_metrics(result: SimulationResult) -> dict:
 
     max_thrust_ratio: max over time and thrusters of |f_i| / (its limit in that direction), <= 1;
     saturated_time_fraction: fraction of rows with a thrust command at a bound;
-    thruster_energy: integral of the thrust power B f . nu (trapezoid) [J] (the mechanical work of the thrusts).
+    thrust_work: integral of the thrust power B f . nu [J] (signed: negative when the current pushes the
+    vehicle back against its thrust); thruster_energy: integral of sum_i |f_i (B_i . nu)| [J], the mechanical
+    power each thruster gives the hull, counted positive either way (not the electrical energy: no propeller
+    efficiency model); both by the trapezoid rule.
     """
     dynamics: ThrusterDynamics = result.thruster_dynamics
     thrusts, commands = result.actuation["thrusts"], result.actuation["thrust_command"]
     limits = np.where(thrusts >= 0, dynamics.upper, np.where(dynamics.lower < 0, -dynamics.lower, np.inf))
     at_bound = np.isclose(commands, dynamics.upper) | np.isclose(commands, dynamics.lower) & (dynamics.lower < 0)
-    power = result.actuation["thrust_power"]
     return {"max_thrust_ratio": float(np.max(np.abs(thrusts) / limits)),
             "saturated_time_fraction": float(np.mean(np.any(at_bound, axis=1))),
-            "thruster_energy": float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(result.t)))}
+            "thrust_work": _trapezoid(result.actuation["thrust_power"], result.t),
+            "thruster_energy": _trapezoid(result.actuation["thruster_power_abs"], result.t)}
+
+
+def _trapezoid(values: np.ndarray, t: np.ndarray) -> float:
+    return float(np.sum(0.5 * (values[1:] + values[:-1]) * np.diff(t)))

@@ -95,7 +95,7 @@ class StationKeeping:
         control = self.velocity.control(q, v, nu_ref, self.dt, arm_acceleration=arm_acceleration)
         pose = self.base_pose(q)
         info = {"wrench_command": control.wrench, "achieved_wrench": control.allocation.achieved_wrench,
-                "attainable": control.allocation.attainable,
+                "attainable": control.allocation.attainable, "velocity_integral": self.velocity.integral.copy(),
                 "vehicle_position_error": float(np.linalg.norm(self.vehicle_target.translation - pose.translation)),
                 "vehicle_attitude_error": float(np.linalg.norm(pin.log3(pose.rotation.T @ self.vehicle_target.rotation))),
                 "ee_position": self.robot.fk(q, self.frame).translation.copy()}

@@ -13,7 +13,8 @@ f moves towards it, f stays inside the bounds. A plant without thrusters keeps i
 The controller is digital: called once per step at the step's start, its command held over the
 integrator's stages, as a vehicle computer at 1/dt does; its state (integrators) advances per call.
 
-Power terms for the energy balance (no current): d(kinetic + potential)/dt = thrust power (B f . nu_base)
+Power terms for the energy balance (no current): d(kinetic + potential)/dt = thrust power (B f . nu_base,
+the sum of each thruster's f_i (B_i . nu))
 + motor power (tau_m . qd_m) + damping power (sum over links of the damping wrench . nu_l, <= 0).
 """
 
@@ -187,8 +188,10 @@ class ActuatedPlantSystem:
         passive = PlantSample(sample.rate, sample.command.arm, sample.dynamics)
         row = self._passive.record(t, q, v, passive)
         wrench = self.thrusters.wrench(thrusts)
+        # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu)
+        powers = thrusts * (self.thrusters.matrix.T @ base_twist(self.plant, v))
         row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
-                   thrust_power=float(wrench @ base_twist(self.plant, v)),
+                   thrust_power=float(np.sum(powers)), thruster_power_abs=float(np.sum(np.abs(powers))),
                    motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]),
                    damping_power=damping_power(self.plant, q, v), **sample.command.info)
         return row
