@@ -9,7 +9,7 @@ import pytest
 
 import uvms
 from uvms.dynamics.actuated import ActuatedCommand
-from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics
+from uvms.dynamics.hydrodynamics import HydroParameters
 from uvms.dynamics.plant import Plant
 from uvms.dynamics.thrusters import allocation_matrix, load_thrusters_yaml, parse_thrusters_urdf, thrusters_of
 from uvms.errors import ModelCheckError

@@ -94,10 +94,11 @@ class StationKeeping:
         arm_acceleration = (arm - v[nb:]) / self.velocity.model.motor_time_constant  # the servo the model knows
         control = self.velocity.control(q, v, nu_ref, self.dt, arm_acceleration=arm_acceleration)
         pose = self.base_pose(q)
+        attitude_error = pin.log3(pose.rotation.T @ self.vehicle_target.rotation)  # [rad], body axes
         info = {"wrench_command": control.wrench, "achieved_wrench": control.allocation.achieved_wrench,
                 "attainable": control.allocation.attainable, "velocity_integral": self.velocity.integral.copy(),
                 "vehicle_position_error": float(np.linalg.norm(self.vehicle_target.translation - pose.translation)),
-                "vehicle_attitude_error": float(np.linalg.norm(pin.log3(pose.rotation.T @ self.vehicle_target.rotation))),
+                "vehicle_attitude_error": float(np.linalg.norm(attitude_error)),
                 "ee_position": self.robot.fk(q, self.frame).translation.copy()}
         if self.ee_target is not None:
             info["ee_point_error"] = float(np.linalg.norm(self.ee_target - info["ee_position"]))

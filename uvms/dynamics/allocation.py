@@ -113,6 +113,7 @@ class ThrustAllocator:
                 achieved = self.matrix @ thrusts
                 residual = wrench - achieved
                 if np.abs(residual).max() <= 10 * slack * max(1.0, np.abs(wrench).max()):  # B has full row rank
+                    thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # the slack, never beyond
                     return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, True, "pinv")
         return self._result(self._least_norm(self._lexicographic(wrench)), wrench, "bounded")
 
