@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -12,7 +14,7 @@ from uvms.control.station_keeping import station_keeping
 from uvms.control.vehicle import pose_velocity_reference
 from uvms.dynamics.actuated import vehicle_inverse_dynamics
 from uvms.dynamics.plant import Plant
-from uvms.dynamics.thrusters import thrusters_of
+from uvms.dynamics.thrusters import Thrusters, thrusters_of
 from uvms.simulate_actuated import actuation_metrics, simulate_actuated
 
 DT = 0.01
@@ -108,3 +110,22 @@ def test_a_current_beyond_the_thrusters_saturates_without_windup(robot, thruster
     # over the second half; conditional integration adds (almost) nothing
     assert abs(integral[-1] - integral[len(integral) // 2]) < 0.05
     assert metrics["thrust_work"] < 0 < metrics["thruster_energy"]  # pushed back against its thrust
+
+
+def test_arm_reaction_feedforward_keeps_the_vehicle_still(robot, thrusters):
+    """The end effector sent 11 cm away (the arm at its 0.5 rad/s limits): its reaction pushes the vehicle.
+    Fed forward from the model (the plant's own equations, the arm's motion included), the vehicle moves far
+    less. Fast thrusters (tau = 0.01 s) so that the thrusters' lag does not hide the feedforward."""
+    fast = Thrusters(tuple(dataclasses.replace(t, time_constant=0.01) for t in thrusters.items), thrusters.source)
+    station = robot.configuration(base=np.zeros(6), arm=ARM)
+    target = robot.fk(station).translation + np.array([0.08, 0.05, -0.05])
+    errors = {}
+    for feedforward in (False, True):
+        plant = Plant(robot, gravity=True)
+        controller = station_keeping(plant, fast, station, 0.005, ee_target=target, arm_feedforward=feedforward,
+                                     ee_gain=3.0)
+        result = simulate_actuated(plant, fast, controller, station, 2.0, 0.005)
+        assert np.abs(result.v[:, 6:]).max() > 0.49  # the arm does move fast
+        errors[feedforward] = (result.actuation["vehicle_position_error"].max(),
+                               result.actuation["vehicle_attitude_error"].max())
+    assert errors[True][0] < 0.1 * errors[False][0] and errors[True][1] < 0.5 * errors[False][1], errors

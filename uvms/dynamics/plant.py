@@ -2,7 +2,8 @@
 
 Model
 =====
-The vehicle is passive (no thrusters): only the joints are actuated, and each
+The vehicle is passive here (its thrusters, when it has some, add a body wrench B f on the
+vehicle: :mod:`uvms.dynamics.actuated`): the joints are actuated, and each
 follows its commanded velocity through a first-order motor, qdd_m = (u - qd_m) / tau
 (the joint servo of amundsen2018, tau = 100 ms). Every link l may carry Fossen's
 hydrodynamics (:mod:`uvms.hydrodynamics`), written in its own frame with nu_l = J_l v
