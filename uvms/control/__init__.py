@@ -5,12 +5,12 @@ A controller is run by the one loop of :mod:`uvms.simulate` (``simulate``, ``sim
 with thrusters, :func:`uvms.simulate_actuated.simulate_actuated`.
 """
 
-from .coordination import coordinated_arm_rates
+from .coordination import CoordinatedControl, coordinated_arm_rates
 from .gjm import GJMControlError, GJMController, VelocityRamps
 from .sequence import Phase, PhasePlan, SequenceController
 from .station_keeping import StationKeeping, station_keeping
 from .vehicle import VehiclePoseController, VehicleVelocityController, pose_velocity_reference
 
-__all__ = ["GJMControlError", "GJMController", "Phase", "PhasePlan", "SequenceController", "StationKeeping",
-           "VehiclePoseController", "VehicleVelocityController", "VelocityRamps", "coordinated_arm_rates",
-           "pose_velocity_reference", "station_keeping"]
+__all__ = ["CoordinatedControl", "GJMControlError", "GJMController", "Phase", "PhasePlan", "SequenceController",
+           "StationKeeping", "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
+           "coordinated_arm_rates", "pose_velocity_reference", "station_keeping"]

@@ -9,13 +9,26 @@ disturbances; the arm, much faster, can take up the difference. With J = [J_v | 
 
 (Simetti & Casalino's arm-vehicle coordination; HippoCampus' "manipulator compensation"). When the vehicle
 does follow (nu_measured = nu_ref) and J_a has full row rank, qd_arm = qd_ref.
+
+:class:`CoordinatedControl` puts it in the chain: kinematic controller -> arm command (coordinated or not)
+and vehicle velocity reference -> vehicle controller -> thrust allocation.
 """
 
 from __future__ import annotations
 
-import numpy as np
+from collections.abc import Callable
 
+import numpy as np
+import pinocchio as pin
+
+from ..dynamics.actuated import ActuatedCommand
+from ..errors import SolverInputError
+from ..robot import Robot
 from ..solvers.inverses import VariableDamping, damped_weighted_inverse
+from .vehicle import VehicleVelocityController
+
+#: A kinematic controller: (t [s], q (nq,), None) -> (v_ref (nv,), diagnostics), as ``uvms.simulate.Controller``.
+KinematicController = Callable[[float, np.ndarray, None], tuple[np.ndarray, object]]
 
 
 def coordinated_arm_rates(
@@ -43,3 +56,68 @@ def coordinated_arm_rates(
     task = jacobian @ reference  # (k,) what the reference asks of the task
     inverse, _, _ = damped_weighted_inverse(jacobian[:, n_vehicle:], weights, damping)  # (n_arm, k)
     return inverse @ (task - jacobian[:, :n_vehicle] @ measured_vehicle_velocity)
+
+
+class CoordinatedControl:
+    """A kinematic controller driving an actuated UVMS: the digital controller of
+    :func:`uvms.simulate_actuated.simulate_actuated`.
+
+    Per step, from the measured (q, v): the kinematic controller's reference v_ref = [nu_ref; qd_ref];
+    the arm command qd_ref, or with ``coordination`` the arm solved again with the measured vehicle velocity
+    (:func:`coordinated_arm_rates` on the task Jacobian); the vehicle part nu_ref to the velocity loop
+    (model feedforward + PI, the arm's commanded acceleration fed forward), its wrench through the allocation.
+
+    Args:
+        robot: a floating-base Robot (the controller's kinematics).
+        velocity: the vehicle velocity controller (its model and allocation).
+        kinematic: (t, q, None) -> (v_ref (nv,), diagnostics), the signature of every kinematic controller
+            (``uvms.simulate.Controller``: CLIK, task priority, set-based...); v_ref's vehicle part in the
+            axes of v (the vehicle joint's local twist).
+        dt: control period [s] (the simulation step).
+        task_jacobian: q -> J (k, nv) of the task the arm keeps with coordination (world-aligned rows).
+        coordination: re-solve the arm with the measured vehicle velocity.
+        arm_damping: DLS damping of J_a^# [same units as J].
+        max_arm_rate: bound on every joint command [rad/s or m/s] (None: the model's velocity limits).
+        monitor: q -> {name: value} recorded per row (e.g. the vehicle and end-effector errors).
+
+    Raises:
+        SolverInputError: a non-floating base, dt <= 0.
+    """
+
+    def __init__(self, robot: Robot, velocity: VehicleVelocityController, kinematic: KinematicController, dt: float,
+                 *, task_jacobian: Callable[[np.ndarray], np.ndarray], coordination: bool = True,
+                 arm_damping: float = 0.01, max_arm_rate: float | None = None,
+                 monitor: Callable[[np.ndarray], dict] | None = None) -> None:
+        if robot.base_type != "floating":
+            raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
+        if not (np.isfinite(dt) and dt > 0):
+            raise SolverInputError(f"dt must be a control period > 0 s, got {dt!r}")
+        self.robot, self.velocity, self.kinematic, self.dt = robot, velocity, kinematic, float(dt)
+        self.task_jacobian, self.monitor = task_jacobian, monitor
+        self.coordination, self.arm_damping = bool(coordination), float(arm_damping)
+        limits = robot.model.velocityLimit[robot.n_vehicle:]
+        self.max_arm_rate = np.where(np.isfinite(limits) & (limits > 0), limits, np.inf) if max_arm_rate is None \
+            else np.full(robot.n_arm, float(max_arm_rate))
+
+    def arm_command(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """The joint-rate command (n_arm,): qd_ref, or coordinated with the measured vehicle, bounded."""
+        nb = self.robot.n_vehicle
+        if self.coordination:
+            arm = coordinated_arm_rates(self.task_jacobian(q), reference, v[:nb], nb, damping=self.arm_damping)
+        else:
+            arm = reference[nb:]
+        return np.clip(arm, -self.max_arm_rate, self.max_arm_rate)
+
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
+        """The arm and thrust commands for the step from (t, q, v); advances the velocity loop's integral."""
+        nb, model = self.robot.n_vehicle, self.velocity.model
+        reference, _ = self.kinematic(t, q, None)
+        arm = self.arm_command(q, v, reference)
+        nu_ref = model._base_placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
+        arm_acceleration = (arm - v[nb:]) / model.motor_time_constant  # the servo the model knows
+        control = self.velocity.control(q, v, nu_ref, self.dt, arm_acceleration=arm_acceleration)
+        info = {"wrench_command": control.wrench, "achieved_wrench": control.allocation.achieved_wrench,
+                "attainable": control.allocation.attainable, "velocity_integral": self.velocity.integral.copy()}
+        if self.monitor is not None:
+            info.update(self.monitor(q))
+        return ActuatedCommand(arm, control.allocation.thrusts, info)
