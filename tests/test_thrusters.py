@@ -175,3 +175,21 @@ def test_energy_balance_with_thrusters_arm_damping_and_restoring(bluerov):
     assert residual < 1e-4 * thrust_work, (residual, thrust_work, dissipated)
     np.testing.assert_array_less(np.abs(a["thrusts"]), 51.5 + 1e-9)
     assert actuation_metrics(result)["saturated_time_fraction"] > 0.3
+
+
+def test_plugin_joint_axis_gives_the_thrust_direction(box):
+    """uuv_simulator pushes along the thruster joint's axis: with <jointName>, the axis (in the child link's
+    frame) is the direction. Thruster 1 is yawed 45 deg: its link's y axis is (-s, s, 0) in the base."""
+    urdf = BOX.read_text().replace(
+        '<origin xyz="0.2 -0.1 0" rpy="0 0 0.7853981633974483"/>',
+        '<origin xyz="0.2 -0.1 0" rpy="0 0 0.7853981633974483"/><axis xyz="0 2 0"/>').replace(
+        "<linkName>thruster_1</linkName>", "<linkName>thruster_1</linkName><jointName>thruster_1_joint</jointName>")
+    thrusters = parse_thrusters_urdf(urdf, "box", box.frame_names)
+    np.testing.assert_allclose(allocation_matrix(box, thrusters)[:, 0], [-S, S, 0, 0, 0, 0.2 * S - 0.1 * S],
+                               atol=1e-12)
+    with pytest.raises(ModelCheckError, match="unknown joint 'thruster_1_jont'; close names: thruster_1_joint"):
+        parse_thrusters_urdf(urdf.replace("<jointName>thruster_1_joint<", "<jointName>thruster_1_jont<"), "box",
+                             box.frame_names)
+    with pytest.raises(ModelCheckError, match="jointName 'thruster_2_joint' does not carry linkName 'thruster_1'"):
+        parse_thrusters_urdf(urdf.replace("<jointName>thruster_1_joint<", "<jointName>thruster_2_joint<"), "box",
+                             box.frame_names)
