@@ -81,6 +81,7 @@ def test_station_keeping_in_still_water_converges(robot, thrusters):
     np.testing.assert_array_equal(result.v[:, 6:], 0.0)  # no arm motion
     metrics = actuation_metrics(result)
     assert 0.0 < metrics["max_thrust_ratio"] <= 1.0
+    assert metrics["final_vehicle_position_error"] == error[-1] and metrics["vehicle_position_error"] == error.max()
 
 
 def test_station_keeping_in_a_current_and_coordination(robot, thrusters):

@@ -83,16 +83,22 @@ def actuation_metrics(result: SimulationResult) -> dict:
     thrust_work: integral of the thrust power B f . nu [J] (signed: negative when the current pushes the
     vehicle back against its thrust); thruster_energy: integral of sum_i |f_i (B_i . nu)| [J], the mechanical
     power each thruster gives the hull, counted positive either way (not the electrical energy: no propeller
-    efficiency model); both by the trapezoid rule.
+    efficiency model); both by the trapezoid rule. With a controller that records ``vehicle_position_error``
+    (:class:`uvms.control.station_keeping.StationKeeping`): vehicle_position_error (its max over the run) and
+    final_vehicle_position_error [m].
     """
     dynamics: ThrusterDynamics = result.thruster_dynamics
     thrusts, commands = result.actuation["thrusts"], result.actuation["thrust_command"]
     limits = np.where(thrusts >= 0, dynamics.upper, np.where(dynamics.lower < 0, -dynamics.lower, np.inf))
     at_bound = np.isclose(commands, dynamics.upper) | np.isclose(commands, dynamics.lower) & (dynamics.lower < 0)
-    return {"max_thrust_ratio": float(np.max(np.abs(thrusts) / limits)),
-            "saturated_time_fraction": float(np.mean(np.any(at_bound, axis=1))),
-            "thrust_work": _trapezoid(result.actuation["thrust_power"], result.t),
-            "thruster_energy": _trapezoid(result.actuation["thruster_power_abs"], result.t)}
+    metrics = {"max_thrust_ratio": float(np.max(np.abs(thrusts) / limits)),
+               "saturated_time_fraction": float(np.mean(np.any(at_bound, axis=1))),
+               "thrust_work": _trapezoid(result.actuation["thrust_power"], result.t),
+               "thruster_energy": _trapezoid(result.actuation["thruster_power_abs"], result.t)}
+    if "vehicle_position_error" in result.actuation:
+        error = result.actuation["vehicle_position_error"]
+        metrics.update(vehicle_position_error=float(np.max(error)), final_vehicle_position_error=float(error[-1]))
+    return metrics
 
 
 def _trapezoid(values: np.ndarray, t: np.ndarray) -> float:
