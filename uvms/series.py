@@ -111,22 +111,26 @@ class SimulationResult:
         return np.array([self.robot.arm_configuration(q) for q in self.q])
 
     def csv_text(self) -> str:
-        """The time series as CSV: t, vehicle pose, arm joints, v, end effector, errors, diagnostics."""
+        """The time series as CSV: t, vehicle pose, arm joints, v, end effector, errors, diagnostics (those recorded)."""
         robot = self.robot
         vehicle_names = (["base_x", "base_y", "base_yaw"] if robot.base_type == "planar" else
                          ["base_x", "base_y", "base_z", "base_roll", "base_pitch", "base_yaw"]
                          if robot.base_type == "floating" else [])
         velocity_names = [f"v_{name}" for name in velocity_labels(robot)]
-        header = (["t"] + vehicle_names + robot.arm_joint_names + velocity_names
-                  + [f"ee_{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
-                  + [f"desired_{a}" for a in ("x", "y", "z", "roll", "pitch", "yaw")]
-                  + [f"error_{axis}" for axis in self.axes]
-                  + ["position_error", "orientation_error", "sigma_min", "damping", "limits_active"])
         vehicle = self.vehicle_pose() if vehicle_names else np.zeros((len(self.t), 0))
-        table = np.column_stack([
-            self.t, vehicle, self.arm(), self.v, self.ee_position, self.ee_rpy, self.desired_position,
-            self.desired_rpy, self.task_error, self.position_error, self.orientation_error, self.sigma_min, self.damping,
-            self.limits_active])
+        columns = [(["t"], self.t), (vehicle_names, vehicle), (robot.arm_joint_names, self.arm()),
+                   (velocity_names, self.v),
+                   ([f"ee_{a}" for a in ("x", "y", "z")], self.ee_position),
+                   ([f"ee_{a}" for a in ("roll", "pitch", "yaw")], self.ee_rpy),
+                   ([f"desired_{a}" for a in ("x", "y", "z")], self.desired_position),
+                   ([f"desired_{a}" for a in ("roll", "pitch", "yaw")], self.desired_rpy),
+                   ([f"error_{axis}" for axis in self.axes], self.task_error),
+                   (["position_error"], self.position_error), (["orientation_error"], self.orientation_error),
+                   (["sigma_min"], self.sigma_min), (["damping"], self.damping),
+                   (["limits_active"], self.limits_active)]
+        recorded = [(names, values) for names, values in columns if values is not None]  # e.g. no sigma_min
+        header = [name for names, _ in recorded for name in names]
+        table = np.column_stack([values for _, values in recorded])
         buffer = io.StringIO()
         writer = csv.writer(buffer, lineterminator="\n")
         writer.writerow(header)

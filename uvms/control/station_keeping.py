@@ -98,7 +98,7 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                     ki: float | np.ndarray = (150.0, 150.0, 150.0, 15.0, 15.0, 15.0),
                     pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                     priorities=None, arm_feedforward: bool = True, ee_gain: float = 1.0,
-                    arm_damping: float = 0.01) -> CoordinatedControl:
+                    arm_damping: float = 0.01, frame: str | None = None) -> CoordinatedControl:
     """The controller of ``plant`` holding the vehicle at its pose of q0 and the end effector at ``ee_target``
     (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held), with the allocation of
     ``thrusters``. The default gains hold the BlueROV2 + Alpha 5 in a 0.3 m/s current to 5 cm.
@@ -111,6 +111,7 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
         max_speed: [m/s, rad/s] bound of the pose loop's reference; priorities: of the allocation
             (:class:`uvms.dynamics.allocation.ThrustAllocator`); arm_feedforward, ee_gain, arm_damping: as in
             :class:`uvms.control.vehicle.VehicleVelocityController` and :class:`StationKeeping`.
+        frame: the end-effector frame held (default: the model's first end effector).
 
     Returns:
         A CoordinatedControl whose ``kinematic`` is the StationKeeping reference.
@@ -124,8 +125,9 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
     velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=arm_feedforward)
     pose = VehiclePoseController(velocity, pose_gains, max_speed)
     base = robot.base_pose(q0) * model._base_placement
-    target = None if hold_arm else robot.fk(q0).translation if ee_target is None else ee_target
-    reference = StationKeeping(robot, pose, vehicle_target=base, ee_target=target, ee_gain=ee_gain,
+    frame = frame or robot.ee_frames[0]
+    target = None if hold_arm else robot.fk(q0, frame).translation if ee_target is None else ee_target
+    reference = StationKeeping(robot, pose, vehicle_target=base, ee_target=target, frame=frame, ee_gain=ee_gain,
                                arm_damping=arm_damping, base_placement=model._base_placement)
     return CoordinatedControl(robot, velocity, reference, dt, task_jacobian=reference.jacobian,
                               coordination=coordination and target is not None, arm_damping=arm_damping,

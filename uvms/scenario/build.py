@@ -27,6 +27,7 @@ from ..solvers import (
 )
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
 from ..trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw, VelocityRamps
+from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .inequalities import ENFORCING_METHODS, ScenarioInequalities, build_inequalities
 from .schema import NUMBER, SCHEMA
 
@@ -48,6 +49,7 @@ class Setup:
     plant: Plant | None = None  # [plant] type rigid or hydrodynamic: the controller is a GJMController
     control_dt: float = 0.0  # [s] sampling period of that controller (0: continuous)
     inequalities: ScenarioInequalities | None = None  # [[inequalities]]: enforced (set_based, hqp) or monitored
+    actuation: Actuation | None = None  # plant.thrusters: the thrusters and the station-keeping controller
 
 
 def build(scenario: dict) -> Setup:
@@ -62,6 +64,7 @@ def build(scenario: dict) -> Setup:
             raise ScenarioError("a sequence scenario ([[phases]]) runs on the kinematic plant only; "
                                 "remove [plant] or set plant.type = 'kinematic'")
         return build_sequence(robot, scenario)
+    check_vehicle_control_used(scenario)
     task_section = scenario["task"]
     task = FrameTask(robot, task_section["frame"] or None, axes=task_section["axes"] or None,
                      orientation=task_section["orientation_error"])
@@ -72,6 +75,10 @@ def build(scenario: dict) -> Setup:
         if scenario["inequalities"]:
             raise ScenarioError(f"[[inequalities]] run on the kinematic plant only; plant.type = "
                                 f"{scenario['plant']['type']!r} drives a passive vehicle by the GJM controller")
+        if scenario["plant"]["thrusters"]:
+            actuation = make_actuation(robot, make_plant(robot, scenario["plant"]), task, trajectory, q0, scenario)
+            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
+                         actuation=actuation)
         plant, controller = make_plant_controller(robot, task, trajectory, scenario)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(scenario["plant"]["control_dt"]))
@@ -150,6 +157,9 @@ def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3T
     orientation = (vector(section["orientation"], 3, "orientation") if section["orientation"]
                    else pin.rpy.matrixToRpy(start_pose.rotation))
     kind = section["type"]
+    if kind == "hold":  # the start pose held for the duration (station keeping)
+        return VelocityRamps.trapezoid(start, np.zeros(3), section["duration"], section["duration"] / 2,
+                                       rotation=pin.rpy.rpyToMatrix(*orientation))
     if kind == "ramps":
         if not section["velocity"]:
             raise ScenarioError("a ramps trajectory needs trajectory.velocity (the cruise velocity [m/s], world axes)")
@@ -197,8 +207,8 @@ def make_law(section: dict, path_length: float):
 def check_kinematic_plant(section: dict) -> None:
     """Reject [plant] keys that only a dynamic plant uses when plant.type = 'kinematic'."""
     defaults = {key: default for key, (_, default, _) in SCHEMA["plant"].items()}
-    unused = [key for key in ("gjm", "motor_feedforward", "control_dt", "gravity", "added_mass", "damping", "current")
-              if section[key] != defaults[key]]
+    unused = [key for key in ("gjm", "motor_feedforward", "control_dt", "gravity", "added_mass", "damping", "current",
+                              "thrusters") if section[key] != defaults[key]]
     if unused:
         raise ScenarioError(f"plant.{unused[0]} needs a dynamic plant: the kinematic one moves the vehicle by momentum "
                             f"conservation (solver.free_floating) or as commanded; set plant.type = 'rigid' or "

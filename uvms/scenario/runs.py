@@ -15,6 +15,7 @@ from .. import outputs
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError
 from ..simulate import SimulationResult, simulate, simulate_gjm, step_count
+from .actuated import actuated_metrics, saved_series, simulate_actuation
 from .build import Setup, build
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
@@ -49,9 +50,9 @@ def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) ->
         "wall_time": float(wall_time),
         "initial_configuration": setup.q0.tolist(),
         "initial_residual": float(setup.initial_residual),
-        "min_sigma_min": float(result.sigma_min.min()),
-        "max_damping": float(result.damping.max()),
     }
+    if result.sigma_min is not None:  # an actuated run's controller has no one inverse to report
+        metrics.update(min_sigma_min=float(result.sigma_min.min()), max_damping=float(result.damping.max()))
     if robot.base_type != "fixed":
         vehicle = result.vehicle_pose()
         position = vehicle[:, :2] if robot.base_type == "planar" else vehicle[:, :3]
@@ -154,7 +155,10 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
     """Simulate a built scenario and write its files into ``folder``."""
     simulation_section = scenario["simulation"]
     plant_run: SimulationResult | None = None
-    if setup.plant is not None:
+    if setup.actuation is not None:
+        result = simulate_actuation(setup.actuation, setup.task, setup.trajectory, setup.q0, setup.duration, scenario,
+                                    progress)
+    elif setup.plant is not None:
         result = plant_run = simulate_gjm(setup.plant, setup.controller, setup.q0, setup.duration,
                                           simulation_section["dt"], control_dt=setup.control_dt,
                                           integrator=simulation_section["integrator"], progress=progress,
@@ -170,7 +174,12 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
     if plant_run is not None:
         metrics.update(plant=scenario["plant"]["type"], gjm=scenario["plant"]["gjm"],
                        motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.plant_metrics())
+    if setup.actuation is not None:
+        metrics.update(actuated_metrics(result, setup.actuation, scenario))
     files = list(result.save(folder))
+    if setup.actuation is not None:
+        outputs.write_npz(folder / "actuation.npz", **saved_series(result))
+        files.append(folder / "actuation.npz")
     if plant_run is not None:
         outputs.write_npz(folder / "plant.npz", **plant_run.plant_arrays())
         files.append(folder / "plant.npz")
@@ -178,6 +187,10 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
         from ..viz.plotting import scenario_figures  # matplotlib only when figures are asked for
 
         files += scenario_figures(result, setup.trajectory, folder, title=scenario["scenario"]["name"])
+        if setup.actuation is not None:
+            from ..viz.actuated import actuated_figures
+
+            files += actuated_figures(result, setup.actuation.thrusters, folder, title=scenario["scenario"]["name"])
         if setup.inequalities is not None and setup.inequalities.objectives:
             from ..viz.objectives import inequality_figure
 

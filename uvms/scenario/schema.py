@@ -86,7 +86,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "orientation_error": (str, "log", ("log", "euler")),
     },
     "trajectory": {
-        "type": (str, "circle", ("circle", "line", "pose", "ramps")),
+        "type": (str, "circle", ("circle", "line", "pose", "ramps", "hold")),
         "start": (NUMBERS, [], None),
         "center": (NUMBERS, [], None),
         "center_offset": (NUMBERS, [], None),
@@ -145,6 +145,17 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "added_mass": (bool, None, None),
         "damping": (bool, None, None),
         "current": (NUMBERS, [], None),
+        "thrusters": (bool, False, None),  # the vehicle actuated by its thrusters ([vehicle_control])
+    },
+    "vehicle_control": {  # plant.thrusters = true: the vehicle loop, the allocation and the arm's coordination
+        "kp": ((int, float, list), [100.0, 100.0, 100.0, 10.0, 10.0, 10.0], None),
+        "ki": ((int, float, list), [150.0, 150.0, 150.0, 15.0, 15.0, 15.0], None),
+        "pose_gains": ((int, float, list), 1.5, None),
+        "max_speed": ((int, float, list), 0.5, None),
+        "priorities": (list, [], None),
+        "coordination": (bool, True, None),
+        "arm_feedforward": (bool, True, None),
+        "knows_current": (bool, False, None),
     },
     "outputs": {
         "figures": (bool, True, None),

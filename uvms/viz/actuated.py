@@ -1,0 +1,79 @@
+"""Figures of an actuated run: the thrusts against their limits, and how well the vehicle and the end effector hold.
+
+``thrusters.png``: one panel per thruster, its thrust [N] and the command, the forward and reverse limits dotted.
+``station.png``: the vehicle's position [m] and attitude [rad] errors from its station and the end effector's
+distance [m] from the held point. :func:`coordination_figure` overlays runs (with and without coordination).
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from .. import outputs
+from ..dynamics.thrusters import Thrusters
+from ..series import SimulationResult
+
+FLOOR = 1e-9  # [m, rad] log axes: errors below are drawn at the floor
+
+
+def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "") -> Figure:
+    """Each thruster's thrust and saturated command [N] over time, its limits dotted (4 per row)."""
+    count = len(thrusters)
+    columns = 2 if count > 1 else 1
+    rows = int(np.ceil(count / columns))
+    figure = Figure(figsize=(9, 1.7 * rows + 0.8))
+    axes = figure.subplots(rows, columns, sharex=True, squeeze=False).reshape(-1)
+    thrusts, commands = result.actuation["thrusts"], result.actuation["thrust_command"]
+    for index, axis in enumerate(axes):
+        if index >= count:
+            axis.set_visible(False)
+            continue
+        axis.plot(result.t, commands[:, index], color="C1", linewidth=0.8, label="command (saturated)")
+        axis.plot(result.t, thrusts[:, index], color="C0", label="thrust")
+        for bound in (thrusters.lower[index], thrusters.upper[index]):
+            axis.axhline(bound, color="k", linestyle=":", linewidth=1)
+        axis.set_ylabel(f"{thrusters.names[index]} [N]", fontsize=8)
+        axis.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=7, loc="lower right")
+    for axis in axes[-columns:]:
+        axis.set_xlabel("t [s]")
+    figure.suptitle(f"{title}: thrusts (dotted: the thrusters' limits)")
+    figure.tight_layout()
+    return figure
+
+
+def coordination_figure(runs: Mapping[str, SimulationResult], title: str = "") -> Figure:
+    """Vehicle position and attitude errors and the end effector's distance from its point, for one or more runs."""
+    figure = Figure(figsize=(8, 6.4))
+    axes = figure.subplots(3, 1, sharex=True)
+    series = (("vehicle_position_error", "vehicle position error [m]"),
+              ("vehicle_attitude_error", "vehicle attitude error [rad]"),
+              ("ee_point_error", "end-effector error [m]"))
+    for label, result in runs.items():
+        for axis, (name, _) in zip(axes, series):
+            if name in result.actuation:
+                axis.semilogy(result.t, np.maximum(result.actuation[name], FLOOR), label=label)
+    for axis, (_, ylabel) in zip(axes, series):
+        axis.set_ylabel(ylabel, fontsize=8)
+        axis.grid(True, which="both", alpha=0.3)
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("t [s]")
+    figure.suptitle(f"{title}: station keeping")
+    figure.tight_layout()
+    return figure
+
+
+def actuated_figures(result: SimulationResult, thrusters: Thrusters, folder: str | os.PathLike,
+                     title: str = "") -> list[Path]:
+    """Write ``thrusters.png`` and ``station.png`` of an actuated run into ``folder``; returns their paths."""
+    folder = Path(folder)
+    figures = {"thrusters.png": thrust_figure(result, thrusters, title),
+               "station.png": coordination_figure({"this run": result}, title)}
+    for name, figure in figures.items():
+        outputs.save_figure(figure, folder / name)
+    return [folder / name for name in figures]
