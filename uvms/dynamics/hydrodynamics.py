@@ -53,7 +53,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError
+from ..errors import ModelCheckError, ModelParseError, UVMSError
+from ..model.resources import read_yaml
 from .hydro_parameters import (  # noqa: F401 - the public names of this module
     FRD_FLU_SIGNS, GRAVITY, MATRIX_TOLERANCE, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_added_mass,
     check_link_names, flip_frd_flu,
@@ -266,19 +267,8 @@ def load_hydrodynamics_yaml(
         NameNotFound: a link the model does not have (naming the file and the close names).
         ModelCheckError: an invalid value.
     """
-    try:
-        import yaml
-    except ImportError:  # pragma: no cover - pyyaml is installed with the test dependencies
-        raise UVMSError("reading hydrodynamics from YAML needs PyYAML: pip install pyyaml") from None
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelFileNotFound(f"{path}: cannot read the hydrodynamics file ({exc})") from None
-    try:
-        document = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ModelParseError(f"{path}: malformed YAML ({' '.join(str(exc).split())})") from None
+    document = read_yaml(path, "hydrodynamics")
     origin = str(path)
     top_keys = ("fluid_density", "gravity", "current", "links")
     if not isinstance(document, Mapping) or not isinstance(document.get("links"), Mapping):

@@ -49,7 +49,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError
+from ..errors import ModelCheckError, ModelParseError, UVMSError
+from ..model.resources import read_yaml
 
 if TYPE_CHECKING:
     from ..robot import Robot
@@ -210,17 +211,8 @@ def load_thrusters_yaml(path: str | os.PathLike, frames: Sequence[str] | None = 
         ModelParseError: not YAML, or no ``thrusters`` mapping.
         ModelCheckError: invalid thruster data (the message names the file and the valid form).
     """
-    import yaml
-
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelFileNotFound(f"{path}: cannot read the thrusters file ({exc})") from None
-    try:
-        document = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ModelParseError(f"{path}: malformed YAML ({' '.join(str(exc).split())})") from None
+    document = read_yaml(path, "thrusters")
     if not isinstance(document, Mapping) or not isinstance(document.get("thrusters"), Mapping) \
             or not document["thrusters"]:
         raise ModelParseError(f"{path}: expected a mapping with a non-empty 'thrusters' mapping (keys: "

@@ -8,7 +8,7 @@ from collections.abc import Iterable, Sequence
 from importlib import metadata
 from pathlib import Path
 
-from ..errors import ModelFileNotFound
+from ..errors import ModelFileNotFound, ModelParseError
 
 #: The repository's `models/` folder (present in a source checkout or an editable install).
 MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
@@ -138,3 +138,26 @@ def resolve_uri(uri: str, base_dir: Path | None, roots: Iterable[Path]) -> Path 
     if not path.is_absolute() and base_dir is not None:
         path = base_dir / path
     return path if path.is_file() else None
+
+
+def read_yaml(path: str | os.PathLike, what: str) -> object:
+    """The document of a YAML data file beside a model (hydrodynamics, thrusters), read safely (data only).
+
+    Args:
+        path: the file; what: what it holds, for the messages ("hydrodynamics", "thrusters").
+
+    Raises:
+        ModelFileNotFound: the file cannot be read.
+        ModelParseError: not YAML.
+    """
+    import yaml
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ModelFileNotFound(f"{path}: cannot read the {what} file ({exc})") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ModelParseError(f"{path}: malformed YAML ({' '.join(str(exc).split())})") from None
