@@ -96,6 +96,50 @@ def test_batched_fk_equals_robot_fk(name, frame, rng):
         assert np.allclose(rotations[k], expected.rotation, atol=1e-12)
 
 
+OBLIQUE_CHAIN = ('<robot name="oblique"><link name="base_link"/>'
+                 + "".join(f'<link name="l{k}">{INERTIAL}</link>' for k in range(4)) + '<link name="ee"/>'
+                 '<joint name="j0" type="revolute"><parent link="base_link"/><child link="l0"/>'
+                 '<origin xyz="0.1 -0.2 0.3" rpy="0.3 -0.7 1.1"/>'
+                 '<axis xyz="0.30058671670520054 -0.5009778611753343 0.8115841351040415"/>'
+                 '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+                 '<joint name="j1" type="prismatic"><parent link="l0"/><child link="l1"/>'
+                 '<origin xyz="0.4 0 0" rpy="1.2 0 0"/><axis xyz="0.6 0.8 0"/>'
+                 '<limit lower="-0.5" upper="0.7" effort="1" velocity="1"/></joint>'
+                 '<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/>'
+                 '<origin xyz="0 0.25 -0.1" rpy="0 0 -0.4"/><axis xyz="0 -1 0"/>'
+                 '<limit lower="-2" upper="2.5" effort="1" velocity="1"/></joint>'
+                 '<joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/>'
+                 '<origin xyz="0.2 0.1 0" rpy="-0.5 0.2 0.9"/>'
+                 '<axis xyz="0.5773502691896258 0.5773502691896258 0.5773502691896258"/>'
+                 '<limit lower="-3" upper="3" effort="1" velocity="1"/></joint>'
+                 '<joint name="ee_joint" type="fixed"><parent link="l3"/><child link="ee"/>'
+                 '<origin xyz="0.05 -0.03 0.12" rpy="0.1 0.2 0.3"/></joint></robot>')
+
+
+def test_batched_fk_equals_pinocchio_on_oblique_axes_and_a_prismatic_joint(tmp_path, rng):
+    """Rodrigues about oblique axes, a prismatic joint, rotated joint origins: against pin.forwardKinematics."""
+    path = tmp_path / "oblique.urdf"
+    path.write_text(OBLIQUE_CHAIN)
+    robot = uvms.load(str(path), base="fixed")
+    batch = BatchKinematics(robot, "ee")
+    values = batch.sample(200, rng)
+    rotations, positions = batch.poses(values)
+    only_positions = batch.positions(values)
+    _, axes = batch.positions_and_axes(values, "yz")
+    model, data, frame = robot.model, robot.model.createData(), robot.model.getFrameId("ee")
+    for k in range(len(values)):
+        q = np.zeros(model.nq)
+        for column, name in enumerate(batch.joint_names):
+            q[model.joints[model.getJointId(name)].idx_q] = values[k, column]
+        pin.forwardKinematics(model, data, q)
+        expected = pin.updateFramePlacement(model, data, frame)
+        assert np.allclose(positions[k], expected.translation, atol=1e-12, rtol=0)
+        assert np.allclose(only_positions[k], expected.translation, atol=1e-12, rtol=0)
+        assert np.allclose(rotations[k], expected.rotation, atol=1e-12, rtol=0)
+        assert np.allclose(axes[k], expected.rotation[:, 1:].T, atol=1e-12, rtol=0)
+    assert np.ptp(positions, axis=0).min() > 0.1  # the samples really move the frame
+
+
 def test_batched_fk_equals_xiang2019_eq7(rng):
     robot = shipped("xiang2019")
     batch = BatchKinematics(robot, "left_ee")
@@ -484,3 +528,18 @@ def test_cli_workspace_replaces_its_folder_whole(tmp_path, capsys):
     assert main(["workspace", "xiang2019", "--ee", "left_ee", "-n", "10", "--out", str(user_folder), "--quiet"]) == 2
     assert "was not written by uvms" in capsys.readouterr().err
     assert [p.name for p in user_folder.iterdir()] == ["thesis.tex"]
+
+
+@pytest.mark.parametrize("key_range", [7, 5_000, 10**9])  # dense table, dense tally, np.unique
+def test_distinct_keys_equal_numpy_unique_on_every_path(key_range, rng):
+    from uvms.workspace.voxels import distinct_keys
+
+    keys = rng.integers(0, key_range, size=3_000)
+    weights = rng.integers(1, 9, size=3_000)
+    unique, counts = np.unique(keys, return_counts=True)
+    assert np.array_equal(distinct_keys(keys, key_range)[0], unique)
+    got, got_counts = distinct_keys(keys, key_range, counted=True)
+    assert np.array_equal(got, unique) and np.array_equal(got_counts, counts)
+    got, got_counts = distinct_keys(keys, key_range, counted=True, counts=weights)
+    summed = np.array([weights[keys == key].sum() for key in unique])
+    assert np.array_equal(got, unique) and np.array_equal(got_counts, summed) and got_counts.dtype == np.int64

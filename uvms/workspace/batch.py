@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -13,6 +14,9 @@ from ..robot import Robot
 #: Samples composed at once by `BatchKinematics` and drawn at once by `monte_carlo` (its default chunk): the
 #: work arrays of one chunk take some 50-90 MB, whatever the sample count.
 CHUNK = 200_000
+#: Samples carried through a chain at once inside a chunk (`BatchKinematics.carried_blocks`): their work arrays
+#: (some 100-400 kB) stay in the CPU cache.
+BLOCK = 8192
 #: Frame axes by name, as columns of a rotation matrix.
 AXES = {"x": 0, "y": 1, "z": 2}
 
@@ -98,35 +102,25 @@ class BatchKinematics:
         return self.lower + (self.upper - self.lower) * rng.random((count, len(self.joint_names)))
 
     def positions(self, values: np.ndarray, base: pin.SE3 | None = None) -> np.ndarray:
-        """Frame positions (N, 3) [m] in the world, the vehicle at ``base`` (default: the origin).
+        """Frame positions (N, 3) [m] in the world, the vehicle at ``base`` (default: the origin), for joint values (N, n).
 
-        Only points are transformed, from the frame back to the root: per joint one
-        rotation of N vectors about a constant axis and one constant 3x3 product,
-        several times cheaper than composing N rotation matrices.
+        Only the point is carried from the frame back to the root (`carried_blocks`): per joint
+        one rotation of N vectors about a constant axis and one constant 3x3 product, several
+        times cheaper than composing N rotation matrices.
         """
         values = self._check_values(values)
-        root = self._root_pose(base)
         out = np.empty((values.shape[0], 3))
-        for start in range(0, values.shape[0], CHUNK):
-            chunk = values[start:start + CHUNK]
-            point = np.broadcast_to(self.frame_placement.translation, (chunk.shape[0], 3)).copy()
-            for step in reversed(self.steps):
-                value = chunk[:, step.column]
-                if step.revolute:
-                    point = rotate_points(point, step.axis, value)
-                else:
-                    point += step.axis * value[:, None]
-                point = point @ step.placement_rotation.T + step.placement_translation
-            out[start:start + CHUNK] = point @ root.rotation.T + root.translation
+        for rows, carried in self.carried_blocks(values, "", base):
+            out[rows] = carried[0].T
         return out
 
     def positions_and_axes(self, values: np.ndarray, axes: str = "xyz",
                            base: pin.SE3 | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Frame positions (N, 3) [m] and some of the frame's axes (N, k, 3) in the world, for joint values (N, n).
 
-        Like `positions`, the point and the k axis vectors are carried from the frame back
-        to the root, which is cheaper than composing rotation matrices (`poses`) when
-        fewer than three axes are needed.
+        Like `positions`, the point and the k axis vectors are carried together from the frame
+        back to the root (one cosine and sine per joint and sample for all of them), which is
+        cheaper than composing rotation matrices when fewer than three axes are needed.
 
         Args:
             values: joint values (N, n) [rad or m].
@@ -136,27 +130,57 @@ class BatchKinematics:
         if not axes or any(axis not in AXES for axis in axes):
             raise WorkspaceInputError(f"axes must be letters of 'xyz', got {axes!r}")
         values = self._check_values(values)
-        root = self._root_pose(base)
         count = values.shape[0]
         position_out, axes_out = np.empty((count, 3)), np.empty((count, len(axes), 3))
-        rotation = np.array(self.frame_placement.rotation)
-        for start in range(0, count, CHUNK):
-            chunk = values[start:start + CHUNK]
-            point = np.broadcast_to(self.frame_placement.translation, (chunk.shape[0], 3)).copy()
-            vectors = [np.broadcast_to(rotation[:, AXES[axis]], (chunk.shape[0], 3)) for axis in axes]
+        for rows, carried in self.carried_blocks(values, axes, base):
+            position_out[rows] = carried[0].T
+            axes_out[rows] = carried[1:].transpose(2, 0, 1)
+        return position_out, axes_out
+
+    def poses(self, values: np.ndarray, base: pin.SE3 | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Frame rotations (N, 3, 3) (columns: the frame axes in the world) and positions (N, 3) [m] for joint values (N, n)."""
+        values = self._check_values(values)
+        count = values.shape[0]
+        rotation_out, position_out = np.empty((count, 3, 3)), np.empty((count, 3))
+        for rows, carried in self.carried_blocks(values, "xyz", base):
+            position_out[rows] = carried[0].T
+            rotation_out[rows] = carried[1:].transpose(2, 1, 0)
+        return rotation_out, position_out
+
+    def carried_blocks(self, values: np.ndarray, axes: str, base: pin.SE3 | None = None
+                       ) -> Iterator[tuple[slice, np.ndarray]]:
+        """The frame's origin and axes carried to the world, ``BLOCK`` samples at a time.
+
+        Vectors are stored coordinate-major, (1 + k, 3, n): row 0 the point, then the k axes
+        named by ``axes``; per joint, from the frame back to the root, they turn about the
+        joint axis (revolute) or the point slides along it (prismatic), then the constant
+        joint placement applies. The blocks are small enough for the work arrays to stay in
+        the CPU cache.
+
+        Args:
+            values: checked joint values (N, n) [rad or m].
+            axes: letters of "xyz" (may be empty).
+            base: pose of the vehicle (default: the origin).
+
+        Yields:
+            (rows of ``values``, vectors (1 + k, 3, n) in the world).
+        """
+        if any(axis not in AXES for axis in axes):
+            raise WorkspaceInputError(f"axes must be letters of 'xyz', got {axes!r}")
+        root = self._root_pose(base)
+        placement = self.frame_placement
+        start_vectors = np.column_stack([placement.translation] + [placement.rotation[:, AXES[a]] for a in axes]).T
+        for start in range(0, values.shape[0], BLOCK):
+            chunk = values[start:start + BLOCK]
+            vectors = np.repeat(start_vectors[:, :, None], chunk.shape[0], axis=2)  # (1 + k, 3, n)
             for step in reversed(self.steps):
                 value = chunk[:, step.column]
                 if step.revolute:
-                    point = rotate_points(point, step.axis, value)
-                    vectors = [rotate_points(vector, step.axis, value) for vector in vectors]
+                    turn(vectors, step.axis, np.cos(value), np.sin(value))
                 else:
-                    point += step.axis * value[:, None]
-                point = point @ step.placement_rotation.T + step.placement_translation
-                vectors = [vector @ step.placement_rotation.T for vector in vectors]
-            position_out[start:start + CHUNK] = point @ root.rotation.T + root.translation
-            for k, vector in enumerate(vectors):
-                axes_out[start:start + CHUNK, k] = vector @ root.rotation.T
-        return position_out, axes_out
+                    shift(vectors[0], step.axis, value)
+                vectors = rotate_and_shift(vectors, step.placement_rotation, step.placement_translation)
+            yield slice(start, start + chunk.shape[0]), rotate_and_shift(vectors, root.rotation, root.translation)
 
     def _check_values(self, values: np.ndarray) -> np.ndarray:
         values = np.atleast_2d(np.asarray(values, dtype=float))
@@ -165,70 +189,79 @@ class BatchKinematics:
                             f"({', '.join(self.joint_names)}), got shape {values.shape}")
         return values
 
-    def poses(self, values: np.ndarray, base: pin.SE3 | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Frame rotations (N, 3, 3) and positions (N, 3) for joint values (N, n)."""
-        values = self._check_values(values)
-        base_pose = self._root_pose(base)
-        count = values.shape[0]
-        rotation_out, position_out = np.empty((count, 3, 3)), np.empty((count, 3))
-        for start in range(0, count, CHUNK):
-            rotation_out[start:start + CHUNK], position_out[start:start + CHUNK] = self._chain(
-                values[start:start + CHUNK], base_pose)
-        return rotation_out, position_out
-
     def _root_pose(self, base: pin.SE3 | None) -> pin.SE3:
         """World pose of the joint the chain starts from: the vehicle body (= oMi[1], see Robot.base_pose) or the world."""
         if self.root_joint == 0 or base is None:
             return pin.SE3.Identity()
         return base
 
-    def _chain(self, values: np.ndarray, root: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
-        count = values.shape[0]
-        rotation = np.broadcast_to(root.rotation, (count, 3, 3)).copy()
-        position = np.broadcast_to(root.translation, (count, 3)).copy()
-        for step in self.steps:
-            position = position + rotation @ step.placement_translation
-            rotation = rotation @ step.placement_rotation
-            value = values[:, step.column]
-            if step.revolute:
-                rotation = rotation @ axis_rotations(step.axis, value)
+
+def turn(vectors: np.ndarray, axis: np.ndarray, cos: np.ndarray, sin: np.ndarray) -> None:
+    """Rotate vectors (m, 3, n) in place about a unit axis (3,) by angles given by their cosines and sines (n,).
+
+    About +-x, +-y or +-z only the two other coordinates change (a plane rotation);
+    any other axis takes Rodrigues' formula.
+    """
+    aligned = np.flatnonzero(np.abs(axis) == 1.0)
+    if aligned.size == 1:
+        k = int(aligned[0])
+        i, j = (k + 1) % 3, (k + 2) % 3
+        sin = sin * axis[k]
+        first, second = vectors[:, i], vectors[:, j]  # (m, n) views
+        new_first = first * cos - second * sin
+        vectors[:, j] = first * sin + second * cos
+        vectors[:, i] = new_first
+        return
+    x, y, z = vectors[:, 0], vectors[:, 1], vectors[:, 2]
+    along = (x * axis[0] + y * axis[1] + z * axis[2]) * (1.0 - cos)
+    cross = (axis[1] * z - axis[2] * y, axis[2] * x - axis[0] * z, axis[0] * y - axis[1] * x)
+    rotated = [vectors[:, r] * cos + cross[r] * sin + along * axis[r] for r in range(3)]
+    for r in range(3):
+        vectors[:, r] = rotated[r]
+
+
+def shift(point: np.ndarray, axis: np.ndarray, value: np.ndarray) -> None:
+    """Slide a point (3, n) in place along a unit axis (3,) by values (n,) [m]."""
+    for r in np.flatnonzero(axis):
+        point[r] += axis[r] * value
+
+
+def rotate_and_shift(vectors: np.ndarray, rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    """A constant rigid transform of vectors (m, 3, n): rotation (3, 3) applied to all, translation (3,) added to row 0.
+
+    Exact zeros and unit entries of the rotation cost nothing (a joint placement is mostly
+    zeros and ones), so the product is a few scaled additions of (m, n) rows.
+
+    Returns:
+        The transformed vectors (m, 3, n), a new array.
+    """
+    out = np.empty_like(vectors)
+    for r in range(3):
+        row = out[:, r]
+        terms = [(c, float(rotation[r, c])) for c in range(3) if rotation[r, c] != 0.0]
+        if not terms:
+            row[...] = 0.0
+        for index, (c, weight) in enumerate(terms):
+            source = vectors[:, c]
+            if index == 0:
+                np.multiply(source, weight, out=row) if weight != 1.0 else np.copyto(row, source)
             else:
-                position = position + (rotation @ step.axis) * value[:, None]
-        placement = self.frame_placement
-        position = position + rotation @ placement.translation
-        rotation = rotation @ placement.rotation
-        return rotation, position
+                row += source if weight == 1.0 else source * weight
+        if translation[r] != 0.0:
+            out[0, r] += translation[r]
+    return out
 
 
 def rotate_points(points: np.ndarray, axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """Points (N, 3) rotated about a unit axis through the origin by angles (N,) [rad] (Rodrigues)."""
-    aligned = np.flatnonzero(np.abs(axis) == 1.0)
-    if aligned.size == 1:  # rotation about +-x, +-y or +-z: a plane rotation of the two other coordinates
-        k = int(aligned[0])
-        i, j = (k + 1) % 3, (k + 2) % 3
-        c, s = np.cos(angles), np.sin(angles) * axis[k]
-        rotated = points.copy()
-        rotated[:, i] = points[:, i] * c - points[:, j] * s
-        rotated[:, j] = points[:, i] * s + points[:, j] * c
-        return rotated
-    c, s = np.cos(angles)[:, None], np.sin(angles)[:, None]
-    along = (points @ axis)[:, None] * axis
-    return points * c + np.cross(axis, points) * s + along * (1.0 - c)
+    """Points (N, 3) rotated about a unit axis (3,) through the origin by angles (N,) [rad] (see `turn`)."""
+    vectors = np.ascontiguousarray(np.asarray(points, dtype=float).T)[None]  # (1, 3, N)
+    turn(vectors, np.asarray(axis, dtype=float), np.cos(angles), np.sin(angles))
+    return vectors[0].T.copy()
 
 
 def axis_rotations(axis: np.ndarray, angles: np.ndarray) -> np.ndarray:
-    """Rotations (N, 3, 3) about a unit axis by angles (N,) [rad] (Rodrigues)."""
-    c, s = np.cos(angles), np.sin(angles)
-    x, y, z = axis
-    one_c = 1.0 - c
-    rotation = np.empty((angles.size, 3, 3))
-    rotation[:, 0, 0] = c + x * x * one_c
-    rotation[:, 0, 1] = x * y * one_c - z * s
-    rotation[:, 0, 2] = x * z * one_c + y * s
-    rotation[:, 1, 0] = y * x * one_c + z * s
-    rotation[:, 1, 1] = c + y * y * one_c
-    rotation[:, 1, 2] = y * z * one_c - x * s
-    rotation[:, 2, 0] = z * x * one_c - y * s
-    rotation[:, 2, 1] = z * y * one_c + x * s
-    rotation[:, 2, 2] = c + z * z * one_c
-    return rotation
+    """Rotations (N, 3, 3) about a unit axis (3,) by angles (N,) [rad]: the unit vectors turned (see `turn`)."""
+    angles = np.asarray(angles, dtype=float).ravel()
+    columns = np.repeat(np.eye(3)[:, :, None], angles.size, axis=2)  # (3 columns, 3, N)
+    turn(columns, np.asarray(axis, dtype=float), np.cos(angles), np.sin(angles))
+    return columns.transpose(2, 1, 0).copy()

@@ -51,6 +51,39 @@ def flat_keys(indices: np.ndarray, what: str = "points") -> tuple[np.ndarray, np
     return np.ravel_multi_index(tuple((indices - low).T), tuple(int(n) for n in span)), low, span
 
 
+#: A key range up to this many times the number of keys (and up to ``DENSE_KEYS``) is tallied in a dense
+#: table (O(keys + range), no sort) instead of sorted; a sparse one goes through ``np.unique``.
+DENSE_RATIO = 16
+#: Largest key range tallied densely (a table of that many bytes, or 8x that for counts).
+DENSE_KEYS = 1 << 24
+
+
+def distinct_keys(keys: np.ndarray, key_range: int, counted: bool = False, counts: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Sorted distinct keys (m,) of integer keys (n,) in [0, key_range), with their summed counts (m,) when ``counted``.
+
+    Same result as ``np.unique(keys, return_counts=counted)`` (``counts`` (n,) weight each key; None: 1 each),
+    by a dense table when the range is small enough (``DENSE_RATIO``, ``DENSE_KEYS``), else by ``np.unique``.
+    """
+    dense = key_range <= min(DENSE_KEYS, DENSE_RATIO * max(keys.size, 1) + 4096)
+    if dense and not counted:
+        table = np.zeros(key_range, dtype=bool)
+        table[keys] = True
+        return np.flatnonzero(table), np.empty(0, dtype=np.int64)
+    if dense and key_range <= DENSE_KEYS // 8:
+        tally = np.bincount(keys, weights=counts, minlength=key_range)
+        unique = np.flatnonzero(tally)
+        return unique, tally[unique].astype(np.int64)
+    if not counted:
+        return np.unique(keys), np.empty(0, dtype=np.int64)
+    if counts is None:
+        return np.unique(keys, return_counts=True)
+    unique, inverse = np.unique(keys, return_inverse=True)
+    totals = np.zeros(unique.shape[0], dtype=np.int64)
+    np.add.at(totals, inverse.ravel(), counts)
+    return unique, totals
+
+
 class UniqueRows:
     """The distinct integer rows (M, k) of a stream of chunks (n, k), optionally with how often each occurred.
 
@@ -88,14 +121,7 @@ class UniqueRows:
     def _distinct(self, rows: np.ndarray, counts: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Distinct rows (m, k) sorted, with their summed counts (m,) (each row counts once when ``counts`` is None)."""
         keys, low, span = flat_keys(rows, self.what)
-        if self.counted and counts is None:
-            unique, totals = np.unique(keys, return_counts=True)
-        elif self.counted:
-            unique, inverse = np.unique(keys, return_inverse=True)
-            totals = np.zeros(unique.shape[0], dtype=np.int64)
-            np.add.at(totals, inverse.ravel(), counts)
-        else:
-            unique, totals = np.unique(keys), np.empty(0, dtype=np.int64)
+        unique, totals = distinct_keys(keys, int(np.prod(span)), self.counted, counts)
         distinct = np.column_stack(np.unravel_index(unique, tuple(int(n) for n in span))) + low
         return distinct.astype(np.int64, copy=False).reshape(-1, self.width), totals
 
@@ -170,7 +196,8 @@ def voxel_keys(points: np.ndarray, voxel: float) -> np.ndarray:
     if indices.shape[0] == 0:
         return np.empty((0, 3), dtype=np.int64)
     keys, low, span = flat_keys(indices)
-    return np.column_stack(np.unravel_index(np.unique(keys), tuple(int(n) for n in span))) + low
+    unique, _ = distinct_keys(keys, int(np.prod(span)))
+    return np.column_stack(np.unravel_index(unique, tuple(int(n) for n in span))) + low
 
 
 def voxel_volume(points: np.ndarray, voxel: float) -> float:
