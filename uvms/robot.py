@@ -111,6 +111,9 @@ class Robot(VehicleAccessors):
         self.ee_frame_ids = [self.frame_id(frame) for frame in requested]
         self.joints = self._collect_joints()
         self._unit_slices = self._unit_norm_slices()
+        # where the arm's values sit in q when no arm joint is continuous (angle = atan2 of a (cos, sin) pair)
+        self._arm_q_index = (np.concatenate([np.arange(j.idx_q, j.idx_q + j.nq) for j in self.arm_joints]).astype(int)
+                             if all(j.nq == j.nv for j in self.arm_joints) and self.arm_joints else None)
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -319,7 +322,12 @@ class Robot(VehicleAccessors):
 
     def arm_configuration(self, q: np.ndarray) -> np.ndarray:
         """Arm joint values (n_arm,) [rad or m] of a configuration (angles for continuous joints)."""
-        q = self.check_configuration(q)
+        return self.arm_values(self.check_configuration(q))
+
+    def arm_values(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`arm_configuration` of a q already checked (e.g. from ``pin.integrate``): no validation."""
+        if self._arm_q_index is not None:
+            return q[self._arm_q_index]
         values = []
         for joint in self.arm_joints:
             part = q[joint.idx_q: joint.idx_q + joint.nq]

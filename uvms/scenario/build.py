@@ -16,6 +16,7 @@ from ..dynamics.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..model.loader import load
 from ..robot import Robot
+from ..state import KinematicState
 from ..solvers import (
     VariableDamping,
     clik_velocity,
@@ -357,21 +358,23 @@ def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict,
 
     def controller(t: float, q: np.ndarray, v: np.ndarray | None = None):
         follow(t)
+        # q comes from pin.integrate in the one loop (checked once at its start): not validated at every call
+        state = KinematicState(robot, q, check=False)
         if method == "clik":
-            result = clik_velocity(robot, q, task, gain=gain, weights=weights, damping=damping, potential=potential,
+            result = clik_velocity(robot, state, task, gain=gain, weights=weights, damping=damping, potential=potential,
                                    alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
                                    enforce_limits=solver["enforce_limits"])
         elif method == "set_based":
-            result = set_based_velocity(robot, q, levels, gain=gain, weights=weights, damping=damping,
+            result = set_based_velocity(robot, state, levels, gain=gain, weights=weights, damping=damping,
                                         eta=solver["eta"], free_floating=solver["free_floating"], dt=dt)
         elif method == "hqp":
-            result = hqp_velocity(robot, q, levels, dt=dt, gain=gain, weights=weights,
+            result = hqp_velocity(robot, state, levels, dt=dt, gain=gain, weights=weights,
                                   free_floating=solver["free_floating"], regularization=solver["regularization"])
         elif method == "task_priority":
-            result = priority_velocity(robot, q, [task, vehicle_task], gain=[gain, vehicle["gain"]],
+            result = priority_velocity(robot, state, [task, vehicle_task], gain=[gain, vehicle["gain"]],
                                        method=solver["priority"], damping=float(solver["damping"]))
         else:
-            result = constrained_velocity(robot, q, task, vehicle_task, gain=gain, constraint_gain=vehicle["gain"])
+            result = constrained_velocity(robot, state, task, vehicle_task, gain=gain, constraint_gain=vehicle["gain"])
         return result.v, result
 
     return controller

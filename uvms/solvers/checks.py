@@ -6,6 +6,8 @@ and raises with a message that names the argument and what would be valid.
 
 from __future__ import annotations
 
+import math
+
 from collections.abc import Sequence
 
 import numpy as np
@@ -119,6 +121,27 @@ def as_task_list(tasks: Task | Sequence[Task]) -> list[Task]:
     if not task_list or not all(isinstance(task, Task) for task in task_list):
         raise SolverInputError(f"expected a Task or a sequence of Tasks, got {tasks!r}")
     return task_list
+
+
+def apply_gain(gain: float | np.ndarray, error: np.ndarray) -> np.ndarray:
+    """K e (k,) for a gain K given as a scalar, a diagonal (k,) or a matrix (k, k) [1/s], checked as
+    :func:`gain_matrix` does.
+
+    A scalar or diagonal K multiplies e entry by entry: the same numbers as K_matrix @ e (every other
+    product is an exact zero), without building the matrix.
+    """
+    if isinstance(gain, (int, float)) and not isinstance(gain, bool):
+        if not (math.isfinite(gain) and gain >= 0):
+            raise SolverInputError(f"gain must be a finite scalar >= 0, ({error.size},) or ({error.size}, "
+                                   f"{error.size}), got {gain!r}")
+        return float(gain) * error
+    gain_array = np.asarray(gain, dtype=float)
+    if gain_array.ndim == 0:
+        return apply_gain(float(gain_array), error)
+    if gain_array.ndim == 1 and gain_array.shape == error.shape and np.all(gain_array >= 0) \
+            and np.all(np.isfinite(gain_array)):
+        return gain_array * error
+    return gain_matrix(gain_array, error.size) @ error  # a matrix, or the message of a bad gain
 
 
 def gain_matrix(gain: float | np.ndarray, size: int) -> np.ndarray:

@@ -85,13 +85,15 @@ def clik_velocity(
         weights = check_weights(weights, solved_jacobian.shape[1], "W",
                                 free_floating_weights_note(robot.n_arm) if free_floating else "")
     nullspace_motion = None
-    if potential is not None and alpha > 0:
-        nullspace_motion = -alpha * potential.gradient(state.q)[first:]
+    if potential is not None and alpha > 0:  # -alpha dS/dv on the solved columns (S has no vehicle entries)
+        gradient = np.zeros(robot.nv)
+        gradient[robot.n_vehicle:] = potential.arm_gradient(robot.arm_values(state.q))
+        nullspace_motion = -alpha * gradient[first:]
     free = np.arange(solved_jacobian.shape[1])
     held: dict[int, float] = {}
     if enforce_limits:  # the solved coordinates: arm joints, and the (unbounded) vehicle unless free floating
         limit = limit.after_unbounded(robot.n_vehicle - first)
-        now = np.concatenate([np.zeros(robot.n_vehicle - first), robot.arm_configuration(state.q)])
+        now = np.concatenate([np.zeros(robot.n_vehicle - first), robot.arm_values(state.q)])
     for _ in range(solved_jacobian.shape[1] + 1):
         solution, sigma_min, used = solve_with_held(
             solved_jacobian, command, weights, damping, nullspace_motion, free, held)
@@ -135,7 +137,8 @@ def solve_with_held(
         return solution, float(singular_values.min(initial=0.0)), 0.0
     remaining = command - jacobian @ solution
     free_jacobian = jacobian[:, free]
-    free_weights = None if weights is None else weights_subset(weights, free, jacobian.shape[1])
+    every = free.size == jacobian.shape[1]  # no joint held: W as checked by the caller
+    free_weights = weights if weights is None or every else weights_subset(weights, free, jacobian.shape[1])
     inverse, sigma_min, used = damped_weighted_inverse(free_jacobian, free_weights, damping)
     solution[free] = inverse @ remaining
     if nullspace_motion is not None:

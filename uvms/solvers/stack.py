@@ -8,7 +8,7 @@ import numpy as np
 
 from ..state import KinematicState
 from ..tasks.task import Task
-from .checks import as_task_list, gain_matrix
+from .checks import apply_gain, as_task_list, gain_matrix
 
 __all__ = ["as_task_list", "gain_matrix", "stack"]
 
@@ -18,5 +18,5 @@ def stack(state: KinematicState, tasks: Sequence[Task], gain: float | np.ndarray
     jacobian = np.vstack([task.jacobian(state) for task in tasks])
     error = np.concatenate([task.error(state) for task in tasks])
     feedforward = np.concatenate([task.feedforward(state) for task in tasks])
-    command = feedforward + gain_matrix(gain, error.size) @ error
+    command = feedforward + apply_gain(gain, error)
     return jacobian, error, command
