@@ -9,6 +9,13 @@ from pathlib import Path
 from ..errors import UVMSError
 
 
+#: The metrics ``uvms run`` prints, those a run has (all are in metrics.json).
+HEADLINE_METRICS = ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
+                    "vehicle_travel", "vehicle_yaw_range", "arm_travel", "max_vehicle_tilt", "min_clearance",
+                    "min_manipulability", "max_joint_speed_ratio", "max_thrust_ratio", "saturated_time_fraction",
+                    "vehicle_position_error", "thruster_energy")
+
+
 def command_run(options: argparse.Namespace) -> int:
     """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
     from ..scenario import run  # the scenario layer pulls in scipy and matplotlib
@@ -21,9 +28,14 @@ def command_run(options: argparse.Namespace) -> int:
     folder = result.files[0].parent
     metrics = result.metrics
     print(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)")
-    for key in ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
-                "vehicle_travel", "vehicle_yaw_range", "arm_travel"):
-        print(f"  {key:<27} {metrics[key]:.3e}")
+    for key in HEADLINE_METRICS:
+        if key in metrics:  # e.g. the thrusters' only in an actuated run
+            print(f"  {key:<27} {metrics[key]:.3e}")
+    if "inequalities" in metrics:
+        enforced = "enforced" if metrics["inequalities_enforced"] else "monitored, not enforced"
+        shares = ", ".join(f"{name} {entry['active_fraction']:.0%}" for name, entry in metrics["inequalities"].items()
+                           if "active_fraction" in entry)
+        print(f"inequalities {enforced}; active: {shares or 'none with rows'}")
     print(f"verdict     {verdict_line(metrics['verdict'])}")
     print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})")
     if "bag" in metrics:
