@@ -262,6 +262,41 @@ def test_solve_ik_two_end_effectors_at_once(rng):
         assert np.allclose(robot.fk(result.q, frame).homogeneous, target.homogeneous, atol=1e-9)
 
 
+def test_solve_ik_ur5_random_targets_from_random_starts_all_within_limits(rng):
+    """The benchmark's protocol in small: FK of uniform joints inside the limits, random starts, checked here."""
+    arm = uvms.load(uvms.example_robot_urdf("ur5"))
+    lower, upper = arm.arm_limits
+    for index in range(150):
+        target = arm.fk(arm.random_configuration(rng))
+        result = uvms.solve_ik(arm, target, arm.random_configuration(rng), rng=index)
+        pose = arm.fk(result.q)
+        assert result.success
+        assert np.linalg.norm(target.translation - pose.translation) <= 1e-10
+        assert np.linalg.norm(pin.log3(target.rotation @ pose.rotation.T)) <= 1e-10
+        assert np.all(result.q >= lower) and np.all(result.q <= upper)
+
+
+def test_ik_projection_wraps_revolute_joints_by_two_pi_then_clips():
+    from uvms.solvers.ik import JointBox
+
+    robot = uvms.load(uvms.example_robot_urdf("ur5"))  # joints in [-2 pi, 2 pi], the elbow in [-pi, pi]
+    box = JointBox.of(robot)
+    assert JointBox.of(robot) is box  # built once per robot
+    lower, upper = robot.arm_limits
+    q = 0.5 * (lower + upper)
+    q[0] = upper[0] + 0.25  # 2 pi + 0.25: wrapped to the lowest equal angle inside, 0.25 - 2 pi
+    q[2] = lower[2] - 0.25  # the elbow's range is 2 pi: wrapped to upper - 0.25
+    projected = box.project(q.copy())
+    assert projected[0] == pytest.approx(0.25 - 2 * np.pi, abs=1e-12)
+    assert projected[2] == pytest.approx(upper[2] - 0.25, abs=1e-12)
+    assert np.array_equal(projected[[1, 3, 4, 5]], q[[1, 3, 4, 5]])
+    assert np.allclose(robot.fk(projected).homogeneous, robot.fk(q).homogeneous, atol=1e-12)  # the same pose
+    narrow = shipped("hoang2011")  # q1 in [0, 3 pi / 2]: 5.5 rad is 5.5 - 2 pi = -0.78 outside too: clipped
+    q = narrow.neutral()
+    q[narrow.nq_vehicle] = 5.5
+    assert JointBox.of(narrow).project(q)[narrow.nq_vehicle] == pytest.approx(1.5 * np.pi)
+
+
 def test_initial_configuration_of_hoang2011():
     robot = shipped("hoang2011")
     result = uvms.initial_configuration(robot, hoang_task(robot))

@@ -1,23 +1,40 @@
-"""Pose inverse kinematics: damped Newton (Levenberg-Marquardt) on the manifold, inside the joint limits."""
+"""Pose inverse kinematics: damped Newton (Levenberg-Marquardt) on the manifold, inside the joint limits.
+
+The loop runs on a `PoseProblem` compiled once per call (targets, rows, the joint box
+read once per Robot): one Pinocchio call per iteration (``computeFrameJacobian`` runs
+the forward kinematics and gives the Jacobian of the next step), a Cholesky solve of the
+small normal equations, limits by projection (a revolute joint first wraps by 2 pi), and
+a start that stalls gives way to a random restart instead of using up its iterations.
+"""
 
 from __future__ import annotations
 
+import math
 import time
+import weakref
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import SolverInputError
+from ..kinematics import WORLD_ALIGNED
 from ..limits import Limit
 from ..robot import Robot
-from ..state import KinematicState
 from ..tasks.frame import FrameTask
 from .checks import check_count, check_scalar
 from .inverses import dls_solve
 from .results import IKResult
 
 Target = pin.SE3 | Sequence[float]
+#: A start is abandoned (for a random restart) when its error has not shrunk below ``STALL_RATIO`` times the error
+#: of ``STALL_ITERATIONS`` iterations earlier: a local minimum or a crawl along a joint limit.
+STALL_ITERATIONS = 8
+STALL_RATIO = 0.5
+#: Levenberg-Marquardt damping d = mu |e|^2 + 1e-14 tr(J J^T) / k: the first mu of a start and its factors after an
+#: accepted or a rejected step (swept on the UR5 benchmark, benchmarks/bench_ik.py).
+MU_START, MU_DOWN, MU_UP = 0.1, 0.5, 10.0
 
 
 def solve_ik(
@@ -55,13 +72,15 @@ def solve_ik(
     check_scalar(tolerance, "tolerance", positive=True)
     check_count(max_iterations, "max_iterations", minimum=1)
     check_count(restarts, "restarts")
-    rng = np.random.default_rng(rng)
     start = robot.neutral() if q_init is None else robot.check_configuration(q_init)
-    limit = Limit.joint_positions(robot)
+    problem = PoseProblem(robot, tasks)
+    generator = None  # drawn from only when a restart is needed
     best_q, best_error, iterations = start, np.inf, 0
     for attempt in range(restarts + 1):
-        q = limit.project(start if attempt == 0 else random_start(robot, rng, best_q))
-        q, error, used = newton(robot, q, tasks, tolerance, max_iterations, limit)
+        if attempt:
+            generator = np.random.default_rng(rng) if generator is None else generator
+        q, error, used = newton(problem, start if attempt == 0 else random_start(robot, generator, best_q),
+                                tolerance, max_iterations)
         iterations += used
         if error < best_error:
             best_q, best_error = q, error
@@ -83,39 +102,155 @@ def project_to_limits(robot: Robot, q: np.ndarray, limit: Limit | None = None) -
     return (Limit.joint_positions(robot) if limit is None else limit).project(q)
 
 
-def newton(
-    robot: Robot, q: np.ndarray, tasks: list[FrameTask], tolerance: float, max_iterations: int, limit: Limit,
-) -> tuple[np.ndarray, float, int]:
-    """Levenberg-Marquardt iterations from q, projected into ``limit``: damping shrinks on success, grows on failure.
+@dataclass(frozen=True)
+class JointBox:
+    """The joint position box of a robot in q coordinates, and a Pinocchio data of its own for the IK loop.
+
+    Attributes:
+        index: coordinates of q held by bounded-or-not scalar joints (b,); span: the same as a slice when contiguous.
+        lower, upper: their limits (b,) [rad or m], +-inf where unbounded.
+        turns: (b,) whether the coordinate is a revolute angle (2 pi periodic).
+        data: ``model.createData()``, used by `PoseProblem.evaluate` only.
+    """
+
+    index: np.ndarray
+    span: slice | np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    turns: np.ndarray
+    data: pin.Data
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "lower_list", self.lower.tolist())
+        object.__setattr__(self, "upper_list", self.upper.tolist())
+
+    @classmethod
+    def of(cls, robot: Robot) -> JointBox:
+        """The box of ``robot`` (`Limit.joint_positions`), built once per Robot and kept while it lives."""
+        box = BOXES.get(robot)
+        if box is None:
+            limit = Limit.joint_positions(robot)
+            held = limit.q_index >= 0
+            index = limit.q_index[held]
+            contiguous = index.size > 0 and np.array_equal(index, np.arange(index[0], index[0] + index.size))
+            revolute = revolute_coordinates(robot.model)
+            box = cls(index, slice(int(index[0]), int(index[0]) + index.size) if contiguous else index,
+                      limit.lower[held], limit.upper[held], np.array([i in revolute for i in index], dtype=bool),
+                      robot.model.createData())
+            BOXES[robot] = box
+        return box
+
+    def project(self, q: np.ndarray) -> np.ndarray:
+        """q (nq,) brought into the box in place; returns q.
+
+        A revolute coordinate outside its limits first moves by a multiple of 2 pi when that
+        lands inside (the same pose: Newton keeps its progress); what is still outside is clipped.
+        """
+        values = q[self.span]
+        # a Python test of a few floats costs a quarter of two numpy reductions (inside is the common case)
+        if any(v < lo or v > hi for v, lo, hi in zip(values.tolist(), self.lower_list, self.upper_list)):
+            outside = (values < self.lower) | (values > self.upper)
+            wrapped = self.lower + np.mod(values - self.lower, 2.0 * np.pi)
+            values = np.where(outside & self.turns & (wrapped <= self.upper), wrapped, values)
+            q[self.span] = np.minimum(np.maximum(values, self.lower), self.upper)
+        return q
+
+
+#: The `JointBox` of each live Robot (a Robot's joints and limits are fixed when it is loaded).
+BOXES: weakref.WeakKeyDictionary[Robot, JointBox] = weakref.WeakKeyDictionary()
+
+
+def revolute_coordinates(model: pin.Model) -> set[int]:
+    """Indices in q of the 1-DOF revolute joints (about an axis of their frame or any axis), 2 pi periodic."""
+    kinds = ("JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned")
+    return {joint.idx_q for joint in model.joints[1:] if joint.nq == 1 and joint.shortname() in kinds}
+
+
+class PoseProblem:
+    """Pose targets compiled once for the Newton loop: one Pinocchio call per evaluation, no validation inside.
+
+    The error is that of `FrameTask` with the "log" orientation, [t* - t; log3(R* R^T)]
+    (world axes) on the task's rows, and the Jacobian its world-aligned frame Jacobian;
+    one frame takes ``computeFrameJacobian`` (it runs the forward kinematics itself),
+    several share one ``computeJointJacobians``.
+
+    Args:
+        robot: the model; tasks: frame tasks with targets (their "log" error is the one used).
+    """
+
+    def __init__(self, robot: Robot, tasks: Sequence[FrameTask]) -> None:
+        self.model = robot.model
+        self.box = JointBox.of(robot)
+        self.data = self.box.data
+        self.frame_ids = [task.frame_id for task in tasks]
+        self.targets = [(task.target.rotation, task.target.translation) for task in tasks]  # (3, 3), (3,)
+        self.rows = [np.asarray(task.rows) for task in tasks]
+        self.single = len(tasks) == 1 and len(self.rows[0]) == 6
+        self.error = np.empty(6)
+
+    def evaluate(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Stacked error (k,) [m, rad] and Jacobian (k, nv) at the configuration q (nq,) (new arrays)."""
+        model, data = self.model, self.data
+        if self.single:
+            frame = self.frame_ids[0]
+            jacobian = pin.computeFrameJacobian(model, data, q, frame, WORLD_ALIGNED)
+            return self.pose_error(0, data.oMf[frame]), jacobian.reshape(6, model.nv)  # (6,) when nv = 1
+        pin.computeJointJacobians(model, data, q)
+        errors, jacobians = [], []
+        for index, (frame, rows) in enumerate(zip(self.frame_ids, self.rows)):
+            errors.append(self.pose_error(index, pin.updateFramePlacement(model, data, frame))[rows])
+            jacobians.append(pin.getFrameJacobian(model, data, frame, WORLD_ALIGNED).reshape(6, model.nv)[rows])
+        return np.concatenate(errors), np.vstack(jacobians)
+
+    def pose_error(self, index: int, pose: pin.SE3) -> np.ndarray:
+        """[t* - t; log3(R* R^T)] (6,) [m, rad] of a frame at ``pose`` against target ``index``."""
+        rotation, translation = self.targets[index]
+        homogeneous = pose.homogeneous  # (4, 4): one conversion for both parts
+        error = np.empty(6)
+        error[:3] = translation - homogeneous[:3, 3]
+        error[3:] = pin.log3(rotation.dot(homogeneous[:3, :3].T))
+        return error
+
+
+def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations: int
+           ) -> tuple[np.ndarray, float, int]:
+    """Levenberg-Marquardt iterations from q, projected into the limits, until the error <= ``tolerance`` or a stall.
 
     Each step is the DLS solution J^T (J J^T + d I)^-1 e in normal-equation form
-    (:func:`~uvms.solvers.inverses.dls_solve`), d = mu |e|^2 + 1e-14 tr(J J^T) / k.
-    """
-    def evaluate(configuration):
-        state = KinematicState(robot, configuration, check=False)
-        return state, np.concatenate([task.error(state) for task in tasks])
+    (:func:`~uvms.solvers.inverses.dls_solve`), d = mu |e|^2 + 1e-14 tr(J J^T) / k; mu
+    shrinks after an accepted step and grows after a rejected one (``MU_*``). The
+    candidate's evaluation gives its Jacobian too, so an accepted step costs one
+    Pinocchio call. The start ends early when it stalls (``STALL_*``).
 
-    state, error = evaluate(q)
-    norm = float(np.linalg.norm(error))
-    mu = 1e-3
+    Returns:
+        (best q (nq,), its error norm [m, rad], iterations used).
+    """
+    model, box, evaluate = problem.model, problem.box, problem.evaluate
+    q = box.project(np.array(q, dtype=float))
+    error, jacobian = evaluate(q)
+    norm = math.sqrt(error.dot(error))
+    floor = 1e-14 * float(np.vdot(jacobian, jacobian)) / jacobian.shape[0]  # 1e-14 tr(J J^T) / k
+    mu, checkpoint = MU_START, norm
     for iteration in range(1, max_iterations + 1):
         if norm <= tolerance:
             return q, norm, iteration - 1
-        jacobian = np.vstack([task.jacobian(state) for task in tasks])  # (k, nv)
-        damping = mu * norm**2 + 1e-14 * np.sum(jacobian**2) / max(1, jacobian.shape[0])  # tr(J J^T) = |J|_F^2
+        if iteration % STALL_ITERATIONS == 0:  # Newton near a solution gains far more than this: a stall
+            if norm > STALL_RATIO * checkpoint:
+                return q, norm, iteration - 1
+            checkpoint = norm
         try:
-            step = dls_solve(jacobian, error, damping)
+            step = dls_solve(jacobian, error, mu * norm * norm + floor)
         except SolverInputError:  # not numerically positive definite: counts as a failed step
             step = None
         if step is not None:
-            candidate = limit.project(pin.integrate(robot.model, q, step))
-            candidate_state, candidate_error = evaluate(candidate)
-            candidate_norm = float(np.linalg.norm(candidate_error))
-            if np.isfinite(candidate_norm) and candidate_norm < norm:
-                q, state, error, norm = candidate, candidate_state, candidate_error, candidate_norm
-                mu = max(mu / 10.0, 1e-12)
+            candidate = box.project(pin.integrate(model, q, step))
+            candidate_error, candidate_jacobian = evaluate(candidate)
+            candidate_norm = math.sqrt(candidate_error.dot(candidate_error))
+            if candidate_norm < norm:  # False for NaN
+                q, error, jacobian, norm = candidate, candidate_error, candidate_jacobian, candidate_norm
+                mu = max(mu * MU_DOWN, 1e-12)
                 continue
-        mu *= 10.0
+        mu *= MU_UP
         if mu > 1e8:
             break
     return q, norm, max_iterations
