@@ -21,6 +21,12 @@ from ..series import SimulationResult
 FLOOR = 1e-9  # [m, rad] log axes: errors below are drawn at the floor
 
 
+def log_bottom(values: list[np.ndarray]) -> float:
+    """A lower limit for a log axis from the data: the decade of their 1st percentile (the errors start at 0)."""
+    positive = np.concatenate([v[v > FLOOR] for v in values]) if values else np.zeros(0)
+    return 10.0 ** np.floor(np.log10(np.percentile(positive, 1))) if positive.size else FLOOR
+
+
 def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "") -> Figure:
     """Each thruster's thrust and saturated command [N] over time, its limits dotted (4 per row)."""
     count = len(thrusters)
@@ -58,7 +64,8 @@ def coordination_figure(runs: Mapping[str, SimulationResult], title: str = "") -
         for axis, (name, _) in zip(axes, series):
             if name in result.actuation:
                 axis.semilogy(result.t, np.maximum(result.actuation[name], FLOOR), label=label)
-    for axis, (_, ylabel) in zip(axes, series):
+    for axis, (name, ylabel) in zip(axes, series):
+        axis.set_ylim(bottom=log_bottom([run.actuation[name] for run in runs.values() if name in run.actuation]))
         axis.set_ylabel(ylabel, fontsize=8)
         axis.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)
