@@ -168,7 +168,7 @@ def main() -> None:
         print(f"| {row.solver} | {row.case} | {row.success:.2f} % | {row.median * 1e3:.3f} ms | "
               f"{row.p95 * 1e3:.3f} ms | {row.median / row.fk:.0f}x |")
     print("| TRAC-IK (published, tolerance 1e-5) | UR5 and others | 99.6-100 % | - | - | - |")
-    print(f"\none pin.forwardKinematics: " + ", ".join(f"{row.case}: {row.fk * 1e6:.2f} us"
+    print("\none pin.forwardKinematics: " + ", ".join(f"{row.case}: {row.fk * 1e6:.2f} us"
                                                       for row in rows[:1] + rows[-1:]))
 
 

@@ -102,7 +102,7 @@ class BatchKinematics:
         return self.lower + (self.upper - self.lower) * rng.random((count, len(self.joint_names)))
 
     def positions(self, values: np.ndarray, base: pin.SE3 | None = None) -> np.ndarray:
-        """Frame positions (N, 3) [m] in the world, the vehicle at ``base`` (default: the origin), for joint values (N, n).
+        """Frame positions (N, 3) [m] in the world for joint values (N, n), the vehicle at ``base`` (default: origin).
 
         Only the point is carried from the frame back to the root (`carried_blocks`): per joint
         one rotation of N vectors about a constant axis and one constant 3x3 product, several
@@ -138,7 +138,7 @@ class BatchKinematics:
         return position_out, axes_out
 
     def poses(self, values: np.ndarray, base: pin.SE3 | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Frame rotations (N, 3, 3) (columns: the frame axes in the world) and positions (N, 3) [m] for joint values (N, n)."""
+        """Frame rotations (N, 3, 3) (columns: the frame axes in the world), positions (N, 3) [m], for values (N, n)."""
         values = self._check_values(values)
         count = values.shape[0]
         rotation_out, position_out = np.empty((count, 3, 3)), np.empty((count, 3))
@@ -190,7 +190,7 @@ class BatchKinematics:
         return values
 
     def _root_pose(self, base: pin.SE3 | None) -> pin.SE3:
-        """World pose of the joint the chain starts from: the vehicle body (= oMi[1], see Robot.base_pose) or the world."""
+        """World pose of the joint the chain starts from: the vehicle body (oMi[1], see Robot.base_pose) or the world."""
         if self.root_joint == 0 or base is None:
             return pin.SE3.Identity()
         return base
