@@ -87,3 +87,21 @@ def test_a_vehicle_without_thrusters_is_told_where_they_go(tmp_path):
     path.write_text(text.replace('path = "../models', f'path = "{SCENARIOS.parent}/models'))
     with pytest.raises(ScenarioError, match="no thrusters.*thrusters.yaml"):
         run(path, tmp_path / "o", NO_FIGURES, progress=False)
+
+
+def test_the_bag_of_an_actuated_run_has_the_thrusts_and_the_body_wrench(tmp_path):
+    from rosbags.rosbag2 import Reader
+    from rosbags.typesys import Stores, get_typestore
+
+    result = run(CURRENT, tmp_path / "b", [*NO_FIGURES, "outputs.bag=true", "trajectory.duration=0.5"], progress=False)
+    typestore, series = get_typestore(Stores.ROS2_HUMBLE), {}
+    with Reader(tmp_path / "b" / "bag") as reader:
+        for connection, _, raw in reader.messages():
+            series.setdefault(connection.topic, []).append(typestore.deserialize_cdr(raw, connection.msgtype))
+    saved = np.load(tmp_path / "b" / "actuation.npz")
+    thrust_3 = np.array([message.data for message in series["/thrusters/thruster_3/thrust"]])
+    assert np.array_equal(thrust_3, saved["thrusts"][:, 2]) and len(thrust_3) == 51
+    wrench = np.array([[m.wrench.force.x, m.wrench.force.y, m.wrench.force.z, m.wrench.torque.x, m.wrench.torque.y,
+                        m.wrench.torque.z] for m in series["/body_wrench"]])
+    assert np.array_equal(wrench, saved["body_wrench"]) and series["/body_wrench"][0].header.frame_id == "base_link"
+    assert result.metrics["bag"]["topics"]["/thrusters/thruster_8/thrust"] == 51

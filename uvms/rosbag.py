@@ -20,6 +20,10 @@ FLU. One message per topic and sample (row k of the run, stamped ``start_time_ns
   [vx, vy, 0, 0, 0, wz] planar). Covariances are zero (exact, simulated). A fixed base has no ``/odom``.
 - ``/<frame>/desired_pose`` (geometry_msgs/PoseStamped, header ``odom``): the desired pose of the task frame;
   ``/<frame>/desired_position`` (geometry_msgs/PointStamped) when only the desired position was recorded.
+- an actuated run (thrusters, :func:`uvms.simulate_actuated.simulate_actuated`): ``/thrusters/<name>/thrust``
+  (std_msgs/Float64, [N], the thruster's thrust, as uuv_simulator's thruster topics) and ``/body_wrench``
+  (geometry_msgs/WrenchStamped, header the vehicle root link: the thrusters' wrench on the vehicle, body FLU
+  [N, N m]).
 
 Stamps: ``start_time_ns`` (default 0, the Unix epoch: a simulated run has no wall time) plus t [s] rounded to
 the nanosecond; the bag's receive times are the same stamps.
@@ -278,6 +282,11 @@ class Messages:
                                                        angular=self.vector(twist.angular)),
                 covariance=covariance))
 
+    def wrench(self, stamp: int, frame_id: str, wrench: np.ndarray) -> Any:
+        """geometry_msgs/WrenchStamped of a wrench [f; tau] (6,) [N, N m] in ``frame_id``'s axes."""
+        body = self.types["geometry_msgs/msg/Wrench"](force=self.vector(wrench[:3]), torque=self.vector(wrench[3:]))
+        return self.types["geometry_msgs/msg/WrenchStamped"](header=self.header(stamp, frame_id), wrench=body)
+
     def desired(self, stamp: int, position: np.ndarray, quaternion: np.ndarray | None) -> Any:
         header = self.header(stamp, WORLD_FRAME)
         if quaternion is None:
@@ -290,7 +299,7 @@ class Messages:
 # ------------------------------------------------------------------ writing
 def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *,
               desired: Sequence[pin.SE3] | np.ndarray | None = None, desired_frame: str | None = None,
-              start_time_ns: int = 0, lock: bool = True) -> BagSummary:
+              start_time_ns: int = 0, lock: bool = True, thrusters: Sequence[str] = ()) -> BagSummary:
     """Write a run as a rosbag2 folder (MCAP storage) at ``path``, replacing a previous bag whole.
 
     The topics, frames and stamps are those of the module docstring. Everything is checked before anything
@@ -307,6 +316,7 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
         desired_frame: the frame the desired pose is for (the task frame); default the first end effector.
         start_time_ns: the stamp of t = 0 [ns since the Unix epoch]; default 0.
         lock: hold the lock of ``path`` (False for a bag inside a run folder being written, as ``uvms run``).
+        thrusters: the thruster names of an actuated run (its ``actuation["thrusts"]`` columns, in order).
 
     Returns:
         The topics written with their message counts, and what was skipped and why.
@@ -318,6 +328,7 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
     api = load_rosbags()
     stamps = stamps_ns(result.t, start_time_ns)
     _check_run(robot, result)
+    thrust = _thrust_series(result, thrusters)
     frame = robot.model.frames[robot.frame_id(desired_frame)].name
     edges, skipped = frame_tree(robot)
     target = desired_series(result, desired)
@@ -335,7 +346,7 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
     with outputs.run_folder(path, lock=lock, markers=BAG_MARKERS) as folder:
         staging = folder / name  # rosbags names the .mcap after its folder: NAME/NAME.mcap once moved up
         try:
-            _write(api, staging, robot, result, stamps, edges, frame, target, summary)
+            _write(api, staging, robot, result, stamps, edges, frame, target, summary, thrust)
             for item in list(staging.iterdir()):
                 os.replace(item, folder / item.name)
             staging.rmdir()
@@ -346,8 +357,24 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
     return summary
 
 
+def _thrust_series(result: SimulationResult, names: Sequence[str]) -> tuple | None:
+    """(names, thrusts (N, n) [N], body wrench (N, 6)) of an actuated run, or None.
+
+    Raises:
+        BagExportError: names given that do not match the run's thrust columns.
+    """
+    actuation = getattr(result, "actuation", None)
+    if not names or not actuation or "thrusts" not in actuation:
+        return None
+    thrusts = np.asarray(actuation["thrusts"])
+    if thrusts.shape != (len(result.t), len(names)):
+        raise BagExportError(f"{len(names)} thruster names for thrusts of shape {thrusts.shape}")
+    return [topic_token(name) for name in names], thrusts, np.asarray(actuation["body_wrench"])
+
+
 def _write(api: dict[str, Any], staging: Path, robot: Robot, result: SimulationResult, stamps: np.ndarray,
-           edges: list[TransformEdge], frame: str, target: tuple | None, summary: BagSummary) -> None:
+           edges: list[TransformEdge], frame: str, target: tuple | None, summary: BagSummary,
+           thrust: tuple | None = None) -> None:
     """Write every message into a new bag folder ``staging``; fill ``summary``'s topics."""
     messages = Messages(api["typestore"])
     model, data = robot.model, robot.model.createData()
@@ -386,6 +413,13 @@ def _write(api: dict[str, Any], staging: Path, robot: Robot, result: SimulationR
                 kind = "desired_pose" if target[1] is not None else "desired_position"
                 put(f"/{topic_token(frame)}/{kind}", stamp,
                     messages.desired(stamp, target[0][k], None if target[1] is None else target[1][k]))
+            if thrust is not None:
+                names, thrusts, wrenches = thrust
+                for index, name in enumerate(names):
+                    put(f"/thrusters/{name}/thrust", stamp, messages.types["std_msgs/msg/Float64"](
+                        data=float(thrusts[k, index])))
+                if root is not None:
+                    put("/body_wrench", stamp, messages.wrench(stamp, model.frames[root].name, wrenches[k]))
 
 
 def _joint_state(messages: Messages, robot: Robot, result: SimulationResult, k: int, stamp: int, q: np.ndarray) -> Any:

@@ -146,7 +146,8 @@ def write_run_bag(folder: Path, setup: Setup, result: SimulationResult, metrics:
     from ..rosbag import write_bag  # rosbags only when a bag is asked for
 
     frame = setup.task.frame if setup.task is not None else None
-    bag = write_bag(folder / "bag", setup.robot, result, desired_frame=frame, lock=False)
+    thrusters = setup.actuation.thrusters.names if setup.actuation is not None else ()
+    bag = write_bag(folder / "bag", setup.robot, result, desired_frame=frame, lock=False, thrusters=thrusters)
     metrics["bag"] = {"topics": bag.topics, "skipped": bag.skipped}
     return bag.path
 
