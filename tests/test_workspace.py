@@ -37,7 +37,7 @@ INERTIAL = '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" 
 def chain_urdf(axes, lengths, ee_xyz="0 0 0", base_xyz="0 0 0", base_geometry=""):
     """A fixed-base serial chain of revolute joints with limits [-pi, pi]: joint k turns about axes[k] and sits
     lengths[k] along the previous link's x (the first one at base_xyz); frame ``ee`` at ee_xyz on the last link."""
-    links = [f'<link name="base_link">{INERTIAL}{base_geometry}</link>']
+    links = [f'<link name="base_link">{base_geometry}</link>']  # massless: the base rule keeps it fixed
     joints, parent = [], "base_link"
     for k, (axis, length) in enumerate(zip(axes, lengths)):
         origin = base_xyz if k == 0 else f"{length} 0 0"
