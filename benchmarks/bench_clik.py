@@ -1,4 +1,4 @@
-"""One CLIK step and pose IK, measured side by side against Pinocchio, pink and roboticstoolbox.
+"""One CLIK step, measured side by side against Pinocchio, a hand-written numpy step and pink.
 
 Model: a 6-DOF floating base carrying a UR5 (6 + 6 DOF). The step is a pose
 task with DLS, a joint-limit null-space term and integration on the manifold.
@@ -6,19 +6,16 @@ Times are ratios to one ``pin.forwardKinematics`` call measured in the same run
 (this machine is shared and noisy: absolute times are not comparable).
 
     pip install -e ".[bench]"
-    python benchmarks/bench_clik.py [--targets 1000] [--repeat 2000]
+    python benchmarks/bench_clik.py [--repeat 2000]
 
-roboticstoolbox has its own UR5 (DH parameters, rtb.models.DH.UR5) preceded by
-a 6-DOF base (tx ty tz Rz Ry Rx): the same kinematic structure, its own frames.
+Pose IK has its own benchmark, ``benchmarks/bench_ik.py``.
+
 """
 
 from __future__ import annotations
 
 import argparse
-import statistics
-import time
 import timeit
-import warnings
 
 import numpy as np
 import pinocchio as pin
@@ -87,45 +84,8 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
     return ratios
 
 
-def ik_comparison(robot: uvms.Robot, targets: int) -> list[tuple[str, float, float, float]]:
-    """(library, success rate at 1e-10, median residual, median time per solve [s]) on random reachable targets."""
-    rng = np.random.default_rng(1)
-    rows = []
-    times, errors, successes = [], [], 0
-    for index in range(targets):
-        target = robot.fk(robot.random_configuration(rng))
-        started = time.perf_counter()
-        result = uvms.solve_ik(robot, target, rng=index)
-        times.append(time.perf_counter() - started)
-        errors.append(result.error)
-        successes += result.success
-    rows.append(("uvms.solve_ik", successes / targets, statistics.median(errors), statistics.median(times)))
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            import roboticstoolbox as rtb
-            from roboticstoolbox import ET, ETS
-        arm = ETS([ET.tx(), ET.ty(), ET.tz(), ET.Rz(), ET.Ry(), ET.Rx()]) * rtb.models.DH.UR5().ets()
-        for tolerance in (1e-10, 1e-6):
-            times, errors, successes = [], [], 0
-            rng = np.random.default_rng(1)
-            for _ in range(targets):
-                goal = arm.eval(rng.uniform(-np.pi, np.pi, arm.n))
-                started = time.perf_counter()
-                solution = arm.ik_LM(goal, tol=tolerance, joint_limits=False)
-                times.append(time.perf_counter() - started)
-                errors.append(solution.residual)
-                successes += bool(solution.success) and solution.residual <= 1e-10
-            rows.append((f"roboticstoolbox ik_LM (tol {tolerance:g})", successes / targets,
-                         statistics.median(errors), statistics.median(times)))
-    except ImportError:
-        print("roboticstoolbox not installed: pip install -e '.[bench]'")
-    return rows
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--targets", type=int, default=1000, help="random reachable IK targets")
     parser.add_argument("--repeat", type=int, default=2000, help="calls per timing")
     options = parser.parse_args()
     robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
@@ -135,10 +95,7 @@ def main() -> None:
     print("| implementation | time / pin.forwardKinematics |\n|---|---|")
     for label, ratio in ratios.items():
         print(f"| {label} | {ratio:.1f} |")
-    print(f"\nPose IK on {options.targets} random reachable targets\n")
-    print("| library | success at 1e-10 | median residual | median time per solve [ms] |\n|---|---|---|---|")
-    for label, rate, residual, seconds in ik_comparison(robot, options.targets):
-        print(f"| {label} | {100 * rate:.1f} % | {residual:.1e} | {1e3 * seconds:.2f} |")
+    print("\nPose IK: benchmarks/bench_ik.py (the TRAC-IK protocol at 1e-10, limits on, roboticstoolbox beside it)")
 
 
 if __name__ == "__main__":
