@@ -63,6 +63,9 @@ def check_actuated_scenario(robot: Robot, task: FrameTask, scenario: dict) -> No
         raise ScenarioError("plant.thrusters = true solves the arm with its own point task (solver.gain [1/s], "
                             "solver.damping): solver.method must be 'clik', without free_floating, alpha or "
                             "enforce_limits (the vehicle is actuated, not free floating)")
+    if isinstance(solver["gain"], list) or solver["damping_epsilon"]:
+        raise ScenarioError("plant.thrusters = true: solver.gain is one number (K [1/s] of the end-effector point "
+                            "task) and solver.damping a fixed DLS damping (no damping_epsilon)")
     if scenario["inequalities"]:
         raise ScenarioError("[[inequalities]] are not enforced on an actuated vehicle yet; remove them or use the "
                             "kinematic plant")
@@ -111,8 +114,7 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
             pose_gains=np.asarray(control["pose_gains"], dtype=float),
             max_speed=np.asarray(control["max_speed"], dtype=float),
             priorities=allocation_priorities(control["priorities"]), arm_feedforward=control["arm_feedforward"],
-            ee_gain=float(np.asarray(solver["gain"], dtype=float).reshape(-1)[0]),
-            arm_damping=float(solver["damping"]) or 0.01)
+            ee_gain=float(solver["gain"]), arm_damping=float(solver["damping"]))
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control: {exc}") from None
     return Actuation(plant, thrusters, controller)
