@@ -54,8 +54,19 @@ def coordinated_arm_rates(
         qd_arm = J_a^# (J v_ref - J_v nu) [rad/s or m/s].
     """
     task = jacobian @ reference  # (k,) what the reference asks of the task
+    return arm_rates_for_task(jacobian, task, measured_vehicle_velocity, n_vehicle, weights=weights, damping=damping)
+
+
+def arm_rates_for_task(jacobian: np.ndarray, task: np.ndarray, vehicle_velocity: np.ndarray, n_vehicle: int, *,
+                       weights: np.ndarray | None = None, damping: float | VariableDamping = 0.0) -> np.ndarray:
+    """qd_arm = J_a^# (task - J_v nu) (n_arm,): the arm's part of a task velocity (k,) with the vehicle's given.
+
+    Args:
+        jacobian: J (k, nv) of the task; task: the task velocity wanted (k,); vehicle_velocity: nu (n_vehicle,)
+            in the axes of v; n_vehicle, weights, damping: as in :func:`coordinated_arm_rates`.
+    """
     inverse, _, _ = damped_weighted_inverse(jacobian[:, n_vehicle:], weights, damping)  # (n_arm, k)
-    return inverse @ (task - jacobian[:, :n_vehicle] @ measured_vehicle_velocity)
+    return inverse @ (task - jacobian[:, :n_vehicle] @ vehicle_velocity)
 
 
 class CoordinatedControl:

@@ -24,8 +24,7 @@ from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError
 from ..robot import Robot
-from ..solvers.inverses import damped_weighted_inverse
-from .coordination import CoordinatedControl
+from .coordination import CoordinatedControl, arm_rates_for_task
 from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector
 
 
@@ -77,8 +76,8 @@ class StationKeeping:
             return np.concatenate([vehicle_ref, np.zeros(robot.n_arm)]), {"nu_ref": nu_ref}
         jacobian = self.jacobian(q)
         task = self.ee_gain * (self.ee_target - robot.fk(q, self.frame).translation)
-        inverse, _, _ = damped_weighted_inverse(jacobian[:, nb:], None, self.arm_damping)
-        return np.concatenate([vehicle_ref, inverse @ (task - jacobian[:, :nb] @ vehicle_ref)]), {"nu_ref": nu_ref}
+        arm = arm_rates_for_task(jacobian, task, vehicle_ref, nb, damping=self.arm_damping)
+        return np.concatenate([vehicle_ref, arm]), {"nu_ref": nu_ref}
 
     def errors(self, q: np.ndarray) -> dict:
         """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and error."""
