@@ -26,6 +26,7 @@ from ..series import SimulationResult
 from ..simulate import TaskRecorder
 from ..simulate_actuated import actuation_metrics, simulate_actuated
 from ..tasks.frame import FrameTask
+from .schema import changed_keys
 
 #: The wrench axes the allocation priorities name (body FLU: forces, then moments).
 WRENCH_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -76,12 +77,9 @@ def check_actuated_scenario(robot: Robot, task: FrameTask, scenario: dict) -> No
 
 def check_vehicle_control_used(scenario: dict) -> None:
     """A [vehicle_control] key set without plant.thrusters = true is refused (it would do nothing)."""
-    from .schema import SCHEMA
-
     if scenario["plant"]["thrusters"]:
         return
-    given = [key for key, (_, default, _) in SCHEMA["vehicle_control"].items()
-             if scenario["vehicle_control"][key] != default]
+    given = changed_keys(scenario, "vehicle_control")
     if given:
         raise ScenarioError(f"vehicle_control.{given[0]} needs plant.thrusters = true (an actuated vehicle); without "
                             f"thrusters the vehicle moves by momentum conservation or as commanded")

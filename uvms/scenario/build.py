@@ -30,7 +30,7 @@ from ..tasks import FrameTask, JointLimitPotential, VehicleTask
 from ..trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw, VelocityRamps
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .inequalities import ENFORCING_METHODS, ScenarioInequalities, build_inequalities
-from .schema import NUMBER, SCHEMA
+from .schema import NUMBER, changed_keys
 
 #: The methods that take solver.weights (the W of the solved columns).
 WEIGHTED_METHODS = ("clik", *ENFORCING_METHODS)
@@ -207,9 +207,8 @@ def make_law(section: dict, path_length: float):
 
 def check_kinematic_plant(section: dict) -> None:
     """Reject [plant] keys that only a dynamic plant uses when plant.type = 'kinematic'."""
-    defaults = {key: default for key, (_, default, _) in SCHEMA["plant"].items()}
-    unused = [key for key in ("gjm", "motor_feedforward", "control_dt", "gravity", "added_mass", "damping", "current",
-                              "thrusters") if section[key] != defaults[key]]
+    unused = changed_keys({"plant": section}, "plant", ("gjm", "motor_feedforward", "control_dt", "gravity",
+                                                        "added_mass", "damping", "current", "thrusters"))
     if unused:
         raise ScenarioError(f"plant.{unused[0]} needs a dynamic plant: the kinematic one moves the vehicle by momentum "
                             f"conservation (solver.free_floating) or as commanded; set plant.type = 'rigid' or "

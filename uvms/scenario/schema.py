@@ -361,6 +361,12 @@ def check_range(name: str, value: Any, origin: str) -> None:
                                 f"{low:g} {'<' if strict else '<='} {name} <= {MAX_MAGNITUDE:.0e}")
 
 
+def changed_keys(scenario: dict, section: str, keys: Sequence[str] | None = None) -> list[str]:
+    """The keys of ``section`` (all, or ``keys``) whose value differs from the schema's default, in schema order."""
+    return [key for key, (_, default, _) in SCHEMA[section].items()
+            if (keys is None or key in keys) and scenario[section][key] != default]
+
+
 def type_names(kinds: tuple) -> str:
     names = {int: "a number", float: "a number", str: "a string", bool: "true/false", list: "a list", dict: "a table"}
     return " or ".join(dict.fromkeys(names[kind] for kind in kinds))
