@@ -41,6 +41,7 @@ from .state import KinematicState
 # tasks and solvers: what to achieve, how
 from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
 from .solvers import (
+    CLIKSolver,
     SolverInputError,
     VariableDamping,
     clik_step,
@@ -82,7 +83,7 @@ __all__ = [
     "KinematicState", "Limit", "Robot",
     # tasks and solvers
     "DistanceTask", "FrameTask", "JointLimitPotential", "JointTask", "PostureTask", "VehicleTask",
-    "SolverInputError", "VariableDamping", "clik_step", "clik_velocity", "constrained_velocity",
+    "CLIKSolver", "SolverInputError", "VariableDamping", "clik_step", "clik_velocity", "constrained_velocity",
     "initial_configuration", "priority_velocity", "solve_ik",
     # trajectories
     "ViaPointTrajectory", "ctraj", "jtraj",

@@ -26,8 +26,9 @@ from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import lapack
 
-from .errors import StepCountError, UVMSError
+from .errors import NumericalError, StepCountError, UVMSError
 
 #: The rate of a state: (t [s], q (nq,), x (m,)) -> (w (nv,) tangent at q, xdot (m,)).
 Rate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -113,7 +114,7 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
     def stage(xi: np.ndarray, x_stage: np.ndarray, time_: float) -> tuple[np.ndarray, np.ndarray]:
         velocity, x_rate = rate(time_, pin.integrate(model, q, xi), x_stage)
         # xi' = dexp^-1(w): the tangent-space rate that moves the stage configuration with velocity w
-        return np.linalg.solve(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), x_rate
+        return solve_square(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), x_rate
 
     k1q, k1x = first
     k2q, k2x = stage(0.5 * dt * k1q, x + 0.5 * dt * k1x, t + 0.5 * dt)
@@ -121,6 +122,19 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
     k4q, k4x = stage(dt * k3q, x + dt * k3x, t + dt)
     q_next = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
     return q_next, x + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x)
+
+
+def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """x (n,) with A x = b for a square A (n, n): LAPACK's dgesv, which numpy's ``linalg.solve`` calls with
+    several times the overhead on these small systems (the same numbers).
+
+    Raises:
+        NumericalError: A is singular (LAPACK info > 0).
+    """
+    _, _, solution, info = lapack.dgesv(matrix, rhs)
+    if info != 0:
+        raise NumericalError(f"singular {matrix.shape[0]}x{matrix.shape[0]} system (LAPACK dgesv info {info})")
+    return solution
 
 
 #: The step of each scheme.

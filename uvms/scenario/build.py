@@ -18,8 +18,8 @@ from ..model.loader import load
 from ..robot import Robot
 from ..state import KinematicState
 from ..solvers import (
+    CLIKSolver,
     VariableDamping,
-    clik_velocity,
     constrained_velocity,
     hqp_velocity,
     initial_configuration,
@@ -27,7 +27,8 @@ from ..solvers import (
     set_based_velocity,
 )
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
-from ..trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw, VelocityRamps
+from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, RecentSamples, SE3Trajectory, TrapezoidLaw,
+                          VelocityRamps)
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .inequalities import ENFORCING_METHODS, ScenarioInequalities, build_inequalities
 from .schema import NUMBER, changed_keys
@@ -350,19 +351,28 @@ def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict,
         vehicle_task = VehicleTask(robot, velocities=vehicle["velocities"], heading=vehicle["heading"],
                                    depth=vehicle["depth"])
 
+    samples = RecentSamples(trajectory)
+    current: list = [None]  # the sample the task points at
+
     def follow(t: float) -> None:
-        sample = trajectory(t)
-        task.set_target(sample.pose)
-        task.set_target_velocity(sample.twist)
+        sample = samples(t)
+        if sample is not current[0]:
+            task.set_target(sample.pose)
+            task.set_target_velocity(sample.twist)
+            current[0] = sample
+
+    clik = None
+    if method == "clik":  # built once: its inputs checked here, not at every evaluation
+        clik = CLIKSolver(robot, task, gain=gain, weights=weights, damping=damping, potential=potential,
+                          alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
+                          enforce_limits=solver["enforce_limits"])
 
     def controller(t: float, q: np.ndarray, v: np.ndarray | None = None):
         follow(t)
         # q comes from pin.integrate in the one loop (checked once at its start): not validated at every call
         state = KinematicState(robot, q, check=False)
-        if method == "clik":
-            result = clik_velocity(robot, state, task, gain=gain, weights=weights, damping=damping, potential=potential,
-                                   alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
-                                   enforce_limits=solver["enforce_limits"])
+        if clik is not None:
+            result = clik.solve(state)
         elif method == "set_based":
             result = set_based_velocity(robot, state, levels, gain=gain, weights=weights, damping=damping,
                                         eta=solver["eta"], free_floating=solver["free_floating"], dt=dt)

@@ -14,7 +14,7 @@ the QP hierarchy on the same levels, both keeping speed limits by scaling the lo
 
 from ..errors import SolverInputError
 from ..limits import Limit
-from .clik import clik_step, clik_velocity
+from .clik import CLIKSolver, clik_step, clik_velocity
 from .constraints import constrained_velocity
 from .hqp import hqp_step, hqp_velocity
 from .ik import solve_ik
@@ -47,6 +47,7 @@ __all__ = [
     "StepResult",
     "VariableDamping",
     "VelocityResult",
+    "CLIKSolver",
     "clik_step",
     "clik_velocity",
     "constrained_velocity",

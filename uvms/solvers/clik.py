@@ -10,7 +10,9 @@ only the arm is commanded and the vehicle follows momentum conservation).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+
 import numpy as np
 import pinocchio as pin
 
@@ -20,14 +22,160 @@ from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
-from .checks import check_scalar, check_weights, free_floating_weights_note
-from .inverses import SolverInputError, VariableDamping, damped_weighted_inverse, svd_inverse, weights_subset
+from .checks import (apply_gain, as_task_list, check_damping, check_scalar, check_weights, free_floating_weights_note,
+                     gain_matrix)
+from .inverses import (SolverInputError, VariableDamping, damped_weighted_inverse, prepared_svd_inverse, svd_inverse,
+                       weights_factor, weights_subset)
 from .results import StepResult, VelocityResult
-from .stack import as_task_list, stack
+from .stack import stacked_terms
 
 # VariableDamping, damped_weighted_inverse and svd_inverse live in .inverses and stay importable from here.
-__all__ = ["VariableDamping", "clik_step", "clik_velocity", "damped_weighted_inverse", "solve_with_held",
+__all__ = ["CLIKSolver", "VariableDamping", "clik_step", "clik_velocity", "damped_weighted_inverse", "solve_with_held",
            "svd_inverse"]
+
+
+class CLIKSolver:
+    """The CLIK of a fixed task set, its inputs checked and its pieces prepared once.
+
+    The one implementation of CLIK: :func:`clik_velocity` builds one and solves once; a controller builds
+    one and calls :meth:`solve` (or :meth:`velocity`, without diagnostics) at every evaluation, with the same
+    numbers, bit for bit. What changes between calls is the configuration and the tasks' targets.
+
+    Args: those of :func:`clik_velocity` (after ``q``).
+    """
+
+    def __init__(
+        self,
+        robot: Robot,
+        tasks: Task | Sequence[Task],
+        *,
+        gain: float | np.ndarray = 1.0,
+        weights: np.ndarray | None = None,
+        damping: float | VariableDamping = 0.0,
+        potential: JointLimitPotential | None = None,
+        alpha: float = 0.0,
+        free_floating: bool = False,
+        dt: float | None = None,
+        enforce_limits: bool = False,
+        limit: Limit | None = None,
+    ) -> None:
+        if free_floating and robot.base_type == "fixed":
+            raise SolverInputError(f"{robot.name} has a fixed base: free_floating=True needs a floating or planar base")
+        self.alpha = check_scalar(alpha, "alpha")
+        self.robot, self.tasks, self.free_floating = robot, as_task_list(tasks), free_floating
+        self.enforce_limits, self.dt = enforce_limits, dt
+        if enforce_limits:
+            if dt is None:
+                raise SolverInputError("enforce_limits needs the step dt > 0")
+            self.dt = check_scalar(dt, "dt", positive=True)
+            limit = Limit.joint_positions(robot) if limit is None else limit
+            if limit.size != robot.n_arm or limit.kind != "position":
+                raise SolverInputError(f"enforce_limits needs position limits of the {robot.n_arm} arm coordinates, "
+                                       f"got {limit.size} {limit.kind} limits")
+        self.limit = limit
+        self.first = robot.n_vehicle if free_floating else 0  # the first solved column of v
+        columns = robot.nv - self.first
+        rows = sum(task.dim for task in self.tasks)
+        apply_gain(gain, np.zeros(rows))  # refuses a bad gain now, with its message, rather than at every call
+        self.gain = float(gain) if np.ndim(gain) == 0 else np.asarray(gain, dtype=float)
+        self._gain_matrix = None if np.ndim(gain) < 2 else gain_matrix(gain, rows)
+        self.weights = None if weights is None else check_weights(
+            weights, columns, "W", free_floating_weights_note(robot.n_arm) if free_floating else "")
+        factor = None if self.weights is None else weights_factor(self.weights, columns)
+        self._factor = factor
+        self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
+        self.potential = potential if potential is not None and self.alpha > 0 else None
+
+    def _command(self, error: np.ndarray, feedforward: np.ndarray) -> np.ndarray:
+        """xdot_d + K e (k,), as :func:`~uvms.solvers.checks.apply_gain` forms K e."""
+        if self._gain_matrix is not None:
+            return feedforward + self._gain_matrix @ error
+        return feedforward + self.gain * error
+
+    def _nullspace_motion(self, q: np.ndarray) -> np.ndarray | None:
+        """z0 = -alpha dS/dv on the solved columns (S has no vehicle entries), or None."""
+        if self.potential is None:
+            return None
+        robot = self.robot
+        gradient = np.zeros(robot.nv)
+        gradient[robot.n_vehicle:] = self.potential.arm_gradient(robot.arm_values(q))
+        return -self.alpha * gradient[self.first:]
+
+    def _inverse(self, jacobian: np.ndarray) -> tuple[np.ndarray, float, float]:
+        """The weighted, damped inverse of the solved Jacobian (all columns free) and its diagnostics."""
+        factor = self._factor
+        if factor is None:
+            return prepared_svd_inverse(jacobian, self.damping)
+        inverse, sigma_min, used = prepared_svd_inverse(factor.scale(jacobian), self.damping)
+        return factor.unscale(inverse), sigma_min, used
+
+    def _solution(self, state: KinematicState) -> tuple:
+        """(v (nv,), task Jacobian (k, nv), error (k,), command (k,), sigma_min, damping used, held names)."""
+        robot = self.robot
+        jacobian, error, feedforward = stacked_terms(state, self.tasks)  # (k, nv), (k,), (k,)
+        command = self._command(error, feedforward)
+        solved = state.generalized(jacobian) if self.free_floating else jacobian  # (k, n)
+        nullspace_motion = self._nullspace_motion(state.q)
+        held: dict[int, float] = {}
+        if self.enforce_limits:
+            solution, sigma_min, used, held = self._clamped(state, solved, command, nullspace_motion)
+        else:
+            # column-major, as solve_with_held's J[:, free] is: the BLAS products sum in the same order, the same bits
+            solved = np.asfortranarray(solved)
+            inverse, sigma_min, used = self._inverse(solved)
+            solution = inverse @ command
+            if nullspace_motion is not None:
+                solution += nullspace_motion - inverse @ (solved @ nullspace_motion)
+        v = np.zeros(robot.nv)
+        v[self.first:] = solution
+        if self.free_floating:
+            a_base, a_arm = state.centroidal_split()
+            v[:self.first] = base_velocity_from_momentum(a_base, a_arm, solution, None)
+        held_names = tuple(self._limit_names[index] for index in sorted(held)) if held else ()
+        return v, jacobian, error, command, sigma_min, used, held_names
+
+    def _clamped(self, state: KinematicState, jacobian: np.ndarray, command: np.ndarray,
+                 nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float, float, dict[int, float]]:
+        """Joint clamping: hold the joints the step would carry past a limit at it and solve with the others."""
+        robot, dt = self.robot, self.dt
+        limit = self.limit.after_unbounded(robot.n_vehicle - self.first)  # the (unbounded) vehicle unless free floating
+        self._limit_names = limit.names
+        now = np.concatenate([np.zeros(robot.n_vehicle - self.first), robot.arm_values(state.q)])
+        free = np.arange(jacobian.shape[1])
+        held: dict[int, float] = {}
+        for _ in range(jacobian.shape[1] + 1):
+            solution, sigma_min, used = solve_with_held(jacobian, command, self.weights, self.damping,
+                                                        nullspace_motion, free, held)
+            predicted = now + dt * solution
+            violated = limit.violated(predicted)
+            outside = [i for i in free if violated[i]]
+            if not outside:
+                break
+            bounds = limit.crossed_bound(predicted)
+            for index in outside:  # hold the joint where the step reaches its limit
+                held[index] = (bounds[index] - now[index]) / dt
+            free = np.array([i for i in free if i not in held], dtype=int)
+        return solution, sigma_min, used, held
+
+    def _state(self, q: np.ndarray | KinematicState, check: bool) -> KinematicState:
+        return q if isinstance(q, KinematicState) else KinematicState(self.robot, q, check)
+
+    def solve(self, q: np.ndarray | KinematicState, *, check: bool = True) -> VelocityResult:
+        """The CLIK velocity at q and its diagnostics.
+
+        Args:
+            q: configuration (nq,) or a KinematicState already computed at it.
+            check: validate an array q (False for configurations of ``pin.integrate`` in a loop).
+        """
+        v, jacobian, error, command, sigma_min, used, held_names = self._solution(self._state(q, check))
+        residual = jacobian @ v - command
+        return VelocityResult(v=v, command=command, error=error, residual=math.sqrt(residual.dot(residual)),
+                              sigma_min=sigma_min, damping=used, limits_active=held_names,
+                              free_floating=self.free_floating)
+
+    def velocity(self, q: np.ndarray | KinematicState, *, check: bool = True) -> np.ndarray:
+        """The CLIK velocity v (nv,) at q alone (the stages of an integrator, where no one reads diagnostics)."""
+        return self._solution(self._state(q, check))[0]
 
 
 def clik_velocity(
@@ -45,7 +193,7 @@ def clik_velocity(
     enforce_limits: bool = False,
     limit: Limit | None = None,
 ) -> VelocityResult:
-    """One CLIK velocity.
+    """One CLIK velocity (a :class:`CLIKSolver` built for the call).
 
     Args:
         robot: the model.
@@ -66,57 +214,9 @@ def clik_velocity(
     Returns:
         VelocityResult with the full velocity v (nv,).
     """
-    if free_floating and robot.base_type == "fixed":
-        raise SolverInputError(f"{robot.name} has a fixed base: free_floating=True needs a floating or planar base")
-    check_scalar(alpha, "alpha")
-    if enforce_limits:
-        if dt is None:
-            raise SolverInputError("enforce_limits needs the step dt > 0")
-        check_scalar(dt, "dt", positive=True)
-        limit = Limit.joint_positions(robot) if limit is None else limit
-        if limit.size != robot.n_arm or limit.kind != "position":
-            raise SolverInputError(f"enforce_limits needs position limits of the {robot.n_arm} arm coordinates, "
-                                   f"got {limit.size} {limit.kind} limits")
-    state = q if isinstance(q, KinematicState) else KinematicState(robot, q)
-    jacobian, error, command = stack(state, as_task_list(tasks), gain)  # (k, nv), (k,), (k,)
-    first = robot.n_vehicle if free_floating else 0
-    solved_jacobian = state.generalized(jacobian) if free_floating else jacobian  # (k, n)
-    if weights is not None:
-        weights = check_weights(weights, solved_jacobian.shape[1], "W",
-                                free_floating_weights_note(robot.n_arm) if free_floating else "")
-    nullspace_motion = None
-    if potential is not None and alpha > 0:  # -alpha dS/dv on the solved columns (S has no vehicle entries)
-        gradient = np.zeros(robot.nv)
-        gradient[robot.n_vehicle:] = potential.arm_gradient(robot.arm_values(state.q))
-        nullspace_motion = -alpha * gradient[first:]
-    free = np.arange(solved_jacobian.shape[1])
-    held: dict[int, float] = {}
-    if enforce_limits:  # the solved coordinates: arm joints, and the (unbounded) vehicle unless free floating
-        limit = limit.after_unbounded(robot.n_vehicle - first)
-        now = np.concatenate([np.zeros(robot.n_vehicle - first), robot.arm_values(state.q)])
-    for _ in range(solved_jacobian.shape[1] + 1):
-        solution, sigma_min, used = solve_with_held(
-            solved_jacobian, command, weights, damping, nullspace_motion, free, held)
-        if not enforce_limits:
-            break
-        predicted = now + dt * solution
-        violated = limit.violated(predicted)
-        outside = [i for i in free if violated[i]]
-        if not outside:
-            break
-        bounds = limit.crossed_bound(predicted)
-        for index in outside:  # hold the joint where the step reaches its limit
-            held[index] = (bounds[index] - now[index]) / dt
-        free = np.array([i for i in free if i not in held], dtype=int)
-    v = np.zeros(robot.nv)
-    v[first:] = solution
-    if free_floating:
-        a_base, a_arm = state.centroidal_split()
-        v[:first] = base_velocity_from_momentum(a_base, a_arm, solution, None)
-    residual = float(np.linalg.norm(jacobian @ v - command))
-    held_names = tuple(limit.names[index] for index in sorted(held)) if held else ()
-    return VelocityResult(v=v, command=command, error=error, residual=residual, sigma_min=sigma_min,
-                          damping=used, limits_active=held_names, free_floating=free_floating)
+    solver = CLIKSolver(robot, tasks, gain=gain, weights=weights, damping=damping, potential=potential, alpha=alpha,
+                        free_floating=free_floating, dt=dt, enforce_limits=enforce_limits, limit=limit)
+    return solver.solve(q)
 
 
 def solve_with_held(

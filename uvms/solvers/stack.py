@@ -10,13 +10,18 @@ from ..state import KinematicState
 from ..tasks.task import Task
 from .checks import apply_gain, as_task_list, gain_matrix
 
-__all__ = ["as_task_list", "gain_matrix", "stack"]
+__all__ = ["as_task_list", "gain_matrix", "stack", "stacked_terms"]
 
 
 def stack(state: KinematicState, tasks: Sequence[Task], gain: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Stacked Jacobian (k, nv), error (k,) and command xdot_d + K e (k,) of several tasks."""
-    jacobian = np.vstack([task.jacobian(state) for task in tasks])
-    error = np.concatenate([task.error(state) for task in tasks])
-    feedforward = np.concatenate([task.feedforward(state) for task in tasks])
-    command = feedforward + apply_gain(gain, error)
-    return jacobian, error, command
+    jacobian, error, feedforward = stacked_terms(state, tasks)
+    return jacobian, error, feedforward + apply_gain(gain, error)
+
+
+def stacked_terms(state: KinematicState, tasks: Sequence[Task]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Jacobian (k, nv), error (k,) and feedforward (k,) of the tasks, stacked in order (one task: its own)."""
+    if len(tasks) == 1:
+        return tasks[0].terms(state)
+    jacobians, errors, feedforwards = zip(*(task.terms(state) for task in tasks))
+    return np.vstack(jacobians), np.concatenate(errors), np.concatenate(feedforwards)

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..conventions import pose_from_xyzrpy, wrap_angle
+from ..conventions import pose_from_xyzrpy
 from ..errors import UVMSError
 from ..kinematics import axis_rows
 from ..robot import Robot
@@ -15,6 +15,7 @@ from ..state import KinematicState
 from .task import Task
 
 ORIENTATION_ERRORS = ("log", "euler")
+matrixToRpy = pin.rpy.matrixToRpy
 
 
 class FrameTask(Task):
@@ -51,7 +52,8 @@ class FrameTask(Task):
         self.axes = tuple(axes or robot.base.task_axes)
         if not self.axes:
             raise UVMSError("a frame task needs at least one axis")
-        self.rows = axis_rows(self.axes)
+        self.rows = np.array(axis_rows(self.axes), dtype=int)
+        self._euler_rows = orientation == "euler" and bool(np.any(self.rows >= 3))  # rows of rpy rates
         self.dim = len(self.rows)
         self.orientation = orientation
         self.target: pin.SE3 | None = None
@@ -87,13 +89,24 @@ class FrameTask(Task):
 
     def full_error_between(self, target: pin.SE3, pose: pin.SE3) -> np.ndarray:
         """Six error rows (6,) of ``pose`` with respect to ``target``, in this task's orientation form."""
+        if self.orientation == "log":
+            return self._log_error(target, pose)
+        return self._euler_error(target, pose, matrixToRpy(target.rotation), matrixToRpy(pose.rotation))
+
+    @staticmethod
+    def _log_error(target: pin.SE3, pose: pin.SE3) -> np.ndarray:
+        """[p_d - p; log3(R_d R^T)] (6,) [m, rad], world axes."""
         error = np.empty(6)
         error[:3] = target.translation - pose.translation
-        if self.orientation == "log":
-            error[3:] = pin.log3(target.rotation @ pose.rotation.T)
-        else:
-            difference = pin.rpy.matrixToRpy(target.rotation) - pin.rpy.matrixToRpy(pose.rotation)
-            error[3:] = [wrap_angle(angle) for angle in difference]
+        error[3:] = pin.log3(target.rotation @ pose.rotation.T)
+        return error
+
+    @staticmethod
+    def _euler_error(target: pin.SE3, pose: pin.SE3, target_rpy: np.ndarray, pose_rpy: np.ndarray) -> np.ndarray:
+        """[p_d - p; rpy_d - rpy wrapped to [-pi, pi)] (6,) [m, rad]."""
+        error = np.empty(6)
+        error[:3] = target.translation - pose.translation
+        error[3:] = (target_rpy - pose_rpy + np.pi) % (2.0 * np.pi) - np.pi  # wrap_angle, entry by entry
         return error
 
     def error(self, state: KinematicState) -> np.ndarray:
@@ -101,15 +114,36 @@ class FrameTask(Task):
 
     def jacobian(self, state: KinematicState) -> np.ndarray:
         jacobian = state.jacobian(self.frame_id)
-        if self.orientation == "euler" and any(row >= 3 for row in self.rows):
-            rpy = pin.rpy.matrixToRpy(state.pose(self.frame_id).rotation)
-            jacobian = jacobian.copy()
-            jacobian[3:] = pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD) @ jacobian[3:]
+        if self._euler_rows:
+            jacobian = self._euler_jacobian(jacobian, matrixToRpy(state.pose(self.frame_id).rotation))
         return jacobian[self.rows]
 
+    @staticmethod
+    def _euler_jacobian(jacobian: np.ndarray, pose_rpy: np.ndarray) -> np.ndarray:
+        """A copy of the world-aligned J (6, nv) with its angular rows as rpy rates: E(rpy)^-1 J_omega."""
+        jacobian = jacobian.copy()
+        jacobian[3:] = pin.rpy.computeRpyJacobianInverse(pose_rpy, pin.WORLD) @ jacobian[3:]
+        return jacobian
+
     def feedforward(self, state: KinematicState) -> np.ndarray:
-        feedforward = self.target_twist.copy()
         if self.orientation == "euler":
-            rpy = pin.rpy.matrixToRpy(self._target().rotation)
-            feedforward[3:] = pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD) @ feedforward[3:]
-        return feedforward[self.rows]
+            return self._euler_feedforward(matrixToRpy(self._target().rotation))[self.rows]
+        return self.target_twist[self.rows]
+
+    def _euler_feedforward(self, target_rpy: np.ndarray) -> np.ndarray:
+        """The target twist (6,) with its angular part as rpy rates [m/s, rad/s]."""
+        feedforward = self.target_twist.copy()
+        feedforward[3:] = pin.rpy.computeRpyJacobianInverse(target_rpy, pin.WORLD) @ feedforward[3:]
+        return feedforward
+
+    def terms(self, state: KinematicState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(jacobian (k, nv), error (k,), feedforward (k,)) at once: each rpy computed a single time."""
+        target, pose = self._target(), state.pose(self.frame_id)
+        jacobian = state.jacobian(self.frame_id)
+        if self.orientation == "log":
+            return jacobian[self.rows], self._log_error(target, pose)[self.rows], self.target_twist[self.rows]
+        target_rpy, pose_rpy = matrixToRpy(target.rotation), matrixToRpy(pose.rotation)
+        if self._euler_rows:
+            jacobian = self._euler_jacobian(jacobian, pose_rpy)
+        return (jacobian[self.rows], self._euler_error(target, pose, target_rpy, pose_rpy)[self.rows],
+                self._euler_feedforward(target_rpy)[self.rows])

@@ -30,3 +30,8 @@ class Task(ABC):
     def feedforward(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - state used by subclasses
         """Desired task velocity (k,); zero unless a target velocity was set."""
         return np.zeros(self.dim)
+
+    def terms(self, state: KinematicState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(jacobian (k, nv), error (k,), feedforward (k,)) at ``state``, what a solver stacks; a task whose three
+        share work (a frame task's rotations) computes them at once."""
+        return self.jacobian(state), self.error(state), self.feedforward(state)

@@ -2,6 +2,7 @@
 
 - ``laws``: s(t) with two derivatives (trapezoid, cubic, quintic).
 - ``cartesian``: paths (circle, line) and pose trajectories (constant orientation, SE(3) interpolation).
+- ``recent``: a trajectory that returns its last samples again (integrator stages share times).
 - ``joint``: joint-space interpolation through via points (cubic, quintic), ``jtraj`` and ``ctraj``.
 """
 
@@ -9,6 +10,7 @@ from .cartesian import CirclePath, LinePath, PathSample, PathTrajectory, PoseSam
 from .joint import CartesianSamples, JointSamples, ViaPointTrajectory, ctraj, jtraj
 from .laws import LawSample, PolynomialLaw, TimeLaw, TrapezoidLaw, check_positive
 from .ramps import VelocityRamps
+from .recent import RecentSamples
 
 __all__ = [
     "CartesianSamples",
@@ -20,6 +22,7 @@ __all__ = [
     "PathTrajectory",
     "PolynomialLaw",
     "PoseSample",
+    "RecentSamples",
     "SE3Trajectory",
     "TimeLaw",
     "TrapezoidLaw",

@@ -1,0 +1,139 @@
+"""The prepared control core: a CLIKSolver built once gives clik_velocity's numbers bit for bit, every call.
+
+The speed work (issue 16) keeps every shipped scenario's arrays bit-identical; these tests hold the pieces
+to that: the prepared solver against the general clamping solve, LAPACK called directly against numpy's
+wrappers, and the trajectory samples an RK4 step reuses.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import uvms
+from uvms.errors import NumericalError
+from uvms.integrate import rk4_step, solve_square
+from uvms.solvers import CLIKSolver
+from uvms.solvers.clik import solve_with_held
+from uvms.solvers.inverses import RCOND, prepared_svd_inverse
+from uvms.state import KinematicState
+from uvms.trajectory import CirclePath, PathTrajectory, RecentSamples, TrapezoidLaw
+
+
+def hoang_setup():
+    robot = uvms.load("hoang2011")
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0.0, -2.0, 0, 0, 0, 1.0])
+    return robot, task
+
+
+def test_a_solver_reused_over_configurations_and_targets_equals_fresh_clik_velocity_bit_for_bit(rng):
+    robot, task = hoang_setup()
+    potential = uvms.JointLimitPotential(robot)
+    options = dict(gain=1.0, weights=np.array([1.0, 1.0, 500.0, 1.0, 1.0, 1.0]), potential=potential, alpha=10.0)
+    solver = CLIKSolver(robot, task, **options)
+    for index in range(30):
+        q = robot.random_configuration(rng)
+        task.set_target([rng.normal(), rng.normal(), 0.0, 0.0, 0.0, rng.normal()])
+        task.set_target_velocity(rng.normal(size=6))
+        fresh = uvms.clik_velocity(robot, q, task, **options)
+        reused = solver.solve(q)
+        assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
+        assert reused.sigma_min == fresh.sigma_min and reused.residual == fresh.residual
+        assert np.array_equal(solver.velocity(KinematicState(robot, q, check=False)), fresh.v)
+        if index == 0:  # the task's own rows: the residual of an exact (undamped, full-rank) solve is rounding
+            assert fresh.residual < 1e-12 and fresh.sigma_min > 0.1
+
+
+def test_the_prepared_path_is_the_clamping_solve_with_no_joint_held(rng):
+    """The no-limit path and solve_with_held (joint clamping) are one computation: same bits, not only close."""
+    robot, task = hoang_setup()
+    potential = uvms.JointLimitPotential(robot)
+    weights = rng.uniform(0.5, 50.0, robot.nv)
+    for damping in (0.0, 0.05):
+        solver = CLIKSolver(robot, task, gain=2.0, weights=weights, damping=damping, potential=potential, alpha=3.0)
+        for _ in range(20):
+            q = robot.random_configuration(rng)
+            state = KinematicState(robot, q)
+            jacobian, error, feedforward = task.terms(state)
+            command = feedforward + 2.0 * error
+            z0 = -3.0 * potential.gradient(q)
+            held, _, _ = solve_with_held(jacobian, command, weights, damping, z0, np.arange(robot.nv), {})
+            assert np.array_equal(solver.solve(state).v, held)
+
+
+def test_a_frame_task_computes_its_three_terms_at_once_as_separately(rng):
+    robot = uvms.load("bluerov2_alpha5")
+    for orientation, axes in (("euler", ("x", "z", "roll", "yaw")), ("log", None), ("euler", ("x", "y", "z"))):
+        task = uvms.FrameTask(robot, axes=axes, orientation=orientation)
+        for _ in range(10):
+            task.set_target(robot.fk(robot.random_configuration(rng)))
+            task.set_target_velocity(rng.normal(size=6))
+            state = KinematicState(robot, robot.random_configuration(rng))
+            jacobian, error, feedforward = task.terms(state)
+            assert np.array_equal(jacobian, task.jacobian(state))
+            assert np.array_equal(error, task.error(state))
+            assert np.array_equal(feedforward, task.feedforward(state))
+            if orientation == "euler" and "yaw" in axes:  # the yaw row is a wrapped angle difference
+                assert -np.pi <= error[-1] < np.pi
+
+
+def test_the_svd_inverse_through_lapack_is_numpy_svd(rng):
+    for rows, columns in ((3, 6), (6, 11), (6, 12), (7, 5)):
+        jacobian = rng.normal(size=(rows, columns))
+        for damping in (0.0, 0.1):
+            inverse, sigma_min, used = prepared_svd_inverse(jacobian, damping)
+            u, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
+            if damping:
+                factors = singular / (singular**2 + damping**2)
+            else:
+                factors = np.where(singular > RCOND * singular[0], 1.0 / singular, 0.0)
+            assert np.array_equal(inverse, (vt.T * factors) @ u.T)
+            assert sigma_min == (singular[-1] if rows <= columns else 0.0) and used == damping
+        if rows <= columns:
+            assert np.allclose(jacobian @ prepared_svd_inverse(jacobian, 0.0)[0], np.eye(rows), atol=1e-12)
+    with pytest.raises(NumericalError, match="did not converge"):
+        prepared_svd_inverse(np.full((3, 6), np.nan), 0.0)
+
+
+def test_the_square_solve_of_the_rk4_stages_is_numpy_solve_and_refuses_a_singular_system(rng):
+    for size in (3, 6, 12):
+        matrix, rhs = rng.normal(size=(size, size)) + 3 * np.eye(size), rng.normal(size=size)
+        assert np.array_equal(solve_square(matrix, rhs), np.linalg.solve(matrix, rhs))
+    with pytest.raises(NumericalError, match="singular 2x2"):
+        solve_square(np.ones((2, 2)), np.ones(2))
+
+
+def misses(dt: float, steps: int) -> int:
+    """Steps whose first time k dt is not bit for bit the last stage's (k - 1) dt + dt of the step before."""
+    return sum((k - 1) * dt + dt != k * dt for k in range(1, steps))
+
+
+def test_recent_samples_evaluate_the_trajectory_twice_per_rk4_step():
+    law = TrapezoidLaw(speed=0.5, duration=4.0, accel_time=1.0)
+    trajectory = PathTrajectory(CirclePath([0.0, 2.0, 0.0], [0.0, -2.0, 0.0]), law)
+    times: list[float] = []
+
+    def counted(t: float):
+        times.append(t)
+        return trajectory(t)
+
+    recent = RecentSamples(counted)
+    robot = uvms.load("hoang2011")
+    model, dt = robot.model, 0.02
+    q = robot.neutral()
+
+    def rate(t, q, x):
+        sample = recent(t)
+        assert sample is recent(t)  # the same object for the same t, while it is kept
+        return np.r_[sample.twist[:2], 0.0, np.zeros(robot.nv - 3)], x
+
+    for k in range(50):
+        t = k * dt
+        q, _ = rk4_step(model, rate, t, q, np.zeros(0), dt, rate(t, q, np.zeros(0)))
+    # t, t + dt/2 (the second and third stages), t + dt: the last is the next step's first when k dt rounds alike
+    assert len(set(times)) == len(times) == 2 * 50 + 1 + misses(dt, 50)
+    sample = recent(0.5)
+    assert np.array_equal(sample.pose.translation, trajectory(0.5).pose.translation)
+    assert np.array_equal(sample.twist, trajectory(0.5).twist)
+    assert isinstance(sample.pose, pin.SE3)
