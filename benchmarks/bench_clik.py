@@ -1,7 +1,8 @@
 """One CLIK step, measured side by side against Pinocchio, a hand-written numpy step and pink.
 
 Model: a 6-DOF floating base carrying a UR5 (6 + 6 DOF). The step is a pose
-task with DLS, a joint-limit null-space term and integration on the manifold.
+task with a diagonal W, DLS, a joint-limit null-space term, diagnostics (sigma_min, residual) and
+integration on the manifold (PoseCLIK and the numpy step: no W).
 Times are ratios to one ``pin.forwardKinematics`` call measured in the same run
 (this machine is shared and noisy: absolute times are not comparable).
 
@@ -53,12 +54,17 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
     hot = PoseCLIK(robot, gain=1.0, damping=1e-6, potential=potential, alpha=1.0)
     hot.set_target(target)
     task = uvms.FrameTask(robot, target=target)
+    weights = np.linspace(1.0, 2.0, robot.nv)  # a diagonal W (the issue's step has weights)
     calls = {
         "uvms PoseCLIK.step": lambda: hot.step(q, DT),
         "uvms clik_step (general, with diagnostics)": lambda: uvms.clik_step(
-            robot, q, task, DT, damping=1e-6, potential=potential, alpha=1.0),
-        "plain numpy DLS step": lambda: numpy_dls_step(robot, q, target, potential),
+            robot, q, task, DT, weights=weights, damping=1e-6, potential=potential, alpha=1.0),
     }
+    if hasattr(uvms, "CLIKSolver"):  # the solver a controller builds once (an older checkout has none)
+        solver = uvms.CLIKSolver(robot, task, weights=weights, damping=1e-6, potential=potential, alpha=1.0)
+        calls["uvms CLIKSolver.solve + integrate (prepared, with diagnostics)"] = lambda: pin.integrate(
+            model, q, solver.solve(q, check=False).v * DT)
+    calls["plain numpy DLS step"] = lambda: numpy_dls_step(robot, q, target, potential)
     try:
         import pink
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from . import kinematics
 from .control.gjm import GJMController
 from .dynamics.plant import Command, Plant, PlantSystem
 from .errors import GJMControlError, UVMSError
@@ -119,7 +120,11 @@ class KinematicSystem:
         return KinematicSample((v, EMPTY), info)
 
     def stage_rate(self, sample: KinematicSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
-        """(t, q, x) -> (controller velocity, empty) at the stages."""
+        """(t, q, x) -> (controller velocity, empty) at the stages (the controller's ``velocity(t, q)`` when it
+        has one: the same v without the diagnostics no one reads there)."""
+        velocity = getattr(self.controller, "velocity", None)
+        if velocity is not None:
+            return lambda t, q, x: (velocity(t, q), EMPTY)
         controller = self.controller
         return lambda t, q, x: (controller(t, q, None)[0], EMPTY)
 
@@ -149,7 +154,9 @@ class TaskRecorder:
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
         task = self.task
-        pose, target = self.robot.fk(q, task.frame), self.desired(t)
+        # q comes from pin.integrate in the loop (checked once at its start): Robot.fk would check it at every row
+        pose = kinematics.frame_pose(self.robot.model, self.robot.data, q, task.frame_id)
+        target = self.desired(t)
         full_error = task.full_error_between(target, pose)
         row = {"ee_rpy": pin.rpy.matrixToRpy(pose.rotation), "desired_rpy": pin.rpy.matrixToRpy(target.rotation),
                "task_error": full_error[task.rows],

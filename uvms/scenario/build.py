@@ -32,6 +32,7 @@ from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, R
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .inequalities import ENFORCING_METHODS, ScenarioInequalities, build_inequalities
 from .schema import NUMBER, changed_keys
+from .tracking import TrackingController
 
 #: The methods that take solver.weights (the W of the solved columns).
 WEIGHTED_METHODS = ("clik", *ENFORCING_METHODS)
@@ -52,6 +53,7 @@ class Setup:
     control_dt: float = 0.0  # [s] sampling period of that controller (0: continuous)
     inequalities: ScenarioInequalities | None = None  # [[inequalities]]: enforced (set_based, hqp) or monitored
     actuation: Actuation | None = None  # plant.thrusters: the thrusters and the station-keeping controller
+    samples: RecentSamples | None = None  # the trajectory as the kinematic controller samples it (None: trajectory)
 
 
 def build(scenario: dict) -> Setup:
@@ -87,8 +89,10 @@ def build(scenario: dict) -> Setup:
     check_kinematic_plant(scenario["plant"])
     inequalities = (build_inequalities(robot, scenario["inequalities"], scenario["solver"]["method"])
                     if scenario["inequalities"] else None)
-    controller = make_controller(robot, task, trajectory, scenario, inequalities)
-    return Setup(robot, task, trajectory, q0, controller, duration, residual, inequalities=inequalities)
+    samples = RecentSamples(trajectory)  # the controller's stages and the recorder share its samples
+    controller = make_controller(robot, task, samples, scenario, inequalities)
+    return Setup(robot, task, trajectory, q0, controller, duration, residual, inequalities=inequalities,
+                 samples=samples)
 
 
 def build_sequence(robot: Robot, scenario: dict) -> Setup:
@@ -325,9 +329,9 @@ def check_enforcing_solver(solver: dict) -> None:
                             "(each QP is regularized by solver.regularization); remove them or use 'set_based'")
 
 
-def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict,
-                    inequalities: ScenarioInequalities | None = None):
-    """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method.
+def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, scenario: dict,
+                    inequalities: ScenarioInequalities | None = None) -> TrackingController:
+    """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method, following ``samples`` (the trajectory).
 
     With solver.method = "set_based" or "hqp" the levels are the ``[[inequalities]]`` (highest first) and
     then the task; any other method leaves the inequalities to the recorder (monitored, not enforced).
@@ -351,39 +355,22 @@ def make_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict,
         vehicle_task = VehicleTask(robot, velocities=vehicle["velocities"], heading=vehicle["heading"],
                                    depth=vehicle["depth"])
 
-    samples = RecentSamples(trajectory)
-    current: list = [None]  # the sample the task points at
-
-    def follow(t: float) -> None:
-        sample = samples(t)
-        if sample is not current[0]:
-            task.set_target(sample.pose)
-            task.set_target_velocity(sample.twist)
-            current[0] = sample
-
-    clik = None
     if method == "clik":  # built once: its inputs checked here, not at every evaluation
         clik = CLIKSolver(robot, task, gain=gain, weights=weights, damping=damping, potential=potential,
                           alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
                           enforce_limits=solver["enforce_limits"])
+        return TrackingController(robot, task, samples, clik.solve, clik.velocity)
 
-    def controller(t: float, q: np.ndarray, v: np.ndarray | None = None):
-        follow(t)
-        # q comes from pin.integrate in the one loop (checked once at its start): not validated at every call
-        state = KinematicState(robot, q, check=False)
-        if clik is not None:
-            result = clik.solve(state)
-        elif method == "set_based":
-            result = set_based_velocity(robot, state, levels, gain=gain, weights=weights, damping=damping,
-                                        eta=solver["eta"], free_floating=solver["free_floating"], dt=dt)
-        elif method == "hqp":
-            result = hqp_velocity(robot, state, levels, dt=dt, gain=gain, weights=weights,
-                                  free_floating=solver["free_floating"], regularization=solver["regularization"])
-        elif method == "task_priority":
-            result = priority_velocity(robot, state, [task, vehicle_task], gain=[gain, vehicle["gain"]],
-                                       method=solver["priority"], damping=float(solver["damping"]))
-        else:
-            result = constrained_velocity(robot, state, task, vehicle_task, gain=gain, constraint_gain=vehicle["gain"])
-        return result.v, result
+    def solve(state: KinematicState):
+        if method == "set_based":
+            return set_based_velocity(robot, state, levels, gain=gain, weights=weights, damping=damping,
+                                      eta=solver["eta"], free_floating=solver["free_floating"], dt=dt)
+        if method == "hqp":
+            return hqp_velocity(robot, state, levels, dt=dt, gain=gain, weights=weights,
+                                free_floating=solver["free_floating"], regularization=solver["regularization"])
+        if method == "task_priority":
+            return priority_velocity(robot, state, [task, vehicle_task], gain=[gain, vehicle["gain"]],
+                                     method=solver["priority"], damping=float(solver["damping"]))
+        return constrained_velocity(robot, state, task, vehicle_task, gain=gain, constraint_gain=vehicle["gain"])
 
-    return controller
+    return TrackingController(robot, task, samples, solve)

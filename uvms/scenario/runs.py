@@ -166,8 +166,9 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
                                           task=setup.task)
     else:
         recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
+        desired = setup.samples or setup.trajectory  # the controller's samples: the row's time is already there
         result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration,
-                          dt=simulation_section["dt"], task=setup.task, desired=lambda t: setup.trajectory(t).pose,
+                          dt=simulation_section["dt"], task=setup.task, desired=lambda t: desired(t).pose,
                           integrator=simulation_section["integrator"], progress=progress, recorders=recorders)
     metrics = compute_metrics(result, setup, time.perf_counter() - started)
     metrics["scenario"] = scenario["scenario"]["name"]

@@ -81,8 +81,9 @@ class CLIKSolver:
         self._gain_matrix = None if np.ndim(gain) < 2 else gain_matrix(gain, rows)
         self.weights = None if weights is None else check_weights(
             weights, columns, "W", free_floating_weights_note(robot.n_arm) if free_floating else "")
-        factor = None if self.weights is None else weights_factor(self.weights, columns)
-        self._factor = factor
+        identity = self.weights is not None and self.weights.ndim == 1 and bool(np.all(self.weights == 1.0))
+        # W = I scales by exactly 1: skipped, the same numbers
+        self._factor = None if self.weights is None or identity else weights_factor(self.weights, columns)
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self.potential = potential if potential is not None and self.alpha > 0 else None
 

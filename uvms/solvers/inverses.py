@@ -214,6 +214,8 @@ def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping)
     value = damping(sigma_min) if isinstance(damping, VariableDamping) else damping
     if value > 0.0:
         factors = singular / (singular**2 + value**2)
+    elif singular.size and singular[-1] > RCOND * singular[0]:  # full rank: every 1 / s (the common case, cheaper)
+        factors = 1.0 / singular
     else:
         cutoff = RCOND * (singular[0] if singular.size else 0.0)
         factors = np.divide(1.0, singular, out=np.zeros_like(singular), where=singular > cutoff)

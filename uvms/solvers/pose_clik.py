@@ -24,7 +24,7 @@ import pinocchio as pin
 from ..conventions import AXIS_NAMES
 from ..kinematics import WORLD_ALIGNED
 from ..robot import Robot
-from ..tasks.frame import FrameTask
+from ..tasks.frame import FrameTask, log_pose_error
 from ..tasks.joint_limits import JointLimitPotential
 from .checks import check_damping, check_scalar, check_vector
 from .inverses import SolverInputError, dls_solve
@@ -67,6 +67,7 @@ class PoseCLIK:
         self._error = np.zeros(6)  # (6,)
         self._feedforward = np.zeros(6)  # (6,)
         self._target = pin.SE3.Identity()
+        self._target_translation, self._target_rotation = np.zeros(3), np.eye(3)
         self._has_feedforward = False
         self._nullspace = self._nullspace_terms(potential, alpha)
 
@@ -90,6 +91,7 @@ class PoseCLIK:
         self.task.set_target(pose)
         self.task.set_target_velocity(feedforward)
         self._target = self.task.target
+        self._target_translation, self._target_rotation = self._target.translation, self._target.rotation  # read once
         self._feedforward = feedforward
         self._has_feedforward = bool(np.any(feedforward))
 
@@ -102,7 +104,7 @@ class PoseCLIK:
         """CLIK velocity v (nv,) at q (trusted: a configuration from ``pin.integrate``)."""
         jacobian = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, WORLD_ALIGNED)  # (6, nv)
         pose = self.data.oMf[self.frame_id]  # updated by computeFrameJacobian in world-aligned axes
-        error = self._error = self.task.full_error_between(self._target, pose)  # (6,)
+        error = self._error = log_pose_error(self._target_translation, self._target_rotation, pose)  # (6,)
         command = self.gain * error
         if self._has_feedforward:
             command += self._feedforward

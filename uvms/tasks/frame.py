@@ -58,11 +58,13 @@ class FrameTask(Task):
         self.orientation = orientation
         self.target: pin.SE3 | None = None
         self.target_twist = np.zeros(6)
+        self._target_parts: tuple | None = None  # what terms() reads of the target, once per set_target
         if target is not None:
             self.set_target(target)
 
     def set_target(self, target: pin.SE3 | Sequence[float]) -> None:
         """Set the target pose (``pin.SE3`` or [x, y, z, roll, pitch, yaw])."""
+        self._target_parts = None
         if isinstance(target, pin.SE3):
             self.target = target.copy()
             return
@@ -77,6 +79,7 @@ class FrameTask(Task):
         if values.shape != (6,) or not np.all(np.isfinite(values)):
             raise UVMSError(f"a target twist must be 6 finite numbers [vx, vy, vz, wx, wy, wz], got {twist!r}")
         self.target_twist = values
+        self._target_parts = None
 
     def _target(self) -> pin.SE3:
         if self.target is None:
@@ -90,24 +93,8 @@ class FrameTask(Task):
     def full_error_between(self, target: pin.SE3, pose: pin.SE3) -> np.ndarray:
         """Six error rows (6,) of ``pose`` with respect to ``target``, in this task's orientation form."""
         if self.orientation == "log":
-            return self._log_error(target, pose)
-        return self._euler_error(target, pose, matrixToRpy(target.rotation), matrixToRpy(pose.rotation))
-
-    @staticmethod
-    def _log_error(target: pin.SE3, pose: pin.SE3) -> np.ndarray:
-        """[p_d - p; log3(R_d R^T)] (6,) [m, rad], world axes."""
-        error = np.empty(6)
-        error[:3] = target.translation - pose.translation
-        error[3:] = pin.log3(target.rotation @ pose.rotation.T)
-        return error
-
-    @staticmethod
-    def _euler_error(target: pin.SE3, pose: pin.SE3, target_rpy: np.ndarray, pose_rpy: np.ndarray) -> np.ndarray:
-        """[p_d - p; rpy_d - rpy wrapped to [-pi, pi)] (6,) [m, rad]."""
-        error = np.empty(6)
-        error[:3] = target.translation - pose.translation
-        error[3:] = (target_rpy - pose_rpy + np.pi) % (2.0 * np.pi) - np.pi  # wrap_angle, entry by entry
-        return error
+            return log_pose_error(target.translation, target.rotation, pose)
+        return euler_pose_error(target.translation, pose, matrixToRpy(target.rotation), matrixToRpy(pose.rotation))
 
     def error(self, state: KinematicState) -> np.ndarray:
         return self.full_error(state)[self.rows]
@@ -136,14 +123,46 @@ class FrameTask(Task):
         feedforward[3:] = pin.rpy.computeRpyJacobianInverse(target_rpy, pin.WORLD) @ feedforward[3:]
         return feedforward
 
+    def _target_terms(self) -> tuple:
+        """(p_d (3,), R_d (3, 3), rpy_d (3,) or None, feedforward rows (k,)) of the target, read once per target
+        (a controller's integrator evaluates several stages at one target)."""
+        if self._target_parts is None:
+            target = self._target()
+            rotation = target.rotation
+            if self.orientation == "log":
+                self._target_parts = (target.translation, rotation, None, self.target_twist[self.rows])
+            else:
+                target_rpy = matrixToRpy(rotation)
+                self._target_parts = (target.translation, rotation, target_rpy,
+                                      self._euler_feedforward(target_rpy)[self.rows])
+        return self._target_parts
+
     def terms(self, state: KinematicState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(jacobian (k, nv), error (k,), feedforward (k,)) at once: each rpy computed a single time."""
-        target, pose = self._target(), state.pose(self.frame_id)
+        """(jacobian (k, nv), error (k,), feedforward (k,)) at once: each rotation read and each rpy computed once."""
+        translation, rotation, target_rpy, feedforward = self._target_terms()
+        pose = state.pose(self.frame_id)
         jacobian = state.jacobian(self.frame_id)
         if self.orientation == "log":
-            return jacobian[self.rows], self._log_error(target, pose)[self.rows], self.target_twist[self.rows]
-        target_rpy, pose_rpy = matrixToRpy(target.rotation), matrixToRpy(pose.rotation)
+            return jacobian[self.rows], log_pose_error(translation, rotation, pose)[self.rows], feedforward.copy()
+        pose_rpy = matrixToRpy(pose.rotation)
         if self._euler_rows:
             jacobian = self._euler_jacobian(jacobian, pose_rpy)
-        return (jacobian[self.rows], self._euler_error(target, pose, target_rpy, pose_rpy)[self.rows],
-                self._euler_feedforward(target_rpy)[self.rows])
+        return (jacobian[self.rows], euler_pose_error(translation, pose, target_rpy, pose_rpy)[self.rows],
+                feedforward.copy())
+
+
+def log_pose_error(target_translation: np.ndarray, target_rotation: np.ndarray, pose: pin.SE3) -> np.ndarray:
+    """[p_d - p; log3(R_d R^T)] (6,) [m, rad] in world axes of ``pose`` against the target p_d (3,), R_d (3, 3)."""
+    error = np.empty(6)
+    error[:3] = target_translation - pose.translation
+    error[3:] = pin.log3(target_rotation @ pose.rotation.T)
+    return error
+
+
+def euler_pose_error(target_translation: np.ndarray, pose: pin.SE3, target_rpy: np.ndarray,
+                     pose_rpy: np.ndarray) -> np.ndarray:
+    """[p_d - p; rpy_d - rpy wrapped to [-pi, pi)] (6,) [m, rad] (the rpy of both given, (3,) each)."""
+    error = np.empty(6)
+    error[:3] = target_translation - pose.translation
+    error[3:] = (target_rpy - pose_rpy + np.pi) % (2.0 * np.pi) - np.pi  # wrap_angle, entry by entry
+    return error

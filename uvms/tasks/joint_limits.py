@@ -45,6 +45,7 @@ class JointLimitPotential:
         self.weights = np.where(bounded, weights, 0.0)
         self.middle = np.where(bounded, limit.middle, 0.0)
         self.range = limit.span
+        self._range_squared = self.range**2  # (n_arm,), once: the gradient is evaluated at every controller call
 
     def value(self, q: np.ndarray) -> float:
         """S(q) [-]."""
@@ -53,7 +54,7 @@ class JointLimitPotential:
 
     def arm_gradient(self, arm: np.ndarray) -> np.ndarray:
         """dS/dq_arm (n_arm,) at arm joint values."""
-        return self.weights * (arm - self.middle) / self.range**2
+        return self.weights * (arm - self.middle) / self._range_squared
 
     def gradient(self, q: np.ndarray) -> np.ndarray:
         """dS/dv (nv,): zero on the vehicle entries."""

@@ -1,0 +1,130 @@
+"""The speed issue's table in one run: every row of issue 16, uvms next to pink and roboticstoolbox where installed.
+
+Rows (goals of the issue in the last column):
+
+* the general CLIK step and ``PoseCLIK.step`` (UR5 on a 6-DOF floating base, nv = 12; ``bench_clik.py``);
+* the set-based step (BlueROV2 + Alpha 5: joint limits, speed limits, attitude, pose; ``bench_set_based.py``),
+  beside pink's ``solve_ik`` with configuration and velocity limits;
+* ``uvms run scenarios/hoang2011_w1.toml`` with figures off, as a user runs it (a fresh process, wall time);
+* pose IK by the TRAC-IK protocol at 1e-10, joint limits on (``bench_ik.py``), beside roboticstoolbox's ``ik_LM``;
+* the Monte Carlo workspace of both xiang2019 arms, 1 M samples each, volumes and with dexterity.
+
+Step times are ratios to one ``pin.forwardKinematics`` on the same model, measured in the same run (the
+machines are shared and noisy: absolute times are not comparable between runs). placo pins an older Pinocchio,
+so it is not installed beside uvms; its step is measured in its own environment (benchmarks/README.md).
+
+    pip install -e ".[bench]"
+    python benchmarks/bench_speed.py [--ik-targets 10000] [--starts 200]   # about 3 min with the defaults
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+import bench_clik
+import bench_ik
+import bench_set_based
+import uvms
+from uvms.workspace import monte_carlo
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def clik_rows() -> list[tuple[str, str, str, str]]:
+    """The CLIK step rows: uvms, the numpy step and pink, as ratios to FK."""
+    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    ratios = bench_clik.clik_step_ratios(robot, 2000)
+    fk = ratios.pop("_reference_us")
+    general = ratios["uvms clik_step (general, with diagnostics)"]
+    prepared = ratios.get("uvms CLIKSolver.solve + integrate (prepared, with diagnostics)")
+    others = [f"numpy DLS {ratios['plain numpy DLS step']:.0f}x"]
+    if "pink solve_ik step (daqp)" in ratios:
+        others.append(f"pink {ratios['pink solve_ik step (daqp)']:.0f}x")
+    now = f"{general:.0f}x (`clik_step`)" + (f", {prepared:.0f}x (`CLIKSolver`)" if prepared else "")
+    return [(f"general CLIK step, UR5 + floating base (FK {fk:.2f} us)", now, ", ".join(others), "<= 40x"),
+            ("`PoseCLIK.step`", f"{ratios['uvms PoseCLIK.step']:.0f}x", "", "<= 15x")]
+
+
+def set_based_row(starts: int, repeat: int) -> tuple[str, str, str, str]:
+    """The set-based step: uvms set_based and hqp, and pink with limits, interleaved with FK."""
+    logging.disable(logging.WARNING)  # pink logs every start outside a limit
+    problem = bench_set_based.Problem()
+    steppers = {"set_based": bench_set_based.ours(bench_set_based.set_based_step, problem),
+                "hqp": bench_set_based.ours(bench_set_based.hqp_step, problem)}
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            import pink  # noqa: F401 - only whether it is there
+        steppers["pink"] = bench_set_based.PinkStepper(problem)
+    except Exception as error:  # noqa: BLE001 - skipped with the reason
+        print(f"pink skipped: {type(error).__name__}: {error}")
+    times = bench_set_based.step_times(problem, steppers, problem.starts(starts), repeat)
+    other = f"pink with limits {times['pink']:.0f}x" if "pink" in times else "pink not installed"
+    return ("set-based step, BlueROV2 + Alpha 5 (limits, speeds, attitude, pose)",
+            f"{times['set_based']:.0f}x (hqp {times['hqp']:.0f}x)", other, "<= 60x, faster than pink")
+
+
+def run_row() -> tuple[str, str, str, str]:
+    """``uvms run hoang2011_w1`` with figures off, in a fresh process, and the run's own loop time."""
+    command = [sys.executable, "-m", "uvms.cli", "run", "hoang2011_w1", "--out", "/tmp/uvms_bench_speed_run",
+               "--set", "outputs.figures=false", "--quiet"]
+    started = time.perf_counter()
+    output = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=True).stdout
+    wall = time.perf_counter() - started
+    loop = output.splitlines()[0].split(",")[-1].strip(" s)")  # "scenario  hoang2011_w1  (9500 steps, 11.1 s)"
+    return ("`uvms run hoang2011_w1`, figures off (9,500 RK4 steps)", f"{wall:.1f} s ({loop} s in the loop)", "",
+            "<= 1 s")
+
+
+def ik_rows(targets: int) -> list[tuple[str, str, str, str]]:
+    """Pose IK on the UR5, limits on, 1e-10, random starts: uvms and roboticstoolbox's ik_LM."""
+    case = bench_ik.cases(targets, 0)[0]
+    fk = bench_ik.fk_time(case.robot)
+    ours = bench_ik.run(case, "uvms", bench_ik.uvms_solver(case, "random"), fk)
+    solve = bench_ik.rtb_solver(case, uvms.example_robot_urdf("ur5"))
+    other = "roboticstoolbox not installed"
+    if solve is not None:
+        theirs = bench_ik.run(case, "rtb", solve, fk)
+        other = f"roboticstoolbox ik_LM {theirs.success:.2f} % at {theirs.median * 1e3:.3f} ms"
+    return [(f"pose IK, UR5, {targets:,} targets, limits on, 1e-10",
+             f"{ours.success:.2f} % at {ours.median * 1e3:.3f} ms median ({ours.median / fk:.0f}x FK)",
+             f"{other}; TRAC-IK (published, 1e-5) 99.6-100 %", ">= 99.9 %, <= 0.1 ms")]
+
+
+def workspace_rows() -> list[tuple[str, str, str, str]]:
+    """monte_carlo of both xiang2019 arms, 1 M samples each: volumes, then with dexterity."""
+    robot = uvms.load("xiang2019")
+    rows = []
+    for dexterity, goal in ((False, "<= 1 s"), (True, "<= 3 s")):
+        started = time.perf_counter()
+        monte_carlo(robot, ["left_ee", "right_ee"], 1_000_000, dexterity=dexterity, progress=False)
+        rows.append((f"Monte Carlo workspace, both xiang2019 arms, 1 M samples each{' + dexterity' if dexterity else ''}",
+                     f"{time.perf_counter() - started:.2f} s", "", goal))
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--ik-targets", type=int, default=2000, help="UR5 IK targets (the issue's row: 10000)")
+    parser.add_argument("--starts", type=int, default=200, help="set-based starts the step times are drawn from")
+    parser.add_argument("--repeat", type=int, default=200, help="interleaved set-based timing rounds")
+    options = parser.parse_args()
+    began = time.perf_counter()
+    rows = [*clik_rows(), set_based_row(options.starts, options.repeat), run_row(), *ik_rows(options.ik_targets),
+            *workspace_rows()]
+    print(f"uvms {uvms.__version__}, numpy {np.__version__}; {time.perf_counter() - began:.0f} s\n")
+    print("| row | uvms | beside it | goal |\n|---|---|---|---|")
+    for row in rows:
+        print("| " + " | ".join(row) + " |")
+
+
+if __name__ == "__main__":
+    main()
