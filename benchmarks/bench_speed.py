@@ -35,7 +35,7 @@ import bench_set_based
 import uvms
 from uvms.workspace import monte_carlo
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(uvms.__file__).resolve().parent.parent  # the checkout imported (PYTHONPATH=OLD_TREE: before/after)
 
 
 def clik_rows() -> list[tuple[str, str, str, str]]:
@@ -74,7 +74,7 @@ def set_based_row(starts: int, repeat: int) -> tuple[str, str, str, str]:
 
 def run_row() -> tuple[str, str, str, str]:
     """``uvms run hoang2011_w1`` with figures off, in a fresh process, and the run's own loop time."""
-    command = [sys.executable, "-m", "uvms.cli", "run", "hoang2011_w1", "--out", "/tmp/uvms_bench_speed_run",
+    command = [sys.executable, "-m", "uvms.cli", "run", str(ROOT / "scenarios" / "hoang2011_w1.toml"), "--out", "/tmp/uvms_bench_speed_run",
                "--set", "outputs.figures=false", "--quiet"]
     started = time.perf_counter()
     output = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=True).stdout

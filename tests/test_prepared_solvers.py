@@ -137,3 +137,31 @@ def test_recent_samples_evaluate_the_trajectory_twice_per_rk4_step():
     assert np.array_equal(sample.pose.translation, trajectory(0.5).pose.translation)
     assert np.array_equal(sample.twist, trajectory(0.5).twist)
     assert isinstance(sample.pose, pin.SE3)
+
+
+def test_a_run_checks_its_configurations_once_and_refuses_a_bad_row_by_its_index(rng):
+    robot = uvms.load("bluerov2_alpha5")
+    rows = np.array([robot.random_configuration(rng) for _ in range(5)])
+    assert np.array_equal(robot.check_configurations(rows), rows)
+    bad = rows.copy()
+    bad[3, 3:7] *= 1.5  # the vehicle's quaternion of row 3
+    with pytest.raises(uvms.UVMSError, match="row 3: the rotation part of joint .* has norm 1.5"):
+        robot.check_configurations(bad)
+    bad = rows.copy()
+    bad[1, -1] = np.nan
+    with pytest.raises(uvms.UVMSError, match="non-finite"):
+        robot.check_configurations(bad)
+
+
+def test_the_vehicle_pose_and_arm_series_of_a_result_follow_its_configurations(rng):
+    from uvms.series import SimulationResult
+
+    robot = uvms.load("bluerov2_alpha5")
+    rows = np.array([robot.random_configuration(rng) for _ in range(4)])
+    result = SimulationResult(t=np.arange(4.0), q=rows, v=np.zeros((4, robot.nv)), robot=robot)
+    expected = np.array([robot.base_values(q) for q in rows])
+    expected[:, 3:6] = np.unwrap(expected[:, 3:6], axis=0)
+    assert np.array_equal(result.vehicle_pose(), expected)
+    assert np.array_equal(result.arm(), np.array([robot.arm_configuration(q) for q in rows]))
+    result.q = rows[::-1].copy()  # a new series: computed again, not the kept one
+    assert np.array_equal(result.vehicle_pose()[0, :3], robot.base_values(rows[-1])[:3])

@@ -256,17 +256,35 @@ class Robot(VehicleAccessors):
         """v as a float array, after checking its size (default nv) and finiteness."""
         return self._check_vector(v, self.nv if size is None else size, what)
 
+    def check_configurations(self, q: np.ndarray) -> np.ndarray:
+        """Configurations (N, nq) as a float array, each row checked as :meth:`check_configuration` does, at once.
+
+        Raises:
+            ConfigurationError: wrong shape, NaN/inf, or a non-unit rotation part (the first row that has one).
+        """
+        array = finite_array(q, "configurations q", (None, self.nq), error=ConfigurationError)
+        for joint_name, part in self._unit_slices:
+            norms = np.linalg.norm(array[:, part], axis=1)
+            bad = np.flatnonzero(np.abs(norms - 1.0) > 1e-6)
+            if bad.size:
+                self._refuse_rotation_part(f"configuration q of row {bad[0]}", joint_name, float(norms[bad[0]]))
+        return array
+
     def _check_vector(self, vector: np.ndarray, size: int, what: str, check_manifold: bool = False) -> np.ndarray:
         array = finite_array(vector, what, (size,), error=ConfigurationError)
         if check_manifold:
             for joint_name, part in self._unit_slices:
                 norm = float(np.linalg.norm(array[part]))
                 if abs(norm - 1.0) > 1e-6:
-                    raise ConfigurationError(
-                        f"{what}: the rotation part of joint {joint_name!r} has norm {norm:.6g}; it must be a "
-                        f"unit quaternion / (cos, sin) pair — build q with robot.configuration()"
-                    )
+                    self._refuse_rotation_part(what, joint_name, norm)
         return array
+
+    @staticmethod
+    def _refuse_rotation_part(what: str, joint_name: str, norm: float) -> None:
+        raise ConfigurationError(
+            f"{what}: the rotation part of joint {joint_name!r} has norm {norm:.6g}; it must be a "
+            f"unit quaternion / (cos, sin) pair — build q with robot.configuration()"
+        )
 
     def neutral(self) -> np.ndarray:
         """The neutral configuration (vehicle at the origin, arm joints at zero)."""

@@ -101,14 +101,31 @@ class SimulationResult:
 
         Angles are unwrapped over time (continuous, not folded into [-pi, pi)).
         """
-        rows = np.array([self.robot.base_values(q) for q in self.q])
-        angles = slice(2, 3) if self.robot.base_type == "planar" else slice(3, 6)
-        rows[:, angles] = np.unwrap(rows[:, angles], axis=0)
-        return rows
+        cached = getattr(self, "_vehicle_pose", None)
+        if cached is None or cached[0] is not self.q:  # the CSV, the metrics and the figures all read it
+            robot = self.robot
+            rows = np.array([robot.base_values(q, check=False) for q in self.checked_q()])
+            angles = slice(2, 3) if robot.base_type == "planar" else slice(3, 6)
+            rows[:, angles] = np.unwrap(rows[:, angles], axis=0)
+            cached = self._vehicle_pose = (self.q, rows)
+        return cached[1].copy()
 
     def arm(self) -> np.ndarray:
         """Arm joint values per row (N, n_arm)."""
-        return np.array([self.robot.arm_configuration(q) for q in self.q])
+        robot = self.robot
+        return np.array([robot.arm_values(q) for q in self.checked_q()]).reshape(len(self.q), robot.n_arm)
+
+    def checked_q(self) -> np.ndarray:
+        """The configurations (N, nq), each checked as :meth:`Robot.check_configuration` does, once per result
+        (the rows of a run are read several times: the CSV, the metrics, the figures).
+
+        Raises:
+            ConfigurationError: a row of the wrong size, non-finite or with a non-unit rotation part.
+        """
+        if getattr(self, "_checked_q", None) is not self.q:
+            self.robot.check_configurations(self.q)
+            self._checked_q = self.q
+        return self.q
 
     def csv_text(self) -> str:
         """The time series as CSV: t, vehicle pose, arm joints, v, end effector, errors, diagnostics (those recorded)."""

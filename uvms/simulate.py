@@ -131,7 +131,9 @@ class KinematicSystem:
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: KinematicSample) -> dict:
         """v and the solver's diagnostics of a row."""
         info = sample.info
-        return {"v": sample.rate[0].copy(), "sigma_min": float(np.min(info.sigma_min)),
+        sigma_min = info.sigma_min  # one number, or one per level (task priority)
+        return {"v": sample.rate[0].copy(),
+                "sigma_min": sigma_min if isinstance(sigma_min, float) else float(np.min(sigma_min)),
                 "damping": float(info.damping), "limits_active": len(getattr(info, "limits_active", ()))}
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:

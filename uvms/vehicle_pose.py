@@ -35,9 +35,14 @@ class VehicleAccessors:
             raise ConfigurationError("a planar base pose must lie in the x-y plane of the planar joint")
         return np.array([translation[0], translation[1], rotation[0, 0], rotation[1, 0]])
 
-    def base_pose(self, q: np.ndarray) -> pin.SE3:
-        """Pose of the vehicle body in the world, ``transform_base_to_world`` (identity for a fixed base)."""
-        q = self.check_configuration(q)
+    def base_pose(self, q: np.ndarray, check: bool = True) -> pin.SE3:
+        """Pose of the vehicle body in the world, ``transform_base_to_world`` (identity for a fixed base).
+
+        Args:
+            q: configuration (nq,); checked unless ``check=False`` (the rows of a run, checked once as a whole).
+        """
+        if check:
+            q = self.check_configuration(q)
         if self.base_type == "fixed":
             return pin.SE3.Identity()
         if self.base_type == "floating":
@@ -47,15 +52,15 @@ class VehicleAccessors:
             joint_motion = pin.SE3(pin.rpy.rpyToMatrix(0.0, 0.0, yaw), np.array([q[0], q[1], 0.0]))
         return self.model.jointPlacements[1] * joint_motion
 
-    def base_values(self, q: np.ndarray) -> np.ndarray:
+    def base_values(self, q: np.ndarray, check: bool = True) -> np.ndarray:
         """The vehicle pose of q as users write it (``base.pose_names``): [x, y, yaw] (planar) or
         [x, y, z, roll, pitch, yaw] (floating) [m, rad], world ENU, R = Rz(yaw) Ry(pitch) Rx(roll); (0,) if fixed.
 
-        The inverse of ``configuration(base=...)``; angles in [-pi, pi].
+        The inverse of ``configuration(base=...)``; angles in [-pi, pi]. ``check=False`` skips the check of q.
         """
         if self.base_type == "fixed":
             return np.zeros(0)
-        pose = self.base_pose(q)
+        pose = self.base_pose(q, check)
         rpy = pin.rpy.matrixToRpy(pose.rotation)
         return np.array([*pose.translation[:2], rpy[2]] if self.base_type == "planar" else [*pose.translation, *rpy])
 
