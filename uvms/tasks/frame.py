@@ -54,6 +54,7 @@ class FrameTask(Task):
             raise UVMSError("a frame task needs at least one axis")
         self.rows = np.array(axis_rows(self.axes), dtype=int)
         self._euler_rows = orientation == "euler" and bool(np.any(self.rows >= 3))  # rows of rpy rates
+        self._all_rows = bool(np.array_equal(self.rows, np.arange(6)))
         self.dim = len(self.rows)
         self.orientation = orientation
         self.target: pin.SE3 | None = None
@@ -143,7 +144,10 @@ class FrameTask(Task):
         pose = state.pose(self.frame_id)
         jacobian = state.jacobian(self.frame_id)
         if self.orientation == "log":
-            return jacobian[self.rows], log_pose_error(translation, rotation, pose)[self.rows], feedforward.copy()
+            error = log_pose_error(translation, rotation, pose)
+            if self._all_rows:  # a fresh copy either way; a copy costs less than taking all six rows by index
+                return jacobian.copy(), error, feedforward.copy()
+            return jacobian[self.rows], error[self.rows], feedforward.copy()
         pose_rpy = matrixToRpy(pose.rotation)
         if self._euler_rows:
             jacobian = self._euler_jacobian(jacobian, pose_rpy)
