@@ -31,7 +31,12 @@ def pose_from_xyyaw(values: np.ndarray) -> pin.SE3:
 
 def wrap_angle(angle: float) -> float:
     """Angle wrapped to [-pi, pi) [rad]."""
-    return float((angle + np.pi) % (2.0 * np.pi) - np.pi)
+    return float(wrap_angles(angle))
+
+
+def wrap_angles(angles: np.ndarray) -> np.ndarray:
+    """Angles wrapped to [-pi, pi) [rad], entry by entry (the numbers of :func:`wrap_angle`)."""
+    return (angles + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def eta_from_pose(pose_enu_flu: pin.SE3, planar: bool) -> np.ndarray:

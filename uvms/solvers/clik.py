@@ -73,7 +73,9 @@ class CLIKSolver:
                 raise SolverInputError(f"enforce_limits needs position limits of the {robot.n_arm} arm coordinates, "
                                        f"got {limit.size} {limit.kind} limits")
         self.limit = limit
+        # the solved coordinates joint clamping keeps: the (unbounded) vehicle unless free floating, then the arm
         self.first = robot.n_vehicle if free_floating else 0  # the first solved column of v
+        self._clamp_limit = None if not enforce_limits else limit.after_unbounded(robot.n_vehicle - self.first)
         columns = robot.nv - self.first
         rows = sum(task.dim for task in self.tasks)
         apply_gain(gain, np.zeros(rows))  # refuses a bad gain now, with its message, rather than at every call
@@ -132,15 +134,13 @@ class CLIKSolver:
         if self.free_floating:
             a_base, a_arm = state.centroidal_split()
             v[:self.first] = base_velocity_from_momentum(a_base, a_arm, solution, None)
-        held_names = tuple(self._limit_names[index] for index in sorted(held)) if held else ()
+        held_names = tuple(self._clamp_limit.names[index] for index in sorted(held)) if held else ()
         return v, jacobian, error, command, sigma_min, used, held_names
 
     def _clamped(self, state: KinematicState, jacobian: np.ndarray, command: np.ndarray,
                  nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float, float, dict[int, float]]:
         """Joint clamping: hold the joints the step would carry past a limit at it and solve with the others."""
-        robot, dt = self.robot, self.dt
-        limit = self.limit.after_unbounded(robot.n_vehicle - self.first)  # the (unbounded) vehicle unless free floating
-        self._limit_names = limit.names
+        robot, dt, limit = self.robot, self.dt, self._clamp_limit
         now = np.concatenate([np.zeros(robot.n_vehicle - self.first), robot.arm_values(state.q)])
         free = np.arange(jacobian.shape[1])
         held: dict[int, float] = {}

@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..conventions import pose_from_xyzrpy
+from ..conventions import pose_from_xyzrpy, wrap_angles
 from ..errors import UVMSError
 from ..kinematics import axis_rows
 from ..robot import Robot
@@ -168,5 +168,5 @@ def euler_pose_error(target_translation: np.ndarray, pose: pin.SE3, target_rpy: 
     """[p_d - p; rpy_d - rpy wrapped to [-pi, pi)] (6,) [m, rad] (the rpy of both given, (3,) each)."""
     error = np.empty(6)
     error[:3] = target_translation - pose.translation
-    error[3:] = (target_rpy - pose_rpy + np.pi) % (2.0 * np.pi) - np.pi  # wrap_angle, entry by entry
+    error[3:] = wrap_angles(target_rpy - pose_rpy)
     return error
