@@ -65,6 +65,15 @@ def test_a_changed_number_is_caught_and_a_temporary_path_is_not():
     first_stream(one)[1]["text"] += "written to /tmp/tmpabc123/out, object at 0x7f00deadbeef\n"
     first_stream(other)[1]["text"] += "written to /tmp/tmpxyz789/out, object at 0x7f11cafef00d\n"
     assert notebook_execute.differences(one, other) == []  # volatile parts masked
+    one, other = copy_of(stored), copy_of(stored)
+    first_stream(one)[1]["text"] += "residual 8.0e-14, drift 7.26e-10 m\n"
+    first_stream(other)[1]["text"] += "residual 8.1e-14, drift 7.25e-10 m\n"
+    assert notebook_execute.differences(one, other) == []  # rounding-level digits (they follow the CPU's BLAS)
+    for small, grown in (("8.0e-14", "8.0e-04"), ("7.2e-10", "7.2e-09"), ("3.0e-12", "0.0030")):
+        one, other = copy_of(stored), copy_of(stored)
+        first_stream(one)[1]["text"] += f"residual {small}\n"
+        first_stream(other)[1]["text"] += f"residual {grown}\n"
+        assert len(notebook_execute.differences(one, other)) == 1, grown  # a number past 1e-9 is caught
     changed = copy_of(stored)
     index, stream = first_stream(changed)
     digit = next(ch for ch in stream["text"] if ch.isdigit())
