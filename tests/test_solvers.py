@@ -338,6 +338,10 @@ def test_bad_solver_inputs():
         uvms.solve_ik(robot, [0, 0, 0, 0, 0, 0], restarts=-1)
     with pytest.raises(SolverInputError, match="tolerance must be finite and > 0"):
         uvms.solve_ik(robot, [0, 0, 0, 0, 0, 0], tolerance=0.0)
+    with pytest.raises(SolverInputError, match=f"needs a target pose for {robot.ee_frames[0]}: a pin.SE3 or"):
+        uvms.solve_ik(robot, None)
+    with pytest.raises(SolverInputError, match="needs a target pose for at least one frame"):
+        uvms.solve_ik(robot, {})
     with pytest.raises(SolverInputError, match="max_iterations must be an integer >= 1"):
         uvms.initial_configuration(robot, task, max_iterations=0)
     with pytest.raises(SolverInputError, match="valid: classic, robust"):
