@@ -84,6 +84,20 @@ def test_station_keeping_in_still_water_converges(robot, thrusters):
     assert metrics["final_vehicle_position_error"] == error[-1] and metrics["vehicle_position_error"] == error.max()
 
 
+def test_an_actuated_result_saves_its_thruster_series(robot, thrusters, tmp_path):
+    """``result.save`` (the library's, not only ``uvms run``'s) writes actuation.npz beside the trajectory."""
+    result = _run(robot, thrusters, [0.0, 0.0, 0.0], False, duration=0.5)
+    written = result.save(tmp_path)
+    assert [path.name for path in written] == ["trajectory.csv", "trajectory.npz", "actuation.npz"]
+    with np.load(tmp_path / "actuation.npz") as saved:
+        assert set(saved.files) == {"t", *uvms.series.ACTUATION_SERIES}
+        np.testing.assert_array_equal(saved["thrusts"], result.actuation["thrusts"])
+        assert saved["thrusts"].shape == (len(result.t), len(thrusters.names))
+        np.testing.assert_array_equal(saved["t"], result.t)
+    plain = uvms.SimulationResult(t=result.t, q=result.q, v=result.v, robot=robot)  # not actuated: no actuation.npz
+    assert [path.name for path in plain.save(tmp_path / "plain")] == ["trajectory.csv", "trajectory.npz"]
+
+
 def test_station_keeping_in_a_current_and_coordination(robot, thrusters):
     """0.3 m/s current along x: the vehicle error stays bounded and decays; coordination cuts the
     end-effector error (the arm takes up the vehicle's drift)."""

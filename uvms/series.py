@@ -30,6 +30,10 @@ SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_r
 PLANT_SERIES = ("t", "q", "v", "command", "rates", "joint_torque", "kinetic_energy", "potential_energy", "momentum",
                 "ee_position", "desired_position", "ee_velocity", "desired_velocity", "position_error", "sigma_min",
                 "damping")
+#: The series of an actuated run that ``save`` writes to ``actuation.npz`` (the others stay in memory).
+ACTUATION_SERIES = ("thrusts", "thrust_command", "body_wrench", "wrench_command", "achieved_wrench", "thrust_power",
+                    "thruster_power_abs", "damping_power", "vehicle_position_error", "vehicle_attitude_error",
+                    "ee_point_error")
 
 
 @dataclass
@@ -55,6 +59,8 @@ class SimulationResult:
         ee_velocity, desired_velocity: (N, 3) [m/s] world, linear velocity of the frame origin (GJM runs).
         axes: the task axes; integrator: "euler" or "rk4"; dt, control_dt, wall_time: [s].
         plant, controller: what produced the run (not saved), or None.
+        actuation: the thrusters' and vehicle controller's series of an actuated run (name -> (N, ...) array;
+            :data:`ACTUATION_SERIES` are saved), or None; thruster_dynamics: its thrusters (not saved).
     """
 
     t: np.ndarray
@@ -90,6 +96,8 @@ class SimulationResult:
     control_dt: float = 0.0
     plant: Any = field(default=None, repr=False)
     controller: Any = field(default=None, repr=False)
+    actuation: dict[str, np.ndarray] | None = field(default=None, repr=False)
+    thruster_dynamics: Any = field(default=None, repr=False)
 
     # ------------------------------------------------------------------ task series
     def arrays(self) -> dict[str, np.ndarray]:
@@ -154,12 +162,23 @@ class SimulationResult:
         writer.writerows([[f"{value:.17g}" for value in row] for row in table])
         return buffer.getvalue()
 
-    def save(self, folder: str | os.PathLike) -> tuple[Path, Path]:
-        """Write ``trajectory.csv`` and ``trajectory.npz`` atomically into ``folder``."""
+    def actuation_arrays(self) -> dict[str, np.ndarray]:
+        """The arrays of ``actuation.npz``: t and the :data:`ACTUATION_SERIES` the run recorded ({} if not actuated)."""
+        if self.actuation is None:
+            return {}
+        return {"t": self.t, **{name: self.actuation[name] for name in ACTUATION_SERIES if name in self.actuation}}
+
+    def save(self, folder: str | os.PathLike) -> tuple[Path, ...]:
+        """Write ``trajectory.csv`` and ``trajectory.npz`` (and an actuated run's ``actuation.npz``) atomically into
+        ``folder``; returns their paths."""
         folder = Path(folder)
         outputs.write_text(folder / "trajectory.csv", self.csv_text())
         outputs.write_npz(folder / "trajectory.npz", **self.arrays())
-        return folder / "trajectory.csv", folder / "trajectory.npz"
+        written = (folder / "trajectory.csv", folder / "trajectory.npz")
+        if self.actuation is not None:
+            outputs.write_npz(folder / "actuation.npz", **self.actuation_arrays())
+            written += (folder / "actuation.npz",)
+        return written
 
     # ------------------------------------------------------------------ plant series
     @property

@@ -68,11 +68,9 @@ def simulate_actuated(
     arrays, wall_time = run_loop(system, q, np.concatenate([v, f]), steps=steps, dt=dt, integrator=integrator,
                                  recorders=recorders, progress=progress, desc="actuated plant")
     known = {field.name for field in fields(SimulationResult)}
-    result = SimulationResult(**{k: a for k, a in arrays.items() if k in known}, robot=robot, plant=plant, dt=dt,
-                              integrator=integrator, wall_time=wall_time, controller=controller)
-    result.actuation = {k: a for k, a in arrays.items() if k not in known}
-    result.thruster_dynamics = dynamics
-    return result
+    return SimulationResult(**{k: a for k, a in arrays.items() if k in known}, robot=robot, plant=plant, dt=dt,
+                            integrator=integrator, wall_time=wall_time, controller=controller,
+                            actuation={k: a for k, a in arrays.items() if k not in known}, thruster_dynamics=dynamics)
 
 
 def actuation_metrics(result: SimulationResult) -> dict:

@@ -30,10 +30,6 @@ from .schema import changed_keys
 
 #: The wrench axes the allocation priorities name (body FLU: forces, then moments).
 WRENCH_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
-#: The series of an actuated run saved in ``actuation.npz`` (the others stay in memory).
-SAVED_SERIES = ("thrusts", "thrust_command", "body_wrench", "wrench_command", "achieved_wrench", "thrust_power",
-                "thruster_power_abs", "damping_power", "vehicle_position_error", "vehicle_attitude_error",
-                "ee_point_error")
 
 
 @dataclass
@@ -133,8 +129,3 @@ def actuated_metrics(result: SimulationResult, actuation: Actuation, scenario: d
     return {**actuation_metrics(result), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names,
             "coordination": bool(scenario["vehicle_control"]["coordination"]),
             "current": list(scenario["plant"]["current"]) or [0.0, 0.0, 0.0]}
-
-
-def saved_series(result: SimulationResult) -> dict[str, np.ndarray]:
-    """The arrays of ``actuation.npz``: t and the thrusters' and controller's series the run recorded."""
-    return {"t": result.t, **{name: result.actuation[name] for name in SAVED_SERIES if name in result.actuation}}

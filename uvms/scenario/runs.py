@@ -15,7 +15,7 @@ from .. import outputs
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError
 from ..simulate import SimulationResult, simulate, simulate_gjm, step_count
-from .actuated import actuated_metrics, saved_series, simulate_actuation
+from .actuated import actuated_metrics, simulate_actuation
 from .build import Setup, build
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
@@ -178,10 +178,7 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
                        motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.plant_metrics())
     if setup.actuation is not None:
         metrics.update(actuated_metrics(result, setup.actuation, scenario))
-    files = list(result.save(folder))
-    if setup.actuation is not None:
-        outputs.write_npz(folder / "actuation.npz", **saved_series(result))
-        files.append(folder / "actuation.npz")
+    files = list(result.save(folder))  # with actuation.npz when the run is actuated
     if plant_run is not None:
         outputs.write_npz(folder / "plant.npz", **plant_run.plant_arrays())
         files.append(folder / "plant.npz")
