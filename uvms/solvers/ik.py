@@ -20,9 +20,9 @@ import pinocchio as pin
 
 from ..errors import SolverInputError
 from ..kinematics import WORLD_ALIGNED
-from ..limits import Limit
+from ..limits import Limit, index_or_slice
 from ..robot import Robot
-from ..tasks.frame import FrameTask
+from ..tasks.frame import FrameTask, log_pose_error
 from .checks import check_count, check_scalar
 from .inverses import dls_solve
 from .results import IKResult
@@ -136,11 +136,9 @@ class JointBox:
             limit = Limit.joint_positions(robot)
             held = limit.q_index >= 0
             index = limit.q_index[held]
-            contiguous = index.size > 0 and np.array_equal(index, np.arange(index[0], index[0] + index.size))
             revolute = revolute_coordinates(robot.model)
-            box = cls(index, slice(int(index[0]), int(index[0]) + index.size) if contiguous else index,
-                      limit.lower[held], limit.upper[held], np.array([i in revolute for i in index], dtype=bool),
-                      robot.model.createData())
+            box = cls(index, index_or_slice(index), limit.lower[held], limit.upper[held],
+                      np.array([i in revolute for i in index], dtype=bool), robot.model.createData())
             BOXES[robot] = box
         return box
 
@@ -211,15 +209,12 @@ class PoseProblem:
         as much as a Pinocchio call; the numbers are those of :meth:`pose_error` and the frame Jacobian.
         """
         model, data, frame, nv = self.model, self.data, self.frame_ids[0], self.model.nv
-        placements, compute, log3, empty = data.oMf, pin.computeFrameJacobian, pin.log3, np.empty
+        placements, compute = data.oMf, pin.computeFrameJacobian
         rotation, translation = self.targets[0]
 
         def evaluate_one_frame(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             jacobian = compute(model, data, q, frame, WORLD_ALIGNED)  # (6, nv); runs the forward kinematics
-            homogeneous = placements[frame].homogeneous  # (4, 4): one conversion for both parts
-            error = empty(6)
-            error[:3] = translation - homogeneous[:3, 3]
-            error[3:] = log3(rotation.dot(homogeneous[:3, :3].T))
+            error = log_pose_error(translation, rotation, placements[frame])
             return error, jacobian if nv > 1 else jacobian.reshape(6, nv)  # (6,) when nv = 1
 
         return evaluate_one_frame
@@ -227,11 +222,7 @@ class PoseProblem:
     def pose_error(self, index: int, pose: pin.SE3) -> np.ndarray:
         """[t* - t; log3(R* R^T)] (6,) [m, rad] of a frame at ``pose`` against target ``index``."""
         rotation, translation = self.targets[index]
-        homogeneous = pose.homogeneous  # (4, 4): one conversion for both parts
-        error = np.empty(6)
-        error[:3] = translation - homogeneous[:3, 3]
-        error[3:] = pin.log3(rotation.dot(homogeneous[:3, :3].T))
-        return error
+        return log_pose_error(translation, rotation, pose)
 
 
 def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations: int

@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from ..conventions import AXIS_NAMES
 from ..kinematics import WORLD_ALIGNED
+from ..limits import index_or_slice
 from ..robot import Robot
 from ..tasks.frame import FrameTask, log_pose_error
 from ..tasks.joint_limits import JointLimitPotential
@@ -70,9 +71,11 @@ class PoseCLIK:
         self._target_translation, self._target_rotation = np.zeros(3), np.eye(3)
         self._has_feedforward = False
         self._nullspace = self._nullspace_terms(potential, alpha)
+        self._z0 = np.zeros(self._nv)  # (nv,) the null-space motion's buffer
 
     def _nullspace_terms(self, potential: JointLimitPotential | None, alpha: float):
-        """(q indices, v indices, -alpha c / range^2, middle) of the arm coordinates q holds itself, or None.
+        """(q indices, v indices (slices when consecutive), -alpha c / range^2, middle) of the arm coordinates q holds
+        itself, or None.
 
         z0[v_index] = scale (q[q_index] - middle) is -alpha grad S(q) of the potential
         (continuous joints, which q stores as (cos, sin), have c = 0 and no entry).
@@ -82,7 +85,8 @@ class PoseCLIK:
         limit = potential.limit
         coordinates = np.flatnonzero(limit.q_index >= 0)
         scale = -alpha * potential.weights[coordinates] / potential.range[coordinates] ** 2
-        return (limit.q_index[coordinates], coordinates + self.robot.n_vehicle, scale,
+        # slices where the coordinates are consecutive (the common case): views, not gathers
+        return (index_or_slice(limit.q_index[coordinates]), index_or_slice(coordinates + self.robot.n_vehicle), scale,
                 potential.middle[coordinates])
 
     def set_target(self, pose: pin.SE3, twist: np.ndarray | None = None) -> None:
@@ -111,7 +115,7 @@ class PoseCLIK:
         z0 = None
         if self._nullspace is not None:
             q_index, v_index, scale, middle = self._nullspace
-            z0 = np.zeros(self._nv)
+            z0 = self._z0  # zero outside v_index; only read within this call
             z0[v_index] = scale * (q[q_index] - middle)
             command -= jacobian.dot(z0)
         velocity = dls_solve(jacobian, command, self._damping_matrix)  # (nv,)

@@ -157,9 +157,10 @@ class FrameTask(Task):
 
 def log_pose_error(target_translation: np.ndarray, target_rotation: np.ndarray, pose: pin.SE3) -> np.ndarray:
     """[p_d - p; log3(R_d R^T)] (6,) [m, rad] in world axes of ``pose`` against the target p_d (3,), R_d (3, 3)."""
+    homogeneous = pose.homogeneous  # (4, 4): one conversion for both parts (.translation and .rotation: two)
     error = np.empty(6)
-    error[:3] = target_translation - pose.translation
-    error[3:] = pin.log3(target_rotation @ pose.rotation.T)
+    error[:3] = target_translation - homogeneous[:3, 3]
+    error[3:] = pin.log3(target_rotation.dot(homogeneous[:3, :3].T))  # the numbers of R_d @ R.T, bit for bit
     return error
 
 
