@@ -9,14 +9,19 @@ Times are ratios to one ``pin.forwardKinematics`` call measured in the same run
     pip install -e ".[bench]"
     python benchmarks/bench_clik.py [--repeat 2000]
 
-Pose IK has its own benchmark, ``benchmarks/bench_ik.py``.
+Pose IK has its own benchmark, ``benchmarks/bench_ik.py``. placo runs in an environment of its own (it pins an
+older Pinocchio): with ``UVMS_PLACO_PYTHON`` naming that environment's Python, its step is measured there by
+``placo_step.py`` (its ratio to that environment's own ``pin.forwardKinematics``) and printed beside uvms.
 
 """
 
 from __future__ import annotations
 
 import argparse
-import timeit
+import json
+import os
+import subprocess
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -24,12 +29,9 @@ import pinocchio as pin
 import uvms
 from uvms.solvers.pose_clik import PoseCLIK
 
+from timing import interleaved_ratios
+
 DT = 0.01
-
-
-def best_time(function, repeat: int) -> float:
-    """Best-of-5 mean time of one call [s]."""
-    return min(timeit.repeat(function, number=repeat, repeat=5)) / repeat
 
 
 def numpy_dls_step(robot: uvms.Robot, q: np.ndarray, target: pin.SE3, potential, damping=1e-6) -> np.ndarray:
@@ -42,6 +44,32 @@ def numpy_dls_step(robot: uvms.Robot, q: np.ndarray, target: pin.SE3, potential,
     z0 = -potential.gradient(q)
     v = inverse @ error + (np.eye(robot.nv) - inverse @ jacobian) @ z0
     return pin.integrate(robot.model, q, v * DT)
+
+
+#: The Python of an environment with placo installed (``python -m venv /tmp/placo_env && /tmp/placo_env/bin/pip
+#: install placo``), read from ``UVMS_PLACO_PYTHON``; unset: placo is skipped with that command printed.
+PLACO_PYTHON = os.environ.get("UVMS_PLACO_PYTHON", "")
+PLACO_HINT = ("placo skipped: python -m venv /tmp/placo_env && /tmp/placo_env/bin/pip install placo, "
+              "then UVMS_PLACO_PYTHON=/tmp/placo_env/bin/python")
+
+
+def placo_ratio(robot: uvms.Robot, repeat: int) -> dict | None:
+    """placo's step on ``robot``'s URDF (its floating base), timed in placo's environment (``placo_step.py``).
+
+    Returns:
+        {"ratio": step / that environment's pin.forwardKinematics, "nv", "fk_us", "step_us", "pin"}, or None (with
+        the reason printed) when ``UVMS_PLACO_PYTHON`` is unset or the run fails.
+    """
+    if not PLACO_PYTHON:
+        print(PLACO_HINT)
+        return None
+    script = Path(__file__).with_name("placo_step.py")
+    run = subprocess.run([PLACO_PYTHON, str(script), str(robot.source), robot.ee_frames[0], "--repeat", str(repeat)],
+                         capture_output=True, text=True)
+    if run.returncode != 0:
+        print(f"placo skipped: {PLACO_PYTHON} {script.name} failed: {run.stderr.strip().splitlines()[-1:]}")
+        return None
+    return json.loads(run.stdout.strip().splitlines()[-1])
 
 
 def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
@@ -82,10 +110,11 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
         calls["pink solve_ik step (daqp)"] = pink_step
     except ImportError:
         print("pink not installed: pip install -e '.[bench]'")
-    reference = best_time(lambda: pin.forwardKinematics(model, data, q), repeat * 5)
-    ratios = {"pin.forwardKinematics": 1.0}
-    for label, call in calls.items():
-        ratios[label] = best_time(call, repeat) / reference
+    ratios, reference = interleaved_ratios(calls, lambda: pin.forwardKinematics(model, data, q), repeat)
+    placo = placo_ratio(robot, repeat)
+    if placo is not None:
+        ratios[f"placo KinematicsSolver.solve (pin {placo['pin']}, its own environment, nv = {placo['nv']})"] = \
+            placo["ratio"]
     ratios["_reference_us"] = reference * 1e6
     return ratios
 

@@ -11,7 +11,8 @@ Rows (goals of the issue in the last column):
 
 Step times are ratios to one ``pin.forwardKinematics`` on the same model, measured in the same run (the
 machines are shared and noisy: absolute times are not comparable between runs). placo pins an older Pinocchio,
-so it is not installed beside uvms; its step is measured in its own environment (benchmarks/README.md).
+so it is not installed beside uvms; with ``UVMS_PLACO_PYTHON`` set, its step is measured in its own environment
+(``placo_step.py``, benchmarks/README.md).
 
     pip install -e ".[bench]"
     python benchmarks/bench_speed.py [--ik-targets 10000] [--starts 200]   # about 3 min with the defaults
@@ -48,6 +49,7 @@ def clik_rows() -> list[tuple[str, str, str, str]]:
     others = [f"numpy DLS {ratios['plain numpy DLS step']:.0f}x"]
     if "pink solve_ik step (daqp)" in ratios:
         others.append(f"pink {ratios['pink solve_ik step (daqp)']:.0f}x")
+    others += [f"placo {ratio:.0f}x (its own env)" for label, ratio in ratios.items() if label.startswith("placo")]
     now = f"{general:.0f}x (`clik_step`)" + (f", {prepared:.0f}x (`CLIKSolver`)" if prepared else "")
     return [(f"general CLIK step, UR5 + floating base (FK {fk:.2f} us)", now, ", ".join(others), "<= 40x"),
             ("`PoseCLIK.step`", f"{ratios['uvms PoseCLIK.step']:.0f}x", "", "<= 15x")]
