@@ -159,7 +159,9 @@ class SimulationResult:
         buffer = io.StringIO()
         writer = csv.writer(buffer, lineterminator="\n")
         writer.writerow(header)
-        writer.writerows([[f"{value:.17g}" for value in row] for row in table])
+        # one %-format of a whole row: the strings of f"{value:.17g}" (the same C formatting), not a call per value
+        row_format = ",".join(["%.17g"] * table.shape[1]) + "\n"
+        buffer.writelines([row_format % row for row in map(tuple, table.tolist())])
         return buffer.getvalue()
 
     def actuation_arrays(self) -> dict[str, np.ndarray]:
