@@ -8,7 +8,8 @@ change that moves a number, refresh them::
 
 ``tests/test_notebooks.py`` re-executes each notebook with the same functions and fails when a stored text output
 differs from the fresh one (after masking what legitimately changes between runs: the repository's path, temporary
-paths, object addresses, throughputs, the digits of numbers below 1e-9), so stale outputs cannot land. Cells tagged ``skip-execution`` (the browser viewer) are not run.
+paths, object addresses, throughputs, the digits of numbers below 1e-9), so stale outputs cannot land. Cells tagged
+``skip-execution`` (the browser viewer) are not run.
 """
 
 from __future__ import annotations
