@@ -114,6 +114,34 @@ def test_unknown_frame_lists_close_names():
         uvms.load("hoang2011", ee="tool")
 
 
+def test_a_model_name_or_none_where_a_robot_is_needed_says_how_to_get_one():
+    """Every public entry that takes the model refuses what is not one (a UVMSError and a TypeError), by name."""
+    robot = shipped("hoang2011")
+    task = uvms.FrameTask(robot, axes=["x", "y", "yaw"], target=robot.fk(robot.neutral()))
+    calls = {"FrameTask": lambda r: uvms.FrameTask(r), "JointLimitPotential": uvms.JointLimitPotential,
+             "VehicleTask": uvms.VehicleTask, "Plant": uvms.Plant, "CLIK": lambda r: uvms.clik_velocity(r, None, task),
+             "solve_ik": lambda r: uvms.solve_ik(r, [0, 0, 0, 0, 0, 0]), "KinematicState": lambda r: uvms.KinematicState(
+                 r, robot.neutral()), "initial_configuration": lambda r: uvms.initial_configuration(r, task),
+             "thrusters_of": uvms.thrusters_of, "hydrodynamics_of": uvms.hydrodynamics_of,
+             "BatchKinematics": lambda r: uvms.BatchKinematics(r, "ee")}
+    for where, call in calls.items():
+        with pytest.raises(uvms.NotARobot, match=rf"^{where} needs a uvms.Robot .*got str 'hoang2011': "
+                                                 r"uvms.load\('hoang2011'\) loads that model"):
+            call("hoang2011")
+        with pytest.raises(TypeError, match=f"^{where} needs a uvms.Robot .*got NoneType None$"):
+            call(None)
+
+
+def test_tasks_and_targets_that_are_not_numbers_are_refused_by_what_is_valid():
+    robot = shipped("hoang2011")
+    with pytest.raises(uvms.SolverInputError, match="expected a Task or a sequence of Tasks, got None"):
+        uvms.clik_velocity(robot, robot.neutral(), None)
+    with pytest.raises(uvms.UVMSError, match=r"a target pose must be a pin.SE3 or 6 finite numbers .* got 'x'"):
+        uvms.solve_ik(robot, "x")
+    with pytest.raises(uvms.UVMSError, match=r"a target twist must be 6 finite numbers .* got \[1, 'a'\]"):
+        uvms.FrameTask(robot).set_target_velocity([1, "a"])
+
+
 @pytest.mark.parametrize(
     "q",
     [np.zeros(3), np.full(7, np.nan), [0, 0, 1, 0, 0, 0, "x"], np.array([0, 0, 2.0, 0, 0, 0, 0])],

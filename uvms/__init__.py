@@ -24,6 +24,7 @@ from .errors import (
     ModelFileNotFound,
     ModelParseError,
     NoVehicleError,
+    NotARobot,
     NumericalError,
     UVMSError,
     WorkspaceInputError,
@@ -76,7 +77,7 @@ __version__ = "0.1.0"
 __all__ = [
     # errors
     "BaseMismatchError", "ConfigurationError", "FrameNotFound", "JointNotFound", "ModelCheckError",
-    "ModelFileNotFound", "ModelParseError", "NoVehicleError", "NumericalError", "UVMSError", "WorkspaceInputError", "XacroError",
+    "ModelFileNotFound", "ModelParseError", "NoVehicleError", "NotARobot", "NumericalError", "UVMSError", "WorkspaceInputError", "XacroError",
     # model
     "BaseGuessWarning", "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
     # robot and kinematics

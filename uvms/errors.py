@@ -69,6 +69,10 @@ class ConfigurationError(UVMSError):
     """A configuration, velocity or pose has the wrong size or non-finite entries."""
 
 
+class NotARobot(UVMSError, TypeError):
+    """Something other than a :class:`uvms.Robot` where a function needs the model (``uvms.load`` returns one)."""
+
+
 class WorkspaceInputError(UVMSError):
     """A workspace argument out of range: sample count, voxel size, orientation grid, hull."""
 

@@ -14,7 +14,7 @@ import pinocchio as pin
 
 from . import kinematics, outputs, urdf_export
 from .bases import BASE_TYPES, BaseType
-from .errors import ConfigurationError, FrameNotFound, JointNotFound, UVMSError
+from .errors import ConfigurationError, FrameNotFound, JointNotFound, NotARobot, UVMSError
 from .vehicle_pose import VehicleAccessors
 from .validate import finite_array
 
@@ -419,3 +419,18 @@ class Robot(VehicleAccessors):
     def __repr__(self) -> str:
         return (f"Robot({self.name!r}, base={self.base_type}, nq={self.nq}, nv={self.nv}, "
                 f"n_arm={self.n_arm}, ee={self.ee_frames})")
+
+
+def check_robot(robot: object, where: str) -> Robot:
+    """``robot`` if it is a :class:`Robot`; else NotARobot saying what came instead and how to get one.
+
+    Args:
+        robot: what the caller passed as the model; where: the function or class that needs it (for the message).
+    """
+    if not isinstance(robot, Robot):
+        shown = repr(robot)
+        shown = shown if len(shown) <= 60 else shown[:57] + "..."
+        hint = f": uvms.load({shown}) loads that model" if isinstance(robot, (str, os.PathLike)) else ""
+        raise NotARobot(f"{where} needs a uvms.Robot (what uvms.load returns), got {type(robot).__name__} {shown}"
+                        f"{hint}")
+    return robot

@@ -19,7 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from . import kinematics
-from .robot import Robot
+from .robot import Robot, check_robot
 
 #: Momentum rows of a configuration: q (nq,) -> (A_b (r, n_vehicle), A_m (r, n_arm)).
 MomentumRows = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -41,7 +41,7 @@ class KinematicState:
 
     def __init__(self, robot: Robot, q: np.ndarray, check: bool = True, *, momentum: MomentumRows | None = None) -> None:
         self.robot = robot
-        self.q = robot.check_configuration(q) if check else q
+        self.q = check_robot(robot, type(self).__name__).check_configuration(q) if check else q
         self._momentum = momentum
         self._centroidal: tuple[np.ndarray, np.ndarray] | None = None
         self._compute()

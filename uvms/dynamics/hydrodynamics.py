@@ -326,6 +326,9 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         NameNotFound: a link that the model does not have (the message lists close names).
         ModelCheckError, ModelParseError: invalid parameters.
     """
+    from ..robot import check_robot  # at call time: robot.py imports this package
+
+    check_robot(robot, "hydrodynamics_of")
     masses = urdf_link_masses(robot.urdf_root) if robot.urdf_root is not None else {}
     names = body_frame_names(robot.model)
     if path is not None:

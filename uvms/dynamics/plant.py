@@ -67,7 +67,7 @@ from .added_mass import (  # noqa: F401 - HydroLink ... resolve_links: also impo
     resolve_links,
 )
 from .hydrodynamics import HydroParameters, hydrodynamics_of
-from ..robot import Robot
+from ..robot import Robot, check_robot
 from ..kinematics import generalized_jacobian_from_parts, mass_matrix_split
 
 
@@ -122,6 +122,7 @@ class Plant:
         added_mass: bool = True,
         damping: bool = True,
     ) -> None:
+        check_robot(robot, "Plant")
         if robot.base_type == "fixed":
             raise UVMSError(f"{robot.name} has a fixed base: the plant needs a floating or planar vehicle")
         tau = float(motor_time_constant)

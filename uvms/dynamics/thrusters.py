@@ -304,6 +304,9 @@ def thrusters_of(robot: Robot, path: str | os.PathLike | None = None, *, require
         UVMSError: no thrusters (and ``required``), or both plugins and a YAML file.
         ModelCheckError, ModelParseError: invalid thruster data.
     """
+    from ..robot import check_robot  # at call time: robot.py imports this package
+
+    check_robot(robot, "thrusters_of")
     frames = robot.frame_names
     if path is not None:
         thrusters = load_thrusters_yaml(path, frames)

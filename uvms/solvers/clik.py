@@ -18,7 +18,7 @@ import pinocchio as pin
 
 from ..kinematics import base_velocity_from_momentum
 from ..limits import Limit
-from ..robot import Robot
+from ..robot import Robot, check_robot
 from ..state import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
@@ -59,6 +59,7 @@ class CLIKSolver:
         enforce_limits: bool = False,
         limit: Limit | None = None,
     ) -> None:
+        check_robot(robot, "CLIK")
         if free_floating and robot.base_type == "fixed":
             raise SolverInputError(f"{robot.name} has a fixed base: free_floating=True needs a floating or planar base")
         self.alpha = check_scalar(alpha, "alpha")

@@ -21,7 +21,7 @@ import pinocchio as pin
 from ..errors import SolverInputError
 from ..kinematics import WORLD_ALIGNED
 from ..limits import Limit, index_or_slice
-from ..robot import Robot
+from ..robot import Robot, check_robot
 from ..tasks.frame import FrameTask, log_pose_error
 from .checks import check_count, check_scalar
 from .inverses import dls_solve
@@ -67,6 +67,7 @@ def solve_ik(
         IKResult; on failure ``success`` is False and ``q`` holds the best residual found.
     """
     started = time.perf_counter()
+    check_robot(robot, "solve_ik")
     targets = dict(target) if isinstance(target, Mapping) else {frame or robot.ee_frames[0]: target}
     missing = [name for name, pose in targets.items() if pose is None]
     if missing or not targets:

@@ -18,7 +18,7 @@ import scipy.optimize
 from ..conventions import pose_from_xyyaw, pose_from_xyzrpy
 from ..errors import NameNotFound, SolverInputError
 from ..limits import Limit
-from ..robot import Robot
+from ..robot import Robot, check_robot
 from ..state import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
@@ -92,6 +92,7 @@ def initial_configuration(
         SolverInputError: a bad tolerance or iteration count, fixed coordinates on a fixed base or on a
             vehicle joint placed with a rotation; NameNotFound: an unknown coordinate (close names listed).
     """
+    check_robot(robot, "initial_configuration")
     task_list = as_task_list(tasks)
     check_scalar(tolerance, "tolerance", positive=True)
     check_count(max_iterations, "max_iterations", minimum=1)

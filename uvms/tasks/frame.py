@@ -10,7 +10,7 @@ import pinocchio as pin
 from ..conventions import pose_from_xyzrpy, wrap_angles
 from ..errors import UVMSError
 from ..kinematics import axis_rows
-from ..robot import Robot
+from ..robot import Robot, check_robot
 from ..state import KinematicState
 from .task import Task
 
@@ -44,6 +44,7 @@ class FrameTask(Task):
         orientation: str = "log",
         target: pin.SE3 | Sequence[float] | None = None,
     ) -> None:
+        check_robot(robot, "FrameTask")
         if orientation not in ORIENTATION_ERRORS:
             raise UVMSError(f"unknown orientation error {orientation!r}; valid: {', '.join(ORIENTATION_ERRORS)}")
         self.robot = robot
@@ -69,15 +70,15 @@ class FrameTask(Task):
         if isinstance(target, pin.SE3):
             self.target = target.copy()
             return
-        values = np.asarray(target, dtype=float)
-        if values.shape != (6,) or not np.all(np.isfinite(values)):
+        values = floats_or_none(target)
+        if values is None or values.shape != (6,) or not np.all(np.isfinite(values)):
             raise UVMSError(f"a target pose must be a pin.SE3 or 6 finite numbers [x, y, z, roll, pitch, yaw], got {target!r}")
         self.target = pose_from_xyzrpy(values)
 
     def set_target_velocity(self, twist: Sequence[float]) -> None:
         """Set the target twist [v; omega] (6,) in world axes (feedforward)."""
-        values = np.asarray(twist, dtype=float)
-        if values.shape != (6,) or not np.all(np.isfinite(values)):
+        values = floats_or_none(twist)
+        if values is None or values.shape != (6,) or not np.all(np.isfinite(values)):
             raise UVMSError(f"a target twist must be 6 finite numbers [vx, vy, vz, wx, wy, wz], got {twist!r}")
         self.target_twist = values
         self._target_parts = None
@@ -153,6 +154,14 @@ class FrameTask(Task):
             jacobian = self._euler_jacobian(jacobian, pose_rpy)
         return (jacobian[self.rows], euler_pose_error(translation, pose, target_rpy, pose_rpy)[self.rows],
                 feedforward.copy())
+
+
+def floats_or_none(value: object) -> np.ndarray | None:
+    """``value`` as a float array, or None when it is not numbers (the caller's message says what is valid)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return None
 
 
 def log_pose_error(target_translation: np.ndarray, target_rotation: np.ndarray, pose: pin.SE3) -> np.ndarray:

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..errors import UVMSError
 from ..limits import Limit
-from ..robot import Robot
+from ..robot import Robot, check_robot
 
 
 class JointLimitPotential:
@@ -30,6 +30,7 @@ class JointLimitPotential:
     """
 
     def __init__(self, robot: Robot, weights: float | np.ndarray = 1.0, limit: Limit | None = None) -> None:
+        check_robot(robot, "JointLimitPotential")
         limit = Limit.joint_positions(robot) if limit is None else limit
         if limit.size != robot.n_arm or limit.kind != "position":
             raise UVMSError(f"the joint-limit potential needs position limits of the {robot.n_arm} arm coordinates, "

@@ -10,7 +10,7 @@ import pinocchio as pin
 from ..bases import BASE_TYPES
 from ..conventions import wrap_angle
 from ..errors import UVMSError
-from ..robot import Robot
+from ..robot import Robot, check_robot
 from ..state import KinematicState
 from .task import Task
 
@@ -42,6 +42,7 @@ class VehicleTask(Task):
         heading: float | None = None,
         depth: float | None = None,
     ) -> None:
+        check_robot(robot, "VehicleTask")
         if robot.base_type not in VELOCITY_NAMES:
             raise UVMSError(f"{robot.name} has a fixed base: a vehicle task needs a floating or planar base")
         names = VELOCITY_NAMES[robot.base_type]

@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError, WorkspaceInputError
-from ..robot import Robot
+from ..robot import Robot, check_robot
 
 #: Samples composed at once by `BatchKinematics` and drawn at once by `monte_carlo` (its default chunk): the
 #: work arrays of one chunk take some 50-90 MB, whatever the sample count.
@@ -49,6 +49,7 @@ class BatchKinematics:
     upper: np.ndarray = field(init=False)
 
     def __post_init__(self) -> None:
+        check_robot(self.robot, "BatchKinematics")
         model = self.robot.model
         frame_id = self.robot.frame_id(self.frame)
         frame = model.frames[frame_id]
