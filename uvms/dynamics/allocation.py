@@ -21,7 +21,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import lsq_linear
 
 from ..conventions import AXIS_NAMES
 from ..errors import SolverInputError, UVMSError
@@ -126,6 +125,8 @@ class ThrustAllocator:
             weights = self.weights[group][:, None]
             a, b = weights * self.matrix[group], self.weights[group] * wrench[group]
             if not kept:
+                from scipy.optimize import lsq_linear  # when first saturated: scipy.optimize costs 0.2 s to import
+
                 thrusts = lsq_linear(a, b, bounds=(self.lower, self.upper), method="bvls", tol=1e-12).x
             else:
                 thrusts = self._solve_qp(a.T @ a, -a.T @ b, self.matrix[kept], self.matrix[kept] @ thrusts, thrusts)

@@ -13,7 +13,6 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
-import scipy.optimize
 
 from ..conventions import pose_from_xyyaw, pose_from_xyzrpy
 from ..errors import NameNotFound, SolverInputError
@@ -137,6 +136,8 @@ def initial_configuration(
         whole = np.zeros(robot.nv)
         whole[n:] = potential.arm_gradient(chart[n:])
         return whole[free] if fixed.size else whole
+
+    import scipy.optimize  # here, not at import: 0.2 s that `uvms info`, `view` and most runs do not need
 
     solution = scipy.optimize.minimize(
         objective, start[free] if fixed.size else start, jac=gradient, method="SLSQP", bounds=bounds,
