@@ -65,6 +65,14 @@ def test_circle_geometry_and_trajectory_derivatives():
         assert pin.rpy.matrixToRpy(trajectory(t).pose.rotation)[2] == pytest.approx(1.0)
     with pytest.raises(UVMSError):
         CirclePath([0, 0, 0], [0, 0, 1.0])  # start off the plane normal to z
+    tilted = CirclePath(center=[1.0, -2.0, 0.5], start=[1.0 + 0.6, -2.0, 0.5 - 0.8], normal=[0.8, 0.3, 0.6])
+    for s in (0.0, 0.4, 2.5, -1.3):  # every component: p on the circle, p' and p'' by finite differences
+        h, sample = 1e-4, tilted(s)
+        assert np.linalg.norm(sample.point - [1.0, -2.0, 0.5]) == pytest.approx(1.0)
+        np.testing.assert_allclose(sample.tangent, (tilted(s + h).point - tilted(s - h).point) / (2 * h), atol=1e-8)
+        np.testing.assert_allclose(sample.curvature, (tilted(s + h).tangent - tilted(s - h).tangent) / (2 * h),
+                                   atol=1e-8)
+        assert sample.point @ [0.8, 0.3, 0.6] == pytest.approx(np.array([1.0, -2.0, 0.5]) @ [0.8, 0.3, 0.6])
 
 
 def test_line_and_se3_interpolation():

@@ -48,6 +48,9 @@ class CirclePath:
             raise UVMSError("the circle's start point must lie in the plane through the centre normal to `normal`")
         self.e1 = radial / self.radius
         self.e2 = np.cross(normal, self.e1)
+        # Python floats of the constant vectors: a sample's 3-vectors in float arithmetic cost half as much as
+        # thirteen numpy operations on them, with the same IEEE operations in the same order (the same bits)
+        self._columns = tuple(zip(self.center.tolist(), self.e1.tolist(), self.e2.tolist()))
 
     @property
     def length(self) -> float:
@@ -55,12 +58,15 @@ class CirclePath:
         return 2 * np.pi * self.radius
 
     def __call__(self, s: float) -> PathSample:
-        angle = s / self.radius
-        c, sn = np.cos(angle), np.sin(angle)
+        """p = center + r (cos a e1 + sin a e2), its tangent and curvature vectors at arc length s [m], a = s / r."""
+        radius = self.radius
+        angle = s / radius
+        c, sn = float(np.cos(angle)), float(np.sin(angle))
+        columns = self._columns  # (center_i, e1_i, e2_i) for i = x, y, z
         return PathSample(
-            self.center + self.radius * (c * self.e1 + sn * self.e2),
-            -sn * self.e1 + c * self.e2,
-            (-c * self.e1 - sn * self.e2) / self.radius,
+            np.array([center + radius * (c * e1 + sn * e2) for center, e1, e2 in columns]),
+            np.array([-sn * e1 + c * e2 for _, e1, e2 in columns]),
+            np.array([(-c * e1 - sn * e2) / radius for _, e1, e2 in columns]),
         )
 
 
@@ -106,13 +112,10 @@ class PathTrajectory:
     def __call__(self, t: float) -> PoseSample:
         timing = self.law(t)
         sample = self.path(timing.s)
-        velocity = sample.tangent * timing.ds
-        acceleration = sample.tangent * timing.dds + sample.curvature * timing.ds**2
-        return PoseSample(
-            pin.SE3(self.rotation, sample.point),
-            np.concatenate([velocity, np.zeros(3)]),
-            np.concatenate([acceleration, np.zeros(3)]),
-        )
+        twist, acceleration = np.zeros(6), np.zeros(6)  # constant orientation: no angular parts
+        twist[:3] = sample.tangent * timing.ds
+        acceleration[:3] = sample.tangent * timing.dds + sample.curvature * timing.ds**2
+        return PoseSample(pin.SE3(self.rotation, sample.point), twist, acceleration)
 
 
 class SE3Trajectory:
