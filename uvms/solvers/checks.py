@@ -117,7 +117,10 @@ def check_choice(value: str, what: str, valid: tuple[str, ...]) -> str:
 
 def as_task_list(tasks: Task | Sequence[Task]) -> list[Task]:
     """One task or several -> a non-empty list of tasks."""
-    task_list = [tasks] if isinstance(tasks, Task) else list(tasks) if isinstance(tasks, (list, tuple)) else []
+    try:
+        task_list = [tasks] if isinstance(tasks, Task) else list(tasks)
+    except TypeError:  # not iterable (None, a number): refused below with the others
+        task_list = []
     if not task_list or not all(isinstance(task, Task) for task in task_list):
         raise SolverInputError(f"expected a Task or a sequence of Tasks, got {tasks!r}")
     return task_list

@@ -9,6 +9,7 @@ import pinocchio as pin
 
 from ..conventions import pose_from_xyzrpy, wrap_angles
 from ..errors import UVMSError
+from ..validate import finite_array
 from ..kinematics import axis_rows
 from ..robot import Robot, check_robot
 from ..state import KinematicState
@@ -70,16 +71,19 @@ class FrameTask(Task):
         if isinstance(target, pin.SE3):
             self.target = target.copy()
             return
-        values = floats_or_none(target)
-        if values is None or values.shape != (6,) or not np.all(np.isfinite(values)):
-            raise UVMSError(f"a target pose must be a pin.SE3 or 6 finite numbers [x, y, z, roll, pitch, yaw], got {target!r}")
+        try:
+            values = finite_array(target, "a target pose", (6,))
+        except UVMSError:  # the message of a pose: what the six numbers are, and that a pin.SE3 serves
+            raise UVMSError(f"a target pose must be a pin.SE3 or 6 finite numbers [x, y, z, roll, pitch, yaw], "
+                            f"got {target!r}") from None
         self.target = pose_from_xyzrpy(values)
 
     def set_target_velocity(self, twist: Sequence[float]) -> None:
         """Set the target twist [v; omega] (6,) in world axes (feedforward)."""
-        values = floats_or_none(twist)
-        if values is None or values.shape != (6,) or not np.all(np.isfinite(values)):
-            raise UVMSError(f"a target twist must be 6 finite numbers [vx, vy, vz, wx, wy, wz], got {twist!r}")
+        try:
+            values = finite_array(twist, "a target twist", (6,))
+        except UVMSError:
+            raise UVMSError(f"a target twist must be 6 finite numbers [vx, vy, vz, wx, wy, wz], got {twist!r}") from None
         self.target_twist = values
         self._target_parts = None
 
@@ -154,14 +158,6 @@ class FrameTask(Task):
             jacobian = self._euler_jacobian(jacobian, pose_rpy)
         return (jacobian[self.rows], euler_pose_error(translation, pose, target_rpy, pose_rpy)[self.rows],
                 feedforward.copy())
-
-
-def floats_or_none(value: object) -> np.ndarray | None:
-    """``value`` as a float array, or None when it is not numbers (the caller's message says what is valid)."""
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        return None
 
 
 def log_pose_error(target_translation: np.ndarray, target_rotation: np.ndarray, pose: pin.SE3) -> np.ndarray:
