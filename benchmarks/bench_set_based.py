@@ -38,7 +38,12 @@ import pinocchio as pin
 import uvms
 from uvms.limits import Limit
 from uvms.solvers.hqp import hqp_step
-from uvms.solvers.set_based import set_based_step
+from uvms.solvers.set_based import integrate_velocity, set_based_step
+
+try:
+    from uvms.solvers.set_based import SetBasedSolver
+except ImportError:  # a checkout before it (PYTHONPATH=OLD_TREE for a before/after)
+    SetBasedSolver = None
 from uvms.tasks import FrameTask
 from uvms.tasks.objectives import JointLimits, JointVelocityLimits, VehicleAttitude, VehicleVelocityLimits
 from uvms.tasks.objectives.base import vehicle_frame_id
@@ -124,6 +129,24 @@ def ours(step, problem: Problem):
     return stepper
 
 
+class PreparedStepper:
+    """uvms.SetBasedSolver built once per start (its levels checked and prepared there, as pink's tasks are
+    in ``PinkStepper.set_target``); a step is its velocity without diagnostics and the integration."""
+
+    def __init__(self, problem: Problem) -> None:
+        self.problem, self.solver = problem, None
+
+    def set_target(self, target: pin.SE3, q0: np.ndarray) -> None:  # noqa: ARG002 - PinkStepper's signature
+        self.solver = SetBasedSolver(self.problem.robot, self.problem.levels(target), gain=GAIN, dt=DT)
+
+    def __call__(self, q, levels=None):  # noqa: ARG002 - the same signature as ours
+        try:
+            v = self.solver.velocity(q, check=False)  # q from pin.integrate
+        except Exception:  # noqa: BLE001 - counted as infeasible, like pink's
+            return q, None, True
+        return integrate_velocity(self.problem.robot, q, v, DT), v, not np.all(np.isfinite(v))
+
+
 class PinkStepper:
     """pink's solve_ik with ConfigurationLimit + VelocityLimit + the same FrameTask, attitude and posture costs."""
 
@@ -190,8 +213,9 @@ def step_times(problem: Problem, steppers: dict, starts: list, repeat: int, numb
     references = []
     for round_ in range(repeat):
         q, target, levels = cases[round_ % len(cases)]
-        if "pink" in steppers:
-            steppers["pink"].set_target(target, q)
+        for stepper in steppers.values():  # pink's tasks and uvms's prepared solver: outside the timing
+            if hasattr(stepper, "set_target"):
+                stepper.set_target(target, q)
         started = time.perf_counter()
         for _ in range(10 * number):
             pin.forwardKinematics(model, data, q)
@@ -215,7 +239,7 @@ def run_starts(problem: Problem, name: str, stepper, starts: list, steps: int) -
     errors, worst_tilt, worst_speed = [], 0.0, 0.0
     for q0, target, outside in starts:
         levels = problem.levels(target)
-        if name == "pink":
+        if hasattr(stepper, "set_target"):
             stepper.set_target(target, q0)
         q, past = q0, problem.outside(q0)
         position_bad = velocity_bad = tilt_bad = infeasible = further = False
@@ -262,7 +286,8 @@ def main() -> None:
     DT = options.dt
     logging.disable(logging.WARNING)  # pink logs every start outside a limit (safety_break=False)
     problem = Problem()
-    steppers = {"uvms set_based_step": ours(set_based_step, problem), "uvms hqp_step": ours(hqp_step, problem)}
+    steppers = {"uvms SetBasedSolver (built per start)": PreparedStepper(problem)} if SetBasedSolver else {}
+    steppers.update({"uvms set_based_step": ours(set_based_step, problem), "uvms hqp_step": ours(hqp_step, problem)})
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

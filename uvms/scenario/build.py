@@ -23,8 +23,8 @@ from ..solvers import (
     constrained_velocity,
     hqp_velocity,
     initial_configuration,
+    SetBasedSolver,
     priority_velocity,
-    set_based_velocity,
 )
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
 from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, RecentSamples, SE3Trajectory, TrapezoidLaw,
@@ -360,11 +360,12 @@ def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, scena
                           alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
                           enforce_limits=solver["enforce_limits"])
         return TrackingController(robot, task, samples, clik.solve, clik.velocity)
+    if method == "set_based":  # likewise
+        set_based = SetBasedSolver(robot, levels, gain=gain, weights=weights, damping=damping, eta=solver["eta"],
+                                   free_floating=solver["free_floating"], dt=dt)
+        return TrackingController(robot, task, samples, set_based.solve, set_based.velocity)
 
     def solve(state: KinematicState):
-        if method == "set_based":
-            return set_based_velocity(robot, state, levels, gain=gain, weights=weights, damping=damping,
-                                      eta=solver["eta"], free_floating=solver["free_floating"], dt=dt)
         if method == "hqp":
             return hqp_velocity(robot, state, levels, dt=dt, gain=gain, weights=weights,
                                 free_floating=solver["free_floating"], regularization=solver["regularization"])

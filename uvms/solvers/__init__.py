@@ -32,7 +32,7 @@ from .pose_clik import PoseCLIK
 from .priority import priority_velocity, task_priority
 from .results import (HQPResult, InitialConfigurationResult, IKResult, ObjectiveStatus, PriorityResult,
                       SetBasedResult, StepResult, VelocityResult)
-from .set_based import set_based_step, set_based_velocity
+from .set_based import SetBasedSolver, set_based_step, set_based_velocity
 
 __all__ = [
     "HQPResult",
@@ -59,6 +59,7 @@ __all__ = [
     "initial_configuration",
     "pinv",
     "priority_velocity",
+    "SetBasedSolver",
     "set_based_step",
     "set_based_velocity",
     "solve_ik",

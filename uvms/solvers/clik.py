@@ -11,7 +11,7 @@ only the arm is commanded and the vehicle follows momentum conservation).
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -22,8 +22,8 @@ from ..robot import Robot, check_robot
 from ..state import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
-from .checks import (apply_gain, as_task_list, check_damping, check_scalar, check_weights, free_floating_weights_note,
-                     gain_matrix)
+from .checks import (as_task_list, check_damping, check_scalar, check_weights, free_floating_weights_note,
+                     prepared_gain)
 from .inverses import (SolverInputError, VariableDamping, damped_weighted_inverse, prepared_svd_inverse, svd_inverse,
                        weights_factor, weights_subset)
 from .results import StepResult, VelocityResult
@@ -79,9 +79,8 @@ class CLIKSolver:
         self._clamp_limit = None if not enforce_limits else limit.after_unbounded(robot.n_vehicle - self.first)
         columns = robot.nv - self.first
         rows = sum(task.dim for task in self.tasks)
-        apply_gain(gain, np.zeros(rows))  # refuses a bad gain now, with its message, rather than at every call
-        self.gain = float(gain) if np.ndim(gain) == 0 else np.asarray(gain, dtype=float)
-        self._gain_matrix = None if np.ndim(gain) < 2 else gain_matrix(gain, rows)
+        # refuses a bad gain now, with its message, rather than at every call
+        self._command: Callable[[np.ndarray, np.ndarray], np.ndarray] = prepared_gain(gain, rows)
         self.weights = None if weights is None else check_weights(
             weights, columns, "W", free_floating_weights_note(robot.n_arm) if free_floating else "")
         identity = self.weights is not None and self.weights.ndim == 1 and bool(np.all(self.weights == 1.0))
@@ -89,12 +88,6 @@ class CLIKSolver:
         self._factor = None if self.weights is None or identity else weights_factor(self.weights, columns)
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self.potential = potential if potential is not None and self.alpha > 0 else None
-
-    def _command(self, error: np.ndarray, feedforward: np.ndarray) -> np.ndarray:
-        """xdot_d + K e (k,), as :func:`~uvms.solvers.checks.apply_gain` forms K e."""
-        if self._gain_matrix is not None:
-            return feedforward + self._gain_matrix @ error
-        return feedforward + self.gain * error
 
     def _nullspace_motion(self, q: np.ndarray) -> np.ndarray | None:
         """z0 = -alpha dS/dv on the solved columns (S has no vehicle entries), or None."""

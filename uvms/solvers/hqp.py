@@ -36,8 +36,9 @@ from .checks import check_scalar, check_weights
 from .inverses import SolverInputError, smallest_singular_value
 from .results import HQPResult, StepResult
 from .saturation import speed_maximum, velocity_box
-from .set_based import (Hierarchy, LevelRows, Levels, build_hierarchy, integrate_velocity, objective_statuses,
-                        rate_bounds, speed_ratio, task_report)
+from .hierarchy import (Hierarchy, LevelRows, Levels, build_hierarchy, objective_statuses, rate_bounds, speed_ratio,
+                        task_report)
+from .set_based import integrate_velocity
 
 #: QP solvers tried, in order, when none is named.
 PREFERRED_SOLVERS = ("daqp", "proxqp")

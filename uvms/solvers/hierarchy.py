@@ -1,0 +1,269 @@
+"""A priority hierarchy of equality tasks and inequality objectives: prepared once, evaluated per configuration.
+
+Both hierarchical solvers read their levels from here: the set-based (iCAT) priority of
+:mod:`uvms.solvers.set_based` and the QP cascade of :mod:`uvms.solvers.hqp`.
+
+* :class:`HierarchyPlan` splits and checks the levels once (what each level holds, the speed limits, the
+  joint-limit objectives, the task gains), where a solver is built;
+* :meth:`HierarchyPlan.evaluate` stacks every level's rows at one configuration (a :class:`Hierarchy`),
+  the kinematics computed once for all of them;
+* the reports both solvers give (objective statuses, the task residuals, the speed ratio).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..kinematics import base_velocity_from_momentum, solve_base_block
+from ..robot import Robot, check_robot
+from ..state import KinematicState
+from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
+from ..tasks.task import Task
+from .checks import check_scalar, prepared_gain
+from .inverses import SolverInputError
+from .results import ObjectiveStatus
+from .saturation import position_rate_bounds
+from .stack import stacked_terms
+
+#: What a level may hold.
+LevelItem = Task | Inequality | VelocityLimit
+Levels = Sequence[LevelItem | Sequence[LevelItem]]
+
+
+# ----------------------------------------------------------------- the hierarchy at one configuration
+@dataclass
+class LevelRows:
+    """One level evaluated at a configuration.
+
+    Attributes:
+        index: its position in the levels given (0 = highest).
+        jacobian: (m, nv) world-aligned rows; solved: (m, n) the columns solved (generalized when free floating).
+        reference: (m,) the rows' reference rates; activation: (m,) in [0, 1].
+        objectives: the inequality objectives' rows at this configuration; inequalities: the objectives.
+        task_jacobian, task_error, task_command: the equality tasks' stacked rows (0 rows if none).
+        equality: the level holds equality tasks only (every activation is 1).
+    """
+
+    index: int
+    jacobian: np.ndarray
+    solved: np.ndarray
+    reference: np.ndarray
+    activation: np.ndarray
+    objectives: list[InequalityRows] = field(default_factory=list)
+    inequalities: list[Inequality] = field(default_factory=list)
+    task_jacobian: np.ndarray | None = None
+    task_error: np.ndarray | None = None
+    task_command: np.ndarray | None = None
+    equality: bool = False
+
+    @property
+    def has_tasks(self) -> bool:
+        return self.task_error is not None and self.task_error.size > 0
+
+
+@dataclass
+class Hierarchy:
+    """The levels of a problem at one configuration, and how solved columns map to v.
+
+    Attributes:
+        state: the kinematic state.
+        levels: the levels with rows (levels holding only speed limits are left out).
+        speed_limits: the speed limits found in the levels or given.
+        joint_limits: the joint-limit objectives (their limits become position-rate bounds).
+        free_floating: only the arm is solved.
+        vehicle_map: free floating: T_b (n_vehicle, n_arm) with v_vehicle = T_b qdot_arm; else None.
+    """
+
+    state: KinematicState
+    levels: list[LevelRows]
+    speed_limits: list[VelocityLimit]
+    joint_limits: list[JointLimits]
+    free_floating: bool
+    vehicle_map: np.ndarray | None
+
+    @property
+    def size(self) -> int:
+        """Number of solved columns n (nv, or n_arm when free floating)."""
+        robot = self.state.robot
+        return robot.n_arm if self.free_floating else robot.nv
+
+    def to_velocity(self, solved: np.ndarray) -> np.ndarray:
+        """A contribution in v (nv,) from solved columns (n,) (linear: the vehicle by T_b when free floating)."""
+        if not self.free_floating:
+            return solved
+        return np.concatenate([self.vehicle_map @ solved, solved])
+
+    def velocity(self, solved: np.ndarray) -> np.ndarray:
+        """The full velocity v (nv,) of a solution: the vehicle from momentum conservation when free floating."""
+        if not self.free_floating:
+            return solved
+        a_base, a_arm = self.state.centroidal_split()
+        return np.concatenate([base_velocity_from_momentum(a_base, a_arm, solved, None), solved])
+
+
+def split_levels(levels: Levels) -> tuple[list[tuple[int, list[Task | Inequality]]], list[VelocityLimit]]:
+    """(index, tasks and inequalities) per level, and the speed limits found anywhere.
+
+    Raises:
+        SolverInputError: no level, an empty level, or an item that is not a Task, an Inequality or a
+            VelocityLimit.
+    """
+    if isinstance(levels, (Task, Inequality, VelocityLimit)) or not len(levels):
+        raise SolverInputError("levels must be a non-empty sequence of levels, each an objective or a list of them")
+    rows, limits = [], []
+    for index, level in enumerate(levels):
+        items = [level] if isinstance(level, (Task, Inequality, VelocityLimit)) else list(level)
+        if not items:
+            raise SolverInputError(f"level {index} is empty")
+        bad = [item for item in items if not isinstance(item, (Task, Inequality, VelocityLimit))]
+        if bad:
+            raise SolverInputError(f"level {index}: {bad[0]!r} is not a Task, an Inequality or a VelocityLimit")
+        limits.extend(item for item in items if isinstance(item, VelocityLimit))
+        solved = [item for item in items if not isinstance(item, VelocityLimit)]
+        if solved:
+            rows.append((index, solved))
+    return rows, limits
+
+
+@dataclass(frozen=True)
+class PlannedLevel:
+    """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities."""
+
+    index: int
+    tasks: tuple[Task, ...]
+    inequalities: tuple[Inequality, ...]
+    command: object  # (error (k,), feedforward (k,)) -> xdot_d + K e (k,), the task gain prepared
+
+
+class HierarchyPlan:
+    """The levels of a hierarchy split and checked once; :meth:`evaluate` stacks their rows at a configuration.
+
+    Args:
+        robot: the model.
+        levels: highest priority first; each level a Task, an Inequality, a VelocityLimit, or a list of them.
+        gain: K of the equality tasks (scalar, (k,) or (k, k) for each level's stacked tasks) [1/s].
+        free_floating: the solved columns are the arm's (generalized Jacobians, the vehicle by momentum).
+        speed_limits: more speed limits (besides those in the levels).
+
+    Raises:
+        SolverInputError: malformed levels, a bad gain, or ``free_floating`` on a fixed base.
+    """
+
+    def __init__(self, robot: Robot, levels: Levels, gain: float | np.ndarray = 1.0, free_floating: bool = False,
+                 speed_limits: Sequence[VelocityLimit] = ()) -> None:
+        check_robot(robot, "the priority hierarchy")
+        if free_floating and robot.base_type == "fixed":
+            raise SolverInputError(f"{robot.name} has a fixed base: free_floating=True needs a floating or planar base")
+        items, found = split_levels(levels)
+        self.robot, self.free_floating = robot, free_floating
+        self.speed_limits = [*found, *speed_limits]
+        self.levels = []
+        for index, level in items:
+            tasks = tuple(item for item in level if isinstance(item, Task))
+            command = prepared_gain(gain, sum(task.dim for task in tasks)) if tasks else None
+            self.levels.append(PlannedLevel(index, tasks, tuple(i for i in level if isinstance(i, Inequality)),
+                                            command))
+        self.joint_limits = [item for level in self.levels for item in level.inequalities
+                             if isinstance(item, JointLimits)]
+        self.size = robot.n_arm if free_floating else robot.nv
+
+    def evaluate(self, state: KinematicState) -> Hierarchy:
+        """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v."""
+        rows = [self._level_rows(state, level) for level in self.levels]
+        vehicle_map = None
+        if self.free_floating:
+            a_base, a_arm = state.centroidal_split()
+            vehicle_map = -solve_base_block(a_base, a_arm)  # (n_vehicle, n_arm)
+        return Hierarchy(state=state, levels=rows, speed_limits=self.speed_limits, joint_limits=self.joint_limits,
+                         free_floating=self.free_floating, vehicle_map=vehicle_map)
+
+    def _level_rows(self, state: KinematicState, level: PlannedLevel) -> LevelRows:
+        """One level's rows at ``state``: equality tasks first, then the inequalities in their order."""
+        inequalities = [item.rows(state) for item in level.inequalities]
+        blocks, references, activations = [], [], []
+        task_jacobian = task_error = task_command = None
+        if level.tasks:
+            task_jacobian, task_error, feedforward = stacked_terms(state, level.tasks)
+            task_command = level.command(task_error, feedforward)
+            if not inequalities:  # the common equality level: its own arrays, nothing to stack
+                solved = state.generalized(task_jacobian) if self.free_floating else task_jacobian
+                return LevelRows(index=level.index, jacobian=task_jacobian, solved=solved, reference=task_command,
+                                 activation=np.ones(task_error.size), task_jacobian=task_jacobian,
+                                 task_error=task_error, task_command=task_command, equality=True)
+            blocks.append(task_jacobian)
+            references.append(task_command)
+            activations.append(np.ones(task_error.size))
+        for rows in inequalities:
+            blocks.append(rows.jacobian)
+            references.append(rows.reference)
+            activations.append(rows.activation)
+        jacobian = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
+        solved = state.generalized(jacobian) if self.free_floating else jacobian
+        return LevelRows(index=level.index, jacobian=jacobian, solved=solved,
+                         reference=references[0] if len(references) == 1 else np.concatenate(references),
+                         activation=activations[0] if len(activations) == 1 else np.concatenate(activations),
+                         objectives=inequalities, inequalities=list(level.inequalities), task_jacobian=task_jacobian,
+                         task_error=task_error, task_command=task_command)
+
+    def state(self, q: np.ndarray | KinematicState, check: bool = True) -> KinematicState:
+        """The kinematic state at q (a state given is used as it is)."""
+        return q if isinstance(q, KinematicState) else KinematicState(self.robot, q, check)
+
+
+def build_hierarchy(robot: Robot, q: np.ndarray | KinematicState, levels: Levels, gain: float | np.ndarray,
+                    free_floating: bool, speed_limits: Sequence[VelocityLimit] = ()) -> Hierarchy:
+    """Evaluate every level at q (the state computed once), and the map of solved columns to v (a plan of one use).
+
+    Raises:
+        SolverInputError: malformed levels, or ``free_floating`` on a fixed base.
+    """
+    plan = HierarchyPlan(robot, levels, gain, free_floating, speed_limits)
+    return plan.evaluate(plan.state(q))
+
+
+def rate_bounds(hierarchy: Hierarchy, dt: float | None, fraction: float,
+                valid_set: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Position-rate bounds (nv,) of the hierarchy's joint limits over ``dt`` (unbounded without dt)."""
+    nv = hierarchy.state.robot.nv
+    if dt is None or not hierarchy.joint_limits:
+        return np.full(nv, -np.inf), np.full(nv, np.inf)
+    dt = check_scalar(dt, "dt", positive=True)
+    return position_rate_bounds(hierarchy.state.q, nv, hierarchy.joint_limits, dt, fraction, valid_set)
+
+
+# --------------------------------------------------------------------------------- reporting
+def objective_statuses(hierarchy: Hierarchy, binding: dict[str, bool] | None = None) -> tuple[ObjectiveStatus, ...]:
+    """The inequality objectives' statuses; active = some activation > 0, or ``binding[name]`` when given."""
+    statuses = []
+    for level in hierarchy.levels:
+        for rows in level.objectives:
+            active = bool(np.any(rows.activation > 0)) if binding is None else binding.get(rows.name, False)
+            statuses.append(ObjectiveStatus(name=rows.name, level=level.index, value=rows.value,
+                                            activation=rows.activation, active=active, violation=rows.violation))
+    return tuple(statuses)
+
+
+def task_report(hierarchy: Hierarchy, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, tuple[float, ...]]:
+    """(command, error, |J v - command| of the equality tasks, per-level activation-weighted residuals)."""
+    task_levels = [level for level in hierarchy.levels if level.has_tasks]
+    command = np.concatenate([level.task_command for level in task_levels]) if task_levels else np.zeros(0)
+    error = np.concatenate([level.task_error for level in task_levels]) if task_levels else np.zeros(0)
+    achieved = np.concatenate([level.task_jacobian @ v for level in task_levels]) if task_levels else np.zeros(0)
+    per_level = tuple(float(np.linalg.norm(level.activation * (level.jacobian @ v - level.reference)))
+                      for level in hierarchy.levels)
+    return command, error, float(np.linalg.norm(achieved - command)), per_level
+
+
+def speed_ratio(v: np.ndarray, maximum: np.ndarray) -> float:
+    """max_i |v_i| / max_i over the finite speed limits (0 without any)."""
+    limited = np.isfinite(maximum)
+    return float(np.max(np.abs(v[limited]) / maximum[limited], initial=0.0))
+
+
+def last_task_sigma(hierarchy: Hierarchy, sigmas: Sequence[float]) -> float:
+    """sigma_min of the last level holding equality tasks (0 if none)."""
+    values = [sigma for level, sigma in zip(hierarchy.levels, sigmas) if level.has_tasks]
+    return float(values[-1]) if values else 0.0
