@@ -26,9 +26,8 @@ from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack
-
 from .errors import NumericalError, StepCountError, UVMSError
+from .lapack import lapack
 
 #: The rate of a state: (t [s], q (nq,), x (m,)) -> (w (nv,) tangent at q, xdot (m,)).
 Rate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -131,7 +130,7 @@ def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     Raises:
         NumericalError: A is singular (LAPACK info > 0).
     """
-    _, _, solution, info = lapack.dgesv(matrix, rhs)
+    _, _, solution, info = lapack().dgesv(matrix, rhs)
     if info != 0:
         raise NumericalError(f"singular {matrix.shape[0]}x{matrix.shape[0]} system (LAPACK dgesv info {info})")
     return solution

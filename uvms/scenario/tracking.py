@@ -37,7 +37,7 @@ class TrackingController:
         sample = self.samples(t)
         if sample is not self._current:
             self.task.set_target(sample.pose)
-            self.task.set_target_velocity(sample.twist)
+            self.task.set_target_velocity(sample.twist, check=False)  # a trajectory's sample: finite, (6,)
             self._current = sample
 
     def _state(self, t: float, q: np.ndarray) -> KinematicState:

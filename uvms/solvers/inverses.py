@@ -19,9 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import lapack
 
 from ..errors import NumericalError, SolverInputError
+from ..lapack import lapack
 from .checks import check_damping, check_matrix, check_variable_damping, check_weights
 
 __all__ = [
@@ -147,7 +147,7 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float | np
     else:
         system.ravel()[:: system.shape[0] + 1] += damping_squared  # the diagonal (a view: J J^T is contiguous)
     # system.T is the Fortran-ordered matrix LAPACK wants (the same numbers): factored in place, no copy
-    _, solution, info = lapack.dposv(system.T, rhs, 0, 1)
+    _, solution, info = lapack().dposv(system.T, rhs, 0, 1)
     if info != 0:  # never return garbage
         raise SolverInputError(f"DLS system not positive definite (LAPACK info {info})")
     return solution.dot(jacobian)  # J^T y as y^T J
@@ -206,7 +206,7 @@ def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping)
     if jacobian.size == 0:
         u, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
     else:
-        u, singular, vt, info = lapack.dgesdd(jacobian, compute_uv=1, full_matrices=0)
+        u, singular, vt, info = lapack().dgesdd(jacobian, compute_uv=1, full_matrices=0)
         if info != 0:
             raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
                                  f"converge (LAPACK info {info}): is it finite?")
@@ -217,8 +217,9 @@ def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping)
     elif singular.size and singular[-1] > RCOND * singular[0]:  # full rank: every 1 / s (the common case, cheaper)
         factors = 1.0 / singular
     else:
-        cutoff = RCOND * (singular[0] if singular.size else 0.0)
-        factors = np.divide(1.0, singular, out=np.zeros_like(singular), where=singular > cutoff)
+        kept = singular > RCOND * (singular[0] if singular.size else 0.0)
+        factors = np.zeros_like(singular)
+        factors[kept] = 1.0 / singular[kept]
     return (vt.T * factors) @ u.T, sigma_min, value
 
 

@@ -52,7 +52,7 @@ def position_rate_bounds(q: np.ndarray, nv: int, joint_limits: Sequence[JointLim
     Returns:
         (lower, upper), -inf / +inf on the entries no objective limits.
     """
-    lower, upper = np.full(nv, -np.inf), np.full(nv, np.inf)
+    lower, upper = np.full(nv, -np.inf), np.full(nv, np.inf)  # (nv,) each
     for objective in joint_limits:
         low, high = (objective.lower, objective.upper) if valid_set else (objective.hard_lower, objective.hard_upper)
         now = q[objective.q_index]

@@ -95,7 +95,7 @@ class ICAT:
         sigma_min of the weighted A^1/2 X (projector None: Q = I, no eta term) and the damping used."""
         rows = root * jacobian
         if projector is not None and self.eta > 0:
-            rows = np.vstack([rows, self._root_eta * (self._identity - projector)])  # Z (m + n, n)
+            rows = np.concatenate((rows, self._root_eta * (self._identity - projector)))  # Z (m + n, n)
         inverse, sigma_min, used = self.inverse(rows, damping)
         return inverse[:, : jacobian.shape[0]] * power, sigma_min, used
 
@@ -108,12 +108,12 @@ class ICAT:
         contributions, sigmas, largest = [], [], 0.0
         for level in hierarchy.levels:
             jacobian, activation = level.solved, level.activation
-            if not level.equality and not np.any(activation > 0):
+            if not level.equality and not (activation > 0).any():
                 contributions.append(np.zeros(size))
                 sigmas.append(0.0)
                 continue
             remaining = level.reference - jacobian @ rho
-            if unrestricted and (level.equality or np.all(activation == 1.0)):  # the CLIK case, as clik_velocity
+            if unrestricted and (level.equality or (activation == 1.0).all()):  # the CLIK case, as clik_velocity
                 inverse, sigma_min, used = self.inverse(jacobian, damping)
                 contribution = inverse @ remaining
                 projector = projector - inverse @ jacobian

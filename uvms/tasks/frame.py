@@ -78,8 +78,15 @@ class FrameTask(Task):
                             f"got {target!r}") from None
         self.target = pose_from_xyzrpy(values)
 
-    def set_target_velocity(self, twist: Sequence[float]) -> None:
-        """Set the target twist [v; omega] (6,) in world axes (feedforward)."""
+    def set_target_velocity(self, twist: Sequence[float], *, check: bool = True) -> None:
+        """Set the target twist [v; omega] (6,) in world axes (feedforward).
+
+        ``check=False`` takes a float array (6,) as it is: a trajectory's samples in the one loop, which
+        refuses any non-finite velocity it would integrate."""
+        if not check:
+            self.target_twist = twist
+            self._target_parts = None
+            return
         try:
             values = finite_array(twist, "a target twist", (6,))
         except UVMSError:

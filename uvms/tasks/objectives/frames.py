@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -50,13 +51,13 @@ class VehicleAttitude(Inequality):
         self._set_valid_set([-np.inf], [max_tilt], band, gain, shape)
 
     def value(self, state: KinematicState) -> np.ndarray:
-        z_axis = state.pose(self.frame_id).rotation[:, 2]
-        return np.array([np.arccos(np.clip(z_axis[2], -1.0, 1.0))])
+        cosine = float(state.pose(self.frame_id).rotation[2, 2])  # the body z axis's world z
+        return np.array([np.arccos(min(max(cosine, -1.0), 1.0))])
 
     def jacobian(self, state: KinematicState) -> np.ndarray:
         z_axis = state.pose(self.frame_id).rotation[:, 2]
         axis = np.array([z_axis[1], -z_axis[0], 0.0])  # z_b x e_z, |axis| = sin(tilt)
-        length = np.linalg.norm(axis)
+        length = math.sqrt(axis.dot(axis))  # np.linalg.norm's numbers
         if length < LEVEL_TILT:
             return np.zeros((1, state.robot.nv))
         return -((axis / length) @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
