@@ -36,8 +36,9 @@ def test_a_solver_reused_over_configurations_and_targets_equals_fresh_clik_veloc
         q = robot.random_configuration(rng)
         task.set_target([rng.normal(), rng.normal(), 0.0, 0.0, 0.0, rng.normal()])
         task.set_target_velocity(rng.normal(size=6))
-        fresh = uvms.clik_velocity(robot, q, task, **options)
+        fresh = CLIKSolver(robot, task, **options).solve(q)  # built for this call
         reused = solver.solve(q)
+        assert np.array_equal(uvms.clik_velocity(robot, q, task, **options).v, fresh.v)  # the kept one
         assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
         assert reused.sigma_min == fresh.sigma_min and reused.residual == fresh.residual
         assert np.array_equal(solver.velocity(KinematicState(robot, q, check=False)), fresh.v)
@@ -208,8 +209,9 @@ def test_a_set_based_solver_reused_over_configurations_and_targets_equals_fresh_
     for _ in range(25):
         q, target = alpha5_start(robot, rng)
         task.set_target(target)
-        fresh = set_based_velocity(robot, q, levels, **options)
+        fresh = SetBasedSolver(robot, levels, **options).solve(q)  # built for this call
         reused = solver.solve(q)
+        assert np.array_equal(set_based_velocity(robot, q, levels, **options).v, fresh.v)  # the kept one
         assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
         assert reused.scales == fresh.scales and reused.level_residuals == fresh.level_residuals
         assert reused.sigma_min == fresh.sigma_min and reused.active == fresh.active
@@ -276,3 +278,55 @@ def test_the_levels_are_added_in_order_as_numpy_sums_them(rng):
         vectors = [rng.normal(size=11) * 10.0 ** rng.integers(-8, 8) for _ in range(count)]
         assert np.array_equal(sum_in_order(vectors), np.sum(vectors, axis=0))
         assert sum_in_order(vectors) is not vectors[0]  # a new array: the contributions stay as they were
+
+
+# ------------------------------------------------------------------------ the one-call entries keep their solver
+def test_clik_velocity_in_a_loop_keeps_its_solver_and_its_numbers(rng):
+    """Calls with the same inputs reuse one solver; a target moved or a W changed in place gives the numbers of
+    a solver built afresh for those inputs, bit for bit."""
+    from uvms.solvers.prepared import PREPARED
+
+    robot, task = hoang_setup()
+    PREPARED.clear()
+    weights = np.array([1.0, 1.0, 500.0, 1.0, 1.0, 1.0])
+    for index in range(12):
+        q = robot.random_configuration(rng)
+        task.set_target([rng.normal(), rng.normal(), 0.0, 0.0, 0.0, rng.normal()])
+        if index == 6:
+            weights[2] = 3.0  # changed in place: a new key, a new solver
+        reused = uvms.clik_velocity(robot, q, task, gain=1.5, weights=weights)
+        fresh = CLIKSolver(robot, task, gain=1.5, weights=weights.copy()).solve(q)
+        assert np.array_equal(reused.v, fresh.v) and reused.sigma_min == fresh.sigma_min
+    assert len(PREPARED._entries) == 2  # one solver for each W
+
+
+def test_the_kept_solvers_are_bounded_and_refusals_are_not_kept(rng):
+    from uvms.solvers.prepared import PREPARED, SIZE
+
+    robot, task = hoang_setup()
+    PREPARED.clear()
+    q = robot.random_configuration(rng)
+    for gain in range(SIZE + 5):
+        uvms.clik_velocity(robot, q, task, gain=float(gain))
+    assert len(PREPARED._entries) == SIZE
+    for _ in range(2):  # refused at every call, with its message
+        with pytest.raises(uvms.SolverInputError, match="gain must be"):
+            uvms.clik_velocity(robot, q, task, gain=-1.0)
+    assert len(PREPARED._entries) == SIZE
+    tasks = (t for t in [task])  # a generator is not keyed (a key would consume it): built for the call
+    assert np.array_equal(uvms.clik_velocity(robot, q, tasks).v, uvms.clik_velocity(robot, q, [task]).v)
+
+
+def test_the_keys_tell_values_and_objects_apart():
+    from uvms.solvers.inverses import VariableDamping
+    from uvms.solvers.prepared import Unkeyable, key_of
+
+    held = []
+    assert key_of(VariableDamping(0.1, 0.05), held) == key_of(VariableDamping(0.1, 0.05), held) and not held
+    assert key_of(np.array([1.0, 2.0]), held) != key_of(np.array([1.0, 2.5]), held)
+    assert key_of(np.array([1.0, 2.0]), held) != key_of(np.array([[1.0, 2.0]]), held)  # the shape counts
+    assert key_of(1, held) != key_of(1.0, held) != key_of(True, held)
+    first, second = object(), object()
+    assert key_of(first, held) != key_of(second, held) and held == [first, second]
+    with pytest.raises(Unkeyable):
+        key_of(iter([1]), held)

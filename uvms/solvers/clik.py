@@ -26,6 +26,7 @@ from .checks import (as_task_list, check_damping, check_scalar, check_weights, f
                      prepared_gain)
 from .inverses import (SolverInputError, VariableDamping, damped_weighted_inverse, prepared_svd_inverse, svd_inverse,
                        weights_factor, weights_subset)
+from .prepared import PREPARED
 from .results import StepResult, VelocityResult
 from .stack import stacked_terms
 
@@ -188,7 +189,8 @@ def clik_velocity(
     enforce_limits: bool = False,
     limit: Limit | None = None,
 ) -> VelocityResult:
-    """One CLIK velocity (a :class:`CLIKSolver` built for the call).
+    """One CLIK velocity: a :class:`CLIKSolver` of these inputs, built at the first call and kept for the next
+    ones with the same inputs (:mod:`~uvms.solvers.prepared`: a loop of calls checks and prepares them once).
 
     Args:
         robot: the model.
@@ -209,8 +211,12 @@ def clik_velocity(
     Returns:
         VelocityResult with the full velocity v (nv,).
     """
-    solver = CLIKSolver(robot, tasks, gain=gain, weights=weights, damping=damping, potential=potential, alpha=alpha,
-                        free_floating=free_floating, dt=dt, enforce_limits=enforce_limits, limit=limit)
+    def build() -> CLIKSolver:
+        return CLIKSolver(robot, tasks, gain=gain, weights=weights, damping=damping, potential=potential, alpha=alpha,
+                          free_floating=free_floating, dt=dt, enforce_limits=enforce_limits, limit=limit)
+
+    solver = PREPARED.get("clik", build, robot, tasks, gain, weights, damping, potential, alpha, free_floating, dt,
+                          enforce_limits, limit)
     return solver.solve(q)
 
 

@@ -46,6 +46,7 @@ from .checks import check_damping, check_scalar, check_weights
 from .hierarchy import (Hierarchy, HierarchyPlan, LevelItem, Levels, LevelRows, build_hierarchy, last_task_sigma,
                         objective_statuses, rate_bounds, speed_ratio, split_levels, task_report)
 from .inverses import SolverInputError, VariableDamping, damped_weighted_inverse, prepared_svd_inverse, weights_factor
+from .prepared import PREPARED
 from .results import SetBasedResult, StepResult
 from .saturation import inside, position_rate_bounds, scale_lowest_first, speed_maximum, velocity_box
 
@@ -255,8 +256,9 @@ def set_based_velocity(
     position_fraction: float = 1.0,
     speed_limits: Sequence[VelocityLimit] = (),
 ) -> SetBasedResult:
-    """One set-based (iCAT) velocity over priority levels of equality tasks and inequality objectives (a
-    :class:`SetBasedSolver` built for the call).
+    """One set-based (iCAT) velocity over priority levels of equality tasks and inequality objectives: a
+    :class:`SetBasedSolver` of these inputs, built at the first call and kept for the next ones with the same
+    inputs (:mod:`~uvms.solvers.prepared`).
 
     Args:
         robot: the model.
@@ -276,9 +278,13 @@ def set_based_velocity(
     Returns:
         SetBasedResult: v (nv,), the objectives' activations, the task residual, the scales.
     """
-    solver = SetBasedSolver(robot, levels, gain=gain, weights=weights, damping=damping, eta=eta,
-                            free_floating=free_floating, dt=dt, position_fraction=position_fraction,
-                            speed_limits=speed_limits)
+    def build() -> SetBasedSolver:
+        return SetBasedSolver(robot, levels, gain=gain, weights=weights, damping=damping, eta=eta,
+                              free_floating=free_floating, dt=dt, position_fraction=position_fraction,
+                              speed_limits=speed_limits)
+
+    solver = PREPARED.get("set_based", build, robot, levels, gain, weights, damping, eta, free_floating, dt,
+                          position_fraction, speed_limits)
     return solver.solve(q)
 
 
