@@ -24,8 +24,8 @@ from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
 from .checks import (as_task_list, check_damping, check_scalar, check_weights, free_floating_weights_note,
                      prepared_gain)
-from .inverses import (SolverInputError, VariableDamping, damped_weighted_inverse, prepared_svd_inverse, svd_inverse,
-                       weights_factor, weights_subset)
+from .inverses import (SolverInputError, VariableDamping, WeightedInverse, damped_weighted_inverse, svd_inverse,
+                       weights_subset)
 from .prepared import PREPARED
 from .results import StepResult, VelocityResult
 from .stack import stacked_terms
@@ -84,9 +84,7 @@ class CLIKSolver:
         self._command: Callable[[np.ndarray, np.ndarray], np.ndarray] = prepared_gain(gain, rows)
         self.weights = None if weights is None else check_weights(
             weights, columns, "W", free_floating_weights_note(robot.n_arm) if free_floating else "")
-        identity = self.weights is not None and self.weights.ndim == 1 and bool(np.all(self.weights == 1.0))
-        # W = I scales by exactly 1: skipped, the same numbers
-        self._factor = None if self.weights is None or identity else weights_factor(self.weights, columns)
+        self._inverse = WeightedInverse(self.weights, columns)  # (J (k, n), damping) -> inverse, sigma_min, used
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self.potential = potential if potential is not None and self.alpha > 0 else None
 
@@ -98,14 +96,6 @@ class CLIKSolver:
         gradient = np.zeros(robot.nv)
         gradient[robot.n_vehicle:] = self.potential.arm_gradient(robot.arm_values(q))
         return -self.alpha * gradient[self.first:]
-
-    def _inverse(self, jacobian: np.ndarray) -> tuple[np.ndarray, float, float]:
-        """The weighted, damped inverse of the solved Jacobian (all columns free) and its diagnostics."""
-        factor = self._factor
-        if factor is None:
-            return prepared_svd_inverse(jacobian, self.damping)
-        inverse, sigma_min, used = prepared_svd_inverse(factor.scale(jacobian), self.damping)
-        return factor.unscale(inverse), sigma_min, used
 
     def _solution(self, state: KinematicState) -> tuple:
         """(v (nv,), task Jacobian (k, nv), error (k,), command (k,), sigma_min, damping used, held names)."""
@@ -120,7 +110,7 @@ class CLIKSolver:
         else:
             # column-major, as solve_with_held's J[:, free] is: the BLAS products sum in the same order, the same bits
             solved = np.asfortranarray(solved)
-            inverse, sigma_min, used = self._inverse(solved)
+            inverse, sigma_min, used = self._inverse(solved, self.damping)
             solution = inverse @ command
             if nullspace_motion is not None:
                 solution += nullspace_motion - inverse @ (solved @ nullspace_motion)

@@ -26,7 +26,7 @@ from .checks import check_damping, check_matrix, check_variable_damping, check_w
 
 __all__ = [
     "RCOND", "SolverInputError", "VariableDamping", "WeightsFactor", "check_damping", "check_matrix",
-    "damped_weighted_inverse", "dls", "dls_solve", "pinv", "prepared_svd_inverse", "smallest_singular_value", "svd_inverse",
+    "WeightedInverse", "damped_weighted_inverse", "dls", "dls_solve", "pinv", "prepared_svd_inverse", "smallest_singular_value", "svd_inverse",
     "variable_damping", "weighted_pinv", "weights_factor", "weights_subset",
 ]
 
@@ -239,10 +239,33 @@ def damped_weighted_inverse(
     Returns:
         (inverse (n, k), sigma_min of the weighted Jacobian, damping used).
     """
-    factor = None if weights is None else weights_factor(weights, jacobian.shape[1])
-    scaled = jacobian if factor is None else factor.scale(jacobian)
-    inverse, sigma_min, value = svd_inverse(scaled, damping)
-    if factor is not None:
-        inverse = factor.unscale(inverse)
-    return inverse, sigma_min, value
+    checked = damping if isinstance(damping, VariableDamping) else check_damping(damping)
+    return WeightedInverse(weights, jacobian.shape[1])(jacobian, checked)
+
+
+class WeightedInverse:
+    """:func:`damped_weighted_inverse` for Jacobians of ``size`` columns with W checked and factored once (the
+    solvers' inner loops).
+
+    Args:
+        weights: W, (size,) diagonal or (size, size) SPD; None or a diagonal of ones: I (no scaling, the
+            same numbers as scaling by 1).
+        size: the number of columns n.
+
+    Raises:
+        SolverInputError: W of a wrong shape, not finite or not positive definite.
+    """
+
+    def __init__(self, weights: np.ndarray | None, size: int) -> None:
+        weights = None if weights is None else check_weights(weights, size)
+        identity = weights is None or (weights.ndim == 1 and bool(np.all(weights == 1.0)))
+        self.factor = None if identity else weights_factor(weights, size)
+
+    def __call__(self, jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
+        """(inverse (n, k), sigma_min of the weighted J, damping used) of J (k, n), ``damping`` already checked."""
+        factor = self.factor
+        if factor is None:
+            return prepared_svd_inverse(jacobian, damping)
+        inverse, sigma_min, used = prepared_svd_inverse(factor.scale(jacobian), damping)
+        return factor.unscale(inverse), sigma_min, used
 

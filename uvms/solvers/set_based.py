@@ -18,7 +18,7 @@ X^{#,A,Q} minimizes |A (xdot - X y)|^2 + |X y|^2_{A (I - A)} + eta |(I - Q) y|^2
 row whose activation falls to 0 fades out continuously, and the eta term keeps directions already used by
 the levels above from being inverted when they are only partly released, so no activation change causes a
 discontinuity. Both inverses are the library's one inverse
-(:func:`~uvms.solvers.inverses.damped_weighted_inverse`) of the stack Z = [A^1/2 X; eta^1/2 (I - Q)],
+(:class:`~uvms.solvers.inverses.WeightedInverse`, that of :func:`~uvms.solvers.inverses.damped_weighted_inverse`) of the stack Z = [A^1/2 X; eta^1/2 (I - Q)],
 since Z^T Z = X^T A X + eta (I - Q)^T (I - Q). Adaptations, stated: the paper's singular-value
 regularization V^T P V is the damping lambda of that inverse (fixed, or amundsen2018 eq. 6 variable), put
 in (J Q)^{#,A,I} only; W_k uses the undamped inverse, so that with Q = I and A = I the step is
@@ -42,10 +42,10 @@ from ..integrate import euler_step
 from ..robot import Robot
 from ..state import KinematicState
 from ..tasks.objectives import VelocityLimit
-from .checks import check_damping, check_scalar, check_weights
+from .checks import check_damping, check_scalar
 from .hierarchy import (Hierarchy, HierarchyPlan, LevelItem, Levels, LevelRows, build_hierarchy, last_task_sigma,
                         objective_statuses, rate_bounds, speed_ratio, split_levels, task_report)
-from .inverses import SolverInputError, VariableDamping, damped_weighted_inverse, prepared_svd_inverse, weights_factor
+from .inverses import SolverInputError, VariableDamping, WeightedInverse
 from .prepared import PREPARED
 from .results import SetBasedResult, StepResult
 from .saturation import inside, position_rate_bounds, scale_lowest_first, speed_maximum, velocity_box
@@ -72,23 +72,11 @@ class ICAT:
 
     def __init__(self, size: int, weights: np.ndarray | None, damping: float | VariableDamping, eta: float) -> None:
         self.size, self.eta = size, check_scalar(eta, "eta")
-        self.weights = None if weights is None else check_weights(weights, size)
-        # W = I scales by exactly 1: skipped, the same numbers
-        identity = self.weights is not None and self.weights.ndim == 1 and bool(np.all(self.weights == 1.0))
-        self._factor = None if self.weights is None or identity else weights_factor(self.weights, size)
+        self.inverse = WeightedInverse(weights, size)  # (rows (r, n), damping) -> inverse (n, r), sigma_min, used
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self.undamped = not isinstance(damping, VariableDamping) and self.damping == 0.0
         self._root_eta = np.sqrt(self.eta)
         self._identity = np.eye(size)
-
-    def inverse(self, rows: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
-        """The one inverse (:func:`~uvms.solvers.inverses.damped_weighted_inverse`) of rows (r, n) with W and
-        ``damping``: (inverse (n, r), sigma_min, damping used)."""
-        factor = self._factor
-        if factor is None:
-            return prepared_svd_inverse(rows, damping)
-        inverse, sigma_min, used = prepared_svd_inverse(factor.scale(rows), damping)
-        return factor.unscale(inverse), sigma_min, used
 
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
