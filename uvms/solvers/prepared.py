@@ -17,6 +17,7 @@ the entry lives.
 
 from __future__ import annotations
 
+import contextlib
 from collections import OrderedDict
 from collections.abc import Callable
 from typing import TypeVar
@@ -81,12 +82,14 @@ class PreparedSolvers:
             return build()
         entry = self._entries.get(key)
         if entry is not None:
-            self._entries.move_to_end(key)
+            with contextlib.suppress(KeyError):  # dropped meanwhile by another thread: the solver still serves
+                self._entries.move_to_end(key)
             return entry[0]
         solver = build()
         self._entries[key] = (solver, held)
-        if len(self._entries) > self.size:
-            self._entries.popitem(last=False)
+        while len(self._entries) > self.size:
+            with contextlib.suppress(KeyError):
+                self._entries.popitem(last=False)
         return solver
 
     def clear(self) -> None:
