@@ -330,3 +330,37 @@ def test_the_keys_tell_values_and_objects_apart():
     assert key_of(first, held) != key_of(second, held) and held == [first, second]
     with pytest.raises(Unkeyable):
         key_of(iter([1]), held)
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(gain="a"), r"gain must be a finite scalar >= 0, \(6,\) or \(6, 6\) \[1/s\], got 'a'"),
+    (dict(gain=[1.0, "b"]), r"gain must be a finite scalar >= 0"),
+    (dict(weights="x"), r"W must be \(11,\) or \(11, 11\) positive numbers, got 'x'"),
+    (dict(speed_limits=None), "speed_limits must be a list of VelocityLimit objectives"),
+    (dict(speed_limits=["x"]), "speed_limits must be a list of VelocityLimit objectives"),
+])
+def test_text_and_none_options_are_refused_by_what_is_valid(options, message):
+    """Not a ValueError of numpy's conversion or a TypeError of Python's: the option named and what it takes."""
+    from uvms.solvers.set_based import set_based_velocity
+
+    robot = uvms.load("bluerov2_alpha5")
+    levels = alpha5_levels(robot, robot.fk(robot.neutral()))
+    with pytest.raises(uvms.SolverInputError, match=message):
+        set_based_velocity(robot, robot.neutral(), levels, **options)
+    if "speed_limits" not in options:  # CLIK reads its gain and W through the same checks
+        hoang, task = hoang_setup()
+        with pytest.raises(uvms.SolverInputError, match=r"(gain must be a finite scalar >= 0, \(3,\)|W must be \(6,\))"):
+            uvms.clik_velocity(hoang, hoang.neutral(), task, **options)
+
+
+@pytest.mark.parametrize("levels, message", [
+    (None, "levels must be a non-empty list of levels.*got None"), (5, "got 5"), ([], "got \\[\\]"),
+    ([None], "level 0: None is not a Task, an Inequality, a VelocityLimit or a list of them"),
+    ([[]], "level 0 is empty"),
+])
+def test_malformed_levels_are_refused_by_what_a_level_holds(levels, message):
+    from uvms.solvers.set_based import SetBasedSolver
+
+    robot = uvms.load("bluerov2_alpha5")
+    with pytest.raises(uvms.SolverInputError, match=message):
+        SetBasedSolver(robot, levels)

@@ -37,6 +37,14 @@ def check_scalar(value: float, what: str, *, positive: bool = False) -> float:
     return number
 
 
+def numbers(value: object, what_is_valid: str) -> np.ndarray:
+    """``value`` as a float array, or SolverInputError saying what is valid (text, None, ragged lists)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise SolverInputError(f"{what_is_valid}, got {value!r}") from None
+
+
 def check_damping(damping: float) -> float:
     """A finite damping factor lambda >= 0 [-]."""
     return check_scalar(damping, "damping")
@@ -78,8 +86,8 @@ def check_weights(weights: np.ndarray, size: int, what: str = "W", note: str = "
     Raises:
         SolverInputError: wrong shape, non-finite, a diagonal entry <= 0, or a full W not symmetric.
     """
-    weights = np.asarray(weights, dtype=float)
     hint = f" ({note})" if note else ""
+    weights = numbers(weights, f"{what} must be ({size},) or ({size}, {size}) positive numbers{hint}")
     if weights.ndim == 1:
         if weights.shape != (size,) or not np.all(np.isfinite(weights)):
             raise SolverInputError(f"{what} must be ({size},) or ({size}, {size}) and finite{hint}, "
@@ -138,7 +146,7 @@ def apply_gain(gain: float | np.ndarray, error: np.ndarray) -> np.ndarray:
             raise SolverInputError(f"gain must be a finite scalar >= 0, ({error.size},) or ({error.size}, "
                                    f"{error.size}), got {gain!r}")
         return float(gain) * error
-    gain_array = np.asarray(gain, dtype=float)
+    gain_array = numbers(gain, f"gain must be a finite scalar >= 0, ({error.size},) or ({error.size}, {error.size}) [1/s]")
     if gain_array.ndim == 0:
         return apply_gain(float(gain_array), error)
     if gain_array.ndim == 1 and gain_array.shape == error.shape and np.all(gain_array >= 0) \
@@ -168,7 +176,7 @@ def prepared_gain(gain: float | np.ndarray, size: int) -> Callable[[np.ndarray, 
 
 def gain_matrix(gain: float | np.ndarray, size: int) -> np.ndarray:
     """The CLIK gain K as a (size, size) positive (semi-)definite matrix, from a scalar, a diagonal (size,) or a matrix [1/s]."""
-    gain_array = np.asarray(gain, dtype=float)
+    gain_array = numbers(gain, f"gain must be a finite scalar >= 0, ({size},) or ({size}, {size}) [1/s]")
     if gain_array.ndim == 0:
         gain_array = np.full(size, float(gain_array))
     if gain_array.ndim == 1:

@@ -111,11 +111,15 @@ def split_levels(levels: Levels) -> tuple[list[tuple[int, list[Task | Inequality
         SolverInputError: no level, an empty level, or an item that is not a Task, an Inequality or a
             VelocityLimit.
     """
-    if isinstance(levels, (Task, Inequality, VelocityLimit)) or not len(levels):
-        raise SolverInputError("levels must be a non-empty sequence of levels, each an objective or a list of them")
+    if not isinstance(levels, (list, tuple)) or not levels:
+        raise SolverInputError(f"levels must be a non-empty list of levels, each a Task, an Inequality, a "
+                               f"VelocityLimit or a list of them, got {levels!r}")
     rows, limits = [], []
     for index, level in enumerate(levels):
-        items = [level] if isinstance(level, (Task, Inequality, VelocityLimit)) else list(level)
+        items = [level] if isinstance(level, (Task, Inequality, VelocityLimit)) else level
+        if not isinstance(items, (list, tuple)):
+            raise SolverInputError(f"level {index}: {level!r} is not a Task, an Inequality, a VelocityLimit or a "
+                                   f"list of them")
         if not items:
             raise SolverInputError(f"level {index} is empty")
         bad = [item for item in items if not isinstance(item, (Task, Inequality, VelocityLimit))]
@@ -159,6 +163,10 @@ class HierarchyPlan:
             raise SolverInputError(f"{robot.name} has a fixed base: free_floating=True needs a floating or planar base")
         items, found = split_levels(levels)
         self.robot, self.free_floating = robot, free_floating
+        if not isinstance(speed_limits, (list, tuple)) or not all(isinstance(limit, VelocityLimit)
+                                                                  for limit in speed_limits):
+            raise SolverInputError(f"speed_limits must be a list of VelocityLimit objectives (JointVelocityLimits, "
+                                   f"VehicleVelocityLimits), got {speed_limits!r}")
         self.speed_limits = [*found, *speed_limits]
         self.levels = []
         for index, level in items:
