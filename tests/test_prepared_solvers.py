@@ -238,7 +238,7 @@ def test_a_set_based_solver_refuses_bad_options_when_built():
         SetBasedSolver(robot, levels, dt=0.0)
     with pytest.raises(uvms.SolverInputError, match=r"gain must be a finite scalar >= 0, \(6,\)"):
         SetBasedSolver(robot, levels, gain=[1.0, 2.0])
-    with pytest.raises(uvms.SolverInputError, match="step needs dt > 0"):
+    with pytest.raises(uvms.SolverInputError, match=r"step needs the step dt > 0 \[s\]: build the solver with dt="):
         SetBasedSolver(robot, levels).step(robot.neutral())
     with pytest.raises(uvms.NotARobot):
         SetBasedSolver("bluerov2_alpha5", levels)

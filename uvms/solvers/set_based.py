@@ -221,12 +221,12 @@ class SetBasedSolver:
         """The set-based velocity v (nv,) at q alone (an integrator's stages, where no one reads diagnostics)."""
         return self._solution(self.plan.state(q, check))[1]
 
-    def step(self, q: np.ndarray, dt: float | None = None, *, check: bool = True) -> np.ndarray:
-        """q+ = integrate(q, v dt) (nq,), one explicit-Euler step of ``dt`` [s] (default: the solver's dt)."""
-        dt = self.dt if dt is None else check_scalar(dt, "dt", positive=True)
-        if dt is None:
-            raise SolverInputError("step needs dt > 0 [s]: give it here or when building the solver")
-        return integrate_velocity(self.robot, q, self.velocity(q, check=check), dt)
+    def step(self, q: np.ndarray, *, check: bool = True) -> np.ndarray:
+        """q+ = integrate(q, v dt) (nq,): one explicit-Euler step of the solver's dt [s] (the step its joint limits'
+        rate bounds are made for)."""
+        if self.dt is None:
+            raise SolverInputError("step needs the step dt > 0 [s]: build the solver with dt=...")
+        return integrate_velocity(self.robot, q, self.velocity(q, check=check), self.dt)
 
 
 # ------------------------------------------------------------------------------- the step
