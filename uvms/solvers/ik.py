@@ -20,11 +20,10 @@ import pinocchio as pin
 
 from ..errors import SolverInputError
 from ..kinematics import WORLD_ALIGNED
-from ..limits import Limit, index_or_slice
+from ..limits import Limit
 from ..robot import Robot, check_robot
 from ..tasks.frame import FrameTask, log_pose_error
 from .checks import check_count, check_scalar
-from .inverses import dls_solve
 from .results import IKResult
 
 Target = pin.SE3 | Sequence[float]
@@ -112,22 +111,22 @@ class JointBox:
     """The joint position box of a robot in q coordinates, and a Pinocchio data of its own for the IK loop.
 
     Attributes:
-        index: coordinates of q held by bounded-or-not scalar joints (b,); span: the same as a slice when contiguous.
+        index: coordinates of q held by bounded-or-not scalar joints (b,).
         lower, upper: their limits (b,) [rad or m], +-inf where unbounded.
         turns: (b,) whether the coordinate is a revolute angle (2 pi periodic).
         data: ``model.createData()``, used by `PoseProblem.evaluate` only.
     """
 
     index: np.ndarray
-    span: slice | np.ndarray
     lower: np.ndarray
     upper: np.ndarray
     turns: np.ndarray
     data: pin.Data
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "lower_list", self.lower.tolist())
-        object.__setattr__(self, "upper_list", self.upper.tolist())
+        from .kernels import project_into_box  # numba: loaded by the IK, not by ``import uvms``
+
+        object.__setattr__(self, "kernel", project_into_box)
 
     @classmethod
     def of(cls, robot: Robot) -> JointBox:
@@ -138,7 +137,7 @@ class JointBox:
             held = limit.q_index >= 0
             index = limit.q_index[held]
             revolute = revolute_coordinates(robot.model)
-            box = cls(index, index_or_slice(index), limit.lower[held], limit.upper[held],
+            box = cls(index.astype(np.int64), limit.lower[held].astype(float), limit.upper[held].astype(float),
                       np.array([i in revolute for i in index], dtype=bool), robot.model.createData())
             BOXES[robot] = box
         return box
@@ -147,15 +146,10 @@ class JointBox:
         """q (nq,) brought into the box in place; returns q.
 
         A revolute coordinate outside its limits first moves by a multiple of 2 pi when that
-        lands inside (the same pose: Newton keeps its progress); what is still outside is clipped.
+        lands inside (the same pose: Newton keeps its progress); what is still outside is clipped
+        (:func:`~uvms.solvers.kernels.project_into_box`).
         """
-        values = q[self.span]
-        # a Python test of a few floats costs a quarter of two numpy reductions (inside is the common case)
-        if any(v < lo or v > hi for v, lo, hi in zip(values.tolist(), self.lower_list, self.upper_list)):
-            outside = (values < self.lower) | (values > self.upper)
-            wrapped = self.lower + np.mod(values - self.lower, 2.0 * np.pi)
-            values = np.where(outside & self.turns & (wrapped <= self.upper), wrapped, values)
-            q[self.span] = np.minimum(np.maximum(values, self.lower), self.upper)
+        self.kernel(q, self.index, self.lower, self.upper, self.turns)
         return q
 
 
@@ -182,48 +176,58 @@ class PoseProblem:
     """
 
     def __init__(self, robot: Robot, tasks: Sequence[FrameTask]) -> None:
+        from . import kernels  # numba: loaded by the IK, not by ``import uvms``
+
+        self.kernels = kernels
         self.model = robot.model
         self.box = JointBox.of(robot)
         self.data = self.box.data
         self.frame_ids = [task.frame_id for task in tasks]
-        self.targets = [(task.target.rotation, task.target.translation) for task in tasks]  # (3, 3), (3,)
+        self.targets = [task.target for task in tasks]  # transform_target_to_world of each frame
         self.rows = [np.asarray(task.rows) for task in tasks]
         self.single = len(tasks) == 1 and len(self.rows[0]) == 6
-        #: q (nq,) -> (stacked error (k,) [m, rad], Jacobian (k, nv)), new arrays
-        self.evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] = (
+        #: q (nq,) -> (stacked error (k,) [m, rad], Jacobian (k, nv), |error|), new arrays
+        self.evaluate: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, float]] = (
             self._one_frame_evaluator() if self.single else self._evaluate_frames)
 
-    def _evaluate_frames(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Stacked error (k,) [m, rad] and Jacobian (k, nv) of several frames (or rows) at q (nq,)."""
+    def _evaluate_frames(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Stacked error (k,) [m, rad], Jacobian (k, nv) and |error| of several frames (or rows) at q (nq,)."""
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, q)
         errors, jacobians = [], []
         for index, (frame, rows) in enumerate(zip(self.frame_ids, self.rows)):
             errors.append(self.pose_error(index, pin.updateFramePlacement(model, data, frame))[rows])
             jacobians.append(pin.getFrameJacobian(model, data, frame, WORLD_ALIGNED).reshape(6, model.nv)[rows])
-        return np.concatenate(errors), np.vstack(jacobians)
+        error = np.concatenate(errors)
+        return error, np.vstack(jacobians), math.sqrt(error.dot(error))
 
-    def _one_frame_evaluator(self) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    def _one_frame_evaluator(self) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, float]]:
         """The evaluation of one frame of six rows (the common case), a closure over what it reads.
 
         The Newton loop calls it once per iteration, where each attribute lookup and call layer costs about
         as much as a Pinocchio call; the numbers are those of :meth:`pose_error` and the frame Jacobian.
         """
         model, data, frame, nv = self.model, self.data, self.frame_ids[0], self.model.nv
-        placements, compute = data.oMf, pin.computeFrameJacobian
-        rotation, translation = self.targets[0]
+        placements, compute, log3 = data.oMf, pin.computeFrameJacobian, pin.log3
+        target = self.targets[0]
+        translation, rotation = np.ascontiguousarray(target.translation), np.ascontiguousarray(target.rotation)
+        error_norm, to_target = self.kernels.pose_error_norm, self.kernels.rotation_to_target
+        relative = np.empty((3, 3))  # R_d R^T, only read within a call
 
-        def evaluate_one_frame(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        def evaluate_one_frame(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
             jacobian = compute(model, data, q, frame, WORLD_ALIGNED)  # (6, nv); runs the forward kinematics
-            error = log_pose_error(translation, rotation, placements[frame])
-            return error, jacobian if nv > 1 else jacobian.reshape(6, nv)  # (6,) when nv = 1
+            pose = placements[frame].homogeneous  # transform_frame_to_world (4, 4)
+            to_target(pose, rotation, relative)
+            error = np.empty(6)
+            norm = error_norm(pose, translation, log3(relative), error)
+            return error, jacobian if nv > 1 else jacobian.reshape(6, nv), norm  # (6,) when nv = 1
 
         return evaluate_one_frame
 
     def pose_error(self, index: int, pose: pin.SE3) -> np.ndarray:
         """[t* - t; log3(R* R^T)] (6,) [m, rad] of a frame at ``pose`` against target ``index``."""
-        rotation, translation = self.targets[index]
-        return log_pose_error(translation, rotation, pose)
+        target = self.targets[index]
+        return log_pose_error(target.translation, target.rotation, pose)
 
 
 def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations: int
@@ -231,7 +235,7 @@ def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations
     """Levenberg-Marquardt iterations from q, projected into the limits, until the error <= ``tolerance`` or a stall.
 
     Each step is the DLS solution J^T (J J^T + d I)^-1 e in normal-equation form
-    (:func:`~uvms.solvers.inverses.dls_solve`), d = mu |e|^2 + 1e-14 tr(J J^T) / k; mu
+    (:func:`~uvms.solvers.kernels.dls_solve_into`), d = mu |e|^2 + 1e-14 tr(J J^T) / k; mu
     shrinks after an accepted step and grows after a rejected one (``MU_*``). The
     candidate's evaluation gives its Jacobian too, so an accepted step costs one
     Pinocchio call. The start ends early when it stalls (``STALL_*``).
@@ -239,10 +243,9 @@ def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations
     Returns:
         (best q (nq,), its error norm [m, rad], iterations used).
     """
-    model, box, evaluate = problem.model, problem.box, problem.evaluate
+    model, box, evaluate, solve = problem.model, problem.box, problem.evaluate, problem.kernels.dls_solve_into
     q = box.project(np.array(q, dtype=float))
-    error, jacobian = evaluate(q)
-    norm = math.sqrt(error.dot(error))
+    error, jacobian, norm = evaluate(q)
     floor = 1e-14 * float(np.vdot(jacobian, jacobian)) / jacobian.shape[0]  # 1e-14 tr(J J^T) / k
     mu, checkpoint = MU_START, norm
     for iteration in range(1, max_iterations + 1):
@@ -252,14 +255,11 @@ def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations
             if norm > STALL_RATIO * checkpoint:
                 return q, norm, iteration - 1
             checkpoint = norm
-        try:
-            step = dls_solve(jacobian, error, mu * norm * norm + floor)
-        except SolverInputError:  # not numerically positive definite: counts as a failed step
-            step = None
-        if step is not None:
+        step = np.empty(model.nv)
+        # not numerically positive definite (False): counts as a failed step
+        if solve(jacobian, error, mu * norm * norm + floor, step):
             candidate = box.project(pin.integrate(model, q, step))
-            candidate_error, candidate_jacobian = evaluate(candidate)
-            candidate_norm = math.sqrt(candidate_error.dot(candidate_error))
+            candidate_error, candidate_jacobian, candidate_norm = evaluate(candidate)
             if candidate_norm < norm:  # False for NaN
                 q, error, jacobian, norm = candidate, candidate_error, candidate_jacobian, candidate_norm
                 mu = max(mu * MU_DOWN, 1e-12)

@@ -7,7 +7,7 @@
 - :func:`damped_weighted_inverse` (:func:`svd_inverse` underneath): weighted and
   damped (fixed or variable) from one SVD, with its diagnostics sigma_min and l.
 - :func:`dls_solve`: the normal-equation form J^T (J J^T + d I)^-1 b for one
-  right-hand side, one Cholesky factorization (LAPACK dposv): cheaper when only
+  right-hand side, one Cholesky factorization (a compiled kernel): cheaper when only
   J^+ b is needed (the CLIK hot path :class:`~uvms.solvers.pose_clik.PoseCLIK`,
   the Newton steps of :func:`~uvms.solvers.ik.solve_ik`).
 
@@ -125,32 +125,29 @@ def dls(jacobian: np.ndarray, damping: float) -> np.ndarray:
     return np.linalg.solve(normal, jacobian.T)
 
 
-def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float | np.ndarray) -> np.ndarray:
+def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float) -> np.ndarray:
     """x = J^T (J J^T + d I)^-1 b (n,): the DLS solution for one right-hand side, in normal-equation form.
 
-    One Cholesky factorization of the (k, k) row-space matrix (LAPACK dposv), no
-    inverse formed and no validation: the caller has checked its inputs once.
-    ``ndarray.dot`` rather than ``@``: the same BLAS calls with less overhead on small arrays.
+    One Cholesky factorization of the (k, k) row-space matrix in the compiled kernel
+    :func:`~uvms.solvers.kernels.dls_solve_into` (the one the Newton steps of
+    :func:`~uvms.solvers.ik.solve_ik` and the :class:`~uvms.solvers.pose_clik.PoseCLIK`
+    step call), no inverse formed and no validation: the caller has checked its inputs once.
 
     Args:
         jacobian: J (k, n), finite.
         rhs: b (k,).
-        damping_squared: d = l^2 > 0 [-] (keeps the system positive definite), or the
-            matrix d I (k, k) when a hot loop allocates it once.
+        damping_squared: d = l^2 > 0 [-] (keeps the system positive definite).
 
     Raises:
-        SolverInputError: the system is not numerically positive definite (LAPACK info != 0).
+        SolverInputError: the system is not numerically positive definite.
     """
-    system = jacobian.dot(jacobian.T)  # (k, k), symmetric
-    if isinstance(damping_squared, np.ndarray):
-        system += damping_squared
-    else:
-        system.ravel()[:: system.shape[0] + 1] += damping_squared  # the diagonal (a view: J J^T is contiguous)
-    # system.T is the Fortran-ordered matrix LAPACK wants (the same numbers): factored in place, no copy
-    _, solution, info = lapack().dposv(system.T, rhs, 0, 1)
-    if info != 0:  # never return garbage
-        raise SolverInputError(f"DLS system not positive definite (LAPACK info {info})")
-    return solution.dot(jacobian)  # J^T y as y^T J
+    from .kernels import dls_solve_into  # numba: loaded at the first solve, not by ``import uvms``
+
+    solution = np.empty(jacobian.shape[1])
+    if not dls_solve_into(jacobian, rhs, float(damping_squared), solution):  # never return garbage
+        raise SolverInputError(f"DLS system J J^T + {float(damping_squared):g} I not positive definite: "
+                               "is the Jacobian finite, the damping > 0?")
+    return solution
 
 
 def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> float:
