@@ -406,6 +406,40 @@ def test_compiled_cholesky_solve_matches_lapack_and_refuses_what_is_not_positive
     assert not cholesky_solve_in_place(np.ones((2, 2)), np.ones(2))  # singular: the second pivot is 0
 
 
+def test_compiled_jacobi_svd_inverse_matches_lapack_wide_tall_and_rank_deficient(rng):
+    from uvms.errors import NumericalError
+    from uvms.solvers.inverses import VariableDamping, prepared_svd_inverse
+
+    duplicated = rng.normal(size=(6, 12))
+    duplicated[5] = duplicated[4]  # two identical task rows: rank 5
+    combined = rng.normal(size=(4, 7))
+    combined[3] = 0.5 * combined[0] - 0.3 * combined[1]
+    graded = rng.normal(size=(6, 12)) * np.logspace(0, -6, 12)  # columns from 1 down to 1e-6
+    for jacobian in (rng.normal(size=(6, 12)), rng.normal(size=(3, 6)), rng.normal(size=(6, 6)),
+                     rng.normal(size=(9, 4)), duplicated, combined, graded, np.zeros((2, 3))):
+        singular = np.linalg.svd(jacobian, compute_uv=False)
+        wide = jacobian.shape[0] <= jacobian.shape[1]
+        inverse, sigma_min, used = prepared_svd_inverse(jacobian, 0.0)
+        assert used == 0.0
+        scale = max(1.0, np.abs(np.linalg.pinv(jacobian, rcond=1e-12)).max())
+        assert np.allclose(inverse, np.linalg.pinv(jacobian, rcond=1e-12), atol=1e-13 * scale)
+        assert sigma_min == (pytest.approx(singular[-1], rel=1e-9, abs=1e-14) if wide else 0.0)
+        for damping in (1e-3, 0.5):
+            inverse, _, used = prepared_svd_inverse(jacobian, damping)
+            rows = jacobian.shape[0]
+            expected = jacobian.T @ np.linalg.inv(jacobian @ jacobian.T + damping**2 * np.eye(rows))
+            assert used == damping and np.allclose(inverse, expected, atol=1e-11)
+    # the variable damping reads sigma_min from the same SVD
+    jacobian = np.diag([1.0, 0.02, 0.5]) @ rng.normal(size=(3, 5))
+    _, sigma_min, used = prepared_svd_inverse(jacobian, VariableDamping(epsilon=0.5, lambda_max=0.2))
+    assert sigma_min == pytest.approx(np.linalg.svd(jacobian, compute_uv=False)[-1], rel=1e-12)
+    assert used == pytest.approx(np.sqrt(1 - (sigma_min / 0.5) ** 2) * 0.2, rel=1e-14)
+    bad = rng.normal(size=(3, 5))
+    bad[1, 2] = np.nan
+    with pytest.raises(NumericalError, match="did not converge"):
+        prepared_svd_inverse(bad, 0.1)
+
+
 def test_compiled_pose_error_and_joint_box_match_pinocchio_and_numpy(rng):
     from uvms.solvers.kernels import pose_error_norm, project_into_box, rotation_to_target
 

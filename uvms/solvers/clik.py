@@ -108,12 +108,7 @@ class CLIKSolver:
         if self.enforce_limits:
             solution, sigma_min, used, held = self._clamped(state, solved, command, nullspace_motion)
         else:
-            # column-major, as solve_with_held's J[:, free] is: the BLAS products sum in the same order, the same bits
-            solved = np.asfortranarray(solved)
-            inverse, sigma_min, used = self._inverse(solved, self.damping)
-            solution = inverse @ command
-            if nullspace_motion is not None:
-                solution += nullspace_motion - inverse @ (solved @ nullspace_motion)
+            solution, sigma_min, used = self._inverse.solve(solved, command, self.damping, nullspace_motion)
         v = np.zeros(robot.nv)
         v[self.first:] = solution
         if self.free_floating:
@@ -227,14 +222,12 @@ def solve_with_held(
         singular_values = np.linalg.svd(jacobian, compute_uv=False)
         return solution, float(singular_values.min(initial=0.0)), 0.0
     remaining = command - jacobian @ solution
-    free_jacobian = jacobian[:, free]
     every = free.size == jacobian.shape[1]  # no joint held: W as checked by the caller
     free_weights = weights if weights is None or every else weights_subset(weights, free, jacobian.shape[1])
-    inverse, sigma_min, used = damped_weighted_inverse(free_jacobian, free_weights, damping)
-    solution[free] = inverse @ remaining
-    if nullspace_motion is not None:
-        z0 = nullspace_motion[free]
-        solution[free] += z0 - inverse @ (free_jacobian @ z0)
+    checked = damping if isinstance(damping, VariableDamping) else check_damping(damping)
+    z0 = None if nullspace_motion is None else nullspace_motion[free]
+    solution[free], sigma_min, used = WeightedInverse(free_weights, free.size).solve(jacobian[:, free], remaining,
+                                                                                     checked, z0)
     return solution, sigma_min, used
 
 

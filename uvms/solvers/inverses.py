@@ -21,7 +21,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import NumericalError, SolverInputError
-from ..lapack import lapack
 from .checks import check_damping, check_matrix, check_variable_damping, check_weights
 
 __all__ = [
@@ -30,7 +29,7 @@ __all__ = [
     "variable_damping", "weighted_pinv", "weights_factor", "weights_subset",
 ]
 
-#: Relative cut-off below which singular values count as zero.
+#: Relative cut-off below which singular values count as zero (that of the compiled inverse).
 RCOND = 1e-12
 
 
@@ -155,10 +154,10 @@ def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> flo
 
     l^2 = 0 when sigma_min >= epsilon, else (1 - (sigma_min / epsilon)^2) lambda_max^2.
     """
+    from .kernels import variable_damping_value  # the formula the compiled inverse applies
+
     check_variable_damping(epsilon, lambda_max)
-    if sigma_min >= epsilon:
-        return 0.0
-    return float(np.sqrt(1.0 - (sigma_min / epsilon) ** 2) * lambda_max)
+    return float(variable_damping_value(float(sigma_min), float(epsilon), float(lambda_max)))
 
 
 @dataclass(frozen=True)
@@ -194,30 +193,23 @@ def svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple
 def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
     """:func:`svd_inverse` of a damping already checked (a float >= 0 or a VariableDamping): the solvers' inner loop.
 
-    LAPACK's dgesdd is called directly: numpy's ``linalg.svd`` calls the same routine with three times the
-    overhead on these small matrices (the same singular vectors, bit for bit).
+    One compiled call (:func:`~uvms.solvers.kernels.svd_inverse_into`: a one-sided Jacobi SVD, the damping
+    and the inverse), a third of LAPACK's dgesdd through scipy on these small matrices.
 
     Raises:
         NumericalError: the SVD did not converge (a non-finite Jacobian).
     """
-    if jacobian.size == 0:
-        u, singular, vt = np.linalg.svd(jacobian, full_matrices=False)
+    from .kernels import svd_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+
+    inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
+    if isinstance(damping, VariableDamping):
+        converged, sigma_min, used = svd_inverse_into(jacobian, 0.0, damping.epsilon, damping.lambda_max, inverse)
     else:
-        u, singular, vt, info = lapack().dgesdd(jacobian, compute_uv=1, full_matrices=0)
-        if info != 0:
-            raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
-                                 f"converge (LAPACK info {info}): is it finite?")
-    sigma_min = float(singular[-1]) if jacobian.shape[0] <= jacobian.shape[1] and singular.size else 0.0
-    value = damping(sigma_min) if isinstance(damping, VariableDamping) else damping
-    if value > 0.0:
-        factors = singular / (singular**2 + value**2)
-    elif singular.size and singular[-1] > RCOND * singular[0]:  # full rank: every 1 / s (the common case, cheaper)
-        factors = 1.0 / singular
-    else:
-        kept = singular > RCOND * (singular[0] if singular.size else 0.0)
-        factors = np.zeros_like(singular)
-        factors[kept] = 1.0 / singular[kept]
-    return (vt.T * factors) @ u.T, sigma_min, value
+        converged, sigma_min, used = svd_inverse_into(jacobian, damping, 0.0, 0.0, inverse)
+    if not converged:
+        raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
+                             "converge: is it finite?")
+    return inverse, sigma_min, used
 
 
 def damped_weighted_inverse(
@@ -257,6 +249,38 @@ class WeightedInverse:
         weights = None if weights is None else check_weights(weights, size)
         identity = weights is None or (weights.ndim == 1 and bool(np.all(weights == 1.0)))
         self.factor = None if identity else weights_factor(weights, size)
+        # W as the compiled solve takes it: W^-1/2 (n,) of a diagonal, L^-T (n, n) of a full W; empty: I
+        self._inverse_sqrt, self._transform = np.zeros(0), np.zeros((0, 0))
+        if self.factor is not None and self.factor.inverse_sqrt is not None:
+            self._inverse_sqrt = np.ascontiguousarray(self.factor.inverse_sqrt)
+        elif self.factor is not None:
+            self._transform = np.linalg.solve(self.factor.cholesky.T, np.eye(size))  # L^-T
+        self._no_motion = np.zeros(0)
+
+    def solve(self, jacobian: np.ndarray, command: np.ndarray, damping: float | VariableDamping,
+              nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float, float]:
+        """(x = J_W^+ (c - J z0) + z0 (n,), sigma_min of the weighted J, damping used) in one compiled call.
+
+        The CLIK's solution (:func:`~uvms.solvers.kernels.clik_solution_into`): the numbers of this
+        inverse applied to c, plus the null-space motion z0 projected (None: none), to rounding.
+
+        Raises:
+            NumericalError: the SVD did not converge (a non-finite Jacobian).
+        """
+        from .kernels import clik_solution_into  # numba: loaded at the first solve, not by ``import uvms``
+
+        solution = np.empty(jacobian.shape[1])
+        z0 = self._no_motion if nullspace_motion is None else nullspace_motion
+        if isinstance(damping, VariableDamping):
+            converged, sigma_min, used = clik_solution_into(jacobian, command, self._inverse_sqrt, self._transform,
+                                                            0.0, damping.epsilon, damping.lambda_max, z0, solution)
+        else:
+            converged, sigma_min, used = clik_solution_into(jacobian, command, self._inverse_sqrt, self._transform,
+                                                            damping, 0.0, 0.0, z0, solution)
+        if not converged:
+            raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
+                                 "converge: is it finite?")
+        return solution, sigma_min, used
 
     def __call__(self, jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
         """(inverse (n, k), sigma_min of the weighted J, damping used) of J (k, n), ``damping`` already checked."""

@@ -17,7 +17,6 @@ the entry lives.
 
 from __future__ import annotations
 
-import contextlib
 from collections import OrderedDict
 from collections.abc import Callable
 from typing import TypeVar
@@ -43,24 +42,47 @@ def key_of(value: object, held: list) -> object:
         Unkeyable: an iterator or generator.
     """
     kind = type(value)
-    if kind in SCALARS:
+    form = FORMS.get(kind)
+    if form is None:
+        form = FORMS[kind] = form_of(kind)
+    if form == "plain":
         return (kind, value)
-    if kind is np.ndarray:
+    if form == "object":
+        held.append(value)
+        return ("object", id(value))
+    if form == "array":
         return ("array", value.dtype.str, value.shape, value.tobytes())
-    if kind is list or kind is tuple:
+    if form == "sequence":
         return (kind, tuple([key_of(item, held) for item in value]))
-    if isinstance(value, np.generic):
+    if form == "scalar":
         return ("scalar", value.dtype.str, value.item())
-    if hasattr(value, "__next__"):  # an iterator or a generator: a key would consume it
+    if form == "iterator":  # a key would consume it
         raise Unkeyable
+    try:  # a value object (a VariableDamping): the same numbers are the same key
+        return ("value", kind, hash(value), value)
+    except TypeError:  # a field that is not hashable (an array): by identity
+        held.append(value)
+        return ("object", id(value))
+
+
+def form_of(kind: type) -> str:
+    """How :func:`key_of` keys the values of a type (read once per type: a loop's inputs repeat their types)."""
+    if kind in SCALARS:
+        return "plain"
+    if kind is np.ndarray:
+        return "array"
+    if kind is list or kind is tuple:
+        return "sequence"
+    if issubclass(kind, np.generic):
+        return "scalar"
+    if hasattr(kind, "__next__"):
+        return "iterator"
     params = getattr(kind, "__dataclass_params__", None)
-    if params is not None and params.frozen and params.eq:
-        try:  # a value object (a VariableDamping): the same numbers are the same key
-            return ("value", kind, hash(value), value)
-        except TypeError:  # a field that is not hashable (an array): by identity
-            pass
-    held.append(value)
-    return ("object", id(value))
+    return "value" if params is not None and params.frozen and params.eq else "object"
+
+
+#: The form of each type met (:func:`form_of`).
+FORMS: dict[type, str] = {}
 
 
 class PreparedSolvers:
@@ -82,14 +104,18 @@ class PreparedSolvers:
             return build()
         entry = self._entries.get(key)
         if entry is not None:
-            with contextlib.suppress(KeyError):  # dropped meanwhile by another thread: the solver still serves
+            try:
                 self._entries.move_to_end(key)
+            except KeyError:  # dropped meanwhile by another thread: the solver still serves
+                pass
             return entry[0]
         solver = build()
         self._entries[key] = (solver, held)
         while len(self._entries) > self.size:
-            with contextlib.suppress(KeyError):
+            try:
                 self._entries.popitem(last=False)
+            except KeyError:
+                pass
         return solver
 
     def clear(self) -> None:
