@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
@@ -271,10 +272,15 @@ class Robot(VehicleAccessors):
         return array
 
     def _check_vector(self, vector: np.ndarray, size: int, what: str, check_manifold: bool = False) -> np.ndarray:
-        array = finite_array(vector, what, (size,), error=ConfigurationError)
+        if (type(vector) is np.ndarray and vector.dtype == np.float64 and vector.shape == (size,)
+                and all(map(math.isfinite, vector.tolist()))):
+            array = vector  # the common case: a float vector of the size, read once as Python floats
+        else:
+            array = finite_array(vector, what, (size,), error=ConfigurationError)
         if check_manifold:
             for joint_name, part in self._unit_slices:
-                norm = float(np.linalg.norm(array[part]))
+                values = array[part]
+                norm = math.sqrt(values.dot(values))  # numpy's norm of a vector, in the same operations
                 if abs(norm - 1.0) > 1e-6:
                     self._refuse_rotation_part(what, joint_name, norm)
         return array

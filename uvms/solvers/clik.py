@@ -87,15 +87,19 @@ class CLIKSolver:
         self._inverse = WeightedInverse(self.weights, columns)  # (J (k, n), damping) -> inverse, sigma_min, used
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self.potential = potential if potential is not None and self.alpha > 0 else None
+        # the potential's arrays, read once, for the compiled z0 (numba: loaded here, not by ``import uvms``)
+        self._nullspace = None if self.potential is None else self.potential.nullspace_terms(self.alpha, self.first)
+        from ..kernels import joint_limit_motion_into
+
+        self._joint_limit_motion = joint_limit_motion_into
 
     def _nullspace_motion(self, q: np.ndarray) -> np.ndarray | None:
         """z0 = -alpha dS/dv on the solved columns (S has no vehicle entries), or None."""
-        if self.potential is None:
+        if self._nullspace is None:
             return None
-        robot = self.robot
-        gradient = np.zeros(robot.nv)
-        gradient[robot.n_vehicle:] = self.potential.arm_gradient(robot.arm_values(q))
-        return -self.alpha * gradient[self.first:]
+        z0 = np.empty(self.robot.nv - self.first)
+        self._joint_limit_motion(q, *self._nullspace, z0)
+        return z0
 
     def _solution(self, state: KinematicState) -> tuple:
         """(v (nv,), task Jacobian (k, nv), error (k,), command (k,), sigma_min, damping used, held names)."""

@@ -128,7 +128,7 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float) -> 
     """x = J^T (J J^T + d I)^-1 b (n,): the DLS solution for one right-hand side, in normal-equation form.
 
     One Cholesky factorization of the (k, k) row-space matrix in the compiled kernel
-    :func:`~uvms.solvers.kernels.dls_solve_into` (the one the Newton steps of
+    :func:`~uvms.kernels.dls_solve_into` (the one the Newton steps of
     :func:`~uvms.solvers.ik.solve_ik` and the :class:`~uvms.solvers.pose_clik.PoseCLIK`
     step call), no inverse formed and no validation: the caller has checked its inputs once.
 
@@ -140,7 +140,7 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float) -> 
     Raises:
         SolverInputError: the system is not numerically positive definite.
     """
-    from .kernels import dls_solve_into  # numba: loaded at the first solve, not by ``import uvms``
+    from ..kernels import dls_solve_into  # numba: loaded at the first solve, not by ``import uvms``
 
     solution = np.empty(jacobian.shape[1])
     if not dls_solve_into(jacobian, rhs, float(damping_squared), solution):  # never return garbage
@@ -154,7 +154,7 @@ def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> flo
 
     l^2 = 0 when sigma_min >= epsilon, else (1 - (sigma_min / epsilon)^2) lambda_max^2.
     """
-    from .kernels import variable_damping_value  # the formula the compiled inverse applies
+    from ..kernels import variable_damping_value  # the formula the compiled inverse applies
 
     check_variable_damping(epsilon, lambda_max)
     return float(variable_damping_value(float(sigma_min), float(epsilon), float(lambda_max)))
@@ -193,19 +193,20 @@ def svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple
 def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
     """:func:`svd_inverse` of a damping already checked (a float >= 0 or a VariableDamping): the solvers' inner loop.
 
-    One compiled call (:func:`~uvms.solvers.kernels.svd_inverse_into`: a one-sided Jacobi SVD, the damping
+    One compiled call (:func:`~uvms.kernels.svd_inverse_into`: a one-sided Jacobi SVD, the damping
     and the inverse), a third of LAPACK's dgesdd through scipy on these small matrices.
 
     Raises:
         NumericalError: the SVD did not converge (a non-finite Jacobian).
     """
-    from .kernels import svd_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+    from ..kernels import svd_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
     inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
     if isinstance(damping, VariableDamping):
-        converged, sigma_min, used = svd_inverse_into(jacobian, 0.0, damping.epsilon, damping.lambda_max, inverse)
+        converged, sigma_min, used = svd_inverse_into(jacobian, 0.0, damping.epsilon, damping.lambda_max, RCOND,
+                                                               inverse)
     else:
-        converged, sigma_min, used = svd_inverse_into(jacobian, damping, 0.0, 0.0, inverse)
+        converged, sigma_min, used = svd_inverse_into(jacobian, damping, 0.0, 0.0, RCOND, inverse)
     if not converged:
         raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
                              "converge: is it finite?")
@@ -261,22 +262,23 @@ class WeightedInverse:
               nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float, float]:
         """(x = J_W^+ (c - J z0) + z0 (n,), sigma_min of the weighted J, damping used) in one compiled call.
 
-        The CLIK's solution (:func:`~uvms.solvers.kernels.clik_solution_into`): the numbers of this
+        The CLIK's solution (:func:`~uvms.kernels.clik_solution_into`): the numbers of this
         inverse applied to c, plus the null-space motion z0 projected (None: none), to rounding.
 
         Raises:
             NumericalError: the SVD did not converge (a non-finite Jacobian).
         """
-        from .kernels import clik_solution_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ..kernels import clik_solution_into  # numba: loaded at the first solve, not by ``import uvms``
 
         solution = np.empty(jacobian.shape[1])
         z0 = self._no_motion if nullspace_motion is None else nullspace_motion
         if isinstance(damping, VariableDamping):
             converged, sigma_min, used = clik_solution_into(jacobian, command, self._inverse_sqrt, self._transform,
-                                                            0.0, damping.epsilon, damping.lambda_max, z0, solution)
+                                                            0.0, damping.epsilon, damping.lambda_max, RCOND, z0,
+                                                            solution)
         else:
             converged, sigma_min, used = clik_solution_into(jacobian, command, self._inverse_sqrt, self._transform,
-                                                            damping, 0.0, 0.0, z0, solution)
+                                                            damping, 0.0, 0.0, RCOND, z0, solution)
         if not converged:
             raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
                                  "converge: is it finite?")

@@ -15,7 +15,7 @@ its :class:`~uvms.limits.Limit`, evaluated on the q entries that limit points at
 
 A step is three Pinocchio calls (``computeFrameJacobian``, which runs the forward
 kinematics, ``log3`` and ``integrate``) around compiled kernels that do the
-rest (:func:`~uvms.solvers.kernels.dls_pose_velocity`): building a ``PoseCLIK``
+rest (:func:`~uvms.kernels.dls_pose_velocity`): building a ``PoseCLIK``
 loads it (numba; compiled once per machine and cached).
 """
 
@@ -28,12 +28,9 @@ from ..conventions import AXIS_NAMES
 from ..kinematics import WORLD_ALIGNED
 from ..robot import Robot
 from ..tasks.frame import FrameTask
-from ..tasks.joint_limits import JointLimitPotential
+from ..tasks.joint_limits import JointLimitPotential, NullspaceTerms
 from .checks import check_damping, check_scalar, check_vector
 from .inverses import SolverInputError
-
-NO_INDEX = np.zeros(0, dtype=np.int64)
-
 
 class PoseCLIK:
     """Preallocated CLIK stepper for one 6-D pose task.
@@ -60,7 +57,7 @@ class PoseCLIK:
         potential: JointLimitPotential | None = None,
         alpha: float = 0.0,
     ) -> None:
-        from . import kernels  # numba: loaded by the solvers that use it, not by ``import uvms``
+        from .. import kernels  # numba: loaded by the solvers that use it, not by ``import uvms``
 
         self.gain = check_scalar(gain, "gain", positive=True)
         if check_damping(damping) == 0.0:
@@ -74,24 +71,9 @@ class PoseCLIK:
         self._target_translation, self._target_rotation = np.zeros(3), np.eye(3)
         self._relative = np.empty((3, 3))  # R_d R^T, only read within a call
         self._feedforward = np.zeros(6)  # (6,)
-        self._nullspace = self._nullspace_terms(potential, alpha)
+        self._nullspace = (potential.nullspace_terms(alpha) if potential is not None and alpha != 0.0
+                           else NullspaceTerms.none())
         self._kernel, self._to_target = kernels.dls_pose_velocity, kernels.rotation_to_target
-
-    def _nullspace_terms(self, potential: JointLimitPotential | None, alpha: float
-                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(q indices, v indices, -alpha c / range^2, middle), each (m,), of the arm coordinates q holds itself.
-
-        z0[v_index] = scale (q[q_index] - middle) is -alpha grad S(q) of the potential
-        (continuous joints, which q stores as (cos, sin), have c = 0 and no entry); m = 0 without a potential.
-        """
-        if potential is None or alpha == 0.0:
-            return NO_INDEX, NO_INDEX, np.zeros(0), np.zeros(0)
-        limit = potential.limit
-        coordinates = np.flatnonzero(limit.q_index >= 0)
-        scale = -alpha * potential.weights[coordinates] / potential.range[coordinates] ** 2
-        return (limit.q_index[coordinates].astype(np.int64), (coordinates + self.robot.n_vehicle).astype(np.int64),
-                np.ascontiguousarray(scale, dtype=float), np.ascontiguousarray(potential.middle[coordinates],
-                                                                               dtype=float))
 
     def set_target(self, pose: pin.SE3, twist: np.ndarray | None = None) -> None:
         """Target pose (``transform_target_to_world``) and feedforward twist [v; omega] (6,) [m/s, rad/s], world axes."""
@@ -114,11 +96,11 @@ class PoseCLIK:
         pose = self.data.oMf[self.frame_id].homogeneous  # transform_frame_to_world, updated by the Jacobian's FK
         self._to_target(pose, self._target_rotation, self._relative)  # R_d R^T (3, 3)
         rotation_error = pin.log3(self._relative)  # (3,)
-        q_index, v_index, nullspace_scale, middle = self._nullspace
+        q_index, v_index, weights, middle, range_squared, alpha = self._nullspace
         out = np.empty(self.model.nv)
         if not self._kernel(jacobian, pose, self._target_translation, rotation_error, self.gain,
-                            self._feedforward, self._damping_squared, q, q_index, v_index, nullspace_scale, middle,
-                            scale, self._error, out):
+                            self._feedforward, self._damping_squared, q, q_index, v_index, weights, middle,
+                            range_squared, alpha, scale, self._error, out):
             raise SolverInputError("DLS system J J^T + l^2 I not positive definite: is the Jacobian finite?")
         return out
 

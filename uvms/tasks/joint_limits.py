@@ -2,11 +2,34 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from ..errors import UVMSError
 from ..limits import Limit
 from ..robot import Robot, check_robot
+
+
+class NullspaceTerms(NamedTuple):
+    """What the compiled null-space motion z0 = -alpha dS/dv reads (:func:`uvms.kernels.joint_limit_motion_into`).
+
+    The m arm coordinates that q holds itself (continuous joints, stored as (cos, sin), have c = 0 and no
+    entry): z0[v_index] = -alpha c (q[q_index] - qbar) / range^2, zero elsewhere.
+    """
+
+    q_index: np.ndarray  #: (m,) int64, in q
+    v_index: np.ndarray  #: (m,) int64, in the solved columns of v
+    weights: np.ndarray  #: c_i (m,)
+    middle: np.ndarray  #: qbar_i (m,) [rad or m]
+    range_squared: np.ndarray  #: (q_iM - q_im)^2 (m,)
+    alpha: float  #: the null-space gain [-]
+
+    @classmethod
+    def none(cls) -> NullspaceTerms:
+        """No null-space motion (m = 0)."""
+        index, values = np.zeros(0, dtype=np.int64), np.zeros(0)
+        return cls(index, index, values, values, values, 0.0)
 
 
 class JointLimitPotential:
@@ -56,6 +79,15 @@ class JointLimitPotential:
     def arm_gradient(self, arm: np.ndarray) -> np.ndarray:
         """dS/dq_arm (n_arm,) at arm joint values."""
         return self.weights * (arm - self.middle) / self._range_squared
+
+    def nullspace_terms(self, alpha: float, first_column: int = 0) -> NullspaceTerms:
+        """The arrays of -alpha dS/dv for solved columns that start at v entry ``first_column``, read once."""
+        coordinates = np.flatnonzero(self.limit.q_index >= 0)
+        return NullspaceTerms(self.limit.q_index[coordinates].astype(np.int64),
+                              (coordinates + self.robot.n_vehicle - first_column).astype(np.int64),
+                              np.ascontiguousarray(self.weights[coordinates]),
+                              np.ascontiguousarray(self.middle[coordinates]),
+                              np.ascontiguousarray(self._range_squared[coordinates]), float(alpha))
 
     def gradient(self, q: np.ndarray) -> np.ndarray:
         """dS/dv (nv,): zero on the vehicle entries."""

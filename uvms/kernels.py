@@ -6,8 +6,7 @@ small, about what the arithmetic itself costs, so a step written as numpy calls 
 number. Here the whole dense part of a step is one compiled call; Pinocchio still computes every pose,
 Jacobian, logarithm and integration.
 
-The module imports numba, so it is loaded where a solver that uses it is built (``PoseCLIK``), not by
-``import uvms``. The kernels compile at their first call and are cached on disk beside this file (or in
+The module imports numba, so it is loaded where a solver or a task first uses it, not by ``import uvms``. The kernels compile at their first call and are cached on disk beside this file (or in
 numba's user cache when the package folder is read-only): a first call in a fresh install takes a
 few seconds, later processes load the machine code in a fraction of a second.
 """
@@ -17,13 +16,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .inverses import RCOND  # singular values below RCOND * s_max count as zero (the pseudo-inverse)
-
 #: Sweeps after which a one-sided Jacobi SVD that has not converged is refused (finite input needs about six).
 JACOBI_SWEEPS = 64
 EPSILON = np.finfo(np.float64).eps
 
-__all__ = ["JACOBI_SWEEPS", "cholesky_solve_in_place", "clik_solution_into", "decompose", "dls_pose_velocity", "dls_solve_into", "orthogonalize_rows",
+__all__ = ["JACOBI_SWEEPS", "cholesky_solve_in_place", "clik_solution_into", "decompose", "dls_pose_velocity", "dls_solve_into", "joint_limit_motion_into", "orthogonalize_rows",
            "pose_error_norm", "project_into_box", "rotation_to_target", "svd_inverse_into", "variable_damping_value"]
 
 
@@ -101,11 +98,11 @@ def orthogonalize_rows(rows: np.ndarray, rotation: np.ndarray) -> bool:
 
 
 @njit(cache=True)
-def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: float):
+def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: float, rcond: float):
     """The SVD of A (k, n) as the inverse needs it: (converged, wide, B, G, factors, sigma_min, l used).
 
     B = G A (rows s_i v_i^T) when k <= n (``wide``), else B = G A^T (rows s_i u_i^T); factors (m,) are
-    1 / (s_i^2 + l^2), or with l = 0 1 / s_i^2 above RCOND * s_max and 0 below, so that
+    1 / (s_i^2 + l^2), or with l = 0 1 / s_i^2 above rcond * s_max and 0 below, so that
     A^+ = B^T diag(factors) G (wide) or G^T diag(factors) B (tall). sigma_min is 0 when k > n; l is the
     fixed ``damping``, or the variable damping of sigma_min when ``epsilon`` > 0.
     """
@@ -131,30 +128,32 @@ def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: fl
     for row in range(count):
         if used > 0.0:
             factors[row] = 1.0 / (singular[row] * singular[row] + used * used)
-        elif singular[row] > RCOND * largest:
+        elif singular[row] > rcond * largest:
             factors[row] = 1.0 / (singular[row] * singular[row])
     return True, wide, work, rotation, factors, sigma_min, used
 
 
 @njit(cache=True)
-def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambda_max: float,
+def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambda_max: float, rcond: float,
                      out: np.ndarray) -> tuple[bool, float, float]:
     """The DLS inverse V diag(s / (s^2 + l^2)) U^T (n, k) of J (k, n) from its SVD, with sigma_min and l.
 
     The SVD is a one-sided Jacobi on the rows of J (of J^T when k > n), so the inverse is formed as
     B^T diag(1 / (s^2 + l^2)) G with B = G J (rows s_i v_i^T): no squared condition number. With l = 0,
-    singular values below RCOND * s_max count as zero (the pseudo-inverse).
+    singular values below rcond * s_max count as zero (the pseudo-inverse).
 
     Args:
         jacobian: J (k, n).
         damping: a fixed l >= 0 (used when ``epsilon`` is 0).
         epsilon, lambda_max: the variable damping of amundsen2018 eq. 6 when epsilon > 0.
+        rcond: with l = 0, the relative cut-off of singular values (``uvms.solvers.inverses.RCOND``).
         out: (n, k) written with the inverse.
 
     Returns:
         (converged (False for a non-finite J), sigma_min (0 when k > n), l used).
     """
-    converged, wide, work, rotation, factors, sigma_min, used = decompose(jacobian, damping, epsilon, lambda_max)
+    converged, wide, work, rotation, factors, sigma_min, used = decompose(jacobian, damping, epsilon, lambda_max,
+                                                                          rcond)
     if not converged:
         return False, sigma_min, used
     count, length = work.shape
@@ -174,7 +173,7 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
 
 @njit(cache=True)
 def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray,
-                       damping: float, epsilon: float, lambda_max: float, z0: np.ndarray,
+                       damping: float, epsilon: float, lambda_max: float, rcond: float, z0: np.ndarray,
                        out: np.ndarray) -> tuple[bool, float, float]:
     """The CLIK solution x = J_W^+ (c - J z0) + z0 (n,), J_W^+ the weighted, damped inverse, in one call.
 
@@ -186,7 +185,7 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
         command: c = xdot_d + K e (k,).
         inverse_sqrt: W^-1/2 (n,) of a diagonal W, or empty.
         transform: L^-T (n, n) of a full W, or empty (used when ``inverse_sqrt`` is empty; both empty: W = I).
-        damping, epsilon, lambda_max: as :func:`svd_inverse_into`.
+        damping, epsilon, lambda_max, rcond: as :func:`svd_inverse_into`.
         z0: the null-space motion (n,), or empty for none.
         out: (n,) written with x.
 
@@ -205,7 +204,8 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
         scaled = jacobian @ transform  # J L^-T
     else:
         scaled = jacobian
-    converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max)
+    converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max,
+                                                                          rcond)
     if not converged:
         return False, sigma_min, used
     count, length = work.shape
@@ -361,6 +361,19 @@ def project_into_box(q: np.ndarray, index: np.ndarray, lower: np.ndarray, upper:
 
 
 @njit(cache=True)
+def joint_limit_motion_into(q: np.ndarray, q_index: np.ndarray, v_index: np.ndarray, weights: np.ndarray,
+                            middle: np.ndarray, range_squared: np.ndarray, alpha: float, z0: np.ndarray) -> None:
+    """z0 = -alpha dS/dv of the joint-limit potential (hoang2011 eq. 20-21), written to ``z0`` (n,).
+
+    z0[v_index] = -alpha c (q[q_index] - qbar) / range^2 (the operations of
+    ``JointLimitPotential.arm_gradient``), zero elsewhere; the arrays are a ``NullspaceTerms``'.
+    """
+    z0[:] = 0.0
+    for entry in range(q_index.size):
+        z0[v_index[entry]] = -alpha * (weights[entry] * (q[q_index[entry]] - middle[entry]) / range_squared[entry])
+
+
+@njit(cache=True)
 def dls_pose_velocity(
     jacobian: np.ndarray,
     transform_frame_to_world: np.ndarray,
@@ -372,15 +385,17 @@ def dls_pose_velocity(
     q: np.ndarray,
     q_index: np.ndarray,
     v_index: np.ndarray,
-    nullspace_scale: np.ndarray,
+    weights: np.ndarray,
     middle: np.ndarray,
+    range_squared: np.ndarray,
+    alpha: float,
     scale: float,
     error: np.ndarray,
     out: np.ndarray,
 ) -> bool:
     """scale * v (nv,) of the DLS CLIK of one 6-D pose task with a joint-limit null-space motion.
 
-        e = [p_d - p; log3(R_d R^T)],  c = K e + xdot_d,  z0[v_index] = s (q[q_index] - middle)
+        e = [p_d - p; log3(R_d R^T)],  c = K e + xdot_d,  z0 = -alpha dS/dv (:func:`joint_limit_motion_into`)
         v = z0 + J^T (J J^T + d I)^-1 (c - J z0)
 
     which is J^+ c + (I - J^+ J) z0 with the DLS inverse J^+ = J^T (J J^T + d I)^-1.
@@ -393,8 +408,8 @@ def dls_pose_velocity(
         gain: K [1/s].
         feedforward: xdot_d (6,) [m/s, rad/s].
         damping_squared: d = l^2 > 0.
-        q: the configuration (nq,); q_index, v_index: (m,) where the potential's coordinates sit in q and v.
-        nullspace_scale: s = -alpha c_i / range_i^2 (m,); middle: the joints' mid-range (m,) [rad or m].
+        q: the configuration (nq,).
+        q_index, v_index, weights, middle, range_squared, alpha: the potential's ``NullspaceTerms``.
         scale: the factor on v written to ``out`` (a step's dt [s], or 1).
         error: (6,) written with e [m, rad].
         out: (nv,) written with scale * v.
@@ -404,9 +419,8 @@ def dls_pose_velocity(
     """
     rows, columns = jacobian.shape
     pose_error_norm(transform_frame_to_world, target_translation, rotation_error, error)
-    z0 = np.zeros(columns)
-    for entry in range(q_index.size):
-        z0[v_index[entry]] = nullspace_scale[entry] * (q[q_index[entry]] - middle[entry])
+    z0 = np.empty(columns)
+    joint_limit_motion_into(q, q_index, v_index, weights, middle, range_squared, alpha, z0)
     rhs = np.empty(rows)  # c - J z0
     for row in range(rows):
         value = gain * error[row] + feedforward[row]
