@@ -20,8 +20,9 @@ from numba import njit
 JACOBI_SWEEPS = 64
 EPSILON = np.finfo(np.float64).eps
 
-__all__ = ["JACOBI_SWEEPS", "cholesky_solve_in_place", "clik_solution_into", "decompose", "dls_pose_velocity", "dls_solve_into", "joint_limit_motion_into", "orthogonalize_rows",
-           "pose_error_norm", "project_into_box", "rotation_to_target", "svd_inverse_into", "variable_damping_value"]
+__all__ = ["JACOBI_SWEEPS", "cholesky_solve_in_place", "clik_solution_into", "decompose", "dls_pose_velocity", "dls_solve_into", "icat_into", "joint_limit_motion_into", "orthogonalize_rows",
+           "pose_error_norm", "project_into_box", "rotation_to_target", "svd_inverse_into", "variable_damping_value",
+           "weighted_inverse_into"]
 
 
 @njit(cache=True)
@@ -169,6 +170,129 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
                 else:
                     out[j, i] += weighted * rotation[row, j]
     return True, sigma_min, used
+
+
+@njit(cache=True)
+def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float,
+                          epsilon: float, lambda_max: float, rcond: float, out: np.ndarray) -> tuple[bool, float, float]:
+    """The weighted, damped inverse L^-T (X L^-T)^+ (n, m) of X (m, n), W = L L^T, written to ``out``.
+
+    Args:
+        matrix: X (m, n).
+        inverse_sqrt: W^-1/2 (n,) of a diagonal W, or empty; transform: L^-T (n, n) of a full W, or empty
+            (both empty: W = I).
+        damping, epsilon, lambda_max, rcond: as :func:`svd_inverse_into`.
+        out: (n, m).
+
+    Returns:
+        (converged, sigma_min of X L^-T, l used), as :func:`svd_inverse_into`.
+    """
+    if inverse_sqrt.size:
+        converged, sigma_min, used = svd_inverse_into(matrix * inverse_sqrt, damping, epsilon, lambda_max, rcond, out)
+        for row in range(out.shape[0]):
+            for col in range(out.shape[1]):
+                out[row, col] *= inverse_sqrt[row]
+    elif transform.size:
+        scaled = np.empty_like(out)
+        converged, sigma_min, used = svd_inverse_into(matrix @ transform, damping, epsilon, lambda_max, rcond, scaled)
+        out[:, :] = transform @ scaled
+    else:
+        converged, sigma_min, used = svd_inverse_into(matrix, damping, epsilon, lambda_max, rcond, out)
+    return converged, sigma_min, used
+
+
+@njit(cache=True)
+def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.ndarray, offsets: np.ndarray,
+              equality: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float, epsilon: float,
+              lambda_max: float, rcond: float, eta: float, contributions: np.ndarray,
+              sigmas: np.ndarray) -> tuple[bool, float]:
+    """The iCAT recursion over priority levels (Simetti and Casalino 2016; ``uvms.solvers.set_based``).
+
+    With rho_0 = 0 and Q_0 = I, level k (rows offsets[k]:offsets[k+1] of the stacks) gives
+    rho_k - rho_{k-1} = Q (J Q)^{#,A,I} W_k (xdot_k - J_k rho_{k-1}) and Q_k = Q (I - (J Q)^{#,A,I} J Q), the
+    inverses X^{#,A,Q} of the weighted, damped inverse of Z = [A^1/2 X; eta^1/2 (I - Q)]; rows with a = 0
+    are left out (they add nothing), and while no level above has moved anything (Q = I) a level of
+    activations 1 is solved as CLIK is.
+
+    Args:
+        jacobians: the levels' solved rows stacked (M, n); references: (M,); activations: (M,) in [0, 1].
+        offsets: (L + 1,) the first row of each level, then M.
+        equality: (L,) the level holds equality tasks only.
+        inverse_sqrt, transform: W as :func:`weighted_inverse_into` takes it.
+        damping, epsilon, lambda_max: the damping of (J Q)^{#,A,I} (W_k's inverse is undamped).
+        rcond: the pseudo-inverse's cut-off; eta: the weight of the (I - Q) term >= 0.
+        contributions: (L, n) written with rho_k - rho_{k-1}; sigmas: (L,) written with each level's sigma_min.
+
+    Returns:
+        (converged (False: a non-finite level), the largest damping used).
+    """
+    size = jacobians.shape[1]
+    rho = np.zeros(size)
+    projector = np.eye(size)
+    unrestricted = True  # Q = I exactly: no level above has moved anything
+    undamped = epsilon == 0.0 and damping == 0.0
+    root_eta = np.sqrt(eta)
+    largest = 0.0
+    for level in range(offsets.size - 1):
+        first, last = offsets[level], offsets[level + 1]
+        contributions[level, :] = 0.0
+        sigmas[level] = 0.0
+        active = 0
+        ones = True
+        for row in range(first, last):
+            if activations[row] > 0.0:
+                active += 1
+            if activations[row] != 1.0:
+                ones = False
+        if not equality[level] and active == 0:
+            continue
+        jacobian = jacobians[first:last]
+        remaining = references[first:last] - jacobian @ rho
+        if unrestricted and (equality[level] or ones):  # the CLIK case
+            inverse = np.empty((size, last - first))
+            converged, sigma_min, used = weighted_inverse_into(jacobian, inverse_sqrt, transform, damping, epsilon,
+                                                               lambda_max, rcond, inverse)
+            if not converged:
+                return False, largest
+            contribution = inverse @ remaining
+            projector = projector - inverse @ jacobian
+        else:
+            rows = np.empty(active, dtype=np.int64)
+            count = 0
+            for row in range(last - first):
+                if activations[first + row] > 0.0:
+                    rows[count] = row
+                    count += 1
+            root = np.sqrt(activations[first:last][rows])
+            power = activations[first:last][rows] ** 1.5
+            projected = jacobian[rows] if unrestricted else jacobian[rows] @ projector  # X (m, n)
+            scaled = projected * root.reshape(-1, 1)  # A^1/2 X
+            inverse = np.empty((size, active))
+            converged, sigma_min, used = weighted_inverse_into(scaled, inverse_sqrt, transform, damping, epsilon,
+                                                               lambda_max, rcond, inverse)
+            if not converged:
+                return False, largest
+            inverse = inverse * power  # X^{#,A,I} (n, m): the columns scale by a^1.5
+            if unrestricted and undamped:
+                regularized = inverse
+            else:  # X^{#,A,Q}, undamped: Z = [A^1/2 X; eta^1/2 (I - Q)] (Q = I: no eta rows)
+                stacked = scaled
+                if not unrestricted and eta > 0.0:
+                    stacked = np.concatenate((scaled, root_eta * (np.eye(size) - projector)))
+                full = np.empty((size, stacked.shape[0]))
+                converged, _, _ = weighted_inverse_into(stacked, inverse_sqrt, transform, 0.0, 0.0, 0.0, rcond, full)
+                if not converged:
+                    return False, largest
+                regularized = np.ascontiguousarray(full[:, :active]) * power
+            transfer = projected @ regularized  # W_k (m, m)
+            contribution = projector @ (inverse @ (transfer @ remaining[rows]))
+            projector = projector - projector @ (inverse @ projected)
+        rho = rho + contribution
+        unrestricted = False
+        contributions[level, :] = contribution
+        sigmas[level] = sigma_min
+        largest = max(largest, used)
+    return True, largest
 
 
 @njit(cache=True)

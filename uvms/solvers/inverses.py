@@ -202,15 +202,26 @@ def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping)
     from ..kernels import svd_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
     inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
+    converged, sigma_min, used = svd_inverse_into(jacobian, *damping_parameters(damping), RCOND, inverse)
+    return inverse, *converged_or_refused(converged, jacobian.shape, sigma_min, used)
+
+
+def damping_parameters(damping: float | VariableDamping) -> tuple[float, float, float]:
+    """(fixed l, epsilon, lambda_max) of a checked damping, as the kernels take it (epsilon = 0: fixed)."""
     if isinstance(damping, VariableDamping):
-        converged, sigma_min, used = svd_inverse_into(jacobian, 0.0, damping.epsilon, damping.lambda_max, RCOND,
-                                                               inverse)
-    else:
-        converged, sigma_min, used = svd_inverse_into(jacobian, damping, 0.0, 0.0, RCOND, inverse)
+        return 0.0, damping.epsilon, damping.lambda_max
+    return damping, 0.0, 0.0
+
+
+def converged_or_refused(converged: bool, shape: tuple[int, ...], sigma_min: float, used: float) -> tuple[float, float]:
+    """(sigma_min, damping used) of a compiled inverse that converged.
+
+    Raises:
+        NumericalError: it did not (a non-finite Jacobian): never a NaN velocity.
+    """
     if not converged:
-        raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
-                             "converge: is it finite?")
-    return inverse, sigma_min, used
+        raise NumericalError(f"the SVD of the {shape[0]}x{shape[1]} task Jacobian did not converge: is it finite?")
+    return sigma_min, used
 
 
 def damped_weighted_inverse(
@@ -250,12 +261,12 @@ class WeightedInverse:
         weights = None if weights is None else check_weights(weights, size)
         identity = weights is None or (weights.ndim == 1 and bool(np.all(weights == 1.0)))
         self.factor = None if identity else weights_factor(weights, size)
-        # W as the compiled solve takes it: W^-1/2 (n,) of a diagonal, L^-T (n, n) of a full W; empty: I
-        self._inverse_sqrt, self._transform = np.zeros(0), np.zeros((0, 0))
+        #: W as the kernels take it: (W^-1/2 (n,) of a diagonal or empty, L^-T (n, n) of a full W or empty); I: both
+        self.kernel_weights = (np.zeros(0), np.zeros((0, 0)))
         if self.factor is not None and self.factor.inverse_sqrt is not None:
-            self._inverse_sqrt = np.ascontiguousarray(self.factor.inverse_sqrt)
+            self.kernel_weights = (np.ascontiguousarray(self.factor.inverse_sqrt), np.zeros((0, 0)))
         elif self.factor is not None:
-            self._transform = np.linalg.solve(self.factor.cholesky.T, np.eye(size))  # L^-T
+            self.kernel_weights = (np.zeros(0), np.linalg.solve(self.factor.cholesky.T, np.eye(size)))  # L^-T
         self._no_motion = np.zeros(0)
 
     def solve(self, jacobian: np.ndarray, command: np.ndarray, damping: float | VariableDamping,
@@ -272,23 +283,20 @@ class WeightedInverse:
 
         solution = np.empty(jacobian.shape[1])
         z0 = self._no_motion if nullspace_motion is None else nullspace_motion
-        if isinstance(damping, VariableDamping):
-            converged, sigma_min, used = clik_solution_into(jacobian, command, self._inverse_sqrt, self._transform,
-                                                            0.0, damping.epsilon, damping.lambda_max, RCOND, z0,
-                                                            solution)
-        else:
-            converged, sigma_min, used = clik_solution_into(jacobian, command, self._inverse_sqrt, self._transform,
-                                                            damping, 0.0, 0.0, RCOND, z0, solution)
-        if not converged:
-            raise NumericalError(f"the SVD of the {jacobian.shape[0]}x{jacobian.shape[1]} task Jacobian did not "
-                                 "converge: is it finite?")
-        return solution, sigma_min, used
+        converged, sigma_min, used = clik_solution_into(jacobian, command, *self.kernel_weights,
+                                                        *damping_parameters(damping), RCOND, z0, solution)
+        return solution, *converged_or_refused(converged, jacobian.shape, sigma_min, used)
 
     def __call__(self, jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
-        """(inverse (n, k), sigma_min of the weighted J, damping used) of J (k, n), ``damping`` already checked."""
-        factor = self.factor
-        if factor is None:
-            return prepared_svd_inverse(jacobian, damping)
-        inverse, sigma_min, used = prepared_svd_inverse(factor.scale(jacobian), damping)
-        return factor.unscale(inverse), sigma_min, used
+        """(inverse (n, k), sigma_min of the weighted J, damping used) of J (k, n), ``damping`` already checked
+        (:func:`~uvms.kernels.weighted_inverse_into`).
 
+        Raises:
+            NumericalError: the SVD did not converge (a non-finite Jacobian).
+        """
+        from ..kernels import weighted_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+
+        inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
+        converged, sigma_min, used = weighted_inverse_into(jacobian, *self.kernel_weights,
+                                                           *damping_parameters(damping), RCOND, inverse)
+        return inverse, *converged_or_refused(converged, jacobian.shape, sigma_min, used)

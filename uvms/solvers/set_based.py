@@ -45,7 +45,8 @@ from ..tasks.objectives import VelocityLimit
 from .checks import check_damping, check_scalar
 from .hierarchy import (Hierarchy, HierarchyPlan, LevelItem, Levels, LevelRows, build_hierarchy, last_task_sigma,
                         objective_statuses, rate_bounds, speed_ratio, split_levels, task_report)
-from .inverses import SolverInputError, VariableDamping, WeightedInverse
+from .inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, converged_or_refused,
+                       damping_parameters)
 from .prepared import PREPARED
 from .results import SetBasedResult, StepResult
 from .saturation import inside, position_rate_bounds, scale_lowest_first, speed_maximum, velocity_box
@@ -74,7 +75,6 @@ class ICAT:
         self.size, self.eta = size, check_scalar(eta, "eta")
         self.inverse = WeightedInverse(weights, size)  # (rows (r, n), damping) -> inverse (n, r), sigma_min, used
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
-        self.undamped = not isinstance(damping, VariableDamping) and self.damping == 0.0
         self._root_eta = np.sqrt(self.eta)
         self._identity = np.eye(size)
 
@@ -90,39 +90,29 @@ class ICAT:
 
     def solve(self, hierarchy: Hierarchy) -> tuple[list[np.ndarray], list[float], float]:
         """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,), its sigma_min,
-        and the largest damping used."""
-        size, damping = self.size, self.damping
-        rho, projector = np.zeros(size), self._identity
-        unrestricted = True  # Q = I exactly: no level above has moved anything
-        contributions, sigmas, largest = [], [], 0.0
-        for level in hierarchy.levels:
-            jacobian, activation = level.solved, level.activation
-            if not level.equality and not (activation > 0).any():
-                contributions.append(np.zeros(size))
-                sigmas.append(0.0)
-                continue
-            remaining = level.reference - jacobian @ rho
-            if unrestricted and (level.equality or (activation == 1.0).all()):  # the CLIK case, as clik_velocity
-                inverse, sigma_min, used = self.inverse(jacobian, damping)
-                contribution = inverse @ remaining
-                projector = projector - inverse @ jacobian
-            else:  # rows with a = 0 add nothing to Z nor to the inverse (its columns scale by a^1.5): left out
-                rows = activation > 0
-                active = activation[rows]
-                root, power = np.sqrt(active)[:, None], active**1.5
-                projected = jacobian[rows] if unrestricted else jacobian[rows] @ projector
-                inverse, sigma_min, used = self.level_inverse(projected, root, power, None, damping)
-                regularized = inverse if unrestricted and self.undamped else self.level_inverse(
-                    projected, root, power, None if unrestricted else projector, 0.0)[0]
-                transfer = projected @ regularized  # W_k (m, m)
-                contribution = projector @ (inverse @ (transfer @ remaining[rows]))
-                projector = projector - projector @ (inverse @ projected)
-            rho = rho + contribution
-            unrestricted = False
-            contributions.append(contribution)
-            sigmas.append(sigma_min)
-            largest = max(largest, used)
-        return contributions, sigmas, largest
+        and the largest damping used (one compiled call, :func:`~uvms.kernels.icat_into`).
+
+        Raises:
+            NumericalError: an inverse did not converge (a non-finite level).
+        """
+        from ..kernels import icat_into  # numba: loaded at the first solve, not by ``import uvms``
+
+        levels = hierarchy.levels
+        count = len(levels)
+        contributions, sigmas = np.empty((count, self.size)), np.empty(count)
+        if not count:
+            return [], [], 0.0
+        sizes = [level.activation.size for level in levels]
+        offsets = np.zeros(count + 1, dtype=np.int64)
+        offsets[1:] = np.cumsum(sizes)
+        jacobians = np.concatenate([level.solved for level in levels]) if count > 1 else levels[0].solved
+        converged, largest = icat_into(
+            np.ascontiguousarray(jacobians, dtype=float), np.concatenate([level.reference for level in levels]),
+            np.concatenate([level.activation for level in levels]), offsets,
+            np.array([level.equality for level in levels]), *self.inverse.kernel_weights,
+            *damping_parameters(self.damping), RCOND, self.eta, contributions, sigmas)
+        converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
+        return list(contributions), sigmas.tolist(), largest
 
 
 def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.ndarray | None,
