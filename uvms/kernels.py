@@ -6,9 +6,10 @@ small, about what the arithmetic itself costs, so a step written as numpy calls 
 number. Here the whole dense part of a step is one compiled call; Pinocchio still computes every pose,
 Jacobian, logarithm and integration.
 
-The module imports numba, so it is loaded where a solver or a task first uses it, not by ``import uvms``. The kernels compile at their first call and are cached on disk beside this file (or in
-numba's user cache when the package folder is read-only): a first call in a fresh install takes a
-few seconds, later processes load the machine code in a fraction of a second.
+The module imports numba, so it is loaded where a solver first uses it, not by ``import uvms``. The
+kernels compile at their first call and are cached on disk beside this file (or in numba's user cache
+when the package folder is read-only): the first solve after an install compiles them (seconds); later
+processes load the machine code (about 0.5 s for numba itself).
 """
 
 from __future__ import annotations
@@ -20,8 +21,9 @@ from numba import njit
 JACOBI_SWEEPS = 64
 EPSILON = np.finfo(np.float64).eps
 
-__all__ = ["JACOBI_SWEEPS", "cholesky_solve_in_place", "clik_solution_into", "decompose", "dls_pose_velocity", "dls_solve_into", "icat_into", "joint_limit_motion_into", "orthogonalize_rows",
-           "pose_error_norm", "project_into_box", "rotation_to_target", "svd_inverse_into", "variable_damping_value",
+__all__ = ["JACOBI_SWEEPS", "cholesky_solve_in_place", "clik_solution_into", "decompose", "dls_pose_velocity",
+           "dls_solve_into", "icat_into", "joint_limit_motion_into", "orthogonalize_rows", "pose_error_norm",
+           "project_into_box", "rotation_to_target", "svd_inverse_into", "variable_damping_value",
            "weighted_inverse_into"]
 
 
@@ -174,7 +176,8 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
 
 @njit(cache=True)
 def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float,
-                          epsilon: float, lambda_max: float, rcond: float, out: np.ndarray) -> tuple[bool, float, float]:
+                          epsilon: float, lambda_max: float, rcond: float,
+                          out: np.ndarray) -> tuple[bool, float, float]:
     """The weighted, damped inverse L^-T (X L^-T)^+ (n, m) of X (m, n), W = L L^T, written to ``out``.
 
     Args:
@@ -194,7 +197,8 @@ def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transfor
                 out[row, col] *= inverse_sqrt[row]
     elif transform.size:
         scaled = np.empty_like(out)
-        converged, sigma_min, used = svd_inverse_into(matrix @ transform, damping, epsilon, lambda_max, rcond, scaled)
+        scaled_matrix = np.ascontiguousarray(matrix) @ transform  # X L^-T
+        converged, sigma_min, used = svd_inverse_into(scaled_matrix, damping, epsilon, lambda_max, rcond, scaled)
         out[:, :] = transform @ scaled
     else:
         converged, sigma_min, used = svd_inverse_into(matrix, damping, epsilon, lambda_max, rcond, out)
@@ -325,7 +329,7 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
     if inverse_sqrt.size:
         scaled = jacobian * inverse_sqrt  # J W^-1/2, column by column
     elif transform.size:
-        scaled = jacobian @ transform  # J L^-T
+        scaled = np.ascontiguousarray(jacobian) @ transform  # J L^-T
     else:
         scaled = jacobian
     converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max,

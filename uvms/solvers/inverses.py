@@ -202,7 +202,8 @@ def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping)
     from ..kernels import svd_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
     inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
-    converged, sigma_min, used = svd_inverse_into(jacobian, *damping_parameters(damping), RCOND, inverse)
+    converged, sigma_min, used = svd_inverse_into(np.ascontiguousarray(jacobian), *damping_parameters(damping), RCOND,
+                                                  inverse)
     return inverse, *converged_or_refused(converged, jacobian.shape, sigma_min, used)
 
 
@@ -283,7 +284,8 @@ class WeightedInverse:
 
         solution = np.empty(jacobian.shape[1])
         z0 = self._no_motion if nullspace_motion is None else nullspace_motion
-        converged, sigma_min, used = clik_solution_into(jacobian, command, *self.kernel_weights,
+        # C order: one compiled form of the kernel serves every caller (numba compiles one per array layout)
+        converged, sigma_min, used = clik_solution_into(np.ascontiguousarray(jacobian), command, *self.kernel_weights,
                                                         *damping_parameters(damping), RCOND, z0, solution)
         return solution, *converged_or_refused(converged, jacobian.shape, sigma_min, used)
 
@@ -297,6 +299,6 @@ class WeightedInverse:
         from ..kernels import weighted_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
         inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
-        converged, sigma_min, used = weighted_inverse_into(jacobian, *self.kernel_weights,
+        converged, sigma_min, used = weighted_inverse_into(np.ascontiguousarray(jacobian), *self.kernel_weights,
                                                            *damping_parameters(damping), RCOND, inverse)
         return inverse, *converged_or_refused(converged, jacobian.shape, sigma_min, used)
