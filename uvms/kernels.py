@@ -106,7 +106,7 @@ def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: fl
 
     B = G A (rows s_i v_i^T) when k <= n (``wide``), else B = G A^T (rows s_i u_i^T); factors (m,) are
     1 / (s_i^2 + l^2), or with l = 0 1 / s_i^2 above rcond * s_max and 0 below, so that
-    A^+ = B^T diag(factors) G (wide) or G^T diag(factors) B (tall). sigma_min is 0 when k > n; l is the
+    A^+ = B^T diag(factors) G (wide) or G^T diag(factors) B (tall): right^T diag(factors) left. sigma_min is 0 when k > n; l is the
     fixed ``damping``, or the variable damping of sigma_min when ``epsilon`` > 0.
     """
     rows, columns = matrix.shape
@@ -159,18 +159,15 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
                                                                           rcond)
     if not converged:
         return False, sigma_min, used
-    count, length = work.shape
+    left, right = (rotation, work) if wide else (work, rotation)  # A^+ = right^T diag(factors) left
     out[:, :] = 0.0
-    for row in range(count):
+    for row in range(left.shape[0]):
         if factors[row] == 0.0:
             continue
-        for i in range(length):  # wide: out += b_i^T f g_i (n, k); tall: out += g_i^T f b_i
-            weighted = work[row, i] * factors[row]
-            for j in range(count):
-                if wide:
-                    out[i, j] += weighted * rotation[row, j]
-                else:
-                    out[j, i] += weighted * rotation[row, j]
+        for i in range(right.shape[1]):  # out += right_i^T f left_i
+            weighted = right[row, i] * factors[row]
+            for j in range(left.shape[1]):
+                out[i, j] += weighted * left[row, j]
     return True, sigma_min, used
 
 
@@ -336,25 +333,17 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
                                                                           rcond)
     if not converged:
         return False, sigma_min, used
-    count, length = work.shape
+    left, right = (rotation, work) if wide else (work, rotation)  # A^+ = right^T diag(factors) left
     solution = np.zeros(columns)  # (J L^-T)^+ rhs
-    for row in range(count):
+    for row in range(left.shape[0]):
         if factors[row] == 0.0:
             continue
-        if wide:  # B^T (f (G rhs))
-            projected = 0.0
-            for j in range(count):
-                projected += rotation[row, j] * rhs[j]
-            projected *= factors[row]
-            for i in range(length):
-                solution[i] += work[row, i] * projected
-        else:  # G^T (f (B rhs))
-            projected = 0.0
-            for i in range(length):
-                projected += work[row, i] * rhs[i]
-            projected *= factors[row]
-            for j in range(count):
-                solution[j] += rotation[row, j] * projected
+        projected = 0.0
+        for col in range(left.shape[1]):
+            projected += left[row, col] * rhs[col]
+        projected *= factors[row]
+        for col in range(right.shape[1]):
+            solution[col] += right[row, col] * projected
     if inverse_sqrt.size:
         for col in range(columns):
             solution[col] *= inverse_sqrt[col]
