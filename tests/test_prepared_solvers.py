@@ -258,7 +258,8 @@ def test_the_prepared_gain_is_apply_gains_products(rng):
 
 
 def test_the_largest_scale_keeps_the_sum_in_the_box_and_no_larger_one_does(rng):
-    from uvms.solvers.saturation import inside, largest_scale
+    """The compiled saturation: the lowest level is scaled by the largest s that keeps the sum in the box."""
+    from uvms.solvers.saturation import inside, scale_lowest_first
 
     for _ in range(300):
         upper = rng.uniform(0.1, 1.0, 5)
@@ -267,10 +268,15 @@ def test_the_largest_scale_keeps_the_sum_in_the_box_and_no_larger_one_does(rng):
         base = rng.uniform(lower, np.minimum(upper, 2.0)) * 0.9
         step = rng.normal(size=5) * rng.choice([0.1, 1.0, 10.0])
         step[rng.integers(5)] = 0.0
-        scale = largest_scale(base, step, lower, upper)
-        assert 0.0 <= scale <= 1.0 and inside(base + scale * step, lower, upper, 1e-12)
+        total, (first, scale) = scale_lowest_first([base, step], lower, upper)
+        assert first == 1.0 and 0.0 <= scale <= 1.0 and inside(total, lower, upper, 1e-12)
+        assert np.array_equal(total, base + scale * step)
         if scale < 1.0:  # the largest: a bit more leaves the box
             assert not inside(base + (scale + 1e-6) * step, lower, upper, 1e-12)
+    # a level above that leaves the box on its own: the lowest is dropped and that one scaled
+    total, scales = scale_lowest_first([np.array([0.5, 0.0]), np.array([2.0, 0.0]), np.array([0.0, 5.0])],
+                                       -np.ones(2), np.ones(2))
+    assert scales == (1.0, 0.25, 0.0) and np.array_equal(total, [1.0, 0.0])
 
 
 def test_the_levels_are_added_in_order_as_numpy_sums_them(rng):

@@ -21,10 +21,11 @@ from numba import njit
 JACOBI_SWEEPS = 64
 EPSILON = np.finfo(np.float64).eps
 
-__all__ = ["JACOBI_SWEEPS", "cholesky_solve_in_place", "clik_solution_into", "decompose", "dls_pose_velocity",
-           "dls_solve_into", "icat_into", "joint_limit_motion_into", "orthogonalize_rows", "pose_error_norm",
-           "project_into_box", "rotation_to_target", "svd_inverse_into", "variable_damping_value",
-           "weighted_inverse_into"]
+__all__ = ["JACOBI_SWEEPS", "activation_reference_into", "bell_into", "bell_value", "cholesky_solve_in_place",
+           "clik_solution_into", "decompose", "dls_pose_velocity", "dls_solve_into", "icat_into", "inside_box",
+           "joint_limit_motion_into", "orthogonalize_rows", "pose_error_norm", "project_into_box",
+           "rate_bounds_into", "rotation_to_target", "scale_lowest_first_into", "svd_inverse_into",
+           "variable_damping_value", "velocity_box_into", "weighted_inverse_into"]
 
 
 @njit(cache=True)
@@ -488,6 +489,131 @@ def joint_limit_motion_into(q: np.ndarray, q_index: np.ndarray, v_index: np.ndar
     z0[:] = 0.0
     for entry in range(q_index.size):
         z0[v_index[entry]] = -alpha * (weights[entry] * (q[q_index[entry]] - middle[entry]) / range_squared[entry])
+
+
+@njit(cache=True)
+def bell_value(depth: float, band: float, step: bool) -> float:
+    """Activation in [0, 1] of a row ``depth`` inside its border over ``band`` > 0 (iCAT).
+
+    depth <= 0 (on or outside the border): 1; depth >= band: 0; between: (1 + cos(pi depth / band)) / 2
+    (the cosine bell, C1), or 1 (``step``: a hard switch).
+    """
+    ratio = depth / band
+    if step:
+        return 1.0 if ratio < 1.0 else 0.0
+    return 0.5 * (1.0 + np.cos(np.pi * min(max(ratio, 0.0), 1.0)))
+
+
+@njit(cache=True)
+def bell_into(depth: np.ndarray, band: np.ndarray, step: bool, out: np.ndarray) -> None:
+    """:func:`bell_value` of each row (k,), written to ``out`` (k,)."""
+    for row in range(depth.size):
+        out[row] = bell_value(depth[row], band[row], step)
+
+
+@njit(cache=True)
+def activation_reference_into(value: np.ndarray, lower: np.ndarray, upper: np.ndarray, band: np.ndarray,
+                              inner_lower: np.ndarray, inner_upper: np.ndarray, gain: float, step: bool,
+                              activation: np.ndarray, reference: np.ndarray) -> None:
+    """The activation and the reference rate (k,) of an inequality objective at x = ``value`` (k,).
+
+    Each row answers to its nearer bound (the only one when the other is infinite): activation the bell of
+    its depth inside that bound, reference gain (x* - x) with x* = lower + band or upper - band.
+    """
+    for row in range(value.size):
+        near_lower = (value[row] - lower[row]) <= (upper[row] - value[row])
+        depth = value[row] - lower[row] if near_lower else upper[row] - value[row]
+        activation[row] = bell_value(depth, band[row], step)
+        reference[row] = gain * ((inner_lower[row] if near_lower else inner_upper[row]) - value[row])
+
+
+@njit(cache=True)
+def rate_bounds_into(q: np.ndarray, q_index: np.ndarray, v_index: np.ndarray, low: np.ndarray, high: np.ndarray,
+                     dt: float, fraction: float, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Velocity bounds (nv,) that keep joints inside [low, high] after one step of ``dt`` [s].
+
+    lower[v] = max over the rows of v of fraction (low - q) / dt, upper[v] = min of fraction (high - q) / dt;
+    -inf / +inf on the entries no row bounds.
+
+    Args:
+        q: configuration (nq,); q_index, v_index: (m,) each row's coordinate in q and entry of v.
+        low, high: (m,) the position limits kept; dt: the step [s] > 0; fraction: in (0, 1].
+        lower, upper: (nv,) written.
+    """
+    lower[:] = -np.inf
+    upper[:] = np.inf
+    for row in range(q_index.size):
+        now, entry = q[q_index[row]], v_index[row]
+        lower[entry] = max(lower[entry], fraction * (low[row] - now) / dt)
+        upper[entry] = min(upper[entry], fraction * (high[row] - now) / dt)
+
+
+@njit(cache=True)
+def velocity_box_into(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.ndarray, contain_zero: bool,
+                      lower: np.ndarray, upper: np.ndarray) -> None:
+    """The box (nv,) of rate bounds clipped into |v_i| <= maximum_i, never empty (``uvms.solvers.saturation``).
+
+    Where two bounds disagree the tighter upper one wins; ``contain_zero`` widens the box to hold v = 0.
+    """
+    for entry in range(maximum.size):
+        bound = maximum[entry]
+        low = min(max(rate_lower[entry], -bound), bound)
+        high = min(max(rate_upper[entry], -bound), bound)
+        low = min(low, high)
+        if contain_zero:
+            low, high = min(low, 0.0), max(high, 0.0)
+        lower[entry], upper[entry] = low, high
+
+
+@njit(cache=True)
+def inside_box(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, tolerance: float) -> bool:
+    """Whether lower - tolerance <= values <= upper + tolerance, entry by entry."""
+    for entry in range(values.size):
+        if not (values[entry] >= lower[entry] - tolerance and values[entry] <= upper[entry] + tolerance):
+            return False
+    return True
+
+
+@njit(cache=True)
+def scale_lowest_first_into(contributions: np.ndarray, lower: np.ndarray, upper: np.ndarray, tolerance: float,
+                            out: np.ndarray, scales: np.ndarray) -> None:
+    """sum_k s_k c_k inside the box lower <= v <= upper (which holds 0), the lowest levels scaled first.
+
+    If the sum of the contributions c_k (L, nv) leaves the box, the lowest level is scaled by the largest
+    s in [0, 1] that keeps base + s c_k inside, base the sum of the levels above; if even s = 0 does not,
+    it is dropped and the next one up is scaled (``uvms.solvers.saturation``).
+
+    Args:
+        contributions: c_k (L, nv), highest priority first.
+        lower, upper: the box (nv,); tolerance: the slack within which a value counts as inside.
+        out: (nv,) written with the scaled sum; scales: (L,) written with the s_k.
+    """
+    count, size = contributions.shape
+    partial = np.zeros((count + 1, size))  # partial[k]: the sum of the k highest levels
+    for level in range(count):
+        for entry in range(size):
+            partial[level + 1, entry] = partial[level, entry] + contributions[level, entry]
+    scales[:] = 1.0
+    if inside_box(partial[count], lower, upper, tolerance):
+        out[:] = partial[count]
+        return
+    for level in range(count - 1, -1, -1):
+        scales[level] = 0.0
+        base = partial[level]  # the levels above, in full
+        if inside_box(base, lower, upper, tolerance):
+            scale = np.inf  # the largest s with lower <= base + s c <= upper (only moving entries bound it)
+            for entry in range(size):
+                step = contributions[level, entry]
+                if step > 0.0:
+                    scale = min(scale, (upper[entry] - base[entry]) / step)
+                elif step < 0.0:
+                    scale = min(scale, (lower[entry] - base[entry]) / step)
+            scale = min(max(scale, 0.0), 1.0)
+            scales[level] = scale
+            for entry in range(size):
+                out[entry] = base[entry] + scale * contributions[level, entry]
+            return
+    out[:] = 0.0
 
 
 @njit(cache=True)

@@ -52,14 +52,40 @@ def position_rate_bounds(q: np.ndarray, nv: int, joint_limits: Sequence[JointLim
     Returns:
         (lower, upper), -inf / +inf on the entries no objective limits.
     """
-    lower, upper = np.full(nv, -np.inf), np.full(nv, np.inf)  # (nv,) each
-    for objective in joint_limits:
-        low, high = (objective.lower, objective.upper) if valid_set else (objective.hard_lower, objective.hard_upper)
-        now = q[objective.q_index]
-        index = objective.v_index
-        lower[index] = np.maximum(lower[index], fraction * (low - now) / dt)
-        upper[index] = np.minimum(upper[index], fraction * (high - now) / dt)
-    return lower, upper
+    return RateRows.of(joint_limits, valid_set).bounds(q, nv, dt, fraction)
+
+
+class RateRows:
+    """The rows of joint-limit objectives a position-rate bound reads, stacked once (m,) each.
+
+    Attributes:
+        q_index, v_index: each row's coordinate in q and entry of v (int64).
+        low, high: the position limits kept [rad or m].
+    """
+
+    def __init__(self, q_index: np.ndarray, v_index: np.ndarray, low: np.ndarray, high: np.ndarray) -> None:
+        self.q_index, self.v_index, self.low, self.high = q_index, v_index, low, high
+
+    @classmethod
+    def of(cls, joint_limits: Sequence[JointLimits], valid_set: bool = False) -> RateRows:
+        """The model's limits of the objectives' rows (their valid sets with ``valid_set``)."""
+        def stacked(parts: list[np.ndarray], kind: type) -> np.ndarray:
+            return np.concatenate(parts).astype(kind) if parts else np.zeros(0, dtype=kind)
+
+        return cls(stacked([objective.q_index for objective in joint_limits], np.int64),
+                   stacked([objective.v_index for objective in joint_limits], np.int64),
+                   stacked([objective.lower if valid_set else objective.hard_lower for objective in joint_limits],
+                           float),
+                   stacked([objective.upper if valid_set else objective.hard_upper for objective in joint_limits],
+                           float))
+
+    def bounds(self, q: np.ndarray, nv: int, dt: float, fraction: float) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) (nv,) at q (:func:`~uvms.kernels.rate_bounds_into`)."""
+        from ..kernels import rate_bounds_into  # numba: loaded at the first use, not by ``import uvms``
+
+        lower, upper = np.empty(nv), np.empty(nv)
+        rate_bounds_into(q, self.q_index, self.v_index, self.low, self.high, dt, fraction, lower, upper)
+        return lower, upper
 
 
 def velocity_box(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.ndarray,
@@ -72,11 +98,11 @@ def velocity_box(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.nda
         contain_zero: also widen the box to hold v = 0 (what scaling needs; a joint outside its limit is
             then stopped, not pushed further out, and its objective brings it back).
     """
-    lower = np.minimum(np.maximum(rate_lower, -maximum), maximum)  # np.clip's numbers, a third of its cost
-    upper = np.minimum(np.maximum(rate_upper, -maximum), maximum)
-    lower = np.minimum(lower, upper)  # only when two objectives disagree; the tighter upper bound wins
-    if contain_zero:
-        lower, upper = np.minimum(lower, 0.0), np.maximum(upper, 0.0)
+    from ..kernels import velocity_box_into  # numba: loaded at the first use, not by ``import uvms``
+
+    lower, upper = np.empty(maximum.size), np.empty(maximum.size)
+    velocity_box_into(np.ascontiguousarray(maximum, dtype=float), np.ascontiguousarray(rate_lower, dtype=float),
+                      np.ascontiguousarray(rate_upper, dtype=float), contain_zero, lower, upper)
     return lower, upper
 
 
@@ -85,17 +111,10 @@ def inside(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, tolerance: 
     return bool((values >= lower - tolerance).all() and (values <= upper + tolerance).all())
 
 
-def largest_scale(base: np.ndarray, step: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
-    """The largest s in [0, 1] with lower <= base + s step <= upper, for ``base`` inside the box."""
-    rising, falling = step > 0, step < 0  # only these entries bound s (a zero step never leaves the box)
-    up = (upper[rising] - base[rising]) / step[rising]
-    down = (lower[falling] - base[falling]) / step[falling]
-    return float(min(max(min(up.min(initial=np.inf), down.min(initial=np.inf)), 0.0), 1.0))
-
-
 def scale_lowest_first(contributions: Sequence[np.ndarray], lower: np.ndarray,
                        upper: np.ndarray) -> tuple[np.ndarray, tuple[float, ...]]:
-    """sum_k s_k c_k inside the box, the lowest levels scaled first.
+    """sum_k s_k c_k inside the box, the lowest levels scaled first (one compiled call,
+    :func:`~uvms.kernels.scale_lowest_first_into`).
 
     Args:
         contributions: c_k (nv,) per level, highest priority first.
@@ -104,15 +123,11 @@ def scale_lowest_first(contributions: Sequence[np.ndarray], lower: np.ndarray,
     Returns:
         (the scaled sum (nv,), the scales s_k).
     """
+    from ..kernels import scale_lowest_first_into  # numba: loaded at the first solve, not by ``import uvms``
+
     count = len(contributions)
-    partial = [np.zeros_like(lower)]
-    for contribution in contributions:
-        partial.append(partial[-1] + contribution)
-    if inside(partial[-1], lower, upper):
-        return partial[-1], (1.0,) * count
-    for level in range(count - 1, -1, -1):
-        base = partial[level]  # the levels above, in full
-        if inside(base, lower, upper):
-            scale = largest_scale(base, contributions[level], lower, upper)
-            return base + scale * contributions[level], (1.0,) * level + (scale,) + (0.0,) * (count - level - 1)
-    return partial[0], (0.0,) * count
+    stacked = np.array(contributions, dtype=float).reshape(count, lower.size)
+    out, scales = np.empty(lower.size), np.empty(count)
+    scale_lowest_first_into(stacked, np.ascontiguousarray(lower, dtype=float),
+                            np.ascontiguousarray(upper, dtype=float), TOLERANCE, out, scales)
+    return out, tuple(scales.tolist())

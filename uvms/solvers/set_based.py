@@ -49,7 +49,7 @@ from .inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse
                        damping_parameters)
 from .prepared import PREPARED
 from .results import SetBasedResult, StepResult
-from .saturation import inside, position_rate_bounds, scale_lowest_first, speed_maximum, velocity_box
+from .saturation import RateRows, inside, scale_lowest_first, speed_maximum, velocity_box
 
 # the hierarchy's pieces stay importable from here
 __all__ = ["Hierarchy", "LevelItem", "LevelRows", "Levels", "SetBasedSolver", "build_hierarchy", "icat_inverse",
@@ -175,6 +175,7 @@ class SetBasedSolver:
         self.dt = None if dt is None else check_scalar(dt, "dt", positive=True)
         self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
         self._rates = self.dt is not None and bool(self.plan.joint_limits)  # position-rate bounds at every q
+        self._rate_rows = RateRows.of(self.plan.joint_limits)  # their rows, stacked once
         unbounded = np.full(robot.nv, np.inf)
         self._box = velocity_box(self.maximum, -unbounded, unbounded, contain_zero=True)  # (nv,), (nv,) without them
 
@@ -182,7 +183,7 @@ class SetBasedSolver:
         """The velocity box (nv,), (nv,) at q: speed limits and the joint limits' rate bounds over dt."""
         if not self._rates:
             return self._box
-        rates = position_rate_bounds(q, self.robot.nv, self.plan.joint_limits, self.dt, self.fraction)
+        rates = self._rate_rows.bounds(q, self.robot.nv, self.dt, self.fraction)
         return velocity_box(self.maximum, *rates, contain_zero=True)
 
     def _solution(self, state: KinematicState) -> tuple[Hierarchy, np.ndarray, tuple[float, ...], list[float], float]:

@@ -36,12 +36,15 @@ def bell(depth: np.ndarray, band: np.ndarray, shape: str = "cosine") -> np.ndarr
     """Activation (k,) in [0, 1] of rows ``depth`` [units of x] inside their border, over ``band`` (k,) > 0.
 
     depth <= 0 (on or outside the border): 1; depth >= band: 0; between: (1 + cos(pi depth / band)) / 2
-    (``"cosine"``, C1) or 1 (``"step"``).
+    (``"cosine"``, C1) or 1 (``"step"``) (:func:`uvms.kernels.bell_value`).
     """
-    s = np.asarray(depth, dtype=float) / band
-    if shape == "step":
-        return np.where(s < 1.0, 1.0, 0.0)
-    return 0.5 * (1.0 + np.cos(np.pi * np.minimum(np.maximum(s, 0.0), 1.0)))  # np.clip's numbers, a third of its cost
+    from ...kernels import bell_into  # numba: loaded at the first use, not by ``import uvms``
+
+    depth = np.atleast_1d(np.asarray(depth, dtype=float))
+    out = np.empty(depth.shape)
+    bell_into(depth.reshape(-1), np.broadcast_to(np.asarray(band, dtype=float), depth.shape).reshape(-1).copy(),
+              shape == "step", out.reshape(-1))
+    return out
 
 
 @dataclass(frozen=True)
@@ -142,31 +145,31 @@ class Inequality(ABC):
     def jacobian(self, state: KinematicState) -> np.ndarray:
         """dx/dt = J v: (k, nv), world-aligned."""
 
-    def _near_lower(self, value: np.ndarray) -> np.ndarray:
-        """(k,) bool: the lower bound is the nearer one (or the only one)."""
-        return (value - self.lower) <= (self.upper - value)
+    def activation(self, value: np.ndarray) -> np.ndarray:
+        """Activation (k,) in [0, 1] at x = ``value`` (k,): the bell of the nearer bound (the larger of the two)."""
+        return self._activation_reference(value)[0]
 
-    def activation(self, value: np.ndarray, near_lower: np.ndarray | None = None) -> np.ndarray:
-        """Activation (k,) in [0, 1] at x = ``value`` (k,): the bell of the nearer bound (the larger of the two).
-
-        ``near_lower``: :meth:`_near_lower` of ``value`` when the caller has it."""
-        near_lower = self._near_lower(value) if near_lower is None else near_lower
-        depth = np.where(near_lower, value - self.lower, self.upper - value)  # >= 0 inside
-        return bell(depth, self.band, self.shape)
-
-    def reference(self, value: np.ndarray, near_lower: np.ndarray | None = None) -> np.ndarray:
+    def reference(self, value: np.ndarray) -> np.ndarray:
         """Reference rate (k,): gain (x* - x), x* = lower + band or upper - band (the nearer side)."""
-        near_lower = self._near_lower(value) if near_lower is None else near_lower
-        target = np.where(near_lower, self._inner_lower, self._inner_upper)
-        return self.gain * (target - value)
+        return self._activation_reference(value)[1]
+
+    def _activation_reference(self, value: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(activation (k,), reference (k,)) at x = ``value`` in one compiled call
+        (:func:`uvms.kernels.activation_reference_into`)."""
+        from ...kernels import activation_reference_into  # numba: loaded at the first use, not by ``import uvms``
+
+        activation, reference = np.empty(self.dim), np.empty(self.dim)
+        activation_reference_into(np.ascontiguousarray(value, dtype=float), self.lower, self.upper, self.band,
+                                  self._inner_lower, self._inner_upper, self.gain, self.shape == "step", activation,
+                                  reference)
+        return activation, reference
 
     def rows(self, state: KinematicState) -> InequalityRows:
         """Everything a solver reads, at ``state``."""
         value = self.value(state)
-        near_lower = self._near_lower(value)
+        activation, reference = self._activation_reference(value)
         return InequalityRows(name=self.name, value=value, jacobian=self.jacobian(state), lower=self.lower,
-                              upper=self.upper, activation=self.activation(value, near_lower),
-                              reference=self.reference(value, near_lower), gain=self.gain)
+                              upper=self.upper, activation=activation, reference=reference, gain=self.gain)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name!r}, dim={self.dim})"
