@@ -173,6 +173,67 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
 
 
 @njit(cache=True)
+def product(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """left @ right (m, n) of (m, k) and (k, n) in loops (numba's BLAS binding takes a second to compile)."""
+    rows, inner = left.shape
+    out = np.zeros((rows, right.shape[1]))
+    for row in range(rows):
+        for k in range(inner):
+            value = left[row, k]
+            for col in range(right.shape[1]):
+                out[row, col] += value * right[k, col]
+    return out
+
+
+@njit(cache=True)
+def apply(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
+    """matrix @ vector (m,) of (m, k) and (k,) in loops."""
+    out = np.zeros(matrix.shape[0])
+    for row in range(matrix.shape[0]):
+        total = 0.0
+        for k in range(matrix.shape[1]):
+            total += matrix[row, k] * vector[k]
+        out[row] = total
+    return out
+
+
+@njit(cache=True)
+def scale_columns(matrix: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """matrix diag(scale) (m, n): column j times scale[j] (n,), a new array."""
+    out = np.empty(matrix.shape)
+    for row in range(matrix.shape[0]):
+        for col in range(matrix.shape[1]):
+            out[row, col] = matrix[row, col] * scale[col]
+    return out
+
+
+@njit(cache=True)
+def scale_rows(matrix: np.ndarray, scale: np.ndarray) -> np.ndarray:
+    """diag(scale) matrix (m, n): row i times scale[i] (m,), a new array."""
+    out = np.empty(matrix.shape)
+    for row in range(matrix.shape[0]):
+        for col in range(matrix.shape[1]):
+            out[row, col] = matrix[row, col] * scale[row]
+    return out
+
+
+@njit(cache=True)
+def copy_into(target: np.ndarray, source: np.ndarray) -> None:
+    """target[:, :] = source (m, n) in loops (numba's broadcasting slice assignment takes seconds to compile)."""
+    for row in range(source.shape[0]):
+        for col in range(source.shape[1]):
+            target[row, col] = source[row, col]
+
+
+@njit(cache=True)
+def subtract_in_place(matrix: np.ndarray, other: np.ndarray) -> None:
+    """matrix -= other, both (m, n)."""
+    for row in range(matrix.shape[0]):
+        for col in range(matrix.shape[1]):
+            matrix[row, col] -= other[row, col]
+
+
+@njit(cache=True)
 def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float,
                           epsilon: float, lambda_max: float, rcond: float,
                           out: np.ndarray) -> tuple[bool, float, float]:
@@ -189,15 +250,15 @@ def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transfor
         (converged, sigma_min of X L^-T, l used), as :func:`svd_inverse_into`.
     """
     if inverse_sqrt.size:
-        converged, sigma_min, used = svd_inverse_into(matrix * inverse_sqrt, damping, epsilon, lambda_max, rcond, out)
+        converged, sigma_min, used = svd_inverse_into(scale_columns(matrix, inverse_sqrt), damping, epsilon, lambda_max, rcond, out)
         for row in range(out.shape[0]):
             for col in range(out.shape[1]):
                 out[row, col] *= inverse_sqrt[row]
     elif transform.size:
         scaled = np.empty_like(out)
-        scaled_matrix = np.ascontiguousarray(matrix) @ transform  # X L^-T
+        scaled_matrix = product(matrix, transform)  # X L^-T
         converged, sigma_min, used = svd_inverse_into(scaled_matrix, damping, epsilon, lambda_max, rcond, scaled)
-        out[:, :] = transform @ scaled
+        copy_into(out, product(transform, scaled))
     else:
         converged, sigma_min, used = svd_inverse_into(matrix, damping, epsilon, lambda_max, rcond, out)
     return converged, sigma_min, used
@@ -230,7 +291,9 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
     """
     size = jacobians.shape[1]
     rho = np.zeros(size)
-    projector = np.eye(size)
+    projector = np.zeros((size, size))  # Q = I
+    for entry in range(size):
+        projector[entry, entry] = 1.0
     unrestricted = True  # Q = I exactly: no level above has moved anything
     undamped = epsilon == 0.0 and damping == 0.0
     root_eta = np.sqrt(eta)
@@ -249,49 +312,67 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
         if not equality[level] and active == 0:
             continue
         jacobian = jacobians[first:last]
-        remaining = references[first:last] - jacobian @ rho
+        remaining = apply(jacobian, rho)
+        for row in range(last - first):
+            remaining[row] = references[first + row] - remaining[row]  # xdot_k - J_k rho_{k-1}
         if unrestricted and (equality[level] or ones):  # the CLIK case
             inverse = np.empty((size, last - first))
             converged, sigma_min, used = weighted_inverse_into(jacobian, inverse_sqrt, transform, damping, epsilon,
                                                                lambda_max, rcond, inverse)
             if not converged:
                 return False, largest
-            contribution = inverse @ remaining
-            projector = projector - inverse @ jacobian
+            contribution = apply(inverse, remaining)
+            subtract_in_place(projector, product(inverse, jacobian))
         else:
-            rows = np.empty(active, dtype=np.int64)
+            rows = np.empty(active, dtype=np.int64)  # the active rows, their a^1/2 and a^1.5
+            root, power = np.empty(active), np.empty(active)
             count = 0
             for row in range(last - first):
-                if activations[first + row] > 0.0:
-                    rows[count] = row
+                value = activations[first + row]
+                if value > 0.0:
+                    rows[count], root[count], power[count] = row, np.sqrt(value), value ** 1.5
                     count += 1
-            root = np.sqrt(activations[first:last][rows])
-            power = activations[first:last][rows] ** 1.5
-            projected = jacobian[rows] if unrestricted else jacobian[rows] @ projector  # X (m, n)
-            scaled = projected * root.reshape(-1, 1)  # A^1/2 X
+            selected = np.empty((active, size))
+            for row in range(active):
+                for col in range(size):
+                    selected[row, col] = jacobian[rows[row], col]
+            projected = selected if unrestricted else product(selected, projector)  # X (m, n)
+            scaled = scale_rows(projected, root)  # A^1/2 X
             inverse = np.empty((size, active))
             converged, sigma_min, used = weighted_inverse_into(scaled, inverse_sqrt, transform, damping, epsilon,
                                                                lambda_max, rcond, inverse)
             if not converged:
                 return False, largest
-            inverse = inverse * power  # X^{#,A,I} (n, m): the columns scale by a^1.5
+            inverse = scale_columns(inverse, power)  # X^{#,A,I} (n, m): the columns scale by a^1.5
             if unrestricted and undamped:
                 regularized = inverse
             else:  # X^{#,A,Q}, undamped: Z = [A^1/2 X; eta^1/2 (I - Q)] (Q = I: no eta rows)
                 stacked = scaled
                 if not unrestricted and eta > 0.0:
-                    stacked = np.concatenate((scaled, root_eta * (np.eye(size) - projector)))
+                    stacked = np.empty((active + size, size))
+                    copy_into(stacked[:active], scaled)
+                    for row in range(size):
+                        for col in range(size):
+                            stacked[active + row, col] = root_eta * ((1.0 if row == col else 0.0) - projector[row, col])
                 full = np.empty((size, stacked.shape[0]))
                 converged, _, _ = weighted_inverse_into(stacked, inverse_sqrt, transform, 0.0, 0.0, 0.0, rcond, full)
                 if not converged:
                     return False, largest
-                regularized = np.ascontiguousarray(full[:, :active]) * power
-            transfer = projected @ regularized  # W_k (m, m)
-            contribution = projector @ (inverse @ (transfer @ remaining[rows]))
-            projector = projector - projector @ (inverse @ projected)
-        rho = rho + contribution
+                regularized = np.empty((size, active))
+                for row in range(size):
+                    for col in range(active):
+                        regularized[row, col] = full[row, col] * power[col]
+            transfer = product(projected, regularized)  # W_k (m, m)
+            wanted = np.empty(active)
+            for row in range(active):
+                wanted[row] = remaining[rows[row]]
+            contribution = apply(projector, apply(inverse, apply(transfer, wanted)))
+            subtract_in_place(projector, product(projector, product(inverse, projected)))
+        for entry in range(size):
+            rho[entry] += contribution[entry]
         unrestricted = False
-        contributions[level, :] = contribution
+        for entry in range(size):
+            contributions[level, entry] = contribution[entry]
         sigmas[level] = sigma_min
         largest = max(largest, used)
     return True, largest
@@ -325,9 +406,9 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
             for col in range(columns):
                 rhs[row] -= jacobian[row, col] * z0[col]
     if inverse_sqrt.size:
-        scaled = jacobian * inverse_sqrt  # J W^-1/2, column by column
+        scaled = scale_columns(jacobian, inverse_sqrt)  # J W^-1/2
     elif transform.size:
-        scaled = np.ascontiguousarray(jacobian) @ transform  # J L^-T
+        scaled = product(jacobian, transform)  # J L^-T
     else:
         scaled = jacobian
     converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max,
@@ -349,7 +430,7 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
         for col in range(columns):
             solution[col] *= inverse_sqrt[col]
     elif transform.size:
-        solution = transform @ solution
+        solution = apply(transform, solution)
     for col in range(columns):
         out[col] = solution[col] + z0[col] if z0.size else solution[col]
     return True, sigma_min, used
@@ -409,10 +490,10 @@ def dls_solve_into(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float
     for row in range(rows):
         solution[row] = rhs[row]
         for other in range(row + 1):
-            product = 0.0
+            dot = 0.0
             for col in range(columns):
-                product += jacobian[row, col] * jacobian[other, col]
-            system[row, other] = product
+                dot += jacobian[row, col] * jacobian[other, col]
+            system[row, other] = dot
         system[row, row] += damping_squared
     if not cholesky_solve_in_place(system, solution):
         return False
@@ -595,7 +676,8 @@ def scale_lowest_first_into(contributions: np.ndarray, lower: np.ndarray, upper:
             partial[level + 1, entry] = partial[level, entry] + contributions[level, entry]
     scales[:] = 1.0
     if inside_box(partial[count], lower, upper, tolerance):
-        out[:] = partial[count]
+        for entry in range(size):
+            out[entry] = partial[count, entry]
         return
     for level in range(count - 1, -1, -1):
         scales[level] = 0.0
