@@ -8,8 +8,11 @@ Jacobian, logarithm and integration.
 
 The module imports numba, so it is loaded where a solver first uses it, not by ``import uvms``. The
 kernels compile at their first call and are cached on disk beside this file (or in numba's user cache
-when the package folder is read-only): the first solve after an install compiles them (seconds); later
-processes load the machine code (about 0.5 s for numba itself).
+when the package folder is read-only): the first solve after an install or an edit of this file compiles
+the kernels it calls (about 3.5 s for the CLIK's, 7 s for the set-based solver's); every later process
+loads the machine code (numba's import and first call, about 0.5-1 s together). Products, scalings and
+copies are written as loops: numba's BLAS binding and its broadcasting slice assignment cost seconds of
+compilation each, and at (6, nv) sizes the loops are as fast.
 """
 
 from __future__ import annotations
@@ -107,8 +110,8 @@ def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: fl
 
     B = G A (rows s_i v_i^T) when k <= n (``wide``), else B = G A^T (rows s_i u_i^T); factors (m,) are
     1 / (s_i^2 + l^2), or with l = 0 1 / s_i^2 above rcond * s_max and 0 below, so that
-    A^+ = B^T diag(factors) G (wide) or G^T diag(factors) B (tall): right^T diag(factors) left. sigma_min is 0 when k > n; l is the
-    fixed ``damping``, or the variable damping of sigma_min when ``epsilon`` > 0.
+    A^+ = B^T diag(factors) G (wide) or G^T diag(factors) B (tall): right^T diag(factors) left. sigma_min is 0
+    when k > n; l is the fixed ``damping``, or the variable damping of sigma_min when ``epsilon`` > 0.
     """
     rows, columns = matrix.shape
     wide = rows <= columns
@@ -198,22 +201,13 @@ def apply(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def scale_columns(matrix: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """matrix diag(scale) (m, n): column j times scale[j] (n,), a new array."""
+def scale_matrix(matrix: np.ndarray, scale: np.ndarray, rows: bool) -> np.ndarray:
+    """diag(scale) matrix (``rows``: row i times scale[i]) or matrix diag(scale) (column j times scale[j]),
+    (m, n), a new array."""
     out = np.empty(matrix.shape)
     for row in range(matrix.shape[0]):
         for col in range(matrix.shape[1]):
-            out[row, col] = matrix[row, col] * scale[col]
-    return out
-
-
-@njit(cache=True)
-def scale_rows(matrix: np.ndarray, scale: np.ndarray) -> np.ndarray:
-    """diag(scale) matrix (m, n): row i times scale[i] (m,), a new array."""
-    out = np.empty(matrix.shape)
-    for row in range(matrix.shape[0]):
-        for col in range(matrix.shape[1]):
-            out[row, col] = matrix[row, col] * scale[row]
+            out[row, col] = matrix[row, col] * scale[row if rows else col]
     return out
 
 
@@ -250,7 +244,8 @@ def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transfor
         (converged, sigma_min of X L^-T, l used), as :func:`svd_inverse_into`.
     """
     if inverse_sqrt.size:
-        converged, sigma_min, used = svd_inverse_into(scale_columns(matrix, inverse_sqrt), damping, epsilon, lambda_max, rcond, out)
+        converged, sigma_min, used = svd_inverse_into(scale_matrix(matrix, inverse_sqrt, False), damping, epsilon,
+                                                       lambda_max, rcond, out)
         for row in range(out.shape[0]):
             for col in range(out.shape[1]):
                 out[row, col] *= inverse_sqrt[row]
@@ -337,13 +332,13 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
                 for col in range(size):
                     selected[row, col] = jacobian[rows[row], col]
             projected = selected if unrestricted else product(selected, projector)  # X (m, n)
-            scaled = scale_rows(projected, root)  # A^1/2 X
+            scaled = scale_matrix(projected, root, True)  # A^1/2 X
             inverse = np.empty((size, active))
             converged, sigma_min, used = weighted_inverse_into(scaled, inverse_sqrt, transform, damping, epsilon,
                                                                lambda_max, rcond, inverse)
             if not converged:
                 return False, largest
-            inverse = scale_columns(inverse, power)  # X^{#,A,I} (n, m): the columns scale by a^1.5
+            inverse = scale_matrix(inverse, power, False)  # X^{#,A,I} (n, m): the columns scale by a^1.5
             if unrestricted and undamped:
                 regularized = inverse
             else:  # X^{#,A,Q}, undamped: Z = [A^1/2 X; eta^1/2 (I - Q)] (Q = I: no eta rows)
@@ -406,7 +401,7 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
             for col in range(columns):
                 rhs[row] -= jacobian[row, col] * z0[col]
     if inverse_sqrt.size:
-        scaled = scale_columns(jacobian, inverse_sqrt)  # J W^-1/2
+        scaled = scale_matrix(jacobian, inverse_sqrt, False)  # J W^-1/2
     elif transform.size:
         scaled = product(jacobian, transform)  # J L^-T
     else:

@@ -23,11 +23,10 @@ import numpy as np
 from ..errors import NumericalError, SolverInputError
 from .checks import check_damping, check_matrix, check_variable_damping, check_weights
 
-__all__ = [
-    "RCOND", "SolverInputError", "VariableDamping", "WeightsFactor", "check_damping", "check_matrix",
-    "WeightedInverse", "damped_weighted_inverse", "dls", "dls_solve", "pinv", "prepared_svd_inverse", "smallest_singular_value", "svd_inverse",
-    "variable_damping", "weighted_pinv", "weights_factor", "weights_subset",
-]
+__all__ = ["RCOND", "SolverInputError", "VariableDamping", "WeightsFactor", "check_damping", "check_matrix",
+           "WeightedInverse", "damped_weighted_inverse", "dls", "dls_solve", "pinv", "prepared_svd_inverse",
+           "smallest_singular_value", "svd_inverse", "variable_damping", "weighted_pinv", "weights_factor",
+           "weights_subset"]
 
 #: Relative cut-off below which singular values count as zero (that of the compiled inverse).
 RCOND = 1e-12
