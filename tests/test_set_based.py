@@ -330,3 +330,110 @@ def test_names_and_parameters_are_checked_with_the_valid_ones():
     built = inequalities_from_table(robot, {"type": "joint_velocity", "max": 0.3, "vehicle_max": [0.5, 0.2]})
     assert [type(item).__name__ for item in built] == ["JointVelocityLimits", "VehicleVelocityLimits"]
     assert built[1].maximum[:6].tolist() == [0.5, 0.5, 0.5, 0.2, 0.2, 0.2]
+
+
+def weighted_damped_inverse_reference(matrix: np.ndarray, weights: np.ndarray, damping: float,
+                                      floor: float = 0.0) -> np.ndarray:
+    """L^-T V diag(s / (s^2 + l^2)) U^T of Z L^-T = U S V^T, W = L L^T, from LAPACK's SVD (other numbers than the
+    compiled Jacobi SVD's): singular values at or below ``floor`` and, undamped, below 1e-12 s_max dropped."""
+    factor_t_inv = np.linalg.inv(np.linalg.cholesky(weights)).T  # L^-T
+    u, s, vt = np.linalg.svd(matrix @ factor_t_inv, full_matrices=False)
+    keep = s > max(floor, 0.0 if damping > 0 else 1e-12 * s.max(initial=0.0))
+    return factor_t_inv @ (vt[keep].T * (s[keep] / (s[keep] ** 2 + damping**2))) @ u[:, keep].T
+
+
+def icat_reference(levels: list, weights: np.ndarray, damping: float, eta: float) -> np.ndarray:
+    """Simetti and Casalino (2016) eqs. 18-20 in numpy: rho_k - rho_{k-1} of each level (L, n).
+
+    rho_k = rho_{k-1} + Q (J Q)^{#,A,I} W_k (xdot - J rho_{k-1}), W_k = J Q (J Q)^{#,A,Q},
+    Q_k = Q (I - (J Q)^{#,A,I} J Q), X^{#,A,Q} = (X^T A X + eta (I - Q)^T (I - Q))^# X^T A A, the damping in
+    X^{#,A,I} only; a level of activations 1 while Q = I is plain CLIK. Below the first level, singular values
+    of X = J Q under 1e-12 of |A^1/2 J L^-T|_F count as zero: the rounding Q keeps of the levels above.
+    """
+    size = weights.shape[0]
+    rho, projector, unrestricted = np.zeros(size), np.eye(size), True
+    contributions = []
+    for jacobian, reference, activation, equality in levels:
+        if not equality and not (activation > 0).any():
+            contributions.append(np.zeros(size))
+            continue
+        remaining = reference - jacobian @ rho
+        if unrestricted and (equality or (activation == 1).all()):
+            inverse = weighted_damped_inverse_reference(jacobian, weights, damping)
+            contribution = inverse @ remaining
+            projector = projector - inverse @ jacobian
+        else:
+            active = activation > 0
+            a = activation[active]
+            projected = jacobian[active] @ projector
+            rows = np.sqrt(a)[:, None] * projected
+            factor_t_inv = np.linalg.inv(np.linalg.cholesky(weights)).T
+            unprojected = np.sqrt(a)[:, None] * jacobian[active] @ factor_t_inv
+            floor = 0.0 if unrestricted else 1e-12 * np.linalg.norm(unprojected)
+            inverse = weighted_damped_inverse_reference(rows, weights, damping, floor) * a**1.5
+            if not unrestricted and eta > 0:
+                rows = np.vstack([rows, np.sqrt(eta) * (np.eye(size) - projector)])
+            regularized = weighted_damped_inverse_reference(rows, weights, 0.0, floor)[:, : a.size] * a**1.5
+            contribution = projector @ inverse @ (projected @ regularized) @ remaining[active]
+            projector = projector - projector @ inverse @ projected
+        rho = rho + contribution
+        unrestricted = False
+        contributions.append(contribution)
+    return np.array(contributions)
+
+
+@pytest.mark.parametrize("weighting", ["identity", "diagonal", "full"])
+@pytest.mark.parametrize("damping", [0.0, 0.05])
+@pytest.mark.parametrize("eta", [0.0, 0.01])
+def test_the_compiled_icat_recursion_is_the_papers_formulas(rng, weighting, damping, eta):
+    """The one compiled iCAT call (kernels.icat_into) against the paper's formulas in numpy, over levels with
+    partial, zero and unit activations, an equality level, and the plain-CLIK first level."""
+    from uvms.kernels import icat_into
+    from uvms.solvers.inverses import RCOND, WeightedInverse
+
+    size = 6  # fewer columns than active rows: the eta term changes the answer
+    weights_given = {"identity": None, "diagonal": rng.uniform(0.5, 3.0, size),
+                     "full": (lambda m: m @ m.T + size * np.eye(size))(rng.normal(size=(size, size)))}[weighting]
+    weights = np.eye(size) if weights_given is None else np.diag(weights_given) if weights_given.ndim == 1 \
+        else weights_given
+    kernel_weights = WeightedInverse(weights_given, size).kernel_weights
+    for first_is_clik in (False, True):
+        activations = [np.array([0.0, 0.4, 1.0]), np.ones(3), np.array([0.7, 0.2, 0.5]), np.zeros(2)]
+        if first_is_clik:
+            activations[0] = np.ones(3)
+        equality = np.array([False, True, False, False])
+        jacobians = [rng.normal(size=(a.size, size)) for a in activations]
+        references = [rng.normal(size=a.size) for a in activations]
+        levels = list(zip(jacobians, references, activations, equality))
+        offsets = np.cumsum([0] + [a.size for a in activations]).astype(np.int64)
+        contributions, sigmas = np.empty((4, size)), np.empty(4)
+        converged, _ = icat_into(np.concatenate(jacobians), np.concatenate(references), np.concatenate(activations),
+                                 offsets, equality, *kernel_weights, damping, 0.0, 0.0, RCOND, eta, contributions,
+                                 sigmas)
+        expected = icat_reference(levels, weights, damping, eta)
+        assert converged
+        assert np.abs(contributions - expected).max() <= 1e-9 * max(1.0, np.abs(expected).max())
+        assert np.abs(expected[1]).max() > 1e-3 and np.all(contributions[3] == 0.0)  # a level moved; the idle one not
+        if eta > 0 and not first_is_clik:  # the test sees the eta term: without it the numbers differ
+            assert np.abs(icat_reference(levels, weights, damping, 0.0) - expected).max() > 1e-6
+        if first_is_clik and damping == 0:  # the two levels above take all six directions: nothing is left
+            assert np.abs(contributions[2]).max() <= 1e-9
+
+
+def test_icat_inverse_is_the_papers_regularized_inverse(rng):
+    """icat_inverse (one level, the same compiled inverse as the recursion) against (X^T A X + eta (I - Q)^T
+    (I - Q) + l^2 W)^-1 X^T A A."""
+    from uvms.solvers.set_based import icat_inverse
+
+    size = 7
+    jacobian, activation = rng.normal(size=(3, size)), np.array([0.3, 1.0, 0.6])
+    basis = np.linalg.qr(rng.normal(size=(size, 2)))[0]
+    projector = np.eye(size) - basis @ basis.T  # Q of a level above of rank 2
+    weights = rng.uniform(0.5, 2.0, size)
+    for damping, eta in ((0.0, 0.1), (0.05, 0.1), (0.05, 0.0)):
+        inverse, _, used = icat_inverse(jacobian, activation, projector, weights, damping, eta)
+        rows = np.sqrt(activation)[:, None] * jacobian
+        if eta > 0:
+            rows = np.vstack([rows, np.sqrt(eta) * (np.eye(size) - projector)])
+        expected = weighted_damped_inverse_reference(rows, np.diag(weights), damping)[:, :3] * activation**1.5
+        assert used == damping and np.abs(inverse - expected).max() <= 1e-10 * np.abs(expected).max()

@@ -105,11 +105,13 @@ def orthogonalize_rows(rows: np.ndarray, rotation: np.ndarray) -> bool:
 
 
 @njit(cache=True)
-def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: float, rcond: float):
+def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: float, rcond: float,
+              floor: float):
     """The SVD of A (k, n) as the inverse needs it: (converged, wide, B, G, factors, sigma_min, l used).
 
     B = G A (rows s_i v_i^T) when k <= n (``wide``), else B = G A^T (rows s_i u_i^T); factors (m,) are
-    1 / (s_i^2 + l^2), or with l = 0 1 / s_i^2 above rcond * s_max and 0 below, so that
+    1 / (s_i^2 + l^2), or with l = 0 1 / s_i^2 above rcond * s_max and 0 below, and 0 for s_i <= ``floor`` (an
+    absolute noise level, 0: none), so that
     A^+ = B^T diag(factors) G (wide) or G^T diag(factors) B (tall): right^T diag(factors) left. sigma_min is 0
     when k > n; l is the fixed ``damping``, or the variable damping of sigma_min when ``epsilon`` > 0.
     """
@@ -133,6 +135,8 @@ def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: fl
     sigma_min = smallest if wide and count > 0 else 0.0
     used = variable_damping_value(sigma_min, epsilon, lambda_max) if epsilon > 0.0 else damping
     for row in range(count):
+        if singular[row] <= floor and floor > 0.0:
+            continue  # rounding noise: its direction is no direction
         if used > 0.0:
             factors[row] = 1.0 / (singular[row] * singular[row] + used * used)
         elif singular[row] > rcond * largest:
@@ -142,7 +146,7 @@ def decompose(matrix: np.ndarray, damping: float, epsilon: float, lambda_max: fl
 
 @njit(cache=True)
 def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambda_max: float, rcond: float,
-                     out: np.ndarray) -> tuple[bool, float, float]:
+                     floor: float, out: np.ndarray) -> tuple[bool, float, float]:
     """The DLS inverse V diag(s / (s^2 + l^2)) U^T (n, k) of J (k, n) from its SVD, with sigma_min and l.
 
     The SVD is a one-sided Jacobi on the rows of J (of J^T when k > n), so the inverse is formed as
@@ -154,13 +158,14 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
         damping: a fixed l >= 0 (used when ``epsilon`` is 0).
         epsilon, lambda_max: the variable damping of amundsen2018 eq. 6 when epsilon > 0.
         rcond: with l = 0, the relative cut-off of singular values (``uvms.solvers.inverses.RCOND``).
+        floor: singular values at or below it count as zero, damped or not (0: none).
         out: (n, k) written with the inverse.
 
     Returns:
         (converged (False for a non-finite J), sigma_min (0 when k > n), l used).
     """
     converged, wide, work, rotation, factors, sigma_min, used = decompose(jacobian, damping, epsilon, lambda_max,
-                                                                          rcond)
+                                                                          rcond, floor)
     if not converged:
         return False, sigma_min, used
     left, right = (rotation, work) if wide else (work, rotation)  # A^+ = right^T diag(factors) left
@@ -228,8 +233,23 @@ def subtract_in_place(matrix: np.ndarray, other: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def weighted_norm(matrix: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray) -> float:
+    """The Frobenius norm of X L^-T (W = L L^T; W as :func:`weighted_inverse_into` takes it) of X (m, n)."""
+    weighted = matrix
+    if inverse_sqrt.size:
+        weighted = scale_matrix(matrix, inverse_sqrt, False)
+    elif transform.size:
+        weighted = product(matrix, transform)
+    total = 0.0
+    for row in range(weighted.shape[0]):
+        for col in range(weighted.shape[1]):
+            total += weighted[row, col] * weighted[row, col]
+    return np.sqrt(total)
+
+
+@njit(cache=True)
 def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float,
-                          epsilon: float, lambda_max: float, rcond: float,
+                          epsilon: float, lambda_max: float, rcond: float, floor: float,
                           out: np.ndarray) -> tuple[bool, float, float]:
     """The weighted, damped inverse L^-T (X L^-T)^+ (n, m) of X (m, n), W = L L^T, written to ``out``.
 
@@ -237,7 +257,7 @@ def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transfor
         matrix: X (m, n).
         inverse_sqrt: W^-1/2 (n,) of a diagonal W, or empty; transform: L^-T (n, n) of a full W, or empty
             (both empty: W = I).
-        damping, epsilon, lambda_max, rcond: as :func:`svd_inverse_into`.
+        damping, epsilon, lambda_max, rcond, floor: as :func:`svd_inverse_into` (floor: of X L^-T).
         out: (n, m).
 
     Returns:
@@ -245,17 +265,53 @@ def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transfor
     """
     if inverse_sqrt.size:
         converged, sigma_min, used = svd_inverse_into(scale_matrix(matrix, inverse_sqrt, False), damping, epsilon,
-                                                       lambda_max, rcond, out)
+                                                       lambda_max, rcond, floor, out)
         for row in range(out.shape[0]):
             for col in range(out.shape[1]):
                 out[row, col] *= inverse_sqrt[row]
     elif transform.size:
         scaled = np.empty_like(out)
         scaled_matrix = product(matrix, transform)  # X L^-T
-        converged, sigma_min, used = svd_inverse_into(scaled_matrix, damping, epsilon, lambda_max, rcond, scaled)
+        converged, sigma_min, used = svd_inverse_into(scaled_matrix, damping, epsilon, lambda_max, rcond, floor,
+                                                       scaled)
         copy_into(out, product(transform, scaled))
     else:
-        converged, sigma_min, used = svd_inverse_into(matrix, damping, epsilon, lambda_max, rcond, out)
+        converged, sigma_min, used = svd_inverse_into(matrix, damping, epsilon, lambda_max, rcond, floor, out)
+    return converged, sigma_min, used
+
+
+@njit(cache=True)
+def level_inverse_into(scaled: np.ndarray, power: np.ndarray, projector: np.ndarray, root_eta: float,
+                       inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float, epsilon: float,
+                       lambda_max: float, rcond: float, floor: float, out: np.ndarray) -> tuple[bool, float, float]:
+    """The iCAT inverse X^{#,A,Q} (n, m) of one level (Simetti and Casalino 2016), written to ``out``.
+
+    The weighted, damped inverse of Z = [A^1/2 X; eta^1/2 (I - Q)] (without the eta rows when ``root_eta``
+    is 0), its first m columns scaled by a^1.5: (X^T A X + eta (I - Q)^T (I - Q))^# X^T A A.
+
+    Args:
+        scaled: A^1/2 X (m, n); power: a^1.5 (m,); projector: Q (n, n) (read only with eta rows).
+        root_eta: eta^1/2 >= 0 (0: no eta rows, the inverse X^{#,A,I}).
+        inverse_sqrt, transform, damping, epsilon, lambda_max, rcond, floor: as :func:`weighted_inverse_into`.
+        out: (n, m).
+
+    Returns:
+        (converged, sigma_min of the weighted Z, l used), as :func:`svd_inverse_into`.
+    """
+    active, size = scaled.shape
+    stacked = scaled
+    if root_eta > 0.0:
+        stacked = np.empty((active + size, size))
+        copy_into(stacked[:active], scaled)
+        for row in range(size):
+            for col in range(size):
+                stacked[active + row, col] = root_eta * ((1.0 if row == col else 0.0) - projector[row, col])
+    full = np.empty((size, stacked.shape[0]))
+    converged, sigma_min, used = weighted_inverse_into(stacked, inverse_sqrt, transform, damping, epsilon,
+                                                       lambda_max, rcond, floor, full)
+    for row in range(size):
+        for col in range(active):
+            out[row, col] = full[row, col] * power[col]
     return converged, sigma_min, used
 
 
@@ -313,7 +369,7 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
         if unrestricted and (equality[level] or ones):  # the CLIK case
             inverse = np.empty((size, last - first))
             converged, sigma_min, used = weighted_inverse_into(jacobian, inverse_sqrt, transform, damping, epsilon,
-                                                               lambda_max, rcond, inverse)
+                                                               lambda_max, rcond, 0.0, inverse)
             if not converged:
                 return False, largest
             contribution = apply(inverse, remaining)
@@ -333,30 +389,24 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
                     selected[row, col] = jacobian[rows[row], col]
             projected = selected if unrestricted else product(selected, projector)  # X (m, n)
             scaled = scale_matrix(projected, root, True)  # A^1/2 X
-            inverse = np.empty((size, active))
-            converged, sigma_min, used = weighted_inverse_into(scaled, inverse_sqrt, transform, damping, epsilon,
-                                                               lambda_max, rcond, inverse)
+            # X = J Q keeps the rounding of the levels above (Q of a level that takes every direction is
+            # rounding noise): its singular values count from the scale of the unprojected A^1/2 J, not its own
+            floor = 0.0 if unrestricted else rcond * weighted_norm(scale_matrix(selected, root, True), inverse_sqrt,
+                                                                   transform)
+            inverse = np.empty((size, active))  # X^{#,A,I}, damped
+            converged, sigma_min, used = level_inverse_into(scaled, power, projector, 0.0, inverse_sqrt, transform,
+                                                            damping, epsilon, lambda_max, rcond, floor, inverse)
             if not converged:
                 return False, largest
-            inverse = scale_matrix(inverse, power, False)  # X^{#,A,I} (n, m): the columns scale by a^1.5
             if unrestricted and undamped:
                 regularized = inverse
-            else:  # X^{#,A,Q}, undamped: Z = [A^1/2 X; eta^1/2 (I - Q)] (Q = I: no eta rows)
-                stacked = scaled
-                if not unrestricted and eta > 0.0:
-                    stacked = np.empty((active + size, size))
-                    copy_into(stacked[:active], scaled)
-                    for row in range(size):
-                        for col in range(size):
-                            stacked[active + row, col] = root_eta * ((1.0 if row == col else 0.0) - projector[row, col])
-                full = np.empty((size, stacked.shape[0]))
-                converged, _, _ = weighted_inverse_into(stacked, inverse_sqrt, transform, 0.0, 0.0, 0.0, rcond, full)
+            else:  # X^{#,A,Q}, undamped (Q = I: no eta rows)
+                regularized = np.empty((size, active))
+                converged, _, _ = level_inverse_into(scaled, power, projector, 0.0 if unrestricted else root_eta,
+                                                     inverse_sqrt, transform, 0.0, 0.0, 0.0, rcond, floor,
+                                                     regularized)
                 if not converged:
                     return False, largest
-                regularized = np.empty((size, active))
-                for row in range(size):
-                    for col in range(active):
-                        regularized[row, col] = full[row, col] * power[col]
             transfer = product(projected, regularized)  # W_k (m, m)
             wanted = np.empty(active)
             for row in range(active):
@@ -407,7 +457,7 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
     else:
         scaled = jacobian
     converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max,
-                                                                          rcond)
+                                                                          rcond, 0.0)
     if not converged:
         return False, sigma_min, used
     left, right = (rotation, work) if wide else (work, rotation)  # A^+ = right^T diag(factors) left

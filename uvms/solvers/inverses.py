@@ -202,7 +202,7 @@ def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping)
 
     inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
     converged, sigma_min, used = svd_inverse_into(np.ascontiguousarray(jacobian), *damping_parameters(damping), RCOND,
-                                                  inverse)
+                                                  0.0, inverse)
     return inverse, *converged_or_refused(converged, jacobian.shape, sigma_min, used)
 
 
@@ -299,5 +299,5 @@ class WeightedInverse:
 
         inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
         converged, sigma_min, used = weighted_inverse_into(np.ascontiguousarray(jacobian), *self.kernel_weights,
-                                                           *damping_parameters(damping), RCOND, inverse)
+                                                           *damping_parameters(damping), RCOND, 0.0, inverse)
         return inverse, *converged_or_refused(converged, jacobian.shape, sigma_min, used)

@@ -81,12 +81,23 @@ class ICAT:
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
         """X^{#,A,Q} (n, m) of X = ``jacobian`` (m, n) (module docstring), root = a^1/2 (m, 1), power = a^1.5 (m,);
-        sigma_min of the weighted A^1/2 X (projector None: Q = I, no eta term) and the damping used."""
-        rows = root * jacobian
-        if projector is not None and self.eta > 0:
-            rows = np.concatenate((rows, self._root_eta * (self._identity - projector)))  # Z (m + n, n)
-        inverse, sigma_min, used = self.inverse(rows, damping)
-        return inverse[:, : jacobian.shape[0]] * power, sigma_min, used
+        sigma_min of the weighted Z and the damping used (projector None: Q = I, no eta term); the inverse of
+        each level of :meth:`solve` (:func:`~uvms.kernels.level_inverse_into`).
+
+        Raises:
+            NumericalError: the SVD did not converge (a non-finite level).
+        """
+        from ..kernels import level_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+
+        scaled = np.ascontiguousarray(root * jacobian, dtype=float)  # A^1/2 X
+        inverse = np.empty((self.size, jacobian.shape[0]))
+        with_eta = projector is not None and self.eta > 0
+        converged, sigma_min, used = level_inverse_into(
+            scaled, np.ascontiguousarray(power, dtype=float),
+            np.ascontiguousarray(projector, dtype=float) if with_eta else self._identity,
+            self._root_eta if with_eta else 0.0, *self.inverse.kernel_weights, *damping_parameters(damping), RCOND,
+            0.0, inverse)
+        return inverse, *converged_or_refused(converged, scaled.shape, sigma_min, used)
 
     def solve(self, hierarchy: Hierarchy) -> tuple[list[np.ndarray], list[float], float]:
         """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,), its sigma_min,
