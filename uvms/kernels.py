@@ -26,7 +26,7 @@ EPSILON = np.finfo(np.float64).eps
 
 __all__ = ["JACOBI_SWEEPS", "activation_reference_into", "bell_into", "bell_value", "cholesky_solve_in_place",
            "clik_solution_into", "decompose", "dls_pose_velocity", "dls_solve_into", "icat_into", "inside_box",
-           "joint_limit_motion_into", "orthogonalize_rows", "pose_error_norm", "project_into_box",
+           "joint_limit_motion_into", "level_inverse_into", "orthogonalize_rows", "pose_error_norm", "project_into_box",
            "rate_bounds_into", "rotation_to_target", "scale_lowest_first_into", "svd_inverse_into",
            "variable_damping_value", "velocity_box_into", "weighted_inverse_into"]
 
@@ -326,7 +326,8 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
     rho_k - rho_{k-1} = Q (J Q)^{#,A,I} W_k (xdot_k - J_k rho_{k-1}) and Q_k = Q (I - (J Q)^{#,A,I} J Q), the
     inverses X^{#,A,Q} of the weighted, damped inverse of Z = [A^1/2 X; eta^1/2 (I - Q)]; rows with a = 0
     are left out (they add nothing), and while no level above has moved anything (Q = I) a level of
-    activations 1 is solved as CLIK is.
+    activations 1 is solved as CLIK is. Below the first level, singular values of X = J Q under rcond times
+    the norm of the unprojected A^1/2 J (weighted) count as zero: the rounding Q keeps of the levels above.
 
     Args:
         jacobians: the levels' solved rows stacked (M, n); references: (M,); activations: (M,) in [0, 1].
