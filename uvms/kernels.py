@@ -233,13 +233,20 @@ def subtract_in_place(matrix: np.ndarray, other: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def weighted_columns(matrix: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray) -> np.ndarray:
+    """X L^-T (m, n) of X (m, n), W = L L^T: X W^-1/2 for a diagonal W (``inverse_sqrt`` (n,)), X L^-T for a
+    full one (``transform`` (n, n)), X itself when both are empty (W = I; not a copy)."""
+    if inverse_sqrt.size:
+        return scale_matrix(matrix, inverse_sqrt, False)
+    if transform.size:
+        return product(matrix, transform)
+    return matrix
+
+
+@njit(cache=True)
 def weighted_norm(matrix: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray) -> float:
     """The Frobenius norm of X L^-T (W = L L^T; W as :func:`weighted_inverse_into` takes it) of X (m, n)."""
-    weighted = matrix
-    if inverse_sqrt.size:
-        weighted = scale_matrix(matrix, inverse_sqrt, False)
-    elif transform.size:
-        weighted = product(matrix, transform)
+    weighted = weighted_columns(matrix, inverse_sqrt, transform)
     total = 0.0
     for row in range(weighted.shape[0]):
         for col in range(weighted.shape[1]):
@@ -263,20 +270,17 @@ def weighted_inverse_into(matrix: np.ndarray, inverse_sqrt: np.ndarray, transfor
     Returns:
         (converged, sigma_min of X L^-T, l used), as :func:`svd_inverse_into`.
     """
-    if inverse_sqrt.size:
-        converged, sigma_min, used = svd_inverse_into(scale_matrix(matrix, inverse_sqrt, False), damping, epsilon,
-                                                       lambda_max, rcond, floor, out)
+    weighted = weighted_columns(matrix, inverse_sqrt, transform)  # X L^-T
+    if transform.size and not inverse_sqrt.size:
+        scaled = np.empty_like(out)  # (X L^-T)^+, then L^-T times it
+        converged, sigma_min, used = svd_inverse_into(weighted, damping, epsilon, lambda_max, rcond, floor, scaled)
+        copy_into(out, product(transform, scaled))
+        return converged, sigma_min, used
+    converged, sigma_min, used = svd_inverse_into(weighted, damping, epsilon, lambda_max, rcond, floor, out)
+    if inverse_sqrt.size:  # W^-1/2 (X W^-1/2)^+: its rows scale
         for row in range(out.shape[0]):
             for col in range(out.shape[1]):
                 out[row, col] *= inverse_sqrt[row]
-    elif transform.size:
-        scaled = np.empty_like(out)
-        scaled_matrix = product(matrix, transform)  # X L^-T
-        converged, sigma_min, used = svd_inverse_into(scaled_matrix, damping, epsilon, lambda_max, rcond, floor,
-                                                       scaled)
-        copy_into(out, product(transform, scaled))
-    else:
-        converged, sigma_min, used = svd_inverse_into(matrix, damping, epsilon, lambda_max, rcond, floor, out)
     return converged, sigma_min, used
 
 
@@ -451,12 +455,7 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
         for row in range(rows):
             for col in range(columns):
                 rhs[row] -= jacobian[row, col] * z0[col]
-    if inverse_sqrt.size:
-        scaled = scale_matrix(jacobian, inverse_sqrt, False)  # J W^-1/2
-    elif transform.size:
-        scaled = product(jacobian, transform)  # J L^-T
-    else:
-        scaled = jacobian
+    scaled = weighted_columns(jacobian, inverse_sqrt, transform)  # J L^-T
     converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max,
                                                                           rcond, 0.0)
     if not converged:

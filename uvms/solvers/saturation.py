@@ -107,8 +107,11 @@ def velocity_box(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.nda
 
 
 def inside(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, tolerance: float = TOLERANCE) -> bool:
-    """Whether lower <= values <= upper, up to ``tolerance``."""
-    return bool((values >= lower - tolerance).all() and (values <= upper + tolerance).all())
+    """Whether lower <= values <= upper, up to ``tolerance`` (:func:`~uvms.kernels.inside_box`, the saturation's)."""
+    from ..kernels import inside_box  # numba: loaded at the first use, not by ``import uvms``
+
+    return bool(inside_box(*(np.ascontiguousarray(array, dtype=float) for array in (values, lower, upper)),
+                           float(tolerance)))
 
 
 def scale_lowest_first(contributions: Sequence[np.ndarray], lower: np.ndarray,
