@@ -1,18 +1,26 @@
 """The child process of :mod:`uvms.sandbox`: confine this process, then expand one xacro file.
 
 Run as ``python -I -B -c <this file's text>`` (never imported by uvms). The request comes as one JSON
-document on stdin: ``{"path", "mappings", "memory_bytes", "cpu_seconds", "audit_hook"}``; the answer is one
-JSON document on stdout: ``{"xml": ...}`` or ``{"kind": "parse"|"xacro"|"unconfined", "message": ...}``.
+document on stdin: ``{"path", "mappings", "memory_bytes", "cpu_seconds", "audit_hook", "parent_pid",
+"landlock", "read_roots"}``; the answer is one JSON document on stdout: ``{"xml": ...}`` or
+``{"kind": "parse"|"xacro"|"unreadable"|"unconfined", "message": ...}``.
 
-The order matters: read the request, set the resource limits, import xacro (trusted code), install the
-seccomp filter (from then on the kernel refuses what the list below names, whatever the Python code does),
-install the audit hook (a second layer with clearer messages), and only then read the untrusted file.
+The order matters: read the request, die with the parent (PR_SET_PDEATHSIG), set the resource limits,
+import xacro (trusted code), restrict reading to the named folders (Landlock), drop the capabilities,
+install the seccomp filter (from then on the kernel refuses what the lists below name, whatever the Python
+code does), install the audit hook (a second layer with clearer messages), and only then read the
+untrusted file.
 """
 
+import ctypes
 import errno
 import json
+import os
 import resource
+import signal
+import stat
 import sys
+from collections.abc import Iterable
 
 #: Syscalls refused with EPERM: processes, signals to others, sockets and IPC, every file-system change,
 #: raising limits, privileges, namespaces, tracing, kernel state.
@@ -45,6 +53,31 @@ DENIED = (
     "setdomainname", "syslog", "iopl", "ioperm", "vhangup",
 )
 
+#: Syscalls that act on a process named by an argument: refused unless that argument names the caller
+#: ({argument index: the value that means "this process"}), so the child cannot renice, pin, reschedule,
+#: migrate or inspect another process. Full 64-bit compares: stray high bits are refused too.
+SELF_ONLY = {
+    "setpriority": {0: 0, 1: 0},  # which == PRIO_PROCESS, who == 0
+    "ioprio_set": {0: 1, 1: 0},  # which == IOPRIO_WHO_PROCESS, who == 0
+    "sched_setaffinity": {0: 0}, "sched_setscheduler": {0: 0}, "sched_setparam": {0: 0},
+    "sched_setattr": {0: 0}, "migrate_pages": {0: 0}, "move_pages": {0: 0},
+    "prlimit64": {0: 0, 2: 0},  # own limits, and only to read them
+}
+
+#: fcntl commands refused: an owner for SIGIO (a signal, even SIGKILL, sent to any process when the file is
+#: ready), and locks and leases, which would hold other processes up.
+FCNTL_DENIED = (
+    8, 10, 15,  # F_SETOWN, F_SETSIG, F_SETOWN_EX
+    1024, 6, 7, 13, 14, 37, 38,  # F_SETLEASE, F_SETLK, F_SETLKW, F_SETLK64, F_SETLKW64, F_OFD_SETLK, F_OFD_SETLKW
+)
+
+#: The only ioctl requests allowed (generic numbering: x86, arm, riscv): read a terminal's state (isatty,
+#: window size), bytes waiting, close-on-exec and non-blocking on its own descriptors. Everything else is
+#: refused: setting a terminal (TCSETS*, TIOCSWINSZ, TIOCSPGRP, TIOCSTI, TCFLSH, TCXONC, TIOCSCTTY...),
+#: SIGIO owners (FIOSETOWN, SIOCSPGRP, FIOASYNC), devices.
+ALLOWED_IOCTLS = (0x5401, 0x5413, 0x541B, 0x5421, 0x5450, 0x5451)  # TCGETS, TIOCGWINSZ, FIONREAD, FIONBIO,
+# FIONCLEX, FIOCLEX
+
 #: Syscall numbers from clone3 (435, Linux 5.3) upward are refused with ENOSYS (as an older kernel would, so
 #: the C library falls back) unless harmless: a filter that allows by default must not let through
 #: syscalls newer than its list (setxattrat, file_setattr, ...).
@@ -60,10 +93,31 @@ HARMLESS_NEW_SYSCALLS = {
 }
 
 O_WRITE_FLAGS = (0o1, 0o2, 0o100, 0o1000, 0o2000)  # O_WRONLY, O_RDWR, O_CREAT, O_TRUNC, O_APPEND
-TERMINAL_INJECTION = (0x5412, 0x541C)  # TIOCSTI, TIOCLINUX
+
+PR_SET_PDEATHSIG, PR_SET_NO_NEW_PRIVS = 1, 38
+CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH = 1, 2
+LANDLOCK_READ_FILE, LANDLOCK_READ_DIR = 1 << 2, 1 << 3
+
+LIBC = ctypes.CDLL(None, use_errno=True)
+LIBC.syscall.restype = ctypes.c_long
 
 
-def limit_resources(memory_bytes, cpu_seconds):
+def checked(result: int) -> int:
+    """A libc result, or OSError with errno when it is -1."""
+    if result < 0:
+        code = ctypes.get_errno()
+        raise OSError(code, os.strerror(code))
+    return result
+
+
+def die_with_parent(parent_pid: int) -> None:
+    """Be killed when the parent dies; exit now if it already has (the child was re-parented)."""
+    checked(LIBC.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0))
+    if os.getppid() != parent_pid:
+        os._exit(1)
+
+
+def limit_resources(memory_bytes: int, cpu_seconds: int) -> None:
     """Address space, CPU time, no file growth, no core file, no new processes, few descriptors."""
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
     resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, cpu_seconds))
@@ -73,34 +127,106 @@ def limit_resources(memory_bytes, cpu_seconds):
     resource.setrlimit(resource.RLIMIT_NOFILE, (64, 64))
 
 
-def install_seccomp_filter():
+class RulesetAttr(ctypes.Structure):
+    _fields_ = [("handled_access_fs", ctypes.c_uint64), ("handled_access_net", ctypes.c_uint64),
+                ("scoped", ctypes.c_uint64)]
+
+
+class PathBeneathAttr(ctypes.Structure):
+    _pack_ = 1
+    _fields_ = [("allowed_access", ctypes.c_uint64), ("parent_fd", ctypes.c_int32)]
+
+
+def python_folders() -> set[str]:
+    """The Python installation and this child's import folders (modules are imported lazily)."""
+    return {p for p in (sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, *sys.path)
+            if os.path.isabs(p)}
+
+
+def restrict_reading(roots: Iterable[str], files: Iterable[str]) -> None:
+    """Landlock: from now on this process may only read under ``roots`` and read ``files``; no file-system
+    change, no TCP, no signal or abstract socket beyond its own domain, whatever its permissions.
+
+    Raises:
+        OSError: Landlock refused (ENOSYS/EOPNOTSUPP: not in this kernel).
+    """
+    abi = checked(LIBC.syscall(444, None, ctypes.c_size_t(0), ctypes.c_uint32(1)))  # ..._VERSION flag
+    rights = (1 << 13) - 1 | (abi >= 2) << 13 | (abi >= 3) << 14 | (abi >= 5) << 15  # REFER, TRUNCATE, IOCTL
+    attr = RulesetAttr(rights, 3 if abi >= 4 else 0, 3 if abi >= 6 else 0)  # TCP bind/connect; sockets+signals
+    ruleset = checked(LIBC.syscall(444, ctypes.byref(attr), ctypes.c_size_t(ctypes.sizeof(attr)), 0))
+    try:
+        for path, access in [(p, LANDLOCK_READ_FILE | LANDLOCK_READ_DIR) for p in roots] + [
+                (p, LANDLOCK_READ_FILE) for p in files]:
+            try:
+                fd = os.open(path, os.O_PATH | os.O_CLOEXEC)
+            except OSError:
+                continue  # a folder that is not there holds nothing to read
+            try:
+                if not stat.S_ISDIR(os.fstat(fd).st_mode):
+                    access = LANDLOCK_READ_FILE  # directory rights on a file are invalid
+                rule = PathBeneathAttr(access, fd)
+                checked(LIBC.syscall(445, ruleset, 1, ctypes.byref(rule), 0))  # LANDLOCK_RULE_PATH_BENEATH
+            finally:
+                os.close(fd)
+        checked(LIBC.prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0))
+        checked(LIBC.syscall(446, ruleset, 0))
+    finally:
+        os.close(ruleset)
+
+
+def drop_capabilities() -> None:
+    """Keep only reading others' files (so root reads what the user could): a root child may then not
+    read another process's environment or memory, renice or signal others, whatever a filter misses."""
+    header = (ctypes.c_uint32 * 2)(0x20080522, 0)  # _LINUX_CAPABILITY_VERSION_3, this process
+    data = (ctypes.c_uint32 * 6)()  # effective, permitted, inheritable; low then high 32 capabilities
+    checked(LIBC.capget(header, data))
+    kept = data[1] & (1 << CAP_DAC_OVERRIDE | 1 << CAP_DAC_READ_SEARCH)  # a capability can only be given up
+    data[:] = [kept, kept, 0, 0, 0, 0]
+    checked(LIBC.capset(header, data))
+
+
+def install_seccomp_filter() -> None:
     """Load the kernel filter; it holds for this process for good (no_new_privs is set by libseccomp)."""
     import pyseccomp as seccomp
 
     refuse = seccomp.ERRNO(errno.EPERM)
     arch = seccomp.system_arch()
     rules = seccomp.SyscallFilter(seccomp.ALLOW)
-    for name in DENIED:
+
+    def number(name: str) -> int:
         try:
-            number = seccomp.resolve_syscall(arch, name)
+            return seccomp.resolve_syscall(arch, name)
         except Exception:  # not a syscall of this architecture
-            continue
-        if number >= 0:
-            rules.add_rule(refuse, number)
+            return -1
+
+    for name in DENIED:
+        if number(name) >= 0:
+            rules.add_rule(refuse, number(name))
     for flag in O_WRITE_FLAGS:
         rules.add_rule(refuse, "open", seccomp.Arg(1, seccomp.MASKED_EQ, flag, flag))
         rules.add_rule(refuse, "openat", seccomp.Arg(2, seccomp.MASKED_EQ, flag, flag))
     rules.add_rule(seccomp.ERRNO(errno.ENOSYS), "openat2")  # flags in a struct: cannot be inspected
-    rules.add_rule(refuse, "prlimit64", seccomp.Arg(2, seccomp.NE, 0))  # reading limits stays allowed
-    for request in TERMINAL_INJECTION:
+    for name, own in SELF_ONLY.items():
+        for index, value in own.items():
+            rules.add_rule(refuse, name, seccomp.Arg(index, seccomp.NE, value))
+    for name in ("fcntl", "fcntl64"):
+        if number(name) >= 0:  # the kernel reads the command as 32 bits: compare only those
+            for command in FCNTL_DENIED:
+                rules.add_rule(refuse, number(name), seccomp.Arg(1, seccomp.MASKED_EQ, 0xFFFFFFFF, command))
+    # libseccomp cannot compare one argument with several values in one rule: an allow-list is written as
+    # "refuse below the lowest, above the highest, and each request between that is not allowed"
+    low, high = min(ALLOWED_IOCTLS), max(ALLOWED_IOCTLS)
+    rules.add_rule(refuse, "ioctl", seccomp.Arg(1, seccomp.LT, low))
+    rules.add_rule(refuse, "ioctl", seccomp.Arg(1, seccomp.GT, high))
+    for request in set(range(low, high)) - set(ALLOWED_IOCTLS):
         rules.add_rule(refuse, "ioctl", seccomp.Arg(1, seccomp.EQ, request))
-    for number in range(FIRST_NEW_SYSCALL, LAST_SYSCALL + 1):
-        if number not in HARMLESS_NEW_SYSCALLS and number != seccomp.resolve_syscall(arch, "openat2"):
-            rules.add_rule(seccomp.ERRNO(errno.ENOSYS), number)
+    for syscall in range(FIRST_NEW_SYSCALL, LAST_SYSCALL + 1):
+        if syscall not in HARMLESS_NEW_SYSCALLS and syscall != number("openat2"):
+            rules.add_rule(seccomp.ERRNO(errno.ENOSYS), syscall)
     rules.load()
 
 
-def install_audit_hook():
+def install_audit_hook() -> None:
     """Second layer: refuse the same things at the Python level, with a message naming the event."""
     forbidden = ("os.remove", "os.unlink", "os.rename", "os.replace", "os.mkdir", "os.rmdir", "os.chmod",
                  "os.chown", "os.link", "os.symlink", "os.truncate", "os.utime", "os.system", "os.exec",
@@ -112,7 +238,7 @@ def install_audit_hook():
     for flag in O_WRITE_FLAGS:
         write_flags |= flag
 
-    def hook(event, args):
+    def hook(event: str, args: tuple) -> None:
         if event == "open":
             mode, flags = args[1], args[2]
             writes = (isinstance(mode, str) and any(c in mode for c in "wax+")) or (
@@ -125,18 +251,39 @@ def install_audit_hook():
     sys.addaudithook(hook)
 
 
-def answer(document):
+def unreadable(exc: BaseException | None) -> str | None:
+    """The file Landlock kept xacro from reading (EACCES somewhere in the chain of ``exc``), or None."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        seen.add(id(exc))
+        if isinstance(exc, PermissionError) and exc.errno == errno.EACCES:
+            return exc.filename or "?"
+        exc = getattr(exc, "exc", None) or exc.__cause__ or exc.__context__
+    return None
+
+
+def answer(document: dict[str, str]) -> None:
+    """Hand the one JSON answer to the parent."""
     sys.stdout.write(json.dumps(document))
     sys.stdout.flush()
 
 
-def main():
+def main() -> None:
+    """Confine this process in the order above, then expand the file and answer."""
     request = json.loads(sys.stdin.read())
     try:
+        die_with_parent(request["parent_pid"])
         limit_resources(request["memory_bytes"], request["cpu_seconds"])
-        import xacro  # trusted code, imported before the filter
+        # trusted code, imported before the filters: what it loads (libseccomp, yaml's C part) comes from
+        # system folders that Landlock then hides; xacro imports substitution_args and yaml lazily
+        import pyseccomp  # noqa: F401
+        import xacro
+        import xacro.substitution_args  # noqa: F401 - imports yaml
         from xml.parsers.expat import ExpatError
 
+        if request["landlock"]:
+            restrict_reading(python_folders() | set(request["read_roots"]), ("/dev/null", "/dev/urandom"))
+        drop_capabilities()
         install_seccomp_filter()
     except Exception as exc:  # no libseccomp, an old kernel, ...: refuse rather than run unconfined
         answer({"kind": "unconfined", "message": f"{type(exc).__name__}: {exc}"})
@@ -152,10 +299,10 @@ def main():
         answer({"kind": "xacro", "message": "recursion too deep (does the file include itself?)"})
     except MemoryError:
         answer({"kind": "xacro", "message": f"needs more than {request['memory_bytes'] >> 20} MiB of memory"})
-    except xacro.XacroException as exc:
-        answer({"kind": "xacro", "message": " ".join(str(exc).split())})
-    except BaseException as exc:  # what the filter and the hook refused, and anything else
-        answer({"kind": "xacro", "message": " ".join(f"{type(exc).__name__}: {exc}".split())})
+    except BaseException as exc:  # xacro's errors, what the filters and the hook refused, anything else
+        text = " ".join(str(exc).split()) if isinstance(exc, xacro.XacroException) else " ".join(
+            f"{type(exc).__name__}: {exc}".split())
+        answer({"kind": "unreadable" if unreadable(exc) else "xacro", "message": text})
 
 
 main()
