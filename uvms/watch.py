@@ -1,7 +1,9 @@
 """Edit a model and see it: rerun a job whenever its scenario, its model or a file the model uses changes.
 
-The files watched are the scenario file, the model file, the files it includes (static ``xacro:include``),
-and the data beside the model (YAML such as ``hydrodynamics.yaml``, meshes). Changes are debounced (an
+The files watched are the scenario file, the model file, the files it includes (static ``xacro:include``,
+read by :func:`uvms.model.resources.walk_xacro`), and the data beside the model (YAML such as
+``hydrodynamics.yaml``, meshes) in the model's folder and its direct subfolders. Every folder is watched
+non-recursively: an include that climbs to ``/`` watches that one file, never a tree. Changes are debounced (an
 editor's several writes give one rerun) through ``watchfiles``. ``uvms run/workspace ... --watch`` runs each
 job in a child process: a change during a run stops it with SIGINT, and the run folder keeps the previous
 complete run (``uvms.outputs.run_folder``).
@@ -15,7 +17,6 @@ import signal
 import subprocess
 import sys
 import time
-import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,46 +26,34 @@ from .model import resources
 
 #: Files beside a model that a change of should rerun the job (data the model or uvms reads).
 MODEL_DATA_SUFFIXES = (".xacro", ".urdf", ".yaml", ".yml", ".stl", ".dae", ".obj", ".ply")
+#: The most direct subfolders of a model folder watched for its data (``meshes/``); more: none of them.
+MAX_DATA_SUBFOLDERS = 32
 #: Milliseconds of quiet before a rerun.
 DEBOUNCE_MS = 300
 #: Seconds a cancelled run has to stop after SIGINT before it is killed.
 CANCEL_GRACE = 10.0
 
 
-def xacro_includes(path: Path, seen: frozenset[Path] = frozenset()) -> set[Path]:
-    """The files a xacro includes statically, recursively (computed names such as ``$(find pkg)`` are skipped)."""
-    resolved = path.resolve()
-    if resolved in seen or not path.is_file():
-        return set()
-    try:
-        root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError):
-        return set()  # a broken file is watched itself; its includes again once it parses
-    found: set[Path] = set()
-    for include in root.iter("{http://www.ros.org/wiki/xacro}include"):
-        name = include.get("filename", "")
-        if name and "$" not in name:
-            target = (path.parent / name).resolve()
-            found |= {target} | xacro_includes(target, seen | {resolved})
-    return found
+def real(path: str | os.PathLike) -> Path:
+    """The path with its symbolic links resolved; a link loop stays as named (``Path.resolve`` raises on one)."""
+    return Path(os.path.realpath(path))
 
 
 def model_files(source: str | os.PathLike) -> set[Path]:
-    """The model file (a path or a shipped model name) and the files it includes."""
-    path = resources.resolve_model_path(source).resolve()
-    return {path} | (xacro_includes(path) if path.name.endswith(".xacro") else set())
+    """The model file (a path or a shipped model name) and the files it includes (resolved)."""
+    path = resources.resolve_model_path(source)
+    if not path.name.endswith(".xacro"):
+        return {real(path)}
+    return set(resources.walk_xacro(path).files)  # a walk that stopped (a cap): the files found; the job says why
 
 
 def scenario_model(scenario: Path) -> str | None:
     """The ``[model] path`` of a scenario file as a path or shipped name, or None when it cannot be read."""
-    try:
-        import tomllib
-    except ImportError:  # Python 3.10
-        import tomli as tomllib
+    from .scenario.schema import read_toml  # the one bounded reader of scenario files
 
     try:
-        model = tomllib.loads(scenario.read_text(encoding="utf-8")).get("model", {}).get("path")
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, AttributeError):
+        model = read_toml(scenario).get("model", {}).get("path")
+    except (UVMSError, AttributeError):
         return None
     if not isinstance(model, str):
         return None
@@ -74,7 +63,8 @@ def scenario_model(scenario: Path) -> str | None:
 
 @dataclass
 class WatchedFiles:
-    """Which changes rerun a job: listed files, and model data inside the model folders, outside ``ignore``."""
+    """Which changes rerun a job: listed files, and model data in the model folders (and their direct subfolders),
+    outside ``ignore``."""
 
     files: set[Path] = field(default_factory=set)
     folders: set[Path] = field(default_factory=set)
@@ -83,35 +73,54 @@ class WatchedFiles:
     @classmethod
     def of(cls, scenario: Path | None = None, model: str | os.PathLike | None = None,
            ignore: Sequence[Path] = ()) -> WatchedFiles:
-        """The files of a scenario and its model, or of a model alone; unreadable parts are skipped."""
+        """The files of a scenario and its model, or of a model alone; unreadable parts are skipped.
+
+        The model's data folder is the folder of the model file (where ``hydrodynamics.yaml`` is looked up),
+        not the folders of its includes: an include is watched as one file.
+        """
         files: set[Path] = set()
+        folders: set[Path] = set()
         if scenario is not None:
-            files.add(Path(scenario).resolve())
+            files.add(real(scenario))
             model = model or scenario_model(Path(scenario))
         if model is not None:
             try:
                 files |= model_files(model)
+                folders.add(real(resources.resolve_model_path(model).parent))
             except UVMSError:
                 pass  # the job reports it; the scenario file is still watched
-        folders = {path.parent for path in files if path.suffix in MODEL_DATA_SUFFIXES or path.name.endswith(".xacro")}
         if scenario is not None:
-            folders.discard(Path(scenario).resolve().parent)  # a scenario folder holds other scenarios
-        return cls(files, folders, tuple(Path(p).resolve() for p in ignore))
+            folders.discard(real(scenario).parent)  # a scenario folder holds other scenarios
+        return cls(files, folders, tuple(real(p) for p in ignore))
+
+    def ignored(self, path: Path) -> bool:
+        """Whether ``path`` is under ``ignore`` or in a run folder being written (``.uvms-*``)."""
+        return any(path == root or root in path.parents for root in self.ignore) or any(
+            ".uvms-" in part for part in path.parts)
 
     def roots(self) -> list[Path]:
-        """The folders to hand to the watcher (the parents of the files, and the model folders)."""
-        return sorted({path.parent for path in self.files} | self.folders)
+        """The folders to hand to the watcher, each watched non-recursively: the parents of the files, the model
+        folders and their direct subfolders (``meshes/``; none when there are more than ``MAX_DATA_SUBFOLDERS``)."""
+        found = {path.parent for path in self.files} | set(self.folders)
+        for folder in self.folders:
+            try:
+                subfolders = [Path(entry.path) for entry in os.scandir(folder)
+                              if entry.is_dir() and not entry.name.startswith(".")]
+            except OSError:
+                continue
+            if len(subfolders) <= MAX_DATA_SUBFOLDERS:
+                found |= {sub for sub in subfolders if not self.ignored(sub)}
+        return sorted(folder for folder in found if folder.is_dir())
 
     def wants(self, path: str | os.PathLike) -> bool:
-        """Whether a change of ``path`` reruns the job."""
-        path = Path(path).resolve()
-        if any(path == root or root in path.parents for root in self.ignore):
-            return False
-        if any(".uvms-" in part for part in path.parts):  # run folders being written and their locks
+        """Whether a change of ``path`` reruns the job: a listed file, or model data in a model folder or in one of
+        its direct subfolders."""
+        path = real(path)
+        if self.ignored(path):
             return False
         if path in self.files:
             return True
-        return path.suffix in MODEL_DATA_SUFFIXES and any(folder in path.parents for folder in self.folders)
+        return path.suffix in MODEL_DATA_SUFFIXES and bool({path.parent, path.parent.parent} & self.folders)
 
 
 def watch(source: str | os.PathLike | WatchedFiles, callback: Callable[[list[Path]], object], *,
@@ -139,8 +148,9 @@ def watch(source: str | os.PathLike | WatchedFiles, callback: Callable[[list[Pat
 
     while stop_event is None or not stop_event.is_set():
         watched = files()
-        for changes in watchfiles.watch(*watched.roots(), watch_filter=lambda _, p: watched.wants(p),
-                                        debounce=debounce_ms, stop_event=stop_event, yield_on_timeout=False):
+        for changes in watchfiles.watch(*watched.roots(), recursive=False,
+                                        watch_filter=lambda _, p: watched.wants(p), debounce=debounce_ms,
+                                        stop_event=stop_event, yield_on_timeout=False):
             callback(sorted({Path(p) for _, p in changes}))
             if once:
                 return
@@ -242,9 +252,9 @@ class Rerun:
         try:
             while stop_event is None or not stop_event.is_set():
                 watched = self.watched()
-                for changes in watchfiles.watch(*watched.roots(), watch_filter=lambda _, p: watched.wants(p),
-                                                debounce=debounce_ms, rust_timeout=200, yield_on_timeout=True,
-                                                stop_event=stop_event):
+                for changes in watchfiles.watch(*watched.roots(), recursive=False,
+                                                watch_filter=lambda _, p: watched.wants(p), debounce=debounce_ms,
+                                                rust_timeout=200, yield_on_timeout=True, stop_event=stop_event):
                     self.poll()
                     if changes:
                         names = ", ".join(sorted({Path(p).name for _, p in changes}))

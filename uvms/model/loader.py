@@ -79,7 +79,8 @@ def load(
             non-positive is refused (the message names the element).
         ee: end-effector frame name(s); default: frames named ``ee``/``*_ee``,
             else the last leaf link.
-        package_dirs: extra folders to resolve ``package://`` mesh URIs.
+        package_dirs: extra folders to resolve ``package://`` mesh URIs, which an untrusted xacro may also
+            include from (besides its own folder tree).
         trusted: a xacro file is code (its expressions are Python). True expands it in this
             process; False in a restricted child process (``uvms.sandbox``: no file writes, no
             processes, no network, a timeout). None: trusted for the shipped models only.
@@ -92,7 +93,7 @@ def load(
         UVMSError: (a subclass) missing file, malformed XML, xacro error, invalid
             model values, base mismatch, unknown end-effector frame.
     """
-    xml, origin, base_dir = read_model_text(source, args, trusted)
+    xml, origin, base_dir = read_model_text(source, args, trusted, package_dirs)
     robot_element = checks.parse_urdf(xml, origin)
     try:
         tree = checks.check_urdf(robot_element, origin)
@@ -110,7 +111,10 @@ def load(
 
 
 def read_model_text(
-    source: str | os.PathLike, args: Mapping[str, object] | None = None, trusted: bool | None = None
+    source: str | os.PathLike,
+    args: Mapping[str, object] | None = None,
+    trusted: bool | None = None,
+    package_dirs: Sequence[str | os.PathLike] | None = None,
 ) -> tuple[str, str, Path | None]:
     """URDF text of a source, with xacro expanded (in a sandbox unless trusted; see :func:`load`).
 
@@ -126,16 +130,14 @@ def read_model_text(
     if path.name.endswith(".xacro"):
         if trusted is None:
             trusted = path.resolve().is_relative_to(resources.MODELS_DIR)
-        return expand_xacro(path, args or {}, trusted), origin, path.parent
+        return expand_xacro(path, args or {}, trusted, package_dirs), origin, path.parent
     if args:
         raise UVMSError(f"{origin}: xacro args were given but the file is not a .xacro")
-    try:
-        return path.read_text(encoding="utf-8"), origin, path.parent
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelFileNotFound(f"{origin}: cannot read the model file ({exc})") from None
+    return resources.read_text(path, "model", checks.MAX_URDF_BYTES, ModelFileNotFound), origin, path.parent
 
 
-def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -> str:
+def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True,
+                 package_dirs: Sequence[str | os.PathLike] | None = None) -> str:
     """Run xacro on a file with ``args`` as its mappings; untrusted files in ``uvms.sandbox``.
 
     Raises:
@@ -144,24 +146,29 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True) -
         ModelParseError: the file is not well-formed XML.
     """
     mappings = {check_arg_name(key, path): format_xacro_value(key, value, path) for key, value in args.items()}
-    declared = declared_xacro_args(path)
-    unknown = sorted(set(mappings) - declared) if declared is not None else []
+    declared = declared_xacro_defaults(path)
+    unknown = sorted(set(mappings) - set(declared)) if declared is not None else []
     if unknown:
         raise XacroError(
             f"{path}: unknown xacro arg(s) {', '.join(unknown)}; this model declares: {', '.join(sorted(declared))}"
         )
     try:
-        return run_xacro(path, mappings, trusted)
+        return run_xacro(path, mappings, trusted, package_dirs)
     except XacroError as exc:
         raise XacroError(f"{exc}{non_numeric_args(path, mappings)}") from None
 
 
-def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool) -> str:
-    """xacro on a file with checked ``mappings``: in this process when trusted, else in ``uvms.sandbox``."""
+def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool,
+              package_dirs: Sequence[str | os.PathLike] | None = None) -> str:
+    """xacro on a file with checked ``mappings``: in this process when trusted, else in ``uvms.sandbox``.
+
+    An untrusted file may read its own folder tree and the package folders (``package_dirs`` first, then
+    ``ROS_PACKAGE_PATH``...: :func:`uvms.model.resources.package_search_roots`), nothing else.
+    """
     import xacro  # imported here: it is slow to import and only needed for .xacro
 
     if not trusted:
-        return sandbox.expand_untrusted(path, mappings)
+        return sandbox.expand_untrusted(path, mappings, read_roots=resources.package_search_roots(package_dirs))
     try:
         document = xacro.process_file(str(path), mappings=mappings)
     except RecursionError:
@@ -175,39 +182,23 @@ def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool) -> str:
     return document.toprettyxml(indent="  ")
 
 
-def declared_xacro_args(path: Path) -> set[str] | None:
-    """Names of the ``<xacro:arg>`` declared in a file and its static includes.
-
-    Returns None when that cannot be known here (unparsable file, an include
-    whose name is computed, an include cycle): the arg check is then left to xacro.
-    """
-    defaults = declared_xacro_defaults(path)
-    return None if defaults is None else set(defaults)
-
-
-def declared_xacro_defaults(path: Path, _seen: frozenset[Path] = frozenset()) -> dict[str, str | None] | None:
+def declared_xacro_defaults(path: Path) -> dict[str, str | None] | None:
     """{name: default text (None without one)} of the ``<xacro:arg>`` of a file and its static includes.
 
-    Returns None when that cannot be known here (see :func:`declared_xacro_args`).
+    Read by :func:`uvms.model.resources.walk_xacro` (each file once, within its caps).
+
+    Returns:
+        The args, or None when they cannot be known here (an unparsable or missing file, an include whose name
+        is computed, an include cycle): the arg check is then left to xacro.
+
+    Raises:
+        XacroError: an include that is not a readable regular file (a FIFO, a symbolic link loop, too large), or
+            includes beyond the walk's caps.
     """
-    namespace = "{http://www.ros.org/wiki/xacro}"
-    resolved = path.resolve()
-    if resolved in _seen:
-        return None  # an include cycle: xacro reports it
-    try:
-        root = ET.parse(path).getroot()
-    except (ET.ParseError, OSError):
-        return None  # xacro reports the real problem
-    names = {element.get("name"): element.get("default") for element in root.iter(namespace + "arg")}
-    for include in root.iter(namespace + "include"):
-        filename = include.get("filename", "")
-        if "$" in filename:
-            return None
-        included = declared_xacro_defaults(path.parent / filename, _seen | {resolved})
-        if included is None:
-            return None
-        names = {**included, **names}
-    return names
+    walk = resources.walk_xacro(path)
+    if walk.problem is not None:
+        raise walk.problem
+    return walk.args
 
 
 def is_number_text(text: str | None) -> bool:

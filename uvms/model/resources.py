@@ -1,14 +1,42 @@
-"""Where model files and their meshes live: shipped models, example-robot-data, package:// URIs."""
+"""Where model files and their meshes live (shipped models, example-robot-data, package:// URIs), and reading them.
+
+A file from a stranger is read by :func:`read_file` only: a regular file (never a FIFO or a device), its size
+checked before a byte is read. YAML goes through :func:`read_yaml` (aliases counted), the includes of a xacro
+through :func:`walk_xacro` (each file once, within caps on files, inclusions, bytes and time).
+"""
 
 from __future__ import annotations
 
 import functools
 import os
+import stat
+import time
+import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 
-from ..errors import ModelFileNotFound, ModelParseError
+from ..errors import ModelFileNotFound, ModelParseError, UVMSError, XacroError
+from .checks import MAX_URDF_BYTES
+
+#: Caps of the files read, checked on a file's size before it is read. A URDF or xacro file: the cap of URDF
+#: text (``checks.MAX_URDF_BYTES``, 32 MiB; the shipped models are under 40 KiB). A TOML scenario: 4 MiB (the
+#: shipped ones are under 4 KiB). A YAML data file: 1 MiB (the shipped ones are 3 KiB; PyYAML's safe loader,
+#: pure Python so that deep nesting is a RecursionError rather than a crash of libyaml, reads about 0.2 MiB/s).
+MAX_TOML_BYTES = 4 << 20
+MAX_YAML_BYTES = 1 << 20
+#: The most values (scalars, lists, mappings) a YAML file may hold, its aliases (``*name``) counted at each use:
+#: nine nested anchors of nine items each are 9**9 values in 300 bytes.
+MAX_YAML_VALUES = 100_000
+#: Caps of the walk through a xacro's static includes (the arg check and ``--watch`` read them before xacro
+#: runs): distinct files, inclusions counted at each use (xacro expands a file included twice twice, so 40 files
+#: each including the next twice are 2**40 inclusions), nesting, bytes of all the files, and seconds.
+MAX_INCLUDE_FILES = 1_000
+MAX_INCLUDE_USES = 10_000
+MAX_INCLUDE_DEPTH = 100
+MAX_INCLUDE_SECONDS = 10.0
+XACRO_NAMESPACE = "{http://www.ros.org/wiki/xacro}"
 
 #: The repository's `models/` folder (present in a source checkout or an editable install).
 MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
@@ -118,6 +146,11 @@ def package_search_roots(package_dirs: Sequence[str | os.PathLike] | None = None
 def resolve_uri(uri: str, base_dir: Path | None, roots: Iterable[Path]) -> Path | None:
     """Resolve a mesh URI (``package://``, ``file://`` or a relative path) to an existing file.
 
+    A ``package://<pkg>/<path>`` stays inside the package's folder under a search root: ``..`` that climbs out
+    of it (``package://example-robot-data/../../etc/hostname``) finds nothing. The check is on the path as
+    written (``..`` resolved, symbolic links not followed), so a package installed as links to its sources
+    (``colcon build --symlink-install``) keeps its meshes.
+
     Args:
         uri: the ``filename`` of a URDF ``<mesh>``.
         base_dir: folder of the model file, for relative paths (None for XML strings).
@@ -128,10 +161,13 @@ def resolve_uri(uri: str, base_dir: Path | None, roots: Iterable[Path]) -> Path 
     """
     if uri.startswith("package://"):
         package, _, relative = uri[len("package://") :].partition("/")
+        if package in ("", ".", "..") or os.path.isabs(relative):
+            return None
         for root in roots:
             # a root is either the package folder itself or a folder holding packages
-            candidate = root / relative if root.name == package else root / package / relative
-            if candidate.is_file():
+            folder = Path(os.path.normpath(root if root.name == package else root / package))
+            candidate = Path(os.path.normpath(folder / relative))
+            if candidate.is_relative_to(folder) and candidate.is_file():
                 return candidate
         return None
     path = Path(uri[len("file://") :] if uri.startswith("file://") else uri)
@@ -140,24 +176,207 @@ def resolve_uri(uri: str, base_dir: Path | None, roots: Iterable[Path]) -> Path 
     return path if path.is_file() else None
 
 
+# ------------------------------------------------------------------ reading files from strangers
+def read_file(path: str | os.PathLike, what: str, limit: int, error: type[UVMSError] = ModelFileNotFound) -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes: the one way uvms reads a model, scenario or data file.
+
+    The file is checked before it is opened (a FIFO or a device such as ``/dev/stdin`` would block a read, and
+    a sparse file of 30 GB would fill the memory) and again once open (it may have been replaced in between).
+
+    Args:
+        path: the file.
+        what: what it holds, for the messages ("model", "scenario", "hydrodynamics YAML").
+        limit: the most bytes accepted (``MAX_URDF_BYTES``, ``MAX_TOML_BYTES``, ``MAX_YAML_BYTES``).
+        error: the UVMSError subclass raised.
+
+    Raises:
+        error: the file does not exist, is not a regular file, is larger than ``limit`` or cannot be read.
+    """
+
+    def refuse(info: os.stat_result) -> None:
+        if not stat.S_ISREG(info.st_mode):
+            kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a FIFO" if stat.S_ISFIFO(info.st_mode) else (
+                "a device or socket")
+            raise error(f"{path}: the {what} file is {kind}, not a regular file; give a file")
+        if info.st_size > limit:
+            raise error(f"{path}: the {what} file holds {info.st_size / 2**20:,.1f} MiB; at most {limit / 2**20:g} "
+                        f"MiB are accepted (no real one is that large)")
+
+    try:
+        refuse(os.stat(path))
+        descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0))
+        with os.fdopen(descriptor, "rb") as handle:
+            refuse(os.fstat(handle.fileno()))
+            data = handle.read(limit + 1)
+    except FileNotFoundError:
+        raise error(f"{path}: the {what} file does not exist") from None
+    except OSError as exc:
+        raise error(f"{path}: cannot read the {what} file ({exc.strerror or exc}); give a readable file") from None
+    if len(data) > limit:  # it grew since it was checked
+        raise error(f"{path}: the {what} file holds more than {limit / 2**20:g} MiB; at most that is accepted")
+    return data
+
+
+def read_text(path: str | os.PathLike, what: str, limit: int, error: type[UVMSError] = ModelFileNotFound) -> str:
+    """The UTF-8 text of a file read by :func:`read_file` (same arguments).
+
+    Raises:
+        error: as :func:`read_file`, or the file is not UTF-8 text.
+    """
+    data = read_file(path, what, limit, error)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(f"{path}: the {what} file is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
+
+
 def read_yaml(path: str | os.PathLike, what: str) -> object:
     """The document of a YAML data file beside a model (hydrodynamics, thrusters), read safely (data only).
+
+    At most ``MAX_YAML_BYTES`` and ``MAX_YAML_VALUES`` values, aliases counted at each use (an alias bomb is
+    refused at once); an alias inside its own anchor (a recursive document) is refused.
 
     Args:
         path: the file; what: what it holds, for the messages ("hydrodynamics", "thrusters").
 
     Raises:
-        ModelFileNotFound: the file cannot be read.
-        ModelParseError: not YAML.
+        ModelFileNotFound: the file cannot be read, or is too large.
+        ModelParseError: not YAML, nested too deeply, too many values or a recursive alias.
     """
     import yaml
 
     path = Path(path)
+    loader = yaml.SafeLoader(read_text(path, f"{what} YAML", MAX_YAML_BYTES))
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelFileNotFound(f"{path}: cannot read the {what} file ({exc})") from None
-    try:
-        return yaml.safe_load(text)
+        node = loader.get_single_node()
+        if node is not None:
+            count_yaml_values(node, path)
+        return None if node is None else loader.construct_document(node)
     except yaml.YAMLError as exc:
         raise ModelParseError(f"{path}: malformed YAML ({' '.join(str(exc).split())})") from None
+    except RecursionError:
+        raise ModelParseError(f"{path}: the YAML is nested too deeply; a data file nests a few levels") from None
+    finally:
+        loader.dispose()
+
+
+def count_yaml_values(root: object, path: Path) -> int:
+    """The values of a composed YAML document with its aliases expanded, counted without expanding them.
+
+    Raises:
+        ModelParseError: more than ``MAX_YAML_VALUES``, or an alias inside its own anchor.
+    """
+    import yaml
+
+    def children(node: yaml.Node) -> list:
+        if isinstance(node, yaml.MappingNode):
+            return [item for pair in node.value for item in pair]
+        return node.value if isinstance(node, yaml.SequenceNode) else []
+
+    sizes: dict[int, int] = {}  # id(node) -> its values, aliases expanded
+    open_nodes: set[int] = set()  # the nodes being counted: the ancestors of the current one
+    stack = [(root, False)]
+    while stack:
+        node, finished = stack.pop()
+        if finished:
+            open_nodes.discard(id(node))
+            sizes[id(node)] = 1 + sum(sizes[id(child)] for child in children(node))
+            if sizes[id(node)] > MAX_YAML_VALUES:
+                raise ModelParseError(f"{path}: the YAML holds more than {MAX_YAML_VALUES} values with its aliases "
+                                      f"(*name) expanded; a data file holds a few hundred: write the values out")
+        elif id(node) in open_nodes:
+            raise ModelParseError(f"{path}: a YAML alias is used inside its own anchor (a recursive document); "
+                                  "a data file is a tree of values")
+        elif id(node) not in sizes:
+            open_nodes.add(id(node))
+            stack.append((node, True))
+            stack.extend((child, False) for child in children(node))
+    return sizes[id(root)]
+
+
+@dataclass
+class XacroWalk:
+    """What a xacro file and its static includes declare, each file read once (see :func:`walk_xacro`).
+
+    Attributes:
+        files: every file reached (resolved), the given one first; an include that does not exist yet too.
+        args: {name: default text or None} of the ``<xacro:arg>`` of all the files (a file's own before those
+            it includes, earlier includes first); None when that cannot be known here (a file that does not
+            parse or exist, an include whose name is computed or a glob, an include cycle): xacro reports it.
+        problem: why the walk stopped (a cap reached, an include that is not a readable regular file), else None.
+    """
+
+    files: list[Path] = field(default_factory=list)
+    args: dict[str, str | None] | None = field(default_factory=dict)
+    problem: UVMSError | None = None
+
+
+def walk_xacro(path: str | os.PathLike) -> XacroWalk:
+    """The files a xacro includes statically, recursively, and the args they declare; it never runs xacro.
+
+    The one reading of a xacro's includes (the loader's arg check and ``--watch``): each file is read once
+    (:func:`read_file`: regular files only, at most ``MAX_URDF_BYTES``), within ``MAX_INCLUDE_FILES`` files,
+    ``MAX_INCLUDE_USES`` inclusions, ``MAX_INCLUDE_DEPTH`` levels, ``MAX_URDF_BYTES`` in all and
+    ``MAX_INCLUDE_SECONDS``. Reaching one stops the walk with ``problem`` set (what was found so far is kept).
+    """
+    walk = XacroWalk()
+    done: dict[str, tuple[dict[str, str | None], int]] = {}  # resolved file -> (its args, its inclusions)
+    open_files: set[str] = set()
+    budget = {"bytes": MAX_URDF_BYTES, "deadline": time.monotonic() + MAX_INCLUDE_SECONDS}
+
+    def stop(message: str) -> XacroError:
+        return XacroError(f"{path}: {message}")
+
+    def visit(file: Path, depth: int) -> tuple[dict[str, str | None], int]:
+        key = os.path.realpath(file)
+        if key in done:
+            return done[key]
+        if key in open_files or not os.path.lexists(file):  # a cycle, or a missing file: xacro reports it
+            walk.args = None
+            if key not in open_files and Path(key) not in walk.files:
+                walk.files.append(Path(key))
+            return {}, 1
+        if len(done) + len(open_files) >= MAX_INCLUDE_FILES or depth > MAX_INCLUDE_DEPTH:
+            raise stop(f"the xacro includes more than {MAX_INCLUDE_FILES} files or nests includes more than "
+                       f"{MAX_INCLUDE_DEPTH} deep; a model includes a few dozen")
+        if time.monotonic() > budget["deadline"]:
+            raise stop(f"reading the xacro's includes took more than {MAX_INCLUDE_SECONDS:g} s; a model takes "
+                       "milliseconds")
+        if os.path.isfile(key):
+            walk.files.append(Path(key))
+        data = read_file(file, "xacro include" if depth else "xacro", MAX_URDF_BYTES, XacroError)
+        budget["bytes"] -= len(data)
+        if budget["bytes"] < 0:
+            raise stop(f"the xacro and its includes hold more than {MAX_URDF_BYTES >> 20} MiB; at most that is "
+                       "accepted")
+        try:
+            root = ET.fromstring(data)
+        except ET.ParseError:
+            walk.args = None  # xacro reports the real problem
+            done[key] = ({}, 1)
+            return done[key]
+        open_files.add(key)
+        args = {element.get("name"): element.get("default") for element in root.iter(XACRO_NAMESPACE + "arg")
+                if element.get("name")}
+        uses = 1
+        for include in root.iter(XACRO_NAMESPACE + "include"):
+            name = include.get("filename", "")
+            if not name or any(mark in name for mark in "$*?["):  # computed or a glob: xacro knows
+                walk.args = None
+                continue
+            included, count = visit(file.parent / name, depth + 1)  # relative to the file as named, as xacro
+            args, uses = {**included, **args}, uses + count
+            if uses > MAX_INCLUDE_USES:
+                raise stop(f"the xacro's includes expand to more than {MAX_INCLUDE_USES} inclusions (files "
+                           "included again and again through nested includes); a model has a few dozen")
+        open_files.discard(key)
+        done[key] = (args, uses)
+        return done[key]
+
+    try:
+        args, _ = visit(Path(path), 0)
+    except XacroError as exc:
+        walk.args, walk.problem = None, exc
+    else:
+        walk.args = None if walk.args is None else args
+    return walk

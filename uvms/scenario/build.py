@@ -200,8 +200,21 @@ def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3T
 
 
 def make_law(section: dict, path_length: float):
-    """Time law: trapezoid from a speed, or any law from laps (circle) / the path length."""
+    """Time law: trapezoid from a speed, or any law from laps (circle) / the path length.
+
+    Raises:
+        ScenarioError: both trajectory.speed and trajectory.laps (a speed fixes the distance, the laps would be
+            ignored), or a speed with a law other than the trapezoid (which alone has a cruise speed).
+    """
     duration, accel_time = section["duration"], section["accel_time"]
+    if section["speed"] and section["laps"]:
+        raise ScenarioError("trajectory.speed and trajectory.laps are both set, but the speed fixes the distance "
+                            "(speed x duration) and the laps would be ignored: keep laps (the circle that many times "
+                            "in trajectory.duration) or speed (the trapezoid's cruise speed [m/s]), not both")
+    if section["speed"] and section["law"] != "trapezoid":
+        raise ScenarioError(f"trajectory.speed is the cruise speed of the trapezoid law, and law = "
+                            f"{section['law']!r} would ignore it: set law = 'trapezoid' or remove speed (the "
+                            f"{section['law']} law covers the path, or its laps, in trajectory.duration)")
     distance = section["laps"] * path_length if section["laps"] else path_length
     if section["law"] == "trapezoid":
         if section["speed"]:

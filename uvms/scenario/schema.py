@@ -22,6 +22,7 @@ else:  # pragma: no cover - Python 3.10
 
 from ..control.gjm import GJM_KINDS
 from ..errors import ScenarioError
+from ..model.resources import MAX_TOML_BYTES, read_text
 from .inequalities import check_tables
 from .resources import resolve_scenario_path
 
@@ -194,16 +195,33 @@ def read_scenario(path: str | os.PathLike, overrides: Sequence[str] = ()) -> dic
 
 
 def read_toml(path: str | os.PathLike) -> dict:
-    """The raw table of a scenario file or shipped scenario name (not validated)."""
+    """The raw table of a scenario file or shipped scenario name (not validated).
+
+    The file is read by :func:`uvms.model.resources.read_text` (a regular file of at most
+    :data:`~uvms.model.resources.MAX_TOML_BYTES`, its size checked first).
+
+    Raises:
+        ScenarioError: unknown file or name, unreadable or too large, not TOML (nested too deeply, a number of
+            more digits than Python converts).
+    """
     path = resolve_scenario_path(path)
+    text = read_text(path, "scenario", MAX_TOML_BYTES, ScenarioError)
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ScenarioError(f"scenario file {str(path)!r} does not exist") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ScenarioError(f"cannot read scenario {str(path)!r}: {exc}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: invalid TOML ({exc})") from None
+        return tomllib.loads(text)
+    except (RecursionError, ValueError) as exc:  # TOMLDecodeError is a ValueError
+        raise toml_error(exc, str(path)) from None
+
+
+def toml_error(exc: Exception, origin: str) -> ScenarioError:
+    """The ScenarioError of a failure of tomllib: bad syntax, nesting beyond the stack, a number of too many digits
+    (Python converts at most ``sys.get_int_max_str_digits()``)."""
+    if isinstance(exc, RecursionError):
+        return ScenarioError(f"{origin}: invalid TOML: arrays or tables nested too deeply (a scenario nests "
+                             "a few levels)")
+    if isinstance(exc, tomllib.TOMLDecodeError) or "integer string conversion" not in str(exc):
+        return ScenarioError(f"{origin}: invalid TOML ({exc})")
+    return ScenarioError(f"{origin}: invalid TOML: a number has too many digits ({str(exc).split(':')[0]}); "
+                         f"scenario numbers are SI values with |x| <= {MAX_MAGNITUDE:.0e}")
 
 
 def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence[str] = ()) -> dict:
@@ -238,11 +256,17 @@ def check_name(name: str, value: str, origin: str, role: str, suffixes: Sequence
 
 
 def parse_value(text: str) -> Any:
-    """A --set value as TOML (number, bool, list, quoted string); bare words stay strings."""
+    """A --set value as TOML (number, bool, list, quoted string); bare words stay strings.
+
+    Raises:
+        ScenarioError: TOML nested too deeply, or a number of too many digits.
+    """
     try:
         return tomllib.loads(f"value = {text}")["value"]
     except tomllib.TOMLDecodeError:
         return text
+    except (RecursionError, ValueError) as exc:
+        raise toml_error(exc, f"--set value {text[:40]!r}{'...' if len(text) > 40 else ''}") from None
 
 
 def apply_override(raw: dict, assignment: str) -> None:
