@@ -1,14 +1,34 @@
-"""`uvms info` on every shipped model and on a URDF a user writes."""
+"""`uvms info` on every shipped model and on a URDF a user writes; every line the CLI prints is escaped."""
 
 from __future__ import annotations
 
+import json
 import re
+from pathlib import Path
 
 import pytest
 
 from conftest import SHIPPED
 from test_errors import FLOATING_ROOT, urdf
 from uvms.cli import main
+
+
+ROOT = Path(__file__).resolve().parent.parent
+SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"
+ESCAPES = "\x1b]52;c;ZWNobyBwd25lZA==\x07\x1b[2K"  # OSC 52 (write the clipboard), then erase the line
+
+
+def raising(exc: BaseException):
+    """A command handler that raises ``exc``."""
+    def handler(options):
+        raise exc
+    return handler
+
+
+def one_line(capsys) -> str:
+    captured = capsys.readouterr()
+    assert len(captured.err.splitlines()) == 1, captured.err
+    return captured.err
 
 
 @pytest.mark.parametrize("name", SHIPPED)
@@ -43,3 +63,30 @@ def test_info_base_option_adds_a_vehicle(tmp_path, capsys):
     path.write_text(urdf())
     assert main(["info", str(path), "--base", "planar"]) == 0
     assert "planar: vehicle DOF 3, arm DOF 1" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ terminal escapes never reach the terminal
+def test_control_characters_never_reach_the_terminal(tmp_path, monkeypatch, capsys):
+    scenario = tmp_path / "evil.toml"
+    key = json.dumps(ESCAPES)  # a TOML basic string: \u001b...
+    scenario.write_text(SANTOS.read_text().replace('"../models', f'"{ROOT}/models').replace(
+        "[solver]", f"[solver]\n{key} = 1"))
+    assert main(["run", str(scenario), "--out", str(tmp_path / "out")]) == 2
+    err = one_line(capsys)
+    assert "unknown key(s) solver.\\x1b]52;c;ZWNobyBwd25lZA==\\x07\\x1b[2K" in err
+    assert not any(ord(c) < 32 or 0x7f <= ord(c) <= 0x9f for c in err.rstrip("\n"))
+    assert main(["run", str(SANTOS), "--out", str(tmp_path / "out"), "--set", "solver.\u202egain\u2066=1"]) == 2
+    err = one_line(capsys)
+    assert "solver.\\u202egain\\u2066" in err and "\u202e" not in err and "\u2066" not in err
+
+    monkeypatch.setattr("uvms.cli.command_info", raising(RuntimeError("\x9b2J\x7f\x1b[31m")))  # internal error
+    assert main(["info", "hoang2011"]) == 2
+    assert "RuntimeError: \\x9b2J\\x7f\\x1b[31m" in one_line(capsys)
+    stop = KeyboardInterrupt()
+    stop.add_note("nothing was written to out/\x1b[2K")
+    monkeypatch.setattr("uvms.cli.command_info", raising(stop))  # and the interrupt note
+    assert main(["info", "hoang2011"]) == 130
+    assert capsys.readouterr().err == "uvms: interrupted; nothing was written to out/\\x1b[2K\n"
+    from uvms.cli import printable  # the one function every line goes through
+
+    assert printable("a\tb\u202cc\u2069") == "a\\x09b\\u202cc\\u2069"

@@ -95,7 +95,7 @@ def test_a_floating_run_has_every_topic_with_one_message_per_sample(floating_bag
     for topic in ("/tf_static", "/robot_description"):  # latched, so RViz's transient-local subscribers get them
         assert connections[topic].ext.offered_qos_profiles[0].durability == QosDurability.TRANSIENT_LOCAL
     assert messages["/robot_description"][0][1].data == robot.urdf
-    assert sorted(path.name for path in summary.path.iterdir()) == ["bag.mcap", "metadata.yaml"]
+    assert sorted(path.name for path in summary.path.iterdir()) == [".uvms-run.json", "bag.mcap", "metadata.yaml"]
 
 
 def test_stamps_are_the_start_time_plus_t(floating_bag):

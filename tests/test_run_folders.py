@@ -18,14 +18,14 @@ import pytest
 
 from uvms import outputs, UVMSError
 from uvms.cli import main
-from uvms.errors import RunFolderBusy, RunFolderError
+from uvms.errors import DiskFullError, RunFolderBusy, RunFolderError
 from uvms.scenario import run
 
 ROOT = Path(__file__).resolve().parent.parent
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps, 6 figures
 HOANG = ROOT / "scenarios" / "hoang2011_w1.toml"  # 9,500 RK4 steps: several seconds per run
 RUN_FILES = {"metrics.json", "trajectory.csv", "trajectory.npz", "desired_motion.png", "vehicle.png",
-             "vehicle_velocity.png", "joints.png", "errors.png", "path.png"}
+             "vehicle_velocity.png", "joints.png", "errors.png", "path.png", outputs.MANIFEST}
 #: `python -c SLOW_CHILD SECONDS ARGS...`: the uvms CLI with a figure writer that first sleeps SECONDS
 SLOW_CHILD = """
 import sys, time
@@ -97,10 +97,12 @@ def test_run_folder_replaces_the_whole_folder(tmp_path):
     umask = os.umask(0)
     os.umask(umask)
     assert folder.stat().st_mode & 0o777 == 0o777 & ~umask  # not mkdtemp's 0700
+    assert json.loads((folder / outputs.MANIFEST).read_text())["entries"] == ["metrics.json", "old_figure.png"]
     with outputs.run_folder(folder) as temporary:
         outputs.write_json(temporary / "metrics.json", {"run": 2})
-    assert sorted(p.name for p in folder.iterdir()) == ["metrics.json"]  # no file of the first run is left
+    assert sorted(p.name for p in folder.iterdir()) == [outputs.MANIFEST, "metrics.json"]  # none of the first run
     assert json.loads((folder / "metrics.json").read_text()) == {"run": 2}
+    assert json.loads((folder / outputs.MANIFEST).read_text())["entries"] == ["metrics.json"]
     assert sorted(p.name for p in tmp_path.iterdir()) == [".run.uvms-lock", "run"]
 
 
@@ -116,7 +118,8 @@ def test_an_exception_inside_leaves_the_old_folder_untouched(tmp_path, monkeypat
             outputs.write_json(temporary / "metrics.json", {"run": 2})
             (temporary / "half.csv").write_text("t,")
             raise error
-        assert snapshot(folder) == {"metrics.json": b'{\n  "run": 1\n}\n'} and not temporaries(folder)
+        assert sorted(snapshot(folder)) == [outputs.MANIFEST, "metrics.json"] and not temporaries(folder)
+        assert (folder / "metrics.json").read_bytes() == b'{\n  "run": 1\n}\n'
     assert raised.value.__notes__ == [f"{folder} keeps the previous complete run"]
     with outputs.run_folder(folder) as temporary:  # and the next run goes through
         outputs.write_json(temporary / "metrics.json", {"run": 3})
@@ -132,7 +135,8 @@ def test_an_exception_inside_a_scenario_run_leaves_the_old_folder_untouched(tmp_
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(outputs, "save_figure", broken)
-    with pytest.raises(OSError, match="No space left"):
+    with pytest.raises(DiskFullError, match=f"no space left on the device holding '{tmp_path}' .*{folder} keeps the "
+                                            f"previous complete run"):
         run(SANTOS, out=folder, overrides=["solver.gain=2"], progress=False)
     assert snapshot(folder) == before and not temporaries(folder)
 
@@ -217,7 +221,8 @@ def test_a_killed_run_leaves_exactly_the_previous_run_and_the_next_run_cleans_up
                                        "outputs.figures=false"), capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert not temporaries(folder)
-    assert {path.name for path in folder.iterdir()} == {"metrics.json", "trajectory.csv", "trajectory.npz"}
+    assert {path.name for path in folder.iterdir()} == {"metrics.json", "trajectory.csv", "trajectory.npz",
+                                                        outputs.MANIFEST}
 
 
 def test_a_second_concurrent_run_is_refused_and_the_first_completes(tmp_path):

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import csv
 import math
+import os
+import socket
+import ssl
 import time
 from pathlib import Path
 
@@ -12,7 +15,7 @@ import pytest
 from uvms import UVMSError
 from uvms.cli import main
 from uvms.scenario import ScenarioError
-from uvms.scenario.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
+from uvms.scenario.sweep import MAX_POINTS, METRICS, SweepError, dask_client, parse_grid, sweep
 
 SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps
 GRID = ["solver.gain=0.5:1.5:2", "model.args.l1=1.5:2.0:2"]  # l1 moves the start; the gain the tracking
@@ -65,8 +68,9 @@ def test_two_jobs_give_the_same_table(reference, tmp_path):
 def test_dask_backend_gives_the_same_table(reference, tmp_path):
     distributed = pytest.importorskip("dask.distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
-        result = sweep(SCENARIO, GRID, backend="dask", scheduler=cluster.scheduler_address, out=tmp_path,
-                       progress=False)
+        with pytest.warns(UserWarning, match="scheduler tcp://.* is not tls://: neither encrypted nor authenticated"):
+            result = sweep(SCENARIO, GRID, backend="dask", scheduler=cluster.scheduler_address, out=tmp_path,
+                           progress=False)
     assert comparable(result) == comparable(reference)
     assert (tmp_path / "sweep.csv").read_text().splitlines()[0] == ",".join(reference.columns)
 
@@ -127,7 +131,8 @@ def test_a_huge_grid_is_refused_at_once(tmp_path, capsys):
 def test_a_sweep_folder_is_replaced_whole_and_reports_final_paths(tmp_path, monkeypatch):
     folder = tmp_path / "sweep"
     first = sweep(SCENARIO, ["solver.gain=[0.5, 1.0, 1.5]"], out=folder, progress=False)
-    assert sorted(path.name for path in folder.iterdir()) == ["point_0", "point_1", "point_2", "sweep.csv", "sweep.png"]
+    assert sorted(path.name for path in folder.iterdir()) == [".uvms-run.json", "point_0", "point_1", "point_2",
+                                                              "sweep.csv", "sweep.png"]
     assert first.files == [folder / "sweep.csv", folder / "sweep.png"]
 
     def failing(scenario, out, **kwargs):  # jobs=1 runs the points in this process
@@ -135,8 +140,61 @@ def test_a_sweep_folder_is_replaced_whole_and_reports_final_paths(tmp_path, monk
 
     monkeypatch.setattr("uvms.scenario.runs.run", failing)
     second = sweep(SCENARIO, ["solver.gain=[2.0, 3.0]"], out=folder, progress=False)
-    assert sorted(path.name for path in folder.iterdir()) == ["sweep.csv", "sweep.png"]  # no point of the first sweep
+    assert sorted(path.name for path in folder.iterdir()) == [".uvms-run.json", "sweep.csv", "sweep.png"]  # no point
     assert [row["error"] for row in second.rows] == [f"UVMSError: cannot write to '{folder / f'point_{k}'}'"
                                                      for k in range(2)]  # the final paths, not the temporary ones
     assert str(folder / "point_0") in (folder / "sweep.csv").read_text()
     assert not list(tmp_path.glob(".sweep.uvms-tmp-*"))
+
+
+# ------------------------------------------------------------------ the Dask backend is no open door
+def listening_ports() -> set[int]:
+    """The TCP ports this process and its children listen on."""
+    psutil = pytest.importorskip("psutil")
+    me = psutil.Process()
+    ports = set()
+    for process in [me, *me.children(recursive=True)]:
+        try:
+            ports |= {c.laddr.port for c in process.net_connections("tcp") if c.status == psutil.CONN_LISTEN}
+        except psutil.Error:
+            continue
+    return ports
+
+
+def test_the_local_dask_cluster_is_tls_only_and_opens_no_http_port():
+    pytest.importorskip("dask.distributed")
+    from distributed import Client
+    from distributed.security import Security
+
+    before = listening_ports()
+    with dask_client(None, 2) as client:
+        address = client.cluster.scheduler_address
+        assert address.startswith("tls://127.0.0.1:")
+        assert client.submit(os.getpid).result(timeout=30) != os.getpid()  # the cluster works for its client
+        info = client.scheduler_info()
+        comms = {address, *info["workers"], *(w["nanny"] for w in info["workers"].values())}
+        assert all(comm.startswith("tls://") for comm in comms)
+        opened = listening_ports() - before
+        assert opened == {int(comm.rsplit(":", 1)[1]) for comm in comms}  # no dashboard, no HTTP port at all
+        started = time.monotonic()
+        for credentials in ({}, {"security": Security.temporary()}):  # none, or another user's own
+            with pytest.raises(Exception):
+                stranger = Client(address, timeout="5s", **credentials)
+                stranger.submit(os.getuid).result(timeout=5)
+        host, port = address[len("tls://"):].rsplit(":", 1)
+        context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
+        context.check_hostname, context.verify_mode = False, ssl.CERT_NONE  # trusts anything, has no certificate
+        with socket.create_connection((host, int(port)), timeout=5) as raw:
+            with pytest.raises((ssl.SSLError, ConnectionError, OSError)):
+                with context.wrap_socket(raw) as tls:
+                    tls.sendall(b"\x00" * 64)
+                    if not tls.recv(1):  # refused after the handshake (TLS 1.3 checks the client's certificate)
+                        raise ConnectionError("closed")
+        assert time.monotonic() - started < 30
+
+
+def test_a_tls_scheduler_without_credentials_says_where_they_come_from():
+    pytest.importorskip("dask.distributed")
+    with pytest.raises(SweepError, match="tls:// scheduler needs credentials .*DASK_DISTRIBUTED__COMM__TLS__CA_FILE"):
+        with dask_client("tls://127.0.0.1:9", 1):
+            pass

@@ -519,7 +519,7 @@ def test_cli_workspace_replaces_its_folder_whole(tmp_path, capsys):
                  "--out", str(out), "--quiet"]) == 0
     assert (out / "workspace_1000.png").is_file()
     assert main(["workspace", "xiang2019", "--ee", "right_ee", "-n", "3000", "--out", str(out), "--quiet"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "points.npz", "workspace.png"]
+    assert sorted(p.name for p in out.iterdir()) == [".uvms-run.json", "metrics.json", "points.npz", "workspace.png"]
     assert json.loads((out / "metrics.json").read_text())["samples"] == 3000
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".ws.uvms-tmp")] == []
     user_folder = tmp_path / "documents"

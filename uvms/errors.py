@@ -102,6 +102,10 @@ class RunFolderBusy(RunFolderError):
     """Another uvms process is writing the same output folder (it holds the folder's lock)."""
 
 
+class DiskFullError(RunFolderError):
+    """No space is left (or the quota is exhausted) on the device holding an output folder."""
+
+
 class RunRecordError(UVMSError):
     """A run folder's record of its model is malformed, or contradicts the model given with the folder."""
 
@@ -136,3 +140,8 @@ class ObjectiveError(UVMSError):
 
 class ObjectiveNameNotFound(NameNotFound):
     """An unknown inequality type, or an unknown parameter of one; the message lists the close names."""
+
+
+# ------------------------------------------------- the browser viewer
+class ViewerInputError(UVMSError):
+    """A viewer argument out of range (port), or a run's ``trajectory.npz`` the viewer will not read."""

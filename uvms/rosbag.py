@@ -55,7 +55,7 @@ WORLD_FRAME = "odom"
 #: rosbag2 metadata version written: 8 keeps the QoS as a YAML string, which Humble's player also reads.
 BAG_VERSION = 8
 INSTALL_HINT = "writing a ROS 2 bag needs the 'rosbags' package: pip install 'uvms[ros]' (or pip install rosbags)"
-#: A bag folder is replaced whole only if it holds this file (it is a rosbag2 folder).
+#: A rosbag2 folder's file: without uvms's manifest (``outputs.MANIFEST``), an older uvms's bag; refused all the same.
 BAG_MARKERS = ("metadata.yaml",)
 
 
@@ -307,8 +307,8 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
     end (:func:`uvms.outputs.run_folder`), so ``path`` holds a complete bag, the previous one or the new one.
 
     Args:
-        path: the bag folder, e.g. ``RUN_FOLDER / "bag"``; an existing non-empty folder must be a rosbag2
-            folder (hold ``metadata.yaml``).
+        path: the bag folder, e.g. ``RUN_FOLDER / "bag"``; an existing non-empty folder must be a bag folder
+            that uvms wrote (its manifest ``.uvms-run.json``) holding nothing else.
         robot: the model of the run.
         result: the run: t (N,) [s], q (N, nq), v (N, nv); joint_torque (N, n_arm) [N m] if any;
             desired_position (N, 3) [m] and desired_rpy (N, 3) [rad] for the desired pose.
@@ -343,7 +343,7 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
         skipped["/joint_states"] = f"joints {', '.join(wide)} have several values; JointState holds one per joint"
     summary = BagSummary(path=Path(path), skipped=skipped)
     name = Path(os.path.realpath(os.path.abspath(path))).name
-    with outputs.run_folder(path, lock=lock, markers=BAG_MARKERS) as folder:
+    with outputs.run_folder(path, lock=lock, legacy_markers=BAG_MARKERS) as folder:
         staging = folder / name  # rosbags names the .mcap after its folder: NAME/NAME.mcap once moved up
         try:
             _write(api, staging, robot, result, stamps, edges, frame, target, summary, thrust)

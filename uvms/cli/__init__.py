@@ -3,15 +3,25 @@
 One module per command group: :mod:`.info` (``uvms info``), :mod:`.run` (``uvms run``, ``uvms sweep``,
 ``--watch``), :mod:`.workspace` (``uvms workspace``), :mod:`.view` (``uvms view``); here the argument parser
 and :func:`main`, the one place that turns an error into one line and an exit status.
+
+Every line :func:`main` prints goes through :func:`printable`: control characters and bidirectional overrides
+(from a scenario key, a file name...) are shown escaped, never sent to the terminal. SIGTERM and SIGHUP take
+the path of Ctrl-C: the run folder is cleaned up and one line says what the output folder holds.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import errno
 import os
+import re
+import signal
 import sys
+import threading
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from typing import TextIO
 
 from ..errors import UVMSError
 from .info import command_info, describe, format_limits, parse_assignments
@@ -30,12 +40,52 @@ from .workspace import command_workspace, parse_figure_counts
 __all__ = [
     "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_info", "command_run",
     "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
-    "parse_assignments", "parse_figure_counts", "read_result", "run_output_folder", "scenario_file",
+    "parse_assignments", "parse_figure_counts", "printable", "read_result", "run_output_folder", "scenario_file",
     "view_configuration", "view_robot", "wait_for_interrupt", "watch_job", "watch_viewer",
 ]
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-C
+#: C0 controls, DEL, C1 controls, and the bidirectional embeddings, overrides and isolates.
+UNPRINTABLE = re.compile("[\x00-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+#: Signals that stop a command as Ctrl-C does (exit status 128 + the signal).
+STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+def printable(text: str) -> str:
+    """``text`` with every control character and bidi override escaped visibly (``\x1b``, ``\u202e``)."""
+    return UNPRINTABLE.sub(lambda m: f"\\x{ord(m[0]):02x}" if ord(m[0]) < 0x100 else f"\\u{ord(m[0]):04x}", text)
+
+
+def say(text: str, file: TextIO | None = None) -> None:
+    """Print one line of the CLI (on stderr unless ``file``), escaped by :func:`printable`."""
+    print(printable(text), file=file or sys.stderr)
+
+
+@contextlib.contextmanager
+def stop_signals_interrupt() -> Iterator[list[int]]:
+    """While running a command: SIGTERM/SIGHUP raise KeyboardInterrupt (the list receives the signal).
+
+    A second signal of the same kind ends the process at once (default action). Only in the main thread, where
+    Python handles signals; an ignored signal stays ignored (``nohup``); the previous handlers are restored after.
+    """
+    received: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+
+    def stop(signum: int, frame: object) -> None:
+        received.append(signum)
+        signal.signal(signum, signal.SIG_DFL)
+        raise KeyboardInterrupt
+
+    previous = {signum: signal.signal(signum, stop) for signum in STOP_SIGNALS
+                if signal.getsignal(signum) is not signal.SIG_IGN}
+    try:
+        yield received
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -76,7 +126,10 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--backend", choices=["loky", "dask"], default="loky",
                        help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
     sweep.add_argument("--scheduler", metavar="ADDRESS",
-                       help="Dask scheduler, e.g. tcp://10.0.0.5:8786 (default: a local cluster of --jobs workers)")
+                       help="Dask scheduler, e.g. tls://10.0.0.5:8786, with TLS credentials from Dask's config "
+                            "distributed.comm.tls.* (env DASK_DISTRIBUTED__COMM__TLS__CA_FILE, ..._CLIENT__CERT, "
+                            "..._CLIENT__KEY); a tcp:// one works but anyone reaching it can run code on its workers "
+                            "(default: a local TLS cluster of --jobs workers, no dashboard)")
     sweep.add_argument("--out", help="output folder (default: out/<scenario name>_sweep)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     sweep.set_defaults(handler=command_sweep)
@@ -141,25 +194,38 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``uvms`` console script."""
     options = build_parser().parse_args(argv)
     options.argv = list(sys.argv[1:] if argv is None else argv)
-    try:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            status = options.handler(options)
-        for warning in caught:
-            print(f"uvms: warning: {warning.message}", file=sys.stderr)
-        return status
-    except UVMSError as exc:
-        print(f"uvms: error: {' '.join(str(exc).split())}", file=sys.stderr)
-        return EXIT_USAGE
-    except KeyboardInterrupt as exc:  # Ctrl-C: one line saying what the output folder holds (outputs.run_folder)
-        notes = getattr(exc, "__notes__", None)
-        if getattr(options, "watch", False):
-            notes = ["stopped watching; the output folder keeps the last complete run"]
-        print(f"uvms: interrupted; {notes[-1]}" if notes else "uvms: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except Exception as exc:  # noqa: BLE001 - the CLI promises one line, never a traceback
-        if os.environ.get("UVMS_DEBUG"):
-            raise
-        print(f"uvms: internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
-              f"(set UVMS_DEBUG=1 for a traceback)", file=sys.stderr)
-        return EXIT_USAGE
+    with stop_signals_interrupt() as received:
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                status = options.handler(options)
+            for warning in caught:
+                say(f"uvms: warning: {warning.message}")
+            return status
+        except KeyboardInterrupt as exc:
+            return interrupted(exc, options, received)
+        except Exception as exc:  # noqa: BLE001 - the CLI promises one line, never a traceback
+            if received:  # a stop signal that surfaced as another error (e.g. from a worker it stopped)
+                return interrupted(exc, options, received)
+            if isinstance(exc, UVMSError):
+                say(f"uvms: error: {' '.join(str(exc).split())}")
+                return EXIT_USAGE
+            if os.environ.get("UVMS_DEBUG"):
+                raise
+            if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):
+                where = os.path.dirname(os.path.abspath(exc.filename)) if exc.filename else "the output folder"
+                say(f"uvms: error: no space left on the device holding {where!r} ({exc.strerror})")
+                return EXIT_USAGE
+            say(f"uvms: internal error: {type(exc).__name__}: {' '.join(str(exc).split())} "
+                f"(set UVMS_DEBUG=1 for a traceback)")
+            return EXIT_USAGE
+
+
+def interrupted(exc: BaseException, options: argparse.Namespace, received: Sequence[int]) -> int:
+    """Ctrl-C, SIGTERM or SIGHUP: one line saying what the output folder holds (the note of outputs.run_folder)."""
+    notes = getattr(exc, "__notes__", None)
+    if getattr(options, "watch", False):
+        notes = ["stopped watching; the output folder keeps the last complete run"]
+    what = f"terminated by {signal.Signals(received[0]).name}" if received else "interrupted"
+    say(f"uvms: {what}; {notes[-1]}" if notes else f"uvms: {what}")
+    return 128 + received[0] if received else EXIT_INTERRUPTED

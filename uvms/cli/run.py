@@ -20,6 +20,7 @@ def command_run(options: argparse.Namespace) -> int:
     """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
     from ..scenario import run  # the scenario layer pulls in scipy and matplotlib
     from ..scenario.verdict import verdict_line
+    from . import say  # every line escaped (names come from scenario and model files)
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
@@ -27,36 +28,38 @@ def command_run(options: argparse.Namespace) -> int:
     result = run(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
-    print(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)")
+    say(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)", sys.stdout)
     for key in HEADLINE_METRICS:
         if key in metrics:  # e.g. the thrusters' only in an actuated run
-            print(f"  {key:<27} {metrics[key]:.3e}")
+            say(f"  {key:<27} {metrics[key]:.3e}", sys.stdout)
     if "inequalities" in metrics:
         enforced = "enforced" if metrics["inequalities_enforced"] else "monitored, not enforced"
         shares = ", ".join(f"{name} {entry['active_fraction']:.0%}" for name, entry in metrics["inequalities"].items()
                            if "active_fraction" in entry)
-        print(f"inequalities {enforced}; active: {shares or 'none with rows'}")
-    print(f"verdict     {verdict_line(metrics['verdict'])}")
-    print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})")
+        say(f"inequalities {enforced}; active: {shares or 'none with rows'}", sys.stdout)
+    say(f"verdict     {verdict_line(metrics['verdict'])}", sys.stdout)
+    say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})", sys.stdout)
     if "bag" in metrics:
         counts = ", ".join(f"{topic} {count}" for topic, count in metrics["bag"]["topics"].items())
-        print(f"bag         {folder / 'bag'}/ ({counts}); replay: ros2 bag play {folder / 'bag'}")
+        say(f"bag         {folder / 'bag'}/ ({counts}); replay: ros2 bag play {folder / 'bag'}", sys.stdout)
         for item, reason in metrics["bag"]["skipped"].items():
-            print(f"uvms: note: bag without {item}: {reason}", file=sys.stderr)
+            say(f"uvms: note: bag without {item}: {reason}")
     for warning in metrics["verdict"]["warnings"]:  # said on the terminal, not only in metrics.json
-        print(f"uvms: warning: {metrics['scenario']}: {warning}", file=sys.stderr)
+        say(f"uvms: warning: {metrics['scenario']}: {warning}")
     return 0
 
 
 def command_sweep(options: argparse.Namespace) -> int:
     """``uvms sweep SCENARIO --grid KEY=START:STOP:N ...``: run a grid of overrides, write sweep.csv and sweep.png."""
     from ..scenario.sweep import sweep  # joblib, and dask only with --backend dask
+    from . import say  # every line escaped (grid values are the user's text)
 
     result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
                    scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None)
-    print(result.text())
+    for line in result.text().splitlines():
+        say(line, sys.stdout)
     folder = result.files[0].parent
-    print(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, point_*/)")
+    say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, point_*/)", sys.stdout)
     if result.failed:
         first = result.failed[0]
         raise UVMSError(f"{len(result.failed)} of {len(result.rows)} sweep points failed (error column of "

@@ -35,8 +35,10 @@ def command_workspace(options: argparse.Namespace) -> int:
     from .. import outputs
     from ..viz.reports import write_workspace_outputs
     from ..workspace import OrientationGrid, monte_carlo, parse_sample_count
+    from ..workspace.montecarlo import check_seed
 
     samples = parse_sample_count(options.samples)
+    check_seed(options.seed)
     if not 0.0 < options.convergence_tolerance < 1.0:
         raise UVMSError(f"--convergence-tolerance must be in (0, 1) (0.01: 1 %), got {options.convergence_tolerance}")
     robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
@@ -48,7 +50,11 @@ def command_workspace(options: argparse.Namespace) -> int:
     out = Path(options.out or Path("out") / f"workspace_{robot.name}")
     if options.watch:
         return watch_job(options, out, model=options.model)
-    with outputs.run_folder(out) as folder:  # taken first: a second writer of the folder is refused at once
+    from ..watch import WatchedFiles
+
+    model_files = WatchedFiles.of(model=options.model)  # the model, its includes and their folders: never deleted
+    inputs = model_files.files | model_files.folders
+    with outputs.run_folder(out, inputs=inputs) as folder:  # taken first: a second writer is refused at once
         result = monte_carlo(robot, frames, samples, seed=options.seed, voxel=options.voxel,
                              progress=False if options.quiet else None, remove_hull=options.remove_hull,
                              dexterity=grid, dexterity_voxel=options.dexterity_voxel)

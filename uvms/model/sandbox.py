@@ -62,13 +62,12 @@ from pathlib import Path
 
 from ..errors import ModelParseError, XacroError
 from . import resources
+from .checks import MAX_URDF_BYTES  # the largest URDF the child may hand back [bytes]
 
 #: Seconds an untrusted xacro expansion may take [s].
 DEFAULT_TIMEOUT = 30.0
 #: Address space of the child [bytes]: xacro needs about 40 MiB.
 DEFAULT_MEMORY_BYTES = 1 << 30
-#: Largest URDF the child may hand back [bytes].
-MAX_URDF_BYTES = 32 << 20
 #: Longest error message taken from the child [characters].
 MAX_MESSAGE_CHARS = 2000
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -19,6 +19,7 @@ from .actuated import actuated_metrics, simulate_actuation
 from .build import Setup, build
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
+from .resources import resolve_scenario_path
 from .schema import read_scenario
 from .verdict import run_verdict
 
@@ -93,6 +94,7 @@ def run(
     The scenario is read, checked and built (model, initial configuration, step count) before anything is
     written; then every file goes into a temporary folder that replaces ``out`` as a whole at the end
     (:func:`uvms.outputs.run_folder`): ``out`` holds the previous complete run until the new one is complete.
+    ``out`` is refused if it holds the scenario or the model (:func:`run_inputs`), or files uvms did not write.
 
     Args:
         scenario_path: the TOML file, or the name of a shipped scenario (``"hoang2011_w1"``).
@@ -104,7 +106,8 @@ def run(
 
     Raises:
         ScenarioError: a bad scenario or override; StepCountError: no step or too many steps;
-        NumericalError: the numerics overflowed; RunFolderBusy: another uvms process writes ``out``.
+        NumericalError: the numerics overflowed; RunFolderBusy: another uvms process writes ``out``;
+        RunFolderError: ``out`` holds an input or files uvms did not write.
     """
     scenario = read_scenario(scenario_path, overrides)
     name = scenario["scenario"]["name"]
@@ -113,10 +116,23 @@ def run(
     with numerics_guard(name):
         setup = build(scenario)
     check_step_count(scenario, setup.duration)
-    with outputs.run_folder(out, lock=lock) as folder, numerics_guard(name):
+    inputs = run_inputs(resolve_scenario_path(scenario_path), [scenario["model"]["path"]])
+    with outputs.run_folder(out, lock=lock, inputs=inputs) as folder, numerics_guard(name):
         result = execute(scenario, setup, folder, progress, started)
     result.files = [out / path.relative_to(folder) for path in result.files]
     return result
+
+
+def run_inputs(scenario_file: str | os.PathLike, models: Iterable[str]) -> list[Path]:
+    """What a run reads, which its output folder must not hold: the scenario file, and each model file (a path
+    or a shipped name) with the files it includes and their folders (meshes, YAML beside the model)."""
+    from ..watch import WatchedFiles
+
+    found = {Path(scenario_file).resolve()}
+    for model in models:
+        watched = WatchedFiles.of(model=model)  # an unreadable model adds nothing: the run reports it
+        found |= watched.files | watched.folders
+    return sorted(found)
 
 
 @contextlib.contextmanager

@@ -4,6 +4,11 @@ Every grid point is one :func:`uvms.scenario.run` with ``--set`` style overrides
 args included), executed through joblib: local processes (loky) by default, or the workers of a Dask
 cluster (``backend="dask"``, optional extra ``pip install uvms[dask]``). The table is sorted by point
 index, so it is the same whatever the backend and the number of jobs.
+
+A Dask scheduler runs whatever its clients submit. The local cluster speaks TLS with credentials made for it
+(client certificates required: another user of the machine cannot submit to it) and opens no HTTP port (no
+dashboard). A remote ``scheduler`` should be ``tls://``, with credentials from Dask's configuration
+``distributed.comm.tls.*`` (:data:`TLS_HINT`); a ``tcp://`` one works as in Dask, with a warning.
 """
 
 from __future__ import annotations
@@ -15,6 +20,7 @@ import itertools
 import json
 import math
 import os
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,6 +40,11 @@ BACKENDS = ("loky", "dask")
 #: progress bar past one second) and is a whole scenario run (seconds to minutes) with its own folder; a larger
 #: study is several sweeps, e.g. one per value of the first key.
 MAX_POINTS = 10_000
+#: A text cell starting with one of these is a formula to a spreadsheet: ``sweep.csv`` prefixes it with ``'``.
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+#: Where the credentials of a remote tls:// scheduler come from (Dask's configuration).
+TLS_HINT = ("credentials from Dask's configuration distributed.comm.tls.* (DASK_DISTRIBUTED__COMM__TLS__CA_FILE, "
+            "DASK_DISTRIBUTED__COMM__TLS__CLIENT__CERT, DASK_DISTRIBUTED__COMM__TLS__CLIENT__KEY)")
 
 
 def parse_grid(text: str) -> tuple[str, list]:
@@ -42,7 +53,7 @@ def parse_grid(text: str) -> tuple[str, list]:
     Integers stay integers when START, STOP and the step are whole (e.g. ``model.args.n_joints=4:8:5``).
 
     Raises:
-        SweepError: not of either form, N < 1, a bound not finite, an empty list, a repeated value.
+        SweepError: not of either form, N < 1, a bound not finite, an empty list, a repeated value, a line break.
     """
     key, sep, spec = text.partition("=")
     key, spec = key.strip(), spec.strip()
@@ -52,6 +63,8 @@ def parse_grid(text: str) -> tuple[str, list]:
         values = parse_value(spec)
         if not isinstance(values, list) or not values or any(isinstance(v, (list, dict)) for v in values):
             raise SweepError(f"--grid {key}: expected a non-empty TOML list of numbers, strings or booleans, got {spec!r}")
+        if any(isinstance(v, str) and any(c in v for c in "\r\n\x0b\x0c") for v in values):  # a row per point
+            raise SweepError(f"--grid {key}: a string value holds a line break; values are one-line, got {spec!r}")
     else:
         parts = spec.split(":")
         try:
@@ -100,12 +113,12 @@ class SweepResult:
         return [row for row in self.rows if row["error"]]
 
     def csv(self) -> str:
-        """The table as CSV text (floats in full precision)."""
+        """The table as CSV text (:func:`csv_cell`)."""
         buffer = io.StringIO()
         writer = csv.writer(buffer, lineterminator="\n")
-        writer.writerow(self.columns)
+        writer.writerow([csv_cell(c) for c in self.columns])
         for row in self.rows:
-            writer.writerow([repr(row[c]) if isinstance(row[c], float) else row[c] for c in self.columns])
+            writer.writerow([csv_cell(row[c]) for c in self.columns])
         return buffer.getvalue()
 
     def text(self) -> str:
@@ -114,6 +127,22 @@ class SweepResult:
                                    for c in self.columns] for row in self.rows]
         widths = [max(len(line[i]) for line in cells) for i in range(len(self.columns))]
         return "\n".join("  ".join(cell.ljust(width) for cell, width in zip(line, widths)).rstrip() for line in cells)
+
+
+def csv_cell(value: Any) -> Any:
+    """A cell of ``sweep.csv``: a float in full precision, text neutralised if it would start a formula."""
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, str) and value.startswith(FORMULA_START):
+        return "'" + value
+    return value
+
+
+def worker_count(jobs: int, points: int, remote: bool = False) -> int:
+    """The parallel jobs of a sweep: ``jobs`` (-1: all cores), at most one per point and, locally, per core."""
+    if remote:  # the cluster's size is its own; -1: all its workers
+        return jobs if jobs == -1 else min(jobs, points)
+    return max(1, min(points, os.cpu_count() or 1, jobs if jobs > 0 else points))
 
 
 def run_point(scenario: str, index: int, assignments: Sequence[str], out: str) -> dict:
@@ -149,19 +178,38 @@ def use_thread_lock_for_progress_bars() -> None:
 
 @contextlib.contextmanager
 def dask_client(scheduler: str | None, jobs: int):
-    """A dask.distributed Client on ``scheduler``, or on a local cluster of ``jobs`` worker processes."""
+    """A dask.distributed Client on ``scheduler`` (TLS credentials from Dask's configuration; a warning if not
+    ``tls://``), or on a local cluster of ``jobs`` workers with TLS credentials of its own and no HTTP port."""
     try:
+        import dask
         from dask.distributed import Client, LocalCluster
+        from distributed.security import Security
     except ImportError:
         raise SweepError("the dask backend needs `pip install uvms[dask]` (dask.distributed)") from None
     try:
         if scheduler:
-            client = Client(scheduler, timeout="20s")
+            if not scheduler.startswith("tls://"):
+                warnings.warn(f"the Dask scheduler {scheduler} is not tls://: neither encrypted nor authenticated, "
+                              f"so anyone who can reach it can run code on its workers; prefer a tls:// scheduler "
+                              f"with {TLS_HINT}", stacklevel=3)
+            client = Client(scheduler, timeout="20s", security=Security())
         else:
-            client = Client(LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True,
-                                         dashboard_address=None))
-    except OSError as exc:
-        raise SweepError(f"cannot reach the Dask scheduler {scheduler!r}: {' '.join(str(exc).split())}") from None
+            try:
+                security = Security.temporary()
+            except ImportError:
+                raise SweepError("the local Dask cluster needs the 'cryptography' package for its TLS credentials: "
+                                 "pip install cryptography") from None
+            no_http = {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
+            with dask.config.set(no_http):  # the workers get this configuration too
+                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True, protocol="tls",
+                                       security=security, dashboard_address=None, host="127.0.0.1")
+            client = Client(cluster, security=security)
+            client.run_on_scheduler(stop_http_server)  # Dask always starts one (routes emptied above)
+            client.run(stop_http_server)
+    except (OSError, TypeError, ValueError) as exc:  # TypeError: a tls:// address without credentials
+        message = " ".join(str(exc).split())
+        hint = f"; a tls:// scheduler needs {TLS_HINT}" if scheduler and scheduler.startswith("tls://") else ""
+        raise SweepError(f"cannot reach the Dask scheduler {scheduler or '(local cluster)'}: {message}{hint}") from None
     try:
         yield client
     finally:
@@ -169,6 +217,13 @@ def dask_client(scheduler: str | None, jobs: int):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def stop_http_server(dask_scheduler: Any = None, dask_worker: Any = None) -> None:
+    """Close the HTTP port of a Dask scheduler or worker (run in its event loop by ``Client.run``)."""
+    server = getattr(dask_scheduler or dask_worker, "http_server", None)
+    if server is not None:
+        server.stop()
 
 
 def sweep(
@@ -187,10 +242,12 @@ def sweep(
         scenario: the TOML file, or the name of a shipped scenario (``"santos2006_task_priority"``).
         grids: ``(key, values)`` pairs or ``KEY=START:STOP:N`` strings; points are their Cartesian product,
             the first key varying slowest.
-        jobs: parallel jobs for loky (-1: all cores); for dask without ``scheduler``, the local workers.
+        jobs: parallel jobs for loky (-1: all cores); for dask without ``scheduler``, the local workers;
+            locally at most one per point and per core (:func:`worker_count`).
         backend: ``"loky"`` (local processes) or ``"dask"`` (a dask.distributed cluster; its workers must
             see the same files).
-        scheduler: address of a Dask scheduler (e.g. ``tcp://10.0.0.5:8786``); None starts a local cluster.
+        scheduler: address of a Dask scheduler, ``tls://`` with credentials from Dask's configuration (e.g.
+            ``tls://10.0.0.5:8786``; a ``tcp://`` one works, with a warning); None starts a local TLS cluster.
         out: output folder (default ``out/<scenario name>_sweep``); point k runs into ``out/point_k``.
         progress: progress bar (None: on a terminal only).
 
@@ -216,7 +273,7 @@ def sweep(
                          f"into several sweeps (e.g. one per value of {keys[0]}) or take fewer values")
     points = list(itertools.product(*(values for _, values in grids)))
     assignments = [[f"{key}={toml_literal(v)}" for key, v in zip(keys, point)] for point in points]
-    checked = check_points(scenario, assignments, progress)
+    checked, models = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
         from ..model.loader import load
 
@@ -225,7 +282,10 @@ def sweep(
     given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
     out = given.resolve()
     width = len(str(len(points) - 1))
-    with outputs.run_folder(given) as folder:  # the sweep folder is replaced whole, point folders included
+    from .runs import run_inputs
+
+    inputs = run_inputs(scenario, models)
+    with outputs.run_folder(given, inputs=inputs) as folder:  # replaced whole, point folders included
         tasks = [(str(Path(scenario).resolve()), k, overrides, str(folder / f"point_{k:0{width}d}"))
                  for k, overrides in enumerate(assignments)]
         rows = run_tasks(tasks, jobs, backend, scheduler, progress)
@@ -239,25 +299,33 @@ def sweep(
     return result
 
 
-def check_points(scenario: str | os.PathLike, assignments: list[list[str]], progress: bool | None) -> dict:
-    """Check every point's keys and values in the parent, before any worker starts; the last point's scenario.
+def check_points(scenario: str | os.PathLike, assignments: list[list[str]],
+                 progress: bool | None) -> tuple[dict, list[str]]:
+    """Check every point's keys and values in the parent, before any worker starts.
 
     The file is parsed once; a progress bar shows up if the checks take more than a second.
+
+    Returns:
+        The last point's scenario, and the model paths of all points (``model.path`` may be a grid key).
     """
     from ..progress import tqdm
 
     raw = read_toml(scenario)
     checked: dict = {}
+    models: dict[str, None] = {}
     for overrides in tqdm(assignments, desc="checking the grid", unit="point", disable=progress is False,
                           leave=False, delay=1.0):
         checked = scenario_from_raw(raw, scenario, overrides)
-    return checked
+        models[checked["model"]["path"]] = None
+    return checked, list(models)
 
 
 def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None, progress: bool | None) -> list[dict]:
     """Run the points through joblib (loky or dask); rows sorted by point index."""
     from joblib import Parallel, delayed, parallel_config
     from ..progress import tqdm
+
+    jobs = worker_count(jobs, len(tasks), remote=bool(scheduler))
 
     def execute() -> list[dict]:
         parallel = Parallel(n_jobs=jobs, return_as="generator")
@@ -281,12 +349,9 @@ def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None
 def stop_workers(results) -> None:
     """Abort a joblib generator and kill the loky workers (before the sweep's temporary folder is removed).
 
-    Closing the generator makes joblib abort its backend, which for loky shuts the executor down with
-    ``kill_workers=True`` and waits for the workers to exit; then any reusable loky executor left is shut down the
-    same way. A Dask cluster is closed by :func:`dask_client`.
+    Closing the generator makes joblib abort its backend (loky: ``kill_workers=True``, waiting for the workers
+    to exit); then any reusable loky executor left is shut down the same way (dask: :func:`dask_client`).
     """
-    import warnings
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # joblib warns that the generator was exited early: that is the point
         with contextlib.suppress(Exception):
