@@ -3,13 +3,17 @@
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+import warnings
+import zipfile
+import zlib
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import UVMSError
+from ..errors import UVMSError, ViewerInputError
 from ..robot import Robot
 from .info import parse_assignments
 
@@ -45,19 +49,78 @@ def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
     return named_model(options.model, parse_assignments(options.arg), options.base), None
 
 
+#: The most rows of a ``trajectory.npz`` that ``uvms view --result`` reads: 1,000,000 (a run of ``uvms run`` has
+#: at most ``uvms.integrate.MAX_STEPS`` + 1 = 200,001), 8 MB per coordinate of q.
+MAX_RESULT_ROWS = 1_000_000
+#: The errors of reading a zip and its .npy headers (a truncated, corrupt or foreign file).
+READ_ERRORS = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error, NotImplementedError,
+               RuntimeError)
+
+
+def npy_header(archive: zipfile.ZipFile, info: zipfile.ZipInfo) -> tuple[tuple[int, ...], np.dtype, int]:
+    """(shape, dtype, bytes the .npy member should hold) of a member of an .npz, from its header only."""
+    with archive.open(info) as member:
+        version = np.lib.format.read_magic(member)
+        if version not in ((1, 0), (2, 0)):
+            raise ValueError(f"{info.filename} is .npy format {version[0]}.{version[1]}; uvms writes 1.0")
+        read = np.lib.format.read_array_header_1_0 if version == (1, 0) else np.lib.format.read_array_header_2_0
+        shape, _, dtype = read(member)
+        return shape, dtype, member.tell() + int(np.prod(shape, dtype=object)) * dtype.itemsize
+
+
+def check_trajectory(path: Path, nq: int) -> None:
+    """Refuse a ``trajectory.npz`` before it is loaded, from its zip directory and .npy headers alone: members
+    other than the series uvms writes (:data:`uvms.series.SERIES`), t and q not float64 of shapes (N,) and
+    (N, nq) with 1 <= N <= :data:`MAX_RESULT_ROWS`, or a member size that contradicts its header.
+
+    Raises:
+        ViewerInputError: what is wrong, and what a run folder of uvms holds.
+    """
+    from ..series import SERIES
+
+    where = f"{str(path)!r} (--result)"
+    try:
+        with zipfile.ZipFile(path) as archive:
+            infos = archive.infolist()
+            names = [info.filename for info in infos]
+            foreign = [name for name in names if name.removesuffix(".npy") not in SERIES or not name.endswith(".npy")]
+            if foreign or len(set(names)) != len(names) or not {"t.npy", "q.npy"} <= set(names):
+                raise ViewerInputError(f"{where} holds {', '.join(sorted(set(names)))[:300] or 'nothing'}; a run "
+                                       f"folder's trajectory.npz holds t.npy and q.npy, and only the series "
+                                       f"{', '.join(SERIES)}")
+            headers = {info.filename: (*npy_header(archive, info), info.file_size) for info in infos
+                       if info.filename in ("t.npy", "q.npy")}
+    except READ_ERRORS as exc:
+        raise ViewerInputError(f"cannot read {where} as the .npz of a run: {' '.join(str(exc).split())}") from None
+    (t_shape, t_dtype, t_bytes, t_size), (q_shape, q_dtype, q_bytes, q_size) = headers["t.npy"], headers["q.npy"]
+    rows = t_shape[0] if len(t_shape) == 1 else -1
+    if len(q_shape) == 2 and q_shape[1] != nq:
+        raise ViewerInputError(f"{where} holds q of shape {q_shape}, but the model has nq = {nq}: is this the run's "
+                               f"model (and its --arg/--base)?")
+    if (t_dtype != np.float64 or q_dtype != np.float64 or not 1 <= rows <= MAX_RESULT_ROWS
+            or q_shape != (rows, nq)):
+        raise ViewerInputError(f"{where} holds t {t_dtype} {t_shape} and q {q_dtype} {q_shape}; a run holds t "
+                               f"float64 (N,) and q float64 (N, nq = {nq}) with 1 <= N <= {MAX_RESULT_ROWS:,}")
+    if (t_size, q_size) != (t_bytes, q_bytes):
+        raise ViewerInputError(f"{where}: t.npy or q.npy is {t_size} or {q_size} bytes, but its header says "
+                               f"{t_bytes} or {q_bytes}; the file is corrupt")
+
+
 def read_result(robot: Robot, folder: str) -> tuple[np.ndarray, np.ndarray]:
-    """(t (N,), q (N, nq)) of a run folder's ``trajectory.npz``, checked against the model."""
+    """(t (N,), q (N, nq)) of a run folder's ``trajectory.npz``, checked against the model before it is loaded
+    (:func:`check_trajectory`)."""
     path = Path(folder) / "trajectory.npz"
     if not path.is_file():
         raise UVMSError(f"{str(path)!r} does not exist; --result takes a run folder written by `uvms run`")
+    check_trajectory(path, robot.nq)
     try:
-        with np.load(path) as arrays:
+        with np.load(path, allow_pickle=False) as arrays:
             t, q = np.asarray(arrays["t"], dtype=float), np.asarray(arrays["q"], dtype=float)
-    except (OSError, ValueError, KeyError) as exc:
-        raise UVMSError(f"cannot read t and q from {str(path)!r}: {exc}") from None
-    if q.ndim != 2 or q.shape[1] != robot.nq or len(t) != len(q) or len(q) == 0:
-        raise UVMSError(f"{str(path)!r} holds q of shape {q.shape} and t of shape {t.shape}, but {robot.name} "
-                        f"has nq = {robot.nq}: is this the run's model (and its --arg/--base)?")
+    except READ_ERRORS as exc:
+        raise ViewerInputError(f"cannot read t and q from {str(path)!r}: {exc}") from None
+    if q.shape != (len(t), robot.nq) or len(q) == 0:  # the file changed since it was checked
+        raise ViewerInputError(f"{str(path)!r} holds q of shape {q.shape} and t of shape {t.shape}, but "
+                               f"{robot.name} has nq = {robot.nq}: is this the run's model (and its --arg/--base)?")
     return t, q
 
 
@@ -77,8 +140,11 @@ def wait_for_interrupt() -> None:
 
 def command_view(options: argparse.Namespace) -> int:
     """``uvms view MODEL [--q ...]`` / ``uvms view MODEL --result DIR``: the 3-D viewer, or a headless picture."""
+    from ..viz.viewer import check_port
+
     if options.frames < 1 or not options.fps > 0:
         raise UVMSError(f"--frames must be >= 1 and --fps > 0, got {options.frames} and {options.fps}")
+    check_port(options.port)
     robot, notice = view_robot(options)
     if notice:
         print(notice, flush=True)
@@ -106,7 +172,11 @@ def command_view(options: argparse.Namespace) -> int:
         return 0
     from ..viz.viewer import Viewer
 
-    viewer = Viewer(robot, q, port=options.port)  # the camera framed on the robot at q
+    with warnings.catch_warnings(record=True) as caught:  # said now, not when the viewer stops (meshes left out)
+        warnings.simplefilter("always")
+        viewer = Viewer(robot, q, port=options.port)  # the camera framed on the robot at q
+    for warning in caught:
+        print(f"uvms: warning: {' '.join(str(warning.message).split())}", file=sys.stderr, flush=True)
     try:
         print(f"viewer      {viewer.url}  (this machine only; Ctrl-C to stop)", flush=True)
         if result is not None:

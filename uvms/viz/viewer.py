@@ -1,7 +1,11 @@
 """3-D viewer: a model with its meshes, or a run as an animation, in the browser through Pinocchio's viser viewer.
 
 Optional: ``pip install uvms[viz]`` (viser). The server listens on 127.0.0.1 only; open the printed
-URL on the same machine (or through an SSH tunnel, ``ssh -L 8080:127.0.0.1:8080 host``).
+URL on the same machine (or through an SSH tunnel, ``ssh -L 8080:127.0.0.1:8080 host``). Listening on the
+loopback does not stop a web page in the same browser from reaching it, so every request must name the
+viewer: its Host must be ``127.0.0.1:PORT``, ``localhost:PORT`` or ``[::1]:PORT`` and its Origin, if any (a
+browser's WebSocket always sends one), ``http://`` one of those; anything else is answered 403
+(:func:`~uvms.viz.viewer_gui.request_refusal`). The values a page sends are clamped to the sliders' ranges.
 
 The page opens with the camera framed on the robot, a seabed grid under it and a triad on every end
 effector; its panel is the teach panel (sliders for the vehicle pose and every arm joint, moving the robot
@@ -16,29 +20,32 @@ from __future__ import annotations
 
 import math
 import os
+import socket
 import threading
 from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError, ViewerUnavailable
+from ..errors import UVMSError, ViewerInputError, ViewerUnavailable
 from ..robot import Robot
 from ..validate import finite_array, time_vector
 from .drawing import as_configurations
 from .viewer_geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, resolved_urdf, skeleton_geometry
-from .viewer_gui import Playback, TeachControls
+from .viewer_gui import Playback, TeachControls, guarded_servers, request_refusal
 from .viewer_scene import (EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box,
                            framing)
 
-__all__ = ["EE_COLOUR", "SKELETON_COLOUR", "Viewer", "ViewerUnavailable", "geometry_models", "play",
-           "require_viser", "resolved_urdf", "skeleton_geometry", "view"]
+__all__ = ["EE_COLOUR", "SKELETON_COLOUR", "Viewer", "ViewerUnavailable", "check_port", "geometry_models", "play",
+           "request_refusal", "require_viser", "resolved_urdf", "skeleton_geometry", "view"]
 
 
 #: The viewer binds to this address only: never to all interfaces.
 HOST = "127.0.0.1"
 DEFAULT_PORT = 8080
 INSTALL_HINT = "the 3-D viewer needs `pip install uvms[viz]` (viser)"
+#: Ports tried from the one asked (viser's own count) when it is busy.
+PORT_TRIES = 1000
 
 
 def require_viser():
@@ -54,6 +61,37 @@ def require_viser():
         raise ViewerUnavailable(f"{INSTALL_HINT}: {exc}; or draw headless with uvms.drawing "
                                 f"(`uvms view ... --headless OUT.png|OUT.gif`)") from None
     return viser, ViserVisualizer
+
+
+# ------------------------------------------------------------------ port, Host and Origin
+def check_port(port: int) -> int:
+    """``port`` if the viewer can listen on it: an integer in 1..65535, or 0 (any free port).
+
+    Raises:
+        ViewerInputError: anything else (a negative port, 65536, a float).
+    """
+    if isinstance(port, bool) or not isinstance(port, (int, np.integer)) or not 0 <= port <= 65535:
+        raise ViewerInputError(f"the viewer's port must be an integer in 1..65535 (or 0: any free port), got {port!r}")
+    return int(port)
+
+
+def first_free_port(port: int) -> int:
+    """The first port from ``port`` (at most :data:`PORT_TRIES`, at most 65535) that 127.0.0.1 can bind; 0 stays 0.
+
+    viser would try the next ports itself, but past 65535 its server thread dies and the caller waits forever.
+    """
+    if check_port(port) == 0:
+        return 0
+    last = min(port + PORT_TRIES, 65536) - 1
+    for candidate in range(port, last + 1):
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as asyncio's server does
+            try:
+                probe.bind((HOST, candidate))
+            except OSError:
+                continue
+        return candidate
+    raise ViewerInputError(f"no free port in {port}..{last} on {HOST}; give another port (0: any free port)")
 
 
 # ------------------------------------------------------------------ viewer
@@ -75,9 +113,13 @@ class Viewer:
     Args:
         robot: the robot.
         q: configuration shown first and framed by the camera (nq,); default neutral.
-        port: first port tried (the next free one is taken when busy); the host is always 127.0.0.1.
+        port: first port tried, 1..65535 (the next free one is taken when busy), or 0 (any free port); the
+            host is always 127.0.0.1.
         package_dirs: extra folders for ``package://`` mesh URIs.
         skeleton: add the stick geometry (None: only when the model has no visual geometry).
+
+    Raises:
+        ViewerInputError: a port outside 0..65535, or no free port from it.
 
     Attributes:
         robot: the robot shown; visualizer: the ViserVisualizer; server: the ``viser.ViserServer``.
@@ -89,7 +131,13 @@ class Viewer:
     def __init__(self, robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
                  package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None) -> None:
         viser, _ = require_viser()
-        self.server = viser.ViserServer(host=HOST, port=int(port), verbose=False)  # the next free port if taken
+        port = first_free_port(port)  # the next free port if taken
+        with guarded_servers() as guarded:
+            self.server = viser.ViserServer(host=HOST, port=port, verbose=False)
+        if not guarded:
+            self.server.stop()
+            raise ViewerUnavailable(f"viser {getattr(viser, '__version__', '?')} starts its server in a way uvms "
+                                    f"cannot guard (Host and Origin checks); install the viser of uvms[viz]")
         self.teach: TeachControls | None = None
         self.playback: Playback | None = None
         self._trajectory: tuple[np.ndarray, np.ndarray] | None = None
@@ -257,7 +305,8 @@ def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
     Args:
         robot: any Robot (loaded, or composed by :func:`uvms.mount_arm`).
         q: configuration (nq,).
-        port: first port tried (the next free one is taken when busy); the host is always 127.0.0.1.
+        port: first port tried, 1..65535 (the next free one is taken when busy), or 0 (any free port); the host
+            is always 127.0.0.1.
         package_dirs: extra folders for ``package://`` mesh URIs.
         skeleton: add the stick geometry (None: only when the model has no visual geometry).
         open_browser: open the page with :mod:`webbrowser`.
@@ -267,6 +316,7 @@ def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
 
     Raises:
         ViewerUnavailable: viser is not installed (``pip install uvms[viz]``).
+        ViewerInputError: a port outside 0..65535.
         ConfigurationError: bad q.
     """
     viewer = Viewer(robot, q, port=port, package_dirs=package_dirs, skeleton=skeleton)

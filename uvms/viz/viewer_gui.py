@@ -1,4 +1,6 @@
-"""The browser viewer's panel: the teach sliders (vehicle pose and arm joints) and the playback of a run.
+"""The browser viewer's panel: the teach sliders (vehicle pose and arm joints) and the playback of a run; and
+what a page may do: who may connect (:func:`request_refusal`, checked on every request by
+:func:`guarded_servers`) and the values it may set (clamped to the sliders' ranges, finite).
 
 The slider ranges and the configuration of slider values are those of the notebook teach panel
 (:func:`uvms.viz.teach.sliders`, :func:`uvms.viz.teach.teach_state`): one implementation for both.
@@ -10,10 +12,13 @@ re-enters the robot.
 
 from __future__ import annotations
 
+import contextlib
+import http
 import math
+import sys
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 
 import numpy as np
 import pinocchio as pin
@@ -26,8 +31,74 @@ from . import teach
 #: Panel order of the groups (smallest first).
 ORDER_PLAYBACK, ORDER_POSES, ORDER_VEHICLE, ORDER_ARM, ORDER_RESET = 10.0, 20.0, 30.0, 40.0, 50.0
 SLIDER_STEPS = 400  # steps across a slider's range
+#: Playback speeds a page may set [x]: the range of the speed input.
+SPEED_RANGE = (1e-3, 1e6)
+#: The names a page may use for the viewer (in its Host, and in its Origin after ``http://``), with ``:PORT``.
+LOOPBACK_NAMES = ("127.0.0.1", "localhost", "[::1]")
+_SERVE_LOCK = threading.Lock()  # one viewer starts its server at a time (websockets.asyncio.server.serve wrapped)
 
 
+# ------------------------------------------------------------------ who may connect
+def request_refusal(headers, port: int) -> str | None:
+    """Why a request to the viewer on ``port`` is refused, None if it is not.
+
+    Its one Host header must be one of :data:`LOOPBACK_NAMES` with ``:port`` (bare at port 80), and its
+    Origin header, when there is one, ``http://`` and the same: a foreign Host is a DNS-rebinding page, a
+    foreign Origin any web page opening a WebSocket to 127.0.0.1. A request without Origin is not from a
+    page (the browser sends it on every WebSocket) and is accepted.
+
+    Args:
+        headers: the request's ``websockets.datastructures.Headers``.
+        port: the port the server listens on.
+    """
+    hosts = {f"{name}:{port}" for name in LOOPBACK_NAMES} | (set(LOOPBACK_NAMES) if port == 80 else set())
+    host, origin = headers.get_all("Host"), headers.get_all("Origin")
+    if len(host) != 1 or host[0].strip().lower() not in hosts:
+        return f"Host {', '.join(host) or '(none)'} is not this viewer, which answers http://127.0.0.1:{port} only"
+    if origin and (len(origin) != 1 or origin[0].strip().lower() not in {f"http://{name}" for name in hosts}):
+        return f"Origin {', '.join(origin)} is not this viewer's page (http://127.0.0.1:{port})"
+    return None
+
+
+def _guard(process_request: Callable | None) -> Callable:
+    """A websockets ``process_request`` answering 403 to what :func:`request_refusal` refuses, else viser's."""
+
+    def checked(connection, request):
+        reason = request_refusal(request.headers, connection.local_address[1])
+        if reason is not None:
+            return connection.respond(http.HTTPStatus.FORBIDDEN, f"{reason}\n")
+        return None if process_request is None else process_request(connection, request)
+
+    return checked
+
+
+@contextlib.contextmanager
+def guarded_servers() -> Iterator[list[bool]]:
+    """While open, the websockets servers viser starts check Host and Origin first (:func:`_guard`).
+
+    viser hands its HTTP file server to ``websockets.asyncio.server.serve`` as ``process_request`` and offers
+    no hook: the function is wrapped for callers in viser, only while a Viewer starts its server. Yields a
+    list that gets an item per server guarded (empty: viser started no server through it; fail closed).
+    """
+    import websockets.asyncio.server as module
+
+    original, guarded = module.serve, []
+
+    def serve(*args, **kwargs):
+        if sys._getframe(1).f_globals.get("__name__", "").startswith("viser."):
+            kwargs["process_request"] = _guard(kwargs.get("process_request"))
+            guarded.append(True)
+        return original(*args, **kwargs)
+
+    with _SERVE_LOCK:
+        module.serve = serve
+        try:
+            yield guarded
+        finally:
+            module.serve = original
+
+
+# ------------------------------------------------------------------ the panel
 def poses_markdown(poses: Mapping[str, pin.SE3]) -> str:
     """The end-effector poses as panel markdown: per frame, position [m] and roll, pitch, yaw [deg] (world)."""
     lines = []
@@ -62,6 +133,8 @@ class TeachControls:
     Attributes:
         sliders: {slider name (``base_x``... or joint name): viser slider handle}.
         specs: {slider name: :class:`uvms.viz.teach.Slider`} at the start.
+        ranges: {slider name: (lower, upper)} the slider values are clamped to (a page can send any number):
+            the joint limits, the vehicle's range (widened when the robot is shown beyond it).
     """
 
     def __init__(self, server, robot: Robot, q: np.ndarray, show: Callable[[np.ndarray], None]) -> None:
@@ -73,6 +146,7 @@ class TeachControls:
         vehicle = set(teach.VEHICLE_SLIDERS[robot.base_type])
         self.folders = []
         self.sliders = {}
+        self.ranges = {name: (spec.lower, spec.upper) for name, spec in self.specs.items()}
         self.folders.append(gui.add_folder("End effectors", order=ORDER_POSES))
         with self.folders[-1]:
             self.poses = gui.add_markdown("", order=ORDER_POSES)
@@ -97,8 +171,18 @@ class TeachControls:
         self.reset_button.on_click(lambda _event: self._show(self.start.copy()))
 
     def values(self) -> dict[str, float]:
-        """The slider values {name: value} [m, rad]."""
-        return {name: float(handle.value) for name, handle in self.sliders.items()}
+        """The slider values {name: value} [m, rad], clamped to :attr:`ranges`; a value that is not a finite
+        number (NaN from a page) is the one shown."""
+        shown = {spec.name: spec.value for spec in teach.sliders(self.robot, self.q)}
+        values = {}
+        for name, handle in self.sliders.items():
+            lower, upper = self.ranges[name]
+            try:
+                value = float(handle.value)
+            except (TypeError, ValueError):
+                value = math.nan
+            values[name] = min(max(value, lower), upper) if math.isfinite(value) else shown[name]
+        return values
 
     def configuration(self) -> np.ndarray:
         """The configuration (nq,) of the slider values (joints without a slider keep their value)."""
@@ -126,8 +210,10 @@ class TeachControls:
                 handle = self.sliders.get(spec.name)
                 if handle is None:
                     continue
-                if spec.lower < handle.min or spec.upper > handle.max:
-                    handle.min, handle.max = min(handle.min, spec.lower), max(handle.max, spec.upper)
+                lower, upper = self.ranges[spec.name]
+                lower, upper = self.ranges[spec.name] = min(lower, spec.lower), max(upper, spec.upper)
+                if (handle.min, handle.max) != (lower, upper):
+                    handle.min, handle.max = lower, upper
                 handle.value = spec.value
             self.poses.content = poses_markdown(poses)
         finally:
@@ -169,7 +255,7 @@ class Playback:
             self.pause_button = gui.add_button("Pause", icon="player-pause", disabled=True)
             self.speed_input = gui.add_number("speed [x]", initial_value=float(speed), min=1e-3, step=0.1,
                                               hint="simulated seconds per second")
-        self.time_slider.on_update(lambda _event: self._show_time(float(self.time_slider.value)))
+        self.time_slider.on_update(lambda _event: self._show_time(self.slider_time()))
         self.play_button.on_click(lambda _event: self.start())
         self.pause_button.on_click(lambda _event: self.pause())
 
@@ -182,6 +268,16 @@ class Playback:
         self.time_slider.min, self.time_slider.max, self.time_slider.step = start, max(end, start + step), step
         self.time_slider.value = start
         self._show_time(start)
+
+    def slider_time(self) -> float:
+        """The time slider's value [s] clamped to the run (a page can send any number; not finite: the start)."""
+        value = float(self.time_slider.value)
+        return min(max(value, float(self.t[0])), float(self.t[-1])) if math.isfinite(value) else float(self.t[0])
+
+    def page_speed(self) -> float:
+        """The speed input's value clamped to :data:`SPEED_RANGE` (not finite: 1)."""
+        value = float(self.speed_input.value)
+        return min(max(value, SPEED_RANGE[0]), SPEED_RANGE[1]) if math.isfinite(value) else 1.0
 
     @property
     def playing(self) -> bool:
@@ -198,7 +294,7 @@ class Playback:
             fps: frames shown per wall-clock second.
             progress: progress bar (None: only on a terminal).
         """
-        speed = float(self.speed_input.value) if speed is None else float(speed)
+        speed = self.page_speed() if speed is None else float(speed)
         if not (speed > 0 and fps > 0 and math.isfinite(speed) and math.isfinite(fps)):
             raise UVMSError(f"speed and fps must be finite and > 0, got speed={speed}, fps={fps}")
         with self._begin:
@@ -208,7 +304,7 @@ class Playback:
             self._runner = threading.get_ident()
         self.play_button.disabled, self.pause_button.disabled = True, False
         start, end = float(self.t[0]), float(self.t[-1])
-        anchor = float(self.time_slider.value)
+        anchor = self.slider_time()
         if anchor >= end:  # at the end: play again from the start
             anchor = start
         began, shown = time.perf_counter(), None
@@ -217,7 +313,7 @@ class Playback:
         try:
             while not self._stop.is_set():
                 if shown is not None and float(self.time_slider.value) != shown:  # scrubbed in the page
-                    anchor, began = float(self.time_slider.value), time.perf_counter()
+                    anchor, began = self.slider_time(), time.perf_counter()
                 now = min(anchor + (time.perf_counter() - began) * speed, end)
                 self.time_slider.value = now  # shows it (the slider's callback)
                 if shown is None:

@@ -49,6 +49,13 @@ def equal_area_rings(count: int) -> tuple[np.ndarray, np.ndarray]:
     return z_edges, counts
 
 
+#: The most approach-direction cells of an `OrientationGrid`: 1,000,000 (cells 0.2 deg across); the grid keeps
+#: 9 numbers per cell, 72 MB at the bound (10^9 cells would be 72 GB).
+MAX_DIRECTIONS = 1_000_000
+#: The most roll bins: 36,000 (0.01 deg each), so that a cell index stays exact.
+MAX_ROLL_BINS = 36_000
+
+
 @dataclass(frozen=True)
 class OrientationGrid:
     """Cells of the orientation space SO(3): equal-area cells of the approach direction x bins of the roll.
@@ -63,8 +70,10 @@ class OrientationGrid:
     cell (about 2 % for 100 cells). ``roll_bins=1`` measures approach directions only.
 
     Attributes:
-        directions: number of approach-direction cells (>= 1). Default 100: cells about 20 deg across.
-        roll_bins: number of roll bins (>= 1). Default 18: 20 deg each, matching the direction cells.
+        directions: number of approach-direction cells (1 .. `MAX_DIRECTIONS`). Default 100: cells about 20 deg
+            across.
+        roll_bins: number of roll bins (1 .. `MAX_ROLL_BINS`). Default 18: 20 deg each, matching the direction
+            cells.
         approach: frame axis taken as the approach direction, "x", "y" or "z".
     """
 
@@ -78,10 +87,11 @@ class OrientationGrid:
     tangents: np.ndarray = field(init=False, repr=False, compare=False)  # (directions, 2, 3) roll basis
 
     def __post_init__(self) -> None:
-        for name in ("directions", "roll_bins"):
+        for name, most in (("directions", MAX_DIRECTIONS), ("roll_bins", MAX_ROLL_BINS)):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise WorkspaceInputError(f"OrientationGrid.{name} must be an integer >= 1, got {value!r}")
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 1 <= value <= most:
+                raise WorkspaceInputError(f"OrientationGrid.{name} (--{name.replace('_', '-')}) must be an integer "
+                                          f"in [1, {most:,}], got {value!r}")
         if self.approach not in AXES:
             raise WorkspaceInputError(f"approach axis must be one of x, y, z; got {self.approach!r}")
         z_edges, counts = equal_area_rings(int(self.directions))

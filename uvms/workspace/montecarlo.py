@@ -40,6 +40,19 @@ def check_sample_count(samples: int) -> int:
     return int(samples)
 
 
+def check_seed(seed: int | None) -> int | None:
+    """A random seed: None (fresh entropy) or an integer >= 0, what ``numpy.random.default_rng`` takes.
+
+    Raises:
+        WorkspaceInputError: a negative number, a bool or anything that is not an integer.
+    """
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise WorkspaceInputError(f"the random seed must be an integer >= 0 (e.g. 0 or 12345), got {seed!r}")
+    return int(seed)
+
+
 def parse_sample_count(text: str | int) -> int:
     """A sample count from the command line: ``"1000000"``, ``"1_000_000"`` or ``"1e9"`` (an integral number) >= 1."""
     if isinstance(text, str):
@@ -299,7 +312,7 @@ def monte_carlo(
         The WorkspaceResult.
 
     Raises:
-        WorkspaceInputError: no frames, bad sample count, voxel, keep_points or chunk, no hull geometry;
+        WorkspaceInputError: no frames, bad sample count, seed, voxel, keep_points or chunk, no hull geometry;
         FrameNotFound: an unknown frame.
     """
     frames = list(frames)
@@ -319,7 +332,7 @@ def monte_carlo(
         hull = [remove_hull] if isinstance(remove_hull, HullShape) else list(remove_hull)
     grid = OrientationGrid() if dexterity is True else (dexterity or None)
     batches = [BatchKinematics(robot, frame) for frame in frames]  # unknown frames fail before any work
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(check_seed(seed))
     streams: dict[str, FrameStream] = {}
     bar = tqdm(total=samples * len(frames), disable=(not progress) if progress is not None else None,
                desc="workspace", unit="sample", unit_scale=True, leave=False)
