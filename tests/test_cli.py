@@ -90,3 +90,20 @@ def test_control_characters_never_reach_the_terminal(tmp_path, monkeypatch, caps
     from uvms.cli import printable  # the one function every line goes through
 
     assert printable("a\tb\u202cc\u2069") == "a\\x09b\\u202cc\\u2069"
+
+
+def test_names_from_a_model_reach_the_terminal_escaped(tmp_path, capsys):
+    """uvms info prints link and joint names from a stranger's URDF: a bidi override (XML allows it, unlike C0
+    controls) arrives escaped, so a name cannot reorder what the terminal shows."""
+    evil = "arm\u202egpj.exe\u2066"
+    urdf = tmp_path / "evil.urdf"
+    urdf.write_text(f"""<robot name="r{evil}">
+  <link name="hull"><inertial><mass value="10"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="{evil}"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j{evil}" type="revolute"><parent link="hull"/><child link="{evil}"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>""")
+    assert main(["info", str(urdf)]) == 0
+    captured = capsys.readouterr()
+    assert "\u202e" not in captured.out + captured.err and "\u2066" not in captured.out + captured.err
+    assert "arm\\u202egpj.exe\\u2066" in captured.out

@@ -24,7 +24,7 @@ import uvms
 import uvms.watch
 from uvms.cli import main
 from uvms.errors import ScenarioError
-from uvms.model import resources
+from uvms.model import includes, resources
 from uvms.scenario import read_scenario
 from uvms.scenario.build import build
 from uvms.watch import WatchedFiles
@@ -98,7 +98,7 @@ def test_a_file_included_twice_is_read_once_and_its_args_are_known(tmp_path):
     main_file = tmp_path / "rov.urdf.xacro"
     main_file.write_text(f'<robot name="r" {XACRO}><xacro:include filename="left.xacro"/>'
                          f'<xacro:include filename="right.xacro"/><xacro:arg name="m" default="3"/></robot>')
-    walk = resources.walk_xacro(main_file)
+    walk = includes.walk_xacro(main_file)
     assert walk.problem is None and walk.args == {"m": "3", "left": "1", "right": "1"}
     assert [path.name for path in walk.files] == ["rov.urdf.xacro", "left.xacro", "macros.xacro", "right.xacro"]
 
@@ -323,10 +323,31 @@ def test_laps_and_speed_together_are_refused(tmp_path, capsys):
 def test_the_caps_hold_every_shipped_model_and_scenario():
     started = time.perf_counter()
     for name, path in resources.shipped_models().items():
-        walk = resources.walk_xacro(path)
+        walk = includes.walk_xacro(path)
         assert walk.problem is None and walk.args, name
     for path in sorted((ROOT / "scenarios").glob("*.toml")):
         assert path.stat().st_size < resources.MAX_TOML_BYTES and read_scenario(path)
     for path in [*ROOT.glob("models/**/*.yaml")]:
         assert resources.read_yaml(path, "data")
     assert time.perf_counter() - started < 10
+
+
+def test_a_foreign_run_record_is_read_within_caps(tmp_path):
+    """A run folder's metrics.json from someone else: too deep or too large is one RunRecordError, never a crash."""
+    from uvms.errors import RunRecordError
+    from uvms.scenario.record import read_run_record
+    from uvms.watch import read_metrics
+
+    deep = tmp_path / "deep"
+    deep.mkdir()
+    (deep / "metrics.json").write_text("[" * 200_000 + "]" * 200_000)
+    with pytest.raises(RunRecordError, match="nested too deeply"):
+        read_run_record(deep)
+    assert read_metrics(deep) == {}
+    huge = tmp_path / "huge"
+    huge.mkdir()
+    with open(huge / "metrics.json", "wb") as handle:
+        handle.truncate(30 << 30)  # sparse: 30 GiB claimed, nothing on disk
+    with pytest.raises(RunRecordError, match="MiB"):
+        read_run_record(huge)
+    assert read_metrics(huge) == {}

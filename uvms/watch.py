@@ -1,7 +1,7 @@
 """Edit a model and see it: rerun a job whenever its scenario, its model or a file the model uses changes.
 
 The files watched are the scenario file, the model file, the files it includes (static ``xacro:include``,
-read by :func:`uvms.model.resources.walk_xacro`), and the data beside the model (YAML such as
+read by :func:`uvms.model.includes.walk_xacro`), and the data beside the model (YAML such as
 ``hydrodynamics.yaml``, meshes) in the model's folder and its direct subfolders. Every folder is watched
 non-recursively: an include that climbs to ``/`` watches that one file, never a tree. Changes are debounced (an
 editor's several writes give one rerun) through ``watchfiles``. ``uvms run/workspace ... --watch`` runs each
@@ -11,7 +11,6 @@ complete run (``uvms.outputs.run_folder``).
 
 from __future__ import annotations
 
-import json
 import os
 import signal
 import subprocess
@@ -22,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import UVMSError
-from .model import resources
+from .model import includes, resources
 
 #: Files beside a model that a change of should rerun the job (data the model or uvms reads).
 MODEL_DATA_SUFFIXES = (".xacro", ".urdf", ".yaml", ".yml", ".stl", ".dae", ".obj", ".ply")
@@ -44,7 +43,7 @@ def model_files(source: str | os.PathLike) -> set[Path]:
     path = resources.resolve_model_path(source)
     if not path.name.endswith(".xacro"):
         return {real(path)}
-    return set(resources.walk_xacro(path).files)  # a walk that stopped (a cap): the files found; the job says why
+    return set(includes.walk_xacro(path).files)  # a walk that stopped (a cap): the files found; the job says why
 
 
 def scenario_model(scenario: Path) -> str | None:
@@ -183,10 +182,12 @@ def compare(before: dict[str, float], after: dict[str, float]) -> str:
 
 
 def read_metrics(folder: Path) -> dict:
+    """The metrics of a finished run (read with the caps of any file from elsewhere), {} if unreadable."""
     try:
-        return json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        metrics = resources.read_json(folder / "metrics.json", "metrics", UVMSError)
+    except UVMSError:
         return {}
+    return metrics if isinstance(metrics, dict) else {}
 
 
 @dataclass

@@ -4,7 +4,7 @@ One module per command group: :mod:`.info` (``uvms info``), :mod:`.run` (``uvms 
 ``--watch``), :mod:`.workspace` (``uvms workspace``), :mod:`.view` (``uvms view``); here the argument parser
 and :func:`main`, the one place that turns an error into one line and an exit status.
 
-Every line :func:`main` prints goes through :func:`printable`: control characters and bidirectional overrides
+Every line :func:`main` prints goes through :func:`.terminal.say`: control characters and bidirectional overrides
 (from a scenario key, a file name...) are shown escaped, never sent to the terminal. SIGTERM and SIGHUP take
 the path of Ctrl-C: the run folder is cleaned up and one line says what the output folder holds.
 """
@@ -15,15 +15,14 @@ import argparse
 import contextlib
 import errno
 import os
-import re
 import signal
 import sys
 import threading
 import warnings
 from collections.abc import Iterator, Sequence
-from typing import TextIO
 
 from ..errors import UVMSError
+from .terminal import printable, say
 from .info import command_info, describe, format_limits, parse_assignments
 from .run import command_run, command_sweep, run_output_folder, scenario_file, watch_job
 from .view import (
@@ -46,20 +45,8 @@ __all__ = [
 
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a command stopped by Ctrl-C
-#: C0 controls, DEL, C1 controls, and the bidirectional embeddings, overrides and isolates.
-UNPRINTABLE = re.compile("[\x00-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
 #: Signals that stop a command as Ctrl-C does (exit status 128 + the signal).
 STOP_SIGNALS = tuple(getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name))
-
-
-def printable(text: str) -> str:
-    """``text`` with every control character and bidi override escaped visibly (``\x1b``, ``\u202e``)."""
-    return UNPRINTABLE.sub(lambda m: f"\\x{ord(m[0]):02x}" if ord(m[0]) < 0x100 else f"\\u{ord(m[0]):04x}", text)
-
-
-def say(text: str, file: TextIO | None = None) -> None:
-    """Print one line of the CLI (on stderr unless ``file``), escaped by :func:`printable`."""
-    print(printable(text), file=file or sys.stderr)
 
 
 @contextlib.contextmanager

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Sequence
 
 import numpy as np
@@ -11,6 +12,7 @@ import pinocchio as pin
 from ..errors import UVMSError
 from ..model.loader import load
 from ..robot import Robot
+from .terminal import say
 
 
 def parse_assignments(items: Sequence[str] | None) -> dict[str, str]:
@@ -63,5 +65,5 @@ def describe(robot: Robot) -> str:
 def command_info(options: argparse.Namespace) -> int:
     """``uvms info MODEL``: load the model (running its checks) and describe it."""
     robot = load(options.model, base=options.base, args=parse_assignments(options.arg), ee=options.ee or None)
-    print(describe(robot))
+    say(describe(robot), sys.stdout, lines=True)
     return 0

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import UVMSError
+from .terminal import say
 
 
 #: The metrics ``uvms run`` prints, those a run has (all are in metrics.json).
@@ -20,7 +21,6 @@ def command_run(options: argparse.Namespace) -> int:
     """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
     from ..scenario import run  # the scenario layer pulls in scipy and matplotlib
     from ..scenario.verdict import verdict_line
-    from . import say  # every line escaped (names come from scenario and model files)
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
@@ -52,7 +52,6 @@ def command_run(options: argparse.Namespace) -> int:
 def command_sweep(options: argparse.Namespace) -> int:
     """``uvms sweep SCENARIO --grid KEY=START:STOP:N ...``: run a grid of overrides, write sweep.csv and sweep.png."""
     from ..scenario.sweep import sweep  # joblib, and dask only with --backend dask
-    from . import say  # every line escaped (grid values are the user's text)
 
     result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
                    scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None)
@@ -95,8 +94,8 @@ def watch_job(options: argparse.Namespace, out: Path, scenario: Path | None = No
     from ..watch import Rerun, WatchedFiles, without_watch
 
     argv = [*without_watch(options.argv), "--out", str(out), "--quiet"]
-    print(f"watching {scenario or model} and the files of its model; Ctrl-C to stop")
+    say(f"watching {scenario or model} and the files of its model; Ctrl-C to stop", sys.stdout)
     rerun = Rerun(argv, out, lambda: WatchedFiles.of(scenario=scenario, model=model, ignore=[out]),
-                  say=lambda line: print(line, flush=True))
+                  say=lambda line: say(line, sys.stdout))
     rerun.loop()
     return 0

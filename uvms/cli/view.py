@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import UVMSError, ViewerInputError
 from ..robot import Robot
 from .info import parse_assignments
+from .terminal import say
 
 
 def view_configuration(robot: Robot, values: Sequence[float] | None) -> np.ndarray:
@@ -147,7 +148,7 @@ def command_view(options: argparse.Namespace) -> int:
     check_port(options.port)
     robot, notice = view_robot(options)
     if notice:
-        print(notice, flush=True)
+        say(notice, sys.stdout)
     q = view_configuration(robot, options.q)
     result = read_result(robot, options.result) if options.result else None
     if options.headless:
@@ -168,7 +169,7 @@ def command_view(options: argparse.Namespace) -> int:
             else:
                 rows = frame_indices(t, 4)
                 drawing.snapshot_figure(robot, qs[rows], titles=[f"t = {t[k]:.2f} s" for k in rows], path=out)
-        print(f"wrote {out}")
+        say(f"wrote {out}", sys.stdout)
         return 0
     from ..viz.viewer import Viewer
 
@@ -176,9 +177,9 @@ def command_view(options: argparse.Namespace) -> int:
         warnings.simplefilter("always")
         viewer = Viewer(robot, q, port=options.port)  # the camera framed on the robot at q
     for warning in caught:
-        print(f"uvms: warning: {' '.join(str(warning.message).split())}", file=sys.stderr, flush=True)
+        say(f"uvms: warning: {' '.join(str(warning.message).split())}")
     try:
-        print(f"viewer      {viewer.url}  (this machine only; Ctrl-C to stop)", flush=True)
+        say(f"viewer      {viewer.url}  (this machine only; Ctrl-C to stop)", sys.stdout)
         if result is not None:
             t, qs = result
             viewer.play(t, qs, speed=options.speed, progress=False if options.quiet else None)
@@ -229,14 +230,14 @@ def watch_viewer(options: argparse.Namespace, viewer) -> None:
             shown[0] = now
             if model_changed:
                 viewer.reload(robot)
-            print(f"{time.strftime('%H:%M:%S')} {', '.join(sorted({p.name for p in paths}))} changed: "
-                  f"{'model reloaded' if model_changed else 'replaying the new run'}", flush=True)
+            say(f"{time.strftime('%H:%M:%S')} {', '.join(sorted({p.name for p in paths}))} changed: "
+                f"{'model reloaded' if model_changed else 'replaying the new run'}", sys.stdout)
             if result is not None and (result / "trajectory.npz").is_file():
                 t, qs = read_result(robot, str(result))
                 viewer.play(t, qs, speed=options.speed, progress=False)
         except UVMSError as exc:
-            print(f"{time.strftime('%H:%M:%S')} {' '.join(str(exc).split())} (still showing the last good model)",
-                  flush=True)
+            say(f"{time.strftime('%H:%M:%S')} {' '.join(str(exc).split())} (still showing the last good model)",
+                sys.stdout)
 
     while True:
         watch(files(), changed, once=True)

@@ -10,6 +10,7 @@ from ..errors import UVMSError
 from ..model.loader import load
 from .info import parse_assignments
 from .run import watch_job
+from .terminal import say
 
 
 def parse_figure_counts(text: str | None, samples: int) -> list[int]:
@@ -64,28 +65,28 @@ def command_workspace(options: argparse.Namespace) -> int:
         line = f"{frame:<12} volume {result.volume[frame]:.4f} m^3 ({result.voxel} m voxels)"
         if result.volume_outside_hull is not None:
             line += f", outside the hull {result.volume_outside_hull[frame]:.4f} m^3"
-        print(line)
+        say(line, sys.stdout)
     if result.common_volume is not None:
         line = f"{'common':<12} volume {result.common_volume:.4f} m^3"
         if result.common_volume_outside_hull is not None:
             line += f", outside the hull {result.common_volume_outside_hull:.4f} m^3"
-        print(line)
+        say(line, sys.stdout)
     convergence = result.volume_converged(options.convergence_tolerance)
     for frame, verdict in convergence.items():
-        print(verdict.status(frame))
+        say(verdict.status(frame), sys.stdout)
     for frame, dexterity in (result.dexterity or {}).items():
         summary = dexterity.summary(options.dexterous_threshold)
-        print(f"{frame:<12} dexterity mean {summary['mean']:.4f}, max {summary['max']:.4f} "
-              f"({result.orientation_grid.count} orientation cells, {dexterity.voxel} m voxels, "
-              f"median {summary['median_samples_per_voxel']:.0f} samples/voxel); "
-              f"dexterous (>= {options.dexterous_threshold}) {summary['dexterous_volume']:.4f} m^3")
+        say(f"{frame:<12} dexterity mean {summary['mean']:.4f}, max {summary['max']:.4f} "
+            f"({result.orientation_grid.count} orientation cells, {dexterity.voxel} m voxels, "
+            f"median {summary['median_samples_per_voxel']:.0f} samples/voxel); "
+            f"dexterous (>= {options.dexterous_threshold}) {summary['dexterous_volume']:.4f} m^3", sys.stdout)
     stored = min(result.stored(frame) for frame in frames)
     if stored < result.samples:
-        print(f"points.npz and the scatter figures keep the first {stored} of the {result.samples} samples per frame "
-              f"(volumes and dexterity use all)")
-    print(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, "
-          f"{', '.join(written)})")
+        say(f"points.npz and the scatter figures keep the first {stored} of the {result.samples} samples per frame "
+            f"(volumes and dexterity use all)", sys.stdout)
+    say(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, "
+        f"{', '.join(written)})", sys.stdout)
     for frame, verdict in convergence.items():  # said on the terminal, not only in metrics.json
         if verdict.warning(frame):
-            print(f"uvms: warning: {verdict.warning(frame)}", file=sys.stderr)
+            say(f"uvms: warning: {verdict.warning(frame)}")
     return 0

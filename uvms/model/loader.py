@@ -17,7 +17,7 @@ from xml.parsers.expat import ExpatError
 
 import pinocchio as pin
 
-from . import checks, resources, sandbox
+from . import checks, includes, resources, sandbox
 from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES, choose_base, decide_base  # noqa: F401 - re-exported
 from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from ..robot import Robot
@@ -185,7 +185,7 @@ def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool,
 def declared_xacro_defaults(path: Path) -> dict[str, str | None] | None:
     """{name: default text (None without one)} of the ``<xacro:arg>`` of a file and its static includes.
 
-    Read by :func:`uvms.model.resources.walk_xacro` (each file once, within its caps).
+    Read by :func:`uvms.model.includes.walk_xacro` (each file once, within its caps).
 
     Returns:
         The args, or None when they cannot be known here (an unparsable or missing file, an include whose name
@@ -195,7 +195,7 @@ def declared_xacro_defaults(path: Path) -> dict[str, str | None] | None:
         XacroError: an include that is not a readable regular file (a FIFO, a symbolic link loop, too large), or
             includes beyond the walk's caps.
     """
-    walk = resources.walk_xacro(path)
+    walk = includes.walk_xacro(path)
     if walk.problem is not None:
         raise walk.problem
     return walk.args

@@ -2,23 +2,20 @@
 
 A file from a stranger is read by :func:`read_file` only: a regular file (never a FIFO or a device), its size
 checked before a byte is read. YAML goes through :func:`read_yaml` (aliases counted), the includes of a xacro
-through :func:`walk_xacro` (each file once, within caps on files, inclusions, bytes and time).
+through :func:`uvms.model.includes.walk_xacro` (each file once, within caps on files, inclusions, bytes and time).
 """
 
 from __future__ import annotations
 
 import functools
+import json
 import os
 import stat
-import time
-import xml.etree.ElementTree as ET
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 
-from ..errors import ModelFileNotFound, ModelParseError, UVMSError, XacroError
-from .checks import MAX_URDF_BYTES
+from ..errors import ModelFileNotFound, ModelParseError, UVMSError
 
 #: Caps of the files read, checked on a file's size before it is read. A URDF or xacro file: the cap of URDF
 #: text (``checks.MAX_URDF_BYTES``, 32 MiB; the shipped models are under 40 KiB). A TOML scenario: 4 MiB (the
@@ -26,17 +23,11 @@ from .checks import MAX_URDF_BYTES
 #: pure Python so that deep nesting is a RecursionError rather than a crash of libyaml, reads about 0.2 MiB/s).
 MAX_TOML_BYTES = 4 << 20
 MAX_YAML_BYTES = 1 << 20
+#: A JSON record of a run (``metrics.json``) read back: 4 MiB (a run writes a few KiB).
+MAX_JSON_BYTES = 4 << 20
 #: The most values (scalars, lists, mappings) a YAML file may hold, its aliases (``*name``) counted at each use:
 #: nine nested anchors of nine items each are 9**9 values in 300 bytes.
 MAX_YAML_VALUES = 100_000
-#: Caps of the walk through a xacro's static includes (the arg check and ``--watch`` read them before xacro
-#: runs): distinct files, inclusions counted at each use (xacro expands a file included twice twice, so 40 files
-#: each including the next twice are 2**40 inclusions), nesting, bytes of all the files, and seconds.
-MAX_INCLUDE_FILES = 1_000
-MAX_INCLUDE_USES = 10_000
-MAX_INCLUDE_DEPTH = 100
-MAX_INCLUDE_SECONDS = 10.0
-XACRO_NAMESPACE = "{http://www.ros.org/wiki/xacro}"
 
 #: The repository's `models/` folder (present in a source checkout or an editable install).
 MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
@@ -230,6 +221,23 @@ def read_text(path: str | os.PathLike, what: str, limit: int, error: type[UVMSEr
         raise error(f"{path}: the {what} file is not UTF-8 text ({exc.reason} at byte {exc.start})") from None
 
 
+def read_json(path: str | os.PathLike, what: str, error: type[UVMSError]) -> object:
+    """The document of a JSON file that may come from someone else (a run folder's ``metrics.json``).
+
+    At most ``MAX_JSON_BYTES``, read by :func:`read_file`; nesting deep enough to exhaust Python's recursion is
+    refused like malformed JSON.
+
+    Raises:
+        error: the file cannot be read, is too large, or is not JSON.
+    """
+    text = read_text(path, what, MAX_JSON_BYTES, error)
+    try:
+        return json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        reason = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise error(f"{path}: the {what} file is not valid JSON ({reason})") from None
+
+
 def read_yaml(path: str | os.PathLike, what: str) -> object:
     """The document of a YAML data file beside a model (hydrodynamics, thrusters), read safely (data only).
 
@@ -292,91 +300,3 @@ def count_yaml_values(root: object, path: Path) -> int:
             stack.append((node, True))
             stack.extend((child, False) for child in children(node))
     return sizes[id(root)]
-
-
-@dataclass
-class XacroWalk:
-    """What a xacro file and its static includes declare, each file read once (see :func:`walk_xacro`).
-
-    Attributes:
-        files: every file reached (resolved), the given one first; an include that does not exist yet too.
-        args: {name: default text or None} of the ``<xacro:arg>`` of all the files (a file's own before those
-            it includes, earlier includes first); None when that cannot be known here (a file that does not
-            parse or exist, an include whose name is computed or a glob, an include cycle): xacro reports it.
-        problem: why the walk stopped (a cap reached, an include that is not a readable regular file), else None.
-    """
-
-    files: list[Path] = field(default_factory=list)
-    args: dict[str, str | None] | None = field(default_factory=dict)
-    problem: UVMSError | None = None
-
-
-def walk_xacro(path: str | os.PathLike) -> XacroWalk:
-    """The files a xacro includes statically, recursively, and the args they declare; it never runs xacro.
-
-    The one reading of a xacro's includes (the loader's arg check and ``--watch``): each file is read once
-    (:func:`read_file`: regular files only, at most ``MAX_URDF_BYTES``), within ``MAX_INCLUDE_FILES`` files,
-    ``MAX_INCLUDE_USES`` inclusions, ``MAX_INCLUDE_DEPTH`` levels, ``MAX_URDF_BYTES`` in all and
-    ``MAX_INCLUDE_SECONDS``. Reaching one stops the walk with ``problem`` set (what was found so far is kept).
-    """
-    walk = XacroWalk()
-    done: dict[str, tuple[dict[str, str | None], int]] = {}  # resolved file -> (its args, its inclusions)
-    open_files: set[str] = set()
-    budget = {"bytes": MAX_URDF_BYTES, "deadline": time.monotonic() + MAX_INCLUDE_SECONDS}
-
-    def stop(message: str) -> XacroError:
-        return XacroError(f"{path}: {message}")
-
-    def visit(file: Path, depth: int) -> tuple[dict[str, str | None], int]:
-        key = os.path.realpath(file)
-        if key in done:
-            return done[key]
-        if key in open_files or not os.path.lexists(file):  # a cycle, or a missing file: xacro reports it
-            walk.args = None
-            if key not in open_files and Path(key) not in walk.files:
-                walk.files.append(Path(key))
-            return {}, 1
-        if len(done) + len(open_files) >= MAX_INCLUDE_FILES or depth > MAX_INCLUDE_DEPTH:
-            raise stop(f"the xacro includes more than {MAX_INCLUDE_FILES} files or nests includes more than "
-                       f"{MAX_INCLUDE_DEPTH} deep; a model includes a few dozen")
-        if time.monotonic() > budget["deadline"]:
-            raise stop(f"reading the xacro's includes took more than {MAX_INCLUDE_SECONDS:g} s; a model takes "
-                       "milliseconds")
-        if os.path.isfile(key):
-            walk.files.append(Path(key))
-        data = read_file(file, "xacro include" if depth else "xacro", MAX_URDF_BYTES, XacroError)
-        budget["bytes"] -= len(data)
-        if budget["bytes"] < 0:
-            raise stop(f"the xacro and its includes hold more than {MAX_URDF_BYTES >> 20} MiB; at most that is "
-                       "accepted")
-        try:
-            root = ET.fromstring(data)
-        except ET.ParseError:
-            walk.args = None  # xacro reports the real problem
-            done[key] = ({}, 1)
-            return done[key]
-        open_files.add(key)
-        args = {element.get("name"): element.get("default") for element in root.iter(XACRO_NAMESPACE + "arg")
-                if element.get("name")}
-        uses = 1
-        for include in root.iter(XACRO_NAMESPACE + "include"):
-            name = include.get("filename", "")
-            if not name or any(mark in name for mark in "$*?["):  # computed or a glob: xacro knows
-                walk.args = None
-                continue
-            included, count = visit(file.parent / name, depth + 1)  # relative to the file as named, as xacro
-            args, uses = {**included, **args}, uses + count
-            if uses > MAX_INCLUDE_USES:
-                raise stop(f"the xacro's includes expand to more than {MAX_INCLUDE_USES} inclusions (files "
-                           "included again and again through nested includes); a model has a few dozen")
-        open_files.discard(key)
-        done[key] = (args, uses)
-        return done[key]
-
-    try:
-        args, _ = visit(Path(path), 0)
-    except XacroError as exc:
-        walk.args, walk.problem = None, exc
-    else:
-        walk.args = None if walk.args is None else args
-    return walk

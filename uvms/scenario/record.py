@@ -20,7 +20,6 @@ by :func:`uvms.model.loader.load` (an untrusted xacro runs in its sandbox) and i
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -29,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RunRecordError, UVMSError
+from ..model import resources
 from ..model.loader import load
 from ..robot import Robot
 
@@ -106,10 +106,7 @@ def read_run_record(folder: str | os.PathLike) -> RunRecord | None:
     path = folder / "metrics.json"
     if not path.is_file():
         return None
-    try:
-        metrics = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        raise RunRecordError(f"cannot read {str(path)!r}: {exc}") from None
+    metrics = resources.read_json(path, "run record", RunRecordError)
     entry = metrics.get(RECORD_KEY) if isinstance(metrics, dict) else None
     if not isinstance(entry, dict):  # older runs; a workspace folder names its model with a string
         return None
