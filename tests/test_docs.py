@@ -34,18 +34,3 @@ def test_readme_quickstart_is_two_commands():
     assert len(commands) == 2
     assert "python -m pytest" in commands[1]
     assert "python -m pytest" in (ROOT / ".ci" / "run").read_text()
-
-
-def test_old_module_paths_are_the_moved_modules():
-    import importlib
-    import warnings
-
-    from uvms.moved import MOVED
-
-    for old, new in MOVED.items():
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            module = importlib.import_module(old)
-        assert module is importlib.import_module(new), old
-        assert module.__name__ == new
-    from uvms import plant  # noqa: F401 - the attribute form works too

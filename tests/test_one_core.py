@@ -10,7 +10,7 @@ import uvms
 from conftest import shipped
 from uvms import kinematics
 from uvms.dynamics.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.plant import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
+from uvms.dynamics.added_mass import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
 from uvms.errors import ModelCheckError
 from uvms.integrate import INTEGRATORS, STEPS, check_integrator
 from uvms.solvers import damped_weighted_inverse
@@ -129,18 +129,25 @@ def test_the_gjm_controller_keeps_the_numbers_of_its_own_law(name, axes, rng):
         assert np.allclose(clik.v[robot.n_vehicle:], expected, atol=1e-12)  # the same law through clik_velocity
 
 
-def test_one_result_type_and_the_old_paths():
+def test_one_result_type_and_no_old_paths():
+    """One result type; the module paths and names of before the layer folders are gone (no shims in 0.1)."""
+    import importlib
+
     from uvms import simulate as simulate_module
     from uvms.control import gjm
     from uvms.dynamics import plant
     from uvms.series import SimulationResult
 
-    assert plant.simulate_plant is simulate_module.simulate_plant and gjm.simulate_gjm is simulate_module.simulate_gjm
-    assert uvms.PlantResult is uvms.GJMResult is SimulationResult
     robot = shipped("hoang2011")
     result = simulate_module.simulate_plant(uvms.Plant(robot), robot.neutral(), None, np.ones(robot.n_arm), 0.1, 0.01)
     assert isinstance(result, SimulationResult) and result.command.shape == (11, robot.n_arm)
     assert result.ee_position is None and result.arrays().keys() == {"t", "q", "v"}
-    assert result.integrator == result.method == "rk4"
-    with pytest.raises(AttributeError):
-        plant.no_such_name  # noqa: B018
+    assert result.integrator == "rk4" and not hasattr(result, "method")
+    for module, name in ((plant, "simulate_plant"), (plant, "PlantResult"), (gjm, "simulate_gjm"), (gjm, "GJMResult"),
+                         (uvms, "PlantResult"), (uvms, "GJMResult")):
+        assert not hasattr(module, name), f"{module.__name__}.{name}"
+    for old in ("uvms.plant", "uvms.plotting", "uvms.sandbox", "uvms.sweep", "uvms.moved"):
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(old)
+    with pytest.raises(TypeError):  # integrator is the one name of the choice
+        simulate_module.simulate_plant(uvms.Plant(robot), robot.neutral(), None, None, 0.1, 0.01, method="euler")

@@ -9,7 +9,8 @@ import uvms
 from conftest import shipped
 from uvms.errors import ModelCheckError, ModelParseError, NameNotFound, UVMSError
 from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
-from uvms.dynamics.plant import Plant, generalized_jacobian_added_mass
+from uvms.dynamics.added_mass import generalized_jacobian_added_mass
+from uvms.dynamics.plant import Plant
 from uvms.simulate import simulate_plant
 
 RHO = 1000.0
@@ -336,7 +337,7 @@ def test_plant_arguments_are_checked():
         Plant(robot, motor_time_constant=0.0)
     with pytest.raises(UVMSError, match="5 finite joint velocities"):
         simulate_plant(Plant(robot), robot.neutral(), None, lambda t, q, v: np.zeros(3), duration=0.1, dt=0.01)
-    with pytest.raises(UVMSError, match="unknown method"):
-        simulate_plant(Plant(robot), robot.neutral(), None, None, duration=0.1, dt=0.01, method="rk45")
+    with pytest.raises(UVMSError, match="unknown integrator 'rk45'; valid: euler, rk4"):
+        simulate_plant(Plant(robot), robot.neutral(), None, None, duration=0.1, dt=0.01, integrator="rk45")
     with pytest.raises(UVMSError, match="no hydrodynamic parameters"):
         hydrodynamics_of(shipped("hoang2011"))

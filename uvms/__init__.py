@@ -12,8 +12,6 @@ array([ 1.433, -0.806,  0.   ])
 The public names, by layer (data flows down this list; no module imports one above it):
 """
 
-from . import moved
-
 # errors: one root, every exception
 from .errors import (
     BaseMismatchError,
@@ -64,13 +62,11 @@ from .dynamics import (HydroParameters, LinkHydrodynamics, Plant, ThrustAllocato
 from .control import GJMControlError, GJMController, StationKeeping, VelocityRamps, station_keeping
 
 # the one simulation loop, for kinematic and dynamic runs, and its result
-from .simulate import GJMResult, PlantResult, SimulationResult, simulate_gjm, simulate_plant
+from .simulate import SimulationResult, simulate_gjm, simulate_plant
 from .simulate_actuated import actuation_metrics, simulate_actuated
 
 # workspace
 from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
-
-moved.install()  # old module paths (uvms.plant, uvms.plotting, ...) keep working for one release
 
 __version__ = "0.1.0"
 
@@ -94,8 +90,7 @@ __all__ = [
     # control
     "GJMControlError", "GJMController", "StationKeeping", "VelocityRamps", "station_keeping",
     # simulation
-    "GJMResult", "PlantResult", "SimulationResult", "actuation_metrics", "simulate_actuated", "simulate_gjm",
-    "simulate_plant",
+    "SimulationResult", "actuation_metrics", "simulate_actuated", "simulate_gjm", "simulate_plant",
     # workspace
     "BatchKinematics", "WorkspaceResult", "monte_carlo",
 ]

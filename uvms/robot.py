@@ -19,7 +19,7 @@ from .errors import ConfigurationError, FrameNotFound, JointNotFound, NotARobot,
 from .vehicle_pose import VehicleAccessors
 from .validate import finite_array
 
-#: Default task axes by base type (kept for existing imports; the facts live in `uvms.bases`).
+#: Default task axes by base type (the facts live in `uvms.bases`).
 DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
 
 

@@ -184,11 +184,6 @@ class SimulationResult:
 
     # ------------------------------------------------------------------ plant series
     @property
-    def method(self) -> str:
-        """The integrator (the name :func:`uvms.simulate.simulate_plant` gives the choice)."""
-        return self.integrator
-
-    @property
     def energy(self) -> np.ndarray:
         """Mechanical energy (N,) [J]: kinetic + potential."""
         return self.kinetic_energy + self.potential_energy

@@ -35,8 +35,8 @@ from .robot import Robot
 from .series import PLANT_SERIES, SERIES, SimulationResult, velocity_labels
 from .tasks.frame import FrameTask
 
-__all__ = ["INTEGRATORS", "MAX_STEPS", "PLANT_SERIES", "SERIES", "Controller", "GJMResult", "KinematicSystem",
-           "PlantResult", "SimulationResult", "TaskRecorder", "run_loop", "simulate", "simulate_gjm",
+__all__ = ["INTEGRATORS", "MAX_STEPS", "PLANT_SERIES", "SERIES", "Controller", "KinematicSystem",
+           "SimulationResult", "TaskRecorder", "run_loop", "simulate", "simulate_gjm",
            "simulate_plant", "step_count", "velocity_labels"]
 
 #: Every controller takes (t [s], q (nq,), v): the arguments of a plant command too (``Command``), v being the
@@ -46,9 +46,6 @@ __all__ = ["INTEGRATORS", "MAX_STEPS", "PLANT_SERIES", "SERIES", "Controller", "
 Controller = Callable[[float, np.ndarray, "np.ndarray | None"], tuple[np.ndarray, object]]
 #: A recorder maps (t, q, x, sample) to the series of a row, name -> value.
 Recorder = Callable[[float, np.ndarray, np.ndarray, object], dict]
-#: The result of a plant run and of a GJM-controlled one: the one result type (names kept for one release).
-PlantResult = SimulationResult
-GJMResult = SimulationResult
 EMPTY = np.zeros(0)
 
 
@@ -214,12 +211,11 @@ def simulate_plant(
     command: Command | np.ndarray | None,
     duration: float,
     dt: float,
-    method: str = "rk4",
     *,
+    integrator: str = "rk4",
     hold: bool = False,
     progress: bool | None = None,
     recorders: Sequence[Recorder] = (),
-    integrator: str | None = None,
 ) -> SimulationResult:
     """Integrate the plant from (q0, v0) for ``duration`` with a fixed step ``dt``.
 
@@ -234,12 +230,11 @@ def simulate_plant(
         command: (t, q, v) -> joint-velocity command (n_arm,), a constant (n_arm,), or None (zero).
         duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
             :data:`uvms.integrate.MAX_STEPS`.
-        method: "rk4" or "euler" (the old name of ``integrator``).
+        integrator: "rk4" (Runge-Kutta-Munthe-Kaas) or "euler".
         hold: sample the command once per step and hold it (a digital
             controller at 1/dt); default: evaluate it at every stage.
         progress: show a progress bar (None: only on a terminal).
         recorders: more series per row, (t, q, v, sample) -> {name: value}.
-        integrator: "rk4" or "euler"; wins over ``method`` when given.
 
     Returns:
         A SimulationResult with N = steps + 1 rows and the plant series (command, joint_torque,
@@ -249,8 +244,7 @@ def simulate_plant(
         UVMSError: bad arguments, a command of the wrong size or non-finite, a state
             that becomes non-finite (step too large).
     """
-    integrator = check_integrator(method if integrator is None else integrator, "method" if integrator is None
-                                  else "integrator")
+    integrator = check_integrator(integrator, "integrator")
     steps = step_count(duration, dt)  # checked before anything runs; the same bounds as every run
     robot = plant.robot
     q = robot.check_configuration(q0).copy()
@@ -271,10 +265,9 @@ def simulate_gjm(
     dt: float,
     *,
     control_dt: float = 0.0,
-    method: str = "rk4",
+    integrator: str = "rk4",
     progress: bool | None = None,
     task: FrameTask | None = None,
-    integrator: str | None = None,
 ) -> SimulationResult:
     """Drive the plant with the GJM controller from rest at q0 and record the tracking.
 
@@ -286,7 +279,7 @@ def simulate_gjm(
         control_dt: 0 (default): a continuous controller, evaluated at every
             integrator stage; > 0: a digital one, sampled every ``control_dt`` [s]
             (a multiple of dt) and held in between.
-        method: "rk4" or "euler" (the old name of ``integrator``, which wins when given).
+        integrator: "rk4" (Runge-Kutta-Munthe-Kaas) or "euler".
         progress: a progress bar (None: only on a terminal).
         task: a ``FrameTask`` on the controlled frame: also record its series (ee_rpy, task_error,
             orientation error; position_error from its axes) as ``uvms run`` saves them; None: the
@@ -322,8 +315,8 @@ def simulate_gjm(
     recorders: list[Recorder] = [lambda t, q, v, sample: controller.tracking(t, q, v)]
     if task is not None:
         recorders.append(TaskRecorder(controller.robot, task, lambda t: controller.reference(t).pose, positions=False))
-    result = simulate_plant(plant, q0, None, command, duration, dt, method, hold=hold, progress=progress,
-                            recorders=recorders, integrator=integrator)
+    result = simulate_plant(plant, q0, None, command, duration, dt, integrator=integrator, hold=hold,
+                            progress=progress, recorders=recorders)
     result.controller, result.control_dt = controller, control_dt
     if task is None:
         result.position_error = result.tracking_error()

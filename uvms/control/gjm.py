@@ -19,7 +19,7 @@ Which GJM (``gjm``):
 
 * ``"rigid"`` — the classic one, from the rigid-body momentum (``Robot.generalized_jacobian``);
 * ``"added_mass"`` — from the momentum of the links *and the water they carry*
-  (link inertias augmented with their added mass, :func:`uvms.dynamics.plant.generalized_jacobian_added_mass`):
+  (link inertias augmented with their added mass, :func:`uvms.dynamics.added_mass.generalized_jacobian_added_mass`):
   exact in an inviscid fluid at rest, where that augmented momentum is conserved;
 * ``"fixed_base"`` — the arm columns J_m of the ordinary Jacobian, as if the vehicle
   were held still (the traditional scheme the paper contrasts with; for comparisons).
@@ -50,7 +50,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
-from ..dynamics.plant import augmented_mass_matrix, resolve_links
+from ..dynamics.added_mass import augmented_mass_matrix, resolve_links
 from ..errors import GJMControlError, UVMSError
 from ..kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
 from ..robot import Robot
@@ -280,16 +280,3 @@ def _task_gain(gain: np.ndarray, rows: list[int]) -> np.ndarray:
             if row < 3 and column < 3:
                 task_gain[i, j] = gain[row, column]
     return task_gain
-
-
-def __getattr__(name: str):
-    """``simulate_gjm`` and ``GJMResult`` moved to :mod:`uvms.simulate` (the one loop and result); this old path
-    keeps working for one release."""
-    if name in ("simulate_gjm", "GJMResult"):
-        import warnings
-
-        warnings.warn(f"{__name__}.{name} moved to uvms.simulate.{name}", DeprecationWarning, stacklevel=2)
-        from ..simulate import GJMResult, simulate_gjm  # lazily: the loop sits above this layer
-
-        return {"GJMResult": GJMResult, "simulate_gjm": simulate_gjm}[name]
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -8,7 +8,8 @@ thrusters, :func:`uvms.simulate_actuated.simulate_actuated` (the same loop).
 from .actuated import ActuatedCommand, ActuatedPlantSystem, ThrusterDynamics, vehicle_inverse_dynamics
 from .allocation import AllocationResult, ThrustAllocator
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from .plant import Plant, PlantSystem, generalized_jacobian_added_mass
+from .added_mass import generalized_jacobian_added_mass
+from .plant import Plant, PlantSystem
 from .thrusters import Thruster, Thrusters, allocation_matrix, thrusters_of
 
 __all__ = ["ActuatedCommand", "ActuatedPlantSystem", "AllocationResult", "HydroParameters", "LinkHydrodynamics",

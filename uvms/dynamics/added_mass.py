@@ -93,7 +93,7 @@ def generalized_jacobian_added_mass(
 
     Args:
         robot: a floating- or planar-base Robot.
-        hydro: the parameters (None: the model's own, see :func:`uvms.hydrodynamics.hydrodynamics_of`).
+        hydro: the parameters (None: the model's own, see :func:`uvms.dynamics.hydrodynamics.hydrodynamics_of`).
         q: configuration (nq,).
         frame: end-effector frame (default: the first).
 

@@ -347,7 +347,7 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         if required:
             raise UVMSError(
                 f"{robot.source}: the model has no hydrodynamic parameters; add a uuv_simulator underwater-object "
-                f"plugin block to the URDF or a {YAML_NAME} beside it (see uvms.hydrodynamics)")
+                f"plugin block to the URDF or a {YAML_NAME} beside it (see uvms.dynamics.hydrodynamics)")
         return HydroParameters(source=f"{robot.source} (no hydrodynamic parameters)")
     hydro.check_links(names)
     return hydro

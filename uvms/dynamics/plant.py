@@ -6,7 +6,7 @@ The vehicle is passive here (its thrusters, when it has some, add a body wrench 
 vehicle: :mod:`uvms.dynamics.actuated`): the joints are actuated, and each
 follows its commanded velocity through a first-order motor, qdd_m = (u - qd_m) / tau
 (the joint servo of amundsen2018, tau = 100 ms). Every link l may carry Fossen's
-hydrodynamics (:mod:`uvms.hydrodynamics`), written in its own frame with nu_l = J_l v
+hydrodynamics (:mod:`uvms.dynamics.hydrodynamics`), written in its own frame with nu_l = J_l v
 its body twist (Pinocchio ``LOCAL``), nu_c = [R_l^T v_c; 0] the ocean current and
 nu_r = nu_l - nu_c::
 
@@ -57,15 +57,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from .added_mass import (  # noqa: F401 - HydroLink ... resolve_links: also importable from here, as before
-    LOCAL,
-    HydroLink,
-    _cross,
-    added_mass_coriolis,
-    augmented_mass_matrix,
-    generalized_jacobian_added_mass,
-    resolve_links,
-)
+from .added_mass import LOCAL, HydroLink, _cross, added_mass_coriolis, augmented_mass_matrix, resolve_links
 from .hydrodynamics import HydroParameters, hydrodynamics_of
 from ..robot import Robot, check_robot
 from ..kinematics import generalized_jacobian_from_parts, mass_matrix_split
@@ -369,16 +361,3 @@ class PlantSystem:
         """Raise UVMSError when the state reached at t [s] is not finite (the step dt was too large)."""
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")
-
-
-def __getattr__(name: str):
-    """``simulate_plant`` and ``PlantResult`` moved to :mod:`uvms.simulate` (the one loop and result); this
-    old path keeps working for one release."""
-    if name in ("simulate_plant", "PlantResult"):
-        import warnings
-
-        warnings.warn(f"{__name__}.{name} moved to uvms.simulate.{name}", DeprecationWarning, stacklevel=2)
-        from ..simulate import PlantResult, simulate_plant  # lazily: the loop sits above this layer
-
-        return {"PlantResult": PlantResult, "simulate_plant": simulate_plant}[name]
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

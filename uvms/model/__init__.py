@@ -1,13 +1,14 @@
 """The model layer: xacro/URDF in, a checked Pinocchio model out.
 
 ``loader`` (``load``: expand, check, choose the base, build), ``checks`` (URDF checks before Pinocchio),
-``resources`` (shipped models, example-robot-data, ``package://``), ``sandbox`` (untrusted xacro in a
-kernel-confined child process), ``compose`` (``mount_arm``).
+``resources`` (shipped models, example-robot-data, ``package://``, bounded reading of files), ``includes``
+(a xacro's static includes), ``sandbox`` (untrusted xacro in a kernel-confined child process), ``base_rule``
+(which root is the vehicle), ``compose`` (``mount_arm``).
 """
 
 from .compose import mount_arm
-from .loader import (ADDED_BASE_JOINT, BASE_CHOICES, BaseGuessWarning, MissingMeshWarning, ParserWarning, load,
-                     read_model_text)
+from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES
+from .loader import BaseGuessWarning, MissingMeshWarning, ParserWarning, load, read_model_text
 from .resources import example_robot_urdf, shipped_models
 
 __all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "MissingMeshWarning", "ParserWarning",

@@ -201,7 +201,7 @@ def prefix_names(robot_element: ET.Element, prefix: str) -> str:
     would otherwise hold two frames of one name, which ``appendModel`` rejects.
     """
     for element in robot_element.iter():
-        element.attrib.pop("_owner", None)  # annotations of uvms.checks
+        element.attrib.pop("_owner", None)  # annotations of uvms.model.checks
     links = {link.get("name") for link in robot_element.findall("link")}
     joint_names = {
         name: prefix + name + ("_joint" if name in links else "")

@@ -18,7 +18,7 @@ from xml.parsers.expat import ExpatError
 import pinocchio as pin
 
 from . import checks, includes, resources, sandbox
-from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES, choose_base, decide_base  # noqa: F401 - re-exported
+from .base_rule import ADDED_BASE_JOINT, decide_base
 from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from ..robot import Robot
 
@@ -82,7 +82,7 @@ def load(
         package_dirs: extra folders to resolve ``package://`` mesh URIs, which an untrusted xacro may also
             include from (besides its own folder tree).
         trusted: a xacro file is code (its expressions are Python). True expands it in this
-            process; False in a restricted child process (``uvms.sandbox``: no file writes, no
+            process; False in a restricted child process (``uvms.model.sandbox``: no file writes, no
             processes, no network, a timeout). None: trusted for the shipped models only.
             Plain URDF is never executed.
 
@@ -138,7 +138,7 @@ def read_model_text(
 
 def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True,
                  package_dirs: Sequence[str | os.PathLike] | None = None) -> str:
-    """Run xacro on a file with ``args`` as its mappings; untrusted files in ``uvms.sandbox``.
+    """Run xacro on a file with ``args`` as its mappings; untrusted files in ``uvms.model.sandbox``.
 
     Raises:
         XacroError: xacro failed (its message is kept, and a given arg that is text where the model's
@@ -160,7 +160,7 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True,
 
 def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool,
               package_dirs: Sequence[str | os.PathLike] | None = None) -> str:
-    """xacro on a file with checked ``mappings``: in this process when trusted, else in ``uvms.sandbox``.
+    """xacro on a file with checked ``mappings``: in this process when trusted, else in ``uvms.model.sandbox``.
 
     An untrusted file may read its own folder tree and the package folders (``package_dirs`` first, then
     ``ROS_PACKAGE_PATH``...: :func:`uvms.model.resources.package_search_roots`), nothing else.

@@ -1,4 +1,4 @@
-"""The child process of :mod:`uvms.sandbox`: confine this process, then expand one xacro file.
+"""The child process of :mod:`uvms.model.sandbox`: confine this process, then expand one xacro file.
 
 Run as ``python -I -B -c <this file's text>`` (never imported by uvms). The request comes as one JSON
 document on stdin: ``{"path", "mappings", "memory_bytes", "cpu_seconds", "audit_hook", "parent_pid",

@@ -96,7 +96,7 @@ def build(scenario: dict) -> Setup:
 
 
 def build_sequence(robot: Robot, scenario: dict) -> Setup:
-    """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.sequence)."""
+    """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.control.sequence)."""
     solver, frames = scenario["solver"], scenario["task"]["frames"] or robot.ee_frames
     if solver["method"] not in SEQUENCE_METHODS:
         raise ScenarioError(f"a sequence scenario needs solver.method in {', '.join(SEQUENCE_METHODS)}, "
@@ -261,7 +261,7 @@ def make_plant(robot: Robot, section: dict) -> Plant:
                   added_mass=added_mass, damping=damping)
     if not plant.links:
         raise ScenarioError(f"plant.type = 'hydrodynamic' needs hydrodynamic parameters, and {robot.source} has none; "
-                            f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.hydrodynamics), "
+                            f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.dynamics.hydrodynamics), "
                             f"or use plant.type = 'rigid'")
     return plant
 

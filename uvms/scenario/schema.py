@@ -33,7 +33,7 @@ NUMBER = (int, float)
 DEFAULT_POSITION_TOLERANCE = 0.01
 DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
-#: free-floating dynamics of uvms.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
+#: free-floating dynamics of uvms.dynamics.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
 #: solver.method values: CLIK, classic/robust task priority, santos2006's kinematic constraint, and the two that
 #: enforce [[inequalities]]: set-based task priority (iCAT) and the QP hierarchy.
@@ -166,7 +166,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.rosbag
     },
 }
-#: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.sequence.
+#: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.control.sequence.
 PHASE_SCHEMA: dict[str, tuple] = {
     "name": (str, "", None),
     "duration": (NUMBER, REQUIRED, None),
@@ -346,7 +346,7 @@ def check_value(name: str, value: Any, kinds, allowed, origin: str) -> Any:
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
     if isinstance(value, list) and kinds != (list,) and not all(is_number(v) for v in value):
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)} of numbers, got {value!r}")
-    if name != "model.args":  # xacro args are checked by the model (uvms.checks)
+    if name != "model.args":  # xacro args are checked by the model (uvms.model.checks)
         check_range(name, value, origin)
     if allowed is not None and value not in allowed:
         raise ScenarioError(f"{origin}: {name} = {value!r} is not valid; valid: {', '.join(map(repr, allowed))}")

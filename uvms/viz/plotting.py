@@ -273,7 +273,7 @@ def sequence_figures(result: SimulationResult, plan, folder: str | os.PathLike, 
     """Figures of a phase sequence: every frame against its target, configuration snapshots, an animation.
 
     Args:
-        result: the run; plan: its ``uvms.sequence.PhasePlan``; folder: output folder.
+        result: the run; plan: its ``uvms.control.sequence.PhasePlan``; folder: output folder.
         animation: file name of the animation (``.gif`` or ``.mp4``), "" for none.
         progress: progress bar of the animation (None: on a terminal only).
     """

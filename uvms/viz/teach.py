@@ -133,7 +133,7 @@ def format_poses(poses: Mapping[str, pin.SE3]) -> str:
 
 
 def picture_png(robot: Robot, q: np.ndarray, plane: str | None, size: float = 5.0, dpi: int = 80) -> bytes:
-    """The stick drawing of q as PNG bytes (headless, :func:`uvms.drawing.draw_configuration`)."""
+    """The stick drawing of q as PNG bytes (headless, :func:`uvms.viz.drawing.draw_configuration`)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -170,7 +170,7 @@ def teach(robot: Robot, q: np.ndarray | None = None, *, plane: str | None = "aut
     try:
         import ipywidgets as widgets
     except ImportError:
-        raise TeachUnavailable(f"{INSTALL_HINT}; without widgets, use uvms.teach.teach_state(robot, values)") from None
+        raise TeachUnavailable(f"{INSTALL_HINT}; without widgets, use uvms.viz.teach.teach_state(robot, values)") from None
     import html
 
     start = robot.neutral() if q is None else robot.check_configuration(q)

@@ -13,7 +13,7 @@ live, and the end-effector poses) and, for a run, a time slider with play and pa
 URDF's visuals, or a stick skeleton for a model without any (:mod:`uvms.viz.viewer_geometry`); the camera,
 seabed and triads are in :mod:`uvms.viz.viewer_scene`, the panel in :mod:`uvms.viz.viewer_gui`.
 
-Without the extra, :mod:`uvms.drawing` draws the same configurations headless (``uvms view --headless OUT``).
+Without the extra, :mod:`uvms.viz.drawing` draws the same configurations headless (``uvms view --headless OUT``).
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ def require_viser():
         import viser
         from pinocchio.visualize import ViserVisualizer
     except ImportError as exc:
-        raise ViewerUnavailable(f"{INSTALL_HINT}: {exc}; or draw headless with uvms.drawing "
+        raise ViewerUnavailable(f"{INSTALL_HINT}: {exc}; or draw headless with uvms.viz.drawing "
                                 f"(`uvms view ... --headless OUT.png|OUT.gif`)") from None
     return viser, ViserVisualizer
 
