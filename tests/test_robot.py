@@ -38,3 +38,17 @@ def test_joint_lookup_and_urdf_root():
         robot.joint(robot.arm_joint_names[2] + "x")
     assert robot.urdf_root is robot.urdf_root  # parsed once
     assert len(robot.urdf_root.findall("link")) == robot.urdf.count("<link ") > 8
+
+
+def test_a_run_checks_its_configurations_once_and_refuses_a_bad_row_by_its_index(rng):
+    robot = uvms.load("bluerov2_alpha5")
+    rows = np.array([robot.random_configuration(rng) for _ in range(5)])
+    assert np.array_equal(robot.check_configurations(rows), rows)
+    bad = rows.copy()
+    bad[3, 3:7] *= 1.5  # the vehicle's quaternion of row 3
+    with pytest.raises(uvms.UVMSError, match="row 3: the rotation part of joint .* has norm 1.5"):
+        robot.check_configurations(bad)
+    bad = rows.copy()
+    bad[1, -1] = np.nan
+    with pytest.raises(uvms.UVMSError, match="non-finite"):
+        robot.check_configurations(bad)

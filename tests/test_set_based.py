@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 
 import uvms
 from uvms.limits import Limit
-from uvms.solvers import VariableDamping, clik_step, clik_velocity
+from uvms.solvers import CLIKSolver, StepResult, VariableDamping, clik_step, clik_velocity
 from uvms.solvers.hqp import hqp_step, hqp_velocity
 from uvms.solvers.saturation import scale_lowest_first
-from uvms.solvers.set_based import set_based_step, set_based_velocity
+from uvms.solvers.set_based import SetBasedSolver, integrate_velocity, set_based_step, set_based_velocity
 from uvms.state import KinematicState
 from uvms.tasks import FrameTask, PostureTask
 from uvms.tasks.objectives import (FrameBox, JointLimits, JointVelocityLimits, Manipulability, PlaneClearance,
@@ -41,12 +41,33 @@ def violation(robot: uvms.Robot, q: np.ndarray, limit: Limit | None = None) -> f
     return float(max(np.max(np.maximum(limit.lower - arm, arm - limit.upper)), 0.0))
 
 
+def stepper(step, robot, levels, dt, **options):
+    """q -> StepResult of ``step`` (clik_step, set_based_step, hqp_step) at dt: CLIK and set-based keep one solver
+    for the loop (the numbers of the one-call function, which builds a solver at every call)."""
+    if step is clik_step:
+        solver = CLIKSolver(robot, levels, dt=dt, **options)
+
+        def clik(q):
+            velocity = solver.solve(q)
+            return StepResult(q=pin.integrate(robot.model, q, velocity.v * dt), velocity=velocity)
+        return clik
+    if step is set_based_step:
+        solver = SetBasedSolver(robot, levels, dt=dt, **options)
+
+        def set_based(q):
+            velocity = solver.solve(q)
+            return StepResult(q=integrate_velocity(robot, q, velocity.v, dt), velocity=velocity)
+        return set_based
+    return lambda q: step(robot, q, levels, dt, **options)
+
+
 def run(step, robot, q, levels, steps=500, **options):
     """Integrate ``steps`` steps; (last q, max limit violation, max speed ratio, task errors, results)."""
     worst, ratio, errors, results = 0.0, 0.0, [], []
     limit = options.pop("limit", None)
+    advance = stepper(step, robot, levels, DT, **options)
     for _ in range(steps):
-        result = step(robot, q, levels, DT, **options)
+        result = advance(q)
         q = result.q
         worst = max(worst, violation(robot, q, limit))
         ratio = max(ratio, getattr(result.velocity, "speed_ratio", 0.0))
@@ -228,8 +249,9 @@ def max_velocity_jump(shape: str, dt: float) -> tuple[float, float]:
     robot, q, task = alpha5_reach()
     levels = [JointLimits(robot, margin={"alpha_axis_c": 0.05}, band=0.2, shape=shape, joints=["alpha_axis_c"]), task]
     velocities = []
+    advance = stepper(set_based_step, robot, levels, dt, weights=HEAVY_VEHICLE)
     for _ in range(int(round(2.0 / dt))):
-        result = set_based_step(robot, q, levels, dt, weights=HEAVY_VEHICLE)
+        result = advance(q)
         q = result.q
         velocities.append(result.velocity.v)
     jumps = np.abs(np.diff(velocities, axis=0)).max()

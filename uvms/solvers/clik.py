@@ -26,7 +26,6 @@ from .checks import (as_task_list, check_damping, check_scalar, check_weights, f
                      prepared_gain)
 from .inverses import (SolverInputError, VariableDamping, WeightedInverse, damped_weighted_inverse, svd_inverse,
                        weights_subset)
-from .prepared import PREPARED
 from .results import StepResult, VelocityResult
 from .stack import stacked_terms
 
@@ -178,8 +177,11 @@ def clik_velocity(
     enforce_limits: bool = False,
     limit: Limit | None = None,
 ) -> VelocityResult:
-    """One CLIK velocity: a :class:`CLIKSolver` of these inputs, built at the first call and kept for the next
-    ones with the same inputs (:mod:`~uvms.solvers.prepared`: a loop of calls checks and prepares them once).
+    """One CLIK velocity, from a :class:`CLIKSolver` built for this call.
+
+    Every call checks its inputs and builds a new solver (nothing is kept between calls), so it always reads
+    the current values of its arguments. A loop should build ``CLIKSolver(robot, tasks, ...)`` once and call
+    its :meth:`~CLIKSolver.solve` at every step: the same numbers, without the checks and preparation.
 
     Args:
         robot: the model.
@@ -200,12 +202,8 @@ def clik_velocity(
     Returns:
         VelocityResult with the full velocity v (nv,).
     """
-    def build() -> CLIKSolver:
-        return CLIKSolver(robot, tasks, gain=gain, weights=weights, damping=damping, potential=potential, alpha=alpha,
-                          free_floating=free_floating, dt=dt, enforce_limits=enforce_limits, limit=limit)
-
-    solver = PREPARED.get("clik", build, robot, tasks, gain, weights, damping, potential, alpha, free_floating, dt,
-                          enforce_limits, limit)
+    solver = CLIKSolver(robot, tasks, gain=gain, weights=weights, damping=damping, potential=potential, alpha=alpha,
+                        free_floating=free_floating, dt=dt, enforce_limits=enforce_limits, limit=limit)
     return solver.solve(q)
 
 
@@ -238,7 +236,8 @@ def solve_with_held(
 def clik_step(robot: Robot, q: np.ndarray, tasks: Task | Sequence[Task], dt: float, **options) -> StepResult:
     """One explicit-Euler CLIK step on the configuration manifold: q+ = integrate(q, v dt).
 
-    ``options`` are those of :func:`clik_velocity`.
+    Like :func:`clik_velocity`, every call checks its inputs and builds a new :class:`CLIKSolver`; a loop
+    should build one solver once and step with it. ``options`` are those of :func:`clik_velocity`.
     """
     check_scalar(dt, "dt", positive=True)
     velocity = clik_velocity(robot, q, tasks, dt=dt, **options)

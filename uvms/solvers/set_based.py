@@ -47,7 +47,6 @@ from .hierarchy import (Hierarchy, HierarchyPlan, LevelItem, Levels, LevelRows, 
                         objective_statuses, rate_bounds, speed_ratio, split_levels, task_report)
 from .inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, converged_or_refused,
                        damping_parameters)
-from .prepared import PREPARED
 from .results import SetBasedResult, StepResult
 from .saturation import RateRows, inside, scale_lowest_first, speed_maximum, velocity_box
 
@@ -246,9 +245,13 @@ def set_based_velocity(
     position_fraction: float = 1.0,
     speed_limits: Sequence[VelocityLimit] = (),
 ) -> SetBasedResult:
-    """One set-based (iCAT) velocity over priority levels of equality tasks and inequality objectives: a
-    :class:`SetBasedSolver` of these inputs, built at the first call and kept for the next ones with the same
-    inputs (:mod:`~uvms.solvers.prepared`).
+    """One set-based (iCAT) velocity over priority levels of equality tasks and inequality objectives, from a
+    :class:`SetBasedSolver` built for this call.
+
+    Every call checks its inputs and builds a new solver (nothing is kept between calls), so it always reads
+    the current values of its arguments. A loop should build ``SetBasedSolver(robot, levels, ...)`` once and
+    call its :meth:`~SetBasedSolver.solve` (or :meth:`~SetBasedSolver.step`) at every step: the same numbers,
+    without the checks and preparation.
 
     Args:
         robot: the model.
@@ -268,13 +271,9 @@ def set_based_velocity(
     Returns:
         SetBasedResult: v (nv,), the objectives' activations, the task residual, the scales.
     """
-    def build() -> SetBasedSolver:
-        return SetBasedSolver(robot, levels, gain=gain, weights=weights, damping=damping, eta=eta,
-                              free_floating=free_floating, dt=dt, position_fraction=position_fraction,
-                              speed_limits=speed_limits)
-
-    solver = PREPARED.get("set_based", build, robot, levels, gain, weights, damping, eta, free_floating, dt,
-                          position_fraction, speed_limits)
+    solver = SetBasedSolver(robot, levels, gain=gain, weights=weights, damping=damping, eta=eta,
+                            free_floating=free_floating, dt=dt, position_fraction=position_fraction,
+                            speed_limits=speed_limits)
     return solver.solve(q)
 
 
@@ -306,7 +305,11 @@ def integrate_velocity(robot: Robot, q: np.ndarray, v: np.ndarray, dt: float) ->
 
 
 def set_based_step(robot: Robot, q: np.ndarray, levels: Levels, dt: float, **options) -> StepResult:
-    """One explicit-Euler set-based step: q+ = integrate(q, v dt); ``options`` of :func:`set_based_velocity`."""
+    """One explicit-Euler set-based step: q+ = integrate(q, v dt); ``options`` of :func:`set_based_velocity`.
+
+    Like :func:`set_based_velocity`, every call checks its inputs and builds a new :class:`SetBasedSolver`; a
+    loop should build one solver (with ``dt``) once and call its :meth:`~SetBasedSolver.step`.
+    """
     dt = check_scalar(dt, "dt", positive=True)
     velocity = set_based_velocity(robot, q, levels, dt=dt, **options)
     return StepResult(q=integrate_velocity(robot, q, velocity.v, dt), velocity=velocity)

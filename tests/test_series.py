@@ -1,0 +1,21 @@
+"""Simulation results (uvms.series): the derived series follow the configurations."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import uvms
+
+
+def test_the_vehicle_pose_and_arm_series_of_a_result_follow_its_configurations(rng):
+    from uvms.series import SimulationResult
+
+    robot = uvms.load("bluerov2_alpha5")
+    rows = np.array([robot.random_configuration(rng) for _ in range(4)])
+    result = SimulationResult(t=np.arange(4.0), q=rows, v=np.zeros((4, robot.nv)), robot=robot)
+    expected = np.array([robot.base_values(q) for q in rows])
+    expected[:, 3:6] = np.unwrap(expected[:, 3:6], axis=0)
+    assert np.array_equal(result.vehicle_pose(), expected)
+    assert np.array_equal(result.arm(), np.array([robot.arm_configuration(q) for q in rows]))
+    result.q = rows[::-1].copy()  # a new series: computed again, not the kept one
+    assert np.array_equal(result.vehicle_pose()[0, :3], robot.base_values(rows[-1])[:3])

@@ -1,0 +1,157 @@
+"""The set-based solver (uvms.solvers.set_based.SetBasedSolver): built once, it gives the numbers of the one-call
+functions (``set_based_velocity``, ``set_based_step``, which build one at every call) bit for bit; it refuses bad
+options when built; the saturation and the sum of the levels it uses."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import uvms
+from uvms.state import KinematicState
+
+
+def hoang_setup():
+    robot = uvms.load("hoang2011")
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0.0, -2.0, 0, 0, 0, 1.0])
+    return robot, task
+
+
+def alpha5_levels(robot, target):
+    """Joint limits, vehicle attitude and speed limits above an end-effector pose (bench_set_based's problem)."""
+    from uvms.tasks.objectives import JointLimits, JointVelocityLimits, VehicleAttitude, VehicleVelocityLimits
+
+    return [JointLimits(robot, band=0.2), VehicleAttitude(robot, np.radians(5.0)), JointVelocityLimits(robot),
+            VehicleVelocityLimits(robot, (0.5, 0.5)), uvms.FrameTask(robot, target=target)]
+
+
+def alpha5_start(robot, rng):
+    """A configuration with the vehicle tilted up to 4 deg (the attitude objective active or not) and a target."""
+    tilt, direction = np.radians(4.0) * np.sqrt(rng.uniform()), rng.uniform(-np.pi, np.pi)
+    q = robot.configuration(base=[0, 0, -5, tilt * np.cos(direction), tilt * np.sin(direction), rng.uniform(-3, 3)],
+                            arm=rng.uniform(*arm_limits(robot)))
+    return q, robot.fk(robot.random_configuration(rng))
+
+
+def arm_limits(robot):
+    """(lower, upper) (n_arm,) of the arm joints."""
+    limit = uvms.Limit.joint_positions(robot)
+    return limit.lower, limit.upper
+
+
+@pytest.mark.parametrize("options", [dict(gain=2.0, dt=0.05), dict(gain=2.0, damping=0.05, eta=0.5, dt=0.05),
+                                     dict(gain=[1.0, 1, 1, 3, 3, 3], weights=np.r_[np.full(6, 5.0), np.ones(5)]),
+                                     dict(gain=2.0, free_floating=True, dt=0.05)])
+def test_a_set_based_solver_reused_over_configurations_and_targets_equals_fresh_calls_bit_for_bit(rng, options):
+    """Nothing carries over between calls of a solver (its identity projector, box, gain are read only)."""
+    from uvms.solvers.set_based import SetBasedSolver, set_based_step, set_based_velocity
+
+    robot = uvms.load("bluerov2_alpha5")
+    q, target = alpha5_start(robot, rng)
+    levels = alpha5_levels(robot, target)
+    if options.get("free_floating"):
+        levels = [level for level in levels if type(level).__name__ not in ("VehicleAttitude",)]
+    solver = SetBasedSolver(robot, levels, **options)
+    task = levels[-1]
+    active = scaled = 0
+    for _ in range(25):
+        q, target = alpha5_start(robot, rng)
+        task.set_target(target)
+        fresh = SetBasedSolver(robot, levels, **options).solve(q)  # built for this call
+        reused = solver.solve(q)
+        assert np.array_equal(set_based_velocity(robot, q, levels, **options).v, fresh.v)  # the one-call function
+        assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
+        assert reused.scales == fresh.scales and reused.level_residuals == fresh.level_residuals
+        assert reused.sigma_min == fresh.sigma_min and reused.active == fresh.active
+        assert np.array_equal(solver.velocity(KinematicState(robot, q, check=False)), fresh.v)
+        if "dt" in options:
+            assert np.array_equal(solver.step(q), set_based_step(robot, q, levels, options["dt"], **{
+                key: value for key, value in options.items() if key != "dt"}).q)
+        active += bool(fresh.active)
+        scaled += min(fresh.scales) < 1.0
+    assert active > 0  # the objectives were active in some calls, and the box bound the velocity in some
+    assert scaled > 0 or "dt" not in options
+
+
+def test_a_set_based_solver_refuses_bad_options_when_built():
+    from uvms.solvers.set_based import SetBasedSolver
+
+    robot = uvms.load("bluerov2_alpha5")
+    levels = alpha5_levels(robot, robot.fk(robot.neutral()))
+    with pytest.raises(uvms.SolverInputError, match="position_fraction must be in"):
+        SetBasedSolver(robot, levels, position_fraction=1.5)
+    with pytest.raises(uvms.SolverInputError, match="eta must be finite"):
+        SetBasedSolver(robot, levels, eta=-1.0)
+    with pytest.raises(uvms.SolverInputError, match="dt must be finite and > 0"):
+        SetBasedSolver(robot, levels, dt=0.0)
+    with pytest.raises(uvms.SolverInputError, match=r"gain must be a finite scalar >= 0, \(6,\)"):
+        SetBasedSolver(robot, levels, gain=[1.0, 2.0])
+    with pytest.raises(uvms.SolverInputError, match=r"step needs the step dt > 0 \[s\]: build the solver with dt="):
+        SetBasedSolver(robot, levels).step(robot.neutral())
+    with pytest.raises(uvms.NotARobot):
+        SetBasedSolver("bluerov2_alpha5", levels)
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(gain="a"), r"gain must be a finite scalar >= 0, \(6,\) or \(6, 6\) \[1/s\], got 'a'"),
+    (dict(gain=[1.0, "b"]), r"gain must be a finite scalar >= 0"),
+    (dict(weights="x"), r"W must be \(11,\) or \(11, 11\) positive numbers, got 'x'"),
+    (dict(speed_limits=None), "speed_limits must be a list of VelocityLimit objectives"),
+    (dict(speed_limits=["x"]), "speed_limits must be a list of VelocityLimit objectives"),
+])
+def test_text_and_none_options_are_refused_by_what_is_valid(options, message):
+    """Not a ValueError of numpy's conversion or a TypeError of Python's: the option named and what it takes."""
+    from uvms.solvers.set_based import set_based_velocity
+
+    robot = uvms.load("bluerov2_alpha5")
+    levels = alpha5_levels(robot, robot.fk(robot.neutral()))
+    with pytest.raises(uvms.SolverInputError, match=message):
+        set_based_velocity(robot, robot.neutral(), levels, **options)
+    if "speed_limits" not in options:  # CLIK reads its gain and W through the same checks
+        hoang, task = hoang_setup()
+        with pytest.raises(uvms.SolverInputError, match=r"(gain must be a finite scalar >= 0, \(3,\)|W must be \(6,\))"):
+            uvms.clik_velocity(hoang, hoang.neutral(), task, **options)
+
+
+@pytest.mark.parametrize("levels, message", [
+    (None, "levels must be a non-empty list of levels.*got None"), (5, "got 5"), ([], "got \\[\\]"),
+    ([None], "level 0: None is not a Task, an Inequality, a VelocityLimit or a list of them"),
+    ([[]], "level 0 is empty"),
+])
+def test_malformed_levels_are_refused_by_what_a_level_holds(levels, message):
+    from uvms.solvers.set_based import SetBasedSolver
+
+    robot = uvms.load("bluerov2_alpha5")
+    with pytest.raises(uvms.SolverInputError, match=message):
+        SetBasedSolver(robot, levels)
+
+
+def test_the_largest_scale_keeps_the_sum_in_the_box_and_no_larger_one_does(rng):
+    """The compiled saturation: the lowest level is scaled by the largest s that keeps the sum in the box."""
+    from uvms.solvers.saturation import inside, scale_lowest_first
+
+    for _ in range(300):
+        upper = rng.uniform(0.1, 1.0, 5)
+        lower = -rng.uniform(0.1, 1.0, 5)
+        upper[rng.integers(5)] = np.inf  # an unbounded entry never limits the scale
+        base = rng.uniform(lower, np.minimum(upper, 2.0)) * 0.9
+        step = rng.normal(size=5) * rng.choice([0.1, 1.0, 10.0])
+        step[rng.integers(5)] = 0.0
+        total, (first, scale) = scale_lowest_first([base, step], lower, upper)
+        assert first == 1.0 and 0.0 <= scale <= 1.0 and inside(total, lower, upper, 1e-12)
+        assert np.array_equal(total, base + scale * step)
+        if scale < 1.0:  # the largest: a bit more leaves the box
+            assert not inside(base + (scale + 1e-6) * step, lower, upper, 1e-12)
+    # a level above that leaves the box on its own: the lowest is dropped and that one scaled
+    total, scales = scale_lowest_first([np.array([0.5, 0.0]), np.array([2.0, 0.0]), np.array([0.0, 5.0])],
+                                       -np.ones(2), np.ones(2))
+    assert scales == (1.0, 0.25, 0.0) and np.array_equal(total, [1.0, 0.0])
+
+
+def test_the_levels_are_added_in_order_as_numpy_sums_them(rng):
+    from uvms.solvers.set_based import sum_in_order
+
+    for count in (1, 2, 3, 5):
+        vectors = [rng.normal(size=11) * 10.0 ** rng.integers(-8, 8) for _ in range(count)]
+        assert np.array_equal(sum_in_order(vectors), np.sum(vectors, axis=0))
+        assert sum_in_order(vectors) is not vectors[0]  # a new array: the contributions stay as they were
