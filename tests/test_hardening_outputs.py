@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from test_cli import one_line, raising
 from uvms import outputs
 from uvms.cli import main
 from uvms.errors import RunFolderError
@@ -54,17 +55,6 @@ def short_hoang(folder: Path) -> Path:
     return path
 
 
-def raising(exc: BaseException):
-    """A command handler that raises ``exc``."""
-    def handler(options):
-        raise exc
-    return handler
-
-
-def one_line(capsys) -> str:
-    captured = capsys.readouterr()
-    assert len(captured.err.splitlines()) == 1, captured.err
-    return captured.err
 
 
 # ------------------------------------------------------------------ 1. --out never deletes a user's folder

@@ -17,21 +17,14 @@ import pytest
 from conftest import shipped
 
 import uvms
+from test_viewer import MISSING_MESH
 from uvms.cli import main
 from uvms.errors import ViewerInputError, WorkspaceInputError
 from uvms.viz import viewer, viewer_geometry
 
 PORT = 18480  # first port tried by the live tests (the next free one is taken when busy)
 
-MESHED = """<robot name="meshed">
-  <link name="base_link"><visual><geometry><mesh filename="{mesh}"/></geometry></visual>
-    <visual><geometry><box size="1 0.5 0.3"/></geometry></visual>
-    <inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="l1"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
-  </link>
-  <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/><origin xyz="0.5 0 0"/>
-    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
-</robot>"""
+MESHED = MISSING_MESH.replace("package://no_such_pkg/hull.stl", "{mesh}")  # the same robot, a mesh of ours
 DAE_HEAD = b'<?xml version="1.0"?>\n<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1"><!-- '
 
 
