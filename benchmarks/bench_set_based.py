@@ -36,7 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 import uvms
-from uvms.limits import Limit
+from uvms.robot.limits import Limit
 from uvms.solvers.hqp import hqp_step
 from uvms.solvers.set_based import integrate_velocity, set_based_step
 

@@ -15,7 +15,7 @@ from conftest import shipped
 from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps
 from uvms.dynamics.plant import Plant
 from uvms.scenario import ScenarioError, run
-from uvms.simulate import simulate_gjm
+from uvms.sim.simulate import simulate_gjm
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
@@ -192,7 +192,7 @@ def test_bad_plant_scenarios_are_rejected(tmp_path, scenario, overrides, words):
 
 
 def test_the_kinematic_plant_runs_the_ramps_with_the_gjm(tmp_path):
-    """plant.type = kinematic: uvms.simulate with the vehicle from momentum conservation (exact by construction)."""
+    """plant.type = kinematic: uvms.sim.simulate with the vehicle from momentum conservation (exact by construction)."""
     result = run(SCENARIOS / "amundsen2018_rigid_open_loop.toml", out=tmp_path, progress=False, overrides=[
         *NO_FIGURES, "plant.type=kinematic", "plant.gjm=rigid", "plant.motor_feedforward=false"])
     assert result.plant_run is None and result.metrics["max_position_error"] <= 1e-6

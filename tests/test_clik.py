@@ -10,7 +10,7 @@ import pytest
 import uvms
 from uvms.solvers import CLIKSolver
 from uvms.solvers.clik import solve_with_held
-from uvms.state import KinematicState
+from uvms.robot.configuration import KinematicState
 
 
 def hoang_setup():
@@ -56,7 +56,7 @@ def test_the_solver_path_is_the_clamping_solve_with_no_joint_held(rng):
 
 
 def test_the_prepared_gain_is_apply_gains_products(rng):
-    from uvms.solvers.checks import apply_gain, prepared_gain
+    from uvms.numerics.checks import apply_gain, prepared_gain
 
     error, feedforward = rng.normal(size=4), rng.normal(size=4)
     matrix = rng.normal(size=(4, 4))

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from conftest import shipped
-from uvms import conventions
+from uvms.robot import conventions
 
 angles = st.floats(-3.1, 3.1)
 positions = st.floats(-50, 50)

@@ -15,7 +15,7 @@ from uvms import UVMSError
 from uvms.scenario import ScenarioError, build, read_scenario, run
 from uvms.control.sequence import Phase, PhasePlan, SequenceController
 from uvms.solvers import clik_velocity, priority_velocity
-from uvms.state import KinematicState
+from uvms.robot.configuration import KinematicState
 from uvms.tasks import DistanceTask, FrameTask, JointTask
 
 GRIP = Path(__file__).resolve().parent.parent / "scenarios" / "xiang2019_grip.toml"

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 from test_jacobians import finite_difference_jacobian
 
 import uvms
-from uvms.limits import Limit
+from uvms.robot.limits import Limit
 
 finite = st.floats(-1.0, 1.0, allow_nan=False)
 unit_axis = st.tuples(finite, finite, finite).filter(lambda v: np.linalg.norm(v) > 0.2).map(
@@ -102,7 +102,7 @@ def test_ik_never_reports_a_false_success(tree, seed):
         assert np.all(np.isfinite(result.q)) and np.isfinite(result.error)
         error = np.concatenate([target.translation - robot.fk(result.q, leaf).translation,
                                 pin.log3(target.rotation @ robot.fk(result.q, leaf).rotation.T)])
-        axes_error = np.linalg.norm(error[uvms.kinematics.axis_rows(uvms.robot.DEFAULT_AXES[robot.base_type])])
+        axes_error = np.linalg.norm(error[uvms.robot.kinematics.axis_rows(uvms.robot.robot.DEFAULT_AXES[robot.base_type])])
         assert result.success == (axes_error <= 1e-10)  # the flag is the truth
         lower, upper = robot.arm_limits
         arm = robot.arm_configuration(result.q)

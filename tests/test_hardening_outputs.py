@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 from test_cli import one_line, raising
-from uvms import outputs
+from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import RunFolderError
 from uvms.scenario import run
@@ -159,7 +159,7 @@ def test_workspace_never_deletes_its_model(tmp_path, capsys):
 
 
 def test_a_bag_folder_needs_the_manifest(tmp_path):
-    from uvms.rosbag import write_bag
+    from uvms.scenario.rosbag import write_bag
 
     pytest.importorskip("rosbags")
     result = run(SANTOS, out=tmp_path / "run", overrides=NO_FIGURES, progress=False)

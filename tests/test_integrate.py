@@ -1,4 +1,4 @@
-"""Integration (uvms.integrate): the RK4 stages' square solve, and the trajectory samples an RK4 step reuses."""
+"""Integration (uvms.numerics.integrate): the RK4 stages' square solve, and the trajectory samples an RK4 step reuses."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import pytest
 
 import uvms
 from uvms.errors import NumericalError
-from uvms.integrate import rk4_step, solve_square
+from uvms.numerics.integrate import rk4_step, solve_square
 from uvms.trajectory import CirclePath, PathTrajectory, RecentSamples, TrapezoidLaw
 
 

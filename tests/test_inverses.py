@@ -1,4 +1,4 @@
-"""The inverses every solver uses (uvms.solvers.inverses): the compiled SVD inverse against numpy's LAPACK."""
+"""The inverses every solver uses (uvms.numerics.inverses): the compiled SVD inverse against numpy's LAPACK."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from uvms.errors import NumericalError
-from uvms.solvers.inverses import RCOND, prepared_svd_inverse
+from uvms.numerics.inverses import RCOND, prepared_svd_inverse
 
 
 def test_the_compiled_svd_inverse_is_numpy_svd_to_rounding(rng):

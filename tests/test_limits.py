@@ -9,7 +9,7 @@ import pytest
 import uvms
 from conftest import shipped
 from uvms.errors import SolverInputError
-from uvms.limits import Limit
+from uvms.robot.limits import Limit
 from uvms.solvers.ik import project_to_limits
 
 CONTINUOUS_ARM = """<robot name="mixed">

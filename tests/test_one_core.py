@@ -8,13 +8,13 @@ import pytest
 
 import uvms
 from conftest import shipped
-from uvms import kinematics
+from uvms.robot import kinematics
 from uvms.dynamics.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.added_mass import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
 from uvms.errors import ModelCheckError
-from uvms.integrate import INTEGRATORS, STEPS, check_integrator
+from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator
 from uvms.solvers import damped_weighted_inverse
-from uvms.state import FrameState, KinematicState
+from uvms.robot.configuration import FrameState, KinematicState
 
 FIXED_ARM = """<robot name="arm"><link name="base"/><link name="tip"><inertial><mass value="1"/>
   <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
@@ -133,10 +133,10 @@ def test_one_result_type_and_no_old_paths():
     """One result type; the module paths and names of before the layer folders are gone (no shims in 0.1)."""
     import importlib
 
-    from uvms import simulate as simulate_module
+    from uvms.sim import simulate as simulate_module
     from uvms.control import gjm
     from uvms.dynamics import plant
-    from uvms.series import SimulationResult
+    from uvms.sim.result import SimulationResult
 
     robot = shipped("hoang2011")
     result = simulate_module.simulate_plant(uvms.Plant(robot), robot.neutral(), None, np.ones(robot.n_arm), 0.1, 0.01)

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from uvms import UVMSError, outputs
+from uvms import UVMSError
+from uvms.io import outputs
 
 SCENARIO = Path(__file__).resolve().parent.parent / "scenarios" / "santos2006_task_priority.toml"
 

@@ -160,7 +160,7 @@ def test_mount_arm_defaults_to_the_root_link_and_keeps_every_end_effector():
     assert robot.base_reason == vehicle.base_reason and robot.root_link == "hull"
     q = robot.random_configuration(3)
     arm = uvms.load(uvms.example_robot_urdf("z1"))
-    expected = robot.fk(q, "hull") * uvms.conventions.pose_from_xyzrpy([1.0, -0.4, -0.7, np.pi, 0, 0]) * arm.fk(
+    expected = robot.fk(q, "hull") * uvms.robot.conventions.pose_from_xyzrpy([1.0, -0.4, -0.7, np.pi, 0, 0]) * arm.fk(
         q[vehicle.nq:], "gripperMover")
     np.testing.assert_allclose(robot.fk(q, "arm_gripperMover").homogeneous, expected.homogeneous, atol=1e-12)
     with pytest.raises(uvms.FrameNotFound, match="unknown frame 'base_link'; close names: hull"):

@@ -21,13 +21,13 @@ import pytest
 from test_errors import FLOATING_ROOT, urdf
 
 import uvms
-import uvms.watch
+import uvms.scenario.watch
 from uvms.cli import main
 from uvms.errors import ScenarioError
 from uvms.model import includes, resources
 from uvms.scenario import read_scenario
 from uvms.scenario.build import build
-from uvms.watch import WatchedFiles
+from uvms.scenario.watch import WatchedFiles
 
 ROOT = Path(__file__).resolve().parent.parent
 XACRO = 'xmlns:xacro="http://www.ros.org/wiki/xacro"'
@@ -71,7 +71,7 @@ def test_a_doubling_include_chain_is_read_once_per_file_and_refused_at_once(tmp_
     top = doubling_chain(tmp_path)
     answer = in_child(f"""
         import json, time, uvms
-        from uvms.watch import WatchedFiles
+        from uvms.scenario.watch import WatchedFiles
         started = time.perf_counter()
         try:
             uvms.load({str(top)!r}, trusted=False)
@@ -115,7 +115,7 @@ def test_an_include_of_a_fifo_or_of_stdin_is_refused_without_blocking(tmp_path):
         answer = in_child(f"""
             import contextlib, io, json, time, uvms
             from uvms.cli import main
-            from uvms.watch import WatchedFiles
+            from uvms.scenario.watch import WatchedFiles
             found = {{}}
             for model in {models!r}:
                 started = time.perf_counter()
@@ -305,7 +305,7 @@ def test_watch_watches_the_files_a_model_uses_never_a_tree(tmp_path, monkeypatch
 
     monkeypatch.setattr("watchfiles.watch", fake_watch)
     seen: list = []
-    uvms.watch.watch(model, seen.append, once=True)
+    uvms.scenario.watch.watch(model, seen.append, once=True)
     assert seen == [[model]] and calls[0][1]["recursive"] is False and Path("/") not in calls[0][0]
 
 
@@ -336,7 +336,7 @@ def test_a_foreign_run_record_is_read_within_caps(tmp_path):
     """A run folder's metrics.json from someone else: too deep or too large is one RunRecordError, never a crash."""
     from uvms.errors import RunRecordError
     from uvms.scenario.record import read_run_record
-    from uvms.watch import read_metrics
+    from uvms.scenario.watch import read_metrics
 
     deep = tmp_path / "deep"
     deep.mkdir()

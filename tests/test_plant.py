@@ -11,7 +11,7 @@ from uvms.errors import ModelCheckError, ModelParseError, NameNotFound, UVMSErro
 from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
 from uvms.dynamics.added_mass import generalized_jacobian_added_mass
 from uvms.dynamics.plant import Plant
-from uvms.simulate import simulate_plant
+from uvms.sim.simulate import simulate_plant
 
 RHO = 1000.0
 G = 9.81

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import uvms
-from uvms.bases import BASE_TYPES
+from uvms.robot.bases import BASE_TYPES
 
 
 @pytest.mark.parametrize("name", ["hoang2011", "xiang2019"])

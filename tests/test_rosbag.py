@@ -18,9 +18,9 @@ from rosbags.typesys import Stores, get_typestore
 import uvms
 from conftest import shipped
 from uvms.errors import BagExportError, RunFolderError
-from uvms.rosbag import write_bag
+from uvms.scenario.rosbag import write_bag
 from uvms.scenario import run
-from uvms.simulate import simulate
+from uvms.sim.simulate import simulate
 from uvms.tasks.frame import FrameTask
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"

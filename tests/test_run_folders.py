@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pytest
 
-from uvms import outputs, UVMSError
+from uvms import UVMSError
+from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import DiskFullError, RunFolderBusy, RunFolderError
 from uvms.scenario import run
@@ -29,7 +30,7 @@ RUN_FILES = {"metrics.json", "trajectory.csv", "trajectory.npz", "desired_motion
 #: `python -c SLOW_CHILD SECONDS ARGS...`: the uvms CLI with a figure writer that first sleeps SECONDS
 SLOW_CHILD = """
 import sys, time
-import uvms.outputs as outputs
+import uvms.io.outputs as outputs
 save_figure = outputs.save_figure
 def slow(figure, path, dpi=110):
     time.sleep(float(sys.argv[1]))

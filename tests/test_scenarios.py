@@ -202,7 +202,7 @@ def test_cli_refuses_a_path_as_scenario_name_in_one_line(tmp_path):
 
 
 def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
-    from uvms import simulate as simulate_module
+    from uvms.sim import simulate as simulate_module
     from uvms.errors import StepCountError
 
     def never(*args, **kwargs):
@@ -234,8 +234,8 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
 def test_library_simulations_share_the_step_bound():
     from uvms.errors import StepCountError
     from uvms.dynamics.plant import Plant
-    from uvms.simulate import simulate_plant
-    from uvms.simulate import simulate
+    from uvms.sim.simulate import simulate_plant
+    from uvms.sim.simulate import simulate
 
     robot = uvms.load("hoang2011")
     task = uvms.FrameTask(robot, axes=("x", "y", "yaw"))

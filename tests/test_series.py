@@ -1,4 +1,4 @@
-"""Simulation results (uvms.series): the derived series follow the configurations."""
+"""Simulation results (uvms.sim.result): the derived series follow the configurations."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import uvms
 
 
 def test_the_vehicle_pose_and_arm_series_of_a_result_follow_its_configurations(rng):
-    from uvms.series import SimulationResult
+    from uvms.sim.result import SimulationResult
 
     robot = uvms.load("bluerov2_alpha5")
     rows = np.array([robot.random_configuration(rng) for _ in range(4)])

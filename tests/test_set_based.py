@@ -11,12 +11,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import uvms
-from uvms.limits import Limit
+from uvms.robot.limits import Limit
 from uvms.solvers import CLIKSolver, StepResult, VariableDamping, clik_step, clik_velocity
 from uvms.solvers.hqp import hqp_step, hqp_velocity
 from uvms.solvers.saturation import scale_lowest_first
 from uvms.solvers.set_based import SetBasedSolver, integrate_velocity, set_based_step, set_based_velocity
-from uvms.state import KinematicState
+from uvms.robot.configuration import KinematicState
 from uvms.tasks import FrameTask, PostureTask
 from uvms.tasks.objectives import (FrameBox, JointLimits, JointVelocityLimits, Manipulability, PlaneClearance,
                                    VehicleAttitude, VehicleVelocityLimits, bell, inequalities_from_table)
@@ -410,8 +410,8 @@ def icat_reference(levels: list, weights: np.ndarray, damping: float, eta: float
 def test_the_compiled_icat_recursion_is_the_papers_formulas(rng, weighting, damping, eta):
     """The one compiled iCAT call (kernels.icat_into) against the paper's formulas in numpy, over levels with
     partial, zero and unit activations, an equality level, and the plain-CLIK first level."""
-    from uvms.kernels import icat_into
-    from uvms.solvers.inverses import RCOND, WeightedInverse
+    from uvms.numerics.kernels import icat_into
+    from uvms.numerics.inverses import RCOND, WeightedInverse
 
     size = 6  # fewer columns than active rows: the eta term changes the answer
     weights_given = {"identity": None, "diagonal": rng.uniform(0.5, 3.0, size),

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import uvms
-from uvms.state import KinematicState
+from uvms.robot.configuration import KinematicState
 
 
 def hoang_setup():

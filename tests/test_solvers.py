@@ -12,7 +12,7 @@ import uvms
 from conftest import shipped
 from uvms.errors import SolverInputError
 from uvms.solvers import dls, dls_solve, pinv, task_priority, variable_damping, weighted_pinv
-from uvms.solvers.inverses import damped_weighted_inverse
+from uvms.numerics.inverses import damped_weighted_inverse
 from uvms.solvers.screws import davies_solve, network_matrix
 
 
@@ -212,7 +212,7 @@ def test_kinematic_constraint_holds_exactly(rng):
     for _, q, ee, result, state in santos_constraint_cases(rng):
         assert abs(result.v[0]) <= 1e-12 and abs(result.v[1]) <= 1e-12
         yaw = np.arctan2(q[3], q[2])
-        assert result.v[2] == pytest.approx(uvms.conventions.wrap_angle(0.78 - yaw), abs=1e-12)
+        assert result.v[2] == pytest.approx(uvms.robot.conventions.wrap_angle(0.78 - yaw), abs=1e-12)
         assert np.linalg.norm(ee.jacobian(state) @ result.v - result.command) <= 1e-12
 
 
@@ -389,7 +389,7 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
 
 # -------------------------------------------------------------- hot path
 def test_compiled_cholesky_solve_matches_lapack_and_refuses_what_is_not_positive_definite(rng):
-    from uvms.kernels import cholesky_solve_in_place
+    from uvms.numerics.kernels import cholesky_solve_in_place
 
     for size in (1, 3, 6, 12):
         factor = rng.normal(size=(size, size + 2))
@@ -408,7 +408,7 @@ def test_compiled_cholesky_solve_matches_lapack_and_refuses_what_is_not_positive
 
 def test_compiled_jacobi_svd_inverse_matches_lapack_wide_tall_and_rank_deficient(rng):
     from uvms.errors import NumericalError
-    from uvms.solvers.inverses import VariableDamping, prepared_svd_inverse
+    from uvms.numerics.inverses import VariableDamping, prepared_svd_inverse
 
     duplicated = rng.normal(size=(6, 12))
     duplicated[5] = duplicated[4]  # two identical task rows: rank 5
@@ -441,7 +441,7 @@ def test_compiled_jacobi_svd_inverse_matches_lapack_wide_tall_and_rank_deficient
 
 
 def test_compiled_pose_error_and_joint_box_match_pinocchio_and_numpy(rng):
-    from uvms.kernels import pose_error_norm, project_into_box, rotation_to_target
+    from uvms.numerics.kernels import pose_error_norm, project_into_box, rotation_to_target
 
     for _ in range(50):
         pose, target = pin.SE3.Random(), pin.SE3.Random()

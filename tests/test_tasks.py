@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import uvms
-from uvms.state import KinematicState
+from uvms.robot.configuration import KinematicState
 
 
 def test_a_frame_task_computes_its_three_terms_at_once_as_separately(rng):

@@ -13,7 +13,7 @@ from uvms.dynamics.hydrodynamics import HydroParameters
 from uvms.dynamics.plant import Plant
 from uvms.dynamics.thrusters import allocation_matrix, load_thrusters_yaml, parse_thrusters_urdf, thrusters_of
 from uvms.errors import ModelCheckError
-from uvms.simulate_actuated import actuation_metrics, simulate_actuated
+from uvms.sim.actuated import actuation_metrics, simulate_actuated
 
 HERE = Path(__file__).parent
 BOX = HERE / "thruster_box.urdf"

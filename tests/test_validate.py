@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from uvms.errors import ConfigurationError, UVMSError, WorkspaceInputError
-from uvms.validate import finite_array, positive_number, time_vector
+from uvms.numerics.validate import finite_array, positive_number, time_vector
 
 
 def test_finite_array():

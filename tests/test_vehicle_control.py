@@ -15,7 +15,7 @@ from uvms.control.vehicle import pose_velocity_reference
 from uvms.dynamics.actuated import vehicle_inverse_dynamics
 from uvms.dynamics.plant import Plant
 from uvms.dynamics.thrusters import Thrusters, thrusters_of
-from uvms.simulate_actuated import actuation_metrics, simulate_actuated
+from uvms.sim.actuated import actuation_metrics, simulate_actuated
 from uvms.tasks import FrameTask
 
 DT = 0.01
@@ -90,7 +90,7 @@ def test_an_actuated_result_saves_its_thruster_series(robot, thrusters, tmp_path
     written = result.save(tmp_path)
     assert [path.name for path in written] == ["trajectory.csv", "trajectory.npz", "actuation.npz"]
     with np.load(tmp_path / "actuation.npz") as saved:
-        assert set(saved.files) == {"t", *uvms.series.ACTUATION_SERIES}
+        assert set(saved.files) == {"t", *uvms.sim.result.ACTUATION_SERIES}
         np.testing.assert_array_equal(saved["thrusts"], result.actuation["thrusts"])
         assert saved["thrusts"].shape == (len(result.t), len(thrusters.names))
         np.testing.assert_array_equal(saved["t"], result.t)

@@ -12,8 +12,8 @@ import threading
 import time
 from pathlib import Path
 
-import uvms.watch
-from uvms.watch import WatchedFiles, compare
+import uvms.scenario.watch
+from uvms.scenario.watch import WatchedFiles, compare
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -98,7 +98,7 @@ def test_watch_api_calls_back_on_a_change(tmp_path):
     model = tmp_path / "arm.urdf"
     model.write_text('<robot name="r"><link name="a"/></robot>')
     seen: list[list[Path]] = []
-    thread = threading.Thread(target=uvms.watch.watch, args=(model, seen.append), kwargs={"once": True}, daemon=True)
+    thread = threading.Thread(target=uvms.scenario.watch.watch, args=(model, seen.append), kwargs={"once": True}, daemon=True)
     thread.start()
     time.sleep(0.5)
     model.write_text('<robot name="r"><link name="b"/></robot>')
@@ -113,7 +113,7 @@ def test_compare_line():
 
 def test_a_watched_run_that_warns_says_so_under_its_line(tmp_path):
     """A good run's terminal warnings (error above tolerance) are not swallowed by --watch."""
-    from uvms.watch import Rerun
+    from uvms.scenario.watch import Rerun
 
     out = tmp_path / "run"
     lines: list[str] = []

@@ -33,9 +33,9 @@ from .errors import (
 from .model import BaseGuessWarning, MissingMeshWarning, example_robot_urdf, load, mount_arm, shipped_models
 
 # robot and kinematics
-from .limits import Limit
-from .robot import Robot
-from .state import KinematicState
+from .robot.limits import Limit
+from .robot.robot import Robot
+from .robot.configuration import KinematicState
 
 # tasks and solvers: what to achieve, how
 from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
@@ -62,8 +62,8 @@ from .dynamics import (HydroParameters, LinkHydrodynamics, Plant, ThrustAllocato
 from .control import GJMControlError, GJMController, StationKeeping, VelocityRamps, station_keeping
 
 # the one simulation loop, for kinematic and dynamic runs, and its result
-from .simulate import SimulationResult, simulate_gjm, simulate_plant
-from .simulate_actuated import actuation_metrics, simulate_actuated
+from .sim.simulate import SimulationResult, simulate_gjm, simulate_plant
+from .sim.actuated import actuation_metrics, simulate_actuated
 
 # workspace
 from .workspace import BatchKinematics, WorkspaceResult, monte_carlo

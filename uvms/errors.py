@@ -83,7 +83,7 @@ class ScenarioError(UVMSError):
 
 
 class StepCountError(UVMSError):
-    """A step ``dt`` and a duration that give no step at all, or more than ``uvms.simulate.MAX_STEPS``."""
+    """A step ``dt`` and a duration that give no step at all, or more than ``uvms.sim.simulate.MAX_STEPS``."""
 
 
 class NumericalError(UVMSError):

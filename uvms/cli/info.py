@@ -11,7 +11,7 @@ import pinocchio as pin
 
 from ..errors import UVMSError
 from ..model.loader import load
-from ..robot import Robot
+from ..robot.robot import Robot
 from .terminal import say
 
 

@@ -91,7 +91,7 @@ def watch_job(options: argparse.Namespace, out: Path, scenario: Path | None = No
     Each run is a child process writing into ``out`` (fixed for the session); one line per run compares its
     headline metrics with the previous run's. Ctrl-C stops the run and the watching (exit 130).
     """
-    from ..watch import Rerun, WatchedFiles, without_watch
+    from ..scenario.watch import Rerun, WatchedFiles, without_watch
 
     argv = [*without_watch(options.argv), "--out", str(out), "--quiet"]
     say(f"watching {scenario or model} and the files of its model; Ctrl-C to stop", sys.stdout)

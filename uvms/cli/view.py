@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import UVMSError, ViewerInputError
-from ..robot import Robot
+from ..robot.robot import Robot
 from .info import parse_assignments
 from .terminal import say
 
@@ -51,7 +51,7 @@ def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
 
 
 #: The most rows of a ``trajectory.npz`` that ``uvms view --result`` reads: 1,000,000 (a run of ``uvms run`` has
-#: at most ``uvms.integrate.MAX_STEPS`` + 1 = 200,001), 8 MB per coordinate of q.
+#: at most ``uvms.numerics.integrate.MAX_STEPS`` + 1 = 200,001), 8 MB per coordinate of q.
 MAX_RESULT_ROWS = 1_000_000
 #: The errors of reading a zip and its .npy headers (a truncated, corrupt or foreign file).
 READ_ERRORS = (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error, NotImplementedError,
@@ -71,13 +71,13 @@ def npy_header(archive: zipfile.ZipFile, info: zipfile.ZipInfo) -> tuple[tuple[i
 
 def check_trajectory(path: Path, nq: int) -> None:
     """Refuse a ``trajectory.npz`` before it is loaded, from its zip directory and .npy headers alone: members
-    other than the series uvms writes (:data:`uvms.series.SERIES`), t and q not float64 of shapes (N,) and
+    other than the series uvms writes (:data:`uvms.sim.result.SERIES`), t and q not float64 of shapes (N,) and
     (N, nq) with 1 <= N <= :data:`MAX_RESULT_ROWS`, or a member size that contradicts its header.
 
     Raises:
         ViewerInputError: what is wrong, and what a run folder of uvms holds.
     """
-    from ..series import SERIES
+    from ..sim.result import SERIES
 
     where = f"{str(path)!r} (--result)"
     try:
@@ -201,7 +201,7 @@ def watch_viewer(options: argparse.Namespace, viewer) -> None:
     With ``uvms run SCENARIO --watch`` in another terminal, the viewer follows both the model and the run.
     """
     from ..scenario.record import read_run_record
-    from ..watch import WatchedFiles, watch
+    from ..scenario.watch import WatchedFiles, watch
 
     scenario = Path(options.model) if str(options.model).endswith(".toml") else None
     result = Path(options.result).resolve() if options.result else None

@@ -33,7 +33,7 @@ def command_workspace(options: argparse.Namespace) -> int:
     `uvms.workspace.POINTS_KEPT` samples per frame, and metrics.json says how many were stored (points_stored)
     of how many sampled (points_sampled).
     """
-    from .. import outputs
+    from ..io import outputs
     from ..viz.reports import write_workspace_outputs
     from ..workspace import OrientationGrid, monte_carlo, parse_sample_count
     from ..workspace.montecarlo import check_seed
@@ -51,7 +51,7 @@ def command_workspace(options: argparse.Namespace) -> int:
     out = Path(options.out or Path("out") / f"workspace_{robot.name}")
     if options.watch:
         return watch_job(options, out, model=options.model)
-    from ..watch import WatchedFiles
+    from ..scenario.watch import WatchedFiles
 
     model_files = WatchedFiles.of(model=options.model)  # the model, its includes and their folders: never deleted
     inputs = model_files.files | model_files.folders

@@ -1,8 +1,8 @@
 """The control layer: controllers built on the solvers (GJM control of amundsen2018, phase sequences, vehicle
 control, arm-vehicle coordination, station keeping).
 
-A controller is run by the one loop of :mod:`uvms.simulate` (``simulate``, ``simulate_gjm``) and, for a vehicle
-with thrusters, :func:`uvms.simulate_actuated.simulate_actuated`.
+A controller is run by the one loop of :mod:`uvms.sim.simulate` (``simulate``, ``simulate_gjm``) and, for a vehicle
+with thrusters, :func:`uvms.sim.actuated.simulate_actuated`.
 """
 
 from .coordination import CoordinatedControl, coordinated_arm_rates

@@ -26,9 +26,9 @@ Which GJM (``gjm``):
 
 This is the CLIK of the core with a choice of Jacobian: a ``FrameTask`` (log orientation
 error, no gain on its angular rows) stacked by :func:`uvms.solvers.stack.stack` gives
-nu_c; a :class:`uvms.state.FrameState` whose momentum rows are the chosen ones (rigid
+nu_c; a :class:`uvms.robot.configuration.FrameState` whose momentum rows are the chosen ones (rigid
 centroidal map, added-mass-augmented mass matrix, or a vehicle held still) gives the GJM
-by the one formula of :mod:`uvms.kinematics`; the inverse is the solvers' damped weighted
+by the one formula of :mod:`uvms.robot.kinematics`; the inverse is the solvers' damped weighted
 inverse (``damped_weighted_inverse`` with ``VariableDamping``), as in ``clik_velocity``.
 
 Joint servos. The plant's joints follow their commanded velocity through a
@@ -52,12 +52,12 @@ import pinocchio as pin
 from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
 from ..dynamics.added_mass import augmented_mass_matrix, resolve_links
 from ..errors import GJMControlError, UVMSError
-from ..kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
-from ..robot import Robot
+from ..robot.kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
+from ..robot.robot import Robot
 from ..solvers.clik import VariableDamping, damped_weighted_inverse
-from ..solvers.inverses import weights_factor
+from ..numerics.inverses import weights_factor
 from ..solvers.stack import stack
-from ..state import FrameState, MomentumRows
+from ..robot.configuration import FrameState, MomentumRows
 from ..tasks.frame import FrameTask
 from ..trajectory.cartesian import PoseSample
 from ..trajectory.ramps import VelocityRamps
@@ -229,7 +229,7 @@ class GJMController:
 
     def tracking(self, t: float, q: np.ndarray, v: np.ndarray) -> dict:
         """The tracking series of a run's row at (t, q, v): pose and velocity of the frame and of the reference,
-        the joint rates w and the inverse's sigma_min and damping (a recorder of :func:`uvms.simulate.simulate_gjm`)."""
+        the joint rates w and the inverse's sigma_min and damping (a recorder of :func:`uvms.sim.simulate.simulate_gjm`)."""
         state = self.state(q)
         sample = self._sample(state, t)
         reference = self.reference(t)
@@ -241,7 +241,7 @@ class GJMController:
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The joint-velocity command u (n_arm,) at (t, q, v): w, plus tau dw/dt with the servo feedforward.
 
-        The signature of a :func:`uvms.simulate.simulate_plant` command.
+        The signature of a :func:`uvms.sim.simulate.simulate_plant` command.
         """
         solution = self._solve(self.state(q), t)
         inverse, command = solution.inverse, solution.command

@@ -18,9 +18,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from ..robot import Robot
+from ..robot.robot import Robot
 from ..solvers import clik_velocity, priority_velocity
-from ..state import KinematicState
+from ..robot.configuration import KinematicState
 from ..tasks import DistanceTask, FrameTask, JointTask, VehicleTask
 from ..tasks.vehicle import VELOCITY_NAMES
 from ..trajectory import PolynomialLaw, PoseSample

@@ -1,5 +1,5 @@
 """Station keeping with an end effector held at a point: the whole chain of an actuated UVMS, as one digital
-controller of :func:`uvms.simulate_actuated.simulate_actuated`.
+controller of :func:`uvms.sim.actuated.simulate_actuated`.
 
 Per control step (period dt), from the measured (q, v):
 
@@ -23,7 +23,7 @@ from ..dynamics.allocation import ThrustAllocator
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError
-from ..robot import Robot
+from ..robot.robot import Robot
 from .coordination import CoordinatedControl, arm_rates_for_task
 from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector
 

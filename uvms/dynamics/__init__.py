@@ -1,8 +1,8 @@
 """The dynamics layer: Fossen hydrodynamics of the model's links, the free-floating plant (Pinocchio), the
 vehicle's thrusters and their allocation.
 
-The loop that integrates a plant is :func:`uvms.simulate.simulate_plant` (one loop for every run); with
-thrusters, :func:`uvms.simulate_actuated.simulate_actuated` (the same loop).
+The loop that integrates a plant is :func:`uvms.sim.simulate.simulate_plant` (one loop for every run); with
+thrusters, :func:`uvms.sim.actuated.simulate_actuated` (the same loop).
 """
 
 from .actuated import ActuatedCommand, ActuatedPlantSystem, ThrusterDynamics, vehicle_inverse_dynamics

@@ -142,7 +142,7 @@ class ActuatedSample:
 
 class ActuatedPlantSystem:
     """The plant with thrusters under a digital controller, as the state (q, [v, f]) of
-    :func:`uvms.simulate.run_loop`.
+    :func:`uvms.sim.simulate.run_loop`.
 
     Args:
         plant: the Plant; thrusters: ThrusterDynamics on it.

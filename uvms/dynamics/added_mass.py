@@ -17,8 +17,8 @@ import pinocchio as pin
 
 from ..errors import UVMSError
 from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from ..robot import Robot
-from ..kinematics import generalized_jacobian_from_parts, mass_matrix_split
+from ..robot.robot import Robot
+from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 
 
 LOCAL = pin.ReferenceFrame.LOCAL

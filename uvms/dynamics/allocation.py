@@ -22,10 +22,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..conventions import AXIS_NAMES
+from ..robot.conventions import AXIS_NAMES
 from ..errors import SolverInputError, UVMSError
-from ..kinematics import axis_rows
-from ..solvers.inverses import pinv
+from ..robot.kinematics import axis_rows
+from ..numerics.inverses import pinv
 
 #: Slack [N] on the bounds and the wrench when deciding that the pseudo-inverse solution is good enough.
 TOLERANCE = 1e-9
@@ -59,7 +59,7 @@ class ThrustAllocator:
         matrix: B (6, n) (:func:`uvms.dynamics.thrusters.allocation_matrix`).
         lower, upper: (n,) thrust bounds [N], lower <= 0 <= upper.
         priorities: groups of wrench axes, highest first, e.g. ``[("z", "roll", "pitch"), ("x", "y", "yaw")]``
-            (attitude and depth before surge, sway and yaw); the names of ``uvms.conventions.AXIS_NAMES``
+            (attitude and depth before surge, sway and yaw); the names of ``uvms.robot.conventions.AXIS_NAMES``
             (x, y, z forces, roll, pitch, yaw moments); axes left out are not allocated. None: one group of all six.
         weights: (6,) > 0 per-axis weights of the least squares (e.g. 1/N and 1/(N m) scales); None: ones.
         tolerance: [N] slack deciding that B^+ tau is within bounds and exact.

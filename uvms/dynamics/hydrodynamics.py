@@ -63,7 +63,7 @@ from .hydro_parameters import (  # noqa: F401 - the public names of this module
 if TYPE_CHECKING:
     import pinocchio as pin
 
-    from ..robot import Robot
+    from ..robot.robot import Robot
 
 #: Name of the YAML file looked for beside a model.
 YAML_NAME = "hydrodynamics.yaml"
@@ -326,7 +326,7 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         NameNotFound: a link that the model does not have (the message lists close names).
         ModelCheckError, ModelParseError: invalid parameters.
     """
-    from ..robot import check_robot  # at call time: robot.py imports this package
+    from ..robot.robot import check_robot  # at call time: robot.py imports this package
 
     check_robot(robot, "hydrodynamics_of")
     masses = urdf_link_masses(robot.urdf_root) if robot.urdf_root is not None else {}

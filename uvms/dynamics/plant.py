@@ -59,8 +59,8 @@ import pinocchio as pin
 from ..errors import UVMSError
 from .added_mass import LOCAL, HydroLink, _cross, added_mass_coriolis, augmented_mass_matrix, resolve_links
 from .hydrodynamics import HydroParameters, hydrodynamics_of
-from ..robot import Robot, check_robot
-from ..kinematics import generalized_jacobian_from_parts, mass_matrix_split
+from ..robot.robot import Robot, check_robot
+from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 
 
 #: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
@@ -299,7 +299,7 @@ class PlantSample:
 
 
 class PlantSystem:
-    """The plant under a joint-velocity command, as the state (q, v) of :func:`uvms.simulate.run_loop`.
+    """The plant under a joint-velocity command, as the state (q, v) of :func:`uvms.sim.simulate.run_loop`.
 
     (q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)).
 

@@ -53,7 +53,7 @@ from ..errors import ModelCheckError, ModelParseError, UVMSError
 from ..model.resources import read_yaml
 
 if TYPE_CHECKING:
-    from ..robot import Robot
+    from ..robot.robot import Robot
 
 #: Name of the YAML file looked for beside a model.
 YAML_NAME = "thrusters.yaml"
@@ -304,7 +304,7 @@ def thrusters_of(robot: Robot, path: str | os.PathLike | None = None, *, require
         UVMSError: no thrusters (and ``required``), or both plugins and a YAML file.
         ModelCheckError, ModelParseError: invalid thruster data.
     """
-    from ..robot import check_robot  # at call time: robot.py imports this package
+    from ..robot.robot import check_robot  # at call time: robot.py imports this package
 
     check_robot(robot, "thrusters_of")
     frames = robot.frame_names

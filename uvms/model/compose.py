@@ -12,10 +12,10 @@ import numpy as np
 import pinocchio as pin
 
 from . import checks, resources
-from .. import urdf_export
-from ..conventions import pose_from_xyzrpy
+from ..robot import urdf_export
+from ..robot.conventions import pose_from_xyzrpy
 from ..errors import FrameNotFound, UVMSError
-from ..robot import Robot, default_end_effectors
+from ..robot.robot import Robot, default_end_effectors
 from .loader import build_model, captured_stderr, read_model_text, warn_missing_meshes
 
 

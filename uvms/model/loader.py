@@ -20,7 +20,7 @@ import pinocchio as pin
 from . import checks, includes, resources, sandbox
 from .base_rule import ADDED_BASE_JOINT, decide_base
 from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
-from ..robot import Robot
+from ..robot.robot import Robot
 
 ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
 

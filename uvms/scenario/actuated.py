@@ -1,7 +1,7 @@
 """A scenario whose vehicle is actuated by its thrusters: station keeping with the end effector held at a point.
 
 ``[plant] type = "hydrodynamic"`` with ``thrusters = true`` runs the whole chain of
-:func:`uvms.control.station_keeping.station_keeping` on the one loop (:func:`uvms.simulate_actuated.simulate_actuated`):
+:func:`uvms.control.station_keeping.station_keeping` on the one loop (:func:`uvms.sim.actuated.simulate_actuated`):
 the vehicle pose loop and the end-effector point task give the vehicle and arm references; with
 ``vehicle_control.coordination`` the arm is solved again with the measured vehicle velocity; the vehicle
 velocity loop (the plant's own Fossen model as feedforward, PI feedback) gives a body wrench, the allocation
@@ -21,10 +21,10 @@ from ..control.station_keeping import station_keeping
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, thrusters_of
 from ..errors import ScenarioError, UVMSError
-from ..robot import Robot
-from ..series import SimulationResult
-from ..simulate import TaskRecorder
-from ..simulate_actuated import actuation_metrics, simulate_actuated
+from ..robot.robot import Robot
+from ..sim.result import SimulationResult
+from ..sim.simulate import TaskRecorder
+from ..sim.actuated import actuation_metrics, simulate_actuated
 from ..tasks.frame import FrameTask
 from .schema import changed_keys
 
@@ -124,7 +124,7 @@ def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np
 
 
 def actuated_metrics(result: SimulationResult, actuation: Actuation, scenario: dict) -> dict:
-    """``metrics.json``'s actuated entries: the thrusters' (:func:`uvms.simulate_actuated.actuation_metrics`) and
+    """``metrics.json``'s actuated entries: the thrusters' (:func:`uvms.sim.actuated.actuation_metrics`) and
     what the run was (thruster count, coordination, current)."""
     return {**actuation_metrics(result), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names,
             "coordination": bool(scenario["vehicle_control"]["coordination"]),

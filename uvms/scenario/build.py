@@ -15,8 +15,8 @@ from ..dynamics.hydrodynamics import HydroParameters
 from ..dynamics.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..model.loader import load
-from ..robot import Robot
-from ..state import KinematicState
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from ..solvers import (
     CLIKSolver,
     VariableDamping,

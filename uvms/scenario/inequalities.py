@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ScenarioError, UVMSError
-from ..robot import Robot
+from ..robot.robot import Robot
 from ..solvers.saturation import speed_maximum
-from ..state import KinematicState
+from ..robot.configuration import KinematicState
 from ..tasks.objectives import Inequality, Objective, PlaneClearance, Manipulability, VelocityLimit, check_table
 from ..tasks.objectives import inequalities_from_table
 

@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import RunRecordError, UVMSError
 from ..model import resources
 from ..model.loader import load
-from ..robot import Robot
+from ..robot.robot import Robot
 
 RECORD_KEY = "model"
 BASES = ("floating", "planar", "fixed")

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import outputs
+from ..io import outputs
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError
-from ..simulate import SimulationResult, simulate, simulate_gjm, step_count
+from ..sim.simulate import SimulationResult, simulate, simulate_gjm, step_count
 from .actuated import actuated_metrics, simulate_actuation
 from .build import Setup, build
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
@@ -87,13 +87,13 @@ def run(
     ``[outputs]`` position/orientation tolerance, :mod:`uvms.scenario.verdict`).
 
     With a dynamic ``[plant]`` (rigid or hydrodynamic) the joints are driven by the GJM
-    controller of :mod:`uvms.control.gjm` through :func:`uvms.simulate.simulate_gjm` (the one loop), and
+    controller of :mod:`uvms.control.gjm` through :func:`uvms.sim.simulate.simulate_gjm` (the one loop), and
     ``plant.npz`` (commands, torques, energy, momentum) and the figures of
     :func:`uvms.viz.plotting.gjm_figures` are added.
 
     The scenario is read, checked and built (model, initial configuration, step count) before anything is
     written; then every file goes into a temporary folder that replaces ``out`` as a whole at the end
-    (:func:`uvms.outputs.run_folder`): ``out`` holds the previous complete run until the new one is complete.
+    (:func:`uvms.io.outputs.run_folder`): ``out`` holds the previous complete run until the new one is complete.
     ``out`` is refused if it holds the scenario or the model (:func:`run_inputs`), or files uvms did not write.
 
     Args:
@@ -126,7 +126,7 @@ def run(
 def run_inputs(scenario_file: str | os.PathLike, models: Iterable[str]) -> list[Path]:
     """What a run reads, which its output folder must not hold: the scenario file, and each model file (a path
     or a shipped name) with the files it includes and their folders (meshes, YAML beside the model)."""
-    from ..watch import WatchedFiles
+    from .watch import WatchedFiles
 
     found = {Path(scenario_file).resolve()}
     for model in models:
@@ -148,7 +148,7 @@ def numerics_guard(name: str) -> Iterator[None]:
 
 
 def check_step_count(scenario: dict, duration: float) -> int:
-    """The number of steps of a run, checked before it starts (:func:`uvms.simulate.step_count`)."""
+    """The number of steps of a run, checked before it starts (:func:`uvms.sim.simulate.step_count`)."""
     if scenario["simulation"]["duration"]:
         duration_name = "simulation.duration"
     else:
@@ -159,7 +159,7 @@ def check_step_count(scenario: dict, duration: float) -> int:
 
 def write_run_bag(folder: Path, setup: Setup, result: SimulationResult, metrics: dict) -> Path:
     """The run as a ROS 2 bag in ``folder/bag`` (``[outputs] bag``); its topics and counts go into the metrics."""
-    from ..rosbag import write_bag  # rosbags only when a bag is asked for
+    from .rosbag import write_bag  # rosbags only when a bag is asked for
 
     frame = setup.task.frame if setup.task is not None else None
     thrusters = setup.actuation.thrusters.names if setup.actuation is not None else ()

@@ -163,7 +163,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "animation": (str, "", None),
         "position_tolerance": (NUMBER, DEFAULT_POSITION_TOLERANCE, None),
         "orientation_tolerance": (NUMBER, DEFAULT_ORIENTATION_TOLERANCE, None),
-        "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.rosbag
+        "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.scenario.rosbag
     },
 }
 #: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.control.sequence.

@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import outputs
+from ..io import outputs
 from ..errors import SweepError
 from .resources import resolve_scenario_path
 from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
@@ -308,7 +308,7 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]],
     Returns:
         The last point's scenario, and the model paths of all points (``model.path`` may be a grid key).
     """
-    from ..progress import tqdm
+    from ..io.progress import tqdm
 
     raw = read_toml(scenario)
     checked: dict = {}
@@ -323,7 +323,7 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]],
 def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None, progress: bool | None) -> list[dict]:
     """Run the points through joblib (loky or dask); rows sorted by point index."""
     from joblib import Parallel, delayed, parallel_config
-    from ..progress import tqdm
+    from ..io.progress import tqdm
 
     jobs = worker_count(jobs, len(tasks), remote=bool(scheduler))
 

@@ -6,8 +6,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..robot import Robot
-from ..state import KinematicState
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from ..tasks.frame import FrameTask
 from ..trajectory import RecentSamples
 

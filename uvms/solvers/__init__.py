@@ -3,7 +3,7 @@
 One inverse module (:mod:`.inverses`: pinv, weighted pinv, DLS with fixed or
 variable damping, the SVD form with its diagnostics, the normal-equation form)
 that every solver inverts with; one validator module (:mod:`.checks`); joint
-limits read from :class:`uvms.limits.Limit`. On top: CLIK with a null-space
+limits read from :class:`uvms.robot.limits.Limit`. On top: CLIK with a null-space
 term and joint clamping (and :class:`PoseCLIK`, its preallocated specialization
 to one pose task), task priority (classic and singularity-robust), kinematic
 constraints (santos2006, with the screw/Davies formulation), pose IK and the
@@ -13,13 +13,13 @@ the QP hierarchy on the same levels, both keeping speed limits by scaling the lo
 """
 
 from ..errors import SolverInputError
-from ..limits import Limit
+from ..robot.limits import Limit
 from .clik import CLIKSolver, clik_step, clik_velocity
 from .constraints import constrained_velocity
 from .hqp import hqp_step, hqp_velocity
 from .ik import solve_ik
 from .initial import initial_configuration
-from .inverses import (
+from ..numerics.inverses import (
     VariableDamping,
     damped_weighted_inverse,
     dls,

@@ -16,15 +16,16 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..kinematics import base_velocity_from_momentum
-from ..limits import Limit
-from ..robot import Robot, check_robot
-from ..state import KinematicState
+from ..robot.kinematics import base_velocity_from_momentum
+from ..robot.limits import Limit
+from ..robot.robot import Robot, check_robot
+from ..robot.configuration import KinematicState
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
-from .checks import (as_task_list, check_damping, check_scalar, check_weights, free_floating_weights_note,
+from ..tasks.task import as_task_list
+from ..numerics.checks import (check_damping, check_scalar, check_weights, free_floating_weights_note,
                      prepared_gain)
-from .inverses import (SolverInputError, VariableDamping, WeightedInverse, damped_weighted_inverse, svd_inverse,
+from ..numerics.inverses import (SolverInputError, VariableDamping, WeightedInverse, damped_weighted_inverse, svd_inverse,
                        weights_subset)
 from .results import StepResult, VelocityResult
 from .stack import stacked_terms
@@ -88,7 +89,7 @@ class CLIKSolver:
         self.potential = potential if potential is not None and self.alpha > 0 else None
         # the potential's arrays, read once, for the compiled z0 (numba: loaded here, not by ``import uvms``)
         self._nullspace = None if self.potential is None else self.potential.nullspace_terms(self.alpha, self.first)
-        from ..kernels import joint_limit_motion_into
+        from ..numerics.kernels import joint_limit_motion_into
 
         self._joint_limit_motion = joint_limit_motion_into
 

@@ -14,10 +14,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot import Robot
-from ..state import KinematicState
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from ..tasks.task import Task
-from .inverses import RCOND, pinv, smallest_singular_value
+from ..numerics.inverses import RCOND, pinv, smallest_singular_value
 from .results import VelocityResult
 from .stack import as_task_list, stack
 

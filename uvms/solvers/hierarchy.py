@@ -17,13 +17,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..kinematics import base_velocity_from_momentum, solve_base_block
-from ..robot import Robot, check_robot
-from ..state import KinematicState
+from ..robot.kinematics import base_velocity_from_momentum, solve_base_block
+from ..robot.robot import Robot, check_robot
+from ..robot.configuration import KinematicState
 from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
 from ..tasks.task import Task
-from .checks import check_scalar, prepared_gain
-from .inverses import SolverInputError
+from ..numerics.checks import check_scalar, prepared_gain
+from ..numerics.inverses import SolverInputError
 from .results import ObjectiveStatus
 from .saturation import position_rate_bounds
 from .stack import stacked_terms

@@ -29,11 +29,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..robot import Robot
-from ..state import KinematicState
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from ..tasks.objectives import JointLimits, VelocityLimit
-from .checks import check_scalar, check_weights
-from .inverses import SolverInputError, smallest_singular_value
+from ..numerics.checks import check_scalar, check_weights
+from ..numerics.inverses import SolverInputError, smallest_singular_value
 from .results import HQPResult, StepResult
 from .saturation import speed_maximum, velocity_box
 from .hierarchy import (Hierarchy, LevelRows, Levels, build_hierarchy, objective_statuses, rate_bounds, speed_ratio,

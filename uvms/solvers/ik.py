@@ -19,11 +19,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SolverInputError
-from ..kinematics import WORLD_ALIGNED
-from ..limits import Limit
-from ..robot import Robot, check_robot
+from ..robot.kinematics import WORLD_ALIGNED
+from ..robot.limits import Limit
+from ..robot.robot import Robot, check_robot
 from ..tasks.frame import FrameTask, log_pose_error
-from .checks import check_count, check_scalar
+from ..numerics.checks import check_count, check_scalar
 from .results import IKResult
 
 Target = pin.SE3 | Sequence[float]
@@ -124,7 +124,7 @@ class JointBox:
     data: pin.Data
 
     def __post_init__(self) -> None:
-        from ..kernels import project_into_box  # numba: loaded by the IK, not by ``import uvms``
+        from ..numerics.kernels import project_into_box  # numba: loaded by the IK, not by ``import uvms``
 
         object.__setattr__(self, "kernel", project_into_box)
 
@@ -147,7 +147,7 @@ class JointBox:
 
         A revolute coordinate outside its limits first moves by a multiple of 2 pi when that
         lands inside (the same pose: Newton keeps its progress); what is still outside is clipped
-        (:func:`~uvms.kernels.project_into_box`).
+        (:func:`~uvms.numerics.kernels.project_into_box`).
         """
         self.kernel(q, self.index, self.lower, self.upper, self.turns)
         return q
@@ -176,7 +176,7 @@ class PoseProblem:
     """
 
     def __init__(self, robot: Robot, tasks: Sequence[FrameTask]) -> None:
-        from .. import kernels  # numba: loaded by the IK, not by ``import uvms``
+        from ..numerics import kernels  # numba: loaded by the IK, not by ``import uvms``
 
         self.kernels = kernels
         self.model = robot.model
@@ -235,7 +235,7 @@ def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations
     """Levenberg-Marquardt iterations from q, projected into the limits, until the error <= ``tolerance`` or a stall.
 
     Each step is the DLS solution J^T (J J^T + d I)^-1 e in normal-equation form
-    (:func:`~uvms.kernels.dls_solve_into`), d = mu |e|^2 + 1e-14 tr(J J^T) / k; mu
+    (:func:`~uvms.numerics.kernels.dls_solve_into`), d = mu |e|^2 + 1e-14 tr(J J^T) / k; mu
     shrinks after an accepted step and grows after a rejected one (``MU_*``). The
     candidate's evaluation gives its Jacobian too, so an accepted step costs one
     Pinocchio call. The start ends early when it stalls (``STALL_*``).

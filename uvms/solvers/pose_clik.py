@@ -11,11 +11,11 @@ which equals J^+ (xdot_d + K e) + (I - J^+ J) z0 with the DLS inverse
 J^+ = J^T (J J^T + l^2 I)^-1 of the 6-row world-aligned frame Jacobian. The error
 is that of a :class:`~uvms.tasks.frame.FrameTask` (position and log3 rotation) and
 z0 the gradient of the :class:`~uvms.tasks.joint_limits.JointLimitPotential` over
-its :class:`~uvms.limits.Limit`, evaluated on the q entries that limit points at.
+its :class:`~uvms.robot.limits.Limit`, evaluated on the q entries that limit points at.
 
 A step is three Pinocchio calls (``computeFrameJacobian``, which runs the forward
 kinematics, ``log3`` and ``integrate``) around compiled kernels that do the
-rest (:func:`~uvms.kernels.dls_pose_velocity`): building a ``PoseCLIK``
+rest (:func:`~uvms.numerics.kernels.dls_pose_velocity`): building a ``PoseCLIK``
 loads it (numba; compiled once per machine and cached).
 """
 
@@ -24,13 +24,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..conventions import AXIS_NAMES
-from ..kinematics import WORLD_ALIGNED
-from ..robot import Robot
+from ..robot.conventions import AXIS_NAMES
+from ..robot.kinematics import WORLD_ALIGNED
+from ..robot.robot import Robot
 from ..tasks.frame import FrameTask
 from ..tasks.joint_limits import JointLimitPotential, NullspaceTerms
-from .checks import check_damping, check_scalar, check_vector
-from .inverses import SolverInputError
+from ..numerics.checks import check_damping, check_scalar, check_vector
+from ..numerics.inverses import SolverInputError
 
 class PoseCLIK:
     """Preallocated CLIK stepper for one 6-D pose task.
@@ -57,7 +57,7 @@ class PoseCLIK:
         potential: JointLimitPotential | None = None,
         alpha: float = 0.0,
     ) -> None:
-        from .. import kernels  # numba: loaded by the solvers that use it, not by ``import uvms``
+        from ..numerics import kernels  # numba: loaded by the solvers that use it, not by ``import uvms``
 
         self.gain = check_scalar(gain, "gain", positive=True)
         if check_damping(damping) == 0.0:

@@ -15,11 +15,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot import Robot
-from ..state import KinematicState
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from ..tasks.task import Task
-from .checks import check_choice, check_damping, check_matrix, check_vector
-from .inverses import SolverInputError, dls, smallest_singular_value
+from ..numerics.checks import check_choice, check_damping, check_matrix, check_vector
+from ..numerics.inverses import SolverInputError, dls, smallest_singular_value
 from .results import PriorityResult
 from .stack import as_task_list, stack
 

@@ -15,9 +15,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..state import KinematicState
+from ..robot.configuration import KinematicState
 from ..errors import SolverInputError
-from .checks import check_matrix, check_vector
+from ..numerics.checks import check_matrix, check_vector
 
 #: Virtual joints of the PPPS chain, in order (prismatic x, y, z; spherical as rotations about x, y, z).
 VIRTUAL_JOINTS = ("px", "py", "pz", "rx", "ry", "rz")

@@ -18,7 +18,7 @@ X^{#,A,Q} minimizes |A (xdot - X y)|^2 + |X y|^2_{A (I - A)} + eta |(I - Q) y|^2
 row whose activation falls to 0 fades out continuously, and the eta term keeps directions already used by
 the levels above from being inverted when they are only partly released, so no activation change causes a
 discontinuity. Both inverses are the library's one inverse
-(:class:`~uvms.solvers.inverses.WeightedInverse`, that of :func:`~uvms.solvers.inverses.damped_weighted_inverse`) of the stack Z = [A^1/2 X; eta^1/2 (I - Q)],
+(:class:`~uvms.numerics.inverses.WeightedInverse`, that of :func:`~uvms.numerics.inverses.damped_weighted_inverse`) of the stack Z = [A^1/2 X; eta^1/2 (I - Q)],
 since Z^T Z = X^T A X + eta (I - Q)^T (I - Q). Adaptations, stated: the paper's singular-value
 regularization V^T P V is the damping lambda of that inverse (fixed, or amundsen2018 eq. 6 variable), put
 in (J Q)^{#,A,I} only; W_k uses the undamped inverse, so that with Q = I and A = I the step is
@@ -38,14 +38,14 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..integrate import euler_step
-from ..robot import Robot
-from ..state import KinematicState
+from ..numerics.integrate import euler_step
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from ..tasks.objectives import VelocityLimit
-from .checks import check_damping, check_scalar
+from ..numerics.checks import check_damping, check_scalar
 from .hierarchy import (Hierarchy, HierarchyPlan, LevelItem, Levels, LevelRows, build_hierarchy, last_task_sigma,
                         objective_statuses, rate_bounds, speed_ratio, split_levels, task_report)
-from .inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, converged_or_refused,
+from ..numerics.inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, converged_or_refused,
                        damping_parameters)
 from .results import SetBasedResult, StepResult
 from .saturation import RateRows, inside, scale_lowest_first, speed_maximum, velocity_box
@@ -81,12 +81,12 @@ class ICAT:
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
         """X^{#,A,Q} (n, m) of X = ``jacobian`` (m, n) (module docstring), root = a^1/2 (m, 1), power = a^1.5 (m,);
         sigma_min of the weighted Z and the damping used (projector None: Q = I, no eta term); the inverse of
-        each level of :meth:`solve` (:func:`~uvms.kernels.level_inverse_into`).
+        each level of :meth:`solve` (:func:`~uvms.numerics.kernels.level_inverse_into`).
 
         Raises:
             NumericalError: the SVD did not converge (a non-finite level).
         """
-        from ..kernels import level_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ..numerics.kernels import level_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
         scaled = np.ascontiguousarray(root * jacobian, dtype=float)  # A^1/2 X
         inverse = np.empty((self.size, jacobian.shape[0]))
@@ -100,12 +100,12 @@ class ICAT:
 
     def solve(self, hierarchy: Hierarchy) -> tuple[list[np.ndarray], list[float], float]:
         """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,), its sigma_min,
-        and the largest damping used (one compiled call, :func:`~uvms.kernels.icat_into`).
+        and the largest damping used (one compiled call, :func:`~uvms.numerics.kernels.icat_into`).
 
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
-        from ..kernels import icat_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ..numerics.kernels import icat_into  # numba: loaded at the first solve, not by ``import uvms``
 
         levels = hierarchy.levels
         count = len(levels)
@@ -299,7 +299,7 @@ def sum_in_order(vectors: Sequence[np.ndarray]) -> np.ndarray:
 
 
 def integrate_velocity(robot: Robot, q: np.ndarray, v: np.ndarray, dt: float) -> np.ndarray:
-    """q+ = integrate(q, v dt) (nq,): the library's one explicit Euler step (:func:`uvms.integrate.euler_step`)."""
+    """q+ = integrate(q, v dt) (nq,): the library's one explicit Euler step (:func:`uvms.numerics.integrate.euler_step`)."""
     empty = np.zeros(0)
     return euler_step(robot.model, None, 0.0, np.asarray(q, dtype=float), empty, dt, (v, empty))[0]
 

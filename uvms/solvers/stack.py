@@ -6,9 +6,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..state import KinematicState
+from ..robot.configuration import KinematicState
 from ..tasks.task import Task
-from .checks import apply_gain, as_task_list, gain_matrix
+from ..tasks.task import as_task_list
+from ..numerics.checks import apply_gain, gain_matrix
 
 __all__ = ["as_task_list", "gain_matrix", "stack", "stacked_terms"]
 

@@ -1,4 +1,4 @@
-"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient, over the limits of :class:`uvms.limits.Limit`."""
+"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient, over the limits of :class:`uvms.robot.limits.Limit`."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import UVMSError
-from ..limits import Limit
-from ..robot import Robot, check_robot
+from ..robot.limits import Limit
+from ..robot.robot import Robot, check_robot
 
 
 class NullspaceTerms(NamedTuple):
-    """What the compiled null-space motion z0 = -alpha dS/dv reads (:func:`uvms.kernels.joint_limit_motion_into`).
+    """What the compiled null-space motion z0 = -alpha dS/dv reads (:func:`uvms.numerics.kernels.joint_limit_motion_into`).
 
     The m arm coordinates that q holds itself (continuous joints, stored as (cos, sin), have c = 0 and no
     entry): z0[v_index] = -alpha c (q[q_index] - qbar) / range^2, zero elsewhere.
@@ -46,7 +46,7 @@ class JointLimitPotential:
             ``Limit.joint_positions(robot)``, the model's (pass one with a margin to aim inside them).
 
     Attributes:
-        limit: the :class:`~uvms.limits.Limit` read.
+        limit: the :class:`~uvms.robot.limits.Limit` read.
         weights: c_i (n_arm,), 0 on unbounded joints.
         middle: qbar_i (n_arm,) [rad or m], 0 on unbounded joints.
         range: q_iM - q_im (n_arm,) [rad or m], 1 on unbounded joints.

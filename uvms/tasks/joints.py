@@ -7,8 +7,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import UVMSError
-from ..robot import Robot
-from ..state import KinematicState
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from .task import Task
 
 

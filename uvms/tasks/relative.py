@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import UVMSError
-from ..robot import Robot
-from ..state import KinematicState
+from ..robot.robot import Robot
+from ..robot.configuration import KinematicState
 from .task import Task
 
 

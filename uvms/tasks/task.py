@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Sequence
 
 import numpy as np
 
-from ..state import KinematicState
+from ..errors import SolverInputError
+from ..robot.configuration import KinematicState
 
 
 class Task(ABC):
@@ -35,3 +37,14 @@ class Task(ABC):
         """(jacobian (k, nv), error (k,), feedforward (k,)) at ``state``, what a solver stacks; a task whose three
         share work (a frame task's rotations) computes them at once."""
         return self.jacobian(state), self.error(state), self.feedforward(state)
+
+
+def as_task_list(tasks: Task | Sequence[Task]) -> list[Task]:
+    """One task or several -> a non-empty list of tasks."""
+    try:
+        task_list = [tasks] if isinstance(tasks, Task) else list(tasks)
+    except TypeError:  # not iterable (None, a number): refused below with the others
+        task_list = []
+    if not task_list or not all(isinstance(task, Task) for task in task_list):
+        raise SolverInputError(f"expected a Task or a sequence of Tasks, got {tasks!r}")
+    return task_list

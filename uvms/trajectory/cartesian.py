@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..conventions import pose_from_xyzrpy
+from ..robot.conventions import pose_from_xyzrpy
 from ..errors import UVMSError
 from .laws import PolynomialLaw, TimeLaw
 

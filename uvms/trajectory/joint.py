@@ -16,7 +16,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from ..validate import time_vector
+from ..numerics.validate import time_vector
 from .cartesian import SE3Trajectory
 from .laws import PolynomialLaw
 

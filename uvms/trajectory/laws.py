@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import UVMSError
-from ..validate import positive_number
+from ..numerics.validate import positive_number
 
 
 @dataclass(frozen=True)

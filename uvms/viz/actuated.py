@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from .. import outputs
+from ..io import outputs
 from ..dynamics.thrusters import Thrusters
-from ..series import SimulationResult
+from ..sim.result import SimulationResult
 
 FLOOR = 1e-9  # [m, rad] log axes: errors below are drawn at the floor
 

@@ -23,11 +23,11 @@ from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from .. import outputs
+from ..io import outputs
 from ..errors import ConfigurationError, UVMSError, WorkspaceInputError
-from ..robot import Robot
+from ..robot.robot import Robot
 from ..workspace.hull import HullShape, hull_shapes
-from ..progress import tqdm
+from ..io.progress import tqdm
 
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}

@@ -15,8 +15,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from .. import outputs
-from ..series import SimulationResult
+from ..io import outputs
+from ..sim.result import SimulationResult
 from ..tasks.objectives import FrameBox, Inequality, JointLimits, Manipulability, PlaneClearance, VehicleAttitude
 
 #: Colours of the overlaid runs, in order: the run itself first.

@@ -14,9 +14,9 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from .. import outputs
-from ..conventions import AXIS_NAMES
-from ..simulate import SimulationResult
+from ..io import outputs
+from ..robot.conventions import AXIS_NAMES
+from ..sim.simulate import SimulationResult
 
 
 
@@ -309,7 +309,7 @@ def gjm_tracking_figure(result, title: str = "", path: str | os.PathLike | None 
     are drawn relative to the start; world ENU axes (x forward, y left, z up).
 
     Args:
-        result: a :class:`uvms.simulate.SimulationResult` of :func:`uvms.simulate.simulate_gjm`.
+        result: a :class:`uvms.sim.simulate.SimulationResult` of :func:`uvms.sim.simulate.simulate_gjm`.
         title: figure title; path: where to save the PNG (atomically), None to only return it.
     """
     t = result.t
@@ -350,7 +350,7 @@ def gjm_figures(result, folder: str | os.PathLike, title: str = "", snapshots: i
     ``snapshots.png`` (the configuration at ``snapshots`` evenly spaced times, 1, 3, 5, 7 s for 8 s).
 
     Args:
-        result: a :class:`uvms.simulate.SimulationResult` of :func:`uvms.simulate.simulate_gjm`; folder: output folder; title: figure titles.
+        result: a :class:`uvms.sim.simulate.SimulationResult` of :func:`uvms.sim.simulate.simulate_gjm`; folder: output folder; title: figure titles.
 
     Returns:
         The paths written.

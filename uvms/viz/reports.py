@@ -6,8 +6,8 @@ import shutil
 from collections.abc import Sequence
 from pathlib import Path
 
-from .. import outputs
-from ..robot import Robot
+from ..io import outputs
+from ..robot.robot import Robot
 from ..workspace import CONVERGENCE_TOLERANCE, WorkspaceResult
 from .plotting import workspace_figure
 

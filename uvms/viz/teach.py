@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..bases import BASE_TYPES
+from ..robot.bases import BASE_TYPES
 from ..errors import TeachUnavailable, UVMSError
-from ..robot import Robot
+from ..robot.robot import Robot
 
 INSTALL_HINT = "the teach panel needs ipywidgets: `pip install uvms[viz]`"
 #: Slider names of the vehicle pose, by base type: position [m], then angles [rad].

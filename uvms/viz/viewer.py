@@ -28,8 +28,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError, ViewerInputError, ViewerUnavailable
-from ..robot import Robot
-from ..validate import finite_array, time_vector
+from ..robot.robot import Robot
+from ..numerics.validate import finite_array, time_vector
 from .drawing import as_configurations
 from .viewer_geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, resolved_urdf, skeleton_geometry
 from .viewer_gui import Playback, TeachControls, guarded_servers, request_refusal

@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..model import resources
-from ..robot import Robot
+from ..robot.robot import Robot
 
 SKELETON_COLOUR = np.array([0.35, 0.35, 0.4, 1.0])
 EE_COLOUR = np.array([1.0, 0.5, 0.05, 1.0])

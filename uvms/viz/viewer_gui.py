@@ -24,8 +24,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from ..progress import tqdm
-from ..robot import Robot
+from ..io.progress import tqdm
+from ..robot.robot import Robot
 from . import teach
 
 #: Panel order of the groups (smallest first).

@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError, WorkspaceInputError
-from ..robot import Robot, check_robot
+from ..robot.robot import Robot, check_robot
 
 #: Samples composed at once by `BatchKinematics` and drawn at once by `monte_carlo` (its default chunk): the
 #: work arrays of one chunk take some 50-90 MB, whatever the sample count.

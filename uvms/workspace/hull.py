@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import WorkspaceInputError
-from ..robot import Robot
+from ..robot.robot import Robot
 from .voxels import check_points
 
 HULL_KINDS = ("box", "cylinder", "sphere")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import WorkspaceInputError
-from ..validate import finite_array, positive_number
+from ..numerics.validate import finite_array, positive_number
 
 
 def check_voxel(voxel: float, what: str = "voxel size") -> float:

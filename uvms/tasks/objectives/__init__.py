@@ -17,7 +17,7 @@ import inspect
 from collections.abc import Callable, Mapping
 
 from ...errors import ObjectiveError, ObjectiveNameNotFound
-from ...robot import Robot
+from ...robot.robot import Robot
 from .base import ACTIVATION_SHAPES, Inequality, InequalityRows, bell
 from .frames import FrameBox, PlaneClearance, VehicleAttitude
 from .joints import JointLimits

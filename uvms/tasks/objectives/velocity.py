@@ -12,8 +12,8 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ...errors import ObjectiveError, ObjectiveNameNotFound
-from ...limits import Limit
-from ...robot import Robot
+from ...robot.limits import Limit
+from ...robot.robot import Robot
 
 
 class VelocityLimit:

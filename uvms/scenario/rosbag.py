@@ -20,7 +20,7 @@ FLU. One message per topic and sample (row k of the run, stamped ``start_time_ns
   [vx, vy, 0, 0, 0, wz] planar). Covariances are zero (exact, simulated). A fixed base has no ``/odom``.
 - ``/<frame>/desired_pose`` (geometry_msgs/PoseStamped, header ``odom``): the desired pose of the task frame;
   ``/<frame>/desired_position`` (geometry_msgs/PointStamped) when only the desired position was recorded.
-- an actuated run (thrusters, :func:`uvms.simulate_actuated.simulate_actuated`): ``/thrusters/<name>/thrust``
+- an actuated run (thrusters, :func:`uvms.sim.actuated.simulate_actuated`): ``/thrusters/<name>/thrust``
   (std_msgs/Float64, [N], the thruster's thrust, as uuv_simulator's thruster topics) and ``/body_wrench``
   (geometry_msgs/WrenchStamped, header the vehicle root link: the thrusters' wrench on the vehicle, body FLU
   [N, N m]).
@@ -41,11 +41,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from . import outputs
-from .errors import BagExportError
-from .robot import Robot
-from .series import SimulationResult
-from .validate import finite_array, time_vector
+from ..io import outputs
+from ..errors import BagExportError
+from ..robot.robot import Robot
+from ..sim.result import SimulationResult
+from ..numerics.validate import finite_array, time_vector
 
 __all__ = ["BAG_VERSION", "WORLD_FRAME", "BagExportError", "BagSummary", "TransformEdge", "frame_tree", "stamps_ns",
            "write_bag"]
@@ -304,7 +304,7 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
 
     The topics, frames and stamps are those of the module docstring. Everything is checked before anything
     is written; the bag is written into a hidden temporary folder beside ``path`` that replaces it at the
-    end (:func:`uvms.outputs.run_folder`), so ``path`` holds a complete bag, the previous one or the new one.
+    end (:func:`uvms.io.outputs.run_folder`), so ``path`` holds a complete bag, the previous one or the new one.
 
     Args:
         path: the bag folder, e.g. ``RUN_FOLDER / "bag"``; an existing non-empty folder must be a bag folder

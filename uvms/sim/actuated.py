@@ -1,7 +1,7 @@
-"""The front-end of the one loop (:func:`uvms.simulate.run_loop`) for a plant whose vehicle has thrusters.
+"""The front-end of the one loop (:func:`uvms.sim.simulate.run_loop`) for a plant whose vehicle has thrusters.
 
 Same loop, same integrators as every run: the system is :class:`uvms.dynamics.actuated.ActuatedPlantSystem`
-(state q and x = [v, thrusts]). The result is the one :class:`uvms.series.SimulationResult` with the plant
+(state q and x = [v, thrusts]). The result is the one :class:`uvms.sim.result.SimulationResult` with the plant
 series; the series it has no field for (thrusts, thrust_command, body_wrench, the powers and the controller's
 own) are in ``result.actuation`` (name -> (N, ...) array).
 """
@@ -13,12 +13,12 @@ from dataclasses import fields
 
 import numpy as np
 
-from .dynamics.actuated import ActuatedController, ActuatedPlantSystem, ThrusterDynamics
-from .dynamics.plant import Plant
-from .dynamics.thrusters import Thrusters
-from .errors import ConfigurationError
-from .integrate import check_integrator, step_count
-from .series import SimulationResult
+from ..dynamics.actuated import ActuatedController, ActuatedPlantSystem, ThrusterDynamics
+from ..dynamics.plant import Plant
+from ..dynamics.thrusters import Thrusters
+from ..errors import ConfigurationError
+from ..numerics.integrate import check_integrator, step_count
+from .result import SimulationResult
 from .simulate import Recorder, run_loop
 
 __all__ = ["actuation_metrics", "simulate_actuated"]

@@ -1,9 +1,9 @@
 """The one result type of a run, kinematic or dynamic: time series with optional dynamic extras.
 
 Row k of every series is the state at t[k] and what was applied from it. A kinematic run
-(:func:`uvms.simulate.simulate`) fills the task series; a plant run
-(:func:`uvms.simulate.simulate_plant`) the plant series; a GJM-controlled plant run
-(:func:`uvms.simulate.simulate_gjm`) the plant and the tracking series, and the task series
+(:func:`uvms.sim.simulate.simulate`) fills the task series; a plant run
+(:func:`uvms.sim.simulate.simulate_plant`) the plant series; a GJM-controlled plant run
+(:func:`uvms.sim.simulate.simulate_gjm`) the plant and the tracking series, and the task series
 too when it is given the task (``uvms run``). A series a run did not record is None.
 """
 
@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from . import outputs
-from .robot import Robot
-from .tasks.vehicle import VELOCITY_NAMES
+from ..io import outputs
+from ..robot.robot import Robot
+from ..tasks.vehicle import VELOCITY_NAMES
 
 #: The time series of a task, in the order of ``trajectory.npz``.
 SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",

@@ -33,7 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from .conventions import AXIS_NAMES
-from .errors import ModelCheckError, NoVehicleError, NumericalError, UVMSError
+from ..errors import ModelCheckError, NoVehicleError, NumericalError, UVMSError
 
 WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

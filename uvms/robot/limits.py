@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import SolverInputError
+from ..errors import SolverInputError
 from .robot import Robot
 
 #: Slack [rad or m] within which a value on the wrong side of a bound still counts as inside.

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .errors import UVMSError
+from ..errors import UVMSError
 
 
 def finite_array(value: object, what: str, shape: Sequence[int | None] | None = None, *,

@@ -16,7 +16,7 @@ Two schemes, one implementation each:
   quaternion stays unit).
 
 This module sits below the dynamics, the controllers and the simulation loop
-(:mod:`uvms.simulate`), which all use it.
+(:mod:`uvms.sim.simulate`), which all use it.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
-from .errors import NumericalError, StepCountError, UVMSError
+from ..errors import NumericalError, StepCountError, UVMSError
 from .lapack import lapack
 
 #: The rate of a state: (t [s], q (nq,), x (m,)) -> (w (nv,) tangent at q, xdot (m,)).

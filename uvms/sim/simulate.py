@@ -1,9 +1,9 @@
 """ONE simulation loop, for kinematic runs (state q) and the dynamic plant (state q, v), with pluggable recording.
 
 The loop (:func:`run_loop`) integrates a *system* with one of the integrators of
-:mod:`uvms.integrate` (explicit Euler, RK4 Munthe-Kaas on the manifold) and records a
+:mod:`uvms.numerics.integrate` (explicit Euler, RK4 Munthe-Kaas on the manifold) and records a
 row per step through the system and any number of recorders, into the one result
-type :class:`uvms.series.SimulationResult`. A system has
+type :class:`uvms.sim.result.SimulationResult`. A system has
 
 * ``model``: the Pinocchio model whose configuration manifold q lives on;
 * ``sample(t, q, x)``: what is applied from (t, q, x), with ``rate`` = (w (nv,), xdot (m,)) there;
@@ -25,15 +25,15 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from . import kinematics
-from .control.gjm import GJMController
-from .dynamics.plant import Command, Plant, PlantSystem
-from .errors import GJMControlError, UVMSError
-from .integrate import INTEGRATORS, MAX_STEPS, STEPS, check_integrator, step_count
-from .progress import tqdm
-from .robot import Robot
-from .series import PLANT_SERIES, SERIES, SimulationResult, velocity_labels
-from .tasks.frame import FrameTask
+from ..robot import kinematics
+from ..control.gjm import GJMController
+from ..dynamics.plant import Command, Plant, PlantSystem
+from ..errors import GJMControlError, UVMSError
+from ..numerics.integrate import INTEGRATORS, MAX_STEPS, STEPS, check_integrator, step_count
+from ..io.progress import tqdm
+from ..robot.robot import Robot
+from .result import PLANT_SERIES, SERIES, SimulationResult, velocity_labels
+from ..tasks.frame import FrameTask
 
 __all__ = ["INTEGRATORS", "MAX_STEPS", "PLANT_SERIES", "SERIES", "Controller", "KinematicSystem",
            "SimulationResult", "TaskRecorder", "run_loop", "simulate", "simulate_gjm",
@@ -57,7 +57,7 @@ def run_loop(system, q0: np.ndarray, x0: np.ndarray, *, steps: int, dt: float, i
 
     Args:
         system: a system (module docstring); q0: (nq,); x0: (m,), checked by the caller.
-        steps: the number of steps (:func:`uvms.integrate.step_count`); dt: [s].
+        steps: the number of steps (:func:`uvms.numerics.integrate.step_count`); dt: [s].
         integrator: "euler" or "rk4".
         recorders: (t, q, x, sample) -> {name: value} after the system's own record, later ones win.
         progress: show a progress bar (None: only on a terminal); desc: its label.
@@ -219,7 +219,7 @@ def simulate_plant(
 ) -> SimulationResult:
     """Integrate the plant from (q0, v0) for ``duration`` with a fixed step ``dt``.
 
-    RK4 is the Runge-Kutta-Munthe-Kaas scheme of order 4 (:mod:`uvms.integrate`): the
+    RK4 is the Runge-Kutta-Munthe-Kaas scheme of order 4 (:mod:`uvms.numerics.integrate`): the
     configuration stages live in the tangent space at q_k and are mapped with
     ``pin.integrate`` / ``pin.dIntegrate``, so the quaternion stays unit and the order
     is 4 on the manifold. "euler" is explicit Euler, for comparison.
@@ -229,7 +229,7 @@ def simulate_plant(
         q0: initial configuration (nq,); v0: initial velocity (nv,) (None: rest).
         command: (t, q, v) -> joint-velocity command (n_arm,), a constant (n_arm,), or None (zero).
         duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
-            :data:`uvms.integrate.MAX_STEPS`.
+            :data:`uvms.numerics.integrate.MAX_STEPS`.
         integrator: "rk4" (Runge-Kutta-Munthe-Kaas) or "euler".
         hold: sample the command once per step and hold it (a digital
             controller at 1/dt); default: evaluate it at every stage.

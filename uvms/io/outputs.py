@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import DiskFullError, RunFolderBusy, RunFolderError, UVMSError
+from ..errors import DiskFullError, RunFolderBusy, RunFolderError, UVMSError
 
 #: A run folder ``DIR/NAME`` has two kinds of hidden siblings in ``DIR``: its lock ``.NAME.uvms-lock`` (kept:
 #: removing a lock file while another process opens it would break the lock) and the temporary folders

@@ -6,7 +6,7 @@ read by :func:`uvms.model.includes.walk_xacro`), and the data beside the model (
 non-recursively: an include that climbs to ``/`` watches that one file, never a tree. Changes are debounced (an
 editor's several writes give one rerun) through ``watchfiles``. ``uvms run/workspace ... --watch`` runs each
 job in a child process: a change during a run stops it with SIGINT, and the run folder keeps the previous
-complete run (``uvms.outputs.run_folder``).
+complete run (``uvms.io.outputs.run_folder``).
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import UVMSError
-from .model import includes, resources
+from ..errors import UVMSError
+from ..model import includes, resources
 
 #: Files beside a model that a change of should rerun the job (data the model or uvms reads).
 MODEL_DATA_SUFFIXES = (".xacro", ".urdf", ".yaml", ".yml", ".stl", ".dae", ".obj", ".ply")
@@ -48,7 +48,7 @@ def model_files(source: str | os.PathLike) -> set[Path]:
 
 def scenario_model(scenario: Path) -> str | None:
     """The ``[model] path`` of a scenario file as a path or shipped name, or None when it cannot be read."""
-    from .scenario.schema import read_toml  # the one bounded reader of scenario files
+    from .schema import read_toml  # the one bounded reader of scenario files
 
     try:
         model = read_toml(scenario).get("model", {}).get("path")
@@ -126,7 +126,7 @@ def watch(source: str | os.PathLike | WatchedFiles, callback: Callable[[list[Pat
           debounce_ms: int = DEBOUNCE_MS, stop_event=None, once: bool = False) -> None:
     """Call ``callback(changed files)`` after every (debounced) change of a model or scenario and its files.
 
-    For notebooks and scripts: ``uvms.watch.watch("my_rov.urdf.xacro", lambda changed: rerun())``.
+    For notebooks and scripts: ``uvms.scenario.watch.watch("my_rov.urdf.xacro", lambda changed: rerun())``.
     Blocks until ``stop_event`` (a ``threading.Event``) is set or Ctrl-C.
 
     Args:

@@ -8,7 +8,7 @@ Two forms, one interface (``q``, ``pose``, ``jacobian``, ``centroidal_split``, `
 
 Both take the momentum rows the vehicle conserves (``momentum``): by default the rigid centroidal map;
 a controller may pass those of the added-mass-augmented inertia or of a vehicle held still
-(:mod:`uvms.kinematics`), and the generalized Jacobian of every task follows from them by the one formula.
+(:mod:`uvms.robot.kinematics`), and the generalized Jacobian of every task follows from them by the one formula.
 """
 
 from __future__ import annotations

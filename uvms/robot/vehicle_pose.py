@@ -1,7 +1,7 @@
 """The vehicle of a Robot: its pose in the world (ENU) and Fossen's eta (NED) / nu (FRD) (a mixin of `uvms.Robot`).
 
 The model stays in ROS form (world ENU, body FLU); the Fossen accessors convert at the edge with
-``uvms.conventions``: eta = [x, y, z, phi, theta, psi] (NED) and nu = [u, v, w, p, q, r] (body FRD), or
+``uvms.robot.conventions``: eta = [x, y, z, phi, theta, psi] (NED) and nu = [u, v, w, p, q, r] (body FRD), or
 [x, y, psi] and [u, v, r] for a planar vehicle.
 """
 
@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from . import conventions
-from .errors import ConfigurationError, NoVehicleError
+from ..errors import ConfigurationError, NoVehicleError
 
 
 class VehicleAccessors:

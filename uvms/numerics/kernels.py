@@ -157,7 +157,7 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
         jacobian: J (k, n).
         damping: a fixed l >= 0 (used when ``epsilon`` is 0).
         epsilon, lambda_max: the variable damping of amundsen2018 eq. 6 when epsilon > 0.
-        rcond: with l = 0, the relative cut-off of singular values (``uvms.solvers.inverses.RCOND``).
+        rcond: with l = 0, the relative cut-off of singular values (``uvms.numerics.inverses.RCOND``).
         floor: singular values at or below it count as zero, damped or not (0: none).
         out: (n, k) written with the inverse.
 

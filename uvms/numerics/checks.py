@@ -8,13 +8,12 @@ from __future__ import annotations
 
 import math
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 
 import numpy as np
 
 from ..errors import SolverInputError
-from ..validate import finite_array
-from ..tasks.task import Task
+from .validate import finite_array
 
 
 def check_scalar(value: float, what: str, *, positive: bool = False) -> float:
@@ -75,7 +74,7 @@ def check_weights(weights: np.ndarray, size: int, what: str = "W", note: str = "
     """A weighting matrix W: (size,) positive diagonal, or (size, size) finite and symmetric.
 
     Positive definiteness of a full W is the Cholesky factorization's to find
-    (:func:`~uvms.solvers.inverses.weights_factor`).
+    (:func:`~uvms.numerics.inverses.weights_factor`).
 
     Args:
         weights: W, (size,) or (size, size).
@@ -121,17 +120,6 @@ def check_choice(value: str, what: str, valid: tuple[str, ...]) -> str:
     if value not in valid:
         raise SolverInputError(f"unknown {what} {value!r}; valid: {', '.join(valid)}")
     return value
-
-
-def as_task_list(tasks: Task | Sequence[Task]) -> list[Task]:
-    """One task or several -> a non-empty list of tasks."""
-    try:
-        task_list = [tasks] if isinstance(tasks, Task) else list(tasks)
-    except TypeError:  # not iterable (None, a number): refused below with the others
-        task_list = []
-    if not task_list or not all(isinstance(task, Task) for task in task_list):
-        raise SolverInputError(f"expected a Task or a sequence of Tasks, got {tasks!r}")
-    return task_list
 
 
 def apply_gain(gain: float | np.ndarray, error: np.ndarray) -> np.ndarray:

@@ -13,13 +13,15 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from . import kinematics, outputs, urdf_export
+from . import kinematics
+from ..io import outputs
+from . import urdf_export
 from .bases import BASE_TYPES, BaseType
-from .errors import ConfigurationError, FrameNotFound, JointNotFound, NotARobot, UVMSError
+from ..errors import ConfigurationError, FrameNotFound, JointNotFound, NotARobot, UVMSError
 from .vehicle_pose import VehicleAccessors
-from .validate import finite_array
+from ..numerics.validate import finite_array
 
-#: Default task axes by base type (the facts live in `uvms.bases`).
+#: Default task axes by base type (the facts live in `uvms.robot.bases`).
 DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
 
 
@@ -73,7 +75,7 @@ class Robot(VehicleAccessors):
     Attributes:
         model: the Pinocchio model.
         data: its work data (reused by every call; a Robot is not thread-safe).
-        base: the kind of vehicle base and its facts (`uvms.bases.BaseType`); base_type: its name,
+        base: the kind of vehicle base and its facts (`uvms.robot.bases.BaseType`); base_type: its name,
             "floating", "planar" or "fixed".
         base_reason: why the base is what it is, one line (`uvms.load`'s rule), e.g. "floating (added: the
             root link 'hull' carries 1810 kg; base='fixed' to hold it)".
