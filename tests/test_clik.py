@@ -10,7 +10,7 @@ import pytest
 import uvms
 from uvms.solvers import CLIKSolver
 from uvms.solvers.clik import solve_with_held
-from uvms.robot.configuration import KinematicState
+from uvms.robot.configuration import Configuration
 
 
 def hoang_setup():
@@ -33,7 +33,7 @@ def test_a_solver_reused_over_configurations_and_targets_equals_fresh_clik_veloc
         assert np.array_equal(uvms.clik_velocity(robot, q, task, **options).v, fresh.v)  # the one-call function
         assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
         assert reused.sigma_min == fresh.sigma_min and reused.residual == fresh.residual
-        assert np.array_equal(solver.velocity(KinematicState(robot, q, check=False)), fresh.v)
+        assert np.array_equal(solver.velocity(Configuration(robot, q, check=False)), fresh.v)
         if index == 0:  # the task's own rows: the residual of an exact (undamped, full-rank) solve is rounding
             assert fresh.residual < 1e-12 and fresh.sigma_min > 0.1
 
@@ -47,7 +47,7 @@ def test_the_solver_path_is_the_clamping_solve_with_no_joint_held(rng):
         solver = CLIKSolver(robot, task, gain=2.0, weights=weights, damping=damping, potential=potential, alpha=3.0)
         for _ in range(20):
             q = robot.random_configuration(rng)
-            state = KinematicState(robot, q)
+            state = Configuration(robot, q)
             jacobian, error, feedforward = task.terms(state)
             command = feedforward + 2.0 * error
             z0 = -3.0 * potential.gradient(q)

@@ -15,7 +15,7 @@ from uvms import UVMSError
 from uvms.scenario import ScenarioError, build, read_scenario, run
 from uvms.control.sequence import Phase, PhasePlan, SequenceController
 from uvms.solvers import clik_velocity, priority_velocity
-from uvms.robot.configuration import KinematicState
+from uvms.robot.configuration import Configuration
 from uvms.tasks import DistanceTask, FrameTask, JointTask
 
 GRIP = Path(__file__).resolve().parent.parent / "scenarios" / "xiang2019_grip.toml"
@@ -32,9 +32,9 @@ def test_distance_task_jacobian_is_the_derivative(rng):
     for _ in range(5):
         q, v = robot.random_configuration(rng), rng.normal(size=robot.nv)
         h = 1e-6
-        plus, minus = (task.current(KinematicState(robot, pin.integrate(robot.model, q, s * h * v))) for s in (1, -1))
+        plus, minus = (task.current(Configuration(robot, pin.integrate(robot.model, q, s * h * v))) for s in (1, -1))
         rate = (plus - minus) / (2 * h)  # states share the robot's data: read each before the next
-        assert task.jacobian(KinematicState(robot, q)) @ v == pytest.approx([rate], abs=1e-7)
+        assert task.jacobian(Configuration(robot, q)) @ v == pytest.approx([rate], abs=1e-7)
     with pytest.raises(UVMSError, match="two different frames"):
         DistanceTask(robot, "left_ee", "left_ee")
     with pytest.raises(UVMSError, match=">= 0"):
@@ -44,7 +44,7 @@ def test_distance_task_jacobian_is_the_derivative(rng):
 def test_joint_task_rows_and_limits():
     robot = shipped("xiang2019")
     task = JointTask(robot, {"left_claw": 0.5, "right_claw": 0.2})
-    state = KinematicState(robot, xiang_q0())
+    state = Configuration(robot, xiang_q0())
     assert task.error(state) == pytest.approx([0.5, 0.2])
     jacobian = task.jacobian(state)
     assert jacobian.shape == (2, robot.nv) and jacobian.sum() == 2.0
@@ -69,7 +69,7 @@ def test_both_claws_reach_constant_targets_to_1e10():
     for _ in range(60):
         levels = [controller.vehicle_task, *tasks]
         q = pin.integrate(robot.model, q, clik_velocity(robot, q, levels, gain=1.0).v * 0.5)
-    state = KinematicState(robot, q)
+    state = Configuration(robot, q)
     assert max(np.abs(task.error(state)).max() for task in tasks) <= 1e-10
     assert np.abs(robot.base_pose(q).translation).max() <= 1e-12
 
@@ -104,7 +104,7 @@ def test_distance_has_priority_over_inconsistent_claw_targets():
     for _ in range(80):
         levels = controller.levels(with_distance=True)
         q = pin.integrate(robot.model, q, priority_velocity(robot, q, levels, method="classic").v * 0.5)
-    state = KinematicState(robot, q)
+    state = Configuration(robot, q)
     assert abs(controller.distance_task.error(state)[0]) <= 1e-10  # the relative task wins ...
     assert np.linalg.norm(controller.frame_tasks[0].error(state)) > 1e-3  # ... over the inconsistent target
 

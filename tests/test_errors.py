@@ -120,7 +120,7 @@ def test_a_model_name_or_none_where_a_robot_is_needed_says_how_to_get_one():
     task = uvms.FrameTask(robot, axes=["x", "y", "yaw"], target=robot.fk(robot.neutral()))
     calls = {"FrameTask": lambda r: uvms.FrameTask(r), "JointLimitPotential": uvms.JointLimitPotential,
              "VehicleTask": uvms.VehicleTask, "Plant": uvms.Plant, "CLIK": lambda r: uvms.clik_velocity(r, None, task),
-             "solve_ik": lambda r: uvms.solve_ik(r, [0, 0, 0, 0, 0, 0]), "KinematicState": lambda r: uvms.KinematicState(
+             "solve_ik": lambda r: uvms.solve_ik(r, [0, 0, 0, 0, 0, 0]), "Configuration": lambda r: uvms.Configuration(
                  r, robot.neutral()), "initial_configuration": lambda r: uvms.initial_configuration(r, task),
              "thrusters_of": uvms.thrusters_of, "hydrodynamics_of": uvms.hydrodynamics_of,
              "BatchKinematics": lambda r: uvms.BatchKinematics(r, "ee")}

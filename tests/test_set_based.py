@@ -16,7 +16,7 @@ from uvms.solvers import CLIKSolver, StepResult, VariableDamping, clik_step, cli
 from uvms.solvers.hqp import hqp_step, hqp_velocity
 from uvms.solvers.saturation import scale_lowest_first
 from uvms.solvers.set_based import SetBasedSolver, integrate_velocity, set_based_step, set_based_velocity
-from uvms.robot.configuration import KinematicState
+from uvms.robot.configuration import Configuration
 from uvms.tasks import FrameTask, PostureTask
 from uvms.tasks.objectives import (FrameBox, JointLimits, JointVelocityLimits, Manipulability, PlaneClearance,
                                    VehicleAttitude, VehicleVelocityLimits, bell, inequalities_from_table)
@@ -105,8 +105,8 @@ def finite_difference(robot, objective, q, step=1e-6):
     for index in range(robot.nv):
         tangent = np.zeros(robot.nv)
         tangent[index] = step
-        ahead = objective.value(KinematicState(robot, pin.integrate(robot.model, q, tangent)))
-        behind = objective.value(KinematicState(robot, pin.integrate(robot.model, q, -tangent)))
+        ahead = objective.value(Configuration(robot, pin.integrate(robot.model, q, tangent)))
+        behind = objective.value(Configuration(robot, pin.integrate(robot.model, q, -tangent)))
         jacobian[:, index] = (ahead - behind) / (2 * step)
     return jacobian
 
@@ -120,7 +120,7 @@ def test_objective_jacobians_are_the_derivatives_of_their_values(rng):
     for _ in range(3):
         q = robot.random_configuration(rng)
         for objective in objectives:
-            error = np.abs(objective.jacobian(KinematicState(robot, q)) - finite_difference(robot, objective, q)).max()
+            error = np.abs(objective.jacobian(Configuration(robot, q)) - finite_difference(robot, objective, q)).max()
             assert error <= 1e-6, (objective, error)  # measured <= 4e-10
 
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import uvms
-from uvms.robot.configuration import KinematicState
+from uvms.robot.configuration import Configuration
 
 
 def hoang_setup():
@@ -63,7 +63,7 @@ def test_a_set_based_solver_reused_over_configurations_and_targets_equals_fresh_
         assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
         assert reused.scales == fresh.scales and reused.level_residuals == fresh.level_residuals
         assert reused.sigma_min == fresh.sigma_min and reused.active == fresh.active
-        assert np.array_equal(solver.velocity(KinematicState(robot, q, check=False)), fresh.v)
+        assert np.array_equal(solver.velocity(Configuration(robot, q, check=False)), fresh.v)
         if "dt" in options:
             assert np.array_equal(solver.step(q), set_based_step(robot, q, levels, options["dt"], **{
                 key: value for key, value in options.items() if key != "dt"}).q)

@@ -113,7 +113,7 @@ def test_clik_spatial_pose_task_and_free_floating_gjm(rng):
     task = uvms.FrameTask(robot, target=target)
     for _ in range(300):
         q = uvms.clik_step(robot, q, task, 0.05, gain=2.0).q
-    assert np.linalg.norm(task.full_error(uvms.KinematicState(robot, q))) <= 1e-10
+    assert np.linalg.norm(task.full_error(uvms.Configuration(robot, q))) <= 1e-10
     snake = shipped("amundsen2018")
     q = snake.configuration(arm=[0.3, -0.3, 0.3, -0.3, 0.2, -0.2, 0.2, -0.2])
     target = snake.fk(q).translation + np.array([-0.05, -0.05, 0.05])
@@ -135,7 +135,7 @@ def test_nullspace_term_leaves_the_task_velocity_unchanged(rng):
             q = robot.random_configuration(rng)
             plain = uvms.clik_velocity(robot, q, task, weights=weights)
             with_null = uvms.clik_velocity(robot, q, task, weights=weights, potential=potential, alpha=10.0)
-            jacobian = task.jacobian(uvms.KinematicState(robot, q))
+            jacobian = task.jacobian(uvms.Configuration(robot, q))
             assert np.linalg.norm(jacobian @ (with_null.v - plain.v)) <= 1e-12
             assert np.linalg.norm(with_null.v - plain.v) > 0  # the null-space motion is there
 
@@ -205,7 +205,7 @@ def santos_constraint_cases(rng, count=20):
         ee.set_target_velocity([0.3, -0.2, 0, 0, 0, 0.1])
         constraint = uvms.VehicleTask(robot, velocities={"vx": 0.0, "vy": 0.0}, heading=0.78)
         result = uvms.constrained_velocity(robot, q, ee, constraint)
-        yield robot, q, ee, result, uvms.KinematicState(robot, q)
+        yield robot, q, ee, result, uvms.Configuration(robot, q)
 
 
 def test_kinematic_constraint_holds_exactly(rng):
@@ -379,7 +379,7 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
         result = uvms.clik_velocity(robot, q, task, damping=uvms.VariableDamping(0.1, 0.2) if damping else 0.0,
                                     free_floating=free_floating, potential=uvms.JointLimitPotential(robot), alpha=10.0)
         assert np.all(np.isfinite(result.v)) and np.isfinite(result.residual) and np.isfinite(result.sigma_min)
-    state = uvms.KinematicState(robot, q)
+    state = uvms.Configuration(robot, q)
     jacobian = task.jacobian(state)[:, 3:]  # arm only: singular when stretched
     for inverse in (pinv(jacobian), dls(jacobian, damping)):
         assert np.all(np.isfinite(inverse @ np.asarray(xdot)))

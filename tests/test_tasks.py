@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 import uvms
-from uvms.robot.configuration import KinematicState
+from uvms.robot.configuration import Configuration
 
 
 def test_a_frame_task_computes_its_three_terms_at_once_as_separately(rng):
@@ -15,7 +15,7 @@ def test_a_frame_task_computes_its_three_terms_at_once_as_separately(rng):
         for _ in range(10):
             task.set_target(robot.fk(robot.random_configuration(rng)))
             task.set_target_velocity(rng.normal(size=6))
-            state = KinematicState(robot, robot.random_configuration(rng))
+            state = Configuration(robot, robot.random_configuration(rng))
             jacobian, error, feedforward = task.terms(state)
             assert np.array_equal(jacobian, task.jacobian(state))
             assert np.array_equal(error, task.error(state))

@@ -35,7 +35,7 @@ from .model import BaseGuessWarning, MissingMeshWarning, example_robot_urdf, loa
 # robot and kinematics
 from .robot.limits import Limit
 from .robot.robot import Robot
-from .robot.configuration import KinematicState
+from .robot.configuration import Configuration
 
 # tasks and solvers: what to achieve, how
 from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
@@ -77,7 +77,7 @@ __all__ = [
     # model
     "BaseGuessWarning", "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
     # robot and kinematics
-    "KinematicState", "Limit", "Robot",
+    "Configuration", "Limit", "Robot",
     # tasks and solvers
     "DistanceTask", "FrameTask", "JointLimitPotential", "JointTask", "PostureTask", "VehicleTask",
     "CLIKSolver", "SolverInputError", "VariableDamping", "clik_step", "clik_velocity", "constrained_velocity",

@@ -26,7 +26,7 @@ Which GJM (``gjm``):
 
 This is the CLIK of the core with a choice of Jacobian: a ``FrameTask`` (log orientation
 error, no gain on its angular rows) stacked by :func:`uvms.solvers.stack.stack` gives
-nu_c; a :class:`uvms.robot.configuration.FrameState` whose momentum rows are the chosen ones (rigid
+nu_c; a :class:`uvms.robot.configuration.Configuration` whose momentum rows are the chosen ones (rigid
 centroidal map, added-mass-augmented mass matrix, or a vehicle held still) gives the GJM
 by the one formula of :mod:`uvms.robot.kinematics`; the inverse is the solvers' damped weighted
 inverse (``damped_weighted_inverse`` with ``VariableDamping``), as in ``clik_velocity``.
@@ -57,7 +57,7 @@ from ..robot.robot import Robot
 from ..solvers.clik import VariableDamping, damped_weighted_inverse
 from ..numerics.inverses import weights_factor
 from ..solvers.stack import stack
-from ..robot.configuration import FrameState, MomentumRows
+from ..robot.configuration import Configuration, MomentumRows
 from ..tasks.frame import FrameTask
 from ..trajectory.cartesian import PoseSample
 from ..trajectory.ramps import VelocityRamps
@@ -91,7 +91,7 @@ class GJMSample:
 class _Solution:
     """One CLIK solve at (q, t): the state, the reference sample, the inverse and what it inverts."""
 
-    state: FrameState
+    state: Configuration
     reference: PoseSample
     inverse: np.ndarray  # (n_arm, k)
     command: np.ndarray  # (k,)
@@ -170,7 +170,6 @@ class GJMController:
             raise GJMControlError(f"difference_step must be > 0 s, got {difference_step!r}")
         self.difference_step = step
         self.model = robot.model
-        self.data = robot.model.createData()  # own workspace: callers may hold views into robot.data
         self._mass_data = robot.model.createData()
         self.nb = robot.n_vehicle
         self.links = []
@@ -190,9 +189,9 @@ class GJMController:
             return lambda q: mass_matrix_split(augmented_mass_matrix(self.model, self._mass_data, self.links, q), nb)
         return None
 
-    def state(self, q: np.ndarray, check: bool = False) -> FrameState:
+    def state(self, q: np.ndarray, check: bool = False) -> Configuration:
         """The controller's state at q: its own data, the chosen momentum rows."""
-        return FrameState(self.robot, q, check, data=self.data, momentum=self._momentum)
+        return Configuration(self.robot, q, check=check, momentum=self._momentum)
 
     def generalized_jacobian(self, q: np.ndarray) -> np.ndarray:
         """The GJM (6, n_arm) this controller inverts (all six rows, world-aligned)."""
@@ -200,7 +199,7 @@ class GJMController:
         return state.generalized(state.jacobian(self.frame_id))
 
     # ------------------------------------------------------------- control
-    def _solve(self, state: FrameState, t: float) -> _Solution:
+    def _solve(self, state: Configuration, t: float) -> _Solution:
         """The CLIK of the core at (state, t): nu_c = stack of the task, the damped weighted inverse of its GJM rows."""
         reference = self.reference(t)
         self.task.set_target(reference.pose)
@@ -222,7 +221,7 @@ class GJMController:
         """
         return self._sample(self.state(q, check=True), t)
 
-    def _sample(self, state: FrameState, t: float) -> GJMSample:
+    def _sample(self, state: Configuration, t: float) -> GJMSample:
         solution = self._solve(state, t)
         return GJMSample(solution.inverse @ solution.command, solution.command, self._position_error(solution),
                          solution.sigma_min, solution.damping)

@@ -20,7 +20,7 @@ import pinocchio as pin
 from ..errors import UVMSError
 from ..robot.robot import Robot
 from ..solvers import clik_velocity, priority_velocity
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks import DistanceTask, FrameTask, JointTask, VehicleTask
 from ..tasks.vehicle import VELOCITY_NAMES
 from ..trajectory import PolynomialLaw, PoseSample
@@ -210,7 +210,7 @@ class SequenceController:
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray | None = None):
         targets = self.set_targets(t)
-        state = KinematicState(self.robot, q, check=False)
+        state = Configuration(self.robot, q, check=False)
         levels = self.levels(targets.distance is not None)
         if self.method == "clik":
             result = clik_velocity(self.robot, state, [task for level in levels for task in level], gain=self.gain,

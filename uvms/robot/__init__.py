@@ -5,8 +5,8 @@ the state of one configuration (:mod:`.configuration`), the one generalized-Jaco
 (:mod:`.kinematics`) and the frame conventions (:mod:`.conventions`).
 """
 
-from .configuration import KinematicState
+from .configuration import Configuration
 from .limits import Limit
 from .robot import Robot
 
-__all__ = ["KinematicState", "Limit", "Robot"]
+__all__ = ["Configuration", "Limit", "Robot"]

@@ -1,14 +1,15 @@
-"""KinematicState: one configuration with its kinematics computed once, shared by every task.
+"""Configuration: one configuration q of a robot, with its own Pinocchio data and its kinematics computed once.
 
-Two forms, one interface (``q``, ``pose``, ``jacobian``, ``centroidal_split``, ``generalized``):
+Every task, inequality objective and solver reads poses and Jacobians from a :class:`Configuration`, so a
+solver step with several tasks runs Pinocchio's kinematics a single time. A configuration owns its
+``pinocchio.Data``: two configurations never share state (building one never changes another's pose).
 
-* :class:`KinematicState` runs Pinocchio's joint Jacobians once for every frame (several tasks);
-* :class:`FrameState` computes the Jacobian of each frame asked for on its own (``computeFrameJacobian``),
-  in a Pinocchio data of its own: the form of a controller of one frame (GJM control).
-
-Both take the momentum rows the vehicle conserves (``momentum``): by default the rigid centroidal map;
-a controller may pass those of the added-mass-augmented inertia or of a vehicle held still
-(:mod:`uvms.robot.kinematics`), and the generalized Jacobian of every task follows from them by the one formula.
+Each quantity is computed at most once per q, when first asked for: the joint Jacobians and frame placements
+(one ``computeJointJacobians``), each frame's world-aligned Jacobian, and the momentum rows the vehicle
+conserves (by default the rigid centroidal map; a controller may pass those of the added-mass-augmented
+inertia or of a vehicle held still, :mod:`uvms.robot.kinematics`), from which the generalized Jacobian of
+every task follows by the one formula. :meth:`Configuration.update` and :meth:`Configuration.integrate`
+move it to another q and forget what was computed.
 """
 
 from __future__ import annotations
@@ -25,40 +26,64 @@ from .robot import Robot, check_robot
 MomentumRows = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
-class KinematicState:
-    """Forward kinematics and joint Jacobians of ``robot`` at ``q``, computed once.
-
-    Tasks read poses and world-aligned frame Jacobians from here, so a solver
-    step with several tasks runs Pinocchio's kinematics a single time. The
-    momentum rows (for the generalized Jacobian) are computed on first use.
+class Configuration:
+    """A configuration q (nq,) of ``robot`` and what Pinocchio computes at it, in data of its own.
 
     Args:
         robot: the model.
-        q: configuration (nq,); checked unless ``check=False`` (for hot loops on
-            configurations produced by ``pin.integrate``).
+        q: configuration (nq,); checked unless ``check=False`` (hot loops on configurations produced by
+            ``pin.integrate``).
+        check: validate q (shape, finite, unit quaternion).
         momentum: q -> (A_b, A_m), the conserved momentum rows; None: the rigid centroidal map.
+
+    Attributes:
+        robot: the model; data: this configuration's ``pinocchio.Data``; q: the configuration (nq,).
     """
 
-    def __init__(self, robot: Robot, q: np.ndarray, check: bool = True, *, momentum: MomentumRows | None = None) -> None:
-        self.robot = robot
-        self.q = check_robot(robot, type(self).__name__).check_configuration(q) if check else q
+    def __init__(self, robot: Robot, q: np.ndarray, *, check: bool = True, momentum: MomentumRows | None = None) -> None:
+        self.robot = check_robot(robot, type(self).__name__)
+        self.data = robot.model.createData()
         self._momentum = momentum
-        self._centroidal: tuple[np.ndarray, np.ndarray] | None = None
-        self._compute()
+        self.update(q, check=check)
 
-    def _compute(self) -> None:
-        model, data = self.robot.model, self.robot.data
-        pin.computeJointJacobians(model, data, self.q)  # also runs forward kinematics
-        pin.updateFramePlacements(model, data)
+    def update(self, q: np.ndarray, *, check: bool = True) -> None:
+        """Move to the configuration q (nq,); what was computed at the previous one is forgotten."""
+        self.q = self.robot.check_configuration(q) if check else q
+        self._kinematics = False
+        self._jacobians: dict[int, np.ndarray] = {}
+        self._centroidal: tuple[np.ndarray, np.ndarray] | None = None
+
+    def integrate(self, v: np.ndarray, dt: float) -> None:
+        """Move along the velocity v (nv,) for dt [s]: q <- pin.integrate(q, v dt) (on the manifold)."""
+        self.update(pin.integrate(self.robot.model, self.q, np.asarray(v, dtype=float) * dt), check=False)
+
+    def _forward(self) -> None:
+        """Joint Jacobians and frame placements at q, once (``computeJointJacobians`` also runs the FK)."""
+        if not self._kinematics:
+            model = self.robot.model
+            pin.computeJointJacobians(model, self.data, self.q)
+            pin.updateFramePlacements(model, self.data)
+            self._kinematics = True
 
     def pose(self, frame_id: int) -> pin.SE3:
-        """``transform_frame_to_world`` of a frame (a view into the robot's data: copy to keep)."""
-        return self.robot.data.oMf[frame_id]
+        """``transform_frame_to_world`` of a frame (a view into this configuration's data: copy to keep it past
+        :meth:`update`)."""
+        self._forward()
+        return self.data.oMf[frame_id]
+
+    def joint_pose(self, joint_id: int) -> pin.SE3:
+        """``transform_joint_to_world`` of a joint (a view, as :meth:`pose`)."""
+        self._forward()
+        return self.data.oMi[joint_id]
 
     def jacobian(self, frame_id: int) -> np.ndarray:
-        """World-aligned Jacobian of a frame (6, nv)."""
-        model = self.robot.model
-        return pin.getFrameJacobian(model, self.robot.data, frame_id, kinematics.WORLD_ALIGNED).reshape(6, model.nv)
+        """World-aligned Jacobian of a frame (6, nv), computed once per configuration."""
+        if frame_id not in self._jacobians:
+            self._forward()
+            model = self.robot.model
+            self._jacobians[frame_id] = pin.getFrameJacobian(model, self.data, frame_id,
+                                                             kinematics.WORLD_ALIGNED).reshape(6, model.nv)
+        return self._jacobians[frame_id]
 
     def centroidal_split(self) -> tuple[np.ndarray, np.ndarray]:
         """Conserved momentum rows: A_b (k, n_vehicle), A_m (k, n_arm) (the centroidal map unless chosen).
@@ -71,8 +96,9 @@ class KinematicState:
             if self._momentum is not None:
                 self._centroidal = self._momentum(self.q)
             else:
-                self._centroidal = kinematics.centroidal_map_split(
-                    robot.model, robot.data, self.q, robot.base_type, robot.n_vehicle)
+                self._forward()  # ccrba overwrites the placements with the same ones: keep them computed first
+                self._centroidal = kinematics.centroidal_map_split(robot.model, self.data, self.q, robot.base_type,
+                                                                   robot.n_vehicle)
         return self._centroidal
 
     def generalized(self, jacobian: np.ndarray) -> np.ndarray:
@@ -83,45 +109,3 @@ class KinematicState:
         """
         a_base, a_arm = self.centroidal_split()
         return kinematics.generalized_jacobian_from_parts(jacobian, a_base, a_arm, self.robot.n_vehicle)
-
-
-class FrameState(KinematicState):
-    """The state of a controller of one or a few frames, each Jacobian computed on its own, in its own data.
-
-    Args:
-        robot: the model; q: configuration (nq,) (checked unless ``check=False``).
-        data: the Pinocchio data to compute in (the controller's own; None: a new one).
-        momentum: q -> (A_b, A_m), the conserved momentum rows; None: the rigid centroidal map.
-    """
-
-    def __init__(self, robot: Robot, q: np.ndarray, check: bool = True, *, data: pin.Data | None = None,
-                 momentum: MomentumRows | None = None) -> None:
-        self.data = robot.model.createData() if data is None else data
-        self._frames: dict[int, tuple[np.ndarray, pin.SE3]] = {}
-        super().__init__(robot, q, check, momentum=momentum)
-
-    def _compute(self) -> None:
-        """Nothing until a frame is asked for."""
-
-    def _frame(self, frame_id: int) -> tuple[np.ndarray, pin.SE3]:
-        if frame_id not in self._frames:
-            model, data = self.robot.model, self.data
-            jacobian = pin.computeFrameJacobian(model, data, self.q, frame_id, kinematics.WORLD_ALIGNED)
-            self._frames[frame_id] = (jacobian.reshape(6, model.nv), data.oMf[frame_id].copy())
-        return self._frames[frame_id]
-
-    def pose(self, frame_id: int) -> pin.SE3:
-        """``transform_frame_to_world`` of a frame (a copy, kept with this state)."""
-        return self._frame(frame_id)[1]
-
-    def jacobian(self, frame_id: int) -> np.ndarray:
-        """World-aligned Jacobian of a frame (6, nv) (``computeFrameJacobian``)."""
-        return self._frame(frame_id)[0]
-
-    def centroidal_split(self) -> tuple[np.ndarray, np.ndarray]:
-        """Conserved momentum rows A_b (k, n_vehicle), A_m (k, n_arm), computed in this state's data."""
-        if self._centroidal is None and self._momentum is None:
-            robot = self.robot
-            self._centroidal = kinematics.centroidal_map_split(robot.model, self.data, self.q, robot.base_type,
-                                                               robot.n_vehicle)
-        return super().centroidal_split()

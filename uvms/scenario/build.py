@@ -16,7 +16,7 @@ from ..dynamics.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..model.loader import load
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..solvers import (
     CLIKSolver,
     VariableDamping,
@@ -378,7 +378,7 @@ def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, scena
                                    free_floating=solver["free_floating"], dt=dt)
         return TrackingController(robot, task, samples, set_based.solve, set_based.velocity)
 
-    def solve(state: KinematicState):
+    def solve(state: Configuration):
         if method == "hqp":
             return hqp_velocity(robot, state, levels, dt=dt, gain=gain, weights=weights,
                                 free_floating=solver["free_floating"], regularization=solver["regularization"])

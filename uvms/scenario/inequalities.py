@@ -26,7 +26,7 @@ import numpy as np
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..solvers.saturation import speed_maximum
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.objectives import Inequality, Objective, PlaneClearance, Manipulability, VelocityLimit, check_table
 from ..tasks.objectives import inequalities_from_table
 
@@ -119,7 +119,7 @@ class ObjectiveRecorder:
         self.maximum = speed_maximum(robot.nv, inequalities.speed_limits)  # (nv,) [m/s, rad/s], inf: none
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
-        state = KinematicState(self.robot, q, check=False)
+        state = Configuration(self.robot, q, check=False)
         values = [objective.value(state) for objective in self.objectives]
         activations = [objective.activation(value) for objective, value in zip(self.objectives, values)]
         reported = {status.name: status.active for status in getattr(sample.info, "objectives", ())}

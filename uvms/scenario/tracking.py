@@ -7,12 +7,12 @@ from collections.abc import Callable
 import numpy as np
 
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.frame import FrameTask
 from ..trajectory import RecentSamples
 
 #: The solver of a scenario: the state (the task pointed at its target) -> a result with v (nv,) and diagnostics.
-Solve = Callable[[KinematicState], object]
+Solve = Callable[[Configuration], object]
 
 
 class TrackingController:
@@ -27,7 +27,7 @@ class TrackingController:
     """
 
     def __init__(self, robot: Robot, task: FrameTask, samples: RecentSamples, solve: Solve,
-                 velocity: Callable[[KinematicState], np.ndarray] | None = None) -> None:
+                 velocity: Callable[[Configuration], np.ndarray] | None = None) -> None:
         self.robot, self.task, self.samples = robot, task, samples
         self._solve, self._velocity = solve, velocity
         self._current = None  # the sample the task points at
@@ -40,10 +40,10 @@ class TrackingController:
             self.task.set_target_velocity(sample.twist, check=False)  # a trajectory's sample: finite, (6,)
             self._current = sample
 
-    def _state(self, t: float, q: np.ndarray) -> KinematicState:
+    def _state(self, t: float, q: np.ndarray) -> Configuration:
         self.follow(t)
         # q comes from pin.integrate in the one loop (checked once at its start): not validated at every call
-        return KinematicState(self.robot, q, check=False)
+        return Configuration(self.robot, q, check=False)
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> tuple[np.ndarray, object]:
         result = self._solve(self._state(t, q))

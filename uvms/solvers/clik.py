@@ -19,7 +19,7 @@ import pinocchio as pin
 from ..robot.kinematics import base_velocity_from_momentum
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
 from ..tasks.task import as_task_list
@@ -101,7 +101,7 @@ class CLIKSolver:
         self._joint_limit_motion(q, *self._nullspace, z0)
         return z0
 
-    def _solution(self, state: KinematicState) -> tuple:
+    def _solution(self, state: Configuration) -> tuple:
         """(v (nv,), task Jacobian (k, nv), error (k,), command (k,), sigma_min, damping used, held names)."""
         robot = self.robot
         jacobian, error, feedforward = stacked_terms(state, self.tasks)  # (k, nv), (k,), (k,)
@@ -121,7 +121,7 @@ class CLIKSolver:
         held_names = tuple(self._clamp_limit.names[index] for index in sorted(held)) if held else ()
         return v, jacobian, error, command, sigma_min, used, held_names
 
-    def _clamped(self, state: KinematicState, jacobian: np.ndarray, command: np.ndarray,
+    def _clamped(self, state: Configuration, jacobian: np.ndarray, command: np.ndarray,
                  nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float, float, dict[int, float]]:
         """Joint clamping: hold the joints the step would carry past a limit at it and solve with the others."""
         robot, dt, limit = self.robot, self.dt, self._clamp_limit
@@ -142,14 +142,14 @@ class CLIKSolver:
             free = np.array([i for i in free if i not in held], dtype=int)
         return solution, sigma_min, used, held
 
-    def _state(self, q: np.ndarray | KinematicState, check: bool) -> KinematicState:
-        return q if isinstance(q, KinematicState) else KinematicState(self.robot, q, check)
+    def _state(self, q: np.ndarray | Configuration, check: bool) -> Configuration:
+        return q if isinstance(q, Configuration) else Configuration(self.robot, q, check=check)
 
-    def solve(self, q: np.ndarray | KinematicState, *, check: bool = True) -> VelocityResult:
+    def solve(self, q: np.ndarray | Configuration, *, check: bool = True) -> VelocityResult:
         """The CLIK velocity at q and its diagnostics.
 
         Args:
-            q: configuration (nq,) or a KinematicState already computed at it.
+            q: configuration (nq,) or a Configuration already computed at it.
             check: validate an array q (False for configurations of ``pin.integrate`` in a loop).
         """
         v, jacobian, error, command, sigma_min, used, held_names = self._solution(self._state(q, check))
@@ -158,14 +158,14 @@ class CLIKSolver:
                               sigma_min=sigma_min, damping=used, limits_active=held_names,
                               free_floating=self.free_floating)
 
-    def velocity(self, q: np.ndarray | KinematicState, *, check: bool = True) -> np.ndarray:
+    def velocity(self, q: np.ndarray | Configuration, *, check: bool = True) -> np.ndarray:
         """The CLIK velocity v (nv,) at q alone (the stages of an integrator, where no one reads diagnostics)."""
         return self._solution(self._state(q, check))[0]
 
 
 def clik_velocity(
     robot: Robot,
-    q: np.ndarray | KinematicState,
+    q: np.ndarray | Configuration,
     tasks: Task | Sequence[Task],
     *,
     gain: float | np.ndarray = 1.0,
@@ -186,7 +186,7 @@ def clik_velocity(
 
     Args:
         robot: the model.
-        q: configuration (nq,) or a KinematicState already computed at it.
+        q: configuration (nq,) or a Configuration already computed at it.
         tasks: one task or several (stacked).
         gain: K, scalar, diagonal (k,) or (k, k).
         weights: W, (n,) diagonal or (n, n) SPD, n = nv (or n_arm when free floating).

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.task import Task
 from ..numerics.inverses import RCOND, pinv, smallest_singular_value
 from .results import VelocityResult
@@ -24,7 +24,7 @@ from .stack import as_task_list, stack
 
 def constrained_velocity(
     robot: Robot,
-    q: np.ndarray | KinematicState,
+    q: np.ndarray | Configuration,
     tasks: Task | Sequence[Task],
     constraints: Task | Sequence[Task],
     *,
@@ -38,7 +38,7 @@ def constrained_velocity(
     Returns:
         VelocityResult; ``residual`` is the task residual, ``sigma_min`` that of [C; J].
     """
-    state = q if isinstance(q, KinematicState) else KinematicState(robot, q)
+    state = q if isinstance(q, Configuration) else Configuration(robot, q)
     constraint_jacobian, _, constraint_values = stack(
         state, as_task_list(constraints), gain if constraint_gain is None else constraint_gain)
     jacobian, error, command = stack(state, as_task_list(tasks), gain)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..robot.kinematics import base_velocity_from_momentum, solve_base_block
 from ..robot.robot import Robot, check_robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
 from ..tasks.task import Task
 from ..numerics.checks import check_scalar, prepared_gain
@@ -77,7 +77,7 @@ class Hierarchy:
         vehicle_map: free floating: T_b (n_vehicle, n_arm) with v_vehicle = T_b qdot_arm; else None.
     """
 
-    state: KinematicState
+    state: Configuration
     levels: list[LevelRows]
     speed_limits: list[VelocityLimit]
     joint_limits: list[JointLimits]
@@ -178,7 +178,7 @@ class HierarchyPlan:
                              if isinstance(item, JointLimits)]
         self.size = robot.n_arm if free_floating else robot.nv
 
-    def evaluate(self, state: KinematicState) -> Hierarchy:
+    def evaluate(self, state: Configuration) -> Hierarchy:
         """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v."""
         rows = [self._level_rows(state, level) for level in self.levels]
         vehicle_map = None
@@ -188,7 +188,7 @@ class HierarchyPlan:
         return Hierarchy(state=state, levels=rows, speed_limits=self.speed_limits, joint_limits=self.joint_limits,
                          free_floating=self.free_floating, vehicle_map=vehicle_map)
 
-    def _level_rows(self, state: KinematicState, level: PlannedLevel) -> LevelRows:
+    def _level_rows(self, state: Configuration, level: PlannedLevel) -> LevelRows:
         """One level's rows at ``state``: equality tasks first, then the inequalities in their order."""
         inequalities = [item.rows(state) for item in level.inequalities]
         blocks, references, activations = [], [], []
@@ -216,12 +216,12 @@ class HierarchyPlan:
                          objectives=inequalities, inequalities=list(level.inequalities), task_jacobian=task_jacobian,
                          task_error=task_error, task_command=task_command)
 
-    def state(self, q: np.ndarray | KinematicState, check: bool = True) -> KinematicState:
+    def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""
-        return q if isinstance(q, KinematicState) else KinematicState(self.robot, q, check)
+        return q if isinstance(q, Configuration) else Configuration(self.robot, q, check=check)
 
 
-def build_hierarchy(robot: Robot, q: np.ndarray | KinematicState, levels: Levels, gain: float | np.ndarray,
+def build_hierarchy(robot: Robot, q: np.ndarray | Configuration, levels: Levels, gain: float | np.ndarray,
                     free_floating: bool, speed_limits: Sequence[VelocityLimit] = ()) -> Hierarchy:
     """Evaluate every level at q (the state computed once), and the map of solved columns to v (a plan of one use).
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.objectives import JointLimits, VelocityLimit
 from ..numerics.checks import check_scalar, check_weights
 from ..numerics.inverses import SolverInputError, smallest_singular_value
@@ -190,7 +190,7 @@ def vehicle_speed_rows(hierarchy: Hierarchy, lower: np.ndarray,
 
 def hqp_velocity(
     robot: Robot,
-    q: np.ndarray | KinematicState,
+    q: np.ndarray | Configuration,
     levels: Levels,
     *,
     dt: float,
@@ -206,7 +206,7 @@ def hqp_velocity(
 
     Args:
         robot: the model.
-        q: configuration (nq,) or a KinematicState computed at it.
+        q: configuration (nq,) or a Configuration computed at it.
         levels: highest priority first; each level a Task, an Inequality, or a list of them (speed limits
             anywhere). Joint-limit objectives are hard bounds; the other inequalities are slacked rows of
             their level.

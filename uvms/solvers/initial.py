@@ -18,7 +18,7 @@ from ..robot.conventions import pose_from_xyyaw, pose_from_xyzrpy
 from ..errors import NameNotFound, SolverInputError
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
 from ..numerics.checks import check_count, check_scalar
@@ -116,7 +116,7 @@ def initial_configuration(
         return chart
 
     def errors(x):
-        state = KinematicState(robot, configuration_of(robot, full(x)), check=False)
+        state = Configuration(robot, configuration_of(robot, full(x)), check=False)
         return np.concatenate([task.error(state) for task in task_list]), state
 
     def constraint(x):

@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.task import Task
 from ..numerics.checks import check_choice, check_damping, check_matrix, check_vector
 from ..numerics.inverses import SolverInputError, dls, smallest_singular_value
@@ -63,7 +63,7 @@ def task_priority(
 
 def priority_velocity(
     robot: Robot,
-    q: np.ndarray | KinematicState,
+    q: np.ndarray | Configuration,
     levels: Sequence[Task | Sequence[Task]],
     *,
     gain: float | Sequence[float] = 1.0,
@@ -74,7 +74,7 @@ def priority_velocity(
 
     ``gain`` is one K for every level or one per level.
     """
-    state = q if isinstance(q, KinematicState) else KinematicState(robot, q)
+    state = q if isinstance(q, Configuration) else Configuration(robot, q)
     gains = list(gain) if isinstance(gain, (list, tuple)) and len(levels) > 1 else [gain] * len(levels)
     if len(gains) != len(levels):
         raise SolverInputError(f"{len(levels)} levels need one gain each, got {len(gains)}")

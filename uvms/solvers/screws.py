@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..errors import SolverInputError
 from ..numerics.checks import check_matrix, check_vector
 
@@ -32,7 +32,7 @@ def twist_at_origin(world_aligned: np.ndarray, point: np.ndarray) -> np.ndarray:
     return np.vstack([angular, linear - np.cross(angular.T, point).T])  # v_O = v_p - omega x p
 
 
-def uvms_screws(state: KinematicState, frame_id: int) -> np.ndarray:
+def uvms_screws(state: Configuration, frame_id: int) -> np.ndarray:
     """Screws of the UVMS chain (6, nv): the Jacobian columns as twists at the world origin."""
     return twist_at_origin(state.jacobian(frame_id), state.pose(frame_id).translation)
 
@@ -46,7 +46,7 @@ def ppps_screws(point: np.ndarray) -> np.ndarray:
     return screws
 
 
-def network_matrix(state: KinematicState, frame_id: int, planar: bool = False) -> np.ndarray:
+def network_matrix(state: Configuration, frame_id: int, planar: bool = False) -> np.ndarray:
     """N = [S_uvms | -S_virtual] (6, nv + 6), or its planar rows/virtual joints (3, nv + 3)."""
     virtual = ppps_screws(state.pose(frame_id).translation)
     network = np.hstack([uvms_screws(state, frame_id), -virtual])

@@ -40,7 +40,7 @@ import numpy as np
 
 from ..numerics.integrate import euler_step
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.objectives import VelocityLimit
 from ..numerics.checks import check_damping, check_scalar
 from .hierarchy import (Hierarchy, HierarchyPlan, LevelItem, Levels, LevelRows, build_hierarchy, last_task_sigma,
@@ -196,18 +196,18 @@ class SetBasedSolver:
         rates = self._rate_rows.bounds(q, self.robot.nv, self.dt, self.fraction)
         return velocity_box(self.maximum, *rates, contain_zero=True)
 
-    def _solution(self, state: KinematicState) -> tuple[Hierarchy, np.ndarray, tuple[float, ...], list[float], float]:
+    def _solution(self, state: Configuration) -> tuple[Hierarchy, np.ndarray, tuple[float, ...], list[float], float]:
         """(the hierarchy at ``state``, v (nv,), the levels' scales, their sigma_min, the largest damping)."""
         hierarchy = self.plan.evaluate(state)
         contributions, sigmas, used = self.icat.solve(hierarchy)
         solved, scales = saturate(hierarchy, contributions, *self._box_at(state.q))
         return hierarchy, hierarchy.velocity(solved), scales, sigmas, used
 
-    def solve(self, q: np.ndarray | KinematicState, *, check: bool = True) -> SetBasedResult:
+    def solve(self, q: np.ndarray | Configuration, *, check: bool = True) -> SetBasedResult:
         """The set-based velocity at q and its diagnostics.
 
         Args:
-            q: configuration (nq,) or a KinematicState already computed at it.
+            q: configuration (nq,) or a Configuration already computed at it.
             check: validate an array q (False for configurations of ``pin.integrate`` in a loop).
         """
         hierarchy, v, scales, sigmas, used = self._solution(self.plan.state(q, check))
@@ -218,7 +218,7 @@ class SetBasedSolver:
                               speed_ratio=speed_ratio(v, self.maximum), free_floating=self.free_floating,
                               damping=used)
 
-    def velocity(self, q: np.ndarray | KinematicState, *, check: bool = True) -> np.ndarray:
+    def velocity(self, q: np.ndarray | Configuration, *, check: bool = True) -> np.ndarray:
         """The set-based velocity v (nv,) at q alone (an integrator's stages, where no one reads diagnostics)."""
         return self._solution(self.plan.state(q, check))[1]
 
@@ -233,7 +233,7 @@ class SetBasedSolver:
 # ------------------------------------------------------------------------------- the step
 def set_based_velocity(
     robot: Robot,
-    q: np.ndarray | KinematicState,
+    q: np.ndarray | Configuration,
     levels: Levels,
     *,
     gain: float | np.ndarray = 1.0,
@@ -255,7 +255,7 @@ def set_based_velocity(
 
     Args:
         robot: the model.
-        q: configuration (nq,) or a KinematicState computed at it.
+        q: configuration (nq,) or a Configuration computed at it.
         levels: highest priority first; each level a Task, an Inequality, or a list of them. Speed limits
             (VelocityLimit) may sit in any level: they are bounds, not rows.
         gain: K of the equality tasks (scalar, (k,) or (k, k) per level's stacked tasks) [1/s].

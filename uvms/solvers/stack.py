@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from ..tasks.task import Task
 from ..tasks.task import as_task_list
 from ..numerics.checks import apply_gain, gain_matrix
@@ -14,13 +14,13 @@ from ..numerics.checks import apply_gain, gain_matrix
 __all__ = ["as_task_list", "gain_matrix", "stack", "stacked_terms"]
 
 
-def stack(state: KinematicState, tasks: Sequence[Task], gain: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def stack(state: Configuration, tasks: Sequence[Task], gain: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Stacked Jacobian (k, nv), error (k,) and command xdot_d + K e (k,) of several tasks."""
     jacobian, error, feedforward = stacked_terms(state, tasks)
     return jacobian, error, feedforward + apply_gain(gain, error)
 
 
-def stacked_terms(state: KinematicState, tasks: Sequence[Task]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def stacked_terms(state: Configuration, tasks: Sequence[Task]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Jacobian (k, nv), error (k,) and feedforward (k,) of the tasks, stacked in order (one task: its own)."""
     if len(tasks) == 1:
         return tasks[0].terms(state)

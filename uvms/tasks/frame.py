@@ -12,7 +12,7 @@ from ..errors import UVMSError
 from ..numerics.validate import finite_array
 from ..robot.kinematics import axis_rows
 from ..robot.robot import Robot, check_robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from .task import Task
 
 ORIENTATION_ERRORS = ("log", "euler")
@@ -99,7 +99,7 @@ class FrameTask(Task):
             raise UVMSError(f"frame task on {self.frame!r} has no target: call set_target() first")
         return self.target
 
-    def full_error(self, state: KinematicState) -> np.ndarray:
+    def full_error(self, state: Configuration) -> np.ndarray:
         """All six error rows (6,): position then orientation."""
         return self.full_error_between(self._target(), state.pose(self.frame_id))
 
@@ -109,10 +109,10 @@ class FrameTask(Task):
             return log_pose_error(target.translation, target.rotation, pose)
         return euler_pose_error(target.translation, pose, matrixToRpy(target.rotation), matrixToRpy(pose.rotation))
 
-    def error(self, state: KinematicState) -> np.ndarray:
+    def error(self, state: Configuration) -> np.ndarray:
         return self.full_error(state)[self.rows]
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         jacobian = state.jacobian(self.frame_id)
         if self._euler_rows:
             jacobian = self._euler_jacobian(jacobian, matrixToRpy(state.pose(self.frame_id).rotation))
@@ -125,7 +125,7 @@ class FrameTask(Task):
         jacobian[3:] = pin.rpy.computeRpyJacobianInverse(pose_rpy, pin.WORLD) @ jacobian[3:]
         return jacobian
 
-    def feedforward(self, state: KinematicState) -> np.ndarray:
+    def feedforward(self, state: Configuration) -> np.ndarray:
         if self.orientation == "euler":
             return self._euler_feedforward(matrixToRpy(self._target().rotation))[self.rows]
         return self.target_twist[self.rows]
@@ -150,7 +150,7 @@ class FrameTask(Task):
                                       self._euler_feedforward(target_rpy)[self.rows])
         return self._target_parts
 
-    def terms(self, state: KinematicState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(jacobian (k, nv), error (k,), feedforward (k,)) at once: each rotation read and each rpy computed once."""
         translation, rotation, target_rpy, feedforward = self._target_terms()
         pose = state.pose(self.frame_id)

@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import UVMSError
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from .task import Task
 
 
@@ -58,11 +58,11 @@ class JointTask(Task):
         for name, rate in (rates or {}).items():
             self.rates[self.names.index(name)] = float(rate)
 
-    def error(self, state: KinematicState) -> np.ndarray:
+    def error(self, state: Configuration) -> np.ndarray:
         return self.targets - state.q[self.idx_q]
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - constant
+    def jacobian(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - constant
         return self._jacobian
 
-    def feedforward(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002
+    def feedforward(self, state: Configuration) -> np.ndarray:  # noqa: ARG002
         return self.rates.copy()

@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from .task import Task
 
 
@@ -24,8 +24,8 @@ class PostureTask(Task):
         self.dim = robot.n_arm
         self._jacobian = np.hstack([np.zeros((robot.n_arm, robot.n_vehicle)), np.eye(robot.n_arm)])
 
-    def error(self, state: KinematicState) -> np.ndarray:
+    def error(self, state: Configuration) -> np.ndarray:
         return pin.difference(self.robot.model, state.q, self.reference)[self.robot.n_vehicle:]
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - constant
+    def jacobian(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - constant
         return self._jacobian

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..errors import UVMSError
 from ..robot.robot import Robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from .task import Task
 
 
@@ -40,18 +40,18 @@ class DistanceTask(Task):
             raise UVMSError(f"a target distance must be finite and >= 0 with a finite rate, got {distance!r}, {rate!r}")
         self.distance, self.rate = distance, rate
 
-    def _offset(self, state: KinematicState) -> np.ndarray:
+    def _offset(self, state: Configuration) -> np.ndarray:
         a, b = self.frame_ids
         return state.pose(b).translation - state.pose(a).translation  # (3,) world
 
-    def current(self, state: KinematicState) -> float:
+    def current(self, state: Configuration) -> float:
         """Current distance [m]."""
         return float(np.linalg.norm(self._offset(state)))
 
-    def error(self, state: KinematicState) -> np.ndarray:
+    def error(self, state: Configuration) -> np.ndarray:
         return np.array([self.distance - self.current(state)])
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         offset = self._offset(state)
         length = np.linalg.norm(offset)
         if length < 1e-9:
@@ -59,5 +59,5 @@ class DistanceTask(Task):
         a, b = self.frame_ids
         return ((offset / length) @ (state.jacobian(b)[:3] - state.jacobian(a)[:3]))[None, :]  # (1, nv)
 
-    def feedforward(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002
+    def feedforward(self, state: Configuration) -> np.ndarray:  # noqa: ARG002
         return np.array([self.rate])

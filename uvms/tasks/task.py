@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ..errors import SolverInputError
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 
 
 class Task(ABC):
@@ -22,18 +22,18 @@ class Task(ABC):
     dim: int
 
     @abstractmethod
-    def error(self, state: KinematicState) -> np.ndarray:
+    def error(self, state: Configuration) -> np.ndarray:
         """Task error e = desired - current (k,)."""
 
     @abstractmethod
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         """Task Jacobian (k, nv): d(current)/dt = J v."""
 
-    def feedforward(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - state used by subclasses
+    def feedforward(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - state used by subclasses
         """Desired task velocity (k,); zero unless a target velocity was set."""
         return np.zeros(self.dim)
 
-    def terms(self, state: KinematicState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(jacobian (k, nv), error (k,), feedforward (k,)) at ``state``, what a solver stacks; a task whose three
         share work (a frame task's rotations) computes them at once."""
         return self.jacobian(state), self.error(state), self.feedforward(state)

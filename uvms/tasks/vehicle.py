@@ -11,7 +11,7 @@ from ..robot.bases import BASE_TYPES
 from ..robot.conventions import wrap_angle
 from ..errors import UVMSError
 from ..robot.robot import Robot, check_robot
-from ..robot.configuration import KinematicState
+from ..robot.configuration import Configuration
 from .task import Task
 
 #: Names of the vehicle velocity entries (body twist in local FLU axes), per base type with a vehicle.
@@ -68,28 +68,28 @@ class VehicleTask(Task):
         """Every vehicle velocity zero."""
         return cls(robot, velocities=dict.fromkeys(VELOCITY_NAMES[robot.base_type], 0.0))
 
-    def _rotation_and_rpy(self) -> tuple[np.ndarray, np.ndarray]:
-        rotation = self.robot.data.oMi[1].rotation
+    def _rotation_and_rpy(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
+        rotation = state.joint_pose(1).rotation
         return rotation, pin.rpy.matrixToRpy(rotation)
 
-    def error(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - reads the state's data
+    def error(self, state: Configuration) -> np.ndarray:
         error = np.zeros(self.dim)
         row = len(self.velocity_indices)
-        rotation, rpy = self._rotation_and_rpy()
+        rotation, rpy = self._rotation_and_rpy(state)
         if self.heading is not None:
             error[row] = wrap_angle(self.heading - rpy[2])
             row += 1
         if self.depth is not None:
-            error[row] = self.depth - self.robot.data.oMi[1].translation[2]
+            error[row] = self.depth - state.joint_pose(1).translation[2]
         return error
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - reads the state's data
+    def jacobian(self, state: Configuration) -> np.ndarray:
         robot = self.robot
         jacobian = np.zeros((self.dim, robot.nv))
         for row, index in enumerate(self.velocity_indices):
             jacobian[row, index] = 1.0
         row = len(self.velocity_indices)
-        rotation, rpy = self._rotation_and_rpy()
+        rotation, rpy = self._rotation_and_rpy(state)
         if self.heading is not None:
             if robot.base_type == "planar":
                 jacobian[row, 2] = 1.0
@@ -100,7 +100,7 @@ class VehicleTask(Task):
             jacobian[row, 0:3] = rotation[2]  # world zdot = [R v_local]_z
         return jacobian
 
-    def feedforward(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - constant
+    def feedforward(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - constant
         feedforward = np.zeros(self.dim)
         feedforward[: len(self.velocity_values)] = self.velocity_values
         return feedforward

@@ -26,7 +26,7 @@ import pinocchio as pin
 
 from ...errors import ObjectiveError
 from ...robot.robot import Robot
-from ...robot.configuration import KinematicState
+from ...robot.configuration import Configuration
 
 #: Shapes of the activation across the band.
 ACTIVATION_SHAPES = ("cosine", "step")
@@ -138,11 +138,11 @@ class Inequality(ABC):
         self._inner_lower, self._inner_upper = lower + band, upper - band  # where the activation falls to 0
 
     @abstractmethod
-    def value(self, state: KinematicState) -> np.ndarray:
+    def value(self, state: Configuration) -> np.ndarray:
         """x(q) (k,)."""
 
     @abstractmethod
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         """dx/dt = J v: (k, nv), world-aligned."""
 
     def activation(self, value: np.ndarray) -> np.ndarray:
@@ -164,7 +164,7 @@ class Inequality(ABC):
                                   reference)
         return activation, reference
 
-    def rows(self, state: KinematicState) -> InequalityRows:
+    def rows(self, state: Configuration) -> InequalityRows:
         """Everything a solver reads, at ``state``."""
         value = self.value(state)
         activation, reference = self._activation_reference(value)

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...errors import FrameNotFound, ObjectiveError
 from ...robot.robot import Robot
-from ...robot.configuration import KinematicState
+from ...robot.configuration import Configuration
 from ...numerics.validate import finite_array
 from .base import Inequality, finite_number, vehicle_frame_id
 
@@ -50,11 +50,11 @@ class VehicleAttitude(Inequality):
         self.max_tilt = max_tilt
         self._set_valid_set([-np.inf], [max_tilt], band, gain, shape)
 
-    def value(self, state: KinematicState) -> np.ndarray:
+    def value(self, state: Configuration) -> np.ndarray:
         cosine = float(state.pose(self.frame_id).rotation[2, 2])  # the body z axis's world z
         return np.array([np.arccos(min(max(cosine, -1.0), 1.0))])
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         z_axis = state.pose(self.frame_id).rotation[:, 2]
         axis = np.array([z_axis[1], -z_axis[0], 0.0])  # z_b x e_z, |axis| = sin(tilt)
         length = math.sqrt(axis.dot(axis))  # np.linalg.norm's numbers
@@ -99,10 +99,10 @@ class PlaneClearance(Inequality):
         self._set_valid_set([self.min], [np.inf], finite_number(band, f"{self.name}: band", positive=True),
                             gain, shape)
 
-    def value(self, state: KinematicState) -> np.ndarray:
+    def value(self, state: Configuration) -> np.ndarray:
         return np.array([self.normal @ (state.pose(self.frame_id).translation - self.point)])
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         return (self.normal @ state.jacobian(self.frame_id)[:3])[None, :]
 
 
@@ -130,8 +130,8 @@ class FrameBox(Inequality):
             raise ObjectiveError(f"{self.name}: lower and upper must be 3 numbers [m] each, got {lower!r}, {upper!r}")
         self._set_valid_set(box[0], box[1], finite_number(band, f"{self.name}: band", positive=True), gain, shape)
 
-    def value(self, state: KinematicState) -> np.ndarray:
+    def value(self, state: Configuration) -> np.ndarray:
         return state.pose(self.frame_id).translation.copy()
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         return state.jacobian(self.frame_id)[:3]

@@ -9,7 +9,7 @@ import numpy as np
 from ...errors import ObjectiveError, ObjectiveNameNotFound
 from ...robot.limits import Limit
 from ...robot.robot import Robot
-from ...robot.configuration import KinematicState
+from ...robot.configuration import Configuration
 from .base import Inequality, finite_number
 
 #: The band is capped at this fraction of each joint's valid range (a narrow jaw next to wide joints).
@@ -104,8 +104,8 @@ class JointLimits(Inequality):
             rows.extend(found)
         return np.array(sorted(set(rows)), dtype=int)
 
-    def value(self, state: KinematicState) -> np.ndarray:
+    def value(self, state: Configuration) -> np.ndarray:
         return state.q[self.q_index]
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:  # noqa: ARG002 - constant
+    def jacobian(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - constant
         return self._jacobian

@@ -10,7 +10,7 @@ import pinocchio as pin
 from ...errors import ObjectiveError
 from ...robot.kinematics import WORLD_ALIGNED, axis_rows, manipulability_of
 from ...robot.robot import Robot
-from ...robot.configuration import KinematicState
+from ...robot.configuration import Configuration
 from .base import Inequality, finite_number
 
 POSITION_AXES = ("x", "y", "z")
@@ -70,10 +70,10 @@ class Manipulability(Inequality):
         jacobian = pin.computeFrameJacobian(model, self._data, q, self.frame_id, WORLD_ALIGNED)
         return self._of_jacobian(jacobian)
 
-    def value(self, state: KinematicState) -> np.ndarray:
+    def value(self, state: Configuration) -> np.ndarray:
         return np.array([self._of_jacobian(state.jacobian(self.frame_id))])
 
-    def jacobian(self, state: KinematicState) -> np.ndarray:
+    def jacobian(self, state: Configuration) -> np.ndarray:
         model, robot = self.robot.model, self.robot
         gradient = np.zeros((1, robot.nv))
         tangent = np.zeros(robot.nv)
