@@ -130,7 +130,7 @@ def test_uvms_view_says_which_mesh_it_left_out_while_the_viewer_runs(tmp_path, c
         said.append(capsys.readouterr())
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(uvms.cli, "wait_for_interrupt", interrupt)
+    monkeypatch.setattr(uvms.cli.view, "wait_for_interrupt", interrupt)
     assert main(["view", str(model), "--base", "floating", "--port", str(PORT)]) == 0
     warning = [line for line in said[0].err.splitlines() if "hull.zae" in line]
     assert len(warning) == 1 and warning[0].startswith("uvms: warning: ")

@@ -218,7 +218,7 @@ def test_view_command_serves_until_interrupted(monkeypatch, capsys, tmp_path):
     def interrupt():
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(uvms.cli, "wait_for_interrupt", interrupt)
+    monkeypatch.setattr(uvms.cli.view, "wait_for_interrupt", interrupt)
     run = tmp_path / "run"
     write_run(run, shipped("hoang2011"), count=3)
     assert main(["view", "hoang2011", "--port", str(PORT), "--result", str(run), "--speed", "100", "--quiet"]) == 0

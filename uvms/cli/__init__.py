@@ -31,7 +31,6 @@ from .view import (
     read_result,
     view_configuration,
     view_robot,
-    wait_for_interrupt,
     watch_viewer,
 )
 from .workspace import command_workspace, parse_figure_counts
@@ -40,7 +39,7 @@ __all__ = [
     "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_info", "command_run",
     "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
     "parse_assignments", "parse_figure_counts", "printable", "read_result", "run_output_folder", "scenario_file",
-    "view_configuration", "view_robot", "wait_for_interrupt", "watch_job", "watch_viewer",
+    "view_configuration", "view_robot", "watch_job", "watch_viewer",
 ]
 
 EXIT_USAGE = 2

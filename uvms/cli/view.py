@@ -185,8 +185,6 @@ def command_view(options: argparse.Namespace) -> int:
             viewer.play(t, qs, speed=options.speed, progress=False if options.quiet else None)
         if options.watch:
             watch_viewer(options, viewer)
-        from . import wait_for_interrupt  # looked up on uvms.cli at call time: tests replace it there
-
         wait_for_interrupt()
     except KeyboardInterrupt:
         pass

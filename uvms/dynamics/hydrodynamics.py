@@ -55,10 +55,8 @@ import numpy as np
 
 from ..errors import ModelCheckError, ModelParseError, UVMSError
 from ..model.resources import read_yaml
-from .hydro_parameters import (  # noqa: F401 - the public names of this module
-    FRD_FLU_SIGNS, GRAVITY, MATRIX_TOLERANCE, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_added_mass,
-    check_link_names, flip_frd_flu,
-)
+from .hydro_parameters import (GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names,
+                               flip_frd_flu)
 
 if TYPE_CHECKING:
     import pinocchio as pin

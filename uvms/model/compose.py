@@ -15,7 +15,8 @@ from . import checks, resources
 from ..robot import urdf_export
 from ..robot.conventions import pose_from_xyzrpy
 from ..errors import FrameNotFound, UVMSError
-from ..robot.robot import Robot, default_end_effectors
+from ..robot.robot import Robot
+from ..robot.structure import default_end_effectors
 from .loader import build_model, captured_stderr, read_model_text, warn_missing_meshes
 
 

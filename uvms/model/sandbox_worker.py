@@ -305,4 +305,5 @@ def main() -> None:
         answer({"kind": "unreadable" if unreadable(exc) else "xacro", "message": text})
 
 
-main()
+if __name__ == "__main__":  # run as ``python -c`` by the sandbox; importing it does nothing
+    main()

@@ -7,62 +7,21 @@ import math
 import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from . import kinematics
-from ..io import outputs
-from . import urdf_export
-from .bases import BASE_TYPES, BaseType
 from ..errors import ConfigurationError, FrameNotFound, JointNotFound, NotARobot, UVMSError
-from .vehicle_pose import VehicleAccessors
+from ..io import outputs
 from ..numerics.validate import finite_array
+from . import kinematics, urdf_export
+from .bases import BASE_TYPES, BaseType
+from .structure import JointInfo, base_type_of, default_end_effectors
+from .vehicle_pose import VehicleAccessors
 
 #: Default task axes by base type (the facts live in `uvms.robot.bases`).
 DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
-
-
-@dataclass(frozen=True)
-class JointInfo:
-    """One joint of the model, as `uvms info` shows it."""
-
-    name: str
-    kind: str  # Pinocchio short name, e.g. "JointModelRZ"
-    nq: int
-    nv: int
-    idx_q: int
-    idx_v: int
-    lower: np.ndarray  # (nq,) [rad or m]
-    upper: np.ndarray  # (nq,)
-    is_vehicle: bool
-
-
-def base_type_of(model: pin.Model) -> str:
-    """"floating", "planar" or "fixed", from the first joint of a Pinocchio model."""
-    if model.njoints > 1 and model.parents[1] == 0:
-        shortname = model.joints[1].shortname()
-        if shortname == "JointModelFreeFlyer":
-            return "floating"
-        if shortname == "JointModelPlanar":
-            return "planar"
-    return "fixed"
-
-
-def default_end_effectors(model: pin.Model) -> list[str]:
-    """Frames named ``ee`` or ``*_ee``; otherwise the body frames of the leaf links."""
-    names = [frame.name for frame in model.frames]
-    named = [n for n in names if n == "ee" or n.endswith("_ee")]
-    if named:
-        return named
-    parents = {model.frames[i].parentFrame for i in range(len(model.frames))}
-    leaves = [
-        frame.name for i, frame in enumerate(model.frames)
-        if frame.type == pin.FrameType.BODY and i not in parents and frame.name != "world"
-    ]
-    return leaves[-1:] if leaves else [model.frames[-1].name]
 
 
 class Robot(VehicleAccessors):
@@ -227,13 +186,8 @@ class Robot(VehicleAccessors):
         return ET.fromstring(self.urdf) if self.urdf else None
 
     def save_urdf(self, path: str | os.PathLike) -> Path:
-        """Write the model as a URDF file (atomically) that ``uvms.load`` reads back as the same model.
-
-        The file states the base (a vehicle joint that uvms added, or a fixed ``world`` link under a root
-        link held by ``base="fixed"``) and gives mesh files by absolute path.
-
-        Returns:
-            The path written.
+        """Write the model as a URDF file (atomically) that ``uvms.load`` reads back as the same model, and return
+        its path: the base stated and meshes by absolute path (:func:`.urdf_export.self_describing_urdf`).
 
         Raises:
             UVMSError: the Robot has no URDF (built from a Pinocchio model alone), or the file cannot be written.

@@ -34,7 +34,7 @@ from .dexterity import (
     DexterityAccumulator,
     DexterityMap,
     OrientationGrid,
-    dexterity,
+    pose_dexterity,
     dexterity_map,
     equal_area_rings,
 )
@@ -58,7 +58,7 @@ __all__ = [
     "WorkspaceResult",
     "axis_rotations",
     "common_volume",
-    "dexterity",
+    "pose_dexterity",
     "dexterity_map",
     "equal_area_rings",
     "hull_shapes",

@@ -271,7 +271,7 @@ def dexterity_map(positions: np.ndarray, cells: np.ndarray, voxel: float, total_
     return accumulator.map()
 
 
-def dexterity(rotations: np.ndarray, positions: np.ndarray, voxel: float = 0.1,
+def pose_dexterity(rotations: np.ndarray, positions: np.ndarray, voxel: float = 0.1,
               grid: OrientationGrid | None = None) -> DexterityMap:
     """Dexterity per voxel of frame poses: rotations (N, 3, 3), positions (N, 3) [m], voxel edge [m]."""
     grid = grid or OrientationGrid()
