@@ -131,24 +131,26 @@ def test_the_gjm_controller_keeps_the_numbers_of_its_own_law(name, axes, rng):
 
 
 def test_one_result_type_and_no_old_paths():
-    """One result type; the module paths and names of before the layer folders are gone (no shims in 0.1)."""
+    """One simulate, one result type; the module paths and names of before the layer folders are gone (no shims)."""
     import importlib
 
-    from uvms.sim import simulate as simulate_module
     from uvms.control import gjm
     from uvms.dynamics import plant
     from uvms.sim.result import SimulationResult
 
     robot = shipped("hoang2011")
-    result = simulate_module.simulate_plant(uvms.Plant(robot), robot.neutral(), None, np.ones(robot.n_arm), 0.1, 0.01)
-    assert isinstance(result, SimulationResult) and result.command.shape == (11, robot.n_arm)
+    result = uvms.simulate(uvms.Plant(robot), np.ones(robot.n_arm), robot.neutral(), 0.1, 0.01)
+    assert isinstance(result, SimulationResult) and result.plant.command.shape == (11, robot.n_arm)
     assert result.ee_position is None and result.arrays().keys() == {"t", "q", "v"}
+    assert result.tracking is None and result.actuation is None
     assert result.integrator == "rk4" and not hasattr(result, "method")
     for module, name in ((plant, "simulate_plant"), (plant, "PlantResult"), (gjm, "simulate_gjm"), (gjm, "GJMResult"),
-                         (uvms, "PlantResult"), (uvms, "GJMResult")):
+                         (uvms, "PlantResult"), (uvms, "GJMResult"), (uvms, "simulate_plant"), (uvms, "simulate_gjm"),
+                         (uvms, "simulate_actuated"), (uvms, "actuation_metrics")):
         assert not hasattr(module, name), f"{module.__name__}.{name}"
-    for old in ("uvms.plant", "uvms.plotting", "uvms.sandbox", "uvms.sweep", "uvms.moved"):
+    for old in ("uvms.plant", "uvms.plotting", "uvms.sandbox", "uvms.sweep", "uvms.moved", "uvms.sim.actuated",
+                "uvms.sim.simulate", "uvms.control.station_keeping"):
         with pytest.raises(ModuleNotFoundError):
             importlib.import_module(old)
     with pytest.raises(TypeError):  # integrator is the one name of the choice
-        simulate_module.simulate_plant(uvms.Plant(robot), robot.neutral(), None, None, 0.1, 0.01, method="euler")
+        uvms.simulate(uvms.Plant(robot), None, robot.neutral(), 0.1, 0.01, method="euler")

@@ -11,7 +11,7 @@ from uvms.errors import ModelCheckError, ModelParseError, NameNotFound, UVMSErro
 from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
 from uvms.dynamics.added_mass import generalized_jacobian_added_mass
 from uvms.dynamics.plant import Plant
-from uvms.sim.simulate import simulate_plant
+from uvms.sim import simulate
 
 RHO = 1000.0
 G = 9.81
@@ -59,8 +59,8 @@ def test_rigid_momentum_is_conserved_and_its_drift_shrinks_like_dt4():
     q0 = robot.configuration(arm=0.3 * np.ones(robot.n_arm))
     drifts = []
     for dt in (0.02, 0.01):
-        result = simulate_plant(plant, q0, None, swinging_command(robot.n_arm), duration=2.0, dt=dt)
-        drifts.append(np.max(result.momentum_drift()))
+        result = simulate(plant, swinging_command(robot.n_arm), q0, 2.0, dt)
+        drifts.append(np.max(result.plant.momentum_drift()))
     moved = np.linalg.norm(result.q[-1, :3] - result.q[0, :3])
     assert moved > 1e-2  # the joints really pushed the base around
     assert drifts[1] <= 1e-5  # [N s, N m s]; the swinging modules carry momenta of order 1 N s
@@ -72,10 +72,10 @@ def test_a_coasting_locked_uvms_keeps_its_energy_and_momentum_with_added_mass():
     plant = Plant(robot, added_mass=True, damping=False, gravity=False)
     q0 = robot.configuration(arm=[np.pi, 1.0, 1.5, 0.5, 0.0])
     v0 = np.concatenate([[0.3, -0.1, 0.2, 0.4, -0.6, 0.8], np.zeros(robot.n_arm)])
-    result = simulate_plant(plant, q0, v0, None, duration=2.0, dt=0.005)
+    result = simulate(plant, None, q0, 2.0, 0.005, v0=v0)
     assert np.allclose(result.v[:, 6:], 0.0)  # motors hold a zero command: the arm stays locked
-    assert np.ptp(result.kinetic_energy) <= 1e-8 * result.kinetic_energy[0]
-    assert np.max(result.momentum_drift()) <= 1e-8 * np.max(np.abs(result.momentum[0]))
+    assert np.ptp(result.plant.kinetic_energy) <= 1e-8 * result.plant.kinetic_energy[0]
+    assert np.max(result.plant.momentum_drift()) <= 1e-8 * np.max(np.abs(result.plant.momentum[0]))
     assert np.ptp(result.v[:, 3:6], axis=0).max() > 0.1  # it tumbles: C_A and C_RB are at work
 
 
@@ -83,8 +83,8 @@ def test_added_mass_momentum_is_conserved_and_the_added_mass_gjm_is_exact():
     robot = shipped("amundsen2018")
     plant = Plant(robot, added_mass=True, damping=False, gravity=False)
     q0 = robot.configuration(arm=0.3 * np.ones(robot.n_arm))
-    result = simulate_plant(plant, q0, None, swinging_command(robot.n_arm), duration=2.0, dt=0.005)
-    assert np.max(result.momentum_drift()) <= 1e-6
+    result = simulate(plant, swinging_command(robot.n_arm), q0, 2.0, 0.005)
+    assert np.max(result.plant.momentum_drift()) <= 1e-6
     twists = result.ee_twist()
     worst_added = worst_rigid = 0.0
     for q, v, twist in zip(result.q[::20], result.v[::20], twists[::20]):
@@ -128,7 +128,7 @@ def test_a_neutral_vehicle_with_its_buoyancy_above_its_weight_rights_itself():
     # restoring moment m g z_b sin(roll) against the roll, about body x, over I_xx + K_p'
     assert start[3] == pytest.approx(-10.0 * G * 0.02 * np.sin(0.4) / (0.3 + 0.1), rel=1e-12)
     assert np.allclose(start[[0, 1, 2, 4, 5]], 0.0, atol=1e-12)  # neutral: no net force
-    result = simulate_plant(plant, q0, None, None, duration=10.0, dt=0.02)
+    result = simulate(plant, None, q0, 10.0, 0.02)
     rolls = np.array([roll_of(q) for q in result.q])
     assert rolls.min() < 0.0 < rolls.max()  # it swings through upright
     assert abs(rolls[-1]) < 0.01 and np.abs(result.q[-1, :3]).max() < 1e-9
@@ -139,9 +139,9 @@ def test_a_buoyant_vehicle_rises_with_its_added_mass_in_the_inertia():
     plant = Plant(robot, gravity=True, damping=False)
     heave = plant.acceleration(robot.neutral(), np.zeros(6), np.zeros(0))
     assert heave[2] == pytest.approx((1.1 - 1.0) * 10.0 * G / (10.0 + 4.0), rel=1e-12)
-    result = simulate_plant(plant, robot.neutral(), None, None, duration=1.0, dt=0.01)
+    result = simulate(plant, None, robot.neutral(), 1.0, 0.01)
     assert result.q[-1, 2] == pytest.approx(0.5 * heave[2], rel=1e-9)
-    assert np.allclose(np.diff(result.energy), 0.0, atol=1e-9)  # buoyancy is conservative
+    assert np.allclose(np.diff(result.plant.energy), 0.0, atol=1e-9)  # buoyancy is conservative
     weightless = Plant(robot, gravity=False)
     assert weightless.acceleration(robot.neutral(), np.zeros(6), np.zeros(0)) == pytest.approx(np.zeros(6))
 
@@ -173,8 +173,8 @@ def test_the_momentum_changes_at_the_rate_of_the_restoring_wrench():
     plant = Plant(robot, gravity=True, damping=False, added_mass=True)
     q0 = robot.configuration(base=[0, 0, 0, 0.3, -0.2, 0.5], arm=[np.pi, 1.0, 1.5, 0.5, 0.005])
     dt = 1e-3
-    result = simulate_plant(plant, q0, None, swinging_command(robot.n_arm), duration=0.2, dt=dt)
-    rate = (result.momentum[2:] - result.momentum[:-2]) / (2 * dt)  # central differences [N, N m]
+    result = simulate(plant, swinging_command(robot.n_arm), q0, 0.2, dt)
+    rate = (result.plant.momentum[2:] - result.plant.momentum[:-2]) / (2 * dt)  # central differences [N, N m]
     expected = np.array([restoring_wrench(plant, q) for q in result.q[1:-1]])
     assert np.abs(expected[:, 3:]).max() > 0.1  # the arm's weight and the offset buoyancy do tilt it
     assert np.allclose(rate, expected, atol=1e-5 * np.abs(expected).max())
@@ -194,7 +194,7 @@ def test_linear_and_quadratic_damping_follow_the_closed_form_coast():
     mass, added, linear, quadratic, u0 = 10.0, 2.0, 3.0, 40.0, 1.5
     robot = hull(added=diagonal_text([added, 5, 5, 0.1, 0.1, 0.1]),
                  linear=f"{-linear} 0 0 0 0 0", quadratic=f"{-quadratic} 0 0 0 0 0")
-    result = simulate_plant(Plant(robot), robot.neutral(), [u0, 0, 0, 0, 0, 0], None, duration=2.0, dt=0.01)
+    result = simulate(Plant(robot), None, robot.neutral(), 2.0, 0.01, v0=[u0, 0, 0, 0, 0, 0])
     inertia = mass + added  # (m + X_u') u' = -(k u + d u^2)
     decay = np.exp(-linear * result.t / inertia)
     expected = linear * u0 * decay / (linear + quadratic * u0 * (1.0 - decay))
@@ -208,7 +208,7 @@ def test_a_damped_body_drifts_with_the_current():
     current = np.array([0.3, -0.2, 0.1])
     plant = Plant(robot, current=current)
     q0 = robot.configuration(base=[0, 0, 0, 0.2, -0.1, 1.0])
-    result = simulate_plant(plant, q0, None, None, duration=10.0, dt=0.05)
+    result = simulate(plant, None, q0, 10.0, 0.05)
     velocity_world = robot.base_pose(result.q[-1]).rotation @ result.v[-1, :3]
     assert np.allclose(velocity_world, current, atol=1e-6)  # relative velocity decays in ~0.7 s
 
@@ -217,10 +217,10 @@ def test_a_coasting_bluerov_slows_down():
     robot = shipped("bluerov2_alpha5")
     q0 = robot.configuration(arm=[np.pi, 1.0, 1.5, 0.5, 0.0])
     v0 = np.concatenate([[0.5, 0.2, -0.1, 0.0, 0.0, 0.3], np.zeros(robot.n_arm)])
-    result = simulate_plant(Plant(robot), q0, v0, None, duration=3.0, dt=0.01)
+    result = simulate(Plant(robot), None, q0, 3.0, 0.01, v0=v0)
     speed = np.linalg.norm(result.v[:, :3], axis=1)
     assert speed[-1] < 0.35 * speed[0]
-    assert np.all(np.diff(result.kinetic_energy) < 0.0)  # damping only removes energy
+    assert np.all(np.diff(result.plant.kinetic_energy) < 0.0)  # damping only removes energy
 
 
 # -------------------------------------------------------------------- motors
@@ -229,7 +229,7 @@ def test_the_joint_motors_are_first_order_lags():
     tau, step = 0.1, np.array([0.3, -0.2, 0.25, 0.4, 0.001])
     plant = Plant(robot, motor_time_constant=tau)
     q0 = robot.configuration(arm=[np.pi, 1.0, 1.5, 0.5, 0.005])
-    result = simulate_plant(plant, q0, None, step, duration=5 * tau, dt=tau / 20)
+    result = simulate(plant, step, q0, 5 * tau, tau / 20)
     at_tau = result.v[np.argmin(np.abs(result.t - tau)), 6:]
     assert np.allclose(at_tau / step, 1.0 - np.exp(-1.0), rtol=1e-7)  # 63.2 % at t = tau
     assert np.allclose(result.v[-1, 6:] / step, 1.0 - np.exp(-5.0), rtol=1e-7)
@@ -336,8 +336,8 @@ def test_plant_arguments_are_checked():
     with pytest.raises(UVMSError, match="motor_time_constant"):
         Plant(robot, motor_time_constant=0.0)
     with pytest.raises(UVMSError, match="5 finite joint velocities"):
-        simulate_plant(Plant(robot), robot.neutral(), None, lambda t, q, v: np.zeros(3), duration=0.1, dt=0.01)
+        simulate(Plant(robot), lambda t, q, v: np.zeros(3), robot.neutral(), 0.1, 0.01)
     with pytest.raises(UVMSError, match="unknown integrator 'rk45'; valid: euler, rk4"):
-        simulate_plant(Plant(robot), robot.neutral(), None, None, duration=0.1, dt=0.01, integrator="rk45")
+        simulate(Plant(robot), None, robot.neutral(), 0.1, 0.01, integrator="rk45")
     with pytest.raises(UVMSError, match="no hydrodynamic parameters"):
         hydrodynamics_of(shipped("hoang2011"))

@@ -20,7 +20,7 @@ from conftest import shipped
 from uvms.errors import BagExportError, RunFolderError
 from uvms.scenario.rosbag import write_bag
 from uvms.scenario import run
-from uvms.sim.simulate import simulate
+from uvms.sim import PlantSeries, simulate
 from uvms.tasks.frame import FrameTask
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
@@ -191,7 +191,7 @@ def test_a_robot_without_urdf_or_vehicle_says_what_it_skipped(tmp_path):
     assert "/robot_description" not in summary.topics and "no URDF" in summary.skipped["/robot_description"]
     fixed = uvms.load(FIXED_ARM)
     result = constant_rate_run(fixed, np.array([0.5]), fixed.neutral(), pin.SE3.Identity())
-    result.desired_position = result.desired_rpy = None
+    result = dataclasses.replace(result, desired_position=None, desired_rpy=None)
     summary = write_bag(tmp_path / "fixed", fixed, result)
     assert set(summary.skipped) == {"/odom", "/tip/desired_pose"}
     assert set(summary.topics) == {"/robot_description", "/tf_static", "/tf", "/joint_states"}
@@ -208,12 +208,14 @@ def test_given_poses_torques_and_a_position_only_desired(tmp_path, floating_bag)
     robot, result, *_ = floating_bag
     n = len(result.t)
     poses = np.array([pin.SE3(np.eye(3), np.array([0.0, 0.0, -k])).homogeneous for k in range(n)])
-    plant_like = dataclasses.replace(result, joint_torque=np.arange(n * 5.0).reshape(n, 5))
+    plant_like = dataclasses.replace(result, plant=PlantSeries(
+        command=np.zeros((n, 5)), joint_torque=np.arange(n * 5.0).reshape(n, 5), kinetic_energy=np.zeros(n),
+        potential_energy=np.zeros(n), momentum=np.zeros((n, 6))))
     write_bag(tmp_path / "poses", robot, plant_like, desired=poses, desired_frame="alpha_jaw_link")
     _, messages = read_bag(tmp_path / "poses")
     heights = [message.pose.position.z for _, message in messages["/alpha_jaw_link/desired_pose"]]
     assert heights == [-k for k in range(n)]
-    np.testing.assert_array_equal([state.effort for _, state in messages["/joint_states"]], plant_like.joint_torque)
+    np.testing.assert_array_equal([state.effort for _, state in messages["/joint_states"]], plant_like.plant.joint_torque)
     position_only = dataclasses.replace(result, desired_rpy=None)
     summary = write_bag(tmp_path / "points", robot, position_only)
     assert summary.types["/ee/desired_position"] == "geometry_msgs/msg/PointStamped"

@@ -202,7 +202,7 @@ def test_cli_refuses_a_path_as_scenario_name_in_one_line(tmp_path):
 
 
 def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
-    from uvms.sim import simulate as simulate_module
+    from uvms.numerics import integrate
     from uvms.errors import StepCountError
 
     def never(*args, **kwargs):
@@ -223,19 +223,18 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
         with pytest.raises(ScenarioError, match=r"simulation.dt = .* is out of range: it is the integration step"):
             run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=[f"simulation.dt={dt}"])
     amundsen = SCENARIOS / "amundsen2018_rigid_open_loop.toml"  # the dynamic plant: the same check
-    monkeypatch.setattr("uvms.scenario.runs.simulate_gjm", never)
+    monkeypatch.setattr("uvms.scenario.runs.simulate", never)
     with pytest.raises(StepCountError, match="at most 200,000"):
         run(amundsen, out=tmp_path / "run", overrides=["simulation.dt=1e-6"], progress=False)
     assert not (tmp_path / "run").exists()
-    assert simulate_module.step_count(190.0, 0.02) == 9500 and simulate_module.step_count(1.0, 1.0) == 1
-    assert simulate_module.step_count(1.0, 1.0 / simulate_module.MAX_STEPS) == simulate_module.MAX_STEPS
+    assert integrate.step_count(190.0, 0.02) == 9500 and integrate.step_count(1.0, 1.0) == 1
+    assert integrate.step_count(1.0, 1.0 / integrate.MAX_STEPS) == integrate.MAX_STEPS
 
 
 def test_library_simulations_share_the_step_bound():
     from uvms.errors import StepCountError
     from uvms.dynamics.plant import Plant
-    from uvms.sim.simulate import simulate_plant
-    from uvms.sim.simulate import simulate
+    from uvms.sim import simulate
 
     robot = uvms.load("hoang2011")
     task = uvms.FrameTask(robot, axes=("x", "y", "yaw"))
@@ -246,9 +245,9 @@ def test_library_simulations_share_the_step_bound():
     for dt, duration, words in ((1e-7, 190.0, "gives 1.9e\\+09 steps"), (2.0, 1.0, "no step"),
                                 (0.0, 1.0, "finite and > 0"), (0.1, float("nan"), "finite and > 0")):
         with pytest.raises(StepCountError, match=words):
-            simulate(robot, never, robot.neutral(), duration=duration, dt=dt, task=task, desired=never)
+            simulate(robot, never, robot.neutral(), duration, dt, task=task, desired=never)
         with pytest.raises(StepCountError, match=words):
-            simulate_plant(Plant(robot, added_mass=False, damping=False), robot.neutral(), None, never, duration, dt)
+            simulate(Plant(robot, added_mass=False, damping=False), never, robot.neutral(), duration, dt)
 
 
 @pytest.mark.parametrize(

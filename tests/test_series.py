@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
+import pytest
 
 import uvms
 
@@ -17,5 +20,8 @@ def test_the_vehicle_pose_and_arm_series_of_a_result_follow_its_configurations(r
     expected[:, 3:6] = np.unwrap(expected[:, 3:6], axis=0)
     assert np.array_equal(result.vehicle_pose(), expected)
     assert np.array_equal(result.arm(), np.array([robot.arm_configuration(q) for q in rows]))
-    result.q = rows[::-1].copy()  # a new series: computed again, not the kept one
-    assert np.array_equal(result.vehicle_pose()[0, :3], robot.base_values(rows[-1])[:3])
+    with pytest.raises(dataclasses.FrozenInstanceError):  # built once, never changed
+        result.q = rows[::-1].copy()
+    reversed_rows = dataclasses.replace(result, q=rows[::-1].copy())  # a new result: its series computed again
+    assert np.array_equal(reversed_rows.vehicle_pose()[0, :3], robot.base_values(rows[-1])[:3])
+    assert np.array_equal(result.vehicle_pose(), expected)

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 import uvms
-from uvms.dynamics.actuated import ActuatedCommand
+from uvms.dynamics.actuated import ActuatedCommand, ActuatedPlant
 from uvms.dynamics.hydrodynamics import HydroParameters
 from uvms.dynamics.plant import Plant
 from uvms.dynamics.thrusters import allocation_matrix, load_thrusters_yaml, parse_thrusters_urdf, thrusters_of
 from uvms.errors import ModelCheckError
-from uvms.sim.actuated import actuation_metrics, simulate_actuated
+from uvms.sim import simulate
 
 HERE = Path(__file__).parent
 BOX = HERE / "thruster_box.urdf"
@@ -150,31 +150,31 @@ class OpenLoop:
 
 def test_first_order_response_and_saturation(box):
     plant = Plant(box, HydroParameters())
-    result = simulate_actuated(plant, thrusters_of(box), lambda t, q, v, f: ActuatedCommand(
+    result = simulate(ActuatedPlant(plant, thrusters_of(box)), lambda t, q, v, f: ActuatedCommand(
         np.zeros(0), np.full(8, 100.0), {}), box.neutral(), 0.4, 0.001)
-    thrusts = result.actuation["thrusts"]
+    thrusts = result.actuation.thrusts
     expected = 50.0 * (1.0 - np.exp(-result.t[:, None] / np.array([0.1] * 4 + [0.2] * 4)))  # command clipped to 50
     np.testing.assert_allclose(thrusts, expected, atol=1e-9)
-    np.testing.assert_array_equal(result.actuation["thrust_command"], 50.0)
-    assert actuation_metrics(result)["max_thrust_ratio"] <= 1.0
+    np.testing.assert_array_equal(result.actuation.thrust_command, 50.0)
+    assert result.actuation_metrics()["max_thrust_ratio"] <= 1.0
 
 
 def test_energy_balance_with_thrusters_arm_damping_and_restoring(bluerov):
     """kinetic + potential energy change = thruster work + motor work + damping work (no current)."""
     plant = Plant(bluerov, gravity=True)
     q0 = bluerov.configuration(base=[0, 0, 0, 0.1, -0.05, 0.2], arm=[3.0, 1.8, 1.8, 1.0, 0.005])
-    result = simulate_actuated(plant, thrusters_of(bluerov), OpenLoop(bluerov.n_arm, 8), q0, 2.0, 0.002)
+    result = simulate(ActuatedPlant(plant, thrusters_of(bluerov)), OpenLoop(bluerov.n_arm, 8), q0, 2.0, 0.002)
     a = result.actuation
-    power = a["thrust_power"] + a["motor_power"] + a["damping_power"]
+    power = a.thrust_power + a.motor_power + a.damping_power
     work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(result.t))])
-    energy = result.energy - result.energy[0]
+    energy = result.plant.energy - result.plant.energy[0]
     residual = np.max(np.abs(energy - work))
-    thrust_work = np.sum(0.5 * (a["thrust_power"][1:] + a["thrust_power"][:-1]) * np.diff(result.t))
-    dissipated = -np.sum(0.5 * (a["damping_power"][1:] + a["damping_power"][:-1]) * np.diff(result.t))
+    thrust_work = np.sum(0.5 * (a.thrust_power[1:] + a.thrust_power[:-1]) * np.diff(result.t))
+    dissipated = -np.sum(0.5 * (a.damping_power[1:] + a.damping_power[:-1]) * np.diff(result.t))
     assert thrust_work > 5.0 and dissipated > 1.0  # the terms are not trivially small
     assert residual < 1e-4 * thrust_work, (residual, thrust_work, dissipated)
-    np.testing.assert_array_less(np.abs(a["thrusts"]), 51.5 + 1e-9)
-    assert actuation_metrics(result)["saturated_time_fraction"] > 0.3
+    np.testing.assert_array_less(np.abs(a.thrusts), 51.5 + 1e-9)
+    assert result.actuation_metrics()["saturated_time_fraction"] > 0.3
 
 
 def test_plugin_joint_axis_gives_the_thrust_direction(box):

@@ -10,12 +10,12 @@ import pytest
 
 import uvms
 from uvms.control.coordination import CoordinatedControl, coordinated_arm_rates
-from uvms.control.station_keeping import station_keeping
+from uvms.control.station import station_keeping
 from uvms.control.vehicle import pose_velocity_reference
-from uvms.dynamics.actuated import vehicle_inverse_dynamics
+from uvms.dynamics.actuated import ActuatedPlant, vehicle_inverse_dynamics
 from uvms.dynamics.plant import Plant
 from uvms.dynamics.thrusters import Thrusters, thrusters_of
-from uvms.sim.actuated import actuation_metrics, simulate_actuated
+from uvms.sim import simulate
 from uvms.tasks import FrameTask
 
 DT = 0.01
@@ -68,18 +68,18 @@ def _run(robot, thrusters, current, coordination, *, start=None, hold_arm=False,
     plant = Plant(robot, gravity=True, current=current)
     station = robot.configuration(base=np.zeros(6), arm=ARM)
     controller = station_keeping(plant, thrusters, station, DT, coordination=coordination, hold_arm=hold_arm)
-    return simulate_actuated(plant, thrusters, controller, station if start is None else start, duration, DT)
+    return simulate(ActuatedPlant(plant, thrusters), controller, station if start is None else start, duration, DT)
 
 
 def test_station_keeping_in_still_water_converges(robot, thrusters):
     """Started 10 cm and 0.1 rad off station, the arm held: the vehicle error goes to zero."""
     start = robot.configuration(base=[0.1, -0.05, 0.03, 0.0, 0.0, 0.1], arm=ARM)
     result = _run(robot, thrusters, [0.0, 0.0, 0.0], False, start=start, hold_arm=True)
-    error = result.actuation["vehicle_position_error"]
+    error = result.actuation.controller["vehicle_position_error"]
     assert error[0] == pytest.approx(np.sqrt(0.1**2 + 0.05**2 + 0.03**2))
-    assert error[-1] < 2e-3 and result.actuation["vehicle_attitude_error"][-1] < 2e-3, (error[-1],)
+    assert error[-1] < 2e-3 and result.actuation.controller["vehicle_attitude_error"][-1] < 2e-3, (error[-1],)
     np.testing.assert_array_equal(result.v[:, 6:], 0.0)  # no arm motion
-    metrics = actuation_metrics(result)
+    metrics = result.actuation_metrics()
     assert 0.0 < metrics["max_thrust_ratio"] <= 1.0
     assert metrics["final_vehicle_position_error"] == error[-1] and metrics["vehicle_position_error"] == error.max()
 
@@ -90,8 +90,8 @@ def test_an_actuated_result_saves_its_thruster_series(robot, thrusters, tmp_path
     written = result.save(tmp_path)
     assert [path.name for path in written] == ["trajectory.csv", "trajectory.npz", "actuation.npz"]
     with np.load(tmp_path / "actuation.npz") as saved:
-        assert set(saved.files) == {"t", *uvms.sim.result.ACTUATION_SERIES}
-        np.testing.assert_array_equal(saved["thrusts"], result.actuation["thrusts"])
+        assert set(saved.files) == {"t", *uvms.sim.series.ACTUATION_SERIES}
+        np.testing.assert_array_equal(saved["thrusts"], result.actuation.thrusts)
         assert saved["thrusts"].shape == (len(result.t), len(thrusters.names))
         np.testing.assert_array_equal(saved["t"], result.t)
     plain = uvms.SimulationResult(t=result.t, q=result.q, v=result.v, robot=robot)  # not actuated: no actuation.npz
@@ -104,10 +104,11 @@ def test_station_keeping_in_a_current_and_coordination(robot, thrusters):
     plain = _run(robot, thrusters, [0.3, 0.0, 0.0], False)
     coordinated = _run(robot, thrusters, [0.3, 0.0, 0.0], True)
     for result in (plain, coordinated):
-        error = result.actuation["vehicle_position_error"]
+        error = result.actuation.controller["vehicle_position_error"]
         assert error.max() < 0.08 and error[-1] < 5e-3, (error.max(), error[-1])
-        assert actuation_metrics(result)["max_thrust_ratio"] <= 1.0
-    plain_ee, coordinated_ee = plain.actuation["ee_point_error"], coordinated.actuation["ee_point_error"]
+        assert result.actuation_metrics()["max_thrust_ratio"] <= 1.0
+    plain_ee = plain.actuation.controller["ee_point_error"]
+    coordinated_ee = coordinated.actuation.controller["ee_point_error"]
     assert coordinated_ee.max() < 0.5 * plain_ee.max(), (coordinated_ee.max(), plain_ee.max())
     assert np.sqrt(np.mean(coordinated_ee**2)) < 0.5 * np.sqrt(np.mean(plain_ee**2))
 
@@ -118,10 +119,10 @@ def test_a_current_beyond_the_thrusters_saturates_without_windup(robot, thruster
     growing once the allocation saturates (anti-windup)."""
     result = _run(robot, thrusters, [1.0, 0.0, 0.0], True, duration=4.0)
     a = result.actuation
-    metrics = actuation_metrics(result)
+    metrics = result.actuation_metrics()
     assert 0.999 < metrics["max_thrust_ratio"] <= 1.0 + 1e-12 and metrics["saturated_time_fraction"] > 0.5
-    assert a["vehicle_position_error"][-1] > 0.3 and a["vehicle_attitude_error"].max() < 0.1
-    integral = a["velocity_integral"][:, 0]  # surge [m]
+    assert a.controller["vehicle_position_error"][-1] > 0.3 and a.controller["vehicle_attitude_error"].max() < 0.1
+    integral = a.controller["velocity_integral"][:, 0]  # surge [m]
     # the pose loop asks 0.5 m/s upstream while the current holds the vehicle: plain integration adds 1.23 m
     # over the second half; conditional integration adds (almost) nothing
     assert abs(integral[-1] - integral[len(integral) // 2]) < 0.05
@@ -140,10 +141,10 @@ def test_arm_reaction_feedforward_keeps_the_vehicle_still(robot, thrusters):
         plant = Plant(robot, gravity=True)
         controller = station_keeping(plant, fast, station, 0.005, ee_target=target, arm_feedforward=feedforward,
                                      ee_gain=3.0)
-        result = simulate_actuated(plant, fast, controller, station, 2.0, 0.005)
+        result = simulate(ActuatedPlant(plant, fast), controller, station, 2.0, 0.005)
         assert np.abs(result.v[:, 6:]).max() > 0.49  # the arm does move fast
-        errors[feedforward] = (result.actuation["vehicle_position_error"].max(),
-                               result.actuation["vehicle_attitude_error"].max())
+        errors[feedforward] = (result.actuation.controller["vehicle_position_error"].max(),
+                               result.actuation.controller["vehicle_attitude_error"].max())
     assert errors[True][0] < 0.1 * errors[False][0] and errors[True][1] < 0.5 * errors[False][1], errors
 
 
@@ -163,6 +164,6 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
             robot, velocity, lambda t, q, v: (uvms.clik_velocity(robot, q, task, gain=1.0, damping=0.01).v, None),
             DT, task_jacobian=lambda q: robot.jacobian(q)[:3], coordination=coordination,
             monitor=lambda q: {"ee_error": float(np.linalg.norm(target - robot.fk(q).translation))})
-        result = simulate_actuated(plant, thrusters, controller, station, 4.0, DT)
-        final[coordination] = result.actuation["ee_error"][-1]
+        result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)
+        final[coordination] = result.actuation.controller["ee_error"][-1]
     assert final[True] < 2e-3 and final[True] < 0.5 * final[False], final

@@ -61,9 +61,8 @@ from .dynamics import (HydroParameters, LinkHydrodynamics, Plant, ThrustAllocato
 # control
 from .control import GJMControlError, GJMController, StationKeeping, VelocityRamps, station_keeping
 
-# the one simulation loop, for kinematic and dynamic runs, and its result
-from .sim.simulate import SimulationResult, simulate_gjm, simulate_plant
-from .sim.actuated import actuation_metrics, simulate_actuated
+# the one simulation, for the kinematic, passive free-floating and actuated plants, and its result
+from .sim import SimulationResult, simulate
 
 # workspace
 from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
@@ -90,7 +89,7 @@ __all__ = [
     # control
     "GJMControlError", "GJMController", "StationKeeping", "VelocityRamps", "station_keeping",
     # simulation
-    "SimulationResult", "actuation_metrics", "simulate_actuated", "simulate_gjm", "simulate_plant",
+    "SimulationResult", "simulate",
     # workspace
     "BatchKinematics", "WorkspaceResult", "monte_carlo",
 ]

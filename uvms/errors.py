@@ -83,7 +83,8 @@ class ScenarioError(UVMSError):
 
 
 class StepCountError(UVMSError):
-    """A step ``dt`` and a duration that give no step at all, or more than ``uvms.sim.simulate.MAX_STEPS``."""
+    """A step ``dt`` and a duration that give no step at all, or more than ``uvms.numerics.integrate.MAX_STEPS``;
+    or a controller period ``control_dt`` that is not a multiple of ``dt``."""
 
 
 class NumericalError(UVMSError):

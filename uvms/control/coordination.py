@@ -27,7 +27,7 @@ from ..robot.robot import Robot
 from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from .vehicle import VehicleVelocityController
 
-#: A kinematic controller: (t [s], q (nq,), None) -> (v_ref (nv,), diagnostics), as ``uvms.sim.simulate.Controller``.
+#: A kinematic controller: (t [s], q (nq,), None) -> (v_ref (nv,), diagnostics), as ``uvms.sim.system.Controller``.
 KinematicController = Callable[[float, np.ndarray, None], tuple[np.ndarray, object]]
 
 
@@ -71,7 +71,7 @@ def arm_rates_for_task(jacobian: np.ndarray, task: np.ndarray, vehicle_velocity:
 
 class CoordinatedControl:
     """A kinematic controller driving an actuated UVMS: the digital controller of
-    :func:`uvms.sim.actuated.simulate_actuated`.
+    an ``ActuatedPlant`` (:func:`uvms.sim.loop.simulate`).
 
     Per step, from the measured (q, v): the kinematic controller's reference v_ref = [nu_ref; qd_ref];
     the arm command qd_ref, or with ``coordination`` the arm solved again with the measured vehicle velocity
@@ -82,7 +82,7 @@ class CoordinatedControl:
         robot: a floating-base Robot (the controller's kinematics).
         velocity: the vehicle velocity controller (its model and allocation).
         kinematic: (t, q, None) -> (v_ref (nv,), diagnostics), the signature of every kinematic controller
-            (``uvms.sim.simulate.Controller``: CLIK, task priority, set-based...); v_ref's vehicle part in the
+            (``uvms.sim.system.Controller``: CLIK, task priority, set-based...); v_ref's vehicle part in the
             axes of v (the vehicle joint's local twist).
         dt: control period [s] (the simulation step).
         task_jacobian: q -> J (k, nv) of the task the arm keeps with coordination (world-aligned rows).

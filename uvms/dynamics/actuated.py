@@ -8,7 +8,8 @@ The state of :class:`ActuatedPlantSystem` is (q, x) with x = [v (nv,), f (n,)], 
 with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.allocation_matrix`) and the wrench applied
 at the vehicle's base frame (:meth:`uvms.dynamics.plant.Plant._evaluate`). Since the command is clipped and
 f moves towards it, f stays inside the bounds. A plant without thrusters keeps its state (q, v):
-:class:`uvms.dynamics.plant.PlantSystem`, unchanged.
+:class:`uvms.dynamics.plant.PlantSystem`. :class:`ActuatedPlant` (plant + thrusters) builds the system
+(:meth:`ActuatedPlant.system`).
 
 The controller is digital: called once per step at the step's start, its command held over the
 integrator's stages, as a vehicle computer at 1/dt does; its state (integrators) advances per call.
@@ -26,8 +27,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError
-from .plant import Plant, PlantDynamics, PlantSample, PlantSystem
+from ..errors import ConfigurationError, StepCountError, UVMSError
+from .plant import Plant, PlantDynamics
+from .plant_system import PlantSample, PlantSystem, check_finite_state
 from .thrusters import Thrusters, allocation_matrix
 
 #: The controller of an actuated plant: (t [s], q (nq,), v (nv,), f (n,) [N]) -> ActuatedCommand.
@@ -49,25 +51,36 @@ class ActuatedCommand:
     info: dict
 
 
-class ThrusterDynamics:
-    """The thrusters on the plant's vehicle: B (6, n), bounds (n,) and time constants (n,).
+class ActuatedPlant:
+    """A plant whose vehicle has thrusters: B (6, n), bounds (n,) and time constants (n,) on the plant's vehicle.
+
+    What :func:`uvms.sim.loop.simulate` integrates with the state (q, [v, f]) under a digital vehicle controller
+    (:meth:`system`).
 
     Args:
-        plant: the Plant (its robot gives the frames); thrusters: their data.
+        plant: the Plant (its robot gives the frames; its current, damping, gravity apply); thrusters: their data.
+        thrusts0: (n,) [N] the thrusts at t = 0, within the bounds (None: zero).
 
     Raises:
         ModelCheckError: a thruster on an arm link, a fixed base.
         UVMSError: no thrusters.
+        ConfigurationError: thrusts0 of the wrong size, non-finite or outside the bounds.
     """
 
-    def __init__(self, plant: Plant, thrusters: Thrusters) -> None:
+    def __init__(self, plant: Plant, thrusters: Thrusters, *, thrusts0: np.ndarray | None = None) -> None:
         if len(thrusters) == 0:
             raise UVMSError(f"{thrusters.source}: no thrusters to actuate the vehicle with")
+        self.plant, self.robot, self.model = plant, plant.robot, plant.model
         self.thrusters = thrusters
         self.matrix = allocation_matrix(plant.robot, thrusters)  # (6, n)
         self.lower, self.upper = thrusters.lower, thrusters.upper
         self.time_constants = thrusters.time_constants
         self.n = len(thrusters)
+        f = np.zeros(self.n) if thrusts0 is None else plant.robot.check_velocity(thrusts0, self.n, "thrusts0").copy()
+        if np.any(f < self.lower) or np.any(f > self.upper):
+            raise ConfigurationError(f"thrusts0 {f.tolist()} must lie within [{self.lower.tolist()}, "
+                                     f"{self.upper.tolist()}] N")
+        self.thrusts0 = f
 
     def saturate(self, command: np.ndarray) -> np.ndarray:
         """The command (n,) clipped to [lower, upper] [N]."""
@@ -80,6 +93,17 @@ class ThrusterDynamics:
     def wrench(self, thrusts: np.ndarray) -> np.ndarray:
         """B f (6,) [N, N m], FLU at the base frame origin."""
         return self.matrix @ thrusts
+
+    def system(self, controller: ActuatedController, *, dt: float, control_dt: float = 0.0) -> ActuatedPlantSystem:
+        """This plant under ``controller`` (t, q, v, f) -> ActuatedCommand, called once per step of dt [s].
+
+        Raises:
+            StepCountError: control_dt other than 0 or dt (the controller runs once per step).
+        """
+        if control_dt not in (0.0, dt):
+            raise StepCountError(f"an actuated plant's controller runs once per step: control_dt must be 0 or dt = "
+                                 f"{dt:g} s, got {control_dt!r}")
+        return ActuatedPlantSystem(self, controller)
 
 
 # ------------------------------------------------------------------ model terms used by controllers and records
@@ -142,18 +166,27 @@ class ActuatedSample:
 
 class ActuatedPlantSystem:
     """The plant with thrusters under a digital controller, as the state (q, [v, f]) of
-    :func:`uvms.sim.simulate.run_loop`.
+    :func:`uvms.sim.loop.run_loop`.
 
     Args:
-        plant: the Plant; thrusters: ThrusterDynamics on it.
+        actuated: the ActuatedPlant.
         controller: (t, q, v, f) -> ActuatedCommand, called once per step (see the module docstring).
     """
 
-    def __init__(self, plant: Plant, thrusters: ThrusterDynamics, controller: ActuatedController) -> None:
-        self.plant, self.thrusters, self.controller = plant, thrusters, controller
-        self.model = plant.model
-        self.nv = plant.model.nv
-        self._passive = PlantSystem(plant, None)  # its record: energies, momentum, torques
+    def __init__(self, actuated: ActuatedPlant, controller: ActuatedController) -> None:
+        self.plant, self.thrusters, self.controller = actuated.plant, actuated, controller
+        self.robot, self.model = actuated.robot, actuated.model
+        self.nv = actuated.model.nv
+        self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its record: energies, momentum, torques
+
+    def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """(q0, [v0, thrusts0]) checked (v0 None: rest; thrusts0 the ActuatedPlant's).
+
+        Raises:
+            ConfigurationError: q0 or v0 of the wrong size or non-finite, a non-unit quaternion.
+        """
+        q, v = self._passive.initial_state(q0, v0)
+        return q, np.concatenate([v, self.thrusters.thrusts0])
 
     def _command(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
         command = self.controller(t, q, v, thrusts)
@@ -198,5 +231,8 @@ class ActuatedPlantSystem:
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
         """Raise UVMSError when the state reached at t [s] is not finite (the step dt was too large)."""
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(x))):
-            raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")
+        check_finite_state(t, q, x, dt)
+
+    def series_info(self) -> dict:
+        """{"thrust_bounds": (lower (n,), upper (n,) [N])}."""
+        return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper)}

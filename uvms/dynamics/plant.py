@@ -50,7 +50,6 @@ momentum live in :mod:`uvms.dynamics.added_mass` (importable from here too).
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,10 +60,8 @@ from .added_mass import LOCAL, HydroLink, _cross, added_mass_coriolis, augmented
 from .hydrodynamics import HydroParameters, hydrodynamics_of
 from ..robot.robot import Robot, check_robot
 from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
+from .plant_system import Command, PlantSystem
 
-
-#: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
-Command = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -141,6 +138,18 @@ class Plant:
         self._current = hydro.current
         self._moving_fluid = bool(np.any(hydro.current != 0.0))
         self._base_placement = self.model.frames[self.model.getFrameId(robot.root_link)].placement.copy()
+
+    def system(self, controller: Command | np.ndarray | None, *, dt: float, control_dt: float = 0.0) -> PlantSystem:
+        """This plant under a joint-velocity command, the system :func:`uvms.sim.loop.simulate` integrates.
+
+        Args:
+            controller: (t, q, v) -> u (n_arm,) (e.g. the GJM controller), a constant (n_arm,), or None (zero).
+            dt: integration step [s]; control_dt: the command's period [s] (0: evaluated at every stage).
+
+        Raises:
+            StepCountError: control_dt not 0 nor a positive multiple of dt.
+        """
+        return PlantSystem(self, controller, dt=dt, control_dt=control_dt)
 
     # ----------------------------------------------------------------- sizes
     @property
@@ -281,83 +290,3 @@ class Plant:
                 nu_r, _ = self._relative_twist(nu, pose)
                 total += pose.act(pin.Force(link.params.added_mass @ nu_r))
         return total.vector.copy()
-
-
-# ------------------------------------------------------------------ the plant as a system of the loop
-@dataclass(frozen=True)
-class PlantSample:
-    """The plant at the start of a step: the command applied from it and the dynamics it gives.
-
-    Attributes:
-        rate: (v (nv,), v' (nv,)): the state's derivative at (q, v), the integrator's first stage.
-        command: u (n_arm,) [rad/s or m/s]; dynamics: accelerations and motor torques.
-    """
-
-    rate: tuple[np.ndarray, np.ndarray]
-    command: np.ndarray
-    dynamics: PlantDynamics
-
-
-class PlantSystem:
-    """The plant under a joint-velocity command, as the state (q, v) of :func:`uvms.sim.simulate.run_loop`.
-
-    (q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)).
-
-    Args:
-        plant: the Plant.
-        command: (t, q, v) -> u (n_arm,), a constant (n_arm,), or None (zero).
-        hold: sample the command once per step and hold it over the integrator's stages (a digital
-            controller at 1/dt); default: evaluate it at every stage.
-
-    Raises:
-        ConfigurationError: a constant command of the wrong size or non-finite.
-    """
-
-    def __init__(self, plant: Plant, command: Command | np.ndarray | None, hold: bool = False) -> None:
-        self.plant, self.model, self.hold = plant, plant.model, bool(hold)
-        if command is None:
-            command = np.zeros(plant.n_arm)
-        if not callable(command):
-            value = plant.robot.check_velocity(command, plant.n_arm, "joint-velocity command")
-            command = lambda t, q, v: value  # noqa: E731
-        self.command = command
-
-    def command_at(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """u (n_arm,) at (t, q, v), checked.
-
-        Raises:
-            UVMSError: the command failed, or is not n_arm finite numbers.
-        """
-        try:
-            u = np.asarray(self.command(t, q, v), dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise UVMSError(f"the command failed at t = {t:.6g} s: {exc}") from None
-        if u.shape != (self.plant.n_arm,) or not np.all(np.isfinite(u)):
-            raise UVMSError(
-                f"the command must return {self.plant.n_arm} finite joint velocities, got {u!r} at t = {t:.6g} s")
-        return u
-
-    def sample(self, t: float, q: np.ndarray, v: np.ndarray) -> PlantSample:
-        """The command and the dynamics at the start of a step."""
-        u = self.command_at(t, q, v)
-        dynamics = self.plant._evaluate(q, v, u)
-        return PlantSample((v, dynamics.acceleration), u, dynamics)
-
-    def stage_rate(self, sample: PlantSample) -> Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
-        """(t, q, v) -> (v, v') at the integrator's stages (the command held from ``sample`` when ``hold``)."""
-        plant = self.plant
-        if self.hold:
-            held = sample.command
-            return lambda t, q, v: (v, plant._evaluate(q, v, held).acceleration)
-        return lambda t, q, v: (v, plant._evaluate(q, v, self.command_at(t, q, v)).acceleration)
-
-    def record(self, t: float, q: np.ndarray, v: np.ndarray, sample: PlantSample) -> dict:
-        """The plant series of a row: v, the command, torques, energies, momentum."""
-        kinetic, potential = self.plant.energy(q, v)
-        return {"v": v.copy(), "command": sample.command, "joint_torque": sample.dynamics.joint_torque,
-                "kinetic_energy": kinetic, "potential_energy": potential, "momentum": self.plant.momentum(q, v)}
-
-    def check(self, t: float, q: np.ndarray, v: np.ndarray, dt: float) -> None:
-        """Raise UVMSError when the state reached at t [s] is not finite (the step dt was too large)."""
-        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-            raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")

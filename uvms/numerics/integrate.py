@@ -16,7 +16,7 @@ Two schemes, one implementation each:
   quaternion stays unit).
 
 This module sits below the dynamics, the controllers and the simulation loop
-(:mod:`uvms.sim.simulate`), which all use it.
+(:mod:`uvms.sim.loop`), which all use it.
 """
 
 from __future__ import annotations

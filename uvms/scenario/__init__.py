@@ -2,7 +2,7 @@
 
 ``resources`` (scenario files and the shipped scenarios by name), ``schema`` (sections, keys, types, defaults,
 bounds; reading and ``--set`` overrides), ``build`` (model, task, initial configuration, trajectory, controller,
-plant), ``runs`` (the one simulation loop of :mod:`uvms.sim.simulate`, metrics, the files of the run folder),
+plant), ``runs`` (the one simulation of :mod:`uvms.sim.loop`, metrics, the files of the run folder),
 ``verdict`` (joint limits kept, task error within tolerance), ``record`` (the model a run folder records, read
 back by ``uvms view --result``) and ``sweep`` (grids of overrides on joblib or Dask).
 

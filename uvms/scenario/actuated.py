@@ -1,7 +1,7 @@
 """A scenario whose vehicle is actuated by its thrusters: station keeping with the end effector held at a point.
 
 ``[plant] type = "hydrodynamic"`` with ``thrusters = true`` runs the whole chain of
-:func:`uvms.control.station_keeping.station_keeping` on the one loop (:func:`uvms.sim.actuated.simulate_actuated`):
+:func:`uvms.control.station.station_keeping` with :func:`uvms.sim.loop.simulate` on an ``ActuatedPlant``:
 the vehicle pose loop and the end-effector point task give the vehicle and arm references; with
 ``vehicle_control.coordination`` the arm is solved again with the measured vehicle velocity; the vehicle
 velocity loop (the plant's own Fossen model as feedforward, PI feedback) gives a body wrench, the allocation
@@ -17,14 +17,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..control.coordination import CoordinatedControl
-from ..control.station_keeping import station_keeping
+from ..control.station import station_keeping
+from ..dynamics.actuated import ActuatedPlant
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, thrusters_of
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
+from ..sim.loop import simulate
 from ..sim.result import SimulationResult
-from ..sim.simulate import TaskRecorder
-from ..sim.actuated import actuation_metrics, simulate_actuated
 from ..tasks.frame import FrameTask
 from .schema import changed_keys
 
@@ -117,15 +117,14 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
 def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np.ndarray, duration: float,
                        scenario: dict, progress: bool | None) -> SimulationResult:
     """The run, with the task series (the end effector against the held point) recorded."""
-    recorder = TaskRecorder(actuation.plant.robot, task, lambda t: trajectory(t).pose)
-    return simulate_actuated(actuation.plant, actuation.thrusters, actuation.controller, q0, duration,
-                             float(scenario["simulation"]["dt"]), integrator=scenario["simulation"]["integrator"],
-                             recorders=[recorder], progress=progress)
+    return simulate(ActuatedPlant(actuation.plant, actuation.thrusters), actuation.controller, q0, duration,
+                    float(scenario["simulation"]["dt"]), integrator=scenario["simulation"]["integrator"], task=task,
+                    desired=lambda t: trajectory(t).pose, progress=progress)
 
 
 def actuated_metrics(result: SimulationResult, actuation: Actuation, scenario: dict) -> dict:
-    """``metrics.json``'s actuated entries: the thrusters' (:func:`uvms.sim.actuated.actuation_metrics`) and
-    what the run was (thruster count, coordination, current)."""
-    return {**actuation_metrics(result), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names,
+    """``metrics.json``'s actuated entries: the thrusters' (:meth:`uvms.sim.result.SimulationResult.actuation_metrics`)
+    and what the run was (thruster count, coordination, current)."""
+    return {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names,
             "coordination": bool(scenario["vehicle_control"]["coordination"]),
             "current": list(scenario["plant"]["current"]) or [0.0, 0.0, 0.0]}

@@ -20,7 +20,7 @@ FLU. One message per topic and sample (row k of the run, stamped ``start_time_ns
   [vx, vy, 0, 0, 0, wz] planar). Covariances are zero (exact, simulated). A fixed base has no ``/odom``.
 - ``/<frame>/desired_pose`` (geometry_msgs/PoseStamped, header ``odom``): the desired pose of the task frame;
   ``/<frame>/desired_position`` (geometry_msgs/PointStamped) when only the desired position was recorded.
-- an actuated run (thrusters, :func:`uvms.sim.actuated.simulate_actuated`): ``/thrusters/<name>/thrust``
+- an actuated run (thrusters, ``simulate`` on an ``ActuatedPlant``): ``/thrusters/<name>/thrust``
   (std_msgs/Float64, [N], the thruster's thrust, as uuv_simulator's thruster topics) and ``/body_wrench``
   (geometry_msgs/WrenchStamped, header the vehicle root link: the thrusters' wrench on the vehicle, body FLU
   [N, N m]).
@@ -210,10 +210,12 @@ def desired_series(result: SimulationResult,
 def _check_run(robot: Robot, result: SimulationResult) -> None:
     """The run's series fit the robot: shapes (N, nq), (N, nv), (N, n_arm), (N, 3) and finite entries."""
     count = len(np.atleast_1d(result.t))
-    shapes = {"q": robot.nq, "v": robot.nv, "joint_torque": robot.n_arm, "desired_position": 3, "desired_rpy": 3}
-    for name, width in shapes.items():
-        if getattr(result, name) is not None:
-            finite_array(getattr(result, name), f"the run's {name}", (count, width), error=BagExportError)
+    torque = None if result.plant is None else result.plant.joint_torque  # a plant run's motor torques
+    series = {"q": (result.q, robot.nq), "v": (result.v, robot.nv), "joint_torque": (torque, robot.n_arm),
+              "desired_position": (result.desired_position, 3), "desired_rpy": (result.desired_rpy, 3)}
+    for name, (values, width) in series.items():
+        if values is not None:
+            finite_array(values, f"the run's {name}", (count, width), error=BagExportError)
 
 
 def topic_token(name: str) -> str:
@@ -316,7 +318,7 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
         desired_frame: the frame the desired pose is for (the task frame); default the first end effector.
         start_time_ns: the stamp of t = 0 [ns since the Unix epoch]; default 0.
         lock: hold the lock of ``path`` (False for a bag inside a run folder being written, as ``uvms run``).
-        thrusters: the thruster names of an actuated run (its ``actuation["thrusts"]`` columns, in order).
+        thrusters: the thruster names of an actuated run (its ``actuation.thrusts`` columns, in order).
 
     Returns:
         The topics written with their message counts, and what was skipped and why.
@@ -363,13 +365,13 @@ def _thrust_series(result: SimulationResult, names: Sequence[str]) -> tuple | No
     Raises:
         BagExportError: names given that do not match the run's thrust columns.
     """
-    actuation = getattr(result, "actuation", None)
-    if not names or not actuation or "thrusts" not in actuation:
+    actuation = result.actuation
+    if not names or actuation is None:
         return None
-    thrusts = np.asarray(actuation["thrusts"])
+    thrusts = np.asarray(actuation.thrusts)
     if thrusts.shape != (len(result.t), len(names)):
         raise BagExportError(f"{len(names)} thruster names for thrusts of shape {thrusts.shape}")
-    return [topic_token(name) for name in names], thrusts, np.asarray(actuation["body_wrench"])
+    return [topic_token(name) for name in names], thrusts, np.asarray(actuation.body_wrench)
 
 
 def _write(api: dict[str, Any], staging: Path, robot: Robot, result: SimulationResult, stamps: np.ndarray,
@@ -425,6 +427,6 @@ def _write(api: dict[str, Any], staging: Path, robot: Robot, result: SimulationR
 def _joint_state(messages: Messages, robot: Robot, result: SimulationResult, k: int, stamp: int, q: np.ndarray) -> Any:
     """The arm joints of row k: positions from q, velocities from v, efforts from a plant run's torques."""
     velocity = None if result.v is None else np.asarray(result.v[k, robot.n_vehicle:])
-    effort = None if result.joint_torque is None else np.asarray(result.joint_torque[k])
+    effort = None if result.plant is None else np.asarray(result.plant.joint_torque[k])
     return messages.joint_state(stamp, robot.arm_joint_names, robot.arm_configuration(q), velocity, effort)
 

@@ -14,7 +14,9 @@ import numpy as np
 from ..io import outputs
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError
-from ..sim.simulate import SimulationResult, simulate, simulate_gjm, step_count
+from ..numerics.integrate import step_count
+from ..sim.loop import simulate
+from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
 from .build import Setup, build
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
@@ -87,7 +89,7 @@ def run(
     ``[outputs]`` position/orientation tolerance, :mod:`uvms.scenario.verdict`).
 
     With a dynamic ``[plant]`` (rigid or hydrodynamic) the joints are driven by the GJM
-    controller of :mod:`uvms.control.gjm` through :func:`uvms.sim.simulate.simulate_gjm` (the one loop), and
+    controller of :mod:`uvms.control.gjm` through :func:`uvms.sim.loop.simulate` on the ``Plant``, and
     ``plant.npz`` (commands, torques, energy, momentum) and the figures of
     :func:`uvms.viz.plotting.gjm_figures` are added.
 
@@ -148,7 +150,7 @@ def numerics_guard(name: str) -> Iterator[None]:
 
 
 def check_step_count(scenario: dict, duration: float) -> int:
-    """The number of steps of a run, checked before it starts (:func:`uvms.sim.simulate.step_count`)."""
+    """The number of steps of a run, checked before it starts (:func:`uvms.numerics.integrate.step_count`)."""
     if scenario["simulation"]["duration"]:
         duration_name = "simulation.duration"
     else:
@@ -176,15 +178,17 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
         result = simulate_actuation(setup.actuation, setup.task, setup.trajectory, setup.q0, setup.duration, scenario,
                                     progress)
     elif setup.plant is not None:
-        result = plant_run = simulate_gjm(setup.plant, setup.controller, setup.q0, setup.duration,
-                                          simulation_section["dt"], control_dt=setup.control_dt,
-                                          integrator=simulation_section["integrator"], progress=progress,
-                                          task=setup.task)
+        controller = setup.controller
+        result = plant_run = simulate(setup.plant, controller, setup.q0, setup.duration, simulation_section["dt"],
+                                      control_dt=setup.control_dt, integrator=simulation_section["integrator"],
+                                      task=setup.task,
+                                      desired=None if setup.task is None else lambda t: controller.reference(t).pose,
+                                      progress=progress)
     else:
         recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
         desired = setup.samples or setup.trajectory  # the controller's samples: the row's time is already there
-        result = simulate(setup.robot, setup.controller, setup.q0, duration=setup.duration,
-                          dt=simulation_section["dt"], task=setup.task, desired=lambda t: desired(t).pose,
+        result = simulate(setup.robot, setup.controller, setup.q0, setup.duration, simulation_section["dt"],
+                          task=setup.task, desired=lambda t: desired(t).pose,
                           integrator=simulation_section["integrator"], progress=progress, recorders=recorders)
     metrics = compute_metrics(result, setup, time.perf_counter() - started)
     metrics["scenario"] = scenario["scenario"]["name"]

@@ -1,1 +1,9 @@
-"""The simulation loop and its result."""
+"""The one simulation (:func:`uvms.sim.loop.simulate` over one System protocol) and its immutable result."""
+
+from .result import SimulationResult
+from .series import ActuationSeries, PlantSeries, TrackingSeries
+from .loop import simulate
+from .system import Simulable, System
+
+__all__ = ["ActuationSeries", "PlantSeries", "SimulationResult", "Simulable", "System", "TrackingSeries",
+           "simulate"]

@@ -1,10 +1,11 @@
-"""The one result type of a run, kinematic or dynamic: time series with optional dynamic extras.
+"""The one result type of a run: time series, with the optional series groups of a plant, a tracking controller
+and thrusters (:mod:`uvms.sim.series`).
 
-Row k of every series is the state at t[k] and what was applied from it. A kinematic run
-(:func:`uvms.sim.simulate.simulate`) fills the task series; a plant run
-(:func:`uvms.sim.simulate.simulate_plant`) the plant series; a GJM-controlled plant run
-(:func:`uvms.sim.simulate.simulate_gjm`) the plant and the tracking series, and the task series
-too when it is given the task (``uvms run``). A series a run did not record is None.
+Row k of every series is the state at t[k] and what was applied from it. A kinematic run fills the task series;
+a plant run the plant series (``plant``); a run of a tracking controller (the GJM controller) the tracking series
+(``tracking``) too; a plant with thrusters the actuation series (``actuation``). The task series need the run's
+task (``simulate(..., task=, desired=)``). A series a run did not record is None. A result is immutable: built
+once at the end of :func:`uvms.sim.loop.simulate`, never changed (``dataclasses.replace`` makes another).
 """
 
 from __future__ import annotations
@@ -18,54 +19,48 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import UVMSError
 from ..io import outputs
 from ..robot.robot import Robot
 from ..tasks.vehicle import VELOCITY_NAMES
+from .series import (ACTUATION_FIELDS, PLANT_FIELDS, TRACKING_FIELDS, ActuationSeries, PlantSeries,
+                     TrackingSeries)
 
 #: The time series of a task, in the order of ``trajectory.npz``.
 SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",
           "position_error", "orientation_error", "sigma_min", "damping", "limits_active", "objective_value",
           "objective_activation", "objective_active", "speed_ratio")
-#: The series of a GJM-controlled plant run, in the order of ``plant.npz``.
+#: The series of a tracking-controlled plant run, in the order of ``plant.npz``.
 PLANT_SERIES = ("t", "q", "v", "command", "rates", "joint_torque", "kinetic_energy", "potential_energy", "momentum",
                 "ee_position", "desired_position", "ee_velocity", "desired_velocity", "position_error", "sigma_min",
                 "damping")
-#: The series of an actuated run that ``save`` writes to ``actuation.npz`` (the others stay in memory).
-ACTUATION_SERIES = ("thrusts", "thrust_command", "body_wrench", "wrench_command", "achieved_wrench", "thrust_power",
-                    "thruster_power_abs", "damping_power", "vehicle_position_error", "vehicle_attitude_error",
-                    "ee_point_error")
 
 
-@dataclass
+@dataclass(frozen=True)
 class SimulationResult:
     """Time series of a run; row k is the state at t[k] and the velocity (or command) applied from it.
 
     Attributes:
         t: (N,) [s]; q: (N, nq); v: (N, nv) (kinematic: the velocity applied; dynamic: the state's).
-        robot: the model the run used (not saved).
         ee_position, desired_position: (N, 3) [m] world; ee_rpy, desired_rpy: (N, 3) [rad].
         task_error: (N, k) desired - actual on the task axes [m, rad] (``axes`` names them).
-        position_error: (N,) [m] norm over the task's position axes.
+        position_error: (N,) [m] norm over the task's position axes (a tracking run without task: the
+            controller's, ``tracking.position_error``).
         orientation_error: (N,) [rad] norm over the task's orientation axes.
         sigma_min, damping: (N,) of the inverted Jacobian; limits_active: (N,) joints held at a limit.
         objective_value, objective_activation: (N, k) the rows of a scenario's inequality objectives (their
             values in their units, activations in [0, 1]); objective_active: (N, n_objectives) bool;
             speed_ratio: (N,) max_i |v_i| / max_i over the speed limits (:mod:`uvms.scenario.inequalities`).
-        command: (N, n_arm) joint-velocity commands u [rad/s or m/s] (plant runs).
-        joint_torque: (N, n_arm) motor torques [N m or N] (plant runs).
-        kinetic_energy, potential_energy: (N,) [J] (plant runs; kinetic includes the added mass).
-        momentum: (N, 6) [N s, N m s] world frame about the world origin, rigid + added mass (plant runs).
-        rates: (N, n_arm) joint rates w [rad/s] of the controller before the servo feedforward (GJM runs).
-        ee_velocity, desired_velocity: (N, 3) [m/s] world, linear velocity of the frame origin (GJM runs).
-        axes: the task axes; integrator: "euler" or "rk4"; dt, control_dt, wall_time: [s].
-        plant, controller: what produced the run (not saved), or None.
-        actuation: the thrusters' and vehicle controller's series of an actuated run (name -> (N, ...) array;
-            :data:`ACTUATION_SERIES` are saved), or None; thruster_dynamics: its thrusters (not saved).
+        robot: the model the run used (not saved); axes: the task axes; integrator: "euler" or "rk4";
+            dt, wall_time: [s].
+        plant: the plant series (plant runs), tracking: the tracking controller's, actuation: the thrusters'
+            and the vehicle controller's (actuated runs); None when the run had none.
     """
 
     t: np.ndarray
     q: np.ndarray
     v: np.ndarray
+    robot: Robot = field(repr=False)
     ee_position: np.ndarray | None = None
     ee_rpy: np.ndarray | None = None
     desired_position: np.ndarray | None = None
@@ -80,24 +75,65 @@ class SimulationResult:
     objective_activation: np.ndarray | None = None
     objective_active: np.ndarray | None = None
     speed_ratio: np.ndarray | None = None
-    robot: Robot = field(default=None, repr=False)
     axes: tuple[str, ...] = ()
-    wall_time: float = 0.0
-    command: np.ndarray | None = None
-    joint_torque: np.ndarray | None = None
-    kinetic_energy: np.ndarray | None = None
-    potential_energy: np.ndarray | None = None
-    momentum: np.ndarray | None = None
-    rates: np.ndarray | None = None
-    ee_velocity: np.ndarray | None = None
-    desired_velocity: np.ndarray | None = None
     integrator: str = "rk4"
     dt: float = 0.0
-    control_dt: float = 0.0
-    plant: Any = field(default=None, repr=False)
-    controller: Any = field(default=None, repr=False)
-    actuation: dict[str, np.ndarray] | None = field(default=None, repr=False)
-    thruster_dynamics: Any = field(default=None, repr=False)
+    wall_time: float = 0.0
+    plant: PlantSeries | None = field(default=None, repr=False)
+    tracking: TrackingSeries | None = field(default=None, repr=False)
+    actuation: ActuationSeries | None = field(default=None, repr=False)
+    _vehicle: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        """Check the configurations once (:meth:`Robot.check_configurations`) and derive the vehicle pose series.
+
+        Raises:
+            ConfigurationError: a row of q of the wrong size, non-finite or with a non-unit rotation part.
+        """
+        robot = self.robot
+        robot.check_configurations(self.q)
+        rows = np.zeros((len(self.q), 0))
+        if robot.base_type != "fixed":
+            rows = np.array([robot.base_values(q, check=False) for q in self.q])
+            angles = slice(2, 3) if robot.base_type == "planar" else slice(3, 6)
+            rows[:, angles] = np.unwrap(rows[:, angles], axis=0)
+        object.__setattr__(self, "_vehicle", rows)
+
+    @classmethod
+    def from_rows(cls, arrays: dict[str, np.ndarray], info: dict[str, Any], **fields: Any) -> SimulationResult:
+        """The result of the loop's rows: each series to its field or group.
+
+        Args:
+            arrays: the series by name, N rows each (:func:`uvms.sim.loop.run_loop`).
+            info: the system's :meth:`uvms.sim.system.System.series_info` (tracking frame and rows, thrust bounds).
+            fields: robot, axes, integrator, dt, wall_time.
+
+        Raises:
+            UVMSError: a series no field or group holds (a recorder's name that is not a series of the result).
+        """
+        arrays = dict(arrays)
+        count = len(arrays["t"])
+        plant = tracking = actuation = None
+        if "joint_torque" in arrays:
+            for name in ("command", "joint_torque"):  # no arm: (N, 0)
+                arrays[name] = arrays[name].reshape(count, -1)
+            plant = PlantSeries(**{name: arrays.pop(name) for name in PLANT_FIELDS})
+        if "tracking" in info:
+            frame, rows = info["tracking"]
+            tracking = TrackingSeries(ee_position=arrays["ee_position"], desired_position=arrays["desired_position"],
+                                      **{name: arrays.pop(name) for name in TRACKING_FIELDS}, frame=frame,
+                                      position_rows=tuple(row for row in rows if row < 3))
+            arrays.setdefault("position_error", tracking.position_error)
+        if "thrust_bounds" in info:
+            lower, upper = info["thrust_bounds"]
+            own = {name: arrays.pop(name) for name in ACTUATION_FIELDS}
+            others = {name: arrays.pop(name) for name in list(arrays) if name not in SERIES}
+            actuation = ActuationSeries(**own, lower=lower, upper=upper, controller=others)
+        unknown = sorted(set(arrays) - set(SERIES))
+        if unknown:
+            raise UVMSError(f"the run recorded {', '.join(unknown)}, which no series of SimulationResult holds; "
+                            f"a recorder may return {', '.join(SERIES[3:])}")
+        return cls(**arrays, plant=plant, tracking=tracking, actuation=actuation, **fields)
 
     # ------------------------------------------------------------------ task series
     def arrays(self) -> dict[str, np.ndarray]:
@@ -109,34 +145,15 @@ class SimulationResult:
 
         Angles are unwrapped over time (continuous, not folded into [-pi, pi)).
         """
-        cached = getattr(self, "_vehicle_pose", None)
-        if cached is None or cached[0] is not self.q:  # the CSV, the metrics and the figures all read it
-            robot = self.robot
-            rows = np.array([robot.base_values(q, check=False) for q in self.checked_q()])
-            angles = slice(2, 3) if robot.base_type == "planar" else slice(3, 6)
-            rows[:, angles] = np.unwrap(rows[:, angles], axis=0)
-            cached = self._vehicle_pose = (self.q, rows)
-        return cached[1].copy()
+        return self._vehicle.copy()
 
     def arm(self) -> np.ndarray:
         """Arm joint values per row (N, n_arm)."""
         robot = self.robot
-        return np.array([robot.arm_values(q) for q in self.checked_q()]).reshape(len(self.q), robot.n_arm)
-
-    def checked_q(self) -> np.ndarray:
-        """The configurations (N, nq), each checked as :meth:`Robot.check_configuration` does, once per result
-        (the rows of a run are read several times: the CSV, the metrics, the figures).
-
-        Raises:
-            ConfigurationError: a row of the wrong size, non-finite or with a non-unit rotation part.
-        """
-        if getattr(self, "_checked_q", None) is not self.q:
-            self.robot.check_configurations(self.q)
-            self._checked_q = self.q
-        return self.q
+        return np.array([robot.arm_values(q) for q in self.q]).reshape(len(self.q), robot.n_arm)
 
     def csv_text(self) -> str:
-        """The time series as CSV: t, vehicle pose, arm joints, v, end effector, errors, diagnostics (those recorded)."""
+        """The time series as CSV: t, vehicle pose, arm joints, v, end effector, errors, diagnostics (as recorded)."""
         robot = self.robot
         vehicle_names = (["base_x", "base_y", "base_yaw"] if robot.base_type == "planar" else
                          ["base_x", "base_y", "base_z", "base_roll", "base_pitch", "base_yaw"]
@@ -164,35 +181,19 @@ class SimulationResult:
         buffer.writelines([row_format % row for row in map(tuple, table.tolist())])
         return buffer.getvalue()
 
-    def actuation_arrays(self) -> dict[str, np.ndarray]:
-        """The arrays of ``actuation.npz``: t and the :data:`ACTUATION_SERIES` the run recorded ({} if not actuated)."""
-        if self.actuation is None:
-            return {}
-        return {"t": self.t, **{name: self.actuation[name] for name in ACTUATION_SERIES if name in self.actuation}}
-
     def save(self, folder: str | os.PathLike) -> tuple[Path, ...]:
-        """Write ``trajectory.csv`` and ``trajectory.npz`` (and an actuated run's ``actuation.npz``) atomically into
-        ``folder``; returns their paths."""
+        """Write ``trajectory.csv`` and ``trajectory.npz`` (and an actuated run's ``actuation.npz``: t and
+        :meth:`ActuationSeries.arrays`) atomically into ``folder``; returns their paths."""
         folder = Path(folder)
         outputs.write_text(folder / "trajectory.csv", self.csv_text())
         outputs.write_npz(folder / "trajectory.npz", **self.arrays())
         written = (folder / "trajectory.csv", folder / "trajectory.npz")
         if self.actuation is not None:
-            outputs.write_npz(folder / "actuation.npz", **self.actuation_arrays())
+            outputs.write_npz(folder / "actuation.npz", t=self.t, **self.actuation.arrays())
             written += (folder / "actuation.npz",)
         return written
 
     # ------------------------------------------------------------------ plant series
-    @property
-    def energy(self) -> np.ndarray:
-        """Mechanical energy (N,) [J]: kinetic + potential."""
-        return self.kinetic_energy + self.potential_energy
-
-    def momentum_drift(self) -> np.ndarray:
-        """max_t |h(t) - h(0)| of the linear and the angular momentum (2,) [N s, N m s]."""
-        change = self.momentum - self.momentum[0]
-        return np.array([np.max(np.linalg.norm(change[:, :3], axis=1)), np.max(np.linalg.norm(change[:, 3:], axis=1))])
-
     def frame_position(self, frame: str | None = None) -> np.ndarray:
         """Position (N, 3) [m] of any frame (default: the first end effector), world frame."""
         return np.array([self.robot.fk(q, frame).translation for q in self.q])
@@ -206,17 +207,9 @@ class SimulationResult:
         return self.v[:, self.robot.n_vehicle:]
 
     def motor_work(self) -> float:
-        """Work done by the joint motors, integral of tau_m . qd_m (trapezoid rule) [J]."""
-        power = np.sum(self.joint_torque * self.joint_rates(), axis=1)
+        """Work done by the joint motors, integral of tau_m . qd_m (trapezoid rule) [J] (plant runs)."""
+        power = np.sum(self._group("plant").joint_torque * self.joint_rates(), axis=1)
         return float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(self.t))) if len(power) > 1 else 0.0
-
-    # ------------------------------------------------------------------ tracking series (GJM runs)
-    def _position_axes(self) -> list[int]:
-        return [row for row in self.controller.rows if row < 3]
-
-    def tracking_error(self) -> np.ndarray:
-        """(N,) [m] norm of p_d - p over the controller's position axes (``plant.npz``'s position_error)."""
-        return np.linalg.norm((self.desired_position - self.ee_position)[:, self._position_axes()], axis=1)
 
     @property
     def final_position_error(self) -> float:
@@ -228,35 +221,48 @@ class SimulationResult:
         """max_t |p_d - p| [m]."""
         return float(self.position_error.max())
 
-    @property
-    def velocity_error(self) -> np.ndarray:
-        """(N,) [m/s] norm of v_d - v over the controller's position axes."""
-        return np.linalg.norm((self.desired_velocity - self.ee_velocity)[:, self._position_axes()], axis=1)
-
     def plant_metrics(self) -> dict:
-        """Plant-run numbers for ``metrics.json`` (SI units; see the README)."""
-        energy = self.energy
+        """Numbers of a tracking-controlled plant run for ``metrics.json`` (SI units; see the README)."""
+        plant, tracking = self._group("plant"), self._group("tracking")
+        energy = plant.energy
         work = self.motor_work()
         rates = self.joint_rates()
+        velocity_error = tracking.velocity_error
         return {
             "final_position_error_xyz": (self.desired_position[-1] - self.ee_position[-1]).tolist(),
-            "max_velocity_error": float(self.velocity_error.max()),
-            "final_velocity_error": float(self.velocity_error[-1]),
-            "momentum_drift": self.momentum_drift().tolist(),
-            "final_kinetic_energy": float(self.kinetic_energy[-1]),
-            "max_kinetic_energy": float(self.kinetic_energy.max()),
+            "max_velocity_error": float(velocity_error.max()),
+            "final_velocity_error": float(velocity_error[-1]),
+            "momentum_drift": plant.momentum_drift().tolist(),
+            "final_kinetic_energy": float(plant.kinetic_energy[-1]),
+            "max_kinetic_energy": float(plant.kinetic_energy.max()),
             "motor_work": work,
             "dissipated_energy": float(work - (energy[-1] - energy[0])),
             "max_joint_rate": float(np.abs(rates).max(initial=0.0)),
-            "max_joint_command": float(np.abs(self.command).max(initial=0.0)),
-            "max_joint_torque": float(np.abs(self.joint_torque).max(initial=0.0)),
+            "max_joint_command": float(np.abs(plant.command).max(initial=0.0)),
+            "max_joint_torque": float(np.abs(plant.joint_torque).max(initial=0.0)),
         }
 
     def plant_arrays(self) -> dict[str, np.ndarray]:
-        """The series of a GJM-controlled plant run saved in ``plant.npz``."""
-        arrays = {name: getattr(self, name) for name in PLANT_SERIES}
-        arrays["position_error"] = self.tracking_error()
+        """The :data:`PLANT_SERIES` of a tracking-controlled plant run, saved in ``plant.npz``."""
+        plant, tracking = self._group("plant"), self._group("tracking")
+        groups = {"plant": plant, "tracking": tracking}
+        arrays = {}
+        for name in PLANT_SERIES:
+            owner = next((group for group in groups.values() if hasattr(group, name)), self)
+            arrays[name] = getattr(owner, name)
+        arrays["position_error"] = tracking.position_error
         return arrays
+
+    def actuation_metrics(self) -> dict:
+        """The actuated run's numbers for ``metrics.json`` (:meth:`uvms.sim.series.ActuationSeries.metrics`)."""
+        return self._group("actuation").metrics(self.t)
+
+    def _group(self, name: str) -> Any:
+        group = getattr(self, name)
+        if group is None:
+            raise UVMSError(f"this run has no {name} series (recorded: task series"
+                            f"{''.join(', ' + n for n in ('plant', 'tracking', 'actuation') if getattr(self, n))})")
+        return group
 
 
 def velocity_labels(robot: Robot) -> list[str]:

@@ -34,7 +34,7 @@ def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "
     rows = int(np.ceil(count / columns))
     figure = Figure(figsize=(9, 1.7 * rows + 0.8))
     axes = figure.subplots(rows, columns, sharex=True, squeeze=False).reshape(-1)
-    thrusts, commands = result.actuation["thrusts"], result.actuation["thrust_command"]
+    thrusts, commands = result.actuation.thrusts, result.actuation.thrust_command
     for index, axis in enumerate(axes):
         if index >= count:
             axis.set_visible(False)
@@ -62,10 +62,12 @@ def coordination_figure(runs: Mapping[str, SimulationResult], title: str = "") -
               ("ee_point_error", "end-effector error [m]"))
     for label, result in runs.items():
         for axis, (name, _) in zip(axes, series):
-            if name in result.actuation:
-                axis.semilogy(result.t, np.maximum(result.actuation[name], FLOOR), label=label)
+            values = result.actuation.series(name)
+            if values is not None:
+                axis.semilogy(result.t, np.maximum(values, FLOOR), label=label)
     for axis, (name, ylabel) in zip(axes, series):
-        axis.set_ylim(bottom=log_bottom([run.actuation[name] for run in runs.values() if name in run.actuation]))
+        axis.set_ylim(bottom=log_bottom([run.actuation.series(name) for run in runs.values()
+                                         if run.actuation.series(name) is not None]))
         axis.set_ylabel(ylabel, fontsize=8)
         axis.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)

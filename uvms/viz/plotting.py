@@ -16,7 +16,7 @@ from matplotlib.ticker import MaxNLocator
 
 from ..io import outputs
 from ..robot.conventions import AXIS_NAMES
-from ..sim.simulate import SimulationResult
+from ..sim.result import SimulationResult
 
 
 
@@ -309,19 +309,21 @@ def gjm_tracking_figure(result, title: str = "", path: str | os.PathLike | None 
     are drawn relative to the start; world ENU axes (x forward, y left, z up).
 
     Args:
-        result: a :class:`uvms.sim.simulate.SimulationResult` of :func:`uvms.sim.simulate.simulate_gjm`.
+        result: a :class:`uvms.sim.result.SimulationResult` of a tracking-controlled plant (its ``tracking``).
         title: figure title; path: where to save the PNG (atomically), None to only return it.
     """
     t = result.t
     figure = Figure(figsize=(7.5, 6.5))
     velocity_axis, position_axis = figure.subplots(2, 1, sharex=True)
-    start = result.desired_position[0]
+    tracking = result.tracking
+    start = tracking.desired_position[0]
     for index, name in enumerate("xyz"):
         colour = f"C{index}"
-        velocity_axis.plot(t, result.ee_velocity[:, index], color=colour, label=f"v_{name}")
-        velocity_axis.plot(t, result.desired_velocity[:, index], "--", color=colour, label=f"v_{name},d")
-        position_axis.plot(t, result.ee_position[:, index] - start[index], color=colour, label=f"{name} - {name}(0)")
-        position_axis.plot(t, result.desired_position[:, index] - start[index], "--", color=colour,
+        velocity_axis.plot(t, tracking.ee_velocity[:, index], color=colour, label=f"v_{name}")
+        velocity_axis.plot(t, tracking.desired_velocity[:, index], "--", color=colour, label=f"v_{name},d")
+        position_axis.plot(t, tracking.ee_position[:, index] - start[index], color=colour,
+                           label=f"{name} - {name}(0)")
+        position_axis.plot(t, tracking.desired_position[:, index] - start[index], "--", color=colour,
                            label=f"{name}_d - {name}(0)")
     velocity_axis.set_ylabel("end-effector velocity [m/s]")
     position_axis.set_ylabel("end-effector position [m]")
@@ -350,7 +352,8 @@ def gjm_figures(result, folder: str | os.PathLike, title: str = "", snapshots: i
     ``snapshots.png`` (the configuration at ``snapshots`` evenly spaced times, 1, 3, 5, 7 s for 8 s).
 
     Args:
-        result: a :class:`uvms.sim.simulate.SimulationResult` of :func:`uvms.sim.simulate.simulate_gjm`; folder: output folder; title: figure titles.
+        result: a :class:`uvms.sim.result.SimulationResult` of a tracking-controlled plant (its ``plant`` and
+            ``tracking`` series); folder: output folder; title: figure titles.
 
     Returns:
         The paths written.
@@ -358,16 +361,16 @@ def gjm_figures(result, folder: str | os.PathLike, title: str = "", snapshots: i
     from .drawing import snapshot_figure  # 3-D drawing only when asked for
 
     folder = Path(folder)
-    robot, t = result.controller.robot, result.t
+    robot, t = result.robot, result.t
     gjm_tracking_figure(result, title, folder / "ee_tracking.png")
     labels = [f"{name} [rad/s]" for name in robot.arm_joint_names]
     figure = stacked(t, result.joint_rates(), labels, f"{title}: joint rates (solid) and commands (dashed)",
-                     dashed=result.command)
+                     dashed=result.plant.command)
     outputs.save_figure(figure, folder / "joint_rates.png")
     rows = snapshot_rows(t, snapshots)
     titles = [f"({chr(97 + k)}) t = {t[row]:.1f} s" for k, row in enumerate(rows)]
     planar = robot.base_type == "planar"
-    figure = snapshot_figure(robot, result.q[rows], titles=titles, frames=[result.controller.frame],
+    figure = snapshot_figure(robot, result.q[rows], titles=titles, frames=[result.tracking.frame],
                              plane="xy" if planar else None)
     figure.subplots_adjust(top=0.84)  # room for the suptitle above the panel titles
     figure.suptitle(f"{title}: configurations", y=0.99)

@@ -1,5 +1,5 @@
 """Station keeping with an end effector held at a point: the whole chain of an actuated UVMS, as one digital
-controller of :func:`uvms.sim.actuated.simulate_actuated`.
+controller of an ``ActuatedPlant`` for :func:`uvms.sim.loop.simulate`.
 
 Per control step (period dt), from the measured (q, v):
 

@@ -1,0 +1,154 @@
+"""The free-floating plant under a joint-velocity command, as a system of the one loop (:mod:`uvms.sim.system`).
+
+(q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)), the command continuous (evaluated at every
+integrator stage) or digital (sampled every control_dt and held). :meth:`uvms.dynamics.plant.Plant.system` builds it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ..errors import StepCountError, UVMSError
+
+if TYPE_CHECKING:
+    from .plant import Plant, PlantDynamics
+
+#: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
+Command = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+#: The rate at an integrator stage: (t [s], q (nq,), v (nv,)) -> (v (nv,), v' (nv,)).
+StageRate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class PlantSample:
+    """The plant at the start of a step: the command applied from it and the dynamics it gives.
+
+    Attributes:
+        rate: (v (nv,), v' (nv,)): the state's derivative at (q, v), the integrator's first stage.
+        command: u (n_arm,) [rad/s or m/s]; dynamics: accelerations and motor torques.
+    """
+
+    rate: tuple[np.ndarray, np.ndarray]
+    command: np.ndarray
+    dynamics: PlantDynamics
+
+
+class PlantSystem:
+    """The plant under a joint-velocity command, as the state (q, v) of :func:`uvms.sim.loop.run_loop`.
+
+    (q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)). A command with a
+    ``tracking(t, q, v) -> dict`` method (a tracking controller, e.g. the GJM controller, with its ``frame`` and
+    task ``rows``) has its series recorded with the plant's.
+
+    Args:
+        plant: the Plant.
+        command: (t, q, v) -> u (n_arm,), a constant (n_arm,), or None (zero).
+        dt: the integration step [s]; control_dt: 0 (default): the command is evaluated at every integrator
+            stage; > 0, a multiple of dt: a digital controller, sampled every control_dt [s] and held in between.
+
+    Raises:
+        ConfigurationError: a constant command of the wrong size or non-finite.
+        StepCountError: control_dt not 0 nor a positive multiple of dt.
+    """
+
+    def __init__(self, plant: Plant, command: Command | np.ndarray | None, *, dt: float,
+                 control_dt: float = 0.0) -> None:
+        self.plant, self.robot, self.model = plant, plant.robot, plant.model
+        self.controller = command
+        if command is None:
+            command = np.zeros(plant.n_arm)
+        if not callable(command):
+            value = plant.robot.check_velocity(command, plant.n_arm, "joint-velocity command")
+            command = lambda t, q, v: value  # noqa: E731
+        self.command = command
+        self.dt, self.every = float(dt), control_steps(control_dt, dt)
+        self.held: np.ndarray | None = None  # the digital controller's output, held between its samples
+
+    def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """(q0, v0) checked (v0 None: rest).
+
+        Raises:
+            ConfigurationError: q0 or v0 of the wrong size or non-finite, a non-unit quaternion.
+        """
+        robot = self.robot
+        q = robot.check_configuration(q0).copy()
+        return q, np.zeros(self.model.nv) if v0 is None else robot.check_velocity(v0).copy()
+
+    def command_at(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """u (n_arm,) at (t, q, v), checked.
+
+        Raises:
+            UVMSError: the command failed, or is not n_arm finite numbers.
+        """
+        try:
+            u = np.asarray(self.command(t, q, v), dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise UVMSError(f"the command failed at t = {t:.6g} s: {exc}") from None
+        if u.shape != (self.plant.n_arm,) or not np.all(np.isfinite(u)):
+            raise UVMSError(
+                f"the command must return {self.plant.n_arm} finite joint velocities, got {u!r} at t = {t:.6g} s")
+        return u
+
+    def sample(self, t: float, q: np.ndarray, v: np.ndarray) -> PlantSample:
+        """The command and the dynamics at the start of a step (a digital controller: sampled at its steps,
+        else the held command)."""
+        if self.every and (int(round(t / self.dt)) % self.every == 0 or self.held is None):
+            self.held = self.command_at(t, q, v)
+        u = self.held if self.every else self.command_at(t, q, v)
+        dynamics = self.plant._evaluate(q, v, u)
+        return PlantSample((v, dynamics.acceleration), u, dynamics)
+
+    def stage_rate(self, sample: PlantSample) -> StageRate:
+        """(t, q, v) -> (v, v') at the integrator's stages (the command held from ``sample`` when digital)."""
+        plant = self.plant
+        if self.every:
+            held = sample.command
+            return lambda t, q, v: (v, plant._evaluate(q, v, held).acceleration)
+        return lambda t, q, v: (v, plant._evaluate(q, v, self.command_at(t, q, v)).acceleration)
+
+    def record(self, t: float, q: np.ndarray, v: np.ndarray, sample: PlantSample) -> dict:
+        """The plant series of a row (v, the command, torques, energies, momentum) and a tracking controller's
+        (with limits_active = 0: it holds no joint at a limit)."""
+        kinetic, potential = self.plant.energy(q, v)
+        row = {"v": v.copy(), "command": sample.command, "joint_torque": sample.dynamics.joint_torque,
+               "kinetic_energy": kinetic, "potential_energy": potential, "momentum": self.plant.momentum(q, v)}
+        tracking = getattr(self.controller, "tracking", None)
+        if tracking is not None:
+            row.update(tracking(t, q, v), limits_active=0)
+        return row
+
+    def check(self, t: float, q: np.ndarray, v: np.ndarray, dt: float) -> None:
+        """Raise UVMSError when the state reached at t [s] is not finite (the step dt was too large)."""
+        check_finite_state(t, q, v, dt)
+
+    def series_info(self) -> dict:
+        """{"tracking": (frame, task rows)} of a tracking controller, else {}."""
+        if getattr(self.controller, "tracking", None) is None:
+            return {}
+        return {"tracking": (self.controller.frame, tuple(self.controller.rows))}
+
+
+def control_steps(control_dt: float, dt: float) -> int:
+    """The steps of dt [s] per period of a digital controller of period control_dt [s] (0: continuous).
+
+    Raises:
+        StepCountError: control_dt not 0 nor a positive multiple of dt.
+    """
+    control_dt = float(control_dt)
+    if control_dt == 0.0:
+        return 0
+    ratio = control_dt / dt
+    if not (np.isfinite(ratio) and ratio >= 1 - 1e-9 and abs(ratio - round(ratio)) < 1e-6):
+        raise StepCountError(f"control_dt must be 0 (continuous) or a positive multiple of dt = {dt:g} s, "
+                             f"got {control_dt!r}")
+    return int(round(ratio))
+
+
+def check_finite_state(t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
+    """Raise UVMSError when the state (q, x) reached at t [s] is not finite (the step dt [s] was too large)."""
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(x))):
+        raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")

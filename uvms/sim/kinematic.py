@@ -1,0 +1,127 @@
+"""The kinematic system (q' = v from a kinematic controller) and the task recorder of a run.
+
+:class:`KinematicSystem` is what :func:`uvms.sim.loop.simulate` integrates when it is given a ``Robot``;
+:class:`TaskRecorder` records the end effector against its desired pose (``simulate(..., task=, desired=)``),
+for every kind of run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import ConfigurationError, StepCountError, UVMSError
+from ..robot import kinematics
+from ..robot.robot import Robot
+from ..tasks.frame import FrameTask
+from .system import Controller, StageRate
+
+EMPTY = np.zeros(0)
+
+
+@dataclass(frozen=True)
+class KinematicSample:
+    """The controller's velocity at the start of a step: rate = (v (nv,), empty) and its diagnostics."""
+
+    rate: tuple[np.ndarray, np.ndarray]
+    info: object
+
+
+class KinematicSystem:
+    """q' = v from a kinematic controller (t, q, None) -> (v, diagnostics); no vector state.
+
+    Args:
+        robot: the model; controller: (t, q, None) -> (v (nv,), diagnostics with sigma_min, damping,
+            limits_active), with an optional ``velocity(t, q) -> v`` (the same v without the diagnostics).
+        control_dt: must be 0: a kinematic controller is evaluated at every integrator stage.
+
+    Raises:
+        StepCountError: control_dt not 0.
+    """
+
+    def __init__(self, robot: Robot, controller: Controller, control_dt: float = 0.0) -> None:
+        if control_dt != 0.0:
+            raise StepCountError(f"control_dt must be 0 for a kinematic run (the controller is evaluated at every "
+                                 f"integrator stage), got {control_dt!r}; a held command needs a plant")
+        self.robot, self.model, self.controller = robot, robot.model, controller
+
+    def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """(q0 checked, empty).
+
+        Raises:
+            ConfigurationError: a bad q0, or a v0 (a kinematic run has no velocity state).
+        """
+        if v0 is not None:
+            raise ConfigurationError("v0 is the initial velocity of a plant; a kinematic run has no velocity state "
+                                     "(give a Plant to simulate, or leave v0 out)")
+        return self.robot.check_configuration(q0).copy(), EMPTY
+
+    def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> KinematicSample:
+        """The velocity applied from q at t.
+
+        Raises:
+            UVMSError: a non-finite velocity.
+        """
+        v, info = self.controller(t, q, None)
+        if not np.all(np.isfinite(v)):
+            raise UVMSError(f"the controller returned a non-finite velocity at t = {t:.6g} s")
+        return KinematicSample((v, EMPTY), info)
+
+    def stage_rate(self, sample: KinematicSample) -> StageRate:
+        """(t, q, x) -> (controller velocity, empty) at the stages (the controller's ``velocity(t, q)`` when it
+        has one: the same v without the diagnostics no one reads there)."""
+        velocity = getattr(self.controller, "velocity", None)
+        if velocity is not None:
+            return lambda t, q, x: (velocity(t, q), EMPTY)
+        controller = self.controller
+        return lambda t, q, x: (controller(t, q, None)[0], EMPTY)
+
+    def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: KinematicSample) -> dict:
+        """v and the solver's diagnostics of a row."""
+        info = sample.info
+        sigma_min = info.sigma_min
+        # TODO(merge): every solver result's sigma_min becomes one float; task priority still gives one per level
+        return {"v": sample.rate[0].copy(),
+                "sigma_min": sigma_min if isinstance(sigma_min, float) else float(np.min(sigma_min)),
+                "damping": float(info.damping), "limits_active": len(getattr(info, "limits_active", ()))}
+
+    def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
+        """Nothing to refuse: the velocity was checked when sampled."""
+
+    def series_info(self) -> dict:
+        """No series group: {}."""
+        return {}
+
+
+class TaskRecorder:
+    """The task series of a row: end-effector pose, desired pose and the errors on the task axes.
+
+    The frame's pose is computed in the recorder's own Pinocchio data (never the robot's).
+
+    Args:
+        robot: the model; task: the end-effector task (its frame, axes and orientation error).
+        desired: t [s] -> desired pose of the task frame (world).
+    """
+
+    def __init__(self, robot: Robot, task: FrameTask, desired: Callable[[float], pin.SE3]) -> None:
+        self.robot, self.task, self.desired = robot, task, desired
+        self.data = robot.model.createData()
+        self.position_rows = [r for r in task.rows if r < 3]
+        self.orientation_rows = [r for r in task.rows if r >= 3]
+
+    def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
+        """ee_position, ee_rpy, desired_position, desired_rpy (3,) each, task_error (k,), position_error and
+        orientation_error at (t, q)."""
+        task = self.task
+        # q comes from pin.integrate in the loop (checked once at its start): Robot.fk would check it at every row
+        pose = kinematics.frame_pose(self.robot.model, self.data, q, task.frame_id)
+        target = self.desired(t)
+        full_error = task.full_error_between(target, pose)
+        return {"ee_position": pose.translation.copy(), "desired_position": target.translation.copy(),
+                "ee_rpy": pin.rpy.matrixToRpy(pose.rotation), "desired_rpy": pin.rpy.matrixToRpy(target.rotation),
+                "task_error": full_error[task.rows],
+                "position_error": float(np.linalg.norm(full_error[self.position_rows])),
+                "orientation_error": float(np.linalg.norm(full_error[self.orientation_rows]))}

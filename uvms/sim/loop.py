@@ -1,0 +1,136 @@
+"""ONE simulation: :func:`simulate` over the one loop :func:`run_loop`, for every system.
+
+The loop integrates a system (:class:`uvms.sim.system.System`) with one of the integrators of
+:mod:`uvms.numerics.integrate` (explicit Euler, RK4 Munthe-Kaas on the manifold) and records a row per step
+through the system and any number of recorders, into the one immutable :class:`uvms.sim.result.SimulationResult`.
+What is simulated decides the system:
+
+* a ``Robot``: q' = v from a kinematic controller (t, q, None) -> (v, diagnostics)
+  (:class:`uvms.sim.kinematic.KinematicSystem`);
+* a ``Plant`` (rigid or hydrodynamic): the passive free-floating plant under a joint-velocity command — the GJM
+  controller, any (t, q, v) -> u, a constant u or None (:class:`uvms.dynamics.plant.PlantSystem`);
+* an ``ActuatedPlant`` (plant + thrusters): under a digital vehicle controller such as station keeping
+  (:class:`uvms.dynamics.actuated.ActuatedPlantSystem`).
+
+::
+
+    simulate(robot, clik, q0, 10.0, 0.01, task=task, desired=lambda t: trajectory(t).pose)
+    simulate(plant, gjm_controller, q0, 8.0, 0.01)
+    simulate(ActuatedPlant(plant, thrusters), station_keeping(plant, thrusters, q0, 0.01), q0, 6.0, 0.01)
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import UVMSError
+from ..io.progress import tqdm
+from ..numerics.integrate import STEPS, check_integrator, step_count
+from ..robot.robot import Robot
+from ..tasks.frame import FrameTask
+from .kinematic import KinematicSystem, TaskRecorder
+from .result import SimulationResult
+from .system import Controller, Recorder, Simulable, System
+
+__all__ = ["run_loop", "simulate"]
+
+
+def run_loop(system: System, q0: np.ndarray, x0: np.ndarray, *, steps: int, dt: float, integrator: str = "rk4",
+             recorders: Sequence[Recorder] = (), progress: bool | None = None,
+             desc: str = "simulate") -> tuple[dict[str, np.ndarray], float]:
+    """Integrate ``system`` from (q0, x0) for ``steps`` steps of ``dt`` and record every row.
+
+    Args:
+        system: a System; q0: (nq,); x0: (m,), checked by the caller (``system.initial_state``).
+        steps: the number of steps (:func:`uvms.numerics.integrate.step_count`); dt: [s].
+        integrator: "euler" or "rk4".
+        recorders: (t, q, x, sample) -> {name: value} after the system's own record, later ones win.
+        progress: show a progress bar (None: only on a terminal); desc: its label.
+
+    Returns:
+        (the series by name, N = steps + 1 rows each, the wall time [s]).
+    """
+    step = STEPS[check_integrator(integrator)]
+    q, x = q0, x0
+    records: dict[str, list] = {}
+    started = time.perf_counter()
+    for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None, desc=desc,
+                  unit="step", leave=False):
+        t = k * dt
+        sample = system.sample(t, q, x)
+        row = {"t": t, "q": q.copy(), **system.record(t, q, x, sample)}
+        for recorder in recorders:
+            row.update(recorder(t, q, x, sample))
+        for name, value in row.items():
+            records.setdefault(name, []).append(value)
+        if k == steps:
+            break
+        q, x = step(system.model, system.stage_rate(sample), t, q, x, dt, sample.rate)
+        system.check(t + dt, q, x, dt)
+    return {name: np.array(values) for name, values in records.items()}, time.perf_counter() - started
+
+
+def simulate(
+    system: Robot | Simulable,
+    controller: Controller,
+    q0: np.ndarray,
+    duration: float,
+    dt: float,
+    *,
+    v0: np.ndarray | None = None,
+    integrator: str = "rk4",
+    control_dt: float = 0.0,
+    task: FrameTask | None = None,
+    desired: Callable[[float], pin.SE3] | None = None,
+    recorders: Sequence[Recorder] = (),
+    progress: bool | None = None,
+) -> SimulationResult:
+    """Integrate ``system`` driven by ``controller`` from q0 for ``duration`` with a fixed step ``dt``.
+
+    Args:
+        system: a ``Robot`` (kinematic run), a ``Plant`` (passive free-floating) or an ``ActuatedPlant`` (module
+            docstring); anything with ``system(controller, dt=, control_dt=) -> System``.
+        controller: what drives it: a kinematic controller (t, q, None) -> (v, diagnostics) for a Robot; a
+            joint-velocity command (t, q, v) -> u (n_arm,) (the GJM controller), a constant (n_arm,) or None
+            (zero) for a Plant; (t, q, v, thrusts) -> ActuatedCommand for an ActuatedPlant.
+        q0: initial configuration (nq,); v0: initial velocity (nv,) of a plant (None: rest).
+        duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
+            :data:`uvms.numerics.integrate.MAX_STEPS` (:func:`uvms.numerics.integrate.step_count`).
+        integrator: "rk4" (Runge-Kutta-Munthe-Kaas, order 4 on the manifold) or "euler".
+        control_dt: the controller's period [s], a multiple of dt, its command held in between (a digital
+            controller); 0: a continuous one, evaluated at every integrator stage (an actuated plant's controller
+            always runs once per step).
+        task, desired: record the task series (end effector against ``desired``: t -> pose, errors on the task's
+            axes) with :class:`uvms.sim.kinematic.TaskRecorder`; both or neither.
+        recorders: more series per row, (t, q, x, sample) -> {name: value}, after the task's; their names must be
+            series of :class:`SimulationResult` (:data:`uvms.sim.result.SERIES`).
+        progress: show a progress bar (None: only on a terminal).
+
+    Returns:
+        The immutable SimulationResult: the task series with ``task``, ``plant`` for a plant, ``tracking`` for a
+        controller with ``tracking`` (the GJM controller), ``actuation`` with thrusters.
+
+    Raises:
+        StepCountError: no step or too many, a control_dt that is not a multiple of dt (checked before anything
+            runs).
+        UVMSError: an unknown integrator, task without desired, bad q0 or v0, a controller returning non-finite
+            or wrongly sized values, a state that becomes non-finite (step too large).
+    """
+    integrator = check_integrator(integrator)
+    steps = step_count(duration, dt)
+    if (task is None) != (desired is None):
+        raise UVMSError("task and desired go together: the task's frame and axes, and desired: t [s] -> the pose "
+                        "(pin.SE3) the frame should have")
+    built = KinematicSystem(system, controller, control_dt) if isinstance(system, Robot) else \
+        system.system(controller, dt=dt, control_dt=control_dt)
+    q, x = built.initial_state(q0, v0)
+    every = [TaskRecorder(built.robot, task, desired)] if task is not None else []
+    arrays, wall_time = run_loop(built, q, x, steps=steps, dt=dt, integrator=integrator,
+                                 recorders=[*every, *recorders], progress=progress, desc="simulate")
+    return SimulationResult.from_rows(arrays, built.series_info(), robot=built.robot,
+                                      axes=task.axes if task is not None else (), integrator=integrator, dt=dt,
+                                      wall_time=wall_time)
