@@ -2,7 +2,7 @@
 
 Model: a 6-DOF floating base carrying a UR5 (6 + 6 DOF). The step is a pose
 task with a diagonal W, DLS, a joint-limit null-space term, diagnostics (sigma_min, residual) and
-integration on the manifold (PoseCLIK and the numpy step: no W).
+integration on the manifold (the pose CLIKSolver and the numpy step: no W).
 Times are ratios to one ``pin.forwardKinematics`` call measured in the same run
 (this machine is shared and noisy: absolute times are not comparable).
 
@@ -27,7 +27,6 @@ import numpy as np
 import pinocchio as pin
 
 import uvms
-from uvms.solvers.pose_clik import PoseCLIK
 
 from timing import interleaved_ratios
 
@@ -79,19 +78,23 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
     target = robot.fk(robot.random_configuration(rng))
     potential = uvms.JointLimitPotential(robot)
     model, data = robot.model, robot.data
-    hot = PoseCLIK(robot, gain=1.0, damping=1e-6, potential=potential, alpha=1.0)
-    hot.set_target(target)
     task = uvms.FrameTask(robot, target=target)
     weights = np.linspace(1.0, 2.0, robot.nv)  # a diagonal W (the step has weights)
+    pose = uvms.CLIKSolver(robot, task, gain=1.0, damping=1e-6, potential=potential, alpha=1.0)  # no W
+    solver = uvms.CLIKSolver(robot, task, weights=weights, damping=1e-6, potential=potential, alpha=1.0)
+    configuration = uvms.Configuration(robot, q)
+
+    def kept_step(kept: uvms.CLIKSolver) -> None:
+        configuration.update(q, check=False)  # the same q at every call
+        kept.step(configuration, DT)
+
     calls = {
-        "uvms PoseCLIK.step": lambda: hot.step(q, DT),
-        "uvms clik_step (general, with diagnostics)": lambda: uvms.clik_step(
-            robot, q, task, DT, weights=weights, damping=1e-6, potential=potential, alpha=1.0),
+        "uvms CLIKSolver.step, pose task (built once, no W)": lambda: kept_step(pose),
+        "uvms CLIKSolver built per step (general, with diagnostics)": lambda: uvms.CLIKSolver(
+            robot, task, weights=weights, damping=1e-6, potential=potential, alpha=1.0).step(
+            uvms.Configuration(robot, q, check=False), DT),
+        "uvms CLIKSolver.step (built once, with W)": lambda: kept_step(solver),
     }
-    if hasattr(uvms, "CLIKSolver"):  # the solver a controller builds once (an older checkout has none)
-        solver = uvms.CLIKSolver(robot, task, weights=weights, damping=1e-6, potential=potential, alpha=1.0)
-        calls["uvms CLIKSolver.solve + integrate (prepared, with diagnostics)"] = lambda: pin.integrate(
-            model, q, solver.solve(q, check=False).v * DT)
     calls["plain numpy DLS step"] = lambda: numpy_dls_step(robot, q, target, potential)
     try:
         import pink

@@ -37,13 +37,7 @@ import pinocchio as pin
 
 import uvms
 from uvms.robot.limits import Limit
-from uvms.solvers.hqp import hqp_step
-from uvms.solvers.set_based import integrate_velocity, set_based_step
-
-try:
-    from uvms.solvers.set_based import SetBasedSolver
-except ImportError:  # a checkout before it (PYTHONPATH=OLD_TREE for a before/after)
-    SetBasedSolver = None
+from uvms.solvers import SetBasedSolver, Solver
 from uvms.tasks import FrameTask
 from uvms.tasks.objectives import JointLimits, JointVelocityLimits, VehicleAttitude, VehicleVelocityLimits
 from uvms.tasks.objectives.base import vehicle_frame_id
@@ -116,22 +110,23 @@ class Problem:
 
 
 # ------------------------------------------------------------------------------------------- steppers
-def ours(step, problem: Problem):
-    """A stepper (q, levels) -> (q+, v, infeasible) of set_based_step or hqp_step."""
+def ours(solver_class: type[Solver], problem: Problem):
+    """A stepper (q, levels) -> (q+, v, infeasible) of a SetBasedSolver or HQPSolver built at every step."""
     def stepper(q, levels):
+        configuration = uvms.Configuration(problem.robot, q, check=False)
         try:
-            result = step(problem.robot, q, levels, DT, gain=GAIN)
+            result = solver_class(problem.robot, levels, dt=DT, gain=GAIN).step(configuration, DT)
         except Exception:  # noqa: BLE001 - counted as infeasible, like pink's
             return q, None, True
-        statuses = getattr(result.velocity, "solver_status", ())
-        infeasible = not np.all(np.isfinite(result.velocity.v)) or not all(s.startswith("optimal") for s in statuses)
-        return result.q, result.velocity.v, infeasible
+        statuses = result.extras.get("solver_status", ())
+        infeasible = not np.all(np.isfinite(result.v)) or not all(s.startswith("optimal") for s in statuses)
+        return configuration.q, result.v, infeasible
     return stepper
 
 
 class PreparedStepper:
     """uvms.SetBasedSolver built once per start (its levels checked and prepared there, as pink's tasks are
-    in ``PinkStepper.set_target``); a step is its velocity without diagnostics and the integration."""
+    in ``PinkStepper.set_target``); a step is its velocity (diagnostics computed only when read) and the integration."""
 
     def __init__(self, problem: Problem) -> None:
         self.problem, self.solver = problem, None
@@ -140,11 +135,12 @@ class PreparedStepper:
         self.solver = SetBasedSolver(self.problem.robot, self.problem.levels(target), gain=GAIN, dt=DT)
 
     def __call__(self, q, levels=None):  # noqa: ARG002 - the same signature as ours
+        configuration = uvms.Configuration(self.problem.robot, q, check=False)  # q from pin.integrate
         try:
-            v = self.solver.velocity(q, check=False)  # q from pin.integrate
+            v = self.solver.step(configuration, DT).v
         except Exception:  # noqa: BLE001 - counted as infeasible, like pink's
             return q, None, True
-        return integrate_velocity(self.problem.robot, q, v, DT), v, not np.all(np.isfinite(v))
+        return configuration.q, v, not np.all(np.isfinite(v))
 
 
 class PinkStepper:
@@ -286,8 +282,9 @@ def main() -> None:
     DT = options.dt
     logging.disable(logging.WARNING)  # pink logs every start outside a limit (safety_break=False)
     problem = Problem()
-    steppers = {"uvms SetBasedSolver (built per start)": PreparedStepper(problem)} if SetBasedSolver else {}
-    steppers.update({"uvms set_based_step": ours(set_based_step, problem), "uvms hqp_step": ours(hqp_step, problem)})
+    steppers = {"uvms SetBasedSolver (built per start)": PreparedStepper(problem),
+                "uvms SetBasedSolver (built per step)": ours(uvms.SetBasedSolver, problem),
+                "uvms HQPSolver (built per step)": ours(uvms.HQPSolver, problem)}
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")

@@ -1,5 +1,5 @@
-"""CLIK (uvms.solvers.clik): a CLIKSolver built once gives the numbers of the one-call functions bit for bit, and
-the one-call functions build a solver at every call, so they read the current values of their arguments."""
+"""CLIK (uvms.solvers.clik): a CLIKSolver built once gives the numbers of a solver built at every call bit for bit;
+a solver built after an input changed in place reads the new value; the pose hot path is CLIK on a FrameTask."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from uvms import Configuration
 from uvms.solvers import CLIKSolver
 from uvms.solvers.clik import solve_with_held
-from uvms.robot.configuration import Configuration
 
 
 def hoang_setup():
@@ -19,7 +19,7 @@ def hoang_setup():
     return robot, task
 
 
-def test_a_solver_reused_over_configurations_and_targets_equals_fresh_clik_velocity_bit_for_bit(rng):
+def test_a_solver_reused_over_configurations_and_targets_equals_a_fresh_one_bit_for_bit(rng):
     robot, task = hoang_setup()
     potential = uvms.JointLimitPotential(robot)
     options = dict(gain=1.0, weights=np.array([1.0, 1.0, 500.0, 1.0, 1.0, 1.0]), potential=potential, alpha=10.0)
@@ -28,12 +28,11 @@ def test_a_solver_reused_over_configurations_and_targets_equals_fresh_clik_veloc
         q = robot.random_configuration(rng)
         task.set_target([rng.normal(), rng.normal(), 0.0, 0.0, 0.0, rng.normal()])
         task.set_target_velocity(rng.normal(size=6))
-        fresh = CLIKSolver(robot, task, **options).solve(q)  # built for this call
-        reused = solver.solve(q)
-        assert np.array_equal(uvms.clik_velocity(robot, q, task, **options).v, fresh.v)  # the one-call function
+        fresh = CLIKSolver(robot, task, **options).velocity(Configuration(robot, q))  # built for this call
+        reused = solver.velocity(Configuration(robot, q))
         assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
         assert reused.sigma_min == fresh.sigma_min and reused.residual == fresh.residual
-        assert np.array_equal(solver.velocity(Configuration(robot, q, check=False)), fresh.v)
+        assert np.array_equal(solver.velocity(Configuration(robot, q, check=False)).v, fresh.v)
         if index == 0:  # the task's own rows: the residual of an exact (undamped, full-rank) solve is rounding
             assert fresh.residual < 1e-12 and fresh.sigma_min > 0.1
 
@@ -52,7 +51,7 @@ def test_the_solver_path_is_the_clamping_solve_with_no_joint_held(rng):
             command = feedforward + 2.0 * error
             z0 = -3.0 * potential.gradient(q)
             held, _, _ = solve_with_held(jacobian, command, weights, damping, z0, np.arange(robot.nv), {})
-            assert np.array_equal(solver.solve(state).v, held)
+            assert np.array_equal(solver.velocity(state).v, held)
 
 
 def test_the_prepared_gain_is_apply_gains_products(rng):
@@ -66,8 +65,8 @@ def test_the_prepared_gain_is_apply_gains_products(rng):
         prepared_gain(-matrix @ matrix.T, 4)
 
 
-# ------------------------------------------------------------------ the one-call functions build a solver per call
-def test_clik_velocity_in_a_loop_gives_the_numbers_of_a_solver_built_for_each_input(rng):
+# ------------------------------------------------------------------ a solver built per input reads its inputs
+def test_a_solver_built_for_each_input_in_a_loop_reads_the_current_inputs(rng):
     """A target moved or a W changed in place gives the numbers of a solver built afresh for those inputs."""
     robot, task = hoang_setup()
     weights = np.array([1.0, 1.0, 500.0, 1.0, 1.0, 1.0])
@@ -75,45 +74,89 @@ def test_clik_velocity_in_a_loop_gives_the_numbers_of_a_solver_built_for_each_in
         q = robot.random_configuration(rng)
         task.set_target([rng.normal(), rng.normal(), 0.0, 0.0, 0.0, rng.normal()])
         if index == 6:
-            weights[2] = 3.0  # changed in place: read by the next call
-        called = uvms.clik_velocity(robot, q, task, gain=1.5, weights=weights)
-        fresh = CLIKSolver(robot, task, gain=1.5, weights=weights.copy()).solve(q)
+            weights[2] = 3.0  # changed in place: read by the next solver built
+        called = CLIKSolver(robot, task, gain=1.5, weights=weights).velocity(Configuration(robot, q))
+        fresh = CLIKSolver(robot, task, gain=1.5, weights=weights.copy()).velocity(Configuration(robot, q))
         assert np.array_equal(called.v, fresh.v) and called.sigma_min == fresh.sigma_min
 
 
-def test_clik_velocity_reads_a_potential_changed_in_place(rng):
-    """Regression (issue 30): after ``potential.weights[:] *= 50`` the next call returns the NEW velocity (a
+def test_a_solver_built_after_a_potential_changed_in_place_reads_it(rng):
+    """Regression (issue 30): after ``potential.weights[:] *= 50`` a solver built next returns the NEW velocity (a
     hidden cache of solvers used to return the old one until it was cleared)."""
     robot, task = hoang_setup()
     potential = uvms.JointLimitPotential(robot)
     q = robot.random_configuration(rng)
-    before = uvms.clik_velocity(robot, q, task, potential=potential, alpha=10.0)
+    before = CLIKSolver(robot, task, potential=potential, alpha=10.0).velocity(Configuration(robot, q))
     potential.weights[:] *= 50
-    after = uvms.clik_velocity(robot, q, task, potential=potential, alpha=10.0)
-    expected = CLIKSolver(robot, task, potential=potential, alpha=10.0).solve(q)  # built with the new weights
+    solver = CLIKSolver(robot, task, potential=potential, alpha=10.0)
+    after = solver.velocity(Configuration(robot, q))
+    expected = CLIKSolver(robot, task, potential=potential.__class__(robot, weights=potential.weights.copy()),
+                          alpha=10.0).velocity(Configuration(robot, q))  # built with the new weights
     assert np.array_equal(after.v, expected.v)
     assert not np.allclose(after.v, before.v)  # the null-space motion is 50 times larger: a new velocity
-    step = uvms.clik_step(robot, q, task, 0.01, potential=potential, alpha=10.0)
-    assert np.array_equal(step.q, pin.integrate(robot.model, q, expected.v * 0.01))
+    configuration = Configuration(robot, q)
+    solver.step(configuration, 0.01)
+    assert np.array_equal(configuration.q, pin.integrate(robot.model, q, expected.v * 0.01))
 
 
-def test_a_clik_loop_keeping_its_solver_equals_clik_step_in_a_loop(rng):
+def test_a_clik_loop_keeping_its_solver_equals_a_solver_built_at_every_step(rng):
     robot, task = hoang_setup()
     potential = uvms.JointLimitPotential(robot)
     options = dict(gain=1.0, weights=[1, 1, 1, 100, 100, 100], potential=potential, alpha=10.0)
     solver = CLIKSolver(robot, task, **options)
-    q = stepped = robot.random_configuration(rng)
+    q = robot.random_configuration(rng)
+    stepped = Configuration(robot, q)
     for _ in range(20):
-        q = pin.integrate(robot.model, q, solver.solve(q).v * 0.01)
-        stepped = uvms.clik_step(robot, stepped, task, 0.01, **options).q
-        assert np.array_equal(q, stepped)
+        q = pin.integrate(robot.model, q, solver.velocity(Configuration(robot, q)).v * 0.01)
+        CLIKSolver(robot, task, **options).step(stepped, 0.01)
+        assert np.array_equal(q, stepped.q)
 
 
-def test_refusals_come_at_every_call_and_any_iterable_of_tasks_is_read(rng):
+def test_refusals_come_at_construction_and_any_iterable_of_tasks_is_read(rng):
     robot, task = hoang_setup()
     q = robot.random_configuration(rng)
-    for _ in range(2):  # refused at every call, with its message
+    for _ in range(2):  # refused at every construction, with its message
         with pytest.raises(uvms.SolverInputError, match="gain must be"):
-            uvms.clik_velocity(robot, q, task, gain=-1.0)
-    tasks = (t for t in [task])  # a generator, read once by the solver built for the call
-    assert np.array_equal(uvms.clik_velocity(robot, q, tasks).v, uvms.clik_velocity(robot, q, [task]).v)
+            CLIKSolver(robot, task, gain=-1.0)
+    tasks = (t for t in [task])  # a generator, read once by the solver
+    assert np.array_equal(CLIKSolver(robot, tasks).velocity(Configuration(robot, q)).v,
+                          CLIKSolver(robot, [task]).velocity(Configuration(robot, q)).v)
+    assert np.array_equal(CLIKSolver(robot, [[task]]).velocity(Configuration(robot, q)).v,
+                          CLIKSolver(robot, task).velocity(Configuration(robot, q)).v)  # levels are stacked
+
+
+# ------------------------------------------------------------------ the pose hot path: CLIK on a FrameTask
+def test_pose_clik_is_clik_on_a_frame_task(rng):
+    """The former PoseCLIK (its own kernel) was this law: v = J^+ (xdot_d + K e) + (I - J^+ J) z0 with the DLS
+    inverse of the 6-row world-aligned frame Jacobian and the log3 pose error. Its tests: one solver, its task's
+    target moved, equals a solver built for that target; 300 steps reach a pose to 1e-10."""
+    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    potential = uvms.JointLimitPotential(robot)
+    for alpha, twist in ((0.0, None), (2.0, rng.normal(size=6))):
+        task = uvms.FrameTask(robot, axes=uvms.robot.conventions.AXIS_NAMES, orientation="log")
+        hot = CLIKSolver(robot, task, gain=1.5, damping=1e-3, potential=potential, alpha=alpha)
+        for _ in range(10):
+            q = robot.random_configuration(rng)
+            target = robot.fk(robot.random_configuration(rng))
+            task.set_target(target)
+            task.set_target_velocity(np.zeros(6) if twist is None else twist)
+            fresh_task = uvms.FrameTask(robot, target=target)
+            if twist is not None:
+                fresh_task.set_target_velocity(twist)
+            general = CLIKSolver(robot, fresh_task, gain=1.5, damping=1e-3, potential=potential,
+                                 alpha=alpha).velocity(Configuration(robot, q))
+            result = hot.velocity(Configuration(robot, q))
+            assert np.allclose(result.v, general.v, atol=1e-12, rtol=1e-10)
+            assert np.allclose(result.error, general.error, atol=1e-14)
+    task = uvms.FrameTask(robot, orientation="log")
+    hot = CLIKSolver(robot, task, gain=2.0, damping=1e-9)
+    q = robot.random_configuration(rng)
+    task.set_target(robot.fk(q) * pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, -0.1), np.array([0.1, -0.1, 0.05])))
+    configuration = Configuration(robot, q)
+    for _ in range(300):
+        hot.step(configuration, 0.05)
+    assert np.linalg.norm(hot.velocity(configuration).error) <= 1e-10
+    with pytest.raises(uvms.SolverInputError, match="damping"):
+        CLIKSolver(robot, task, damping=-1.0)
+    with pytest.raises(uvms.UVMSError, match="finite"):
+        hot.velocity(Configuration(robot, np.full(robot.nq, np.nan)))  # never a NaN velocity

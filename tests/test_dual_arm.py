@@ -14,7 +14,7 @@ from PIL import Image
 from uvms import UVMSError
 from uvms.scenario import ScenarioError, build, read_scenario, run
 from uvms.control.sequence import Phase, PhasePlan, SequenceController
-from uvms.solvers import clik_velocity, priority_velocity
+from uvms.solvers import CLIKSolver, PrioritySolver
 from uvms.robot.configuration import Configuration
 from uvms.tasks import DistanceTask, FrameTask, JointTask
 
@@ -66,9 +66,9 @@ def test_both_claws_reach_constant_targets_to_1e10():
              JointTask(robot, {"left_claw": 0.6, "right_claw": 0.6})]
     plan = PhasePlan(robot, q, ["left_ee", "right_ee"], [Phase("hold", 1.0)])
     controller = SequenceController(robot, plan, method="clik")
+    solver = CLIKSolver(robot, [controller.vehicle_task, *tasks], gain=1.0)
     for _ in range(60):
-        levels = [controller.vehicle_task, *tasks]
-        q = pin.integrate(robot.model, q, clik_velocity(robot, q, levels, gain=1.0).v * 0.5)
+        q = pin.integrate(robot.model, q, solver.velocity(Configuration(robot, q)).v * 0.5)
     state = Configuration(robot, q)
     assert max(np.abs(task.error(state)).max() for task in tasks) <= 1e-10
     assert np.abs(robot.base_pose(q).translation).max() <= 1e-12
@@ -101,9 +101,9 @@ def test_distance_has_priority_over_inconsistent_claw_targets():
     controller = SequenceController(robot, plan, method="task_priority", priority="classic")
     controller.set_targets(1.0)
     controller.frame_tasks[0].set_target(pin.SE3(np.eye(3), controller.frame_tasks[0].target.translation + [0, 0.05, 0]))
+    solver = PrioritySolver(robot, controller.levels(with_distance=True), priority="classic")
     for _ in range(80):
-        levels = controller.levels(with_distance=True)
-        q = pin.integrate(robot.model, q, priority_velocity(robot, q, levels, method="classic").v * 0.5)
+        q = pin.integrate(robot.model, q, solver.velocity(Configuration(robot, q)).v * 0.5)
     state = Configuration(robot, q)
     assert abs(controller.distance_task.error(state)[0]) <= 1e-10  # the relative task wins ...
     assert np.linalg.norm(controller.frame_tasks[0].error(state)) > 1e-3  # ... over the inconsistent target

@@ -119,7 +119,7 @@ def test_a_model_name_or_none_where_a_robot_is_needed_says_how_to_get_one():
     robot = shipped("hoang2011")
     task = uvms.FrameTask(robot, axes=["x", "y", "yaw"], target=robot.fk(robot.neutral()))
     calls = {"FrameTask": lambda r: uvms.FrameTask(r), "JointLimitPotential": uvms.JointLimitPotential,
-             "VehicleTask": uvms.VehicleTask, "Plant": uvms.Plant, "CLIK": lambda r: uvms.clik_velocity(r, None, task),
+             "VehicleTask": uvms.VehicleTask, "Plant": uvms.Plant, "CLIK": lambda r: uvms.CLIKSolver(r, task),
              "solve_ik": lambda r: uvms.solve_ik(r, [0, 0, 0, 0, 0, 0]), "Configuration": lambda r: uvms.Configuration(
                  r, robot.neutral()), "initial_configuration": lambda r: uvms.initial_configuration(r, task),
              "thrusters_of": uvms.thrusters_of, "hydrodynamics_of": uvms.hydrodynamics_of,
@@ -135,7 +135,7 @@ def test_a_model_name_or_none_where_a_robot_is_needed_says_how_to_get_one():
 def test_tasks_and_targets_that_are_not_numbers_are_refused_by_what_is_valid():
     robot = shipped("hoang2011")
     with pytest.raises(uvms.SolverInputError, match="expected a Task or a sequence of Tasks, got None"):
-        uvms.clik_velocity(robot, robot.neutral(), None)
+        uvms.CLIKSolver(robot, None)
     with pytest.raises(uvms.UVMSError, match=r"a target pose must be a pin.SE3 or 6 finite numbers .* got 'x'"):
         uvms.solve_ik(robot, "x")
     with pytest.raises(uvms.UVMSError, match=r"a target twist must be 6 finite numbers .* got \[1, 'a'\]"):

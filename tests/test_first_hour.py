@@ -148,7 +148,7 @@ def test_free_floating_weights_of_size_nv_name_the_key_and_the_arm_joints(tmp_pa
     task = uvms.FrameTask(robot, axes=["x", "y"])
     task.set_target(np.zeros(6))
     with pytest.raises(SolverInputError, match=r"W must be \(3,\).*arm joints only"):
-        uvms.clik_velocity(robot, robot.neutral(), task, weights=np.ones(robot.nv), free_floating=True)
+        uvms.CLIKSolver(robot, task, weights=np.ones(robot.nv), free_floating=True)
 
 
 # ------------------------------------------------------------------ 4. limits and tolerance on the terminal

@@ -124,8 +124,10 @@ def assert_limit_projection_and_clamping(robot: uvms.Robot, leaf: str, rng: np.r
     before[arm] = np.clip(before[arm], robot.model.lowerPositionLimit[arm], robot.model.upperPositionLimit[arm])
     assert np.array_equal(projected, before)
     task = uvms.FrameTask(robot, leaf, target=robot.fk(robot.random_configuration(rng), leaf))
+    solver = uvms.CLIKSolver(robot, task, gain=5.0, damping=1e-3, dt=0.5, enforce_limits=True)
+    configuration = uvms.Configuration(robot, q)
     for _ in range(5):
-        step = uvms.clik_step(robot, q, task, 0.5, gain=5.0, damping=1e-3, enforce_limits=True)
-        assert np.all(np.isfinite(step.q))
-        q = step.q
+        solver.step(configuration, 0.5)
+        assert np.all(np.isfinite(configuration.q))
+        q = configuration.q
         assert limit.contains(robot.arm_configuration(q))

@@ -107,15 +107,17 @@ def test_every_user_reads_the_same_limit():
     task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, 0, 0, 0, 0, 0])
     q = robot.configuration(arm=[0.3, 4.2, -4.2])  # inside the margin
     clamped_any = False
+    solver = uvms.CLIKSolver(robot, task, gain=5.0, weights=[100, 100, 100, 1, 1, 1], dt=0.1, enforce_limits=True,
+                             limit=inner)
+    configuration = uvms.Configuration(robot, q)
     for _ in range(100):
-        step = uvms.clik_step(robot, q, task, 0.1, gain=5.0, weights=[100, 100, 100, 1, 1, 1], enforce_limits=True,
-                              limit=inner)
-        q = step.q
+        result = solver.step(configuration, 0.1)
+        q = configuration.q
         assert inner.contains(robot.arm_configuration(q))
-        clamped_any |= bool(step.velocity.limits_active)
+        clamped_any |= bool(result.limits_active)
     assert clamped_any
     with pytest.raises(SolverInputError, match="position limits of the 3 arm"):
-        uvms.clik_velocity(robot, q, task, dt=0.1, enforce_limits=True, limit=Limit([0.0], [1.0]))
+        uvms.CLIKSolver(robot, task, dt=0.1, enforce_limits=True, limit=Limit([0.0], [1.0]))
     with pytest.raises(uvms.UVMSError, match="position limits of the 3 arm"):
         uvms.JointLimitPotential(robot, limit=Limit.joint_velocities(robot))
     # the initial configuration inside a box that excludes the paper's optimum q1 = 3 pi / 4

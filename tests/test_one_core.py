@@ -13,7 +13,7 @@ from uvms.dynamics.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.added_mass import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
 from uvms.errors import ModelCheckError
 from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator
-from uvms.solvers import damped_weighted_inverse
+from uvms.numerics.inverses import damped_weighted_inverse
 from uvms.robot.configuration import Configuration
 
 FIXED_ARM = """<robot name="arm"><link name="base"/><link name="tip"><inertial><mass value="1"/>
@@ -68,8 +68,7 @@ def test_a_fixed_base_has_no_generalized_jacobian_with_a_clear_error():
     with pytest.raises(ModelCheckError, match="has no vehicle"):
         kinematics.centroidal_map_split(robot.model, robot.data, robot.neutral(), robot.base_type, 0)
     with pytest.raises(uvms.UVMSError):  # the solver refuses it too, never a KeyError
-        uvms.clik_velocity(robot, robot.neutral(), uvms.FrameTask(robot, axes=("x",), target=[0.5, 0, 0, 0, 0, 0]),
-                           free_floating=True)
+        uvms.CLIKSolver(robot, uvms.FrameTask(robot, axes=("x",), target=[0.5, 0, 0, 0, 0, 0]), free_floating=True)
 
 
 # ------------------------------------------------------------ the integrator
@@ -126,8 +125,8 @@ def test_the_gjm_controller_keeps_the_numbers_of_its_own_law(name, axes, rng):
         task = uvms.FrameTask(robot, axes=axes, orientation="log", target=reference(3.0).pose)
         task.set_target_velocity(reference(3.0).twist)
         gains = np.array([gain if row < 3 else 0.0 for row in rows])
-        clik = uvms.clik_velocity(robot, q, task, gain=gains, damping=damping, free_floating=True)
-        assert np.allclose(clik.v[robot.n_vehicle:], expected, atol=1e-12)  # the same law through clik_velocity
+        clik = uvms.CLIKSolver(robot, task, gain=gains, damping=damping, free_floating=True).velocity(Configuration(robot, q))
+        assert np.allclose(clik.v[robot.n_vehicle:], expected, atol=1e-12)  # the same law through CLIKSolver
 
 
 def test_one_result_type_and_no_old_paths():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
@@ -12,10 +13,8 @@ from hypothesis import strategies as st
 
 import uvms
 from uvms.robot.limits import Limit
-from uvms.solvers import CLIKSolver, StepResult, VariableDamping, clik_step, clik_velocity
-from uvms.solvers.hqp import hqp_step, hqp_velocity
+from uvms.solvers import CLIKSolver, HQPSolver, SetBasedSolver, Solver, SolverResult, VariableDamping
 from uvms.solvers.saturation import scale_lowest_first
-from uvms.solvers.set_based import SetBasedSolver, integrate_velocity, set_based_step, set_based_velocity
 from uvms.robot.configuration import Configuration
 from uvms.tasks import FrameTask, PostureTask
 from uvms.tasks.objectives import (FrameBox, JointLimits, JointVelocityLimits, Manipulability, PlaneClearance,
@@ -41,24 +40,25 @@ def violation(robot: uvms.Robot, q: np.ndarray, limit: Limit | None = None) -> f
     return float(max(np.max(np.maximum(limit.lower - arm, arm - limit.upper)), 0.0))
 
 
-def stepper(step, robot, levels, dt, **options):
-    """q -> StepResult of ``step`` (clik_step, set_based_step, hqp_step) at dt: CLIK and set-based keep one solver
-    for the loop (the numbers of the one-call function, which builds a solver at every call)."""
-    if step is clik_step:
-        solver = CLIKSolver(robot, levels, dt=dt, **options)
+def stepper(solver_class: type[Solver], robot, levels, dt, **options):
+    """q -> (q+, the result) of one explicit-Euler step at dt of one solver built for the loop."""
+    solver = solver_class(robot, levels, dt=dt, **options)
 
-        def clik(q):
-            velocity = solver.solve(q)
-            return StepResult(q=pin.integrate(robot.model, q, velocity.v * dt), velocity=velocity)
-        return clik
-    if step is set_based_step:
-        solver = SetBasedSolver(robot, levels, dt=dt, **options)
+    def advance(q):
+        configuration = Configuration(robot, q)
+        velocity = solver.step(configuration, dt)
+        return SimpleNamespace(q=configuration.q, velocity=velocity)
+    return advance
 
-        def set_based(q):
-            velocity = solver.solve(q)
-            return StepResult(q=integrate_velocity(robot, q, velocity.v, dt), velocity=velocity)
-        return set_based
-    return lambda q: step(robot, q, levels, dt, **options)
+
+def one_step(solver_class: type[Solver], robot, q, levels, dt, **options):
+    """(q+, the result) of one step of a solver built for this call."""
+    return stepper(solver_class, robot, levels, dt, **options)(q)
+
+
+def solve_once(solver_class: type[Solver], robot, q, levels, **options) -> SolverResult:
+    """The velocity at q of a solver built for this call."""
+    return solver_class(robot, levels, **options).velocity(Configuration(robot, q))
 
 
 def run(step, robot, q, levels, steps=500, **options):
@@ -159,9 +159,9 @@ def test_with_every_inequality_inactive_set_based_is_clik(case):
     robot, q, above, options = list(inactive_cases())[case]
     offset = pin.SE3(pin.rpy.rpyToMatrix(0.05, 0, 0.1), np.array([0.1, 0.05, 0.02]))
     task = FrameTask(robot, target=robot.fk(q) * offset)
-    result = set_based_velocity(robot, q, [*above, task], gain=2.0, **options)
+    result = solve_once(SetBasedSolver, robot, q, [*above, task], gain=2.0, **options)
     assert result.active == ()
-    reference = clik_velocity(robot, q, task, gain=2.0, **options)
+    reference = solve_once(CLIKSolver, robot, q, task, gain=2.0, **options)
     assert np.abs(result.v - reference.v).max() <= 1e-12  # measured 0.0 (the same inverse, the same call)
     assert result.residual == pytest.approx(reference.residual, abs=1e-12)
 
@@ -172,25 +172,25 @@ def test_dual_arm_tasks_at_one_level_or_two_levels_keep_the_limits():
     left, right = (FrameTask(robot, frame, axes=("x", "y", "z"), target=pin.SE3(robot.fk(q, frame).rotation,
                    robot.fk(q, frame).translation + [0.05, 0, 0])) for frame in ("left_ee", "right_ee"))
     limits = JointLimits(robot, band=0.05)
-    one = set_based_velocity(robot, q, [limits, [left, right]], free_floating=True)
-    assert np.abs(one.v - clik_velocity(robot, q, [left, right], free_floating=True).v).max() <= 1e-12
-    two = set_based_velocity(robot, q, [limits, left, right], free_floating=True)
-    assert two.level_residuals[1] <= 1e-10  # the left arm's task, above the right one's
-    _, clik_worst, *_ = run(clik_step, robot, q, [left, right], steps=300, gain=2.0, free_floating=True)
+    one = solve_once(SetBasedSolver, robot, q, [limits, [left, right]], free_floating=True)
+    assert np.abs(one.v - solve_once(CLIKSolver, robot, q, [left, right], free_floating=True).v).max() <= 1e-12
+    two = solve_once(SetBasedSolver, robot, q, [limits, left, right], free_floating=True)
+    assert two.task_residuals[1] <= 1e-10  # the left arm's task, above the right one's
+    _, clik_worst, *_ = run(CLIKSolver, robot, q, [left, right], steps=300, gain=2.0, free_floating=True)
     assert clik_worst > 0.5  # measured: a claw 1.05 past its limit
     for levels in ([limits, [left, right]], [limits, left, right]):
-        _, worst, _, errors, _ = run(set_based_step, robot, q, levels, steps=300, gain=2.0, free_floating=True)
+        _, worst, _, errors, _ = run(SetBasedSolver, robot, q, levels, steps=300, gain=2.0, free_floating=True)
         assert worst == 0.0 and errors[-1] <= 0.01  # measured 0.0040 (one level), 0.0066 (two)
 
 
 # ------------------------------------------------------------------------ limits are never crossed
 def test_redundant_uvms_never_crosses_a_limit_that_clik_crosses():
     robot, q0, task = alpha5_reach()
-    _, clik_worst, *_ = run(clik_step, robot, q0, task, gain=2.0, weights=HEAVY_VEHICLE)
+    _, clik_worst, *_ = run(CLIKSolver, robot, q0, task, gain=2.0, weights=HEAVY_VEHICLE)
     assert clik_worst > 0.2  # measured 0.237 rad past the elbow's 3.5 rad
     levels = [JointLimits(robot, margin={"alpha_axis_c": 0.05, "alpha_axis_d": 0.05}, band=0.2),
               JointVelocityLimits(robot), task]
-    for step in (set_based_step, hqp_step):
+    for step in (SetBasedSolver, HQPSolver):
         _, worst, ratio, errors, results = run(step, robot, q0, levels, gain=2.0, weights=HEAVY_VEHICLE)
         assert worst == 0.0 and ratio <= 1.0 + 1e-9  # positions and speeds (0.5 rad/s) kept at every step
         assert errors[-1] <= 1e-3  # measured 4.9e-5 (set_based), 3.0e-5 (hqp): the vehicle takes over
@@ -199,11 +199,11 @@ def test_redundant_uvms_never_crosses_a_limit_that_clik_crosses():
 
 def test_non_redundant_free_floating_arm_the_limit_wins_and_the_error_is_reported():
     robot, q0, task, limit = ur5_reach()
-    _, clik_worst, _, clik_errors, _ = run(clik_step, robot, q0, task, gain=2.0, free_floating=True, limit=limit)
+    _, clik_worst, _, clik_errors, _ = run(CLIKSolver, robot, q0, task, gain=2.0, free_floating=True, limit=limit)
     assert clik_worst > 0.25 and clik_errors[-1] < 1e-3  # measured: the elbow 0.31 rad past 1.7 rad
     levels = [JointLimits(robot, margin=0.02, band=0.15, limit=limit), JointVelocityLimits(robot, 1.0), task]
     options = {"gain": 2.0, "free_floating": True, "limit": limit}
-    for step, extra in ((set_based_step, {"damping": VariableDamping(0.05, 0.05)}), (hqp_step, {})):
+    for step, extra in ((SetBasedSolver, {"damping": VariableDamping(0.05, 0.05)}), (HQPSolver, {})):
         _, worst, ratio, errors, results = run(step, robot, q0, levels, **options, **extra)
         assert worst == 0.0 and ratio <= 1.0 + 1e-9
         assert errors[-1] > 0.03  # measured 0.057 (set_based), 0.044 (hqp): the task gives way
@@ -217,15 +217,15 @@ def test_hqp_started_outside_a_limit_comes_back_at_the_allowed_speed_and_is_neve
     levels = [limits, JointVelocityLimits(robot), task]
     elbow = [3.7]
     for _ in range(60):
-        result = hqp_step(robot, q, levels, DT, gain=2.0, weights=HEAVY_VEHICLE)
+        result = one_step(HQPSolver, robot, q, levels, DT, gain=2.0, weights=HEAVY_VEHICLE)
         q = result.q
         elbow.append(robot.arm_configuration(q)[2])
-        assert all(status.startswith("optimal") for status in result.velocity.solver_status)
+        assert all(status.startswith("optimal") for status in result.velocity.extras["solver_status"])
     steps = -np.diff(elbow)
     assert np.allclose(steps[:40], 0.5 * DT, atol=1e-9)  # back at its 0.5 rad/s while outside (0.25 rad: 50 steps)
     assert max(elbow[-1] - 3.45, 0.0) <= 1e-9  # then inside the valid set
     q = robot.configuration(base=[0, 0, -5, 0, 0, 0], arm=[3.0, 1.5, 3.7, 3.0, 0.007])
-    back = set_based_step(robot, q, levels, DT, gain=2.0, weights=HEAVY_VEHICLE)  # set-based: back, never further
+    back = one_step(SetBasedSolver, robot, q, levels, DT, gain=2.0, weights=HEAVY_VEHICLE)  # set-based: back, never further
     assert robot.arm_configuration(back.q)[2] < 3.7 and back.velocity.speed_ratio <= 1.0 + 1e-12
 
 
@@ -235,11 +235,11 @@ def test_an_equality_task_feasible_with_the_active_inequalities_is_met():
     q = robot.configuration(base=[0, 0, -5, 0.15, 0.0, 0.3], arm=[3.0, 1.5, 3.4, 3.0, 0.007])  # tilted, elbow in band
     levels = [JointLimits(robot, margin={"alpha_axis_c": 0.05}, band=0.2), VehicleAttitude(robot, 0.1),
               FrameTask(robot, target=robot.fk(q) * pin.SE3(np.eye(3), np.array([0.1, 0.0, 0.05])))]
-    result = set_based_velocity(robot, q, levels, gain=1.0)
+    result = solve_once(SetBasedSolver, robot, q, levels, gain=1.0)
     assert set(result.active) == {"joint_limits", "vehicle_attitude"}
     assert result.residual <= 1e-9  # measured ~1e-15: 6 task rows in the 9 DOF the inequalities leave
-    assert result.level_residuals[1] <= 1e-12  # the tilt, fully active, comes back at its reference rate
-    hqp = hqp_velocity(robot, q, levels, dt=DT, gain=1.0)
+    assert result.task_residuals[1] <= 1e-12  # the tilt, fully active, comes back at its reference rate
+    hqp = solve_once(HQPSolver, robot, q, levels, dt=DT, gain=1.0)
     assert hqp.residual <= 1e-7 and hqp.status("vehicle_attitude").active  # measured ~1e-10
 
 
@@ -249,7 +249,7 @@ def max_velocity_jump(shape: str, dt: float) -> tuple[float, float]:
     robot, q, task = alpha5_reach()
     levels = [JointLimits(robot, margin={"alpha_axis_c": 0.05}, band=0.2, shape=shape, joints=["alpha_axis_c"]), task]
     velocities = []
-    advance = stepper(set_based_step, robot, levels, dt, weights=HEAVY_VEHICLE)
+    advance = stepper(SetBasedSolver, robot, levels, dt, weights=HEAVY_VEHICLE)
     for _ in range(int(round(2.0 / dt))):
         result = advance(q)
         q = result.q
@@ -275,11 +275,11 @@ def test_saturation_scales_the_lowest_level_first_and_keeps_the_higher_ones():
     reach = FrameTask(robot, axes=("x", "y", "z"), target=robot.fk(q) * pin.SE3(np.eye(3), np.array([0.05, 0, 0])))
     posture = PostureTask(robot, robot.configuration(base=[0, 0, -5, 0, 0, 0], arm=[4.0, 2.5, 2.5, 4.0, 0.01]))
     limits = [JointVelocityLimits(robot, 0.2), VehicleVelocityLimits(robot, [0.3, 0.3])]
-    result = set_based_velocity(robot, q, [reach, posture, *limits], gain=2.0)
+    result = solve_once(SetBasedSolver, robot, q, [reach, posture, *limits], gain=2.0)
     assert result.scales[0] == 1.0 and 0.0 < result.scales[1] < 1.0  # measured 0.1
-    assert result.level_residuals[0] <= 1e-12 and result.speed_ratio == pytest.approx(1.0)
-    hqp = hqp_velocity(robot, q, [reach, posture, *limits], dt=DT, gain=2.0)
-    assert hqp.level_residuals[0] <= 1e-7 and hqp.speed_ratio <= 1.0 + 1e-9
+    assert result.task_residuals[0] <= 1e-12 and result.speed_ratio == pytest.approx(1.0)
+    hqp = solve_once(HQPSolver, robot, q, [reach, posture, *limits], dt=DT, gain=2.0)
+    assert hqp.task_residuals[0] <= 1e-7 and hqp.speed_ratio <= 1.0 + 1e-9
     contributions = [np.array([0.5, 0.0]), np.array([1.0, 1.0])]
     total, scales = scale_lowest_first(contributions, -np.ones(2), np.ones(2))
     assert scales == (1.0, 0.5) and np.allclose(total, [1.0, 0.5])
@@ -289,12 +289,13 @@ def test_a_passive_vehicles_speed_limits_hold_through_momentum_conservation():
     robot = shipped("amundsen2018")  # a swimming manipulator: its base link weighs what a link does
     q = robot.random_configuration(3)
     task = FrameTask(robot, axes=("x", "y", "z"), target=pin.SE3(np.eye(3), robot.fk(q).translation + [0.3, -0.2, 0.2]))
-    free = set_based_velocity(robot, q, [task], gain=2.0, free_floating=True)
+    free = solve_once(SetBasedSolver, robot, q, [task], gain=2.0, free_floating=True)
     assert np.abs(free.v[3]) > 2.0  # measured: the reaction turns the vehicle at 2.86 rad/s
     limits = VehicleVelocityLimits(robot, [0.05, 0.1])  # [m/s, rad/s]
     maximum = np.array([0.05] * 3 + [0.1] * 3)
-    for solve in (set_based_velocity, hqp_velocity):
-        result = solve(robot, q, [JointLimits(robot, band=0.05), task, limits], gain=2.0, free_floating=True, dt=DT)
+    for solver_class in (SetBasedSolver, HQPSolver):
+        result = solve_once(solver_class, robot, q, [JointLimits(robot, band=0.05), task, limits], gain=2.0,
+                            free_floating=True, dt=DT)
         assert np.all(np.abs(result.v[:6]) <= maximum * (1 + 1e-7))  # hqp: rows kept to the QP tolerance
         assert result.speed_ratio == pytest.approx(1.0, abs=1e-7)
 
@@ -323,13 +324,13 @@ def test_random_models_and_configurations_give_finite_velocities_inside_the_boun
         seabed = PlaneClearance(robot, "vehicle", [0, 0, -3], [0, 0, 1], min=0.5)
         levels.insert(1, [VehicleAttitude(robot, 0.2), seabed])
     before = outside_distance(robot, q, limit)
-    for solve, options in ((set_based_velocity, {"damping": 0.05}), (hqp_velocity, {})):
-        result = solve(robot, q, levels, dt=DT, free_floating=free, **options)
+    for solver_class, options in ((SetBasedSolver, {"damping": 0.05}), (HQPSolver, {})):
+        result = solve_once(solver_class, robot, q, levels, dt=DT, free_floating=free, **options)
         assert np.all(np.isfinite(result.v))
         assert np.all(np.abs(result.v[robot.n_vehicle:]) <= 0.3 + 1e-9)
         after = outside_distance(robot, pin.integrate(robot.model, q, result.v * DT), limit)
         assert np.all(after <= before + 1e-9) and (outside or after.max() <= 1e-9)
-        assert all(status.startswith("optimal") for status in getattr(result, "solver_status", ()))
+        assert all(status.startswith("optimal") for status in result.extras.get("solver_status", ()))
 
 
 # ---------------------------------------------------------------------------------- bad input

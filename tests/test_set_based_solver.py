@@ -1,6 +1,5 @@
-"""The set-based solver (uvms.solvers.set_based.SetBasedSolver): built once, it gives the numbers of the one-call
-functions (``set_based_velocity``, ``set_based_step``, which build one at every call) bit for bit; it refuses bad
-options when built; the saturation and the sum of the levels it uses."""
+"""The set-based solver (uvms.solvers.set_based.SetBasedSolver): built once, it gives the numbers of a solver built
+at every call bit for bit; it refuses bad options when built; the saturation and the sum of the levels it uses."""
 
 from __future__ import annotations
 
@@ -44,7 +43,7 @@ def arm_limits(robot):
                                      dict(gain=2.0, free_floating=True, dt=0.05)])
 def test_a_set_based_solver_reused_over_configurations_and_targets_equals_fresh_calls_bit_for_bit(rng, options):
     """Nothing carries over between calls of a solver (its identity projector, box, gain are read only)."""
-    from uvms.solvers.set_based import SetBasedSolver, set_based_step, set_based_velocity
+    from uvms.solvers import SetBasedSolver
 
     robot = uvms.load("bluerov2_alpha5")
     q, target = alpha5_start(robot, rng)
@@ -57,16 +56,17 @@ def test_a_set_based_solver_reused_over_configurations_and_targets_equals_fresh_
     for _ in range(25):
         q, target = alpha5_start(robot, rng)
         task.set_target(target)
-        fresh = SetBasedSolver(robot, levels, **options).solve(q)  # built for this call
-        reused = solver.solve(q)
-        assert np.array_equal(set_based_velocity(robot, q, levels, **options).v, fresh.v)  # the one-call function
+        fresh = SetBasedSolver(robot, levels, **options).velocity(Configuration(robot, q))  # built for this call
+        reused = solver.velocity(Configuration(robot, q))
         assert np.array_equal(reused.v, fresh.v) and np.array_equal(reused.command, fresh.command)
-        assert reused.scales == fresh.scales and reused.level_residuals == fresh.level_residuals
+        assert reused.scales == fresh.scales and reused.task_residuals == fresh.task_residuals
         assert reused.sigma_min == fresh.sigma_min and reused.active == fresh.active
-        assert np.array_equal(solver.velocity(Configuration(robot, q, check=False)), fresh.v)
+        assert np.array_equal(solver.velocity(Configuration(robot, q, check=False)).v, fresh.v)
         if "dt" in options:
-            assert np.array_equal(solver.step(q), set_based_step(robot, q, levels, options["dt"], **{
-                key: value for key, value in options.items() if key != "dt"}).q)
+            kept, built = Configuration(robot, q), Configuration(robot, q)
+            solver.step(kept, options["dt"])
+            SetBasedSolver(robot, levels, **options).step(built, options["dt"])  # a solver built for the step
+            assert np.array_equal(kept.q, built.q)
         active += bool(fresh.active)
         scaled += min(fresh.scales) < 1.0
     assert active > 0  # the objectives were active in some calls, and the box bound the velocity in some
@@ -86,8 +86,8 @@ def test_a_set_based_solver_refuses_bad_options_when_built():
         SetBasedSolver(robot, levels, dt=0.0)
     with pytest.raises(uvms.SolverInputError, match=r"gain must be a finite scalar >= 0, \(6,\)"):
         SetBasedSolver(robot, levels, gain=[1.0, 2.0])
-    with pytest.raises(uvms.SolverInputError, match=r"step needs the step dt > 0 \[s\]: build the solver with dt="):
-        SetBasedSolver(robot, levels).step(robot.neutral())
+    with pytest.raises(uvms.SolverInputError, match=r"dt must be finite and > 0"):
+        SetBasedSolver(robot, levels).step(Configuration(robot, robot.neutral()), 0.0)
     with pytest.raises(uvms.NotARobot):
         SetBasedSolver("bluerov2_alpha5", levels)
 
@@ -101,16 +101,16 @@ def test_a_set_based_solver_refuses_bad_options_when_built():
 ])
 def test_text_and_none_options_are_refused_by_what_is_valid(options, message):
     """Not a ValueError of numpy's conversion or a TypeError of Python's: the option named and what it takes."""
-    from uvms.solvers.set_based import set_based_velocity
+    from uvms.solvers import SetBasedSolver
 
     robot = uvms.load("bluerov2_alpha5")
     levels = alpha5_levels(robot, robot.fk(robot.neutral()))
     with pytest.raises(uvms.SolverInputError, match=message):
-        set_based_velocity(robot, robot.neutral(), levels, **options)
+        SetBasedSolver(robot, levels, **options)
     if "speed_limits" not in options:  # CLIK reads its gain and W through the same checks
         hoang, task = hoang_setup()
         with pytest.raises(uvms.SolverInputError, match=r"(gain must be a finite scalar >= 0, \(3,\)|W must be \(6,\))"):
-            uvms.clik_velocity(hoang, hoang.neutral(), task, **options)
+            uvms.CLIKSolver(hoang, task, **options)
 
 
 @pytest.mark.parametrize("levels, message", [

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -11,9 +13,33 @@ from hypothesis import strategies as st
 import uvms
 from conftest import shipped
 from uvms.errors import SolverInputError
-from uvms.solvers import dls, dls_solve, pinv, task_priority, variable_damping, weighted_pinv
-from uvms.numerics.inverses import damped_weighted_inverse
+from uvms.numerics.inverses import damped_weighted_inverse, dls, dls_solve, pinv, variable_damping, weighted_pinv
+from uvms.solvers.priority import prioritized
 from uvms.solvers.screws import davies_solve, network_matrix
+
+
+def clik_velocity(robot, q, tasks, **options):
+    """One CLIK velocity from a solver built for this call."""
+    return uvms.CLIKSolver(robot, tasks, **options).velocity(uvms.Configuration(robot, q))
+
+
+def clik_step(robot, q, tasks, dt, **options):
+    """One explicit-Euler CLIK step from a solver built for this call: q+ and the result (``velocity``)."""
+    configuration = uvms.Configuration(robot, q)
+    velocity = uvms.CLIKSolver(robot, tasks, dt=dt, **options).step(configuration, dt)
+    return SimpleNamespace(q=configuration.q, velocity=velocity)
+
+
+def priority_velocity(robot, q, levels, method="robust", **options):
+    """One task-priority velocity from a solver built for this call."""
+    return uvms.PrioritySolver(robot, levels, priority=method, **options).velocity(uvms.Configuration(robot, q))
+
+
+def task_priority(jacobians, commands, method="robust", damping=0.0):
+    """The prioritized solution of raw levels and its residuals |J_i v - c_i| per level."""
+    v, sigmas = prioritized(jacobians, commands, method, damping)
+    return SimpleNamespace(v=v, sigma_min=sigmas, residuals=tuple(
+        float(np.linalg.norm(np.asarray(j) @ v - c)) for j, c in zip(jacobians, commands)))
 
 
 def hoang_task(robot, target=(0.0, -2.0, 1.0)):
@@ -97,7 +123,7 @@ def test_clik_converges_monotonically_on_a_constant_target(weights):
     q = robot.configuration(base=[-1.0, -3.0, 1.0], arm=[2.0, 0.5, -0.5])
     norms = []
     for _ in range(400):
-        step = uvms.clik_step(robot, q, task, 0.05, gain=2.0, weights=weights)
+        step = clik_step(robot, q, task, 0.05, gain=2.0, weights=weights)
         norms.append(np.linalg.norm(step.velocity.error))
         q = step.q
         if norms[-1] <= 1e-11:
@@ -112,14 +138,14 @@ def test_clik_spatial_pose_task_and_free_floating_gjm(rng):
     target = robot.fk(q) * pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.1, 0.2), np.array([0.05, 0.03, -0.04]))
     task = uvms.FrameTask(robot, target=target)
     for _ in range(300):
-        q = uvms.clik_step(robot, q, task, 0.05, gain=2.0).q
+        q = clik_step(robot, q, task, 0.05, gain=2.0).q
     assert np.linalg.norm(task.full_error(uvms.Configuration(robot, q))) <= 1e-10
     snake = shipped("amundsen2018")
     q = snake.configuration(arm=[0.3, -0.3, 0.3, -0.3, 0.2, -0.2, 0.2, -0.2])
     target = snake.fk(q).translation + np.array([-0.05, -0.05, 0.05])
     position = uvms.FrameTask(snake, axes=("x", "y", "z"), target=pin.SE3(np.eye(3), target))
     for _ in range(100):
-        step = uvms.clik_step(snake, q, position, 0.05, gain=3.0, free_floating=True)
+        step = clik_step(snake, q, position, 0.05, gain=3.0, free_floating=True)
         momentum = pin.computeCentroidalMap(snake.model, snake.data, q) @ step.velocity.v
         assert np.max(np.abs(momentum)) <= 1e-10  # the vehicle is passive
         q = step.q
@@ -133,8 +159,8 @@ def test_nullspace_term_leaves_the_task_velocity_unchanged(rng):
     for weights in (None, [1, 1, 1, 100, 100, 100]):
         for _ in range(20):
             q = robot.random_configuration(rng)
-            plain = uvms.clik_velocity(robot, q, task, weights=weights)
-            with_null = uvms.clik_velocity(robot, q, task, weights=weights, potential=potential, alpha=10.0)
+            plain = clik_velocity(robot, q, task, weights=weights)
+            with_null = clik_velocity(robot, q, task, weights=weights, potential=potential, alpha=10.0)
             jacobian = task.jacobian(uvms.Configuration(robot, q))
             assert np.linalg.norm(jacobian @ (with_null.v - plain.v)) <= 1e-12
             assert np.linalg.norm(with_null.v - plain.v) > 0  # the null-space motion is there
@@ -160,7 +186,7 @@ def test_joint_limits_never_violated_when_enabled():
     q = robot.configuration(arm=[0.2, 4.5, -4.5])  # near the limits
     clamped_any = False
     for _ in range(200):
-        step = uvms.clik_step(robot, q, task, 0.1, gain=5.0, weights=[100, 100, 100, 1, 1, 1], enforce_limits=True)
+        step = clik_step(robot, q, task, 0.1, gain=5.0, weights=[100, 100, 100, 1, 1, 1], enforce_limits=True)
         q = step.q
         arm = robot.arm_configuration(q)
         assert np.all(arm >= lower - 1e-12) and np.all(arm <= upper + 1e-12)
@@ -176,10 +202,10 @@ def test_robust_priority_meets_the_first_task_exactly(rng):
     for _ in range(30):
         q = robot.random_configuration(rng)
         for method in ("robust", "classic"):
-            result = uvms.priority_velocity(robot, q, [ee, rest], method=method)
-            assert result.residuals[0] <= 1e-11 * (1 + np.linalg.norm(result.v))  # machine precision
-        classic = uvms.priority_velocity(robot, q, [ee, rest], method="classic")
-        assert classic.residuals[1] <= 1e-9  # 3 + 3 rows on 6 DOF: both feasible
+            result = priority_velocity(robot, q, [ee, rest], method=method)
+            assert result.task_residuals[0] <= 1e-11 * (1 + np.linalg.norm(result.v))  # machine precision
+        classic = priority_velocity(robot, q, [ee, rest], method="classic")
+        assert classic.task_residuals[1] <= 1e-9  # 3 + 3 rows on 6 DOF: both feasible
     jacobians = [rng.normal(size=(2, 5)), rng.normal(size=(2, 5)), rng.normal(size=(3, 5))]
     commands = [rng.normal(size=2), rng.normal(size=2), rng.normal(size=3)]
     three = task_priority(jacobians, commands, method="robust")
@@ -197,15 +223,19 @@ def test_classic_priority_and_robust_differ_only_below_the_first_level(rng):
 
 # --------------------------------------------------------- kinematic constraint
 def santos_constraint_cases(rng, count=20):
-    """Random santos2006 configurations with the end-effector task, the vehicle constraint and their solution."""
+    """Random santos2006 configurations with the end-effector task, the vehicle constraint and their solution
+    (the vehicle constraint's rows come first in ``result.command``: ``constraint_rows`` of them)."""
     robot = shipped("santos2006")
     for _ in range(count):
         q = robot.random_configuration(rng)
         ee = uvms.FrameTask(robot, axes=("x", "y", "yaw"), target=[6.0, 4.5, 0, 0, 0, 0.8])
         ee.set_target_velocity([0.3, -0.2, 0, 0, 0, 0.1])
         constraint = uvms.VehicleTask(robot, velocities={"vx": 0.0, "vy": 0.0}, heading=0.78)
-        result = uvms.constrained_velocity(robot, q, ee, constraint)
+        result = uvms.ConstraintSolver(robot, [constraint, ee]).velocity(uvms.Configuration(robot, q))
         yield robot, q, ee, result, uvms.Configuration(robot, q)
+
+
+constraint_rows = 3  # vx, vy and the heading
 
 
 def test_kinematic_constraint_holds_exactly(rng):
@@ -213,7 +243,8 @@ def test_kinematic_constraint_holds_exactly(rng):
         assert abs(result.v[0]) <= 1e-12 and abs(result.v[1]) <= 1e-12
         yaw = np.arctan2(q[3], q[2])
         assert result.v[2] == pytest.approx(uvms.robot.conventions.wrap_angle(0.78 - yaw), abs=1e-12)
-        assert np.linalg.norm(ee.jacobian(state) @ result.v - result.command) <= 1e-12
+        command = result.command[constraint_rows:]  # the task's rows, after the constraint's
+        assert np.linalg.norm(ee.jacobian(state) @ result.v - command) <= 1e-12
 
 
 def test_kinematic_constraint_equals_the_screw_formulation(rng):
@@ -222,7 +253,8 @@ def test_kinematic_constraint_equals_the_screw_formulation(rng):
         network = network_matrix(state, ee.frame_id, planar=True)  # (3, 6 + 3): [S_uvms | -S_virtual]
         # primary: vehicle u, v, r (imposed) and the virtual chain magnitudes (end-effector vx, vy, wz)
         primary = [0, 1, 2, robot.nv + 0, robot.nv + 1, robot.nv + 2]
-        values = [0.0, 0.0, result.v[2], *result.command[:2], result.command[2]]
+        command = result.command[constraint_rows:]  # the task's rows, after the constraint's
+        values = [0.0, 0.0, result.v[2], *command[:2], command[2]]
         magnitudes = davies_solve(network, primary, values)
         assert np.allclose(magnitudes[3:6], result.v[3:6], atol=1e-12)
         assert np.allclose(network @ magnitudes, 0.0, atol=1e-12)  # the closed chain's circulation law
@@ -311,27 +343,27 @@ def test_bad_solver_inputs():
     task = hoang_task(robot)
     q = robot.neutral()
     with pytest.raises(SolverInputError, match="gain"):
-        uvms.clik_velocity(robot, q, task, gain=[1.0, 2.0])
+        clik_velocity(robot, q, task, gain=[1.0, 2.0])
     with pytest.raises(SolverInputError, match="positive definite"):
-        uvms.clik_velocity(robot, q, task, weights=[1, 1, 1, 1, 1, -1])
+        clik_velocity(robot, q, task, weights=[1, 1, 1, 1, 1, -1])
     with pytest.raises(SolverInputError, match="damping"):
-        uvms.clik_velocity(robot, q, task, damping=np.nan)
+        clik_velocity(robot, q, task, damping=np.nan)
     with pytest.raises(SolverInputError, match="dt"):
-        uvms.clik_step(robot, q, task, 0.0)
+        clik_step(robot, q, task, 0.0)
     with pytest.raises(uvms.UVMSError, match="no target"):
-        uvms.clik_velocity(robot, q, uvms.FrameTask(robot))
+        clik_velocity(robot, q, uvms.FrameTask(robot))
     with pytest.raises(uvms.UVMSError, match="valid: log, euler"):
         uvms.FrameTask(robot, orientation="quaternion")
     with pytest.raises(uvms.UVMSError, match="valid for a planar base: vx, vy, wz"):
         uvms.VehicleTask(robot, velocities={"vz": 0.0})
     with pytest.raises(SolverInputError, match="alpha"):
-        uvms.clik_velocity(robot, q, task, alpha=-1.0)
+        clik_velocity(robot, q, task, alpha=-1.0)
     with pytest.raises(SolverInputError, match="variable damping needs epsilon > 0"):
         uvms.VariableDamping(0.0, 0.1)
     with pytest.raises(SolverInputError, match="W must be symmetric"):
-        uvms.clik_velocity(robot, q, task, weights=np.triu(np.ones((6, 6))), dt=0.1, enforce_limits=True)
+        clik_velocity(robot, q, task, weights=np.triu(np.ones((6, 6))), dt=0.1, enforce_limits=True)
     with pytest.raises(SolverInputError, match="dt"):
-        uvms.clik_velocity(robot, q, task, enforce_limits=True)
+        clik_velocity(robot, q, task, enforce_limits=True)
     with pytest.raises(SolverInputError, match="restarts must be an integer >= 0"):
         uvms.solve_ik(robot, [0, 0, 0, 0, 0, 0], restarts=-1)
     with pytest.raises(SolverInputError, match="tolerance must be finite and > 0"):
@@ -355,10 +387,10 @@ def test_free_floating_on_a_fixed_base_is_one_clear_error():
     assert arm.base_type == "fixed"
     task = uvms.FrameTask(arm, target=arm.fk(arm.neutral()))
     with pytest.raises(SolverInputError, match="ur5 has a fixed base: free_floating=True needs a floating or planar base"):
-        uvms.clik_velocity(arm, arm.neutral(), task, free_floating=True)
+        clik_velocity(arm, arm.neutral(), task, free_floating=True)
     with pytest.raises(SolverInputError, match="fixed base"):
-        uvms.clik_step(arm, arm.neutral(), task, 0.1, free_floating=True)
-    assert np.all(np.isfinite(uvms.clik_velocity(arm, arm.neutral(), task).v))  # the same call without it works
+        clik_step(arm, arm.neutral(), task, 0.1, free_floating=True)
+    assert np.all(np.isfinite(clik_velocity(arm, arm.neutral(), task).v))  # the same call without it works
 
 
 # ------------------------------------------------------ property-based tests
@@ -376,14 +408,14 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
     q = robot.configuration(base=[0, 0, 0.1], arm=arm)
     task = hoang_task(robot, target=xdot)
     for free_floating in (False, True):
-        result = uvms.clik_velocity(robot, q, task, damping=uvms.VariableDamping(0.1, 0.2) if damping else 0.0,
+        result = clik_velocity(robot, q, task, damping=uvms.VariableDamping(0.1, 0.2) if damping else 0.0,
                                     free_floating=free_floating, potential=uvms.JointLimitPotential(robot), alpha=10.0)
         assert np.all(np.isfinite(result.v)) and np.isfinite(result.residual) and np.isfinite(result.sigma_min)
     state = uvms.Configuration(robot, q)
     jacobian = task.jacobian(state)[:, 3:]  # arm only: singular when stretched
     for inverse in (pinv(jacobian), dls(jacobian, damping)):
         assert np.all(np.isfinite(inverse @ np.asarray(xdot)))
-    priority = uvms.priority_velocity(robot, q, [task, uvms.VehicleTask.at_rest(robot)], damping=damping)
+    priority = priority_velocity(robot, q, [task, uvms.VehicleTask.at_rest(robot)], damping=damping)
     assert np.all(np.isfinite(priority.v))
 
 
@@ -465,33 +497,3 @@ def test_compiled_pose_error_and_joint_box_match_pinocchio_and_numpy(rng):
         expected[index] = np.clip(moved, lower, upper)
         project_into_box(q, index, lower, upper, turns)
         assert np.array_equal(q, expected)
-
-
-def test_pose_clik_hot_path_equals_the_general_clik(rng):
-    from uvms.solvers.pose_clik import PoseCLIK
-
-    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
-    potential = uvms.JointLimitPotential(robot)
-    for alpha, twist in ((0.0, None), (2.0, rng.normal(size=6))):
-        hot = PoseCLIK(robot, gain=1.5, damping=1e-3, potential=potential, alpha=alpha)
-        for _ in range(10):
-            q = robot.random_configuration(rng)
-            target = robot.fk(robot.random_configuration(rng))
-            hot.set_target(target, twist)
-            task = uvms.FrameTask(robot, target=target)
-            if twist is not None:
-                task.set_target_velocity(twist)
-            general = uvms.clik_velocity(robot, q, task, gain=1.5, damping=1e-3, potential=potential, alpha=alpha)
-            assert np.allclose(hot.velocity(q), general.v, atol=1e-12, rtol=1e-10)
-            assert np.allclose(hot.error, general.error, atol=1e-14)
-    hot = PoseCLIK(robot, gain=2.0, damping=1e-9)
-    q = robot.random_configuration(rng)
-    target = robot.fk(q) * pin.SE3(pin.rpy.rpyToMatrix(0.2, 0.1, -0.1), np.array([0.1, -0.1, 0.05]))
-    hot.set_target(target)
-    for _ in range(300):
-        q = hot.step(q, 0.05)
-    assert np.linalg.norm(hot.error) <= 1e-10
-    with pytest.raises(SolverInputError):
-        PoseCLIK(robot, damping=0.0)
-    with pytest.raises(SolverInputError, match="not positive definite"):
-        hot.velocity(np.full(robot.nq, np.nan))  # never a NaN velocity

@@ -160,8 +160,9 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
     for coordination in (False, True):
         plant = Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
         velocity = station_keeping(plant, thrusters, station, DT).velocity  # its vehicle loop and allocation
+        clik = uvms.CLIKSolver(robot, task, gain=1.0, damping=0.01)
         controller = CoordinatedControl(
-            robot, velocity, lambda t, q, v: (uvms.clik_velocity(robot, q, task, gain=1.0, damping=0.01).v, None),
+            robot, velocity, lambda t, q, v: (clik.velocity(uvms.Configuration(robot, q)).v, None),
             DT, task_jacobian=lambda q: robot.jacobian(q)[:3], coordination=coordination,
             monitor=lambda q: {"ee_error": float(np.linalg.norm(target - robot.fk(q).translation))})
         result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)

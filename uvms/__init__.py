@@ -24,6 +24,7 @@ from .errors import (
     NoVehicleError,
     NotARobot,
     NumericalError,
+    SolverInputError,
     UVMSError,
     WorkspaceInputError,
     XacroError,
@@ -41,13 +42,13 @@ from .robot.configuration import Configuration
 from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
 from .solvers import (
     CLIKSolver,
-    SolverInputError,
+    ConstraintSolver,
+    HQPSolver,
+    PrioritySolver,
+    SetBasedSolver,
+    SolverResult,
     VariableDamping,
-    clik_step,
-    clik_velocity,
-    constrained_velocity,
     initial_configuration,
-    priority_velocity,
     solve_ik,
 )
 
@@ -79,8 +80,8 @@ __all__ = [
     "Configuration", "Limit", "Robot",
     # tasks and solvers
     "DistanceTask", "FrameTask", "JointLimitPotential", "JointTask", "PostureTask", "VehicleTask",
-    "CLIKSolver", "SolverInputError", "VariableDamping", "clik_step", "clik_velocity", "constrained_velocity",
-    "initial_configuration", "priority_velocity", "solve_ik",
+    "CLIKSolver", "ConstraintSolver", "HQPSolver", "PrioritySolver", "SetBasedSolver", "SolverInputError",
+    "SolverResult", "VariableDamping", "initial_configuration", "solve_ik",
     # trajectories
     "ViaPointTrajectory", "ctraj", "jtraj",
     # dynamics

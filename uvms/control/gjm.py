@@ -24,12 +24,13 @@ Which GJM (``gjm``):
 * ``"fixed_base"`` — the arm columns J_m of the ordinary Jacobian, as if the vehicle
   were held still (the traditional scheme the paper contrasts with; for comparisons).
 
-This is the CLIK of the core with a choice of Jacobian: a ``FrameTask`` (log orientation
-error, no gain on its angular rows) stacked by :func:`uvms.solvers.stack.stack` gives
-nu_c; a :class:`uvms.robot.configuration.Configuration` whose momentum rows are the chosen ones (rigid
-centroidal map, added-mass-augmented mass matrix, or a vehicle held still) gives the GJM
-by the one formula of :mod:`uvms.robot.kinematics`; the inverse is the solvers' damped weighted
-inverse (``damped_weighted_inverse`` with ``VariableDamping``), as in ``clik_velocity``.
+This is CLIK with ``free_floating=True`` (:class:`uvms.solvers.CLIKSolver`, built once): a ``FrameTask``
+(log orientation error, no gain on its angular rows) gives nu_c; a
+:class:`uvms.robot.configuration.Configuration` whose momentum rows are the chosen ones (rigid centroidal
+map, added-mass-augmented mass matrix, or a vehicle held still) gives the GJM by the one formula of
+:mod:`uvms.robot.kinematics`; the inverse is the solvers' damped weighted inverse (fixed damping or
+``VariableDamping``). GJM^# applied to another twist x (the servo feedforward below) is the same CLIK in open
+loop (K = 0) with x as its feedforward.
 
 Joint servos. The plant's joints follow their commanded velocity through a
 first-order servo of time constant tau (amundsen2018: 100 ms). Sent as is, w is
@@ -54,10 +55,9 @@ from ..dynamics.added_mass import augmented_mass_matrix, resolve_links
 from ..errors import GJMControlError, UVMSError
 from ..robot.kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
 from ..robot.robot import Robot
-from ..solvers.clik import VariableDamping, damped_weighted_inverse
-from ..numerics.inverses import weights_factor
-from ..solvers.stack import stack
+from ..numerics.inverses import VariableDamping, weights_factor
 from ..robot.configuration import Configuration, MomentumRows
+from ..solvers import CLIKSolver, SolverResult
 from ..tasks.frame import FrameTask
 from ..trajectory.cartesian import PoseSample
 from ..trajectory.ramps import VelocityRamps
@@ -89,14 +89,11 @@ class GJMSample:
 
 @dataclass(frozen=True)
 class _Solution:
-    """One CLIK solve at (q, t): the state, the reference sample, the inverse and what it inverts."""
+    """One CLIK solve at (q, t): the state, the reference sample and the solver's result."""
 
     state: Configuration
     reference: PoseSample
-    inverse: np.ndarray  # (n_arm, k)
-    command: np.ndarray  # (k,)
-    sigma_min: float
-    damping: float
+    result: SolverResult
 
 
 class GJMController:
@@ -120,7 +117,8 @@ class GJMController:
 
     Raises:
         GJMControlError: a fixed base, unknown axes or GJM kind, bad gain or tau.
-        SolverInputError: weights not (n_arm,) positive nor (n_arm, n_arm) symmetric positive definite.
+        SolverInputError: weights not (n_arm,) positive nor (n_arm, n_arm) symmetric positive definite, or a
+            bad damping.
         UVMSError: the model has no hydrodynamic parameters and ``gjm = "added_mass"``.
     """
 
@@ -178,6 +176,12 @@ class GJMController:
             self.hydro = hydrodynamics_of(robot) if hydro is None else hydro
             self.links = resolve_links(self.model, self.hydro)
         self._momentum = self._momentum_rows()
+        # the law, built once: CLIK on the generalized Jacobian (closed loop with K on the position rows), and
+        # the same in open loop, whose feedforward is any twist x: GJM^# x (the servo feedforward)
+        options = dict(weights=self.weights, damping=damping, free_floating=True)
+        self.solver = CLIKSolver(robot, self.task, gain=self.task_gain, **options)
+        self._open_task = FrameTask(robot, self.frame, axes=self.axes, orientation="log")
+        self._open = CLIKSolver(robot, self._open_task, gain=0.0, **options)
 
     # ------------------------------------------------------------- Jacobians
     def _momentum_rows(self) -> MomentumRows | None:
@@ -200,13 +204,17 @@ class GJMController:
 
     # ------------------------------------------------------------- control
     def _solve(self, state: Configuration, t: float) -> _Solution:
-        """The CLIK of the core at (state, t): nu_c = stack of the task, the damped weighted inverse of its GJM rows."""
+        """The CLIK of the core at (state, t): nu_c from the task, the damped weighted inverse of its GJM rows."""
         reference = self.reference(t)
         self.task.set_target(reference.pose)
         self.task.set_target_velocity(reference.twist)
-        jacobian, _, command = stack(state, [self.task], self.task_gain)  # (k, nv), nu_c (k,)
-        inverse, sigma_min, used = damped_weighted_inverse(state.generalized(jacobian), self.weights, self.damping)
-        return _Solution(state, reference, inverse, command, sigma_min, used)
+        return _Solution(state, reference, self.solver.velocity(state))
+
+    def _inverse_times(self, state: Configuration, twist: np.ndarray, pose) -> np.ndarray:
+        """GJM^# x (n_arm,) at ``state`` of the task rows of a twist x (6,): the open-loop CLIK fed x."""
+        self._open_task.set_target(pose)
+        self._open_task.set_target_velocity(twist)
+        return self._open.velocity(state).v[self.nb:]
 
     def _position_error(self, solution: _Solution) -> np.ndarray:
         if not self.position_rows:
@@ -223,8 +231,9 @@ class GJMController:
 
     def _sample(self, state: Configuration, t: float) -> GJMSample:
         solution = self._solve(state, t)
-        return GJMSample(solution.inverse @ solution.command, solution.command, self._position_error(solution),
-                         solution.sigma_min, solution.damping)
+        result = solution.result
+        return GJMSample(result.v[self.nb:], result.command, self._position_error(solution), result.sigma_min,
+                         result.damping)
 
     def tracking(self, t: float, q: np.ndarray, v: np.ndarray) -> dict:
         """The tracking series of a run's row at (t, q, v): pose and velocity of the frame and of the reference,
@@ -243,17 +252,18 @@ class GJMController:
         The signature of a :func:`uvms.sim.simulate.simulate_plant` command.
         """
         solution = self._solve(self.state(q), t)
-        inverse, command = solution.inverse, solution.command
-        rates = inverse @ command
+        rates = solution.result.v[self.nb:]
         if self.motor_feedforward == 0.0:
             return rates
         h = self.difference_step
-        ahead = self._solve(self.state(pin.integrate(self.model, q, v * h)), t).inverse
         reference = solution.reference
+        command = np.zeros(6)
+        command[self.rows] = solution.result.command  # nu_c (k,) as a twist (6,) on the task rows
+        ahead = self._inverse_times(self.state(pin.integrate(self.model, q, v * h)), command, reference.pose)
         jacobian = solution.state.jacobian(self.frame_id)
         command_rate = reference.acceleration.copy()  # d nu_c / dt = a_d + K (v_d - p')
         command_rate[:3] += self.gain @ (reference.twist[:3] - jacobian[:3] @ v)
-        rate_of_rates = (ahead - inverse) @ command / h + inverse @ command_rate[self.rows]
+        rate_of_rates = (ahead - rates) / h + self._inverse_times(solution.state, command_rate, reference.pose)
         return rates + self.motor_feedforward * rate_of_rates
 
 

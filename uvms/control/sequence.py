@@ -3,9 +3,10 @@
 A sequence is a list of phases. Each phase moves some frames by a displacement
 [m], drives named joints (claws) to values and optionally the distance between
 the first two frames to a value, all along a quintic time law (rest to rest),
-while the vehicle holds its pose. The controller stacks every task (``clik``)
-or prioritizes them: vehicle, then the relative distance, then frames and
-joints (``task_priority``). xiang2019's gripping sequence (open the arms, lower
+while the vehicle holds its pose. The controller gives the levels — vehicle,
+then the relative distance, then frames and joints — to a solver of
+:data:`uvms.solvers.SOLVERS` (``clik`` stacks them, ``task_priority``
+prioritizes them). xiang2019's gripping sequence (open the arms, lower
 onto the target, grip) is ``scenarios/xiang2019_grip.toml``.
 """
 
@@ -19,14 +20,13 @@ import pinocchio as pin
 
 from ..errors import UVMSError
 from ..robot.robot import Robot
-from ..solvers import clik_velocity, priority_velocity
+from ..solvers import SOLVERS, Solver, SolverResult
 from ..robot.configuration import Configuration
 from ..tasks import DistanceTask, FrameTask, JointTask, VehicleTask
 from ..tasks.vehicle import VELOCITY_NAMES
 from ..trajectory import PolynomialLaw, PoseSample
 
 POSITION_AXES = ("x", "y", "z")
-METHODS = ("clik", "task_priority")
 
 
 @dataclass(frozen=True)
@@ -166,19 +166,21 @@ class SequenceController:
     Args:
         robot: the model.
         plan: the targets.
-        method: "clik" (all tasks stacked) or "task_priority" (vehicle > distance > frames and joints).
-        gain: K of every task [1/s].
-        damping: DLS damping lambda >= 0.
-        priority: "classic" or "robust" (task_priority only).
+        method: a solver of :data:`uvms.solvers.SOLVERS` that takes any number of levels (e.g. "clik": all
+            tasks stacked; "task_priority": vehicle > distance > frames and joints).
         hold_vehicle: keep the vehicle at rest (a floating/planar base); False lets it move.
+        options: the solver's keywords (e.g. gain, damping, priority = "classic" or "robust").
+
+    Raises:
+        UVMSError: an unknown method, or one that needs a fixed number of levels; the solver's own errors.
     """
 
-    def __init__(self, robot: Robot, plan: PhasePlan, *, method: str = "task_priority", gain: float = 1.0,
-                 damping: float = 0.0, priority: str = "classic", hold_vehicle: bool = True) -> None:
-        if method not in METHODS:
-            raise UVMSError(f"unknown sequence solver {method!r}; valid: {', '.join(METHODS)}")
+    def __init__(self, robot: Robot, plan: PhasePlan, *, method: str = "task_priority", hold_vehicle: bool = True,
+                 **options) -> None:
+        valid = [name for name, cls in SOLVERS.items() if cls.level_count is None]
+        if method not in valid:
+            raise UVMSError(f"unknown sequence solver {method!r}; valid: {', '.join(valid)}")
         self.robot, self.plan, self.method = robot, plan, method
-        self.gain, self.damping, self.priority = gain, damping, priority
         self.frame_tasks = [FrameTask(robot, frame, axes=POSITION_AXES) for frame in plan.frames]
         start = plan(0.0).joints
         self.joint_task = JointTask(robot, {name: value for name, (value, _) in start.items()}) if start else None
@@ -186,6 +188,11 @@ class SequenceController:
         self.vehicle_task = None
         if hold_vehicle and robot.base_type != "fixed":
             self.vehicle_task = VehicleTask(robot, velocities={name: 0.0 for name in VELOCITY_NAMES[robot.base_type]})
+        # one solver per level set, built once: without the distance task, and with it when a phase sets one
+        cls = SOLVERS[method]
+        self.solvers: dict[bool, Solver] = {with_distance: cls(robot, self.levels(with_distance), **options)
+                                            for with_distance in ((False, True) if plan.uses_distance else (False,))}
+        self._configuration: Configuration | None = None  # moved to each q asked about
 
     def set_targets(self, t: float) -> Targets:
         """Point every task at its target of time t."""
@@ -208,16 +215,14 @@ class SequenceController:
                   primary]
         return [level for level in levels if level]
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray | None = None):
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> tuple[np.ndarray, SolverResult]:
+        """(v (nv,), the SolverResult) at (t, q)."""
         targets = self.set_targets(t)
-        state = Configuration(self.robot, q, check=False)
-        levels = self.levels(targets.distance is not None)
-        if self.method == "clik":
-            result = clik_velocity(self.robot, state, [task for level in levels for task in level], gain=self.gain,
-                                   damping=self.damping)
+        if self._configuration is None:
+            self._configuration = Configuration(self.robot, q, check=False)
         else:
-            result = priority_velocity(self.robot, state, levels, gain=self.gain, method=self.priority,
-                                       damping=self.damping)
+            self._configuration.update(q, check=False)
+        result = self.solvers[targets.distance is not None].velocity(self._configuration)
         return result.v, result
 
 

@@ -8,8 +8,7 @@
   damped (fixed or variable) from one SVD, with its diagnostics sigma_min and l.
 - :func:`dls_solve`: the normal-equation form J^T (J J^T + d I)^-1 b for one
   right-hand side, one Cholesky factorization (a compiled kernel): cheaper when only
-  J^+ b is needed (the CLIK hot path :class:`~uvms.solvers.pose_clik.PoseCLIK`,
-  the Newton steps of :func:`~uvms.solvers.ik.solve_ik`).
+  J^+ b is needed (the Newton steps of :func:`~uvms.solvers.ik.solve_ik`).
 
 The matrix forms return the inverse (n, k), like ``numpy.linalg.pinv``.
 """
@@ -128,8 +127,7 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float) -> 
 
     One Cholesky factorization of the (k, k) row-space matrix in the compiled kernel
     :func:`~uvms.numerics.kernels.dls_solve_into` (the one the Newton steps of
-    :func:`~uvms.solvers.ik.solve_ik` and the :class:`~uvms.solvers.pose_clik.PoseCLIK`
-    step call), no inverse formed and no validation: the caller has checked its inputs once.
+    :func:`~uvms.solvers.ik.solve_ik` call), no inverse formed and no validation: the caller has checked its inputs once.
 
     Args:
         jacobian: J (k, n), finite.

@@ -9,7 +9,6 @@ import numpy as np
 import pinocchio as pin
 
 from ..control.gjm import GJMController
-from ..control.sequence import METHODS as SEQUENCE_METHODS
 from ..control.sequence import Phase, PhasePlan, SequenceController
 from ..dynamics.hydrodynamics import HydroParameters
 from ..dynamics.plant import Plant
@@ -17,25 +16,21 @@ from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..model.loader import load
 from ..robot.robot import Robot
 from ..robot.configuration import Configuration
-from ..solvers import (
-    CLIKSolver,
-    VariableDamping,
-    constrained_velocity,
-    hqp_velocity,
-    initial_configuration,
-    SetBasedSolver,
-    priority_velocity,
-)
+from ..solvers import SOLVERS, CLIKSolver, Solver, VariableDamping, initial_configuration
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
 from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, RecentSamples, SE3Trajectory, TrapezoidLaw,
                           VelocityRamps)
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
-from .inequalities import ENFORCING_METHODS, ScenarioInequalities, build_inequalities
+from .inequalities import ScenarioInequalities, build_inequalities
 from .schema import NUMBER, changed_keys
 from .tracking import TrackingController
 
-#: The methods that take solver.weights (the W of the solved columns).
-WEIGHTED_METHODS = ("clik", *ENFORCING_METHODS)
+#: [solver] keys -> the solver constructor's keyword they set (solver.method and solver.joint_limit_weights,
+#: which the initial configuration also reads, are not options of a solver).
+SOLVER_KEYWORDS = {"gain": "gain", "weights": "weights", "damping": "damping", "damping_epsilon": "damping",
+                   "damping_max": "damping", "alpha": "alpha", "free_floating": "free_floating",
+                   "enforce_limits": "enforce_limits", "priority": "priority", "eta": "eta",
+                   "regularization": "regularization"}
 
 @dataclass
 class Setup:
@@ -87,7 +82,7 @@ def build(scenario: dict) -> Setup:
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(scenario["plant"]["control_dt"]))
     check_kinematic_plant(scenario["plant"])
-    inequalities = (build_inequalities(robot, scenario["inequalities"], scenario["solver"]["method"])
+    inequalities = (build_inequalities(robot, scenario["inequalities"], SOLVERS[scenario["solver"]["method"]])
                     if scenario["inequalities"] else None)
     samples = RecentSamples(trajectory)  # the controller's stages and the recorder share its samples
     controller = make_controller(robot, task, samples, scenario, inequalities)
@@ -98,9 +93,11 @@ def build(scenario: dict) -> Setup:
 def build_sequence(robot: Robot, scenario: dict) -> Setup:
     """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.control.sequence)."""
     solver, frames = scenario["solver"], scenario["task"]["frames"] or robot.ee_frames
-    if solver["method"] not in SEQUENCE_METHODS:
-        raise ScenarioError(f"a sequence scenario needs solver.method in {', '.join(SEQUENCE_METHODS)}, "
-                            f"got {solver['method']!r}")
+    if SOLVERS[solver["method"]].level_count is not None:
+        valid = [name for name, cls in SOLVERS.items() if cls.level_count is None]
+        raise ScenarioError(f"a sequence scenario needs solver.method in {', '.join(valid)} (a solver of any number "
+                            f"of levels: vehicle, distance, frames and joints), got {solver['method']!r}")
+    solver_type = solver_class(solver)
     if scenario["initial"]["method"] != "given" or not isinstance(solver["gain"], NUMBER):
         raise ScenarioError("a sequence scenario needs initial.method = 'given' and one number for solver.gain")
     q0, _ = initial_q(robot, None, scenario)
@@ -108,9 +105,12 @@ def build_sequence(robot: Robot, scenario: dict) -> Setup:
                     offsets=phase["offsets"], joints=phase["joints"], distance=phase["distance"])
               for index, phase in enumerate(scenario["phases"])]
     plan = PhasePlan(robot, q0, frames, phases)
-    controller = SequenceController(robot, plan, method=solver["method"], gain=float(solver["gain"]),
-                                    damping=float(solver["damping"]), priority=solver["priority"],
-                                    hold_vehicle=scenario["vehicle"]["hold"])
+    options = solver_options(robot, solver, solver_type, float(scenario["simulation"]["dt"]))
+    try:
+        controller = SequenceController(robot, plan, method=solver["method"], hold_vehicle=scenario["vehicle"]["hold"],
+                                        **options)
+    except UVMSError as exc:
+        raise ScenarioError(f"solver: {exc}") from None
     duration = scenario["simulation"]["duration"] or plan.duration
     return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller, float(duration),
                  0.0, plan)
@@ -269,7 +269,7 @@ def make_plant(robot: Robot, section: dict) -> Plant:
 def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict) -> tuple[Plant, GJMController]:
     """The plant and the GJM controller of amundsen2018 (eq. 4-8) for a dynamic [plant]."""
     section, solver = scenario["plant"], scenario["solver"]
-    if solver["method"] != "clik" or not solver["free_floating"]:
+    if SOLVERS[solver["method"]] is not CLIKSolver or not solver["free_floating"]:
         raise ScenarioError(f"plant.type = {section['type']!r} leaves the vehicle passive: it needs solver.method = "
                             f"'clik' and solver.free_floating = true (the joints are commanded through the "
                             f"generalized Jacobian, plant.gjm)")
@@ -281,9 +281,7 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: d
     if gain.shape not in ((), (3,)):
         raise ScenarioError(f"solver.gain with a dynamic plant is K on the position error: one number or 3 "
                             f"(x, y, z) [1/s], got {solver['gain']!r}")
-    damping: float | VariableDamping = solver["damping"]
-    if solver["damping_epsilon"] > 0:
-        damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
+    damping = solver_damping(solver)
     weights = solver_weights(robot, solver, free_floating=True)
     control_dt, dt = float(section["control_dt"]), float(scenario["simulation"]["dt"])
     ratio = control_dt / dt
@@ -299,6 +297,52 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: d
     return plant, controller
 
 
+def solver_class(solver: dict) -> type[Solver]:
+    """The class of solver.method, every [solver] key the user set checked against what it takes.
+
+    Raises:
+        ScenarioError: a key set (not at its default) that the method's constructor does not take; the
+            message lists the keys it takes.
+    """
+    method = solver["method"]
+    cls = SOLVERS[method]
+    taken = cls.options()
+    refused = [key for key in changed_keys({"solver": solver}, "solver", tuple(SOLVER_KEYWORDS))
+               if SOLVER_KEYWORDS[key] not in taken]
+    if refused:
+        keys = ", ".join(f"solver.{key}" for key, keyword in SOLVER_KEYWORDS.items() if keyword in taken)
+        hint = ""
+        if cls.enforces_inequalities and refused[0] in ("alpha", "enforce_limits"):
+            hint = ("; joint limits are an [[inequalities]] table of type 'joint_limits' (margin, band [rad]), "
+                    "which it enforces")
+        raise ScenarioError(f"solver.{refused[0]} is not used by solver.method = {method!r}, which takes {keys}: "
+                            f"remove it or choose another method{hint}")
+    return cls
+
+
+def solver_damping(solver: dict) -> float | VariableDamping:
+    """solver.damping, or the variable damping of amundsen2018 eq. 6 when solver.damping_epsilon > 0."""
+    if solver["damping_epsilon"] > 0:
+        return VariableDamping(solver["damping_epsilon"], solver["damping_max"])
+    return solver["damping"]
+
+
+def solver_options(robot: Robot, solver: dict, cls: type[Solver], dt: float) -> dict[str, Any]:
+    """The constructor keywords of ``cls`` from the [solver] section (those it takes), with the step dt [s]."""
+    offered = {"gain": np.asarray(solver["gain"], dtype=float), "damping": solver_damping(solver),
+               "alpha": solver["alpha"], "free_floating": solver["free_floating"], "dt": dt,
+               "enforce_limits": solver["enforce_limits"], "priority": solver["priority"], "eta": solver["eta"],
+               "regularization": solver["regularization"]}
+    taken = cls.options()
+    options = {keyword: value for keyword, value in offered.items() if keyword in taken}
+    if "weights" in taken:
+        options["weights"] = solver_weights(robot, solver, free_floating=solver["free_floating"])
+    if "potential" in taken:
+        options["potential"] = JointLimitPotential(robot, weights=np.asarray(solver["joint_limit_weights"],
+                                                                             dtype=float))
+    return options
+
+
 def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarray | None:
     """``solver.weights`` as the diagonal W of the solved columns, checked against the model (None: not given).
 
@@ -306,14 +350,10 @@ def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarra
     (generalized-Jacobian) control, where the vehicle is not commanded.
 
     Raises:
-        ScenarioError: weights with a method other than clik, the wrong count (the message says what the
-            entries are), or an entry <= 0.
+        ScenarioError: the wrong count (the message says what the entries are), or an entry <= 0.
     """
     if not solver["weights"]:
         return None
-    if solver["method"] not in WEIGHTED_METHODS:
-        raise ScenarioError(f"solver.weights (the W of the weighted pseudo-inverse) is used by solver.method = "
-                            f"{', '.join(map(repr, WEIGHTED_METHODS))} only, not {solver['method']!r}; remove it")
     weights = np.asarray(solver["weights"], dtype=float)
     if free_floating:
         size, covered = robot.n_arm, (f"free-floating (generalized-Jacobian) weights cover the arm joints only "
@@ -330,61 +370,29 @@ def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarra
     return weights
 
 
-def check_enforcing_solver(solver: dict) -> None:
-    """Refuse the keys of solver.method = 'clik' that set_based/hqp do not take (they have their own limits)."""
-    method = solver["method"]
-    if solver["alpha"] or solver["enforce_limits"]:
-        raise ScenarioError(f"solver.alpha and solver.enforce_limits are CLIK's joint-limit handling; with "
-                            f"solver.method = {method!r} the limits are an [[inequalities]] table of type "
-                            f"'joint_limits' (margin, band [rad])")
-    if method == "hqp" and (solver["damping"] or solver["damping_epsilon"]):
-        raise ScenarioError("solver.damping and solver.damping_epsilon are not used by solver.method = 'hqp' "
-                            "(each QP is regularized by solver.regularization); remove them or use 'set_based'")
-
-
 def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, scenario: dict,
                     inequalities: ScenarioInequalities | None = None) -> TrackingController:
     """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method, following ``samples`` (the trajectory).
 
-    With solver.method = "set_based" or "hqp" the levels are the ``[[inequalities]]`` (highest first) and
-    then the task; any other method leaves the inequalities to the recorder (monitored, not enforced).
+    The solver is ``SOLVERS[solver.method]``, built once. Its levels: the ``[[inequalities]]`` (highest first)
+    when it enforces them (else the recorder monitors them), then the task, and the ``[vehicle]`` task at the
+    level the solver puts it (:attr:`~uvms.solvers.base.Solver.vehicle_level`) when it uses one.
     """
     solver, vehicle = scenario["solver"], scenario["vehicle"]
-    dt = scenario["simulation"]["dt"]
-    gain = np.asarray(solver["gain"], dtype=float)
-    damping: float | VariableDamping = solver["damping"]
-    if solver["damping_epsilon"] > 0:
-        damping = VariableDamping(solver["damping_epsilon"], solver["damping_max"])
-    potential = JointLimitPotential(robot, weights=np.asarray(solver["joint_limit_weights"], dtype=float))
-    weights = solver_weights(robot, solver, free_floating=solver["free_floating"])
-    method = solver["method"]
-    levels = [*(inequalities.levels if inequalities is not None else []), task]
-    if method in ENFORCING_METHODS:
-        check_enforcing_solver(solver)
-    vehicle_task = None
-    if method in ("task_priority", "kinematic_constraint"):
+    cls = solver_class(solver)
+    options = solver_options(robot, solver, cls, scenario["simulation"]["dt"])
+    levels: list = [*(inequalities.levels if inequalities is not None and cls.enforces_inequalities else []), task]
+    if cls.vehicle_level is not None:
         if not vehicle["velocities"] and vehicle["heading"] is None and vehicle["depth"] is None:
-            raise ScenarioError(f"solver.method = {method!r} needs a [vehicle] task (velocities, heading or depth)")
-        vehicle_task = VehicleTask(robot, velocities=vehicle["velocities"], heading=vehicle["heading"],
-                                   depth=vehicle["depth"])
-
-    if method == "clik":  # built once: its inputs checked here, not at every evaluation
-        clik = CLIKSolver(robot, task, gain=gain, weights=weights, damping=damping, potential=potential,
-                          alpha=solver["alpha"], free_floating=solver["free_floating"], dt=dt,
-                          enforce_limits=solver["enforce_limits"])
-        return TrackingController(robot, task, samples, clik.solve, clik.velocity)
-    if method == "set_based":  # likewise
-        set_based = SetBasedSolver(robot, levels, gain=gain, weights=weights, damping=damping, eta=solver["eta"],
-                                   free_floating=solver["free_floating"], dt=dt)
-        return TrackingController(robot, task, samples, set_based.solve, set_based.velocity)
-
-    def solve(state: Configuration):
-        if method == "hqp":
-            return hqp_velocity(robot, state, levels, dt=dt, gain=gain, weights=weights,
-                                free_floating=solver["free_floating"], regularization=solver["regularization"])
-        if method == "task_priority":
-            return priority_velocity(robot, state, [task, vehicle_task], gain=[gain, vehicle["gain"]],
-                                     method=solver["priority"], damping=float(solver["damping"]))
-        return constrained_velocity(robot, state, task, vehicle_task, gain=gain, constraint_gain=vehicle["gain"])
-
-    return TrackingController(robot, task, samples, solve)
+            raise ScenarioError(f"solver.method = {solver['method']!r} needs a [vehicle] task (velocities, heading or "
+                                f"depth)")
+        levels.insert(cls.vehicle_level, VehicleTask(robot, velocities=vehicle["velocities"],
+                                                     heading=vehicle["heading"], depth=vehicle["depth"]))
+        gains: list = [options["gain"]] * (len(levels) - 1)
+        gains.insert(cls.vehicle_level, vehicle["gain"])
+        options["gain"] = gains
+    try:
+        built = cls(robot, levels, **options)  # its inputs checked here, not at every evaluation
+    except UVMSError as exc:
+        raise ScenarioError(f"solver ({solver['method']}): {exc}") from None
+    return TrackingController(robot, task, samples, built)

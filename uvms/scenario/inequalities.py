@@ -6,7 +6,8 @@ Each table is one priority level, highest first, all above ``[task]``::
     type = "vehicle_attitude"     # joint_limits, joint_velocity, vehicle_attitude, plane_clearance, manipulability
     max_tilt = 0.0873             # [rad] (5 degrees)
 
-``solver.method = "set_based"`` (iCAT) or ``"hqp"`` (the QP cascade) enforces them. With another method they
+A solver that enforces them (``Solver.enforces_inequalities``: ``"set_based"``, iCAT, and ``"hqp"``, the QP
+cascade) makes them levels above the task. With another method they
 are *monitored*: recorded and reported exactly the same way, not enforced (``metrics.json`` says
 ``"inequalities_enforced": false``), so the same scenario run with ``--set solver.method=clik`` shows what the
 inequalities change.
@@ -25,13 +26,12 @@ import numpy as np
 
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
+from ..solvers import SOLVERS, Solver
 from ..solvers.saturation import speed_maximum
 from ..robot.configuration import Configuration
 from ..tasks.objectives import Inequality, Objective, PlaneClearance, Manipulability, VelocityLimit, check_table
 from ..tasks.objectives import inequalities_from_table
 
-#: The methods that enforce the inequalities (the others monitor them).
-ENFORCING_METHODS = ("set_based", "hqp")
 #: An objective whose value is outside its valid set by more than this [its unit] is reported on the terminal:
 #: the activation keeps it inside up to the step's discretization (a tilt limit can be passed by a fraction
 #: of a degree between two solver calls), which is a result, not rounding.
@@ -86,8 +86,8 @@ class ScenarioInequalities:
         return self.types[self.level_of(name)]
 
 
-def build_inequalities(robot: Robot, tables: Sequence[dict], method: str) -> ScenarioInequalities:
-    """The objectives of the scenario's tables on ``robot``.
+def build_inequalities(robot: Robot, tables: Sequence[dict], solver: type[Solver]) -> ScenarioInequalities:
+    """The objectives of the scenario's tables on ``robot``, enforced if the ``solver`` class enforces them.
 
     Raises:
         ScenarioError: an invalid value or name (frame, joint) of a table, or two objectives with one name.
@@ -104,7 +104,7 @@ def build_inequalities(robot: Robot, tables: Sequence[dict], method: str) -> Sce
     if repeated:
         raise ScenarioError(f"inequalities: two objectives are called {repeated[0]!r}; give each its own "
                             f"name = '...' (results and metrics.json report them by name)")
-    return ScenarioInequalities(levels, types, enforced=method in ENFORCING_METHODS)
+    return ScenarioInequalities(levels, types, enforced=solver.enforces_inequalities)
 
 
 class ObjectiveRecorder:
@@ -190,7 +190,8 @@ def inequality_warnings(metrics: dict) -> list[str]:
     enforced = metrics.get("inequalities_enforced", True)
     for name, entry in metrics.get("inequalities", {}).items():
         if entry.get("max_violation", 0.0) > VIOLATION_SLACK:
-            how = "" if enforced else " (monitored only: solver.method = 'set_based' or 'hqp' enforces it)"
+            enforcing = " or ".join(repr(name) for name, cls in SOLVERS.items() if cls.enforces_inequalities)
+            how = "" if enforced else f" (monitored only: solver.method = {enforcing} enforces it)"
             warnings.append(f"{name} left its valid set by up to {entry['max_violation']:.3g}{how}")
     ratio = metrics.get("max_joint_speed_ratio", 0.0)
     if ratio > 1.0 + 1e-9:

@@ -23,6 +23,7 @@ else:  # pragma: no cover - Python 3.10
 from ..control.gjm import GJM_KINDS
 from ..errors import ScenarioError
 from ..model.resources import MAX_TOML_BYTES, read_text
+from ..solvers import SOLVERS
 from .inequalities import check_tables
 from .resources import resolve_scenario_path
 
@@ -35,9 +36,10 @@ DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
 #: free-floating dynamics of uvms.dynamics.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
-#: solver.method values: CLIK, classic/robust task priority, santos2006's kinematic constraint, and the two that
-#: enforce [[inequalities]]: set-based task priority (iCAT) and the QP hierarchy.
-SOLVER_METHODS = ("clik", "task_priority", "kinematic_constraint", "set_based", "hqp")
+#: solver.method values: the names of the solvers registered in uvms.solvers.SOLVERS (CLIK, classic/robust task
+#: priority, santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based task
+#: priority (iCAT) and the QP hierarchy).
+SOLVER_METHODS = tuple(SOLVERS)
 NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
 #: A name read from a scenario that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,

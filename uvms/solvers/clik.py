@@ -10,45 +10,56 @@ only the arm is commanded and the vehicle follows momentum conservation).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
-import pinocchio as pin
 
 from ..robot.kinematics import base_velocity_from_momentum
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
 from ..robot.configuration import Configuration
 from ..tasks.joint_limits import JointLimitPotential
-from ..tasks.task import Task
-from ..tasks.task import as_task_list
+from ..tasks.task import Task, as_task_list
 from ..numerics.checks import (check_damping, check_scalar, check_weights, free_floating_weights_note,
                      prepared_gain)
-from ..numerics.inverses import (SolverInputError, VariableDamping, WeightedInverse, damped_weighted_inverse, svd_inverse,
-                       weights_subset)
-from .results import StepResult, VelocityResult
+from ..numerics.inverses import SolverInputError, VariableDamping, WeightedInverse, weights_subset
+from .base import Solver, check_free_floating
+from .result import SolvedRows, SolverResult
 from .stack import stacked_terms
 
-# VariableDamping, damped_weighted_inverse and svd_inverse live in .inverses and stay importable from here.
-__all__ = ["CLIKSolver", "VariableDamping", "clik_step", "clik_velocity", "damped_weighted_inverse", "solve_with_held",
-           "svd_inverse"]
 
+class CLIKSolver(Solver):
+    """The CLIK of a fixed task set (scenario method "clik"), its inputs checked and its pieces prepared once.
 
-class CLIKSolver:
-    """The CLIK of a fixed task set, its inputs checked and its pieces prepared once.
+    The one implementation of CLIK: build it once, call :meth:`velocity` (or :meth:`step`) at every
+    evaluation. What changes between calls is the configuration and the tasks' targets.
 
-    The one implementation of CLIK: :func:`clik_velocity` builds one and solves once; a controller builds
-    one and calls :meth:`solve` (or :meth:`velocity`, without diagnostics) at every evaluation, with the same
-    numbers, bit for bit. What changes between calls is the configuration and the tasks' targets.
+    Args:
+        robot: the model.
+        tasks: one task, several (stacked), or levels of tasks (stacked in order: CLIK has no priorities).
+        gain: K, scalar, diagonal (k,) or (k, k) [1/s].
+        weights: W, (n,) diagonal or (n, n) SPD, n = nv (or n_arm when free floating).
+        damping: fixed lambda >= 0, or a VariableDamping (amundsen2018 eq. 6).
+        potential: S(q) whose gradient gives the null-space motion z0 = -alpha grad S.
+        alpha: null-space gain alpha >= 0.
+        free_floating: use the generalized Jacobian; the vehicle is passive (follows momentum conservation).
+        dt: step [s], needed by ``enforce_limits``.
+        enforce_limits: keep q + dt v inside the arm limits by holding joints at their limits and re-solving
+            the task with the others (joint clamping).
+        limit: the arm position limits that ``enforce_limits`` keeps (n_arm,); default
+            ``Limit.joint_positions(robot)``, the model's.
 
-    Args: those of :func:`clik_velocity` (after ``q``).
+    Raises:
+        SolverInputError: a bad gain, weight, damping, alpha or dt, free_floating on a fixed base,
+            enforce_limits without dt or with limits of the wrong size.
     """
+
+    name = "clik"
 
     def __init__(
         self,
         robot: Robot,
-        tasks: Task | Sequence[Task],
+        tasks: Task | Sequence[Task | Sequence[Task]],
         *,
         gain: float | np.ndarray = 1.0,
         weights: np.ndarray | None = None,
@@ -61,10 +72,9 @@ class CLIKSolver:
         limit: Limit | None = None,
     ) -> None:
         check_robot(robot, "CLIK")
-        if free_floating and robot.base_type == "fixed":
-            raise SolverInputError(f"{robot.name} has a fixed base: free_floating=True needs a floating or planar base")
+        free_floating = check_free_floating(robot, free_floating)
         self.alpha = check_scalar(alpha, "alpha")
-        self.robot, self.tasks, self.free_floating = robot, as_task_list(tasks), free_floating
+        self.robot, self.tasks, self.free_floating = robot, stacked_tasks(tasks), free_floating
         self.enforce_limits, self.dt = enforce_limits, dt
         if enforce_limits:
             if dt is None:
@@ -80,6 +90,8 @@ class CLIKSolver:
         self._clamp_limit = None if not enforce_limits else limit.after_unbounded(robot.n_vehicle - self.first)
         columns = robot.nv - self.first
         rows = sum(task.dim for task in self.tasks)
+        ends = np.cumsum([task.dim for task in self.tasks])
+        self._task_rows = [slice(end - task.dim, end) for task, end in zip(self.tasks, ends)]  # each task's rows
         # refuses a bad gain now, with its message, rather than at every call
         self._command: Callable[[np.ndarray, np.ndarray], np.ndarray] = prepared_gain(gain, rows)
         self.weights = None if weights is None else check_weights(
@@ -142,70 +154,23 @@ class CLIKSolver:
             free = np.array([i for i in free if i not in held], dtype=int)
         return solution, sigma_min, used, held
 
-    def _state(self, q: np.ndarray | Configuration, check: bool) -> Configuration:
-        return q if isinstance(q, Configuration) else Configuration(self.robot, q, check=check)
-
-    def solve(self, q: np.ndarray | Configuration, *, check: bool = True) -> VelocityResult:
-        """The CLIK velocity at q and its diagnostics.
-
-        Args:
-            q: configuration (nq,) or a Configuration already computed at it.
-            check: validate an array q (False for configurations of ``pin.integrate`` in a loop).
-        """
-        v, jacobian, error, command, sigma_min, used, held_names = self._solution(self._state(q, check))
-        residual = jacobian @ v - command
-        return VelocityResult(v=v, command=command, error=error, residual=math.sqrt(residual.dot(residual)),
-                              sigma_min=sigma_min, damping=used, limits_active=held_names,
-                              free_floating=self.free_floating)
-
-    def velocity(self, q: np.ndarray | Configuration, *, check: bool = True) -> np.ndarray:
-        """The CLIK velocity v (nv,) at q alone (the stages of an integrator, where no one reads diagnostics)."""
-        return self._solution(self._state(q, check))[0]
+    def velocity(self, configuration: Configuration) -> SolverResult:
+        """The CLIK velocity at ``configuration`` and its diagnostics (the residuals per task, when read)."""
+        v, jacobian, error, command, sigma_min, used, held_names = self._solution(self._checked(configuration))
+        if len(self.tasks) == 1:
+            levels = (SolvedRows(0, jacobian, command, error),)
+        else:
+            levels = tuple(SolvedRows(index, jacobian[rows], command[rows], error[rows])
+                           for index, rows in enumerate(self._task_rows))
+        return SolverResult(v=v, sigma_min=sigma_min, damping=used, free_floating=self.free_floating,
+                            limits_active=held_names, levels=levels)
 
 
-def clik_velocity(
-    robot: Robot,
-    q: np.ndarray | Configuration,
-    tasks: Task | Sequence[Task],
-    *,
-    gain: float | np.ndarray = 1.0,
-    weights: np.ndarray | None = None,
-    damping: float | VariableDamping = 0.0,
-    potential: JointLimitPotential | None = None,
-    alpha: float = 0.0,
-    free_floating: bool = False,
-    dt: float | None = None,
-    enforce_limits: bool = False,
-    limit: Limit | None = None,
-) -> VelocityResult:
-    """One CLIK velocity, from a :class:`CLIKSolver` built for this call.
-
-    Every call checks its inputs and builds a new solver (nothing is kept between calls), so it always reads
-    the current values of its arguments. A loop should build ``CLIKSolver(robot, tasks, ...)`` once and call
-    its :meth:`~CLIKSolver.solve` at every step: the same numbers, without the checks and preparation.
-
-    Args:
-        robot: the model.
-        q: configuration (nq,) or a Configuration already computed at it.
-        tasks: one task or several (stacked).
-        gain: K, scalar, diagonal (k,) or (k, k).
-        weights: W, (n,) diagonal or (n, n) SPD, n = nv (or n_arm when free floating).
-        damping: fixed lambda >= 0, or a VariableDamping.
-        potential: S(q) whose gradient gives the null-space motion z0 = -alpha grad S.
-        alpha: null-space gain alpha >= 0.
-        free_floating: use the generalized Jacobian; the vehicle is passive.
-        dt: step [s], needed by ``enforce_limits``.
-        enforce_limits: keep q + dt v inside the arm limits by holding joints at their
-            limits and re-solving the task with the others (joint clamping).
-        limit: the arm position limits that ``enforce_limits`` keeps (n_arm,); default
-            ``Limit.joint_positions(robot)``, the model's.
-
-    Returns:
-        VelocityResult with the full velocity v (nv,).
-    """
-    solver = CLIKSolver(robot, tasks, gain=gain, weights=weights, damping=damping, potential=potential, alpha=alpha,
-                        free_floating=free_floating, dt=dt, enforce_limits=enforce_limits, limit=limit)
-    return solver.solve(q)
+def stacked_tasks(tasks: Task | Sequence[Task | Sequence[Task]]) -> list[Task]:
+    """The tasks in stacking order: a task, a list of tasks, or a list of levels (each a task or a list)."""
+    if isinstance(tasks, (list, tuple)) and not all(isinstance(task, Task) for task in tasks):
+        return as_task_list([task for item in tasks for task in as_task_list(item)])
+    return as_task_list(tasks)
 
 
 def solve_with_held(
@@ -234,12 +199,3 @@ def solve_with_held(
     return solution, sigma_min, used
 
 
-def clik_step(robot: Robot, q: np.ndarray, tasks: Task | Sequence[Task], dt: float, **options) -> StepResult:
-    """One explicit-Euler CLIK step on the configuration manifold: q+ = integrate(q, v dt).
-
-    Like :func:`clik_velocity`, every call checks its inputs and builds a new :class:`CLIKSolver`; a loop
-    should build one solver once and step with it. ``options`` are those of :func:`clik_velocity`.
-    """
-    check_scalar(dt, "dt", positive=True)
-    velocity = clik_velocity(robot, q, tasks, dt=dt, **options)
-    return StepResult(q=pin.integrate(robot.model, np.asarray(q, dtype=float), velocity.v * dt), velocity=velocity)

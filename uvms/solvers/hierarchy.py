@@ -7,7 +7,7 @@ Both hierarchical solvers read their levels from here: the set-based (iCAT) prio
   joint-limit objectives, the task gains), where a solver is built;
 * :meth:`HierarchyPlan.evaluate` stacks every level's rows at one configuration (a :class:`Hierarchy`),
   the kinematics computed once for all of them;
-* the reports both solvers give (objective statuses, the task residuals, the speed ratio).
+* what both solvers report (the rows a result keeps, the speed ratio).
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from ..tasks.objectives import Inequality, InequalityRows, JointLimits, Velocity
 from ..tasks.task import Task
 from ..numerics.checks import check_scalar, prepared_gain
 from ..numerics.inverses import SolverInputError
-from .results import ObjectiveStatus
+from .result import SolvedRows
 from .saturation import position_rate_bounds
 from .stack import stacked_terms
 
@@ -221,17 +221,6 @@ class HierarchyPlan:
         return q if isinstance(q, Configuration) else Configuration(self.robot, q, check=check)
 
 
-def build_hierarchy(robot: Robot, q: np.ndarray | Configuration, levels: Levels, gain: float | np.ndarray,
-                    free_floating: bool, speed_limits: Sequence[VelocityLimit] = ()) -> Hierarchy:
-    """Evaluate every level at q (the state computed once), and the map of solved columns to v (a plan of one use).
-
-    Raises:
-        SolverInputError: malformed levels, or ``free_floating`` on a fixed base.
-    """
-    plan = HierarchyPlan(robot, levels, gain, free_floating, speed_limits)
-    return plan.evaluate(plan.state(q))
-
-
 def rate_bounds(hierarchy: Hierarchy, dt: float | None, fraction: float,
                 valid_set: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Position-rate bounds (nv,) of the hierarchy's joint limits over ``dt`` (unbounded without dt)."""
@@ -243,26 +232,13 @@ def rate_bounds(hierarchy: Hierarchy, dt: float | None, fraction: float,
 
 
 # --------------------------------------------------------------------------------- reporting
-def objective_statuses(hierarchy: Hierarchy, binding: dict[str, bool] | None = None) -> tuple[ObjectiveStatus, ...]:
-    """The inequality objectives' statuses; active = some activation > 0, or ``binding[name]`` when given."""
-    statuses = []
-    for level in hierarchy.levels:
-        for rows in level.objectives:
-            active = bool(np.any(rows.activation > 0)) if binding is None else binding.get(rows.name, False)
-            statuses.append(ObjectiveStatus(name=rows.name, level=level.index, value=rows.value,
-                                            activation=rows.activation, active=active, violation=rows.violation))
-    return tuple(statuses)
-
-
-def task_report(hierarchy: Hierarchy, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, tuple[float, ...]]:
-    """(command, error, |J v - command| of the equality tasks, per-level activation-weighted residuals)."""
-    task_levels = [level for level in hierarchy.levels if level.has_tasks]
-    command = np.concatenate([level.task_command for level in task_levels]) if task_levels else np.zeros(0)
-    error = np.concatenate([level.task_error for level in task_levels]) if task_levels else np.zeros(0)
-    achieved = np.concatenate([level.task_jacobian @ v for level in task_levels]) if task_levels else np.zeros(0)
-    per_level = tuple(float(np.linalg.norm(level.activation * (level.jacobian @ v - level.reference)))
-                      for level in hierarchy.levels)
-    return command, error, float(np.linalg.norm(achieved - command)), per_level
+def solved_rows(hierarchy: Hierarchy) -> tuple[SolvedRows, ...]:
+    """Every level's rows as a result keeps them (its residuals and objectives computed when read)."""
+    empty = np.zeros(0)
+    return tuple(SolvedRows(index=level.index, jacobian=level.jacobian, reference=level.reference,
+                            error=level.task_error if level.has_tasks else empty,
+                            activation=None if level.equality else level.activation,
+                            objectives=tuple(level.objectives)) for level in hierarchy.levels)
 
 
 def speed_ratio(v: np.ndarray, maximum: np.ndarray) -> float:

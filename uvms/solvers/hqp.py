@@ -19,7 +19,7 @@ of the level above meets the rest); a level whose QP fails keeps that solution a
 ``solver_status``. The QPs go through qpsolvers (DAQP, else ProxQP).
 
 This is the optimization family of pink/mink with strict priorities (Kanoun et al. 2011, Escande et al.
-2014 style), here on the same levels as :func:`~uvms.solvers.set_based.set_based_velocity`.
+2014 style), here on the same levels as :class:`~uvms.solvers.set_based.SetBasedSolver`.
 """
 
 from __future__ import annotations
@@ -34,11 +34,10 @@ from ..robot.configuration import Configuration
 from ..tasks.objectives import JointLimits, VelocityLimit
 from ..numerics.checks import check_scalar, check_weights
 from ..numerics.inverses import SolverInputError, smallest_singular_value
-from .results import HQPResult, StepResult
+from .base import Solver
+from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, rate_bounds, solved_rows, speed_ratio
+from .result import SolverResult
 from .saturation import speed_maximum, velocity_box
-from .hierarchy import (Hierarchy, LevelRows, Levels, build_hierarchy, objective_statuses, rate_bounds, speed_ratio,
-                        task_report)
-from .set_based import integrate_velocity
 
 #: QP solvers tried, in order, when none is named.
 PREFERRED_SOLVERS = ("daqp", "proxqp")
@@ -188,25 +187,12 @@ def vehicle_speed_rows(hierarchy: Hierarchy, lower: np.ndarray,
     return rows, np.concatenate([low[finite_low], -high[finite_high]])
 
 
-def hqp_velocity(
-    robot: Robot,
-    q: np.ndarray | Configuration,
-    levels: Levels,
-    *,
-    dt: float,
-    gain: float | np.ndarray = 1.0,
-    weights: np.ndarray | None = None,
-    free_floating: bool = False,
-    position_fraction: float = 1.0,
-    regularization: float = 1e-9,
-    solver: str | None = None,
-    speed_limits: Sequence[VelocityLimit] = (),
-) -> HQPResult:
-    """One velocity of the QP hierarchy over the levels of :func:`~uvms.solvers.set_based.set_based_velocity`.
+class HQPSolver(Solver):
+    """The QP hierarchy over the levels of :class:`~uvms.solvers.set_based.SetBasedSolver` (scenario method "hqp"),
+    its inputs checked, its levels split and its QP solver chosen once.
 
     Args:
         robot: the model.
-        q: configuration (nq,) or a Configuration computed at it.
         levels: highest priority first; each level a Task, an Inequality, or a list of them (speed limits
             anywhere). Joint-limit objectives are hard bounds; the other inequalities are slacked rows of
             their level.
@@ -219,48 +205,74 @@ def hqp_velocity(
         solver: a qpsolvers solver name; default DAQP, then ProxQP (the other tried when one fails).
         speed_limits: more speed limits (besides those in the levels).
 
-    Returns:
-        HQPResult: v (nv,), the objectives (active = a constraint binding or relaxed), ``solver_status``
-        and ``slacks`` per level.
+    Raises:
+        SolverInputError: malformed levels, a bad dt, gain, weight, position_fraction or regularization, a QP
+            solver not installed, free_floating on a fixed base.
     """
-    dt = check_scalar(dt, "dt", positive=True)
-    fraction = check_scalar(position_fraction, "position_fraction", positive=True)
-    if fraction > 1:
-        raise SolverInputError(f"position_fraction must be in (0, 1], got {position_fraction!r}")
-    regularization = check_scalar(regularization, "regularization")
-    first = qp_solver(solver)
-    solvers = [first] + [name for name in PREFERRED_SOLVERS if name != first and name in _installed()]
-    hierarchy = build_hierarchy(robot, q, levels, gain, free_floating, speed_limits)
-    weight_matrix = _weight_matrix(weights, hierarchy.size)
-    maximum = speed_maximum(robot.nv, hierarchy.speed_limits)
-    rate_lower, rate_upper = rate_bounds(hierarchy, dt, fraction, valid_set=True)
-    lower, upper = velocity_box(maximum, rate_lower, rate_upper)
-    cascade = initial_cascade(hierarchy, lower, upper)
 
-    def solve(equality, command, inequality, bound):
-        return solve_level(cascade, equality, command, inequality, bound, weight_matrix, regularization, solvers)
+    name = "hqp"
+    enforces_inequalities = True
 
-    vehicle_rows, vehicle_bounds = vehicle_speed_rows(hierarchy, lower, upper)
-    if vehicle_bounds.size:  # a slacked level of its own, above the others
-        cascade.x, slack, _ = solve(np.zeros((0, hierarchy.size)), np.zeros(0), vehicle_rows, vehicle_bounds)
-        cascade.keep_inequalities(vehicle_rows, vehicle_bounds, slack)
-    statuses, slacks, binding = [], [], {}
-    for level in hierarchy.levels:
-        equality, command = level_equalities(hierarchy, level)
-        inequality, bound, spans = level_constraints(hierarchy, level)
-        cascade.x, slack, status = solve(equality, command, inequality, bound)
-        cascade.keep_equalities(equality)
-        cascade.keep_inequalities(inequality, bound, slack)
-        statuses.append(status)
-        slacks.append(float(np.linalg.norm(slack)))
-        binding.update(inequalities_binding(inequality @ cascade.x - bound, slack, spans))
-    v = hierarchy.velocity(cascade.x)
-    binding.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
-    command, error, residual, level_residuals = task_report(hierarchy, v)
-    return HQPResult(v=v, objectives=objective_statuses(hierarchy, binding), command=command, error=error,
-                     residual=residual, level_residuals=level_residuals, sigma_min=task_sigma_min(hierarchy),
-                     scales=(1.0,) * len(hierarchy.levels), speed_ratio=speed_ratio(v, maximum),
-                     free_floating=free_floating, solver_status=tuple(statuses), slacks=tuple(slacks), solver=first)
+    def __init__(
+        self,
+        robot: Robot,
+        levels: Levels,
+        *,
+        dt: float,
+        gain: float | np.ndarray = 1.0,
+        weights: np.ndarray | None = None,
+        free_floating: bool = False,
+        position_fraction: float = 1.0,
+        regularization: float = 1e-9,
+        solver: str | None = None,
+        speed_limits: Sequence[VelocityLimit] = (),
+    ) -> None:
+        self.plan = HierarchyPlan(robot, levels, gain, free_floating, speed_limits)
+        self.robot, self.free_floating = robot, free_floating
+        self.dt = check_scalar(dt, "dt", positive=True)
+        self.fraction = check_scalar(position_fraction, "position_fraction", positive=True)
+        if self.fraction > 1:
+            raise SolverInputError(f"position_fraction must be in (0, 1], got {position_fraction!r}")
+        self.regularization = check_scalar(regularization, "regularization")
+        self.solver = qp_solver(solver)
+        self._solvers = [self.solver] + [name for name in PREFERRED_SOLVERS
+                                         if name != self.solver and name in _installed()]
+        self._weights = _weight_matrix(weights, self.plan.size)
+        self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
+
+    def velocity(self, configuration: Configuration) -> SolverResult:
+        """The velocity of the QP hierarchy at ``configuration``: the objectives active when a constraint binds
+        or is relaxed; ``extras`` has ``solver_status`` and ``slacks`` per level and the ``solver`` used."""
+        hierarchy = self.plan.evaluate(self._checked(configuration))
+        maximum = self.maximum
+        rate_lower, rate_upper = rate_bounds(hierarchy, self.dt, self.fraction, valid_set=True)
+        lower, upper = velocity_box(maximum, rate_lower, rate_upper)
+        cascade = initial_cascade(hierarchy, lower, upper)
+
+        def solve(equality, command, inequality, bound):
+            return solve_level(cascade, equality, command, inequality, bound, self._weights, self.regularization,
+                               self._solvers)
+
+        vehicle_rows, vehicle_bounds = vehicle_speed_rows(hierarchy, lower, upper)
+        if vehicle_bounds.size:  # a slacked level of its own, above the others
+            cascade.x, slack, _ = solve(np.zeros((0, hierarchy.size)), np.zeros(0), vehicle_rows, vehicle_bounds)
+            cascade.keep_inequalities(vehicle_rows, vehicle_bounds, slack)
+        statuses, slacks, binding = [], [], {}
+        for level in hierarchy.levels:
+            equality, command = level_equalities(hierarchy, level)
+            inequality, bound, spans = level_constraints(hierarchy, level)
+            cascade.x, slack, status = solve(equality, command, inequality, bound)
+            cascade.keep_equalities(equality)
+            cascade.keep_inequalities(inequality, bound, slack)
+            statuses.append(status)
+            slacks.append(float(np.linalg.norm(slack)))
+            binding.update(inequalities_binding(inequality @ cascade.x - bound, slack, spans))
+        v = hierarchy.velocity(cascade.x)
+        binding.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
+        return SolverResult(v=v, sigma_min=task_sigma_min(hierarchy), damping=0.0, free_floating=self.free_floating,
+                            scales=(1.0,) * len(hierarchy.levels), speed_ratio=speed_ratio(v, maximum),
+                            extras={"solver_status": tuple(statuses), "slacks": tuple(slacks), "solver": self.solver},
+                            levels=solved_rows(hierarchy), binding=binding)
 
 
 def initial_cascade(hierarchy: Hierarchy, lower: np.ndarray, upper: np.ndarray) -> Cascade:
@@ -313,9 +325,3 @@ def _weight_matrix(weights: np.ndarray | None, size: int) -> np.ndarray:
         return np.eye(size)
     weights = check_weights(weights, size)
     return np.diag(weights) if weights.ndim == 1 else weights
-
-
-def hqp_step(robot: Robot, q: np.ndarray, levels: Levels, dt: float, **options) -> StepResult:
-    """One explicit-Euler step of the QP hierarchy: q+ = integrate(q, v dt); ``options`` of :func:`hqp_velocity`."""
-    velocity = hqp_velocity(robot, q, levels, dt=dt, **options)
-    return StepResult(q=integrate_velocity(robot, q, velocity.v, dt), velocity=velocity)

@@ -24,7 +24,7 @@ from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
 from ..tasks.frame import FrameTask, log_pose_error
 from ..numerics.checks import check_count, check_scalar
-from .results import IKResult
+from .result import IKResult
 
 Target = pin.SE3 | Sequence[float]
 #: A start is abandoned (for a random restart) when its error has not shrunk below ``STALL_RATIO`` times the error

@@ -23,7 +23,7 @@ from ..tasks.joint_limits import JointLimitPotential
 from ..tasks.task import Task
 from ..numerics.checks import check_count, check_scalar
 from ..numerics.inverses import pinv
-from .results import InitialConfigurationResult
+from .result import InitialConfigurationResult
 from .stack import as_task_list
 
 

@@ -25,7 +25,7 @@ in (J Q)^{#,A,I} only; W_k uses the undamped inverse, so that with Q = I and A =
 J^# J J^+ xdot = J^# xdot exactly (J J^+ projects on the range of J, on which J^# acts).
 
 Hence with every inequality inactive (A = 0: rho and Q untouched) the result is CLIK,
-:func:`~uvms.solvers.clik.clik_velocity` with the same gain, weights and damping, to rounding (that case
+:class:`~uvms.solvers.clik.CLIKSolver` with the same gain, weights and damping, to rounding (that case
 calls the inverse exactly as CLIK does). Speed and position-rate bounds are met by scaling the lowest
 levels' contributions first (:mod:`uvms.solvers.saturation`). With ``free_floating`` only the arm is
 solved: every Jacobian is its generalized form (the one GJM formula) and the vehicle follows momentum
@@ -38,23 +38,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..numerics.integrate import euler_step
 from ..robot.robot import Robot
 from ..robot.configuration import Configuration
 from ..tasks.objectives import VelocityLimit
 from ..numerics.checks import check_damping, check_scalar
-from .hierarchy import (Hierarchy, HierarchyPlan, LevelItem, Levels, LevelRows, build_hierarchy, last_task_sigma,
-                        objective_statuses, rate_bounds, speed_ratio, split_levels, task_report)
+from .base import Solver
+from .hierarchy import Hierarchy, HierarchyPlan, Levels, last_task_sigma, solved_rows, speed_ratio
 from ..numerics.inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, converged_or_refused,
                        damping_parameters)
-from .results import SetBasedResult, StepResult
+from .result import SolverResult
 from .saturation import RateRows, inside, scale_lowest_first, speed_maximum, velocity_box
-
-# the hierarchy's pieces stay importable from here
-__all__ = ["Hierarchy", "LevelItem", "LevelRows", "Levels", "SetBasedSolver", "build_hierarchy", "icat_inverse",
-           "integrate_velocity", "objective_statuses", "rate_bounds", "saturate", "set_based_step", "set_based_velocity",
-           "solve_levels", "speed_ratio", "split_levels", "task_report"]
-
 
 # ----------------------------------------------------------------------------- the iCAT levels
 class ICAT:
@@ -143,24 +136,32 @@ def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.nda
     return icat.level_inverse(jacobian, np.sqrt(activation)[:, None], activation**1.5, projector, icat.damping)
 
 
-def solve_levels(hierarchy: Hierarchy, weights: np.ndarray | None, damping: float | VariableDamping,
-                 eta: float) -> tuple[list[np.ndarray], list[float], float]:
-    """The iCAT recursion over the levels (an :class:`ICAT` of one use): each level's contribution (n,), its
-    sigma_min, and the largest damping used."""
-    return ICAT(hierarchy.size, weights, damping, eta).solve(hierarchy)
-
-
 # ------------------------------------------------------------------------------- the solver
-class SetBasedSolver:
-    """Set-based (iCAT) priority over fixed levels, its inputs checked and its pieces prepared once.
+class SetBasedSolver(Solver):
+    """Set-based (iCAT) priority over fixed levels (scenario method "set_based"), its inputs checked and its
+    pieces prepared once; what changes between calls is the configuration and the tasks' targets.
 
-    The one implementation of the set-based step: :func:`set_based_velocity` builds one and solves once;
-    a controller builds one and calls :meth:`solve` (with diagnostics) or :meth:`velocity` (without) at
-    every evaluation, with the same numbers. What changes between calls is the configuration and the
-    tasks' targets.
+    Args:
+        robot: the model.
+        levels: highest priority first; each level a Task, an Inequality, or a list of them. Speed limits
+            (VelocityLimit) may sit in any level: they are bounds, not rows.
+        gain: K of the equality tasks (scalar, (k,) or (k, k) per level's stacked tasks) [1/s].
+        weights: W of the solved columns, (n,) or (n, n) SPD, n = nv (n_arm when free floating).
+        damping: lambda >= 0 or a VariableDamping, as in CLIK.
+        eta: weight of the iCAT (I - Q) regularization [-] >= 0.
+        free_floating: solve the arm only, the vehicle passive (generalized Jacobians).
+        dt: step [s]; when given, the model's joint limits of every JointLimits objective become
+            position-rate bounds (a joint never crosses them over the step).
+        position_fraction: the part of the distance to a limit one step may cover, in (0, 1].
+        speed_limits: more speed limits (besides those in the levels).
 
-    Args: those of :func:`set_based_velocity` (after ``q``).
+    Raises:
+        SolverInputError: malformed levels, a bad gain, weight, damping, eta, dt or position_fraction,
+            free_floating on a fixed base.
     """
+
+    name = "set_based"
+    enforces_inequalities = True
 
     def __init__(
         self,
@@ -196,85 +197,17 @@ class SetBasedSolver:
         rates = self._rate_rows.bounds(q, self.robot.nv, self.dt, self.fraction)
         return velocity_box(self.maximum, *rates, contain_zero=True)
 
-    def _solution(self, state: Configuration) -> tuple[Hierarchy, np.ndarray, tuple[float, ...], list[float], float]:
-        """(the hierarchy at ``state``, v (nv,), the levels' scales, their sigma_min, the largest damping)."""
+    def velocity(self, configuration: Configuration) -> SolverResult:
+        """The set-based velocity at ``configuration`` and its diagnostics (the residuals and the objectives'
+        statuses when read); ``sigma_min`` that of the last level holding equality tasks."""
+        state = self._checked(configuration)
         hierarchy = self.plan.evaluate(state)
         contributions, sigmas, used = self.icat.solve(hierarchy)
         solved, scales = saturate(hierarchy, contributions, *self._box_at(state.q))
-        return hierarchy, hierarchy.velocity(solved), scales, sigmas, used
-
-    def solve(self, q: np.ndarray | Configuration, *, check: bool = True) -> SetBasedResult:
-        """The set-based velocity at q and its diagnostics.
-
-        Args:
-            q: configuration (nq,) or a Configuration already computed at it.
-            check: validate an array q (False for configurations of ``pin.integrate`` in a loop).
-        """
-        hierarchy, v, scales, sigmas, used = self._solution(self.plan.state(q, check))
-        command, error, residual, level_residuals = task_report(hierarchy, v)
-        return SetBasedResult(v=v, objectives=objective_statuses(hierarchy), command=command, error=error,
-                              residual=residual, level_residuals=level_residuals,
-                              sigma_min=last_task_sigma(hierarchy, sigmas), scales=scales,
-                              speed_ratio=speed_ratio(v, self.maximum), free_floating=self.free_floating,
-                              damping=used)
-
-    def velocity(self, q: np.ndarray | Configuration, *, check: bool = True) -> np.ndarray:
-        """The set-based velocity v (nv,) at q alone (an integrator's stages, where no one reads diagnostics)."""
-        return self._solution(self.plan.state(q, check))[1]
-
-    def step(self, q: np.ndarray, *, check: bool = True) -> np.ndarray:
-        """q+ = integrate(q, v dt) (nq,): one explicit-Euler step of the solver's dt [s] (the step its joint limits'
-        rate bounds are made for)."""
-        if self.dt is None:
-            raise SolverInputError("step needs the step dt > 0 [s]: build the solver with dt=...")
-        return integrate_velocity(self.robot, q, self.velocity(q, check=check), self.dt)
-
-
-# ------------------------------------------------------------------------------- the step
-def set_based_velocity(
-    robot: Robot,
-    q: np.ndarray | Configuration,
-    levels: Levels,
-    *,
-    gain: float | np.ndarray = 1.0,
-    weights: np.ndarray | None = None,
-    damping: float | VariableDamping = 0.0,
-    eta: float = 1.0,
-    free_floating: bool = False,
-    dt: float | None = None,
-    position_fraction: float = 1.0,
-    speed_limits: Sequence[VelocityLimit] = (),
-) -> SetBasedResult:
-    """One set-based (iCAT) velocity over priority levels of equality tasks and inequality objectives, from a
-    :class:`SetBasedSolver` built for this call.
-
-    Every call checks its inputs and builds a new solver (nothing is kept between calls), so it always reads
-    the current values of its arguments. A loop should build ``SetBasedSolver(robot, levels, ...)`` once and
-    call its :meth:`~SetBasedSolver.solve` (or :meth:`~SetBasedSolver.step`) at every step: the same numbers,
-    without the checks and preparation.
-
-    Args:
-        robot: the model.
-        q: configuration (nq,) or a Configuration computed at it.
-        levels: highest priority first; each level a Task, an Inequality, or a list of them. Speed limits
-            (VelocityLimit) may sit in any level: they are bounds, not rows.
-        gain: K of the equality tasks (scalar, (k,) or (k, k) per level's stacked tasks) [1/s].
-        weights: W of the solved columns, (n,) or (n, n) SPD, n = nv (n_arm when free floating).
-        damping: lambda >= 0 or a VariableDamping, as in CLIK.
-        eta: weight of the iCAT (I - Q) regularization [-] >= 0.
-        free_floating: solve the arm only, the vehicle passive (generalized Jacobians).
-        dt: step [s]; when given, the model's joint limits of every JointLimits objective become
-            position-rate bounds (a joint never crosses them over the step).
-        position_fraction: the part of the distance to a limit one step may cover, in (0, 1].
-        speed_limits: more speed limits (besides those in the levels).
-
-    Returns:
-        SetBasedResult: v (nv,), the objectives' activations, the task residual, the scales.
-    """
-    solver = SetBasedSolver(robot, levels, gain=gain, weights=weights, damping=damping, eta=eta,
-                            free_floating=free_floating, dt=dt, position_fraction=position_fraction,
-                            speed_limits=speed_limits)
-    return solver.solve(q)
+        v = hierarchy.velocity(solved)
+        return SolverResult(v=v, sigma_min=last_task_sigma(hierarchy, sigmas), damping=used,
+                            free_floating=self.free_floating, scales=scales, speed_ratio=speed_ratio(v, self.maximum),
+                            levels=solved_rows(hierarchy))
 
 
 def saturate(hierarchy: Hierarchy, contributions: list[np.ndarray], lower: np.ndarray,
@@ -298,18 +231,3 @@ def sum_in_order(vectors: Sequence[np.ndarray]) -> np.ndarray:
     return total
 
 
-def integrate_velocity(robot: Robot, q: np.ndarray, v: np.ndarray, dt: float) -> np.ndarray:
-    """q+ = integrate(q, v dt) (nq,): the library's one explicit Euler step (:func:`uvms.numerics.integrate.euler_step`)."""
-    empty = np.zeros(0)
-    return euler_step(robot.model, None, 0.0, np.asarray(q, dtype=float), empty, dt, (v, empty))[0]
-
-
-def set_based_step(robot: Robot, q: np.ndarray, levels: Levels, dt: float, **options) -> StepResult:
-    """One explicit-Euler set-based step: q+ = integrate(q, v dt); ``options`` of :func:`set_based_velocity`.
-
-    Like :func:`set_based_velocity`, every call checks its inputs and builds a new :class:`SetBasedSolver`; a
-    loop should build one solver (with ``dt``) once and call its :meth:`~SetBasedSolver.step`.
-    """
-    dt = check_scalar(dt, "dt", positive=True)
-    velocity = set_based_velocity(robot, q, levels, dt=dt, **options)
-    return StepResult(q=integrate_velocity(robot, q, velocity.v, dt), velocity=velocity)

@@ -93,4 +93,4 @@ class JointLimitPotential:
         """dS/dv (nv,): zero on the vehicle entries."""
         gradient = np.zeros(self.robot.nv)
         gradient[self.robot.n_vehicle:] = self.arm_gradient(self.robot.arm_configuration(q))
-        return gradient  # clik_velocity forms the same from arm_gradient on its already checked q
+        return gradient  # CLIKSolver forms the same from arm_gradient on its already checked q

@@ -1,0 +1,202 @@
+"""Result objects of the solvers: the solution and its diagnostics, never bare arrays.
+
+:class:`SolverResult` is what every velocity solver (:class:`~uvms.solvers.base.Solver`) returns;
+:class:`IKResult` and :class:`InitialConfigurationResult` answer another question (a configuration, not a
+velocity). The residuals, the task command and error and the objectives' statuses are computed from the rows
+the solver kept when they are first read (:func:`functools.cached_property`), not in the hot path.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from types import MappingProxyType
+
+import numpy as np
+
+from ..errors import SolverInputError
+from ..tasks.objectives import InequalityRows
+
+
+@dataclass(frozen=True)
+class IKResult:
+    """A pose inverse-kinematics solution.
+
+    Attributes:
+        q: best configuration found (nq,), inside the joint limits.
+        success: error <= tolerance.
+        error: norm of the stacked task error at ``q`` [m and rad].
+        iterations: Newton iterations over all starts.
+        restarts: random restarts used.
+        time: wall time [s].
+    """
+
+    q: np.ndarray
+    success: bool
+    error: float
+    iterations: int
+    restarts: int
+    time: float
+
+
+@dataclass(frozen=True)
+class InitialConfigurationResult:
+    """The initial configuration of hoang2011 sec. 2.3: min S(q) s.t. f(q) = x0 and joint limits.
+
+    Attributes:
+        q: configuration (nq,).
+        success: residual <= tolerance and limits respected.
+        residual: |x0 - f(q)|.
+        potential: S(q).
+        iterations: optimizer iterations.
+        message: optimizer message.
+    """
+
+    q: np.ndarray
+    success: bool
+    residual: float
+    potential: float
+    iterations: int
+    message: str = field(default="")
+
+
+@dataclass(frozen=True)
+class ObjectiveStatus:
+    """An inequality objective in a solution of the set-based or QP hierarchy.
+
+    Attributes:
+        name: the objective's name.
+        level: its priority level (0 = highest).
+        value: x(q) (k,) at the configuration solved at.
+        activation: (k,) in [0, 1] (0 deep inside the valid set, 1 on its border and beyond).
+        active: set-based: some activation > 0; QP hierarchy: some constraint row binding or relaxed.
+        violation: how far x is outside its valid set (>= 0) [units of x].
+    """
+
+    name: str
+    level: int
+    value: np.ndarray
+    activation: np.ndarray
+    active: bool
+    violation: float
+
+
+@dataclass(frozen=True)
+class SolvedRows:
+    """The rows one level (or one task) of a solution was solved for, kept to report on it when asked.
+
+    Attributes:
+        index: the level's position in the levels given (0 = highest).
+        jacobian: (m, nv) world-aligned rows, columns in the order of v.
+        reference: (m,) the rows' reference rates; the first ``error.size`` are the equality tasks' commands
+            xdot_d + K e.
+        error: (t,) the equality tasks' error e (t <= m; 0 rows: a level of inequality objectives only).
+        activation: (m,) in [0, 1], or None: every row weighs 1.
+        objectives: the inequality objectives' rows of this level, at the configuration solved at.
+    """
+
+    index: int
+    jacobian: np.ndarray
+    reference: np.ndarray
+    error: np.ndarray
+    activation: np.ndarray | None = None
+    objectives: tuple[InequalityRows, ...] = ()
+
+    def residual(self, v: np.ndarray) -> float:
+        """|A (J v - reference)| of the level (activation-weighted; equality rows weigh 1)."""
+        difference = self.jacobian @ v - self.reference
+        return float(np.linalg.norm(difference if self.activation is None else self.activation * difference))
+
+
+
+
+@dataclass(frozen=True)
+class SolverResult:
+    """One velocity of a solver and its diagnostics, the same fields for every method.
+
+    Attributes:
+        v: velocity (nv,) in the order of Pinocchio's v (vehicle twist local, then arm).
+        sigma_min: the smallest singular value over the Jacobians the solver inverted (weighted, projected as
+            it inverted them; the QP hierarchy: that of the last level's task rows).
+        damping: the (largest) damping lambda used (0: exact inverses; the QP hierarchy: 0).
+        free_floating: whether only the arm was solved and the vehicle followed momentum conservation.
+        limits_active: names of the arm joints held at a limit (CLIK's joint clamping).
+        scales: per level, the factor in [0, 1] its contribution was scaled by to meet the speed and
+            position-rate bounds (1: not scaled; the lowest levels are scaled first); () without bounds.
+        speed_ratio: max_i |v_i| / max_i over the speed limits given (0 without any).
+        extras: what one method alone reports (read-only): ``method`` (task priority: "classic" or
+            "robust"), ``level_sigma_min`` (task priority: one per level), ``solver_status``, ``slacks`` and
+            ``solver`` (QP hierarchy).
+        levels: the rows solved, per level (or per task for CLIK), highest priority first; what
+            :attr:`command`, :attr:`error`, :attr:`residual`, :attr:`task_residuals` and :attr:`objectives`
+            are computed from when read.
+        binding: per objective name, whether it binds (the QP hierarchy); None: active = some activation > 0.
+    """
+
+    v: np.ndarray
+    sigma_min: float
+    damping: float
+    free_floating: bool = False
+    limits_active: tuple[str, ...] = ()
+    scales: tuple[float, ...] = ()
+    speed_ratio: float = 0.0
+    extras: Mapping[str, object] = field(default_factory=dict)
+    levels: tuple[SolvedRows, ...] = ()
+    binding: Mapping[str, bool] | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.extras, MappingProxyType):  # read-only, whatever mapping the solver gave
+            object.__setattr__(self, "extras", MappingProxyType(dict(self.extras)))
+
+    @cached_property
+    def command(self) -> np.ndarray:
+        """The equality tasks' command xdot_d + K e (k,), every level in order."""
+        parts = [level.reference[:level.error.size] for level in self.levels]
+        return np.concatenate(parts) if parts else np.zeros(0)
+
+    @cached_property
+    def error(self) -> np.ndarray:
+        """The equality tasks' error e (k,), every level in order."""
+        return np.concatenate([level.error for level in self.levels]) if self.levels else np.zeros(0)
+
+    @cached_property
+    def residual(self) -> float:
+        """|J v - command| over every equality row (rows not achieved: damping, priorities, limits)."""
+        parts = [level.jacobian[:level.error.size] @ self.v for level in self.levels]
+        achieved = np.concatenate(parts) if parts else np.zeros(0)
+        return float(np.linalg.norm(achieved - self.command))
+
+    @cached_property
+    def task_residuals(self) -> tuple[float, ...]:
+        """Per level (per task for CLIK), |A (J v - reference)| (activation-weighted; equality rows weigh 1)."""
+        return tuple(level.residual(self.v) for level in self.levels)
+
+    @cached_property
+    def objectives(self) -> tuple[ObjectiveStatus, ...]:
+        """The inequality objectives, in priority order: value, activation, whether active, violation."""
+        statuses = []
+        for level in self.levels:
+            for rows in level.objectives:
+                active = (bool(np.any(rows.activation > 0)) if self.binding is None
+                          else self.binding.get(rows.name, False))
+                statuses.append(ObjectiveStatus(name=rows.name, level=level.index, value=rows.value,
+                                                activation=rows.activation, active=active, violation=rows.violation))
+        return tuple(statuses)
+
+    @property
+    def active(self) -> tuple[str, ...]:
+        """Names of the active objectives."""
+        return tuple(status.name for status in self.objectives if status.active)
+
+    def status(self, name: str) -> ObjectiveStatus:
+        """The status of the objective called ``name``.
+
+        Raises:
+            SolverInputError: no objective of that name (the message lists them).
+        """
+        for status in self.objectives:
+            if status.name == name:
+                return status
+        raise SolverInputError(f"no objective {name!r} in this result; objectives: "
+                               f"{', '.join(s.name for s in self.objectives) or 'none'}")
