@@ -237,7 +237,7 @@ class GJMController:
 
     def tracking(self, t: float, q: np.ndarray, v: np.ndarray) -> dict:
         """The tracking series of a run's row at (t, q, v): pose and velocity of the frame and of the reference,
-        the joint rates w and the inverse's sigma_min and damping (a recorder of :func:`uvms.sim.simulate.simulate_gjm`)."""
+        the joint rates w and the inverse's sigma_min and damping (what :func:`uvms.sim.simulate` records of a plant run)."""
         state = self.state(q)
         sample = self._sample(state, t)
         reference = self.reference(t)
@@ -249,7 +249,7 @@ class GJMController:
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The joint-velocity command u (n_arm,) at (t, q, v): w, plus tau dw/dt with the servo feedforward.
 
-        The signature of a :func:`uvms.sim.simulate.simulate_plant` command.
+        The signature of a plant's joint command in :func:`uvms.sim.simulate`.
         """
         solution = self._solve(self.state(q), t)
         rates = solution.result.v[self.nb:]

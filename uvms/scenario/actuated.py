@@ -23,6 +23,7 @@ from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, thrusters_of
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
+from ..solvers import SOLVERS, CLIKSolver
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from ..tasks.frame import FrameTask
@@ -56,7 +57,7 @@ def check_actuated_scenario(robot: Robot, task: FrameTask, scenario: dict) -> No
     if tuple(task.axes) != ("x", "y", "z"):
         raise ScenarioError(f"plant.thrusters = true holds the end effector at a point: task.axes must be "
                             f"['x', 'y', 'z'], got {list(task.axes)}")
-    if solver["method"] != "clik" or solver["free_floating"] or solver["alpha"] or solver["enforce_limits"]:
+    if SOLVERS[solver["method"]] is not CLIKSolver or solver["free_floating"] or solver["alpha"] or solver["enforce_limits"]:
         raise ScenarioError("plant.thrusters = true solves the arm with its own point task (solver.gain [1/s], "
                             "solver.damping): solver.method must be 'clik', without free_floating, alpha or "
                             "enforce_limits (the vehicle is actuated, not free floating)")

@@ -81,12 +81,9 @@ class KinematicSystem:
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: KinematicSample) -> dict:
         """v and the solver's diagnostics of a row."""
-        info = sample.info
-        sigma_min = info.sigma_min
-        # TODO(merge): every solver result's sigma_min becomes one float; task priority still gives one per level
-        return {"v": sample.rate[0].copy(),
-                "sigma_min": sigma_min if isinstance(sigma_min, float) else float(np.min(sigma_min)),
-                "damping": float(info.damping), "limits_active": len(getattr(info, "limits_active", ()))}
+        info = sample.info  # a SolverResult (or anything with its three diagnostics)
+        return {"v": sample.rate[0].copy(), "sigma_min": float(info.sigma_min), "damping": float(info.damping),
+                "limits_active": len(info.limits_active)}
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
         """Nothing to refuse: the velocity was checked when sampled."""
