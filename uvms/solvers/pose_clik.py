@@ -15,7 +15,7 @@ its :class:`~uvms.robot.limits.Limit`, evaluated on the q entries that limit poi
 
 A step is three Pinocchio calls (``computeFrameJacobian``, which runs the forward
 kinematics, ``log3`` and ``integrate``) around compiled kernels that do the
-rest (:func:`~uvms.numerics.kernels.dls_pose_velocity`): building a ``PoseCLIK``
+rest (:func:`~uvms.numerics._kernels.pose.dls_pose_velocity`): building a ``PoseCLIK``
 loads it (numba; compiled once per machine and cached).
 """
 
@@ -57,7 +57,7 @@ class PoseCLIK:
         potential: JointLimitPotential | None = None,
         alpha: float = 0.0,
     ) -> None:
-        from ..numerics import kernels  # numba: loaded by the solvers that use it, not by ``import uvms``
+        from ..numerics._kernels.pose import dls_pose_velocity, rotation_to_target  # numba: loaded at first use
 
         self.gain = check_scalar(gain, "gain", positive=True)
         if check_damping(damping) == 0.0:
@@ -73,7 +73,7 @@ class PoseCLIK:
         self._feedforward = np.zeros(6)  # (6,)
         self._nullspace = (potential.nullspace_terms(alpha) if potential is not None and alpha != 0.0
                            else NullspaceTerms.none())
-        self._kernel, self._to_target = kernels.dls_pose_velocity, kernels.rotation_to_target
+        self._kernel, self._to_target = dls_pose_velocity, rotation_to_target
 
     def set_target(self, pose: pin.SE3, twist: np.ndarray | None = None) -> None:
         """Target pose (``transform_target_to_world``) and feedforward twist [v; omega] (6,) [m/s, rad/s], world axes."""
