@@ -1,4 +1,5 @@
-"""The Limit concept: one reading of the joint limits for the potential, CLIK clamping, IK projection and optimizer bounds."""
+"""The Limit concept: one reading of the joint limits for the potential, CLIK clamping, the set-based objectives,
+IK projection and optimizer bounds."""
 
 from __future__ import annotations
 
@@ -8,9 +9,10 @@ import pytest
 
 import uvms
 from conftest import shipped
-from uvms.errors import SolverInputError
+from uvms.errors import LimitError, SolverInputError
 from uvms.robot.limits import Limit
 from uvms.solvers.ik import project_to_limits
+from uvms.tasks.objectives import JointLimits, JointVelocityLimits
 
 CONTINUOUS_ARM = """<robot name="mixed">
   <link name="world"/><link name="base"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
@@ -79,15 +81,15 @@ def test_margin_and_bad_limits():
     assert inner.lower == pytest.approx([0.1, -1.5 * np.pi + 0.1, -1.5 * np.pi + 0.1])
     assert inner.upper == pytest.approx([1.5 * np.pi - 0.1, 1.5 * np.pi - 0.1, 1.5 * np.pi - 0.1])
     assert Limit.joint_positions(robot, margin=0.0).lower.tolist() == robot.arm_limits[0].tolist()
-    with pytest.raises(SolverInputError, match="no room"):
+    with pytest.raises(LimitError, match="no room"):
         Limit.joint_positions(robot, margin=3.0)
-    with pytest.raises(SolverInputError, match="margin"):
+    with pytest.raises(LimitError, match="margin"):
         Limit.joint_positions(robot, margin=-0.1)
-    with pytest.raises(SolverInputError, match="lower <= upper"):
+    with pytest.raises(LimitError, match="lower <= upper"):
         Limit([0.0, 1.0], [1.0, 0.5])
-    with pytest.raises(SolverInputError, match="lower <= upper"):
+    with pytest.raises(LimitError, match="lower <= upper"):
         Limit([np.nan], [1.0])
-    with pytest.raises(SolverInputError, match="valid: position, velocity"):
+    with pytest.raises(LimitError, match="valid: position, velocity"):
         Limit([0.0], [1.0], kind="torque")
     padded = inner.after_unbounded(3)
     assert padded.size == 6 and padded.bounds()[:3] == [(None, None)] * 3 and padded.names[3:] == inner.names
@@ -134,3 +136,62 @@ def test_pose_ik_projects_into_the_limits_it_reads():
     for target in ([3.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, -2.0, 1.0, 0.0, 1.0, 0.0]):
         result = uvms.solve_ik(arm, target, restarts=2, max_iterations=30)
         assert not result.success and limit.contains(arm.arm_configuration(result.q))
+
+
+def test_a_custom_limit_moves_the_potential_the_objective_and_the_clamping_alike():
+    """One Limit, three uses: the potential's middle and range, the objective's rows and valid set, CLIK's clamping."""
+    robot = shipped("hoang2011")
+    model = Limit.joint_positions(robot)
+    custom = Limit([0.2, -2.0, -1.0], [2.0, 2.0, 1.5], model.names, model.q_index)
+    potential = uvms.JointLimitPotential(robot, limit=custom)
+    assert potential.middle == pytest.approx([1.1, 0.0, 0.25]) and potential.range == pytest.approx([1.8, 4.0, 2.5])
+    assert potential.value(robot.configuration(arm=[2.0, 0.0, 0.25])) == pytest.approx(0.125)  # 1/2 (0.9 / 1.8)^2
+    objective = JointLimits(robot, limit=custom, margin=0.1, band=0.2)
+    assert objective.limit.lower.tolist() == custom.lower.tolist() and objective.hard_upper.tolist() == [2.0, 2.0, 1.5]
+    assert objective.lower == pytest.approx([0.3, -1.9, -0.9]) and objective.upper == pytest.approx([1.9, 1.9, 1.4])
+    assert np.array_equal(objective.lower, custom.shrink(0.1).lower)  # the objective's valid set is Limit.shrink's
+    rows = objective.rows(uvms.Configuration(robot, robot.configuration(arm=[0.3, 0.0, 0.25])))
+    assert rows.activation.tolist() == [1.0, 0.0, 0.0] and rows.reference[0] == pytest.approx(0.2)  # gain (0.5 - 0.3)
+    q = robot.configuration(arm=[1.9, 0.0, 0.0])
+    task = uvms.JointTask(robot, {"q1": 3.0})  # asks 1.1 rad/s: 0.11 rad in a step of 0.1 s
+    free = uvms.clik_velocity(robot, q, task, dt=0.1, enforce_limits=True)
+    clamped = uvms.clik_velocity(robot, q, task, dt=0.1, enforce_limits=True, limit=custom)
+    assert free.v[robot.n_vehicle] == pytest.approx(1.1) and not free.limits_active  # the model's bound: 3 pi / 2
+    assert clamped.v[robot.n_vehicle] == pytest.approx(1.0) and clamped.limits_active == ("q1",)  # held at 2.0
+    # the margins of the objective are those of a Limit, one number or {joint: margin}
+    per_joint = JointLimits(robot, margin={"q2": 0.3})
+    assert np.array_equal(per_joint.lower, model.shrink({"q2": 0.3}).lower)
+    assert per_joint.lower == pytest.approx([0.0, -1.5 * np.pi + 0.3, -1.5 * np.pi])
+    assert per_joint.margin.tolist() == [0.0, 0.3, 0.0]
+    with pytest.raises(uvms.UVMSError, match="close names: q2"):
+        JointLimits(robot, margin={"q22": 0.3})
+    with pytest.raises(LimitError, match="no room inside the limits of q1 \\[0.2, 2\\]"):
+        JointLimits(robot, limit=custom, margin=0.95)
+    for build in (uvms.JointLimitPotential, JointLimits):
+        with pytest.raises(LimitError, match="needs position limits of the 3 arm coordinates, got 3 velocity"):
+            build(robot, limit=Limit.joint_velocities(robot))
+
+
+def test_the_velocity_objective_reads_a_velocity_limit():
+    robot = uvms.load(CONTINUOUS_ARM)
+    model = Limit.joint_velocities(robot)
+    default = JointVelocityLimits(robot)
+    assert default.limit.upper.tolist() == model.upper.tolist() == [np.inf, 0.5, np.inf]
+    assert default.maximum.tolist() == [np.inf] * 6 + [np.inf, 0.5, np.inf]
+    custom = Limit([-0.2, -0.3, -0.4], [0.2, 0.3, 0.4], model.names, kind="velocity")
+    assert JointVelocityLimits(robot, limit=custom).maximum[6:].tolist() == [0.2, 0.3, 0.4]
+    assert JointVelocityLimits(robot, 0.7).limit.upper.tolist() == [0.7, 0.7, 0.7]
+    assert Limit.joint_velocities(robot, {"tilt": 0.25}).upper.tolist() == [np.inf, np.inf, 0.25]
+    assert Limit.joint_velocities(robot, [1.0, 2.0, 3.0]).lower.tolist() == [-1.0, -2.0, -3.0]
+    with pytest.raises(LimitError, match="numbers > 0"):
+        Limit.joint_velocities(robot, 0.0)
+    with pytest.raises(LimitError, match="one number or 3"):
+        Limit.joint_velocities(robot, [1.0, 2.0])
+    with pytest.raises(uvms.UVMSError, match="close names: tilt"):
+        Limit.joint_velocities(robot, {"tlt": 1.0})
+    with pytest.raises(LimitError, match="not both"):
+        JointVelocityLimits(robot, 0.7, limit=custom)
+    with pytest.raises(LimitError, match="symmetric"):
+        JointVelocityLimits(robot, limit=Limit([-0.1, -0.3, -0.4], [0.2, 0.3, 0.4], model.names, kind="velocity"))
+    with pytest.raises(LimitError, match="needs velocity limits of the 3 arm coordinates, got 3 position"):
+        JointVelocityLimits(robot, limit=Limit.joint_positions(robot))

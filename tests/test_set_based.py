@@ -409,9 +409,9 @@ def icat_reference(levels: list, weights: np.ndarray, damping: float, eta: float
 @pytest.mark.parametrize("damping", [0.0, 0.05])
 @pytest.mark.parametrize("eta", [0.0, 0.01])
 def test_the_compiled_icat_recursion_is_the_papers_formulas(rng, weighting, damping, eta):
-    """The one compiled iCAT call (kernels.icat_into) against the paper's formulas in numpy, over levels with
+    """The one compiled iCAT call (``_kernels.icat.icat_into``) against the paper's formulas in numpy, over levels with
     partial, zero and unit activations, an equality level, and the plain-CLIK first level."""
-    from uvms.numerics.kernels import icat_into
+    from uvms.numerics._kernels.icat import icat_into
     from uvms.numerics.inverses import RCOND, WeightedInverse
 
     size = 6  # fewer columns than active rows: the eta term changes the answer

@@ -421,7 +421,7 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
 
 # -------------------------------------------------------------- hot path
 def test_compiled_cholesky_solve_matches_lapack_and_refuses_what_is_not_positive_definite(rng):
-    from uvms.numerics.kernels import cholesky_solve_in_place
+    from uvms.numerics._kernels.dense import cholesky_solve_in_place
 
     for size in (1, 3, 6, 12):
         factor = rng.normal(size=(size, size + 2))
@@ -473,7 +473,8 @@ def test_compiled_jacobi_svd_inverse_matches_lapack_wide_tall_and_rank_deficient
 
 
 def test_compiled_pose_error_and_joint_box_match_pinocchio_and_numpy(rng):
-    from uvms.numerics.kernels import pose_error_norm, project_into_box, rotation_to_target
+    from uvms.numerics._kernels.boxes import project_into_box
+    from uvms.numerics._kernels.pose import pose_error_norm, rotation_to_target
 
     for _ in range(50):
         pose, target = pin.SE3.Random(), pin.SE3.Random()

@@ -120,6 +120,11 @@ class GJMControlError(UVMSError):
     """Invalid input to the GJM controller or its reference (shape, value, option)."""
 
 
+class LimitError(UVMSError):
+    """Joint limits (a ``Limit``) that are invalid or do not fit their use: bounds inverted or NaN, a margin that is
+    negative or leaves no room, speed limits <= 0, or the wrong size or kind (position, velocity) for the robot."""
+
+
 # ------------------------------------------------- optional extras
 class ViewerUnavailable(UVMSError):
     """The optional 3-D viewer package (viser) is not installed."""

@@ -23,6 +23,7 @@ import pinocchio as pin
 
 from ..dynamics.actuated import ActuatedCommand
 from ..errors import SolverInputError
+from ..robot.limits import Limit
 from ..robot.robot import Robot
 from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from .vehicle import VehicleVelocityController
@@ -106,8 +107,7 @@ class CoordinatedControl:
         self.robot, self.velocity, self.kinematic, self.dt = robot, velocity, kinematic, float(dt)
         self.task_jacobian, self.monitor = task_jacobian, monitor
         self.coordination, self.arm_damping = bool(coordination), float(arm_damping)
-        limits = robot.model.velocityLimit[robot.n_vehicle:]
-        self.max_arm_rate = np.where(np.isfinite(limits) & (limits > 0), limits, np.inf) if max_arm_rate is None \
+        self.max_arm_rate = Limit.joint_velocities(robot).upper if max_arm_rate is None \
             else np.full(robot.n_arm, float(max_arm_rate))
 
     def arm_command(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray) -> np.ndarray:

@@ -126,7 +126,7 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float) -> 
     """x = J^T (J J^T + d I)^-1 b (n,): the DLS solution for one right-hand side, in normal-equation form.
 
     One Cholesky factorization of the (k, k) row-space matrix in the compiled kernel
-    :func:`~uvms.numerics.kernels.dls_solve_into` (the one the Newton steps of
+    :func:`~uvms.numerics._kernels.dense.dls_solve_into` (the one the Newton steps of
     :func:`~uvms.solvers.ik.solve_ik` call), no inverse formed and no validation: the caller has checked its inputs once.
 
     Args:
@@ -137,7 +137,7 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float) -> 
     Raises:
         SolverInputError: the system is not numerically positive definite.
     """
-    from .kernels import dls_solve_into  # numba: loaded at the first solve, not by ``import uvms``
+    from ._kernels.dense import dls_solve_into  # numba: loaded at the first solve, not by ``import uvms``
 
     solution = np.empty(jacobian.shape[1])
     if not dls_solve_into(jacobian, rhs, float(damping_squared), solution):  # never return garbage
@@ -151,7 +151,7 @@ def variable_damping(sigma_min: float, epsilon: float, lambda_max: float) -> flo
 
     l^2 = 0 when sigma_min >= epsilon, else (1 - (sigma_min / epsilon)^2) lambda_max^2.
     """
-    from .kernels import variable_damping_value  # the formula the compiled inverse applies
+    from ._kernels.svd import variable_damping_value  # the formula the compiled inverse applies
 
     check_variable_damping(epsilon, lambda_max)
     return float(variable_damping_value(float(sigma_min), float(epsilon), float(lambda_max)))
@@ -190,13 +190,13 @@ def svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple
 def prepared_svd_inverse(jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
     """:func:`svd_inverse` of a damping already checked (a float >= 0 or a VariableDamping): the solvers' inner loop.
 
-    One compiled call (:func:`~uvms.numerics.kernels.svd_inverse_into`: a one-sided Jacobi SVD, the damping
+    One compiled call (:func:`~uvms.numerics._kernels.svd.svd_inverse_into`: a one-sided Jacobi SVD, the damping
     and the inverse), a third of LAPACK's dgesdd through scipy on these small matrices.
 
     Raises:
         NumericalError: the SVD did not converge (a non-finite Jacobian).
     """
-    from .kernels import svd_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+    from ._kernels.svd import svd_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
     inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
     converged, sigma_min, used = svd_inverse_into(np.ascontiguousarray(jacobian), *damping_parameters(damping), RCOND,
@@ -271,13 +271,13 @@ class WeightedInverse:
               nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float, float]:
         """(x = J_W^+ (c - J z0) + z0 (n,), sigma_min of the weighted J, damping used) in one compiled call.
 
-        The CLIK's solution (:func:`~uvms.numerics.kernels.clik_solution_into`): the numbers of this
+        The CLIK's solution (:func:`~uvms.numerics._kernels.clik.clik_solution_into`): the numbers of this
         inverse applied to c, plus the null-space motion z0 projected (None: none), to rounding.
 
         Raises:
             NumericalError: the SVD did not converge (a non-finite Jacobian).
         """
-        from .kernels import clik_solution_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ._kernels.clik import clik_solution_into  # numba: loaded at the first solve, not by ``import uvms``
 
         solution = np.empty(jacobian.shape[1])
         z0 = self._no_motion if nullspace_motion is None else nullspace_motion
@@ -288,12 +288,12 @@ class WeightedInverse:
 
     def __call__(self, jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
         """(inverse (n, k), sigma_min of the weighted J, damping used) of J (k, n), ``damping`` already checked
-        (:func:`~uvms.numerics.kernels.weighted_inverse_into`).
+        (:func:`~uvms.numerics._kernels.weighted.weighted_inverse_into`).
 
         Raises:
             NumericalError: the SVD did not converge (a non-finite Jacobian).
         """
-        from .kernels import weighted_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ._kernels.weighted import weighted_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
         inverse = np.empty((jacobian.shape[1], jacobian.shape[0]))
         converged, sigma_min, used = weighted_inverse_into(np.ascontiguousarray(jacobian), *self.kernel_weights,

@@ -1,11 +1,15 @@
 """Joint limits as one concept: which coordinates are limited, where, and how to clamp, project and bound.
 
 A :class:`Limit` is a box ``lower <= x <= upper`` on coordinates of the robot
-(the arm's joint values or velocities, in the order of v). Every user of limits
-reads them here: the joint-limit potential S(q) of hoang2011 (its middle and
-range), the joint clamping of CLIK (which coordinates a step would push out and
-to which bound), the projection of pose IK (q clipped into the box) and the
-bounds of the initial-configuration optimizer (scipy's ``(lo, hi)`` pairs).
+(the arm's joint values or velocities, in the order of v), with margins
+(:meth:`Limit.shrink`). Every user of limits reads them here, through
+:meth:`Limit.arm` (the one given, checked, or the model's): the joint-limit
+potential S(q) of hoang2011 (its middle and range), the joint clamping of CLIK
+(which coordinates a step would push out and to which bound), the set-based
+objectives (``JointLimits``: the box of its rows and its valid set inside the
+margins; ``JointVelocityLimits``: the speed box), the projection of pose IK (q
+clipped into the box) and the bounds of the initial-configuration optimizer
+(scipy's ``(lo, hi)`` pairs).
 
 Coordinates without a finite bound (continuous joints, the vehicle) are
 unbounded (+-inf); a continuous joint keeps its (cos, sin) pair in q, which a
@@ -14,11 +18,12 @@ projection leaves alone.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import SolverInputError
+from ..errors import LimitError, NameNotFound
 from .robot import Robot
 
 #: Slack [rad or m] within which a value on the wrong side of a bound still counts as inside.
@@ -66,12 +71,12 @@ class Limit:
         names = tuple(self.names) if self.names else tuple(f"x{i}" for i in range(size))
         q_index = np.full(size, -1, dtype=int) if self.q_index is None else np.array(self.q_index, dtype=int).reshape(-1)
         if upper.size != size or len(names) != size or q_index.size != size:
-            raise SolverInputError(f"a limit needs as many lower/upper bounds, names and q indices, got "
+            raise LimitError(f"a limit needs as many lower/upper bounds, names and q indices, got "
                                    f"{size}, {upper.size}, {len(names)}, {q_index.size}")
         if np.any(np.isnan(lower)) or np.any(np.isnan(upper)) or np.any(lower > upper):
-            raise SolverInputError(f"limits must satisfy lower <= upper (+-inf for unbounded), got {lower} and {upper}")
+            raise LimitError(f"limits must satisfy lower <= upper (+-inf for unbounded), got {lower} and {upper}")
         if self.kind not in KINDS:
-            raise SolverInputError(f"unknown limit kind {self.kind!r}; valid: {', '.join(KINDS)}")
+            raise LimitError(f"unknown limit kind {self.kind!r}; valid: {', '.join(KINDS)}")
         for name, value in (("lower", lower), ("upper", upper), ("names", names), ("q_index", q_index)):
             object.__setattr__(self, name, value)
 
@@ -96,29 +101,114 @@ class Limit:
         return cls(lower, upper, tuple(names), np.array(q_index, dtype=int)).shrink(margin)
 
     @classmethod
-    def joint_velocities(cls, robot: Robot) -> Limit:
-        """The arm's joint velocity limits |v_i| <= v_max,i (n_arm,) [rad/s or m/s] from the model.
+    def joint_velocities(cls, robot: Robot,
+                         max: float | Sequence[float] | Mapping[str, float] | None = None) -> Limit:  # noqa: A002
+        """The arm's joint velocity limits |v_i| <= v_max,i (n_arm,) [rad/s or m/s], the model's or given.
 
-        A velocity limit of 0 (the URDF placeholder for "not given") counts as unbounded.
+        Args:
+            robot: the model (its ``velocityLimit``: a limit of 0, the URDF placeholder for "not given",
+                counts as unbounded).
+            max: None (the model's), one number for every arm coordinate, n_arm numbers, or
+                {joint name: value} (the joints not named are unbounded); each > 0 (inf: none).
+
+        Raises:
+            LimitError: a value <= 0, NaN or not a number, or the wrong count.
+            NameNotFound: a name in ``max`` that is not an arm joint (the message lists the close ones).
         """
-        v_max = np.array(robot.model.velocityLimit[robot.n_vehicle:], dtype=float)
-        v_max = np.where(v_max > 0, v_max, np.inf)
-        names = [joint.name for joint in robot.arm_joints for _ in range(joint.nv)]
-        return cls(-v_max, v_max, tuple(names), kind="velocity")
+        names = tuple(joint.name for joint in robot.arm_joints for _ in range(joint.nv))
+        if max is None:
+            v_max = np.array(robot.model.velocityLimit[robot.n_vehicle:], dtype=float)
+            v_max = np.where(v_max > 0, v_max, np.inf)
+        elif isinstance(max, Mapping):
+            v_max = np.full(len(names), np.inf)
+            for joint, value in max.items():
+                if joint not in names:
+                    raise NameNotFound("arm joint", str(joint), sorted(set(names)), where="joint speed limits")
+                v_max[[i for i, owner in enumerate(names) if owner == joint]] = _number(value, f"the speed of {joint}")
+        else:
+            v_max = _numbers(max, "joint speed limits")
+            v_max = np.full(robot.n_arm, float(v_max)) if v_max.ndim == 0 else v_max
+            if v_max.shape != (robot.n_arm,):
+                raise LimitError(f"joint speed limits must be one number or {robot.n_arm} (one per arm coordinate: "
+                                 f"{', '.join(names)}), got {max!r}")
+        if np.any(np.isnan(v_max)) or np.any(v_max <= 0):
+            raise LimitError(f"joint speed limits must be numbers > 0 [rad/s or m/s] (inf: none), got {max!r}")
+        return cls(-v_max, v_max, names, kind="velocity")
 
-    def shrink(self, margin: float) -> Limit:
-        """The box with every finite bound moved ``margin`` inward [rad or m]."""
-        if not (np.isfinite(margin) and margin >= 0):
-            raise SolverInputError(f"a limit margin must be finite and >= 0, got {margin!r}")
-        if margin == 0:
+    @classmethod
+    def arm(cls, robot: Robot, limit: Limit | None = None, kind: str = "position", user: str = "this use") -> Limit:
+        """``limit`` checked to be ``kind`` limits of the robot's n_arm arm coordinates, or the model's when None.
+
+        What every user of joint limits calls with the ``limit`` it was given (the potential, the set-based
+        objectives; CLIK's clamping and the initial configuration may too).
+
+        Args:
+            robot: the model.
+            limit: the box to use, or None for :meth:`joint_positions` / :meth:`joint_velocities` of the model.
+            kind: "position" or "velocity".
+            user: who asks, for the message (e.g. "the joint-limit potential").
+
+        Raises:
+            LimitError: a box of another size or kind.
+        """
+        if kind not in KINDS:
+            raise LimitError(f"unknown limit kind {kind!r}; valid: {', '.join(KINDS)}")
+        if limit is None:
+            return cls.joint_positions(robot) if kind == "position" else cls.joint_velocities(robot)
+        if limit.size != robot.n_arm or limit.kind != kind:
+            raise LimitError(f"{user} needs {kind} limits of the {robot.n_arm} arm coordinates, got {limit.size} "
+                             f"{limit.kind} limits")
+        return limit
+
+    def take(self, index: np.ndarray | Sequence[int]) -> Limit:
+        """The box of the coordinates ``index`` (m,) only, in that order."""
+        index = np.asarray(index, dtype=int)
+        return Limit(self.lower[index], self.upper[index], tuple(self.names[i] for i in index), self.q_index[index],
+                     self.kind)
+
+    def margins(self, margin: float | Mapping[str, float], where: str = "") -> np.ndarray:
+        """The margin (n,) >= 0 [rad or m] of each coordinate from one number or {joint name: margin} (others: 0).
+
+        Raises:
+            LimitError: a margin negative, NaN, infinite or not a number.
+            NameNotFound: a joint of the mapping that owns none of the coordinates.
+        """
+        prefix = f"{where}: " if where else ""
+        if isinstance(margin, Mapping):
+            for joint in margin:
+                if joint not in self.names:
+                    raise NameNotFound("limited joint", str(joint), sorted(set(self.names)), where=where)
+            values = np.array([_number(margin.get(joint, 0.0), f"{prefix}margin of {joint}") for joint in self.names])
+        else:
+            values = np.full(self.size, _number(margin, f"{prefix}margin"))
+        if not np.all(np.isfinite(values)) or np.any(values < 0):
+            raise LimitError(f"{prefix}a limit margin must be finite and >= 0 [rad or m], one number or "
+                             f"{{joint: margin}}, got {margin!r}")
+        return values
+
+    def shrink(self, margin: float | Mapping[str, float], where: str = "") -> Limit:
+        """The box with every finite bound moved ``margin`` inward [rad or m].
+
+        Args:
+            margin: one distance for every coordinate, or {joint name: distance} (joints not named: 0), >= 0.
+            where: who asks, for the messages.
+
+        Raises:
+            LimitError: a bad margin (:meth:`margins`), or one that leaves no room inside a coordinate's range.
+            NameNotFound: a joint of the mapping that owns none of the coordinates.
+        """
+        values = self.margins(margin, where)
+        if not np.any(values):
             return self
-        bounded = self.bounded
-        too_narrow = bounded & (self.upper - self.lower <= 2 * margin)
+        too_narrow = self.bounded & (self.upper - self.lower <= 2 * values)
         if np.any(too_narrow):
-            joints = sorted({self.names[i] for i in np.flatnonzero(too_narrow)})
-            raise SolverInputError(f"margin {margin} leaves no room inside the limits of {', '.join(joints)}")
-        return Limit(np.where(np.isfinite(self.lower), self.lower + margin, self.lower),
-                     np.where(np.isfinite(self.upper), self.upper - margin, self.upper), self.names, self.q_index, self.kind)
+            joints = [f"{self.names[i]} [{self.lower[i]:g}, {self.upper[i]:g}]" for i in np.flatnonzero(too_narrow)]
+            raise LimitError(f"{f'{where}: ' if where else ''}margin {margin} leaves no room inside the limits of "
+                             f"{', '.join(joints)}; give a smaller one, one per joint {{joint: margin}}, or leave "
+                             f"those joints out")
+        return Limit(np.where(np.isfinite(self.lower), self.lower + values, self.lower),
+                     np.where(np.isfinite(self.upper), self.upper - values, self.upper), self.names, self.q_index,
+                     self.kind)
 
     def after_unbounded(self, count: int, name: str = "vehicle") -> Limit:
         """This box preceded by ``count`` unbounded coordinates (the vehicle's columns of v)."""
@@ -193,3 +283,21 @@ class Limit:
         with np.errstate(divide="ignore", invalid="ignore"):
             ratios = np.where(values > 0, self.upper / values, np.where(values < 0, self.lower / values, np.inf))
         return values * float(np.clip(np.min(ratios, initial=np.inf), 0.0, 1.0))
+
+
+def _numbers(value: object, what: str) -> np.ndarray:
+    """``value`` as a float array, else LimitError naming ``what``; a bool is not a number."""
+    try:
+        if isinstance(value, bool):
+            raise TypeError
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise LimitError(f"{what} must be numbers [rad or m, rad/s or m/s], got {value!r}") from None
+
+
+def _number(value: object, what: str) -> float:
+    """``value`` as one float, else LimitError naming ``what``."""
+    number = _numbers(value, what)
+    if number.ndim != 0:
+        raise LimitError(f"{what} must be one number [rad or m, rad/s or m/s], got {value!r}")
+    return float(number)

@@ -15,7 +15,6 @@ from ..dynamics.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..model.loader import load
 from ..robot.robot import Robot
-from ..robot.configuration import Configuration
 from ..solvers import SOLVERS, CLIKSolver, Solver, VariableDamping, initial_configuration
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
 from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, RecentSamples, SE3Trajectory, TrapezoidLaw,

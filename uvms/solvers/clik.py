@@ -101,7 +101,7 @@ class CLIKSolver(Solver):
         self.potential = potential if potential is not None and self.alpha > 0 else None
         # the potential's arrays, read once, for the compiled z0 (numba: loaded here, not by ``import uvms``)
         self._nullspace = None if self.potential is None else self.potential.nullspace_terms(self.alpha, self.first)
-        from ..numerics.kernels import joint_limit_motion_into
+        from ..numerics._kernels.clik import joint_limit_motion_into
 
         self._joint_limit_motion = joint_limit_motion_into
 

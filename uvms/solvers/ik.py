@@ -124,7 +124,7 @@ class JointBox:
     data: pin.Data
 
     def __post_init__(self) -> None:
-        from ..numerics.kernels import project_into_box  # numba: loaded by the IK, not by ``import uvms``
+        from ..numerics._kernels.boxes import project_into_box  # numba: loaded by the IK, not by ``import uvms``
 
         object.__setattr__(self, "kernel", project_into_box)
 
@@ -147,7 +147,7 @@ class JointBox:
 
         A revolute coordinate outside its limits first moves by a multiple of 2 pi when that
         lands inside (the same pose: Newton keeps its progress); what is still outside is clipped
-        (:func:`~uvms.numerics.kernels.project_into_box`).
+        (:func:`~uvms.numerics._kernels.boxes.project_into_box`).
         """
         self.kernel(q, self.index, self.lower, self.upper, self.turns)
         return q
@@ -176,9 +176,6 @@ class PoseProblem:
     """
 
     def __init__(self, robot: Robot, tasks: Sequence[FrameTask]) -> None:
-        from ..numerics import kernels  # numba: loaded by the IK, not by ``import uvms``
-
-        self.kernels = kernels
         self.model = robot.model
         self.box = JointBox.of(robot)
         self.data = self.box.data
@@ -207,11 +204,13 @@ class PoseProblem:
         The Newton loop calls it once per iteration, where each attribute lookup and call layer costs about
         as much as a Pinocchio call; the numbers are those of :meth:`pose_error` and the frame Jacobian.
         """
+        from ..numerics._kernels.pose import pose_error_norm as error_norm  # numba: loaded by the IK, not by ``import uvms``
+        from ..numerics._kernels.pose import rotation_to_target as to_target
+
         model, data, frame, nv = self.model, self.data, self.frame_ids[0], self.model.nv
         placements, compute, log3 = data.oMf, pin.computeFrameJacobian, pin.log3
         target = self.targets[0]
         translation, rotation = np.ascontiguousarray(target.translation), np.ascontiguousarray(target.rotation)
-        error_norm, to_target = self.kernels.pose_error_norm, self.kernels.rotation_to_target
         relative = np.empty((3, 3))  # R_d R^T, only read within a call
 
         def evaluate_one_frame(q: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -235,7 +234,7 @@ def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations
     """Levenberg-Marquardt iterations from q, projected into the limits, until the error <= ``tolerance`` or a stall.
 
     Each step is the DLS solution J^T (J J^T + d I)^-1 e in normal-equation form
-    (:func:`~uvms.numerics.kernels.dls_solve_into`), d = mu |e|^2 + 1e-14 tr(J J^T) / k; mu
+    (:func:`~uvms.numerics._kernels.dense.dls_solve_into`), d = mu |e|^2 + 1e-14 tr(J J^T) / k; mu
     shrinks after an accepted step and grows after a rejected one (``MU_*``). The
     candidate's evaluation gives its Jacobian too, so an accepted step costs one
     Pinocchio call. The start ends early when it stalls (``STALL_*``).
@@ -243,7 +242,9 @@ def newton(problem: PoseProblem, q: np.ndarray, tolerance: float, max_iterations
     Returns:
         (best q (nq,), its error norm [m, rad], iterations used).
     """
-    model, box, evaluate, solve = problem.model, problem.box, problem.evaluate, problem.kernels.dls_solve_into
+    from ..numerics._kernels.dense import dls_solve_into as solve  # numba: loaded by the IK, not by ``import uvms``
+
+    model, box, evaluate = problem.model, problem.box, problem.evaluate
     q = box.project(np.array(q, dtype=float))
     error, jacobian, norm = evaluate(q)
     floor = 1e-14 * float(np.vdot(jacobian, jacobian)) / jacobian.shape[0]  # 1e-14 tr(J J^T) / k

@@ -80,8 +80,8 @@ class RateRows:
                            float))
 
     def bounds(self, q: np.ndarray, nv: int, dt: float, fraction: float) -> tuple[np.ndarray, np.ndarray]:
-        """(lower, upper) (nv,) at q (:func:`~uvms.numerics.kernels.rate_bounds_into`)."""
-        from ..numerics.kernels import rate_bounds_into  # numba: loaded at the first use, not by ``import uvms``
+        """(lower, upper) (nv,) at q (:func:`~uvms.numerics._kernels.boxes.rate_bounds_into`)."""
+        from ..numerics._kernels.boxes import rate_bounds_into  # numba: loaded at the first use, not by ``import uvms``
 
         lower, upper = np.empty(nv), np.empty(nv)
         rate_bounds_into(q, self.q_index, self.v_index, self.low, self.high, dt, fraction, lower, upper)
@@ -98,7 +98,7 @@ def velocity_box(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.nda
         contain_zero: also widen the box to hold v = 0 (what scaling needs; a joint outside its limit is
             then stopped, not pushed further out, and its objective brings it back).
     """
-    from ..numerics.kernels import velocity_box_into  # numba: loaded at the first use, not by ``import uvms``
+    from ..numerics._kernels.boxes import velocity_box_into  # numba: loaded at the first use, not by ``import uvms``
 
     lower, upper = np.empty(maximum.size), np.empty(maximum.size)
     velocity_box_into(np.ascontiguousarray(maximum, dtype=float), np.ascontiguousarray(rate_lower, dtype=float),
@@ -107,8 +107,8 @@ def velocity_box(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.nda
 
 
 def inside(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, tolerance: float = TOLERANCE) -> bool:
-    """Whether lower <= values <= upper, up to ``tolerance`` (:func:`~uvms.numerics.kernels.inside_box`, the saturation's)."""
-    from ..numerics.kernels import inside_box  # numba: loaded at the first use, not by ``import uvms``
+    """Whether lower <= values <= upper, up to ``tolerance`` (:func:`~uvms.numerics._kernels.boxes.inside_box`, the saturation's)."""
+    from ..numerics._kernels.boxes import inside_box  # numba: loaded at the first use, not by ``import uvms``
 
     return bool(inside_box(*(np.ascontiguousarray(array, dtype=float) for array in (values, lower, upper)),
                            float(tolerance)))
@@ -117,7 +117,7 @@ def inside(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, tolerance: 
 def scale_lowest_first(contributions: Sequence[np.ndarray], lower: np.ndarray,
                        upper: np.ndarray) -> tuple[np.ndarray, tuple[float, ...]]:
     """sum_k s_k c_k inside the box, the lowest levels scaled first (one compiled call,
-    :func:`~uvms.numerics.kernels.scale_lowest_first_into`).
+    :func:`~uvms.numerics._kernels.boxes.scale_lowest_first_into`).
 
     Args:
         contributions: c_k (nv,) per level, highest priority first.
@@ -126,7 +126,7 @@ def scale_lowest_first(contributions: Sequence[np.ndarray], lower: np.ndarray,
     Returns:
         (the scaled sum (nv,), the scales s_k).
     """
-    from ..numerics.kernels import scale_lowest_first_into  # numba: loaded at the first solve, not by ``import uvms``
+    from ..numerics._kernels.boxes import scale_lowest_first_into  # numba: loaded at the first solve, not by ``import uvms``
 
     count = len(contributions)
     stacked = np.array(contributions, dtype=float).reshape(count, lower.size)

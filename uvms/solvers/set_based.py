@@ -74,12 +74,12 @@ class ICAT:
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
         """X^{#,A,Q} (n, m) of X = ``jacobian`` (m, n) (module docstring), root = a^1/2 (m, 1), power = a^1.5 (m,);
         sigma_min of the weighted Z and the damping used (projector None: Q = I, no eta term); the inverse of
-        each level of :meth:`solve` (:func:`~uvms.numerics.kernels.level_inverse_into`).
+        each level of :meth:`solve` (:func:`~uvms.numerics._kernels.icat.level_inverse_into`).
 
         Raises:
             NumericalError: the SVD did not converge (a non-finite level).
         """
-        from ..numerics.kernels import level_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ..numerics._kernels.icat import level_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
 
         scaled = np.ascontiguousarray(root * jacobian, dtype=float)  # A^1/2 X
         inverse = np.empty((self.size, jacobian.shape[0]))
@@ -93,12 +93,12 @@ class ICAT:
 
     def solve(self, hierarchy: Hierarchy) -> tuple[list[np.ndarray], list[float], float]:
         """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,), its sigma_min,
-        and the largest damping used (one compiled call, :func:`~uvms.numerics.kernels.icat_into`).
+        and the largest damping used (one compiled call, :func:`~uvms.numerics._kernels.icat.icat_into`).
 
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
-        from ..numerics.kernels import icat_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ..numerics._kernels.icat import icat_into  # numba: loaded at the first solve, not by ``import uvms``
 
         levels = hierarchy.levels
         count = len(levels)

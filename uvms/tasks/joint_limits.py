@@ -6,13 +6,14 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import UVMSError
+from ..errors import SolverInputError
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
 
 
 class NullspaceTerms(NamedTuple):
-    """What the compiled null-space motion z0 = -alpha dS/dv reads (:func:`uvms.numerics.kernels.joint_limit_motion_into`).
+    """What the compiled null-space motion z0 = -alpha dS/dv reads
+    (:func:`uvms.numerics._kernels.clik.joint_limit_motion_into`).
 
     The m arm coordinates that q holds itself (continuous joints, stored as (cos, sin), have c = 0 and no
     entry): z0[v_index] = -alpha c (q[q_index] - qbar) / range^2, zero elsewhere.
@@ -43,7 +44,12 @@ class JointLimitPotential:
         robot: the model.
         weights: c_i >= 0, a scalar or (n_arm,); default 1.
         limit: the joint position limits q_im, q_iM (n_arm,); default
-            ``Limit.joint_positions(robot)``, the model's (pass one with a margin to aim inside them).
+            ``Limit.joint_positions(robot)``, the model's (pass one with a margin to aim inside them): the
+            same :class:`~uvms.robot.limits.Limit` CLIK's clamping and the ``JointLimits`` objective read.
+
+    Raises:
+        LimitError: a limit that is not the position limits of the arm.
+        SolverInputError: weights of the wrong size, negative or not finite.
 
     Attributes:
         limit: the :class:`~uvms.robot.limits.Limit` read.
@@ -54,15 +60,12 @@ class JointLimitPotential:
 
     def __init__(self, robot: Robot, weights: float | np.ndarray = 1.0, limit: Limit | None = None) -> None:
         check_robot(robot, "JointLimitPotential")
-        limit = Limit.joint_positions(robot) if limit is None else limit
-        if limit.size != robot.n_arm or limit.kind != "position":
-            raise UVMSError(f"the joint-limit potential needs position limits of the {robot.n_arm} arm coordinates, "
-                            f"got {limit.size} {limit.kind} limits")
+        limit = Limit.arm(robot, limit, "position", "the joint-limit potential")
         shape = limit.lower.shape
         weights = np.broadcast_to(np.asarray(weights, dtype=float), shape).copy() if np.ndim(weights) == 0 \
             else np.asarray(weights, dtype=float)
         if weights.shape != shape or not np.all(np.isfinite(weights)) or np.any(weights < 0):
-            raise UVMSError(f"joint-limit weights must be {limit.size} finite numbers >= 0, got {weights!r}")
+            raise SolverInputError(f"joint-limit weights must be {limit.size} finite numbers >= 0, got {weights!r}")
         bounded = limit.bounded
         self.robot = robot
         self.limit = limit

@@ -36,9 +36,9 @@ def bell(depth: np.ndarray, band: np.ndarray, shape: str = "cosine") -> np.ndarr
     """Activation (k,) in [0, 1] of rows ``depth`` [units of x] inside their border, over ``band`` (k,) > 0.
 
     depth <= 0 (on or outside the border): 1; depth >= band: 0; between: (1 + cos(pi depth / band)) / 2
-    (``"cosine"``, C1) or 1 (``"step"``) (:func:`uvms.numerics.kernels.bell_value`).
+    (``"cosine"``, C1) or 1 (``"step"``) (:func:`uvms.numerics._kernels.activation.bell_value`).
     """
-    from ...numerics.kernels import bell_into  # numba: loaded at the first use, not by ``import uvms``
+    from ...numerics._kernels.activation import bell_into  # numba: loaded at the first use, not by ``import uvms``
 
     depth = np.atleast_1d(np.asarray(depth, dtype=float))
     out = np.empty(depth.shape)
@@ -155,8 +155,8 @@ class Inequality(ABC):
 
     def _activation_reference(self, value: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(activation (k,), reference (k,)) at x = ``value`` in one compiled call
-        (:func:`uvms.numerics.kernels.activation_reference_into`)."""
-        from ...numerics.kernels import activation_reference_into  # numba: loaded at the first use, not by ``import uvms``
+        (:func:`uvms.numerics._kernels.activation.activation_reference_into`)."""
+        from ...numerics._kernels.activation import activation_reference_into  # numba: loaded at the first use, not by ``import uvms``
 
         activation, reference = np.empty(self.dim), np.empty(self.dim)
         activation_reference_into(np.ascontiguousarray(value, dtype=float), self.lower, self.upper, self.band,

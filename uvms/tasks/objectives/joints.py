@@ -1,4 +1,4 @@
-"""Joint position limits as an inequality objective (one row per limited arm coordinate)."""
+"""Joint position limits as an inequality objective (one row per limited arm coordinate), over a :class:`Limit`."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ...errors import ObjectiveError, ObjectiveNameNotFound
+from ...errors import ObjectiveError
 from ...robot.limits import Limit
 from ...robot.robot import Robot
 from ...robot.configuration import Configuration
@@ -21,7 +21,9 @@ class JointLimits(Inequality):
 
     Rows: the arm coordinates with finite limits whose value q holds itself (continuous joints, stored as
     (cos, sin), have none). x = q_i, J = the unit row of v_i. The valid set is
-    [q_min + margin, q_max - margin]; the activation rises from 0 at ``band`` inside it to 1 at its border.
+    [q_min + margin, q_max - margin] (``limit.take(rows).shrink(margin)``: the same :class:`Limit` the
+    joint-limit potential and CLIK's clamping read); the activation rises from 0 at ``band`` inside it to 1
+    at its border.
     The set-based solver also keeps the hard limits (q_min, q_max) by saturation; the QP hierarchy turns
     the valid set into hard velocity bounds.
 
@@ -38,8 +40,15 @@ class JointLimits(Inequality):
         name: the name results report.
 
     Attributes:
+        limit: the :class:`Limit` of the rows (k,), before the margin; valid: the one inside the margin.
         names: joint of each row (k,); v_index, q_index: its index in v and in q (k,).
-        hard_lower, hard_upper: the limits before the margin (k,).
+        hard_lower, hard_upper: the limits before the margin (k,) (``limit.lower``, ``limit.upper``).
+        margin: the margin of each row (k,) [rad or m].
+
+    Raises:
+        LimitError: a limit that is not the arm's positions, a bad margin or one that leaves no room.
+        NameNotFound: a margin for a joint that is not limited here (the message lists the close ones).
+        ObjectiveError: no limited joint, a joint without finite limits, a bad band, gain or shape.
     """
 
     def __init__(self, robot: Robot, margin: float | Mapping[str, float] = 0.0, band: float = 0.2, gain: float = 1.0,
@@ -47,41 +56,19 @@ class JointLimits(Inequality):
                  name: str = "joint_limits") -> None:
         self.name = name
         self.robot = robot
-        limit = Limit.joint_positions(robot) if limit is None else limit
-        if limit.size != robot.n_arm or limit.kind != "position":
-            raise ObjectiveError(f"{name}: needs position limits of the {robot.n_arm} arm coordinates, got "
-                                 f"{limit.size} {limit.kind} limits")
+        limit = Limit.arm(robot, limit, "position", name)
         rows = self._selected_rows(robot, limit, joints)
-        margin = self._margins(margin, [limit.names[i] for i in rows], name)
-        too_narrow = [f"{limit.names[i]} [{limit.lower[i]:g}, {limit.upper[i]:g}]" for i, m in zip(rows, margin)
-                      if limit.upper[i] - limit.lower[i] <= 2 * m]
-        if too_narrow:
-            raise ObjectiveError(f"{name}: the margin leaves no room inside the limits of {', '.join(too_narrow)}; "
-                                 f"give a smaller one, one per joint {{joint: margin}}, or leave them out (joints=)")
-        self.names = tuple(limit.names[i] for i in rows)
-        self.q_index = limit.q_index[rows]
+        self.limit = limit.take(rows)  # (k,) the hard limits of the rows
+        self.valid = self.limit.shrink(margin, name)  # (k,) inside the margins
+        self.margin = self.limit.margins(margin, name)
+        self.names, self.q_index = self.limit.names, self.limit.q_index
         self.v_index = robot.n_vehicle + rows
-        self.hard_lower, self.hard_upper = limit.lower[rows], limit.upper[rows]
-        lower, upper = self.hard_lower + margin, self.hard_upper - margin
+        self.hard_lower, self.hard_upper = self.limit.lower, self.limit.upper
+        lower, upper = self.valid.lower, self.valid.upper
         band = finite_number(band, f"{name}: band", positive=True)
-        self.margin = margin
         self._set_valid_set(lower, upper, np.minimum(band, BAND_FRACTION_CAP * (upper - lower)), gain, shape)
         self._jacobian = np.zeros((self.dim, robot.nv))
         self._jacobian[np.arange(self.dim), self.v_index] = 1.0
-
-    @staticmethod
-    def _margins(margin: float | Mapping[str, float], names: list[str], where: str) -> np.ndarray:
-        """The margin of each row (k,) >= 0 from one number or {joint name: margin}."""
-        if isinstance(margin, Mapping):
-            for joint in margin:
-                if joint not in names:
-                    raise ObjectiveNameNotFound("limited joint", str(joint), sorted(set(names)), where=where)
-            values = np.array([finite_number(margin.get(joint, 0.0), f"{where}: margin of {joint}") for joint in names])
-        else:
-            values = np.full(len(names), finite_number(margin, f"{where}: margin"))
-        if np.any(values < 0):
-            raise ObjectiveError(f"{where}: margins must be >= 0 [rad or m], got {margin!r}")
-        return values
 
     @staticmethod
     def _selected_rows(robot: Robot, limit: Limit, joints: Sequence[str] | None) -> np.ndarray:

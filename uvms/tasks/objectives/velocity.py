@@ -11,7 +11,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ...errors import ObjectiveError, ObjectiveNameNotFound
+from ...errors import LimitError, ObjectiveError, ObjectiveNameNotFound
 from ...robot.limits import Limit
 from ...robot.robot import Robot
 
@@ -58,30 +58,32 @@ def _by_name(values: Mapping[str, float], names: Sequence[str], kind: str, where
 
 
 class JointVelocityLimits(VelocityLimit):
-    """|qdot_i| <= max_i on the arm joints [rad/s or m/s].
+    """|qdot_i| <= max_i on the arm joints [rad/s or m/s]: the box of a velocity :class:`Limit`.
 
     Args:
         robot: the model.
         max: None (the model's ``<limit velocity>``; 0 there means none), one number for every arm joint,
-            n_arm numbers, or {joint name: value}.
+            n_arm numbers, or {joint name: value} (:meth:`Limit.joint_velocities`).
         name: the name results report.
+        limit: a symmetric velocity :class:`Limit` of the n_arm arm coordinates instead of ``max``.
+
+    Attributes:
+        limit: the velocity :class:`Limit` read (n_arm,); ``maximum`` holds its upper bounds on the arm entries.
+
+    Raises:
+        LimitError: a bad ``max`` or ``limit``, or both given.
     """
 
     def __init__(self, robot: Robot, max: float | Sequence[float] | Mapping[str, float] | None = None,  # noqa: A002
-                 name: str = "joint_velocity") -> None:
+                 name: str = "joint_velocity", limit: Limit | None = None) -> None:
         self.name = name
-        names = [joint.name for joint in robot.arm_joints for _ in range(joint.nv)]
-        if max is None:
-            values = Limit.joint_velocities(robot).upper
-        elif isinstance(max, Mapping):
-            values = _by_name(max, names, "arm joint", name)
-        else:
-            values = _numbers(max, f"{name}: max")
-            values = np.full(robot.n_arm, float(values)) if values.ndim == 0 else values
-            if values.shape != (robot.n_arm,):
-                raise ObjectiveError(f"{name}: max must be one number or {robot.n_arm} (one per arm joint: "
-                                     f"{', '.join(names)}), got {max!r}")
-        self._set_maximum(robot, np.arange(robot.n_vehicle, robot.nv), values)
+        if limit is not None and max is not None:
+            raise LimitError(f"{name}: give the speed limits as max or as a velocity limit, not both")
+        self.limit = Limit.joint_velocities(robot, max) if limit is None else Limit.arm(robot, limit, "velocity", name)
+        if not np.array_equal(-self.limit.lower, self.limit.upper):
+            raise LimitError(f"{name}: speed limits are |v_i| <= max_i, symmetric; got lower {self.limit.lower} "
+                             f"and upper {self.limit.upper}")
+        self._set_maximum(robot, np.arange(robot.n_vehicle, robot.nv), self.limit.upper)
 
 
 class VehicleVelocityLimits(VelocityLimit):

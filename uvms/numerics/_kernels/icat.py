@@ -1,0 +1,163 @@
+"""The iCAT recursion of the set-based solver (Simetti and Casalino 2016; ``uvms.solvers.set_based``).
+
+Each level's activation-weighted, regularized inverse X^{#,A,Q} and the recursion over priority levels
+with its projector Q, in one compiled call.
+
+The module imports numba, so it is loaded where a solver first uses it, not by ``import uvms``; its kernels
+compile at their first call and are cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .dense import apply, copy_into, product, scale_matrix, subtract_in_place
+from .weighted import weighted_inverse_into, weighted_norm
+
+__all__ = ["icat_into", "level_inverse_into"]
+
+
+@njit(cache=True)
+def level_inverse_into(scaled: np.ndarray, power: np.ndarray, projector: np.ndarray, root_eta: float,
+                       inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float, epsilon: float,
+                       lambda_max: float, rcond: float, floor: float, out: np.ndarray) -> tuple[bool, float, float]:
+    """The iCAT inverse X^{#,A,Q} (n, m) of one level (Simetti and Casalino 2016), written to ``out``.
+
+    The weighted, damped inverse of Z = [A^1/2 X; eta^1/2 (I - Q)] (without the eta rows when ``root_eta``
+    is 0), its first m columns scaled by a^1.5: (X^T A X + eta (I - Q)^T (I - Q))^# X^T A A.
+
+    Args:
+        scaled: A^1/2 X (m, n); power: a^1.5 (m,); projector: Q (n, n) (read only with eta rows).
+        root_eta: eta^1/2 >= 0 (0: no eta rows, the inverse X^{#,A,I}).
+        inverse_sqrt, transform, damping, epsilon, lambda_max, rcond, floor: as
+            :func:`~.weighted.weighted_inverse_into`.
+        out: (n, m).
+
+    Returns:
+        (converged, sigma_min of the weighted Z, l used), as :func:`~.svd.svd_inverse_into`.
+    """
+    active, size = scaled.shape
+    stacked = scaled
+    if root_eta > 0.0:
+        stacked = np.empty((active + size, size))
+        copy_into(stacked[:active], scaled)
+        for row in range(size):
+            for col in range(size):
+                stacked[active + row, col] = root_eta * ((1.0 if row == col else 0.0) - projector[row, col])
+    full = np.empty((size, stacked.shape[0]))
+    converged, sigma_min, used = weighted_inverse_into(stacked, inverse_sqrt, transform, damping, epsilon,
+                                                       lambda_max, rcond, floor, full)
+    for row in range(size):
+        for col in range(active):
+            out[row, col] = full[row, col] * power[col]
+    return converged, sigma_min, used
+
+
+@njit(cache=True)
+def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.ndarray, offsets: np.ndarray,
+              equality: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float, epsilon: float,
+              lambda_max: float, rcond: float, eta: float, contributions: np.ndarray,
+              sigmas: np.ndarray) -> tuple[bool, float]:
+    """The iCAT recursion over priority levels (Simetti and Casalino 2016; ``uvms.solvers.set_based``).
+
+    With rho_0 = 0 and Q_0 = I, level k (rows offsets[k]:offsets[k+1] of the stacks) gives
+    rho_k - rho_{k-1} = Q (J Q)^{#,A,I} W_k (xdot_k - J_k rho_{k-1}) and Q_k = Q (I - (J Q)^{#,A,I} J Q), the
+    inverses X^{#,A,Q} of the weighted, damped inverse of Z = [A^1/2 X; eta^1/2 (I - Q)]; rows with a = 0
+    are left out (they add nothing), and while no level above has moved anything (Q = I) a level of
+    activations 1 is solved as CLIK is. Below the first level, singular values of X = J Q under rcond times
+    the norm of the unprojected A^1/2 J (weighted) count as zero: the rounding Q keeps of the levels above.
+
+    Args:
+        jacobians: the levels' solved rows stacked (M, n); references: (M,); activations: (M,) in [0, 1].
+        offsets: (L + 1,) the first row of each level, then M.
+        equality: (L,) the level holds equality tasks only.
+        inverse_sqrt, transform: W as :func:`~.weighted.weighted_inverse_into` takes it.
+        damping, epsilon, lambda_max: the damping of (J Q)^{#,A,I} (W_k's inverse is undamped).
+        rcond: the pseudo-inverse's cut-off; eta: the weight of the (I - Q) term >= 0.
+        contributions: (L, n) written with rho_k - rho_{k-1}; sigmas: (L,) written with each level's sigma_min.
+
+    Returns:
+        (converged (False: a non-finite level), the largest damping used).
+    """
+    size = jacobians.shape[1]
+    rho = np.zeros(size)
+    projector = np.zeros((size, size))  # Q = I
+    for entry in range(size):
+        projector[entry, entry] = 1.0
+    unrestricted = True  # Q = I exactly: no level above has moved anything
+    undamped = epsilon == 0.0 and damping == 0.0
+    root_eta = np.sqrt(eta)
+    largest = 0.0
+    for level in range(offsets.size - 1):
+        first, last = offsets[level], offsets[level + 1]
+        contributions[level, :] = 0.0
+        sigmas[level] = 0.0
+        active = 0
+        ones = True
+        for row in range(first, last):
+            if activations[row] > 0.0:
+                active += 1
+            if activations[row] != 1.0:
+                ones = False
+        if not equality[level] and active == 0:
+            continue
+        jacobian = jacobians[first:last]
+        remaining = apply(jacobian, rho)
+        for row in range(last - first):
+            remaining[row] = references[first + row] - remaining[row]  # xdot_k - J_k rho_{k-1}
+        if unrestricted and (equality[level] or ones):  # the CLIK case
+            inverse = np.empty((size, last - first))
+            converged, sigma_min, used = weighted_inverse_into(jacobian, inverse_sqrt, transform, damping, epsilon,
+                                                               lambda_max, rcond, 0.0, inverse)
+            if not converged:
+                return False, largest
+            contribution = apply(inverse, remaining)
+            subtract_in_place(projector, product(inverse, jacobian))
+        else:
+            rows = np.empty(active, dtype=np.int64)  # the active rows, their a^1/2 and a^1.5
+            root, power = np.empty(active), np.empty(active)
+            count = 0
+            for row in range(last - first):
+                value = activations[first + row]
+                if value > 0.0:
+                    rows[count], root[count], power[count] = row, np.sqrt(value), value ** 1.5
+                    count += 1
+            selected = np.empty((active, size))
+            for row in range(active):
+                for col in range(size):
+                    selected[row, col] = jacobian[rows[row], col]
+            projected = selected if unrestricted else product(selected, projector)  # X (m, n)
+            scaled = scale_matrix(projected, root, True)  # A^1/2 X
+            # X = J Q keeps the rounding of the levels above (Q of a level that takes every direction is
+            # rounding noise): its singular values count from the scale of the unprojected A^1/2 J, not its own
+            floor = 0.0 if unrestricted else rcond * weighted_norm(scale_matrix(selected, root, True), inverse_sqrt,
+                                                                   transform)
+            inverse = np.empty((size, active))  # X^{#,A,I}, damped
+            converged, sigma_min, used = level_inverse_into(scaled, power, projector, 0.0, inverse_sqrt, transform,
+                                                            damping, epsilon, lambda_max, rcond, floor, inverse)
+            if not converged:
+                return False, largest
+            if unrestricted and undamped:
+                regularized = inverse
+            else:  # X^{#,A,Q}, undamped (Q = I: no eta rows)
+                regularized = np.empty((size, active))
+                converged, _, _ = level_inverse_into(scaled, power, projector, 0.0 if unrestricted else root_eta,
+                                                     inverse_sqrt, transform, 0.0, 0.0, 0.0, rcond, floor,
+                                                     regularized)
+                if not converged:
+                    return False, largest
+            transfer = product(projected, regularized)  # W_k (m, m)
+            wanted = np.empty(active)
+            for row in range(active):
+                wanted[row] = remaining[rows[row]]
+            contribution = apply(projector, apply(inverse, apply(transfer, wanted)))
+            subtract_in_place(projector, product(projector, product(inverse, projected)))
+        for entry in range(size):
+            rho[entry] += contribution[entry]
+        unrestricted = False
+        for entry in range(size):
+            contributions[level, entry] = contribution[entry]
+        sigmas[level] = sigma_min
+        largest = max(largest, used)
+    return True, largest
