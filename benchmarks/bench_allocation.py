@@ -1,6 +1,6 @@
 """Thrust allocation per call, as ratios to one ``pin.forwardKinematics`` on the BlueROV2 + Alpha 5.
 
-The BlueROV2 Heavy's 8 thrusters (``models/bluerov2_alpha5/thrusters.yaml``), ``uvms.ThrustAllocator``:
+The BlueROV2 Heavy's 8 thrusters (``models/bluerov2_alpha5/thrusters.yaml``), ``uvms.dynamics.ThrustAllocator``:
 
 * attainable: random wrenches B f with f inside 0.3 x the bounds (B^+ tau inside the bounds: no solver runs);
 * bounded: random wrenches ~ N(0, [250 N x3, 40 N m x3]) beyond the thrusters (bounded least squares by
@@ -42,11 +42,11 @@ def main() -> None:
     parser.add_argument("--number", type=int, default=20, help="calls per measure in a round")
     options = parser.parse_args()
     robot = uvms.load("bluerov2_alpha5")
-    thrusters = uvms.thrusters_of(robot)
-    matrix = uvms.allocation_matrix(robot, thrusters)
+    thrusters = uvms.dynamics.thrusters_of(robot)
+    matrix = uvms.dynamics.allocation_matrix(robot, thrusters)
     lower, upper = thrusters.lower, thrusters.upper
-    plain = uvms.ThrustAllocator(matrix, lower, upper)
-    ranked = uvms.ThrustAllocator(matrix, lower, upper, priorities=[("yaw", "z", "roll", "pitch"), ("x", "y")])
+    plain = uvms.dynamics.ThrustAllocator(matrix, lower, upper)
+    ranked = uvms.dynamics.ThrustAllocator(matrix, lower, upper, priorities=[("yaw", "z", "roll", "pitch"), ("x", "y")])
     rng = np.random.default_rng(0)
     attainable = [matrix @ rng.uniform(0.3 * lower, 0.3 * upper) for _ in range(50)]
     unattainable = [rng.normal(size=6) * np.array([250, 250, 250, 40, 40, 40]) for _ in range(50)]

@@ -76,7 +76,7 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
     rng = np.random.default_rng(0)
     q = robot.random_configuration(rng)
     target = robot.fk(robot.random_configuration(rng))
-    potential = uvms.JointLimitPotential(robot)
+    potential = uvms.tasks.JointLimitPotential(robot)
     model, data = robot.model, robot.data
     task = uvms.FrameTask(robot, target=target)
     weights = np.linspace(1.0, 2.0, robot.nv)  # a diagonal W (the step has weights)
@@ -126,7 +126,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=2000, help="calls per timing")
     options = parser.parse_args()
-    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
     ratios = clik_step_ratios(robot, options.repeat)
     print(f"One CLIK step, {robot.name} on a 6-DOF floating base (nv = {robot.nv}); "
           f"pin.forwardKinematics = {ratios.pop('_reference_us'):.2f} us in this run (goal: uvms <= 10x)\n")

@@ -142,7 +142,7 @@ def rtb_solver(case: Case, path: str) -> Callable[[pin.SE3, int], np.ndarray] | 
 def cases(count: int, seed: int) -> list[Case]:
     """The UR5 (fixed base, example-robot-data) and the BlueROV2 + Alpha 5 arm (floating vehicle, 4 arm joints)."""
     rng = np.random.default_rng(seed)
-    ur5 = uvms.load(uvms.example_robot_urdf("ur5"))
+    ur5 = uvms.load(uvms.model.example_robot_urdf("ur5"))
     out = [Case("UR5 (fixed base, 6 joints)", ur5, ur5.ee_frames[0],
                 np.array([ur5.random_configuration(rng) for _ in range(count)]))]
     rov = uvms.load("bluerov2_alpha5")
@@ -162,7 +162,7 @@ def main() -> None:
         fk = fk_time(case.robot)
         rows.append(run(case, f"uvms solve_ik ({options.start} start)", uvms_solver(case, options.start), fk))
         if case.robot.base_type == "fixed":
-            solve = rtb_solver(case, uvms.example_robot_urdf("ur5"))
+            solve = rtb_solver(case, uvms.model.example_robot_urdf("ur5"))
             if solve is None:
                 print("roboticstoolbox not installed: pip install -e '.[bench]'")
             else:

@@ -47,7 +47,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=2000, help="calls per timing")
     options = parser.parse_args()
     rows = [measure(name, uvms.load(name), options.repeat) for name in ("bluerov2_alpha5", "amundsen2018", "xiang2019")]
-    rows.append(measure("bluerov2+panda", uvms.mount_arm(uvms.load("bluerov2_alpha5"), "panda",
+    rows.append(measure("bluerov2+panda", uvms.model.mount_arm(uvms.load("bluerov2_alpha5"), "panda",
                                                          placement=[0.0, 0.0, -0.2, np.pi, 0.0, 0.0]), options.repeat))
     headers = list(rows[0])
     print("| " + " | ".join(headers) + " |")

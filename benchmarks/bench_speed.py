@@ -41,7 +41,7 @@ ROOT = Path(uvms.__file__).resolve().parent.parent  # the checkout imported (PYT
 
 def clik_rows() -> list[tuple[str, str, str, str]]:
     """The CLIK step rows: uvms, the numpy step and pink, as ratios to FK."""
-    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
     ratios = bench_clik.clik_step_ratios(robot, 2000)
     fk = ratios.pop("_reference_us")
     general = ratios["uvms CLIKSolver built per step (general, with diagnostics)"]
@@ -94,7 +94,7 @@ def ik_rows(targets: int) -> list[tuple[str, str, str, str]]:
     case = bench_ik.cases(targets, 0)[0]
     fk = bench_ik.fk_time(case.robot)
     ours = bench_ik.run(case, "uvms", bench_ik.uvms_solver(case, "random"), fk)
-    solve = bench_ik.rtb_solver(case, uvms.example_robot_urdf("ur5"))
+    solve = bench_ik.rtb_solver(case, uvms.model.example_robot_urdf("ur5"))
     other = "roboticstoolbox not installed"
     if solve is not None:
         theirs = bench_ik.run(case, "rtb", solve, fk)

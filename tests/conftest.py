@@ -10,7 +10,7 @@ import pytest
 
 import uvms
 
-SHIPPED = sorted(uvms.shipped_models())
+SHIPPED = sorted(uvms.model.shipped_models())
 
 
 @functools.lru_cache(maxsize=None)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from uvms.errors import ScenarioError
-from uvms.scenario import run
+from uvms.scenario import run_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 CURRENT = SCENARIOS / "bluerov2_alpha5_station_current.toml"
@@ -22,7 +22,7 @@ NO_FIGURES = ["outputs.figures=false"]
 @pytest.fixture(scope="module")
 def current_runs(tmp_path_factory) -> dict:
     root = tmp_path_factory.mktemp("station")
-    return {coordination: run(CURRENT, root / str(coordination),
+    return {coordination: run_scenario(CURRENT, root / str(coordination),
                               [f"vehicle_control.coordination={str(coordination).lower()}"], progress=False)
             for coordination in (True, False)}
 
@@ -55,7 +55,7 @@ def test_an_actuated_run_folder(current_runs):
 
 
 def test_a_current_beyond_the_thrusters_saturates_them_and_surge_gives_way(tmp_path):
-    metrics = run("bluerov2_alpha5_station_saturated", tmp_path / "s", NO_FIGURES, progress=False).metrics
+    metrics = run_scenario("bluerov2_alpha5_station_saturated", tmp_path / "s", NO_FIGURES, progress=False).metrics
     assert metrics["max_thrust_ratio"] == pytest.approx(1.0, abs=1e-9) and metrics["max_thrust_ratio"] <= 1.0
     assert metrics["saturated_time_fraction"] > 0.8  # measured 0.905
     assert metrics["final_vehicle_position_error"] > 0.5  # measured 0.87 m downstream
@@ -77,7 +77,7 @@ def test_a_current_beyond_the_thrusters_saturates_them_and_surge_gives_way(tmp_p
 def test_what_station_keeping_does_not_do_is_refused(tmp_path, overrides, message):
     extra = ["vehicle_control.kp=50"] if overrides == ["plant.thrusters=false"] else []
     with pytest.raises(ScenarioError, match=message.replace("(", r"\(").replace("[", r"\[")):
-        run(CURRENT, tmp_path / "o", [*NO_FIGURES, *overrides, *extra], progress=False)
+        run_scenario(CURRENT, tmp_path / "o", [*NO_FIGURES, *overrides, *extra], progress=False)
     assert not (tmp_path / "o").exists()
 
 
@@ -87,14 +87,14 @@ def test_a_vehicle_without_thrusters_is_told_where_they_go(tmp_path):
     path = tmp_path / "s.toml"
     path.write_text(text.replace('path = "../models', f'path = "{SCENARIOS.parent}/models'))
     with pytest.raises(ScenarioError, match="no thrusters.*thrusters.yaml"):
-        run(path, tmp_path / "o", NO_FIGURES, progress=False)
+        run_scenario(path, tmp_path / "o", NO_FIGURES, progress=False)
 
 
 def test_the_bag_of_an_actuated_run_has_the_thrusts_and_the_body_wrench(tmp_path):
     from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
 
-    result = run(CURRENT, tmp_path / "b", [*NO_FIGURES, "outputs.bag=true", "trajectory.duration=0.5"], progress=False)
+    result = run_scenario(CURRENT, tmp_path / "b", [*NO_FIGURES, "outputs.bag=true", "trajectory.duration=0.5"], progress=False)
     typestore, series = get_typestore(Stores.ROS2_HUMBLE), {}
     with Reader(tmp_path / "b" / "bag") as reader:
         for connection, _, raw in reader.messages():

@@ -14,7 +14,7 @@ import uvms
 from conftest import shipped
 from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps
 from uvms.dynamics.plant import Plant
-from uvms.scenario import ScenarioError, run
+from uvms.scenario import ScenarioError, run_scenario
 from uvms.errors import StepCountError
 from uvms.sim import simulate
 
@@ -37,14 +37,14 @@ def runs(tmp_path_factory):
     results = {}
     for name in AMUNDSEN:
         overrides = [] if name == "hydro_open_loop" else NO_FIGURES
-        results[name] = run(SCENARIOS / f"amundsen2018_{name}.toml", out=out / name, overrides=overrides,
+        results[name] = run_scenario(SCENARIOS / f"amundsen2018_{name}.toml", out=out / name, overrides=overrides,
                             progress=False)
     for name, gjm in (("inviscid_rigid_gjm", "rigid"), ("inviscid_added_mass_gjm", "added_mass")):
-        results[name] = run(SCENARIOS / "amundsen2018_hydro_open_loop_servo_inverted.toml", out=out / name,
+        results[name] = run_scenario(SCENARIOS / "amundsen2018_hydro_open_loop_servo_inverted.toml", out=out / name,
                             progress=False, overrides=[*NO_FIGURES, *NO_DAMPING, f"plant.gjm={gjm}"])
-    results["hydrostatics_off"] = run(SCENARIOS / "amundsen2018_hydro_open_loop.toml", out=out / "no_hydrostatics",
+    results["hydrostatics_off"] = run_scenario(SCENARIOS / "amundsen2018_hydro_open_loop.toml", out=out / "no_hydrostatics",
                                       progress=False, overrides=[*NO_FIGURES, "plant.gravity=false"])
-    results["hoang2011"] = run(SCENARIOS / "hoang2011_gjm.toml", out=out / "hoang", overrides=NO_FIGURES,
+    results["hoang2011"] = run_scenario(SCENARIOS / "hoang2011_gjm.toml", out=out / "hoang", overrides=NO_FIGURES,
                                progress=False)
     return results
 
@@ -135,7 +135,7 @@ def test_gjm_control_on_the_planar_hoang2011_uvms(runs, tmp_path):
     metrics = runs["hoang2011"].metrics
     assert metrics["max_position_error"] <= 1e-6  # 1e-8 m measured
     assert 0.005 < metrics["vehicle_travel"] < 0.05  # the 120 kg vehicle drifts 1.6 cm
-    fixed = run(SCENARIOS / "hoang2011_gjm.toml", out=tmp_path, progress=False,
+    fixed = run_scenario(SCENARIOS / "hoang2011_gjm.toml", out=tmp_path, progress=False,
                 overrides=[*NO_FIGURES, "plant.gjm=fixed_base"]).metrics
     assert fixed["final_position_error"] > 0.03  # 7.5 cm: the fixed-base Jacobian assumes station keeping
 
@@ -190,12 +190,12 @@ def test_cli_runs_a_plant_scenario(tmp_path):
 )
 def test_bad_plant_scenarios_are_rejected(tmp_path, scenario, overrides, words):
     with pytest.raises(ScenarioError, match=words):
-        run(SCENARIOS / f"{scenario}.toml", out=tmp_path, overrides=[*NO_FIGURES, *overrides], progress=False)
+        run_scenario(SCENARIOS / f"{scenario}.toml", out=tmp_path, overrides=[*NO_FIGURES, *overrides], progress=False)
 
 
 def test_the_kinematic_plant_runs_the_ramps_with_the_gjm(tmp_path):
     """plant.type = kinematic: uvms.sim.simulate with the vehicle from momentum conservation (exact by construction)."""
-    result = run(SCENARIOS / "amundsen2018_rigid_open_loop.toml", out=tmp_path, progress=False, overrides=[
+    result = run_scenario(SCENARIOS / "amundsen2018_rigid_open_loop.toml", out=tmp_path, progress=False, overrides=[
         *NO_FIGURES, "plant.type=kinematic", "plant.gjm=rigid", "plant.motor_feedforward=false"])
     assert result.plant_run is None and result.metrics["max_position_error"] <= 1e-6
 
@@ -227,7 +227,7 @@ def test_the_controller_inverts_the_chosen_gjm(rng):
     reference = VelocityRamps.trapezoid(robot.fk(q).translation, [-0.05, -0.05, 0.05], 8.0, 1.0)
     jacobians = {
         "rigid": robot.generalized_jacobian(q),
-        "added_mass": uvms.generalized_jacobian_added_mass(robot, None, q),
+        "added_mass": uvms.dynamics.generalized_jacobian_added_mass(robot, None, q),
         "fixed_base": robot.jacobian(q)[:, robot.n_vehicle:],
     }
     for kind, expected in jacobians.items():

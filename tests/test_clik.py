@@ -21,7 +21,7 @@ def hoang_setup():
 
 def test_a_solver_reused_over_configurations_and_targets_equals_a_fresh_one_bit_for_bit(rng):
     robot, task = hoang_setup()
-    potential = uvms.JointLimitPotential(robot)
+    potential = uvms.tasks.JointLimitPotential(robot)
     options = dict(gain=1.0, weights=np.array([1.0, 1.0, 500.0, 1.0, 1.0, 1.0]), potential=potential, alpha=10.0)
     solver = CLIKSolver(robot, task, **options)
     for index in range(30):
@@ -40,7 +40,7 @@ def test_a_solver_reused_over_configurations_and_targets_equals_a_fresh_one_bit_
 def test_the_solver_path_is_the_clamping_solve_with_no_joint_held(rng):
     """The no-limit path and solve_with_held (joint clamping) are one computation: same bits, not only close."""
     robot, task = hoang_setup()
-    potential = uvms.JointLimitPotential(robot)
+    potential = uvms.tasks.JointLimitPotential(robot)
     weights = rng.uniform(0.5, 50.0, robot.nv)
     for damping in (0.0, 0.05):
         solver = CLIKSolver(robot, task, gain=2.0, weights=weights, damping=damping, potential=potential, alpha=3.0)
@@ -61,7 +61,7 @@ def test_the_prepared_gain_is_apply_gains_products(rng):
     matrix = rng.normal(size=(4, 4))
     for gain in (2.5, np.array(2.5), rng.uniform(0, 3, 4), matrix @ matrix.T):
         assert np.array_equal(prepared_gain(gain, 4)(error, feedforward), feedforward + apply_gain(gain, error))
-    with pytest.raises(uvms.SolverInputError, match="positive"):
+    with pytest.raises(uvms.errors.SolverInputError, match="positive"):
         prepared_gain(-matrix @ matrix.T, 4)
 
 
@@ -84,7 +84,7 @@ def test_a_solver_built_after_a_potential_changed_in_place_reads_it(rng):
     """Regression (issue 30): after ``potential.weights[:] *= 50`` a solver built next returns the NEW velocity (a
     hidden cache of solvers used to return the old one until it was cleared)."""
     robot, task = hoang_setup()
-    potential = uvms.JointLimitPotential(robot)
+    potential = uvms.tasks.JointLimitPotential(robot)
     q = robot.random_configuration(rng)
     before = CLIKSolver(robot, task, potential=potential, alpha=10.0).velocity(Configuration(robot, q))
     potential.weights[:] *= 50
@@ -101,7 +101,7 @@ def test_a_solver_built_after_a_potential_changed_in_place_reads_it(rng):
 
 def test_a_clik_loop_keeping_its_solver_equals_a_solver_built_at_every_step(rng):
     robot, task = hoang_setup()
-    potential = uvms.JointLimitPotential(robot)
+    potential = uvms.tasks.JointLimitPotential(robot)
     options = dict(gain=1.0, weights=[1, 1, 1, 100, 100, 100], potential=potential, alpha=10.0)
     solver = CLIKSolver(robot, task, **options)
     q = robot.random_configuration(rng)
@@ -116,7 +116,7 @@ def test_refusals_come_at_construction_and_any_iterable_of_tasks_is_read(rng):
     robot, task = hoang_setup()
     q = robot.random_configuration(rng)
     for _ in range(2):  # refused at every construction, with its message
-        with pytest.raises(uvms.SolverInputError, match="gain must be"):
+        with pytest.raises(uvms.errors.SolverInputError, match="gain must be"):
             CLIKSolver(robot, task, gain=-1.0)
     tasks = (t for t in [task])  # a generator, read once by the solver
     assert np.array_equal(CLIKSolver(robot, tasks).velocity(Configuration(robot, q)).v,
@@ -130,8 +130,8 @@ def test_pose_clik_is_clik_on_a_frame_task(rng):
     """The former PoseCLIK (its own kernel) was this law: v = J^+ (xdot_d + K e) + (I - J^+ J) z0 with the DLS
     inverse of the 6-row world-aligned frame Jacobian and the log3 pose error. Its tests: one solver, its task's
     target moved, equals a solver built for that target; 300 steps reach a pose to 1e-10."""
-    robot = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
-    potential = uvms.JointLimitPotential(robot)
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
+    potential = uvms.tasks.JointLimitPotential(robot)
     for alpha, twist in ((0.0, None), (2.0, rng.normal(size=6))):
         task = uvms.FrameTask(robot, axes=uvms.robot.conventions.AXIS_NAMES, orientation="log")
         hot = CLIKSolver(robot, task, gain=1.5, damping=1e-3, potential=potential, alpha=alpha)
@@ -156,7 +156,7 @@ def test_pose_clik_is_clik_on_a_frame_task(rng):
     for _ in range(300):
         hot.step(configuration, 0.05)
     assert np.linalg.norm(hot.velocity(configuration).error) <= 1e-10
-    with pytest.raises(uvms.SolverInputError, match="damping"):
+    with pytest.raises(uvms.errors.SolverInputError, match="damping"):
         CLIKSolver(robot, task, damping=-1.0)
     with pytest.raises(uvms.UVMSError, match="finite"):
         hot.velocity(Configuration(robot, np.full(robot.nq, np.nan)))  # never a NaN velocity

@@ -14,8 +14,8 @@ from conftest import shipped
 def test_mounted_arm_kinematics_compose(arm_name, rng):
     vehicle = shipped("santos2006")
     placement = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0.0, 0.3), np.array([2.5, 0.1, -0.5]))
-    robot = uvms.mount_arm(vehicle, arm_name, placement=placement, prefix="arm_")
-    arm = uvms.load(uvms.example_robot_urdf(arm_name), base="fixed")  # panda's root link has mass: bolt it down
+    robot = uvms.model.mount_arm(vehicle, arm_name, placement=placement, prefix="arm_")
+    arm = uvms.load(uvms.model.example_robot_urdf(arm_name), base="fixed")  # panda's root link has mass: bolt it down
     assert robot.base_type == "planar"
     assert robot.n_arm == vehicle.n_arm + arm.nv
     arm_mass = sum(inertia.mass for inertia in arm.model.inertias)  # with the fixed root link's own mass
@@ -33,22 +33,22 @@ def test_mounted_arm_kinematics_compose(arm_name, rng):
 
 def test_mount_rejects_name_clashes_and_unknown_arms():
     vehicle = shipped("hoang2011")
-    once = uvms.mount_arm(vehicle, "z1", prefix="left_")
+    once = uvms.model.mount_arm(vehicle, "z1", prefix="left_")
     with pytest.raises(uvms.UVMSError, match="clash"):
-        uvms.mount_arm(once, "z1", prefix="left_")
-    assert uvms.mount_arm(once, "z1", prefix="right_").n_arm == vehicle.n_arm + 2 * (once.n_arm - vehicle.n_arm)
+        uvms.model.mount_arm(once, "z1", prefix="left_")
+    assert uvms.model.mount_arm(once, "z1", prefix="right_").n_arm == vehicle.n_arm + 2 * (once.n_arm - vehicle.n_arm)
     with pytest.raises(uvms.UVMSError, match="fixed root"):
-        uvms.mount_arm(vehicle, "santos2006")
-    with pytest.raises(uvms.ModelFileNotFound, match="available: .*panda"):
-        uvms.mount_arm(vehicle, "no_such_arm")
-    with pytest.raises(uvms.FrameNotFound):
-        uvms.mount_arm(vehicle, "z1", parent_frame="hull")
+        uvms.model.mount_arm(vehicle, "santos2006")
+    with pytest.raises(uvms.errors.ModelFileNotFound, match="available: .*panda"):
+        uvms.model.mount_arm(vehicle, "no_such_arm")
+    with pytest.raises(uvms.errors.FrameNotFound):
+        uvms.model.mount_arm(vehicle, "z1", parent_frame="hull")
 
 
 def test_mount_placement_as_six_numbers_matches_se3():
     vehicle = shipped("hoang2011")
     values = [0.4, -0.6, 0.1, 0.1, 0.2, 0.3]
-    a = uvms.mount_arm(vehicle, "z1", placement=values)
-    b = uvms.mount_arm(vehicle, "z1", placement=pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.array(values[:3])))
+    a = uvms.model.mount_arm(vehicle, "z1", placement=values)
+    b = uvms.model.mount_arm(vehicle, "z1", placement=pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.array(values[:3])))
     q = a.random_configuration(1)
     assert np.allclose(a.fk(q, a.ee_frames[1]).homogeneous, b.fk(q, b.ee_frames[1]).homogeneous, atol=1e-14)

@@ -12,7 +12,8 @@ from conftest import shipped
 from PIL import Image
 
 from uvms import UVMSError
-from uvms.scenario import ScenarioError, build, read_scenario, run
+from uvms.scenario import ScenarioError, read_scenario, run_scenario
+from uvms.scenario.build import build
 from uvms.control.sequence import Phase, PhasePlan, SequenceController
 from uvms.solvers import CLIKSolver, PrioritySolver
 from uvms.robot.configuration import Configuration
@@ -111,7 +112,7 @@ def test_distance_has_priority_over_inconsistent_claw_targets():
 
 @pytest.fixture(scope="module")
 def grip_run(tmp_path_factory):
-    return run(GRIP, out=tmp_path_factory.mktemp("grip"), progress=False)
+    return run_scenario(GRIP, out=tmp_path_factory.mktemp("grip"), progress=False)
 
 
 def test_grip_scenario_reaches_every_phase_target(grip_run):

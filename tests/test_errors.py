@@ -45,25 +45,25 @@ def test_a_valid_user_urdf_loads(tmp_path):
 @pytest.mark.parametrize(
     ("source", "error", "words"),
     [
-        ("/nonexistent/robot.urdf", uvms.ModelFileNotFound, "does not exist"),
-        ("<robot name='x'><link name='a'></robot>", uvms.ModelParseError, "malformed XML"),
-        ("<model/>", uvms.ModelParseError, "needs <robot>"),
-        (urdf(axis="0 0 0"), uvms.ModelCheckError, "zero axis"),
-        (urdf(axis="0 0 2"), uvms.ModelCheckError, "unit vectors"),
-        (urdf(xyz="nan 0 0"), uvms.ModelCheckError, "not finite"),
-        (urdf(xyz="inf 0 0"), uvms.ModelCheckError, "not finite"),
-        (urdf(xyz="1 0"), uvms.ModelCheckError, "expected 3"),
-        (urdf(mass="-2"), uvms.ModelCheckError, "must be positive"),
-        (urdf(mass="0"), uvms.ModelCheckError, "must be positive"),
-        (urdf(ixx="-1"), uvms.ModelCheckError, "not positive definite"),
+        ("/nonexistent/robot.urdf", uvms.errors.ModelFileNotFound, "does not exist"),
+        ("<robot name='x'><link name='a'></robot>", uvms.errors.ModelParseError, "malformed XML"),
+        ("<model/>", uvms.errors.ModelParseError, "needs <robot>"),
+        (urdf(axis="0 0 0"), uvms.errors.ModelCheckError, "zero axis"),
+        (urdf(axis="0 0 2"), uvms.errors.ModelCheckError, "unit vectors"),
+        (urdf(xyz="nan 0 0"), uvms.errors.ModelCheckError, "not finite"),
+        (urdf(xyz="inf 0 0"), uvms.errors.ModelCheckError, "not finite"),
+        (urdf(xyz="1 0"), uvms.errors.ModelCheckError, "expected 3"),
+        (urdf(mass="-2"), uvms.errors.ModelCheckError, "must be positive"),
+        (urdf(mass="0"), uvms.errors.ModelCheckError, "must be positive"),
+        (urdf(ixx="-1"), uvms.errors.ModelCheckError, "not positive definite"),
         (urdf(extra='<joint name="j2" type="fixed"><parent link="l1"/><child link="base_link"/></joint>'),
-         uvms.ModelCheckError, "cycle"),
+         uvms.errors.ModelCheckError, "cycle"),
         (urdf(extra='<link name="l2"/><joint name="j2" type="fixed"><parent link="l1"/><child link="l2"/></joint>'
                     '<joint name="j3" type="fixed"><parent link="base_link"/><child link="l2"/></joint>'),
-         uvms.ModelCheckError, "child of two joints"),
-        (urdf(extra='<link name="orphan"/>'), uvms.ModelCheckError, "2 roots"),
+         uvms.errors.ModelCheckError, "child of two joints"),
+        (urdf(extra='<link name="orphan"/>'), uvms.errors.ModelCheckError, "2 roots"),
         (urdf(root='<link name="world"/><joint name="p" type="planar"><parent link="world"/>'
-                   '<child link="base_link"/><axis xyz="1 0 0"/></joint>'), uvms.ModelCheckError, "x-y plane"),
+                   '<child link="base_link"/><axis xyz="1 0 0"/></joint>'), uvms.errors.ModelCheckError, "x-y plane"),
     ],
 )
 def test_bad_model_raises_its_error(source, error, words):
@@ -93,14 +93,14 @@ def test_massless_link_idiom_is_accepted():
 def test_xacro_errors(tmp_path, content, args, words):
     path = tmp_path / "bad.urdf.xacro"
     path.write_text(content)
-    with pytest.raises(uvms.XacroError, match=words):
+    with pytest.raises(uvms.errors.XacroError, match=words):
         uvms.load(path, args=args)
 
 
 def test_base_that_contradicts_the_file():
-    with pytest.raises(uvms.BaseMismatchError, match="contradicts"):
+    with pytest.raises(uvms.errors.BaseMismatchError, match="contradicts"):
         uvms.load("hoang2011", base="floating")
-    with pytest.raises(uvms.BaseMismatchError):
+    with pytest.raises(uvms.errors.BaseMismatchError):
         uvms.load("xiang2019", base="fixed")
     with pytest.raises(uvms.UVMSError, match="valid: floating, planar, fixed"):
         uvms.load("hoang2011", base="flying")
@@ -108,9 +108,9 @@ def test_base_that_contradicts_the_file():
 
 def test_unknown_frame_lists_close_names():
     robot = shipped("xiang2019")
-    with pytest.raises(uvms.FrameNotFound, match="close names: left_ee"):
+    with pytest.raises(uvms.errors.FrameNotFound, match="close names: left_ee"):
         robot.fk(robot.neutral(), "left_e")
-    with pytest.raises(uvms.FrameNotFound):
+    with pytest.raises(uvms.errors.FrameNotFound):
         uvms.load("hoang2011", ee="tool")
 
 
@@ -118,14 +118,14 @@ def test_a_model_name_or_none_where_a_robot_is_needed_says_how_to_get_one():
     """Every public entry that takes the model refuses what is not one (a UVMSError and a TypeError), by name."""
     robot = shipped("hoang2011")
     task = uvms.FrameTask(robot, axes=["x", "y", "yaw"], target=robot.fk(robot.neutral()))
-    calls = {"FrameTask": lambda r: uvms.FrameTask(r), "JointLimitPotential": uvms.JointLimitPotential,
+    calls = {"FrameTask": lambda r: uvms.FrameTask(r), "JointLimitPotential": uvms.tasks.JointLimitPotential,
              "VehicleTask": uvms.VehicleTask, "Plant": uvms.Plant, "CLIK": lambda r: uvms.CLIKSolver(r, task),
              "solve_ik": lambda r: uvms.solve_ik(r, [0, 0, 0, 0, 0, 0]), "Configuration": lambda r: uvms.Configuration(
-                 r, robot.neutral()), "initial_configuration": lambda r: uvms.initial_configuration(r, task),
-             "thrusters_of": uvms.thrusters_of, "hydrodynamics_of": uvms.hydrodynamics_of,
-             "BatchKinematics": lambda r: uvms.BatchKinematics(r, "ee")}
+                 r, robot.neutral()), "initial_configuration": lambda r: uvms.solvers.initial_configuration(r, task),
+             "thrusters_of": uvms.dynamics.thrusters_of, "hydrodynamics_of": uvms.dynamics.hydrodynamics_of,
+             "BatchKinematics": lambda r: uvms.workspace.BatchKinematics(r, "ee")}
     for where, call in calls.items():
-        with pytest.raises(uvms.NotARobot, match=rf"^{where} needs a uvms.Robot .*got str 'hoang2011': "
+        with pytest.raises(uvms.errors.NotARobot, match=rf"^{where} needs a uvms.Robot .*got str 'hoang2011': "
                                                  r"uvms.load\('hoang2011'\) loads that model"):
             call("hoang2011")
         with pytest.raises(TypeError, match=f"^{where} needs a uvms.Robot .*got NoneType None$"):
@@ -134,7 +134,7 @@ def test_a_model_name_or_none_where_a_robot_is_needed_says_how_to_get_one():
 
 def test_tasks_and_targets_that_are_not_numbers_are_refused_by_what_is_valid():
     robot = shipped("hoang2011")
-    with pytest.raises(uvms.SolverInputError, match="expected a Task or a sequence of Tasks, got None"):
+    with pytest.raises(uvms.errors.SolverInputError, match="expected a Task or a sequence of Tasks, got None"):
         uvms.CLIKSolver(robot, None)
     with pytest.raises(uvms.UVMSError, match=r"a target pose must be a pin.SE3 or 6 finite numbers .* got 'x'"):
         uvms.solve_ik(robot, "x")
@@ -148,17 +148,17 @@ def test_tasks_and_targets_that_are_not_numbers_are_refused_by_what_is_valid():
 )
 def test_bad_configuration(q):
     robot = shipped("hoang2011")
-    with pytest.raises(uvms.ConfigurationError):
+    with pytest.raises(uvms.errors.ConfigurationError):
         robot.fk(q)
 
 
 def test_bad_arm_values_and_base_pose():
     robot = shipped("hoang2011")
-    with pytest.raises(uvms.ConfigurationError, match=r"shape \(3,\)"):
+    with pytest.raises(uvms.errors.ConfigurationError, match=r"shape \(3,\)"):
         robot.configuration(arm=[1.0, 2.0])
-    with pytest.raises(uvms.ConfigurationError, match="non-finite"):
+    with pytest.raises(uvms.errors.ConfigurationError, match="non-finite"):
         robot.configuration(base=[0.0, np.inf, 0.0])
-    with pytest.raises(uvms.ConfigurationError, match=r"shape \(3,\)"):
+    with pytest.raises(uvms.errors.ConfigurationError, match=r"shape \(3,\)"):
         robot.base_velocity(robot.neutral(), [1.0])
 
 
@@ -198,17 +198,17 @@ def test_missing_meshes_only_warn_and_package_dirs_resolve_them(tmp_path):
     mesh_link = ('<link name="shell"><visual><geometry><mesh filename="package://my_rov/meshes/hull.stl"/>'
                  '</geometry></visual></link><joint name="s" type="fixed"><parent link="l1"/><child link="shell"/></joint>')
     source = urdf(extra=mesh_link)
-    with pytest.warns(uvms.MissingMeshWarning, match="package://my_rov/meshes/hull.stl"):
+    with pytest.warns(uvms.model.MissingMeshWarning, match="package://my_rov/meshes/hull.stl"):
         assert uvms.load(source).nq == 1
     (tmp_path / "my_rov" / "meshes").mkdir(parents=True)
     (tmp_path / "my_rov" / "meshes" / "hull.stl").write_text("solid hull\nendsolid hull\n")
     import warnings
 
     with warnings.catch_warnings():
-        warnings.simplefilter("error", uvms.MissingMeshWarning)
+        warnings.simplefilter("error", uvms.model.MissingMeshWarning)
         assert uvms.load(source, package_dirs=[tmp_path]).nq == 1
         assert uvms.load(source, package_dirs=[tmp_path / "my_rov"]).nq == 1
-        uvms.mount_arm(shipped("hoang2011"), "panda")  # example-robot-data meshes are found
+        uvms.model.mount_arm(shipped("hoang2011"), "panda")  # example-robot-data meshes are found
 
 
 @pytest.mark.parametrize(
@@ -232,19 +232,19 @@ def test_continuous_joint_is_an_angle_for_the_user_and_cos_sin_for_pinocchio():
     assert q == pytest.approx([np.cos(2.5), np.sin(2.5)])
     assert robot.arm_configuration(q) == pytest.approx([2.5])
     assert robot.jacobian(q).shape == (6, 1)
-    with pytest.raises(uvms.ConfigurationError):
+    with pytest.raises(uvms.errors.ConfigurationError):
         robot.fk([2.0, 0.0])  # not a unit (cos, sin) pair
 
 
 def test_unreadable_model_path_is_a_directory(tmp_path):
     folder = tmp_path / "robot.urdf"
     folder.mkdir()
-    with pytest.raises(uvms.ModelFileNotFound, match="is not a file"):
+    with pytest.raises(uvms.errors.ModelFileNotFound, match="is not a file"):
         uvms.load(folder)
 
 
 def test_a_model_without_any_degree_of_freedom_is_refused():
     fixed_only = urdf().replace('type="revolute"', 'type="fixed"')
-    with pytest.raises(uvms.ModelCheckError, match="no degree of freedom"):
+    with pytest.raises(uvms.errors.ModelCheckError, match="no degree of freedom"):
         uvms.load(fixed_only)
     assert uvms.load(fixed_only, base="floating").nv == 6  # the same tree on a vehicle is fine

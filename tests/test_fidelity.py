@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import uvms
-from uvms.scenario import run
+from uvms.scenario import run_scenario
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 
@@ -16,7 +16,7 @@ SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 def test_hoang2011_error_feedback_beats_the_open_loop_under_euler(tmp_path):
     errors = {}
     for name in ("hoang2011_w1_euler", "hoang2011_w1_euler_open_loop"):
-        result = run(SCENARIOS / f"{name}.toml", out=tmp_path / name, progress=False, overrides=["outputs.figures=false"])
+        result = run_scenario(SCENARIOS / f"{name}.toml", out=tmp_path / name, progress=False, overrides=["outputs.figures=false"])
         errors[name] = result.metrics["max_position_error"]
     assert errors["hoang2011_w1_euler"] * 10 < errors["hoang2011_w1_euler_open_loop"]
     assert 1e-3 < errors["hoang2011_w1_euler"] < 5e-3 and 3e-2 < errors["hoang2011_w1_euler_open_loop"] < 1e-1
@@ -26,11 +26,11 @@ def test_hoang2011_printed_q0_is_the_optimum_with_q1_below_three_quarter_pi():
     paper = np.array([-1.255, -3.213, 1.393, 1.178, 0.0, 0.0])  # printed, signs restored
     robot = uvms.load("hoang2011", args={"q1_max": 0.75 * np.pi})
     task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, -2, 0, 0, 0, 1.0])
-    initial = uvms.initial_configuration(robot, task)
+    initial = uvms.solvers.initial_configuration(robot, task)
     found = np.r_[robot.base_values(initial.q), robot.arm_configuration(initial.q)]
     assert np.abs(found - paper).max() < 1e-3 and found[3] <= 0.75 * np.pi
     stated = uvms.load("hoang2011")  # the printed limit 3*pi/2 gives q1 = 3*pi/4 instead
-    other = uvms.initial_configuration(stated, uvms.FrameTask(stated, axes=("x", "y", "yaw"), orientation="euler",
+    other = uvms.solvers.initial_configuration(stated, uvms.FrameTask(stated, axes=("x", "y", "yaw"), orientation="euler",
                                                               target=[0, -2, 0, 0, 0, 1.0]))
     assert abs(stated.arm_configuration(other.q)[0] - 0.75 * np.pi) < 1e-6
 
@@ -58,25 +58,25 @@ def test_santos2006_classic_priority_meets_the_vehicle_task_the_robust_form_does
     robot = uvms.load("santos2006")
     final = {}
     for name, overrides in (("robust", []), ("classic", ['solver.priority="classic"'])):
-        result = run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / name, progress=False,
+        result = run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / name, progress=False,
                      overrides=["outputs.figures=false", *overrides])
         final[name] = (robot.base_values(result.simulation.q[-1])[2], result.metrics["vehicle_travel"])
-    constraint = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc", progress=False,
+    constraint = run_scenario(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc", progress=False,
                      overrides=["outputs.figures=false"])
     assert abs(final["classic"][0] - 0.78) < 1e-3 and final["classic"][1] < 1e-9  # = the kinematic constraint
     assert final["robust"][0] < 0.7 and final["robust"][1] > 1.5  # the SR form only approximates the vehicle task
     assert constraint.metrics["vehicle_travel"] < 1e-12
-    open_loop = run(SCENARIOS / "santos2006_kinematic_constraint_open_loop.toml", out=tmp_path / "open",
+    open_loop = run_scenario(SCENARIOS / "santos2006_kinematic_constraint_open_loop.toml", out=tmp_path / "open",
                     progress=False, overrides=["outputs.figures=false"])
     assert open_loop.metrics["max_position_error"] > 2 * constraint.metrics["max_position_error"]
 
 
 def test_amundsen2018_variable_damping_acts_near_the_singular_configuration(tmp_path):
-    result = run(SCENARIOS / "amundsen2018_near_singular.toml", out=tmp_path / "damped", progress=False,
+    result = run_scenario(SCENARIOS / "amundsen2018_near_singular.toml", out=tmp_path / "damped", progress=False,
                  overrides=["outputs.figures=false"])
     metrics = result.metrics
     assert metrics["min_sigma_min"] < 0.05 / 10 and metrics["max_damping"] > 0.04  # eq. 6 active
     assert metrics["max_joint_rate"] < 0.1  # rad/s: the damping keeps the rates bounded
-    with pytest.raises(uvms.NumericalError, match="diverged"):  # without damping the rates blow up
-        run(SCENARIOS / "amundsen2018_near_singular.toml", out=tmp_path / "undamped", progress=False,
+    with pytest.raises(uvms.errors.NumericalError, match="diverged"):  # without damping the rates blow up
+        run_scenario(SCENARIOS / "amundsen2018_near_singular.toml", out=tmp_path / "undamped", progress=False,
             overrides=["outputs.figures=false", "solver.damping_max=0.0"])

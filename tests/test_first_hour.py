@@ -16,7 +16,8 @@ import uvms
 from conftest import shipped
 from uvms.cli import main, run_output_folder, scenario_file, view_robot
 from uvms.errors import RunRecordError, ScenarioError, SolverInputError
-from uvms.scenario import build, run, scenario_from_raw
+from uvms.scenario import run_scenario, scenario_from_raw
+from uvms.scenario.build import build
 from uvms.scenario.record import read_run_record
 from uvms.scenario.resources import SCENARIOS_DIR, resolve_scenario_path, shipped_scenarios
 from uvms.scenario.verdict import LIMIT_SLACK, run_verdict
@@ -102,7 +103,7 @@ def ylabels(figure) -> list[str]:
 
 
 def test_a_circle_in_the_y_z_plane_is_drawn_in_3d_when_the_task_is_3d(tmp_path):
-    result = run(yz_circle(tmp_path, ["x", "y", "z"]), out=tmp_path / "yz3", progress=False)
+    result = run_scenario(yz_circle(tmp_path, ["x", "y", "z"]), out=tmp_path / "yz3", progress=False)
     assert result.metrics["max_position_error"] < 1e-6
     assert np.ptp(result.simulation.desired_position[:, 2]) == pytest.approx(0.1, rel=1e-6)  # it moves in z
     path = path_figure(result.simulation, "yz")
@@ -118,7 +119,7 @@ def test_a_circle_in_the_y_z_plane_is_drawn_in_3d_when_the_task_is_3d(tmp_path):
 
 
 def test_a_planar_task_is_drawn_in_its_own_plane(tmp_path):
-    result = run(yz_circle(tmp_path, ["y", "z"]), out=tmp_path / "yz2", progress=False, overrides=FAST)
+    result = run_scenario(yz_circle(tmp_path, ["y", "z"]), out=tmp_path / "yz2", progress=False, overrides=FAST)
     (axis,) = path_figure(result.simulation, "yz").axes
     assert axis.name != "3d"
     assert (axis.get_xlabel(), axis.get_ylabel()) == ("y [m]", "z [m]")
@@ -126,7 +127,7 @@ def test_a_planar_task_is_drawn_in_its_own_plane(tmp_path):
     desired = desired_motion_figure(result.simulation, result.setup.trajectory, "yz")
     assert ylabels(desired) == ["speed [m/s]", "y_d [m]", "z_d [m]"]
     # a planar vehicle's x, y, yaw task keeps its x-y figure
-    hoang = run("hoang2011_w1_euler", out=tmp_path / "h", progress=False,
+    hoang = run_scenario("hoang2011_w1_euler", out=tmp_path / "h", progress=False,
                 overrides=[*FAST, "simulation.duration=2"])
     (axis,) = path_figure(hoang.simulation, "h").axes
     assert (axis.get_xlabel(), axis.get_ylabel(), axis.get_title()) == ("x [m]", "y [m]", "h: paths in the x-y plane")
@@ -138,12 +139,12 @@ def test_a_planar_task_is_drawn_in_its_own_plane(tmp_path):
 def test_free_floating_weights_of_size_nv_name_the_key_and_the_arm_joints(tmp_path):
     for name, extra in (("hoang2011_gjm", []), ("hoang2011_w1_euler", ["solver.free_floating=true"])):
         with pytest.raises(ScenarioError) as caught:
-            run(name, out=tmp_path / name, overrides=[*FAST, *extra, "solver.weights=[1, 1, 1, 1, 1, 1]"])
+            run_scenario(name, out=tmp_path / name, overrides=[*FAST, *extra, "solver.weights=[1, 1, 1, 1, 1, 1]"])
         message = str(caught.value)
         assert "solver.weights has 6 numbers, hoang2011_uvms needs 3" in message
         assert "free-floating (generalized-Jacobian) weights cover the arm joints only" in message
     with pytest.raises(ScenarioError, match=r"needs 6: one per velocity coordinate: the vehicle \(x, y, yaw\)"):
-        run("hoang2011_w1_euler", out=tmp_path / "k", overrides=[*FAST, "solver.weights=[1, 1, 1]"])
+        run_scenario("hoang2011_w1_euler", out=tmp_path / "k", overrides=[*FAST, "solver.weights=[1, 1, 1]"])
     robot = shipped("hoang2011")
     task = uvms.FrameTask(robot, axes=["x", "y"])
     task.set_target(np.zeros(6))
@@ -179,7 +180,7 @@ def test_a_task_error_above_the_stated_tolerance_says_so_and_the_default_passes_
     metrics = json.loads((tmp_path / "b" / "metrics.json").read_text())
     assert metrics["verdict"]["within_tolerance"] is False and metrics["verdict"]["position_tolerance"] == 1e-6
     with pytest.raises(ScenarioError, match="outputs.position_tolerance = 0 is out of range"):
-        run("hoang2011_w1_euler", out=tmp_path / "c", overrides=["outputs.position_tolerance=0"])
+        run_scenario("hoang2011_w1_euler", out=tmp_path / "c", overrides=["outputs.position_tolerance=0"])
 
 
 def test_rounding_at_a_limit_is_not_a_violation():
@@ -231,7 +232,7 @@ def view_options(result: Path, model: str | None = None, args: list[str] | None 
 def long_arm_run(tmp_path_factory) -> Path:
     """hoang2011 with l1 = 0.7 m (default 0.4 m), two seconds."""
     folder = tmp_path_factory.mktemp("runs") / "long_arm"
-    run("hoang2011_w1_euler", out=folder, progress=False,
+    run_scenario("hoang2011_w1_euler", out=folder, progress=False,
         overrides=[*FAST, "model.args.l1=0.7", "simulation.duration=2"])
     return folder
 

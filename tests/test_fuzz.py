@@ -56,7 +56,7 @@ def load_or_refuse(text: str, leaf: str) -> uvms.Robot | None:
     """The robot, or None after checking that a tree without any degree of freedom is refused."""
     if 'type="fixed"' in text and all(kind not in text for kind in ("revolute", "prismatic", "continuous",
                                                                     'type="floating"', 'type="planar"')):
-        with pytest.raises(uvms.ModelCheckError, match="no degree of freedom"):
+        with pytest.raises(uvms.errors.ModelCheckError, match="no degree of freedom"):
             uvms.load(text, ee=leaf)
         return None
     return uvms.load(text, ee=leaf)

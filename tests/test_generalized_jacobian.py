@@ -15,7 +15,7 @@ ROWS = {"floating": slice(0, 6), "planar": [0, 1, 5]}
 def available(names):
     import uvms
 
-    return [name for name in names if name in uvms.shipped_models()]
+    return [name for name in names if name in uvms.model.shipped_models()]
 
 
 @pytest.mark.parametrize("name", available(FREE_FLOATING))

@@ -24,7 +24,7 @@ from test_cli import one_line, raising
 from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import RunFolderError
-from uvms.scenario import run
+from uvms.scenario import run_scenario
 from uvms.scenario.sweep import SweepError, SweepResult, sweep
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -79,7 +79,7 @@ def test_a_user_folder_with_a_metrics_json_and_the_scenario_is_kept(tmp_path, mo
 
 def test_files_a_user_put_into_an_earlier_run_folder_are_kept(tmp_path, capsys):
     folder = tmp_path / "run"
-    run(SANTOS, out=folder, overrides=NO_FIGURES, progress=False)
+    run_scenario(SANTOS, out=folder, overrides=NO_FIGURES, progress=False)
     manifest = json.loads((folder / outputs.MANIFEST).read_text())
     assert manifest["entries"] == ["metrics.json", "trajectory.csv", "trajectory.npz"]
     (folder / "notes.txt").write_text("what I saw")
@@ -162,7 +162,7 @@ def test_a_bag_folder_needs_the_manifest(tmp_path):
     from uvms.scenario.rosbag import write_bag
 
     pytest.importorskip("rosbags")
-    result = run(SANTOS, out=tmp_path / "run", overrides=NO_FIGURES, progress=False)
+    result = run_scenario(SANTOS, out=tmp_path / "run", overrides=NO_FIGURES, progress=False)
     robot, simulation = result.setup.robot, result.simulation
     old = tmp_path / "old"  # a bag of another tool or an older uvms, with the user's notes beside it
     old.mkdir()
@@ -216,7 +216,7 @@ def test_a_full_disk_says_so_and_keeps_the_previous_run(tmp_path, code):
 
 def test_a_full_disk_in_the_cli_is_one_line_naming_the_disk(tmp_path, monkeypatch, capsys):
     folder = tmp_path / "run"
-    run(SANTOS, out=folder, overrides=NO_FIGURES, progress=False)
+    run_scenario(SANTOS, out=folder, overrides=NO_FIGURES, progress=False)
     before = contents(folder)
 
     def full(path, **arrays):

@@ -28,7 +28,7 @@ def finite_difference_jacobian(robot: uvms.Robot, q: np.ndarray, frame: str, ste
 
 
 def composed_robot() -> uvms.Robot:
-    return uvms.mount_arm(shipped("santos2006"), "z1", placement=[2.5, 0.0, -0.5, np.pi, 0.0, 0.0])
+    return uvms.model.mount_arm(shipped("santos2006"), "z1", placement=[2.5, 0.0, -0.5, np.pi, 0.0, 0.0])
 
 
 @pytest.mark.parametrize("name", SHIPPED)
@@ -52,9 +52,9 @@ def test_composed_model_jacobian_matches_finite_differences(rng):
 
 def test_fixed_base_option_drops_the_vehicle(rng):
     robot = uvms.load("models/hoang2011/uvms.urdf.xacro")
-    arm_only = uvms.load(uvms.example_robot_urdf("ur5"))
+    arm_only = uvms.load(uvms.model.example_robot_urdf("ur5"))
     assert arm_only.base_type == "fixed" and arm_only.n_vehicle == 0
-    floating_ur5 = uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    floating_ur5 = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
     assert floating_ur5.n_vehicle == 6 and floating_ur5.nv == arm_only.nv + 6
     q = floating_ur5.random_configuration(rng)
     frame = floating_ur5.ee_frames[0]

@@ -102,10 +102,10 @@ def test_every_user_reads_the_same_limit():
     """The potential, CLIK clamping and the initial configuration all take a Limit, e.g. one with a margin."""
     robot = shipped("hoang2011")
     inner = Limit.joint_positions(robot, margin=0.2)
-    potential = uvms.JointLimitPotential(robot, limit=inner)
+    potential = uvms.tasks.JointLimitPotential(robot, limit=inner)
     assert potential.limit is inner
     assert potential.middle == pytest.approx(inner.middle) and potential.range == pytest.approx(inner.span)
-    assert uvms.JointLimitPotential(robot).limit.lower.tolist() == robot.arm_limits[0].tolist()
+    assert uvms.tasks.JointLimitPotential(robot).limit.lower.tolist() == robot.arm_limits[0].tolist()
     task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, 0, 0, 0, 0, 0])
     q = robot.configuration(arm=[0.3, 4.2, -4.2])  # inside the margin
     clamped_any = False
@@ -118,20 +118,20 @@ def test_every_user_reads_the_same_limit():
         assert inner.contains(robot.arm_configuration(q))
         clamped_any |= bool(result.limits_active)
     assert clamped_any
-    with pytest.raises(SolverInputError, match="position limits of the 3 arm"):
+    with pytest.raises(LimitError, match="enforce_limits needs position limits of the 3 arm"):
         uvms.CLIKSolver(robot, task, dt=0.1, enforce_limits=True, limit=Limit([0.0], [1.0]))
     with pytest.raises(uvms.UVMSError, match="position limits of the 3 arm"):
-        uvms.JointLimitPotential(robot, limit=Limit.joint_velocities(robot))
+        uvms.tasks.JointLimitPotential(robot, limit=Limit.joint_velocities(robot))
     # the initial configuration inside a box that excludes the paper's optimum q1 = 3 pi / 4
     box = Limit(robot.arm_limits[0], [0.5 * np.pi, 1.5 * np.pi, 1.5 * np.pi])
     target = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, -2, 0, 0, 0, 1.0])
-    result = uvms.initial_configuration(robot, target, limit=box)
+    result = uvms.solvers.initial_configuration(robot, target, limit=box)
     assert result.success and box.contains(robot.arm_configuration(result.q))
     assert robot.arm_configuration(result.q)[0] == pytest.approx(0.5 * np.pi, abs=1e-6)  # pressed on the new bound
 
 
 def test_pose_ik_projects_into_the_limits_it_reads():
-    arm = uvms.load(uvms.example_robot_urdf("ur5"))  # fixed base: an unreachable target pulls every joint
+    arm = uvms.load(uvms.model.example_robot_urdf("ur5"))  # fixed base: an unreachable target pulls every joint
     limit = Limit.joint_positions(arm)
     for target in ([3.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, -2.0, 1.0, 0.0, 1.0, 0.0]):
         result = uvms.solve_ik(arm, target, restarts=2, max_iterations=30)
@@ -143,7 +143,7 @@ def test_a_custom_limit_moves_the_potential_the_objective_and_the_clamping_alike
     robot = shipped("hoang2011")
     model = Limit.joint_positions(robot)
     custom = Limit([0.2, -2.0, -1.0], [2.0, 2.0, 1.5], model.names, model.q_index)
-    potential = uvms.JointLimitPotential(robot, limit=custom)
+    potential = uvms.tasks.JointLimitPotential(robot, limit=custom)
     assert potential.middle == pytest.approx([1.1, 0.0, 0.25]) and potential.range == pytest.approx([1.8, 4.0, 2.5])
     assert potential.value(robot.configuration(arm=[2.0, 0.0, 0.25])) == pytest.approx(0.125)  # 1/2 (0.9 / 1.8)^2
     objective = JointLimits(robot, limit=custom, margin=0.1, band=0.2)
@@ -154,8 +154,9 @@ def test_a_custom_limit_moves_the_potential_the_objective_and_the_clamping_alike
     assert rows.activation.tolist() == [1.0, 0.0, 0.0] and rows.reference[0] == pytest.approx(0.2)  # gain (0.5 - 0.3)
     q = robot.configuration(arm=[1.9, 0.0, 0.0])
     task = uvms.JointTask(robot, {"q1": 3.0})  # asks 1.1 rad/s: 0.11 rad in a step of 0.1 s
-    free = uvms.clik_velocity(robot, q, task, dt=0.1, enforce_limits=True)
-    clamped = uvms.clik_velocity(robot, q, task, dt=0.1, enforce_limits=True, limit=custom)
+    free = uvms.CLIKSolver(robot, task, dt=0.1, enforce_limits=True).velocity(uvms.Configuration(robot, q))
+    clamped = uvms.CLIKSolver(robot, task, dt=0.1, enforce_limits=True, limit=custom).velocity(
+        uvms.Configuration(robot, q))
     assert free.v[robot.n_vehicle] == pytest.approx(1.1) and not free.limits_active  # the model's bound: 3 pi / 2
     assert clamped.v[robot.n_vehicle] == pytest.approx(1.0) and clamped.limits_active == ("q1",)  # held at 2.0
     # the margins of the objective are those of a Limit, one number or {joint: margin}
@@ -167,7 +168,7 @@ def test_a_custom_limit_moves_the_potential_the_objective_and_the_clamping_alike
         JointLimits(robot, margin={"q22": 0.3})
     with pytest.raises(LimitError, match="no room inside the limits of q1 \\[0.2, 2\\]"):
         JointLimits(robot, limit=custom, margin=0.95)
-    for build in (uvms.JointLimitPotential, JointLimits):
+    for build in (uvms.tasks.JointLimitPotential, JointLimits):
         with pytest.raises(LimitError, match="needs position limits of the 3 arm coordinates, got 3 velocity"):
             build(robot, limit=Limit.joint_velocities(robot))
 

@@ -116,7 +116,7 @@ def test_the_gjm_controller_keeps_the_numbers_of_its_own_law(name, axes, rng):
     data = robot.model.createData()
     jacobian = pin.computeFrameJacobian(robot.model, data, q, robot.frame_id(), pin.LOCAL_WORLD_ALIGNED)
     pose = data.oMf[robot.frame_id()]
-    for gain, damping in ((0.0, 0.0), (3.0, uvms.VariableDamping(0.5, 0.2))):
+    for gain, damping in ((0.0, 0.0), (3.0, uvms.solvers.VariableDamping(0.5, 0.2))):
         controller = GJMController(robot, reference, axes=axes, gain=gain, damping=damping)
         expected = old_gjm_rates(robot, jacobian, robot.generalized_jacobian(q), reference(3.0), pose, rows, gain, damping)
         # the controller's Configuration computes all joint Jacobians (computeJointJacobians) where the old law

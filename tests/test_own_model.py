@@ -133,7 +133,7 @@ def test_vehicle_quantities_of_a_fixed_base_are_errors_that_point_to_jacobian():
                  lambda: arm.base_velocity(q, np.ones(2), momentum=np.zeros(6)), lambda: arm.eta_ned(q)):
         with pytest.raises(NoVehicleError, match=r"fixed base .*no vehicle.*robot\.jacobian"):
             call()
-    with pytest.raises(uvms.ConfigurationError, match="fixed base .*base='fixed'.*give only arm values"):
+    with pytest.raises(uvms.errors.ConfigurationError, match="fixed base .*base='fixed'.*give only arm values"):
         arm.configuration(base=[0, 0, 0, 0, 0, 0])
 
 
@@ -145,35 +145,35 @@ def test_shipped_models_and_example_arms_keep_their_base():
             assert robot.base_reason == f"{robot.base_type} (the file's root joint 'base_joint')"
             assert robot.base_type in ("floating", "planar")
         for arm in ("ur5", "z1"):  # their root link 'world' has no mass: arms on a table, as before
-            assert uvms.load(uvms.example_robot_urdf(arm)).base_type == "fixed"
+            assert uvms.load(uvms.model.example_robot_urdf(arm)).base_type == "fixed"
     # panda's root link panda_link0 carries 0.63 kg: a free-flying body by the rule, base="fixed" bolts it down
     with pytest.warns(BaseGuessWarning, match="panda_link0"):
-        assert uvms.load(uvms.example_robot_urdf("panda")).base_type == "floating"
-    assert uvms.load(uvms.example_robot_urdf("panda"), base="fixed").nv == 8  # 7 joints + 1 finger (1 mimics)
+        assert uvms.load(uvms.model.example_robot_urdf("panda")).base_type == "floating"
+    assert uvms.load(uvms.model.example_robot_urdf("panda"), base="fixed").nv == 8  # 7 joints + 1 finger (1 mimics)
 
 
 # ------------------------------------------------------------------ mount_arm and the composed URDF
 def test_mount_arm_defaults_to_the_root_link_and_keeps_every_end_effector():
     vehicle = load_quietly(work_rov(), ee=["tool_ee", "camera_ee"])
-    robot = uvms.mount_arm(vehicle, "z1", placement=[1.0, -0.4, -0.7, np.pi, 0, 0])
+    robot = uvms.model.mount_arm(vehicle, "z1", placement=[1.0, -0.4, -0.7, np.pi, 0, 0])
     assert robot.ee_frames == ["tool_ee", "camera_ee", "arm_gripperMover"]
     assert robot.base_reason == vehicle.base_reason and robot.root_link == "hull"
     q = robot.random_configuration(3)
-    arm = uvms.load(uvms.example_robot_urdf("z1"))
+    arm = uvms.load(uvms.model.example_robot_urdf("z1"))
     expected = robot.fk(q, "hull") * uvms.robot.conventions.pose_from_xyzrpy([1.0, -0.4, -0.7, np.pi, 0, 0]) * arm.fk(
         q[vehicle.nq:], "gripperMover")
     np.testing.assert_allclose(robot.fk(q, "arm_gripperMover").homogeneous, expected.homogeneous, atol=1e-12)
-    with pytest.raises(uvms.FrameNotFound, match="unknown frame 'base_link'; close names: hull"):
-        uvms.mount_arm(vehicle, "z1", parent_frame="base_link")
+    with pytest.raises(uvms.errors.FrameNotFound, match="unknown frame 'base_link'; close names: hull"):
+        uvms.model.mount_arm(vehicle, "z1", parent_frame="base_link")
     bare = load_quietly(work_rov().replace('type="revolute"', 'type="fixed"'))  # a vehicle without arm joints
-    assert uvms.mount_arm(bare, "z1").ee_frames[0] == "arm_gripperMover"  # the default end effector is the arm's
+    assert uvms.model.mount_arm(bare, "z1").ee_frames[0] == "arm_gripperMover"  # the default end effector is the arm's
 
 
 @pytest.mark.parametrize(("vehicle_name", "arm_name"), [("bluerov2_alpha5", "panda"), ("santos2006", "ur5"),
                                                         ("hoang2011", "z1"), ("workrov", "ur5")])
 def test_the_composed_urdf_saved_loads_as_the_same_model(vehicle_name, arm_name, tmp_path, rng):
     vehicle = load_quietly(work_rov()) if vehicle_name == "workrov" else shipped(vehicle_name)
-    robot = uvms.mount_arm(vehicle, arm_name, placement=[0.1, 0.0, -0.2, np.pi, 0.0, 0.3])
+    robot = uvms.model.mount_arm(vehicle, arm_name, placement=[0.1, 0.0, -0.2, np.pi, 0.0, 0.3])
     assert robot.urdf is not None and "package://" not in robot.urdf
     saved = robot.save_urdf(tmp_path / "composed.urdf")
     with warnings.catch_warnings():
@@ -192,8 +192,8 @@ def test_save_urdf_states_a_base_given_to_load(base, tmp_path, rng):
         warnings.simplefilter("error", BaseGuessWarning)
         again = uvms.load(robot.save_urdf(tmp_path / "rov.urdf"), ee=robot.ee_frames)
     assert_same_model(robot, again, rng)
-    mounted = uvms.mount_arm(robot, "z1", prefix="left_")
-    twice = uvms.mount_arm(mounted, "z1", prefix="right_", placement=[0, 0.5, 0, 0, 0, 0])
+    mounted = uvms.model.mount_arm(robot, "z1", prefix="left_")
+    twice = uvms.model.mount_arm(mounted, "z1", prefix="right_", placement=[0, 0.5, 0, 0, 0, 0])
     assert_same_model(twice, uvms.load(twice.save_urdf(tmp_path / "two.urdf"), ee=twice.ee_frames), rng)
 
 
@@ -205,7 +205,7 @@ def test_save_urdf_without_a_urdf_is_an_error(tmp_path):
 
 # ------------------------------------------------------------------ xacro args and sizes
 def test_a_non_numeric_xacro_arg_names_the_arg_and_asks_for_a_number(capsys):
-    with pytest.raises(uvms.XacroError, match=r"xacro arg l1='abc' is not a number.*default is 0\.4.*give a number"):
+    with pytest.raises(uvms.errors.XacroError, match=r"xacro arg l1='abc' is not a number.*default is 0\.4.*give a number"):
         uvms.load("hoang2011", args={"l1": "abc"})
     assert main(["info", "bluerov2_alpha5", "--arg", "vehicle_mass=heavy"]) == 2
     assert "xacro arg vehicle_mass='heavy' is not a number" in capsys.readouterr().err
@@ -222,7 +222,7 @@ def test_a_non_numeric_xacro_arg_names_the_arg_and_asks_for_a_number(capsys):
     ("hoang2011", {"vehicle_mass": -120}, "vehicle_mass", "link 'base_link' has mass -120 kg"),
 ])
 def test_a_negative_length_or_mass_arg_is_refused_naming_the_element_and_the_arg(model, args, blamed, element):
-    with pytest.raises(uvms.ModelCheckError) as caught:
+    with pytest.raises(uvms.errors.ModelCheckError) as caught:
         uvms.load(model, args=args)
     message = str(caught.value)
     assert element in message and f"(from xacro arg {blamed}={args[blamed]!r}: with its default" in message
@@ -234,7 +234,7 @@ def test_geometry_sizes_of_any_urdf_must_be_positive():
     for bad, words in (('<box size="1 -2 1"/>', "<box size='1 -2 1'>"),
                        ('<cylinder radius="0" length="1"/>', "<cylinder radius='0'>"),
                        ('<sphere radius="-0.1"/>', "<sphere radius='-0.1'>")):
-        with pytest.raises(uvms.ModelCheckError, match=f"link 'hull' visual {words}: a geometry size must be > 0"):
+        with pytest.raises(uvms.errors.ModelCheckError, match=f"link 'hull' visual {words}: a geometry size must be > 0"):
             uvms.load(work_rov().replace('<box size="2.5 1.5 1.6"/>', bad))
 
 

@@ -152,7 +152,7 @@ def test_an_include_of_a_symbolic_link_loop_is_one_line(tmp_path, capsys):
     model = tmp_path / "rov.urdf.xacro"
     model.write_text(f'<robot name="r" {XACRO}><xacro:include filename="a.xacro"/><link name="a"/></robot>')
     for trusted in (True, False):
-        with pytest.raises(uvms.XacroError, match="a.xacro: cannot read the xacro include file .*symbolic links"):
+        with pytest.raises(uvms.errors.XacroError, match="a.xacro: cannot read the xacro include file .*symbolic links"):
             uvms.load(model, trusted=trusted)  # was RuntimeError: Symlink loop from Path.resolve
     assert "Too many levels of symbolic links" in one_line(capsys, ["info", str(model)])
     assert WatchedFiles.of(model=model).files == {model}
@@ -176,7 +176,7 @@ def test_a_yaml_alias_bomb_beside_a_model_is_refused_at_once_naming_the_file(tmp
         import json, time, uvms
         robot = uvms.load({str(tmp_path / "rov.urdf")!r})
         found = []
-        for read in (uvms.hydrodynamics_of, uvms.thrusters_of):
+        for read in (uvms.dynamics.hydrodynamics_of, uvms.dynamics.thrusters_of):
             started = time.perf_counter()
             try:
                 read(robot)
@@ -194,11 +194,11 @@ def test_a_yaml_alias_bomb_beside_a_model_is_refused_at_once_naming_the_file(tmp
 def test_recursive_and_deeply_nested_yaml_are_one_line(tmp_path):
     recursive = tmp_path / "recursive.yaml"
     recursive.write_text("links: &a {base_link: *a}\n")
-    with pytest.raises(uvms.ModelParseError, match="recursive.yaml: a YAML alias is used inside its own anchor"):
+    with pytest.raises(uvms.errors.ModelParseError, match="recursive.yaml: a YAML alias is used inside its own anchor"):
         resources.read_yaml(recursive, "hydrodynamics")
     deep = tmp_path / "deep.yaml"
     deep.write_text("links: " + "[" * 100_000 + "]" * 100_000)
-    with pytest.raises(uvms.ModelParseError, match="deep.yaml: the YAML is nested too deeply"):
+    with pytest.raises(uvms.errors.ModelParseError, match="deep.yaml: the YAML is nested too deeply"):
         resources.read_yaml(deep, "hydrodynamics")  # was RecursionError
     plain = tmp_path / "plain.yaml"
     plain.write_text("defaults: &d {volume: 0.01}\nlinks: {base_link: *d, l1: *d}\n")  # a real use of aliases
@@ -280,7 +280,7 @@ def test_a_package_uri_stays_inside_its_package(tmp_path):
     hostname = "package://example-robot-data/" + "../" * 40 + "etc/hostname"  # the red team's URI
     assert resources.resolve_uri(hostname, None, resources.package_search_roots()) is None
     mesh = '<visual><geometry><mesh filename="package://mypkg/../../secret.stl"/></geometry></visual>'
-    with pytest.warns(uvms.MissingMeshWarning, match="1 mesh file"):
+    with pytest.warns(uvms.model.MissingMeshWarning, match="1 mesh file"):
         uvms.load(urdf(extra=f'<link name="l2">{mesh}</link><joint name="j2" type="fixed"><parent link="l1"/>'
                                '<child link="l2"/></joint>'), package_dirs=roots)
 

@@ -251,7 +251,7 @@ def test_values_round_trip_from_uuv_simulator_form():
     assert np.array_equal(np.diag(link.added_mass), np.diag(added))
     assert np.array_equal(link.linear_damping, [1, 2, 3, 4, 5, 6])
     assert np.array_equal(link.quadratic_damping, [7, 8, 9, 10, 11, 12])
-    assert parse_hydrodynamics(uvms.example_robot_urdf("ur5").read_text()) is None
+    assert parse_hydrodynamics(uvms.model.example_robot_urdf("ur5").read_text()) is None
 
 
 def test_neutrally_buoyant_takes_the_volume_from_the_link_mass():
@@ -332,7 +332,7 @@ def test_a_yaml_beside_the_model_is_read_in_the_same_conventions(tmp_path):
 def test_plant_arguments_are_checked():
     robot = shipped("bluerov2_alpha5")
     with pytest.raises(UVMSError, match="fixed base"):
-        Plant(uvms.load(uvms.example_robot_urdf("ur5")))
+        Plant(uvms.load(uvms.model.example_robot_urdf("ur5")))
     with pytest.raises(UVMSError, match="motor_time_constant"):
         Plant(robot, motor_time_constant=0.0)
     with pytest.raises(UVMSError, match="5 finite joint velocities"):

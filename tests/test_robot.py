@@ -34,7 +34,7 @@ def test_joint_lookup_and_urdf_root():
     robot = uvms.load("xiang2019")
     joint = robot.joint(robot.arm_joint_names[2])
     assert joint.name == robot.arm_joint_names[2] and joint.idx_q == robot.model.idx_qs[robot.joint_id(joint.name)]
-    with pytest.raises(uvms.JointNotFound, match="close names"):
+    with pytest.raises(uvms.errors.JointNotFound, match="close names"):
         robot.joint(robot.arm_joint_names[2] + "x")
     assert robot.urdf_root is robot.urdf_root  # parsed once
     assert len(robot.urdf_root.findall("link")) == robot.urdf.count("<link ") > 8

@@ -19,7 +19,7 @@ import uvms
 from conftest import shipped
 from uvms.errors import BagExportError, RunFolderError
 from uvms.scenario.rosbag import write_bag
-from uvms.scenario import run
+from uvms.scenario import run_scenario
 from uvms.sim import PlantSeries, simulate
 from uvms.tasks.frame import FrameTask
 
@@ -65,7 +65,7 @@ def world_pose(frame: str, tf_static, tf_row) -> pin.SE3:
 
 def constant_rate_run(robot: uvms.Robot, rate: np.ndarray, q0: np.ndarray, goal: pin.SE3):
     """A short kinematic run at a constant velocity v (nv,), desired pose ``goal`` throughout."""
-    info = types.SimpleNamespace(sigma_min=1.0, damping=0.0)
+    info = types.SimpleNamespace(sigma_min=1.0, damping=0.0, limits_active=())
     return simulate(robot, lambda t, q, v: (rate, info), q0, duration=1.0, dt=0.05, task=FrameTask(robot),
                     desired=lambda t: goal)
 
@@ -151,7 +151,7 @@ def test_the_desired_pose_is_the_runs(floating_bag):
 def test_a_planar_scenario_run_reads_back_as_its_trajectory_npz(tmp_path):
     """hoang2011 (planar base), shortened: the bag of the run folder against the run's own trajectory.npz."""
     out = tmp_path / "run"
-    ran = run(SCENARIOS / "hoang2011_w1.toml", out=out, progress=False,
+    ran = run_scenario(SCENARIOS / "hoang2011_w1.toml", out=out, progress=False,
               overrides=["outputs.figures=false", "simulation.duration=1.0", "simulation.dt=0.1"])
     robot, simulation = ran.setup.robot, ran.simulation
     summary = write_bag(out / "bag", robot, simulation, desired_frame=ran.setup.task.frame, lock=False)
@@ -251,7 +251,7 @@ def test_bad_input_is_refused_before_anything_is_written(tmp_path, floating_bag)
         write_bag(tmp_path / "bag", robot, dataclasses.replace(result, v=np.full_like(result.v, np.nan)))
     with pytest.raises(BagExportError, match="the run's t must be .*non-decreasing"):
         write_bag(tmp_path / "bag", robot, dataclasses.replace(result, t=result.t[::-1]))
-    with pytest.raises(uvms.FrameNotFound):
+    with pytest.raises(uvms.errors.FrameNotFound):
         write_bag(tmp_path / "bag", robot, result, desired_frame="hand")
     assert not (tmp_path / "bag").exists()
 

@@ -20,7 +20,7 @@ from uvms import UVMSError
 from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import DiskFullError, RunFolderBusy, RunFolderError
-from uvms.scenario import run
+from uvms.scenario import run_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps, 6 figures
@@ -129,7 +129,7 @@ def test_an_exception_inside_leaves_the_old_folder_untouched(tmp_path, monkeypat
 
 def test_an_exception_inside_a_scenario_run_leaves_the_old_folder_untouched(tmp_path, monkeypatch):
     folder = tmp_path / "run"
-    run(SANTOS, out=folder, progress=False)
+    run_scenario(SANTOS, out=folder, progress=False)
     before = snapshot(folder)
 
     def broken(figure, path, dpi=110):
@@ -138,7 +138,7 @@ def test_an_exception_inside_a_scenario_run_leaves_the_old_folder_untouched(tmp_
     monkeypatch.setattr(outputs, "save_figure", broken)
     with pytest.raises(DiskFullError, match=f"no space left on the device holding '{tmp_path}' .*{folder} keeps the "
                                             f"previous complete run"):
-        run(SANTOS, out=folder, overrides=["solver.gain=2"], progress=False)
+        run_scenario(SANTOS, out=folder, overrides=["solver.gain=2"], progress=False)
     assert snapshot(folder) == before and not temporaries(folder)
 
 
@@ -202,7 +202,7 @@ def test_a_symbolic_link_to_a_run_folder_keeps_pointing_to_the_new_run(tmp_path)
 
 
 def test_run_reports_the_final_paths(tmp_path):
-    result = run(SANTOS, out=tmp_path / "run", progress=False, overrides=["outputs.figures=false"])
+    result = run_scenario(SANTOS, out=tmp_path / "run", progress=False, overrides=["outputs.figures=false"])
     assert [path.name for path in result.files] == ["trajectory.csv", "trajectory.npz", "metrics.json"]
     assert all(path.parent == tmp_path / "run" and path.is_file() for path in result.files)
 
@@ -250,7 +250,7 @@ def test_ctrl_c_keeps_the_previous_run_and_exits_130(tmp_path, previous):
     folder = tmp_path / "out" / "run"
     before = None
     if previous:
-        run(SANTOS, out=folder, progress=False)
+        run_scenario(SANTOS, out=folder, progress=False)
         before = snapshot(folder)
     child = slow_child(0.5, "run", str(SANTOS), "--out", str(folder), "--quiet", "--set", "solver.gain=2")
     wait_for(writing(folder, "desired_motion.png"), process=child)

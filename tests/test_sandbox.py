@@ -39,7 +39,7 @@ def xacro_file(folder: Path, expression: str) -> Path:
 def test_untrusted_xacro_cannot_write_a_file(tmp_path):
     target = tmp_path / "pwned.txt"
     path = xacro_file(tmp_path, ESCAPE.format(target=target))
-    with pytest.raises(uvms.XacroError, match="may not write files"):
+    with pytest.raises(uvms.errors.XacroError, match="may not write files"):
         uvms.load(path)  # a user file: untrusted by default
     assert not target.exists()
     robot = uvms.load(path, trusted=True)  # what the switch guards against: in-process, the write happens
@@ -48,7 +48,7 @@ def test_untrusted_xacro_cannot_write_a_file(tmp_path):
 
 def test_untrusted_xacro_times_out(tmp_path):
     path = xacro_file(tmp_path, "python.sum(python.range(10**11))")
-    with pytest.raises(uvms.XacroError, match="longer than 1 s"):
+    with pytest.raises(uvms.errors.XacroError, match="longer than 1 s"):
         expand_untrusted(path, {}, timeout=1.0)
 
 
@@ -61,11 +61,11 @@ def test_untrusted_xacro_gives_the_same_model_and_errors(tmp_path):
         assert uvms.load(path, trusted=False).urdf == uvms.load(path).urdf
     broken = tmp_path / "broken.urdf.xacro"
     broken.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="${undefined_x}"/></robot>')
-    with pytest.raises(uvms.XacroError, match="undefined_x"):
+    with pytest.raises(uvms.errors.XacroError, match="undefined_x"):
         uvms.load(broken)
     malformed = tmp_path / "malformed.urdf.xacro"
     malformed.write_text("<robot name='r'><link name='a'></robot>")
-    with pytest.raises(uvms.ModelParseError):
+    with pytest.raises(uvms.errors.ModelParseError):
         uvms.load(malformed)
 
 
@@ -118,7 +118,7 @@ def test_every_escape_is_refused_and_leaves_no_trace(tmp_path, audit_hook):
     try:
         for name, attack in escapes(work, victim.pid).items():
             path = xacro_file(tmp_path, attack)
-            with pytest.raises(uvms.XacroError, match="not permitted|may not|refused") as raised:
+            with pytest.raises(uvms.errors.XacroError, match="not permitted|may not|refused") as raised:
                 expand_untrusted(path, {}, timeout=10.0, audit_hook=audit_hook)
             assert len(str(raised.value).splitlines()) == 1, name
         time.sleep(2.5)  # a detached child, had one been made, would act now
@@ -131,14 +131,14 @@ def test_every_escape_is_refused_and_leaves_no_trace(tmp_path, audit_hook):
 
 def test_memory_and_output_bombs_are_stopped(tmp_path):
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    with pytest.raises(uvms.XacroError, match="memory|MemoryError"):
+    with pytest.raises(uvms.errors.XacroError, match="memory|MemoryError"):
         expand_untrusted(xacro_file(tmp_path, "python.len('x' * 3 * 10**9)"), {}, memory_bytes=256 << 20)
-    with pytest.raises(uvms.XacroError, match="more than 1 MiB of URDF"):
+    with pytest.raises(uvms.errors.XacroError, match="more than 1 MiB of URDF"):
         expand_untrusted(xacro_file(tmp_path, "'x' * 3 * 2**20"), {}, max_urdf_bytes=1 << 20)
     assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - rss < 200 << 10  # KiB: the parent stayed small
 
 
 def test_no_confinement_means_no_untrusted_expansion(tmp_path, monkeypatch):
     monkeypatch.setattr(sandbox, "confinement_problem", lambda: "untrusted xacro needs libseccomp (test)")
-    with pytest.raises(uvms.XacroError, match="needs libseccomp.*trusted=True only if you trust"):
+    with pytest.raises(uvms.errors.XacroError, match="needs libseccomp.*trusted=True only if you trust"):
         uvms.load(xacro_file(tmp_path, "1"))

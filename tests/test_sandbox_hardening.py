@@ -43,7 +43,7 @@ def checked(call: str) -> str:
 
 def refused(path: Path, layers: str, name: str) -> None:
     """Expanding ``path`` fails with a one-line XacroError that says the kernel or the hook refused."""
-    with pytest.raises(uvms.XacroError, match=REFUSED) as raised:
+    with pytest.raises(uvms.errors.XacroError, match=REFUSED) as raised:
         expand_untrusted(path, {}, timeout=20.0, **LAYERS[layers])
     assert len(str(raised.value).splitlines()) == 1, name
 
@@ -228,7 +228,7 @@ def test_a_handler_of_the_caller_still_runs_and_is_restored(tmp_path):
     try:
         timer = threading.Timer(3.0, os.kill, (os.getpid(), signal.SIGHUP))
         timer.start()
-        with pytest.raises(uvms.XacroError, match="killed by SIGKILL"):  # the handler killed the child first
+        with pytest.raises(uvms.errors.XacroError, match="killed by SIGKILL"):  # the handler killed the child first
             expand_untrusted(xacro_file(tmp_path, f"{IMPORT}('time').sleep(100)"), {}, timeout=20.0)
         timer.join()
         assert received == [signal.SIGHUP] and signal.getsignal(signal.SIGHUP) is handler
@@ -296,7 +296,7 @@ def test_includes_outside_the_named_folders_are_refused_clearly(tmp_path, monkey
     part(elsewhere / "pkg" / "arm.xacro", "arm_from_elsewhere")
     path = include_model(tmp_path / "model", elsewhere / "pkg" / "arm.xacro")
     monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
-    with pytest.raises(uvms.XacroError) as raised:
+    with pytest.raises(uvms.errors.XacroError) as raised:
         expand_untrusted(path, {})
     message = str(raised.value)
     assert len(message.splitlines()) == 1
@@ -315,7 +315,7 @@ def test_load_package_dirs_are_the_folders_an_untrusted_xacro_may_include_from(t
     monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
     from uvms.model.loader import read_model_text
 
-    with pytest.raises(uvms.XacroError, match="package_dirs"):
+    with pytest.raises(uvms.errors.XacroError, match="package_dirs"):
         read_model_text(path, trusted=False)
     xml, _, _ = read_model_text(path, trusted=False, package_dirs=[elsewhere])
     assert 'name="arm_from_elsewhere"' in xml
@@ -360,13 +360,13 @@ MALFORMED = {"200000 [": b"[" * 200_000, "100000 {": b'{"a":' * 100_000, "list":
 
 @pytest.mark.parametrize("stdout", MALFORMED.values(), ids=MALFORMED.keys())
 def test_a_malformed_answer_is_a_one_line_error(tmp_path, stdout):
-    with pytest.raises(uvms.XacroError, match="untrusted xacro expansion failed") as raised:
+    with pytest.raises(uvms.errors.XacroError, match="untrusted xacro expansion failed") as raised:
         read_answer(tmp_path / "m.xacro", stdout, b"", 0)
     assert len(str(raised.value).splitlines()) == 1 and len(str(raised.value)) < 500
 
 
 def test_a_hostile_message_is_one_bounded_line(tmp_path):
     stdout = b'{"kind": "xacro", "message": "first\\nsecond\\r\\n' + b"x" * 100_000 + b'"}'
-    with pytest.raises(uvms.XacroError, match="xacro error: first second") as raised:
+    with pytest.raises(uvms.errors.XacroError, match="xacro error: first second") as raised:
         read_answer(tmp_path / "m.xacro", stdout, b"", 0)
     assert len(str(raised.value).splitlines()) == 1 and len(str(raised.value)) < 3000

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import uvms
-from uvms.scenario import ScenarioError, read_scenario, run
+from uvms.scenario import ScenarioError, read_scenario, run_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIOS = ROOT / "scenarios"
@@ -27,7 +27,7 @@ def hoang_runs(tmp_path_factory):
     runs = {}
     for name in HOANG:
         overrides = [] if name == "w1" else ["outputs.figures=false"]
-        runs[name] = run(SCENARIOS / f"hoang2011_{name}.toml", out=out / name, overrides=overrides, progress=False)
+        runs[name] = run_scenario(SCENARIOS / f"hoang2011_{name}.toml", out=out / name, overrides=overrides, progress=False)
     return runs
 
 
@@ -72,8 +72,8 @@ def test_hoang2011_outputs(hoang_runs):
 
 
 def test_santos2006_kinematic_constraint_keeps_the_vehicle_still_and_task_priority_does_not(tmp_path):
-    constraint = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc", progress=False).metrics
-    priority = run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "tp", progress=False).metrics
+    constraint = run_scenario(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc", progress=False).metrics
+    priority = run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "tp", progress=False).metrics
     assert constraint["vehicle_travel"] <= 1e-12
     assert priority["vehicle_travel"] > 0.1
     assert constraint["steps"] == priority["steps"] == 100
@@ -87,9 +87,9 @@ def test_santos2006_kinematic_constraint_keeps_the_vehicle_still_and_task_priori
 
 
 def test_set_overrides_change_the_run(tmp_path):
-    base = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "a", progress=False,
+    base = run_scenario(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "a", progress=False,
                overrides=["outputs.figures=false"])
-    longer = run(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "b", progress=False,
+    longer = run_scenario(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "b", progress=False,
                  overrides=["outputs.figures=false", "model.args.l1=2.5", "vehicle.heading=0.5"])
     assert longer.setup.robot.fk(longer.setup.q0).translation[1] > base.setup.robot.fk(base.setup.q0).translation[1] + 0.4
     assert longer.metrics["arm_travel"] != base.metrics["arm_travel"]
@@ -100,7 +100,7 @@ def test_rk4_on_the_manifold_is_fourth_order(tmp_path):
     """Open loop (K = 0, no null space): the tracking error is the integration error alone."""
     errors = []
     for dt in (0.2, 0.1):
-        result = run(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / str(dt), progress=False, overrides=[
+        result = run_scenario(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / str(dt), progress=False, overrides=[
             "outputs.figures=false", "solver.gain=0.0", "solver.alpha=0.0", f"simulation.dt={dt}",
             "trajectory.duration=20.0"])
         errors.append(result.metrics["max_position_error"])
@@ -122,7 +122,7 @@ def test_rk4_on_the_manifold_is_fourth_order(tmp_path):
 )
 def test_bad_scenarios_are_rejected_with_the_valid_choices(tmp_path, overrides, words):
     with pytest.raises(uvms.UVMSError, match=words):
-        run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path, overrides=overrides, progress=False)
+        run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path, overrides=overrides, progress=False)
 
 
 def test_missing_required_key(tmp_path):
@@ -177,13 +177,13 @@ def test_names_from_a_scenario_never_become_paths(tmp_path, monkeypatch, scenari
     monkeypatch.chdir(work)  # the default --out is out/<scenario name>, relative to here
     override = f"{key}={json.dumps(value.format(tmp=tmp_path))}"
     with pytest.raises(ScenarioError, match=f"{key} = .* is not valid: .*plain name: letters, digits"):
-        run(SCENARIOS / f"{scenario}.toml", overrides=[override, "outputs.figures=false"], progress=False)
+        run_scenario(SCENARIOS / f"{scenario}.toml", overrides=[override, "outputs.figures=false"], progress=False)
     assert not files_below(tmp_path) and not (tmp_path / "absolute").exists()
 
 
 def test_plain_names_are_accepted(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    result = run(SCENARIOS / "santos2006_task_priority.toml", progress=False,
+    result = run_scenario(SCENARIOS / "santos2006_task_priority.toml", progress=False,
                  overrides=['scenario.name="my-run_2.v1"', "outputs.figures=false"])
     assert result.files[0].parent == Path("out") / "my-run_2.v1" and result.metrics["scenario"] == "my-run_2.v1"
     assert read_scenario(GRIP, ['outputs.animation="Grip.MP4"'])["outputs"]["animation"] == "Grip.MP4"
@@ -212,20 +212,20 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
     started = time.perf_counter()
     with pytest.raises(StepCountError, match=r"simulation.dt = 1e-07 s over 190 s gives 1.9e\+09 steps; at most "
                                              r"200,000 are allowed .*raise simulation.dt or shorten"):
-        run(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=["simulation.dt=1e-7"], progress=False)
+        run_scenario(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=["simulation.dt=1e-7"], progress=False)
     assert time.perf_counter() - started < 30 and not (tmp_path / "run").exists()
     with pytest.raises(StepCountError, match="longer than trajectory.duration = 10 s: the run would have no step"):
-        run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=["simulation.dt=100"])
+        run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=["simulation.dt=100"])
     with pytest.raises(StepCountError, match="simulation.dt = 1 s is longer than simulation.duration = 0.5 s"):
-        run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run",
+        run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run",
             overrides=["simulation.dt=1.0", "simulation.duration=0.5"])
     for dt in ("0", "-0.1"):
         with pytest.raises(ScenarioError, match=r"simulation.dt = .* is out of range: it is the integration step"):
-            run(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=[f"simulation.dt={dt}"])
+            run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=[f"simulation.dt={dt}"])
     amundsen = SCENARIOS / "amundsen2018_rigid_open_loop.toml"  # the dynamic plant: the same check
     monkeypatch.setattr("uvms.scenario.runs.simulate", never)
     with pytest.raises(StepCountError, match="at most 200,000"):
-        run(amundsen, out=tmp_path / "run", overrides=["simulation.dt=1e-6"], progress=False)
+        run_scenario(amundsen, out=tmp_path / "run", overrides=["simulation.dt=1e-6"], progress=False)
     assert not (tmp_path / "run").exists()
     assert integrate.step_count(190.0, 0.02) == 9500 and integrate.step_count(1.0, 1.0) == 1
     assert integrate.step_count(1.0, 1.0 / integrate.MAX_STEPS) == integrate.MAX_STEPS
@@ -259,7 +259,7 @@ def test_library_simulations_share_the_step_bound():
 )
 def test_numbers_out_of_range_are_one_scenario_error(tmp_path, override):
     with pytest.raises(ScenarioError, match=r"is out of range: scenario numbers are SI values with \|x\| <= 1e\+06"):
-        run(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=[override], progress=False)
+        run_scenario(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=[override], progress=False)
     assert not (tmp_path / "run").exists()
 
 
@@ -299,7 +299,7 @@ def test_numerical_failures_become_one_uvms_error_naming_the_scenario(tmp_path, 
     folder = tmp_path / "run"
     with pytest.raises(NumericalError, match=f"scenario 'santos2006_task_priority': the numerics failed "
                                              f"\\({type(error).__name__}: "):
-        run(SCENARIOS / "santos2006_task_priority.toml", out=folder, progress=False)
+        run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=folder, progress=False)
     assert sorted(path.name for path in tmp_path.iterdir()) == [".run.uvms-lock"]  # no run folder, no temporary
     assert main(["run", str(SCENARIOS / "santos2006_task_priority.toml"), "--out", str(folder), "--quiet"]) == 2
     err = capsys.readouterr().err

@@ -30,7 +30,7 @@ HEAVY_VEHICLE = np.r_[[100.0] * 6, [1.0] * 5]
 @functools.lru_cache(maxsize=None)
 def floating_ur5() -> uvms.Robot:
     """A fixed 6-DOF arm (UR5) on a passive floating base: a 6-axis task is not redundant."""
-    return uvms.load(uvms.example_robot_urdf("ur5"), base="floating")
+    return uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
 
 
 def violation(robot: uvms.Robot, q: np.ndarray, limit: Limit | None = None) -> float:

@@ -16,7 +16,7 @@ import pytest
 
 from uvms.cli import main
 from uvms.errors import ScenarioError
-from uvms.scenario import read_scenario, run
+from uvms.scenario import read_scenario, run_scenario
 from uvms.tasks.objectives import INEQUALITY_TYPES
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
@@ -30,7 +30,7 @@ NO_FIGURES = ["outputs.figures=false"]
 def panel_runs(tmp_path_factory) -> dict:
     """The panel scenario under the three methods (clik: the inequalities monitored only)."""
     root = tmp_path_factory.mktemp("panel")
-    return {method: run(PANEL, root / method, [*NO_FIGURES, f"solver.method={method}"], progress=False)
+    return {method: run_scenario(PANEL, root / method, [*NO_FIGURES, f"solver.method={method}"], progress=False)
             for method in ("set_based", "hqp", "clik")}
 
 
@@ -80,10 +80,10 @@ def test_the_recorded_series_give_the_metrics(panel_runs):
 
 
 def test_non_redundant_free_floating_the_limit_wins_and_the_run_says_so(tmp_path):
-    set_based = run(FREE_FLOATING, tmp_path / "sb", NO_FIGURES, progress=False).metrics
-    hqp = run(FREE_FLOATING, tmp_path / "hqp", [*NO_FIGURES, "solver.method=hqp", "solver.damping_epsilon=0",
+    set_based = run_scenario(FREE_FLOATING, tmp_path / "sb", NO_FIGURES, progress=False).metrics
+    hqp = run_scenario(FREE_FLOATING, tmp_path / "hqp", [*NO_FIGURES, "solver.method=hqp", "solver.damping_epsilon=0",
                                                 "solver.damping_max=0"], progress=False).metrics
-    clik = run(FREE_FLOATING, tmp_path / "clik", [*NO_FIGURES, "solver.method=clik"], progress=False).metrics
+    clik = run_scenario(FREE_FLOATING, tmp_path / "clik", [*NO_FIGURES, "solver.method=clik"], progress=False).metrics
     assert clik["max_joint_limit_violation"] > 0.35  # measured: the elbow 0.40 rad past 3.5
     for metrics in (set_based, hqp):
         assert metrics["max_joint_limit_violation"] == 0.0
@@ -99,9 +99,9 @@ def test_non_redundant_free_floating_the_limit_wins_and_the_run_says_so(tmp_path
 def test_hoang2011_set_based_far_from_its_limits_is_clik_without_the_potential(tmp_path):
     """Over the first 40 s no joint is within the band: set-based = CLIK with alpha = 0, the potential run differs."""
     options = [*NO_FIGURES, "simulation.duration=40"]
-    set_based = run("hoang2011_w1_set_based", tmp_path / "sb", options, progress=False)
-    plain = run("hoang2011_w1", tmp_path / "clik", [*options, "solver.alpha=0"], progress=False)
-    potential = run("hoang2011_w1", tmp_path / "potential", options, progress=False)
+    set_based = run_scenario("hoang2011_w1_set_based", tmp_path / "sb", options, progress=False)
+    plain = run_scenario("hoang2011_w1", tmp_path / "clik", [*options, "solver.alpha=0"], progress=False)
+    potential = run_scenario("hoang2011_w1", tmp_path / "potential", options, progress=False)
     assert set_based.metrics["inequalities"]["joint_limits"]["active_fraction"] == 0.0
     assert np.abs(set_based.simulation.q - plain.simulation.q).max() <= 1e-9  # integrated over 2000 RK4 steps
     assert np.abs(set_based.simulation.q - potential.simulation.q).max() > 0.1
@@ -136,24 +136,24 @@ def test_unknown_types_and_keys_are_refused_with_the_valid_ones(tmp_path):
 def test_model_names_and_solver_keys_are_checked_when_built(tmp_path):
     bad_frame = '[[inequalities]]\ntype = "plane_clearance"\nframe = "jaws"\npoint = [0, 0, -6]\nnormal = [0, 0, 1]\n'
     with pytest.raises(ScenarioError, match=r"inequalities\[0\] \(plane_clearance\).*'jaws'.*vehicle"):
-        run(write(tmp_path, bad_frame), tmp_path / "o", NO_FIGURES, progress=False)
+        run_scenario(write(tmp_path, bad_frame), tmp_path / "o", NO_FIGURES, progress=False)
     twice = '[[inequalities]]\ntype = "vehicle_attitude"\nmax_tilt = 0.1\n' * 2
     with pytest.raises(ScenarioError, match="two objectives are called 'vehicle_attitude'"):
-        run(write(tmp_path, twice), tmp_path / "o", NO_FIGURES, progress=False)
+        run_scenario(write(tmp_path, twice), tmp_path / "o", NO_FIGURES, progress=False)
     tilt = '[[inequalities]]\ntype = "vehicle_attitude"\nmax_tilt = 0.1\n'
     with pytest.raises(ScenarioError, match="joint_limits"):
-        run(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "solver.alpha=1"], progress=False)
+        run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "solver.alpha=1"], progress=False)
     with pytest.raises(ScenarioError, match="not used by solver.method = 'hqp'"):
-        run(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "solver.method=hqp", "solver.damping=0.1"],
+        run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "solver.method=hqp", "solver.damping=0.1"],
             progress=False)
     with pytest.raises(ScenarioError, match="kinematic plant only"):
-        run(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "plant.type=rigid"], progress=False)
+        run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "plant.type=rigid"], progress=False)
     assert not (tmp_path / "o").exists()  # refused before anything is written
 
 
 def test_manipulability_is_measured_and_the_cli_refuses_in_one_line(tmp_path, capsys):
     extra = '[[inequalities]]\ntype = "manipulability"\nframe = "ee"\nmin = 0.001\nband = 0.002\n'
-    metrics = run(write(tmp_path, extra), tmp_path / "m", [*NO_FIGURES, "trajectory.duration=2",
+    metrics = run_scenario(write(tmp_path, extra), tmp_path / "m", [*NO_FIGURES, "trajectory.duration=2",
                                                            "trajectory.accel_time=0.5"], progress=False).metrics
     entry = metrics["inequalities"]["manipulability(ee)"]
     assert metrics["min_manipulability"] == entry["value_range"][0] > 0.001
@@ -165,7 +165,7 @@ def test_manipulability_is_measured_and_the_cli_refuses_in_one_line(tmp_path, ca
 
 
 def test_a_run_folder_has_the_inequality_figure(tmp_path):
-    result = run(PANEL, tmp_path / "f", ["trajectory.duration=2", "trajectory.accel_time=0.5"], progress=False)
+    result = run_scenario(PANEL, tmp_path / "f", ["trajectory.duration=2", "trajectory.accel_time=0.5"], progress=False)
     assert (tmp_path / "f" / "inequalities.png").stat().st_size > 20_000
     assert json.loads((tmp_path / "f" / "metrics.json").read_text())["inequalities"]["vehicle_attitude"]["level"] == 2
     assert tmp_path / "f" / "inequalities.png" in result.files

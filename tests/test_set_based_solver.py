@@ -78,17 +78,17 @@ def test_a_set_based_solver_refuses_bad_options_when_built():
 
     robot = uvms.load("bluerov2_alpha5")
     levels = alpha5_levels(robot, robot.fk(robot.neutral()))
-    with pytest.raises(uvms.SolverInputError, match="position_fraction must be in"):
+    with pytest.raises(uvms.errors.SolverInputError, match="position_fraction must be in"):
         SetBasedSolver(robot, levels, position_fraction=1.5)
-    with pytest.raises(uvms.SolverInputError, match="eta must be finite"):
+    with pytest.raises(uvms.errors.SolverInputError, match="eta must be finite"):
         SetBasedSolver(robot, levels, eta=-1.0)
-    with pytest.raises(uvms.SolverInputError, match="dt must be finite and > 0"):
+    with pytest.raises(uvms.errors.SolverInputError, match="dt must be finite and > 0"):
         SetBasedSolver(robot, levels, dt=0.0)
-    with pytest.raises(uvms.SolverInputError, match=r"gain must be a finite scalar >= 0, \(6,\)"):
+    with pytest.raises(uvms.errors.SolverInputError, match=r"gain must be a finite scalar >= 0, \(6,\)"):
         SetBasedSolver(robot, levels, gain=[1.0, 2.0])
-    with pytest.raises(uvms.SolverInputError, match=r"dt must be finite and > 0"):
+    with pytest.raises(uvms.errors.SolverInputError, match=r"dt must be finite and > 0"):
         SetBasedSolver(robot, levels).step(Configuration(robot, robot.neutral()), 0.0)
-    with pytest.raises(uvms.NotARobot):
+    with pytest.raises(uvms.errors.NotARobot):
         SetBasedSolver("bluerov2_alpha5", levels)
 
 
@@ -105,11 +105,11 @@ def test_text_and_none_options_are_refused_by_what_is_valid(options, message):
 
     robot = uvms.load("bluerov2_alpha5")
     levels = alpha5_levels(robot, robot.fk(robot.neutral()))
-    with pytest.raises(uvms.SolverInputError, match=message):
+    with pytest.raises(uvms.errors.SolverInputError, match=message):
         SetBasedSolver(robot, levels, **options)
     if "speed_limits" not in options:  # CLIK reads its gain and W through the same checks
         hoang, task = hoang_setup()
-        with pytest.raises(uvms.SolverInputError, match=r"(gain must be a finite scalar >= 0, \(3,\)|W must be \(6,\))"):
+        with pytest.raises(uvms.errors.SolverInputError, match=r"(gain must be a finite scalar >= 0, \(3,\)|W must be \(6,\))"):
             uvms.CLIKSolver(hoang, task, **options)
 
 
@@ -122,7 +122,7 @@ def test_malformed_levels_are_refused_by_what_a_level_holds(levels, message):
     from uvms.solvers.set_based import SetBasedSolver
 
     robot = uvms.load("bluerov2_alpha5")
-    with pytest.raises(uvms.SolverInputError, match=message):
+    with pytest.raises(uvms.errors.SolverInputError, match=message):
         SetBasedSolver(robot, levels)
 
 

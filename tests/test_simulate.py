@@ -70,9 +70,9 @@ def test_an_actuated_run_equals_the_former_simulate_actuated():
     of the former ``simulate_actuated``."""
     robot = shipped("bluerov2_alpha5")
     plant = uvms.Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
-    thrusters = uvms.thrusters_of(robot)
+    thrusters = uvms.dynamics.thrusters_of(robot)
     station = robot.configuration(base=np.zeros(6), arm=[3.0, 1.8, 1.8, 1.0, 0.0])
-    result = simulate(ActuatedPlant(plant, thrusters), uvms.station_keeping(plant, thrusters, station, 0.01), station,
+    result = simulate(ActuatedPlant(plant, thrusters), uvms.control.station_keeping(plant, thrusters, station, 0.01), station,
                       0.5, 0.01)
     assert [value.hex() for value in result.q[-1, :3]] == ["0x1.36e47b01927d9p-5", "0x1.b028791c97595p-14",
                                                            "-0x1.2c40a8ad9222fp-12"]
@@ -95,7 +95,7 @@ def test_a_result_cannot_be_mutated():
     with pytest.raises(dataclasses.FrozenInstanceError):
         plant_run.plant.command = np.zeros((11, robot.n_arm))
     blue = shipped("bluerov2_alpha5")
-    actuated = ActuatedPlant(uvms.Plant(blue), uvms.thrusters_of(blue))
+    actuated = ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue))
     run = simulate(actuated, lambda t, q, v, f: uvms.dynamics.ActuatedCommand(
         np.zeros(blue.n_arm), np.zeros(actuated.n), {"custom": t}), blue.neutral(), 0.02, 0.01)
     with pytest.raises(TypeError):  # the controller's series are read-only
@@ -122,9 +122,9 @@ def test_what_a_system_cannot_run_is_refused_before_it_runs():
         simulate(robot, never, robot.neutral(), 1.0, 0.1, v0=np.zeros(robot.nv))
     blue = shipped("bluerov2_alpha5")
     with pytest.raises(ConfigurationError, match="thrusts0 .* must lie within"):
-        ActuatedPlant(uvms.Plant(blue), uvms.thrusters_of(blue), thrusts0=np.full(8, 1e6))
+        ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue), thrusts0=np.full(8, 1e6))
     with pytest.raises(StepCountError, match="runs once per step"):
-        simulate(ActuatedPlant(uvms.Plant(blue), uvms.thrusters_of(blue)), never, blue.neutral(), 1.0, 0.1,
+        simulate(ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue)), never, blue.neutral(), 1.0, 0.1,
                  control_dt=0.2)
     with pytest.raises(UVMSError, match="recorded extra, which no series of SimulationResult holds"):
         simulate(robot, lambda t, q, v: (np.zeros(robot.nv), INFO), robot.neutral(), 0.1, 0.1,

@@ -155,7 +155,7 @@ def test_clik_spatial_pose_task_and_free_floating_gjm(rng):
 def test_nullspace_term_leaves_the_task_velocity_unchanged(rng):
     robot = shipped("hoang2011")
     task = hoang_task(robot)
-    potential = uvms.JointLimitPotential(robot)
+    potential = uvms.tasks.JointLimitPotential(robot)
     for weights in (None, [1, 1, 1, 100, 100, 100]):
         for _ in range(20):
             q = robot.random_configuration(rng)
@@ -168,7 +168,7 @@ def test_nullspace_term_leaves_the_task_velocity_unchanged(rng):
 
 def test_joint_limit_potential_gradient_matches_finite_differences(rng):
     robot = shipped("hoang2011")
-    potential = uvms.JointLimitPotential(robot, weights=[1.0, 2.0, 0.5])
+    potential = uvms.tasks.JointLimitPotential(robot, weights=[1.0, 2.0, 0.5])
     q = robot.random_configuration(rng)
     gradient = potential.gradient(q)
     for index in range(robot.nv):
@@ -262,7 +262,7 @@ def test_kinematic_constraint_equals_the_screw_formulation(rng):
 
 # --------------------------------------------------------------------- IK
 def test_solve_ik_reaches_random_reachable_targets_within_limits(rng):
-    robot = uvms.mount_arm(shipped("bluerov2_alpha5"), "ur5", placement=[0, 0, -0.2, np.pi, 0, 0], ee="arm_tool0")
+    robot = uvms.model.mount_arm(shipped("bluerov2_alpha5"), "ur5", placement=[0, 0, -0.2, np.pi, 0, 0], ee="arm_tool0")
     model = robot.model
     for seed in range(25):
         target = robot.fk(robot.random_configuration(rng))
@@ -275,7 +275,7 @@ def test_solve_ik_reaches_random_reachable_targets_within_limits(rng):
 
 
 def test_solve_ik_unreachable_target_is_not_a_false_success():
-    arm = uvms.load(uvms.example_robot_urdf("ur5"))
+    arm = uvms.load(uvms.model.example_robot_urdf("ur5"))
     result = uvms.solve_ik(arm, [3.0, 0.0, 0.0, 0.0, 0.0, 0.0], restarts=3)
     assert not result.success
     assert np.isfinite(result.error) and result.error > 1.0
@@ -294,7 +294,7 @@ def test_solve_ik_two_end_effectors_at_once(rng):
 
 def test_solve_ik_ur5_random_targets_from_random_starts_all_within_limits(rng):
     """The benchmark's protocol in small: FK of uniform joints inside the limits, random starts, checked here."""
-    arm = uvms.load(uvms.example_robot_urdf("ur5"))
+    arm = uvms.load(uvms.model.example_robot_urdf("ur5"))
     lower, upper = arm.arm_limits
     for index in range(150):
         target = arm.fk(arm.random_configuration(rng))
@@ -309,7 +309,7 @@ def test_solve_ik_ur5_random_targets_from_random_starts_all_within_limits(rng):
 def test_ik_projection_wraps_revolute_joints_by_two_pi_then_clips():
     from uvms.solvers.ik import JointBox
 
-    robot = uvms.load(uvms.example_robot_urdf("ur5"))  # joints in [-2 pi, 2 pi], the elbow in [-pi, pi]
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"))  # joints in [-2 pi, 2 pi], the elbow in [-pi, pi]
     box = JointBox.of(robot)
     assert JointBox.of(robot) is box  # built once per robot
     lower, upper = robot.arm_limits
@@ -329,7 +329,7 @@ def test_ik_projection_wraps_revolute_joints_by_two_pi_then_clips():
 
 def test_initial_configuration_of_hoang2011():
     robot = shipped("hoang2011")
-    result = uvms.initial_configuration(robot, hoang_task(robot))
+    result = uvms.solvers.initial_configuration(robot, hoang_task(robot))
     assert result.success and result.residual <= 1e-10
     arm = robot.arm_configuration(result.q)
     # S can reach zero: q1 at mid-range 3 pi / 4, q2 = q3 = 0, the vehicle yaw takes the rest of phi
@@ -359,7 +359,7 @@ def test_bad_solver_inputs():
     with pytest.raises(SolverInputError, match="alpha"):
         clik_velocity(robot, q, task, alpha=-1.0)
     with pytest.raises(SolverInputError, match="variable damping needs epsilon > 0"):
-        uvms.VariableDamping(0.0, 0.1)
+        uvms.solvers.VariableDamping(0.0, 0.1)
     with pytest.raises(SolverInputError, match="W must be symmetric"):
         clik_velocity(robot, q, task, weights=np.triu(np.ones((6, 6))), dt=0.1, enforce_limits=True)
     with pytest.raises(SolverInputError, match="dt"):
@@ -373,7 +373,7 @@ def test_bad_solver_inputs():
     with pytest.raises(SolverInputError, match="needs a target pose for at least one frame"):
         uvms.solve_ik(robot, {})
     with pytest.raises(SolverInputError, match="max_iterations must be an integer >= 1"):
-        uvms.initial_configuration(robot, task, max_iterations=0)
+        uvms.solvers.initial_configuration(robot, task, max_iterations=0)
     with pytest.raises(SolverInputError, match="valid: classic, robust"):
         task_priority([np.eye(2)], [np.ones(2)], method="fast")
     with pytest.raises(SolverInputError, match="level 0 command must be 2 finite numbers"):
@@ -383,7 +383,7 @@ def test_bad_solver_inputs():
 
 
 def test_free_floating_on_a_fixed_base_is_one_clear_error():
-    arm = uvms.load(uvms.example_robot_urdf("ur5"))  # fixed base: no generalized Jacobian
+    arm = uvms.load(uvms.model.example_robot_urdf("ur5"))  # fixed base: no generalized Jacobian
     assert arm.base_type == "fixed"
     task = uvms.FrameTask(arm, target=arm.fk(arm.neutral()))
     with pytest.raises(SolverInputError, match="ur5 has a fixed base: free_floating=True needs a floating or planar base"):
@@ -408,8 +408,8 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
     q = robot.configuration(base=[0, 0, 0.1], arm=arm)
     task = hoang_task(robot, target=xdot)
     for free_floating in (False, True):
-        result = clik_velocity(robot, q, task, damping=uvms.VariableDamping(0.1, 0.2) if damping else 0.0,
-                                    free_floating=free_floating, potential=uvms.JointLimitPotential(robot), alpha=10.0)
+        result = clik_velocity(robot, q, task, damping=uvms.solvers.VariableDamping(0.1, 0.2) if damping else 0.0,
+                                    free_floating=free_floating, potential=uvms.tasks.JointLimitPotential(robot), alpha=10.0)
         assert np.all(np.isfinite(result.v)) and np.isfinite(result.residual) and np.isfinite(result.sigma_min)
     state = uvms.Configuration(robot, q)
     jacobian = task.jacobian(state)[:, 3:]  # arm only: singular when stretched
@@ -476,14 +476,15 @@ def test_compiled_pose_error_and_joint_box_match_pinocchio_and_numpy(rng):
     from uvms.numerics._kernels.boxes import project_into_box
     from uvms.numerics._kernels.pose import pose_error_norm, rotation_to_target
 
-    for _ in range(50):
-        pose, target = pin.SE3.Random(), pin.SE3.Random()
+    for _ in range(50):  # seeded poses: log3 is ill-conditioned near pi, an unseeded draw made the bound flaky
+        pose, target = (pin.SE3(pin.exp3(rng.normal(size=3)), rng.normal(size=3)) for _ in range(2))
         relative = np.empty((3, 3))
         rotation_to_target(pose.homogeneous, target.rotation, relative)
         assert np.allclose(relative, target.rotation @ pose.rotation.T, atol=1e-15)
         error = np.empty(6)
         norm = pose_error_norm(pose.homogeneous, target.translation, pin.log3(relative), error)
-        expected = np.concatenate([target.translation - pose.translation, pin.log3(target.rotation @ pose.rotation.T)])
+        expected = np.concatenate([target.translation - pose.translation, pin.log3(relative)])
+        assert np.allclose(expected[3:], pin.log3(target.rotation @ pose.rotation.T), atol=1e-12)
         assert np.allclose(error, expected, atol=1e-14) and norm == pytest.approx(np.linalg.norm(expected), rel=1e-14)
     # the box: a revolute angle outside its limits wraps by 2 pi when that lands inside, the rest is clipped
     lower, upper = np.array([-1.0, -3.0, 0.0, -0.5]), np.array([1.0, 3.0, 0.5, 6.0])

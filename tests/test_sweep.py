@@ -138,7 +138,7 @@ def test_a_sweep_folder_is_replaced_whole_and_reports_final_paths(tmp_path, monk
     def failing(scenario, out, **kwargs):  # jobs=1 runs the points in this process
         raise UVMSError(f"cannot write to {out!r}")
 
-    monkeypatch.setattr("uvms.scenario.runs.run", failing)
+    monkeypatch.setattr("uvms.scenario.runs.run_scenario", failing)
     second = sweep(SCENARIO, ["solver.gain=[2.0, 3.0]"], out=folder, progress=False)
     assert sorted(path.name for path in folder.iterdir()) == [".uvms-run.json", "sweep.csv", "sweep.png"]  # no point
     assert [row["error"] for row in second.rows] == [f"UVMSError: cannot write to '{folder / f'point_{k}'}'"

@@ -39,9 +39,9 @@ def test_code_in_args_is_refused_through_the_api(tmp_path):
     target = tmp_path / "owned.txt"
     for bad in (payload(target), "1+1 if True else 0", "a b", "'quoted'", "x__class__", "$(find pkg)", "${1}",
                 "a" * 300, float("nan"), float("inf"), [1, 2], {"a": 1}, None):
-        with pytest.raises(uvms.XacroError, match="diameter=.*(not allowed|not finite)"):
+        with pytest.raises(uvms.errors.XacroError, match="diameter=.*(not allowed|not finite)"):
             uvms.load("amundsen2018", args={"diameter": bad})
-    with pytest.raises(uvms.XacroError, match="arg name"):
+    with pytest.raises(uvms.errors.XacroError, match="arg name"):
         uvms.load("amundsen2018", args={"diameter) + (1": 0.2})
     assert not target.exists()
 
@@ -107,11 +107,11 @@ def peak_rss_mib() -> float:
 
 def test_models_no_uvms_has_are_refused_before_pinocchio():
     started, rss = time.perf_counter(), peak_rss_mib()
-    with pytest.raises(uvms.ModelCheckError, match="10000 links; at most 1000"):
+    with pytest.raises(uvms.errors.ModelCheckError, match="10000 links; at most 1000"):
         uvms.load(chain_urdf(10_000, "fixed"))  # Pinocchio's parser segfaults on this chain
-    with pytest.raises(uvms.ModelCheckError, match="400 degrees of freedom; at most 100"):
+    with pytest.raises(uvms.errors.ModelCheckError, match="400 degrees of freedom; at most 100"):
         uvms.load(chain_urdf(401))  # Pinocchio's createData would take 4.5 GiB
-    with pytest.raises(uvms.ModelCheckError, match="MiB of text"):
+    with pytest.raises(uvms.errors.ModelCheckError, match="MiB of text"):
         uvms.load('<robot name="big"><link name="a"/>' + "<!--" + "x" * (33 << 20) + "--></robot>")
     assert time.perf_counter() - started < 20 and peak_rss_mib() - rss < 500
     assert uvms.load(chain_urdf(95)).nv == 94  # a long arm is fine
@@ -129,7 +129,7 @@ def test_models_no_uvms_has_are_refused_before_pinocchio():
     (urdf().replace('type="revolute"', 'type="revolutee"'), "type 'revolutee'; valid"),
 ])
 def test_overflowing_and_contradictory_models_are_refused(text, match):
-    with pytest.raises(uvms.ModelCheckError, match=match):
+    with pytest.raises(uvms.errors.ModelCheckError, match=match):
         uvms.load(text)
 
 
@@ -162,20 +162,20 @@ def test_massless_floating_model_gives_a_model_error_not_linalg():
     robot = uvms.load(massless)
     q = robot.configuration(base=[0, 0, 0, 0, 0, 0], arm=[0.1])
     assert robot.jacobian(q).shape == (6, 7)  # kinematics needs no mass
-    with pytest.raises(uvms.ModelCheckError, match="massless"):
+    with pytest.raises(uvms.errors.ModelCheckError, match="massless"):
         robot.generalized_jacobian(q)
-    with pytest.raises(uvms.ModelCheckError, match="massless"):
+    with pytest.raises(uvms.errors.ModelCheckError, match="massless"):
         robot.base_velocity(q, arm_velocity=np.ones(1))
 
 
 def test_symlink_loop_and_self_include_give_one_line(tmp_path):
     (tmp_path / "a.urdf").symlink_to(tmp_path / "b.urdf")
     (tmp_path / "b.urdf").symlink_to(tmp_path / "a.urdf")
-    with pytest.raises(uvms.ModelFileNotFound, match="symbolic link that leads nowhere"):
+    with pytest.raises(uvms.errors.ModelFileNotFound, match="symbolic link that leads nowhere"):
         uvms.load(tmp_path / "a.urdf")
     looped = tmp_path / "self.urdf.xacro"
     looped.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">'
                       '<xacro:include filename="self.urdf.xacro"/><link name="a"/></robot>')
     for trusted in (True, False):
-        with pytest.raises(uvms.XacroError, match="recursion too deep"):
+        with pytest.raises(uvms.errors.XacroError, match="recursion too deep"):
             uvms.load(looped, trusted=trusted)

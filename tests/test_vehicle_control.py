@@ -94,7 +94,7 @@ def test_an_actuated_result_saves_its_thruster_series(robot, thrusters, tmp_path
         np.testing.assert_array_equal(saved["thrusts"], result.actuation.thrusts)
         assert saved["thrusts"].shape == (len(result.t), len(thrusters.names))
         np.testing.assert_array_equal(saved["t"], result.t)
-    plain = uvms.SimulationResult(t=result.t, q=result.q, v=result.v, robot=robot)  # not actuated: no actuation.npz
+    plain = uvms.sim.SimulationResult(t=result.t, q=result.q, v=result.v, robot=robot)  # not actuated: no actuation.npz
     assert [path.name for path in plain.save(tmp_path / "plain")] == ["trajectory.csv", "trajectory.npz"]
 
 

@@ -69,7 +69,7 @@ def test_visuals_come_from_the_urdf_and_sit_on_their_links(rng):
 
 
 def test_a_composed_robot_is_shown_as_a_skeleton_joining_its_joints(rng):
-    composed = uvms.mount_arm(shipped("hoang2011"), "z1", placement=[0.3, 0.0, -0.2, 0.0, 0.0, 0.5])
+    composed = uvms.model.mount_arm(shipped("hoang2011"), "z1", placement=[0.3, 0.0, -0.2, 0.0, 0.0, 0.5])
     robot = uvms.Robot(composed.model, ee=composed.ee_frames)  # a model without URDF (mount_arm now writes one)
     assert robot.urdf is None
     visual, _ = viewer.geometry_models(robot)
@@ -95,10 +95,10 @@ def test_a_composed_robot_is_shown_as_a_skeleton_joining_its_joints(rng):
 
 
 def test_mesh_uris_are_resolved_and_missing_meshes_left_out():
-    panda = uvms.load(uvms.example_robot_urdf("panda"))
+    panda = uvms.load(uvms.model.example_robot_urdf("panda"))
     xml, missing = viewer.resolved_urdf(panda)
     assert not missing and "package://" not in xml and xml.count(".dae") > 0
-    with pytest.warns(uvms.MissingMeshWarning):
+    with pytest.warns(uvms.model.MissingMeshWarning):
         robot = uvms.load(MISSING_MESH)
     with pytest.warns(UserWarning, match="1 mesh file.*no_such_pkg.*not shown"):
         visual, _ = viewer.geometry_models(robot)
@@ -186,7 +186,7 @@ def accepts(host: str, port: int) -> bool:
 
 def test_viewer_binds_to_localhost_shows_q_and_plays(rng):
     pytest.importorskip("viser")
-    robot = uvms.mount_arm(shipped("hoang2011"), "z1")
+    robot = uvms.model.mount_arm(shipped("hoang2011"), "z1")
     q = robot.random_configuration(rng)
     with viewer.view(robot, q, port=PORT) as shown:
         port = shown.server.get_port()

@@ -320,7 +320,7 @@ def test_bad_workspace_arguments_raise_workspace_errors():
         arguments = {"robot": robot, "frames": ["left_ee"], "samples": 10, **kwargs}
         with pytest.raises(WorkspaceInputError, match=words):
             monte_carlo(**arguments)
-    with pytest.raises(uvms.FrameNotFound):
+    with pytest.raises(uvms.errors.FrameNotFound):
         monte_carlo(robot, ["left_eee"], 10)
     for kwargs, words in [({"directions": 0}, "directions"), ({"roll_bins": 1.5}, "roll_bins"),
                           ({"approach": "w"}, "x, y, z")]:

@@ -1,4 +1,4 @@
-"""uvms: model-driven kinematics of underwater vehicle-manipulator systems, backed by Pinocchio.
+"""uvms: model-driven kinematics and dynamics of underwater vehicle-manipulator systems, backed by Pinocchio.
 
 Vehicles and arms are data (xacro/URDF with a floating or planar root joint);
 Pinocchio computes every pose, Jacobian and momentum map.
@@ -9,88 +9,35 @@ Pinocchio computes every pose, Jacobian and momentum map.
 >>> robot.fk(q).translation.round(3)
 array([ 1.433, -0.806,  0.   ])
 
-The public names, by layer (data flows down this list; no module imports one above it):
+Here are the names a user needs first; everything else lives in its layer, one folder each, data flowing down
+this list: ``uvms.errors`` (every exception), ``uvms.model`` (files in), ``uvms.robot`` (Robot, Configuration,
+Limit), ``uvms.tasks`` (tasks and inequality objectives), ``uvms.solvers`` (the solvers and their
+``SOLVERS`` registry), ``uvms.trajectory``, ``uvms.dynamics`` (hydrodynamics, plant, thrusters),
+``uvms.workspace``, ``uvms.control``, ``uvms.sim`` (the one simulation), ``uvms.viz``, ``uvms.scenario``,
+``uvms.cli``.
 """
 
-# errors: one root, every exception
-from .errors import (
-    BaseMismatchError,
-    ConfigurationError,
-    FrameNotFound,
-    JointNotFound,
-    ModelCheckError,
-    ModelFileNotFound,
-    ModelParseError,
-    NoVehicleError,
-    NotARobot,
-    NumericalError,
-    SolverInputError,
-    UVMSError,
-    WorkspaceInputError,
-    XacroError,
-)
-
-# model: xacro/URDF -> checked Pinocchio model -> Robot
-from .model import BaseGuessWarning, MissingMeshWarning, example_robot_urdf, load, mount_arm, shipped_models
-
-# robot and kinematics
-from .robot.limits import Limit
-from .robot.robot import Robot
-from .robot.configuration import Configuration
-
-# tasks and solvers: what to achieve, how
-from .tasks import DistanceTask, FrameTask, JointLimitPotential, JointTask, PostureTask, VehicleTask
-from .solvers import (
-    CLIKSolver,
-    ConstraintSolver,
-    HQPSolver,
-    PrioritySolver,
-    SetBasedSolver,
-    SolverResult,
-    VariableDamping,
-    initial_configuration,
-    solve_ik,
-)
-
-# trajectories
-from .trajectory import ViaPointTrajectory, ctraj, jtraj
-
-# dynamics: hydrodynamics and the free-floating plant
-from .dynamics import (HydroParameters, LinkHydrodynamics, Plant, ThrustAllocator, allocation_matrix,
-                       generalized_jacobian_added_mass, hydrodynamics_of, thrusters_of)
-
-# control
-from .control import GJMControlError, GJMController, StationKeeping, VelocityRamps, station_keeping
-
-# the one simulation, for the kinematic, passive free-floating and actuated plants, and its result
-from .sim import SimulationResult, simulate
-
-# workspace
-from .workspace import BatchKinematics, WorkspaceResult, monte_carlo
+from . import control, dynamics, errors, model, robot, scenario, sim, solvers, tasks, trajectory, workspace
+from .dynamics import Plant
+from .errors import UVMSError
+from .model import load
+from .robot import Configuration, Limit, Robot
+from .scenario import run_scenario
+from .sim import simulate
+from .solvers import CLIKSolver, ConstraintSolver, HQPSolver, PrioritySolver, SetBasedSolver, solve_ik
+from .tasks import DistanceTask, FrameTask, JointTask, PostureTask, VehicleTask
+from .workspace import monte_carlo
 
 __version__ = "0.1.0"
 
 __all__ = [
-    # errors
-    "BaseMismatchError", "ConfigurationError", "FrameNotFound", "JointNotFound", "ModelCheckError",
-    "ModelFileNotFound", "ModelParseError", "NoVehicleError", "NotARobot", "NumericalError", "UVMSError", "WorkspaceInputError", "XacroError",
-    # model
-    "BaseGuessWarning", "MissingMeshWarning", "example_robot_urdf", "load", "mount_arm", "shipped_models",
-    # robot and kinematics
-    "Configuration", "Limit", "Robot",
-    # tasks and solvers
-    "DistanceTask", "FrameTask", "JointLimitPotential", "JointTask", "PostureTask", "VehicleTask",
-    "CLIKSolver", "ConstraintSolver", "HQPSolver", "PrioritySolver", "SetBasedSolver", "SolverInputError",
-    "SolverResult", "VariableDamping", "initial_configuration", "solve_ik",
-    # trajectories
-    "ViaPointTrajectory", "ctraj", "jtraj",
-    # dynamics
-    "HydroParameters", "LinkHydrodynamics", "Plant", "ThrustAllocator", "allocation_matrix",
-    "generalized_jacobian_added_mass", "hydrodynamics_of", "thrusters_of",
-    # control
-    "GJMControlError", "GJMController", "StationKeeping", "VelocityRamps", "station_keeping",
-    # simulation
-    "SimulationResult", "simulate",
-    # workspace
-    "BatchKinematics", "WorkspaceResult", "monte_carlo",
+    "UVMSError",
+    # a model and its configurations
+    "load", "Robot", "Configuration", "Limit",
+    # what to achieve
+    "FrameTask", "JointTask", "PostureTask", "VehicleTask", "DistanceTask",
+    # how: the solvers (uvms.solvers.SOLVERS names them for scenarios), and pose IK
+    "CLIKSolver", "PrioritySolver", "ConstraintSolver", "SetBasedSolver", "HQPSolver", "solve_ik",
+    # running it: one simulation (kinematic, free-floating Plant, actuated), a scenario file, the workspace
+    "Plant", "simulate", "run_scenario", "monte_carlo",
 ]

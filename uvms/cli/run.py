@@ -19,13 +19,13 @@ HEADLINE_METRICS = ("max_position_error", "final_position_error", "max_orientati
 
 def command_run(options: argparse.Namespace) -> int:
     """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
-    from ..scenario import run  # the scenario layer pulls in scipy and matplotlib
+    from ..scenario import run_scenario  # the scenario layer pulls in scipy and matplotlib
     from ..scenario.verdict import verdict_line
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
     overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else [])]
-    result = run(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
+    result = run_scenario(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
     say(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)", sys.stdout)

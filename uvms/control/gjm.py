@@ -108,7 +108,7 @@ class GJMController:
             the sub-matrix of amundsen2018 sec. III). Position axes get feedback, angular
             ones only the reference's angular velocity (eq. 8).
         gain: K [1/s]: scalar, (3,) diagonal or (3, 3), on the position error; 0 = open loop.
-        damping: fixed lambda >= 0 or a :class:`uvms.VariableDamping` (eq. 6).
+        damping: fixed lambda >= 0 or a :class:`uvms.solvers.VariableDamping` (eq. 6).
         weights: joint weights W (n_arm,) or (n_arm, n_arm) (weighted DLS); None: W = I as in the paper.
         gjm: "rigid", "added_mass" or "fixed_base" (see the module docstring).
         hydro: parameters of the added-mass GJM (None: the model's own).

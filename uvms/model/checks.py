@@ -2,7 +2,7 @@
 
 Pinocchio accepts many inputs that give silently wrong kinematics or dynamics
 (a non-unit axis, a NaN in an origin, a planar joint whose axis it ignores, a
-negative mass, a cylinder of negative length). Each check here raises :class:`uvms.ModelCheckError` naming the
+negative mass, a cylinder of negative length). Each check here raises :class:`uvms.errors.ModelCheckError` naming the
 element and saying what is valid.
 """
 

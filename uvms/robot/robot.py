@@ -40,7 +40,7 @@ class Robot(VehicleAccessors):
             root link 'hull' carries 1810 kg; base='fixed' to hold it)".
         ee_frames: names of the end-effector frames; the first is the default.
         name: model name; source: file it came from (or "<string>").
-        urdf: the URDF text of the model (composed by `uvms.mount_arm` for a mounted arm; None when the
+        urdf: the URDF text of the model (composed by `uvms.model.mount_arm` for a mounted arm; None when the
             Robot was built from a Pinocchio model alone). A base joint that uvms added is not in it:
             :meth:`save_urdf` writes it.
     """
@@ -194,7 +194,7 @@ class Robot(VehicleAccessors):
         """
         if self.urdf is None:
             raise UVMSError(f"{self.name} has no URDF (it was built from a Pinocchio model); load it from a file "
-                            "or compose it with uvms.mount_arm to save it")
+                            "or compose it with uvms.model.mount_arm to save it")
         vehicle_joint = self.model.names[1] if self.base_type != "fixed" else None
         text = urdf_export.self_describing_urdf(self.urdf, self.base_type, vehicle_joint, self.source)
         outputs.write_text(path, text)

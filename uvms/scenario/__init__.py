@@ -12,12 +12,11 @@ the generalized-Jacobian controller of :mod:`uvms.control.gjm` (amundsen2018 eq.
 """
 
 from ..errors import ScenarioError
-from .build import Setup, build
 from .record import RunRecord, read_run_record
 from .resources import resolve_scenario_path, shipped_scenarios
-from .runs import RunResult, compute_metrics, run
+from .runs import RunResult, compute_metrics, run_scenario
 from .schema import SCHEMA, name_from_stem, parse_value, read_scenario, read_toml, scenario_from_raw
 
-__all__ = ["RunRecord", "RunResult", "SCHEMA", "ScenarioError", "Setup", "build", "compute_metrics", "name_from_stem",
-           "parse_value", "read_run_record", "read_scenario", "read_toml", "resolve_scenario_path", "run",
+__all__ = ["RunRecord", "RunResult", "SCHEMA", "ScenarioError", "compute_metrics", "name_from_stem",
+           "parse_value", "read_run_record", "read_scenario", "read_toml", "resolve_scenario_path", "run_scenario",
            "scenario_from_raw", "shipped_scenarios"]

@@ -41,17 +41,15 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..io import outputs
 from ..errors import BagExportError
+from ..io import outputs
+from ..numerics.validate import finite_array, time_vector
 from ..robot.robot import Robot
 from ..sim.result import SimulationResult
-from ..numerics.validate import finite_array, time_vector
+from .tf_tree import WORLD_FRAME, TransformEdge, frame_tree, vehicle_root_link
 
-__all__ = ["BAG_VERSION", "WORLD_FRAME", "BagExportError", "BagSummary", "TransformEdge", "frame_tree", "stamps_ns",
-           "write_bag"]
+__all__ = ["BAG_VERSION", "BagSummary", "stamps_ns", "write_bag"]
 
-#: The world frame of every bag (REP-105): the model's world frame, ENU.
-WORLD_FRAME = "odom"
 #: rosbag2 metadata version written: 8 keeps the QoS as a YAML string, which Humble's player also reads.
 BAG_VERSION = 8
 INSTALL_HINT = "writing a ROS 2 bag needs the 'rosbags' package: pip install 'uvms[ros]' (or pip install rosbags)"
@@ -82,20 +80,6 @@ class BagSummary:
         return "\n".join(lines + [f"  skipped {item}: {reason}" for item, reason in self.skipped.items()])
 
 
-@dataclass(frozen=True)
-class TransformEdge:
-    """One transform of the tf tree: ``parent`` -> ``child`` (frame names); ids are Pinocchio frame ids.
-
-    ``parent_id`` is None for the world frame (``odom``); ``static`` when no joint moves between the two.
-    """
-
-    parent: str
-    child: str
-    parent_id: int | None
-    child_id: int
-    static: bool
-
-
 def load_rosbags() -> dict[str, Any]:
     """The parts of ``rosbags`` used here, imported on first use.
 
@@ -117,55 +101,6 @@ def load_rosbags() -> dict[str, Any]:
     return {"Writer": Writer, "WriterError": WriterError, "mcap": StoragePlugin.MCAP,
             "typestore": get_typestore(Stores.ROS2_HUMBLE), "latched": qos(QosDurability.TRANSIENT_LOCAL),
             "volatile": qos(QosDurability.VOLATILE)}
-
-
-# ------------------------------------------------------------------ the frames
-def vehicle_root_link(robot: Robot) -> int | None:
-    """Frame id of the vehicle's root link (the first link moved by the vehicle joint), None for a fixed base."""
-    if robot.base_type == "fixed":
-        return None
-    return next((index for index, frame in enumerate(robot.model.frames)
-                 if frame.type == pin.FrameType.BODY and frame.parentJoint == 1), None)
-
-
-def _nearest_link(model: pin.Model, index: int) -> int | None:
-    """The nearest link (BODY frame) above frame ``index``; None when the chain reaches the world."""
-    while index != 0:
-        index = model.frames[index].parentFrame
-        if model.frames[index].type == pin.FrameType.BODY:
-            return index
-    return None
-
-
-def frame_tree(robot: Robot) -> tuple[list[TransformEdge], dict[str, str]]:
-    """The tf tree of a robot (module docstring) and the end-effector frames left out, with the reason.
-
-    Raises:
-        BagExportError: a link of the model is called ``odom`` (the world frame of the bag).
-    """
-    model, root = robot.model, vehicle_root_link(robot)
-    links = [index for index, frame in enumerate(model.frames) if frame.type == pin.FrameType.BODY]
-    link_names = {model.frames[index].name for index in links}
-    if WORLD_FRAME in link_names:
-        raise BagExportError(f"{robot.name}: a link is called {WORLD_FRAME!r}, the world frame of a bag (REP-105); "
-                             f"rename the link")
-    skipped = {}
-    children = list(links)
-    for name, index in zip(robot.ee_frames, robot.ee_frame_ids):
-        if model.frames[index].type == pin.FrameType.BODY:
-            continue
-        if name in link_names:
-            skipped[f"tf frame {name}"] = "the end effector is not a link and a link has its name"
-        else:
-            children.append(index)
-    edges = []
-    for child in children:
-        parent = None if child == root else _nearest_link(model, child)
-        parent_joint = 0 if parent is None else model.frames[parent].parentJoint
-        edges.append(TransformEdge(
-            parent=WORLD_FRAME if parent is None else model.frames[parent].name, child=model.frames[child].name,
-            parent_id=parent, child_id=child, static=model.frames[child].parentJoint == parent_joint))
-    return edges, skipped
 
 
 # ------------------------------------------------------------------ the series

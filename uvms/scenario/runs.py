@@ -74,7 +74,7 @@ def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) ->
     return metrics
 
 
-def run(
+def run_scenario(
     scenario_path: str | os.PathLike,
     out: str | os.PathLike | None = None,
     overrides: Sequence[str] = (),

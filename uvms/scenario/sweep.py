@@ -1,6 +1,6 @@
 """Parameter sweeps of a scenario: a grid of overrides run in parallel, one summary table and one plot.
 
-Every grid point is one :func:`uvms.scenario.run` with ``--set`` style overrides (any scenario key, xacro
+Every grid point is one :func:`uvms.scenario.run_scenario` with ``--set`` style overrides (any scenario key, xacro
 args included), executed through joblib: local processes (loky) by default, or the workers of a Dask
 cluster (``backend="dask"``, optional extra ``pip install uvms[dask]``). The table is sorted by point
 index, so it is the same whatever the backend and the number of jobs.
@@ -147,12 +147,12 @@ def worker_count(jobs: int, points: int, remote: bool = False) -> int:
 
 def run_point(scenario: str, index: int, assignments: Sequence[str], out: str) -> dict:
     """Run one grid point (in a worker); an exception becomes the row's ``error`` text, metrics NaN."""
-    from .runs import run
+    from .runs import run_scenario
 
     use_thread_lock_for_progress_bars()
     row: dict[str, Any] = {"point": index, "error": ""}
     try:
-        metrics = run(scenario, out=out, overrides=[*assignments, "outputs.figures=false"], progress=False,
+        metrics = run_scenario(scenario, out=out, overrides=[*assignments, "outputs.figures=false"], progress=False,
                       lock=False).metrics  # out is inside the sweep's own (locked) temporary folder
         row.update({key: float(metrics.get(key, math.nan)) for key in METRICS})
     except Exception as exc:  # noqa: BLE001 - one failed point must not stop the sweep; it is reported

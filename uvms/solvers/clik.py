@@ -50,8 +50,9 @@ class CLIKSolver(Solver):
             ``Limit.joint_positions(robot)``, the model's.
 
     Raises:
-        SolverInputError: a bad gain, weight, damping, alpha or dt, free_floating on a fixed base,
-            enforce_limits without dt or with limits of the wrong size.
+        SolverInputError: a bad gain, weight, damping, alpha or dt, free_floating on a fixed base, or
+            enforce_limits without dt.
+        LimitError: enforce_limits with limits of another size or kind than the arm's positions.
     """
 
     name = "clik"
@@ -80,10 +81,7 @@ class CLIKSolver(Solver):
             if dt is None:
                 raise SolverInputError("enforce_limits needs the step dt > 0")
             self.dt = check_scalar(dt, "dt", positive=True)
-            limit = Limit.joint_positions(robot) if limit is None else limit
-            if limit.size != robot.n_arm or limit.kind != "position":
-                raise SolverInputError(f"enforce_limits needs position limits of the {robot.n_arm} arm coordinates, "
-                                       f"got {limit.size} {limit.kind} limits")
+            limit = Limit.arm(robot, limit, "position", "enforce_limits")
         self.limit = limit
         # the solved coordinates joint clamping keeps: the (unbounded) vehicle unless free floating, then the arm
         self.first = robot.n_vehicle if free_floating else 0  # the first solved column of v

@@ -96,8 +96,7 @@ def initial_configuration(
     check_scalar(tolerance, "tolerance", positive=True)
     check_count(max_iterations, "max_iterations", minimum=1)
     potential = potential or JointLimitPotential(robot)
-    if limit is None:
-        limit = getattr(potential, "limit", None) or Limit.joint_positions(robot)
+    limit = Limit.arm(robot, limit if limit is not None else potential.limit, "position", "initial_configuration")
     if q_init is None:
         q_init = robot.configuration(arm=limit.middle)
     n = robot.n_vehicle

@@ -303,7 +303,7 @@ def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
     """Show a robot at configuration q (default neutral) in the browser; the server keeps running.
 
     Args:
-        robot: any Robot (loaded, or composed by :func:`uvms.mount_arm`).
+        robot: any Robot (loaded, or composed by :func:`uvms.model.mount_arm`).
         q: configuration (nq,).
         port: first port tried, 1..65535 (the next free one is taken when busy), or 0 (any free port); the host
             is always 127.0.0.1.

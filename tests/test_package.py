@@ -1,0 +1,148 @@
+"""The package's shape: layers as folders, imports only downward, no circle, small modules, a small top level.
+
+The import graph is read from the source (every ``import`` and ``from ... import``, function-local ones too), so
+these tests are how the closing numbers of the one-design issue are counted: ``pytest tests/test_package.py``.
+Imports under ``if TYPE_CHECKING:`` name types for annotations only (they never run) and are not counted.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import pkgutil
+from pathlib import Path
+
+import pytest
+
+import uvms
+
+PACKAGE = Path(uvms.__file__).parent
+#: The layers, lowest first: a module may import its own folder and the folders of lower rank only.
+LAYERS = {
+    "errors": 0, "numerics": 1, "io": 1, "robot": 2, "model": 3, "tasks": 4, "trajectory": 4, "dynamics": 4,
+    "workspace": 4, "solvers": 5, "control": 6, "sim": 7, "viz": 8, "scenario": 9, "cli": 10, "": 11,
+}
+MAX_LINES = 400
+MAX_TOP_LEVEL_NAMES = 22
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph() -> dict[str, set[str]]:
+    """module -> the uvms modules it imports."""
+    modules = {module_name(path): path for path in PACKAGE.rglob("*.py")}
+    graph = {}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rsplit(".", 1)[0]
+        imported = set()
+        for node in runtime_nodes(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                base = package.split(".")[:len(package.split(".")) - node.level + 1] if node.level else []
+                target = ".".join(base + ([node.module] if node.module else []))
+                for alias in node.names:
+                    full = f"{target}.{alias.name}"
+                    imported.add(full if full in modules else target)
+            elif isinstance(node, ast.Import):
+                imported.update(alias.name for alias in node.names)
+        graph[name] = {target for target in imported if target in modules and target != name}
+    return graph
+
+
+def runtime_nodes(tree: ast.AST):
+    """Every node of ``tree`` outside ``if TYPE_CHECKING:`` blocks."""
+    for node in ast.iter_child_nodes(tree):
+        if isinstance(node, ast.If) and getattr(node.test, "id", getattr(node.test, "attr", "")) == "TYPE_CHECKING":
+            yield from (child for orelse in node.orelse for child in [orelse, *runtime_nodes(orelse)])
+            continue
+        yield node
+        yield from runtime_nodes(node)
+
+
+def layer(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan)."""
+    index, low, stack, on_stack, found, counter = {}, {}, [], set(), [], [0]
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = counter[0]
+        counter[0] += 1
+        stack.append(node)
+        on_stack.add(node)
+        for target in graph[node]:
+            if target not in index:
+                visit(target)
+                low[node] = min(low[node], low[target])
+            elif target in on_stack:
+                low[node] = min(low[node], index[target])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                member = stack.pop()
+                on_stack.discard(member)
+                component.append(member)
+                if member == node:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for node in graph:
+        if node not in index:
+            visit(node)
+    return found
+
+
+def test_the_top_of_the_package_holds_only_the_entry_errors_and_folders():
+    loose = sorted(path.name for path in PACKAGE.glob("*.py") if path.name not in ("__init__.py", "errors.py"))
+    assert loose == []
+    folders = {path.name for path in PACKAGE.iterdir() if path.is_dir() and not path.name.startswith("__")}
+    assert folders == set(LAYERS) - {"", "errors"}
+
+
+def test_no_module_is_above_400_lines():
+    long = {module_name(path): n for path in PACKAGE.rglob("*.py")
+            if (n := len(path.read_text().splitlines())) > MAX_LINES}
+    assert long == {}
+
+
+def test_imports_only_go_down_the_layers():
+    upward = sorted(f"{source} -> {target}" for source, targets in import_graph().items() for target in targets
+                    if layer(source) != layer(target) and LAYERS[layer(target)] >= LAYERS[layer(source)])
+    assert upward == []
+
+
+def test_there_is_no_import_circle():
+    assert circles(import_graph()) == []
+
+
+def test_the_circle_finder_finds_a_circle():
+    assert circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_no_module_is_hidden_behind_a_name_of_its_package():
+    """``import uvms.x.y as m`` gives the module y, never a function its package exports under the same name."""
+    hidden = []
+    for info in pkgutil.walk_packages(uvms.__path__, "uvms."):
+        if info.name.endswith("__main__"):
+            continue
+        parent, leaf = info.name.rsplit(".", 1)
+        module = importlib.import_module(info.name)
+        if getattr(importlib.import_module(parent), leaf, module) is not module:
+            hidden.append(info.name)
+    assert hidden == []
+
+
+@pytest.mark.parametrize("name", sorted(uvms.__all__))
+def test_every_top_level_name_is_importable(name):
+    assert getattr(uvms, name) is not None
+
+
+def test_the_top_level_is_small():
+    assert len(uvms.__all__) <= MAX_TOP_LEVEL_NAMES
+    assert "UVMSError" in uvms.__all__ and "load" in uvms.__all__
