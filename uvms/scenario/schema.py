@@ -39,7 +39,7 @@ PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
 #: solver.method values: the names of the solvers registered in uvms.solvers.SOLVERS (CLIK, classic/robust task
 #: priority, santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based task
 #: priority (iCAT) and the QP hierarchy).
-SOLVER_METHODS = tuple(SOLVERS)
+SOLVER_METHODS = SOLVERS.keys()  # a live view: a method registered later is valid
 NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
 #: A name read from a scenario that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,
