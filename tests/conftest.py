@@ -1,16 +1,27 @@
-"""Shared fixtures: the shipped models, loaded once per test session."""
+"""What the test files share: the repository's paths, the shipped models (loaded once per test session),
+small model texts, and helpers for CLI output, xacro escapes and finite differences.
+
+pytest puts this folder on sys.path when it loads this file, so a test file in any sub-folder imports these
+with ``from conftest import ...`` (test basenames are unique across the folders: the default import mode).
+"""
 
 from __future__ import annotations
 
 import functools
+from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 from hypothesis import settings
 import pytest
 
 import uvms
 
+ROOT = Path(__file__).resolve().parent.parent  # the repository
+SCENARIOS = ROOT / "scenarios"
+THRUSTER_BOX = ROOT / "tests" / "dynamics" / "thruster_box.urdf"  # a box vehicle with eight thrusters
 SHIPPED = sorted(uvms.model.shipped_models())
+NO_FIGURES = ["outputs.figures=false"]  # a scenario override for runs whose figures are not under test
 
 
 @functools.lru_cache(maxsize=None)
@@ -28,3 +39,125 @@ def rng() -> np.random.Generator:
 # `pytest --hypothesis-seed=N` (a new seed per run) — that is how the zero-DOF crash was found.
 settings.register_profile("reproducible", derandomize=True)
 settings.load_profile("reproducible")
+
+
+# ------------------------------------------------------------------ small models
+INERTIAL = '<inertial><mass value="{mass}"/><inertia ixx="{ixx}" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+
+
+def urdf(axis="0 0 1", xyz="1 0 0", mass="1", ixx="1", root="", extra="") -> str:
+    """A two-link URDF with knobs for the values under test.
+
+    Without ``root`` its root link ``base_link`` is massless (an arm's mounting link), so by uvms.load's base
+    rule the probe is a fixed-base arm; with a vehicle joint in ``root``, ``base_link`` is the vehicle's body.
+    """
+    body = INERTIAL.format(mass=mass, ixx=ixx)
+    return f"""<robot name="probe">{root}
+      <link name="base_link">{body if root else ""}</link>
+      <link name="l1">{body}</link>
+      <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/>
+        <origin xyz="{xyz}"/><axis xyz="{axis}"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+      {extra}</robot>"""
+
+
+FLOATING_ROOT = '<link name="world"/><joint name="float" type="floating"><parent link="world"/><child link="base_link"/></joint>'
+
+#: a one-joint arm on a massless base: a fixed base by the base rule (``base="floating"`` makes it a vehicle)
+FIXED_ARM = """<robot name="arm"><link name="base"/><link name="tip"><inertial><mass value="1"/>
+  <inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="tip"/><axis xyz="0 0 1"/>
+  <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+
+
+MISSING_MESH = """<robot name="meshy">
+  <link name="base_link"><visual><geometry><mesh filename="package://no_such_pkg/hull.stl"/></geometry></visual>
+    <visual><geometry><box size="1 0.5 0.3"/></geometry></visual>
+    <inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="l1"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>
+  </link>
+  <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/><origin xyz="0.5 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>"""
+
+
+# ------------------------------------------------------------------ xacro that escapes
+# Escapes xacro's name filter through python.vars(python.type) to reach io.FileIO, then writes a file.
+ESCAPE = ("[f for b in python.vars(python.type)['__subclasses__'](python.type(()).mro()[1]) if 'io._IOBase' in "
+          "python.repr(b) for r in python.vars(python.type)['__subclasses__'](b) if 'RawIOBase' in python.repr(r) "
+          "for f in python.vars(python.type)['__subclasses__'](r) if 'FileIO' in python.repr(f)][0]"
+          "('{target}', 'w').write(b'owned')")
+
+
+def xacro_file(folder: Path, expression: str) -> Path:
+    path = folder / "model.urdf.xacro"
+    path.write_text(f"""<?xml version="1.0"?>
+<robot name="evil" xmlns:xacro="http://www.ros.org/wiki/xacro">
+  <xacro:property name="payload" value="${{{expression}}}"/>
+  <link name="world"/>
+  <link name="hull{'${payload}'}"><inertial><mass value="10"/>
+    <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="base_joint" type="floating"><parent link="world"/><child link="hull{'${payload}'}"/></joint>
+</robot>
+""")
+    return path
+
+
+# Reaching the modules from xacro's restricted eval: a function's __globals__ through descriptors named by
+# strings (xacro only filters names written in the expression), then builtins.__import__.
+GLOBALS = ("python.vars(python.type(python.vars(python.type(abs_filename))['__globals__']))['__get__']"
+           "(python.vars(python.type(abs_filename))['__globals__'], abs_filename)")
+IMPORT = f"python.vars({GLOBALS}['sys'].modules['builtins'])['__import__']"
+
+
+# ------------------------------------------------------------------ the CLI's output
+ESCAPES = "\x1b]52;c;ZWNobyBwd25lZA==\x07\x1b[2K"  # OSC 52 (write the clipboard), then erase the line
+
+
+def raising(exc: BaseException):
+    """A command handler that raises ``exc``."""
+    def handler(options):
+        raise exc
+    return handler
+
+
+def one_line(capsys) -> str:
+    """What the CLI wrote on stderr since the last read: exactly one line, ending in a newline."""
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1, err
+    assert err.count("\n") == 1, err
+    return err
+
+
+# ------------------------------------------------------------------ kinematics
+def finite_difference_jacobian(robot: uvms.Robot, q: np.ndarray, frame: str, step: float = 1e-6) -> np.ndarray:
+    """Central differences of fk along each velocity direction, on the manifold (pin.integrate).
+
+    Linear rows: d(position)/dv; angular rows: log3(R+ R-^T) / (2 step), in world axes.
+    """
+    columns = []
+    for index in range(robot.nv):
+        direction = np.zeros(robot.nv)
+        direction[index] = step
+        plus = robot.fk(pin.integrate(robot.model, q, direction), frame)
+        minus = robot.fk(pin.integrate(robot.model, q, -direction), frame)
+        linear = (plus.translation - minus.translation) / (2 * step)
+        angular = pin.log3(plus.rotation @ minus.rotation.T) / (2 * step)
+        columns.append(np.concatenate([linear, angular]))
+    return np.array(columns).T
+
+
+def xiang_eq6(theta: np.ndarray) -> pin.SE3:
+    """0T5 of xiang2019 eq. 6, lengths converted from mm to m."""
+    t1, t2, t3, t4 = theta
+    c1, s1 = np.cos(t1), np.sin(t1)
+    c2, s2 = np.cos(t2), np.sin(t2)
+    c23, s23 = np.cos(t2 + t3), np.sin(t2 + t3)
+    c234, s234 = np.cos(t2 + t3 + t4), np.sin(t2 + t3 + t4)
+    reach = 0.080 + 0.370 * c2 + 0.308 * c234 + 0.220 * c23
+    rotation = np.array([
+        [c1 * c234, -c1 * s234, -s1],
+        [s1 * c234, -s1 * s234, c1],
+        [-s234, -c234, 0.0],
+    ])
+    position = np.array([c1 * reach, s1 * reach, -0.370 * s2 - 0.220 * s23 - 0.308 * s234])
+    return pin.SE3(rotation, position)

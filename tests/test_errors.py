@@ -9,28 +9,8 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import shipped
+from conftest import FLOATING_ROOT, shipped, urdf
 from uvms.cli import main
-
-INERTIAL = '<inertial><mass value="{mass}"/><inertia ixx="{ixx}" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
-
-
-def urdf(axis="0 0 1", xyz="1 0 0", mass="1", ixx="1", root="", extra="") -> str:
-    """A two-link URDF with knobs for the values under test.
-
-    Without ``root`` its root link ``base_link`` is massless (an arm's mounting link), so by uvms.load's base
-    rule the probe is a fixed-base arm; with a vehicle joint in ``root``, ``base_link`` is the vehicle's body.
-    """
-    body = INERTIAL.format(mass=mass, ixx=ixx)
-    return f"""<robot name="probe">{root}
-      <link name="base_link">{body if root else ""}</link>
-      <link name="l1">{body}</link>
-      <joint name="j1" type="revolute"><parent link="base_link"/><child link="l1"/>
-        <origin xyz="{xyz}"/><axis xyz="{axis}"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
-      {extra}</robot>"""
-
-
-FLOATING_ROOT = '<link name="world"/><joint name="float" type="floating"><parent link="world"/><child link="base_link"/></joint>'
 
 
 def test_a_valid_user_urdf_loads(tmp_path):

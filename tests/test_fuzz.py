@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
-from test_jacobians import finite_difference_jacobian
+from conftest import finite_difference_jacobian
 
 import uvms
 from uvms.robot.limits import Limit

@@ -8,11 +8,10 @@ from __future__ import annotations
 
 import importlib.util
 import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from conftest import ROOT
 spec = importlib.util.spec_from_file_location("notebook_execute", ROOT / "notebooks" / "execute.py")
 notebook_execute = importlib.util.module_from_spec(spec)
 sys.modules["notebook_execute"] = notebook_execute  # dataclasses look their module up

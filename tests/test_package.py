@@ -12,9 +12,11 @@ import importlib
 import pkgutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import uvms
+from conftest import shipped
 
 PACKAGE = Path(uvms.__file__).parent
 #: The layers, lowest first: a module may import its own folder and the folders of lower rank only.
@@ -146,3 +148,27 @@ def test_every_top_level_name_is_importable(name):
 def test_the_top_level_is_small():
     assert len(uvms.__all__) <= MAX_TOP_LEVEL_NAMES
     assert "UVMSError" in uvms.__all__ and "load" in uvms.__all__
+
+
+def test_one_result_type_and_no_old_paths():
+    """One simulate, one result type; the module paths and names of before the layer folders are gone (no shims)."""
+    from uvms.control import gjm
+    from uvms.dynamics import plant
+    from uvms.sim.result import SimulationResult
+
+    robot = shipped("hoang2011")
+    result = uvms.simulate(uvms.Plant(robot), np.ones(robot.n_arm), robot.neutral(), 0.1, 0.01)
+    assert isinstance(result, SimulationResult) and result.plant.command.shape == (11, robot.n_arm)
+    assert result.ee_position is None and result.arrays().keys() == {"t", "q", "v"}
+    assert result.tracking is None and result.actuation is None
+    assert result.integrator == "rk4" and not hasattr(result, "method")
+    for module, name in ((plant, "simulate_plant"), (plant, "PlantResult"), (gjm, "simulate_gjm"), (gjm, "GJMResult"),
+                         (uvms, "PlantResult"), (uvms, "GJMResult"), (uvms, "simulate_plant"), (uvms, "simulate_gjm"),
+                         (uvms, "simulate_actuated"), (uvms, "actuation_metrics")):
+        assert not hasattr(module, name), f"{module.__name__}.{name}"
+    for old in ("uvms.plant", "uvms.plotting", "uvms.sandbox", "uvms.sweep", "uvms.moved", "uvms.sim.actuated",
+                "uvms.sim.simulate", "uvms.control.station_keeping"):
+        with pytest.raises(ModuleNotFoundError):
+            importlib.import_module(old)
+    with pytest.raises(TypeError):  # integrator is the one name of the choice
+        uvms.simulate(uvms.Plant(robot), None, robot.neutral(), 0.1, 0.01, method="euler")

@@ -1,0 +1,93 @@
+"""`uvms info` (uvms.cli.info) on every shipped model and on a URDF a user writes; every line the CLI prints is
+escaped."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from conftest import ESCAPES, FLOATING_ROOT, one_line, raising, ROOT, SHIPPED, urdf
+from uvms.cli import main
+
+
+SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_info_on_shipped_models(name, capsys):
+    assert main(["info", name]) == 0
+    out = capsys.readouterr().out
+    assert "checks      passed" in out
+    assert re.search(r"total mass  \d+\.\d{3} kg", out)
+
+
+def test_info_on_a_user_urdf(tmp_path, capsys):
+    path = tmp_path / "my_rov.urdf"
+    path.write_text(urdf(root=FLOATING_ROOT))
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "floating: vehicle DOF 6, arm DOF 1" in out
+    assert "total mass  2.000 kg" in out
+    assert main(["info", str(path).replace("my_rov.urdf", "my_rov.urdf"), "--ee", "base_link"]) == 0
+
+
+def test_info_xacro_args_change_the_model(capsys):
+    assert main(["info", "hoang2011"]) == 0
+    default = capsys.readouterr().out
+    assert main(["info", "hoang2011", "--arg", "l1=1.0", "--arg", "vehicle_mass=200"]) == 0
+    changed = capsys.readouterr().out
+    assert "xyz [ 0.4 -1.7  0. ]" in default and "xyz [ 0.4 -2.3  0. ]" in changed
+    assert "total mass  209.000 kg" in changed
+
+
+def test_info_base_option_adds_a_vehicle(tmp_path, capsys):
+    path = tmp_path / "arm.urdf"
+    path.write_text(urdf())
+    assert main(["info", str(path), "--base", "planar"]) == 0
+    assert "planar: vehicle DOF 3, arm DOF 1" in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ terminal escapes never reach the terminal
+def test_control_characters_never_reach_the_terminal(tmp_path, monkeypatch, capsys):
+    scenario = tmp_path / "evil.toml"
+    key = json.dumps(ESCAPES)  # a TOML basic string: \u001b...
+    scenario.write_text(SANTOS.read_text().replace('"../models', f'"{ROOT}/models').replace(
+        "[solver]", f"[solver]\n{key} = 1"))
+    assert main(["run", str(scenario), "--out", str(tmp_path / "out")]) == 2
+    err = one_line(capsys)
+    assert "unknown key(s) solver.\\x1b]52;c;ZWNobyBwd25lZA==\\x07\\x1b[2K" in err
+    assert not any(ord(c) < 32 or 0x7f <= ord(c) <= 0x9f for c in err.rstrip("\n"))
+    assert main(["run", str(SANTOS), "--out", str(tmp_path / "out"), "--set", "solver.\u202egain\u2066=1"]) == 2
+    err = one_line(capsys)
+    assert "solver.\\u202egain\\u2066" in err and "\u202e" not in err and "\u2066" not in err
+
+    monkeypatch.setattr("uvms.cli.command_info", raising(RuntimeError("\x9b2J\x7f\x1b[31m")))  # internal error
+    assert main(["info", "hoang2011"]) == 2
+    assert "RuntimeError: \\x9b2J\\x7f\\x1b[31m" in one_line(capsys)
+    stop = KeyboardInterrupt()
+    stop.add_note("nothing was written to out/\x1b[2K")
+    monkeypatch.setattr("uvms.cli.command_info", raising(stop))  # and the interrupt note
+    assert main(["info", "hoang2011"]) == 130
+    assert capsys.readouterr().err == "uvms: interrupted; nothing was written to out/\\x1b[2K\n"
+    from uvms.cli import printable  # the one function every line goes through
+
+    assert printable("a\tb\u202cc\u2069") == "a\\x09b\\u202cc\\u2069"
+
+
+def test_names_from_a_model_reach_the_terminal_escaped(tmp_path, capsys):
+    """uvms info prints link and joint names from a stranger's URDF: a bidi override (XML allows it, unlike C0
+    controls) arrives escaped, so a name cannot reorder what the terminal shows."""
+    evil = "arm\u202egpj.exe\u2066"
+    urdf = tmp_path / "evil.urdf"
+    urdf.write_text(f"""<robot name="r{evil}">
+  <link name="hull"><inertial><mass value="10"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="{evil}"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="j{evil}" type="revolute"><parent link="hull"/><child link="{evil}"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+</robot>""")
+    assert main(["info", str(urdf)]) == 0
+    captured = capsys.readouterr()
+    assert "\u202e" not in captured.out + captured.err and "\u2066" not in captured.out + captured.err
+    assert "arm\\u202egpj.exe\\u2066" in captured.out

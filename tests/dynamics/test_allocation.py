@@ -1,0 +1,126 @@
+"""Thrust allocation (uvms.dynamics.allocation): exact when attainable, the bounded least-squares optimum when not."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.optimize import lsq_linear, minimize
+
+import uvms
+from conftest import THRUSTER_BOX
+from uvms.dynamics.allocation import ThrustAllocator
+from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
+from uvms.errors import SolverInputError
+
+
+@pytest.fixture(scope="module", params=["box", "bluerov2_alpha5"])
+def vehicle(request):
+    robot = uvms.load(THRUSTER_BOX if request.param == "box" else request.param)
+    thrusters = thrusters_of(robot)
+    return allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper
+
+
+def test_random_attainable_wrenches_are_reproduced_without_a_solver(vehicle):
+    matrix, lower, upper = vehicle
+    allocator = ThrustAllocator(matrix, lower, upper)
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        thrusts = rng.uniform(0.3 * lower, 0.3 * upper)  # well inside: B^+ B f stays inside too
+        wrench = matrix @ thrusts
+        result = allocator.allocate(wrench)
+        assert result.solver == "pinv" and result.attainable and not result.saturated.any()
+        np.testing.assert_allclose(result.achieved_wrench, wrench, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(result.thrusts, np.linalg.pinv(matrix) @ wrench, atol=1e-9)  # minimum norm
+
+
+def test_attainable_wrench_whose_pinv_solution_saturates_is_found_by_the_bounded_stage(vehicle):
+    """Near a thruster's limit B^+ tau leaves the bounds although another allocation attains tau exactly."""
+    matrix, lower, upper = vehicle
+    allocator = ThrustAllocator(matrix, lower, upper)
+    rng = np.random.default_rng(2)
+    found = 0
+    for _ in range(300):
+        wrench = matrix @ rng.uniform(lower, upper)  # attainable by construction
+        result = allocator.allocate(wrench)
+        assert np.all(result.thrusts >= lower - 1e-9) and np.all(result.thrusts <= upper + 1e-9)
+        np.testing.assert_allclose(result.achieved_wrench, wrench, rtol=0, atol=1e-7)
+        assert result.attainable
+        found += result.solver == "bounded"
+    assert found > 10
+
+
+def _slsqp_optimum(matrix, lower, upper, wrench):
+    """min |B f - tau|^2 s.t. bounds by SLSQP: an independent solver."""
+    start = np.clip(np.linalg.pinv(matrix) @ wrench, lower, upper)
+    result = minimize(lambda f: 0.5 * np.sum((matrix @ f - wrench) ** 2), start,
+                      jac=lambda f: matrix.T @ (matrix @ f - wrench), bounds=list(zip(lower, upper)),
+                      method="SLSQP", options={"ftol": 1e-15, "maxiter": 500})
+    return result.x
+
+
+def test_unattainable_wrenches_give_the_bounded_least_squares_optimum(vehicle):
+    matrix, lower, upper = vehicle
+    allocator = ThrustAllocator(matrix, lower, upper)
+    rng = np.random.default_rng(3)
+    for _ in range(30):
+        wrench = rng.normal(size=6) * np.array([250, 250, 250, 40, 40, 40])
+        result = allocator.allocate(wrench)
+        assert not result.attainable and result.saturated.any()
+        assert np.all(result.thrusts >= lower - 1e-9) and np.all(result.thrusts <= upper + 1e-9)
+        np.testing.assert_allclose(result.residual, wrench - result.achieved_wrench, atol=1e-12)
+        trf = lsq_linear(matrix, wrench, bounds=(lower, upper), method="trf", tol=1e-13).x  # another method
+        slsqp = _slsqp_optimum(matrix, lower, upper, wrench)  # and another solver
+        for other in (trf, slsqp):  # the optimum wrench is unique: no other method does better, and the closer
+            # another feasible point's residual comes to ours, the closer its wrench: at the optimum of a convex
+            # least squares |r_other|^2 >= |r_ours|^2 + |B f_other - B f_ours|^2 (SLSQP stops ~1e-8 short here)
+            gap = np.sum((wrench - matrix @ other) ** 2) - np.sum(result.residual**2)
+            assert np.sum((matrix @ other - result.achieved_wrench) ** 2) <= gap + 1e-6
+            np.testing.assert_allclose(result.achieved_wrench, matrix @ other, atol=1e-2)
+        # the least-norm stage: no smaller thrust vector gives the same wrench
+        assert np.linalg.norm(result.thrusts) <= np.linalg.norm(trf) + 1e-6
+
+
+def test_priorities_keep_the_higher_group_first(vehicle):
+    """Heading, depth and attitude before surge and sway (yaw and surge share the horizontal thrusters): the first
+    group is attained whenever it can be on its own, the second is the best the rest allows."""
+    matrix, lower, upper = vehicle
+    groups = [("yaw", "z", "roll", "pitch"), ("x", "y")]
+    allocator = ThrustAllocator(matrix, lower, upper, priorities=groups)
+    plain = ThrustAllocator(matrix, lower, upper)
+    first, second = [5, 2, 3, 4], [0, 1]
+    rng = np.random.default_rng(4)
+    improved = 0
+    for _ in range(20):
+        wrench = np.zeros(6)
+        wrench[first] = matrix[first] @ rng.uniform(0.8 * lower, 0.8 * upper)  # attainable on its own
+        wrench[second] = rng.normal(size=2) * 400  # far beyond the horizontals
+        result = allocator.allocate(wrench)
+        np.testing.assert_allclose(result.achieved_wrench[first], wrench[first], atol=1e-6)
+        assert np.all(result.thrusts >= lower - 1e-9) and np.all(result.thrusts <= upper + 1e-9)
+        best = _second_stage_optimum(matrix, lower, upper, wrench, first, second)
+        np.testing.assert_allclose(np.linalg.norm(result.residual[second]), best, rtol=1e-4, atol=1e-6)
+        improved += np.linalg.norm(plain.allocate(wrench).residual[first]) > 1e-3
+    assert improved > 10  # without priorities the first group would have been given up
+
+
+def _second_stage_optimum(matrix, lower, upper, wrench, first, second):
+    """min |B_2 f - tau_2| s.t. B_1 f = tau_1 and bounds, by SLSQP (the first group attainable)."""
+    start = lsq_linear(matrix[first], wrench[first], bounds=(lower, upper), method="bvls").x
+    constraint = {"type": "eq", "fun": lambda f: matrix[first] @ f - wrench[first], "jac": lambda f: matrix[first]}
+    result = minimize(lambda f: 0.5 * np.sum((matrix[second] @ f - wrench[second]) ** 2), start,
+                      jac=lambda f: matrix[second].T @ (matrix[second] @ f - wrench[second]),
+                      bounds=list(zip(lower, upper)), constraints=[constraint], method="SLSQP",
+                      options={"ftol": 1e-15, "maxiter": 1000})
+    return float(np.linalg.norm(matrix[second] @ result.x - wrench[second]))
+
+
+def test_bad_allocation_input():
+    matrix = np.eye(6)
+    with pytest.raises(SolverInputError, match="lower <= 0 <= upper"):
+        ThrustAllocator(matrix, np.ones(6), np.full(6, 2.0))
+    with pytest.raises(SolverInputError, match="unknown task axis 'surge'"):
+        ThrustAllocator(matrix, -np.ones(6), np.ones(6), priorities=[("surge",)])
+    with pytest.raises(SolverInputError, match="6 numbers"):
+        ThrustAllocator(matrix, -np.ones(6), np.ones(6)).allocate(np.zeros(5))
+    with pytest.raises(SolverInputError, match="finite"):
+        ThrustAllocator(matrix, -np.ones(6), np.ones(6)).allocate(np.array([np.nan, 0, 0, 0, 0, 0]))

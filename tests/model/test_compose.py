@@ -1,0 +1,54 @@
+"""Composing models (uvms.model.compose): an example-robot-data arm mounted on a vehicle (Pinocchio appendModel)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import uvms
+from conftest import shipped
+
+
+@pytest.mark.parametrize("arm_name", ["panda", "ur5", "z1"])
+def test_mounted_arm_kinematics_compose(arm_name, rng):
+    vehicle = shipped("santos2006")
+    placement = pin.SE3(pin.rpy.rpyToMatrix(np.pi, 0.0, 0.3), np.array([2.5, 0.1, -0.5]))
+    robot = uvms.model.mount_arm(vehicle, arm_name, placement=placement, prefix="arm_")
+    arm = uvms.load(uvms.model.example_robot_urdf(arm_name), base="fixed")  # panda's root link has mass: bolt it down
+    assert robot.base_type == "planar"
+    assert robot.n_arm == vehicle.n_arm + arm.nv
+    arm_mass = sum(inertia.mass for inertia in arm.model.inertias)  # with the fixed root link's own mass
+    assert robot.total_mass == pytest.approx(vehicle.total_mass + arm_mass, rel=1e-12)
+    arm_ee = arm.ee_frames[0]
+    assert robot.ee_frames == ["ee", "arm_" + arm_ee]
+    for _ in range(10):
+        q = robot.random_configuration(rng)
+        q_arm = q[vehicle.nq:]
+        expected = robot.fk(q, "base_link") * placement * arm.fk(q_arm, arm_ee)
+        assert np.allclose(robot.fk(q, "arm_" + arm_ee).homogeneous, expected.homogeneous, atol=1e-12)
+        # the vehicle's own arm is unchanged by the mounting
+        assert np.allclose(robot.fk(q, "ee").homogeneous, vehicle.fk(q[: vehicle.nq], "ee").homogeneous, atol=1e-12)
+
+
+def test_mount_rejects_name_clashes_and_unknown_arms():
+    vehicle = shipped("hoang2011")
+    once = uvms.model.mount_arm(vehicle, "z1", prefix="left_")
+    with pytest.raises(uvms.UVMSError, match="clash"):
+        uvms.model.mount_arm(once, "z1", prefix="left_")
+    assert uvms.model.mount_arm(once, "z1", prefix="right_").n_arm == vehicle.n_arm + 2 * (once.n_arm - vehicle.n_arm)
+    with pytest.raises(uvms.UVMSError, match="fixed root"):
+        uvms.model.mount_arm(vehicle, "santos2006")
+    with pytest.raises(uvms.errors.ModelFileNotFound, match="available: .*panda"):
+        uvms.model.mount_arm(vehicle, "no_such_arm")
+    with pytest.raises(uvms.errors.FrameNotFound):
+        uvms.model.mount_arm(vehicle, "z1", parent_frame="hull")
+
+
+def test_mount_placement_as_six_numbers_matches_se3():
+    vehicle = shipped("hoang2011")
+    values = [0.4, -0.6, 0.1, 0.1, 0.2, 0.3]
+    a = uvms.model.mount_arm(vehicle, "z1", placement=values)
+    b = uvms.model.mount_arm(vehicle, "z1", placement=pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.array(values[:3])))
+    q = a.random_configuration(1)
+    assert np.allclose(a.fk(q, a.ee_frames[1]).homogeneous, b.fk(q, b.ee_frames[1]).homogeneous, atol=1e-14)

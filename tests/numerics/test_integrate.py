@@ -1,0 +1,80 @@
+"""Integration (uvms.numerics.integrate): the RK4 stages' square solve, the trajectory samples an RK4 step reuses,
+and one step per scheme for q alone and for (q, v), exact on the manifold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import uvms
+from conftest import FIXED_ARM
+from uvms.errors import NumericalError
+from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator, rk4_step, solve_square
+from uvms.trajectory import CirclePath, PathTrajectory, RecentSamples, TrapezoidLaw
+
+
+def test_the_square_solve_of_the_rk4_stages_is_numpy_solve_and_refuses_a_singular_system(rng):
+    for size in (3, 6, 12):
+        matrix, rhs = rng.normal(size=(size, size)) + 3 * np.eye(size), rng.normal(size=size)
+        assert np.array_equal(solve_square(matrix, rhs), np.linalg.solve(matrix, rhs))
+    with pytest.raises(NumericalError, match="singular 2x2"):
+        solve_square(np.ones((2, 2)), np.ones(2))
+
+
+def misses(dt: float, steps: int) -> int:
+    """Steps whose first time k dt is not bit for bit the last stage's (k - 1) dt + dt of the step before."""
+    return sum((k - 1) * dt + dt != k * dt for k in range(1, steps))
+
+
+def test_recent_samples_evaluate_the_trajectory_twice_per_rk4_step():
+    law = TrapezoidLaw(speed=0.5, duration=4.0, accel_time=1.0)
+    trajectory = PathTrajectory(CirclePath([0.0, 2.0, 0.0], [0.0, -2.0, 0.0]), law)
+    times: list[float] = []
+
+    def counted(t: float):
+        times.append(t)
+        return trajectory(t)
+
+    recent = RecentSamples(counted)
+    robot = uvms.load("hoang2011")
+    model, dt = robot.model, 0.02
+    q = robot.neutral()
+
+    def rate(t, q, x):
+        sample = recent(t)
+        assert sample is recent(t)  # the same object for the same t, while it is kept
+        return np.r_[sample.twist[:2], 0.0, np.zeros(robot.nv - 3)], x
+
+    for k in range(50):
+        t = k * dt
+        q, _ = rk4_step(model, rate, t, q, np.zeros(0), dt, rate(t, q, np.zeros(0)))
+    # t, t + dt/2 (the second and third stages), t + dt: the last is the next step's first when k dt rounds alike
+    assert len(set(times)) == len(times) == 2 * 50 + 1 + misses(dt, 50)
+    sample = recent(0.5)
+    assert np.array_equal(sample.pose.translation, trajectory(0.5).pose.translation)
+    assert np.array_equal(sample.twist, trajectory(0.5).twist)
+    assert isinstance(sample.pose, pin.SE3)
+
+
+# ------------------------------------------------------------ one step per scheme, for q alone and for (q, v)
+def test_one_step_per_scheme_serves_q_alone_and_q_with_x_exactly_on_the_manifold():
+    """A rigid body spinning about a fixed axis: q alone (kinematic), then (q, v) with v' = 0 (dynamic)."""
+    model = uvms.load(FIXED_ARM, base="floating").model  # a free vehicle (nq = 7 + 1): spin it, arm at rest
+    twist = np.concatenate([[0.2, -0.1, 0.3, 0.5, -0.4, 0.7], [0.0]])
+    exact = pin.integrate(model, pin.neutral(model), twist * 1.0)
+    empty = np.zeros(0)
+    for name in INTEGRATORS:
+        errors = []
+        for steps in (10, 20):
+            dt, q, v = 1.0 / steps, pin.neutral(model), twist.copy()
+            for k in range(steps):
+                q, v = STEPS[name](model, lambda t, qq, vv: (vv, np.zeros(7)), k * dt, q, v, dt, (v, np.zeros(7)))
+            q_alone = pin.neutral(model)
+            for k in range(steps):
+                q_alone, _ = STEPS[name](model, lambda t, qq, x: (twist, empty), k * dt, q_alone, empty, dt, (twist, empty))
+            assert np.array_equal(q, q_alone)
+            errors.append(np.linalg.norm(pin.difference(model, q, exact)))
+        assert errors[1] <= 1e-12  # a constant body twist is the exponential map: exact for both
+    with pytest.raises(uvms.UVMSError, match="unknown method 'rk45'; valid: euler, rk4"):
+        check_integrator("rk45", "method")

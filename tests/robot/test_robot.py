@@ -1,0 +1,55 @@
+"""Robot facts in one place (uvms.robot.robot, uvms.robot.bases): the base table, joint lookup, base values, the URDF
+parsed once."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import uvms
+from uvms.robot.bases import BASE_TYPES
+
+
+@pytest.mark.parametrize("name", ["hoang2011", "xiang2019"])
+def test_base_values_invert_configuration(name, rng):
+    robot = uvms.load(name)
+    for _ in range(50):
+        values = rng.uniform(-1.0, 1.0, robot.n_vehicle)  # angles inside (-pi/2, pi/2): a unique rpy
+        q = robot.configuration(base=values, arm=np.zeros(robot.n_arm))
+        assert robot.base_values(q) == pytest.approx(values, abs=1e-12)
+    assert len(robot.base_values(robot.neutral())) == len(robot.base.pose_names) == robot.n_vehicle
+
+
+def test_base_table_matches_pinocchio():
+    for name, base in BASE_TYPES.items():
+        if base.root_joint is not None:
+            joint = base.root_joint()
+            assert (joint.nq, joint.nv) == (base.nq, base.nv), name
+        assert len(base.velocity_names) == len(base.velocity_labels) == base.nv
+        assert len(base.pose_names) == len(base.pose_labels) == base.nv
+    robot = uvms.load("santos2006")
+    assert robot.base is BASE_TYPES["planar"] and robot.base.task_axes == ("x", "y", "yaw")
+
+
+def test_joint_lookup_and_urdf_root():
+    robot = uvms.load("xiang2019")
+    joint = robot.joint(robot.arm_joint_names[2])
+    assert joint.name == robot.arm_joint_names[2] and joint.idx_q == robot.model.idx_qs[robot.joint_id(joint.name)]
+    with pytest.raises(uvms.errors.JointNotFound, match="close names"):
+        robot.joint(robot.arm_joint_names[2] + "x")
+    assert robot.urdf_root is robot.urdf_root  # parsed once
+    assert len(robot.urdf_root.findall("link")) == robot.urdf.count("<link ") > 8
+
+
+def test_a_run_checks_its_configurations_once_and_refuses_a_bad_row_by_its_index(rng):
+    robot = uvms.load("bluerov2_alpha5")
+    rows = np.array([robot.random_configuration(rng) for _ in range(5)])
+    assert np.array_equal(robot.check_configurations(rows), rows)
+    bad = rows.copy()
+    bad[3, 3:7] *= 1.5  # the vehicle's quaternion of row 3
+    with pytest.raises(uvms.UVMSError, match="row 3: the rotation part of joint .* has norm 1.5"):
+        robot.check_configurations(bad)
+    bad = rows.copy()
+    bad[1, -1] = np.nan
+    with pytest.raises(uvms.UVMSError, match="non-finite"):
+        robot.check_configurations(bad)

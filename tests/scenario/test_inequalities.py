@@ -1,0 +1,171 @@
+"""Set-based task priority and the QP hierarchy in scenarios (uvms.scenario.inequalities): [[inequalities]],
+solver.method, metrics.
+
+The shipped scenarios: bluerov2_alpha5_panel (a point on a panel near the seabed, level, inside the limits),
+bluerov2_alpha5_free_floating_limit (non-redundant, the limit wins over the task) and hoang2011_w1_set_based
+(the circle with set-based joint limits instead of the potential).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from uvms.cli import main
+from uvms.errors import ScenarioError
+from uvms.scenario import read_scenario, run_scenario
+from uvms.tasks.objectives import INEQUALITY_TYPES
+
+from conftest import NO_FIGURES, SCENARIOS
+PANEL = SCENARIOS / "bluerov2_alpha5_panel.toml"
+FREE_FLOATING = SCENARIOS / "bluerov2_alpha5_free_floating_limit.toml"
+MAX_TILT = 0.0873  # [rad] the panel scenario's vehicle_attitude
+
+
+@pytest.fixture(scope="module")
+def panel_runs(tmp_path_factory) -> dict:
+    """The panel scenario under the three methods (clik: the inequalities monitored only)."""
+    root = tmp_path_factory.mktemp("panel")
+    return {method: run_scenario(PANEL, root / method, [*NO_FIGURES, f"solver.method={method}"], progress=False)
+            for method in ("set_based", "hqp", "clik")}
+
+
+@pytest.mark.parametrize("method", ["set_based", "hqp"])
+def test_panel_reached_level_inside_every_limit(panel_runs, method):
+    metrics = panel_runs[method].metrics
+    assert metrics["inequalities_enforced"] is True
+    assert metrics["final_position_error"] <= 1e-8  # measured 7e-10: the task is feasible with the inequalities
+    assert metrics["max_joint_limit_violation"] == 0.0
+    assert metrics["max_vehicle_tilt"] <= MAX_TILT  # measured 0.0767 (set_based), 0.0872 (hqp) rad
+    assert metrics["inequalities"]["seabed_clearance"]["value_range"][0] >= 0.5  # measured 0.526, 0.504 m
+    assert metrics["inequalities"]["panel_clearance"]["value_range"][0] >= 0.45
+    assert metrics["min_clearance"] == min(metrics["inequalities"][name]["value_range"][0]
+                                           for name in ("seabed_clearance", "panel_clearance"))
+    assert metrics["max_joint_speed_ratio"] <= 1.0 + 1e-9
+    assert all(entry.get("max_violation", 0.0) == 0.0 for entry in metrics["inequalities"].values())
+    assert metrics["verdict"]["ok"] and metrics["verdict"]["within_inequalities"]
+
+
+def test_panel_without_the_inequalities_tilts_and_comes_too_close_to_the_seabed(panel_runs):
+    clik, set_based = panel_runs["clik"].metrics, panel_runs["set_based"].metrics
+    assert clik["inequalities_enforced"] is False
+    assert clik["max_vehicle_tilt"] > 0.12  # measured 0.1325 rad = 7.6 deg against 5
+    assert clik["inequalities"]["seabed_clearance"]["max_violation"] > 0.05  # measured 6.2 cm below the 0.5 m
+    assert not clik["verdict"]["within_inequalities"]
+    assert any("monitored only" in warning for warning in clik["verdict"]["warnings"])
+    # the same objectives were active over the same share of the run: the recorder is the solver's, not the method's
+    assert set(clik["inequalities"]) == set(set_based["inequalities"])
+
+
+def test_the_recorded_series_give_the_metrics(panel_runs):
+    result = panel_runs["set_based"]
+    simulation, inequalities = result.simulation, result.setup.inequalities
+    names = [objective.name for objective in inequalities.objectives]
+    assert names == ["joint_limits", "vehicle_attitude", "seabed_clearance", "panel_clearance"]
+    assert simulation.objective_value.shape == (501, 4 + 1 + 1 + 1)  # four arm joints, tilt, two distances
+    tilt = simulation.objective_value[:, 4]
+    assert np.max(tilt) == pytest.approx(result.metrics["max_vehicle_tilt"], abs=1e-12)  # two computations agree
+    attitude = result.metrics["inequalities"]["vehicle_attitude"]
+    assert attitude["active_fraction"] == pytest.approx(np.mean(simulation.objective_activation[:, 4] > 0))
+    assert 0.3 < attitude["active_fraction"] < 0.9  # measured 0.59: active while the vehicle pitches
+    seabed = simulation.objective_value[:, 5]
+    vehicle_z = np.array([result.setup.robot.base_values(q)[2] for q in simulation.q])
+    assert np.abs(seabed - (vehicle_z + 6.0)).max() <= 1e-12  # the distance to z = -6
+    saved = np.load(result.files[[p.name for p in result.files].index("trajectory.npz")])
+    assert np.array_equal(saved["objective_value"], simulation.objective_value)
+
+
+def test_non_redundant_free_floating_the_limit_wins_and_the_run_says_so(tmp_path):
+    set_based = run_scenario(FREE_FLOATING, tmp_path / "sb", NO_FIGURES, progress=False).metrics
+    hqp = run_scenario(FREE_FLOATING, tmp_path / "hqp", [*NO_FIGURES, "solver.method=hqp", "solver.damping_epsilon=0",
+                                                "solver.damping_max=0"], progress=False).metrics
+    clik = run_scenario(FREE_FLOATING, tmp_path / "clik", [*NO_FIGURES, "solver.method=clik"], progress=False).metrics
+    assert clik["max_joint_limit_violation"] > 0.35  # measured: the elbow 0.40 rad past 3.5
+    for metrics in (set_based, hqp):
+        assert metrics["max_joint_limit_violation"] == 0.0
+        assert metrics["final_position_error"] > 0.02  # measured 0.0265 (set_based), 0.0246 (hqp)
+        assert metrics["max_joint_speed_ratio"] <= 1.0 + 1e-9
+        assert not metrics["verdict"]["within_tolerance"]
+        assert any("position error" in warning for warning in metrics["verdict"]["warnings"])
+    elbow_top = set_based["inequalities"]["joint_limits"]["value_range"][1]
+    assert 3.3 < elbow_top <= 3.45  # held inside the margin (3.5 - 0.05)
+    assert hqp["inequalities"]["joint_limits"]["value_range"][1] <= 3.45 + 1e-9
+
+
+def test_hoang2011_set_based_far_from_its_limits_is_clik_without_the_potential(tmp_path):
+    """Over the first 40 s no joint is within the band: set-based = CLIK with alpha = 0, the potential run differs."""
+    options = [*NO_FIGURES, "simulation.duration=40"]
+    set_based = run_scenario("hoang2011_w1_set_based", tmp_path / "sb", options, progress=False)
+    plain = run_scenario("hoang2011_w1", tmp_path / "clik", [*options, "solver.alpha=0"], progress=False)
+    potential = run_scenario("hoang2011_w1", tmp_path / "potential", options, progress=False)
+    assert set_based.metrics["inequalities"]["joint_limits"]["active_fraction"] == 0.0
+    assert np.abs(set_based.simulation.q - plain.simulation.q).max() <= 1e-9  # integrated over 2000 RK4 steps
+    assert np.abs(set_based.simulation.q - potential.simulation.q).max() > 0.1
+    assert set_based.metrics["max_position_error"] <= 1e-9
+
+
+# ------------------------------------------------------------------------------------ the scenario file
+def write(tmp_path: Path, extra: str, top: str = "") -> Path:
+    """The panel scenario with its [[inequalities]] replaced by ``extra`` (and ``top`` before every table)."""
+    text = re.sub(r"(?ms)^\[\[inequalities\]\].*?(?=^\[solver\])", "", PANEL.read_text())
+    path = tmp_path / "s.toml"
+    path.write_text(top + text.replace('path = "../models', f'path = "{SCENARIOS.parent}/models') + extra)
+    return path
+
+
+def test_unknown_types_and_keys_are_refused_with_the_valid_ones(tmp_path):
+    with pytest.raises(ScenarioError, match="close names: joint_limits") as error:
+        read_scenario(write(tmp_path, '[[inequalities]]\ntype = "joint_limit"\n'))
+    assert "inequalities[0]" in str(error.value)
+    with pytest.raises(ScenarioError, match="close names: max_tilt"):
+        read_scenario(write(tmp_path, '[[inequalities]]\ntype = "vehicle_attitude"\nmax_tlt = 0.1\n'))
+    with pytest.raises(ScenarioError, match="needs frame, point, normal"):
+        read_scenario(write(tmp_path, '[[inequalities]]\ntype = "plane_clearance"\n'))
+    with pytest.raises(ScenarioError, match="must be finite"):
+        read_scenario(write(tmp_path, '[[inequalities]]\ntype = "vehicle_attitude"\nmax_tilt = nan\n'))
+    with pytest.raises(ScenarioError, match="array of tables"):
+        read_scenario(write(tmp_path, "", top="inequalities = 3\n"))
+    assert set(INEQUALITY_TYPES) >= {"joint_limits", "joint_velocity", "vehicle_attitude", "plane_clearance",
+                                     "manipulability"}
+
+
+def test_model_names_and_solver_keys_are_checked_when_built(tmp_path):
+    bad_frame = '[[inequalities]]\ntype = "plane_clearance"\nframe = "jaws"\npoint = [0, 0, -6]\nnormal = [0, 0, 1]\n'
+    with pytest.raises(ScenarioError, match=r"inequalities\[0\] \(plane_clearance\).*'jaws'.*vehicle"):
+        run_scenario(write(tmp_path, bad_frame), tmp_path / "o", NO_FIGURES, progress=False)
+    twice = '[[inequalities]]\ntype = "vehicle_attitude"\nmax_tilt = 0.1\n' * 2
+    with pytest.raises(ScenarioError, match="two objectives are called 'vehicle_attitude'"):
+        run_scenario(write(tmp_path, twice), tmp_path / "o", NO_FIGURES, progress=False)
+    tilt = '[[inequalities]]\ntype = "vehicle_attitude"\nmax_tilt = 0.1\n'
+    with pytest.raises(ScenarioError, match="joint_limits"):
+        run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "solver.alpha=1"], progress=False)
+    with pytest.raises(ScenarioError, match="not used by solver.method = 'hqp'"):
+        run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "solver.method=hqp", "solver.damping=0.1"],
+            progress=False)
+    with pytest.raises(ScenarioError, match="kinematic plant only"):
+        run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "plant.type=rigid"], progress=False)
+    assert not (tmp_path / "o").exists()  # refused before anything is written
+
+
+def test_manipulability_is_measured_and_the_cli_refuses_in_one_line(tmp_path, capsys):
+    extra = '[[inequalities]]\ntype = "manipulability"\nframe = "ee"\nmin = 0.001\nband = 0.002\n'
+    metrics = run_scenario(write(tmp_path, extra), tmp_path / "m", [*NO_FIGURES, "trajectory.duration=2",
+                                                           "trajectory.accel_time=0.5"], progress=False).metrics
+    entry = metrics["inequalities"]["manipulability(ee)"]
+    assert metrics["min_manipulability"] == entry["value_range"][0] > 0.001
+    assert entry["type"] == "manipulability" and entry["level"] == 0
+    path = write(tmp_path, '[[inequalities]]\ntype = "clearance"\n')
+    assert main(["run", str(path), "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown inequality type 'clearance'" in err[0] and "plane_clearance" in err[0]
+
+
+def test_a_run_folder_has_the_inequality_figure(tmp_path):
+    result = run_scenario(PANEL, tmp_path / "f", ["trajectory.duration=2", "trajectory.accel_time=0.5"], progress=False)
+    assert (tmp_path / "f" / "inequalities.png").stat().st_size > 20_000
+    assert json.loads((tmp_path / "f" / "metrics.json").read_text())["inequalities"]["vehicle_attitude"]["level"] == 2
+    assert tmp_path / "f" / "inequalities.png" in result.files

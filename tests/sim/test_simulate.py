@@ -1,0 +1,132 @@
+"""uvms.simulate (uvms.sim.loop): one function for the kinematic, passive free-floating and actuated plants; one
+immutable result."""
+
+from __future__ import annotations
+
+import dataclasses
+import types
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import uvms
+from conftest import shipped
+from uvms.control.gjm import GJMController, VelocityRamps
+from uvms.dynamics.actuated import ActuatedPlant
+from uvms.errors import ConfigurationError, StepCountError, UVMSError
+from uvms.sim import SimulationResult, simulate
+
+INFO = types.SimpleNamespace(sigma_min=1.0, damping=0.0, limits_active=())
+
+
+def hoang_run():
+    """A kinematic run on hoang2011: a pseudo-inverse law on x, y, yaw towards a moving goal."""
+    robot = shipped("hoang2011")
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"))
+    q0 = robot.configuration(base=[0.0, 0.0, 0.0], arm=[1.0, 0.5, 0.2])
+    start = robot.fk(q0)
+
+    def goal(t):
+        return pin.SE3(start.rotation, start.translation + np.array([0.3 * np.sin(t), 0.2 * t, 0.0]))
+
+    def controller(t, q, v=None):
+        error = np.array([*(goal(t).translation - robot.fk(q).translation)[:2], 0.0])
+        return np.linalg.pinv(robot.jacobian(q)[[0, 1, 5]]) @ (2.0 * error), INFO
+
+    return robot, simulate(robot, controller, q0, 2.0, 0.01, task=task, desired=goal)
+
+
+def test_a_kinematic_run_equals_the_former_simulate_bit_for_bit():
+    """The numbers of the former ``uvms.sim.simulate.simulate`` (main before the one simulate) on the same run."""
+    robot, result = hoang_run()
+    former = ["0x1.30602ca34acfbp-3", "0x1.027c22b62653bp-3", "0x1.f9abd5f685664p-1", "0x1.410373aa96d18p-3",
+              "0x1.03abead52f08ep+0", "0x1.c2e9bf3dd9dddp-2", "0x1.681e0efb848a0p-4"]
+    assert [value.hex() for value in result.q[-1]] == former
+    assert result.position_error[-1].hex() == "0x1.923866382de16p-4"
+    assert result.task_error[-1][0].hex() == "0x1.3d80884f5b400p-9"
+    assert result.axes == ("x", "y", "yaw") and result.t.shape == (201,) and result.v.shape == (201, robot.nv)
+    assert result.plant is None and result.tracking is None and result.actuation is None
+
+
+def test_a_free_floating_rigid_run_conserves_momentum():
+    """The GJM controller on the rigid plant, from rest: the momentum stays zero to 1e-9 [N s, N m s]."""
+    robot = shipped("hoang2011")
+    q0 = robot.configuration(base=[0.0, 0.0, 0.0], arm=[2.0, 0.4, 0.4])
+    reference = VelocityRamps.trapezoid(robot.fk(q0).translation, [-0.05, -0.05, 0.0], 2.0, 0.5)
+    controller = GJMController(robot, reference, axes=("x", "y"), gain=1.0)
+    result = simulate(uvms.Plant(robot, added_mass=False, damping=False), controller, q0, 2.0, 0.005)
+    assert np.max(result.plant.momentum_drift()) <= 1e-9  # 9e-11 measured
+    assert np.abs(result.plant.momentum).max() <= 1e-9
+    assert np.abs(result.v[:, :3]).max() > 1e-3  # the base does move: the arm pushes it around
+    tracking = result.tracking
+    assert tracking.frame == controller.frame and tracking.position_rows == (0, 1)
+    np.testing.assert_array_equal(result.position_error, tracking.position_error)  # no task: the controller's error
+    assert result.max_position_error < 6e-3  # 5.3 mm: the 100 ms servos lag (no feedforward)
+    assert set(result.plant_arrays()) == set(uvms.sim.result.PLANT_SERIES)
+
+
+def test_an_actuated_run_equals_the_former_simulate_actuated():
+    """Station keeping in a 0.3 m/s current through ``simulate(ActuatedPlant(plant, thrusters), ...)``: the numbers
+    of the former ``simulate_actuated``."""
+    robot = shipped("bluerov2_alpha5")
+    plant = uvms.Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
+    thrusters = uvms.dynamics.thrusters_of(robot)
+    station = robot.configuration(base=np.zeros(6), arm=[3.0, 1.8, 1.8, 1.0, 0.0])
+    result = simulate(ActuatedPlant(plant, thrusters), uvms.control.station_keeping(plant, thrusters, station, 0.01), station,
+                      0.5, 0.01)
+    assert [value.hex() for value in result.q[-1, :3]] == ["0x1.36e47b01927d9p-5", "0x1.b028791c97595p-14",
+                                                           "-0x1.2c40a8ad9222fp-12"]
+    assert result.actuation.thrusts[-1].sum().hex() == "-0x1.9c2a2f76b3d00p-4"
+    error = result.actuation.controller["vehicle_position_error"]
+    assert error[-1].hex() == "0x1.36e70a0a2976ep-5"
+    metrics = result.actuation_metrics()
+    assert metrics["final_vehicle_position_error"] == error[-1] and 0.0 < metrics["max_thrust_ratio"] <= 1.0
+    assert np.all(result.actuation.thrusts <= thrusters.upper) and np.all(result.actuation.thrusts >= thrusters.lower)
+    assert result.plant.momentum.shape == (51, 6) and result.tracking is None
+
+
+def test_a_result_cannot_be_mutated():
+    robot, result = hoang_run()
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.q = result.q[::-1]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        result.plant = None
+    plant_run = simulate(uvms.Plant(robot), np.ones(robot.n_arm), robot.neutral(), 0.1, 0.01)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        plant_run.plant.command = np.zeros((11, robot.n_arm))
+    blue = shipped("bluerov2_alpha5")
+    actuated = ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue))
+    run = simulate(actuated, lambda t, q, v, f: uvms.dynamics.ActuatedCommand(
+        np.zeros(blue.n_arm), np.zeros(actuated.n), {"custom": t}), blue.neutral(), 0.02, 0.01)
+    with pytest.raises(TypeError):  # the controller's series are read-only
+        run.actuation.controller["custom"] = np.zeros(3)
+    np.testing.assert_array_equal(run.actuation.controller["custom"], [0.0, 0.01, 0.02])
+    assert isinstance(dataclasses.replace(result, axes=()), SimulationResult)  # a new result, the old one unchanged
+    assert result.axes == ("x", "y", "yaw")
+
+
+def test_what_a_system_cannot_run_is_refused_before_it_runs():
+    robot = shipped("hoang2011")
+    task = uvms.FrameTask(robot, axes=("x", "y"))
+
+    def never(*args):
+        raise AssertionError("nothing may run")
+
+    with pytest.raises(StepCountError, match="control_dt must be 0 for a kinematic run"):
+        simulate(robot, never, robot.neutral(), 1.0, 0.1, control_dt=0.2)
+    with pytest.raises(StepCountError, match="control_dt must be 0 .* or a positive multiple of dt = 0.1 s"):
+        simulate(uvms.Plant(robot), never, robot.neutral(), 1.0, 0.1, control_dt=0.15)
+    with pytest.raises(UVMSError, match="task and desired go together"):
+        simulate(robot, never, robot.neutral(), 1.0, 0.1, task=task)
+    with pytest.raises(ConfigurationError, match="a kinematic run has no velocity state"):
+        simulate(robot, never, robot.neutral(), 1.0, 0.1, v0=np.zeros(robot.nv))
+    blue = shipped("bluerov2_alpha5")
+    with pytest.raises(ConfigurationError, match="thrusts0 .* must lie within"):
+        ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue), thrusts0=np.full(8, 1e6))
+    with pytest.raises(StepCountError, match="runs once per step"):
+        simulate(ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue)), never, blue.neutral(), 1.0, 0.1,
+                 control_dt=0.2)
+    with pytest.raises(UVMSError, match="recorded extra, which no series of SimulationResult holds"):
+        simulate(robot, lambda t, q, v: (np.zeros(robot.nv), INFO), robot.neutral(), 0.1, 0.1,
+                 recorders=[lambda t, q, x, sample: {"extra": 1.0}])

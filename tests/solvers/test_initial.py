@@ -1,0 +1,49 @@
+"""The initial configuration (uvms.solvers.initial): initial.fixed_base keeps the vehicle's roll and pitch and
+still reaches the target; its names are checked."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from conftest import shipped
+from uvms.errors import ScenarioError
+from uvms.scenario import scenario_from_raw
+from uvms.scenario.build import build
+
+
+def level_vehicle_scenario(fixed: list[str]) -> dict:
+    """bluerov2_alpha5: q0 optimized to put the end effector on a pose reached with roll 0.05, pitch -0.03."""
+    robot = shipped("bluerov2_alpha5")
+    target = robot.fk(robot.configuration(base=np.array([0.2, 0.1, -0.1, 0.05, -0.03, 0.4]),
+                                          arm=np.array([2.0, 1.2, 1.0, 2.5, 0.005])))
+    raw = {"model": {"path": "bluerov2_alpha5"},
+           "trajectory": {"type": "line", "start": target.translation.tolist(),
+                          "orientation": pin.rpy.matrixToRpy(target.rotation).tolist(),
+                          "end_offset": [0.0, 0.0, 0.05], "duration": 1.0},
+           "initial": {"method": "optimize", "base": [0.0, 0.0, 0.0, 0.05, -0.03, 0.0], "fixed_base": fixed},
+           "simulation": {"dt": 0.05}}
+    return scenario_from_raw(raw, "level.toml")
+
+
+def test_initial_fixed_base_keeps_roll_and_pitch_and_still_reaches_the_target():
+    robot = shipped("bluerov2_alpha5")
+    free = build(level_vehicle_scenario([]))
+    assert np.max(np.abs(robot.base_values(free.q0)[3:5] - [0.05, -0.03])) > 0.05  # it tilts when free to
+    level = build(level_vehicle_scenario(["roll", "pitch"]))
+    np.testing.assert_allclose(robot.base_values(level.q0)[3:5], [0.05, -0.03], atol=1e-9)
+    assert level.initial_residual <= 1e-10
+    target = level.task.target  # the start pose of the trajectory
+    pose = robot.fk(level.q0, level.task.frame)
+    np.testing.assert_allclose(pose.translation, target.translation, atol=1e-9)
+    np.testing.assert_allclose(pose.rotation, target.rotation, atol=1e-9)
+
+
+def test_initial_fixed_base_names_are_checked():
+    with pytest.raises(ScenarioError, match="unknown vehicle coordinate 'rol'; close names: roll"):
+        build(level_vehicle_scenario(["rol"]))
+    scenario = level_vehicle_scenario(["roll"])
+    scenario["initial"]["method"] = "given"
+    with pytest.raises(ScenarioError, match="initial.fixed_base .* needs initial.method = 'optimize'"):
+        build(scenario)
