@@ -24,13 +24,23 @@ Which GJM (``gjm``):
 * ``"fixed_base"`` — the arm columns J_m of the ordinary Jacobian, as if the vehicle
   were held still (the traditional scheme the paper contrasts with; for comparisons).
 
-This is CLIK with ``free_floating=True`` (:class:`uvms.solvers.CLIKSolver`, built once): a ``FrameTask``
+By default this is CLIK with ``free_floating=True`` (:class:`uvms.solvers.CLIKSolver`, built once): a ``FrameTask``
 (log orientation error, no gain on its angular rows) gives nu_c; a
 :class:`uvms.robot.configuration.Configuration` whose momentum rows are the chosen ones (rigid centroidal
 map, added-mass-augmented mass matrix, or a vehicle held still) gives the GJM by the one formula of
 :mod:`uvms.robot.kinematics`; the inverse is the solvers' damped weighted inverse (fixed damping or
 ``VariableDamping``). GJM^# applied to another twist x (the servo feedforward below) is the same CLIK in open
 loop (K = 0) with x as its feedforward.
+
+Any solver. ``solver`` is any class of :data:`uvms.solvers.SOLVERS`, built with ``free_floating=True`` on the
+levels ``[*levels, task]``: inequality objectives above the task (``levels``, e.g. joint limits, for a solver
+that enforces them, :attr:`~uvms.solvers.base.Solver.enforces_inequalities`: set_based, hqp), then the task.
+Every solver solves the arm only; the vehicle, passive, follows momentum conservation through the chosen GJM.
+A solver that needs a level the passive vehicle cannot give (the kinematic constraint's first level, a
+vehicle task) is refused. With levels above the task the solution is no longer linear in nu_c: the
+feedforward's command term below is then the open-loop solver fed d nu_c/dt minus the same fed 0 (what the
+objectives ask of themselves at q), the task's share of it; with the task alone (fed 0 gives 0) it is
+GJM^# d nu_c/dt as before.
 
 Joint servos. The plant's joints follow their commanded velocity through a
 first-order servo of time constant tau (amundsen2018: 100 ms). Sent as is, w is
@@ -44,7 +54,7 @@ reference acceleration.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,7 +67,7 @@ from ..robot.kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_m
 from ..robot.robot import Robot
 from ..numerics.inverses import VariableDamping, weights_factor
 from ..robot.configuration import Configuration, MomentumRows
-from ..solvers import CLIKSolver, SolverResult
+from ..solvers import CLIKSolver, Solver, SolverResult
 from ..tasks.frame import FrameTask
 from ..trajectory.cartesian import PoseSample
 from ..trajectory.ramps import VelocityRamps
@@ -114,11 +124,17 @@ class GJMController:
         hydro: parameters of the added-mass GJM (None: the model's own).
         motor_feedforward: tau [s] of the joint servos to invert (u = w + tau dw/dt); 0: send w.
         difference_step: time step [s] of the forward difference of dGJM^#/dt.
+        solver: the solver class (any of :data:`uvms.solvers.SOLVERS`), built with ``free_floating=True``.
+        levels: the levels above the task, highest first (each an objective or a list of them: inequality
+            objectives, speed limits), for a solver that enforces them.
+        options: more keywords of ``solver`` (e.g. ``dt`` [s] for hqp, ``eta`` for set_based).
 
     Raises:
-        GJMControlError: a fixed base, unknown axes or GJM kind, bad gain or tau.
-        SolverInputError: weights not (n_arm,) positive nor (n_arm, n_arm) symmetric positive definite, or a
-            bad damping.
+        GJMControlError: a fixed base, unknown axes or GJM kind, bad gain or tau; levels for a solver that does
+            not enforce inequalities; a solver that needs a fixed number of levels (its first the vehicle's);
+            weights, damping or an option the solver does not take.
+        SolverInputError: weights not (n_arm,) positive nor (n_arm, n_arm) symmetric positive definite, a
+            bad damping, or a bad option or level of the solver.
         UVMSError: the model has no hydrodynamic parameters and ``gjm = "added_mass"``.
     """
 
@@ -136,6 +152,9 @@ class GJMController:
         hydro: HydroParameters | None = None,
         motor_feedforward: float = 0.0,
         difference_step: float = 1e-6,
+        solver: type[Solver] = CLIKSolver,
+        levels: Sequence = (),
+        options: Mapping[str, object] | None = None,
     ) -> None:
         if robot.base_type == "fixed":
             raise GJMControlError(f"{robot.name} has a fixed base: GJM control needs a free-floating (or planar) vehicle")
@@ -176,12 +195,13 @@ class GJMController:
             self.hydro = hydrodynamics_of(robot) if hydro is None else hydro
             self.links = resolve_links(self.model, self.hydro)
         self._momentum = self._momentum_rows()
-        # the law, built once: CLIK on the generalized Jacobian (closed loop with K on the position rows), and
-        # the same in open loop, whose feedforward is any twist x: GJM^# x (the servo feedforward)
-        options = dict(weights=self.weights, damping=damping, free_floating=True)
-        self.solver = CLIKSolver(robot, self.task, gain=self.task_gain, **options)
+        self.levels = list(levels)
+        options = _solver_options(solver, self.levels, self.weights, damping, options or {})
+        # the law, built once: the solver on the generalized Jacobian (closed loop with K on the position rows),
+        # and the same in open loop, whose feedforward is any twist x: GJM^# x (the servo feedforward)
+        self.solver = solver(robot, [*self.levels, self.task], gain=self.task_gain, **options)
         self._open_task = FrameTask(robot, self.frame, axes=self.axes, orientation="log")
-        self._open = CLIKSolver(robot, self._open_task, gain=0.0, **options)
+        self._open = solver(robot, [*self.levels, self._open_task], gain=0.0, **options)
 
     # ------------------------------------------------------------- Jacobians
     def _momentum_rows(self) -> MomentumRows | None:
@@ -263,7 +283,10 @@ class GJMController:
         jacobian = solution.state.jacobian(self.frame_id)
         command_rate = reference.acceleration.copy()  # d nu_c / dt = a_d + K (v_d - p')
         command_rate[:3] += self.gain @ (reference.twist[:3] - jacobian[:3] @ v)
-        rate_of_rates = (ahead - rates) / h + self._inverse_times(solution.state, command_rate, reference.pose)
+        command_term = self._inverse_times(solution.state, command_rate, reference.pose)
+        if self.levels:  # the objectives' own share, fed no task velocity (module docstring)
+            command_term = command_term - self._inverse_times(solution.state, np.zeros(6), reference.pose)
+        rate_of_rates = (ahead - rates) / h + command_term
         return rates + self.motor_feedforward * rate_of_rates
 
 
@@ -289,3 +312,31 @@ def _task_gain(gain: np.ndarray, rows: list[int]) -> np.ndarray:
             if row < 3 and column < 3:
                 task_gain[i, j] = gain[row, column]
     return task_gain
+
+
+def _solver_options(solver: type[Solver], levels: list, weights: np.ndarray | None, damping: float | VariableDamping,
+                    options: Mapping[str, object]) -> dict:
+    """The keywords of ``solver`` (free floating, the weights and damping when given, ``options``), checked.
+
+    Raises:
+        GJMControlError: not a solver class, levels for a solver that does not enforce inequalities, a solver
+            of a fixed number of levels, or a keyword it does not take.
+    """
+    if not (isinstance(solver, type) and issubclass(solver, Solver)):
+        raise GJMControlError(f"solver must be a class of uvms.solvers.SOLVERS, got {solver!r}")
+    if levels and not solver.enforces_inequalities:
+        raise GJMControlError(f"levels above the task need a solver that enforces inequalities (set_based, hqp); "
+                              f"{solver.__name__} would not use them")
+    if solver.level_count is not None:
+        raise GJMControlError(f"{solver.__name__} needs {solver.level_count} levels, the first of them a constraint "
+                              f"such as a vehicle task, which a passive vehicle cannot follow (it has no actuators): "
+                              f"use clik, task_priority, set_based or hqp, or a plant with thrusters")
+    given = dict(options, free_floating=True)
+    if weights is not None:
+        given["weights"] = weights
+    if not (isinstance(damping, (int, float)) and damping == 0.0):
+        given["damping"] = damping
+    refused = [key for key in given if key not in solver.options()]
+    if refused:
+        raise GJMControlError(f"{solver.__name__} takes no {refused[0]!r} (it takes {', '.join(solver.options())})")
+    return given

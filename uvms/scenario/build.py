@@ -10,7 +10,6 @@ import pinocchio as pin
 
 from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
-from ..dynamics.hydrodynamics import HydroParameters
 from ..dynamics.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..model.loader import load
@@ -21,6 +20,7 @@ from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, R
                           VelocityRamps)
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .inequalities import ScenarioInequalities, build_inequalities
+from .plant import check_kinematic_plant, make_plant
 from .schema import NUMBER, changed_keys
 from .tracking import TrackingController
 
@@ -70,16 +70,16 @@ def build(scenario: dict) -> Setup:
     trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
     duration = float(scenario["simulation"]["duration"] or trajectory.duration)
     if scenario["plant"]["type"] != "kinematic":
-        if scenario["inequalities"]:
-            raise ScenarioError(f"[[inequalities]] run on the kinematic plant only; plant.type = "
-                                f"{scenario['plant']['type']!r} drives a passive vehicle by the GJM controller")
         if scenario["plant"]["thrusters"]:
+            if scenario["inequalities"]:
+                raise ScenarioError(f"[[inequalities]] run on the kinematic plant only; plant.type = "
+                                    f"{scenario['plant']['type']!r} drives a passive vehicle by the GJM controller")
             actuation = make_actuation(robot, make_plant(robot, scenario["plant"]), task, trajectory, q0, scenario)
             return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
                          actuation=actuation)
-        plant, controller = make_plant_controller(robot, task, trajectory, scenario)
+        plant, controller, inequalities = make_plant_controller(robot, task, trajectory, scenario)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
-                     control_dt=float(scenario["plant"]["control_dt"]))
+                     control_dt=float(scenario["plant"]["control_dt"]), inequalities=inequalities)
     check_kinematic_plant(scenario["plant"])
     inequalities = (build_inequalities(robot, scenario["inequalities"], SOLVERS[scenario["solver"]["method"]])
                     if scenario["inequalities"] else None)
@@ -222,78 +222,55 @@ def make_law(section: dict, path_length: float):
     return PolynomialLaw(distance=distance, duration=duration, degree=3 if section["law"] == "cubic" else 5)
 
 
-def check_kinematic_plant(section: dict) -> None:
-    """Reject [plant] keys that only a dynamic plant uses when plant.type = 'kinematic'."""
-    unused = changed_keys({"plant": section}, "plant", ("gjm", "motor_feedforward", "control_dt", "gravity",
-                                                        "added_mass", "damping", "current", "thrusters"))
-    if unused:
-        raise ScenarioError(f"plant.{unused[0]} needs a dynamic plant: the kinematic one moves the vehicle by momentum "
-                            f"conservation (solver.free_floating) or as commanded; set plant.type = 'rigid' or "
-                            f"'hydrodynamic'")
+def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
+                          scenario: dict) -> tuple[Plant, GJMController, ScenarioInequalities | None]:
+    """The plant, the GJM controller (amundsen2018 eq. 4-8) on solver.method and the [[inequalities]] of a
+    dynamic [plant] (passive vehicle): the solver built with free_floating on the levels [inequalities (when it
+    enforces them, else monitored), task].
 
-
-def make_plant(robot: Robot, section: dict) -> Plant:
-    """The free-floating plant of a [plant] section (type rigid or hydrodynamic)."""
-    tau = float(section["motor_time_constant"])
-    if not tau > 0:
-        raise ScenarioError(f"plant.motor_time_constant must be > 0 s (the joint servos' time constant), got {tau:g}")
-    current = None
-    if section["current"]:
-        if len(section["current"]) != 3:
-            raise ScenarioError(f"plant.current must have 3 numbers (world ENU [m/s]), got {len(section['current'])}")
-        current = np.array(section["current"], dtype=float)
-    if robot.base_type == "fixed":
-        raise ScenarioError(f"plant.type = {section['type']!r} needs a floating or planar vehicle; "
-                            f"{robot.name} has a fixed base (set model.base or use plant.type = 'kinematic')")
-    if section["type"] == "rigid":
-        for key in ("added_mass", "damping"):
-            if section[key]:
-                raise ScenarioError(f"plant.{key} = true needs plant.type = 'hydrodynamic'; a rigid plant has no fluid")
-        if section["gravity"] or current is not None:
-            raise ScenarioError("plant.gravity and plant.current need plant.type = 'hydrodynamic' (buoyancy, fluid); "
-                                "a rigid plant floats weightless in vacuum")
-        return Plant(robot, HydroParameters(source="rigid plant (no fluid)"), gravity=False, motor_time_constant=tau,
-                     added_mass=False, damping=False)
-    added_mass = True if section["added_mass"] is None else section["added_mass"]
-    damping = True if section["damping"] is None else section["damping"]
-    plant = Plant(robot, None, gravity=section["gravity"], motor_time_constant=tau, current=current,
-                  added_mass=added_mass, damping=damping)
-    if not plant.links:
-        raise ScenarioError(f"plant.type = 'hydrodynamic' needs hydrodynamic parameters, and {robot.source} has none; "
-                            f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.dynamics.hydrodynamics), "
-                            f"or use plant.type = 'rigid'")
-    return plant
-
-
-def make_plant_controller(robot: Robot, task: FrameTask, trajectory, scenario: dict) -> tuple[Plant, GJMController]:
-    """The plant and the GJM controller of amundsen2018 (eq. 4-8) for a dynamic [plant]."""
+    Raises:
+        ScenarioError: free_floating off (the vehicle has no actuators), a [vehicle] task, a method of fixed
+            levels, solver.alpha or enforce_limits, a gain that is not K on the position error, a bad control_dt.
+    """
     section, solver = scenario["plant"], scenario["solver"]
-    if SOLVERS[solver["method"]] is not CLIKSolver or not solver["free_floating"]:
-        raise ScenarioError(f"plant.type = {section['type']!r} leaves the vehicle passive: it needs solver.method = "
-                            f"'clik' and solver.free_floating = true (the joints are commanded through the "
-                            f"generalized Jacobian, plant.gjm)")
+    cls = solver_class(solver)
+    passive = f"plant.type = {section['type']!r} without thrusters leaves the vehicle passive (no actuators)"
+    if not solver["free_floating"]:
+        raise ScenarioError(f"{passive}: the solver cannot command its velocity; set solver.free_floating = true "
+                            f"(the joints through the generalized Jacobian, plant.gjm), plant.thrusters = true "
+                            f"(an actuated vehicle) or plant.type = 'kinematic'")
+    if changed_keys(scenario, "vehicle", ("velocities", "heading", "depth")):
+        raise ScenarioError(f"{passive}: a [vehicle] task cannot be followed; remove it (solver.method = "
+                            f"{solver['method']!r} then prioritizes the task alone) or set plant.thrusters = true")
     if solver["alpha"] or solver["enforce_limits"]:
-        raise ScenarioError("solver.alpha and solver.enforce_limits are not supported with a dynamic plant "
-                            "(the GJM controller of amundsen2018 has no null-space term or joint clamping)")
+        raise ScenarioError("solver.alpha and solver.enforce_limits are not supported with a dynamic plant; keep the "
+                            "joints inside their limits with an [[inequalities]] table of type 'joint_limits' and "
+                            "solver.method = 'set_based' or 'hqp'")
     plant = make_plant(robot, section)
     gain = np.asarray(solver["gain"], dtype=float)
     if gain.shape not in ((), (3,)):
         raise ScenarioError(f"solver.gain with a dynamic plant is K on the position error: one number or 3 "
                             f"(x, y, z) [1/s], got {solver['gain']!r}")
-    damping = solver_damping(solver)
-    weights = solver_weights(robot, solver, free_floating=True)
     control_dt, dt = float(section["control_dt"]), float(scenario["simulation"]["dt"])
     ratio = control_dt / dt
     if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
         raise ScenarioError(f"plant.control_dt must be 0 (continuous controller) or a multiple of simulation.dt = "
                             f"{dt:g} s, got {control_dt:g}")
+    inequalities = (build_inequalities(robot, scenario["inequalities"], cls) if scenario["inequalities"] else None)
+    taken = solver_options(robot, solver, cls, control_dt or dt)  # the step: the controller's period
+    options = {key: value for key, value in taken.items() if key in ("dt", "priority", "eta", "regularization")}
+    if cls is CLIKSolver:
+        options.pop("dt")  # CLIK steps nothing (no clamping)
     try:
-        controller = GJMController(robot, trajectory, frame=task.frame, axes=task.axes, gain=gain, damping=damping,
-                                   weights=weights, gjm=section["gjm"], hydro=plant.hydro if plant.links else None,
-                                   motor_feedforward=plant.motor_time_constant if section["motor_feedforward"] else 0.0)
+        controller = GJMController(robot, trajectory, frame=task.frame, axes=task.axes, gain=gain,
+                                   damping=solver_damping(solver), weights=solver_weights(robot, solver, True),
+                                   gjm=section["gjm"], hydro=plant.hydro if plant.links else None,
+                                   motor_feedforward=plant.motor_time_constant if section["motor_feedforward"] else 0.0,
+                                   solver=cls, levels=inequalities.levels if inequalities and inequalities.enforced
+                                   else (), options=options)
     except UVMSError as exc:
-        raise ScenarioError(f"plant/solver: {exc}") from None
-    return plant, controller
+        raise ScenarioError(f"plant/solver ({solver['method']}): {exc}") from None
+    return plant, controller, inequalities
 
 
 def solver_class(solver: dict) -> type[Solver]:

@@ -13,8 +13,10 @@ are *monitored*: recorded and reported exactly the same way, not enforced (``met
 inequalities change.
 
 The recorder evaluates every objective at every row from the configuration itself (not from the solver), so
-the series are comparable between methods; "active" is the solver's own report when it gives one (a QP row
-binding for hqp, an activation > 0 for set_based), else an activation > 0.
+the series are comparable between methods and between plants; "active" is the solver's own report when it
+gives one (a QP row binding for hqp, an activation > 0 for set_based) in a kinematic run, else (a monitored
+method, or a dynamic [plant] run, whose row is the plant's) an activation > 0. On a dynamic plant the speed
+ratio is that of the measured velocity v.
 """
 
 from __future__ import annotations
@@ -112,6 +114,10 @@ class ObjectiveRecorder:
 
     Args:
         robot: the model; inequalities: the scenario's.
+
+    Called with a row's (t, q, x, sample) of any run: the sample's ``rate[0]`` is the velocity (nv,) (the
+    kinematic controller's, or a plant's measured v); a kinematic sample's ``info`` (a SolverResult) says which
+    objectives are active.
     """
 
     def __init__(self, robot: Robot, inequalities: ScenarioInequalities) -> None:
@@ -122,7 +128,7 @@ class ObjectiveRecorder:
         state = Configuration(self.robot, q, check=False)
         values = [objective.value(state) for objective in self.objectives]
         activations = [objective.activation(value) for objective, value in zip(self.objectives, values)]
-        reported = {status.name: status.active for status in getattr(sample.info, "objectives", ())}
+        reported = {status.name: status.active for status in getattr(getattr(sample, "info", None), "objectives", ())}
         active = [reported.get(objective.name, bool(np.any(activation > 0)))
                   for objective, activation in zip(self.objectives, activations)]
         limited = np.isfinite(self.maximum)

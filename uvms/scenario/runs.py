@@ -174,6 +174,7 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
     """Simulate a built scenario and write its files into ``folder``."""
     simulation_section = scenario["simulation"]
     plant_run: SimulationResult | None = None
+    recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
     if setup.actuation is not None:
         result = simulate_actuation(setup.actuation, setup.task, setup.trajectory, setup.q0, setup.duration, scenario,
                                     progress)
@@ -183,9 +184,8 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
                                       control_dt=setup.control_dt, integrator=simulation_section["integrator"],
                                       task=setup.task,
                                       desired=None if setup.task is None else lambda t: controller.reference(t).pose,
-                                      progress=progress)
+                                      progress=progress, recorders=recorders)
     else:
-        recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
         desired = setup.samples or setup.trajectory  # the controller's samples: the row's time is already there
         result = simulate(setup.robot, setup.controller, setup.q0, setup.duration, simulation_section["dt"],
                           task=setup.task, desired=lambda t: desired(t).pose,
