@@ -370,7 +370,7 @@ def icat_reference(levels: list, weights: np.ndarray, damping: float, eta: float
     """Simetti and Casalino (2016) eqs. 18-20 in numpy: rho_k - rho_{k-1} of each level (L, n).
 
     rho_k = rho_{k-1} + Q (J Q)^{#,A,I} W_k (xdot - J rho_{k-1}), W_k = J Q (J Q)^{#,A,Q},
-    Q_k = Q (I - (J Q)^{#,A,I} J Q), X^{#,A,Q} = (X^T A X + eta (I - Q)^T (I - Q))^# X^T A A, the damping in
+    Q_k = Q (I - (J Q)^{#,A,I} J Q), X^{#,A,Q} = (X^T A X + eta (I - Q)^T D^2 (I - Q))^# X^T A A (D = diag of the column norms of A^1/2 J), the damping in
     X^{#,A,I} only; a level of activations 1 while Q = I is plain CLIK. Below the first level, singular values
     of X = J Q under 1e-12 of |A^1/2 J L^-T|_F count as zero: the rounding Q keeps of the levels above.
     """
@@ -396,7 +396,8 @@ def icat_reference(levels: list, weights: np.ndarray, damping: float, eta: float
             floor = 0.0 if unrestricted else 1e-12 * np.linalg.norm(unprojected)
             inverse = weighted_damped_inverse_reference(rows, weights, damping, floor) * a**1.5
             if not unrestricted and eta > 0:
-                rows = np.vstack([rows, np.sqrt(eta) * (np.eye(size) - projector)])
+                column_norms = np.linalg.norm(np.sqrt(a)[:, None] * jacobian[active], axis=0)
+                rows = np.vstack([rows, np.sqrt(eta) * column_norms[:, None] * (np.eye(size) - projector)])
             regularized = weighted_damped_inverse_reference(rows, weights, 0.0, floor)[:, : a.size] * a**1.5
             contribution = projector @ inverse @ (projected @ regularized) @ remaining[active]
             projector = projector - projector @ inverse @ projected
@@ -446,7 +447,7 @@ def test_the_compiled_icat_recursion_is_the_papers_formulas(rng, weighting, damp
 
 def test_icat_inverse_is_the_papers_regularized_inverse(rng):
     """icat_inverse (one level, the same compiled inverse as the recursion) against (X^T A X + eta (I - Q)^T
-    (I - Q) + l^2 W)^-1 X^T A A."""
+    D^2 (I - Q) + l^2 W)^-1 X^T A A, X = J Q, D = diag of the column norms of A^1/2 J."""
     from uvms.solvers.set_based import icat_inverse
 
     size = 7
@@ -456,8 +457,9 @@ def test_icat_inverse_is_the_papers_regularized_inverse(rng):
     weights = rng.uniform(0.5, 2.0, size)
     for damping, eta in ((0.0, 0.1), (0.05, 0.1), (0.05, 0.0)):
         inverse, _, used = icat_inverse(jacobian, activation, projector, weights, damping, eta)
-        rows = np.sqrt(activation)[:, None] * jacobian
+        rows = np.sqrt(activation)[:, None] * jacobian @ projector
         if eta > 0:
-            rows = np.vstack([rows, np.sqrt(eta) * (np.eye(size) - projector)])
+            column_norms = np.linalg.norm(np.sqrt(activation)[:, None] * jacobian, axis=0)
+            rows = np.vstack([rows, np.sqrt(eta) * column_norms[:, None] * (np.eye(size) - projector)])
         expected = weighted_damped_inverse_reference(rows, np.diag(weights), damping)[:, :3] * activation**1.5
         assert used == damping and np.abs(inverse - expected).max() <= 1e-10 * np.abs(expected).max()

@@ -2,7 +2,7 @@
 
 Level k (highest first) solves, over the solved velocity x (n,) and its slacks w (m_k,):
 
-    minimize    1/2 |E_k x - r_k|^2 + 1/2 |w|^2 + 1/2 rho |x|^2_W
+    minimize    1/2 |E_k x - r_k|^2 + 1/2 |w|^2 + 1/2 (rho + lambda_k^2) |x|^2_W
     subject to  G_k x + w >= b_k,  w >= 0                    its inequality objectives, relaxed by w
                 the rows of every level above at their optimum (equality rows at J x*, inequality rows
                 with their optimal slack), up to a tolerance
@@ -10,6 +10,13 @@ Level k (highest first) solves, over the solved velocity x (n,) and its slacks w
 
 with E_k, r_k the equality tasks' rows and commands (xdot_d + K e) and G_k x >= b_k the valid sets of
 the inequality objectives as velocity dampers (:meth:`~uvms.tasks.objectives.InequalityRows.constraint`).
+lambda_k is the damping of CLIK and the set-based solver (fixed, or amundsen2018 eq. 6 variable) read from
+sigma_min of E_k W^-1/2 with each joint's column times 1 - its joint-limit activation: the columns the
+joint-limit bounds hold taken out, as the set-based levels take them out. Without it (rho alone, 1e-9) a
+task that the held joints leave short reaches for any column that still moves it, however little, and
+drives it to its speed limit: in ``bluerov2_alpha5_free_floating_limit`` the wrist roll, which moves the
+tool point only through the vehicle's momentum, switched between -0.5 and +0.5 rad/s (per-step jumps of
+1 rad/s; issue 31, item 3); with the scenario's variable damping it stays below 0.01 rad/s.
 The hard bounds are the speed limits and the joint-limit objectives' valid sets turned into rate bounds
 over one step, clipped into the speed limits (:func:`~uvms.solvers.saturation.velocity_box`), so the box
 is never empty and a joint started outside its valid set comes back at the allowed speed. A free-floating
@@ -32,8 +39,8 @@ import numpy as np
 from ..robot.robot import Robot
 from ..robot.configuration import Configuration
 from ..tasks.objectives import JointLimits, VelocityLimit
-from ..numerics.checks import check_scalar, check_weights
-from ..numerics.inverses import SolverInputError, smallest_singular_value
+from ..numerics.checks import check_damping, check_scalar, check_weights
+from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value
 from .base import Solver
 from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, rate_bounds, solved_rows, speed_ratio
 from .result import SolverResult
@@ -136,7 +143,8 @@ def level_attempts(solvers: Sequence[str]) -> list[tuple[str, dict, float]]:
 def solve_level(cascade: Cascade, equality: np.ndarray, command: np.ndarray, inequality: np.ndarray,
                 bound: np.ndarray, weights: np.ndarray, regularization: float,
                 solvers: Sequence[str]) -> tuple[np.ndarray, np.ndarray, str]:
-    """One level's QP over z = [x, w]: (x, w, status); if every attempt fails, the cascade's x is kept."""
+    """One level's QP over z = [x, w]: (x, w, status); if every attempt fails, the cascade's x is kept.
+    ``regularization``: the weight rho + lambda^2 of |x|^2_W in this level."""
     n, m = cascade.size, inequality.shape[0]
     cost = np.zeros((n + m, n + m))
     cost[:n, :n] = equality.T @ equality + regularization * weights
@@ -198,7 +206,8 @@ class HQPSolver(Solver):
             their level.
         dt: step [s] > 0 over which position limits become rate bounds.
         gain: K of the equality tasks [1/s].
-        weights: W of the solved columns (n,) or (n, n), used by the regularization.
+        weights: W of the solved columns (n,) or (n, n), used by the regularization and the damping.
+        damping: lambda >= 0 or a VariableDamping of the levels' task rows, as in CLIK (module docstring).
         free_floating: solve the arm only, the vehicle passive (generalized Jacobians).
         position_fraction: the part of the distance to a limit one step may cover, in (0, 1].
         regularization: rho >= 0, weight of |x|^2_W in every level (a unique solution) [-].
@@ -206,7 +215,7 @@ class HQPSolver(Solver):
         speed_limits: more speed limits (besides those in the levels).
 
     Raises:
-        SolverInputError: malformed levels, a bad dt, gain, weight, position_fraction or regularization, a QP
+        SolverInputError: malformed levels, a bad dt, gain, weight, damping, position_fraction or regularization, a QP
             solver not installed, free_floating on a fixed base.
     """
 
@@ -221,6 +230,7 @@ class HQPSolver(Solver):
         dt: float,
         gain: float | np.ndarray = 1.0,
         weights: np.ndarray | None = None,
+        damping: float | VariableDamping = 0.0,
         free_floating: bool = False,
         position_fraction: float = 1.0,
         regularization: float = 1e-9,
@@ -238,6 +248,8 @@ class HQPSolver(Solver):
         self._solvers = [self.solver] + [name for name in PREFERRED_SOLVERS
                                          if name != self.solver and name in _installed()]
         self._weights = _weight_matrix(weights, self.plan.size)
+        self._inverse_root = np.linalg.inv(np.linalg.cholesky(self._weights)).T  # W^-1/2 = L^-T, W = L L^T
+        self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
 
     def velocity(self, configuration: Configuration) -> SolverResult:
@@ -249,15 +261,21 @@ class HQPSolver(Solver):
         lower, upper = velocity_box(maximum, rate_lower, rate_upper)
         cascade = initial_cascade(hierarchy, lower, upper)
 
+        freedom = joint_freedom(hierarchy)
+        used = 0.0
+
         def solve(equality, command, inequality, bound):
-            return solve_level(cascade, equality, command, inequality, bound, self._weights, self.regularization,
-                               self._solvers)
+            nonlocal used
+            damping = level_damping(equality, freedom, self._inverse_root, self.damping)
+            used = max(used, damping)
+            return solve_level(cascade, equality, command, inequality, bound, self._weights,
+                               self.regularization + damping**2, self._solvers)
 
         vehicle_rows, vehicle_bounds = vehicle_speed_rows(hierarchy, lower, upper)
         if vehicle_bounds.size:  # a slacked level of its own, above the others
             cascade.x, slack, _ = solve(np.zeros((0, hierarchy.size)), np.zeros(0), vehicle_rows, vehicle_bounds)
             cascade.keep_inequalities(vehicle_rows, vehicle_bounds, slack)
-        statuses, slacks, binding = [], [], {}
+        statuses, slacks, solved = [], [], []
         for level in hierarchy.levels:
             equality, command = level_equalities(hierarchy, level)
             inequality, bound, spans = level_constraints(hierarchy, level)
@@ -266,10 +284,13 @@ class HQPSolver(Solver):
             cascade.keep_inequalities(inequality, bound, slack)
             statuses.append(status)
             slacks.append(float(np.linalg.norm(slack)))
-            binding.update(inequalities_binding(inequality @ cascade.x - bound, slack, spans))
+            solved.append((inequality, bound, slack, spans))
+        binding = {}  # read at the final x: the levels below are what push a row onto its bound
+        for inequality, bound, slack, spans in solved:
+            binding.update(inequalities_binding(inequality @ cascade.x - (bound - slack), slack, spans))
         v = hierarchy.velocity(cascade.x)
         binding.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
-        return SolverResult(v=v, sigma_min=task_sigma_min(hierarchy), damping=0.0, free_floating=self.free_floating,
+        return SolverResult(v=v, sigma_min=task_sigma_min(hierarchy), damping=used, free_floating=self.free_floating,
                             scales=(1.0,) * len(hierarchy.levels), speed_ratio=speed_ratio(v, maximum),
                             extras={"solver_status": tuple(statuses), "slacks": tuple(slacks), "solver": self.solver},
                             levels=solved_rows(hierarchy), binding=binding)
@@ -283,6 +304,29 @@ def initial_cascade(hierarchy: Hierarchy, lower: np.ndarray, upper: np.ndarray) 
     return Cascade(size=hierarchy.size, lower=low, upper=high, x=np.clip(np.zeros(hierarchy.size), low, high))
 
 
+def joint_freedom(hierarchy: Hierarchy) -> np.ndarray:
+    """Per solved column (n,), 1 - the largest joint-limit activation on it (1: free, 0: held at a limit)."""
+    freedom = np.ones(hierarchy.size)
+    offset = hierarchy.state.robot.n_vehicle if hierarchy.free_floating else 0
+    for level in hierarchy.levels:
+        for objective, rows in zip(level.inequalities, level.objectives):
+            if isinstance(objective, JointLimits):
+                index = objective.v_index - offset
+                freedom[index] = np.minimum(freedom[index], 1.0 - rows.activation)
+    return freedom
+
+
+def level_damping(equality: np.ndarray, freedom: np.ndarray, inverse_root: np.ndarray,
+                  damping: float | VariableDamping) -> float:
+    """lambda of a level with task rows E (k, n): fixed, or amundsen2018 eq. 6 of sigma_min of
+    E diag(freedom) W^-1/2 (the columns the joint limits hold taken out); 0 without task rows."""
+    if not equality.size:
+        return 0.0
+    if not isinstance(damping, VariableDamping):
+        return damping
+    return damping(smallest_singular_value((equality * freedom) @ inverse_root))
+
+
 def level_equalities(hierarchy: Hierarchy, level: LevelRows) -> tuple[np.ndarray, np.ndarray]:
     """The level's equality-task rows E (k, n) (solved columns) and commands r (k,) (0 rows without tasks)."""
     if not level.has_tasks:
@@ -291,7 +335,8 @@ def level_equalities(hierarchy: Hierarchy, level: LevelRows) -> tuple[np.ndarray
 
 
 def inequalities_binding(margin: np.ndarray, slack: np.ndarray, spans: list[tuple[str, slice]]) -> dict[str, bool]:
-    """Per objective: some row binding (G x - b ~ 0) or relaxed (slack > 0)."""
+    """Per objective: some row binding (``margin`` G x - (b - w*) ~ 0 at the final x, w* its slack) or relaxed
+    (w* > 0)."""
     return {name: bool(np.any(margin[span] <= BINDING_TOLERANCE) or np.any(slack[span] > BINDING_TOLERANCE))
             for name, span in spans}
 

@@ -8,21 +8,30 @@ Levels, highest priority first; each level stacks its objectives' rows: Jacobian
 xdot_k (m,) and activation A_k = diag(a) (equality tasks: a = 1, reference xdot_d + K e; inequality
 objectives: their activation and reference, :mod:`uvms.tasks.objectives`). With rho_0 = 0, Q_0 = I:
 
-    X^{#,A,Q} = (X^T A X + eta (I - Q)^T (I - Q) + lambda^2 M)^# X^T A A          (the iCAT inverse)
+    X^{#,A,Q} = (X^T A X + eta (I - Q)^T D^2 (I - Q) + lambda^2 M)^# X^T A A   (the iCAT inverse, X = J Q)
     W_k       = J_k Q_{k-1} (J_k Q_{k-1})^{#,A_k,Q_{k-1}}          (undamped)
     rho_k     = rho_{k-1} + Q_{k-1} (J_k Q_{k-1})^{#,A_k,I} W_k (xdot_k - J_k rho_{k-1})
     Q_k       = Q_{k-1} (I - (J_k Q_{k-1})^{#,A_k,I} J_k Q_{k-1})
 
-with M the weights of the solved columns (``weights``, the W of CLIK; I by default).
-X^{#,A,Q} minimizes |A (xdot - X y)|^2 + |X y|^2_{A (I - A)} + eta |(I - Q) y|^2 (+ lambda^2 |y|^2_M): a
-row whose activation falls to 0 fades out continuously, and the eta term keeps directions already used by
-the levels above from being inverted when they are only partly released, so no activation change causes a
-discontinuity. Both inverses are the library's one inverse
-(:class:`~uvms.numerics.inverses.WeightedInverse`, that of :func:`~uvms.numerics.inverses.damped_weighted_inverse`) of the stack Z = [A^1/2 X; eta^1/2 (I - Q)],
-since Z^T Z = X^T A X + eta (I - Q)^T (I - Q). Adaptations, stated: the paper's singular-value
+with M the weights of the solved columns (``weights``, the W of CLIK; I by default) and D = diag of the
+column norms of A^1/2 J (how much each solved coordinate moves the level's rows).
+X^{#,A,Q} minimizes |A (xdot - X y)|^2 + |X y|^2_{A (I - A)} + eta |D (I - Q) y|^2 (+ lambda^2 |y|^2_M):
+a row whose activation falls to 0 fades out continuously, and the eta term keeps directions already used
+by the levels above from being inverted when they are only partly released, so no activation change
+causes a discontinuity. Both inverses are the library's one inverse
+(:class:`~uvms.numerics.inverses.WeightedInverse`, that of :func:`~uvms.numerics.inverses.damped_weighted_inverse`) of the stack
+Z = [A^1/2 X; eta^1/2 D (I - Q)]. Adaptations, stated: the paper's singular-value
 regularization V^T P V is the damping lambda of that inverse (fixed, or amundsen2018 eq. 6 variable), put
 in (J Q)^{#,A,I} only; W_k uses the undamped inverse, so that with Q = I and A = I the step is
-J^# J J^+ xdot = J^# xdot exactly (J J^+ projects on the range of J, on which J^# acts).
+J^# J J^+ xdot = J^# xdot exactly (J J^+ projects on the range of J, on which J^# acts). The eta term
+is the paper's eta |(I - Q) y|^2 with each coordinate weighed by its column in the level, D: the paper's term weighs a
+direction the same whatever the level's Jacobian does with it, so for a column the level barely moves
+(the jaw of the Alpha 5 in a free-floating tool-point task, a column ~1e-3 of the others) it takes over
+when the level above has released all but ~1e-3 of it: the level's use of that direction switched on within
+a sliver of the bell (issue 31, item 1: an elbow-rate jump of 0.09 rad/s per step that stayed at dt
+0.01/0.005/0.0025). Weighed by D the penalty and X^T A X share their units and scale, the direction is handed
+over across the whole band, and the largest per-step rate change scales with dt (0.029 / 0.023 / 0.013 /
+0.007 rad/s at dt 0.01 / 0.005 / 0.0025 / 0.00125; it was 0.077 / 0.064 / 0.073 rad/s).
 
 Hence with every inequality inactive (A = 0: rho and Q untouched) the result is CLIK,
 :class:`~uvms.solvers.clik.CLIKSolver` with the same gain, weights and damping, to rounding (that case
@@ -57,7 +66,7 @@ class ICAT:
         size: the number of solved columns n.
         weights: W of the solved columns, (n,) or (n, n) SPD, or None (I).
         damping: lambda >= 0 (fixed) or a VariableDamping, in (J Q)^{#,A,I} only.
-        eta: weight of the eta (I - Q)^T (I - Q) term [-] >= 0.
+        eta: weight of the eta (I - Q)^T D^2 (I - Q) term [-] >= 0.
 
     Raises:
         SolverInputError: a bad W, damping or eta.
@@ -68,27 +77,26 @@ class ICAT:
         self.inverse = WeightedInverse(weights, size)  # (rows (r, n), damping) -> inverse (n, r), sigma_min, used
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self._root_eta = np.sqrt(self.eta)
-        self._identity = np.eye(size)
 
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
-        """X^{#,A,Q} (n, m) of X = ``jacobian`` (m, n) (module docstring), root = a^1/2 (m, 1), power = a^1.5 (m,);
-        sigma_min of the weighted Z and the damping used (projector None: Q = I, no eta term); the inverse of
-        each level of :meth:`solve` (:func:`~uvms.numerics._kernels.icat.level_inverse_into`).
+        """X^{#,A,Q} (n, m) of X = ``jacobian`` Q (J (m, n) unprojected; module docstring), root = a^1/2 (m, 1),
+        power = a^1.5 (m,); sigma_min of the weighted Z and the damping used (projector None: Q = I, no eta
+        rows); the inverse of each level of :meth:`solve` (:func:`~uvms.numerics._kernels.icat.level_inverse_into`).
 
         Raises:
             NumericalError: the SVD did not converge (a non-finite level).
         """
-        from ..numerics._kernels.icat import level_inverse_into  # numba: loaded at the first solve, not by ``import uvms``
+        from ..numerics._kernels.icat import eta_rows, level_inverse_into  # numba: loaded at the first solve
 
-        scaled = np.ascontiguousarray(root * jacobian, dtype=float)  # A^1/2 X
+        unprojected = np.ascontiguousarray(root * jacobian, dtype=float)  # A^1/2 J
+        scaled = unprojected if projector is None else np.ascontiguousarray(unprojected @ projector)  # A^1/2 X
         inverse = np.empty((self.size, jacobian.shape[0]))
-        with_eta = projector is not None and self.eta > 0
+        penalty = (eta_rows(unprojected, np.ascontiguousarray(projector, dtype=float), self._root_eta)
+                   if projector is not None and self.eta > 0 else np.zeros((0, self.size)))
         converged, sigma_min, used = level_inverse_into(
-            scaled, np.ascontiguousarray(power, dtype=float),
-            np.ascontiguousarray(projector, dtype=float) if with_eta else self._identity,
-            self._root_eta if with_eta else 0.0, *self.inverse.kernel_weights, *damping_parameters(damping), RCOND,
-            0.0, inverse)
+            scaled, np.ascontiguousarray(power, dtype=float), penalty, *self.inverse.kernel_weights,
+            *damping_parameters(damping), RCOND, 0.0, inverse)
         return inverse, *converged_or_refused(converged, scaled.shape, sigma_min, used)
 
     def solve(self, hierarchy: Hierarchy) -> tuple[list[np.ndarray], list[float], float]:
@@ -121,16 +129,16 @@ class ICAT:
 def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.ndarray | None,
                  weights: np.ndarray | None, damping: float | VariableDamping,
                  eta: float) -> tuple[np.ndarray, float, float]:
-    """X^{#,A,Q} (n, m) of the iCAT (module docstring), sigma_min of the weighted A^1/2 X (Q = None: I) and the
-    damping used (an :class:`ICAT` of one use).
+    """X^{#,A,Q} (n, m) of the iCAT, X = J Q (module docstring), sigma_min of the weighted A^1/2 X (Q = None: I)
+    and the damping used (an :class:`ICAT` of one use).
 
     Args:
-        jacobian: X (m, n), the level's Jacobian times the projector of the levels above.
+        jacobian: J (m, n), the level's Jacobian (unprojected: X = J Q is formed here).
         activation: diag(A) (m,) in [0, 1].
         projector: Q (n, n) of the levels above, or None for Q = I (no eta term).
         weights: W of the solved columns, or None.
         damping: lambda (fixed or variable) of the one inverse.
-        eta: weight of the eta (I - Q)^T (I - Q) term [-] >= 0.
+        eta: weight of the eta (I - Q)^T D^2 (I - Q) term [-] >= 0.
     """
     icat = ICAT(jacobian.shape[1], weights, damping, eta)
     return icat.level_inverse(jacobian, np.sqrt(activation)[:, None], activation**1.5, projector, icat.damping)
@@ -148,7 +156,10 @@ class SetBasedSolver(Solver):
         gain: K of the equality tasks (scalar, (k,) or (k, k) per level's stacked tasks) [1/s].
         weights: W of the solved columns, (n,) or (n, n) SPD, n = nv (n_arm when free floating).
         damping: lambda >= 0 or a VariableDamping, as in CLIK.
-        eta: weight of the iCAT (I - Q) regularization [-] >= 0.
+        eta: weight of the iCAT regularization eta |D (I - Q) y|^2 [-] >= 0. It keeps a level off what the
+            levels above partly hold, which is also why a task stops inside an objective's activation band;
+            0 lets the task use the band (it reaches the valid set's border), without that protection
+            (:mod:`uvms.tasks.objectives.base`, "What the band costs").
         free_floating: solve the arm only, the vehicle passive (generalized Jacobians).
         dt: step [s]; when given, the model's joint limits of every JointLimits objective become
             position-rate bounds (a joint never crosses them over the step).

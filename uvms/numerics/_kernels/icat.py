@@ -15,21 +15,37 @@ from numba import njit
 from .dense import apply, copy_into, product, scale_matrix, subtract_in_place
 from .weighted import weighted_inverse_into, weighted_norm
 
-__all__ = ["icat_into", "level_inverse_into"]
+__all__ = ["eta_rows", "icat_into", "level_inverse_into"]
 
 
 @njit(cache=True)
-def level_inverse_into(scaled: np.ndarray, power: np.ndarray, projector: np.ndarray, root_eta: float,
-                       inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float, epsilon: float,
-                       lambda_max: float, rcond: float, floor: float, out: np.ndarray) -> tuple[bool, float, float]:
+def eta_rows(scaled_unprojected: np.ndarray, projector: np.ndarray, root_eta: float) -> np.ndarray:
+    """The eta rows eta^1/2 D (I - Q) (n, n) of a level: the directions the levels above hold (Q their projector
+    (n, n)), each coordinate weighed by D = diag(|column j of A^1/2 J|), how much it moves the level's rows
+    (A^1/2 J = ``scaled_unprojected`` (m, n))."""
+    size = projector.shape[0]
+    rows = np.empty((size, size))
+    for row in range(size):
+        norm = 0.0
+        for k in range(scaled_unprojected.shape[0]):
+            norm += scaled_unprojected[k, row] ** 2
+        weight = root_eta * np.sqrt(norm)
+        for col in range(size):
+            rows[row, col] = weight * ((1.0 if row == col else 0.0) - projector[row, col])
+    return rows
+
+
+@njit(cache=True)
+def level_inverse_into(scaled: np.ndarray, power: np.ndarray, penalty: np.ndarray, inverse_sqrt: np.ndarray,
+                       transform: np.ndarray, damping: float, epsilon: float, lambda_max: float, rcond: float,
+                       floor: float, out: np.ndarray) -> tuple[bool, float, float]:
     """The iCAT inverse X^{#,A,Q} (n, m) of one level (Simetti and Casalino 2016), written to ``out``.
 
-    The weighted, damped inverse of Z = [A^1/2 X; eta^1/2 (I - Q)] (without the eta rows when ``root_eta``
-    is 0), its first m columns scaled by a^1.5: (X^T A X + eta (I - Q)^T (I - Q))^# X^T A A.
+    The weighted, damped inverse of Z = [A^1/2 X; P] (without P when it has no row), its first m columns
+    scaled by a^1.5: (X^T A X + P^T P)^# X^T A A, P the eta rows (:func:`eta_rows`).
 
     Args:
-        scaled: A^1/2 X (m, n); power: a^1.5 (m,); projector: Q (n, n) (read only with eta rows).
-        root_eta: eta^1/2 >= 0 (0: no eta rows, the inverse X^{#,A,I}).
+        scaled: A^1/2 X (m, n); power: a^1.5 (m,); penalty: the eta rows P (p, n), p = 0 for X^{#,A,I}.
         inverse_sqrt, transform, damping, epsilon, lambda_max, rcond, floor: as
             :func:`~.weighted.weighted_inverse_into`.
         out: (n, m).
@@ -39,12 +55,10 @@ def level_inverse_into(scaled: np.ndarray, power: np.ndarray, projector: np.ndar
     """
     active, size = scaled.shape
     stacked = scaled
-    if root_eta > 0.0:
-        stacked = np.empty((active + size, size))
+    if penalty.shape[0] > 0:
+        stacked = np.empty((active + penalty.shape[0], size))
         copy_into(stacked[:active], scaled)
-        for row in range(size):
-            for col in range(size):
-                stacked[active + row, col] = root_eta * ((1.0 if row == col else 0.0) - projector[row, col])
+        copy_into(stacked[active:], penalty)
     full = np.empty((size, stacked.shape[0]))
     converged, sigma_min, used = weighted_inverse_into(stacked, inverse_sqrt, transform, damping, epsilon,
                                                        lambda_max, rcond, floor, full)
@@ -63,7 +77,7 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
 
     With rho_0 = 0 and Q_0 = I, level k (rows offsets[k]:offsets[k+1] of the stacks) gives
     rho_k - rho_{k-1} = Q (J Q)^{#,A,I} W_k (xdot_k - J_k rho_{k-1}) and Q_k = Q (I - (J Q)^{#,A,I} J Q), the
-    inverses X^{#,A,Q} of the weighted, damped inverse of Z = [A^1/2 X; eta^1/2 (I - Q)]; rows with a = 0
+    inverses X^{#,A,Q} of the weighted, damped inverse of Z = [A^1/2 X; eta^1/2 D (I - Q)]; rows with a = 0
     are left out (they add nothing), and while no level above has moved anything (Q = I) a level of
     activations 1 is solved as CLIK is. Below the first level, singular values of X = J Q under rcond times
     the norm of the unprojected A^1/2 J (weighted) count as zero: the rounding Q keeps of the levels above.
@@ -74,7 +88,7 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
         equality: (L,) the level holds equality tasks only.
         inverse_sqrt, transform: W as :func:`~.weighted.weighted_inverse_into` takes it.
         damping, epsilon, lambda_max: the damping of (J Q)^{#,A,I} (W_k's inverse is undamped).
-        rcond: the pseudo-inverse's cut-off; eta: the weight of the (I - Q) term >= 0.
+        rcond: the pseudo-inverse's cut-off; eta: the weight of the eta rows (:func:`eta_rows`) >= 0.
         contributions: (L, n) written with rho_k - rho_{k-1}; sigmas: (L,) written with each level's sigma_min.
 
     Returns:
@@ -88,6 +102,7 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
     unrestricted = True  # Q = I exactly: no level above has moved anything
     undamped = epsilon == 0.0 and damping == 0.0
     root_eta = np.sqrt(eta)
+    no_rows = np.zeros((0, size))
     largest = 0.0
     for level in range(offsets.size - 1):
         first, last = offsets[level], offsets[level + 1]
@@ -131,10 +146,10 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
             scaled = scale_matrix(projected, root, True)  # A^1/2 X
             # X = J Q keeps the rounding of the levels above (Q of a level that takes every direction is
             # rounding noise): its singular values count from the scale of the unprojected A^1/2 J, not its own
-            floor = 0.0 if unrestricted else rcond * weighted_norm(scale_matrix(selected, root, True), inverse_sqrt,
-                                                                   transform)
+            unprojected = scale_matrix(selected, root, True)  # A^1/2 J
+            floor = 0.0 if unrestricted else rcond * weighted_norm(unprojected, inverse_sqrt, transform)
             inverse = np.empty((size, active))  # X^{#,A,I}, damped
-            converged, sigma_min, used = level_inverse_into(scaled, power, projector, 0.0, inverse_sqrt, transform,
+            converged, sigma_min, used = level_inverse_into(scaled, power, no_rows, inverse_sqrt, transform,
                                                             damping, epsilon, lambda_max, rcond, floor, inverse)
             if not converged:
                 return False, largest
@@ -142,9 +157,10 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
                 regularized = inverse
             else:  # X^{#,A,Q}, undamped (Q = I: no eta rows)
                 regularized = np.empty((size, active))
-                converged, _, _ = level_inverse_into(scaled, power, projector, 0.0 if unrestricted else root_eta,
-                                                     inverse_sqrt, transform, 0.0, 0.0, 0.0, rcond, floor,
-                                                     regularized)
+                penalty = no_rows if unrestricted or root_eta == 0.0 else \
+                    eta_rows(unprojected, projector, root_eta)
+                converged, _, _ = level_inverse_into(scaled, power, penalty, inverse_sqrt, transform, 0.0, 0.0, 0.0,
+                                                     rcond, floor, regularized)
                 if not converged:
                     return False, largest
             transfer = product(projected, regularized)  # W_k (m, m)
