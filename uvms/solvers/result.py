@@ -119,7 +119,7 @@ class SolverResult:
         v: velocity (nv,) in the order of Pinocchio's v (vehicle twist local, then arm).
         sigma_min: the smallest singular value over the Jacobians the solver inverted (weighted, projected as
             it inverted them; the QP hierarchy: that of the last level's task rows).
-        damping: the (largest) damping lambda used (0: exact inverses; the QP hierarchy: 0).
+        damping: the (largest) damping lambda used (0: exact inverses or an undamped QP hierarchy).
         free_floating: whether only the arm was solved and the vehicle followed momentum conservation.
         limits_active: names of the arm joints held at a limit (CLIK's joint clamping).
         scales: per level, the factor in [0, 1] its contribution was scaled by to meet the speed and
