@@ -10,7 +10,8 @@ import pytest
 
 import uvms
 from uvms.control.coordination import CoordinatedControl, coordinated_arm_rates
-from uvms.control.station import station_keeping
+from uvms.control.station import actuated_control, station_keeping
+from uvms.trajectory import VelocityRamps
 from uvms.control.vehicle import pose_velocity_reference
 from uvms.dynamics.actuated import ActuatedPlant, vehicle_inverse_dynamics
 from uvms.dynamics.plant import Plant
@@ -149,22 +150,20 @@ def test_arm_reaction_feedforward_keeps_the_vehicle_still(robot, thrusters):
 
 
 def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
-    """CoordinatedControl takes a kinematic controller of the (t, q, None) -> (v, info) signature: here the core's
-    CLIK on an end-effector point 6 cm away, in a 0.3 m/s current (its vehicle part is left free, so the vehicle
-    drifts with the current). Coordination brings the end effector closer."""
+    """The actuated chain takes any solver: here task priority on an end-effector point 6 cm away, in a 0.3 m/s
+    current (the vehicle holds its station below the pose objective's level). Coordination (the arm re-solved
+    through the same solver with the measured vehicle velocity on top) brings the end effector closer."""
     station = robot.configuration(base=np.zeros(6), arm=ARM)
     target = robot.fk(station).translation + np.array([0.05, -0.03, 0.02])
-    task = FrameTask(robot, axes=("x", "y", "z"))
-    task.set_target(pin.SE3(np.eye(3), target))
+    hold = VelocityRamps.trapezoid(target, np.zeros(3), 1.0, 0.5)
     final = {}
     for coordination in (False, True):
         plant = Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
-        velocity = station_keeping(plant, thrusters, station, DT).velocity  # its vehicle loop and allocation
-        clik = uvms.CLIKSolver(robot, task, gain=1.0, damping=0.01)
-        controller = CoordinatedControl(
-            robot, velocity, lambda t, q, v: (clik.velocity(uvms.Configuration(robot, q)).v, None),
-            DT, task_jacobian=lambda q: robot.jacobian(q)[:3], coordination=coordination,
-            monitor=lambda q: {"ee_error": float(np.linalg.norm(target - robot.fk(q).translation))})
+        task = FrameTask(robot, axes=("x", "y", "z"))
+        controller = actuated_control(plant, thrusters, station, DT, task, hold, coordination=coordination,
+                                      solver=lambda levels: uvms.PrioritySolver(robot, levels, damping=0.01,
+                                                                                       priority="classic"))
+        assert isinstance(controller, CoordinatedControl)
         result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)
-        final[coordination] = result.actuation.controller["ee_error"][-1]
+        final[coordination] = result.actuation.controller["ee_point_error"][-1]
     assert final[True] < 2e-3 and final[True] < 0.5 * final[False], final

@@ -66,9 +66,7 @@ def test_a_current_beyond_the_thrusters_saturates_them_and_surge_gives_way(tmp_p
 @pytest.mark.parametrize("overrides, message", [
     (["plant.type=kinematic"], "needs a dynamic plant"),
     (["plant.type=rigid", "plant.gravity=false", "plant.current=[]"], "thrusters = true needs plant.type = 'hydrodynamic'"),
-    (["trajectory.type=line", "trajectory.end_offset=[0.1,0,0]"], "trajectory.type = 'hold'"),
-    (['task.axes=["x","y","z","yaw"]'], "task.axes must be"),
-    (["solver.free_floating=true"], "without free_floating"),
+    (["solver.free_floating=true"], "leaves the vehicle passive"),
     (["solver.gain=[1.0, 1.0, 1.0]"], "solver.gain is one number"),
     (['vehicle_control.priorities=[["surge"]]'], "groups of wrench axes among x, y, z, roll, pitch, yaw"),
     (["plant.thrusters=false"], "vehicle_control.kp needs plant.thrusters = true"),

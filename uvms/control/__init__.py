@@ -8,9 +8,9 @@ the GJM controller on a ``Plant``, a vehicle controller (station keeping) on an 
 from .coordination import CoordinatedControl, coordinated_arm_rates
 from .gjm import GJMControlError, GJMController, VelocityRamps
 from .sequence import Phase, PhasePlan, SequenceController
-from .station import StationKeeping, station_keeping
+from .station import ActuatedKinematics, actuated_control, station_keeping
 from .vehicle import VehiclePoseController, VehicleVelocityController, pose_velocity_reference
 
-__all__ = ["CoordinatedControl", "GJMControlError", "GJMController", "Phase", "PhasePlan", "SequenceController",
-           "StationKeeping", "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
-           "coordinated_arm_rates", "pose_velocity_reference", "station_keeping"]
+__all__ = ["ActuatedKinematics", "CoordinatedControl", "GJMControlError", "GJMController", "Phase", "PhasePlan", "SequenceController",
+           "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
+           "actuated_control", "coordinated_arm_rates", "pose_velocity_reference", "station_keeping"]

@@ -10,27 +10,22 @@ disturbances; the arm, much faster, can take up the difference. With J = [J_v | 
 (Simetti & Casalino's arm-vehicle coordination; HippoCampus' "manipulator compensation"). When the vehicle
 does follow (nu_measured = nu_ref) and J_a has full row rank, qd_arm = qd_ref.
 
-:class:`CoordinatedControl` puts it in the chain: kinematic controller -> arm command (coordinated or not)
-and vehicle velocity reference -> vehicle controller -> thrust allocation.
+:class:`CoordinatedControl` puts it in the chain: kinematic layer -> arm command (coordinated: the arm solved
+again through the scenario's solver with the vehicle level on top, :mod:`uvms.control.station`) and vehicle
+velocity reference -> vehicle controller -> thrust allocation, with the allocation's shortfall fed back.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.actuated import ActuatedCommand
+from ..dynamics.actuated import ActuatedCommand, base_twist
 from ..errors import SolverInputError
 from ..robot.limits import Limit
 from ..robot.robot import Robot
 from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from .vehicle import VehicleVelocityController
-
-#: A kinematic controller: (t [s], q (nq,), None) -> (v_ref (nv,), diagnostics), as ``uvms.sim.system.Controller``.
-KinematicController = Callable[[float, np.ndarray, None], tuple[np.ndarray, object]]
-
 
 def coordinated_arm_rates(
     jacobian: np.ndarray,
@@ -71,64 +66,78 @@ def arm_rates_for_task(jacobian: np.ndarray, task: np.ndarray, vehicle_velocity:
 
 
 class CoordinatedControl:
-    """A kinematic controller driving an actuated UVMS: the digital controller of
-    an ``ActuatedPlant`` (:func:`uvms.sim.loop.simulate`).
+    """The kinematic layer driving an actuated UVMS: the digital controller of an ``ActuatedPlant``
+    (:func:`uvms.sim.loop.simulate`).
 
-    Per step, from the measured (q, v): the kinematic controller's reference v_ref = [nu_ref; qd_ref];
-    the arm command qd_ref, or with ``coordination`` the arm solved again with the measured vehicle velocity
-    (:func:`coordinated_arm_rates` on the task Jacobian); the vehicle part nu_ref to the velocity loop
-    (model feedforward + PI, the arm's commanded acceleration fed forward), its wrench through the allocation.
+    Per step, from the measured (q, v): the kinematic reference v_ref = [nu_ref; qd_ref]
+    (:meth:`uvms.control.station.ActuatedKinematics.reference`); the arm command qd_ref, or with
+    ``coordination`` the arm solved again through the same solver with the measured vehicle velocity held
+    (:meth:`~uvms.control.station.ActuatedKinematics.arm_rates`); nu_ref to the velocity loop (model feedforward
+    + PI, the arm's commanded acceleration fed forward), its wrench through the allocation.
+
+    Saturation feedback: when the allocation fell short on an axis i at the previous step (it gave
+    w_achieved,i of the w_asked,i), the vehicle velocities the kinematic layer may ask this step are bounded
+    between the measured nu_i and nu_i + r_i (nu_pose,i - nu_i), r_i = clip(w_achieved,i / w_asked,i, 0, 1):
+    the vehicle level of the hierarchy asks what the thrusters can give, and the task below it (the arm) takes
+    up the rest instead of the vehicle reference winding up.
 
     Args:
         robot: a floating-base Robot (the controller's kinematics).
         velocity: the vehicle velocity controller (its model and allocation).
-        kinematic: (t, q, None) -> (v_ref (nv,), diagnostics), the signature of every kinematic controller
-            (``uvms.sim.system.Controller``: CLIK, task priority, set-based...); v_ref's vehicle part in the
-            axes of v (the vehicle joint's local twist).
+        kinematic: the kinematic layer (an ActuatedKinematics: ``reference``, ``arm_rates``, ``errors``).
         dt: control period [s] (the simulation step).
-        task_jacobian: q -> J (k, nv) of the task the arm keeps with coordination (world-aligned rows).
         coordination: re-solve the arm with the measured vehicle velocity.
-        arm_damping: DLS damping of J_a^# [same units as J].
+        saturation_feedback: bound the vehicle's part of the reference by what the allocation achieved.
         max_arm_rate: bound on every joint command [rad/s or m/s] (None: the model's velocity limits).
-        monitor: q -> {name: value} recorded per row (e.g. the vehicle and end-effector errors).
 
     Raises:
         SolverInputError: a non-floating base, dt <= 0.
     """
 
-    def __init__(self, robot: Robot, velocity: VehicleVelocityController, kinematic: KinematicController, dt: float,
-                 *, task_jacobian: Callable[[np.ndarray], np.ndarray], coordination: bool = True,
-                 arm_damping: float = 0.01, max_arm_rate: float | None = None,
-                 monitor: Callable[[np.ndarray], dict] | None = None) -> None:
+    def __init__(self, robot: Robot, velocity: VehicleVelocityController, kinematic, dt: float, *,
+                 coordination: bool = True, saturation_feedback: bool = False,
+                 max_arm_rate: float | None = None) -> None:
         if robot.base_type != "floating":
             raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
         if not (np.isfinite(dt) and dt > 0):
             raise SolverInputError(f"dt must be a control period > 0 s, got {dt!r}")
         self.robot, self.velocity, self.kinematic, self.dt = robot, velocity, kinematic, float(dt)
-        self.task_jacobian, self.monitor = task_jacobian, monitor
-        self.coordination, self.arm_damping = bool(coordination), float(arm_damping)
+        self.coordination, self.saturation_feedback = bool(coordination), bool(saturation_feedback)
         self.max_arm_rate = Limit.joint_velocities(robot).upper if max_arm_rate is None \
             else np.full(robot.n_arm, float(max_arm_rate))
+        self.ratio = np.ones(6)  # achieved / asked wrench per axis at the last step (1: the allocation gave it)
 
-    def arm_command(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray) -> np.ndarray:
-        """The joint-rate command (n_arm,): qd_ref, or coordinated with the measured vehicle, bounded."""
-        nb = self.robot.n_vehicle
-        if self.coordination:
-            arm = coordinated_arm_rates(self.task_jacobian(q), reference, v[:nb], nb, damping=self.arm_damping)
-        else:
-            arm = reference[nb:]
-        return np.clip(arm, -self.max_arm_rate, self.max_arm_rate)
+    def vehicle_bounds(self, nu: np.ndarray, nu_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) (6,) [m/s, rad/s] base frame: between the measured nu and nu + r (nu_pose - nu)."""
+        reachable = nu + self.ratio * (nu_pose - nu)
+        return np.minimum(nu, reachable), np.maximum(nu, reachable)
 
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
         """The arm and thrust commands for the step from (t, q, v); advances the velocity loop's integral."""
         nb, model = self.robot.n_vehicle, self.velocity.model
-        reference, _ = self.kinematic(t, q, None)
-        arm = self.arm_command(q, v, reference)
+        bounds = None
+        if self.saturation_feedback and np.any(self.ratio < 1.0):
+            nu = base_twist(model, v)
+            bounds = self.vehicle_bounds(nu, self.kinematic.vehicle_objective(q))
+        reference, _ = self.kinematic.reference(t, q, bounds)
+        arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
+        arm = np.clip(arm, -self.max_arm_rate, self.max_arm_rate)
         nu_ref = model._base_placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
         arm_acceleration = (arm - v[nb:]) / model.motor_time_constant  # the servo the model knows
         control = self.velocity.control(q, v, nu_ref, self.dt, arm_acceleration=arm_acceleration)
-        info = {"wrench_command": control.wrench, "achieved_wrench": control.allocation.achieved_wrench,
-                "attainable": control.allocation.attainable, "velocity_integral": self.velocity.integral.copy()}
-        if self.monitor is not None:
-            info.update(self.monitor(q))
-        return ActuatedCommand(arm, control.allocation.thrusts, info)
+        allocation = control.allocation
+        self.ratio = np.ones(6) if allocation.attainable else achieved_ratio(control.wrench,
+                                                                                allocation.achieved_wrench)
+        info = {"wrench_command": control.wrench, "achieved_wrench": allocation.achieved_wrench,
+                "attainable": allocation.attainable, "velocity_integral": self.velocity.integral.copy(),
+                "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
+        return ActuatedCommand(arm, allocation.thrusts, info)
+
+
+def achieved_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:
+    """r (6,) = clip(achieved / asked, 0, 1) per wrench axis, 1 where the allocation gave what was asked."""
+    scale = max(1.0, float(np.max(np.abs(asked))))
+    short = np.abs(asked - achieved) > tolerance * scale
+    ratio = np.ones(6)
+    ratio[short] = np.clip(achieved[short] / np.where(asked[short] == 0.0, 1.0, asked[short]), 0.0, 1.0)
+    return ratio

@@ -1,20 +1,29 @@
-"""Station keeping with an end effector held at a point: the whole chain of an actuated UVMS, as one digital
-controller of an ``ActuatedPlant`` for :func:`uvms.sim.loop.simulate`.
+"""The kinematic layer of an actuated UVMS: any solver, a vehicle pose objective, and the vehicle's velocity given.
 
 Per control step (period dt), from the measured (q, v):
 
-1. vehicle pose loop: nu_ref = K_pose [R^T (p_d - p); log3(R^T R_d)] towards the station (vehicle.py);
-2. kinematic controller (:class:`StationKeeping`): the end-effector point task v_task = K_ee (x_d - x) with the
-   vehicle's part imposed, v_ref = [nu_ref; J_a^# (v_task - J_v nu_ref)] (a virtual-chain CLIK: the vehicle
-   given, the arm solved);
-3. arm command: without coordination qd_ref; with coordination the arm part solved again with the MEASURED
-   vehicle velocity, so the arm takes up the vehicle's lag and drift;
-4. vehicle velocity loop: model feedforward + PI -> body wrench -> thrust allocation -> thrust commands.
+1. vehicle pose objective: nu_pose = K_pose [R^T (p_d - p); log3(R^T R_d)] towards the vehicle's station
+   (:class:`uvms.control.vehicle.VehiclePoseController`), bounded by ``max_speed`` and, with saturation
+   feedback, by what the thrusters can give (:meth:`ActuatedKinematics.reference`);
+2. kinematic reference: the scenario's solver on the levels ``[inequalities..., task, [VehicleTask(nu_pose)]]``
+   (the inequalities when the solver enforces them; the pose objective above the task for a solver whose
+   ``vehicle_level`` is 0, the kinematic constraint): the end-effector task (any axes, following any
+   trajectory) takes the vehicle and the arm, the pose objective brings the vehicle back to its station in the
+   task's null space. Its vehicle part is the vehicle controller's setpoint;
+3. coordination: the arm solved again THROUGH THE SAME SOLVER with the MEASURED vehicle velocity held fixed:
+   the levels ``[[VehicleTask(nu_measured)], inequalities..., task]`` (a vehicle level at the top fixes the
+   vehicle columns for every priority method), so enforced inequalities keep holding for the arm.
 
-Steps 3-4 are :class:`uvms.control.coordination.CoordinatedControl`, which takes any kinematic controller.
+CLIK has no priorities: its levels would be stacked and traded off, not held. With CLIK the vehicle's given
+velocity nu is taken out of the task: qd_arm = J_a^# (K e + xdot_d - J_v nu) (DLS ``damping``): the same law
+as the priority methods' with the vehicle level on top, without inequalities.
+
+Station keeping (:func:`station_keeping`) is one case: a held end-effector point and the CLIK law.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -23,71 +32,124 @@ from ..dynamics.allocation import ThrustAllocator
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
+from ..solvers.base import Solver
+from ..solvers.stack import stacked_terms
+from ..tasks.frame import FrameTask
+from ..tasks.vehicle import VehicleTask
+from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, arm_rates_for_task
 from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector
 
+#: levels -> a solver built on them (the scenario's class and options); None: the CLIK law (module docstring).
+SolverFactory = Callable[[list], Solver]
 
-class StationKeeping:
-    """The kinematic reference of station keeping: the vehicle at ``vehicle_target``, the end effector at
-    ``ee_target`` (module docstring, steps 1-2), a kinematic controller (t, q, None) -> (v_ref, info).
+
+class ActuatedKinematics:
+    """The kinematic reference of an actuated UVMS and the arm re-solved with a given vehicle velocity.
 
     Args:
         robot: a floating-base Robot.
-        pose: the vehicle pose controller.
-        vehicle_target: world_M_base wanted [m, rad]; ee_target: (3,) [m] world point for the end effector,
-            or None: no end-effector task, the arm held (zero joint rates).
-        frame: end-effector frame (default: the first).
-        ee_gain: K_ee [1/s] of the point task.
-        arm_damping: DLS damping of the arm inverse.
+        pose: the vehicle pose controller (the pose objective's gains and speed bound).
+        task: the end-effector task (any axes).
+        trajectory: t [s] -> a sample with ``pose`` (pin.SE3) and ``twist`` (6,) world [m/s, rad/s] the task
+            follows, or None: no end-effector task, the arm held (zero joint rates).
+        vehicle_target: world_M_base the vehicle's station [m, rad].
+        solver: levels -> Solver (built twice, once per level order), or None: the CLIK law.
+        inequalities: the levels of inequality objectives the solver enforces, highest first.
+        gain: K [1/s] of the CLIK law; damping: its DLS damping.
         base_placement: the base frame in the vehicle joint's frame (``Plant._base_placement``; None: identity).
+        vehicle_level: where the vehicle's pose objective goes relative to the task: 0 above it, 1 or None below
+            (the solver's :attr:`~uvms.solvers.base.Solver.vehicle_level`). Below, the task takes the vehicle too
+            and the pose objective brings the vehicle back to its station in the task's null space (the arm does
+            the work while it can); above, the arm alone follows the task.
 
     Raises:
-        SolverInputError: a non-floating base, a bad gain.
+        SolverInputError: a non-floating base, a bad gain, or a solver that refuses the levels.
     """
 
-    def __init__(self, robot: Robot, pose: VehiclePoseController, *, vehicle_target: pin.SE3,
-                 ee_target: np.ndarray | None, frame: str | None = None, ee_gain: float = 1.0,
-                 arm_damping: float = 0.01, base_placement: pin.SE3 | None = None) -> None:
+    def __init__(self, robot: Robot, pose: VehiclePoseController, task: FrameTask,
+                 trajectory: Callable[[float], object] | None, *, vehicle_target: pin.SE3,
+                 solver: SolverFactory | None = None, inequalities: Sequence[Sequence] = (), gain: float = 1.0,
+                 damping: float = 0.01, base_placement: pin.SE3 | None = None,
+                 vehicle_level: int | None = None) -> None:
         if robot.base_type != "floating":
-            raise SolverInputError(f"station keeping needs a floating base, {robot.name} is {robot.base_type}")
-        self.robot, self.pose = robot, pose
+            raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
+        self.robot, self.pose, self.task, self.trajectory = robot, pose, task, trajectory
         self.vehicle_target = vehicle_target.copy()
-        self.ee_target = None if ee_target is None else np.asarray(ee_target, dtype=float).reshape(3)
-        self.frame = frame or robot.ee_frames[0]
-        self.ee_gain = float(gain_vector(ee_gain, "ee_gain", 1)[0])
-        self.arm_damping = float(arm_damping)
+        self.gain = float(gain_vector(gain, "gain", 1)[0])
+        self.damping = float(damping)
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
+        self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
+        levels = [list(level) for level in inequalities]
+        reference = [task]
+        reference.insert(len(reference) if vehicle_level is None else vehicle_level, [self._vehicle_reference])
+        self.reference_solver = None if solver is None else solver([*levels, *reference])
+        self.arm_solver = None if solver is None else solver([[self._vehicle_measured], *levels, task])
+        self._configuration: Configuration | None = None
+        self._time: float | None = None
+
+    def _at(self, t: float, q: np.ndarray) -> Configuration:
+        """The configuration at q (one kept, updated), the task pointed at the trajectory's sample of t."""
+        if self.trajectory is not None and t != self._time:
+            sample = self.trajectory(t)
+            self.task.set_target(sample.pose)
+            self.task.set_target_velocity(sample.twist, check=False)
+            self._time = t
+        if self._configuration is None:
+            self._configuration = Configuration(self.robot, q, check=False)
+        else:
+            self._configuration.update(q, check=False)
+        return self._configuration
 
     def base_pose(self, q: np.ndarray) -> pin.SE3:
         """world_M_base of the vehicle's base frame (its link frame, not only the joint)."""
         return self.robot.base_pose(q) * self.base_placement
 
-    def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """J (3, nv) of the end-effector point, world-aligned (the task coordination keeps)."""
-        return self.robot.jacobian(q, self.frame)[:3]
+    def vehicle_objective(self, q: np.ndarray, bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+        """nu_pose (6,) [m/s, rad/s] in the base frame, within ``bounds`` (lower, upper) (6,) when given."""
+        nu = self.pose.reference(self.base_pose(q), self.vehicle_target)
+        return nu if bounds is None else np.clip(nu, *bounds)
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
-        """v_ref (nv,) (vehicle part in the vehicle joint's axes) and {"nu_ref": (6,) base frame} at q."""
-        robot, nb = self.robot, self.robot.n_vehicle
-        nu_ref = self.pose.reference(self.base_pose(q), self.vehicle_target)
-        vehicle_ref = self.base_placement.act(pin.Motion(nu_ref)).vector  # base frame -> vehicle joint axes
-        if self.ee_target is None:  # the arm held still
-            return np.concatenate([vehicle_ref, np.zeros(robot.n_arm)]), {"nu_ref": nu_ref}
-        jacobian = self.jacobian(q)
-        task = self.ee_gain * (self.ee_target - robot.fk(q, self.frame).translation)
-        arm = arm_rates_for_task(jacobian, task, vehicle_ref, nb, damping=self.arm_damping)
-        return np.concatenate([vehicle_ref, arm]), {"nu_ref": nu_ref}
+    def _solve(self, configuration: Configuration, vehicle: np.ndarray, reference: bool) -> tuple[np.ndarray, object]:
+        """v (nv,) with the vehicle's velocity (joint axes) given: above the task (reference) or on top."""
+        nb = self.robot.n_vehicle
+        if self.trajectory is None:
+            return np.concatenate([vehicle, np.zeros(self.robot.n_arm)]), None
+        if self.reference_solver is None:  # the CLIK law
+            jacobian, error, feedforward = stacked_terms(configuration, [self.task])
+            arm = arm_rates_for_task(jacobian, self.gain * error + feedforward, vehicle, nb, damping=self.damping)
+            return np.concatenate([vehicle, arm]), None
+        level = self._vehicle_reference if reference else self._vehicle_measured
+        level.velocity_values[:] = vehicle
+        result = (self.reference_solver if reference else self.arm_solver).velocity(configuration)
+        return result.v, result
 
-    def errors(self, q: np.ndarray) -> dict:
-        """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and error."""
+    def reference(self, t: float, q: np.ndarray,
+                  bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]:
+        """v_ref (nv,) (vehicle part in the vehicle joint's axes) and {"nu_pose": (6,) base frame, "solver": the
+        SolverResult or None} at (t, q); ``bounds``: the vehicle velocities the thrusters can give (base frame)."""
+        nu_pose = self.vehicle_objective(q, bounds)
+        vehicle = self.base_placement.act(pin.Motion(nu_pose)).vector  # base frame -> vehicle joint axes
+        v, result = self._solve(self._at(t, q), vehicle, reference=True)
+        return v, {"nu_pose": nu_pose, "solver": result}
+
+    def arm_rates(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray) -> np.ndarray:
+        """The arm rates (n_arm,) of the same solver with the vehicle velocity (n_vehicle,) (joint axes) held."""
+        v, _ = self._solve(self._at(t, q), vehicle_velocity, reference=False)
+        return v[self.robot.n_vehicle:]
+
+    def errors(self, t: float, q: np.ndarray) -> dict:
+        """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and its
+        distance [m] from the trajectory's point."""
         pose = self.base_pose(q)
-        ee = self.robot.fk(q, self.frame).translation.copy()
+        ee = self.robot.fk(q, self.task.frame).translation.copy()
         attitude_error = pin.log3(pose.rotation.T @ self.vehicle_target.rotation)  # body axes [rad]
         row = {"vehicle_position_error": float(np.linalg.norm(self.vehicle_target.translation - pose.translation)),
                "vehicle_attitude_error": float(np.linalg.norm(attitude_error)), "ee_position": ee}
-        if self.ee_target is not None:
-            row["ee_point_error"] = float(np.linalg.norm(self.ee_target - ee))
+        if self.trajectory is not None:
+            row["ee_point_error"] = float(np.linalg.norm(self.trajectory(t).pose.translation - ee))
         return row
 
 
@@ -98,22 +160,51 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                     pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                     priorities=None, arm_feedforward: bool = True, ee_gain: float = 1.0,
                     arm_damping: float = 0.01, frame: str | None = None) -> CoordinatedControl:
-    """The controller of ``plant`` holding the vehicle at its pose of q0 and the end effector at ``ee_target``
-    (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held), with the allocation of
-    ``thrusters``. The default gains hold the BlueROV2 + Alpha 5 in a 0.3 m/s current to 5 cm.
+    """The controller of ``plant`` holding the vehicle at its pose of q0 and the end-effector point at ``ee_target``
+    (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held): :func:`actuated_control` with
+    a held point and the CLIK law. The default gains hold the BlueROV2 + Alpha 5 in a 0.3 m/s current to 5 cm.
+
+    Args:
+        plant, thrusters, q0, dt, coordination, knows_current, kp, ki, pose_gains, max_speed, priorities,
+            arm_feedforward: as in :func:`actuated_control`.
+        ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse.
+        frame: the end-effector frame held (default: the model's first end effector).
+
+    Returns:
+        A CoordinatedControl whose ``kinematic`` is the ActuatedKinematics of the held point.
+    """
+    robot = plant.robot
+    frame = frame or robot.ee_frames[0]
+    start = robot.fk(q0, frame)
+    point = start.translation if ee_target is None else np.asarray(ee_target, dtype=float).reshape(3)
+    hold = None if hold_arm else VelocityRamps.trapezoid(point, np.zeros(3), 1.0, 0.5, rotation=start.rotation)
+    return actuated_control(plant, thrusters, q0, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold,
+                            coordination=coordination and not hold_arm, knows_current=knows_current, kp=kp, ki=ki,
+                            pose_gains=pose_gains, max_speed=max_speed, priorities=priorities,
+                            arm_feedforward=arm_feedforward, gain=ee_gain, damping=arm_damping)
+
+
+def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: float, task: FrameTask,
+                     trajectory: Callable[[float], object] | None, *, solver: SolverFactory | None = None,
+                     inequalities: Sequence[Sequence] = (), coordination: bool = True,
+                     saturation_feedback: bool = False, knows_current: bool = False,
+                     kp: float | np.ndarray = (100.0, 100.0, 100.0, 10.0, 10.0, 10.0),
+                     ki: float | np.ndarray = (150.0, 150.0, 150.0, 15.0, 15.0, 15.0),
+                     pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
+                     priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
+                     vehicle_level: int | None = None) -> CoordinatedControl:
+    """The whole chain on ``plant``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
 
     Args:
         plant: the simulated plant; its robot and hydrodynamics are the controller's model, without the
             current unless ``knows_current``.
         thrusters: the vehicle's thrusters; q0: (nq,) the station; dt: control period [s].
+        task, trajectory, solver, inequalities, gain, damping, vehicle_level: as in :class:`ActuatedKinematics`.
+        coordination, saturation_feedback: as in :class:`uvms.control.coordination.CoordinatedControl`.
         kp [N s/m, N m s/rad], ki [N/m, N m/rad]: velocity PI gains (6,) or numbers; pose_gains [1/s];
-        max_speed: [m/s, rad/s] bound of the pose loop's reference; priorities: of the allocation
-            (:class:`uvms.dynamics.allocation.ThrustAllocator`); arm_feedforward, ee_gain, arm_damping: as in
-            :class:`uvms.control.vehicle.VehicleVelocityController` and :class:`StationKeeping`.
-        frame: the end-effector frame held (default: the model's first end effector).
-
-    Returns:
-        A CoordinatedControl whose ``kinematic`` is the StationKeeping reference.
+        max_speed: [m/s, rad/s] bound of the pose objective; priorities: of the allocation
+            (:class:`uvms.dynamics.allocation.ThrustAllocator`); arm_feedforward: as in
+            :class:`uvms.control.vehicle.VehicleVelocityController`.
     """
     robot = plant.robot
     model = Plant(robot, plant.hydro if knows_current else plant.hydro.with_current(np.zeros(3)),
@@ -123,11 +214,9 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                                 priorities=priorities)
     velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=arm_feedforward)
     pose = VehiclePoseController(velocity, pose_gains, max_speed)
-    base = robot.base_pose(q0) * model._base_placement
-    frame = frame or robot.ee_frames[0]
-    target = None if hold_arm else robot.fk(q0, frame).translation if ee_target is None else ee_target
-    reference = StationKeeping(robot, pose, vehicle_target=base, ee_target=target, frame=frame, ee_gain=ee_gain,
-                               arm_damping=arm_damping, base_placement=model._base_placement)
-    return CoordinatedControl(robot, velocity, reference, dt, task_jacobian=reference.jacobian,
-                              coordination=coordination and target is not None, arm_damping=arm_damping,
-                              monitor=reference.errors)
+    kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) *
+                                   model._base_placement, solver=solver, inequalities=inequalities, gain=gain,
+                                   damping=damping, base_placement=model._base_placement,
+                                   vehicle_level=vehicle_level)
+    return CoordinatedControl(robot, velocity, kinematic, dt, coordination=coordination and trajectory is not None,
+                              saturation_feedback=saturation_feedback)

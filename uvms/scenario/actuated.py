@@ -1,32 +1,35 @@
-"""A scenario whose vehicle is actuated by its thrusters: station keeping with the end effector held at a point.
+"""A scenario whose vehicle is actuated by thrusters: the whole chain, any solver, inequalities, task and trajectory.
 
-``[plant] type = "hydrodynamic"`` with ``thrusters = true`` runs the whole chain of
-:func:`uvms.control.station.station_keeping` with :func:`uvms.sim.loop.simulate` on an ``ActuatedPlant``:
-the vehicle pose loop and the end-effector point task give the vehicle and arm references; with
-``vehicle_control.coordination`` the arm is solved again with the measured vehicle velocity; the vehicle
-velocity loop (the plant's own Fossen model as feedforward, PI feedback) gives a body wrench, the allocation
-turns it into thrusts within the thrusters' limits, and the plant simulates their first-order response. The
-thrusters are model data (:func:`uvms.dynamics.thrusters.thrusters_of`: uuv_simulator plugins or a
-``thrusters.yaml`` beside the model). The end effector holds ``trajectory.start`` (``trajectory.type = "hold"``).
+``[plant] type = "hydrodynamic"`` with ``thrusters = true`` runs :func:`uvms.control.station.actuated_control`
+with :func:`uvms.sim.loop.simulate` on an ``ActuatedPlant``: the scenario's solver (any ``solver.method``, its
+``[[inequalities]]`` enforced above the task when it enforces them) with the vehicle's pose objective gives the
+reference; its vehicle part is the velocity loop's setpoint (the plant's own Fossen model as feedforward, PI
+feedback); with ``vehicle_control.coordination`` the arm is solved again through the same solver with the
+measured vehicle velocity held; the allocation turns the wrench into thrusts within the thrusters' limits
+(``vehicle_control.saturation_feedback``: its shortfall bounds the vehicle's part of the next reference), and the
+plant simulates their first-order response. The thrusters are model data
+(:func:`uvms.dynamics.thrusters.thrusters_of`). Station keeping is ``trajectory.type = "hold"``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from types import SimpleNamespace
 
 import numpy as np
 
 from ..control.coordination import CoordinatedControl
-from ..control.station import station_keeping
+from ..control.station import actuated_control
 from ..dynamics.actuated import ActuatedPlant
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, thrusters_of
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
-from ..solvers import SOLVERS, CLIKSolver
+from ..solvers import SOLVERS, CLIKSolver, Solver
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from ..tasks.frame import FrameTask
+from .inequalities import ObjectiveRecorder, ScenarioInequalities, build_inequalities
 from .schema import changed_keys
 
 #: The wrench axes the allocation priorities name (body FLU: forces, then moments).
@@ -40,10 +43,11 @@ class Actuation:
     plant: Plant
     thrusters: Thrusters
     controller: CoordinatedControl
+    inequalities: ScenarioInequalities | None = None
 
 
-def check_actuated_scenario(robot: Robot, task: FrameTask, scenario: dict) -> None:
-    """Refuse what station keeping does not do (a clear message per case)."""
+def check_actuated_scenario(robot: Robot, scenario: dict) -> None:
+    """Refuse only what is meaningless on an actuated vehicle (a message per case: why, and what works)."""
     plant, solver = scenario["plant"], scenario["solver"]
     if plant["type"] != "hydrodynamic":
         raise ScenarioError(f"plant.thrusters = true needs plant.type = 'hydrodynamic' (thrusters push against "
@@ -51,25 +55,28 @@ def check_actuated_scenario(robot: Robot, task: FrameTask, scenario: dict) -> No
     if robot.base_type != "floating":
         raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
                             f"base")
-    if scenario["trajectory"]["type"] != "hold":
-        raise ScenarioError("plant.thrusters = true keeps station: the end effector holds a point, so it needs "
-                            "trajectory.type = 'hold' (trajectory.start, default where the end effector starts)")
-    if tuple(task.axes) != ("x", "y", "z"):
-        raise ScenarioError(f"plant.thrusters = true holds the end effector at a point: task.axes must be "
-                            f"['x', 'y', 'z'], got {list(task.axes)}")
-    if SOLVERS[solver["method"]] is not CLIKSolver or solver["free_floating"] or solver["alpha"] or solver["enforce_limits"]:
-        raise ScenarioError("plant.thrusters = true solves the arm with its own point task (solver.gain [1/s], "
-                            "solver.damping): solver.method must be 'clik', without free_floating, alpha or "
-                            "enforce_limits (the vehicle is actuated, not free floating)")
-    if isinstance(solver["gain"], list) or solver["damping_epsilon"]:
-        raise ScenarioError("plant.thrusters = true: solver.gain is one number (K [1/s] of the end-effector point "
-                            "task) and solver.damping a fixed DLS damping (no damping_epsilon)")
-    if scenario["inequalities"]:
-        raise ScenarioError("[[inequalities]] are not enforced on an actuated vehicle yet; remove them or use the "
-                            "kinematic plant")
+    if solver["free_floating"]:
+        raise ScenarioError("solver.free_floating = true leaves the vehicle passive (momentum conservation), but "
+                            "plant.thrusters = true actuates it: the solver's vehicle part is the vehicle "
+                            "controller's setpoint; remove solver.free_floating (or plant.thrusters for a passive "
+                            "vehicle)")
+    if isinstance(solver["gain"], list):
+        raise ScenarioError("plant.thrusters = true: solver.gain is one number (K [1/s] of every level; the levels "
+                            "are the inequalities, the vehicle's pose objective and the task)")
+    if SOLVERS[solver["method"]] is CLIKSolver and (solver["alpha"] or solver["enforce_limits"] or solver["weights"]
+                                                   or solver["damping_epsilon"]):
+        raise ScenarioError("plant.thrusters = true with solver.method = 'clik': CLIK has no priorities to hold the "
+                            "vehicle's velocity above the task, so the arm is solved with the vehicle's given: "
+                            "J_a^# (K e + xdot_d - J_v nu) (solver.gain, a fixed solver.damping); solver.alpha, "
+                            "enforce_limits, weights and damping_epsilon are not used. For joint limits use "
+                            "solver.method = 'set_based' or 'hqp' with an [[inequalities]] joint_limits table")
+    if changed_keys(scenario, "vehicle"):
+        raise ScenarioError("plant.thrusters = true: the vehicle holds its station by the vehicle controller's pose "
+                            "objective (vehicle_control.pose_gains, max_speed), not a [vehicle] task; remove "
+                            "[vehicle]")
     if plant["motor_feedforward"] or plant["control_dt"]:
-        raise ScenarioError("plant.motor_feedforward and plant.control_dt are the GJM controller's; station keeping "
-                            "runs its controller once per simulation.dt")
+        raise ScenarioError("plant.motor_feedforward and plant.control_dt are the GJM controller's; the actuated "
+                            "chain runs its controller once per simulation.dt")
 
 
 def check_vehicle_control_used(scenario: dict) -> None:
@@ -92,35 +99,59 @@ def allocation_priorities(value: list, origin: str = "vehicle_control.priorities
     return [tuple(group) for group in value]
 
 
-def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray,
-                   scenario: dict) -> Actuation:
-    """The thrusters of the model and the station-keeping controller of the scenario."""
-    check_actuated_scenario(robot, task, scenario)
+def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray, scenario: dict,
+                   solver: type[Solver], options: dict) -> Actuation:
+    """The thrusters of the model and the whole chain of the scenario (:func:`uvms.control.station.actuated_control`).
+
+    Args:
+        solver: the scenario's solver class, built with ``options`` on the chain's levels (CLIK: the vehicle
+            given, no levels). The scenario's ``[[inequalities]]`` are levels above the task when the solver
+            enforces them, else monitored.
+    """
+    check_actuated_scenario(robot, scenario)
     try:
         thrusters = thrusters_of(robot)
     except UVMSError as exc:
         raise ScenarioError(f"plant.thrusters = true: {exc}") from None
-    control, solver = scenario["vehicle_control"], scenario["solver"]
+    control, section, tables = scenario["vehicle_control"], scenario["solver"], scenario["inequalities"]
+    inequalities = build_inequalities(robot, tables, solver) if tables else None
+    enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
-        controller = station_keeping(
-            plant, thrusters, q0, float(scenario["simulation"]["dt"]), ee_target=trajectory(0.0).pose.translation,
-            frame=task.frame, coordination=control["coordination"], knows_current=control["knows_current"],
+        controller = actuated_control(
+            plant, thrusters, q0, float(scenario["simulation"]["dt"]), task, trajectory,
+            solver=None if solver is CLIKSolver else lambda levels: solver(robot, levels, **options),
+            inequalities=enforced, coordination=control["coordination"],
+            saturation_feedback=control["saturation_feedback"], knows_current=control["knows_current"],
             kp=np.asarray(control["kp"], dtype=float), ki=np.asarray(control["ki"], dtype=float),
             pose_gains=np.asarray(control["pose_gains"], dtype=float),
             max_speed=np.asarray(control["max_speed"], dtype=float),
             priorities=allocation_priorities(control["priorities"]), arm_feedforward=control["arm_feedforward"],
-            ee_gain=float(solver["gain"]), arm_damping=float(solver["damping"]))
+            gain=float(section["gain"]), damping=float(section["damping"]), vehicle_level=solver.vehicle_level)
     except UVMSError as exc:
-        raise ScenarioError(f"vehicle_control: {exc}") from None
-    return Actuation(plant, thrusters, controller)
+        raise ScenarioError(f"vehicle_control/solver: {exc}") from None
+    return Actuation(plant, thrusters, controller, inequalities)
+
+
+class ActuatedObjectives:
+    """The inequality series of an actuated row (:class:`uvms.scenario.inequalities.ObjectiveRecorder` on the
+    measured state, the solver's activity from the kinematic reference)."""
+
+    def __init__(self, robot: Robot, inequalities: ScenarioInequalities) -> None:
+        self.recorder = ObjectiveRecorder(robot, inequalities)
+
+    def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
+        view = SimpleNamespace(rate=sample.rate, info=sample.command.info.get("solver"))
+        return self.recorder(t, q, x, view)
 
 
 def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np.ndarray, duration: float,
                        scenario: dict, progress: bool | None) -> SimulationResult:
     """The run, with the task series (the end effector against the held point) recorded."""
+    recorders = [] if actuation.inequalities is None else [ActuatedObjectives(actuation.plant.robot,
+                                                                                  actuation.inequalities)]
     return simulate(ActuatedPlant(actuation.plant, actuation.thrusters), actuation.controller, q0, duration,
                     float(scenario["simulation"]["dt"]), integrator=scenario["simulation"]["integrator"], task=task,
-                    desired=lambda t: trajectory(t).pose, progress=progress)
+                    desired=lambda t: trajectory(t).pose, progress=progress, recorders=recorders)
 
 
 def actuated_metrics(result: SimulationResult, actuation: Actuation, scenario: dict) -> dict:
@@ -128,4 +159,5 @@ def actuated_metrics(result: SimulationResult, actuation: Actuation, scenario: d
     and what the run was (thruster count, coordination, current)."""
     return {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names,
             "coordination": bool(scenario["vehicle_control"]["coordination"]),
+            "saturation_feedback": bool(scenario["vehicle_control"]["saturation_feedback"]),
             "current": list(scenario["plant"]["current"]) or [0.0, 0.0, 0.0]}

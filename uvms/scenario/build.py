@@ -46,7 +46,7 @@ class Setup:
     plant: Plant | None = None  # [plant] type rigid or hydrodynamic: the controller is a GJMController
     control_dt: float = 0.0  # [s] sampling period of that controller (0: continuous)
     inequalities: ScenarioInequalities | None = None  # [[inequalities]]: enforced (set_based, hqp) or monitored
-    actuation: Actuation | None = None  # plant.thrusters: the thrusters and the station-keeping controller
+    actuation: Actuation | None = None  # plant.thrusters: the thrusters and the whole chain's controller
     samples: RecentSamples | None = None  # the trajectory as the kinematic controller samples it (None: trajectory)
 
 
@@ -71,12 +71,12 @@ def build(scenario: dict) -> Setup:
     duration = float(scenario["simulation"]["duration"] or trajectory.duration)
     if scenario["plant"]["type"] != "kinematic":
         if scenario["plant"]["thrusters"]:
-            if scenario["inequalities"]:
-                raise ScenarioError(f"[[inequalities]] run on the kinematic plant only; plant.type = "
-                                    f"{scenario['plant']['type']!r} drives a passive vehicle by the GJM controller")
-            actuation = make_actuation(robot, make_plant(robot, scenario["plant"]), task, trajectory, q0, scenario)
+            cls = solver_class(scenario["solver"])
+            options = solver_options(robot, scenario["solver"], cls, scenario["simulation"]["dt"])
+            actuation = make_actuation(robot, make_plant(robot, scenario["plant"]), task, RecentSamples(trajectory), q0,
+                                       scenario, cls, options)
             return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
-                         actuation=actuation)
+                         actuation=actuation, inequalities=actuation.inequalities)
         plant, controller, inequalities = make_plant_controller(robot, task, trajectory, scenario)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(scenario["plant"]["control_dt"]), inequalities=inequalities)

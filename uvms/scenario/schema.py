@@ -159,6 +159,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "coordination": (bool, True, None),
         "arm_feedforward": (bool, True, None),
         "knows_current": (bool, False, None),
+        "saturation_feedback": (bool, False, None),  # the allocation's shortfall bounds the vehicle's reference
     },
     "outputs": {
         "figures": (bool, True, None),

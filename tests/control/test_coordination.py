@@ -1,0 +1,87 @@
+"""Arm-vehicle coordination through the scenario's solver (uvms.control.coordination, uvms.control.station)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import uvms
+from uvms.control.coordination import CoordinatedControl, achieved_ratio, arm_rates_for_task
+from uvms.control.station import ActuatedKinematics
+from uvms.control.vehicle import VehiclePoseController
+from uvms.tasks import FrameTask
+from uvms.tasks.objectives import JointLimits
+from uvms.trajectory import VelocityRamps
+
+ARM = [3.0, 1.8, 1.8, 1.0, 0.0]
+
+
+@pytest.fixture(scope="module")
+def robot() -> uvms.Robot:
+    return uvms.load("bluerov2_alpha5")
+
+
+def test_achieved_ratio_is_what_the_allocation_gave_per_axis():
+    asked = np.array([200.0, 10.0, -50.0, 1.0, 0.0, 3.0])
+    achieved = np.array([130.0, 10.0, -25.0, 1.0, 0.0, -1.0])
+    np.testing.assert_allclose(achieved_ratio(asked, achieved), [0.65, 1.0, 0.5, 1.0, 1.0, 0.0])
+
+
+def test_vehicle_bounds_lie_between_the_measured_velocity_and_what_the_thrusters_give(robot):
+    control = CoordinatedControl.__new__(CoordinatedControl)
+    control.ratio = np.array([0.25, 1.0, 0.0, 1.0, 1.0, 1.0])
+    nu = np.array([-0.2, 0.0, 0.1, 0.0, 0.0, 0.0])
+    nu_pose = np.array([0.5, 0.3, -0.1, 0.0, 0.0, 0.0])
+    lower, upper = control.vehicle_bounds(nu, nu_pose)
+    # surge: -0.2 + 0.25 * 0.7 = -0.025; heave: held at the measured 0.1
+    np.testing.assert_allclose(lower, [-0.2, 0.0, 0.1, 0, 0, 0])
+    np.testing.assert_allclose(upper, [-0.025, 0.3, 0.1, 0, 0, 0])
+
+
+def kinematics(robot, target, solver, inequalities=()):
+    pose = VehiclePoseController(None, 1.5, 0.5)
+    hold = VelocityRamps.trapezoid(target, np.zeros(3), 1.0, 0.5)
+    return ActuatedKinematics(robot, pose, FrameTask(robot, axes=("x", "y", "z")), hold,
+                              vehicle_target=robot.base_pose(robot.configuration(base=np.zeros(6), arm=ARM)),
+                              solver=solver, inequalities=inequalities, damping=0.01)
+
+
+def test_the_re_solve_holds_the_measured_vehicle_velocity_and_keeps_the_joint_limits(robot):
+    """Near the lower limit of alpha_axis_c (0 rad, margin 0.05) a measured vehicle velocity that the plain
+    coordination formula takes up by driving that joint further down: through set_based with the joint-limit
+    objective above the task, the joint is stopped (its rate >= 0), the other joints take up what they can."""
+    q = robot.configuration(base=np.zeros(6), arm=[3.0, 1.8, 0.1, 1.0, 0.0])
+    target = robot.fk(q).translation
+    limits = JointLimits(robot, margin=0.05, band=0.2, joints=["alpha_axis_e", "alpha_axis_d", "alpha_axis_c"])
+    index = robot.arm_joint_names.index("alpha_axis_c")
+    measured = np.zeros(6)
+    plain = kinematics(robot, target, None)
+    plain.arm_rates(0.0, q, measured)  # points the task at the target
+    jacobian = plain.task.jacobian(plain._configuration)
+    for direction in np.eye(6)[:3]:
+        for sign in (1.0, -1.0):
+            candidate = sign * 0.2 * direction
+            if arm_rates_for_task(jacobian, np.zeros(3), candidate, 6, damping=0.01)[index] < -0.05:
+                measured = candidate
+    assert np.any(measured), "no vehicle velocity drives alpha_axis_c down"
+    free = arm_rates_for_task(jacobian, np.zeros(3), measured, 6, damping=0.01)
+    enforced = kinematics(robot, target, lambda levels: uvms.SetBasedSolver(robot, levels, damping=0.01),
+                          [[limits]])
+    arm = enforced.arm_rates(0.0, q, measured)
+    assert free[index] < -0.05 and arm[index] >= -1e-9, (free[index], arm[index])
+    # the vehicle level on top holds the measured velocity: the re-solve's vehicle part is it, up to the DLS
+    # damping of its identity rows, lambda^2 / (1 + lambda^2) = 1e-4 of it with lambda = 0.01
+    v, _ = enforced._solve(enforced._configuration, measured, reference=False)
+    np.testing.assert_allclose(v[:6], measured, atol=1.01e-4 * np.linalg.norm(measured))
+
+
+def test_the_reference_puts_the_pose_objective_below_the_task(robot):
+    """A target 4 cm away: the solver's reference moves the end effector at K e with the vehicle at rest on its
+    station (the pose objective in the task's null space, the arm doing the work)."""
+    station = robot.configuration(base=np.zeros(6), arm=ARM)
+    target = robot.fk(station).translation + np.array([0.0, 0.04, 0.0])
+    k = kinematics(robot, target, lambda levels: uvms.SetBasedSolver(robot, levels, damping=0.0))
+    v, info = k.reference(0.0, station)
+    np.testing.assert_allclose(k.task.jacobian(k._configuration) @ v, [0.0, 0.04, 0.0], atol=1e-9)
+    np.testing.assert_allclose(info["nu_pose"], 0.0, atol=1e-12)
+    assert np.linalg.norm(v[:6]) < 1e-6 < np.linalg.norm(v[6:])
