@@ -17,6 +17,8 @@ velocity reference -> vehicle controller -> thrust allocation, with the allocati
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 import pinocchio as pin
 
@@ -65,6 +67,20 @@ def arm_rates_for_task(jacobian: np.ndarray, task: np.ndarray, vehicle_velocity:
     return inverse @ (task - jacobian[:, :n_vehicle] @ vehicle_velocity)
 
 
+class KinematicLayer(Protocol):
+    """What :class:`CoordinatedControl` asks of its kinematic layer (:class:`uvms.control.station.ActuatedKinematics`)."""
+
+    def vehicle_objective(self, q: np.ndarray,
+                          bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray: ...
+
+    def reference(self, t: float, q: np.ndarray,
+                  bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]: ...
+
+    def arm_rates(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray) -> np.ndarray: ...
+
+    def errors(self, t: float, q: np.ndarray) -> dict: ...
+
+
 class CoordinatedControl:
     """The kinematic layer driving an actuated UVMS: the digital controller of an ``ActuatedPlant``
     (:func:`uvms.sim.loop.simulate`).
@@ -94,7 +110,7 @@ class CoordinatedControl:
         SolverInputError: a non-floating base, dt <= 0.
     """
 
-    def __init__(self, robot: Robot, velocity: VehicleVelocityController, kinematic, dt: float, *,
+    def __init__(self, robot: Robot, velocity: VehicleVelocityController, kinematic: KinematicLayer, dt: float, *,
                  coordination: bool = True, saturation_feedback: bool = False,
                  max_arm_rate: float | None = None) -> None:
         if robot.base_type != "floating":

@@ -131,7 +131,7 @@ class ActuationSeries:
         vehicle back against its thrust); thruster_energy: integral of sum_i |f_i (B_i . nu)| [J], the mechanical
         power each thruster gives the hull, counted positive either way (not the electrical energy: no propeller
         efficiency model); both by the trapezoid rule. With a controller that records ``vehicle_position_error``
-        (:class:`uvms.control.station.StationKeeping`): vehicle_position_error (its max over the run) and
+        (:class:`uvms.control.station.ActuatedKinematics`): vehicle_position_error (its max over the run) and
         final_vehicle_position_error [m].
         """
         thrusts, commands, lower, upper = self.thrusts, self.thrust_command, self.lower, self.upper

@@ -72,7 +72,37 @@ def coordination_figure(runs: Mapping[str, SimulationResult], title: str = "") -
         axis.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("t [s]")
-    figure.suptitle(f"{title}: station keeping")
+    figure.suptitle(f"{title}: the vehicle on its station, the end effector on its trajectory")
+    figure.tight_layout()
+    return figure
+
+
+def comparison_figure(runs: Mapping[str, SimulationResult], title: str = "",
+                      clearance: tuple[float, float] | None = None) -> Figure:
+    """Runs side by side, kinematic or actuated: the end-effector error [m], the vehicle's distance from where it
+    started [m] and its tilt [rad] (the angle of its z axis from the world's); ``clearance``: (the seabed's
+    height, the minimum [m]) adds the vehicle's clearance above it."""
+    panels = 4 if clearance is not None else 3
+    figure = Figure(figsize=(8, 1.9 * panels + 0.6))
+    axes = figure.subplots(panels, 1, sharex=True)
+    for label, result in runs.items():
+        robot = result.robot
+        poses = [robot.base_pose(q) for q in result.q]
+        start = poses[0].translation
+        axes[0].plot(result.t, result.position_error, label=label)
+        axes[1].plot(result.t, [np.linalg.norm(pose.translation - start) for pose in poses], label=label)
+        axes[2].plot(result.t, [np.arccos(np.clip(pose.rotation[2, 2], -1.0, 1.0)) for pose in poses], label=label)
+        if clearance is not None:
+            axes[3].plot(result.t, [pose.translation[2] - clearance[0] for pose in poses], label=label)
+    labels = ["end-effector error [m]", "vehicle from its start [m]", "vehicle tilt [rad]", "seabed clearance [m]"]
+    for axis, ylabel in zip(axes, labels):
+        axis.set_ylabel(ylabel, fontsize=8)
+        axis.grid(True, alpha=0.3)
+    if clearance is not None:
+        axes[3].axhline(clearance[1], color="k", linestyle=":", linewidth=1)
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("t [s]")
+    figure.suptitle(title)
     figure.tight_layout()
     return figure
 
