@@ -8,6 +8,11 @@ with ``from conftest import ...`` (test basenames are unique across the folders:
 from __future__ import annotations
 
 import functools
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -161,3 +166,44 @@ def xiang_eq6(theta: np.ndarray) -> pin.SE3:
     ])
     position = np.array([c1 * reach, s1 * reach, -0.370 * s2 - 0.220 * s23 - 0.308 * s234])
     return pin.SE3(rotation, position)
+
+
+# ------------------------------------------------------------------ child processes of `uvms`
+def uvms_command(*args: str) -> list[str]:
+    """The command line of ``uvms ARGS`` in this interpreter."""
+    return [sys.executable, "-m", "uvms.cli", *args]
+
+
+def wait_for(condition, timeout: float = 120.0, process: subprocess.Popen | None = None):
+    """Poll ``condition`` until it returns something true; fail if the process ends first or on timeout [s]."""
+    started = time.monotonic()
+    while time.monotonic() - started < timeout:
+        found = condition()
+        if found:
+            return found
+        if process is not None and process.poll() is not None:
+            pytest.fail(f"the child ended ({process.returncode}) before the condition: {process.stderr.read()}")
+        time.sleep(0.05)
+    pytest.fail("timed out")
+
+
+def signal_a_running_sweep(folder: Path, grid: str, sig: int, check=lambda child: None) -> tuple[subprocess.Popen, str]:
+    """Start ``uvms sweep`` of the hoang2011 scenario over ``grid`` on 2 jobs into ``folder``, wait until a point is
+    under way (its temporary folder inside the sweep's), run ``check(child)``, send ``sig``: (the child, its stderr).
+    The child's process group is killed if it outlives this."""
+    from uvms.io import outputs
+
+    child = subprocess.Popen(uvms_command("sweep", str(SCENARIOS / "hoang2011_w1.toml"), "--grid", grid, "--jobs", "2",
+                                          "--out", str(folder), "--quiet"), stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        wait_for(lambda: list(folder.parent.glob(f".sweep{outputs.TEMPORARY_MARK}*/.point_*{outputs.TEMPORARY_MARK}*")),
+                 process=child)
+        check(child)
+        child.send_signal(sig)
+        _, err = child.communicate(timeout=60)
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+            child.communicate()
+    return child, err

@@ -17,7 +17,8 @@ Limit), ``uvms.tasks`` (tasks and inequality objectives), ``uvms.solvers`` (the 
 ``uvms.cli``.
 """
 
-from . import control, dynamics, errors, model, robot, scenario, sim, solvers, tasks, trajectory, workspace
+# the layers, so that `uvms.dynamics.ThrustAllocator` works after `import uvms`
+from . import control, dynamics, errors, model, robot, scenario, sim, solvers, tasks, trajectory, workspace  # noqa: F401
 from .dynamics import Plant
 from .errors import UVMSError
 from .model import load

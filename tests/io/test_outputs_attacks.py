@@ -14,13 +14,12 @@ import json
 import os
 import signal
 import subprocess
-import sys
 import time
 from pathlib import Path
 
 import pytest
 
-from conftest import NO_FIGURES, one_line, raising, ROOT
+from conftest import NO_FIGURES, ROOT, one_line, raising, signal_a_running_sweep, uvms_command, wait_for
 from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import RunFolderError
@@ -265,36 +264,9 @@ def test_formula_cells_in_sweep_csv_are_neutralised(tmp_path):
         sweep(SANTOS, ['scenario.description=["\\rx", "b"]'], out=tmp_path / "t", progress=False)
 
 
-def uvms_command(*args: str) -> list[str]:
-    return [sys.executable, "-m", "uvms.cli", *args]
-
-
-def wait_for(condition, process: subprocess.Popen, timeout: float = 120.0):
-    started = time.monotonic()
-    while time.monotonic() - started < timeout:
-        found = condition()
-        if found:
-            return found
-        if process.poll() is not None:
-            pytest.fail(f"the child ended ({process.returncode}) first: {process.stderr.read()}")
-        time.sleep(0.05)
-    pytest.fail("timed out")
-
-
 def test_sigterm_stops_a_sweep_cleanly(tmp_path):
     folder = tmp_path / "out" / "sweep"
-    child = subprocess.Popen(uvms_command("sweep", str(HOANG), "--grid", "solver.gain=[1.0, 2.0, 3.0]", "--jobs", "2",
-                                          "--out", str(folder), "--quiet"), stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        wait_for(lambda: list(folder.parent.glob(f".sweep{outputs.TEMPORARY_MARK}*/.point_*{outputs.TEMPORARY_MARK}*")),
-                 child)  # a point under way
-        child.send_signal(signal.SIGTERM)
-        out, err = child.communicate(timeout=60)
-    finally:
-        if child.poll() is None:
-            os.killpg(child.pid, signal.SIGKILL)
-            child.communicate()
+    child, err = signal_a_running_sweep(folder, "solver.gain=[1.0, 2.0, 3.0]", signal.SIGTERM)
     assert child.returncode == 128 + signal.SIGTERM
     assert err.splitlines() == [f"uvms: terminated by SIGTERM; nothing was written to {folder}"]
     time.sleep(0.5)
@@ -309,7 +281,7 @@ def test_sighup_stops_a_run_and_keeps_the_previous_one(tmp_path):
     child = subprocess.Popen(uvms_command("run", str(HOANG), "--out", str(folder), "--quiet"), stdout=subprocess.PIPE,
                              stderr=subprocess.PIPE, text=True)
     try:
-        wait_for(lambda: list(tmp_path.glob(f".run{outputs.TEMPORARY_MARK}*")), child)  # the run under way
+        wait_for(lambda: list(tmp_path.glob(f".run{outputs.TEMPORARY_MARK}*")), process=child)  # the run under way
         time.sleep(0.5)
         child.send_signal(signal.SIGHUP)
         out, err = child.communicate(timeout=60)

@@ -23,7 +23,7 @@ from uvms.cli import main
 from uvms.errors import DiskFullError, RunFolderBusy, RunFolderError
 from uvms.scenario import run_scenario
 
-from conftest import ROOT
+from conftest import ROOT, signal_a_running_sweep, uvms_command, wait_for
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps, 6 figures
 HOANG = ROOT / "scenarios" / "hoang2011_w1.toml"  # 9,500 RK4 steps: several seconds per run
 RUN_FILES = {"metrics.json", "trajectory.csv", "trajectory.npz", "desired_motion.png", "vehicle.png",
@@ -42,10 +42,6 @@ sys.exit(main(sys.argv[2:]))
 """
 
 
-def uvms_command(*args: str) -> list[str]:
-    return [sys.executable, "-m", "uvms.cli", *args]
-
-
 def slow_child(seconds: float, *args: str, **popen) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-c", SLOW_CHILD, str(seconds), *args], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, **popen)
@@ -54,19 +50,6 @@ def slow_child(seconds: float, *args: str, **popen) -> subprocess.Popen:
 def temporaries(folder: Path) -> list[Path]:
     """The hidden temporary siblings of a run folder."""
     return sorted(folder.parent.glob(f".{folder.name}{outputs.TEMPORARY_MARK}*"))
-
-
-def wait_for(condition, timeout: float = 120.0, process: subprocess.Popen | None = None):
-    """Poll ``condition`` until it returns something true; fail if the process ends first or on timeout."""
-    started = time.monotonic()
-    while time.monotonic() - started < timeout:
-        found = condition()
-        if found:
-            return found
-        if process is not None and process.poll() is not None:
-            pytest.fail(f"the child ended ({process.returncode}) before the condition: {process.stderr.read()}")
-        time.sleep(0.05)
-    pytest.fail("timed out")
 
 
 def writing(folder: Path, name: str = "trajectory.csv"):
@@ -312,21 +295,13 @@ def alive(pid: int) -> bool:
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs /proc to follow the worker processes")
 def test_ctrl_c_stops_a_sweep_and_its_workers(tmp_path):
     folder = tmp_path / "out" / "sweep"
-    child = subprocess.Popen(uvms_command("sweep", str(HOANG), "--grid", "solver.gain=[1.0, 2.0, 3.0, 4.0]", "--jobs",
-                                          "2", "--out", str(folder), "--quiet"), stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True, start_new_session=True)
-    try:
-        # a point under way: its own temporary folder inside the sweep's
-        wait_for(lambda: list(folder.parent.glob(f".sweep{outputs.TEMPORARY_MARK}*/.point_*{outputs.TEMPORARY_MARK}*")),
-                 process=child)
-        workers = descendants(child.pid)
+    workers: set[int] = set()
+
+    def two_workers(child) -> None:
+        workers.update(descendants(child.pid))
         assert len(workers) >= 2
-        child.send_signal(signal.SIGINT)
-        out, err = child.communicate(timeout=60)
-    finally:
-        if child.poll() is None:
-            os.killpg(child.pid, signal.SIGKILL)
-            child.communicate()
+
+    child, err = signal_a_running_sweep(folder, "solver.gain=[1.0, 2.0, 3.0, 4.0]", signal.SIGINT, two_workers)
     assert child.returncode == 130
     assert err.splitlines() == [f"uvms: interrupted; nothing was written to {folder}"]
     deadline = time.monotonic() + 10
