@@ -16,7 +16,7 @@ joint-limit bounds hold taken out, as the set-based levels take them out. Withou
 task that the held joints leave short reaches for any column that still moves it, however little, and
 drives it to its speed limit: in ``bluerov2_alpha5_free_floating_limit`` the wrist roll, which moves the
 tool point only through the vehicle's momentum, switched between -0.5 and +0.5 rad/s (per-step jumps of
-1 rad/s; issue 31, item 3); with the scenario's variable damping it stays below 0.01 rad/s.
+1 rad/s); with the scenario's variable damping it stays below 0.01 rad/s.
 The hard bounds are the speed limits and the joint-limit objectives' valid sets turned into rate bounds
 over one step, clipped into the speed limits (:func:`~uvms.solvers.saturation.velocity_box`), so the box
 is never empty and a joint started outside its valid set comes back at the allowed speed. A free-floating

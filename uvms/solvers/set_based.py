@@ -28,7 +28,7 @@ is the paper's eta |(I - Q) y|^2 with each coordinate weighed by its column in t
 direction the same whatever the level's Jacobian does with it, so for a column the level barely moves
 (the jaw of the Alpha 5 in a free-floating tool-point task, a column ~1e-3 of the others) it takes over
 when the level above has released all but ~1e-3 of it: the level's use of that direction switched on within
-a sliver of the bell (issue 31, item 1: an elbow-rate jump of 0.09 rad/s per step that stayed at dt
+a sliver of the bell (an elbow-rate jump of 0.09 rad/s per step that stayed at dt
 0.01/0.005/0.0025). Weighed by D the penalty and X^T A X share their units and scale, the direction is handed
 over across the whole band, and the largest per-step rate change scales with dt (0.029 / 0.023 / 0.013 /
 0.007 rad/s at dt 0.01 / 0.005 / 0.0025 / 0.00125; it was 0.077 / 0.064 / 0.073 rad/s).
