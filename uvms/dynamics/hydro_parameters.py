@@ -18,6 +18,8 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 
+import warnings
+
 import numpy as np
 
 from ..errors import ModelCheckError, NameNotFound
@@ -27,8 +29,13 @@ SEA_WATER_DENSITY = 1028.0
 GRAVITY = 9.81
 #: Sign flip between SNAME (FRD) and ROS (FLU) body axes, per entry of [u v w p q r].
 FRD_FLU_SIGNS = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
-#: Relative tolerance of the symmetry and semi-definiteness checks of an added-mass matrix.
-MATRIX_TOLERANCE = 1e-9
+#: Tolerance of the symmetry and semi-definiteness checks of an added-mass matrix, relative to its largest entry
+#: (at least 1): published matrices are rounded (uuv_simulator's RexROV differs by 0.001 in 3,659, 2.7e-7 of it).
+MATRIX_TOLERANCE = 1e-6
+
+
+class AddedMassSymmetrizedWarning(UserWarning):
+    """An added-mass matrix that was symmetric within :data:`MATRIX_TOLERANCE` was replaced by (M + M^T) / 2."""
 
 
 @dataclass(frozen=True)
@@ -39,7 +46,8 @@ class LinkHydrodynamics:
         volume: displaced volume [m^3] (buoyancy rho g V at the centre of buoyancy).
         center_of_buoyancy: (3,) [m] in the link frame.
         added_mass: (6, 6) M_A about the link origin, order [u v w p q r]
-            [kg, kg m, kg m^2]; symmetric positive semi-definite.
+            [kg, kg m, kg m^2]; symmetric positive semi-definite (symmetric within :data:`MATRIX_TOLERANCE` of
+            its largest entry is averaged to exactly symmetric, with an :class:`AddedMassSymmetrizedWarning`).
         linear_damping: (6,) d_l >= 0 [N s/m, N m s/rad].
         quadratic_damping: (6,) d_q >= 0 [N s^2/m^2, N m s^2/rad^2].
 
@@ -61,7 +69,10 @@ class LinkHydrodynamics:
         object.__setattr__(self, "volume", float(volume))
         object.__setattr__(self, "center_of_buoyancy", _array(self.center_of_buoyancy, (3,), "center_of_buoyancy"))
         added = _array(self.added_mass, (6, 6), "added_mass")
-        check_added_mass(added)
+        if np.array_equal(added, added.T):
+            check_added_mass(added)
+        else:
+            added = _array(symmetrized_added_mass(added, "LinkHydrodynamics"), (6, 6), "added_mass")
         object.__setattr__(self, "added_mass", added)
         for name in ("linear_damping", "quadratic_damping"):
             values = _array(getattr(self, name), (6,), name)
@@ -147,21 +158,49 @@ def _array(value: object, shape: tuple[int, ...], what: str) -> np.ndarray:
 
 
 def check_added_mass(matrix: np.ndarray) -> None:
-    """Raise ModelCheckError unless ``matrix`` (6, 6) is symmetric positive semi-definite.
+    """Raise ModelCheckError unless ``matrix`` (6, 6) is symmetric positive semi-definite within the tolerance.
 
     Potential-flow added mass is the Hessian of the fluid's kinetic energy, so it
     is symmetric and semi-definite; anything else makes the mass matrix of the
-    plant indefinite (or asymmetric) and the simulation meaningless.
+    plant indefinite (or asymmetric) and the simulation meaningless. Both are checked
+    to :data:`MATRIX_TOLERANCE` of the largest entry (at least 1 kg): see :func:`symmetrized_added_mass`.
     """
     scale = max(1.0, float(np.max(np.abs(matrix))))
     asymmetry = np.abs(matrix - matrix.T)
     if np.max(asymmetry) > MATRIX_TOLERANCE * scale:
         i, j = np.unravel_index(int(np.argmax(asymmetry)), matrix.shape)
         raise ModelCheckError(
-            f"added_mass must be symmetric: entry ({i},{j}) = {matrix[i, j]:g} but ({j},{i}) = {matrix[j, i]:g}")
+            f"added_mass must be symmetric: entry ({i},{j}) = {matrix[i, j]:g} but ({j},{i}) = {matrix[j, i]:g} "
+            f"(entries may differ by at most {MATRIX_TOLERANCE:g} of the largest, {scale:g})")
     smallest = float(np.min(np.linalg.eigvalsh(0.5 * (matrix + matrix.T))))
     if smallest < -MATRIX_TOLERANCE * scale:
         raise ModelCheckError(f"added_mass must be positive semi-definite; its smallest eigenvalue is {smallest:g}")
+
+
+def symmetrized_added_mass(matrix: np.ndarray, where: str) -> np.ndarray:
+    """An added mass (6, 6) [kg, kg m, kg m^2] checked, and made exactly symmetric, (M + M^T) / 2.
+
+    Published matrices are rounded (uuv_simulator's RexROV: entry (2,5) = 10.774 but (5,2) = 10.775 beside a
+    largest entry of 3,659), so an asymmetry within :data:`MATRIX_TOLERANCE` of the largest entry is averaged
+    away, with an :class:`AddedMassSymmetrizedWarning` naming ``where`` and the largest difference.
+
+    Args:
+        matrix: the added mass as given.
+        where: what it is, for the warning (the file and the link).
+
+    Raises:
+        ModelCheckError: asymmetric beyond the tolerance, or not positive semi-definite (:func:`check_added_mass`).
+    """
+    matrix = np.asarray(matrix, dtype=float)
+    check_added_mass(matrix)
+    asymmetry = np.abs(matrix - matrix.T)
+    if np.max(asymmetry) == 0:
+        return matrix
+    i, j = np.unravel_index(int(np.argmax(asymmetry)), matrix.shape)
+    warnings.warn(f"{where}: added_mass is not exactly symmetric (largest difference {asymmetry[i, j]:g} between "
+                  f"entries ({i},{j}) and ({j},{i}), within {MATRIX_TOLERANCE:g} of its largest entry); "
+                  "using (M + M^T) / 2", AddedMassSymmetrizedWarning, stacklevel=3)
+    return 0.5 * (matrix + matrix.T)
 
 
 def flip_frd_flu(matrix: np.ndarray) -> np.ndarray:

@@ -56,7 +56,7 @@ import numpy as np
 from ..errors import ModelCheckError, ModelParseError, UVMSError
 from ..model.resources import read_yaml
 from .hydro_parameters import (GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names,
-                               flip_frd_flu)
+                               flip_frd_flu, symmetrized_added_mass)
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -103,7 +103,8 @@ def link_from_uuv(
                 raise ModelCheckError("neutrally_buoyant needs the link's mass, and the model gives it none (no "
                                       "<inertial> mass on this link); give volume [m^3] instead")
             volume = link_mass / fluid_density  # as uuv_simulator's BuoyantObject::SetNeutrallyBuoyant
-        added = _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6)
+        added = symmetrized_added_mass(
+            _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6), where)
         linear = _diagonal(model.get("linear_damping", np.zeros(6)), "linear_damping")
         quadratic = _diagonal(model.get("quadratic_damping", np.zeros(6)), "quadratic_damping")
         for name, derivatives in (("linear_damping", linear), ("quadratic_damping", quadratic)):

@@ -8,12 +8,14 @@ element and saying what is valid.
 
 from __future__ import annotations
 
+import warnings
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from ..errors import ModelCheckError, ModelParseError
+from .point_masses import PointMassWarning
 
 #: Attributes holding numbers in URDF, and how many each holds (None: any count).
 NUMERIC_ATTRIBUTES: dict[str, int | None] = {
@@ -55,6 +57,7 @@ class TreeSummary:
     base_type: str  # "floating", "planar" or "fixed"
     base_joint: str | None
     root_mass: float = 0.0  # [kg] of the root link's <inertial> (0 when it has none)
+    point_masses: tuple[str, ...] = ()  # links with a mass and an all-zero inertia (uvms.model.point_masses)
 
 
 def parse_urdf(xml: str, origin: str) -> ET.Element:
@@ -151,12 +154,19 @@ def check_joint_axes(robot: ET.Element, origin: str) -> None:
             )
 
 
-def check_inertias(robot: ET.Element, origin: str) -> None:
+def check_inertias(robot: ET.Element, origin: str) -> tuple[str, ...]:
     """Masses are positive and inertia matrices positive definite.
 
     An ``<inertial>`` with zero mass and an all-zero inertia is the common URDF
-    idiom for a massless link and is accepted as such.
+    idiom for a massless link and is accepted as such. A positive mass with an all-zero
+    inertia (uuv_simulator's thruster links: 0.001 kg) is a point mass: accepted with one
+    :class:`~uvms.model.point_masses.PointMassWarning` naming the links (the loader then refuses
+    a model whose mass matrix they make singular).
+
+    Returns:
+        The names of the point-mass links.
     """
+    point_masses = []
     for link in robot.findall("link"):
         inertial = link.find("inertial")
         if inertial is None:
@@ -172,12 +182,19 @@ def check_inertias(robot: ET.Element, origin: str) -> None:
             continue  # massless link
         if mass <= 0.0:
             raise ModelCheckError(f"{origin}: link {name!r} has mass {mass:g} kg; a mass must be positive")
+        if not inertia.any():
+            point_masses.append(name)
+            continue
         smallest = float(np.linalg.eigvalsh(inertia)[0])
         if smallest <= 0.0:
             raise ModelCheckError(
                 f"{origin}: link {name!r} inertia is not positive definite (smallest eigenvalue "
                 f"{smallest:.3g} kg m^2); principal moments must be positive"
             )
+    if point_masses:
+        warnings.warn(f"{origin}: link(s) {', '.join(point_masses)} have a mass but an all-zero inertia; taken as "
+                      "point masses (as Gazebo does)", PointMassWarning, stacklevel=4)
+    return tuple(point_masses)
 
 
 #: Sizes of URDF geometry that must be positive [m]: a negative or zero length, radius or box side has no
@@ -338,7 +355,7 @@ def check_urdf(robot: ET.Element, origin: str) -> TreeSummary:
     check_numbers(robot, origin)
     check_joints(robot, origin)
     check_joint_axes(robot, origin)
-    check_inertias(robot, origin)
+    point_masses = check_inertias(robot, origin)
     check_geometry(robot, origin)
-    return summarize_tree(robot, origin)
+    return replace(summarize_tree(robot, origin), point_masses=point_masses)
 

@@ -24,7 +24,10 @@ MAX_INCLUDE_FILES = 1_000
 MAX_INCLUDE_USES = 10_000
 MAX_INCLUDE_DEPTH = 100
 MAX_INCLUDE_SECONDS = 10.0
-XACRO_NAMESPACE = "{http://www.ros.org/wiki/xacro}"
+#: The namespaces xacro files declare for the ``xacro:`` prefix (ROS's wiki moved between these addresses; xacro
+#: itself reads the prefix, not the address, so any namespace bound to ``xacro`` is read too: :func:`xacro_namespaces`).
+XACRO_NAMESPACES = tuple(f"{scheme}://{host}ros.org/wiki/xacro" for scheme in ("http", "https")
+                         for host in ("www.", ""))
 
 
 @dataclass
@@ -42,6 +45,30 @@ class XacroWalk:
     files: list[Path] = field(default_factory=list)
     args: dict[str, str | None] | None = field(default_factory=dict)
     problem: UVMSError | None = None
+
+
+def parse_xacro(data: bytes) -> tuple[ET.Element, set[str]]:
+    """The root element of a xacro text and the namespaces its ``xacro:`` prefix stands for.
+
+    xacro recognises its tags by the ``xacro:`` prefix whatever address the file binds it to
+    (``http://www.ros.org/wiki/xacro``, ``http://ros.org/wiki/xacro``, their https forms...), so every
+    namespace bound to that prefix counts, with :data:`XACRO_NAMESPACES` always.
+
+    Raises:
+        xml.etree.ElementTree.ParseError: the text is not well-formed XML.
+    """
+    namespaces = set(XACRO_NAMESPACES)
+    parser = ET.XMLPullParser(events=("start-ns",))
+    parser.feed(data)
+    parser.close()
+    namespaces.update(uri for _, (prefix, uri) in parser.read_events() if prefix == "xacro")
+    return ET.fromstring(data), namespaces
+
+
+def xacro_elements(root: ET.Element, namespaces: set[str], tag: str) -> list[ET.Element]:
+    """The elements ``xacro:<tag>`` under ``root`` (itself included), in document order, in any xacro namespace."""
+    wanted = {f"{{{uri}}}{tag}" for uri in namespaces}
+    return [element for element in root.iter() if element.tag in wanted]
 
 
 def walk_xacro(path: str | os.PathLike) -> XacroWalk:
@@ -83,16 +110,16 @@ def walk_xacro(path: str | os.PathLike) -> XacroWalk:
             raise stop(f"the xacro and its includes hold more than {MAX_URDF_BYTES >> 20} MiB; at most that is "
                        "accepted")
         try:
-            root = ET.fromstring(data)
+            root, namespaces = parse_xacro(data)
         except ET.ParseError:
             walk.args = None  # xacro reports the real problem
             done[key] = ({}, 1)
             return done[key]
         open_files.add(key)
-        args = {element.get("name"): element.get("default") for element in root.iter(XACRO_NAMESPACE + "arg")
+        args = {element.get("name"): element.get("default") for element in xacro_elements(root, namespaces, "arg")
                 if element.get("name")}
         uses = 1
-        for include in root.iter(XACRO_NAMESPACE + "include"):
+        for include in xacro_elements(root, namespaces, "include"):
             name = include.get("filename", "")
             if not name or any(mark in name for mark in "$*?["):  # computed or a glob: xacro knows
                 walk.args = None

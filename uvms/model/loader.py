@@ -17,7 +17,7 @@ from xml.parsers.expat import ExpatError
 
 import pinocchio as pin
 
-from . import checks, includes, resources, sandbox
+from . import checks, includes, point_masses, resources, sandbox
 from .base_rule import ADDED_BASE_JOINT, decide_base
 from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from ..robot.robot import Robot
@@ -102,6 +102,7 @@ def load(
     chosen, reason = decide_base(base, tree, origin)
     warn_missing_meshes(robot_element, base_dir, package_dirs, origin)
     model = build_model(xml, chosen, tree, origin)
+    point_masses.check_mass_matrix(model, tree.point_masses, origin)
     if model.nv == 0:  # nothing to move, and Pinocchio's Jacobians crash on an empty velocity space
         raise ModelCheckError(f"{origin}: the model has no degree of freedom (fixed base, only fixed joints); "
                               "a UVMS needs a floating/planar base or a moving joint")
