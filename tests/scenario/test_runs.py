@@ -187,10 +187,11 @@ def test_plain_names_are_accepted(tmp_path, monkeypatch):
                  overrides=['scenario.name="my-run_2.v1"', "outputs.figures=false"])
     assert result.files[0].parent == Path("out") / "my-run_2.v1" and result.metrics["scenario"] == "my-run_2.v1"
     assert read_scenario(GRIP, ['outputs.animation="Grip.MP4"'])["outputs"]["animation"] == "Grip.MP4"
-    from uvms.scenario import name_from_stem
+    from uvms.io.outputs import plain_file_name
 
-    assert name_from_stem("hoang2011_w1") == "hoang2011_w1"  # the shipped scenarios keep their names
-    assert name_from_stem("my run (2)") == "my_run_2_" and name_from_stem("..") == "scenario"
+    assert plain_file_name("hoang2011_w1", "scenario") == "hoang2011_w1"  # the shipped scenarios keep their names
+    assert plain_file_name("my run (2)", "scenario") == "my_run_2_" and plain_file_name("..", "scenario") == "scenario"
+    assert plain_file_name("rexrov/end_effector", "frame") == "rexrov_end_effector"  # a frame name: no subfolder
 
 
 def test_cli_refuses_a_path_as_scenario_name_in_one_line(tmp_path):

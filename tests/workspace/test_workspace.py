@@ -287,7 +287,7 @@ def test_hull_is_read_from_the_urdf():
     assert hull_shapes(robot, element="visual")[0].kind == "sphere"
     with pytest.raises(WorkspaceInputError, match="valid: base_link"):
         hull_shapes(robot, links=["l0"])
-    with pytest.raises(WorkspaceInputError, match="no box, cylinder or sphere"):
+    with pytest.raises(WorkspaceInputError, match="no box, cylinder, sphere or mesh"):
         hull_shapes(uvms.load(chain_urdf(["0 0 1"], [0])))
 
 

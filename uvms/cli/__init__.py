@@ -132,8 +132,9 @@ def build_parser() -> argparse.ArgumentParser:
                            help="also draw the first N1, N2, ... samples, e.g. 10000,50000,100000 "
                                 "(xiang2019 Fig. 4): workspace_<N>.png")
     workspace.add_argument("--remove-hull", action="store_true",
-                           help="drop the points inside the vehicle link's box/cylinder/sphere (URDF collision, "
-                                "else visual) and report volume_outside_hull")
+                           help="drop the points inside the solids of the links fixed to the vehicle (box, cylinder, "
+                                "sphere, a mesh's convex hull; URDF collision, else visual) and report "
+                                "volume_outside_hull")
     workspace.add_argument("--dexterity", action="store_true",
                            help="measure the fraction of orientation cells reached per voxel (slower FK)")
     workspace.add_argument("--dexterity-voxel", type=float, default=0.1, help="voxel edge for the dexterity [m]")

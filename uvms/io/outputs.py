@@ -51,6 +51,14 @@ _RENAME_EXCHANGE = 2  # linux/fs.h
 _AT_FDCWD = -100
 
 
+def plain_file_name(text: str, fallback: str) -> str:
+    """``text`` (a frame or scenario name from a model or a scenario) made one plain file name: runs of characters
+    other than letters, digits and ``._-`` become ``_`` (so ``rexrov/end_effector`` is ``rexrov_end_effector``,
+    never a subfolder), no ``..``, no leading ``._-``, at most 128 characters; ``fallback`` if nothing is left."""
+    name = re.sub(r"\.{2,}", ".", re.sub(r"[^A-Za-z0-9._-]+", "_", text)).lstrip("._-")[:128]
+    return name or fallback
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, keep_suffix: bool = False) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success it replaces ``path`` atomically.

@@ -15,8 +15,8 @@ from ..errors import ScenarioError
 from .record import RunRecord, read_run_record
 from .resources import resolve_scenario_path, shipped_scenarios
 from .runs import RunResult, compute_metrics, run_scenario
-from .schema import SCHEMA, name_from_stem, parse_value, read_scenario, read_toml, scenario_from_raw
+from .schema import SCHEMA, parse_value, read_scenario, read_toml, scenario_from_raw
 
-__all__ = ["RunRecord", "RunResult", "SCHEMA", "ScenarioError", "compute_metrics", "name_from_stem",
+__all__ = ["RunRecord", "RunResult", "SCHEMA", "ScenarioError", "compute_metrics",
            "parse_value", "read_run_record", "read_scenario", "read_toml", "resolve_scenario_path", "run_scenario",
            "scenario_from_raw", "shipped_scenarios"]

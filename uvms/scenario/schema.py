@@ -22,6 +22,7 @@ else:  # pragma: no cover - Python 3.10
 
 from ..control.gjm import GJM_KINDS
 from ..errors import ScenarioError
+from ..io import outputs
 from ..model.resources import MAX_TOML_BYTES, read_text
 from ..solvers import SOLVERS
 from .inequalities import check_tables
@@ -237,14 +238,8 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     model_path = Path(scenario["model"]["path"])
     if not model_path.is_absolute() and (path.parent / model_path).exists():
         scenario["model"]["path"] = str((path.parent / model_path).resolve())
-    scenario["scenario"]["name"] = scenario["scenario"]["name"] or name_from_stem(path.stem)
+    scenario["scenario"]["name"] = scenario["scenario"]["name"] or outputs.plain_file_name(path.stem, "scenario")
     return scenario
-
-
-def name_from_stem(stem: str) -> str:
-    """The run name of a scenario without ``scenario.name``: its file name, made a plain name ("my run" -> "my_run")."""
-    name = re.sub(r"\.{2,}", ".", re.sub(r"[^A-Za-z0-9._-]+", "_", stem)).lstrip("._-")[:128]
-    return name or "scenario"
 
 
 def check_name(name: str, value: str, origin: str, role: str, suffixes: Sequence[str] = (), example: str = "") -> str:
