@@ -47,14 +47,11 @@ LEGACY_MARKERS = ("metrics.json", "sweep.csv")
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT)  # a full disk or an exhausted quota
 MAX_MANIFEST_BYTES = 16 << 20  # a manifest of a million paths; a larger one is not uvms's
 SHOWN = 5  # foreign files a refusal names before "and N more"
-_RENAME_EXCHANGE = 2  # linux/fs.h
-_AT_FDCWD = -100
+_RENAME_EXCHANGE, _AT_FDCWD = 2, -100  # linux/fs.h
 
 
 def plain_file_name(text: str, fallback: str) -> str:
-    """``text`` (a frame or scenario name from a model or a scenario) made one plain file name: runs of characters
-    other than letters, digits and ``._-`` become ``_`` (so ``rexrov/end_effector`` is ``rexrov_end_effector``,
-    never a subfolder), no ``..``, no leading ``._-``, at most 128 characters; ``fallback`` if nothing is left."""
+    """``text`` (a frame or scenario name) as one file name: ``rexrov/ee`` -> ``rexrov_ee`` (see the code), or ``fallback``."""
     name = re.sub(r"\.{2,}", ".", re.sub(r"[^A-Za-z0-9._-]+", "_", text)).lstrip("._-")[:128]
     return name or fallback
 
