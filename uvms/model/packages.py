@@ -126,8 +126,8 @@ def find_packages(root: Path) -> dict[str, Path]:
     """The packages in ``root`` (a package itself, or a folder searched breadth first as the module says).
 
     Returns:
-        {name: folder}, shallower and then alphabetically earlier folders first; a second package of one name
-        is left out with a :class:`PackageSearchWarning`.
+        {name: real path of its folder}, shallower and then alphabetically earlier folders first; a second
+        package of one name is left out with a :class:`PackageSearchWarning`.
     """
     found: dict[str, Path] = {}
     top = os.path.realpath(root)
@@ -148,10 +148,10 @@ def find_packages(root: Path) -> dict[str, Path]:
             continue
         if os.path.isfile(os.path.join(folder, "package.xml")):
             name = package_name(folder)
-            if name in found and found[name] != folder:
-                warnings.warn(f"{root}: two ROS packages named {name!r}: {found[name]} (used) and {folder}",
+            if name in found:
+                warnings.warn(f"{root}: two ROS packages named {name!r}: {found[name]} (used) and {real}",
                               PackageSearchWarning, stacklevel=3)
-            found.setdefault(name, folder)
+            found.setdefault(name, Path(real))  # by its real path, however the search reached it
             continue
         if depth < MAX_PACKAGE_DEPTH:
             queue.extend((child, depth + 1) for child in subfolders(folder, top))
