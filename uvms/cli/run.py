@@ -25,7 +25,8 @@ def command_run(options: argparse.Namespace) -> int:
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
-    overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else []), *package_path_overrides(options)]
+    overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else []),
+                 *package_path_overrides(options)]
     result = run_scenario(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
