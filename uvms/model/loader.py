@@ -19,7 +19,6 @@ import pinocchio as pin
 
 from . import checks, includes, point_masses, resources, sandbox
 from .packages import package_index, unknown_package
-from .sandbox_worker import PackageNotFound, missing_package, packages_for_find
 from .base_rule import ADDED_BASE_JOINT, decide_base
 from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from ..robot.robot import Robot
@@ -186,6 +185,8 @@ def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool, packages: 
     its own folder tree and the folders of ``packages``, nothing else.
     """
     import xacro  # imported here: it is slow to import and only needed for .xacro
+
+    from .sandbox_worker import PackageNotFound, missing_package, packages_for_find
 
     if not trusted:
         return sandbox.expand_untrusted(path, mappings, packages=packages)

@@ -14,7 +14,7 @@ untrusted file.
 
 :func:`packages_for_find` (xacro's ``$(find)`` through uvms's package index) is also imported by
 :mod:`uvms.model.loader` for trusted files: importing this module defines names and runs nothing (``LIBC`` is
-a handle on the C library the process has already loaded).
+a handle on the C library the process has already loaded), on any platform.
 """
 
 import contextlib
@@ -22,7 +22,6 @@ import ctypes
 import errno
 import json
 import os
-import resource
 import signal
 import stat
 import sys
@@ -104,8 +103,9 @@ PR_SET_PDEATHSIG, PR_SET_NO_NEW_PRIVS = 1, 38
 CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH = 1, 2
 LANDLOCK_READ_FILE, LANDLOCK_READ_DIR = 1 << 2, 1 << 3
 
-LIBC = ctypes.CDLL(None, use_errno=True)
-LIBC.syscall.restype = ctypes.c_long
+LIBC = ctypes.CDLL(None, use_errno=True) if os.name == "posix" else None  # None: Windows may import this module
+if LIBC is not None:
+    LIBC.syscall.restype = ctypes.c_long
 
 
 def checked(result: int) -> int:
@@ -125,6 +125,8 @@ def die_with_parent(parent_pid: int) -> None:
 
 def limit_resources(memory_bytes: int, cpu_seconds: int) -> None:
     """Address space, CPU time, no file growth, no core file, no new processes, few descriptors."""
+    import resource  # POSIX only: imported here so that any platform may import this module
+
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
     resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, cpu_seconds))
     resource.setrlimit(resource.RLIMIT_FSIZE, (0, 0))
