@@ -174,7 +174,7 @@ def test_cli_malformed_file(tmp_path, capsys):
     assert err.count("\n") == 1 and "malformed XML" in err
 
 
-def test_missing_meshes_only_warn_and_package_dirs_resolve_them(tmp_path):
+def test_missing_meshes_only_warn_and_package_path_resolves_them(tmp_path):
     mesh_link = ('<link name="shell"><visual><geometry><mesh filename="package://my_rov/meshes/hull.stl"/>'
                  '</geometry></visual></link><joint name="s" type="fixed"><parent link="l1"/><child link="shell"/></joint>')
     source = urdf(extra=mesh_link)
@@ -182,12 +182,13 @@ def test_missing_meshes_only_warn_and_package_dirs_resolve_them(tmp_path):
         assert uvms.load(source).nq == 1
     (tmp_path / "my_rov" / "meshes").mkdir(parents=True)
     (tmp_path / "my_rov" / "meshes" / "hull.stl").write_text("solid hull\nendsolid hull\n")
+    (tmp_path / "my_rov" / "package.xml").write_text("<package><name>my_rov</name></package>")
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", uvms.model.MissingMeshWarning)
-        assert uvms.load(source, package_dirs=[tmp_path]).nq == 1
-        assert uvms.load(source, package_dirs=[tmp_path / "my_rov"]).nq == 1
+        assert uvms.load(source, package_path=[tmp_path]).nq == 1
+        assert uvms.load(source, package_path=[tmp_path / "my_rov"]).nq == 1
         uvms.model.mount_arm(shipped("hoang2011"), "panda")  # example-robot-data meshes are found
 
 

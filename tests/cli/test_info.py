@@ -91,3 +91,22 @@ def test_names_from_a_model_reach_the_terminal_escaped(tmp_path, capsys):
     captured = capsys.readouterr()
     assert "\u202e" not in captured.out + captured.err and "\u2066" not in captured.out + captured.err
     assert "arm\\u202egpj.exe\\u2066" in captured.out
+
+
+ROS_WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"  # two packages, one including the other by $(find)
+
+
+def test_info_finds_the_packages_of_a_model_in_the_folders_named_by_package_path(tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    monkeypatch.delenv("AMENT_PREFIX_PATH", raising=False)
+    model = tmp_path / "vehicle.urdf.xacro"  # the fixture's vehicle, away from its workspace
+    model.write_text((ROS_WORKSPACE / "fixture_vehicle_description" / "urdf" / "vehicle.urdf.xacro").read_text())
+    assert main(["info", str(model)]) == 2
+    err = one_line(capsys)
+    assert "no ROS package 'fixture_arm_description'" in err and "--package-path DIR" in err and "Traceback" not in err
+    assert main(["info", str(model), "--package-path", str(tmp_path), "--package-path", str(ROS_WORKSPACE)]) == 0
+    captured = capsys.readouterr()
+    assert "arm DOF 2" in captured.out and "shoulder" in captured.out and "elbow" in captured.out
+    assert "mesh" not in captured.err  # the hull's package:// mesh is found too
+    assert main(["info", str(model), "--package-path", str(tmp_path / "absent")]) == 2
+    assert "does not exist; package_path names folders" in one_line(capsys)

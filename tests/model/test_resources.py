@@ -269,8 +269,9 @@ def test_a_package_uri_stays_inside_its_package(tmp_path):
     package = tmp_path / "share" / "mypkg"
     (package / "meshes").mkdir(parents=True)
     (package / "meshes" / "hull.stl").write_text("solid hull\nendsolid hull\n")
+    (package / "package.xml").write_text("<package><name>mypkg</name></package>")
     (tmp_path / "secret.stl").write_text("not a mesh of this package\n")
-    roots = [tmp_path / "share"]
+    roots = uvms.model.package_index([tmp_path / "share"])
     assert resources.resolve_uri("package://mypkg/meshes/hull.stl", None, roots) == package / "meshes" / "hull.stl"
     assert resources.resolve_uri("package://mypkg/meshes/../meshes/hull.stl", None, roots) is not None
     for escape in ("package://mypkg/../../secret.stl", "package://mypkg/meshes/../../../secret.stl",
@@ -278,11 +279,11 @@ def test_a_package_uri_stays_inside_its_package(tmp_path):
                    "package://mypkg/" + "../" * 40 + str(tmp_path / "secret.stl").lstrip("/")):
         assert resources.resolve_uri(escape, None, roots) is None, escape
     hostname = "package://example-robot-data/" + "../" * 40 + "etc/hostname"  # the red team's URI
-    assert resources.resolve_uri(hostname, None, resources.package_search_roots()) is None
+    assert resources.resolve_uri(hostname, None, uvms.model.package_index()) is None
     mesh = '<visual><geometry><mesh filename="package://mypkg/../../secret.stl"/></geometry></visual>'
     with pytest.warns(uvms.model.MissingMeshWarning, match="1 mesh file"):
         uvms.load(urdf(extra=f'<link name="l2">{mesh}</link><joint name="j2" type="fixed"><parent link="l1"/>'
-                               '<child link="l2"/></joint>'), package_dirs=roots)
+                               '<child link="l2"/></joint>'), package_path=[tmp_path / "share"])
 
 
 def test_watch_watches_the_files_a_model_uses_never_a_tree(tmp_path, monkeypatch):

@@ -304,21 +304,23 @@ def test_includes_outside_the_named_folders_are_refused_clearly(tmp_path, monkey
     for said in ("Permission denied", str(elsewhere / "pkg" / "arm.xacro"), "may read only",
                  str(tmp_path / "model"), "ROS_PACKAGE_PATH", "trusted=True"):
         assert said in message
-    assert 'name="arm_from_elsewhere"' in expand_untrusted(path, {}, read_roots=[elsewhere])
+    assert 'name="arm_from_elsewhere"' in expand_untrusted(path, {}, packages={"pkg": elsewhere / "pkg"})
+    (elsewhere / "pkg" / "package.xml").write_text("<package><name>pkg</name></package>")
     monkeypatch.setenv("ROS_PACKAGE_PATH", str(elsewhere))
     assert 'name="arm_from_elsewhere"' in expand_untrusted(path, {})
 
 
-def test_load_package_dirs_are_the_folders_an_untrusted_xacro_may_include_from(tmp_path, monkeypatch):
+def test_load_package_path_names_the_folders_an_untrusted_xacro_may_include_from(tmp_path, monkeypatch):
     elsewhere = tmp_path / "elsewhere"
     part(elsewhere / "pkg" / "arm.xacro", "arm_from_elsewhere")
+    (elsewhere / "pkg" / "package.xml").write_text("<package><name>pkg</name></package>")
     path = include_model(tmp_path / "model", elsewhere / "pkg" / "arm.xacro")
     monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
     from uvms.model.loader import read_model_text
 
-    with pytest.raises(uvms.errors.XacroError, match="package_dirs"):
+    with pytest.raises(uvms.errors.XacroError, match="package_path"):
         read_model_text(path, trusted=False)
-    xml, _, _ = read_model_text(path, trusted=False, package_dirs=[elsewhere])
+    xml, _, _ = read_model_text(path, trusted=False, packages=uvms.model.package_index([elsewhere]))
     assert 'name="arm_from_elsewhere"' in xml
 
 

@@ -81,6 +81,13 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"{self.prog}: error: {message} (see --help)\n")
 
 
+def add_package_path(parser: argparse.ArgumentParser) -> None:
+    """``--package-path DIR`` (repeatable) on a command that loads a model (:mod:`uvms.model.packages`)."""
+    parser.add_argument("--package-path", action="append", default=[], metavar="DIR",
+                        help="folder of ROS packages for $(find pkg) and package://pkg/ (a package, or a folder "
+                             "searched for package.xml); repeatable, before ROS_PACKAGE_PATH and the model's workspace")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``uvms``."""
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
@@ -90,6 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
     info.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
     info.add_argument("--ee", action="append", metavar="FRAME", help="end-effector frame (repeatable)")
+    add_package_path(info)
     info.set_defaults(handler=command_info)
     run = commands.add_parser("run", help="run a scenario (TOML): metrics.json, trajectory.csv/.npz, figures")
     run.add_argument("scenario", help="scenario file or shipped scenario name, e.g. hoang2011_w1 or my_run.toml")
@@ -102,6 +110,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no progress bar")
     run.add_argument("--watch", action="store_true",
                      help="rerun whenever the scenario, the model or a file it includes changes (Ctrl-C stops)")
+    add_package_path(run)
     run.set_defaults(handler=command_run)
     sweep = commands.add_parser("sweep", help="run a scenario on a grid of overrides: sweep.csv and sweep.png")
     sweep.add_argument("scenario", help="scenario file or shipped scenario name, e.g. santos2006_task_priority")
@@ -118,6 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "(default: a local TLS cluster of --jobs workers, no dashboard)")
     sweep.add_argument("--out", help="output folder (default: out/<scenario name>_sweep)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_package_path(sweep)
     sweep.set_defaults(handler=command_sweep)
     workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
     workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
@@ -152,6 +162,7 @@ def build_parser() -> argparse.ArgumentParser:
     workspace.add_argument("--quiet", action="store_true", help="no progress bar")
     workspace.add_argument("--watch", action="store_true",
                            help="rerun whenever the model or a file it includes changes (Ctrl-C stops)")
+    add_package_path(workspace)
     workspace.set_defaults(handler=command_workspace)
     view = commands.add_parser("view", help="3-D viewer of a model or a run (needs uvms[viz]), or --headless OUT")
     view.add_argument("model", nargs="?",
@@ -173,6 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--quiet", action="store_true", help="no progress bar")
     view.add_argument("--watch", action="store_true",
                       help="reload the model in place when its files change; replay --result when it is rerun")
+    add_package_path(view)
     view.set_defaults(handler=command_view)
     return parser
 

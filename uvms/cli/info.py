@@ -64,6 +64,7 @@ def describe(robot: Robot) -> str:
 
 def command_info(options: argparse.Namespace) -> int:
     """``uvms info MODEL``: load the model (running its checks) and describe it."""
-    robot = load(options.model, base=options.base, args=parse_assignments(options.arg), ee=options.ee or None)
+    robot = load(options.model, base=options.base, args=parse_assignments(options.arg), ee=options.ee or None,
+                 package_path=options.package_path)
     say(describe(robot), sys.stdout, lines=True)
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -24,7 +25,8 @@ def command_run(options: argparse.Namespace) -> int:
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
-    overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else [])]
+    overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else []),
+                 *package_path_overrides(options)]
     result = run_scenario(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
@@ -54,7 +56,8 @@ def command_sweep(options: argparse.Namespace) -> int:
     from ..scenario.sweep import sweep  # joblib, and dask only with --backend dask
 
     result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
-                   scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None)
+                   scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None,
+                   overrides=package_path_overrides(options))
     for line in result.text().splitlines():
         say(line, sys.stdout)
     folder = result.files[0].parent
@@ -64,6 +67,18 @@ def command_sweep(options: argparse.Namespace) -> int:
         raise UVMSError(f"{len(result.failed)} of {len(result.rows)} sweep points failed (error column of "
                         f"{result.files[0]}); point {first['point']}: {first['error']}")
     return 0
+
+
+def package_path_overrides(options: argparse.Namespace) -> list[str]:
+    """``--package-path DIR ...`` of ``uvms run``/``sweep`` as the override of ``model.package_path``: the folders
+    given (from the current folder) before the scenario's own (from the scenario file's folder)."""
+    if not options.package_path:
+        return []
+    from ..scenario import read_scenario
+
+    own = read_scenario(options.scenario, getattr(options, "set", None) or ())["model"]["package_path"]
+    folders = [str(Path(folder).absolute()) for folder in options.package_path] + own
+    return [f"model.package_path={json.dumps(folders, ensure_ascii=False)}"]  # a TOML array of basic strings
 
 
 def scenario_file(scenario: str) -> Path:

@@ -42,7 +42,8 @@ def command_workspace(options: argparse.Namespace) -> int:
     check_seed(options.seed)
     if not 0.0 < options.convergence_tolerance < 1.0:
         raise UVMSError(f"--convergence-tolerance must be in (0, 1) (0.01: 1 %), got {options.convergence_tolerance}")
-    robot = load(options.model, base=options.base, args=parse_assignments(options.arg))
+    robot = load(options.model, base=options.base, args=parse_assignments(options.arg),
+                 package_path=options.package_path)
     frames = options.ee or robot.ee_frames
     figure_counts = parse_figure_counts(options.figures, samples)
     if not 0.0 <= options.dexterous_threshold <= 1.0:

@@ -1,6 +1,7 @@
 """The model layer: xacro/URDF in, a checked Pinocchio model out.
 
 ``loader`` (``load``: expand, check, choose the base, build), ``checks`` (URDF checks before Pinocchio),
+``packages`` (the ROS package index of ``$(find)`` and ``package://``, without ROS),
 ``resources`` (shipped models, example-robot-data, ``package://``, bounded reading of files), ``includes``
 (a xacro's static includes), ``sandbox`` (untrusted xacro in a kernel-confined child process), ``base_rule``
 (which root is the vehicle), ``compose`` (``mount_arm``), ``point_masses`` (links with a mass and no inertia).
@@ -9,8 +10,10 @@
 from .compose import mount_arm
 from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES
 from .loader import BaseGuessWarning, MissingMeshWarning, ParserWarning, load, read_model_text
+from .packages import PackageSearchWarning, package_index
 from .point_masses import PointMassWarning
 from .resources import example_robot_urdf, shipped_models
 
-__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "MissingMeshWarning", "ParserWarning",
-           "PointMassWarning", "example_robot_urdf", "load", "mount_arm", "read_model_text", "shipped_models"]
+__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "MissingMeshWarning", "PackageSearchWarning",
+           "ParserWarning", "PointMassWarning", "example_robot_urdf", "load", "mount_arm", "package_index",
+           "read_model_text", "shipped_models"]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -18,6 +18,7 @@ from ..errors import FrameNotFound, UVMSError
 from ..robot.robot import Robot
 from ..robot.structure import default_end_effectors
 from .loader import build_model, captured_stderr, read_model_text, warn_missing_meshes
+from .packages import package_index
 
 
 def mount_arm(
@@ -63,12 +64,13 @@ def mount_arm(
         UVMSError: an arm with a floating/planar root, names that clash, a bad placement.
     """
     path = arm_source(arm)
-    xml, origin, base_dir = read_model_text(path, args)
+    packages = package_index(model=path)
+    xml, origin, base_dir = read_model_text(path, args, packages=packages)
     robot_element = checks.parse_urdf(xml, origin)
     tree = checks.check_urdf(robot_element, origin)
     if tree.base_type != "fixed":
         raise UVMSError(f"{origin}: an arm to mount must have a fixed root, but its root joint is {tree.base_type}")
-    warn_missing_meshes(robot_element, base_dir, None, origin)
+    warn_missing_meshes(robot_element, base_dir, packages, origin)
     prefixed = prefix_names(robot_element, prefix)
     arm_model = build_model(prefixed, "fixed", tree, origin)
     clashes = sorted(set(vehicle.frame_names) & {f.name for f in arm_model.frames} - {"universe"})
@@ -87,10 +89,10 @@ def mount_arm(
         ee = vehicle.ee_frames + arm_ees if vehicle.n_arm else arm_ees + vehicle.ee_frames
     urdf = None
     if vehicle.urdf is not None:
-        urdf = composed_urdf(vehicle, parent_id, placement, robot_element, base_dir, f"{prefix}mount")
+        urdf = composed_urdf(vehicle, parent_id, placement, robot_element, base_dir, f"{prefix}mount", packages)
         check_joint_order(model, urdf, vehicle)
     return Robot(model, ee=ee, name=model.name, source=f"{vehicle.source} + {origin}", urdf=urdf,
-                 base_reason=vehicle.base_reason)
+                 base_reason=vehicle.base_reason, packages={**packages, **vehicle.packages})
 
 
 class JointOrderWarning(UserWarning):
@@ -137,7 +139,8 @@ def placement_of(placement: pin.SE3 | Sequence[float] | None) -> pin.SE3:
 
 
 def composed_urdf(
-    vehicle: Robot, parent_id: int, placement: pin.SE3, arm: ET.Element, arm_dir: Path | None, mount: str
+    vehicle: Robot, parent_id: int, placement: pin.SE3, arm: ET.Element, arm_dir: Path | None, mount: str,
+    arm_packages: Mapping[str, Path],
 ) -> str:
     """The vehicle's URDF with the (prefixed) arm attached by a fixed joint ``mount``, meshes by absolute path.
 
@@ -146,10 +149,9 @@ def composed_urdf(
     """
     document = ET.fromstring(vehicle.urdf)
     document.set("name", f"{document.get('name', vehicle.name)}+{arm.get('name', 'arm')}")
-    roots = resources.package_search_roots()
     vehicle_dir = Path(vehicle.source).parent if Path(vehicle.source).is_file() else None
-    absolute_meshes(document, vehicle_dir, roots)
-    absolute_meshes(arm, arm_dir, roots)
+    absolute_meshes(document, vehicle_dir, vehicle.packages)
+    absolute_meshes(arm, arm_dir, arm_packages)
     frame = vehicle.model.frames[parent_id]
     link_names = {link.get("name") for link in document.findall("link")}
     if frame.type == pin.FrameType.BODY and frame.name in link_names:
@@ -179,10 +181,10 @@ def composed_urdf(
     return ET.tostring(document, encoding="unicode")
 
 
-def absolute_meshes(robot: ET.Element, base_dir: Path | None, roots: Sequence[Path]) -> None:
+def absolute_meshes(robot: ET.Element, base_dir: Path | None, packages: Mapping[str, Path]) -> None:
     """Replace every mesh URI that resolves (relative, ``file://``, ``package://``) by its absolute path."""
     for mesh in robot.iter("mesh"):
-        found = resources.resolve_uri(mesh.get("filename", ""), base_dir, roots)
+        found = resources.resolve_uri(mesh.get("filename", ""), base_dir, packages)
         if found is not None:
             mesh.set("filename", str(found.resolve()))
 

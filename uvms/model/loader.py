@@ -18,6 +18,7 @@ from xml.parsers.expat import ExpatError
 import pinocchio as pin
 
 from . import checks, includes, point_masses, resources, sandbox
+from .packages import package_index, unknown_package
 from .base_rule import ADDED_BASE_JOINT, decide_base
 from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
 from ..robot.robot import Robot
@@ -50,7 +51,7 @@ def load(
     base: str | None = None,
     args: Mapping[str, object] | None = None,
     ee: str | Sequence[str] | None = None,
-    package_dirs: Sequence[str | os.PathLike] | None = None,
+    package_path: Sequence[str | os.PathLike] | None = None,
     trusted: bool | None = None,
 ) -> Robot:
     """Load a UVMS from a ``.xacro`` or ``.urdf`` file, a shipped model name, or URDF text.
@@ -79,8 +80,11 @@ def load(
             non-positive is refused (the message names the element).
         ee: end-effector frame name(s); default: frames named ``ee``/``*_ee``,
             else the last leaf link.
-        package_dirs: extra folders to resolve ``package://`` mesh URIs, which an untrusted xacro may also
-            include from (besides its own folder tree).
+        package_path: folders of ROS packages (each a package, holding ``package.xml``, or a folder searched
+            for packages), first in precedence before ``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH`` and the
+            model's own workspace (:mod:`uvms.model.packages`). ``$(find pkg)`` and ``package://pkg/...``
+            resolve through these packages only, and an untrusted xacro may read them (besides its own folder
+            tree). The robot keeps them as ``robot.packages`` (the viewer finds the meshes there).
         trusted: a xacro file is code (its expressions are Python). True expands it in this
             process; False in a restricted child process (``uvms.model.sandbox``: no file writes, no
             processes, no network, a timeout). None: trusted for the shipped models only.
@@ -93,14 +97,15 @@ def load(
         UVMSError: (a subclass) missing file, malformed XML, xacro error, invalid
             model values, base mismatch, unknown end-effector frame.
     """
-    xml, origin, base_dir = read_model_text(source, args, trusted, package_dirs)
+    packages = package_index(package_path, model_file(source))
+    xml, origin, base_dir = read_model_text(source, args, trusted, packages)
     robot_element = checks.parse_urdf(xml, origin)
     try:
         tree = checks.check_urdf(robot_element, origin)
     except ModelCheckError as exc:
-        raise ModelCheckError(f"{exc}{blamed_args(exc, source, args, trusted)}") from None
+        raise ModelCheckError(f"{exc}{blamed_args(exc, source, args, trusted, packages)}") from None
     chosen, reason = decide_base(base, tree, origin)
-    warn_missing_meshes(robot_element, base_dir, package_dirs, origin)
+    warn_missing_meshes(robot_element, base_dir, packages, origin)
     model = build_model(xml, chosen, tree, origin)
     point_masses.check_mass_matrix(model, tree.point_masses, origin)
     if model.nv == 0:  # nothing to move, and Pinocchio's Jacobians crash on an empty velocity space
@@ -108,38 +113,51 @@ def load(
                               "a UVMS needs a floating/planar base or a moving joint")
     if base is None and chosen != tree.base_type:
         warnings.warn(f"{origin}: the base is {reason}", BaseGuessWarning, stacklevel=2)
-    return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=xml, base_reason=reason)
+    return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=xml, base_reason=reason,
+                 packages=packages)
+
+
+def model_file(source: str | os.PathLike) -> Path | None:
+    """The file of a model source (a path or a shipped model name; else ModelFileNotFound), None for URDF text."""
+    if isinstance(source, str) and source.lstrip().startswith("<"):
+        return None
+    return resources.resolve_model_path(source)
 
 
 def read_model_text(
     source: str | os.PathLike,
     args: Mapping[str, object] | None = None,
     trusted: bool | None = None,
-    package_dirs: Sequence[str | os.PathLike] | None = None,
+    packages: Mapping[str, Path] | None = None,
 ) -> tuple[str, str, Path | None]:
     """URDF text of a source, with xacro expanded (in a sandbox unless trusted; see :func:`load`).
+
+    Args:
+        packages: the package index for ``$(find)`` (:func:`uvms.model.packages.package_index`); None: that of
+            the model alone (``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH``, its workspace).
 
     Returns:
         (URDF text, origin for messages, folder of the file or None for a string).
     """
-    if isinstance(source, str) and source.lstrip().startswith("<"):
+    path = model_file(source)
+    if path is None:
         if args:
             raise UVMSError("xacro args were given with a URDF string; args apply to .xacro files only")
-        return source, "<string>", None
-    path = resources.resolve_model_path(source)
+        return str(source), "<string>", None
     origin = str(path)
     if path.name.endswith(".xacro"):
         if trusted is None:
             trusted = path.resolve().is_relative_to(resources.MODELS_DIR)
-        return expand_xacro(path, args or {}, trusted, package_dirs), origin, path.parent
+        packages = package_index(model=path) if packages is None else packages
+        return expand_xacro(path, args or {}, trusted, packages), origin, path.parent
     if args:
         raise UVMSError(f"{origin}: xacro args were given but the file is not a .xacro")
     return resources.read_text(path, "model", checks.MAX_URDF_BYTES, ModelFileNotFound), origin, path.parent
 
 
-def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True,
-                 package_dirs: Sequence[str | os.PathLike] | None = None) -> str:
-    """Run xacro on a file with ``args`` as its mappings; untrusted files in ``uvms.model.sandbox``.
+def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool, packages: Mapping[str, Path]) -> str:
+    """Run xacro on a file with ``args`` as its mappings (``$(find)`` through the package index ``packages``);
+    untrusted files in ``uvms.model.sandbox``.
 
     Raises:
         XacroError: xacro failed (its message is kept, and a given arg that is text where the model's
@@ -154,27 +172,32 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool = True,
             f"{path}: unknown xacro arg(s) {', '.join(unknown)}; this model declares: {', '.join(sorted(declared))}"
         )
     try:
-        return run_xacro(path, mappings, trusted, package_dirs)
+        return run_xacro(path, mappings, trusted, packages)
     except XacroError as exc:
         raise XacroError(f"{exc}{non_numeric_args(path, mappings)}") from None
 
 
-def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool,
-              package_dirs: Sequence[str | os.PathLike] | None = None) -> str:
+def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool, packages: Mapping[str, Path]) -> str:
     """xacro on a file with checked ``mappings``: in this process when trusted, else in ``uvms.model.sandbox``.
 
-    An untrusted file may read its own folder tree and the package folders (``package_dirs`` first, then
-    ``ROS_PACKAGE_PATH``...: :func:`uvms.model.resources.package_search_roots`), nothing else.
+    ``$(find pkg)`` is the folder of ``pkg`` in the package index ``packages`` (an unknown package: an error
+    saying where uvms looked); xacro's own resolution is back in place afterwards. An untrusted file may read
+    its own folder tree and the folders of ``packages``, nothing else.
     """
     import xacro  # imported here: it is slow to import and only needed for .xacro
 
+    from .sandbox_worker import PackageNotFound, missing_package, packages_for_find
+
     if not trusted:
-        return sandbox.expand_untrusted(path, mappings, read_roots=resources.package_search_roots(package_dirs))
+        return sandbox.expand_untrusted(path, mappings, packages=packages)
     try:
-        document = xacro.process_file(str(path), mappings=mappings)
+        with packages_for_find(packages):
+            document = xacro.process_file(str(path), mappings=mappings)
     except RecursionError:
         raise XacroError(f"{path}: xacro recursion too deep (does the file include itself?)") from None
-    except xacro.XacroException as exc:
+    except (xacro.XacroException, PackageNotFound) as exc:
+        if missing_package(exc) is not None:
+            raise XacroError(unknown_package(missing_package(exc), packages, path)) from None
         raise XacroError(f"{path}: xacro error: {' '.join(str(exc).split())}") from None
     except ExpatError as exc:
         raise ModelParseError(f"{path}: malformed XML ({exc})") from None
@@ -228,7 +251,8 @@ def non_numeric_args(path: Path, mappings: Mapping[str, str]) -> str:
 
 
 def blamed_args(
-    error: ModelCheckError, source: str | os.PathLike, args: Mapping[str, object] | None, trusted: bool | None
+    error: ModelCheckError, source: str | os.PathLike, args: Mapping[str, object] | None, trusted: bool | None,
+    packages: Mapping[str, Path] | None = None,
 ) -> str:
     """Which given xacro args a model check failure comes from: those without which the failure goes away.
 
@@ -246,7 +270,7 @@ def blamed_args(
     for name in args:
         others = {key: value for key, value in args.items() if key != name}
         try:
-            xml, origin, _ = read_model_text(source, others, trusted)
+            xml, origin, _ = read_model_text(source, others, trusted, packages)
             checks.check_urdf(checks.parse_urdf(xml, origin), origin)
         except ModelCheckError as again:
             if str(again) == str(error):
@@ -339,22 +363,22 @@ def captured_stderr() -> Iterator[list[str]]:
 def warn_missing_meshes(
     robot_element: ET.Element,
     base_dir: Path | None,
-    package_dirs: Sequence[str | os.PathLike] | None,
+    packages: Mapping[str, Path],
     origin: str,
 ) -> dict[str, Path]:
-    """Resolve every mesh URI; warn (once per model) about the ones that cannot be found.
+    """Resolve every mesh URI (``package://`` through the package index); warn (once per model) about the ones
+    that cannot be found.
 
     Returns:
         {URI: resolved file} for the meshes found.
     """
-    roots = resources.package_search_roots(package_dirs)
     found: dict[str, Path] = {}
     missing: list[str] = []
     for mesh in robot_element.iter("mesh"):
         uri = mesh.get("filename", "")
         if uri in found or uri in missing:
             continue
-        path = resources.resolve_uri(uri, base_dir, roots)
+        path = resources.resolve_uri(uri, base_dir, packages)
         if path is None:
             missing.append(uri)
         else:
@@ -362,7 +386,8 @@ def warn_missing_meshes(
     if missing:
         warnings.warn(
             f"{origin}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); kinematics is unaffected. "
-            f"Pass package_dirs= or set ROS_PACKAGE_PATH to show them.",
+            f"Name the folder of their package (package_path=, --package-path DIR or ROS_PACKAGE_PATH) to "
+            f"show them.",
             MissingMeshWarning,
             stacklevel=3,
         )

@@ -1,4 +1,5 @@
-"""Where model files and their meshes live (shipped models, example-robot-data, package:// URIs), and reading them.
+"""Where model files and their meshes live (shipped models, example-robot-data, ``package://`` URIs through the
+package index of :mod:`uvms.model.packages`), and reading them.
 
 A file from a stranger is read by :func:`read_file` only: a regular file (never a FIFO or a device), its size
 checked before a byte is read. YAML goes through :func:`read_yaml` (aliases counted), the includes of a xacro
@@ -11,7 +12,7 @@ import functools
 import json
 import os
 import stat
-from collections.abc import Iterable, Sequence
+from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
 
@@ -117,27 +118,10 @@ def example_robot_urdf(name: str) -> Path:
     raise ModelFileNotFound(f"example-robot-data has no robot {name!r}; available: {', '.join(names)}")
 
 
-def package_search_roots(package_dirs: Sequence[str | os.PathLike] | None = None) -> list[Path]:
-    """Folders in which ``package://<pkg>/...`` is looked up, in order.
-
-    ``package_dirs`` first, then ``ROS_PACKAGE_PATH``, then ``<prefix>/share`` of
-    ``AMENT_PREFIX_PATH``, then the ``share`` folder of example-robot-data
-    (its URDFs say ``package://example-robot-data/robots/...``).
-    """
-    roots = [Path(p) for p in package_dirs or ()]
-    roots += [Path(p) for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
-    roots += [Path(p) / "share" for p in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
-    try:
-        roots.append(example_robot_data_dir().parent.parent)
-    except ModelFileNotFound:
-        pass
-    return roots
-
-
-def resolve_uri(uri: str, base_dir: Path | None, roots: Iterable[Path]) -> Path | None:
+def resolve_uri(uri: str, base_dir: Path | None, packages: Mapping[str, Path]) -> Path | None:
     """Resolve a mesh URI (``package://``, ``file://`` or a relative path) to an existing file.
 
-    A ``package://<pkg>/<path>`` stays inside the package's folder under a search root: ``..`` that climbs out
+    A ``package://<pkg>/<path>`` is looked up in ``packages`` and stays inside that folder: ``..`` that climbs out
     of it (``package://example-robot-data/../../etc/hostname``) finds nothing. The check is on the path as
     written (``..`` resolved, symbolic links not followed), so a package installed as links to its sources
     (``colcon build --symlink-install``) keeps its meshes.
@@ -145,22 +129,18 @@ def resolve_uri(uri: str, base_dir: Path | None, roots: Iterable[Path]) -> Path 
     Args:
         uri: the ``filename`` of a URDF ``<mesh>``.
         base_dir: folder of the model file, for relative paths (None for XML strings).
-        roots: package search roots (see :func:`package_search_roots`).
+        packages: the package index, {name: folder} (:func:`uvms.model.packages.package_index`).
 
     Returns:
         The file, or None when it cannot be found.
     """
     if uri.startswith("package://"):
         package, _, relative = uri[len("package://") :].partition("/")
-        if package in ("", ".", "..") or os.path.isabs(relative):
+        if package not in packages or os.path.isabs(relative):
             return None
-        for root in roots:
-            # a root is either the package folder itself or a folder holding packages
-            folder = Path(os.path.normpath(root if root.name == package else root / package))
-            candidate = Path(os.path.normpath(folder / relative))
-            if candidate.is_relative_to(folder) and candidate.is_file():
-                return candidate
-        return None
+        folder = Path(os.path.normpath(packages[package]))
+        candidate = Path(os.path.normpath(folder / relative))
+        return candidate if candidate.is_relative_to(folder) and candidate.is_file() else None
     path = Path(uri[len("file://") :] if uri.startswith("file://") else uri)
     if not path.is_absolute() and base_dir is not None:
         path = base_dir / path

@@ -17,9 +17,10 @@ guard cannot hold such code, so a model from someone else is expanded in a child
   utime, mknod, xattrs, mount...); io_uring; raising its limits, changing identity or namespaces.
   Syscalls newer than its list are refused with ENOSYS;
 - **Landlock** (Linux 5.13+, when the kernel has it): the child may read only the model's folder and
-  everything below it, the package folders (``read_roots``: by default ``ROS_PACKAGE_PATH``,
-  ``AMENT_PREFIX_PATH`` and example-robot-data, see :func:`uvms.model.resources.package_search_roots`),
-  the Python installation and its import folders, ``/dev/null`` and ``/dev/urandom``; it may change no
+  everything below it, the folders of the packages of its package index (``packages``: the ROS packages of
+  the folders the user named, ``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH``, the model's own workspace and
+  example-robot-data, see :mod:`uvms.model.packages`; ``$(find pkg)`` resolves through the same index and
+  nothing else), the Python installation and its import folders, ``/dev/null`` and ``/dev/urandom``; it may change no
   file, and (ABI 4+/6+) open no TCP connection and signal no process outside its own domain. Outside
   those folders, ``/proc`` and ``/dev/pts`` included, an open fails and the message says what is readable
   (a model lying loose in a home folder therefore exposes that whole folder: keep models in their own);
@@ -57,11 +58,11 @@ import sys
 import tempfile
 import threading
 import time
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from ..errors import ModelParseError, XacroError
-from . import resources
+from .packages import package_index, unknown_package
 from .checks import MAX_URDF_BYTES  # the largest URDF the child may hand back [bytes]
 
 #: Seconds an untrusted xacro expansion may take [s].
@@ -112,7 +113,7 @@ def expand_untrusted(
     *,
     memory_bytes: int = DEFAULT_MEMORY_BYTES,
     max_urdf_bytes: int = MAX_URDF_BYTES,
-    read_roots: Iterable[str | os.PathLike] | None = None,
+    packages: Mapping[str, Path] | None = None,
     audit_hook: bool = True,
     landlock: bool = True,
 ) -> str:
@@ -124,8 +125,9 @@ def expand_untrusted(
         timeout: wall-clock limit [s].
         memory_bytes: address-space limit of the child [bytes].
         max_urdf_bytes: largest URDF accepted back [bytes].
-        read_roots: folders (besides the model's own) whose files the xacro may include; None: the
-            package search roots (``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH``, example-robot-data).
+        packages: the package index, {name: folder}: ``$(find name)`` is that folder, and the xacro may read
+            those folders besides its own; None: :func:`uvms.model.packages.package_index` of the model alone
+            (``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH``, its workspace, example-robot-data).
         audit_hook: install the Python-level second layer (False only to test the kernel layers alone).
         landlock: restrict reading with Landlock where the kernel has it (False only to test the other
             layers alone; the parent is then non-dumpable during the expansion, as without Landlock).
@@ -142,11 +144,12 @@ def expand_untrusted(
     if problem:
         raise XacroError(f"{path}: {problem}; expand it with trusted=True only if you trust its author")
     resolved = Path(path).resolve()
-    roots = [resolved.parent] + [Path(p).resolve() for p in
-                                 (resources.package_search_roots() if read_roots is None else read_roots)]
+    packages = package_index(model=path) if packages is None else packages
+    roots = [resolved.parent] + [Path(folder).resolve() for folder in packages.values()]
     roots = [str(p) for p in dict.fromkeys(roots) if p.exists()]
     use_landlock = landlock and landlock_abi() > 0
     request = json.dumps({"path": str(resolved), "mappings": dict(mappings), "memory_bytes": int(memory_bytes),
+                          "packages": {name: str(folder) for name, folder in packages.items()},
                           "cpu_seconds": int(timeout) + 1, "audit_hook": bool(audit_hook),
                           "parent_pid": os.getpid(), "landlock": use_landlock, "read_roots": roots}).encode()
     guard = contextlib.nullcontext() if use_landlock else not_dumpable()
@@ -167,7 +170,7 @@ def expand_untrusted(
                          "no UVMS model is that large")
     readable = None if not use_landlock else f"the model's folder {roots[0]}, " + (
         f"the package folders {', '.join(roots[1:])} " if roots[1:] else "no package folder ")
-    return read_answer(path, stdout, stderr, process.returncode, readable=readable)
+    return read_answer(path, stdout, stderr, process.returncode, readable=readable, packages=packages)
 
 
 _dumpable_lock = threading.Lock()
@@ -288,7 +291,7 @@ def one_line(text: object) -> str:
 
 
 def read_answer(path: Path, stdout: bytes, stderr: bytes, returncode: int | None, *,
-                readable: str | None = None) -> str:
+                readable: str | None = None, packages: Mapping[str, Path] | None = None) -> str:
     """The URDF from the child's JSON answer, or the matching error.
 
     Args:
@@ -296,6 +299,7 @@ def read_answer(path: Path, stdout: bytes, stderr: bytes, returncode: int | None
         stdout, stderr: what the child wrote (it may be hostile: any bytes).
         returncode: its exit status (negative: the signal that ended it).
         readable: what Landlock let it read, for the message when a read was refused (None: no Landlock).
+        packages: the package index it was given, for the message of a package it did not find.
 
     Raises:
         XacroError: anything but a well-formed answer carrying the URDF, in one line.
@@ -330,9 +334,11 @@ def read_answer(path: Path, stdout: bytes, stderr: bytes, returncode: int | None
     if answer["kind"] == "unconfined":
         raise XacroError(f"{path}: the sandbox could not confine the child ({message}); "
                          "refusing to expand untrusted xacro unconfined")
+    if answer["kind"] == "package":
+        raise XacroError(unknown_package(message, packages or {}, path))
     if answer["kind"] == "unreadable" and readable:
         raise XacroError(f"{path}: xacro error: {message}; an untrusted xacro may read only {readable}"
-                         "and the Python installation: name the folder of that file (load(package_dirs=[...]) or "
-                         "ROS_PACKAGE_PATH), or "
+                         "and the Python installation: name the package holding that file (--package-path DIR, "
+                         "load(package_path=[...]) or ROS_PACKAGE_PATH), or "
                          "load the model with trusted=True if you trust its author")
     raise XacroError(f"{path}: xacro error: {message}")

@@ -1,26 +1,31 @@
 """The child process of :mod:`uvms.model.sandbox`: confine this process, then expand one xacro file.
 
-Run as ``python -I -B -c <this file's text>`` (never imported by uvms). The request comes as one JSON
-document on stdin: ``{"path", "mappings", "memory_bytes", "cpu_seconds", "audit_hook", "parent_pid",
-"landlock", "read_roots"}``; the answer is one JSON document on stdout: ``{"xml": ...}`` or
-``{"kind": "parse"|"xacro"|"unreadable"|"unconfined", "message": ...}``.
+Run as ``python -I -B -c <this file's text>``. The request comes as one JSON document on stdin: ``{"path",
+"mappings", "packages", "memory_bytes", "cpu_seconds", "audit_hook", "parent_pid", "landlock", "read_roots"}``;
+the answer is one JSON document on stdout: ``{"xml": ...}`` or ``{"kind": "parse"|"xacro"|"unreadable"|
+"package"|"unconfined", "message": ...}`` ("package": ``$(find)`` of a package not in ``packages``, the message
+its name).
 
 The order matters: read the request, die with the parent (PR_SET_PDEATHSIG), set the resource limits,
 import xacro (trusted code), restrict reading to the named folders (Landlock), drop the capabilities,
 install the seccomp filter (from then on the kernel refuses what the lists below name, whatever the Python
 code does), install the audit hook (a second layer with clearer messages), and only then read the
 untrusted file.
+
+:func:`packages_for_find` (xacro's ``$(find)`` through uvms's package index) is also imported by
+:mod:`uvms.model.loader` for trusted files: importing this module defines names and runs nothing (``LIBC`` is
+a handle on the C library the process has already loaded), on any platform.
 """
 
+import contextlib
 import ctypes
 import errno
 import json
 import os
-import resource
 import signal
 import stat
 import sys
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator, Mapping
 
 #: Syscalls refused with EPERM: processes, signals to others, sockets and IPC, every file-system change,
 #: raising limits, privileges, namespaces, tracing, kernel state.
@@ -98,8 +103,9 @@ PR_SET_PDEATHSIG, PR_SET_NO_NEW_PRIVS = 1, 38
 CAP_DAC_OVERRIDE, CAP_DAC_READ_SEARCH = 1, 2
 LANDLOCK_READ_FILE, LANDLOCK_READ_DIR = 1 << 2, 1 << 3
 
-LIBC = ctypes.CDLL(None, use_errno=True)
-LIBC.syscall.restype = ctypes.c_long
+LIBC = ctypes.CDLL(None, use_errno=True) if os.name == "posix" else None  # None: Windows may import this module
+if LIBC is not None:
+    LIBC.syscall.restype = ctypes.c_long
 
 
 def checked(result: int) -> int:
@@ -119,6 +125,8 @@ def die_with_parent(parent_pid: int) -> None:
 
 def limit_resources(memory_bytes: int, cpu_seconds: int) -> None:
     """Address space, CPU time, no file growth, no core file, no new processes, few descriptors."""
+    import resource  # POSIX only: imported here so that any platform may import this module
+
     resource.setrlimit(resource.RLIMIT_AS, (memory_bytes, memory_bytes))
     resource.setrlimit(resource.RLIMIT_CPU, (cpu_seconds, cpu_seconds))
     resource.setrlimit(resource.RLIMIT_FSIZE, (0, 0))
@@ -251,15 +259,58 @@ def install_audit_hook() -> None:
     sys.addaudithook(hook)
 
 
-def unreadable(exc: BaseException | None) -> str | None:
-    """The file Landlock kept xacro from reading (EACCES somewhere in the chain of ``exc``), or None."""
+class PackageNotFound(LookupError):
+    """``$(find name)`` of a package that is not in the package index; ``args[0]`` is the name."""
+
+
+@contextlib.contextmanager
+def packages_for_find(packages: Mapping[str, str]) -> Iterator[None]:
+    """While inside, xacro's ``$(find pkg)`` (and ``find('pkg')`` in ``$(eval ...)``) is ``packages[pkg]``.
+
+    The one place that sets xacro's find resolution (xacro 2 asks ament_index, which uvms does not need): this
+    child and the trusted expansion of :mod:`uvms.model.loader` alike. A name not in ``packages`` raises
+    :class:`PackageNotFound`. xacro's own resolution is restored on exit.
+
+    Args:
+        packages: {package name: its folder} (:func:`uvms.model.packages.package_index`).
+    """
+    from xacro import substitution_args
+
+    def find(name: object) -> str:
+        if not isinstance(name, str) or name not in packages:
+            raise PackageNotFound(str(name))
+        return str(packages[name])
+
+    saved = substitution_args._eval_find, substitution_args._eval_dict.get("find")
+    substitution_args._eval_find = substitution_args._eval_dict["find"] = find
+    try:
+        yield
+    finally:
+        substitution_args._eval_find = saved[0]
+        if saved[1] is None:
+            substitution_args._eval_dict.pop("find", None)
+        else:
+            substitution_args._eval_dict["find"] = saved[1]
+
+
+def causes(exc: BaseException | None) -> Iterator[BaseException]:
+    """``exc`` and what it wraps (xacro's ``.exc``, ``__cause__``, ``__context__``), each once."""
     seen = set()
     while exc is not None and id(exc) not in seen:
         seen.add(id(exc))
-        if isinstance(exc, PermissionError) and exc.errno == errno.EACCES:
-            return exc.filename or "?"
+        yield exc
         exc = getattr(exc, "exc", None) or exc.__cause__ or exc.__context__
-    return None
+
+
+def unreadable(exc: BaseException | None) -> str | None:
+    """The file Landlock kept xacro from reading (EACCES somewhere in the chain of ``exc``), or None."""
+    return next((cause.filename or "?" for cause in causes(exc)
+                 if isinstance(cause, PermissionError) and cause.errno == errno.EACCES), None)
+
+
+def missing_package(exc: BaseException | None) -> str | None:
+    """The package that ``$(find)`` did not find (a :class:`PackageNotFound` in the chain of ``exc``), or None."""
+    return next((str(cause.args[0]) for cause in causes(exc) if isinstance(cause, PackageNotFound)), None)
 
 
 def answer(document: dict[str, str]) -> None:
@@ -291,7 +342,8 @@ def main() -> None:
     if request["audit_hook"]:
         install_audit_hook()
     try:
-        document = xacro.process_file(request["path"], mappings=request["mappings"])
+        with packages_for_find(request["packages"]):
+            document = xacro.process_file(request["path"], mappings=request["mappings"])
         answer({"xml": document.toprettyxml(indent="  ")})
     except ExpatError as exc:
         answer({"kind": "parse", "message": str(exc)})
@@ -302,7 +354,10 @@ def main() -> None:
     except BaseException as exc:  # xacro's errors, what the filters and the hook refused, anything else
         text = " ".join(str(exc).split()) if isinstance(exc, xacro.XacroException) else " ".join(
             f"{type(exc).__name__}: {exc}".split())
-        answer({"kind": "unreadable" if unreadable(exc) else "xacro", "message": text})
+        if missing_package(exc) is not None:
+            answer({"kind": "package", "message": missing_package(exc)})
+        else:
+            answer({"kind": "unreadable" if unreadable(exc) else "xacro", "message": text})
 
 
 if __name__ == "__main__":  # run as ``python -c`` by the sandbox; importing it does nothing

@@ -6,7 +6,7 @@ import functools
 import math
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -42,7 +42,7 @@ class Robot(VehicleAccessors):
         name: model name; source: file it came from (or "<string>").
         urdf: the URDF text of the model (composed by `uvms.model.mount_arm` for a mounted arm; None when the
             Robot was built from a Pinocchio model alone). A base joint that uvms added is not in it:
-            :meth:`save_urdf` writes it.
+            :meth:`save_urdf` writes it. packages: the ROS packages its meshes resolve through, {name: folder}.
     """
 
     def __init__(
@@ -54,12 +54,14 @@ class Robot(VehicleAccessors):
         source: str = "<model>",
         urdf: str | None = None,
         base_reason: str | None = None,
+        packages: Mapping[str, Path] | None = None,
     ) -> None:
         self.model = model
         self.data = model.createData()
         self.name = name or model.name
         self.source = source
         self.urdf = urdf
+        self.packages = dict(packages or {})
         self.base: BaseType = BASE_TYPES[base_type_of(model)]
         self.base_type = self.base.name
         self.base_reason = base_reason or (

@@ -53,7 +53,8 @@ class Setup:
 def build(scenario: dict) -> Setup:
     """Model, task, initial configuration, trajectory and controller of a scenario."""
     model = scenario["model"]
-    robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
+    robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None,
+                 package_path=model["package_path"])
     if scenario["phases"]:
         if scenario["inequalities"]:
             raise ScenarioError("[[inequalities]] need a [task] and a [trajectory]; a sequence scenario ([[phases]]) "

@@ -8,20 +8,22 @@ else::
       "args": {"l1": 0.7},                                            # xacro args as the run used them
       "base": "planar",                                               # the base the run had
       "ee": ["ee"],                                                   # its end-effector frames
+      "package_path": ["/home/me/ws/src"],                            # its package folders (model.package_path)
       "scenario": "hoang2011_w1",
       "robot": "hoang2011_uvms", "nq": 7, "nv": 6,
       "urdf_sha256": "3f1c..."                                        # of the expanded URDF (None if composed)
     }
 
 The record is data from a folder someone else may have written: every field is checked, the model is loaded
-by :func:`uvms.model.loader.load` (an untrusted xacro runs in its sandbox) and its args are literals.
+by :func:`uvms.model.loader.load` (an untrusted xacro runs in its sandbox) and its args are literals; its package
+folders are only read from, as a scenario's ``model.package_path``.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -54,6 +56,7 @@ def model_record(scenario: dict, robot: Robot) -> dict:
         "args": dict(scenario["model"]["args"]),
         "base": robot.base_type,
         "ee": list(robot.ee_frames),
+        "package_path": list(scenario["model"]["package_path"]),
         "scenario": scenario["scenario"]["name"],
         "robot": robot.name,
         "nq": robot.nq,
@@ -71,17 +74,20 @@ class RunRecord:
     args: dict = field(default_factory=dict)
     base: str = "floating"
     ee: list[str] = field(default_factory=list)
+    package_path: list[str] = field(default_factory=list)
     scenario: str = ""
     urdf_sha256: str | None = None
 
-    def load(self) -> Robot:
-        """The run's robot: its model with its args, base and end effectors.
+    def load(self, package_path: Sequence[str | os.PathLike] = ()) -> Robot:
+        """The run's robot: its model with its args, base and end effectors, its packages found in ``package_path``
+        (e.g. ``--package-path``) and then in the recorded folders.
 
         Raises:
             RunRecordError: the model cannot be loaded (the message says why, and that the run folder records it).
         """
         try:
-            return load(self.source, base=self.base, args=self.args or None, ee=self.ee or None)
+            return load(self.source, base=self.base, args=self.args or None, ee=self.ee or None,
+                        package_path=[*package_path, *self.package_path])
         except UVMSError as exc:
             raise RunRecordError(f"the model recorded by {self.folder / 'metrics.json'} does not load: {exc}") from None
 
@@ -125,9 +131,12 @@ def read_run_record(folder: str | os.PathLike) -> RunRecord | None:
         raise bad(f"base must be one of {', '.join(BASES)}, got {base!r}")
     if not isinstance(ee, list) or not all(isinstance(frame, str) for frame in ee):
         raise bad("ee must be a list of frame names")
+    package_path = entry.get("package_path", [])
+    if not isinstance(package_path, list) or not all(isinstance(folder, str) and folder for folder in package_path):
+        raise bad("package_path must be a list of folders")
     digest = entry.get("urdf_sha256")
     scenario = entry.get("scenario", "")
-    return RunRecord(folder=folder, source=source, args=dict(args), base=base, ee=list(ee),
+    return RunRecord(folder=folder, source=source, args=dict(args), base=base, ee=list(ee), package_path=package_path,
                      scenario=scenario if isinstance(scenario, str) else "",
                      urdf_sha256=digest if isinstance(digest, str) else None)
 
@@ -168,21 +177,23 @@ def check_given_model(record: RunRecord, recorded: Robot, given: Robot, given_te
 
 
 
-def named_model(model: str, args: Mapping[str, object] | None = None, base: str | None = None) -> Robot:
+def named_model(model: str, args: Mapping[str, object] | None = None, base: str | None = None,
+                package_path: Sequence[str | os.PathLike] = ()) -> Robot:
     """A model named on a command line: a model file or shipped name, or the ``[model]`` of a scenario ``.toml``
-    (or shipped scenario name ending in ``.toml``), with ``args`` over its xacro args and ``base`` over its base."""
+    (or shipped scenario name ending in ``.toml``), with ``args`` over its xacro args, ``base`` over its base and
+    the folders of ``package_path`` before its own."""
     args = dict(args or {})
     if str(model).endswith(".toml"):
         from .schema import read_scenario
 
         section = read_scenario(model)["model"]
         return load(section["path"], base=base or section["base"] or None, args={**section["args"], **args},
-                    ee=section["ee"] or None)
-    return load(model, base=base, args=args)
+                    ee=section["ee"] or None, package_path=[*package_path, *section["package_path"]])
+    return load(model, base=base, args=args, package_path=package_path)
 
 
 def replay_model(folder: str | os.PathLike, model: str | None = None, args: Mapping[str, object] | None = None,
-                 base: str | None = None) -> tuple[Robot, str | None]:
+                 base: str | None = None, package_path: Sequence[str | os.PathLike] = ()) -> tuple[Robot, str | None]:
     """The robot to draw the run of ``folder`` on, and a one-line note about it (None: nothing to note).
 
     A folder that records its model (:func:`read_run_record`) is drawn on that model; a ``model``, ``args`` or
@@ -200,16 +211,16 @@ def replay_model(folder: str | os.PathLike, model: str | None = None, args: Mapp
         if model is None:
             raise UVMSError(f"uvms view needs the model: {folder} does not record it (a run of an older uvms); "
                             f"give it: uvms view MODEL|SCENARIO.toml --result {folder}")
-        return named_model(model, args, base), (
+        return named_model(model, args, base, package_path), (
             f"note        {folder} does not record its model (a run of an older uvms): drawing it on {model} as "
             f"given; check that its --arg and --base are the run's")
-    recorded = record.load()
+    recorded = record.load(package_path)
     if model is not None or args or base:
         named = " ".join([model or "the recorded model", *(f"--arg {k}={v}" for k, v in (args or {}).items()),
                           *([f"--base {base}"] if base else [])])
-        given = (named_model(model, args, base) if model is not None else
+        given = (named_model(model, args, base, package_path) if model is not None else
                  load(record.source, base=base or record.base, args={**record.args, **(args or {})} or None,
-                      ee=record.ee or None))
+                      ee=record.ee or None, package_path=[*package_path, *record.package_path]))
         check_given_model(record, recorded, given, f"the model given ({named})")
     note = None
     if record.changed_since(recorded):

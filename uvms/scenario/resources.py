@@ -1,4 +1,5 @@
-"""Where scenario files live: a path, or the name of a scenario shipped in the repository's ``scenarios/``.
+"""Where scenario files live (a path, or the name of a scenario shipped in the repository's ``scenarios/``), and
+the folders a scenario names.
 
 ``uvms run hoang2011_w1`` runs ``scenarios/hoang2011_w1.toml`` of the installed repository, as
 ``uvms info hoang2011`` loads ``models/hoang2011/`` (:mod:`uvms.model.resources`). A file that exists
@@ -58,3 +59,16 @@ def resolve_scenario_path(name_or_path: str | os.PathLike) -> Path:
         hint = f"shipped scenarios: {', '.join(shipped) or 'none found'}"
     raise ScenarioError(f"scenario file {name!r} does not exist and is not a shipped scenario name; give a .toml "
                         f"path or a shipped name ({hint})")
+
+
+def scenario_folders(names: list, scenario_file: str | os.PathLike, key: str) -> list[str]:
+    """The folders a scenario names (``model.package_path``), absolute: a relative name is relative to the scenario
+    file's folder. They are only read from (a name from a scenario never becomes a place to write).
+
+    Raises:
+        ScenarioError: an entry that is not a folder name (a non-empty string).
+    """
+    if not all(isinstance(name, str) and name for name in names):
+        raise ScenarioError(f"{scenario_file}: {key} must be a list of folders (strings, relative to the scenario "
+                            f"file's folder or absolute), got {names!r}")
+    return [str((Path(scenario_file).parent / name).resolve()) for name in names]

@@ -26,7 +26,7 @@ from ..io import outputs
 from ..model.resources import MAX_TOML_BYTES, read_text
 from ..solvers import SOLVERS
 from .inequalities import check_tables
-from .resources import resolve_scenario_path
+from .resources import resolve_scenario_path, scenario_folders
 
 NUMBER = (int, float)
 #: Defaults of [outputs] position_tolerance [m] and orientation_tolerance [rad]: a run whose task error exceeds
@@ -82,6 +82,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "base": (str, "", ("", "floating", "planar", "fixed")),
         "ee": (str, "", None),
         "args": (dict, {}, None),
+        "package_path": (list, [], None),  # folders of ROS packages ($(find), package://), from the scenario's folder
     },
     "task": {
         "frame": (str, "", None),
@@ -184,7 +185,7 @@ SEQUENCE_REQUIRED_SECTIONS = ("model", "phases", "simulation")
 
 # ------------------------------------------------------------------ parsing
 def read_scenario(path: str | os.PathLike, overrides: Sequence[str] = ()) -> dict:
-    """Read, override and validate a scenario file; relative model paths become absolute.
+    """Read, override and validate a scenario file; relative model paths and package folders become absolute.
 
     Args:
         path: a ``.toml`` file or the name of a shipped scenario (``"hoang2011_w1"``,
@@ -238,6 +239,7 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     model_path = Path(scenario["model"]["path"])
     if not model_path.is_absolute() and (path.parent / model_path).exists():
         scenario["model"]["path"] = str((path.parent / model_path).resolve())
+    scenario["model"]["package_path"] = scenario_folders(scenario["model"]["package_path"], path, "model.package_path")
     scenario["scenario"]["name"] = scenario["scenario"]["name"] or outputs.plain_file_name(path.stem, "scenario")
     return scenario
 
@@ -338,9 +340,7 @@ def check_value(name: str, value: Any, kinds, allowed, origin: str) -> Any:
         check_range(name, value, origin)
         return [float(v) for v in value]
     kinds = kinds if isinstance(kinds, tuple) else (kinds,)
-    if isinstance(value, bool) and bool not in kinds:
-        raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
-    if not isinstance(value, kinds):
+    if not isinstance(value, kinds) or (isinstance(value, bool) and bool not in kinds):
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
     if isinstance(value, list) and kinds != (list,) and not all(is_number(v) for v in value):
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)} of numbers, got {value!r}")

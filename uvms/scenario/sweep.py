@@ -30,6 +30,7 @@ import numpy as np
 
 from ..io import outputs
 from ..errors import SweepError
+from ..model.loader import load
 from .resources import resolve_scenario_path
 from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
 
@@ -235,6 +236,7 @@ def sweep(
     scheduler: str | None = None,
     out: str | os.PathLike | None = None,
     progress: bool | None = None,
+    overrides: Sequence[str] = (),
 ) -> SweepResult:
     """Run a scenario on every point of a grid; write ``sweep.csv`` and ``sweep.png`` into ``out``.
 
@@ -250,6 +252,7 @@ def sweep(
             ``tls://10.0.0.5:8786``; a ``tcp://`` one works, with a warning); None starts a local TLS cluster.
         out: output folder (default ``out/<scenario name>_sweep``); point k runs into ``out/point_k``.
         progress: progress bar (None: on a terminal only).
+        overrides: ``SECTION.KEY=VALUE`` strings applied to every point before its grid values.
 
     Raises:
         SweepError: bad grid, backend or jobs; ScenarioError: a key or value the scenario rejects, found
@@ -272,13 +275,12 @@ def sweep(
         raise SweepError(f"the grid has {count:,} points ({sizes}); a sweep has at most {MAX_POINTS:,}: split it "
                          f"into several sweeps (e.g. one per value of {keys[0]}) or take fewer values")
     points = list(itertools.product(*(values for _, values in grids)))
-    assignments = [[f"{key}={toml_literal(v)}" for key, v in zip(keys, point)] for point in points]
+    assignments = [[*overrides, *(f"{key}={toml_literal(v)}" for key, v in zip(keys, point))] for point in points]
     checked, models = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
-        from ..model.loader import load
-
         model = read_scenario(scenario, assignments[0])["model"]
-        load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
+        load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None,
+             package_path=model["package_path"])
     given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
     out = given.resolve()
     width = len(str(len(points) - 1))

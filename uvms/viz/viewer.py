@@ -19,10 +19,8 @@ Without the extra, :mod:`uvms.viz.drawing` draws the same configurations headles
 from __future__ import annotations
 
 import math
-import os
 import socket
 import threading
-from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -115,8 +113,9 @@ class Viewer:
         q: configuration shown first and framed by the camera (nq,); default neutral.
         port: first port tried, 1..65535 (the next free one is taken when busy), or 0 (any free port); the
             host is always 127.0.0.1.
-        package_dirs: extra folders for ``package://`` mesh URIs.
         skeleton: add the stick geometry (None: only when the model has no visual geometry).
+
+    Meshes are found as the robot was loaded (``package://`` through ``robot.packages``).
 
     Raises:
         ViewerInputError: a port outside 0..65535, or no free port from it.
@@ -129,7 +128,7 @@ class Viewer:
     """
 
     def __init__(self, robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
-                 package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None) -> None:
+                 skeleton: bool | None = None) -> None:
         viser, _ = require_viser()
         port = first_free_port(port)  # the next free port if taken
         with guarded_servers() as guarded:
@@ -146,16 +145,15 @@ class Viewer:
             self.server.gui.configure_theme(show_share_button=False)
             self.server.gui.set_panel_label("uvms")
             self.server.gui.main_panel.dock_right()
-            self._show_model(robot, robot.neutral() if q is None else q, package_dirs, skeleton)
+            self._show_model(robot, robot.neutral() if q is None else q, skeleton)
         except BaseException:
             self.server.stop()
             raise
 
-    def _show_model(self, robot: Robot, q: np.ndarray, package_dirs: Sequence[str | os.PathLike] | None,
-                    skeleton: bool | None) -> None:
+    def _show_model(self, robot: Robot, q: np.ndarray, skeleton: bool | None) -> None:
         _, ViserVisualizer = require_viser()
         q = robot.check_configuration(q)
-        visual, collision = geometry_models(robot, package_dirs, skeleton)
+        visual, collision = geometry_models(robot, skeleton)
         visualizer = ViserVisualizer(robot.model, collision, visual)
         if self.playback is not None:  # stopped outside the lock: the playback thread displays under it
             self.playback.remove()
@@ -190,8 +188,7 @@ class Viewer:
         self.seabed = add_seabed(self.server, self.scene_frame)
         return self.scene_frame
 
-    def reload(self, robot: Robot, q: np.ndarray | None = None, *,
-               package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None) -> None:
+    def reload(self, robot: Robot, q: np.ndarray | None = None, *, skeleton: bool | None = None) -> None:
         """Show another version of the model (e.g. after an edit of its URDF) in place: same page, same camera.
 
         The teach sliders are rebuilt for the new model; a run played before is dropped (it may no longer fit).
@@ -203,7 +200,7 @@ class Viewer:
         if q is None:
             q = self.q if len(self.q) == robot.nq else robot.neutral()
         self._trajectory = None
-        self._show_model(robot, q, package_dirs, skeleton)
+        self._show_model(robot, q, skeleton)
 
     @property
     def url(self) -> str:
@@ -297,8 +294,7 @@ class Viewer:
         return f"Viewer({self.robot.name!r}, {self.url})"
 
 
-def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
-         package_dirs: Sequence[str | os.PathLike] | None = None, skeleton: bool | None = None,
+def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT, skeleton: bool | None = None,
          open_browser: bool = False) -> Viewer:
     """Show a robot at configuration q (default neutral) in the browser; the server keeps running.
 
@@ -307,8 +303,8 @@ def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
         q: configuration (nq,).
         port: first port tried, 1..65535 (the next free one is taken when busy), or 0 (any free port); the host
             is always 127.0.0.1.
-        package_dirs: extra folders for ``package://`` mesh URIs.
-        skeleton: add the stick geometry (None: only when the model has no visual geometry).
+        skeleton: add the stick geometry (None: only when the model has no visual geometry); meshes are found
+            as the robot was loaded (``robot.packages``).
         open_browser: open the page with :mod:`webbrowser`.
 
     Returns:
@@ -319,7 +315,7 @@ def view(robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
         ViewerInputError: a port outside 0..65535.
         ConfigurationError: bad q.
     """
-    viewer = Viewer(robot, q, port=port, package_dirs=package_dirs, skeleton=skeleton)
+    viewer = Viewer(robot, q, port=port, skeleton=skeleton)
     if open_browser:
         import webbrowser
 

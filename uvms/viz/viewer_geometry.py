@@ -1,8 +1,8 @@
 """Geometry of the browser viewer: the URDF visuals with their mesh URIs resolved, or a stick skeleton.
 
 The geometry comes from the model's URDF ``<visual>`` elements (mesh URIs resolved as
-:func:`uvms.load` does: ``package://`` through ``package_dirs``, ``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH``
-and example-robot-data; meshes that cannot be found are left out). A mesh is a stranger's file too: only
+:func:`uvms.load` does: ``package://`` through the packages the robot was loaded with, ``robot.packages``
+(:mod:`uvms.model.packages`); meshes that cannot be found are left out). A mesh is a stranger's file too: only
 the formats of :data:`MESH_FORMATS`, at most :data:`MAX_MESH_BYTES` each, and never a compressed archive
 (a ``.zae`` or a zip under any name: a 4 MB zip inflates to gigabytes) are loaded; a refused mesh is left
 out with a warning that names it and the rule (:func:`mesh_refusal`), checked before any loader opens it.
@@ -12,11 +12,9 @@ joint origin), a sphere per joint, and the end effectors in orange.
 
 from __future__ import annotations
 
-import os
 import warnings
 import zipfile
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -60,8 +58,9 @@ def mesh_refusal(path: Path) -> str | None:
     return None
 
 
-def resolved_urdf(robot: Robot, package_dirs: Sequence[str | os.PathLike] | None = None) -> tuple[str, list[str]]:
-    """The robot's URDF text with every mesh URI made an absolute path; visuals whose mesh is missing removed.
+def resolved_urdf(robot: Robot) -> tuple[str, list[str]]:
+    """The robot's URDF text with every mesh URI made an absolute path (``package://`` through ``robot.packages``);
+    visuals whose mesh is missing removed.
 
     A visual or collision whose mesh :func:`mesh_refusal` refuses is removed too, with a warning.
 
@@ -74,7 +73,6 @@ def resolved_urdf(robot: Robot, package_dirs: Sequence[str | os.PathLike] | None
     root = ET.fromstring(robot.urdf)  # a copy of its own: visuals are edited below
     source = Path(robot.source)
     base_dir = source.parent if source.is_file() else None
-    roots = resources.package_search_roots(package_dirs)
     missing: list[str] = []
     refused: dict[Path, str | None] = {}
     for link in root.iter("link"):
@@ -84,7 +82,7 @@ def resolved_urdf(robot: Robot, package_dirs: Sequence[str | os.PathLike] | None
                 if mesh is None:
                     continue
                 uri = mesh.get("filename", "")
-                path = resources.resolve_uri(uri, base_dir, roots)
+                path = resources.resolve_uri(uri, base_dir, robot.packages)
                 if path is None:
                     missing.append(uri)
                     link.remove(element)
@@ -151,13 +149,11 @@ def skeleton_geometry(robot: Robot, radius: float | None = None) -> pin.Geometry
     return geometry
 
 
-def geometry_models(robot: Robot, package_dirs: Sequence[str | os.PathLike] | None = None,
-                    skeleton: bool | None = None) -> tuple[pin.GeometryModel, pin.GeometryModel]:
+def geometry_models(robot: Robot, skeleton: bool | None = None) -> tuple[pin.GeometryModel, pin.GeometryModel]:
     """The (visual, collision) geometry models the viewer shows.
 
     Args:
         robot: the robot.
-        package_dirs: extra folders for ``package://`` mesh URIs.
         skeleton: add the stick geometry of :func:`skeleton_geometry`; None: only when the model
             has no visual geometry (no URDF, or a URDF without ``<visual>``).
 
@@ -170,7 +166,7 @@ def geometry_models(robot: Robot, package_dirs: Sequence[str | os.PathLike] | No
     """
     visual, collision = pin.GeometryModel(), pin.GeometryModel()
     if robot.urdf is not None:
-        xml, missing = resolved_urdf(robot, package_dirs)
+        xml, missing = resolved_urdf(robot)
         if missing:
             warnings.warn(f"{robot.source}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); "
                           f"they are not shown", UserWarning, stacklevel=2)

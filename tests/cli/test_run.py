@@ -1,0 +1,93 @@
+"""``--package-path DIR`` of ``uvms run``, ``uvms sweep`` and ``uvms view`` (uvms.cli.run, uvms.cli.view): the
+folders given come before the scenario's own ``[model] package_path``, and a run folder replays on them."""
+
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+
+import numpy as np
+import pytest
+
+from conftest import ROOT
+from uvms.cli import main
+from uvms.scenario import read_run_record
+
+ROS_WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"  # two packages, one including the other by $(find)
+SCENARIO = """
+[model]
+path = "vehicle.urdf.xacro"
+package_path = ["arms"]
+
+[task]
+frame = "ee"
+axes = ["x", "y", "z"]
+
+[trajectory]
+type = "line"
+end_offset = [0.0, 0.05, 0.0]
+duration = 0.4
+
+[initial]
+base = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+arm = [0.3, -0.7]
+
+[simulation]
+dt = 0.1
+
+[outputs]
+figures = false
+"""
+
+
+@pytest.fixture
+def scenario(tmp_path, monkeypatch):
+    """The fixture's vehicle away from its workspace, in a scenario whose own package folder ``arms`` holds an arm
+    package of the same name with other lengths (0.5 m and 0.1 m)."""
+    monkeypatch.delenv("ROS_PACKAGE_PATH", raising=False)
+    monkeypatch.delenv("AMENT_PREFIX_PATH", raising=False)
+    monkeypatch.chdir(tmp_path)
+    shutil.copy(ROS_WORKSPACE / "fixture_vehicle_description" / "urdf" / "vehicle.urdf.xacro", tmp_path)
+    arm = shutil.copytree(ROS_WORKSPACE / "fixture_arm", tmp_path / "arms" / "other_arm")
+    (arm / "urdf" / "arm.xacro").write_text((arm / "urdf" / "arm.xacro").read_text()
+                                            .replace('value="0.35"', 'value="0.5"').replace('value="0.25"', 'value="0.1"'))
+    path = tmp_path / "s.toml"
+    path.write_text(SCENARIO)
+    return path
+
+
+def ee_at_start(folder) -> np.ndarray:
+    """The end effector of a run folder's recorded model at the run's first configuration [m]."""
+    robot = read_run_record(folder).load()
+    return robot.fk(np.load(folder / "trajectory.npz")["q"][0], "ee").translation
+
+
+def test_run_puts_the_folders_given_before_the_scenario_s_own(scenario, capsys):
+    shoulder, elbow = 0.3, -0.4  # q1 and q1 + q2 of the initial arm; the vehicle starts at the origin
+    for given, lengths in (([], (0.5, 0.1)), (["--package-path", os.path.relpath(ROS_WORKSPACE)], (0.35, 0.25))):  # from the cwd
+        out = scenario.parent / f"out{len(given)}"
+        assert main(["run", str(scenario), "--out", str(out), "--quiet", *given]) == 0, capsys.readouterr().err
+        expected = [0.5 + lengths[0] * np.cos(shoulder) + lengths[1] * np.cos(elbow),
+                    lengths[0] * np.sin(shoulder) + lengths[1] * np.sin(elbow), -0.2]
+        np.testing.assert_allclose(ee_at_start(out), expected, atol=1e-12)
+    assert read_run_record(out).package_path == [str(ROS_WORKSPACE), str(scenario.parent / "arms")]
+    capsys.readouterr()
+    assert main(["view", "--result", str(out), "--headless", str(scenario.parent / "replay.png")]) == 0
+    assert (scenario.parent / "replay.png").stat().st_size > 0
+
+
+def test_sweep_and_view_take_package_folders_too(scenario, capsys):
+    out = scenario.parent / "sweep"
+    assert main(["sweep", str(scenario), "--grid", "simulation.dt=[0.1, 0.2]", "--package-path",
+                 str(ROS_WORKSPACE), "--out", str(out), "--quiet"]) == 0, capsys.readouterr().err
+    with open(out / "sweep.csv") as table:
+        rows = list(csv.DictReader(table))
+    assert [row["error"] for row in rows] == ["", ""]
+    assert read_run_record(out / "point_0").package_path[0] == str(ROS_WORKSPACE)
+    model = scenario.parent / "vehicle.urdf.xacro"
+    picture = scenario.parent / "vehicle.png"
+    assert main(["view", str(model), "--headless", str(picture)]) == 2  # no package named: one line
+    assert "no ROS package 'fixture_arm_description'" in capsys.readouterr().err
+    assert main(["view", str(model), "--package-path", str(ROS_WORKSPACE), "--headless", str(picture)]) == 0
+    assert picture.stat().st_size > 0
