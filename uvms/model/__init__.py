@@ -3,14 +3,17 @@
 ``loader`` (``load``: expand, check, choose the base, build), ``checks`` (URDF checks before Pinocchio),
 ``resources`` (shipped models, example-robot-data, ``package://``, bounded reading of files), ``includes``
 (a xacro's static includes), ``sandbox`` (untrusted xacro in a kernel-confined child process), ``base_rule``
-(which root is the vehicle), ``compose`` (``mount_arm``), ``point_masses`` (links with a mass and no inertia).
+(which root is the vehicle), ``compose`` (``mount_arm``), ``point_masses`` (links with a mass and no inertia),
+``joint_classes`` (arm joints, mimics, and the propellers, sensors and zero-range joints uvms freezes).
 """
 
 from .compose import mount_arm
 from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES
+from .joint_classes import ThrusterFileWarning
 from .loader import BaseGuessWarning, MissingMeshWarning, ParserWarning, load, read_model_text
 from .point_masses import PointMassWarning
 from .resources import example_robot_urdf, shipped_models
 
 __all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "MissingMeshWarning", "ParserWarning",
-           "PointMassWarning", "example_robot_urdf", "load", "mount_arm", "read_model_text", "shipped_models"]
+           "PointMassWarning", "ThrusterFileWarning", "example_robot_urdf", "load", "mount_arm", "read_model_text",
+           "shipped_models"]
