@@ -8,6 +8,7 @@ else::
       "args": {"l1": 0.7},                                            # xacro args as the run used them
       "base": "planar",                                               # the base the run had
       "ee": ["ee"],                                                   # its end-effector frames
+      "arm_joints": null,                                             # [model] arm_joints (null: the rule)
       "scenario": "hoang2011_w1",
       "robot": "hoang2011_uvms", "nq": 7, "nv": 6,
       "urdf_sha256": "3f1c..."                                        # of the expanded URDF (None if composed)
@@ -54,6 +55,7 @@ def model_record(scenario: dict, robot: Robot) -> dict:
         "args": dict(scenario["model"]["args"]),
         "base": robot.base_type,
         "ee": list(robot.ee_frames),
+        "arm_joints": scenario["model"]["arm_joints"],
         "scenario": scenario["scenario"]["name"],
         "robot": robot.name,
         "nq": robot.nq,
@@ -71,6 +73,7 @@ class RunRecord:
     args: dict = field(default_factory=dict)
     base: str = "floating"
     ee: list[str] = field(default_factory=list)
+    arm_joints: list[str] | None = None  # [model] arm_joints (None: uvms.load's rule)
     scenario: str = ""
     urdf_sha256: str | None = None
 
@@ -81,7 +84,8 @@ class RunRecord:
             RunRecordError: the model cannot be loaded (the message says why, and that the run folder records it).
         """
         try:
-            return load(self.source, base=self.base, args=self.args or None, ee=self.ee or None)
+            return load(self.source, base=self.base, args=self.args or None, ee=self.ee or None,
+                        arm_joints=self.arm_joints)
         except UVMSError as exc:
             raise RunRecordError(f"the model recorded by {self.folder / 'metrics.json'} does not load: {exc}") from None
 
@@ -125,9 +129,12 @@ def read_run_record(folder: str | os.PathLike) -> RunRecord | None:
         raise bad(f"base must be one of {', '.join(BASES)}, got {base!r}")
     if not isinstance(ee, list) or not all(isinstance(frame, str) for frame in ee):
         raise bad("ee must be a list of frame names")
+    arm_joints = entry.get("arm_joints")
+    if arm_joints is not None and (not isinstance(arm_joints, list) or not all(isinstance(n, str) for n in arm_joints)):
+        raise bad("arm_joints must be a list of joint names or null")
     digest = entry.get("urdf_sha256")
     scenario = entry.get("scenario", "")
-    return RunRecord(folder=folder, source=source, args=dict(args), base=base, ee=list(ee),
+    return RunRecord(folder=folder, source=source, args=dict(args), base=base, ee=list(ee), arm_joints=arm_joints,
                      scenario=scenario if isinstance(scenario, str) else "",
                      urdf_sha256=digest if isinstance(digest, str) else None)
 
@@ -177,7 +184,7 @@ def named_model(model: str, args: Mapping[str, object] | None = None, base: str 
 
         section = read_scenario(model)["model"]
         return load(section["path"], base=base or section["base"] or None, args={**section["args"], **args},
-                    ee=section["ee"] or None)
+                    ee=section["ee"] or None, arm_joints=section["arm_joints"])
     return load(model, base=base, args=args)
 
 
@@ -209,7 +216,7 @@ def replay_model(folder: str | os.PathLike, model: str | None = None, args: Mapp
                           *([f"--base {base}"] if base else [])])
         given = (named_model(model, args, base) if model is not None else
                  load(record.source, base=base or record.base, args={**record.args, **(args or {})} or None,
-                      ee=record.ee or None))
+                      ee=record.ee or None, arm_joints=record.arm_joints))
         check_given_model(record, recorded, given, f"the model given ({named})")
     note = None
     if record.changed_since(recorded):

@@ -81,6 +81,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "base": (str, "", ("", "floating", "planar", "fixed")),
         "ee": (str, "", None),
         "args": (dict, {}, None),
+        "arm_joints": (list, None, None),  # names of the joints that move, others frozen; absent: uvms.load's rule
     },
     "task": {
         "frame": (str, "", None),
@@ -130,7 +131,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     "initial": {
         "method": (str, "given", ("given", "optimize")),
         "base": (NUMBERS, [], None),
-        "arm": (NUMBERS, [], None),
+        "arm": ((list, dict), [], None),  # [rad or m] n_arm numbers, or {joint = value} (others at 0, neutral)
         "fixed_base": (list, [], None),
     },
     "simulation": {

@@ -278,7 +278,8 @@ def sweep(
         from ..model.loader import load
 
         model = read_scenario(scenario, assignments[0])["model"]
-        load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None)
+        load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None,
+             arm_joints=model["arm_joints"])
     given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
     out = given.resolve()
     width = len(str(len(points) - 1))
