@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -281,10 +281,11 @@ def overridden(classes: Mapping[str, JointClass], arm_joints: Sequence[str], mim
         ModelCheckError: ``arm_joints`` is not a list of names, or names a mimic or a joint without range.
         NameNotFound: a name that is not a moving joint of the file (the message lists the valid ones).
     """
-    if isinstance(arm_joints, str) or not all(isinstance(name, str) for name in arm_joints):
+    names = list(arm_joints) if isinstance(arm_joints, Iterable) and not isinstance(arm_joints, str) else None
+    if names is None or not all(isinstance(name, str) for name in names):
         raise ModelCheckError(f"{origin}: arm_joints must be a list of joint names, got {arm_joints!r}")
     valid = [name for name in classes if not is_zero_range(limits[name])]
-    for name in arm_joints:
+    for name in names:
         if name in mimics:
             raise ModelCheckError(f"{origin}: arm_joints names {name!r}, which mimics {mimics[name].root!r}: name "
                                   f"{mimics[name].root!r} instead (valid: {', '.join(valid)})")
@@ -295,8 +296,9 @@ def overridden(classes: Mapping[str, JointClass], arm_joints: Sequence[str], mim
             raise NameNotFound("arm joint", name, valid, first=valid, where=f"{origin}: arm_joints")
     result = {}
     for name, joint_class in classes.items():
-        if name in arm_joints:
-            rule = "" if joint_class.kind == "arm" else f" (by the rule a {joint_class.kind}: {joint_class.reason})"
+        if name in names:
+            why = joint_class.reason.split("; held at")[0]
+            rule = "" if joint_class.kind == "arm" else f" (by the rule a {joint_class.kind}: {why})"
             result[name] = JointClass("arm", f"named in arm_joints{rule}")
         elif joint_class.kind == "arm":
             value = held_value(limits[name])
