@@ -110,3 +110,30 @@ def test_info_finds_the_packages_of_a_model_in_the_folders_named_by_package_path
     assert "mesh" not in captured.err  # the hull's package:// mesh is found too
     assert main(["info", str(model), "--package-path", str(tmp_path / "absent")]) == 2
     assert "does not exist; package_path names folders" in one_line(capsys)
+
+
+def test_info_groups_the_joints_and_says_why(capsys):
+    assert main(["info", str(ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf")]) == 0
+    out = capsys.readouterr().out
+    titles = [line.split(" (")[0] for line in out.splitlines() if re.match(r"[a-z].* \(\d+\): ", line)]
+    assert titles == ["arm joints", "mimics", "propellers", "sensors", "fixed by range"]
+    assert "arm joints (7): what a user commands" in out and "sensors (6): sensor mounts; frozen" in out
+    assert re.search(r"\n  finger_c +follows 'finger_a' \(composed through finger_b\): q = -0.5 q\(finger_a\) \+ 0.1\n",
+                     out)
+    assert re.search(r"\n  anchor +limits \[0.2, 0.2\]: upper - lower <= 1e-09; held at 0.2\n", out)
+    assert "ee rule     'arm_tool' (named like an end effector: 'tool' or '*_tool') on the arm of joint 'j1'" in out
+    assert "arm DOF 7" in out
+
+
+def test_info_columns_stay_aligned_with_long_joint_names(tmp_path, capsys):
+    long = "a_joint_name_longer_than_the_24_character_column"
+    path = tmp_path / "long.urdf"
+    path.write_text(urdf(root=FLOATING_ROOT).replace('"j1"', f'"{long}"'))
+    assert main(["info", str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    start = lines.index("joints")
+    header, rows = lines[start + 1], lines[start + 2: start + 4]
+    assert [row.split()[0] for row in rows] == ["float", long]
+    assert rows[0].index("FreeFlyer") == rows[1].index("RZ") == header.index("type")  # before: pushed right
+    assert rows[0].rindex("-") == rows[1].index("[-1.0000") == header.index("limits")
+    assert re.search(rf"\n  {long} revolute, limits \[-1, 1\]\n", "\n".join(lines) + "\n")

@@ -7,7 +7,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import shipped
+from conftest import ROOT, shipped
 
 
 @pytest.mark.parametrize("arm_name", ["panda", "ur5", "z1"])
@@ -52,3 +52,22 @@ def test_mount_placement_as_six_numbers_matches_se3():
     b = uvms.model.mount_arm(vehicle, "z1", placement=pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.array(values[:3])))
     q = a.random_configuration(1)
     assert np.allclose(a.fk(q, a.ee_frames[1]).homogeneous, b.fk(q, b.ee_frames[1]).homogeneous, atol=1e-14)
+
+
+IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"
+
+
+@pytest.mark.parametrize("arm_joints", [None, []])  # the vehicle with its arm, and the vehicle alone
+def test_mount_save_load_keeps_the_end_effectors_and_the_arm_joints(arm_joints, tmp_path, rng):
+    vehicle = uvms.load(IDIOMS, arm_joints=arm_joints)  # propellers, sensor mounts, a zero-range joint, mimics
+    robot = uvms.model.mount_arm(vehicle, "z1", placement=[0.2, 0.0, -0.4, np.pi, 0.0, 0.0])
+    expected = ["arm_tool", "arm_gripperMover"] if arm_joints is None else ["arm_gripperMover"]
+    assert robot.ee_frames == expected and robot.ee_reason.count("on the arm of joint") == len(expected)
+    assert robot.joint_classes["thruster_0_joint"].kind == "propeller" and robot.joint_classes["arm_joint1"].kind == "arm"
+    again = uvms.load(robot.save_urdf(tmp_path / "composed.urdf"))
+    assert again.ee_frames == robot.ee_frames and again.arm_joint_names == robot.arm_joint_names
+    assert again.mimic_joint_names == robot.mimic_joint_names and list(again.model.names) == list(robot.model.names)
+    for _ in range(5):
+        q = robot.random_configuration(rng)
+        for frame in [*robot.ee_frames, "thruster_1", "finger_c_link"]:
+            np.testing.assert_allclose(again.fk(q, frame).homogeneous, robot.fk(q, frame).homogeneous, atol=1e-12)

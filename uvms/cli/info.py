@@ -33,33 +33,70 @@ def format_limits(lower: np.ndarray, upper: np.ndarray) -> str:
     return f"[{lower[0]:+.4f}, {upper[0]:+.4f}]"
 
 
+#: The groups of ``uvms info``: joint class -> what the group is.
+JOINT_GROUPS = {
+    "arm": ("arm joints", "what a user commands"),
+    "mimic": ("mimics", "follow an arm joint, no degree of freedom of their own"),
+    "propeller": ("propellers", "carry a thruster; frozen (their spin changes no kinematics)"),
+    "sensor": ("sensors", "sensor mounts; frozen"),
+    "fixed by range": ("fixed by range", "no motion between their limits; frozen"),
+    "frozen": ("frozen", "left out of arm_joints"),
+}
+
+
 def describe(robot: Robot) -> str:
-    """The text of ``uvms info``: joints, DOF split, why the base is what it is, frames, mass, end-effector poses."""
+    """The text of ``uvms info``: joints, DOF split, why the base is what it is, each joint's class and why, frames,
+    mass, end-effector poses and the rule that chose them."""
     lines = [
         f"model       {robot.name}  ({robot.source})",
         f"base        {robot.base_type}: vehicle DOF {robot.n_vehicle}, arm DOF {robot.n_arm} "
         f"(nq {robot.nq}, nv {robot.nv})",
         f"base rule   {robot.base_reason}",
         f"total mass  {robot.total_mass:.3f} kg",
-        "joints",
-        f"  {'name':<24} {'type':<27} {'nq':>2} {'nv':>2}  limits [rad or m]",
+        *joint_table(robot),
+        *joint_groups(robot),
     ]
-    for joint in robot.joints:
-        role = "vehicle" if joint.is_vehicle else "arm"
-        kind = joint.kind.removeprefix("JointModel") + f" ({role})"
-        lines.append(f"  {joint.name:<24} {kind:<27} {joint.nq:>2} {joint.nv:>2}  {format_limits(joint.lower, joint.upper)}")
     body_frames = [f.name for f in robot.model.frames if f.type == pin.FrameType.BODY]
     lines.append(f"frames      {', '.join(body_frames)}")
     q = robot.neutral()
     lines.append("end effectors at the neutral configuration (world frame, m / rad)")
+    width = max([22, *map(len, robot.ee_frames)])
     for frame in robot.ee_frames:
         pose = robot.fk(q, frame)
         rpy = pin.rpy.matrixToRpy(pose.rotation)
-        lines.append(f"  {frame:<22} xyz {np.array2string(pose.translation, precision=4, suppress_small=True)}"
+        lines.append(f"  {frame:<{width}} xyz {np.array2string(pose.translation, precision=4, suppress_small=True)}"
                      f"  rpy {np.array2string(rpy, precision=4, suppress_small=True)}")
+    lines.append(f"ee rule     {robot.ee_reason}")
     lines.append("checks      passed (unit axes, finite numbers, positive masses, inertias and geometry sizes, one tree, "
                  "base)")
     return "\n".join(lines)
+
+
+def joint_table(robot: Robot) -> list[str]:
+    """The joints of the model (vehicle, arm, mimics) with their sizes and limits, columns as wide as the names."""
+    kinds = [joint.kind.removeprefix("JointModel") + (" (vehicle)" if joint.is_vehicle else
+                                                       f" ({robot.joint_classes[joint.name].kind})")
+             for joint in robot.joints]
+    name_width = max([24, *(len(joint.name) for joint in robot.joints)])
+    kind_width = max([27, *map(len, kinds)])
+    lines = ["joints", f"  {'name':<{name_width}} {'type':<{kind_width}} {'nq':>2} {'nv':>2}  limits [rad or m]"]
+    for joint, kind in zip(robot.joints, kinds):
+        lines.append(f"  {joint.name:<{name_width}} {kind:<{kind_width}} {joint.nq:>2} {joint.nv:>2}  "
+                     f"{format_limits(joint.lower, joint.upper)}")
+    return lines
+
+
+def joint_groups(robot: Robot) -> list[str]:
+    """The model file's joints by class (:data:`JOINT_GROUPS`), each with the reason it was classed so."""
+    lines = []
+    width = max([24, *map(len, robot.joint_classes)])
+    for kind, (title, meaning) in JOINT_GROUPS.items():
+        members = [(name, joint_class.reason) for name, joint_class in robot.joint_classes.items()
+                   if joint_class.kind == kind]
+        if members:
+            lines.append(f"{title} ({len(members)}): {meaning}")
+            lines.extend(f"  {name:<{width}} {reason}" for name, reason in members)
+    return lines
 
 
 def command_info(options: argparse.Namespace) -> int:

@@ -50,6 +50,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelCheckError, ModelParseError, UVMSError
+from ..model.joint_classes import is_thruster_plugin
 from ..model.resources import read_yaml
 
 if TYPE_CHECKING:
@@ -231,10 +232,6 @@ def load_thrusters_yaml(path: str | os.PathLike, frames: Sequence[str] | None = 
 
 
 # ------------------------------------------------------------------ uuv_simulator plugin form
-def _is_thruster_plugin(plugin: ET.Element) -> bool:
-    return "uuv_thruster" in plugin.get("filename", "")
-
-
 def _joint_axis(root: ET.Element, joint_name: str, link: str, where: str) -> np.ndarray:
     """The axis (child-link frame) of a URDF joint whose child is ``link``; x when it has no <axis>."""
     for joint in root.findall("joint"):
@@ -260,7 +257,7 @@ def parse_thrusters_urdf(urdf: str, origin: str = "<string>", frames: Sequence[s
         root = ET.fromstring(urdf)
     except ET.ParseError as exc:
         raise ModelParseError(f"{origin}: malformed XML ({exc})") from None
-    plugins = [p for gazebo in root.findall("gazebo") for p in gazebo.findall("plugin") if _is_thruster_plugin(p)]
+    plugins = [p for gazebo in root.findall("gazebo") for p in gazebo.findall("plugin") if is_thruster_plugin(p)]
     if not plugins:
         return None
     items = []

@@ -12,11 +12,12 @@ import numpy as np
 import pinocchio as pin
 
 from . import checks, resources
+from .joint_classes import classify_joints
 from ..robot import urdf_export
 from ..robot.conventions import pose_from_xyzrpy
 from ..errors import FrameNotFound, UVMSError
 from ..robot.robot import Robot
-from ..robot.structure import default_end_effectors
+from ..robot.structure import EE_GIVEN, default_end_effectors
 from .loader import build_model, captured_stderr, read_model_text, warn_missing_meshes
 from .packages import package_index
 
@@ -43,14 +44,17 @@ def mount_arm(
         placement: pose of the arm's root link in ``parent_frame``: a ``pin.SE3`` or
             [x, y, z, roll, pitch, yaw] [m, rad]; default identity.
         prefix: prepended to every link, joint and material name of the arm, so names never clash.
-        ee: end-effector frame(s) of the result (names after prefixing); default: every end
-            effector of the vehicle, then the arm's default one (the arm's first when the vehicle
-            has no arm joints, so the default end effector is the arm's).
+        ee: end-effector frame(s) of the result (names after prefixing); default: the rule of
+            ``uvms.load`` on the composed model (one per arm: the vehicle's arms, then the mounted one), which
+            ``uvms.load`` of the saved URDF gives again; when the vehicle's end effectors were given
+            (``ee=``), those, then the arm's default one (the arm's first when the vehicle has no arm joints).
         args: xacro args of the arm file.
 
     Returns:
         A new Robot, its joints in Pinocchio's depth-first order: mounted on the vehicle's root
         link, the vehicle joint, the vehicle's arm joints, then the mounted arm's.
+        The arm's joints are classified as ``uvms.load`` does (``joint_classes``: propellers, sensors and
+        zero-range joints frozen, mimic chains composed).
         Its ``urdf`` is the vehicle's URDF plus the prefixed links, joints and materials of the arm
         (mesh files by absolute path) and a fixed joint ``<prefix>mount`` at ``placement``;
         ``robot.save_urdf(path)`` writes it, and ``uvms.load`` of that file gives the same links,
@@ -71,8 +75,8 @@ def mount_arm(
     if tree.base_type != "fixed":
         raise UVMSError(f"{origin}: an arm to mount must have a fixed root, but its root joint is {tree.base_type}")
     warn_missing_meshes(robot_element, base_dir, packages, origin)
-    prefixed = prefix_names(robot_element, prefix)
-    arm_model = build_model(prefixed, "fixed", tree, origin)
+    classified = classify_joints(prefix_names(robot_element, prefix), origin, base_dir)
+    arm_model = build_model(classified.urdf, "fixed", tree, origin)
     clashes = sorted(set(vehicle.frame_names) & {f.name for f in arm_model.frames} - {"universe"})
     if clashes:
         raise UVMSError(f"names of the arm clash with the vehicle's: {', '.join(clashes[:5])}; pass another prefix=")
@@ -84,15 +88,17 @@ def mount_arm(
     parent_id = vehicle.frame_id(parent_frame)
     model = pin.appendModel(vehicle.model, arm_model, parent_id, placement)
     model.name = f"{vehicle.name}+{Path(origin).stem}"
-    if ee is None:
-        arm_ees = default_end_effectors(arm_model)
+    if ee is None and vehicle.ee_reason == EE_GIVEN:
+        arm_ees = default_end_effectors(arm_model)[0]
         ee = vehicle.ee_frames + arm_ees if vehicle.n_arm else arm_ees + vehicle.ee_frames
     urdf = None
     if vehicle.urdf is not None:
-        urdf = composed_urdf(vehicle, parent_id, placement, robot_element, base_dir, f"{prefix}mount", packages)
+        arm_element = ET.fromstring(classified.urdf)
+        urdf = composed_urdf(vehicle, parent_id, placement, arm_element, base_dir, f"{prefix}mount", packages)
         check_joint_order(model, urdf, vehicle)
     return Robot(model, ee=ee, name=model.name, source=f"{vehicle.source} + {origin}", urdf=urdf,
-                 base_reason=vehicle.base_reason, packages={**packages, **vehicle.packages})
+                 base_reason=vehicle.base_reason, packages={**packages, **vehicle.packages},
+                 joint_classes={**vehicle.joint_classes, **classified.classes})
 
 
 class JointOrderWarning(UserWarning):

@@ -17,7 +17,7 @@ from xml.parsers.expat import ExpatError
 
 import pinocchio as pin
 
-from . import checks, includes, point_masses, resources, sandbox
+from . import checks, includes, joint_classes, point_masses, resources, sandbox
 from .packages import package_index, unknown_package
 from .base_rule import ADDED_BASE_JOINT, decide_base
 from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
@@ -53,6 +53,7 @@ def load(
     ee: str | Sequence[str] | None = None,
     package_path: Sequence[str | os.PathLike] | None = None,
     trusted: bool | None = None,
+    arm_joints: Sequence[str] | None = None,
 ) -> Robot:
     """Load a UVMS from a ``.xacro`` or ``.urdf`` file, a shipped model name, or URDF text.
 
@@ -78,8 +79,9 @@ def load(
         args: xacro arguments, ``{name: value}`` (numbers or strings); a value used in
             arithmetic must be a number, and a length that makes a geometry size or a mass
             non-positive is refused (the message names the element).
-        ee: end-effector frame name(s); default: frames named ``ee``/``*_ee``,
-            else the last leaf link.
+        ee: end-effector frame name(s); default: one per arm, the frame named like an end effector
+            (``end_effector``, ``tool``, ``tcp``, ``ee`` or ``*_<that>``), else the arm's last leaf link
+            (:func:`uvms.robot.structure.default_end_effectors`; ``robot.ee_reason`` says which rule chose it).
         package_path: folders of ROS packages (each a package, holding ``package.xml``, or a folder searched
             for packages), first in precedence before ``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH`` and the
             model's own workspace (:mod:`uvms.model.packages`). ``$(find pkg)`` and ``package://pkg/...``
@@ -89,15 +91,20 @@ def load(
             process; False in a restricted child process (``uvms.model.sandbox``: no file writes, no
             processes, no network, a timeout). None: trusted for the shipped models only.
             Plain URDF is never executed.
+        arm_joints: the joints that move besides the vehicle; every other joint is frozen (held at 0, or at its
+            limit nearest to 0). None: the rule of :mod:`uvms.model.joint_classes`: propellers (joints carrying
+            a thruster), sensor mounts and zero-range joints are frozen, mimic chains composed, every other joint
+            is an arm joint. ``robot.joint_classes`` holds each joint's class and why.
 
     Returns:
         The Robot.
 
     Raises:
         UVMSError: (a subclass) missing file, malformed XML, xacro error, invalid
-            model values, base mismatch, unknown end-effector frame.
+            model values, base mismatch, unknown end-effector frame, a mimic cycle or a mimic of a missing
+            joint, an ``arm_joints`` entry that is not a joint that can move (the message lists the valid ones).
     """
-    packages = package_index(package_path, model_file(source))
+    packages = package_index(package_path, resources.model_file(source))
     xml, origin, base_dir = read_model_text(source, args, trusted, packages)
     robot_element = checks.parse_urdf(xml, origin)
     try:
@@ -106,22 +113,16 @@ def load(
         raise ModelCheckError(f"{exc}{blamed_args(exc, source, args, trusted, packages)}") from None
     chosen, reason = decide_base(base, tree, origin)
     warn_missing_meshes(robot_element, base_dir, packages, origin)
-    model = build_model(xml, chosen, tree, origin)
+    classified = joint_classes.classify_joints(xml, origin, base_dir, arm_joints)
+    model = build_model(classified.urdf, chosen, tree, origin)
     point_masses.check_mass_matrix(model, tree.point_masses, origin)
     if model.nv == 0:  # nothing to move, and Pinocchio's Jacobians crash on an empty velocity space
         raise ModelCheckError(f"{origin}: the model has no degree of freedom (fixed base, only fixed joints); "
                               "a UVMS needs a floating/planar base or a moving joint")
     if base is None and chosen != tree.base_type:
         warnings.warn(f"{origin}: the base is {reason}", BaseGuessWarning, stacklevel=2)
-    return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=xml, base_reason=reason,
-                 packages=packages)
-
-
-def model_file(source: str | os.PathLike) -> Path | None:
-    """The file of a model source (a path or a shipped model name; else ModelFileNotFound), None for URDF text."""
-    if isinstance(source, str) and source.lstrip().startswith("<"):
-        return None
-    return resources.resolve_model_path(source)
+    return Robot(model, ee=ee, name=robot_element.get("name"), source=origin, urdf=classified.urdf, base_reason=reason,
+                 packages=packages, joint_classes=classified.classes)
 
 
 def read_model_text(
@@ -139,7 +140,7 @@ def read_model_text(
     Returns:
         (URDF text, origin for messages, folder of the file or None for a string).
     """
-    path = model_file(source)
+    path = resources.model_file(source)
     if path is None:
         if args:
             raise UVMSError("xacro args were given with a URDF string; args apply to .xacro files only")

@@ -76,6 +76,13 @@ def resolve_model_path(name_or_path: str | os.PathLike) -> Path:
     )
 
 
+def model_file(source: str | os.PathLike) -> Path | None:
+    """The file of a model source (a path or a shipped model name; else ModelFileNotFound), None for URDF text."""
+    if isinstance(source, str) and source.lstrip().startswith("<"):
+        return None
+    return resolve_model_path(source)
+
+
 @functools.lru_cache(maxsize=1)
 def example_robot_data_dir() -> Path:
     """The ``robots/`` folder installed by the ``example-robot-data`` wheel (data only).

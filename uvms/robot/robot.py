@@ -17,7 +17,8 @@ from ..io import outputs
 from ..numerics.validate import finite_array
 from . import kinematics, urdf_export
 from .bases import BASE_TYPES, BaseType
-from .structure import JointInfo, base_type_of, default_end_effectors
+from .structure import (EE_GIVEN, JointClass, JointInfo, base_type_of, default_end_effectors, joint_class_table,
+                        joint_infos, unit_norm_slices)
 from .vehicle_pose import VehicleAccessors
 
 #: Default task axes by base type (the facts live in `uvms.robot.bases`).
@@ -38,11 +39,16 @@ class Robot(VehicleAccessors):
             "floating", "planar" or "fixed".
         base_reason: why the base is what it is, one line (`uvms.load`'s rule), e.g. "floating (added: the
             root link 'hull' carries 1810 kg; base='fixed' to hold it)".
-        ee_frames: names of the end-effector frames; the first is the default.
+        ee_frames: names of the end-effector frames; the first is the default. ee_reason: the rule that chose
+            them, one line (:func:`.structure.default_end_effectors`), or ``EE_GIVEN``.
+        joint_classes: {joint name: :class:`.structure.JointClass`} (read-only) of every non-vehicle joint of the
+            model file that is not fixed there: arm joints, mimics, and the joints uvms froze (propellers,
+            sensors, fixed by range, left out of ``arm_joints=``), each with the reason (``uvms.load``).
         name: model name; source: file it came from (or "<string>").
-        urdf: the URDF text of the model (composed by `uvms.model.mount_arm` for a mounted arm; None when the
-            Robot was built from a Pinocchio model alone). A base joint that uvms added is not in it:
-            :meth:`save_urdf` writes it. packages: the ROS packages its meshes resolve through, {name: folder}.
+        urdf: the URDF text Pinocchio built the model from: the file's, with the frozen joints written as fixed
+            joints and mimic chains composed (`uvms.load`), or composed by `uvms.model.mount_arm` for a mounted
+            arm; None when the Robot was built from a Pinocchio model alone. A base joint that uvms added is not
+            in it: :meth:`save_urdf` writes it. packages: the ROS packages its meshes resolve through, {name: folder}.
     """
 
     def __init__(
@@ -55,6 +61,7 @@ class Robot(VehicleAccessors):
         urdf: str | None = None,
         base_reason: str | None = None,
         packages: Mapping[str, Path] | None = None,
+        joint_classes: Mapping[str, JointClass] | None = None,
     ) -> None:
         self.model = model
         self.data = model.createData()
@@ -70,11 +77,14 @@ class Robot(VehicleAccessors):
         self.n_vehicle = self.base.nv
         self.nq_vehicle = self.base.nq
         self.frame_names = [frame.name for frame in model.frames]
-        requested = [ee] if isinstance(ee, str) else list(ee) if ee is not None else default_end_effectors(model)
-        self.ee_frames = requested
-        self.ee_frame_ids = [self.frame_id(frame) for frame in requested]
-        self.joints = self._collect_joints()
-        self._unit_slices = self._unit_norm_slices()
+        if ee is None:
+            self.ee_frames, self.ee_reason = default_end_effectors(model)
+        else:
+            self.ee_frames, self.ee_reason = [ee] if isinstance(ee, str) else list(ee), EE_GIVEN
+        self.ee_frame_ids = [self.frame_id(frame) for frame in self.ee_frames]
+        self.joint_classes = joint_class_table(model, joint_classes)
+        self.joints = joint_infos(model)
+        self._unit_slices = unit_norm_slices(self.joints)
         # where the arm's values sit in q when no arm joint is continuous (angle = atan2 of a (cos, sin) pair)
         self._arm_q_index = (np.concatenate([np.arange(j.idx_q, j.idx_q + j.nq) for j in self.arm_joints]).astype(int)
                              if all(j.nq == j.nv for j in self.arm_joints) and self.arm_joints else None)
@@ -95,40 +105,20 @@ class Robot(VehicleAccessors):
         """Number of arm (non-vehicle) velocity entries."""
         return self.model.nv - self.n_vehicle
 
-    def _collect_joints(self) -> list[JointInfo]:
-        """Every joint but Pinocchio's universe, vehicle first."""
-        infos = []
-        for index in range(1, self.model.njoints):
-            joint = self.model.joints[index]
-            span = slice(joint.idx_q, joint.idx_q + joint.nq)
-            infos.append(JointInfo(
-                name=self.model.names[index], kind=joint.shortname(), nq=joint.nq, nv=joint.nv,
-                idx_q=joint.idx_q, idx_v=joint.idx_v,
-                lower=self.model.lowerPositionLimit[span].copy(), upper=self.model.upperPositionLimit[span].copy(),
-                is_vehicle=(index == 1 and self.base_type != "fixed"),
-            ))
-        return infos
-
-    def _unit_norm_slices(self) -> list[tuple[str, slice]]:
-        """Parts of q that must have unit norm: quaternions and (cos, sin) pairs."""
-        slices = []
-        for joint in self.joints:
-            end = joint.idx_q + joint.nq
-            if joint.kind in ("JointModelFreeFlyer", "JointModelSpherical"):
-                slices.append((joint.name, slice(end - 4, end)))
-            elif joint.nq == joint.nv + 1:  # planar and continuous joints hold (cos, sin)
-                slices.append((joint.name, slice(end - 2, end)))
-        return slices
-
     @property
     def arm_joints(self) -> list[JointInfo]:
-        """The joints that are not the vehicle's."""
-        return [joint for joint in self.joints if not joint.is_vehicle]
+        """The joints a user commands: not the vehicle's, not mimics (which have no entry in q and v)."""
+        return [joint for joint in self.joints if not joint.is_vehicle and joint.nv > 0]
 
     @property
     def arm_joint_names(self) -> list[str]:
-        """Names of the arm joints, in the order of q and v."""
+        """Names of the arm joints, in the order of q and v (n_arm of them: every arm joint has one velocity)."""
         return [joint.name for joint in self.arm_joints]
+
+    @property
+    def mimic_joint_names(self) -> list[str]:
+        """Names of the mimic joints of the model: they follow an arm joint (``joint_classes`` says which)."""
+        return [joint.name for joint in self.joints if not joint.is_vehicle and joint.nv == 0]
 
     @property
     def arm_limits(self) -> tuple[np.ndarray, np.ndarray]:

@@ -12,7 +12,6 @@ from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
 from ..dynamics.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
-from ..model.loader import load
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, CLIKSolver, Solver, VariableDamping, initial_configuration
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
@@ -21,6 +20,7 @@ from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, R
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .inequalities import ScenarioInequalities, build_inequalities
 from .plant import check_kinematic_plant, make_plant
+from .record import scenario_model
 from .schema import NUMBER, changed_keys
 from .tracking import TrackingController
 
@@ -53,8 +53,7 @@ class Setup:
 def build(scenario: dict) -> Setup:
     """Model, task, initial configuration, trajectory and controller of a scenario."""
     model = scenario["model"]
-    robot = load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None,
-                 package_path=model["package_path"])
+    robot = scenario_model(model)
     if scenario["phases"]:
         if scenario["inequalities"]:
             raise ScenarioError("[[inequalities]] need a [task] and a [trajectory]; a sequence scenario ([[phases]]) "
@@ -120,9 +119,8 @@ def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.
     """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start."""
     initial = scenario["initial"]
     base = initial["base"] or None
-    arm = initial["arm"] or None
     try:
-        q_given = robot.configuration(base=np.array(base) if base else None, arm=np.array(arm) if arm else None)
+        q_given = robot.configuration(base=np.array(base) if base else None, arm=initial_arm(robot, initial["arm"]))
     except UVMSError as exc:
         raise ScenarioError(f"initial.base/initial.arm: {exc}") from None
     fixed = initial["fixed_base"]
@@ -149,6 +147,29 @@ def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.
         raise ScenarioError(f"no initial configuration reaches the trajectory start{held} "
                             f"(residual {result.residual:.3g})")
     return result.q, result.residual
+
+
+def initial_arm(robot: Robot, arm: list | dict) -> np.ndarray | None:
+    """initial.arm as arm joint values (n_arm,) [rad or m]: the list as given, or a table {joint = value} with the
+    joints left out at 0 (their neutral value); None when empty.
+
+    Raises:
+        ScenarioError: a table naming a joint that is not an arm joint (the valid ones listed), or a value that is
+            not a number.
+    """
+    if not arm:
+        return None
+    if isinstance(arm, list):
+        return np.array(arm, dtype=float)
+    names = robot.arm_joint_names
+    values = np.zeros(robot.n_arm)
+    for joint, value in arm.items():
+        if joint not in names:
+            raise ScenarioError(f"initial.arm names {joint!r}, which is not an arm joint; valid: {', '.join(names)}")
+        if isinstance(value, bool) or not isinstance(value, NUMBER):
+            raise ScenarioError(f"initial.arm.{joint} must be a number [rad or m], got {value!r}")
+        values[names.index(joint)] = value
+    return values
 
 
 def vector(values: list[float], size: int, name: str) -> np.ndarray:

@@ -9,6 +9,7 @@ else::
       "base": "planar",                                               # the base the run had
       "ee": ["ee"],                                                   # its end-effector frames
       "package_path": ["/home/me/ws/src"],                            # its package folders (model.package_path)
+      "arm_joints": null,                                             # [model] arm_joints (null: the rule)
       "scenario": "hoang2011_w1",
       "robot": "hoang2011_uvms", "nq": 7, "nv": 6,
       "urdf_sha256": "3f1c..."                                        # of the expanded URDF (None if composed)
@@ -26,6 +27,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -57,6 +59,7 @@ def model_record(scenario: dict, robot: Robot) -> dict:
         "base": robot.base_type,
         "ee": list(robot.ee_frames),
         "package_path": list(scenario["model"]["package_path"]),
+        "arm_joints": scenario["model"]["arm_joints"],
         "scenario": scenario["scenario"]["name"],
         "robot": robot.name,
         "nq": robot.nq,
@@ -75,6 +78,7 @@ class RunRecord:
     base: str = "floating"
     ee: list[str] = field(default_factory=list)
     package_path: list[str] = field(default_factory=list)
+    arm_joints: list[str] | None = None  # [model] arm_joints (None: uvms.load's rule)
     scenario: str = ""
     urdf_sha256: str | None = None
 
@@ -87,7 +91,8 @@ class RunRecord:
         """
         try:
             return load(self.source, base=self.base, args=self.args or None, ee=self.ee or None,
-                        package_path=[*package_path, *self.package_path])
+                        package_path=[*package_path, *self.package_path],
+                        arm_joints=self.arm_joints)
         except UVMSError as exc:
             raise RunRecordError(f"the model recorded by {self.folder / 'metrics.json'} does not load: {exc}") from None
 
@@ -134,9 +139,13 @@ def read_run_record(folder: str | os.PathLike) -> RunRecord | None:
     package_path = entry.get("package_path", [])
     if not isinstance(package_path, list) or not all(isinstance(folder, str) and folder for folder in package_path):
         raise bad("package_path must be a list of folders")
+    arm_joints = entry.get("arm_joints")
+    if arm_joints is not None and (not isinstance(arm_joints, list) or not all(isinstance(n, str) for n in arm_joints)):
+        raise bad("arm_joints must be a list of joint names or null")
     digest = entry.get("urdf_sha256")
     scenario = entry.get("scenario", "")
     return RunRecord(folder=folder, source=source, args=dict(args), base=base, ee=list(ee), package_path=package_path,
+                     arm_joints=arm_joints,
                      scenario=scenario if isinstance(scenario, str) else "",
                      urdf_sha256=digest if isinstance(digest, str) else None)
 
@@ -177,18 +186,24 @@ def check_given_model(record: RunRecord, recorded: Robot, given: Robot, given_te
 
 
 
+def scenario_model(section: Mapping[str, Any], args: Mapping[str, object] | None = None, base: str | None = None,
+                   package_path: Sequence[str | os.PathLike] = ()) -> Robot:
+    """The robot of a scenario's checked ``[model]`` section (the one way a scenario loads its model), with
+    ``args`` over its xacro args, ``base`` over its base and the folders of ``package_path`` before its own."""
+    return load(section["path"], base=base or section["base"] or None, args={**section["args"], **(args or {})} or None,
+                ee=section["ee"] or None, package_path=[*package_path, *section["package_path"]],
+                arm_joints=section["arm_joints"])
+
+
 def named_model(model: str, args: Mapping[str, object] | None = None, base: str | None = None,
                 package_path: Sequence[str | os.PathLike] = ()) -> Robot:
     """A model named on a command line: a model file or shipped name, or the ``[model]`` of a scenario ``.toml``
-    (or shipped scenario name ending in ``.toml``), with ``args`` over its xacro args, ``base`` over its base and
-    the folders of ``package_path`` before its own."""
+    (or shipped scenario name ending in ``.toml``): :func:`scenario_model` with these overrides."""
     args = dict(args or {})
     if str(model).endswith(".toml"):
         from .schema import read_scenario
 
-        section = read_scenario(model)["model"]
-        return load(section["path"], base=base or section["base"] or None, args={**section["args"], **args},
-                    ee=section["ee"] or None, package_path=[*package_path, *section["package_path"]])
+        return scenario_model(read_scenario(model)["model"], args, base, package_path)
     return load(model, base=base, args=args, package_path=package_path)
 
 
@@ -220,7 +235,8 @@ def replay_model(folder: str | os.PathLike, model: str | None = None, args: Mapp
                           *([f"--base {base}"] if base else [])])
         given = (named_model(model, args, base, package_path) if model is not None else
                  load(record.source, base=base or record.base, args={**record.args, **(args or {})} or None,
-                      ee=record.ee or None, package_path=[*package_path, *record.package_path]))
+                      ee=record.ee or None, package_path=[*package_path, *record.package_path],
+                      arm_joints=record.arm_joints))
         check_given_model(record, recorded, given, f"the model given ({named})")
     note = None
     if record.changed_since(recorded):

@@ -83,6 +83,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "ee": (str, "", None),
         "args": (dict, {}, None),
         "package_path": (list, [], None),  # folders of ROS packages ($(find), package://), from the scenario's folder
+        "arm_joints": (list, None, None),  # names of the joints that move, others frozen; absent: uvms.load's rule
     },
     "task": {
         "frame": (str, "", None),
@@ -132,7 +133,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     "initial": {
         "method": (str, "given", ("given", "optimize")),
         "base": (NUMBERS, [], None),
-        "arm": (NUMBERS, [], None),
+        "arm": ((list, dict), [], None),  # [rad or m] n_arm numbers, or {joint = value} (others at 0, neutral)
         "fixed_base": (list, [], None),
     },
     "simulation": {

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..io import outputs
 from ..errors import SweepError
-from ..model.loader import load
+from .record import scenario_model
 from .resources import resolve_scenario_path
 from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
 
@@ -278,9 +278,7 @@ def sweep(
     assignments = [[*overrides, *(f"{key}={toml_literal(v)}" for key, v in zip(keys, point))] for point in points]
     checked, models = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
-        model = read_scenario(scenario, assignments[0])["model"]
-        load(model["path"], base=model["base"] or None, args=model["args"] or None, ee=model["ee"] or None,
-             package_path=model["package_path"])
+        scenario_model(read_scenario(scenario, assignments[0])["model"])
     given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
     out = given.resolve()
     width = len(str(len(points) - 1))

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -168,7 +168,7 @@ def hull_shapes(robot: Robot, links: Sequence[str] | None = None, element: str =
         for name in links:
             placement = robot.model.frames[robot.model.getFrameId(name, pin.FrameType.BODY)].placement
             for item in elements[name].findall(kind):
-                shape = _urdf_shape(name, item, placement, mesh_folder(robot))
+                shape = _urdf_shape(name, item, placement, mesh_folder(robot), robot.packages)
                 if shape is not None:
                     shapes.append(shape)
         if shapes:
@@ -183,7 +183,8 @@ def mesh_folder(robot: Robot) -> Path | None:
     return source.parent if source is not None and source.is_file() else None
 
 
-def _urdf_shape(link: str, item: ET.Element, placement: pin.SE3, folder: Path | None = None) -> HullShape | None:
+def _urdf_shape(link: str, item: ET.Element, placement: pin.SE3, folder: Path | None = None,
+                packages: Mapping[str, Path] | None = None) -> HullShape | None:
     """The solid of one URDF <collision>/<visual> element, in the frame of the vehicle joint (None: no solid).
 
     A mesh becomes the convex hull of its vertices (coal reads STL, DAE, OBJ...), with a warning when its file
@@ -213,7 +214,7 @@ def _urdf_shape(link: str, item: ET.Element, placement: pin.SE3, folder: Path | 
         size = numbers(solid, "radius", "nan")
     elif solid.tag == "mesh":
         scale = numbers(solid, "scale", "1 1 1")
-        vertices = mesh_vertices(link, solid.get("filename", ""), scale, folder)
+        vertices = mesh_vertices(link, solid.get("filename", ""), scale, folder, packages or {})
         if vertices is None:
             return None
         return HullShape(link, "convex", np.array(pose.rotation), np.array(pose.translation), vertices=vertices)
@@ -224,12 +225,13 @@ def _urdf_shape(link: str, item: ET.Element, placement: pin.SE3, folder: Path | 
     return HullShape(link, solid.tag, np.array(pose.rotation), np.array(pose.translation), size)
 
 
-def mesh_vertices(link: str, uri: str, scale: np.ndarray, folder: Path | None) -> np.ndarray | None:
+def mesh_vertices(link: str, uri: str, scale: np.ndarray, folder: Path | None,
+                  packages: Mapping[str, Path]) -> np.ndarray | None:
     """The vertices (K, 3) [m] of a URDF mesh, scaled, in the mesh's frame; None (with a warning) when its file
-    cannot be found (``package://`` through the package search roots) or read."""
+    cannot be found (``package://`` through the robot's ``packages``) or read."""
     import coal
 
-    path = resources.resolve_uri(uri, folder, resources.package_search_roots())
+    path = resources.resolve_uri(uri, folder, packages)
     if path is None or scale.shape != (3,):
         warnings.warn(f"hull of link {link!r}: mesh {uri!r} not found (or its scale is not 3 numbers); it is not "
                       "used", stacklevel=4)
