@@ -212,7 +212,7 @@ def test_plugin_joint_axis_gives_the_thrust_direction(box):
                              box.frame_names)
 
 
-# ------------------------------------------------------------------ uuv_simulator's form: plugins completed per thruster
+# ------------------------------------------------------------------ uuv_simulator's plugins, completed per thruster
 FOUR = Path(__file__).resolve().parents[1] / "fixtures" / "uuv" / "four_thrusters.urdf"
 #: B of four_thrusters.urdf by hand: column [d; p x d] of a thruster at p pushing along d (base frame).
 FOUR_MATRIX = np.array([
