@@ -296,6 +296,12 @@ def test_a_bad_completion_is_refused_naming_the_file(tmp_path, entry, message):
     assert str(tmp_path) in str(error.value)
 
 
+def test_a_bad_file_default_in_a_completion_is_refused_naming_the_file(tmp_path):
+    robot = four_thrusters(tmp_path, "max_forward: -1\n")
+    with pytest.raises(ModelCheckError, match=r"thrusters.yaml: max_forward must be > 0, got -1"):
+        thrusters_of(robot)
+
+
 def test_a_propeller_joint_must_be_frozen_and_the_thrust_acts_at_the_joints_zero(tmp_path):
     """uuv_simulator writes the propeller joint continuous. Frozen by the loader, its link is fixed to the vehicle
     at the joint's zero and B is the hand-derived one; not frozen, the thruster rides an arm joint and is refused

@@ -168,13 +168,13 @@ def _unit(direction: np.ndarray, where: str) -> np.ndarray:
     return direction / norm
 
 
-def _check_frame(name: str, valid: Sequence[str] | None, where: str, kind: str = "frame") -> None:
-    """ModelCheckError for a frame (or joint) the model does not have, with the close names (difflib)."""
+def _check_frame(name: str, valid: Sequence[str] | None, where: str) -> None:
+    """ModelCheckError for a frame the model does not have, with the close names (difflib)."""
     if valid is None or name in valid:
         return
     close = difflib.get_close_matches(name, list(valid), n=5, cutoff=0.4)
-    hint = f"close names: {', '.join(close)}" if close else f"valid {kind}s: {', '.join(list(valid)[:20])}"
-    raise ModelCheckError(f"{where}: unknown {kind} {name!r}; {hint}; {VALID_FORM}")
+    hint = f"close names: {', '.join(close)}" if close else f"valid frames: {', '.join(list(valid)[:20])}"
+    raise fail(where, f"unknown frame {name!r}; {hint}")
 
 
 def thruster_from_values(name: str, values: Mapping[str, object], defaults: Mapping[str, object],
@@ -201,7 +201,7 @@ def thruster_from_values(name: str, values: Mapping[str, object], defaults: Mapp
         direction = _unit(_vector(values["direction"], "direction", where), where)
     else:
         direction = pin.rpy.rpyToMatrix(*_vector(values.get("rpy", [0.0, 0.0, 0.0]), "rpy", where))[:, 0]
-    for key in ("max_forward", "max_reverse", "time_constant"):
+    for key in LIMIT_KEYS:
         if key not in merged:
             raise fail(where, f"{key} is missing")
     return Thruster(name=str(name), parent=parent, position=position, direction=direction,
@@ -248,6 +248,8 @@ def complete_plugin_thrusters(plugins: Sequence[PluginThruster], origin: str, fr
     """
     defaults, entries = read_thrusters_document(completion, entries_required=False) if completion else ({}, {})
     names = [plugin.name for plugin in plugins]
+    for key, value in defaults.items():  # values checked where the message can name the YAML
+        _number(value, key, str(completion), positive=key != "max_reverse")
     for name, entry in entries.items():
         where = f"{completion}: thruster {name!r}"
         if name not in names:
@@ -257,7 +259,7 @@ def complete_plugin_thrusters(plugins: Sequence[PluginThruster], origin: str, fr
         if posed:
             raise fail(where, f"it completes the thruster plugin {name!r}, whose link gives the pose; give only "
                                f"{', '.join(LIMIT_KEYS)} (not {', '.join(posed)})")
-        for key, value in entry.items():  # checked here, where the message can name the YAML
+        for key, value in entry.items():
             _number(value, key, where, positive=key != "max_reverse")
     items, defaulted = [], {}
     for plugin in plugins:
@@ -266,10 +268,8 @@ def complete_plugin_thrusters(plugins: Sequence[PluginThruster], origin: str, fr
         if plugin.direction is not None:
             values["direction"] = plugin.direction.tolist()
         for key in LIMIT_KEYS:
-            for source in (entries.get(plugin.name, {}), plugin.given, defaults, DEFAULT_VALUES):
-                if key in source:
-                    values[key] = source[key]
-                    break
+            source = next(s for s in (entries.get(plugin.name, {}), plugin.given, defaults, DEFAULT_VALUES) if key in s)
+            values[key] = source[key]
             if source is DEFAULT_VALUES:
                 defaulted.setdefault(key, []).append(plugin.name)
         items.append(thruster_from_values(plugin.name, values, {}, frames, where))
