@@ -58,7 +58,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelCheckError, ModelParseError, UVMSError
-from .thruster_sources import (LIMIT_KEYS, THRUSTER_KEYS, VALID_FORM, PluginThruster, fail,
+from .thruster_sources import (LIMIT_KEYS, THRUSTER_KEYS, PluginThruster, fail,
                                read_thruster_plugins, read_thrusters_document)
 
 if TYPE_CHECKING:
