@@ -268,7 +268,7 @@ def test_neutrally_buoyant_takes_the_volume_from_the_link_mass():
     ({"added": diagonal_text([1, 1, -1, 1, 1, 1])}, "positive semi-definite"),
     ({"volume": "-0.1"}, "volume must be >= 0"),
     ({"volume": "nan"}, "non-finite"),
-    ({"kind": "sphere"}, "valid: fossen"),
+    ({"kind": "ellipsoid"}, "valid: fossen, sphere, cylinder, spheroid, box"),
 ])
 def test_bad_hydrodynamic_values_are_refused(change, message):
     with pytest.raises(ModelCheckError, match=message) as error:

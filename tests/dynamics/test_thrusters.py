@@ -12,7 +12,8 @@ from conftest import THRUSTER_BOX
 from uvms.dynamics.actuated import ActuatedCommand, ActuatedPlant
 from uvms.dynamics.hydrodynamics import HydroParameters
 from uvms.dynamics.plant import Plant
-from uvms.dynamics.thrusters import allocation_matrix, load_thrusters_yaml, parse_thrusters_urdf, thrusters_of
+from uvms.dynamics.thrusters import (ThrusterDefaultWarning, allocation_matrix, load_thrusters_yaml,
+                                     parse_thrusters_urdf, thruster_rows, thrusters_of)
 from uvms.errors import ModelCheckError
 from uvms.sim import simulate
 
@@ -111,12 +112,29 @@ def test_bad_plugin_thrusters(box):
     urdf = THRUSTER_BOX.read_text()
     with pytest.raises(ModelCheckError, match="unknown frame 'thrster_1'; close names: thruster_1"):
         parse_thrusters_urdf(urdf.replace("<linkName>thruster_1<", "<linkName>thrster_1<"), "box", box.frame_names)
-    with pytest.raises(ModelCheckError, match="thrustMin.*thrustMax.*needed"):
-        parse_thrusters_urdf(urdf.replace("<thrustMin>-40</thrustMin>", "", 1), "box", box.frame_names)
-    with pytest.raises(ModelCheckError, match="'ZeroOrder' is not supported.*FirstOrder"):
-        parse_thrusters_urdf(urdf.replace("FirstOrder", "ZeroOrder", 1), "box", box.frame_names)
-    with pytest.raises(ModelCheckError, match="-thrustMin must be >= 0"):
+    with pytest.raises(ModelCheckError, match="thruster plugin 'thruster_1': its lowest thrust is 5 N; it must be "
+                                              "<= 0 N"):
         parse_thrusters_urdf(urdf.replace("<thrustMin>-40<", "<thrustMin>5<", 1), "box", box.frame_names)
+    with pytest.raises(ModelCheckError, match=r"thrustMin \(60 N\) must be below thrustMax \(50 N\)"):
+        parse_thrusters_urdf(urdf.replace("<thrustMin>-40<", "<thrustMin>60<", 1), "box", box.frame_names)
+    with pytest.raises(ModelCheckError, match="<thrustMax> must be a number, got 'lots'"):
+        parse_thrusters_urdf(urdf.replace("<thrustMax>50<", "<thrustMax>lots<", 1), "box", box.frame_names)
+
+
+def test_a_missing_limit_or_a_zero_order_dynamics_takes_the_default_with_one_warning(box):
+    """Without thrustMin the plugin leaves the reverse thrust unbounded (uuv_simulator's default), and ZeroOrder (no
+    lag) is no time constant: both take uvms's RexROV defaults, named in one warning; the rest stays the plugin's."""
+    urdf = THRUSTER_BOX.read_text().replace("<thrustMin>-40</thrustMin>", "", 1).replace(
+        "<type>FirstOrder</type><timeConstant>0.2</timeConstant>", "<type>ZeroOrder</type>", 1)
+    with pytest.warns(ThrusterDefaultWarning) as caught:
+        thrusters = parse_thrusters_urdf(urdf, "box", box.frame_names)
+    assert len(caught) == 1
+    assert ("box: uvms's default thruster values for what neither the thruster plugins nor a thrusters.yaml beside "
+            "the model give: max_reverse = 2000 N for thruster_1; time_constant = 0.05 s for thruster_5.") \
+        in str(caught[0].message)
+    np.testing.assert_array_equal(thrusters.lower, [-2000.0] + [-40.0] * 7)
+    np.testing.assert_array_equal(thrusters.upper, 50.0)
+    np.testing.assert_array_equal(thrusters.time_constants, [0.1] * 4 + [0.05, 0.2, 0.2, 0.2])
 
 
 def test_thruster_on_an_arm_link_is_refused(bluerov, tmp_path):
@@ -192,3 +210,125 @@ def test_plugin_joint_axis_gives_the_thrust_direction(box):
     with pytest.raises(ModelCheckError, match="jointName 'thruster_2_joint' does not carry linkName 'thruster_1'"):
         parse_thrusters_urdf(urdf.replace("<jointName>thruster_1_joint<", "<jointName>thruster_2_joint<"), "box",
                              box.frame_names)
+
+
+# ------------------------------------------------------------------ uuv_simulator's plugins, completed per thruster
+FOUR = Path(__file__).resolve().parents[1] / "fixtures" / "uuv" / "four_thrusters.urdf"
+#: B of four_thrusters.urdf by hand: column [d; p x d] of a thruster at p pushing along d (base frame).
+FOUR_MATRIX = np.array([
+    # +x at (0.5, 0.3, 0.1), +y at (0.5, -0.3, 0.1), +z at (-0.4, 0, 0.2), -x at (-0.4, 0.2, -0.1)
+    [1, 0, 0, -1],
+    [0, 1, 0, 0],
+    [0, 0, 1, 0],
+    [0, -0.1, 0, 0],
+    [0.1, 0, 0.4, 0.1],
+    [-0.3, 0.5, 0, 0.2],
+])
+
+
+def four_thrusters(folder: Path, yaml: str | None = None, urdf: str | None = None) -> uvms.Robot:
+    """The fixture copied into ``folder`` (with a thrusters.yaml beside it when given), loaded."""
+    (folder / "rov.urdf").write_text(FOUR.read_text() if urdf is None else urdf)
+    if yaml is not None:
+        (folder / "thrusters.yaml").write_text(yaml)
+    with pytest.warns(uvms.model.PointMassWarning):
+        return uvms.load(folder / "rov.urdf")
+
+
+def test_uuv_plugins_without_limits_take_the_defaults_and_give_the_hand_derived_matrix(tmp_path):
+    robot = four_thrusters(tmp_path)
+    assert robot.n_arm == 0  # the propeller joints are written fixed here
+    with pytest.warns(ThrusterDefaultWarning, match="max_forward = 2000 N for thruster_0, thruster_1, thruster_2; "
+                      "max_reverse = 2000 N for thruster_0, thruster_1, thruster_2, thruster_3; time_constant = "
+                      "0.05 s for thruster_2") as caught:
+        thrusters = thrusters_of(robot)
+    assert len(caught) == 1
+    np.testing.assert_allclose(allocation_matrix(robot, thrusters), FOUR_MATRIX, atol=1e-12)
+    np.testing.assert_array_equal(thrusters.upper, [2000, 2000, 2000, 300])  # thruster 3's plugin gives 300 N
+    np.testing.assert_array_equal(thrusters.lower, -2000.0)
+    np.testing.assert_array_equal(thrusters.time_constants, [0.1, 0.2, 0.05, 0.05])  # 2 is ZeroOrder
+
+
+def test_a_yaml_beside_the_plugins_completes_them_per_thruster_and_wins_over_them(tmp_path, recwarn):
+    yaml = ("max_forward: 150\nmax_reverse: 120\ntime_constant: 0.4\nthrusters:\n"
+            "  thruster_0: {max_forward: 100, max_reverse: 80}\n"
+            "  thruster_2: {time_constant: 0.3}\n"
+            "  thruster_3: {max_forward: 250}\n")  # the plugin says 300: the user's YAML wins
+    robot = four_thrusters(tmp_path, yaml)
+    thrusters = thrusters_of(robot)
+    np.testing.assert_array_equal(thrusters.upper, [100, 150, 150, 250])
+    np.testing.assert_array_equal(thrusters.lower, [-80, -120, -120, -120])
+    np.testing.assert_array_equal(thrusters.time_constants, [0.1, 0.2, 0.3, 0.05])  # file default 0.4: unused
+    assert thrusters.source == f"{tmp_path / 'rov.urdf'} + {tmp_path / 'thrusters.yaml'}"
+    np.testing.assert_allclose(allocation_matrix(robot, thrusters), FOUR_MATRIX, atol=1e-12)
+    assert not [w for w in recwarn if issubclass(w.category, ThrusterDefaultWarning)]
+
+
+def test_file_defaults_alone_complete_every_plugin_but_not_what_a_plugin_gives(tmp_path):
+    robot = four_thrusters(tmp_path, "max_forward: 150\nmax_reverse: 120\ntime_constant: 0.4\n")
+    thrusters = thrusters_of(robot)
+    np.testing.assert_array_equal(thrusters.upper, [150, 150, 150, 300])
+    np.testing.assert_array_equal(thrusters.lower, -120.0)
+    np.testing.assert_array_equal(thrusters.time_constants, [0.1, 0.2, 0.4, 0.05])
+    other = tmp_path / "elsewhere.yaml"
+    other.write_text("thrusters:\n  thruster_1: {max_reverse: 7}\n")
+    with pytest.warns(ThrusterDefaultWarning, match=f"nor {other} give: max_forward = 2000 N for thruster_0, "
+                                                    "thruster_1, thruster_2; max_reverse = 2000 N for thruster_0, "
+                                                    "thruster_2, thruster_3;"):
+        chosen = thrusters_of(robot, other)  # path= replaces the YAML beside the model
+    np.testing.assert_array_equal(chosen.lower, [-2000, -7, -2000, -2000])
+
+
+@pytest.mark.parametrize("entry, message", [
+    ("thruster_O: {max_forward: 5}", r"thruster 'thruster_O': no thruster plugin of the model has this name; an "
+                                     r"entry completes the plugin of the same name: thruster_0, thruster_1, "
+                                     r"thruster_2, thruster_3$"),
+    ("thruster_1: {parent: rov/base_link, max_forward: 5}", r"thruster 'thruster_1': it completes the thruster "
+     r"plugin 'thruster_1', whose link gives the pose; give only max_forward, max_reverse, time_constant \(not "
+     r"parent\)"),
+    ("thruster_1: {max_reverse: -3}", r"thrusters.yaml: thruster 'thruster_1': max_reverse must be >= 0, got -3"),
+    ("thruster_1: 12", r"thruster 'thruster_1': expected a mapping, got 12"),
+])
+def test_a_bad_completion_is_refused_naming_the_file(tmp_path, entry, message):
+    robot = four_thrusters(tmp_path, f"max_forward: 1\nmax_reverse: 1\nthrusters:\n  {entry}\n")
+    with pytest.raises(ModelCheckError, match=message) as error:
+        thrusters_of(robot)
+    assert str(tmp_path) in str(error.value)
+
+
+def test_a_bad_file_default_in_a_completion_is_refused_naming_the_file(tmp_path):
+    robot = four_thrusters(tmp_path, "max_forward: -1\n")
+    with pytest.raises(ModelCheckError, match=r"thrusters.yaml: max_forward must be > 0, got -1"):
+        thrusters_of(robot)
+
+
+def test_a_propeller_joint_must_be_frozen_and_the_thrust_acts_at_the_joints_zero(tmp_path):
+    """uuv_simulator writes the propeller joint continuous (and the thruster link a point mass). The loader freezes
+    it: the link is fixed to the vehicle at the joint's zero and B is the hand-derived one. Kept moving
+    (``arm_joints=``), the thruster rides an arm joint and is refused with a message that says so."""
+    urdf = FOUR.read_text().replace('type="fixed"', 'type="continuous"')
+    (tmp_path / "rov.urdf").write_text(urdf)
+    (tmp_path / "thrusters.yaml").write_text("max_forward: 150\nmax_reverse: 120\ntime_constant: 0.4\n")
+    robot = uvms.load(tmp_path / "rov.urdf")
+    assert robot.joint_classes["rov/thruster_0_joint"].kind == "propeller" and robot.n_arm == 0
+    np.testing.assert_allclose(allocation_matrix(robot, thrusters_of(robot)), FOUR_MATRIX, atol=1e-12)
+    (tmp_path / "rov.urdf").write_text(urdf.replace('ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"',
+                                                    'ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"'))
+    moving = uvms.load(tmp_path / "rov.urdf", arm_joints=["rov/thruster_0_joint"])
+    with pytest.raises(ModelCheckError, match=r"thruster 'thruster_0' is on frame 'rov/thruster_0', which moves "
+                       r"with joint 'rov/thruster_0_joint'; a thruster must be fixed to the vehicle body .*; if "
+                       r"'rov/thruster_0_joint' is the thruster's propeller joint .* it must be frozen in the "
+                       r"loaded model"):
+        allocation_matrix(moving, thrusters_of(moving))
+
+
+def test_thruster_rows_give_the_base_frame_placements_and_limits(tmp_path):
+    robot = four_thrusters(tmp_path, "max_forward: 150\nmax_reverse: 120\ntime_constant: 0.4\n")
+    rows = thruster_rows(robot, thrusters_of(robot))
+    assert [row["name"] for row in rows] == ["thruster_0", "thruster_1", "thruster_2", "thruster_3"]
+    assert rows[1]["frame"] == "rov/thruster_1"
+    np.testing.assert_allclose([row["position"] for row in rows],
+                               [[0.5, 0.3, 0.1], [0.5, -0.3, 0.1], [-0.4, 0, 0.2], [-0.4, 0.2, -0.1]], atol=1e-12)
+    np.testing.assert_allclose([row["direction"] for row in rows], FOUR_MATRIX[:3].T, atol=1e-12)
+    assert [(row["max_forward"], row["max_reverse"], row["time_constant"]) for row in rows] == [
+        (150, 120, 0.1), (150, 120, 0.2), (150, 120, 0.4), (300, 120, 0.05)]

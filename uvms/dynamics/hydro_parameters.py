@@ -206,3 +206,17 @@ def symmetrized_added_mass(matrix: np.ndarray, where: str) -> np.ndarray:
 def flip_frd_flu(matrix: np.ndarray) -> np.ndarray:
     """A (6, 6) body matrix from SNAME (FRD) to ROS (FLU) axes or back: T M T, T = diag(1,-1,-1,1,-1,-1)."""
     return FRD_FLU_SIGNS[:, None] * matrix * FRD_FLU_SIGNS[None, :] + 0.0  # + 0.0: no -0.0 entries
+
+
+def hydro_rows(hydro: HydroParameters) -> list[dict[str, object]]:
+    """One plain row per link with hydrodynamic parameters, for a table (``uvms info``), in uvms's conventions.
+
+    Returns:
+        [{"link": str, "volume": float [m^3], "center_of_buoyancy": [x, y, z] [m] (link frame),
+        "added_mass_diagonal": 6 floats [kg, kg, kg, kg m^2, kg m^2, kg m^2], "linear_damping": 6 floats
+        [N s/m, N m s/rad] and "quadratic_damping": 6 floats [N s^2/m^2, N m s^2/rad^2] (coefficients >= 0),
+        all about the link origin, FLU, order [u v w p q r]}], in the order of ``hydro.links``.
+    """
+    return [{"link": name, "volume": link.volume, "center_of_buoyancy": link.center_of_buoyancy.tolist(),
+             "added_mass_diagonal": np.diag(link.added_mass).tolist(), "linear_damping": link.linear_damping.tolist(),
+             "quadratic_damping": link.quadratic_damping.tolist()} for name, link in hydro.links.items()]

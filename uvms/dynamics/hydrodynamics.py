@@ -14,7 +14,7 @@ the other::
           <volume>0.0134</volume>                      <!-- m^3 -->
           <center_of_buoyancy>0 0 0.01</center_of_buoyancy>  <!-- m, link frame -->
           <hydrodynamic_model>
-            <type>fossen</type>
+            <type>fossen</type>                        <!-- or sphere, cylinder, spheroid, box -->
             <added_mass>36 numbers, row-major</added_mass>
             <linear_damping>6 numbers (or 36, diagonal)</linear_damping>
             <quadratic_damping>6 numbers (or 36, diagonal)</quadratic_damping>
@@ -23,9 +23,14 @@ the other::
       </plugin>
     </gazebo>
 
-or a YAML file beside the model (``hydrodynamics.yaml``, same keys and the same
-conventions; see :func:`load_hydrodynamics_yaml`, README.md "Hydrodynamics of your vehicle" and the
-complete example ``models/example_hydrodynamics.yaml``).
+The shape models (``sphere``, ``cylinder``, ``spheroid``, ``box``) set added-mass and drag entries from
+``<radius>``, ``<length>``, ``<width>``, ``<height>``, ``<axis>``, ``<cd>`` (or the link's ``<box>``) over those
+of ``fossen``, as uuv_simulator does (:mod:`uvms.dynamics.hydro_shapes`). Volume, centre of buoyancy and
+``neutrally_buoyant`` are read for every type.
+
+Or a YAML file beside the model (``hydrodynamics.yaml``, same keys and the same conventions; see
+:func:`load_hydrodynamics_yaml`, README.md "Hydrodynamics of your vehicle" and the complete example
+``models/example_hydrodynamics.yaml``).
 
 Conventions of the file (those of uuv_simulator's ``HMFossen``)
 --------------------------------------------------------------
@@ -57,6 +62,7 @@ from ..errors import ModelCheckError, ModelParseError, UVMSError
 from ..model.resources import read_yaml
 from .hydro_parameters import (GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names,
                                flip_frd_flu, symmetrized_added_mass)
+from .hydro_shapes import BOX_KEYS, SHAPE_KEYS, SHAPE_TYPES, shape_coefficients
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -65,8 +71,10 @@ if TYPE_CHECKING:
 
 #: Name of the YAML file looked for beside a model.
 YAML_NAME = "hydrodynamics.yaml"
-#: Hydrodynamic model types understood (uuv_simulator also has sphere, cylinder, box, spheroid).
-MODEL_TYPES = ("fossen",)
+#: Hydrodynamic model types understood: uuv_simulator's.
+MODEL_TYPES = ("fossen",) + SHAPE_TYPES
+#: The keys of a ``hydrodynamic_model``.
+MODEL_KEYS = ("type", "added_mass", "linear_damping", "quadratic_damping", "linear_damping_forward_speed") + SHAPE_KEYS
 
 
 # --------------------------------------------------------- uuv_simulator form
@@ -76,10 +84,10 @@ def link_from_uuv(
     """A LinkHydrodynamics from the values of one uuv_simulator ``<link>`` entry (file conventions).
 
     Args:
-        values: ``volume``, ``center_of_buoyancy``, ``neutrally_buoyant`` and
+        values: ``volume``, ``center_of_buoyancy``, ``neutrally_buoyant``, ``box`` = {width, length, height} and
             ``hydrodynamic_model`` = {``type``, ``added_mass``, ``linear_damping``,
-            ``quadratic_damping``, ``linear_damping_forward_speed``}, as numbers or
-            whitespace-separated text.
+            ``quadratic_damping``, ``linear_damping_forward_speed``, and the shape's dimensions
+            (:data:`MODEL_KEYS`)}, as numbers or whitespace-separated text.
         fluid_density: rho [kg/m^3], for ``neutrally_buoyant``.
         link_mass: the link's mass [kg] in the model, for ``neutrally_buoyant`` (None: unknown).
         where: prefix of error messages.
@@ -103,10 +111,18 @@ def link_from_uuv(
                 raise ModelCheckError("neutrally_buoyant needs the link's mass, and the model gives it none (no "
                                       "<inertial> mass on this link); give volume [m^3] instead")
             volume = link_mass / fluid_density  # as uuv_simulator's BuoyantObject::SetNeutrallyBuoyant
-        added = symmetrized_added_mass(
-            _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6), where)
+        added = _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6).copy()
         linear = _diagonal(model.get("linear_damping", np.zeros(6)), "linear_damping")
-        quadratic = _diagonal(model.get("quadratic_damping", np.zeros(6)), "quadratic_damping")
+        quadratic = _diagonal(model.get("quadratic_damping", np.zeros(6)), "quadratic_damping").copy()
+        if kind in SHAPE_TYPES:  # a fossen model whose diagonal entries the shape then sets, as uuv_simulator's
+            box = values.get("box") or None
+            if box is not None and not isinstance(box, Mapping):
+                raise ModelCheckError(f"box must hold {', '.join(BOX_KEYS)} [m], got {box!r}")
+            shape_added, shape_drag = shape_coefficients(kind, model, box, fluid_density, where)
+            for index, value in shape_added.items():
+                added[index, index] = value
+            quadratic[list(shape_drag)] = list(shape_drag.values())
+        added = symmetrized_added_mass(added, where)
         for name, derivatives in (("linear_damping", linear), ("quadratic_damping", quadratic)):
             if np.any(derivatives > 0):
                 raise ModelCheckError(
@@ -211,9 +227,10 @@ def parse_hydrodynamics(
             if name in links:
                 raise ModelCheckError(f"{where}: the link is given twice")
             values: dict[str, object] = {child.tag: (child.text or "") for child in element}
-            model = element.find("hydrodynamic_model")
-            if model is not None:
-                values["hydrodynamic_model"] = {child.tag: (child.text or "") for child in model}
+            for tag in ("hydrodynamic_model", "box"):
+                nested = element.find(tag)
+                if nested is not None:
+                    values[tag] = {child.tag: (child.text or "") for child in nested}
             links[name] = link_from_uuv(values, fluid_density=density, link_mass=masses.get(name), where=where)
     return HydroParameters(fluid_density=density, links=links, source=origin)
 
@@ -283,8 +300,7 @@ def load_hydrodynamics_yaml(
         _check_keys(values, ("volume", "neutrally_buoyant", "center_of_buoyancy", "hydrodynamic_model", "box"), where)
         model = values.get("hydrodynamic_model") or {}
         if isinstance(model, Mapping):
-            _check_keys(model, ("type", "added_mass", "linear_damping", "quadratic_damping",
-                                "linear_damping_forward_speed"), where + " hydrodynamic_model")
+            _check_keys(model, MODEL_KEYS, where + " hydrodynamic_model")
         mass = None if link_masses is None else link_masses.get(str(name))
         links[str(name)] = link_from_uuv(values, fluid_density=density, link_mass=mass, where=where)
     try:
