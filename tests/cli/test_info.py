@@ -137,3 +137,23 @@ def test_info_columns_stay_aligned_with_long_joint_names(tmp_path, capsys):
     assert rows[0].index("FreeFlyer") == rows[1].index("RZ") == header.index("type")  # before: pushed right
     assert rows[0].rindex("-") == rows[1].index("[-1.0000") == header.index("limits")
     assert re.search(rf"\n  {long} revolute, limits \[-1, 1\]\n", "\n".join(lines) + "\n")
+
+
+def test_info_lists_the_thrusters_and_the_hydrodynamics(capsys):
+    assert main(["info", "bluerov2_alpha5"]) == 0
+    out = capsys.readouterr().out
+    # models/bluerov2_alpha5/thrusters.yaml: thruster_1 at (0.14, -0.092, 0) pushing along (-1, -1, 0)/sqrt(2)
+    assert re.search(r"thrusters \(8\) from .*thrusters.yaml", out)
+    assert "  thruster_1   xyz [+0.140 -0.092 +0.000]  dir [-0.707 -0.707 +0.000]  [-40.2, 51.5]  0.1\n" in out
+    # the URDF's underwater-object plugin: base_link's volume and added-mass diagonal (FLU: a diagonal keeps signs)
+    assert "hydrodynamics (7 links, rho 1028 kg/m^3)" in out and "  base_link: V 0.01197  CoB [+0.000 +0.000 +0.010]" in out
+    assert "    added mass [6.36 7.12 18.68 0.189 0.135 0.222]\n" in out
+
+
+def test_info_says_which_thruster_values_are_defaults(capsys):
+    """uuv_simulator's plugins without thrustMin/thrustMax: the fixture's thruster_3 gives thrustMax 300 only."""
+    assert main(["info", str(ROOT / "tests" / "fixtures" / "uuv" / "four_thrusters.urdf")]) == 0
+    captured = capsys.readouterr()
+    assert "  thruster_3   xyz [-0.400 +0.200 -0.100]  dir [-1.000 +0.000 +0.000]  [-2000, 300]  0.05\n" in captured.out
+    assert "hydrodynamics none" in captured.out
+    assert "uvms's default thruster values" in captured.err and "max_reverse = 2000 N for thruster_0" in captured.err

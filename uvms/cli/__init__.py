@@ -171,6 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--result", metavar="DIR",
                       help="play the trajectory.npz of a run folder (uvms run) on the model it records")
     view.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    view.add_argument("--ee", action="append", metavar="FRAME",
+                      help="end-effector frame drawn with a triad (repeatable; default: the model's rule, see uvms info)")
     view.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
     view.add_argument("--q", nargs="+", type=float, metavar="V",
                       help="configuration: nq numbers (q), vehicle pose + arm joints, or arm joints only")

@@ -67,6 +67,7 @@ def describe(robot: Robot) -> str:
         lines.append(f"  {frame:<{width}} xyz {np.array2string(pose.translation, precision=4, suppress_small=True)}"
                      f"  rpy {np.array2string(rpy, precision=4, suppress_small=True)}")
     lines.append(f"ee rule     {robot.ee_reason}")
+    lines += thruster_lines(robot) + hydrodynamics_lines(robot)
     lines.append("checks      passed (unit axes, finite numbers, positive masses, inertias and geometry sizes, one tree, "
                  "base)")
     return "\n".join(lines)
@@ -96,6 +97,52 @@ def joint_groups(robot: Robot) -> list[str]:
         if members:
             lines.append(f"{title} ({len(members)}): {meaning}")
             lines.extend(f"  {name:<{width}} {reason}" for name, reason in members)
+    return lines
+
+
+def vector(values: Sequence[float], style: str = "+.3f") -> str:
+    """Numbers as ``[a b c]`` in one format (fixed decimals for positions, significant digits for data)."""
+    return "[" + " ".join(f"{value:{style}}" for value in values) + "]"
+
+
+def thruster_lines(robot: Robot) -> list[str]:
+    """The thrusters (``uvms.dynamics.thrusters_of``): placement and direction in the base frame, limits, lag."""
+    from ..dynamics.thrusters import thruster_rows, thrusters_of
+
+    try:
+        thrusters = thrusters_of(robot, required=False)
+        rows = thruster_rows(robot, thrusters) if len(thrusters) else []
+    except UVMSError as exc:  # info describes the model; the data's problem is stated, not fatal
+        return [f"thrusters   not usable: {' '.join(str(exc).split())}"]
+    if not rows:
+        return ["thrusters   none (no uuv_simulator thruster plugin, no thrusters.yaml beside the model)"]
+    width = max([12, *(len(row["name"]) for row in rows)])
+    lines = [f"thrusters ({len(rows)}) from {thrusters.source}: position [m], direction (base frame), thrust [N], "
+             "time constant [s]"]
+    lines += [f"  {row['name']:<{width}} xyz {vector(row['position'])}  dir {vector(row['direction'])}  "
+              f"[{-row['max_reverse']:g}, {row['max_forward']:g}]  {row['time_constant']:g}" for row in rows]
+    return lines
+
+
+def hydrodynamics_lines(robot: Robot) -> list[str]:
+    """Per link the hydrodynamic data (``uvms.dynamics.hydrodynamics_of``), FLU axes, order [u v w p q r]."""
+    from ..dynamics.hydro_parameters import hydro_rows
+    from ..dynamics.hydrodynamics import hydrodynamics_of
+
+    try:
+        hydro = hydrodynamics_of(robot, required=False)
+    except UVMSError as exc:
+        return [f"hydrodynamics not usable: {' '.join(str(exc).split())}"]
+    rows = hydro_rows(hydro)
+    if not rows:
+        return ["hydrodynamics none (no uuv_simulator underwater-object plugin, no hydrodynamics.yaml beside the model)"]
+    lines = [f"hydrodynamics ({len(rows)} links, rho {hydro.fluid_density:g} kg/m^3): volume [m^3], centre of "
+             "buoyancy [m], diagonals of added mass [kg, kg m^2], linear [N s/m, N m s] and quadratic damping "
+             "[N s^2/m^2, N m s^2]"]
+    for row in rows:
+        lines += [f"  {row['link']}: V {row['volume']:.4g}  CoB {vector(row['center_of_buoyancy'])}",
+                  f"    added mass {vector(row['added_mass_diagonal'], '.4g')}",
+                  f"    linear {vector(row['linear_damping'], '.4g')}  quadratic {vector(row['quadratic_damping'], '.4g')}"]
     return lines
 
 

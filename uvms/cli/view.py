@@ -43,12 +43,16 @@ def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
     from ..scenario.record import named_model, replay_model
 
     if options.result:
+        if options.ee:
+            raise UVMSError("--ee is for a model; a run folder (--result) is drawn with the end effectors it was run "
+                            "with")
         return replay_model(options.result, options.model, parse_assignments(options.arg), options.base,
                             options.package_path)
     if options.model is None:
         raise UVMSError("uvms view needs the model: `uvms view MODEL`, or `uvms view --result DIR` of a run folder "
                         "(which records its model)")
-    return named_model(options.model, parse_assignments(options.arg), options.base, options.package_path), None
+    return named_model(options.model, parse_assignments(options.arg), options.base, options.package_path,
+                       options.ee), None
 
 
 #: The most rows of a ``trajectory.npz`` that ``uvms view --result`` reads: 1,000,000 (a run of ``uvms run`` has
