@@ -56,29 +56,17 @@ DEFAULT_BANDWIDTH = (2.75, 2.75, 2.75, 5.0, 5.0, 5.0)
 DEFAULT_DAMPING_RATIO = (0.9, 0.9, 0.9, 1.5, 1.5, 1.5)
 
 
-def gain_vector(value: float | np.ndarray, what: str, size: int = 6) -> np.ndarray:
-    """A diagonal gain (size,) >= 0 from a number or ``size`` numbers.
+def gain_vector(value: float | np.ndarray, what: str, size: int = 6, *, positive: bool = False) -> np.ndarray:
+    """A diagonal gain (size,) >= 0 (``positive``: > 0, e.g. a bandwidth) from a number or ``size`` numbers.
 
     Raises:
-        SolverInputError: not finite, negative or of the wrong size.
+        SolverInputError: not finite, negative (``positive``: not > 0) or of the wrong size.
     """
     array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy() if np.ndim(value) == 0 \
         else np.asarray(value, dtype=float)
-    if array.shape != (size,) or not np.all(np.isfinite(array)) or np.any(array < 0):
-        raise SolverInputError(f"{what} must be a number or {size} numbers >= 0 (a diagonal gain), got {value!r}")
-    return array
-
-
-def positive_vector(value: float | np.ndarray, what: str, size: int = 6) -> np.ndarray:
-    """A per-axis parameter (size,) > 0 from a number or ``size`` numbers (a bandwidth, a damping ratio).
-
-    Raises:
-        SolverInputError: not finite, not positive or of the wrong size.
-    """
-    array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy() if np.ndim(value) == 0 \
-        else np.asarray(value, dtype=float)
-    if array.shape != (size,) or not np.all(np.isfinite(array)) or np.any(array <= 0):
-        raise SolverInputError(f"{what} must be a number or {size} numbers > 0 (one per body axis), got {value!r}")
+    if array.shape != (size,) or not np.all(np.isfinite(array)) or np.any(array <= 0 if positive else array < 0):
+        raise SolverInputError(f"{what} must be a number or {size} numbers {'> 0' if positive else '>= 0'} (a "
+                               f"diagonal gain, one per axis), got {value!r}")
     return array
 
 
@@ -107,9 +95,9 @@ def velocity_gains(inertia: np.ndarray, bandwidth: float | np.ndarray = DEFAULT_
     Raises:
         SolverInputError: a bandwidth or damping ratio not > 0, or of the wrong size.
     """
-    omega = positive_vector(bandwidth, "bandwidth")
-    zeta = positive_vector(damping_ratio, "damping_ratio")
-    inertia = positive_vector(inertia, "the vehicle's inertia M_ii")
+    omega = gain_vector(bandwidth, "bandwidth", positive=True)
+    zeta = gain_vector(damping_ratio, "damping_ratio", positive=True)
+    inertia = gain_vector(inertia, "the vehicle's inertia M_ii", positive=True)
     return 2.0 * zeta * omega * inertia, omega**2 * inertia
 
 
