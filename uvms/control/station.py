@@ -40,7 +40,8 @@ from ..tasks.frame import FrameTask
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, arm_rates_for_task
-from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector
+from .vehicle import (DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, VehiclePoseController, VehicleVelocityController,
+                      gain_vector, vehicle_inertia, velocity_gains)
 
 #: levels -> a solver built on them (the scenario's class and options); None: the CLIK law (module docstring).
 SolverFactory = Callable[[list], Solver]
@@ -155,18 +156,20 @@ class ActuatedKinematics:
 
 def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: float, *,
                     ee_target: np.ndarray | None = None, hold_arm: bool = False, coordination: bool = True,
-                    knows_current: bool = False, kp: float | np.ndarray = (100.0, 100.0, 100.0, 10.0, 10.0, 10.0),
-                    ki: float | np.ndarray = (150.0, 150.0, 150.0, 15.0, 15.0, 15.0),
-                    pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
+                    knows_current: bool = False, kp: float | np.ndarray | None = None,
+                    ki: float | np.ndarray | None = None, bandwidth: float | np.ndarray = DEFAULT_BANDWIDTH,
+                    damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO, pose_gains: float | np.ndarray = 1.5,
+                    max_speed: float | np.ndarray | None = 0.5,
                     priorities=None, arm_feedforward: bool = True, ee_gain: float = 1.0,
                     arm_damping: float = 0.01, frame: str | None = None) -> CoordinatedControl:
     """The controller of ``plant`` holding the vehicle at its pose of q0 and the end-effector point at ``ee_target``
     (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held): :func:`actuated_control` with
-    a held point and the CLIK law. The default gains hold the BlueROV2 + Alpha 5 in a 0.3 m/s current to 5 cm.
+    a held point and the CLIK law. The default gains, scaled to the vehicle's inertia, hold the BlueROV2 + Alpha 5
+    in a 0.3 m/s current to 5 cm and a 1.9 t RexROV-sized vehicle to 3 mm (tests/control/test_vehicle_gains.py).
 
     Args:
-        plant, thrusters, q0, dt, coordination, knows_current, kp, ki, pose_gains, max_speed, priorities,
-            arm_feedforward: as in :func:`actuated_control`.
+        plant, thrusters, q0, dt, coordination, knows_current, kp, ki, bandwidth, damping_ratio, pose_gains,
+            max_speed, priorities, arm_feedforward: as in :func:`actuated_control`.
         ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse.
         frame: the end-effector frame held (default: the model's first end effector).
 
@@ -180,7 +183,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
     hold = None if hold_arm else VelocityRamps.trapezoid(point, np.zeros(3), 1.0, 0.5, rotation=start.rotation)
     return actuated_control(plant, thrusters, q0, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold,
                             coordination=coordination and not hold_arm, knows_current=knows_current, kp=kp, ki=ki,
-                            pose_gains=pose_gains, max_speed=max_speed, priorities=priorities,
+                            bandwidth=bandwidth, damping_ratio=damping_ratio, pose_gains=pose_gains,
+                            max_speed=max_speed, priorities=priorities,
                             arm_feedforward=arm_feedforward, gain=ee_gain, damping=arm_damping)
 
 
@@ -188,8 +192,9 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                      trajectory: Callable[[float], object] | None, *, solver: SolverFactory | None = None,
                      inequalities: Sequence[Sequence] = (), coordination: bool = True,
                      saturation_feedback: bool = False, knows_current: bool = False,
-                     kp: float | np.ndarray = (100.0, 100.0, 100.0, 10.0, 10.0, 10.0),
-                     ki: float | np.ndarray = (150.0, 150.0, 150.0, 15.0, 15.0, 15.0),
+                     kp: float | np.ndarray | None = None, ki: float | np.ndarray | None = None,
+                     bandwidth: float | np.ndarray = DEFAULT_BANDWIDTH,
+                     damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO,
                      pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                      priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
                      vehicle_level: int | None = None) -> CoordinatedControl:
@@ -201,7 +206,10 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
         thrusters: the vehicle's thrusters; q0: (nq,) the station; dt: control period [s].
         task, trajectory, solver, inequalities, gain, damping, vehicle_level: as in :class:`ActuatedKinematics`.
         coordination, saturation_feedback: as in :class:`uvms.control.coordination.CoordinatedControl`.
-        kp [N s/m, N m s/rad], ki [N/m, N m/rad]: velocity PI gains (6,) or numbers; pose_gains [1/s];
+        kp [N s/m, N m s/rad], ki [N/m, N m/rad]: velocity PI gains (6,) or numbers; None (default): derived
+            from ``bandwidth`` omega [rad/s] and ``damping_ratio`` zeta (6,) or numbers and the vehicle's inertia
+            M_ii at q0, kp = 2 zeta omega M_ii, ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`); a
+            kp or ki given is used as it is. pose_gains [1/s];
         max_speed: [m/s, rad/s] bound of the pose objective; priorities: of the allocation
             (:class:`uvms.dynamics.allocation.ThrustAllocator`); arm_feedforward: as in
             :class:`uvms.control.vehicle.VehicleVelocityController`.
@@ -212,6 +220,9 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                   added_mass=plant.added_mass, damping=plant.damping)
     allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper,
                                 priorities=priorities)
+    if kp is None or ki is None:
+        derived = velocity_gains(vehicle_inertia(model, q0), bandwidth, damping_ratio)
+        kp, ki = derived[0] if kp is None else kp, derived[1] if ki is None else ki
     velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=arm_feedforward)
     pose = VehiclePoseController(velocity, pose_gains, max_speed)
     kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) *

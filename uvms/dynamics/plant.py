@@ -44,6 +44,14 @@ sum_l X_l^* (I_l + M_A,l) nu_l is conserved; with M_A = 0 it is the rigid moment
 behind the generalized Jacobian. :func:`generalized_jacobian_added_mass` is the GJM
 of that augmented momentum.
 
+Mimic joints (a gripper's second finger; ``pin.buildModelFromXML(..., mimic=True)``): q and v hold only the
+driving joints' coordinates, and Pinocchio's ``crba``, ``rnea`` (with ``fext``), Jacobians and centroidal map
+expand them through the mimic relation (q_mimic = scaling q_driver + offset): M = G^T M_full G and
+h = G^T h_full, G (nv_full, nv) the mimic's multiplier in its driver's column (tests/dynamics/test_plant_mimic.py
+checks both against the model without mimics). ``computePotentialEnergy``, ``computeKineticEnergy`` and ``aba``
+refuse mimic joints, so the plant calls none of them: the kinetic energy is 1/2 v^T M v, the weight's potential
+-m g . c from the centre of mass (:func:`weight_potential`).
+
 The links on the model, M_A in the mass matrix, C_A and the GJM of the augmented
 momentum live in :mod:`uvms.dynamics.added_mass` (importable from here too).
 """
@@ -62,6 +70,16 @@ from ..robot.robot import Robot, check_robot
 from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from .plant_system import Command, PlantSystem
 
+
+
+def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
+    """Potential energy [J] of the weight of every body, -m g . c (m the total mass [kg], c (3,) its centre [m]).
+
+    ``pin.computePotentialEnergy`` sums the same -m_i g . c_i per body but refuses mimic joints;
+    ``pin.centerOfMass`` places the mimic bodies by their mimic relation.
+    """
+    center = pin.centerOfMass(model, data, q)
+    return -float(data.mass[0]) * float(model.gravity.linear @ center)
 
 
 @dataclass(frozen=True)
@@ -262,7 +280,7 @@ class Plant:
         mass = pin.crba(model, self._dynamics_data, q)
         mass = np.triu(mass) + np.triu(mass, 1).T
         kinetic = 0.5 * float(v @ mass @ v)
-        potential = float(pin.computePotentialEnergy(model, self._dynamics_data, q)) if self.gravity else 0.0
+        potential = weight_potential(model, self._dynamics_data, q) if self.gravity else 0.0
         for link in self.links:
             nu, _, pose = self._link_motion(link)
             if self.added_mass:

@@ -99,6 +99,11 @@ def allocation_priorities(value: list, origin: str = "vehicle_control.priorities
     return [tuple(group) for group in value]
 
 
+def optional_gain(value: float | list | None) -> np.ndarray | None:
+    """A [vehicle_control] kp or ki as an array, or None (derived from the bandwidth and damping ratio)."""
+    return None if value is None else np.asarray(value, dtype=float)
+
+
 def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray, scenario: dict,
                    solver: type[Solver], options: dict) -> Actuation:
     """The thrusters of the model and the whole chain of the scenario (:func:`uvms.control.station.actuated_control`).
@@ -122,7 +127,9 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
             solver=None if solver is CLIKSolver else lambda levels: solver(robot, levels, **options),
             inequalities=enforced, coordination=control["coordination"],
             saturation_feedback=control["saturation_feedback"], knows_current=control["knows_current"],
-            kp=np.asarray(control["kp"], dtype=float), ki=np.asarray(control["ki"], dtype=float),
+            kp=optional_gain(control["kp"]), ki=optional_gain(control["ki"]),
+            bandwidth=np.asarray(control["bandwidth"], dtype=float),
+            damping_ratio=np.asarray(control["damping_ratio"], dtype=float),
             pose_gains=np.asarray(control["pose_gains"], dtype=float),
             max_speed=np.asarray(control["max_speed"], dtype=float),
             priorities=allocation_priorities(control["priorities"]), arm_feedforward=control["arm_feedforward"],

@@ -20,7 +20,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from ..control.gjm import GJM_KINDS
+from ..control import gjm, vehicle
 from ..errors import ScenarioError
 from ..io import outputs
 from ..model.resources import MAX_TOML_BYTES, read_text
@@ -69,7 +69,6 @@ LOWER_BOUNDS: dict[str, tuple[float, bool, str]] = {
     "outputs.position_tolerance": (0.0, True, "the largest position error [m] of a run said to meet its task"),
     "outputs.orientation_tolerance": (0.0, True, "the largest orientation error [rad] of a run said to meet its task"),
 }
-
 
 #: section -> key -> (accepted types, default, allowed values or None). "args"/"velocities" hold free tables.
 SCHEMA: dict[str, dict[str, tuple]] = {
@@ -143,7 +142,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
     "plant": {
         "type": (str, "kinematic", PLANT_TYPES),
-        "gjm": (str, "rigid", GJM_KINDS),
+        "gjm": (str, "rigid", gjm.GJM_KINDS),
         "motor_time_constant": (NUMBER, 0.1, None),
         "motor_feedforward": (bool, False, None),
         "control_dt": (NUMBER, 0.0, None),
@@ -154,8 +153,10 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "thrusters": (bool, False, None),  # the vehicle actuated by its thrusters ([vehicle_control])
     },
     "vehicle_control": {  # plant.thrusters = true: the vehicle loop, the allocation and the arm's coordination
-        "kp": ((int, float, list), [100.0, 100.0, 100.0, 10.0, 10.0, 10.0], None),
-        "ki": ((int, float, list), [150.0, 150.0, 150.0, 15.0, 15.0, 15.0], None),
+        "kp": ((int, float, list), None, None),  # None: from bandwidth, damping_ratio and the vehicle's inertia
+        "ki": ((int, float, list), None, None),  # (uvms.control.vehicle.velocity_gains); given: used as it is
+        "bandwidth": ((int, float, list), list(vehicle.DEFAULT_BANDWIDTH), None),  # [rad/s] per body axis
+        "damping_ratio": ((int, float, list), list(vehicle.DEFAULT_DAMPING_RATIO), None),
         "pose_gains": ((int, float, list), 1.5, None),
         "max_speed": ((int, float, list), 0.5, None),
         "priorities": (list, [], None),
