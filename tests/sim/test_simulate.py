@@ -69,12 +69,14 @@ def test_a_free_floating_rigid_run_conserves_momentum():
 def test_an_actuated_run_equals_the_former_simulate_actuated():
     """Station keeping in a 0.3 m/s current through ``simulate(ActuatedPlant(plant, thrusters), ...)``: the numbers
     of the former ``simulate_actuated`` to 2e-6 relative (issue 31: the arm is re-solved for the task's command
-    K e, not J v_ref; the bits below are the chain's)."""
+    K e, not J v_ref; the bits below are the chain's), with the former default gains (the defaults now scale with
+    the vehicle's inertia)."""
     robot = shipped("bluerov2_alpha5")
     plant = uvms.Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
     thrusters = uvms.dynamics.thrusters_of(robot)
     station = robot.configuration(base=np.zeros(6), arm=[3.0, 1.8, 1.8, 1.0, 0.0])
-    result = simulate(ActuatedPlant(plant, thrusters), uvms.control.station_keeping(plant, thrusters, station, 0.01), station,
+    result = simulate(ActuatedPlant(plant, thrusters), uvms.control.station_keeping(
+        plant, thrusters, station, 0.01, kp=[100, 100, 100, 10, 10, 10], ki=[150, 150, 150, 15, 15, 15]), station,
                       0.5, 0.01)
     assert [value.hex() for value in result.q[-1, :3]] == ["0x1.36e4baa29f06ap-5", "0x1.b09ab0391adebp-14",
                                                            "-0x1.2be8296055389p-12"]

@@ -14,7 +14,10 @@ gets a class (:class:`uvms.robot.structure.JointClass`, ``robot.joint_classes``,
   (a missing lower or upper is 0, as urdfdom reads it). Frozen.
 * ``mimic``: a joint with ``<mimic>``. A chain (a mimics b, which mimics c) is composed to its root joint c:
   q_a = m1 q_b + o1 and q_b = m2 q_c + o2 give q_a = (m1 m2) q_c + (m1 o2 + o1), as Pinocchio needs. A mimic of
-  a frozen joint is frozen at the value the relation gives.
+  a frozen joint is frozen at the value the relation gives. Pinocchio also needs the joint a group follows to come
+  first in its order (depth first, sibling joints by name, as urdfdom stores them): when a mimic comes before its
+  root (a finger ``finger_b`` beside the ``jaw`` it mimics), the relation is inverted and the group follows that
+  earliest joint, which is then the one commanded (``uvms info`` says so).
 * ``arm``: every other joint: what a user commands.
 
 ``arm_joints=[...]`` overrides the rule: exactly the listed joints move (class ``arm``); an arm joint left out
@@ -28,7 +31,7 @@ from __future__ import annotations
 
 import warnings
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -111,17 +114,26 @@ def classify_joints(
                for name, joint in moving.items() if name not in mimics}
     if arm_joints is not None:
         classes = overridden(classes, arm_joints, mimics, limits, origin)
+    mimics, leaders = leader_first(mimics, pinocchio_order(robot), origin, frozen=lambda root: classes[root].frozen)
+    for leader, root in leaders.items():  # the joint commanded for the group; its own limits
+        own = rule_class(leader, moving[leader], limits[leader], propellers.get(leader), masses)
+        classes[leader] = JointClass(classes[root].kind, f"{own.reason}; commanded for {root!r}, which mimics it "
+                                     f"(inverted: Pinocchio orders {leader!r} first)")
     for name, mimic in mimics.items():
         classes[name] = mimic_class(mimic, classes[mimic.root])
     classes = {name: classes[name] for name in moving}  # the file's order
     frozen = {name: joint_class.value for name, joint_class in classes.items() if joint_class.frozen}
-    composed = {name: mimic for name, mimic in mimics.items() if mimic.through and name not in frozen}
-    if not frozen and not composed:
+    rewritten = {name: mimic for name, mimic in mimics.items()
+                 if (mimic.through or name in leaders.values()) and name not in frozen}
+    if not frozen and not rewritten:
         return ClassifiedModel(xml, classes)
     for name, value in frozen.items():
         freeze(moving[name], value)
-    for name, mimic in composed.items():
+    for leader in leaders:
+        moving[leader].remove(moving[leader].find("mimic"))
+    for name, mimic in rewritten.items():
         element = moving[name].find("mimic")
+        element = ET.SubElement(moving[name], "mimic") if element is None else element
         element.attrib.update(joint=mimic.root, multiplier=repr(mimic.multiplier), offset=repr(mimic.offset))
     return ClassifiedModel(ET.tostring(robot, encoding="unicode"), classes)
 
@@ -259,6 +271,60 @@ def composed_mimics(moving: Mapping[str, ET.Element], joints: Mapping[str, ET.El
                                   f"revolute, continuous or prismatic joint")
         mimics[name] = Mimic(leader, multiplier, offset, tuple(chain[1:-1]))
     return mimics
+
+
+def pinocchio_order(robot: ET.Element) -> dict[str, int]:
+    """{joint name: its rank in Pinocchio's model}: depth first, siblings by name (urdfdom's map, walked by Pinocchio)."""
+    below: dict[str, list[tuple[str, str]]] = {}
+    children = set()
+    for joint in robot.findall("joint"):
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is not None and child is not None:
+            below.setdefault(parent.get("link", ""), []).append((joint.get("name", ""), child.get("link", "")))
+            children.add(child.get("link", ""))
+    roots = [link.get("name", "") for link in robot.findall("link") if link.get("name") not in children]
+    order: dict[str, int] = {}
+    stack = [child for root in roots for child in sorted(below.get(root, []), reverse=True)]
+    while stack:
+        name, link = stack.pop()
+        order[name] = len(order)
+        stack.extend(sorted(below.get(link, []), reverse=True))
+    return order
+
+
+def leader_first(mimics: Mapping[str, Mimic], order: Mapping[str, int], origin: str,
+                 frozen: Callable[[str], bool]) -> tuple[dict[str, Mimic], dict[str, str]]:
+    """The mimic relations with every group following the joint Pinocchio meets first (see the module docstring):
+    a root r after its mimic p (q_p = k q_r + o) gives q_r = q_p / k - o / k, q_i = (k_i / k) q_p + (o_i - k_i o / k).
+
+    Returns:
+        (the relations, {new leader: the root it replaces}).
+
+    Raises:
+        ModelCheckError: the earliest mimic of a group has a zero multiplier (the relation cannot be inverted).
+    """
+    groups: dict[str, list[str]] = {}
+    for name, mimic in mimics.items():
+        groups.setdefault(mimic.root, []).append(name)
+    result, leaders = dict(mimics), {}
+    for root, members in groups.items():
+        leader = min(members, key=lambda name: order.get(name, len(order)))
+        if frozen(root) or order.get(leader, len(order)) > order.get(root, len(order)):
+            continue
+        k, o = mimics[leader].multiplier, mimics[leader].offset
+        if k == 0.0:
+            raise ModelCheckError(f"{origin}: joint {leader!r} mimics {root!r} with multiplier 0 and comes before it in "
+                                  "Pinocchio's order (depth first, siblings by name), which needs the followed joint "
+                                  "first; give a non-zero multiplier or rename the joints")
+        leaders[leader] = root
+        del result[leader]
+        result[root] = Mimic(leader, 1.0 / k, -o / k, ())
+        for name in members:
+            if name != leader:
+                mimic = mimics[name]
+                through = tuple(joint for joint in (*mimic.through, root) if joint != leader)
+                result[name] = Mimic(leader, mimic.multiplier / k, mimic.offset - mimic.multiplier * o / k, through)
+    return result, leaders
 
 
 def mimic_class(mimic: Mimic, root: JointClass) -> JointClass:

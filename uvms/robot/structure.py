@@ -136,8 +136,8 @@ def sensor_word(name: str) -> str | None:
 
 
 def ee_name(name: str) -> str | None:
-    """The entry of :data:`EE_NAMES` that a frame name is (or ends with after '_'), or None."""
-    return next((stem for stem in EE_NAMES if name == stem or name.endswith("_" + stem)), None)
+    """The entry of :data:`EE_NAMES` that a frame name is (or ends with after '_' or a ROS namespace '/'), or None."""
+    return next((stem for stem in EE_NAMES if name == stem or name.endswith(("_" + stem, "/" + stem))), None)
 
 
 def default_end_effectors(model: pin.Model) -> tuple[list[str], str]:
