@@ -71,3 +71,23 @@ def test_mount_save_load_keeps_the_end_effectors_and_the_arm_joints(arm_joints, 
         q = robot.random_configuration(rng)
         for frame in [*robot.ee_frames, "thruster_1", "finger_c_link"]:
             np.testing.assert_allclose(again.fk(q, frame).homogeneous, robot.fk(q, frame).homogeneous, atol=1e-12)
+
+
+def test_an_arm_whose_point_mass_moves_nothing_is_refused_once_mounted(tmp_path):
+    """A tiny mass with zero inertia on the axis of its own joint: the joint moves no inertia, the composed mass
+    matrix is singular, which mount_arm refuses as load does (a point mass off the axis is accepted)."""
+    def arm(offset: float) -> str:
+        return f"""<robot name="pointy"><link name="mount"/>
+          <link name="tip"><inertial><origin xyz="{offset} 0 0"/><mass value="0.001"/>
+            <inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+          <joint name="spin" type="revolute"><parent link="mount"/><child link="tip"/><axis xyz="0 0 1"/>
+            <limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>"""
+
+    (tmp_path / "on_axis.urdf").write_text(arm(0.0))
+    (tmp_path / "off_axis.urdf").write_text(arm(0.1))
+    vehicle = shipped("bluerov2_alpha5")
+    with pytest.warns(uvms.model.PointMassWarning):
+        mounted = uvms.model.mount_arm(vehicle, tmp_path / "off_axis.urdf", placement=[0.2, 0, -0.1, 0, 0, 0])
+    assert mounted.nv == vehicle.nv + 1
+    with pytest.warns(uvms.model.PointMassWarning), pytest.raises(uvms.errors.ModelCheckError, match="singular"):
+        uvms.model.mount_arm(vehicle, tmp_path / "on_axis.urdf", placement=[0.2, 0, -0.1, 0, 0, 0])

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from . import checks, resources
+from . import checks, point_masses, resources
 from .joint_classes import classify_joints
 from ..robot import urdf_export
 from ..robot.conventions import pose_from_xyzrpy
@@ -88,6 +88,7 @@ def mount_arm(
     parent_id = vehicle.frame_id(parent_frame)
     model = pin.appendModel(vehicle.model, arm_model, parent_id, placement)
     model.name = f"{vehicle.name}+{Path(origin).stem}"
+    point_masses.check_mass_matrix(model, tree.point_masses, origin)  # an arm's point masses, now on a vehicle
     if ee is None and vehicle.ee_reason == EE_GIVEN:
         arm_ees = default_end_effectors(arm_model)[0]
         ee = vehicle.ee_frames + arm_ees if vehicle.n_arm else arm_ees + vehicle.ee_frames
