@@ -207,3 +207,32 @@ def signal_a_running_sweep(folder: Path, grid: str, sig: int, check=lambda child
             os.killpg(child.pid, signal.SIGKILL)
             child.communicate()
     return child, err
+
+
+#: The fixture workspace of ROS packages: a vehicle package including an arm package by $(find) (tests/fixtures/ros_ws).
+ROS_WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"
+#: A short run of that vehicle, whose ``[model]`` section ends with ``{package_path}`` (a line or nothing).
+ROS_SHORT_RUN = """
+[model]
+path = "vehicle.urdf.xacro"
+{package_path}
+
+[task]
+frame = "ee"
+axes = ["x", "y", "z"]
+
+[trajectory]
+type = "line"
+end_offset = [0.0, 0.05, 0.0]
+duration = 0.4
+
+[initial]
+base = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+arm = [0.3, -0.7]
+
+[simulation]
+dt = 0.1
+
+[outputs]
+figures = false
+"""

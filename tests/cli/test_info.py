@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from conftest import ESCAPES, FLOATING_ROOT, one_line, raising, ROOT, SHIPPED, urdf
+from conftest import ESCAPES, FLOATING_ROOT, one_line, raising, ROOT, ROS_WORKSPACE, SHIPPED, urdf
 from uvms.cli import main
 
 
@@ -93,7 +93,6 @@ def test_names_from_a_model_reach_the_terminal_escaped(tmp_path, capsys):
     assert "arm\\u202egpj.exe\\u2066" in captured.out
 
 
-ROS_WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"  # two packages, one including the other by $(find)
 
 
 def test_info_finds_the_packages_of_a_model_in_the_folders_named_by_package_path(tmp_path, monkeypatch, capsys):

@@ -10,35 +10,10 @@ import shutil
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROS_SHORT_RUN, ROS_WORKSPACE
 from uvms.cli import main
 from uvms.scenario import read_run_record
 
-ROS_WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"  # two packages, one including the other by $(find)
-SCENARIO = """
-[model]
-path = "vehicle.urdf.xacro"
-package_path = ["arms"]
-
-[task]
-frame = "ee"
-axes = ["x", "y", "z"]
-
-[trajectory]
-type = "line"
-end_offset = [0.0, 0.05, 0.0]
-duration = 0.4
-
-[initial]
-base = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-arm = [0.3, -0.7]
-
-[simulation]
-dt = 0.1
-
-[outputs]
-figures = false
-"""
 
 
 @pytest.fixture
@@ -53,7 +28,7 @@ def scenario(tmp_path, monkeypatch):
     (arm / "urdf" / "arm.xacro").write_text((arm / "urdf" / "arm.xacro").read_text()
                                             .replace('value="0.35"', 'value="0.5"').replace('value="0.25"', 'value="0.1"'))
     path = tmp_path / "s.toml"
-    path.write_text(SCENARIO)
+    path.write_text(ROS_SHORT_RUN.format(package_path='package_path = ["arms"]'))
     return path
 
 

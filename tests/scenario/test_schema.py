@@ -10,35 +10,10 @@ import shutil
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROS_SHORT_RUN, ROS_WORKSPACE
 from uvms.cli import main
 from uvms.scenario import ScenarioError, read_run_record, read_scenario, run_scenario
 
-ROS_WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"  # two packages, one including the other by $(find)
-SHORT_RUN = """
-[model]
-path = "vehicle.urdf.xacro"
-{package_path}
-
-[task]
-frame = "ee"
-axes = ["x", "y", "z"]
-
-[trajectory]
-type = "line"
-end_offset = [0.0, 0.05, 0.0]
-duration = 0.4
-
-[initial]
-base = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
-arm = [0.3, -0.7]
-
-[simulation]
-dt = 0.1
-
-[outputs]
-figures = false
-"""
 
 
 @pytest.fixture
@@ -52,7 +27,7 @@ def scenario_folder(tmp_path, monkeypatch):
 
 def write_scenario(folder, package_path: str = "") -> os.PathLike:
     path = folder / "short.toml"
-    path.write_text(SHORT_RUN.format(package_path=package_path))
+    path.write_text(ROS_SHORT_RUN.format(package_path=package_path))
     return path
 
 
