@@ -265,3 +265,19 @@ def test_two_packages_of_one_name_in_one_tree_keep_the_shallower_with_a_warning(
         (tmp_path / folder / "package.xml").write_text("<package><name>twin</name></package>")
     with pytest.warns(packages.PackageSearchWarning, match="two ROS packages named 'twin'"):
         assert packages.find_packages(tmp_path) == {"twin": tmp_path / "b"}
+
+
+def test_the_includes_of_a_package_are_walked_through_the_index():
+    """``$(find pkg)/...`` includes are followed (the arg check and --watch see the other package's files)."""
+    from uvms.model.includes import walk_xacro
+    from uvms.model.packages import package_index
+    from uvms.scenario.watch import model_files
+
+    model = ROOT / "tests" / "fixtures" / "uuv_ws" / "src" / "fixture_uuv_rov" / "urdf" / "rov.urdf.xacro"
+    arm = ROOT / "tests" / "fixtures" / "uuv_ws" / "src" / "fixture_uuv_arm" / "urdf" / "arm.xacro"
+    assert walk_xacro(model).args is None  # without the index the includes are computed names: xacro checks
+    walk = walk_xacro(model, package_index(None, model))
+    assert walk.args == {"namespace": "rov"} and arm.resolve() in walk.files
+    assert arm.resolve() in model_files(model)
+    with pytest.raises(uvms.errors.XacroError, match=r"unknown xacro arg\(s\) namespce; this model declares: namespace$"):
+        uvms.load(model, args={"namespce": "x"})

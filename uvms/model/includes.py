@@ -8,8 +8,10 @@ parent process hang or explode before the sandbox even starts.
 from __future__ import annotations
 
 import os
+import re
 import time
 import xml.etree.ElementTree as ET
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -71,8 +73,25 @@ def xacro_elements(root: ET.Element, namespaces: set[str], tag: str) -> list[ET.
     return [element for element in root.iter() if element.tag in wanted]
 
 
-def walk_xacro(path: str | os.PathLike) -> XacroWalk:
+#: An include named through a ROS package: ``$(find pkg)/rest`` (nothing else computed in it).
+FIND_INCLUDE = re.compile(r"\$\(find ([A-Za-z0-9_.\-]+)\)(/[^$*?\[]*)")
+
+
+def include_file(name: str, folder: Path, packages: Mapping[str, Path]) -> Path | None:
+    """The file an include names: relative to the including file's folder, as xacro does, or ``$(find pkg)/...``
+    through the package index; None when the name is computed otherwise (or names a package not indexed)."""
+    found = FIND_INCLUDE.fullmatch(name)
+    if found is not None:
+        package = packages.get(found.group(1))
+        return None if package is None else Path(package) / found.group(2).lstrip("/")
+    return None if any(mark in name for mark in "$*?[") else folder / name
+
+
+def walk_xacro(path: str | os.PathLike, packages: Mapping[str, Path] | None = None) -> XacroWalk:
     """The files a xacro includes statically, recursively, and the args they declare; it never runs xacro.
+
+    An include named ``$(find pkg)/...`` is followed through the package index ``packages`` ({name: folder},
+    :func:`uvms.model.packages.package_index`), which the loader and ``--watch`` give.
 
     The one reading of a xacro's includes (the loader's arg check and ``--watch``): each file is read once
     (:func:`read_file`: regular files only, at most ``MAX_URDF_BYTES``), within ``MAX_INCLUDE_FILES`` files,
@@ -120,11 +139,11 @@ def walk_xacro(path: str | os.PathLike) -> XacroWalk:
                 if element.get("name")}
         uses = 1
         for include in xacro_elements(root, namespaces, "include"):
-            name = include.get("filename", "")
-            if not name or any(mark in name for mark in "$*?["):  # computed or a glob: xacro knows
+            target = include_file(include.get("filename", ""), file.parent, packages or {})
+            if target is None:  # computed, a glob or an unknown package: xacro knows
                 walk.args = None
                 continue
-            included, count = visit(file.parent / name, depth + 1)  # relative to the file as named, as xacro
+            included, count = visit(target, depth + 1)
             args, uses = {**included, **args}, uses + count
             if uses > MAX_INCLUDE_USES:
                 raise stop(f"the xacro's includes expand to more than {MAX_INCLUDE_USES} inclusions (files "

@@ -166,7 +166,7 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool, packages
         ModelParseError: the file is not well-formed XML.
     """
     mappings = {check_arg_name(key, path): format_xacro_value(key, value, path) for key, value in args.items()}
-    declared = declared_xacro_defaults(path)
+    declared = declared_xacro_defaults(path, packages)
     unknown = sorted(set(mappings) - set(declared)) if declared is not None else []
     if unknown:
         raise XacroError(
@@ -175,7 +175,7 @@ def expand_xacro(path: Path, args: Mapping[str, object], trusted: bool, packages
     try:
         return run_xacro(path, mappings, trusted, packages)
     except XacroError as exc:
-        raise XacroError(f"{exc}{non_numeric_args(path, mappings)}") from None
+        raise XacroError(f"{exc}{non_numeric_args(path, mappings, packages)}") from None
 
 
 def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool, packages: Mapping[str, Path]) -> str:
@@ -207,8 +207,9 @@ def run_xacro(path: Path, mappings: Mapping[str, str], trusted: bool, packages: 
     return document.toprettyxml(indent="  ")
 
 
-def declared_xacro_defaults(path: Path) -> dict[str, str | None] | None:
-    """{name: default text (None without one)} of the ``<xacro:arg>`` of a file and its static includes.
+def declared_xacro_defaults(path: Path, packages: Mapping[str, Path] | None = None) -> dict[str, str | None] | None:
+    """{name: default text (None without one)} of the ``<xacro:arg>`` of a file and its static includes (those
+    named ``$(find pkg)/...`` too, through the package index ``packages``).
 
     Read by :func:`uvms.model.includes.walk_xacro` (each file once, within its caps).
 
@@ -220,7 +221,7 @@ def declared_xacro_defaults(path: Path) -> dict[str, str | None] | None:
         XacroError: an include that is not a readable regular file (a FIFO, a symbolic link loop, too large), or
             includes beyond the walk's caps.
     """
-    walk = includes.walk_xacro(path)
+    walk = includes.walk_xacro(path, packages)
     if walk.problem is not None:
         raise walk.problem
     return walk.args
@@ -237,14 +238,14 @@ def is_number_text(text: str | None) -> bool:
     return True
 
 
-def non_numeric_args(path: Path, mappings: Mapping[str, str]) -> str:
+def non_numeric_args(path: Path, mappings: Mapping[str, str], packages: Mapping[str, Path] | None = None) -> str:
     """The explanation of a xacro failure by args given as text where the model's default is a number.
 
     Returns:
         "; xacro arg l1='abc' is not a number, but the model computes with it (its default is 0.4): give a
         number", or "" when no given arg is such.
     """
-    defaults = declared_xacro_defaults(path) or {}
+    defaults = declared_xacro_defaults(path, packages) or {}
     suspects = [f"xacro arg {name}={value!r} is not a number, but the model computes with it (its default is "
                 f"{defaults[name]})" for name, value in mappings.items()
                 if not is_number_text(value) and value not in ("true", "false") and is_number_text(defaults.get(name))]
@@ -266,7 +267,7 @@ def blamed_args(
     if not args or len(args) > 16:
         return ""
     path = resources.resolve_model_path(source)
-    defaults = declared_xacro_defaults(path) or {}
+    defaults = declared_xacro_defaults(path, packages) or {}
     blamed = []
     for name in args:
         others = {key: value for key, value in args.items() if key != name}

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from ..errors import UVMSError
 from ..model import includes, resources
+from ..model.packages import package_index
 
 #: Files beside a model that a change of should rerun the job (data the model or uvms reads).
 MODEL_DATA_SUFFIXES = (".xacro", ".urdf", ".yaml", ".yml", ".stl", ".dae", ".obj", ".ply")
@@ -39,11 +40,13 @@ def real(path: str | os.PathLike) -> Path:
 
 
 def model_files(source: str | os.PathLike) -> set[Path]:
-    """The model file (a path or a shipped model name) and the files it includes (resolved)."""
+    """The model file (a path or a shipped model name) and the files it includes (resolved), ``$(find pkg)/...``
+    ones too through the packages of ``ROS_PACKAGE_PATH``, ``AMENT_PREFIX_PATH`` and the model's workspace."""
     path = resources.resolve_model_path(source)
     if not path.name.endswith(".xacro"):
         return {real(path)}
-    return set(includes.walk_xacro(path).files)  # a walk that stopped (a cap): the files found; the job says why
+    packages = package_index(None, path)
+    return set(includes.walk_xacro(path, packages).files)  # a walk that stopped (a cap): the files found
 
 
 def scenario_model(scenario: Path) -> str | None:
