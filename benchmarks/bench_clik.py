@@ -1,8 +1,9 @@
 """One CLIK step, measured side by side against Pinocchio, a hand-written numpy step and pink.
 
 Model: a 6-DOF floating base carrying a UR5 (6 + 6 DOF). The step is a pose
-task with a diagonal W, DLS, a joint-limit null-space term, diagnostics (sigma_min, residual) and
-integration on the manifold (the pose CLIKSolver and the numpy step: no W).
+task with a diagonal W, DLS, a joint-limit null-space term, sigma_min read and integration on the manifold (the
+pose CLIKSolver and the numpy step: no W, sigma_min not read). The prepared steps reset q before each step; the
+loop steps one configuration on as a user does (``solver.step(configuration, dt)``), towards the target.
 Times are ratios to one ``pin.forwardKinematics`` call measured in the same run
 (this machine is shared and noisy: absolute times are not comparable).
 
@@ -84,16 +85,20 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
     solver = uvms.CLIKSolver(robot, task, weights=weights, damping=1e-6, potential=potential, alpha=1.0)
     configuration = uvms.Configuration(robot, q)
 
-    def kept_step(kept: uvms.CLIKSolver) -> None:
+    moving = uvms.Configuration(robot, q)
+
+    def kept_step(kept: uvms.CLIKSolver) -> uvms.solvers.SolverResult:
         configuration.update(q, check=False)  # the same q at every call
-        kept.step(configuration, DT)
+        return kept.step(configuration, DT)
 
     calls = {
         "uvms CLIKSolver.step, pose task (built once, no W)": lambda: kept_step(pose),
         "uvms CLIKSolver built per step (general, with diagnostics)": lambda: uvms.CLIKSolver(
             robot, task, weights=weights, damping=1e-6, potential=potential, alpha=1.0).step(
-            uvms.Configuration(robot, q, check=False), DT),
-        "uvms CLIKSolver.step (built once, with W)": lambda: kept_step(solver),
+            uvms.Configuration(robot, q, check=False), DT).sigma_min,
+        "uvms CLIKSolver.step (built once, with W, sigma_min read)": lambda: kept_step(solver).sigma_min,
+        "uvms CLIKSolver.step in a loop (built once, with W, sigma_min read; q moving)":
+            lambda: solver.step(moving, DT).sigma_min,
     }
     calls["plain numpy DLS step"] = lambda: numpy_dls_step(robot, q, target, potential)
     try:

@@ -15,6 +15,7 @@ The matrix forms return the inverse (n, k), like ``numpy.linalg.pinv``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -268,11 +269,13 @@ class WeightedInverse:
         self._no_motion = np.zeros(0)
 
     def solve(self, jacobian: np.ndarray, command: np.ndarray, damping: float | VariableDamping,
-              nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float, float]:
+              nullspace_motion: np.ndarray | None) -> tuple[np.ndarray, float | Callable[[], float], float]:
         """(x = J_W^+ (c - J z0) + z0 (n,), sigma_min of the weighted J, damping used) in one compiled call.
 
         The CLIK's solution (:func:`~uvms.numerics._kernels.clik.clik_solution_into`): the numbers of this
-        inverse applied to c, plus the null-space motion z0 projected (None: none), to rounding.
+        inverse applied to c, plus the null-space motion z0 projected (None: none), to rounding. A fixed damping
+        solved by Cholesky does not compute sigma_min: it is then a function that computes it
+        (:meth:`sigma_min`), for a result to call when it is read.
 
         Raises:
             NumericalError: the SVD did not converge (a non-finite Jacobian).
@@ -282,9 +285,17 @@ class WeightedInverse:
         solution = np.empty(jacobian.shape[1])
         z0 = self._no_motion if nullspace_motion is None else nullspace_motion
         # C order: one compiled form of the kernel serves every caller (numba compiles one per array layout)
-        converged, sigma_min, used = clik_solution_into(np.ascontiguousarray(jacobian), command, *self.kernel_weights,
+        matrix = np.ascontiguousarray(jacobian)
+        converged, sigma_min, used = clik_solution_into(matrix, command, *self.kernel_weights,
                                                         *damping_parameters(damping), RCOND, z0, solution)
-        return solution, *converged_or_refused(converged, jacobian.shape, sigma_min, used)
+        sigma_min, used = converged_or_refused(converged, jacobian.shape, sigma_min, used)
+        return solution, (lambda: self.sigma_min(matrix)) if sigma_min < 0.0 else sigma_min, used
+
+    def sigma_min(self, jacobian: np.ndarray) -> float:
+        """sigma_min of the weighted J (k, n) (0 when k > n): the number the SVD of :meth:`solve` reports."""
+        from ._kernels.clik import weighted_sigma_min  # numba: loaded at the first solve, not by ``import uvms``
+
+        return float(weighted_sigma_min(np.ascontiguousarray(jacobian), *self.kernel_weights))
 
     def __call__(self, jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
         """(inverse (n, k), sigma_min of the weighted J, damping used) of J (k, n), ``damping`` already checked

@@ -19,6 +19,7 @@ What the scenario builder reads from a class, never from its name:
 from __future__ import annotations
 
 import inspect
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from typing import ClassVar
@@ -78,7 +79,7 @@ class Solver(ABC):
         Raises:
             SolverInputError: dt not > 0, or not a Configuration of this solver's robot.
         """
-        dt = check_scalar(dt, "dt", positive=True)
+        dt = checked_step(dt)
         result = self.velocity(configuration)
         configuration.integrate(result.v, dt)
         return result
@@ -90,6 +91,17 @@ class Solver(ABC):
                                    f"built for ({self.robot.name}), got {type(configuration).__name__}: build one with "
                                    f"Configuration(robot, q)")
         return configuration
+
+
+def checked_step(dt: float) -> float:
+    """A step dt > 0 [s] as a float (a positive float passes without a call).
+
+    Raises:
+        SolverInputError: dt not a finite number > 0.
+    """
+    if dt.__class__ is float and 0.0 < dt < math.inf:
+        return dt
+    return check_scalar(dt, "dt", positive=True)
 
 
 def check_free_floating(robot: Robot, free_floating: bool) -> bool:

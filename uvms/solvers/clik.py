@@ -14,16 +14,21 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+import pinocchio as pin
+
+from ..errors import NumericalError
 from ..robot.kinematics import base_velocity_from_momentum
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
 from ..robot.configuration import Configuration
-from ..tasks.joint_limits import JointLimitPotential
+from ..tasks.frame import FrameTask
+from ..tasks.joint_limits import JointLimitPotential, NullspaceTerms
 from ..tasks.task import Task, as_task_list
-from ..numerics.checks import (check_damping, check_scalar, check_weights, free_floating_weights_note,
-                     prepared_gain)
-from ..numerics.inverses import SolverInputError, VariableDamping, WeightedInverse, weights_subset
-from .base import Solver, check_free_floating
+from ..numerics.checks import (check_damping, check_scalar, check_weights, free_floating_weights_note, gain_matrix,
+                               prepared_gain)
+from ..numerics.inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, damping_parameters,
+                                 weights_subset)
+from .base import Solver, check_free_floating, checked_step
 from .result import SolvedRows, SolverResult
 from .stack import stacked_terms
 
@@ -32,7 +37,10 @@ class CLIKSolver(Solver):
     """The CLIK of a fixed task set (scenario method "clik"), its inputs checked and its pieces prepared once.
 
     The one implementation of CLIK: build it once, call :meth:`velocity` (or :meth:`step`) at every
-    evaluation. What changes between calls is the configuration and the tasks' targets.
+    evaluation. What changes between calls is the configuration and the tasks' targets. One frame task with the
+    log orientation error on an actuated vehicle (or a fixed base), without joint clamping or mimic joints, is
+    solved by a prepared step (:class:`FrameStep`: one compiled call after Pinocchio's joint kinematics, the
+    numbers of the general path to rounding); sigma_min and the task's rows are then computed when read.
 
     Args:
         robot: the model.
@@ -102,6 +110,7 @@ class CLIKSolver(Solver):
         from ..numerics._kernels.clik import joint_limit_motion_into
 
         self._joint_limit_motion = joint_limit_motion_into
+        self._frame_step = FrameStep(self, gain) if FrameStep.serves(self) else None
 
     def _nullspace_motion(self, q: np.ndarray) -> np.ndarray | None:
         """z0 = -alpha dS/dv on the solved columns (S has no vehicle entries), or None."""
@@ -152,8 +161,23 @@ class CLIKSolver(Solver):
             free = np.array([i for i in free if i not in held], dtype=int)
         return solution, sigma_min, used, held
 
+    def step(self, configuration: Configuration, dt: float) -> SolverResult:
+        """Solve at ``configuration``, then move it along v for dt [s] (explicit Euler on the manifold, in place).
+
+        Returns:
+            The result at the configuration before the step.
+
+        Raises:
+            SolverInputError: dt not > 0, or not a Configuration of this solver's robot.
+        """
+        if self._frame_step is None:
+            return super().step(configuration, dt)
+        return self._frame_step.step(self._checked(configuration), checked_step(dt))
+
     def velocity(self, configuration: Configuration) -> SolverResult:
         """The CLIK velocity at ``configuration`` and its diagnostics (the residuals per task, when read)."""
+        if self._frame_step is not None:
+            return self._frame_step.velocity(self._checked(configuration))
         v, jacobian, error, command, sigma_min, used, held_names = self._solution(self._checked(configuration))
         if len(self.tasks) == 1:
             levels = (SolvedRows(0, jacobian, command, error),)
@@ -197,3 +221,100 @@ def solve_with_held(
     return solution, sigma_min, used
 
 
+
+
+class FrameStep:
+    """The prepared CLIK of one frame task with the log orientation error (a :class:`CLIKSolver`'s fast path).
+
+    After Pinocchio's joint kinematics (one ``computeJointJacobians`` per configuration,
+    :meth:`Configuration.joint_arrays`), one compiled call (:func:`~uvms.numerics._kernels.clik.frame_clik_into`)
+    computes the task's rows, the command, the null-space motion and the solution, in buffers laid out here once.
+    sigma_min (after a Cholesky solve) and the task's rows are given to the result as functions: computed when read.
+
+    Args:
+        solver: the CLIKSolver, built and checked (:meth:`serves` it); gain: its K, checked.
+    """
+
+    def __init__(self, solver: CLIKSolver, gain: float | np.ndarray) -> None:
+        from ..numerics._kernels.clik import frame_clik_into, frame_sigma_min  # numba: loaded with the solver
+
+        self._kernel, self._sigma_min = frame_clik_into, frame_sigma_min
+        task: FrameTask = solver.tasks[0]
+        model = solver.robot.model
+        frame = model.frames[task.frame_id]
+        self.task, self.joint, self.nv, self.count = task, int(frame.parentJoint), model.nv, task.dim
+        self.indices, self.constants = frame_constants(solver, frame, gain)
+        self.record_size = self.count * (self.nv + 2)  # the task's rows (k, nv), error (k,), command (k,)
+        self._displacement = np.empty(self.nv)  # v dt of a step, read by pin.integrate at once (never kept)
+
+    @staticmethod
+    def serves(solver: CLIKSolver) -> bool:
+        """Whether ``solver`` is one frame task with the log error on a robot without mimic joints, not free
+        floating, without joint clamping: what :func:`~uvms.numerics._kernels.clik.frame_clik_into` computes."""
+        tasks = solver.tasks
+        return (len(tasks) == 1 and isinstance(tasks[0], FrameTask) and tasks[0].orientation == "log"
+                and not solver.free_floating and not solver.enforce_limits and not solver.robot.mimic_joint_names)
+
+    def velocity(self, configuration: Configuration) -> SolverResult:
+        """The CLIK velocity at ``configuration`` (checked by the solver); sigma_min and the rows when read.
+
+        Raises:
+            UVMSError: the task has no target.
+            NumericalError: a non-finite Jacobian (the SVD did not converge).
+        """
+        return self._solve(configuration, 0.0)
+
+    def step(self, configuration: Configuration, dt: float) -> SolverResult:
+        """:meth:`velocity`, then ``configuration`` moved to pin.integrate(q, v dt) (dt > 0 [s], checked), in place:
+        ``Solver.step``'s numbers, v dt written by the compiled call."""
+        result = self._solve(configuration, dt)
+        configuration.update(pin.integrate(configuration.model, configuration.q, self._displacement), check=False)
+        return result
+
+    def _solve(self, configuration: Configuration, dt: float) -> SolverResult:
+        """The result at ``configuration``, and v dt in the displacement buffer when dt > 0."""
+        joint_jacobians, translation, rotation = configuration.joint_arrays(self.joint)
+        target_translation, target_rotation, _, feedforward = self.task.target_terms()
+        v, record = np.empty(self.nv), np.empty(self.record_size)
+        converged, sigma_min, used = self._kernel(joint_jacobians, translation, rotation, configuration.q,
+                                                  target_translation, target_rotation, feedforward, self.indices,
+                                                  self.constants, v, record, dt, self._displacement)
+        if not converged:
+            raise NumericalError(f"the SVD of the {self.count}x{self.nv} task Jacobian did not converge: is it finite?")
+        return SolverResult(v=v, sigma_min=(lambda: self._sigma_min(record, self.indices, self.constants))
+                            if sigma_min < 0.0 else sigma_min, damping=used, levels=lambda: self.levels(record))
+
+    def jacobian(self, record: np.ndarray) -> np.ndarray:
+        """The task's rows (k, nv) in a step's record."""
+        return record[:self.count * self.nv].reshape(self.count, self.nv)
+
+    def levels(self, record: np.ndarray) -> tuple[SolvedRows, ...]:
+        """The one level of a step's record: the task's rows, command and error."""
+        size = self.count * self.nv
+        return (SolvedRows(0, self.jacobian(record), record[size + self.count:], record[size:size + self.count]),)
+
+
+def support_columns(model: pin.Model, joint: int) -> np.ndarray:
+    """The columns of v (m,) of the joints from the root to ``joint``: those that move it (a model without mimic
+    joints, whose every joint has its own columns)."""
+    columns = [column for ancestor in list(model.supports[joint])[1:]
+               for column in range(model.idx_vs[ancestor], model.idx_vs[ancestor] + model.nvs[ancestor])]
+    return np.array(sorted(columns), dtype=np.int64)
+
+
+def frame_constants(solver: CLIKSolver, frame: pin.Frame, gain: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(indices, constants): what a frame task's CLIK reads at every step and never changes, in the layout of
+    :func:`~uvms.numerics._kernels.clik.frame_constants` (the task's rows and the columns moving its frame; the
+    placement of the frame in its joint, K, the damping, W and the joint-limit potential's terms)."""
+    task: FrameTask = solver.tasks[0]
+    columns = support_columns(solver.robot.model, int(frame.parentJoint))
+    terms = solver._nullspace if solver._nullspace is not None else NullspaceTerms.none()
+    alpha = terms.alpha if solver._nullspace is not None else 0.0
+    inverse_sqrt, transform = solver._inverse.kernel_weights
+    kind = 1 if inverse_sqrt.size else 2 if transform.size else 0
+    indices = np.concatenate([[task.dim, columns.size, terms.q_index.size, kind], task.rows, columns, terms.q_index,
+                              terms.v_index]).astype(np.int64)
+    constants = np.concatenate([frame.placement.homogeneous.ravel(), gain_matrix(gain, task.dim).ravel(),
+                                [*damping_parameters(solver.damping), RCOND, alpha], inverse_sqrt, transform.ravel(),
+                                terms.weights, terms.middle, terms.range_squared]).astype(np.float64)
+    return indices, constants

@@ -3,15 +3,17 @@
 :class:`SolverResult` is what every velocity solver (:class:`~uvms.solvers.base.Solver`) returns;
 :class:`IKResult` and :class:`InitialConfigurationResult` answer another question (a configuration, not a
 velocity). The residuals, the task command and error and the objectives' statuses are computed from the rows
-the solver kept when they are first read (:func:`functools.cached_property`), not in the hot path.
+the solver kept when they are first read (:func:`functools.cached_property`), not in the hot path; so are the
+sigma_min and the rows a solver gives as functions (a prepared CLIK step computes them only when asked).
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
+from typing import NamedTuple
 
 import numpy as np
 
@@ -82,8 +84,7 @@ class ObjectiveStatus:
     violation: float
 
 
-@dataclass(frozen=True)
-class SolvedRows:
+class SolvedRows(NamedTuple):
     """The rows one level (or one task) of a solution was solved for, kept to report on it when asked.
 
     Attributes:
@@ -109,11 +110,18 @@ class SolvedRows:
         return float(np.linalg.norm(difference if self.activation is None else self.activation * difference))
 
 
+#: The extras of a result that has none (read-only).
+NO_EXTRAS: Mapping[str, object] = MappingProxyType({})
 
 
-@dataclass(frozen=True)
 class SolverResult:
-    """One velocity of a solver and its diagnostics, the same fields for every method.
+    """One velocity of a solver and its diagnostics, the same fields for every method (read them; a result is
+    never changed after it is built).
+
+    Built at every solver call, so building it costs a few attribute writes: what a solver can compute later
+    (sigma_min after a Cholesky solve, the rows of a prepared step) it may give as a function of no argument,
+    called when the field is first read; the residuals, command and error are computed from the levels when
+    first read.
 
     Attributes:
         v: velocity (nv,) in the order of Pinocchio's v (vehicle twist local, then arm).
@@ -134,20 +142,36 @@ class SolverResult:
         binding: per objective name, whether it binds (the QP hierarchy); None: active = some activation > 0.
     """
 
-    v: np.ndarray
-    sigma_min: float
-    damping: float
-    free_floating: bool = False
-    limits_active: tuple[str, ...] = ()
-    scales: tuple[float, ...] = ()
-    speed_ratio: float = 0.0
-    extras: Mapping[str, object] = field(default_factory=dict)
-    levels: tuple[SolvedRows, ...] = ()
-    binding: Mapping[str, bool] | None = None
+    def __init__(self, v: np.ndarray, sigma_min: float | Callable[[], float], damping: float,
+                 free_floating: bool = False, limits_active: tuple[str, ...] = (), scales: tuple[float, ...] = (),
+                 speed_ratio: float = 0.0, extras: Mapping[str, object] | None = None,
+                 levels: tuple[SolvedRows, ...] | Callable[[], tuple[SolvedRows, ...]] = (),
+                 binding: Mapping[str, bool] | None = None) -> None:
+        self.v, self.damping, self.free_floating, self.limits_active = v, damping, free_floating, limits_active
+        self.scales, self.speed_ratio, self.binding = scales, speed_ratio, binding
+        self.extras = MappingProxyType(dict(extras)) if extras else NO_EXTRAS  # read-only, whatever mapping given
+        if callable(sigma_min):  # computed when read
+            self._sigma_min = sigma_min
+        else:
+            self.sigma_min = sigma_min
+        if callable(levels):
+            self._levels = levels
+        else:
+            self.levels = levels
 
-    def __post_init__(self) -> None:
-        if not isinstance(self.extras, MappingProxyType):  # read-only, whatever mapping the solver gave
-            object.__setattr__(self, "extras", MappingProxyType(dict(self.extras)))
+    def __repr__(self) -> str:
+        return (f"SolverResult(v={self.v!r}, sigma_min={self.sigma_min!r}, damping={self.damping!r}, "
+                f"free_floating={self.free_floating!r}, limits_active={self.limits_active!r})")
+
+    @cached_property
+    def sigma_min(self) -> float:
+        """The smallest singular value of the inverted Jacobians (given by the solver as a function: computed now)."""
+        return float(self._sigma_min())
+
+    @cached_property
+    def levels(self) -> tuple[SolvedRows, ...]:
+        """The rows solved, per level (given by the solver as a function: made now)."""
+        return tuple(self._levels())
 
     @cached_property
     def command(self) -> np.ndarray:

@@ -136,9 +136,13 @@ class FrameTask(Task):
         feedforward[3:] = pin.rpy.computeRpyJacobianInverse(target_rpy, pin.WORLD) @ feedforward[3:]
         return feedforward
 
-    def _target_terms(self) -> tuple:
-        """(p_d (3,), R_d (3, 3), rpy_d (3,) or None, feedforward rows (k,)) of the target, read once per target
-        (a controller's integrator evaluates several stages at one target)."""
+    def target_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
+        """(p_d (3,) [m], R_d (3, 3), rpy_d (3,) [rad] or None, feedforward rows (k,)) of the target, read once per
+        target (a controller's integrator evaluates several stages at one target; a prepared CLIK step reads them).
+
+        Raises:
+            UVMSError: no target set.
+        """
         if self._target_parts is None:
             target = self._target()
             rotation = target.rotation
@@ -152,7 +156,7 @@ class FrameTask(Task):
 
     def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(jacobian (k, nv), error (k,), feedforward (k,)) at once: each rotation read and each rpy computed once."""
-        translation, rotation, target_rpy, feedforward = self._target_terms()
+        translation, rotation, target_rpy, feedforward = self.target_terms()
         pose = state.pose(self.frame_id)
         jacobian = state.jacobian(self.frame_id)
         if self.orientation == "log":

@@ -70,21 +70,25 @@ def subtract_in_place(matrix: np.ndarray, other: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def cholesky_solve_in_place(system: np.ndarray, rhs: np.ndarray) -> bool:
+def cholesky_solve_in_place(system: np.ndarray, rhs: np.ndarray, floor: float = 0.0) -> bool:
     """Solve A y = b for a symmetric positive definite A (k, k) by A = L L^T, overwriting both.
 
     The lower triangle of ``system`` becomes L and ``rhs`` becomes y; the upper triangle is not read.
 
+    Args:
+        system: A (k, k); rhs: b (k,).
+        floor: a squared pivot L_ii^2 must exceed it (0: A positive definite; larger: A well-conditioned).
+
     Returns:
-        False when A is not numerically positive definite (a pivot <= 0; ``rhs`` is then partly
-        overwritten and not a solution), True otherwise.
+        False when a squared pivot is <= ``floor`` (A not numerically positive definite, or too ill-conditioned;
+        ``rhs`` is then partly overwritten and not a solution), True otherwise.
     """
     size = system.shape[0]
     for col in range(size):
         pivot = system[col, col]
         for inner in range(col):
             pivot -= system[col, inner] * system[col, inner]
-        if not pivot > 0.0:  # also catches NaN
+        if not pivot > floor:  # also catches NaN
             return False
         pivot = np.sqrt(pivot)
         system[col, col] = pivot
@@ -107,19 +111,24 @@ def cholesky_solve_in_place(system: np.ndarray, rhs: np.ndarray) -> bool:
 
 
 @njit(cache=True)
-def dls_solve_into(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float, out: np.ndarray) -> bool:
+def dls_solve_into(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float, out: np.ndarray,
+                   conditioning: float = 0.0) -> bool:
     """out = J^T (J J^T + d I)^-1 b (n,): the DLS solution for one right-hand side, in normal-equation form.
 
     Args:
         jacobian: J (k, n); rhs: b (k,) (not modified); damping_squared: d = l^2 >= 0.
         out: (n,) written with the solution.
+        conditioning: refuse the system when a squared Cholesky pivot is <= this times its largest diagonal
+            entry (0: only when it is not positive definite). The solution's relative error grows as the
+            condition number of J J^T + d I, about the inverse of that ratio, times the rounding unit.
 
     Returns:
-        False when J J^T + d I is not numerically positive definite (``out`` is then not written).
+        False when J J^T + d I is not numerically positive definite or is refused (``out`` is then not written).
     """
     rows, columns = jacobian.shape
     system = np.empty((rows, rows))  # J J^T + d I (lower triangle)
     solution = np.empty(rows)
+    largest = 0.0
     for row in range(rows):
         solution[row] = rhs[row]
         for other in range(row + 1):
@@ -128,7 +137,8 @@ def dls_solve_into(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float
                 dot += jacobian[row, col] * jacobian[other, col]
             system[row, other] = dot
         system[row, row] += damping_squared
-    if not cholesky_solve_in_place(system, solution):
+        largest = max(largest, system[row, row])
+    if not cholesky_solve_in_place(system, solution, conditioning * largest if conditioning > 0.0 else 0.0):
         return False
     for col in range(columns):  # J^T y
         value = 0.0

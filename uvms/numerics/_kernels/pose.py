@@ -1,7 +1,8 @@
-"""Pose errors of one 6-D pose task (the Newton steps of ``uvms.solvers.ik``).
+"""Pose errors of a frame task: the Newton steps of ``uvms.solvers.ik`` and the rows of a prepared CLIK step.
 
-The rotation R_d R^T whose log3 is the orientation error, and the norm of the pose error
-e = [p_d - p; log3(R_d R^T)].
+The rotation R_d R^T whose log3 is the orientation error, the norm of the pose error e = [p_d - p; log3(R_d R^T)],
+Pinocchio's log3 itself (a port, step by step) and a frame task's rows (its world-aligned Jacobian and its error)
+from the joint kinematics Pinocchio computed (``uvms.solvers.clik``).
 
 The module imports numba, so it is loaded where a solver first uses it, not by ``import uvms``; its kernels
 compile at their first call and are cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
@@ -12,7 +13,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["pose_error_norm", "rotation_to_target"]
+__all__ = ["frame_rows_into", "log3_into", "pose_error_norm", "rotation_to_target"]
+
+EPSILON = np.finfo(np.float64).eps
+#: Pinocchio's TaylorSeriesExpansion<double>::precision<2>(): eps^(1/3), where log3 switches to its expansions.
+LOG3_PRECISION = EPSILON ** (1.0 / 3.0)
 
 
 @njit(cache=True)
@@ -48,3 +53,117 @@ def pose_error_norm(transform_frame_to_world: np.ndarray, target_translation: np
         error[3 + axis] = rotation_error[axis]
         squared += error[axis] * error[axis] + rotation_error[axis] * rotation_error[axis]
     return np.sqrt(squared)
+
+
+@njit(cache=True)
+def theta_axis(value: float, rotation: np.ndarray, first: int) -> tuple[float, float, float, float]:
+    """Pinocchio's ``internal::compute_theta_axis<first>``: (angle, unit axis (3 floats)) of a rotation near pi
+    from its ``first`` diagonal entry's ``value`` = 2 R_ii - tr R + 1."""
+    second, third = (first + 1) % 3, (first + 2) % 3
+    sign = 1.0 if rotation[third, second] >= rotation[second, third] else -1.0
+    s = np.sqrt(value + EPSILON + EPSILON * EPSILON) * sign  # keeps the root's argument >= 0 and s != 0
+    axis = np.empty(3)
+    axis[first] = s / 2.0
+    axis[second] = 1.0 / (2.0 * s) * (rotation[second, first] + rotation[first, second])
+    axis[third] = 1.0 / (2.0 * s) * (rotation[third, first] + rotation[first, third])
+    w = 1.0 / (2.0 * s) * (rotation[third, second] - rotation[second, third])
+    norm = np.sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2])
+    return 2.0 * np.arctan2(norm, w), axis[0] / norm, axis[1] / norm, axis[2] / norm
+
+
+@njit(cache=True)
+def log3_into(rotation: np.ndarray, out: np.ndarray) -> None:
+    """log3(R) (3,) [rad] of a rotation matrix R (3, 3), written to ``out``: Pinocchio's ``log3`` (spatial/log.hxx)
+    operation by operation (R renormalized, the Taylor expansion near 0, the axis of the largest diagonal entry near
+    pi), so that its numbers are Pinocchio's to rounding."""
+    normed = np.empty((3, 3))  # renormalize_rotation_matrix: columns 0 and 1 unit, then two cross products
+    for col in range(2):
+        norm = np.sqrt(rotation[0, col] * rotation[0, col] + rotation[1, col] * rotation[1, col]
+                       + rotation[2, col] * rotation[2, col])
+        for row in range(3):
+            normed[row, col] = rotation[row, col] / norm
+    for target, left, right in ((2, 0, 1), (0, 1, 2)):
+        normed[0, target] = normed[1, left] * normed[2, right] - normed[2, left] * normed[1, right]
+        normed[1, target] = normed[2, left] * normed[0, right] - normed[0, left] * normed[2, right]
+        normed[2, target] = normed[0, left] * normed[1, right] - normed[1, left] * normed[0, right]
+    trace = normed[0, 0] + (normed[1, 1] + normed[2, 2])  # Eigen's unrolled sum: a + (b + c)
+    cosine = (trace - 1.0) / 2.0
+    if cosine < -1.0 + LOG3_PRECISION:  # near pi: the axis from the largest of 2 R_ii - tr R + 1
+        values = np.empty(3)
+        for index in range(3):
+            values[index] = 2.0 * normed[index, index] - trace + 1.0
+        first = (0 if values[0] >= values[2] else 2) if values[0] >= values[1] else (1 if values[1] >= values[2] else 2)
+        theta, x, y, z = theta_axis(values[first], normed, first)
+        out[0], out[1], out[2] = theta * x, theta * y, theta * z
+        return
+    expansion = np.sqrt(2.0 * (1.0 - cosine) + EPSILON * EPSILON)
+    if trace <= 3.0 - LOG3_PRECISION:
+        theta = np.arccos(cosine) if trace >= -1.0 + LOG3_PRECISION else np.pi - expansion
+    else:
+        theta = expansion
+    x = 0.5 * (normed[2, 1] - normed[1, 2])  # unSkew
+    y = 0.5 * (normed[0, 2] - normed[2, 0])
+    z = 0.5 * (normed[1, 0] - normed[0, 1])
+    squared = x * x + y * y + z * z
+    if theta >= LOG3_PRECISION:
+        t = theta / np.sin(theta)
+    else:
+        t = 1.0 + squared / 6.0 + squared * squared * 3.0 / 40.0
+    out[0], out[1], out[2] = t * x, t * y, t * z
+
+
+@njit(cache=True)
+def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, joint_rotation: np.ndarray,
+                    placement: np.ndarray, columns: np.ndarray, rows: np.ndarray, target_translation: np.ndarray,
+                    target_rotation: np.ndarray, jacobian: np.ndarray, error: np.ndarray) -> None:
+    """The rows of a frame task (log orientation error) at the joint kinematics Pinocchio computed.
+
+    The frame's pose is oMi * placement (Pinocchio's SE3 product); its world-aligned Jacobian is that of
+    ``getFrameJacobian`` (LOCAL_WORLD_ALIGNED): each column c of the joint's support is the world Jacobian's
+    [v_c - p x w_c; w_c] (p the frame's position), every other column zero; the error is
+    e = [p_d - p; log3(R_d R^T)] (world axes). Jacobian and error are kept on the task's ``rows``.
+
+    Args:
+        joint_jacobians: the joints' Jacobians in the world frame (6, nv) (Pinocchio's ``data.J``).
+        joint_translation, joint_rotation: the placement oMi of the frame's joint, (3,) and (3, 3).
+        placement: the frame's placement in its joint (4, 4), homogeneous.
+        columns: the columns of v that move the joint (its support) (m,).
+        rows: the task's rows among [x, y, z, roll, pitch, yaw] (k,).
+        target_translation, target_rotation: p_d (3,) [m] and R_d (3, 3).
+        jacobian: (k, nv) written; error: (k,) written [m, rad].
+    """
+    rotation = np.empty((3, 3))
+    translation = np.empty(3)
+    for row in range(3):
+        translation[row] = joint_translation[row] + (joint_rotation[row, 0] * placement[0, 3]
+                                                     + joint_rotation[row, 1] * placement[1, 3]
+                                                     + joint_rotation[row, 2] * placement[2, 3])
+        for col in range(3):
+            rotation[row, col] = (joint_rotation[row, 0] * placement[0, col] + joint_rotation[row, 1] * placement[1, col]
+                                  + joint_rotation[row, 2] * placement[2, col])
+    full = np.empty(6)
+    for axis in range(3):
+        full[axis] = target_translation[axis] - translation[axis]
+    relative = np.empty((3, 3))  # R_d R^T
+    for row in range(3):
+        for col in range(3):
+            relative[row, col] = (target_rotation[row, 0] * rotation[col, 0] + target_rotation[row, 1] * rotation[col, 1]
+                                  + target_rotation[row, 2] * rotation[col, 2])
+    log3_into(relative, full[3:])
+    for index in range(rows.size):  # columns off the support stay zero
+        for col in range(jacobian.shape[1]):
+            jacobian[index, col] = 0.0
+    px, py, pz = translation[0], translation[1], translation[2]
+    for index in range(rows.size):
+        row = rows[index]
+        error[index] = full[row]
+        for col in columns:
+            wx, wy, wz = joint_jacobians[3, col], joint_jacobians[4, col], joint_jacobians[5, col]
+            if row == 0:
+                jacobian[index, col] = joint_jacobians[0, col] - (py * wz - pz * wy)
+            elif row == 1:
+                jacobian[index, col] = joint_jacobians[1, col] - (pz * wx - px * wz)
+            elif row == 2:
+                jacobian[index, col] = joint_jacobians[2, col] - (px * wy - py * wx)
+            else:
+                jacobian[index, col] = joint_jacobians[row, col]
