@@ -160,3 +160,132 @@ def test_pose_clik_is_clik_on_a_frame_task(rng):
         CLIKSolver(robot, task, damping=-1.0)
     with pytest.raises(uvms.UVMSError, match="finite"):
         hot.velocity(Configuration(robot, np.full(robot.nq, np.nan)))  # never a NaN velocity
+
+
+# ------------------------------------------------------------------ the prepared step of one frame task
+def numpy_clik(robot, task, q, gain, weights, damping, potential, alpha):
+    """v of CLIK from numpy alone: Pinocchio's frame Jacobian and pose, c = xdot_d + K e, z0 = -alpha grad S, and
+    v = L^-T A^T (A A^T + l^2 I)^-1 (c - J z0) + z0 with A = J L^-T (W = L L^T; l = 0: A^+ by numpy's SVD).
+    Returns (v, sigma_min of A, J, c)."""
+    data = robot.model.createData()
+    pin.computeJointJacobians(robot.model, data, q)
+    pin.updateFramePlacements(robot.model, data)
+    jacobian = pin.getFrameJacobian(robot.model, data, task.frame_id, pin.LOCAL_WORLD_ALIGNED)[task.rows]
+    pose = data.oMf[task.frame_id]
+    error = np.concatenate([task.target.translation - pose.translation,
+                            pin.log3(task.target.rotation @ pose.rotation.T)])[task.rows]
+    command = task.target_twist[task.rows] + np.asarray(gain_matrix(gain, task.dim)) @ error
+    z0 = -alpha * potential.gradient(q) if alpha else np.zeros(robot.nv)
+    transform = (np.eye(robot.nv) if weights is None else np.diag(weights ** -0.5) if weights.ndim == 1
+                 else np.linalg.inv(np.linalg.cholesky(weights)).T)
+    scaled = jacobian @ transform
+    singular = np.linalg.svd(scaled, compute_uv=False)
+    if isinstance(damping, uvms.solvers.VariableDamping):
+        damping = damping(singular[-1])
+    inverse = (np.linalg.pinv(scaled, rcond=1e-12) if damping == 0.0 else
+               scaled.T @ np.linalg.inv(scaled @ scaled.T + damping ** 2 * np.eye(task.dim)))
+    return transform @ inverse @ (command - jacobian @ z0) + z0, singular[-1], jacobian, command
+
+
+def gain_matrix(gain, size):
+    return np.diag(np.broadcast_to(gain, (size,))) if np.ndim(gain) < 2 else gain
+
+
+def test_the_prepared_frame_step_is_an_independent_numpy_clik(rng):
+    """One log frame task (all axes, or some) with every kind of gain, W, damping and the null space: v is the
+    numpy computation's to 1e-12 of |v|, sigma_min numpy's SVD of J L^-T, the residual |J v - c|."""
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
+    potential = uvms.tasks.JointLimitPotential(robot)
+    square = rng.normal(size=(robot.nv, robot.nv))
+    cases = [(None, 1.0, 1e-3, 0.0, None), (rng.uniform(0.5, 2, robot.nv), 2.0, 0.0, 1.5, None),
+             (square @ square.T + robot.nv * np.eye(robot.nv), rng.uniform(0.5, 2, 6), 0.05, 1.0, None),
+             (rng.uniform(0.5, 2, robot.nv), 1.0, uvms.solvers.VariableDamping(0.3, 0.2), 1.0, None),
+             (None, np.diag([1.0, 2.0, 3.0]) + 0.1, 1e-2, 1.0, ("x", "y", "z")),
+             (None, 1.5, 0.0, 0.0, ("x", "z", "yaw"))]
+    for weights, gain, damping, alpha, axes in cases:
+        task = uvms.FrameTask(robot, axes=axes, orientation="log")
+        solver = CLIKSolver(robot, task, gain=gain, weights=weights, damping=damping, potential=potential,
+                            alpha=alpha)
+        assert solver._frame_step is not None  # the prepared path serves this solver
+        for _ in range(8):
+            q = robot.random_configuration(rng)
+            task.set_target(robot.fk(robot.random_configuration(rng)))
+            task.set_target_velocity(rng.normal(size=6))
+            result = solver.velocity(Configuration(robot, q))
+            v, sigma_min, jacobian, command = numpy_clik(robot, task, q, gain, weights, damping, potential, alpha)
+            assert np.allclose(result.v, v, rtol=0, atol=1e-12 * max(1.0, np.abs(v).max()))
+            assert result.sigma_min == pytest.approx(sigma_min, rel=1e-12)
+            assert np.array_equal(result.levels[0].jacobian, jacobian)
+            assert np.allclose(result.command, command, rtol=0, atol=1e-14 * np.abs(command).max())
+            assert result.residual == pytest.approx(np.linalg.norm(jacobian @ result.v - result.command), abs=1e-15)
+
+
+def test_the_prepared_steps_diagnostics_are_computed_when_read_and_kept_with_their_result(rng):
+    """A fixed damping (Cholesky): sigma_min and the task's rows are not computed by the step; read later, after
+    other steps, they are those of the step's own configuration."""
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
+    task = uvms.FrameTask(robot, target=robot.fk(robot.random_configuration(rng)))
+    solver = CLIKSolver(robot, task, gain=1.0, damping=1e-3)
+    q = robot.random_configuration(rng)
+    first = solver.velocity(Configuration(robot, q))
+    assert "sigma_min" not in vars(first) and "levels" not in vars(first)  # not computed yet
+    configuration = Configuration(robot, robot.random_configuration(rng))
+    for _ in range(3):
+        solver.step(configuration, 0.01)
+    fresh = CLIKSolver(robot, task, gain=1.0, damping=1e-3).velocity(Configuration(robot, q))
+    assert first.sigma_min == fresh.sigma_min > 0 and np.array_equal(first.error, fresh.error)
+    assert np.array_equal(first.levels[0].jacobian, fresh.levels[0].jacobian) and first.residual == fresh.residual
+
+
+def test_a_prepared_step_is_its_velocity_then_pin_integrate_bit_for_bit(rng):
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
+    potential = uvms.tasks.JointLimitPotential(robot)
+    task = uvms.FrameTask(robot, target=robot.fk(robot.random_configuration(rng)))
+    solver = CLIKSolver(robot, task, gain=2.0, weights=rng.uniform(1, 2, robot.nv), damping=1e-4,
+                        potential=potential, alpha=1.0)
+    q = robot.random_configuration(rng)
+    configuration = Configuration(robot, q)
+    for dt in (0.01, 0.05, 1):
+        result = solver.step(configuration, dt)
+        expected = solver.velocity(Configuration(robot, q)).v
+        assert np.array_equal(result.v, expected)
+        q = pin.integrate(robot.model, q, expected * dt)  # Solver.step's numbers
+        assert np.array_equal(configuration.q, q)
+    for dt in (0.0, -0.01, np.nan, np.inf, None):
+        with pytest.raises(uvms.errors.SolverInputError, match="dt"):
+            solver.step(configuration, dt)
+
+
+def test_a_frame_task_on_a_mimic_joint_takes_the_general_path(rng):
+    """A frame on a mimic finger: Pinocchio's data.J has a column per mimic joint, so the prepared step does not
+    serve it; the general path gives the numpy CLIK of the frame's Jacobian (the mimic folded in)."""
+    robot = uvms.load(MIMIC_URDF)
+    task = uvms.FrameTask(robot, frame="tip_b", axes=("x", "y", "z"))
+    solver = CLIKSolver(robot, task, gain=1.0, damping=1e-3)
+    assert solver._frame_step is None
+    for _ in range(5):
+        q = robot.random_configuration(rng)
+        task.set_target(robot.fk(robot.random_configuration(rng), "tip_b"))
+        state = Configuration(robot, q)
+        jacobian, error, _ = task.terms(state)
+        expected = jacobian.T @ np.linalg.solve(jacobian @ jacobian.T + 1e-6 * np.eye(3), error)
+        assert np.allclose(solver.velocity(state).v, expected, rtol=0, atol=1e-12)
+
+
+MIMIC_URDF = """<robot name="mimic_probe">
+  <link name="world"/>
+  <joint name="base_joint" type="floating"><parent link="world"/><child link="hull"/></joint>
+  <link name="hull"><inertial><mass value="10"/><inertia ixx="0.3" iyy="0.4" izz="0.5" ixy="0" ixz="0" iyz="0"/>
+    </inertial></link>
+  <joint name="finger_a" type="revolute"><parent link="hull"/><child link="link_a"/><origin xyz="0.4 0.05 0"/>
+    <axis xyz="0 0 1"/><limit lower="-2" upper="2" effort="10" velocity="2"/></joint>
+  <link name="link_a"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>
+    </inertial></link>
+  <joint name="finger_b" type="revolute"><parent link="hull"/><child link="link_b"/><origin xyz="0.4 -0.05 0"/>
+    <axis xyz="0 1 0"/><limit lower="-4" upper="4" effort="10" velocity="3"/>
+    <mimic joint="finger_a" multiplier="-1.5" offset="0.2"/></joint>
+  <link name="link_b"><inertial><mass value="1"/><inertia ixx="0.01" iyy="0.01" izz="0.01" ixy="0" ixz="0" iyz="0"/>
+    </inertial></link>
+  <joint name="tip_b_joint" type="fixed"><parent link="link_b"/><child link="tip_b"/><origin xyz="0.15 0 0"/></joint>
+  <link name="tip_b"/>
+</robot>"""
