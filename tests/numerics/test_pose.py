@@ -8,7 +8,8 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from uvms.numerics._kernels.pose import frame_rows_into, log3_into
+from uvms.numerics._kernels.pose import frame_rows_into, log3_into, matrix_to_rpy
+from uvms.robot.configuration import Configuration
 from uvms.solvers.clik import support_columns
 
 from conftest import shipped
@@ -59,9 +60,40 @@ def test_a_frame_tasks_rows_are_pinocchios_frame_jacobian_and_pose_error(name, r
                                         pin.log3(product_in_order(target.rotation, pose.rotation.T))])[rows]
                 jacobian, got = np.empty((rows.size, model.nv)), np.empty(rows.size)
                 frame_rows_into(data.J, data.oMi[joint].translation, data.oMi[joint].rotation, placement, columns,
-                                rows, target.translation, target.rotation, jacobian, got)
+                                rows, target.translation, target.rotation, np.zeros(0), jacobian, got)
                 assert np.array_equal(jacobian, expected)
                 assert np.array_equal(got, error)
         if name == "xiang2019":  # the other arm's joints do not move this frame
             other = np.setdiff1d(np.arange(robot.n_vehicle, model.nv), columns)
             assert other.size and np.all(jacobian[:, other] == 0.0)
+
+
+def test_the_ported_matrix_to_rpy_is_pinocchios_bit_for_bit(rng):
+    """Every branch: pitch past pi/2 folded back, yaw of either sign, planar rotations about z."""
+    rotations = [pin.exp3(rng.normal(size=3) * scale) for scale in (0.01, 1.0, 3.0, 10.0) for _ in range(200)]
+    rotations += [pin.rpy.rpyToMatrix(0.0, 0.0, yaw) for yaw in rng.uniform(-4, 4, 200)]
+    for rotation in rotations:
+        assert np.array_equal(np.array(matrix_to_rpy(rotation)), pin.rpy.matrixToRpy(rotation))
+
+
+@pytest.mark.parametrize("name", ["hoang2011", "bluerov2_alpha5"])
+def test_a_frame_tasks_euler_rows_are_the_tasks_terms_bit_for_bit(name, rng):
+    """The Euler error (rpy_d - rpy wrapped) and the rows E(rpy)^-1 J_omega are FrameTask.terms' numbers."""
+    robot = shipped(name)
+    model = robot.model
+    axes = ("x", "y", "yaw") if name == "hoang2011" else ("x", "z", "roll", "pitch", "yaw")
+    task = uvms.FrameTask(robot, axes=axes, orientation="euler")
+    frame = model.frames[task.frame_id]
+    placement = np.ascontiguousarray(frame.placement.homogeneous)
+    columns = support_columns(model, frame.parentJoint)
+    rows = np.asarray(task.rows, dtype=np.int64)
+    for _ in range(40):
+        task.set_target(robot.fk(robot.random_configuration(rng)))
+        state = Configuration(robot, robot.random_configuration(rng))
+        expected_jacobian, expected_error, _ = task.terms(state)
+        translation, rotation, target_rpy, _ = task.target_terms()
+        joint_jacobians, joint_translation, joint_rotation = state.joint_arrays(frame.parentJoint)
+        jacobian, error = np.empty((task.dim, model.nv)), np.empty(task.dim)
+        frame_rows_into(joint_jacobians, joint_translation, joint_rotation, placement, columns, rows, translation,
+                        rotation, target_rpy, jacobian, error)
+        assert np.array_equal(jacobian, expected_jacobian) and np.array_equal(error, expected_error)

@@ -37,9 +37,8 @@ class CLIKSolver(Solver):
     """The CLIK of a fixed task set (scenario method "clik"), its inputs checked and its pieces prepared once.
 
     The one implementation of CLIK: build it once, call :meth:`velocity` (or :meth:`step`) at every
-    evaluation. What changes between calls is the configuration and the tasks' targets. One frame task with the
-    log orientation error on an actuated vehicle (or a fixed base), without joint clamping or mimic joints, is
-    solved by a prepared step (:class:`FrameStep`: one compiled call after Pinocchio's joint kinematics, the
+    evaluation. What changes between calls is the configuration and the tasks' targets. One frame task on an
+    actuated vehicle (or a fixed base), without joint clamping or mimic joints, is solved by a prepared step (:class:`FrameStep`: one compiled call after Pinocchio's joint kinematics, the
     numbers of the general path to rounding); sigma_min and the task's rows are then computed when read.
 
     Args:
@@ -223,8 +222,12 @@ def solve_with_held(
 
 
 
+#: The target angles of a frame task with the log orientation error (the kernel's "no Euler angles").
+NO_ANGLES = np.zeros(0)
+
+
 class FrameStep:
-    """The prepared CLIK of one frame task with the log orientation error (a :class:`CLIKSolver`'s fast path).
+    """The prepared CLIK of one frame task (a :class:`CLIKSolver`'s fast path).
 
     After Pinocchio's joint kinematics (one ``computeJointJacobians`` per configuration,
     :meth:`Configuration.joint_arrays`), one compiled call (:func:`~uvms.numerics._kernels.clik.frame_clik_into`)
@@ -249,11 +252,10 @@ class FrameStep:
 
     @staticmethod
     def serves(solver: CLIKSolver) -> bool:
-        """Whether ``solver`` is one frame task with the log error on a robot without mimic joints, not free
-        floating, without joint clamping: what :func:`~uvms.numerics._kernels.clik.frame_clik_into` computes."""
+        """Whether ``solver`` is one frame task on a robot without mimic joints, not free floating, without joint
+        clamping: what :func:`~uvms.numerics._kernels.clik.frame_clik_into` computes."""
         tasks = solver.tasks
-        return (len(tasks) == 1 and isinstance(tasks[0], FrameTask) and tasks[0].orientation == "log"
-                and not solver.free_floating and not solver.enforce_limits and not solver.robot.mimic_joint_names)
+        return (len(tasks) == 1 and isinstance(tasks[0], FrameTask) and not solver.free_floating and not solver.enforce_limits and not solver.robot.mimic_joint_names)
 
     def velocity(self, configuration: Configuration) -> SolverResult:
         """The CLIK velocity at ``configuration`` (checked by the solver); sigma_min and the rows when read.
@@ -274,11 +276,12 @@ class FrameStep:
     def _solve(self, configuration: Configuration, dt: float) -> SolverResult:
         """The result at ``configuration``, and v dt in the displacement buffer when dt > 0."""
         joint_jacobians, translation, rotation = configuration.joint_arrays(self.joint)
-        target_translation, target_rotation, _, feedforward = self.task.target_terms()
+        target_translation, target_rotation, target_rpy, feedforward = self.task.target_terms()
         v, record = np.empty(self.nv), np.empty(self.record_size)
         converged, sigma_min, used = self._kernel(joint_jacobians, translation, rotation, configuration.q,
-                                                  target_translation, target_rotation, feedforward, self.indices,
-                                                  self.constants, v, record, dt, self._displacement)
+                                                  target_translation, target_rotation,
+                                                  NO_ANGLES if target_rpy is None else target_rpy, feedforward,
+                                                  self.indices, self.constants, v, record, dt, self._displacement)
         if not converged:
             raise NumericalError(f"the SVD of the {self.count}x{self.nv} task Jacobian did not converge: is it finite?")
         return SolverResult(v=v, sigma_min=(lambda: self._sigma_min(record, self.indices, self.constants))

@@ -158,7 +158,8 @@ def frame_constants(indices: np.ndarray, constants: np.ndarray):
 
 @njit(cache=True)
 def frame_sigma_min(record: np.ndarray, indices: np.ndarray, constants: np.ndarray) -> float:
-    """sigma_min of the weighted task rows J L^-T a :func:`frame_clik_into` step recorded (:func:`weighted_sigma_min`)."""
+    """sigma_min of the weighted task rows J L^-T that a :func:`frame_clik_into` step recorded
+    (:func:`weighted_sigma_min`)."""
     (rows, _, _, _, _, _, _, inverse_sqrt, transform, _, _, _) = frame_constants(indices, constants)
     size = (record.size // rows.size) - 2  # nv
     return weighted_sigma_min(record[:rows.size * size].reshape((rows.size, size)), inverse_sqrt, transform)
@@ -167,9 +168,9 @@ def frame_sigma_min(record: np.ndarray, indices: np.ndarray, constants: np.ndarr
 @njit(cache=True)
 def frame_clik_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, joint_rotation: np.ndarray,
                     q: np.ndarray, target_translation: np.ndarray, target_rotation: np.ndarray,
-                    feedforward: np.ndarray, indices: np.ndarray, constants: np.ndarray, v: np.ndarray,
-                    record: np.ndarray, dt: float, displacement: np.ndarray) -> tuple[bool, float, float]:
-    """The CLIK velocity of one frame task (log orientation error) after Pinocchio's joint kinematics, in one call.
+                    target_rpy: np.ndarray, feedforward: np.ndarray, indices: np.ndarray, constants: np.ndarray,
+                    v: np.ndarray, record: np.ndarray, dt: float, displacement: np.ndarray) -> tuple[bool, float, float]:
+    """The CLIK velocity of one frame task after Pinocchio's joint kinematics, in one call.
 
     The task's rows (:func:`~.pose.frame_rows_into`), the command c = xdot_d + K e, the null-space motion z0
     (:func:`joint_limit_motion_into`) and v = J_W^+ (c - J z0) + z0 (:func:`clik_solution_into`): the numbers of
@@ -178,7 +179,8 @@ def frame_clik_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
 
     Args:
         joint_jacobians, joint_translation, joint_rotation: as :func:`~.pose.frame_rows_into`; q: (nq,).
-        target_translation, target_rotation: p_d (3,) [m] and R_d (3, 3); feedforward: xdot_d (k,) on the rows.
+        target_translation, target_rotation, target_rpy: p_d (3,) [m], R_d (3, 3) and rpy_d (3,) (empty: the log
+            error), as :func:`~.pose.frame_rows_into`; feedforward: xdot_d (k,) on the rows.
         indices, constants: the prepared arrays (:func:`frame_constants`; alpha 0: no null-space motion).
         v: (nv,) written with the velocity.
         record: (k (nv + 2),) written with the task's Jacobian rows (k, nv), its error e (k,) and the command (k,).
@@ -194,7 +196,7 @@ def frame_clik_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
     error = record[count * size:count * (size + 1)]
     command = record[count * (size + 1):]
     frame_rows_into(joint_jacobians, joint_translation, joint_rotation, placement, columns, rows, target_translation,
-                    target_rotation, jacobian, error)
+                    target_rotation, target_rpy, jacobian, error)
     for row in range(count):
         total = 0.0
         for col in range(count):

@@ -1,8 +1,8 @@
 """Pose errors of a frame task: the Newton steps of ``uvms.solvers.ik`` and the rows of a prepared CLIK step.
 
 The rotation R_d R^T whose log3 is the orientation error, the norm of the pose error e = [p_d - p; log3(R_d R^T)],
-Pinocchio's log3 itself (a port, step by step) and a frame task's rows (its world-aligned Jacobian and its error)
-from the joint kinematics Pinocchio computed (``uvms.solvers.clik``).
+Pinocchio's log3 and matrixToRpy themselves (ports, operation by operation) and a frame task's rows (its
+Jacobian and its error, log or Euler) from the joint kinematics Pinocchio computed (``uvms.solvers.clik``).
 
 The module imports numba, so it is loaded where a solver first uses it, not by ``import uvms``; its kernels
 compile at their first call and are cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["frame_rows_into", "log3_into", "pose_error_norm", "rotation_to_target"]
+__all__ = ["frame_rows_into", "log3_into", "matrix_to_rpy", "pose_error_norm", "rotation_to_target"]
 
 EPSILON = np.finfo(np.float64).eps
 #: Pinocchio's TaylorSeriesExpansion<double>::precision<2>(): eps^(1/3), where log3 switches to its expansions.
@@ -113,15 +113,40 @@ def log3_into(rotation: np.ndarray, out: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def matrix_to_rpy(rotation: np.ndarray) -> tuple[float, float, float]:
+    """(roll, pitch, yaw) [rad] of R = Rz(yaw) Ry(pitch) Rx(roll): Pinocchio's ``rpy.matrixToRpy`` operation by
+    operation (Eigen's ``eulerAngles(2, 1, 0)``, then pitch brought into [-pi/2, pi/2]), its numbers bit for bit."""
+    yaw = np.arctan2(rotation[1, 0], rotation[0, 0])
+    c2 = np.sqrt(rotation[2, 2] * rotation[2, 2] + rotation[2, 1] * rotation[2, 1])
+    if yaw < 0.0:
+        yaw += np.pi
+        pitch = np.arctan2(-rotation[2, 0], -c2)
+    else:
+        pitch = np.arctan2(-rotation[2, 0], c2)
+    s1, c1 = np.sin(yaw), np.cos(yaw)
+    roll = np.arctan2(s1 * rotation[0, 2] - c1 * rotation[1, 2], c1 * rotation[1, 1] - s1 * rotation[0, 1])
+    if pitch < -np.pi / 2:
+        pitch += 2 * np.pi
+    if pitch > np.pi / 2:
+        pitch = np.pi - pitch
+        roll = roll + np.pi if roll < 0.0 else roll - np.pi
+        yaw -= np.pi
+    return roll, pitch, yaw
+
+
+@njit(cache=True)
 def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, joint_rotation: np.ndarray,
                     placement: np.ndarray, columns: np.ndarray, rows: np.ndarray, target_translation: np.ndarray,
-                    target_rotation: np.ndarray, jacobian: np.ndarray, error: np.ndarray) -> None:
-    """The rows of a frame task (log orientation error) at the joint kinematics Pinocchio computed.
+                    target_rotation: np.ndarray, target_rpy: np.ndarray, jacobian: np.ndarray,
+                    error: np.ndarray) -> None:
+    """The rows of a frame task (``uvms.tasks.frame``) at the joint kinematics Pinocchio computed.
 
     The frame's pose is oMi * placement (Pinocchio's SE3 product); its world-aligned Jacobian is that of
     ``getFrameJacobian`` (LOCAL_WORLD_ALIGNED): each column c of the joint's support is the world Jacobian's
-    [v_c - p x w_c; w_c] (p the frame's position), every other column zero; the error is
-    e = [p_d - p; log3(R_d R^T)] (world axes). Jacobian and error are kept on the task's ``rows``.
+    [v_c - p x w_c; w_c] (p the frame's position), every other column zero. The error is [p_d - p; log3(R_d R^T)]
+    (world axes), or with ``target_rpy`` given [p_d - p; rpy_d - rpy wrapped to [-pi, pi)] with the angular rows
+    E(rpy)^-1 w (rpy rates; E^-1 Pinocchio's ``computeRpyJacobianInverse`` in the world frame, each product summed
+    in index order). Jacobian and error are kept on the task's ``rows``.
 
     Args:
         joint_jacobians: the joints' Jacobians in the world frame (6, nv) (Pinocchio's ``data.J``).
@@ -130,6 +155,7 @@ def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
         columns: the columns of v that move the joint (its support) (m,).
         rows: the task's rows among [x, y, z, roll, pitch, yaw] (k,).
         target_translation, target_rotation: p_d (3,) [m] and R_d (3, 3).
+        target_rpy: rpy_d (3,) [rad] of the Euler error, or empty for the log error.
         jacobian: (k, nv) written; error: (k,) written [m, rad].
     """
     rotation = np.empty((3, 3))
@@ -139,17 +165,31 @@ def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
                                                      + joint_rotation[row, 1] * placement[1, 3]
                                                      + joint_rotation[row, 2] * placement[2, 3])
         for col in range(3):
-            rotation[row, col] = (joint_rotation[row, 0] * placement[0, col] + joint_rotation[row, 1] * placement[1, col]
+            rotation[row, col] = (joint_rotation[row, 0] * placement[0, col]
+                                  + joint_rotation[row, 1] * placement[1, col]
                                   + joint_rotation[row, 2] * placement[2, col])
     full = np.empty(6)
     for axis in range(3):
         full[axis] = target_translation[axis] - translation[axis]
-    relative = np.empty((3, 3))  # R_d R^T
-    for row in range(3):
-        for col in range(3):
-            relative[row, col] = (target_rotation[row, 0] * rotation[col, 0] + target_rotation[row, 1] * rotation[col, 1]
-                                  + target_rotation[row, 2] * rotation[col, 2])
-    log3_into(relative, full[3:])
+    euler = target_rpy.size > 0
+    rates = np.zeros((3, 3))  # E(rpy)^-1, world frame
+    if euler:
+        roll, pitch, yaw = matrix_to_rpy(rotation)
+        for axis, angle in ((0, roll), (1, pitch), (2, yaw)):
+            full[3 + axis] = (target_rpy[axis] - angle + np.pi) % (2.0 * np.pi) - np.pi  # uvms wrap_angles
+        sp, cp, sy, cy = np.sin(pitch), np.cos(pitch), np.sin(yaw), np.cos(yaw)
+        tp = sp / cp
+        rates[0, 0], rates[0, 1] = cy / cp, sy / cp
+        rates[1, 0], rates[1, 1] = -sy, cy
+        rates[2, 0], rates[2, 1], rates[2, 2] = cy * tp, sy * tp, 1.0
+    else:
+        relative = np.empty((3, 3))  # R_d R^T
+        for row in range(3):
+            for col in range(3):
+                relative[row, col] = (target_rotation[row, 0] * rotation[col, 0]
+                                      + target_rotation[row, 1] * rotation[col, 1]
+                                      + target_rotation[row, 2] * rotation[col, 2])
+        log3_into(relative, full[3:])
     for index in range(rows.size):  # columns off the support stay zero
         for col in range(jacobian.shape[1]):
             jacobian[index, col] = 0.0
@@ -165,5 +205,8 @@ def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
                 jacobian[index, col] = joint_jacobians[1, col] - (pz * wx - px * wz)
             elif row == 2:
                 jacobian[index, col] = joint_jacobians[2, col] - (px * wy - py * wx)
+            elif euler:
+                rate = rates[row - 3]
+                jacobian[index, col] = (rate[0] * wx + rate[1] * wy) + rate[2] * wz
             else:
                 jacobian[index, col] = joint_jacobians[row, col]
