@@ -169,7 +169,8 @@ def frame_sigma_min(record: np.ndarray, indices: np.ndarray, constants: np.ndarr
 def frame_clik_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, joint_rotation: np.ndarray,
                     q: np.ndarray, target_translation: np.ndarray, target_rotation: np.ndarray,
                     target_rpy: np.ndarray, feedforward: np.ndarray, indices: np.ndarray, constants: np.ndarray,
-                    v: np.ndarray, record: np.ndarray, dt: float, displacement: np.ndarray) -> tuple[bool, float, float]:
+                    v: np.ndarray, record: np.ndarray, dt: float,
+                    displacement: np.ndarray) -> tuple[bool, float, float]:
     """The CLIK velocity of one frame task after Pinocchio's joint kinematics, in one call.
 
     The task's rows (:func:`~.pose.frame_rows_into`), the command c = xdot_d + K e, the null-space motion z0
