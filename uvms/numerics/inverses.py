@@ -295,7 +295,8 @@ class WeightedInverse:
         """sigma_min of the weighted J (k, n) (0 when k > n): the number the SVD of :meth:`solve` reports."""
         from ._kernels.clik import weighted_sigma_min  # numba: loaded at the first solve, not by ``import uvms``
 
-        return float(weighted_sigma_min(np.ascontiguousarray(jacobian), *self.kernel_weights))
+        rows, columns = jacobian.shape
+        return float(weighted_sigma_min(np.ascontiguousarray(jacobian).ravel(), rows, columns, *self.kernel_weights))
 
     def __call__(self, jacobian: np.ndarray, damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
         """(inverse (n, k), sigma_min of the weighted J, damping used) of J (k, n), ``damping`` already checked

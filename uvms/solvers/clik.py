@@ -14,6 +14,7 @@ kinematics (``benchmarks/bench_clik.py``).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -175,12 +176,17 @@ class CLIKSolver(Solver):
         """
         if self._frame_step is None:
             return super().step(configuration, dt)
-        return self._frame_step.step(self._checked(configuration), checked_step(dt))
+        if not (dt.__class__ is float and 0.0 < dt < math.inf):  # a positive float passes without a call
+            dt = checked_step(dt)
+        frame_step = self._frame_step
+        result = frame_step.solve(self._checked(configuration), dt)
+        configuration.update(pin.integrate(configuration.model, configuration.q, frame_step.displacement), check=False)
+        return result
 
     def velocity(self, configuration: Configuration) -> SolverResult:
         """The CLIK velocity at ``configuration`` and its diagnostics (the residuals per task, when read)."""
         if self._frame_step is not None:
-            return self._frame_step.velocity(self._checked(configuration))
+            return self._frame_step.solve(self._checked(configuration), 0.0)
         v, jacobian, error, command, sigma_min, used, held_names = self._solution(self._checked(configuration))
         if len(self.tasks) == 1:
             levels = (SolvedRows(0, jacobian, command, error),)
@@ -241,16 +247,17 @@ class FrameStep:
     """
 
     def __init__(self, solver: CLIKSolver, gain: float | np.ndarray) -> None:
-        from ..numerics._kernels.clik import frame_clik_into, frame_sigma_min  # numba: loaded with the solver
+        from ..numerics._kernels.clik import frame_clik_into, weighted_sigma_min  # numba: loaded with the solver
 
-        self._kernel, self._sigma_min = frame_clik_into, frame_sigma_min
+        self._kernel, self._sigma_min = frame_clik_into, weighted_sigma_min
+        self._weights = solver._inverse.kernel_weights  # (W^-1/2 (n,) or empty, L^-T (n, n) or empty)
         task: FrameTask = solver.tasks[0]
         model = solver.robot.model
         frame = model.frames[task.frame_id]
         self.task, self.joint, self.nv, self.count = task, int(frame.parentJoint), model.nv, task.dim
         self.indices, self.constants = frame_constants(solver, frame, gain)
         self.record_size = self.count * (self.nv + 2)  # the task's rows (k, nv), error (k,), command (k,)
-        self._displacement = np.empty(self.nv)  # v dt of a step, read by pin.integrate at once (never kept)
+        self.displacement = np.empty(self.nv)  # v dt of a step, read by pin.integrate at once (never kept)
 
     @staticmethod
     def serves(solver: CLIKSolver) -> bool:
@@ -260,35 +267,25 @@ class FrameStep:
         return (len(tasks) == 1 and isinstance(tasks[0], FrameTask) and not solver.free_floating
                 and not solver.enforce_limits and not solver.robot.mimic_joint_names)
 
-    def velocity(self, configuration: Configuration) -> SolverResult:
-        """The CLIK velocity at ``configuration`` (checked by the solver); sigma_min and the rows when read.
+    def solve(self, configuration: Configuration, dt: float) -> SolverResult:
+        """The CLIK velocity at ``configuration`` (checked by the solver), sigma_min and the rows when read; with
+        dt > 0 [s], v dt written to :attr:`displacement` (what ``pin.integrate`` adds in a step).
 
         Raises:
             UVMSError: the task has no target.
             NumericalError: a non-finite Jacobian (the SVD did not converge).
         """
-        return self._solve(configuration, 0.0)
-
-    def step(self, configuration: Configuration, dt: float) -> SolverResult:
-        """:meth:`velocity`, then ``configuration`` moved to pin.integrate(q, v dt) (dt > 0 [s], checked), in place:
-        ``Solver.step``'s numbers, v dt written by the compiled call."""
-        result = self._solve(configuration, dt)
-        configuration.update(pin.integrate(configuration.model, configuration.q, self._displacement), check=False)
-        return result
-
-    def _solve(self, configuration: Configuration, dt: float) -> SolverResult:
-        """The result at ``configuration``, and v dt in the displacement buffer when dt > 0."""
         joint_jacobians, translation, rotation = configuration.joint_arrays(self.joint)
         target_translation, target_rotation, target_rpy, feedforward = self.task.target_terms()
         v, record = np.empty(self.nv), np.empty(self.record_size)
         converged, sigma_min, used = self._kernel(joint_jacobians, translation, rotation, configuration.q,
                                                   target_translation, target_rotation,
                                                   NO_ANGLES if target_rpy is None else target_rpy, feedforward,
-                                                  self.indices, self.constants, v, record, dt, self._displacement)
+                                                  self.indices, self.constants, v, record, dt, self.displacement)
         if not converged:
             raise NumericalError(f"the SVD of the {self.count}x{self.nv} task Jacobian did not converge: is it finite?")
-        return SolverResult(v=v, sigma_min=(lambda: self._sigma_min(record, self.indices, self.constants))
-                            if sigma_min < 0.0 else sigma_min, damping=used, levels=lambda: self.levels(record))
+        return SolverResult(v, (lambda: self._sigma_min(record, self.count, self.nv, *self._weights))
+                            if sigma_min < 0.0 else sigma_min, used, lambda: self.levels(record))
 
     def jacobian(self, record: np.ndarray) -> np.ndarray:
         """The task's rows (k, nv) in a step's record."""

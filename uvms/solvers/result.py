@@ -121,7 +121,7 @@ class SolverResult:
     Built at every solver call, so building it costs a few attribute writes: what a solver can compute later
     (sigma_min after a Cholesky solve, the rows of a prepared step) it may give as a function of no argument,
     called when the field is first read; the residuals, command and error are computed from the levels when
-    first read.
+    first read. v, sigma_min, damping and levels may be given by position, the others by name.
 
     Attributes:
         v: velocity (nv,) in the order of Pinocchio's v (vehicle twist local, then arm).
@@ -143,12 +143,17 @@ class SolverResult:
     """
 
     def __init__(self, v: np.ndarray, sigma_min: float | Callable[[], float], damping: float,
+                 levels: tuple[SolvedRows, ...] | Callable[[], tuple[SolvedRows, ...]] = (), *,
                  free_floating: bool = False, limits_active: tuple[str, ...] = (), scales: tuple[float, ...] = (),
                  speed_ratio: float = 0.0, extras: Mapping[str, object] | None = None,
-                 levels: tuple[SolvedRows, ...] | Callable[[], tuple[SolvedRows, ...]] = (),
                  binding: Mapping[str, bool] | None = None) -> None:
-        self.v, self.damping, self.free_floating, self.limits_active = v, damping, free_floating, limits_active
-        self.scales, self.speed_ratio, self.binding = scales, speed_ratio, binding
+        self.v = v
+        self.damping = damping
+        self.free_floating = free_floating
+        self.limits_active = limits_active
+        self.scales = scales
+        self.speed_ratio = speed_ratio
+        self.binding = binding
         self.extras = MappingProxyType(dict(extras)) if extras else NO_EXTRAS  # read-only, whatever mapping given
         if callable(sigma_min):  # computed when read
             self._sigma_min = sigma_min

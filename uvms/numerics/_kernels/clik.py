@@ -15,11 +15,11 @@ from numba import njit
 
 from .dense import apply, dls_solve_into
 from .pose import frame_rows_into
-from .svd import decompose, smallest_singular_value
+from .svd import decompose
 from .weighted import weighted_columns
 
 __all__ = ["CHOLESKY_CONDITIONING", "NOT_COMPUTED", "clik_solution_into", "frame_clik_into", "frame_constants",
-           "frame_sigma_min", "joint_limit_motion_into", "weighted_sigma_min"]
+           "joint_limit_motion_into", "weighted_sigma_min"]
 
 #: A fixed damping l > 0 solves (J L^-T)(J L^-T)^T + l^2 I by Cholesky when each squared pivot exceeds this fraction
 #: of its largest diagonal entry (a condition number of about 1e4 or less: the SVD's solution to about 1e-12,
@@ -102,10 +102,15 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
 
 
 @njit(cache=True)
-def weighted_sigma_min(jacobian: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray) -> float:
-    """sigma_min of J L^-T (0 when k > n), what :func:`clik_solution_into`'s SVD reports, computed alone
-    (:func:`~.svd.smallest_singular_value`; NaN for a non-finite J)."""
-    return smallest_singular_value(weighted_columns(jacobian, inverse_sqrt, transform))
+def weighted_sigma_min(values: np.ndarray, rows: int, columns: int, inverse_sqrt: np.ndarray,
+                       transform: np.ndarray) -> float:
+    """sigma_min of J L^-T (0 when k > n) of J (k, n) held row by row in the first k n ``values``: the number
+    :func:`clik_solution_into`'s SVD reports (the same :func:`~.svd.decompose`, compiled once for both), computed
+    alone; NaN for a non-finite J."""
+    jacobian = values[:rows * columns].reshape((rows, columns))
+    converged, _, _, _, _, sigma_min, _ = decompose(weighted_columns(jacobian, inverse_sqrt, transform), 0.0, 0.0,
+                                                    0.0, 0.0, 0.0)
+    return sigma_min if converged else np.nan
 
 
 @njit(cache=True)
@@ -154,15 +159,6 @@ def frame_constants(indices: np.ndarray, constants: np.ndarray):
     range_squared = constants[last + 2 * bounded:last + 3 * bounded]
     return (rows, columns, q_index, v_index, placement, gain, settings, inverse_sqrt, transform, weights, middle,
             range_squared)
-
-
-@njit(cache=True)
-def frame_sigma_min(record: np.ndarray, indices: np.ndarray, constants: np.ndarray) -> float:
-    """sigma_min of the weighted task rows J L^-T that a :func:`frame_clik_into` step recorded
-    (:func:`weighted_sigma_min`)."""
-    (rows, _, _, _, _, _, _, inverse_sqrt, transform, _, _, _) = frame_constants(indices, constants)
-    size = (record.size // rows.size) - 2  # nv
-    return weighted_sigma_min(record[:rows.size * size].reshape((rows.size, size)), inverse_sqrt, transform)
 
 
 @njit(cache=True)

@@ -175,8 +175,9 @@ def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
     rates = np.zeros((3, 3))  # E(rpy)^-1, world frame
     if euler:
         roll, pitch, yaw = matrix_to_rpy(rotation)
-        for axis, angle in ((0, roll), (1, pitch), (2, yaw)):
-            full[3 + axis] = (target_rpy[axis] - angle + np.pi) % (2.0 * np.pi) - np.pi  # uvms wrap_angles
+        full[3] = (target_rpy[0] - roll + np.pi) % (2.0 * np.pi) - np.pi  # uvms wrap_angles
+        full[4] = (target_rpy[1] - pitch + np.pi) % (2.0 * np.pi) - np.pi
+        full[5] = (target_rpy[2] - yaw + np.pi) % (2.0 * np.pi) - np.pi
         sp, cp, sy, cy = np.sin(pitch), np.cos(pitch), np.sin(yaw), np.cos(yaw)
         tp = sp / cp
         rates[0, 0], rates[0, 1] = cy / cp, sy / cp

@@ -17,8 +17,8 @@ from numba import njit
 JACOBI_SWEEPS = 64
 EPSILON = np.finfo(np.float64).eps
 
-__all__ = ["JACOBI_SWEEPS", "decompose", "orthogonalize_rows", "smallest_singular_value",
-           "svd_inverse_into", "variable_damping_value", "zero_negligible_row"]
+__all__ = ["JACOBI_SWEEPS", "decompose", "orthogonalize_rows", "svd_inverse_into", "variable_damping_value",
+           "zero_negligible_row"]
 
 
 @njit(cache=True)
@@ -40,9 +40,8 @@ def zero_negligible_row(rows: np.ndarray, row: int) -> None:
 def orthogonalize_rows(rows: np.ndarray, rotation: np.ndarray) -> bool:
     """One-sided (Hestenes) Jacobi SVD: rotate the rows of B (k, n) in place until they are mutually orthogonal.
 
-    On return B_out = G B_in with G (k, k) orthogonal (written to ``rotation``; an empty ``rotation`` (0, 0):
-    not accumulated, for the singular values alone): the row norms of B_out are the singular values and
-    B_in = G^T B_out. Pairs are rotated until |b_i . b_j| <= n eps |b_i| |b_j|, which gives
+    On return B_out = G B_in with G (k, k) orthogonal (written to ``rotation``): the row norms of B_out are the
+    singular values and B_in = G^T B_out. Pairs are rotated until |b_i . b_j| <= n eps |b_i| |b_j|, which gives
     the singular values to high relative accuracy (Demmel and Veselic 1992). A row whose norm falls to the
     rounding level of the matrix (n eps |B|_F) is set to zero: its direction is noise that no rotation can
     make orthogonal, and its singular value is zero to working precision.
@@ -51,8 +50,7 @@ def orthogonalize_rows(rows: np.ndarray, rotation: np.ndarray) -> bool:
         False when the rows are not orthogonal after ``JACOBI_SWEEPS`` sweeps (non-finite input).
     """
     count, length = rows.shape
-    accumulate = rotation.shape[0] > 0
-    for row in range(rotation.shape[0]):
+    for row in range(count):
         for col in range(count):
             rotation[row, col] = 1.0 if row == col else 0.0
     tolerance = length * EPSILON
@@ -87,11 +85,10 @@ def orthogonalize_rows(rows: np.ndarray, rotation: np.ndarray) -> bool:
                     a, b = rows[first, col], rows[second, col]
                     rows[first, col] = cosine * a - sine * b
                     rows[second, col] = sine * a + cosine * b
-                if accumulate:
-                    for col in range(count):
-                        a, b = rotation[first, col], rotation[second, col]
-                        rotation[first, col] = cosine * a - sine * b
-                        rotation[second, col] = sine * a + cosine * b
+                for col in range(count):
+                    a, b = rotation[first, col], rotation[second, col]
+                    rotation[first, col] = cosine * a - sine * b
+                    rotation[second, col] = sine * a + cosine * b
         if not rotated:
             return True
     return False
@@ -171,26 +168,3 @@ def svd_inverse_into(jacobian: np.ndarray, damping: float, epsilon: float, lambd
             for j in range(left.shape[1]):
                 out[i, j] += weighted * left[row, j]
     return True, sigma_min, used
-
-
-@njit(cache=True)
-def smallest_singular_value(matrix: np.ndarray) -> float:
-    """sigma_min of A (k, n) alone, the number :func:`decompose` reports (0 when k > n): the same rotations of A's
-    rows by :func:`orthogonalize_rows`, without accumulating them.
-
-    Returns:
-        sigma_min, or NaN when the rotation did not converge (a non-finite A).
-    """
-    rows, columns = matrix.shape
-    if rows > columns or rows == 0:
-        return 0.0
-    work = matrix.copy()
-    if not orthogonalize_rows(work, np.empty((0, 0))):
-        return np.nan
-    smallest = np.inf
-    for row in range(rows):
-        value = 0.0
-        for col in range(columns):
-            value += work[row, col] * work[row, col]
-        smallest = min(smallest, np.sqrt(value))
-    return smallest
