@@ -28,8 +28,7 @@ from ..robot.configuration import Configuration
 from ..tasks.frame import FrameTask
 from ..tasks.joint_limits import JointLimitPotential, NullspaceTerms
 from ..tasks.task import Task, as_task_list
-from ..numerics.checks import (check_damping, check_scalar, check_weights, free_floating_weights_note, gain_matrix,
-                               prepared_gain)
+from ..numerics.checks import check_damping, check_scalar, check_weights, free_floating_weights_note, prepared_gain
 from ..numerics.inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, damping_parameters,
                                  weights_subset)
 from .base import Solver, check_free_floating, checked_step
@@ -298,10 +297,14 @@ class FrameStep:
 
 
 def support_columns(model: pin.Model, joint: int) -> np.ndarray:
-    """The columns of v (m,) of the joints from the root to ``joint``: those that move it (a model without mimic
+    """The columns of v (m,) of the joints from ``joint`` up to the root: those that move it (a model without mimic
     joints, whose every joint has its own columns)."""
-    columns = [column for ancestor in list(model.supports[joint])[1:]
-               for column in range(model.idx_vs[ancestor], model.idx_vs[ancestor] + model.nvs[ancestor])]
+    parents, starts, sizes = model.parents, model.idx_vs, model.nvs  # each read copies Pinocchio's vector: once
+    columns = []
+    while joint > 0:  # joint 0 is the universe
+        start = starts[joint]
+        columns.extend(range(start, start + sizes[joint]))
+        joint = parents[joint]
     return np.array(sorted(columns), dtype=np.int64)
 
 
@@ -317,7 +320,9 @@ def frame_constants(solver: CLIKSolver, frame: pin.Frame, gain: float | np.ndarr
     kind = 1 if inverse_sqrt.size else 2 if transform.size else 0
     indices = np.concatenate([[task.dim, columns.size, terms.q_index.size, kind], task.rows, columns, terms.q_index,
                               terms.v_index]).astype(np.int64)
-    constants = np.concatenate([frame.placement.homogeneous.ravel(), gain_matrix(gain, task.dim).ravel(),
+    gain = np.asarray(gain, dtype=float)  # checked by the solver: a scalar, a diagonal (k,) or (k, k)
+    gain = gain if gain.ndim == 2 else np.diag(np.broadcast_to(gain, (task.dim,)))
+    constants = np.concatenate([frame.placement.homogeneous.ravel(), gain.ravel(),
                                 [*damping_parameters(solver.damping), RCOND, alpha], inverse_sqrt, transform.ravel(),
                                 terms.weights, terms.middle, terms.range_squared]).astype(np.float64)
     return indices, constants
