@@ -60,3 +60,23 @@ def test_update_and_integrate_move_it_and_forget_what_was_computed(robot):
     assert np.allclose(configuration.generalized(before), robot.generalized_jacobian(q), atol=1e-12)
     with pytest.raises(ConfigurationError):
         configuration.update(np.full(robot.nq, np.nan))
+
+
+def test_the_joint_arrays_are_views_of_its_own_data_at_its_current_q(robot):
+    """data.J and a joint's placement, as Pinocchio computes them at q; the same views show the next q after an
+    update (what a compiled step reads without a Python call per array)."""
+    rng = np.random.default_rng(7)
+    joint = robot.model.frames[robot.frame_id()].parentJoint
+    configuration = Configuration(robot, robot.random_configuration(rng))
+    views = configuration.joint_arrays(joint)
+    for _ in range(3):
+        q = robot.random_configuration(rng)
+        configuration.update(q)
+        jacobians, translation, rotation = configuration.joint_arrays(joint)
+        assert all(a is b for a, b in zip((jacobians, translation, rotation), views))  # made once per joint
+        data = robot.model.createData()
+        pin.computeJointJacobians(robot.model, data, q)
+        assert np.array_equal(jacobians, data.J)
+        assert np.array_equal(translation, data.oMi[joint].translation)
+        assert np.array_equal(rotation, data.oMi[joint].rotation)
+        assert np.array_equal(configuration.pose(robot.frame_id()).homogeneous, robot.fk(q).homogeneous)
