@@ -71,6 +71,11 @@ def test_every_scenario_key_is_documented_and_every_documented_key_exists():
     assert not empty
 
 
+def test_scenario_reference_page_shows_every_section():
+    shown = re.findall(r"```\{scenario-keys\} (\w+)", (DOCS / "scenarios.md").read_text())
+    assert shown == scenario_reference().sections()
+
+
 def test_scenario_reference_states_types_defaults_and_values_from_the_schema():
     from uvms.scenario.schema import SCHEMA
 

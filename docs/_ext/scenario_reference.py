@@ -1,4 +1,4 @@
-"""The scenario reference, generated: ``{scenario-keys}`` renders every section and key of a scenario file.
+"""The scenario reference, generated: ``{scenario-keys} SECTION`` renders the keys of a section of a scenario file.
 
 Types, defaults and allowed values come from :data:`uvms.scenario.schema.SCHEMA` (``[[phases]]``: ``PHASE_SCHEMA``;
 ``[[inequalities]]``: the objectives' constructors); the meaning of each key from ``reference/scenario_keys.toml``
@@ -100,9 +100,9 @@ def cell(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
 
-def section_table(title: str, table: dict[str, tuple], about: dict[str, str]) -> list[str]:
-    """Markdown lines of one section (``title``: how a file writes it): its introduction and a table of its keys."""
-    lines = [f"**`{title}`** — {about.get('_about', '')}", "",
+def section_table(table: dict[str, tuple], about: dict[str, str]) -> list[str]:
+    """Markdown lines of one section: its introduction and a table of its keys."""
+    lines = [about.get("_about", ""), "",
              "| key | type | default | values | meaning |", "|---|---|---|---|---|"]
     for key, (accepted, default, allowed) in table.items():
         values = ", ".join(value_text(value) for value in allowed) if allowed else ""
@@ -113,41 +113,52 @@ def section_table(title: str, table: dict[str, tuple], about: dict[str, str]) ->
 
 def inequality_tables(about: dict) -> list[str]:
     """Markdown lines of ``[[inequalities]]``: one table per type."""
-    lines = [f"**`[[inequalities]]`** — {about.get('_about', '')}", ""]
+    lines = [about.get("_about", ""), ""]
     common = about.get("common", {})
     for kind, keys in inequality_keys().items():
         own = about.get(kind, {})
-        lines += [f"`type = \"{kind}\"`", "", "| key | default | meaning |", "|---|---|---|"]
+        lines += [f"**`type = \"{kind}\"`**", "", "| key | default | meaning |", "|---|---|---|"]
         lines += [f"| `{key}` | {cell(value_text(default))} | {cell(own.get(key, common.get(key, '')))} |"
                   for key, default in keys.items()]
         lines.append("")
     return lines
 
 
-def reference_markdown() -> str:
-    """The whole reference as Markdown: the sections of SCHEMA in order, then ``[[phases]]`` and ``[[inequalities]]``."""
+def sections() -> list[str]:
+    """Every section of a scenario file, in the order of the reference: SCHEMA's, then the arrays of tables."""
+    from uvms.scenario.schema import SCHEMA
+
+    return [*SCHEMA, *ARRAYS]
+
+
+def reference_markdown(section: str | None = None) -> str:
+    """The reference of one section as Markdown (None: every section, in the order of :func:`sections`)."""
     from uvms.scenario.schema import PHASE_SCHEMA, SCHEMA
 
-    about = meanings()
-    lines: list[str] = []
-    for section, table in SCHEMA.items():
-        lines += section_table(f"[{section}]", table, about.get(section, {}))
-    lines += section_table("[[phases]]", PHASE_SCHEMA, about.get("phases", {}))
-    lines += inequality_tables(about.get("inequalities", {}))
-    return "\n".join(lines)
+    if section is None:
+        return "\n".join(reference_markdown(name) for name in sections())
+    if section not in sections():
+        raise ValueError(f"no scenario section {section!r}; sections: {', '.join(sections())}")
+    about = meanings().get(section, {})
+    if section == "inequalities":
+        return "\n".join(inequality_tables(about))
+    if section == "phases":
+        return "\n".join(section_table(PHASE_SCHEMA, about))
+    return "\n".join(section_table(SCHEMA[section], about))
 
 
 class ScenarioKeys(Directive):
-    """``{scenario-keys}``: the scenario reference tables, parsed as Markdown in the page."""
+    """``{scenario-keys} SECTION``: the reference table(s) of a scenario section, parsed as Markdown in the page."""
 
     has_content = False
+    required_arguments = 1
 
     def run(self) -> list:
         """The tables as nodes of the page."""
         from docutils import nodes
 
         node = nodes.container(classes=["scenario-reference"])
-        self.state.nested_parse(StringList(reference_markdown().splitlines(), source="scenario_keys.toml"),
+        self.state.nested_parse(StringList(reference_markdown(self.arguments[0]).splitlines(), source="scenario_keys.toml"),
                                 self.content_offset, node)
         return [node]
 
