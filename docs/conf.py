@@ -41,4 +41,3 @@ napoleon_use_rtype = False
 
 html_theme = "furo"
 html_title = "uvms"
-suppress_warnings = ["mystnb.unknown_mime_type"]  # widget views of the viewer cells: shown as text in Jupyter only
