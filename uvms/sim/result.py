@@ -51,7 +51,7 @@ class SimulationResult:
         sigma_min, damping: (N,) of the inverted Jacobian; limits_active: (N,) joints held at a limit.
         objective_value, objective_activation: (N, k) the rows of a scenario's inequality objectives (their
             values in their units, activations in [0, 1]); objective_active: (N, n_objectives) bool;
-            speed_ratio: (N,) max_i |v_i| / max_i over the speed limits (:mod:`uvms.scenario.inequalities`).
+            speed_ratio: (N,) max_i ``|v_i|`` / max_i over the speed limits (:mod:`uvms.scenario.inequalities`).
         robot: the model the run used (not saved); axes: the task axes; integrator: "euler" or "rk4";
             dt, wall_time: [s].
         plant: the plant series (plant runs), tracking: the tracking controller's, actuation: the thrusters'
@@ -217,12 +217,12 @@ class SimulationResult:
 
     @property
     def final_position_error(self) -> float:
-        """|p_d - p| at the last row [m]."""
+        """``|p_d - p|`` at the last row [m]."""
         return float(self.position_error[-1])
 
     @property
     def max_position_error(self) -> float:
-        """max_t |p_d - p| [m]."""
+        """max_t ``|p_d - p|`` [m]."""
         return float(self.position_error.max())
 
     def plant_metrics(self) -> dict:
