@@ -5,7 +5,8 @@ Rows (goals of the issue in the last column):
 * the general CLIK step and the pose-task ``CLIKSolver.step`` (UR5 on a 6-DOF floating base, nv = 12; ``bench_clik.py``);
 * the set-based step (BlueROV2 + Alpha 5: joint limits, speed limits, attitude, pose; ``bench_set_based.py``),
   beside pink's ``solve_ik`` with configuration and velocity limits;
-* ``uvms run scenarios/hoang2011_w1.toml`` with figures off, as a user runs it (a fresh process, wall time);
+* ``uvms run scenarios/hoang2011_w1.toml`` with figures off, as a user runs it (fresh processes, wall time), and the
+  time up to its loop (import + load + build);
 * pose IK by the TRAC-IK protocol at 1e-10, joint limits on (``bench_ik.py``), beside roboticstoolbox's ``ik_LM``;
 * the Monte Carlo workspace of both xiang2019 arms, 1 M samples each, volumes and with dexterity.
 
@@ -16,6 +17,7 @@ so it is not installed beside uvms; with ``UVMS_PLACO_PYTHON`` set, its step is 
 
     pip install -e ".[bench]"
     python benchmarks/bench_speed.py [--ik-targets 10000] [--starts 200]   # about 3 min with the defaults
+    python benchmarks/bench_speed.py --only-run   # the `uvms run` row alone (before/after: PYTHONPATH=OLD_TREE)
 """
 
 from __future__ import annotations
@@ -79,16 +81,30 @@ def set_based_row(starts: int, repeat: int) -> tuple[str, str, str, str]:
             f"{times['set_based']:.0f}x (built per step; `HQPSolver` {times['hqp']:.0f}x)", other, "<= 60x, faster than pink")
 
 
-def run_row() -> tuple[str, str, str, str]:
-    """``uvms run hoang2011_w1`` with figures off, in a fresh process, and the run's own loop time."""
-    command = [sys.executable, "-m", "uvms.cli", "run", str(ROOT / "scenarios" / "hoang2011_w1.toml"), "--out", "/tmp/uvms_bench_speed_run",
+#: Up to the loop's first step: the interpreter, ``import uvms.cli``, reading the scenario, the model, the initial
+#: configuration (scipy.optimize) and the controller (the kernels' import); the issue's "import + load + build".
+BUILD_ONLY = ("from uvms.scenario.build import build; from uvms.scenario.schema import read_scenario; import uvms.cli; "
+              "build(read_scenario({path!r}, ['outputs.figures=false']))")
+
+
+def run_row(repeat: int = 3) -> tuple[str, str, str, str]:
+    """``uvms run hoang2011_w1`` with figures off, in fresh processes (median of ``repeat``): its wall time, the
+    time up to the loop (a process that only builds the run) and the run's own time (build and loop)."""
+    path = str(ROOT / "scenarios" / "hoang2011_w1.toml")
+    command = [sys.executable, "-m", "uvms.cli", "run", path, "--out", "/tmp/uvms_bench_speed_run",
                "--set", "outputs.figures=false", "--quiet"]
-    started = time.perf_counter()
-    output = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=True).stdout
-    wall = time.perf_counter() - started
-    loop = output.splitlines()[0].split(",")[-1].strip(" s)")  # "scenario  hoang2011_w1  (9500 steps, 11.1 s)"
-    return ("`uvms run hoang2011_w1`, figures off (9,500 RK4 steps)", f"{wall:.1f} s ({loop} s in the loop)", "",
-            "<= 1 s")
+    walls, builds, inside = [], [], []
+    for _ in range(repeat):
+        started = time.perf_counter()
+        output = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, check=True).stdout
+        walls.append(time.perf_counter() - started)
+        inside.append(output.splitlines()[0].split(",")[-1].strip(" s)"))  # "scenario  hoang2011_w1  (9500 steps, 1.1 s)"
+        started = time.perf_counter()
+        subprocess.run([sys.executable, "-c", BUILD_ONLY.format(path=path)], cwd=ROOT, check=True)
+        builds.append(time.perf_counter() - started)
+    return ("`uvms run hoang2011_w1`, figures off (9,500 RK4 steps)",
+            f"{np.median(walls):.2f} s ({min(walls):.2f}-{max(walls):.2f}; import + load + build "
+            f"{np.median(builds):.2f} s; {', '.join(inside)} s of build and loop)", "", "<= 1 s (import + load + build <= 0.5 s)")
 
 
 def ik_rows(targets: int) -> list[tuple[str, str, str, str]]:
@@ -123,10 +139,12 @@ def main() -> None:
     parser.add_argument("--ik-targets", type=int, default=2000, help="UR5 IK targets (the issue's row: 10000)")
     parser.add_argument("--starts", type=int, default=200, help="set-based starts the step times are drawn from")
     parser.add_argument("--repeat", type=int, default=200, help="interleaved set-based timing rounds")
+    parser.add_argument("--only-run", action="store_true", help="only the `uvms run hoang2011_w1` row (about 20 s)")
     options = parser.parse_args()
     began = time.perf_counter()
-    rows = [*clik_rows(), set_based_row(options.starts, options.repeat), run_row(), *ik_rows(options.ik_targets),
-            *workspace_rows()]
+    rows = [run_row()] if options.only_run else [
+        *clik_rows(), set_based_row(options.starts, options.repeat), run_row(), *ik_rows(options.ik_targets),
+        *workspace_rows()]
     print(f"uvms {uvms.__version__}, numpy {np.__version__}; {time.perf_counter() - began:.0f} s\n")
     print("| row | uvms | beside it | goal |\n|---|---|---|---|")
     for row in rows:

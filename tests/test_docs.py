@@ -5,6 +5,8 @@ from __future__ import annotations
 import doctest
 import re
 
+import pytest
+
 import uvms
 
 from conftest import ROOT
@@ -33,3 +35,99 @@ def test_readme_quickstart_is_two_commands():
     assert len(commands) == 2
     assert "python -m pytest" in commands[1]
     assert "python -m pytest" in (ROOT / ".ci" / "run").read_text()
+
+
+# ------------------------------------------------------------------ the documentation site (docs/)
+DOCS = ROOT / "docs"
+README_LIMIT = 15 * 1024  # [bytes] a README read in five minutes; the rest is in docs/
+
+
+def test_readme_is_short_and_points_to_the_docs():
+    text = (ROOT / "README.md").read_text()
+    assert len(text.encode()) <= README_LIMIT, f"README.md is {len(text.encode())} bytes, over {README_LIMIT}"
+    assert "python -m sphinx -W -b html docs docs/_build/html" in text
+    assert not re.search(r"\bissue \d+", text), "the README speaks to users: no issue numbers"
+
+
+def scenario_reference():
+    """docs/_ext/scenario_reference.py, the generator of the scenario reference page."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("scenario_reference", DOCS / "_ext" / "scenario_reference.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_scenario_key_is_documented_and_every_documented_key_exists():
+    reference = scenario_reference()
+    schema, documented = reference.schema_keys(), reference.documented_keys()
+    assert "model.path" in schema and "inequalities.plane_clearance.normal" in schema and "phases.offsets" in schema
+    assert not schema - documented, f"keys without a meaning in docs/reference/scenario_keys.toml: {sorted(schema - documented)}"
+    assert not documented - schema, f"documented keys the schema does not have: {sorted(documented - schema)}"
+    meanings = reference.meanings()
+    empty = [f"{section}.{key}" for section, table in meanings.items() for key, text in table.items()
+             if isinstance(text, str) and not text.strip()]
+    assert not empty
+
+
+def test_scenario_reference_page_shows_every_section():
+    shown = re.findall(r"```\{scenario-keys\} (\w+)", (DOCS / "scenarios.md").read_text())
+    assert shown == scenario_reference().sections()
+
+
+def test_scenario_reference_states_types_defaults_and_values_from_the_schema():
+    from uvms.scenario.schema import SCHEMA
+
+    markdown = scenario_reference().reference_markdown()
+    assert "| `dt` | number | **required** |" in markdown
+    assert '| `type` | string | `"circle"` | `"circle"`, `"line"`, `"pose"`, `"ramps"`, `"hold"` |' in markdown
+    assert "| `bandwidth` | number or list | `[2.75, 2.75, 2.75, 5, 5, 5]` |" in markdown
+    assert markdown.count("| `") >= sum(len(table) for table in SCHEMA.values())
+
+
+def docs_blocks(language: str) -> list[tuple[str, str]]:
+    """(page, code) of every fenced block of a language in the docs' Markdown pages."""
+    return [(str(page.relative_to(DOCS)), block) for page in sorted(DOCS.rglob("*.md")) if "_build" not in page.parts
+            for block in re.findall(rf"```{language}\n(.*?)```", page.read_text(), flags=re.S)]
+
+
+def minimal_scenario(source: str) -> str:
+    """The one TOML block of the README or of the docs' *Bring your own ROV*."""
+    if source == "README.md":
+        blocks = re.findall(r"```toml\n(.*?)```", (ROOT / "README.md").read_text(), flags=re.S)
+    else:
+        blocks = [block for page, block in docs_blocks("toml") if page == source]
+    assert len(blocks) == 1
+    return blocks[0]
+
+
+@pytest.mark.parametrize("source", ["README.md", "own_rov.md"])
+def test_minimal_scenario_runs(tmp_path, source):
+    scenario = tmp_path / "my_rov_line.toml"
+    scenario.write_text(minimal_scenario(source))
+    run = uvms.run_scenario(scenario, out=tmp_path / "out", overrides=["outputs.figures=false"], progress=False)
+    assert 0 < run.metrics["max_position_error"] < 1e-4  # a 20 cm line; DLS damping 0.01 leaves micrometres
+
+
+def test_docs_python_blocks_run(monkeypatch):
+    monkeypatch.chdir(ROOT)
+    blocks = docs_blocks("python")
+    assert len(blocks) >= 3
+    for page, block in blocks:
+        exec(compile(block, f"docs/{page}", "exec"), {})  # noqa: S102 - our own docs
+
+
+def test_docs_build_without_warnings(tmp_path):
+    import importlib.util
+    import subprocess
+    import sys
+
+    missing = [name for name in ("sphinx", "myst_nb", "furo") if importlib.util.find_spec(name) is None]
+    if missing:
+        pytest.skip(f"the docs extra is not installed ({', '.join(missing)}): pip install -e '.[docs]'")
+    command = [sys.executable, "-m", "sphinx", "-W", "--keep-going", "-q", "-b", "html", str(DOCS), str(tmp_path)]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert done.returncode == 0, done.stderr[-4000:]
+    assert (tmp_path / "scenarios.html").read_text().count("<tr") > 100  # the generated scenario reference
+    assert (tmp_path / "notebooks" / "hoang2011.html").exists()

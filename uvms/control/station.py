@@ -168,8 +168,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
     in a 0.3 m/s current to 5 cm and a 1.9 t RexROV-sized vehicle to 3 mm (tests/control/test_vehicle_gains.py).
 
     Args:
-        plant, thrusters, q0, dt, coordination, knows_current, kp, ki, bandwidth, damping_ratio, pose_gains,
-            max_speed, priorities, arm_feedforward: as in :func:`actuated_control`.
+        plant, thrusters, q0, dt: as in :func:`actuated_control`; so are coordination, knows_current, kp, ki,
+            bandwidth, damping_ratio, pose_gains, max_speed, priorities and arm_feedforward.
         ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse.
         frame: the end-effector frame held (default: the model's first end effector).
 

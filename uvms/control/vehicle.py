@@ -204,7 +204,7 @@ class VehiclePoseController:
 
     Args:
         velocity: the velocity controller; gains: (6,) or a number [1/s].
-        max_speed: (6,) or a number [m/s, rad/s] bound on |nu_ref| per axis (None: none).
+        max_speed: (6,) or a number [m/s, rad/s] bound on ``|nu_ref|`` per axis (None: none).
     """
 
     def __init__(self, velocity: VehicleVelocityController, gains: float | np.ndarray,

@@ -82,7 +82,7 @@ class LinkHydrodynamics:
             object.__setattr__(self, name, values)
 
     def damping_wrench(self, nu_r: np.ndarray) -> np.ndarray:
-        """Fossen's damping wrench -(D_l + D_q |nu_r|) nu_r (6,) [N, N m] for a relative twist nu_r (6,)."""
+        """Fossen's damping wrench ``-(D_l + D_q |nu_r|) nu_r`` (6,) [N, N m] for a relative twist nu_r (6,)."""
         return -(self.linear_damping + self.quadratic_damping * np.abs(nu_r)) * nu_r
 
 

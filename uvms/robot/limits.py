@@ -103,7 +103,7 @@ class Limit:
     @classmethod
     def joint_velocities(cls, robot: Robot,
                          max: float | Sequence[float] | Mapping[str, float] | None = None) -> Limit:  # noqa: A002
-        """The arm's joint velocity limits |v_i| <= v_max,i (n_arm,) [rad/s or m/s], the model's or given.
+        """The arm's joint velocity limits ``|v_i| <= v_max,i`` (n_arm,) [rad/s or m/s], the model's or given.
 
         Args:
             robot: the model (its ``velocityLimit``: a limit of 0, the URDF placeholder for "not given",

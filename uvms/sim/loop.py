@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from ..io.progress import tqdm
+from ..io.progress import compile_notice, progress_bar
 from ..numerics.integrate import STEPS, check_integrator, step_count
 from ..robot.robot import Robot
 from ..tasks.frame import FrameTask
@@ -58,19 +58,24 @@ def run_loop(system: System, q0: np.ndarray, x0: np.ndarray, *, steps: int, dt: 
     q, x = q0, x0
     records: dict[str, list] = {}
     started = time.perf_counter()
-    for k in tqdm(range(steps + 1), disable=(not progress) if progress is not None else None, desc=desc,
-                  unit="step", leave=False):
-        t = k * dt
-        sample = system.sample(t, q, x)
-        row = {"t": t, "q": q.copy(), **system.record(t, q, x, sample)}
-        for recorder in recorders:
-            row.update(recorder(t, q, x, sample))
-        for name, value in row.items():
-            records.setdefault(name, []).append(value)
-        if k == steps:
-            break
-        q, x = step(system.model, system.stage_rate(sample), t, q, x, dt, sample.rate)
-        system.check(t + dt, q, x, dt)
+    notice = compile_notice()  # the first step runs the solver's first call: its kernels compile after an install
+    try:
+        for k in progress_bar(range(steps + 1), progress, desc=desc, unit="step", leave=False):
+            t = k * dt
+            sample = system.sample(t, q, x)
+            row = {"t": t, "q": q.copy(), **system.record(t, q, x, sample)}
+            for recorder in recorders:
+                row.update(recorder(t, q, x, sample))
+            for name, value in row.items():
+                records.setdefault(name, []).append(value)
+            if k == steps:
+                break
+            q, x = step(system.model, system.stage_rate(sample), t, q, x, dt, sample.rate)
+            system.check(t + dt, q, x, dt)
+            if k == 0:
+                notice.cancel()
+    finally:
+        notice.cancel()
     return {name: np.array(values) for name, values in records.items()}, time.perf_counter() - started
 
 

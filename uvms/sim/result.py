@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,7 +51,7 @@ class SimulationResult:
         sigma_min, damping: (N,) of the inverted Jacobian; limits_active: (N,) joints held at a limit.
         objective_value, objective_activation: (N, k) the rows of a scenario's inequality objectives (their
             values in their units, activations in [0, 1]); objective_active: (N, n_objectives) bool;
-            speed_ratio: (N,) max_i |v_i| / max_i over the speed limits (:mod:`uvms.scenario.inequalities`).
+            speed_ratio: (N,) max_i ``|v_i|`` / max_i over the speed limits (:mod:`uvms.scenario.inequalities`).
         robot: the model the run used (not saved); axes: the task axes; integrator: "euler" or "rk4";
             dt, wall_time: [s].
         plant: the plant series (plant runs), tracking: the tracking controller's, actuation: the thrusters'
@@ -185,8 +186,11 @@ class SimulationResult:
         """Write ``trajectory.csv`` and ``trajectory.npz`` (and an actuated run's ``actuation.npz``: t and
         :meth:`ActuationSeries.arrays`) atomically into ``folder``; returns their paths."""
         folder = Path(folder)
-        outputs.write_text(folder / "trajectory.csv", self.csv_text())
-        outputs.write_npz(folder / "trajectory.npz", **self.arrays())
+        # zlib releases the GIL: the npz compresses on a second core while the CSV's numbers are formatted
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            npz = pool.submit(outputs.write_npz, folder / "trajectory.npz", **self.arrays())
+            outputs.write_text(folder / "trajectory.csv", self.csv_text())
+            npz.result()
         written = (folder / "trajectory.csv", folder / "trajectory.npz")
         if self.actuation is not None:
             outputs.write_npz(folder / "actuation.npz", t=self.t, **self.actuation.arrays())
@@ -213,12 +217,12 @@ class SimulationResult:
 
     @property
     def final_position_error(self) -> float:
-        """|p_d - p| at the last row [m]."""
+        """``|p_d - p|`` at the last row [m]."""
         return float(self.position_error[-1])
 
     @property
     def max_position_error(self) -> float:
-        """max_t |p_d - p| [m]."""
+        """max_t ``|p_d - p|`` [m]."""
         return float(self.position_error.max())
 
     def plant_metrics(self) -> dict:

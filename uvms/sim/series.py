@@ -49,7 +49,7 @@ class PlantSeries:
         return self.kinetic_energy + self.potential_energy
 
     def momentum_drift(self) -> np.ndarray:
-        """max_t |h(t) - h(0)| of the linear and the angular momentum (2,) [N s, N m s]."""
+        """max_t ``|h(t) - h(0)|`` of the linear and the angular momentum (2,) [N s, N m s]."""
         change = self.momentum - self.momentum[0]
         return np.array([np.max(np.linalg.norm(change[:, :3], axis=1)), np.max(np.linalg.norm(change[:, 3:], axis=1))])
 
@@ -91,7 +91,7 @@ class ActuationSeries:
     Attributes:
         thrusts: (N, n) [N] each thruster's thrust; thrust_command: (N, n) [N] the saturated command.
         body_wrench: (N, 6) [N, N m] B f, FLU at the base frame origin.
-        thrust_power: (N,) [W] B f . nu; thruster_power_abs: (N,) [W] sum_i |f_i (B_i . nu)|.
+        thrust_power: (N,) [W] B f . nu; thruster_power_abs: (N,) [W] sum_i ``|f_i (B_i . nu)|``.
         motor_power: (N,) [W] tau_m . qd_m; damping_power: (N,) [W] of the links' damping (<= 0 in still water).
         lower, upper: (n,) [N] the thrust bounds.
         controller: the controller's own series by name (e.g. wrench_command (N, 6), vehicle_position_error (N,)),
@@ -125,10 +125,10 @@ class ActuationSeries:
     def metrics(self, t: np.ndarray) -> dict:
         """Numbers of an actuated run for ``metrics.json`` [SI units], t (N,) [s] the run's times.
 
-        max_thrust_ratio: max over time and thrusters of |f_i| / (its limit in that direction), <= 1;
+        max_thrust_ratio: max over time and thrusters of ``|f_i|`` / (its limit in that direction), <= 1;
         saturated_time_fraction: fraction of rows with a thrust command at a bound;
         thrust_work: integral of the thrust power B f . nu [J] (signed: negative when the current pushes the
-        vehicle back against its thrust); thruster_energy: integral of sum_i |f_i (B_i . nu)| [J], the mechanical
+        vehicle back against its thrust); thruster_energy: integral of sum_i ``|f_i (B_i . nu)|`` [J], the mechanical
         power each thruster gives the hull, counted positive either way (not the electrical energy: no propeller
         efficiency model); both by the trapezoid rule. With a controller that records ``vehicle_position_error``
         (:class:`uvms.control.station.ActuatedKinematics`): vehicle_position_error (its max over the run) and

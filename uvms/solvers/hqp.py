@@ -210,7 +210,7 @@ class HQPSolver(Solver):
         damping: lambda >= 0 or a VariableDamping of the levels' task rows, as in CLIK (module docstring).
         free_floating: solve the arm only, the vehicle passive (generalized Jacobians).
         position_fraction: the part of the distance to a limit one step may cover, in (0, 1].
-        regularization: rho >= 0, weight of |x|^2_W in every level (a unique solution) [-].
+        regularization: rho >= 0, weight of ``|x|^2_W`` in every level (a unique solution) [-].
         solver: a qpsolvers solver name; default DAQP, then ProxQP (the other tried when one fails).
         speed_limits: more speed limits (besides those in the levels).
 

@@ -79,7 +79,7 @@ def initial_configuration(
         tasks: task(s) whose targets define x0 (e.g. a FrameTask with axes x, y, yaw).
         potential: S(q); default JointLimitPotential(robot) with c_i = 1.
         q_init: starting guess (default: arm at mid-range, vehicle at the origin).
-        tolerance: success when |e| <= tolerance.
+        tolerance: success when ``|e| <= tolerance``.
         max_iterations: SLSQP iterations.
         limit: the arm position limits (n_arm,) kept by the optimizer (its bounds) and the
             polishing; default: those of ``potential``, the model's unless it was given others.

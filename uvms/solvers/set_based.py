@@ -156,7 +156,7 @@ class SetBasedSolver(Solver):
         gain: K of the equality tasks (scalar, (k,) or (k, k) per level's stacked tasks) [1/s].
         weights: W of the solved columns, (n,) or (n, n) SPD, n = nv (n_arm when free floating).
         damping: lambda >= 0 or a VariableDamping, as in CLIK.
-        eta: weight of the iCAT regularization eta |D (I - Q) y|^2 [-] >= 0. It keeps a level off what the
+        eta: weight of the iCAT regularization ``eta |D (I - Q) y|^2`` [-] >= 0. It keeps a level off what the
             levels above partly hold, which is also why a task stops inside an objective's activation band;
             0 lets the task use the band (it reaches the valid set's border), without that protection
             (:mod:`uvms.tasks.objectives.base`, "What the band costs").

@@ -11,9 +11,9 @@ from .task import Task
 
 
 class DistanceTask(Task):
-    """Keep or drive the distance |p_b - p_a| between two frame origins to ``distance`` (1 row).
+    """Keep or drive the distance ``|p_b - p_a|`` between two frame origins to ``distance`` (1 row).
 
-    Error d* - |p_b - p_a|; Jacobian u^T (J_b - J_a) on the linear rows, with u the unit vector from a to b.
+    Error ``d* - |p_b - p_a|``; Jacobian u^T (J_b - J_a) on the linear rows, with u the unit vector from a to b.
     The task is singular when the frames coincide; targets are then meaningless, so it is refused.
 
     Args:

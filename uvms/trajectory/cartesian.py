@@ -31,7 +31,7 @@ class CirclePath:
     """Circle through ``start`` around ``center`` in the plane normal to ``normal`` (counter-clockwise about it).
 
     Args:
-        center: (3,) [m]; start: (3,) [m], radius = |start - center| > 0.
+        center: (3,) [m]; start: (3,) [m], radius = ``|start - center|`` > 0.
         normal: (3,) plane normal (right-hand rule gives the direction of travel).
     """
 

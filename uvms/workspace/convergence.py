@@ -27,7 +27,7 @@ class VolumeConvergence:
 
     Attributes:
         converged: the last doubling changed the volume by at most ``tolerance`` (False when not measured).
-        change: relative change |V(N) - V(N/2)| / V(N) over the last doubling [-] (NaN: fewer than two
+        change: relative change ``|V(N) - V(N/2)| / V(N)`` over the last doubling [-] (NaN: fewer than two
             distinct sample counts, or a zero volume).
         previous_change: the same over the doubling before (N/4 -> N/2), NaN when not measured.
         samples_from, samples_to: the sample counts of the last doubling.

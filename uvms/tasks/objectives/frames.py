@@ -22,7 +22,7 @@ class VehicleAttitude(Inequality):
 
     The tilt combines roll and pitch (cos tilt = cos roll cos pitch, yaw free). With z_b the body z axis
     in world axes and omega the vehicle's angular velocity (world axes, from Pinocchio's world-aligned
-    Jacobian of the vehicle body frame), d tilt/dt = -u . omega, u = (z_b x e_z) / |z_b x e_z|.
+    Jacobian of the vehicle body frame), d tilt/dt = -u . omega, ``u = (z_b x e_z) / |z_b x e_z|``.
     At tilt = 0 the gradient is undefined and taken as 0 (the objective is inactive there).
 
     Args:

@@ -1,4 +1,4 @@
-"""Joint and vehicle speed limits |v_i| <= max_i: bounds of the solvers, not tasks.
+"""Joint and vehicle speed limits ``|v_i| <= max_i``: bounds of the solvers, not tasks.
 
 The set-based solver meets them by scaling the lowest-priority contributions first
 (:mod:`uvms.solvers.saturation`); the QP hierarchy by hard bounds. Place them anywhere in the levels
@@ -17,7 +17,7 @@ from ...robot.robot import Robot
 
 
 class VelocityLimit:
-    """A box |v_i| <= maximum_i on the entries of v.
+    """A box ``|v_i| <= maximum_i`` on the entries of v.
 
     Attributes:
         name: how results name it.
@@ -58,7 +58,7 @@ def _by_name(values: Mapping[str, float], names: Sequence[str], kind: str, where
 
 
 class JointVelocityLimits(VelocityLimit):
-    """|qdot_i| <= max_i on the arm joints [rad/s or m/s]: the box of a velocity :class:`Limit`.
+    """``|qdot_i| <= max_i`` on the arm joints [rad/s or m/s]: the box of a velocity :class:`Limit`.
 
     Args:
         robot: the model.
@@ -87,7 +87,7 @@ class JointVelocityLimits(VelocityLimit):
 
 
 class VehicleVelocityLimits(VelocityLimit):
-    """|nu_i| <= max_i on the vehicle twist (body axes, the vehicle entries of v) [m/s, rad/s].
+    """``|nu_i| <= max_i`` on the vehicle twist (body axes, the vehicle entries of v) [m/s, rad/s].
 
     Args:
         robot: a model with a floating or planar base.
