@@ -30,30 +30,6 @@ NOT_COMPUTED = -1.0
 
 
 @njit(cache=True)
-def svd_solution_into(scaled: np.ndarray, rhs: np.ndarray, damping: float, epsilon: float, lambda_max: float,
-                      rcond: float, out: np.ndarray) -> tuple[bool, float, float]:
-    """out = A^+ rhs (n,) of A = J L^-T (k, n), the damped inverse of :func:`~.svd.svd_inverse_into` applied to one
-    vector: (converged, sigma_min of A (0 when k > n), l used)."""
-    converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max,
-                                                                          rcond, 0.0)
-    if not converged:
-        return False, sigma_min, used
-    left, right = (rotation, work) if wide else (work, rotation)  # A^+ = right^T diag(factors) left
-    for col in range(out.size):
-        out[col] = 0.0
-    for row in range(left.shape[0]):
-        if factors[row] == 0.0:
-            continue
-        projected = 0.0
-        for col in range(left.shape[1]):
-            projected += left[row, col] * rhs[col]
-        projected *= factors[row]
-        for col in range(right.shape[1]):
-            out[col] += right[row, col] * projected
-    return True, sigma_min, used
-
-
-@njit(cache=True)
 def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray,
                        damping: float, epsilon: float, lambda_max: float, rcond: float, z0: np.ndarray,
                        out: np.ndarray) -> tuple[bool, float, float]:
@@ -84,13 +60,24 @@ def clik_solution_into(jacobian: np.ndarray, command: np.ndarray, inverse_sqrt: 
             for col in range(columns):
                 rhs[row] -= jacobian[row, col] * z0[col]
     scaled = weighted_columns(jacobian, inverse_sqrt, transform)  # J L^-T
-    solution = np.empty(columns)  # (J L^-T)^+ rhs
+    solution = np.zeros(columns)  # (J L^-T)^+ rhs
     sigma_min, used = NOT_COMPUTED, damping
     if not (epsilon == 0.0 and damping > 0.0 and rows <= columns
             and dls_solve_into(scaled, rhs, damping * damping, solution, CHOLESKY_CONDITIONING)):
-        converged, sigma_min, used = svd_solution_into(scaled, rhs, damping, epsilon, lambda_max, rcond, solution)
+        converged, wide, work, rotation, factors, sigma_min, used = decompose(scaled, damping, epsilon, lambda_max,
+                                                                              rcond, 0.0)
         if not converged:
             return False, sigma_min, used
+        left, right = (rotation, work) if wide else (work, rotation)  # A^+ = right^T diag(factors) left
+        for row in range(left.shape[0]):
+            if factors[row] == 0.0:
+                continue
+            projected = 0.0
+            for col in range(left.shape[1]):
+                projected += left[row, col] * rhs[col]
+            projected *= factors[row]
+            for col in range(right.shape[1]):
+                solution[col] += right[row, col] * projected
     if inverse_sqrt.size:
         for col in range(columns):
             solution[col] *= inverse_sqrt[col]
