@@ -49,7 +49,7 @@ class InitialConfigurationResult:
     Attributes:
         q: configuration (nq,).
         success: residual <= tolerance and limits respected.
-        residual: |x0 - f(q)|.
+        residual: ``|x0 - f(q)|``.
         potential: S(q).
         iterations: optimizer iterations.
         message: optimizer message.
@@ -105,7 +105,7 @@ class SolvedRows(NamedTuple):
     objectives: tuple[InequalityRows, ...] = ()
 
     def residual(self, v: np.ndarray) -> float:
-        """|A (J v - reference)| of the level (activation-weighted; equality rows weigh 1)."""
+        """``|A (J v - reference)|`` of the level (activation-weighted; equality rows weigh 1)."""
         difference = self.jacobian @ v - self.reference
         return float(np.linalg.norm(difference if self.activation is None else self.activation * difference))
 
@@ -125,20 +125,15 @@ class SolverResult:
 
     Attributes:
         v: velocity (nv,) in the order of Pinocchio's v (vehicle twist local, then arm).
-        sigma_min: the smallest singular value over the Jacobians the solver inverted (weighted, projected as
-            it inverted them; the QP hierarchy: that of the last level's task rows).
         damping: the (largest) damping lambda used (0: exact inverses or an undamped QP hierarchy).
         free_floating: whether only the arm was solved and the vehicle followed momentum conservation.
         limits_active: names of the arm joints held at a limit (CLIK's joint clamping).
         scales: per level, the factor in [0, 1] its contribution was scaled by to meet the speed and
             position-rate bounds (1: not scaled; the lowest levels are scaled first); () without bounds.
-        speed_ratio: max_i |v_i| / max_i over the speed limits given (0 without any).
+        speed_ratio: max_i ``|v_i|`` / max_i over the speed limits given (0 without any).
         extras: what one method alone reports (read-only): ``method`` (task priority: "classic" or
             "robust"), ``level_sigma_min`` (task priority: one per level), ``solver_status``, ``slacks`` and
             ``solver`` (QP hierarchy).
-        levels: the rows solved, per level (or per task for CLIK), highest priority first; what
-            :attr:`command`, :attr:`error`, :attr:`residual`, :attr:`task_residuals` and :attr:`objectives`
-            are computed from when read.
         binding: per objective name, whether it binds (the QP hierarchy); None: active = some activation > 0.
     """
 
@@ -170,12 +165,14 @@ class SolverResult:
 
     @cached_property
     def sigma_min(self) -> float:
-        """The smallest singular value of the inverted Jacobians (given by the solver as a function: computed now)."""
+        """The smallest singular value over the Jacobians the solver inverted (weighted, projected as it inverted
+        them; the QP hierarchy: that of the last level's task rows)."""
         return float(self._sigma_min())
 
     @cached_property
     def levels(self) -> tuple[SolvedRows, ...]:
-        """The rows solved, per level (given by the solver as a function: made now)."""
+        """The rows solved, per level (or per task for CLIK), highest priority first; what :attr:`command`,
+        :attr:`error`, :attr:`residual`, :attr:`task_residuals` and :attr:`objectives` are computed from."""
         return tuple(self._levels())
 
     @cached_property
@@ -191,14 +188,14 @@ class SolverResult:
 
     @cached_property
     def residual(self) -> float:
-        """|J v - command| over every equality row (rows not achieved: damping, priorities, limits)."""
+        """``|J v - command|`` over every equality row (rows not achieved: damping, priorities, limits)."""
         parts = [level.jacobian[:level.error.size] @ self.v for level in self.levels]
         achieved = np.concatenate(parts) if parts else np.zeros(0)
         return float(np.linalg.norm(achieved - self.command))
 
     @cached_property
     def task_residuals(self) -> tuple[float, ...]:
-        """Per level (per task for CLIK), |A (J v - reference)| (activation-weighted; equality rows weigh 1)."""
+        """Per level (per task for CLIK), ``|A (J v - reference)|`` (activation-weighted; equality rows weigh 1)."""
         return tuple(level.residual(self.v) for level in self.levels)
 
     @cached_property
