@@ -4,6 +4,7 @@ bad input."""
 from __future__ import annotations
 
 import csv
+import gc
 import math
 import os
 import socket
@@ -179,9 +180,14 @@ def test_the_local_dask_cluster_is_tls_only_and_opens_no_http_port():
         assert opened == {int(comm.rsplit(":", 1)[1]) for comm in comms}  # no dashboard, no HTTP port at all
         started = time.monotonic()
         for credentials in ({}, {"security": Security.temporary()}):  # none, or another user's own
-            with pytest.raises(Exception):
+            with pytest.raises(Exception) as refused:
                 stranger = Client(address, timeout="5s", **credentials)
                 stranger.submit(os.getuid).result(timeout=5)
+            # the refused Client is finalised here, not by a garbage collection inside the next Client's start,
+            # where distributed's LoopRunner.stop deadlocks (Client.__del__ during Thread.__init__)
+            del refused
+            stranger = None
+            gc.collect()
         host, port = address[len("tls://"):].rsplit(":", 1)
         context = ssl.SSLContext(ssl.PROTOCOL_TLS_CLIENT)
         context.check_hostname, context.verify_mode = False, ssl.CERT_NONE  # trusts anything, has no certificate
