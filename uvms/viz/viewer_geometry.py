@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ..errors import GeometryWarning, MissingMeshWarning
 from ..model import resources
 from ..robot.robot import Robot
 
@@ -68,7 +69,7 @@ def resolved_urdf(robot: Robot) -> tuple[str, list[str]]:
         (URDF text, the mesh URIs that could not be found).
 
     Warns:
-        UserWarning: per refused mesh, its file and the rule it breaks (the rest of the model is shown).
+        GeometryWarning: per refused mesh, its file and the rule it breaks (the rest of the model is shown).
     """
     root = ET.fromstring(robot.urdf)  # a copy of its own: visuals are edited below
     source = Path(robot.source)
@@ -96,7 +97,7 @@ def resolved_urdf(robot: Robot) -> tuple[str, list[str]]:
                     link.remove(element)
     for path, reason in refused.items():
         if reason is not None:
-            warnings.warn(f"{robot.source}: mesh {str(path)!r} not shown: {reason}", UserWarning, stacklevel=2)
+            warnings.warn(f"{robot.source}: mesh {str(path)!r} not shown: {reason}", GeometryWarning, stacklevel=2)
     return ET.tostring(root, encoding="unicode"), sorted(set(missing))
 
 
@@ -162,20 +163,20 @@ def geometry_models(robot: Robot, skeleton: bool | None = None) -> tuple[pin.Geo
         hidden by the viewer unless asked).
 
     Warns:
-        UserWarning: some meshes cannot be found (they are left out).
+        MissingMeshWarning: some meshes cannot be found (they are left out).
     """
     visual, collision = pin.GeometryModel(), pin.GeometryModel()
     if robot.urdf is not None:
         xml, missing = resolved_urdf(robot)
         if missing:
             warnings.warn(f"{robot.source}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); "
-                          f"they are not shown", UserWarning, stacklevel=2)
+                          f"they are not shown", MissingMeshWarning, stacklevel=2)
         try:
             visual = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.VISUAL)
             collision = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.COLLISION)
         except (RuntimeError, ValueError) as exc:
             warnings.warn(f"{robot.source}: Pinocchio cannot read the geometry ({' '.join(str(exc).split())}); "
-                          f"showing the skeleton", UserWarning, stacklevel=2)
+                          f"showing the skeleton", GeometryWarning, stacklevel=2)
             visual, collision = pin.GeometryModel(), pin.GeometryModel()
     if skeleton or (skeleton is None and visual.ngeoms == 0):
         for item in skeleton_geometry(robot).geometryObjects:
