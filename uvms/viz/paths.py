@@ -119,7 +119,7 @@ def path_figure(result: SimulationResult, title: str = "") -> Figure:
         equal_box(axis, everything)
         axis.tick_params(pad=4)  # minus signs clear of the tick marks
         axis.set_zlabel("z [m]", labelpad=24)  # clear of the tick labels
-        plane = "3-D (task axes x, y, z; equal scales)"
+        plane = "3-D (x, y, z; equal scales)"
     else:
         axis.set_aspect("equal", adjustable="datalim")
         axis.grid(True, alpha=0.3)
