@@ -8,6 +8,7 @@ with ``from conftest import ...`` (test basenames are unique across the folders:
 from __future__ import annotations
 
 import functools
+import json
 import os
 import signal
 import subprocess
@@ -236,3 +237,28 @@ dt = 0.1
 [outputs]
 figures = false
 """
+
+
+def yz_circle(folder: Path, axes: list[str]) -> Path:
+    """A scenario file: a 5 cm circle in the world's y-z plane, driven by the bluerov2_alpha5 end effector on the
+    task ``axes`` (kinematic, 4 s, figures of the run under test)."""
+    path = folder / f"yz_{''.join(axes)}.toml"
+    path.write_text(f"""
+[model]
+path = "bluerov2_alpha5"
+[task]
+axes = {json.dumps(axes)}
+[trajectory]
+type = "circle"
+center_offset = [0.0, 0.0, 0.05]
+normal = [1.0, 0.0, 0.0]
+law = "quintic"
+duration = 4.0
+[initial]
+arm = [3.0, 1.5, 1.5, 3.0, 0.005]
+[solver]
+gain = 5.0
+[simulation]
+dt = 0.02
+""")
+    return path

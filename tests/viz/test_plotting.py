@@ -1,75 +1,117 @@
-"""Figures of a run (uvms.viz.plotting): the path and the desired motion follow the task's axes (3-D, a plane,
-the planar vehicle's x-y)."""
+"""Figures of a run (uvms.viz.plotting): the desired motion follows the task's axes, errors below the rounding level
+lie on a labelled floor, the vehicle's velocities are named in the frame they are in, joints carry their own unit,
+and a tall figure keeps its title above its first panel."""
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
+import re
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from conftest import NO_FIGURES
+from conftest import NO_FIGURES, yz_circle
 from uvms.scenario import run_scenario
-from uvms.viz.plotting import desired_motion_figure, path_figure
+from uvms.viz.plotting import (ROUNDING_LEVEL, desired_motion_figure, error_figure, joint_trajectory_figure,
+                               run_figures, stacked)
 
 
-def yz_circle(tmp_path: Path, axes: list[str]) -> Path:
-    """A 5 cm circle in the y-z plane of the world, driven by the bluerov2_alpha5 end effector."""
-    path = tmp_path / f"yz_{''.join(axes)}.toml"
-    path.write_text(f"""
-[model]
-path = "bluerov2_alpha5"
-[task]
-axes = {json.dumps(axes)}
-[trajectory]
-type = "circle"
-center_offset = [0.0, 0.0, 0.05]
-normal = [1.0, 0.0, 0.0]
-law = "quintic"
-duration = 4.0
-[initial]
-arm = [3.0, 1.5, 1.5, 3.0, 0.005]
-[solver]
-gain = 5.0
-[simulation]
-dt = 0.02
-""")
-    return path
+@pytest.fixture(scope="module")
+def yz3(tmp_path_factory):
+    """A kinematic bluerov2_alpha5 run (a prismatic jaw) on a 3-D task: a circle in the y-z plane."""
+    folder = tmp_path_factory.mktemp("yz3")
+    return run_scenario(yz_circle(folder, ["x", "y", "z"]), out=folder / "run", progress=False, overrides=NO_FIGURES)
 
 
 def ylabels(figure) -> list[str]:
     return [axis.get_ylabel() for axis in figure.axes]
 
 
-def test_a_circle_in_the_y_z_plane_is_drawn_in_3d_when_the_task_is_3d(tmp_path):
-    result = run_scenario(yz_circle(tmp_path, ["x", "y", "z"]), out=tmp_path / "yz3", progress=False)
-    assert result.metrics["max_position_error"] < 1e-6
-    assert np.ptp(result.simulation.desired_position[:, 2]) == pytest.approx(0.1, rel=1e-6)  # it moves in z
-    path = path_figure(result.simulation, "yz")
-    (axis,) = path.axes
-    assert axis.name == "3d"
-    assert (axis.get_xlabel(), axis.get_ylabel(), axis.get_zlabel()) == ("x [m]", "y [m]", "z [m]")
-    assert "3-D" in axis.get_title()
-    desired = desired_motion_figure(result.simulation, result.setup.trajectory, "yz")
-    assert ylabels(desired) == ["speed [m/s]", "x_d [m]", "y_d [m]", "z_d [m]"]  # z was missing before
+def urdf_joint_types(urdf: str) -> dict[str, str]:
+    """name -> type of every <joint> of a URDF text (an oracle independent of Pinocchio)."""
+    return dict(re.findall(r'<joint\s+name="([^"]+)"\s+type="([^"]+)"', urdf))
+
+
+def test_the_desired_motion_shows_the_controlled_axes_only(yz3, tmp_path):
+    desired = desired_motion_figure(yz3.simulation, yz3.setup.trajectory, "yz")
+    assert ylabels(desired) == ["speed [m/s]", "x_d [m]", "y_d [m]", "z_d [m]"]  # no roll_d, pitch_d, yaw_d
     assert np.ptp(desired.axes[3].lines[0].get_ydata()) == pytest.approx(0.1, rel=1e-6)
-    for name in ("path.png", "desired_motion.png"):
-        assert (tmp_path / "yz3" / name).stat().st_size > 10_000
-
-
-def test_a_planar_task_is_drawn_in_its_own_plane(tmp_path):
-    result = run_scenario(yz_circle(tmp_path, ["y", "z"]), out=tmp_path / "yz2", progress=False, overrides=NO_FIGURES)
-    (axis,) = path_figure(result.simulation, "yz").axes
-    assert axis.name != "3d"
-    assert (axis.get_xlabel(), axis.get_ylabel()) == ("y [m]", "z [m]")
-    assert "the y-z plane" in axis.get_title()
-    desired = desired_motion_figure(result.simulation, result.setup.trajectory, "yz")
-    assert ylabels(desired) == ["speed [m/s]", "y_d [m]", "z_d [m]"]
-    # a planar vehicle's x, y, yaw task keeps its x-y figure
+    planar = run_scenario(yz_circle(tmp_path, ["y", "z"]), out=tmp_path / "yz2", progress=False, overrides=NO_FIGURES)
+    assert ylabels(desired_motion_figure(planar.simulation, planar.setup.trajectory)) == [
+        "speed [m/s]", "y_d [m]", "z_d [m]"]
     hoang = run_scenario("hoang2011_w1_euler", out=tmp_path / "h", progress=False,
-                overrides=[*NO_FIGURES, "simulation.duration=2"])
-    (axis,) = path_figure(hoang.simulation, "h").axes
-    assert (axis.get_xlabel(), axis.get_ylabel(), axis.get_title()) == ("x [m]", "y [m]", "h: paths in the x-y plane")
+                         overrides=[*NO_FIGURES, "simulation.duration=2"])
     assert ylabels(desired_motion_figure(hoang.simulation, hoang.setup.trajectory)) == [
         "speed [m/s]", "x_d [m]", "y_d [m]", "yaw_d [rad]"]
+
+
+def test_errors_below_the_rounding_level_lie_on_a_labelled_floor():
+    t = np.linspace(0.0, 1.0, 200)
+    rng = np.random.default_rng(3)
+    position = 1e-10 * (1 + t)  # above the floor: drawn as it is
+    orientation = np.where(rng.random(200) < 0.5, 0.0, 1e-15 * rng.random(200))  # noise and exact zeros
+    run = SimpleNamespace(t=t, position_error=position, orientation_error=orientation)
+    (axis,) = error_figure(run, "r").axes
+    lines = {line.get_label(): line for line in axis.lines}
+    assert np.array_equal(lines["position error [m]"].get_ydata(), position)
+    flat = lines["orientation error [rad]: at rounding level throughout"].get_ydata()
+    assert np.all(flat == ROUNDING_LEVEL) and ROUNDING_LEVEL == 1e-12  # one line on the floor, not a noise band
+    floor = lines["rounding level (1e-12)"]
+    assert set(floor.get_ydata()) == {ROUNDING_LEVEL}
+    assert axis.get_ylim()[0] < ROUNDING_LEVEL and axis.get_yscale() == "log"
+    legend = [text.get_text() for text in axis.get_legend().get_texts()]
+    assert "rounding level (1e-12)" in legend
+    run.orientation_error = np.where(t > 0.5, 1e-3, 0.0)  # a real error is drawn, zeros on the floor
+    (axis,) = error_figure(run).axes
+    drawn = {line.get_label(): line for line in axis.lines}["orientation error [rad]"].get_ydata()
+    assert np.array_equal(drawn, np.maximum(run.orientation_error, ROUNDING_LEVEL))
+
+
+def test_vehicle_velocities_are_named_in_flu_and_drawn_as_flu(yz3):
+    figures = run_figures(yz3.simulation, yz3.setup.trajectory, "yz")
+    velocity = figures["vehicle_velocity.png"]
+    assert ylabels(velocity) == ["vx [m/s]", "vy [m/s]", "vz [m/s]", "ωx [rad/s]", "ωy [rad/s]", "ωz [rad/s]"]
+    assert "FLU" in velocity.get_suptitle()
+    twist = yz3.simulation.v[:, :6]  # Pinocchio's v: the body twist in FLU axes
+    robot, q, v = yz3.simulation.robot, yz3.simulation.q, yz3.simulation.v
+    nu = np.array([robot.nu_frd(q[k], v[k]) for k in range(len(q))])  # FRD: v, w, q, r flip sign
+    assert np.ptp(twist[:, 1]) > 1e-4  # the vehicle sways: the flip would show
+    for index, axis in enumerate(velocity.axes):
+        assert np.array_equal(axis.lines[0].get_ydata(), twist[:, index])
+    assert not np.allclose(velocity.axes[1].lines[0].get_ydata(), nu[:, 1])  # not Fossen's v (FRD sway)
+
+
+def test_joints_carry_the_unit_of_their_type(yz3):
+    robot = yz3.simulation.robot
+    types = urdf_joint_types(robot.urdf)
+    figures = run_figures(yz3.simulation, yz3.setup.trajectory, "yz")
+    labels = ylabels(figures["joints.png"])
+    assert len(labels) == robot.n_arm and "alpha_axis_a [m]" in labels  # the jaw's push rod slides
+    for name, label in zip(robot.arm_joint_names, labels):
+        assert label == f"{name} [{'m' if types[name] == 'prismatic' else 'rad'}]"
+    samples = SimpleNamespace(t=np.linspace(0, 1, 5), q=np.full((5, 2), 0.01), qd=np.zeros((5, 2)),
+                              qdd=np.zeros((5, 2)))
+    figure = joint_trajectory_figure(samples, names=["turn", "slide"], units=["rad", "m"])
+    top = figure.axes[:2]
+    assert [axis.get_ylabel() for axis in top] == ["position [deg]", "position [m]"]
+    assert top[0].lines[0].get_ydata()[0] == pytest.approx(np.degrees(0.01))
+    assert top[1].lines[0].get_ydata()[0] == 0.01  # metres are not converted to degrees
+
+
+def title_clearance(figure) -> float:
+    """[px] from the top of the first panel (with its tick labels) up to the bottom of the figure's title."""
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    title = figure._suptitle.get_window_extent(renderer)
+    panel = figure.axes[0].get_tightbbox(renderer)
+    return float(title.y0 - panel.y1)
+
+
+@pytest.mark.parametrize("panels", [1, 4, 10])
+def test_a_tall_figure_keeps_its_title_above_the_first_panel(panels):
+    t = np.linspace(0.0, 1.0, 50)
+    figure = stacked(t, np.outer(t, np.arange(1, panels + 1)) * 1e3, [f"joint{k} [rad]" for k in range(panels)],
+                     "xiang2019_grip: arm joints (dotted: limits)")
+    assert title_clearance(figure) >= 0.0

@@ -180,8 +180,8 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--port", type=int, default=8080, help="first port tried on 127.0.0.1 (default 8080)")
     view.add_argument("--speed", type=float, default=1.0, help="simulated seconds per second of playback")
     view.add_argument("--headless", metavar="OUT",
-                      help="no viewer: write OUT.png (snapshot) or OUT.gif/.mp4 (animation of --result) "
-                           "with matplotlib")
+                      help="no viewer: write OUT.png (snapshot of --q, else of a scenario's initial configuration, "
+                           "else of the model's neutral one) or OUT.gif/.mp4 (animation of --result) with matplotlib")
     view.add_argument("--frames", type=int, default=100, help="--headless animation: at most this many frames")
     view.add_argument("--fps", type=float, default=20.0, help="--headless animation: frames per second")
     view.add_argument("--quiet", action="store_true", help="no progress bar")

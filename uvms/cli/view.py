@@ -36,6 +36,18 @@ def view_configuration(robot: Robot, values: Sequence[float] | None) -> np.ndarr
                     f"{robot.n_arm} (arm joints) for {robot.name}; got {len(values)}")
 
 
+def headless_start(options: argparse.Namespace, robot: Robot) -> tuple[np.ndarray, str]:
+    """The configuration (nq,) ``uvms view ... --headless PNG`` draws, and its title: ``--q`` when given, else the
+    initial configuration of a scenario ``.toml`` (the one its run starts from), else the model's neutral one."""
+    if options.q or not str(options.model).endswith(".toml"):
+        return view_configuration(robot, options.q), robot.name
+    from ..scenario.build import scenario_start
+    from ..scenario.schema import read_scenario
+
+    scenario = read_scenario(options.model)
+    return scenario_start(robot, scenario)[1], f"{scenario['scenario']['name']}: initial configuration ({robot.name})"
+
+
 def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
     """The model of ``uvms view`` and a one-line note on it (or None): with ``--result DIR``, the model the run
     folder records (a MODEL, ``--arg`` or ``--base`` given too must describe it; an older folder without a record:
@@ -164,7 +176,8 @@ def command_view(options: argparse.Namespace) -> int:
             if out.suffix.lower() in drawing.WRITERS:
                 raise UVMSError(f"an animation ({out.suffix}) needs --result DIR; write a picture (.png) of one "
                                 f"configuration instead")
-            drawing.snapshot_figure(robot, [q], titles=[robot.name], path=out, ncols=1, panel_size=6.0)
+            q, title = headless_start(options, robot)
+            drawing.snapshot_figure(robot, [q], titles=[title], path=out, ncols=1, panel_size=6.0)
         else:
             t, qs = result
             if out.suffix.lower() in drawing.WRITERS:

@@ -63,10 +63,7 @@ def build(scenario: dict) -> Setup:
                                 "remove [plant] or set plant.type = 'kinematic'")
         return build_sequence(robot, scenario)
     check_vehicle_control_used(scenario)
-    task_section = scenario["task"]
-    task = FrameTask(robot, task_section["frame"] or None, axes=task_section["axes"] or None,
-                     orientation=task_section["orientation_error"])
-    q0, residual = initial_q(robot, task, scenario)
+    task, q0, residual = scenario_start(robot, scenario)
     trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
     duration = float(scenario["simulation"]["duration"] or trajectory.duration)
     if scenario["plant"]["type"] != "kinematic":
@@ -113,6 +110,13 @@ def build_sequence(robot: Robot, scenario: dict) -> Setup:
     duration = scenario["simulation"]["duration"] or plan.duration
     return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller, float(duration),
                  0.0, plan)
+
+
+def scenario_start(robot: Robot, scenario: dict) -> tuple[FrameTask | None, np.ndarray, float]:
+    """(task (None with [[phases]]), q0 (nq,), its residual) of a checked scenario; ``uvms view SCENARIO`` draws q0."""
+    task = None if scenario["phases"] else FrameTask(robot, scenario["task"]["frame"] or None,
+                     axes=scenario["task"]["axes"] or None, orientation=scenario["task"]["orientation_error"])
+    return (task, *initial_q(robot, task, scenario))
 
 
 def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.ndarray, float]:

@@ -32,7 +32,7 @@ def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "
     count = len(thrusters)
     columns = 2 if count > 1 else 1
     rows = int(np.ceil(count / columns))
-    figure = Figure(figsize=(9, 1.7 * rows + 0.8))
+    figure = Figure(figsize=(9, 1.7 * rows + 0.8), layout="constrained")  # the title above the panels
     axes = figure.subplots(rows, columns, sharex=True, squeeze=False).reshape(-1)
     thrusts, commands = result.actuation.thrusts, result.actuation.thrust_command
     for index, axis in enumerate(axes):
@@ -49,13 +49,12 @@ def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "
     for axis in axes[-columns:]:
         axis.set_xlabel("t [s]")
     figure.suptitle(f"{title}: thrusts (dotted: the thrusters' limits)")
-    figure.tight_layout()
     return figure
 
 
 def coordination_figure(runs: Mapping[str, SimulationResult], title: str = "") -> Figure:
     """Vehicle position and attitude errors and the end effector's distance from its point, for one or more runs."""
-    figure = Figure(figsize=(8, 6.4))
+    figure = Figure(figsize=(8, 6.4), layout="constrained")
     axes = figure.subplots(3, 1, sharex=True)
     series = (("vehicle_position_error", "vehicle position error [m]"),
               ("vehicle_attitude_error", "vehicle attitude error [rad]"),
@@ -73,7 +72,6 @@ def coordination_figure(runs: Mapping[str, SimulationResult], title: str = "") -
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("t [s]")
     figure.suptitle(f"{title}: the vehicle on its station, the end effector on its trajectory")
-    figure.tight_layout()
     return figure
 
 
@@ -83,7 +81,7 @@ def comparison_figure(runs: Mapping[str, SimulationResult], title: str = "",
     started [m] and its tilt [rad] (the angle of its z axis from the world's); ``clearance``: (the seabed's
     height, the minimum [m]) adds the vehicle's clearance above it."""
     panels = 4 if clearance is not None else 3
-    figure = Figure(figsize=(8, 1.9 * panels + 0.6))
+    figure = Figure(figsize=(8, 1.9 * panels + 0.6), layout="constrained")
     axes = figure.subplots(panels, 1, sharex=True)
     for label, result in runs.items():
         robot = result.robot
@@ -103,7 +101,6 @@ def comparison_figure(runs: Mapping[str, SimulationResult], title: str = "",
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("t [s]")
     figure.suptitle(title)
-    figure.tight_layout()
     return figure
 
 

@@ -12,18 +12,25 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
 
+from ..errors import UVMSError
 from ..io import outputs
 from ..robot.conventions import AXIS_NAMES
 from ..sim.result import SimulationResult
+from .labels import arm_joint_labels, vehicle_velocity_labels
+from .paths import path_figure
 
+#: [m, rad] Errors below this are at the rounding level of double precision over a run: errors.png draws them on
+#: one floor line so labelled, not as a band of noise.
+ROUNDING_LEVEL = 1e-12
 
 
 def stacked(t: np.ndarray, series: np.ndarray, labels, title: str, limits=None, dashed=None):
-    """One subplot per column of ``series`` against t; optional limit lines and dashed references."""
+    """One subplot per column of ``series`` against t; optional limit lines and dashed references.
+
+    The layout is constrained: the title gets its own room above the first panel, however many panels."""
     count = series.shape[1]
-    figure = Figure(figsize=(7, 1.9 * count + 0.6))
+    figure = Figure(figsize=(7, 1.9 * count + 0.6), layout="constrained")
     axes = figure.subplots(count, 1, sharex=True, squeeze=False)
     for index, axis in enumerate(axes[:, 0]):
         axis.plot(t, series[:, index], color="C0", label="actual" if dashed is not None else None)
@@ -38,7 +45,6 @@ def stacked(t: np.ndarray, series: np.ndarray, labels, title: str, limits=None, 
         axes[0, 0].legend(loc="upper right", fontsize=8)
     axes[-1, 0].set_xlabel("t [s]")
     figure.suptitle(title)
-    figure.tight_layout()
     return figure
 
 
@@ -46,22 +52,6 @@ def motion_axes(axes: Sequence[str]) -> list[str]:
     """The controlled axes (of x, y, z, roll, pitch, yaw) in that order; all six when none are named."""
     named = [axis for axis in AXIS_NAMES if axis in axes]
     return named or list(AXIS_NAMES)
-
-
-def path_coordinates(axes: Sequence[str], desired: np.ndarray) -> tuple[int, ...]:
-    """Which of x, y, z (indices) a path figure shows: the task's position axes when it controls two or three,
-    else the controlled one and those along which the desired path (N, 3) [m] moves most (x, y if it does not).
-
-    Returns:
-        Three indices (a 3-D path) or two in increasing order (a plane).
-    """
-    controlled = [index for index, name in enumerate("xyz") if name in axes]
-    if len(controlled) >= 2:
-        return tuple(controlled)
-    spans = np.ptp(desired, axis=0) if len(desired) else np.zeros(3)
-    ranked = [index for index in np.argsort(-spans, kind="stable") if spans[index] > 0 and index not in controlled]
-    chosen = controlled + ranked + [index for index in (0, 1, 2) if index not in controlled and index not in ranked]
-    return tuple(sorted(chosen[:2]))
 
 
 def desired_motion_figure(result: SimulationResult, trajectory, title: str = "") -> Figure:
@@ -76,84 +66,55 @@ def desired_motion_figure(result: SimulationResult, trajectory, title: str = "")
     return stacked(t, np.column_stack(columns), labels, f"{title}: desired end-effector motion")
 
 
-def path_figure(result: SimulationResult, title: str = "") -> Figure:
-    """End effector, its desired path and the vehicle in the task's own axes: 3-D when the task controls x, y
-    and z, else the plane of its two position axes (or of the two along which the path moves)."""
-    robot = result.robot
-    shown = path_coordinates(result.axes or robot.base.task_axes, result.desired_position)
-    names = ["xyz"[index] for index in shown]
-    vehicle = (np.array([robot.base_pose(q).translation for q in result.q]) if robot.base_type != "fixed"
-               else None)  # (N, 3) [m] world
-    if len(shown) == 3:
-        figure = Figure(figsize=(7, 6.5))
-        axis = figure.add_subplot(projection="3d")
-    else:
-        figure = Figure(figsize=(6, 6))
-        axis = figure.subplots()
-    curves = [(result.desired_position, {"linestyle": "--", "color": "C1", "label": "desired"}),
-              (result.ee_position, {"color": "C0", "linewidth": 1, "label": "end effector"})]
-    if vehicle is not None:
-        curves.append((vehicle, {"color": "C2", "label": "vehicle"}))
-    for points, style in curves:
-        axis.plot(*(points[:, index] for index in shown), **style)
-    if vehicle is not None:
-        axis.plot(*(vehicle[:1, index] for index in shown), "o", color="C2")
-    if len(shown) == 3:
-        everything = np.vstack([points for points, _ in curves])
-        span = np.ptp(everything, axis=0)
-        box = np.maximum(span, 0.05 * max(float(span.max()), 1e-9))
-        axis.set_box_aspect(box)  # true proportions
-        for coordinate, extent in zip((axis.xaxis, axis.yaxis, axis.zaxis), box / box.max()):
-            coordinate.set_major_locator(MaxNLocator(max(2, int(round(7 * extent)))))  # no crowded ticks
-        axis.tick_params(pad=5)  # minus signs clear of the tick marks
-        axis.set_zlabel("z [m]", labelpad=14)
-        plane = "3-D (task axes x, y, z)"
-    else:
-        axis.set_aspect("equal", adjustable="datalim")
-        axis.grid(True, alpha=0.3)
-        plane = f"the {names[0]}-{names[1]} plane"
-    pad = {"labelpad": 10} if len(shown) == 3 else {}
-    axis.set_xlabel(f"{names[0]} [m]", **pad)
-    axis.set_ylabel(f"{names[1]} [m]", **pad)
-    axis.legend()
-    axis.set_title(f"{title}: paths in {plane}")
-    figure.tight_layout()
+def error_figure(result: SimulationResult, title: str = "") -> Figure:
+    """Position [m] and orientation [rad] errors on a log axis; values below :data:`ROUNDING_LEVEL` (exact zeros
+    included) lie on a floor line labelled "rounding level", and a series that never rises above it says so."""
+    figure = Figure(figsize=(7, 3.2), layout="constrained")
+    axis = figure.subplots()
+    series = [(result.position_error, "position error [m]")]
+    if np.any(result.orientation_error > 0):
+        series.append((result.orientation_error, "orientation error [rad]"))
+    for values, label in series:
+        below = not np.any(values > ROUNDING_LEVEL)
+        axis.semilogy(result.t, np.maximum(values, ROUNDING_LEVEL),
+                      label=f"{label}: at rounding level throughout" if below else label)
+    axis.axhline(ROUNDING_LEVEL, color="0.4", linestyle=":", linewidth=1.2,
+                 label=f"rounding level ({ROUNDING_LEVEL:g})")
+    axis.set_ylim(bottom=ROUNDING_LEVEL / 3)
+    axis.set_xlabel("t [s]")
+    axis.grid(True, which="both", alpha=0.3)
+    axis.legend(fontsize=8)
+    axis.set_title(f"{title}: tracking error")
     return figure
 
 
-def scenario_figures(result: SimulationResult, trajectory, folder: str | os.PathLike, title: str = "") -> list[Path]:
-    """Write the standard figures of a run into ``folder``; returns their paths.
+def run_figures(result: SimulationResult, trajectory, title: str = "") -> dict[str, Figure]:
+    """The standard figures of a run, by file name (what :func:`scenario_figures` writes).
 
     ``desired_motion.png`` and ``path.png`` follow the task's axes (``result.axes``): every controlled axis
-    against time, and the path in 3-D or in the task's plane (:func:`path_figure`).
+    against time, and the path in 3-D or in the task's plane (:func:`uvms.viz.paths.path_figure`).
+    ``vehicle_velocity.png`` shows v's vehicle entries as they are, the body twist in FLU axes.
     """
-    folder = Path(folder)
     robot, t = result.robot, result.t
     figures = {"desired_motion.png": desired_motion_figure(result, trajectory, title)}
     if robot.base_type != "fixed":
         figures["vehicle.png"] = stacked(t, result.vehicle_pose(), robot.base.pose_labels,
                                          f"{title}: vehicle pose")
-        figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], robot.base.velocity_labels,
-                                                  f"{title}: vehicle body velocities (FLU)")
-    figures["joints.png"] = stacked(t, result.arm(), [f"{name} [rad]" for name in robot.arm_joint_names],
-                                    f"{title}: arm joints (dotted: limits)", limits=robot.arm_limits)
-    figure = Figure(figsize=(7, 3.2))
-    axis = figure.subplots()
-    floor = 1e-17  # log axes: exact zeros are drawn at the floor
-    axis.semilogy(t, np.maximum(result.position_error, floor), label="position error [m]")
-    if np.any(result.orientation_error > 0):
-        axis.semilogy(t, np.maximum(result.orientation_error, floor), label="orientation error [rad]")
-    axis.set_xlabel("t [s]")
-    axis.grid(True, which="both", alpha=0.3)
-    axis.legend()
-    axis.set_title(f"{title}: tracking error")
-    figure.tight_layout()
-    figures["errors.png"] = figure
+        figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], vehicle_velocity_labels(robot),
+                                                  f"{title}: vehicle velocities in its body axes (FLU)")
+    figures["joints.png"] = stacked(t, result.arm(), arm_joint_labels(robot), f"{title}: arm joints (dotted: limits)",
+                                    limits=robot.arm_limits)
+    figures["errors.png"] = error_figure(result, title)
     figures["path.png"] = path_figure(result, title)
+    return figures
+
+
+def scenario_figures(result: SimulationResult, trajectory, folder: str | os.PathLike, title: str = "") -> list[Path]:
+    """Write the standard figures of a run (:func:`run_figures`) into ``folder``; returns their paths."""
     written = []
-    for name, figure in figures.items():
-        outputs.save_figure(figure, folder / name)
-        written.append(folder / name)
+    for name, figure in run_figures(result, trajectory, title).items():
+        outputs.save_figure(figure, Path(folder) / name)
+        written.append(Path(folder) / name)
     return written
 
 
@@ -235,34 +196,43 @@ def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, 
     return Path(path)
 
 
+#: Rows of :func:`joint_trajectory_figure`: (quantity, unit suffix) and how a joint of each unit is drawn.
+TRAJECTORY_ROWS = (("position", ""), ("velocity", "/s"), ("acceleration", "/s²"))
+DRAWN_UNITS = {"rad": ("deg", np.rad2deg), "m": ("m", np.asarray)}
+
+
 def joint_trajectory_figure(samples, path: str | os.PathLike | None = None, title: str = "",
-                            names: list[str] | None = None, marks=None) -> Figure:
-    """Position, velocity and acceleration of every joint (xiang2019 Figs. 5-6), in degrees.
+                            names: list[str] | None = None, marks=None, units: Sequence[str] | None = None) -> Figure:
+    """Position, velocity and acceleration of every joint (xiang2019 Figs. 5-6): revolute joints in degrees,
+    prismatic ones in metres.
 
     Args:
-        samples: a ``JointSamples`` (t (N,), q, qd, qdd (N, n) in rad).
+        samples: a ``JointSamples`` (t (N,), q, qd, qdd (N, n) in rad or m).
         path: where to save the PNG (atomically); None to only return the figure.
         names: joint names for the column titles; marks: times [s] drawn as dotted lines (via points).
+        units: "rad" or "m" per joint (:func:`uvms.viz.labels.joint_unit`); default: every joint in rad.
     """
     count = samples.q.shape[1]
-    figure = Figure(figsize=(3.2 * count, 7))
+    units = list(units) if units is not None else ["rad"] * count
+    if len(units) != count or not set(units) <= set(DRAWN_UNITS):
+        raise UVMSError(f"units must hold 'rad' or 'm' for each of the {count} joints, got {units!r}")
+    figure = Figure(figsize=(3.2 * count, 7), layout="constrained")
     axes = figure.subplots(3, count, sharex=True, squeeze=False)
-    rows = ((samples.q, "position [deg]"), (samples.qd, "velocity [deg/s]"), (samples.qdd, "acceleration [deg/s²]"))
-    for row, (values, label) in enumerate(rows):
+    for row, (values, (quantity, per)) in enumerate(zip((samples.q, samples.qd, samples.qdd), TRAJECTORY_ROWS)):
         for joint in range(count):
             axis = axes[row, joint]
-            axis.plot(samples.t, np.rad2deg(values[:, joint]), color=f"C{joint}")
+            unit, convert = DRAWN_UNITS[units[joint]]
+            axis.plot(samples.t, convert(values[:, joint]), color=f"C{joint}")
             for mark in marks if marks is not None else ():
                 axis.axvline(mark, color="0.6", linestyle=":", linewidth=1)
             axis.grid(True, alpha=0.3)
-            if joint == 0:
-                axis.set_ylabel(label)
+            if joint == 0 or units[joint] != units[joint - 1]:  # a label wherever the unit changes
+                axis.set_ylabel(f"{quantity} [{unit}{per}]")
             if row == 0:
                 axis.set_title(names[joint] if names else f"joint {joint + 1}")
             if row == 2:
                 axis.set_xlabel("t [s]")
     figure.suptitle(title)
-    figure.tight_layout()
     if path is not None:
         outputs.save_figure(figure, path)
     return figure
@@ -363,8 +333,8 @@ def gjm_figures(result, folder: str | os.PathLike, title: str = "", snapshots: i
     folder = Path(folder)
     robot, t = result.robot, result.t
     gjm_tracking_figure(result, title, folder / "ee_tracking.png")
-    labels = [f"{name} [rad/s]" for name in robot.arm_joint_names]
-    figure = stacked(t, result.joint_rates(), labels, f"{title}: joint rates (solid) and commands (dashed)",
+    figure = stacked(t, result.joint_rates(), arm_joint_labels(robot, per_second=True),
+                     f"{title}: joint rates (solid) and commands (dashed)",
                      dashed=result.plant.command)
     outputs.save_figure(figure, folder / "joint_rates.png")
     rows = snapshot_rows(t, snapshots)

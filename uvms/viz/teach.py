@@ -17,6 +17,7 @@ import pinocchio as pin
 from ..robot.bases import BASE_TYPES
 from ..errors import TeachUnavailable, UVMSError
 from ..robot.robot import Robot
+from .labels import joint_unit
 
 INSTALL_HINT = "the teach panel needs ipywidgets: `pip install uvms[viz]`"
 #: Slider names of the vehicle pose, by base type: position [m], then angles [rad].
@@ -71,9 +72,7 @@ def sliders(robot: Robot, q: np.ndarray | None = None, position_range: float = 5
             value = float(np.arctan2(q[joint.idx_q + 1], q[joint.idx_q]))
         if not (np.isfinite(lower) and np.isfinite(upper)) or abs(lower) > 1e10 or abs(upper) > 1e10:
             lower, upper = -np.pi, np.pi
-        prismatic = "Prismatic" in joint.kind or joint.kind.startswith("JointModelP")
-        result.append(Slider(joint.name, lower, upper, float(np.clip(value, lower, upper)),
-                             "m" if prismatic else "rad"))
+        result.append(Slider(joint.name, lower, upper, float(np.clip(value, lower, upper)), joint_unit(joint.kind)))
     return result
 
 
