@@ -9,7 +9,7 @@ import pinocchio as pin
 from conftest import shipped
 from uvms.solvers import SOLVERS
 from uvms.viz.labels import (METHOD_NAMES, TITLE_CHARACTERS_PER_INCH, arm_joint_labels, figure_title, joint_unit,
-                             method_name, vehicle_velocity_labels)
+                             method_name)
 
 
 def test_prismatic_joints_are_metres_and_every_other_joint_radians():
@@ -25,9 +25,11 @@ def test_prismatic_joints_are_metres_and_every_other_joint_radians():
 
 
 def test_vehicle_velocities_are_named_by_their_flu_axis():
-    assert vehicle_velocity_labels(shipped("hoang2011")) == ["vx [m/s]", "vy [m/s]", "ωz [rad/s]"]
-    assert vehicle_velocity_labels(shipped("bluerov2_alpha5")) == [
-        "vx [m/s]", "vy [m/s]", "vz [m/s]", "ωx [rad/s]", "ωy [rad/s]", "ωz [rad/s]"]
+    assert shipped("hoang2011").base.velocity_labels == ("vx [m/s]", "vy [m/s]", "ωz [rad/s]")
+    assert shipped("bluerov2_alpha5").base.velocity_labels == (
+        "vx [m/s]", "vy [m/s]", "vz [m/s]", "ωx [rad/s]", "ωy [rad/s]", "ωz [rad/s]")
+    for base in (shipped("hoang2011").base, shipped("bluerov2_alpha5").base):  # the labels name the twist's entries
+        assert [label.split()[0].replace("ω", "w") for label in base.velocity_labels] == list(base.velocity_names)
 
 
 def test_every_solver_method_has_a_full_name():

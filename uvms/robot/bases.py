@@ -25,7 +25,8 @@ class BaseType:
         nv: entries of v the vehicle holds (its degrees of freedom).
         pose_names: the vehicle pose as users give it (``Robot.configuration(base=...)``, ``base_values``).
         velocity_names: the vehicle twist entries of v, in the vehicle's local axes.
-        pose_labels, velocity_labels: axis labels of figures [units].
+        pose_labels, velocity_labels: axis labels of figures [units] (the twist in the body's FLU axes, not
+            Fossen's u, v, w, p, q, r of FRD).
         task_axes: the task axes that make sense for this base (all six, or x, y, yaw).
         conserved_momentum_rows: rows of the centroidal momentum [linear; angular] the vehicle cannot exchange
             with the world through its joint (the generalized Jacobian uses them).
@@ -50,7 +51,7 @@ BASE_TYPES: dict[str, BaseType] = {
         pose_names=("x", "y", "z", "roll", "pitch", "yaw"),
         velocity_names=("vx", "vy", "vz", "wx", "wy", "wz"),
         pose_labels=("x [m]", "y [m]", "z [m]", "roll [rad]", "pitch [rad]", "yaw [rad]"),
-        velocity_labels=("u [m/s]", "v [m/s]", "w [m/s]", "p [rad/s]", "q [rad/s]", "r [rad/s]"),
+        velocity_labels=("vx [m/s]", "vy [m/s]", "vz [m/s]", "ωx [rad/s]", "ωy [rad/s]", "ωz [rad/s]"),
         task_axes=AXIS_NAMES, conserved_momentum_rows=(0, 1, 2, 3, 4, 5), root_joint=pin.JointModelFreeFlyer,
     ),
     "planar": BaseType(
@@ -58,7 +59,7 @@ BASE_TYPES: dict[str, BaseType] = {
         pose_names=("x", "y", "yaw"),
         velocity_names=("vx", "vy", "wz"),
         pose_labels=("x [m]", "y [m]", "psi [rad]"),
-        velocity_labels=("u [m/s]", "v [m/s]", "r [rad/s]"),
+        velocity_labels=("vx [m/s]", "vy [m/s]", "ωz [rad/s]"),
         task_axes=("x", "y", "yaw"), conserved_momentum_rows=(0, 1, 5), root_joint=pin.JointModelPlanar,
     ),
     "fixed": BaseType(

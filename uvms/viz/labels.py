@@ -34,12 +34,6 @@ def arm_joint_labels(robot: Robot, per_second: bool = False) -> list[str]:
     return [f"{joint.name} [{joint_unit(joint.kind)}{suffix}]" for joint in robot.arm_joints]
 
 
-def vehicle_velocity_labels(robot: Robot) -> list[str]:
-    """Labels of the vehicle's entries of v, its body twist in FLU axes: vx, vy, vz [m/s], ωx, ωy, ωz [rad/s]
-    (a planar vehicle: vx, vy, ωz)."""
-    return [f"ω{name[1:]} [rad/s]" if name.startswith("w") else f"{name} [m/s]" for name in robot.base.velocity_names]
-
-
 def method_name(method: str) -> str:
     """The full name of a ``solver.method`` (:data:`METHOD_NAMES`); any other label as it is."""
     return METHOD_NAMES.get(method, method)

@@ -17,7 +17,7 @@ from ..errors import UVMSError
 from ..io import outputs
 from ..robot.conventions import AXIS_NAMES
 from ..sim.result import SimulationResult
-from .labels import arm_joint_labels, vehicle_velocity_labels
+from .labels import arm_joint_labels
 from .paths import path_figure
 
 #: [m, rad] Errors below this are at the rounding level of double precision over a run: errors.png draws them on
@@ -100,7 +100,7 @@ def run_figures(result: SimulationResult, trajectory, title: str = "") -> dict[s
     if robot.base_type != "fixed":
         figures["vehicle.png"] = stacked(t, result.vehicle_pose(), robot.base.pose_labels,
                                          f"{title}: vehicle pose")
-        figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], vehicle_velocity_labels(robot),
+        figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], list(robot.base.velocity_labels),
                                                   f"{title}: vehicle velocities in its body axes (FLU)")
     figures["joints.png"] = stacked(t, result.arm(), arm_joint_labels(robot), f"{title}: arm joints (dotted: limits)",
                                     limits=robot.arm_limits)
