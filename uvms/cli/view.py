@@ -36,9 +36,10 @@ def view_configuration(robot: Robot, values: Sequence[float] | None) -> np.ndarr
                     f"{robot.n_arm} (arm joints) for {robot.name}; got {len(values)}")
 
 
-def headless_start(options: argparse.Namespace, robot: Robot) -> tuple[np.ndarray, str]:
-    """The configuration (nq,) ``uvms view ... --headless PNG`` draws, and its title: ``--q`` when given, else the
-    initial configuration of a scenario ``.toml`` (the one its run starts from), else the model's neutral one."""
+def start_configuration(options: argparse.Namespace, robot: Robot) -> tuple[np.ndarray, str]:
+    """The configuration (nq,) ``uvms view`` shows (the viewer, or ``--headless PNG``), and its title: ``--q`` when
+    given, else the initial configuration of a scenario ``.toml`` (the one its run starts from), else the model's
+    neutral one."""
     if options.q or not str(options.model).endswith(".toml"):
         return view_configuration(robot, options.q), robot.name
     from ..scenario.build import scenario_start
@@ -166,7 +167,7 @@ def command_view(options: argparse.Namespace) -> int:
     robot, notice = view_robot(options)
     if notice:
         say(notice, sys.stdout)
-    q = view_configuration(robot, options.q)
+    q, title = start_configuration(options, robot)
     result = read_result(robot, options.result) if options.result else None
     if options.headless:
         from ..viz import drawing
@@ -176,7 +177,6 @@ def command_view(options: argparse.Namespace) -> int:
             if out.suffix.lower() in drawing.WRITERS:
                 raise UVMSError(f"an animation ({out.suffix}) needs --result DIR; write a picture (.png) of one "
                                 f"configuration instead")
-            q, title = headless_start(options, robot)
             drawing.snapshot_figure(robot, [q], titles=[title], path=out, ncols=1, panel_size=6.0)
         else:
             t, qs = result
