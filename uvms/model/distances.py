@@ -1,0 +1,104 @@
+"""Signed distances between pairs of collision geometries, their witness points, and the distance Jacobian.
+
+For a pair (o1, o2) coal gives the signed distance d (negative: the penetration depth), the witness points p1
+on o1 and p2 on o2 and the unit normal n from o1 to o2, all in the world frame, with d = n . (p2 - p1).
+Moving each witness point with its body, d' = n . (v_p2 - v_p1), and the velocity of a point p carried by
+joint i is v_p = J_v,i v - [p]x J_w,i v (``getJointJacobian`` in the WORLD frame: the velocity at the world
+origin and the angular velocity), so the Jacobian row of the pair is
+
+    J_d = n^T (J_v,2 - J_v,1) - (n x p2)^T J_w,2 + (n x p1)^T J_w,1       (1, nv), d' = J_d v.
+
+A geometry on the world (joint 0: an obstacle, or a fixed base's root link) contributes nothing. The
+Jacobian is that of smooth convex shapes (the normal's own rotation is second order in the distance); checked
+against finite differences on the manifold in ``tests/model/test_distances.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..robot.configuration import Configuration
+
+#: GJK/EPA tolerance of the distance queries [m]: far below any clearance, and fine enough that the distance
+#: is smooth at the scale of a finite-difference check.
+DISTANCE_TOLERANCE = 1e-9
+
+
+@dataclass(frozen=True)
+class Distances:
+    """Signed distances of m pairs at one configuration, world frame.
+
+    Attributes:
+        distance: (m,) [m], negative in penetration.
+        point1, point2: (m, 3) witness points on the pair's first and second geometry [m].
+        normal: (m, 3) unit normals from the first geometry to the second: distance = normal . (point2 - point1).
+    """
+
+    distance: np.ndarray
+    point1: np.ndarray
+    point2: np.ndarray
+    normal: np.ndarray
+
+
+class PairDistances:
+    """Signed distances and Jacobians of chosen pairs of a geometry model.
+
+    Args:
+        model: the robot's Pinocchio model; geometry: the geometry model (robot shapes, and obstacles attached to
+            joint 0); pairs: (m, 2) indices of the geometry pairs evaluated.
+
+    The geometry data is scratch filled at every :meth:`evaluate` (the placements recomputed from the
+    configuration's joint placements): nothing carries over between calls.
+    """
+
+    def __init__(self, model: pin.Model, geometry: pin.GeometryModel, pairs: np.ndarray) -> None:
+        self.model, self.pairs = model, np.asarray(pairs, dtype=int).reshape(-1, 2)
+        self.geometry = geometry.copy()
+        self.geometry.removeAllCollisionPairs()
+        for a, b in self.pairs:
+            self.geometry.addCollisionPair(pin.CollisionPair(int(a), int(b)))
+        self.joints = np.array([[geometry.geometryObjects[int(i)].parentJoint for i in pair] for pair in self.pairs],
+                               dtype=int).reshape(-1, 2)
+        self._data = pin.GeometryData(self.geometry)
+        for request in self._data.distanceRequests:
+            request.enable_signed_distance = True
+            request.gjk_tolerance = DISTANCE_TOLERANCE
+            request.epa_tolerance = DISTANCE_TOLERANCE
+
+    @property
+    def count(self) -> int:
+        """Number of pairs m."""
+        return len(self.pairs)
+
+    def evaluate(self, state: Configuration) -> Distances:
+        """Signed distances, witness points and normals of every pair at ``state`` (world frame)."""
+        state.joint_pose(0)  # the joint placements (and Jacobians) at q, once per configuration
+        pin.updateGeometryPlacements(self.model, state.data, self.geometry, self._data)
+        pin.computeDistances(self.geometry, self._data)
+        results = self._data.distanceResults
+        m = self.count
+        distance, point1, point2, normal = np.empty(m), np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
+        for k in range(m):
+            result = results[k]
+            distance[k] = result.min_distance
+            point1[k], point2[k], normal[k] = result.getNearestPoint1(), result.getNearestPoint2(), result.normal
+        return Distances(distance, point1, point2, normal)
+
+    def jacobian(self, state: Configuration, distances: Distances, rows: np.ndarray) -> np.ndarray:
+        """The distance Jacobian (k, nv), d' = J v, of the pairs ``rows`` (k,) (indices into the pairs) from their
+        witness points and normals ``distances`` (of :meth:`evaluate` at the same ``state``)."""
+        state.joint_pose(0)  # computeJointJacobians at q
+        model, data = self.model, state.data
+        out = np.zeros((len(rows), model.nv))
+        for row, k in enumerate(rows):
+            n = distances.normal[k]
+            for side, point, sign in ((0, distances.point1[k], -1.0), (1, distances.point2[k], 1.0)):
+                joint = int(self.joints[k, side])
+                if joint == 0:
+                    continue  # the world does not move
+                jacobian = pin.getJointJacobian(model, data, joint, pin.ReferenceFrame.WORLD)
+                out[row] += sign * (n @ jacobian[:3] - np.cross(n, point) @ jacobian[3:])
+        return out
