@@ -42,7 +42,7 @@ def test_shapes_on_links_behind_fixed_joints_ride_on_the_joint_that_carries_them
     for item in geometry.geometryObjects:  # each shape where the URDF puts it: its link's pose times its origin
         link = state.pose(robot.frame_id(robot.model.frames[item.parentFrame].name))
         placed = state.joint_pose(item.parentJoint) * item.placement
-        origin = {"link1": [0, 0, 0.05], "link2": [0.15, 0, 0], "link3": [0.1, 0, 0]}.get(
+        origin = {"link1": [0, 0, 0.075], "link2": [0.15, 0, 0], "link3": [0.1, 0, 0]}.get(
             robot.model.frames[item.parentFrame].name, [0, 0, 0])
         np.testing.assert_allclose(placed.translation, link.act(np.array(origin, dtype=float)), atol=1e-12)
     assert [type(item.geometry).__name__ for item in geometry.geometryObjects] == [

@@ -43,6 +43,16 @@ class Distances:
     normal: np.ndarray
 
 
+def distance_request() -> object:
+    """A coal distance request: signed, :data:`DISTANCE_TOLERANCE`, GJK started from its default guess."""
+    import coal  # shipped with the pin wheel
+
+    request = coal.DistanceRequest()
+    request.enable_signed_distance = True
+    request.gjk_tolerance = request.epa_tolerance = DISTANCE_TOLERANCE
+    return request
+
+
 class PairDistances:
     """Signed distances and Jacobians of chosen pairs of a geometry model.
 
@@ -51,7 +61,8 @@ class PairDistances:
             joint 0); pairs: (m, 2) indices of the geometry pairs evaluated.
 
     The geometry data is scratch filled at every :meth:`evaluate` (the placements recomputed from the
-    configuration's joint placements): nothing carries over between calls.
+    configuration's joint placements, GJK started from its default guess, not the last call's): nothing carries
+    over between calls.
     """
 
     def __init__(self, model: pin.Model, geometry: pin.GeometryModel, pairs: np.ndarray) -> None:
@@ -63,10 +74,8 @@ class PairDistances:
         self.joints = np.array([[geometry.geometryObjects[int(i)].parentJoint for i in pair] for pair in self.pairs],
                                dtype=int).reshape(-1, 2)
         self._data = pin.GeometryData(self.geometry)
-        for request in self._data.distanceRequests:
-            request.enable_signed_distance = True
-            request.gjk_tolerance = DISTANCE_TOLERANCE
-            request.epa_tolerance = DISTANCE_TOLERANCE
+        for k in range(len(self.pairs)):  # Pinocchio's requests carry GJK's last guess between calls: fresh ones
+            self._data.distanceRequests[k] = distance_request()
 
     @property
     def count(self) -> int:
