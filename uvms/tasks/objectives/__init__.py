@@ -42,6 +42,9 @@ INEQUALITY_TYPES: dict[str, Callable[..., object]] = {
 Objective = Inequality | VelocityLimit
 #: Constructor parameters that take Python objects, not plain data: not keys of a table.
 NOT_TABLE_KEYS = ("limit",)
+#: Table keys that name a file: a scenario resolves them inside its own folder
+#: (:func:`uvms.scenario.resources.scenario_file`).
+FILE_KEYS = {"obstacle": ("mesh",), "self_collision": ("srdf",)}
 
 
 def table_keys(type_name: str) -> tuple[list[str], list[str]]:
@@ -95,7 +98,7 @@ def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[O
 
 
 __all__ = [
-    "ACTIVATION_SHAPES", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
+    "ACTIVATION_SHAPES", "FILE_KEYS", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
     "JointVelocityLimits", "Manipulability", "Objective", "Obstacle", "PlaneClearance", "SelfCollision", "VehicleAttitude",
     "VehicleVelocityLimits", "VelocityLimit", "bell", "check_table", "inequalities_from_table", "table_keys", "velocity_limits",
 ]
