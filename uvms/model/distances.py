@@ -73,9 +73,13 @@ class PairDistances:
             self.geometry.addCollisionPair(pin.CollisionPair(int(a), int(b)))
         self.joints = np.array([[geometry.geometryObjects[int(i)].parentJoint for i in pair] for pair in self.pairs],
                                dtype=int).reshape(-1, 2)
+        self._moved = sorted(set(self.joints.ravel().tolist()) - {0})  # the joints that carry a shape; 0: the world
+        self._entries = np.array([[self._moved.index(j) if j else -1 for j in pair] for pair in self.joints],
+                                 dtype=np.int64).reshape(-1, 2)  # (m, 2): each side's joint in the table, -1: world
         self._data = pin.GeometryData(self.geometry)
         for k in range(len(self.pairs)):  # Pinocchio's requests carry GJK's last guess between calls: fresh ones
             self._data.distanceRequests[k] = distance_request()
+        self._results = list(self._data.distanceResults)  # views of the results (a pass over the vector costs 1 us/pair)
 
     @property
     def count(self) -> int:
@@ -87,27 +91,24 @@ class PairDistances:
         state.joint_pose(0)  # the joint placements (and Jacobians) at q, once per configuration
         pin.updateGeometryPlacements(self.model, state.data, self.geometry, self._data)
         pin.computeDistances(self.geometry, self._data)
-        results = self._data.distanceResults
-        m = self.count
-        distance, point1, point2, normal = np.empty(m), np.empty((m, 3)), np.empty((m, 3)), np.empty((m, 3))
-        for k in range(m):
-            result = results[k]
-            distance[k] = result.min_distance
-            point1[k], point2[k], normal[k] = result.getNearestPoint1(), result.getNearestPoint2(), result.normal
-        return Distances(distance, point1, point2, normal)
+        results = self._results
+        return Distances(np.array([result.min_distance for result in results]),
+                         np.array([result.getNearestPoint1() for result in results]).reshape(-1, 3),
+                         np.array([result.getNearestPoint2() for result in results]).reshape(-1, 3),
+                         np.array([result.normal for result in results]).reshape(-1, 3))
 
     def jacobian(self, state: Configuration, distances: Distances, rows: np.ndarray) -> np.ndarray:
         """The distance Jacobian (k, nv), d' = J v, of the pairs ``rows`` (k,) (indices into the pairs) from their
         witness points and normals ``distances`` (of :meth:`evaluate` at the same ``state``)."""
+        from ..numerics._kernels.distance import distance_jacobian_into  # numba: loaded at the first use
+
         state.joint_pose(0)  # computeJointJacobians at q
         model, data = self.model, state.data
-        out = np.zeros((len(rows), model.nv))
-        for row, k in enumerate(rows):
-            n = distances.normal[k]
-            for side, point, sign in ((0, distances.point1[k], -1.0), (1, distances.point2[k], 1.0)):
-                joint = int(self.joints[k, side])
-                if joint == 0:
-                    continue  # the world does not move
-                jacobian = pin.getJointJacobian(model, data, joint, pin.ReferenceFrame.WORLD)
-                out[row] += sign * (n @ jacobian[:3] - np.cross(n, point) @ jacobian[3:])
+        table = np.empty((len(self._moved), 6, model.nv))
+        for entry, joint in enumerate(self._moved):
+            table[entry] = pin.getJointJacobian(model, data, joint, pin.ReferenceFrame.WORLD)
+        rows = np.asarray(rows, dtype=np.int64)
+        out = np.empty((rows.size, model.nv))
+        distance_jacobian_into(table, self._entries[rows], distances.normal[rows], distances.point1[rows],
+                               distances.point2[rows], out)
         return out
