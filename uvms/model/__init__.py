@@ -6,17 +6,19 @@
 (a xacro's static includes), ``sandbox`` (untrusted xacro in a kernel-confined child process), ``base_rule``
 (which root is the vehicle), ``compose`` (``mount_arm``), ``point_masses`` (links with a mass and no inertia),
 ``joint_classes`` (arm joints, mimics, and the propellers, sensors and zero-range joints uvms freezes), ``meshes``
-(mesh URIs resolved, mesh files refused by rule).
+(mesh URIs resolved, mesh files refused by rule), ``collision`` (the ``<collision>`` shapes and the pairs checked),
+``distances`` (signed distances of pairs and their Jacobian).
 """
 
 from .compose import mount_arm
 from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES
+from .collision import CollidingPairWarning
 from .joint_classes import ThrusterFileWarning
 from .loader import BaseGuessWarning, MissingMeshWarning, ParserWarning, load, read_model_text
 from .packages import PackageSearchWarning, package_index
 from .point_masses import PointMassWarning
 from .resources import example_robot_urdf, shipped_models
 
-__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "MissingMeshWarning", "PackageSearchWarning",
-           "ParserWarning", "PointMassWarning", "ThrusterFileWarning", "example_robot_urdf", "load", "mount_arm",
-           "package_index", "read_model_text", "shipped_models"]
+__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "CollidingPairWarning", "MissingMeshWarning",
+           "PackageSearchWarning", "ParserWarning", "PointMassWarning", "ThrusterFileWarning", "example_robot_urdf", "load",
+           "mount_arm", "package_index", "read_model_text", "shipped_models"]
