@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import doctest
 import re
+import subprocess
 
 import pytest
 
@@ -28,13 +29,19 @@ def test_readme_python_example_runs(monkeypatch):
     assert namespace["rov_panda"].n_arm == 5 + 8
 
 
-def test_readme_quickstart_is_two_commands():
+def test_readme_quickstart_is_two_commands_and_ci_runs_them_as_written():
+    """CI (a fresh venv on a clean checkout) runs the README's block itself, so the two commands cannot drift."""
     text = (ROOT / "README.md").read_text()
     quickstart = text.split("## Quickstart", 1)[1].split("```bash\n", 1)[1].split("```", 1)[0]
+    shell = subprocess.run(["bash", "-c", "awk '/^## Quickstart/{q=1} q && /^```bash/{b=1; next} b && /^```/{exit} b' "
+                            "README.md"], cwd=ROOT, capture_output=True, text=True, check=True).stdout
     commands = [line for line in quickstart.splitlines() if line.strip()]
-    assert len(commands) == 2
-    assert "python -m pytest" in commands[1]
-    assert "python -m pytest" in (ROOT / ".ci" / "run").read_text()
+    assert shell.splitlines() == commands and len(commands) == 2
+    assert commands[0].startswith("pip install -e") and "uvms run scenarios/" in commands[0]
+    assert commands[1] == "python -m pytest"
+    ci = (ROOT / ".ci" / "run").read_text()
+    assert "awk '/^## Quickstart/{q=1} q && /^```bash/{b=1; next} b && /^```/{exit} b' README.md" in ci
+    assert ci.rstrip().endswith('bash -c "$(printf \'%s\\n\' "$quickstart" | sed -n 2p)"')
 
 
 # ------------------------------------------------------------------ the documentation site (docs/)

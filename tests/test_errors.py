@@ -178,7 +178,7 @@ def test_missing_meshes_only_warn_and_package_path_resolves_them(tmp_path):
     mesh_link = ('<link name="shell"><visual><geometry><mesh filename="package://my_rov/meshes/hull.stl"/>'
                  '</geometry></visual></link><joint name="s" type="fixed"><parent link="l1"/><child link="shell"/></joint>')
     source = urdf(extra=mesh_link)
-    with pytest.warns(uvms.model.MissingMeshWarning, match="package://my_rov/meshes/hull.stl"):
+    with pytest.warns(uvms.errors.MissingMeshWarning, match="package://my_rov/meshes/hull.stl"):
         assert uvms.load(source).nq == 1
     (tmp_path / "my_rov" / "meshes").mkdir(parents=True)
     (tmp_path / "my_rov" / "meshes" / "hull.stl").write_text("solid hull\nendsolid hull\n")
@@ -186,7 +186,7 @@ def test_missing_meshes_only_warn_and_package_path_resolves_them(tmp_path):
     import warnings
 
     with warnings.catch_warnings():
-        warnings.simplefilter("error", uvms.model.MissingMeshWarning)
+        warnings.simplefilter("error", uvms.errors.MissingMeshWarning)
         assert uvms.load(source, package_path=[tmp_path]).nq == 1
         assert uvms.load(source, package_path=[tmp_path / "my_rov"]).nq == 1
         uvms.model.mount_arm(shipped("hoang2011"), "panda")  # example-robot-data meshes are found

@@ -158,3 +158,62 @@ class ObjectiveNameNotFound(NameNotFound):
 # ------------------------------------------------- the browser viewer
 class ViewerInputError(UVMSError):
     """A viewer argument out of range (port), or a run's ``trajectory.npz`` the viewer will not read."""
+
+
+# ------------------------------------------------- warnings: what uvms did that the user should know (a guess, a
+# default taken, a file left out); never a failure
+class UVMSWarning(UserWarning):
+    """Root of every warning uvms gives (``warnings.simplefilter("error", uvms.errors.UVMSWarning)`` makes them errors)."""
+
+
+class AddedMassSymmetrizedWarning(UVMSWarning):
+    """An added-mass matrix that was symmetric within :data:`uvms.dynamics.hydro_parameters.MATRIX_TOLERANCE` was replaced by (M + M^T) / 2."""
+
+
+class BaseGuessWarning(UVMSWarning):
+    """``load`` chose the vehicle base by the root-link rule and added a joint the file does not have."""
+
+
+class JointOrderWarning(UVMSWarning):
+    """``uvms.load`` of a composed URDF would order the joints differently from the composed model."""
+
+
+class MissingMeshWarning(UVMSWarning):
+    """A mesh of the model cannot be found; kinematics does not need it."""
+
+
+class PackageSearchWarning(UVMSWarning):
+    """A search for ROS packages stopped at a bound, or met a ``package.xml`` it cannot read or two of one name."""
+
+
+class ParserWarning(UVMSWarning):
+    """Pinocchio's URDF parser printed something while building a model it accepted."""
+
+
+class PointMassWarning(UVMSWarning):
+    """A link has a positive mass and an all-zero inertia (a point mass), as uuv_simulator's thruster links do."""
+
+
+class ShapeCoefficientWarning(UVMSWarning):
+    """A shape model took a coefficient that uuv_simulator leaves undefined (a cylinder longer than its table)."""
+
+
+class ThrusterDefaultWarning(UVMSWarning):
+    """A plugin thruster took a value of :data:`uvms.dynamics.thrusters.DEFAULT_VALUES` (the plugin and the YAML give none)."""
+
+
+class ThrusterFileWarning(UVMSWarning):
+    """The ``thrusters.yaml`` beside a model cannot be read: the propellers it names are not known when loading
+    (``uvms.dynamics.thrusters_of`` raises the same error when the thrusters are used)."""
+
+
+class CollidingPairWarning(UVMSWarning):
+    """Pairs of links in collision at the reference configuration were disabled (no SRDF says which to check)."""
+
+
+class GeometryWarning(UVMSWarning):
+    """A geometry element of the model is left out of a drawing or a hull (an unsupported shape, an unreadable mesh)."""
+
+
+class InsecureSchedulerWarning(UVMSWarning):
+    """A Dask scheduler is reached without TLS: anyone who can reach it can run code on its workers."""

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from uvms.dynamics.hydro_shapes import ShapeCoefficientWarning
+from uvms.errors import ShapeCoefficientWarning
 from uvms.dynamics.hydrodynamics import parse_hydrodynamics
 from uvms.errors import ModelCheckError
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from test_plant import body_urdf
-from uvms.dynamics.hydro_parameters import (MATRIX_TOLERANCE, AddedMassSymmetrizedWarning, LinkHydrodynamics,
+from uvms.dynamics.hydro_parameters import (MATRIX_TOLERANCE, LinkHydrodynamics,
                                             flip_frd_flu)
 from uvms.dynamics.hydrodynamics import parse_hydrodynamics
-from uvms.errors import ModelCheckError
+from uvms.errors import AddedMassSymmetrizedWarning, ModelCheckError
 
 #: The RexROV's added mass as uuv_descriptions publishes it (SNAME axes, row-major).
 REXROV_ADDED_MASS = np.array([

@@ -10,7 +10,8 @@ import pytest
 
 import uvms
 from test_hydro_shapes import RHO, shape_urdf
-from uvms.dynamics.hydro_parameters import AddedMassSymmetrizedWarning, hydro_rows
+from uvms.errors import AddedMassSymmetrizedWarning
+from uvms.dynamics.hydro_parameters import hydro_rows
 from uvms.dynamics.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
 from uvms.dynamics.plant import Plant
 from uvms.sim import simulate

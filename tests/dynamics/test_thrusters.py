@@ -12,9 +12,9 @@ from conftest import THRUSTER_BOX
 from uvms.dynamics.actuated import ActuatedCommand, ActuatedPlant
 from uvms.dynamics.hydrodynamics import HydroParameters
 from uvms.dynamics.plant import Plant
-from uvms.dynamics.thrusters import (ThrusterDefaultWarning, allocation_matrix, load_thrusters_yaml,
+from uvms.dynamics.thrusters import (allocation_matrix, load_thrusters_yaml,
                                      parse_thrusters_urdf, thruster_rows, thrusters_of)
-from uvms.errors import ModelCheckError
+from uvms.errors import ModelCheckError, PointMassWarning, ThrusterDefaultWarning
 from uvms.sim import simulate
 
 S = np.sqrt(0.5)
@@ -231,7 +231,7 @@ def four_thrusters(folder: Path, yaml: str | None = None, urdf: str | None = Non
     (folder / "rov.urdf").write_text(FOUR.read_text() if urdf is None else urdf)
     if yaml is not None:
         (folder / "thrusters.yaml").write_text(yaml)
-    with pytest.warns(uvms.model.PointMassWarning):
+    with pytest.warns(uvms.errors.PointMassWarning):
         return uvms.load(folder / "rov.urdf")
 
 
@@ -309,7 +309,8 @@ def test_a_propeller_joint_must_be_frozen_and_the_thrust_acts_at_the_joints_zero
     urdf = FOUR.read_text().replace('type="fixed"', 'type="continuous"')
     (tmp_path / "rov.urdf").write_text(urdf)
     (tmp_path / "thrusters.yaml").write_text("max_forward: 150\nmax_reverse: 120\ntime_constant: 0.4\n")
-    robot = uvms.load(tmp_path / "rov.urdf")
+    with pytest.warns(PointMassWarning, match="rov/thruster_0, rov/thruster_1"):  # the thruster links
+        robot = uvms.load(tmp_path / "rov.urdf")
     assert robot.joint_classes["rov/thruster_0_joint"].kind == "propeller" and robot.n_arm == 0
     np.testing.assert_allclose(allocation_matrix(robot, thrusters_of(robot)), FOUR_MATRIX, atol=1e-12)
     (tmp_path / "rov.urdf").write_text(urdf.replace('ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"',

@@ -14,9 +14,9 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from uvms.errors import LinkNotFound, ModelCheckError
-from uvms.model.collision import (ADJACENT, COLLIDING, SAME_BODY, SRDF, CollidingPairWarning, candidate_pairs,
-                                  collision_geometry, collision_pairs, read_srdf)
+from uvms.errors import CollidingPairWarning, LinkNotFound, ModelCheckError
+from uvms.model.collision import (ADJACENT, COLLIDING, SAME_BODY, SRDF, candidate_pairs, collision_geometry,
+                                  collision_pairs, read_srdf)
 from uvms.robot.configuration import Configuration
 
 FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"
@@ -27,7 +27,7 @@ BOX_ARM_PAIRS = [("base_link", "link2"), ("base_link", "link3"), ("base_link", "
 
 
 def load(path=BOX_ARM, **options):
-    with pytest.warns(uvms.model.BaseGuessWarning):
+    with pytest.warns(uvms.errors.BaseGuessWarning):
         return uvms.load(path, **options)
 
 
@@ -106,7 +106,7 @@ def test_a_capsule_which_pinocchios_parser_drops_is_built_from_the_urdf():
                '<joint name="tip_mount" type="fixed"><parent link="link3"/><child link="tip"/>'
                '<origin xyz="0.2 0 0"/></joint></robot>')
     text = BOX_ARM.read_text().replace("</robot>", capsule)
-    with pytest.warns(uvms.model.ParserWarning):  # Pinocchio's URDF parser says it cannot read the capsule
+    with pytest.warns(uvms.errors.ParserWarning):  # Pinocchio's URDF parser says it cannot read the capsule
         robot = load(text)
     item = next(i for i in collision_geometry(robot).geometryObjects if i.name == "tip_0")
     assert isinstance(item.geometry, coal.Capsule) and item.geometry.radius == 0.02
@@ -121,7 +121,7 @@ MESHED = ('<robot name="meshed"><link name="hull"><inertial><mass value="5"/><in
 
 
 def test_a_missing_or_refused_mesh_and_a_zero_size_shape_are_clear_errors(tmp_path):
-    with pytest.warns(uvms.model.MissingMeshWarning):
+    with pytest.warns(uvms.errors.MissingMeshWarning):
         robot = uvms.load(MESHED.format(mesh=str(tmp_path / "gone.stl")), base="floating")
     with pytest.raises(ModelCheckError, match=r"link 'hull': the collision mesh '.*gone\.stl' cannot be found"):
         collision_geometry(robot)

@@ -86,8 +86,8 @@ def test_an_arm_whose_point_mass_moves_nothing_is_refused_once_mounted(tmp_path)
     (tmp_path / "on_axis.urdf").write_text(arm(0.0))
     (tmp_path / "off_axis.urdf").write_text(arm(0.1))
     vehicle = shipped("bluerov2_alpha5")
-    with pytest.warns(uvms.model.PointMassWarning):
+    with pytest.warns(uvms.errors.PointMassWarning):
         mounted = uvms.model.mount_arm(vehicle, tmp_path / "off_axis.urdf", placement=[0.2, 0, -0.1, 0, 0, 0])
     assert mounted.nv == vehicle.nv + 1
-    with pytest.warns(uvms.model.PointMassWarning), pytest.raises(uvms.errors.ModelCheckError, match="singular"):
+    with pytest.warns(uvms.errors.PointMassWarning), pytest.raises(uvms.errors.ModelCheckError, match="singular"):
         uvms.model.mount_arm(vehicle, tmp_path / "on_axis.urdf", placement=[0.2, 0, -0.1, 0, 0, 0])

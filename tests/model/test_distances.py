@@ -20,7 +20,7 @@ BOX_ARM = Path(__file__).parents[1] / "fixtures" / "collision" / "box_arm.urdf"
 
 @pytest.fixture(scope="module")
 def box_arm():
-    with pytest.warns(uvms.model.BaseGuessWarning):
+    with pytest.warns(uvms.errors.BaseGuessWarning):
         return uvms.load(BOX_ARM)
 
 

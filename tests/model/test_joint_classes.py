@@ -13,7 +13,7 @@ import uvms
 from conftest import ROOT, urdf
 from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import ModelCheckError, NameNotFound
-from uvms.model.joint_classes import ThrusterFileWarning
+from uvms.errors import ThrusterFileWarning
 
 IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"
 ARM = ["j1", "j2", "j3", "j4", "j5", "j6", "finger_a"]

@@ -21,7 +21,8 @@ from uvms.cli import main
 from uvms.dynamics.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.plant import Plant
 from uvms.errors import NoVehicleError
-from uvms.model import ADDED_BASE_JOINT, BaseGuessWarning
+from uvms.errors import BaseGuessWarning
+from uvms.model import ADDED_BASE_JOINT
 
 EXAMPLE_HYDRODYNAMICS = ROOT / "models" / "example_hydrodynamics.yaml"
 

@@ -20,7 +20,7 @@ import uvms
 from conftest import ROOT
 from uvms.errors import ModelFileNotFound, UVMSError, XacroError
 from uvms.model import packages, resources, sandbox
-from uvms.model.loader import MissingMeshWarning
+from uvms.errors import MissingMeshWarning
 from uvms.model.sandbox_worker import PackageNotFound, packages_for_find
 
 WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"

@@ -281,7 +281,7 @@ def test_a_package_uri_stays_inside_its_package(tmp_path):
     hostname = "package://example-robot-data/" + "../" * 40 + "etc/hostname"  # the red team's URI
     assert resources.resolve_uri(hostname, None, uvms.model.package_index()) is None
     mesh = '<visual><geometry><mesh filename="package://mypkg/../../secret.stl"/></geometry></visual>'
-    with pytest.warns(uvms.model.MissingMeshWarning, match="1 mesh file"):
+    with pytest.warns(uvms.errors.MissingMeshWarning, match="1 mesh file"):
         uvms.load(urdf(extra=f'<link name="l2">{mesh}</link><joint name="j2" type="fixed"><parent link="l1"/>'
                                '<child link="l2"/></joint>'), package_path=[tmp_path / "share"])
 

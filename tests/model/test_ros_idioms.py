@@ -14,7 +14,8 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from uvms.model import PointMassWarning, read_model_text
+from uvms.errors import PointMassWarning
+from uvms.model import read_model_text
 from uvms.model.includes import XACRO_NAMESPACES, walk_xacro
 
 INERTIA = 'ixx="{i}" ixy="0" ixz="0" iyy="{i}" iyz="0" izz="{i}"'

@@ -18,6 +18,7 @@ import pytest
 import uvms
 from conftest import ROOT
 from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
+from uvms.errors import AddedMassSymmetrizedWarning, BaseGuessWarning, PointMassWarning
 
 PACKAGE = ROOT / "tests" / "fixtures" / "uuv_ws" / "src" / "fixture_uuv_rov"
 MODEL = PACKAGE / "urdf" / "rov.urdf.xacro"
@@ -71,7 +72,9 @@ def test_the_thrusters_are_the_plugins_completed_by_the_yaml(robot):
 
 
 def test_the_intervention_runs_on_the_actuated_vehicle_with_default_gains(tmp_path):
-    result = uvms.run_scenario(PACKAGE / "scenarios" / "intervention.toml", out=tmp_path / "run", progress=False)
+    with pytest.warns(uvms.errors.UVMSWarning) as said:  # what uvms tells the user of a uuv_simulator model
+        result = uvms.run_scenario(PACKAGE / "scenarios" / "intervention.toml", out=tmp_path / "run", progress=False)
+    assert {type(w.message) for w in said} == {PointMassWarning, BaseGuessWarning, AddedMassSymmetrizedWarning}
     metrics = result.metrics
     assert metrics["verdict"]["ok"] and metrics["max_joint_limit_violation"] == 0.0
     assert metrics["max_position_error"] < 0.01  # measured 4.5 mm along the 0.2 m line in a 0.3 m/s current

@@ -264,7 +264,7 @@ def test_uvms_run_bag_writes_the_run_beside_its_files(tmp_path):
     import subprocess
 
     out = tmp_path / "run"
-    command = [sys.executable, "-m", "uvms.cli", "run", "hoang2011_w1", "--bag", "--quiet", "--out", str(out),
+    command = [sys.executable, "-m", "uvms.cli", "run", "hoang2011_w1", "--bag", "--out", str(out),
                "--set", "outputs.figures=false", "--set", "trajectory.duration=10"]
     done = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr

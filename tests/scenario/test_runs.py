@@ -137,7 +137,7 @@ def test_missing_required_key(tmp_path):
 
 def test_cli_run_and_its_errors(tmp_path):
     command = [sys.executable, "-m", "uvms.cli", "run", str(SCENARIOS / "santos2006_task_priority.toml"),
-               "--out", str(tmp_path / "cli"), "--quiet", "--set", "outputs.figures=false"]
+               "--out", str(tmp_path / "cli"), "--set", "outputs.figures=false"]
     result = subprocess.run(command, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert "vehicle_travel" in result.stdout and (tmp_path / "cli" / "metrics.json").exists()

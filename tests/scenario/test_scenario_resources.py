@@ -16,7 +16,7 @@ def test_a_shipped_scenario_runs_by_name_from_any_folder(tmp_path, monkeypatch, 
     monkeypatch.chdir(tmp_path)  # no scenarios/ here: the name is looked up in the installed repository
     assert resolve_scenario_path("hoang2011_w1") == SCENARIOS_DIR / "hoang2011_w1.toml"
     assert "santos2006_task_priority" in shipped_scenarios()
-    assert main(["run", "santos2006_task_priority", "--out", "tp", "--quiet", "--set", "outputs.figures=false"]) == 0
+    assert main(["run", "santos2006_task_priority", "--out", "tp", "--set", "outputs.figures=false"]) == 0
     out = capsys.readouterr().out
     assert "scenario    santos2006_task_priority  (100 steps" in out
     assert json.loads((tmp_path / "tp" / "metrics.json").read_text())["scenario"] == "santos2006_task_priority"

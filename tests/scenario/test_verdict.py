@@ -14,19 +14,19 @@ from uvms.scenario.verdict import LIMIT_SLACK, run_verdict
 
 
 def test_a_run_that_leaves_its_joint_limits_says_so_on_the_terminal(tmp_path, capsys):
-    assert main(["run", "hoang2011_w1_euler", "--out", str(tmp_path / "lim"), "--quiet",
+    assert main(["run", "hoang2011_w1_euler", "--out", str(tmp_path / "lim"), "--quiet",  # the result line
                  "--set", "outputs.figures=false", "--set", "model.args.q23_max=0.6",
                  "--set", "model.args.q23_min=-0.6", "--set", "solver.alpha=0",
                  "--set", "simulation.duration=30"]) == 0
     captured = capsys.readouterr()
-    assert "verdict     WARNING: joint limits left" in captured.out
+    assert captured.out == f"hoang2011_w1_euler: WARNING: joint limits left -> {tmp_path / 'lim'}/\n"
     assert captured.err.startswith("uvms: warning: hoang2011_w1_euler: the arm left its joint limits by up to")
     verdict = json.loads((tmp_path / "lim" / "metrics.json").read_text())["verdict"]
     assert verdict["ok"] is False and verdict["within_joint_limits"] is False and verdict["within_tolerance"]
 
 
 def test_a_task_error_above_the_stated_tolerance_says_so_and_the_default_passes_a_good_run(tmp_path, capsys):
-    assert main(["run", "hoang2011_w1_euler", "--out", str(tmp_path / "a"), "--quiet", "--set",
+    assert main(["run", "hoang2011_w1_euler", "--out", str(tmp_path / "a"), "--set",
                  "outputs.figures=false", "--set", "simulation.duration=20"]) == 0
     captured = capsys.readouterr()
     assert "verdict     ok: inside the joint limits, errors <= 0.01 m and 0.0175 rad" in captured.out

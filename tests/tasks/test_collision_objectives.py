@@ -12,7 +12,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from uvms.errors import FrameNotFound, LinkNotFound, ModelCheckError, ObjectiveError
+from uvms.errors import FrameNotFound, LinkNotFound, ObjectiveError
 from uvms.model.collision import candidate_pairs, collision_geometry
 from uvms.model.distances import PairDistances
 from uvms.robot.configuration import Configuration
@@ -28,7 +28,7 @@ ARM_FIRST = np.r_[np.full(6, 1000.0), np.ones(3)]
 
 @pytest.fixture(scope="module")
 def robot():
-    with pytest.warns(uvms.model.BaseGuessWarning):
+    with pytest.warns(uvms.errors.BaseGuessWarning):
         return uvms.load(BOX_ARM)
 
 

@@ -69,6 +69,12 @@ def test_xiang2019_vehicle_box_is_the_base_pose_times_the_hull(rng):
     np.testing.assert_allclose(sorted(np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1)), np.repeat(np.sort(XIANG_HULL), 4))
 
 
+def test_vehicle_box_is_the_visual_envelope_not_a_collision_solid():
+    box = drawing.vehicle_box(shipped("bluerov2_alpha5"))  # 14 collision solids on base_link, one visual box
+    np.testing.assert_allclose(box.size, [0.457, 0.575, 0.254], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(box.centre, np.zeros(3), atol=1e-12)
+
+
 def test_vehicle_without_a_box_gets_a_triad(rng):
     robot = shipped("amundsen2018")  # its base link is a cylinder
     q = robot.random_configuration(rng)

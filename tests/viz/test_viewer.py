@@ -88,12 +88,12 @@ def test_a_composed_robot_is_shown_as_a_skeleton_joining_its_joints(rng):
 def test_mesh_uris_are_resolved_and_missing_meshes_left_out():
     from uvms.model.meshes import resolved_urdf
 
-    panda = uvms.load(uvms.model.example_robot_urdf("panda"))
+    panda = uvms.load(uvms.model.example_robot_urdf("panda"), base="fixed")
     xml, missing = resolved_urdf(panda)
     assert not missing and "package://" not in xml and xml.count(".dae") > 0
-    with pytest.warns(uvms.model.MissingMeshWarning):
-        robot = uvms.load(MISSING_MESH)
-    with pytest.warns(UserWarning, match="1 mesh file.*no_such_pkg.*not shown"):
+    with pytest.warns(uvms.errors.MissingMeshWarning):
+        robot = uvms.load(MISSING_MESH, base="floating")
+    with pytest.warns(uvms.errors.MissingMeshWarning, match="1 mesh file.*no_such_pkg.*not shown"):
         visual, _ = viewer.geometry_models(robot)
     assert [item.geometry.__class__.__name__ for item in visual.geometryObjects] == ["Box"]
 

@@ -107,7 +107,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--bag", action="store_true",
                      help="also write the run as a ROS 2 bag (OUT/bag, MCAP: /joint_states, /tf, /odom, desired pose, "
                           "/robot_description); same as --set outputs.bag=true")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--quiet", action="store_true",
+                     help="print only the result line (verdict and folder); warnings still go to stderr")
     run.add_argument("--watch", action="store_true",
                      help="rerun whenever the scenario, the model or a file it includes changes (Ctrl-C stops)")
     add_package_path(run)

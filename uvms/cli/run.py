@@ -20,6 +20,7 @@ HEADLINE_METRICS = ("max_position_error", "final_position_error", "max_orientati
 
 def command_run(options: argparse.Namespace) -> int:
     """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
+    from ..io.outputs import holds_run
     from ..scenario import run_scenario  # the scenario layer pulls in scipy and matplotlib
     from ..scenario.verdict import verdict_line
 
@@ -27,9 +28,15 @@ def command_run(options: argparse.Namespace) -> int:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
     overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else []),
                  *package_path_overrides(options)]
+    replacing = holds_run(run_output_folder(options))
     result = run_scenario(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
+    if options.quiet:  # the one result line; warnings and notes still go to stderr
+        say(f"{metrics['scenario']}: {verdict_line(metrics['verdict'])} -> {folder}/{replaced_note(replacing)}",
+            sys.stdout)
+        say_run_warnings(metrics)
+        return 0
     say(f"scenario    {metrics['scenario']}  ({metrics['steps']} steps, {metrics['wall_time']:.1f} s)", sys.stdout)
     for key in HEADLINE_METRICS:
         if key in metrics:  # e.g. the thrusters' only in an actuated run
@@ -41,20 +48,39 @@ def command_run(options: argparse.Namespace) -> int:
         say(f"inequalities {enforced}; active: {shares or 'none with rows'}", sys.stdout)
     say(f"verdict     {verdict_line(metrics['verdict'])}", sys.stdout)
     say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})", sys.stdout)
+    say_replaced(replacing, folder)
     if "bag" in metrics:
         counts = ", ".join(f"{topic} {count}" for topic, count in metrics["bag"]["topics"].items())
         say(f"bag         {folder / 'bag'}/ ({counts}); replay: ros2 bag play {folder / 'bag'}", sys.stdout)
-        for item, reason in metrics["bag"]["skipped"].items():
-            say(f"uvms: note: bag without {item}: {reason}")
-    for warning in metrics["verdict"]["warnings"]:  # said on the terminal, not only in metrics.json
-        say(f"uvms: warning: {metrics['scenario']}: {warning}")
+    say_run_warnings(metrics)
     return 0
+
+
+def say_run_warnings(metrics: dict) -> None:
+    """The notes and warnings of a run on stderr (said on the terminal, not only in metrics.json)."""
+    for item, reason in metrics.get("bag", {}).get("skipped", {}).items():
+        say(f"uvms: note: bag without {item}: {reason}")
+    for warning in metrics["verdict"]["warnings"]:
+        say(f"uvms: warning: {metrics['scenario']}: {warning}")
+
+
+def replaced_note(replacing: bool) -> str:
+    """" (replaced the previous run)" after an output folder that held one, else ""."""
+    return " (replaced the previous run)" if replacing else ""
+
+
+def say_replaced(replacing: bool, folder: Path) -> None:
+    """One line when the run replaced a previous complete run in ``folder`` (its files are gone)."""
+    if replacing:
+        say(f"replaced    the previous run in {folder}/", sys.stdout)
 
 
 def command_sweep(options: argparse.Namespace) -> int:
     """``uvms sweep SCENARIO --grid KEY=START:STOP:N ...``: run a grid of overrides, write sweep.csv and sweep.png."""
+    from ..io.outputs import holds_run
     from ..scenario.sweep import sweep  # joblib, and dask only with --backend dask
 
+    replacing = holds_run(run_output_folder(options, "_sweep"))
     result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
                    scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None,
                    overrides=package_path_overrides(options))
@@ -62,6 +88,7 @@ def command_sweep(options: argparse.Namespace) -> int:
         say(line, sys.stdout)
     folder = result.files[0].parent
     say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, point_*/)", sys.stdout)
+    say_replaced(replacing, folder)
     if result.failed:
         first = result.failed[0]
         raise UVMSError(f"{len(result.failed)} of {len(result.rows)} sweep points failed (error column of "
@@ -88,16 +115,18 @@ def scenario_file(scenario: str) -> Path:
     return resolve_scenario_path(scenario)
 
 
-def run_output_folder(options: argparse.Namespace) -> Path:
-    """Where ``uvms run`` writes: ``--out``, else ``out/<scenario name>`` (the file stem if it cannot be read)."""
+def run_output_folder(options: argparse.Namespace, suffix: str = "") -> Path:
+    """Where ``uvms run`` (``uvms sweep``: ``suffix`` "_sweep") writes: ``--out``, else ``out/<scenario name><suffix>``
+    (the file stem if the scenario cannot be read)."""
     if options.out:
         return Path(options.out)
     from ..scenario import read_scenario
 
     try:
-        return Path("out") / read_scenario(options.scenario, options.set or ())["scenario"]["name"]
+        name = read_scenario(options.scenario, getattr(options, "set", None) or ())["scenario"]["name"]
     except UVMSError:
-        return Path("out") / Path(options.scenario).stem
+        name = Path(options.scenario).stem
+    return Path("out") / f"{name}{suffix}"
 
 
 def watch_job(options: argparse.Namespace, out: Path, scenario: Path | None = None, model: str | None = None) -> int:

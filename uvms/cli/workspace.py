@@ -9,7 +9,7 @@ from pathlib import Path
 from ..errors import UVMSError
 from ..model.loader import load
 from .info import parse_assignments
-from .run import watch_job
+from .run import say_replaced, watch_job
 from .terminal import say
 
 
@@ -56,6 +56,7 @@ def command_workspace(options: argparse.Namespace) -> int:
 
     model_files = WatchedFiles.of(model=options.model)  # the model, its includes and their folders: never deleted
     inputs = model_files.files | model_files.folders
+    replacing = outputs.holds_run(out)
     with outputs.run_folder(out, inputs=inputs) as folder:  # taken first: a second writer is refused at once
         result = monte_carlo(robot, frames, samples, seed=options.seed, voxel=options.voxel,
                              progress=False if options.quiet else None, remove_hull=options.remove_hull,
@@ -87,6 +88,7 @@ def command_workspace(options: argparse.Namespace) -> int:
             f"(volumes and dexterity use all)", sys.stdout)
     say(f"{result.samples_per_second:,.0f} samples/s; outputs in {out}/ (metrics.json, points.npz, "
         f"{', '.join(written)})", sys.stdout)
+    say_replaced(replacing, out)
     for frame, verdict in convergence.items():  # said on the terminal, not only in metrics.json
         if verdict.warning(frame):
             say(f"uvms: warning: {verdict.warning(frame)}")

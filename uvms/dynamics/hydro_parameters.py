@@ -22,7 +22,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import ModelCheckError, NameNotFound
+from ..errors import AddedMassSymmetrizedWarning, ModelCheckError, NameNotFound
 
 #: Fluid density of sea water [kg/m^3] (uuv_simulator's default) and gravity [m/s^2].
 SEA_WATER_DENSITY = 1028.0
@@ -32,10 +32,6 @@ FRD_FLU_SIGNS = np.array([1.0, -1.0, -1.0, 1.0, -1.0, -1.0])
 #: Tolerance of the symmetry and semi-definiteness checks of an added-mass matrix, relative to its largest entry
 #: (at least 1): published matrices are rounded (uuv_simulator's RexROV differs by 0.001 in 3,659, 2.7e-7 of it).
 MATRIX_TOLERANCE = 1e-6
-
-
-class AddedMassSymmetrizedWarning(UserWarning):
-    """An added-mass matrix that was symmetric within :data:`MATRIX_TOLERANCE` was replaced by (M + M^T) / 2."""
 
 
 @dataclass(frozen=True)

@@ -55,7 +55,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import ModelCheckError
+from ..errors import ModelCheckError, ShapeCoefficientWarning
 
 #: The shape models, by their ``<type>``.
 SHAPE_TYPES = ("sphere", "cylinder", "spheroid", "box")
@@ -67,10 +67,6 @@ CD_CIRCULAR = ((1.0, 0.91), (2.0, 0.85), (4.0, 0.87), (7.0, 0.99))
 CD_LENGTH = ((1.0, 0.63), (2.0, 0.68), (5.0, 0.74), (10.0, 0.82), (math.inf, 0.98))
 #: Drag coefficient of a sphere in subcritical flow (HMSphere).
 CD_SPHERE = 0.5
-
-
-class ShapeCoefficientWarning(UserWarning):
-    """A shape model took a coefficient that uuv_simulator leaves undefined (a cylinder longer than its table)."""
 
 
 def shape_coefficients(kind: str, model: Mapping[str, object], box: Mapping[str, object] | None,

@@ -57,7 +57,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError, ModelParseError, UVMSError
+from ..errors import ModelCheckError, ModelParseError, ThrusterDefaultWarning, UVMSError
 from .thruster_sources import (LIMIT_KEYS, THRUSTER_KEYS, PluginThruster, fail,
                                read_thruster_plugins, read_thrusters_document)
 
@@ -74,10 +74,6 @@ DEFAULTS_WHY = ("These are uuv_simulator's RexROV values: max_thrust 2000 N of i
                 "A plugin gives limits by thrustMin/thrustMax, a clamp or a LinearInterp table, and a time constant "
                 f"with FirstOrder dynamics only; give your thrusters' values there or in {YAML_NAME} (max_forward, "
                 "max_reverse, time_constant, per thruster or as file defaults)")
-
-
-class ThrusterDefaultWarning(UserWarning):
-    """A plugin thruster took a value of :data:`DEFAULT_VALUES` (the plugin and the YAML give none)."""
 
 
 @dataclass(frozen=True)

@@ -8,10 +8,9 @@ sibling folder, which is swapped in only when the run completed, so the folder a
 run — the previous one or the new one, never a mix. A lock next to the folder refuses a second uvms process
 on the same folder at once.
 
-A folder is recognised as uvms's own by its manifest ``.uvms-run.json``, written last by :func:`run_folder` and
-listing every file and folder the run wrote; an existing folder is replaced only if it holds that manifest and
-nothing else, and never when an input of the run (its scenario, its model) lies inside it. A folder of an older
-uvms (``metrics.json`` but no manifest) is refused: the user deletes it or chooses another ``--out``.
+A folder is uvms's own by its manifest ``.uvms-run.json`` (written last, listing every path the run wrote); a folder
+is replaced only if it holds that manifest and nothing else, never when an input of the run lies inside it. A
+folder of an older uvms (``metrics.json``, no manifest) is refused: the user deletes it or chooses another ``--out``.
 """
 
 from __future__ import annotations
@@ -34,10 +33,8 @@ import numpy as np
 
 from ..errors import DiskFullError, RunFolderBusy, RunFolderError, UVMSError
 
-#: A run folder ``DIR/NAME`` has two kinds of hidden siblings in ``DIR``: its lock ``.NAME.uvms-lock`` (kept:
-#: removing a lock file while another process opens it would break the lock) and the temporary folders
-#: ``.NAME.uvms-tmp-<random>`` of a run in progress (removed by the next run that holds the lock, if a run was
-#: killed before it could remove its own).
+#: Hidden siblings of ``DIR/NAME``: its lock ``.NAME.uvms-lock`` (kept: removing a lock another process opens breaks
+#: it) and ``.NAME.uvms-tmp-<random>`` of a run in progress (a killed run's are removed by the next run's lock holder).
 LOCK_SUFFIX = ".uvms-lock"
 TEMPORARY_MARK = ".uvms-tmp-"
 #: The manifest of a run folder, written last by :func:`run_folder`: every path the run wrote (folders end in "/").
@@ -161,15 +158,14 @@ def _remove(path: Path) -> None:
     """Remove a folder (or a file or link) if possible; what cannot be removed is left to the next run."""
     if path.is_dir() and not path.is_symlink():
         shutil.rmtree(path, ignore_errors=True)
-    else:
-        with contextlib.suppress(OSError):
-            path.unlink()
+        return
+    with contextlib.suppress(OSError):
+        path.unlink()
 
 
 def _few(names: Sequence[str]) -> str:
     """The first :data:`SHOWN` names, then "and N more"."""
-    shown = ", ".join(names[:SHOWN])
-    return shown + (f" and {len(names) - SHOWN} more" if len(names) > SHOWN else "")
+    return ", ".join(names[:SHOWN]) + (f" and {len(names) - SHOWN} more" if len(names) > SHOWN else "")
 
 
 def _entries(folder: Path) -> tuple[list[str], set[tuple[int, int]]]:
@@ -199,6 +195,11 @@ def _listed(folder: Path) -> set[str] | None:
     except (OSError, UnicodeDecodeError, ValueError, AttributeError):
         return None
     return set(entries) if isinstance(entries, list) and all(isinstance(e, str) for e in entries) else None
+
+
+def holds_run(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a folder holding a complete uvms run (its manifest), which a new run would replace."""
+    return Path(path).is_dir() and _listed(Path(path)) is not None
 
 
 def _check_replaceable(final: Path, shown: str, inputs: Sequence[str | os.PathLike],
@@ -266,8 +267,7 @@ def _lock(lock_path: Path, shown: str) -> Callable[[], None]:
     """Take the lock of a run folder (never through a symbolic link); return its release.
 
     Raises:
-        RunFolderBusy: another process holds it. RunFolderError: the lock path is a link or not a file.
-        OSError: it cannot be created.
+        RunFolderBusy: another process holds it. RunFolderError: it is a link or not a file. OSError: not created.
     """
     try:
         import fcntl

@@ -12,13 +12,9 @@
 
 from .compose import mount_arm
 from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES
-from .collision import CollidingPairWarning
-from .joint_classes import ThrusterFileWarning
-from .loader import BaseGuessWarning, MissingMeshWarning, ParserWarning, load, read_model_text
-from .packages import PackageSearchWarning, package_index
-from .point_masses import PointMassWarning
+from .loader import load, read_model_text
+from .packages import package_index
 from .resources import example_robot_urdf, shipped_models
 
-__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "BaseGuessWarning", "CollidingPairWarning", "MissingMeshWarning",
-           "PackageSearchWarning", "ParserWarning", "PointMassWarning", "ThrusterFileWarning", "example_robot_urdf", "load",
-           "mount_arm", "package_index", "read_model_text", "shipped_models"]
+__all__ = ["ADDED_BASE_JOINT", "BASE_CHOICES", "example_robot_urdf", "load", "mount_arm", "package_index",
+           "read_model_text", "shipped_models"]

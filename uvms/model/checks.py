@@ -14,8 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..errors import ModelCheckError, ModelParseError
-from .point_masses import PointMassWarning
+from ..errors import ModelCheckError, ModelParseError, PointMassWarning
 
 #: Attributes holding numbers in URDF, and how many each holds (None: any count).
 NUMERIC_ATTRIBUTES: dict[str, int | None] = {
@@ -160,7 +159,7 @@ def check_inertias(robot: ET.Element, origin: str) -> tuple[str, ...]:
     An ``<inertial>`` with zero mass and an all-zero inertia is the common URDF
     idiom for a massless link and is accepted as such. A positive mass with an all-zero
     inertia (uuv_simulator's thruster links: 0.001 kg) is a point mass: accepted with one
-    :class:`~uvms.model.point_masses.PointMassWarning` naming the links (the loader then refuses
+    :class:`~uvms.errors.PointMassWarning` naming the links (the loader then refuses
     a model whose mass matrix they make singular).
 
     Returns:

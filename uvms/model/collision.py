@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import LinkNotFound, ModelCheckError, UVMSError
+from ..errors import CollidingPairWarning, LinkNotFound, ModelCheckError, UVMSError
 from ..robot.robot import Robot
 from .meshes import resolved_urdf
 from .resources import read_file
@@ -39,10 +39,6 @@ from .resources import read_file
 MAX_SRDF_BYTES = 1 << 20
 #: Why a pair of links is not checked (the values of ``CollisionPairs.disabled``).
 SAME_BODY, ADJACENT, SRDF, COLLIDING = "same body", "adjacent", "srdf", "in collision at the reference configuration"
-
-
-class CollidingPairWarning(UserWarning):
-    """Pairs of links in collision at the reference configuration were disabled (no SRDF says which to check)."""
 
 
 def collision_geometry(robot: Robot) -> pin.GeometryModel:

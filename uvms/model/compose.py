@@ -15,7 +15,7 @@ from . import checks, point_masses, resources
 from .joint_classes import classify_joints
 from ..robot import urdf_export
 from ..robot.conventions import pose_from_xyzrpy
-from ..errors import FrameNotFound, UVMSError
+from ..errors import FrameNotFound, JointOrderWarning, UVMSError
 from ..robot.robot import Robot
 from ..robot.structure import EE_GIVEN, default_end_effectors
 from .loader import build_model, captured_stderr, read_model_text, warn_missing_meshes
@@ -100,10 +100,6 @@ def mount_arm(
     return Robot(model, ee=ee, name=model.name, source=f"{vehicle.source} + {origin}", urdf=urdf,
                  base_reason=vehicle.base_reason, packages={**packages, **vehicle.packages},
                  joint_classes={**vehicle.joint_classes, **classified.classes})
-
-
-class JointOrderWarning(UserWarning):
-    """``uvms.load`` of a composed URDF would order the joints differently from the composed model."""
 
 
 def check_joint_order(model: pin.Model, urdf: str, vehicle: Robot) -> None:

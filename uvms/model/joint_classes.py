@@ -38,7 +38,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError, NameNotFound, UVMSError
+from ..errors import ModelCheckError, NameNotFound, ThrusterFileWarning, UVMSError
 from ..robot.structure import JointClass, sensor_word
 from .resources import read_yaml
 
@@ -50,11 +50,6 @@ MOVING_TYPES = ("revolute", "continuous", "prismatic")
 DROPPED_WHEN_FROZEN = ("limit", "dynamics", "calibration", "safety_controller", "mimic")
 #: The thruster file beside a model (read by uvms.dynamics.thrusters).
 THRUSTERS_YAML = "thrusters.yaml"
-
-
-class ThrusterFileWarning(UserWarning):
-    """The ``thrusters.yaml`` beside a model cannot be read: the propellers it names are not known when loading
-    (``uvms.dynamics.thrusters_of`` raises the same error when the thrusters are used)."""
 
 
 @dataclass(frozen=True)

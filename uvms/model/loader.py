@@ -20,7 +20,8 @@ import pinocchio as pin
 from . import checks, includes, joint_classes, point_masses, resources, sandbox
 from .packages import package_index, unknown_package
 from .base_rule import ADDED_BASE_JOINT, decide_base
-from ..errors import ModelCheckError, ModelFileNotFound, ModelParseError, UVMSError, XacroError
+from ..errors import (BaseGuessWarning, MissingMeshWarning, ModelCheckError, ModelFileNotFound, ModelParseError,
+                      ParserWarning, UVMSError, XacroError)
 from ..robot.robot import Robot
 
 ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
@@ -31,18 +32,6 @@ ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlan
 ARG_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
 PLAIN_ARG_TEXT = re.compile(r"[A-Za-z0-9_.+\-/]{0,256}")
 ARG_RULE = "a number, true/false, or a plain name or path (letters, digits and _ . / + -, at most 256 characters)"
-
-
-class BaseGuessWarning(UserWarning):
-    """``load`` chose the vehicle base by the root-link rule and added a joint the file does not have."""
-
-
-class MissingMeshWarning(UserWarning):
-    """A mesh of the model cannot be found; kinematics does not need it."""
-
-
-class ParserWarning(UserWarning):
-    """Pinocchio's URDF parser printed something while building a model it accepted."""
 
 
 def load(

@@ -15,7 +15,7 @@ import zipfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from ..errors import ModelCheckError
+from ..errors import GeometryWarning, ModelCheckError
 from ..robot.robot import Robot
 from . import resources
 
@@ -69,7 +69,7 @@ def resolved_urdf(robot: Robot, strict: bool = False) -> tuple[str, list[str]]:
             the rule it breaks).
 
     Warns:
-        UserWarning: not ``strict``, per refused mesh, its file and the rule it breaks.
+        GeometryWarning: not ``strict``, per refused mesh, its file and the rule it breaks.
     """
     root = ET.fromstring(robot.urdf)  # a copy of its own: visuals are edited below
     source = Path(robot.source)
@@ -105,5 +105,5 @@ def resolved_urdf(robot: Robot, strict: bool = False) -> tuple[str, list[str]]:
                     link.remove(element)
     for path, reason in refused.items():
         if reason is not None:
-            warnings.warn(f"{robot.source}: mesh {str(path)!r} not shown: {reason}", UserWarning, stacklevel=2)
+            warnings.warn(f"{robot.source}: mesh {str(path)!r} not shown: {reason}", GeometryWarning, stacklevel=2)
     return ET.tostring(root, encoding="unicode"), sorted(set(missing))

@@ -34,7 +34,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from ..errors import ModelFileNotFound, UVMSError
+from ..errors import ModelFileNotFound, PackageSearchWarning, UVMSError
 from .resources import example_robot_data_dir, read_file
 
 #: Bounds of one search for packages: levels below the searched folder, and folders visited (a ROS
@@ -54,10 +54,6 @@ PACKAGE_NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.+-]{0,127}")
 LISTED_PACKAGES = 8
 HOW_TO_ADD = ("add the folder holding it with --package-path DIR (uvms commands), package_path=[...] "
               "(uvms.load), [model] package_path (scenarios) or ROS_PACKAGE_PATH")
-
-
-class PackageSearchWarning(UserWarning):
-    """A search for ROS packages stopped at a bound, or met a ``package.xml`` it cannot read or two of one name."""
 
 
 def package_index(package_path: Sequence[str | os.PathLike] | None = None,

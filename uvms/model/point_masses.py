@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError
+from ..errors import ModelCheckError, PointMassWarning
 
 #: A mass matrix whose smallest eigenvalue is at most this fraction of its largest is singular (rounding of an
 #: exactly singular one stays near 1e-16 of it).
@@ -20,10 +20,6 @@ SINGULAR_TOLERANCE = 1e-13
 #: Irrational fractions that place each coordinate at a generic value within its limits (clipped to +-1):
 #: a mass matrix singular there is singular almost everywhere, not only at a special pose.
 _GENERIC_FRACTION = (np.sqrt(5.0) - 1.0) / 2.0
-
-
-class PointMassWarning(UserWarning):
-    """A link has a positive mass and an all-zero inertia (a point mass), as uuv_simulator's thruster links do."""
 
 
 def generic_configuration(model: pin.Model) -> np.ndarray:

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..io import outputs
-from ..errors import SweepError
+from ..errors import InsecureSchedulerWarning, SweepError
 from .record import scenario_model
 from .resources import resolve_scenario_path
 from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
@@ -192,7 +192,7 @@ def dask_client(scheduler: str | None, jobs: int):
             if not scheduler.startswith("tls://"):
                 warnings.warn(f"the Dask scheduler {scheduler} is not tls://: neither encrypted nor authenticated, "
                               f"so anyone who can reach it can run code on its workers; prefer a tls:// scheduler "
-                              f"with {TLS_HINT}", stacklevel=3)
+                              f"with {TLS_HINT}", InsecureSchedulerWarning, stacklevel=3)
             client = Client(scheduler, timeout="20s", security=Security())
         else:
             try:

@@ -89,13 +89,17 @@ def vehicle_box(robot: Robot) -> HullShape | None:
     """The vehicle's first box solid from its URDF (`uvms.workspace.hull_shapes`), None without one or for a fixed base."""
     if robot.base_type == "fixed" or robot.urdf is None:
         return None
-    with warnings.catch_warnings():  # meshes are skipped silently here: the drawing falls back to a triad
-        warnings.simplefilter("ignore")
-        try:
-            shapes = hull_shapes(robot)
-        except WorkspaceInputError:
-            return None
-    return next((shape for shape in shapes if shape.kind == "box"), None)
+    for element in ("visual", "collision"):  # the visual envelope, not the first of many collision solids
+        with warnings.catch_warnings():  # meshes are skipped silently here: the drawing falls back to a triad
+            warnings.simplefilter("ignore")
+            try:
+                shapes = hull_shapes(robot, element=element)
+            except WorkspaceInputError:
+                continue
+        box = next((shape for shape in shapes if shape.kind == "box"), None)
+        if box is not None:
+            return box
+    return None
 
 
 def _triad(pose: pin.SE3, length: float) -> np.ndarray:

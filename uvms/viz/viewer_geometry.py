@@ -16,6 +16,7 @@ import warnings
 import numpy as np
 import pinocchio as pin
 
+from ..errors import GeometryWarning, MissingMeshWarning
 from ..model.meshes import resolved_urdf
 from ..robot.robot import Robot
 
@@ -85,20 +86,20 @@ def geometry_models(robot: Robot, skeleton: bool | None = None) -> tuple[pin.Geo
         hidden by the viewer unless asked).
 
     Warns:
-        UserWarning: some meshes cannot be found (they are left out).
+        MissingMeshWarning: some meshes cannot be found (they are left out).
     """
     visual, collision = pin.GeometryModel(), pin.GeometryModel()
     if robot.urdf is not None:
         xml, missing = resolved_urdf(robot)
         if missing:
             warnings.warn(f"{robot.source}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); "
-                          f"they are not shown", UserWarning, stacklevel=2)
+                          f"they are not shown", MissingMeshWarning, stacklevel=2)
         try:
             visual = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.VISUAL)
             collision = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.COLLISION)
         except (RuntimeError, ValueError) as exc:
             warnings.warn(f"{robot.source}: Pinocchio cannot read the geometry ({' '.join(str(exc).split())}); "
-                          f"showing the skeleton", UserWarning, stacklevel=2)
+                          f"showing the skeleton", GeometryWarning, stacklevel=2)
             visual, collision = pin.GeometryModel(), pin.GeometryModel()
     if skeleton or (skeleton is None and visual.ngeoms == 0):
         for item in skeleton_geometry(robot).geometryObjects:

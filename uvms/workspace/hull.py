@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import WorkspaceInputError
+from ..errors import GeometryWarning, MissingMeshWarning, WorkspaceInputError
 from ..model import resources
 from ..robot.robot import Robot
 from .voxels import check_points
@@ -220,7 +220,7 @@ def _urdf_shape(link: str, item: ET.Element, placement: pin.SE3, folder: Path | 
         return HullShape(link, "convex", np.array(pose.rotation), np.array(pose.translation), vertices=vertices)
     else:
         warnings.warn(f"hull of link {link!r}: a <{solid.tag}> is not used (only box, cylinder, sphere, mesh)",
-                      stacklevel=3)
+                      GeometryWarning, stacklevel=3)
         return None
     return HullShape(link, solid.tag, np.array(pose.rotation), np.array(pose.translation), size)
 
@@ -234,13 +234,13 @@ def mesh_vertices(link: str, uri: str, scale: np.ndarray, folder: Path | None,
     path = resources.resolve_uri(uri, folder, packages)
     if path is None or scale.shape != (3,):
         warnings.warn(f"hull of link {link!r}: mesh {uri!r} not found (or its scale is not 3 numbers); it is not "
-                      "used", stacklevel=4)
+                      "used", MissingMeshWarning, stacklevel=4)
         return None
     try:
         return np.asarray(coal.MeshLoader().load(str(path), scale).vertices(), dtype=float)
     except (RuntimeError, ValueError) as exc:
         warnings.warn(f"hull of link {link!r}: mesh {path.name} cannot be read ({' '.join(str(exc).split())[:200]})"
-                      "; it is not used", stacklevel=4)
+                      "; it is not used", GeometryWarning, stacklevel=4)
         return None
 
 

@@ -96,7 +96,7 @@ class SelfCollision(NearestPairs):
         band: activation band [m] > 0.
         pairs: None: every pair of shapes on different, non-adjacent bodies minus those the model's SRDF disables
             (``srdf``, else ``<stem>.srdf`` beside the model), or without an SRDF those in collision at the
-            neutral configuration (with a :class:`~uvms.model.collision.CollidingPairWarning`); ``"all"``: every
+            neutral configuration (with a :class:`~uvms.errors.CollidingPairWarning`); ``"all"``: every
             pair of shapes on different, non-adjacent bodies; a list of [link1, link2]: the shapes of those links.
         count: rows: the nearest pairs kept (fewer if fewer pairs exist).
         gain: reference gain [1/s].
