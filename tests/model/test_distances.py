@@ -139,3 +139,25 @@ def test_the_jacobian_of_the_models_own_shapes_equals_finite_differences(box_arm
         np.testing.assert_allclose(analytic[smooth], numeric[smooth], rtol=0, atol=1e-4)
         checked += smooth.sum()
     assert checked > 0.8 * 20 * distances.count
+
+
+@pytest.mark.parametrize("count", [1, 3, 10, 40])
+def test_the_nearest_pairs_found_through_bounding_spheres_are_those_of_every_distance(box_arm, rng, count):
+    """On the UR5's hulls and box_arm with a world half-space (never pruned): the k smallest of all distances."""
+    ur5 = uvms.load(uvms.model.example_robot_urdf("ur5"), base="fixed")
+    arm_geometry = collision_geometry(box_arm)
+    arm_pairs = np.vstack([candidate_pairs(box_arm, arm_geometry).pairs,
+                           [[arm_geometry.ngeoms, k] for k in range(arm_geometry.ngeoms)]])
+    arm_geometry.addGeometryObject(pin.GeometryObject("seabed", 0, 0, pin.SE3.Identity(),
+                                                      coal.Halfspace(np.array([0.0, 0.0, 1.0]), -0.5)))
+    ur5_geometry = collision_geometry(ur5)
+    for robot, geometry, pairs in ((ur5, ur5_geometry, candidate_pairs(ur5, ur5_geometry).pairs),
+                                   (box_arm, arm_geometry, arm_pairs)):
+        distances = PairDistances(robot.model, geometry, pairs)
+        for _ in range(10):
+            state = Configuration(robot, random_pose(robot, rng) if robot is box_arm else pin.randomConfiguration(
+                robot.model))
+            every = distances.evaluate(state).distance
+            chosen, found = distances.nearest(state, count)
+            np.testing.assert_array_equal(found.distance, np.sort(every)[:count])
+            np.testing.assert_array_equal(every[chosen], found.distance)

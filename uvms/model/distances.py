@@ -8,6 +8,10 @@ origin and the angular velocity), so the Jacobian row of the pair is
 
     J_d = n^T (J_v,2 - J_v,1) - (n x p2)^T J_w,2 + (n x p1)^T J_w,1       (1, nv), d' = J_d v.
 
+:meth:`PairDistances.nearest` finds the k nearest pairs without querying every pair: each shape's bounding sphere
+bounds its pair's distance, |c1 - c2| - r1 - r2 <= d <= |c1 - c2| + r1 + r2; the k-th smallest upper bound is a
+reach no k-nearest pair exceeds, so only the pairs whose lower bound is within it are queried (one batch).
+
 A geometry on the world (joint 0: an obstacle, or a fixed base's root link) contributes nothing. The
 Jacobian is that of smooth convex shapes (the normal's own rotation is second order in the distance); checked
 against finite differences on the manifold in ``tests/model/test_distances.py``.
@@ -20,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..errors import ModelCheckError
 from ..robot.configuration import Configuration
 
 #: GJK/EPA tolerance of the distance queries [m]: far below any clearance, and fine enough that the distance
@@ -41,6 +46,10 @@ class Distances:
     point1: np.ndarray
     point2: np.ndarray
     normal: np.ndarray
+
+    def take(self, rows: np.ndarray) -> Distances:
+        """The distances of ``rows`` (k,) only."""
+        return Distances(self.distance[rows], self.point1[rows], self.point2[rows], self.normal[rows])
 
 
 def distance_request() -> object:
@@ -71,6 +80,9 @@ class PairDistances:
         self.geometry.removeAllCollisionPairs()
         for a, b in self.pairs:
             self.geometry.addCollisionPair(pin.CollisionPair(int(a), int(b)))
+        if len(self.geometry.collisionPairs) != len(self.pairs):
+            raise ModelCheckError(f"the pairs of shapes must be distinct pairs of two shapes each, got "
+                                  f"{self.pairs.tolist()}")
         self.joints = np.array([[geometry.geometryObjects[int(i)].parentJoint for i in pair] for pair in self.pairs],
                                dtype=int).reshape(-1, 2)
         self._moved = sorted(set(self.joints.ravel().tolist()) - {0})  # the joints that carry a shape; 0: the world
@@ -80,6 +92,7 @@ class PairDistances:
         for k in range(len(self.pairs)):  # Pinocchio's requests carry GJK's last guess between calls: fresh ones
             self._data.distanceRequests[k] = distance_request()
         self._results = list(self._data.distanceResults)  # views of the results (a pass over the vector costs 1 us/pair)
+        self._bounds = BoundingSpheres(geometry, self.pairs)
 
     @property
     def count(self) -> int:
@@ -90,8 +103,31 @@ class PairDistances:
         """Signed distances, witness points and normals of every pair at ``state`` (world frame)."""
         state.joint_pose(0)  # the joint placements (and Jacobians) at q, once per configuration
         pin.updateGeometryPlacements(self.model, state.data, self.geometry, self._data)
+        self._data.setActiveCollisionPairs(self.geometry, np.ones((self.geometry.ngeoms,) * 2, dtype=bool))
         pin.computeDistances(self.geometry, self._data)
-        results = self._results
+        return self._read(range(self.count))
+
+    def nearest(self, state: Configuration, count: int) -> tuple[np.ndarray, Distances]:
+        """(the indices (k,) of the ``count`` nearest pairs, nearest first, k = min(count, m); their Distances) at
+        ``state``, querying only the pairs whose bounding spheres could be that near (module docstring)."""
+        state.joint_pose(0)
+        lower, upper = self._bounds.bounds(state)
+        count = min(count, self.count)
+        reach = np.partition(upper, count - 1)[count - 1]  # the count nearest are at most this far
+        queried = np.flatnonzero(lower <= reach)  # every other pair is farther than all of them
+        active = np.zeros((self.geometry.ngeoms, self.geometry.ngeoms), dtype=bool)
+        active[self.pairs[queried, 0], self.pairs[queried, 1]] = True
+        active |= active.T
+        self._data.setActiveCollisionPairs(self.geometry, active)
+        pin.updateGeometryPlacements(self.model, state.data, self.geometry, self._data)
+        pin.computeDistances(self.geometry, self._data)
+        found = np.array([self._results[k].min_distance for k in queried.tolist()])
+        chosen = queried[np.argsort(found, kind="stable")[:count]]
+        return chosen, self._read(chosen.tolist())
+
+    def _read(self, pairs: object) -> Distances:
+        """The Distances of the last query of ``pairs`` (an iterable of pair indices)."""
+        results = [self._results[k] for k in pairs]
         return Distances(np.array([result.min_distance for result in results]),
                          np.array([result.getNearestPoint1() for result in results]).reshape(-1, 3),
                          np.array([result.getNearestPoint2() for result in results]).reshape(-1, 3),
@@ -99,7 +135,7 @@ class PairDistances:
 
     def jacobian(self, state: Configuration, distances: Distances, rows: np.ndarray) -> np.ndarray:
         """The distance Jacobian (k, nv), d' = J v, of the pairs ``rows`` (k,) (indices into the pairs) from their
-        witness points and normals ``distances`` (of :meth:`evaluate` at the same ``state``)."""
+        witness points and normals ``distances`` (k rows, those of ``rows`` at the same ``state``)."""
         from ..numerics._kernels.distance import distance_jacobian_into  # numba: loaded at the first use
 
         state.joint_pose(0)  # computeJointJacobians at q
@@ -109,6 +145,45 @@ class PairDistances:
             table[entry] = pin.getJointJacobian(model, data, joint, pin.ReferenceFrame.WORLD)
         rows = np.asarray(rows, dtype=np.int64)
         out = np.empty((rows.size, model.nv))
-        distance_jacobian_into(table, self._entries[rows], distances.normal[rows], distances.point1[rows],
-                               distances.point2[rows], out)
+        distance_jacobian_into(table, self._entries[rows], distances.normal, distances.point1, distances.point2, out)
         return out
+
+
+class BoundingSpheres:
+    """The bounding sphere of each shape of the pairs, in its joint's frame, and the bounds of the pairs' distances
+    they give at a configuration.
+
+    Args:
+        geometry: the geometry model; pairs: (m, 2) indices of its geometry pairs.
+    """
+
+    def __init__(self, geometry: pin.GeometryModel, pairs: np.ndarray) -> None:
+        objects = geometry.geometryObjects
+        used = sorted(set(pairs.ravel().tolist()))
+        centres, radii, self.joints = [], [], []
+        for index in used:
+            item = objects[index]
+            item.geometry.computeLocalAABB()
+            radius = float(item.geometry.aabb_radius)
+            finite = np.isfinite(radius)  # a half-space has no bounding sphere: its pairs are always queried
+            centres.append(item.placement.act(np.asarray(item.geometry.aabb_center)) if finite else np.zeros(3))
+            radii.append(radius)
+            self.joints.append(item.parentJoint)
+        self.centres, self.radii = np.array(centres).reshape(-1, 3), np.array(radii)
+        position = {index: k for k, index in enumerate(used)}
+        self.sides = np.array([[position[int(i)] for i in pair] for pair in pairs], dtype=np.int64).reshape(-1, 2)
+        self.moved = sorted(set(self.joints))
+        self.carrier = np.array([self.moved.index(joint) for joint in self.joints], dtype=np.int64)  # (g,)
+
+    def bounds(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
+        """(lower, upper) bounds (m,) [m] of every pair's distance at ``state``: |c1 - c2| -+ (r1 + r2) (-inf and
+        +inf for a pair with a half-space)."""
+        from ..numerics._kernels.distance import sphere_bounds_into  # numba: loaded at the first use
+
+        rotation, translation = np.empty((len(self.moved), 3, 3)), np.empty((len(self.moved), 3))
+        for entry, joint in enumerate(self.moved):
+            placement = state.joint_pose(joint)
+            rotation[entry], translation[entry] = placement.rotation, placement.translation
+        lower, upper = np.empty(len(self.sides)), np.empty(len(self.sides))
+        sphere_bounds_into(rotation, translation, self.carrier, self.centres, self.radii, self.sides, lower, upper)
+        return lower, upper

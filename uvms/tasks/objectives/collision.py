@@ -62,29 +62,24 @@ class NearestPairs(Inequality):
         self._set_valid_set(np.full(dim, self.min), np.full(dim, np.inf),
                             finite_number(band, f"{self.name}: band", positive=True), gain, shape)
 
-    def nearest(self, state: Configuration) -> tuple[Distances, np.ndarray]:
-        """(every pair's distances, the indices (dim,) of the nearest pairs, nearest first) at ``state``."""
-        found = self.distances.evaluate(state)
-        distance = found.distance
-        chosen = np.argpartition(distance, self.dim - 1)[:self.dim] if self.dim < distance.size else np.arange(
-            distance.size)
-        return found, chosen[np.argsort(distance[chosen], kind="stable")]
+    def nearest(self, state: Configuration) -> tuple[np.ndarray, Distances]:
+        """(the indices (dim,) of the nearest pairs, nearest first; their distances) at ``state``."""
+        return self.distances.nearest(state, self.dim)
 
     def nearest_pairs(self, state: Configuration) -> list[tuple[str, str, float]]:
         """(link1, link2, distance [m]) of the rows at ``state``, nearest first (what to print or mark)."""
-        found, chosen = self.nearest(state)
-        return [(*self.links[k], float(found.distance[k])) for k in chosen]
+        chosen, found = self.nearest(state)
+        return [(*self.links[k], float(d)) for k, d in zip(chosen, found.distance)]
 
     def value(self, state: Configuration) -> np.ndarray:
-        found, chosen = self.nearest(state)
-        return found.distance[chosen]
+        return self.nearest(state)[1].distance
 
     def jacobian(self, state: Configuration) -> np.ndarray:
         return self.value_jacobian(state)[1]
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
-        found, chosen = self.nearest(state)  # one distance query per pair for both
-        return found.distance[chosen], self.distances.jacobian(state, found, chosen)
+        chosen, found = self.nearest(state)  # one distance query per pair for both
+        return found.distance, self.distances.jacobian(state, found, chosen)
 
 
 class SelfCollision(NearestPairs):
