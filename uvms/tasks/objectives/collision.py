@@ -1,9 +1,9 @@
 """Collision objectives from the model's ``<collision>`` geometry: the robot kept clear of itself and of obstacles.
 
 Both keep the signed distance d of pairs of shapes at least ``min`` [m] (coal through Pinocchio's geometry
-model, :mod:`uvms.model.collision` and :mod:`uvms.model.distances`; meshes as their convex hulls). Every pair
-is evaluated at each step; the ``count`` nearest pairs are the objective's rows, nearest first, each with
-the distance Jacobian of its witness points (d' = n . (v_p2 - v_p1)).
+model, :mod:`uvms.model.collision` and :mod:`uvms.model.distances`; meshes as their convex hulls). At each step
+the ``count`` nearest pairs are the objective's rows, nearest first, each with the distance Jacobian of its
+witness points (d' = n . (v_p2 - v_p1)); pairs whose bounding spheres keep them farther are not queried.
 
 Why the rows stay continuous when the nearest pair changes: row i holds the i-th smallest distance, a
 continuous function of q (an order statistic of continuous distances), so its value, activation and reference
