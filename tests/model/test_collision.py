@@ -133,6 +133,13 @@ def test_a_missing_or_refused_mesh_and_a_zero_size_shape_are_clear_errors(tmp_pa
         uvms.load(BOX_ARM.read_text().replace('<sphere radius="0.04"/>', '<sphere radius="0"/>'))
 
 
+def test_a_missing_visual_mesh_does_not_stop_the_collision_geometry(tmp_path):
+    visual = '<visual><geometry><mesh filename="{}"/></geometry></visual><collision>'.format(tmp_path / "gone.dae")
+    with pytest.warns(uvms.errors.MissingMeshWarning):
+        robot = load(BOX_ARM.read_text().replace("<collision>", visual, 1))
+    assert collision_geometry(robot).ngeoms == 6
+
+
 def test_a_flat_mesh_has_no_hull_and_says_so(tmp_path):
     flat = tmp_path / "flat.stl"
     flat.write_text("solid flat\n" + "".join(

@@ -57,9 +57,10 @@ def resolved_urdf(robot: Robot, strict: bool = False) -> tuple[str, list[str]]:
 
     Args:
         robot: the robot.
-        strict: a mesh that is missing or that :func:`mesh_refusal` refuses raises (the collision geometry
-            needs every shape); False: its ``<visual>`` or ``<collision>`` is removed (a refused one with a
-            warning), and the rest of the model is shown.
+        strict: the collision geometry's text: the ``<visual>`` elements are removed and a ``<collision>`` mesh
+            that is missing or that :func:`mesh_refusal` refuses raises (every shape is needed); False (the
+            viewer's): a ``<visual>`` or ``<collision>`` whose mesh is missing or refused is removed (a refused one
+            with a warning), and the rest of the model is shown.
 
     Returns:
         (URDF text, the mesh URIs that could not be found).
@@ -77,6 +78,9 @@ def resolved_urdf(robot: Robot, strict: bool = False) -> tuple[str, list[str]]:
     missing: list[str] = []
     refused: dict[Path, str | None] = {}
     for link in root.iter("link"):
+        if strict:
+            for element in link.findall("visual"):
+                link.remove(element)
         for kind in ("visual", "collision"):
             for element in list(link.findall(kind)):
                 mesh = element.find("geometry/mesh")
