@@ -25,8 +25,9 @@ from ..errors import ScenarioError
 from ..io import outputs
 from ..model.resources import MAX_TOML_BYTES, read_text
 from ..solvers import SOLVERS
+from ..tasks.objectives import FILE_KEYS
 from .inequalities import check_tables
-from .resources import resolve_scenario_path, scenario_folders
+from .resources import resolve_scenario_path, scenario_file, scenario_folders
 
 NUMBER = (int, float)
 #: Defaults of [outputs] position_tolerance [m] and orientation_tolerance [rad]: a run whose task error exceeds
@@ -242,6 +243,9 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     if not model_path.is_absolute() and (path.parent / model_path).exists():
         scenario["model"]["path"] = str((path.parent / model_path).resolve())
     scenario["model"]["package_path"] = scenario_folders(scenario["model"]["package_path"], path, "model.package_path")
+    for index, table in enumerate(scenario["inequalities"]):
+        for key in set(FILE_KEYS.get(table["type"], ())) & set(table):
+            table[key] = scenario_file(table[key], path, f"inequalities[{index}].{key}")
     scenario["scenario"]["name"] = scenario["scenario"]["name"] or outputs.plain_file_name(path.stem, "scenario")
     return scenario
 
