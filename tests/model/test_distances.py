@@ -161,3 +161,26 @@ def test_the_nearest_pairs_found_through_bounding_spheres_are_those_of_every_dis
             chosen, found = distances.nearest(state, count)
             np.testing.assert_array_equal(found.distance, np.sort(every)[:count])
             np.testing.assert_array_equal(every[chosen], found.distance)
+
+
+def test_a_deep_cylinder_overlap_is_a_penetration_depth_not_a_failed_query():
+    """The Alpha 5's base tube through its E housing (the arm folded past its D limit, as a CLIK run without limits
+    drove it): at EPA tolerance 1e-9 coal returned -1.8e308; the depth is -3.19 mm, the same at 1e-4."""
+    robot = uvms.load("bluerov2_alpha5")
+    q = np.array([-0.0459593512, 0.0231621958, -4.98867662, 0.00412426906, 0.00490224544, 0.00220653168,
+                  0.999977045, 3.05847576, 3.99686333, 1.99353964, 1.0, 0.0])
+    q[3:7] /= np.linalg.norm(q[3:7])
+    geometry = collision_geometry(robot)
+    names = [item.name for item in geometry.geometryObjects]
+    pair = [names.index("alpha_m3_inline_link_0"), names.index("alpha_m2_joint_link_0")]
+    found = PairDistances(robot.model, geometry, np.array([pair])).evaluate(Configuration(robot, q))
+    request = coal.DistanceRequest()
+    request.enable_signed_distance, request.gjk_tolerance, request.epa_tolerance = True, 1e-4, 1e-4
+    data = pin.GeometryData(geometry)
+    pin.updateGeometryPlacements(robot.model, pin.Data(robot.model), geometry, data, q)
+    result = coal.DistanceResult()
+    placements = [coal.Transform3s(data.oMg[k].rotation, data.oMg[k].translation) for k in pair]
+    coal.distance(geometry.geometryObjects[pair[0]].geometry, placements[0], geometry.geometryObjects[pair[1]].geometry,
+                  placements[1], request, result)
+    assert -0.0033 < found.distance[0] < -0.0031
+    assert found.distance[0] == pytest.approx(result.min_distance, abs=5e-5)  # a looser EPA: the same depth

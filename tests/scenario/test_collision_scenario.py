@@ -79,3 +79,49 @@ def test_the_mesh_and_srdf_of_a_scenario_resolve_beside_it(tmp_path):
     built = uvms.tasks.objectives.inequalities_from_table(robot, scenario["inequalities"][0])[0]
     assert ("base_link", "jaw") not in built.links and built.disabled[("base_link", "jaw")] == "srdf"
     assert np.isfinite(built.value(Configuration(robot, robot.neutral()))).all()
+
+
+# ------------------------------------------------------------------ the shipped BlueROV2 + Alpha 5 scenarios
+SCENARIOS = Path(__file__).parents[2] / "scenarios"
+
+
+def recorded_distances(run, table: dict) -> np.ndarray:
+    """(N, dim) the distances of an ``[[inequalities]]`` table's objective, built afresh, at every recorded q [m]."""
+    objective = uvms.tasks.objectives.inequalities_from_table(run.setup.robot, table)[0]
+    return np.array([objective.value(Configuration(run.setup.robot, q)) for q in run.simulation.q])
+
+
+def test_the_jaws_tuck_under_the_bow_clear_of_the_vehicle_where_straight_clik_puts_them_in_it(tmp_path):
+    scenario = SCENARIOS / "bluerov2_alpha5_stow.toml"
+    table = uvms.scenario.schema.read_scenario(scenario)["inequalities"][1]
+    run = uvms.run_scenario(scenario, tmp_path / "stow", overrides=["outputs.figures=false"], progress=False)
+    distances = recorded_distances(run, table)
+    assert distances.min() >= table["min"] - 1e-4  # every recorded step, every row (the 6 nearest pairs)
+    assert distances.min() == pytest.approx(run.metrics["min_self_distance"], abs=1e-12)
+    assert run.metrics["verdict"]["ok"] and run.metrics["final_position_error"] < 1e-4
+    assert run.simulation.q[-1, 2] - run.simulation.q[0, 2] > 0.05  # the vehicle rose to make room
+    entry = run.metrics["inequalities"]["self_collision"]
+    assert entry["closest"]["distance"] == run.metrics["min_self_distance"]
+    assert list(entry["pairs_active"]) == ["alpha_m2_joint_link / alpha_m1_link"]  # the wrist off the upper arm
+    jaws = uvms.tasks.objectives.SelfCollision(run.setup.robot, pairs=[["base_link", "alpha_jaw_link"]])
+    assert min(jaws.value(Configuration(run.setup.robot, q)).min() for q in run.simulation.q) > 0.05  # so the jaws
+    # never turn up into the bottom plate
+    assert all(0.0 < fraction <= entry["active_fraction"] for fraction in entry["pairs_active"].values())
+    clik = uvms.run_scenario(scenario, tmp_path / "clik", overrides=["outputs.figures=false", "solver.method=clik"],
+                             progress=False)
+    assert recorded_distances(clik, table).min() < -0.01  # the jaws' box inside the plate, within the joint limits
+    assert clik.metrics["max_joint_limit_violation"] == 0.0 and not clik.metrics["verdict"]["ok"]
+
+
+def test_the_jaws_slide_along_the_pipe_instead_of_into_it(tmp_path):
+    scenario = SCENARIOS / "bluerov2_alpha5_pipe.toml"
+    table = uvms.scenario.schema.read_scenario(scenario)["inequalities"][1]
+    run = uvms.run_scenario(scenario, tmp_path / "pipe", overrides=["outputs.figures=false"], progress=False)
+    distances = recorded_distances(run, table)
+    assert distances.min() >= table["min"] - 1e-4
+    assert distances.min() < table["min"] + table["band"]  # the pipe was in the way
+    assert run.metrics["inequalities"]["pipe"]["closest"]["pair"] == "pipe / alpha_jaw_link"
+    assert 0.02 < run.metrics["final_position_error"] < 0.05  # the line's end is inside the pipe: the task yields
+    clik = uvms.run_scenario(scenario, tmp_path / "clik", overrides=["outputs.figures=false", "solver.method=clik"],
+                             progress=False)
+    assert recorded_distances(clik, table).min() < -0.1

@@ -24,12 +24,18 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError
+from ..errors import ModelCheckError, NumericalError
 from ..robot.configuration import Configuration
 
-#: GJK/EPA tolerance of the distance queries [m]: far below any clearance, and fine enough that the distance
-#: is smooth at the scale of a finite-difference check.
+#: GJK/EPA tolerance of the distance queries [m]: far below any clearance, and fine enough that the distance is
+#: smooth at the scale of a finite-difference check.
 DISTANCE_TOLERANCE = 1e-9
+#: EPA tolerance of a penetration depth queried again [m]: EPA does not converge at 1e-9 on some deep
+#: cylinder-cylinder overlaps (coal then returns -1.8e308; the Alpha 5's base tube through its E housing); at 1e-6 it
+#: does.
+RETRY_TOLERANCE = 1e-6
+#: A distance beyond this [m] is a failed query, not a distance (checked, never passed on).
+LARGEST_DISTANCE = 1e6
 
 
 @dataclass(frozen=True)
@@ -52,13 +58,13 @@ class Distances:
         return Distances(self.distance[rows], self.point1[rows], self.point2[rows], self.normal[rows])
 
 
-def distance_request() -> object:
-    """A coal distance request: signed, :data:`DISTANCE_TOLERANCE`, GJK started from its default guess."""
+def distance_request(tolerance: float = DISTANCE_TOLERANCE) -> object:
+    """A coal distance request: signed, GJK and EPA to ``tolerance`` [m], GJK started from its default guess."""
     import coal  # shipped with the pin wheel
 
     request = coal.DistanceRequest()
     request.enable_signed_distance = True
-    request.gjk_tolerance = request.epa_tolerance = DISTANCE_TOLERANCE
+    request.gjk_tolerance = request.epa_tolerance = tolerance
     return request
 
 
@@ -121,17 +127,42 @@ class PairDistances:
         self._data.setActiveCollisionPairs(self.geometry, active)
         pin.updateGeometryPlacements(self.model, state.data, self.geometry, self._data)
         pin.computeDistances(self.geometry, self._data)
-        found = np.array([self._results[k].min_distance for k in queried.tolist()])
+        found = np.array([self._checked(k).min_distance for k in queried.tolist()])
         chosen = queried[np.argsort(found, kind="stable")[:count]]
         return chosen, self._read(chosen.tolist())
 
     def _read(self, pairs: object) -> Distances:
         """The Distances of the last query of ``pairs`` (an iterable of pair indices)."""
-        results = [self._results[k] for k in pairs]
+        results = [self._checked(k) for k in pairs]
         return Distances(np.array([result.min_distance for result in results]),
                          np.array([result.getNearestPoint1() for result in results]).reshape(-1, 3),
                          np.array([result.getNearestPoint2() for result in results]).reshape(-1, 3),
                          np.array([result.normal for result in results]).reshape(-1, 3))
+
+    def _checked(self, pair: int) -> object:
+        """The last DistanceResult of ``pair``; a failed one (EPA not converged) queried again at
+        :data:`RETRY_TOLERANCE`.
+
+        Raises:
+            NumericalError: coal fails at that tolerance too (never a distance of -1.8e308 passed on).
+        """
+        import coal  # shipped with the pin wheel
+
+        result = self._results[pair]
+        if abs(result.min_distance) <= LARGEST_DISTANCE:
+            return result
+        first, second = (int(i) for i in self.pairs[pair])
+        objects, placements = self.geometry.geometryObjects, self._data.oMg
+        result = coal.DistanceResult()
+        coal.distance(objects[first].geometry, coal.Transform3s(placements[first].rotation, placements[first].translation),
+                      objects[second].geometry,
+                      coal.Transform3s(placements[second].rotation, placements[second].translation),
+                      distance_request(RETRY_TOLERANCE), result)
+        if not abs(result.min_distance) <= LARGEST_DISTANCE:
+            raise NumericalError(f"coal cannot compute the distance between the shapes {objects[first].name!r} and "
+                                 f"{objects[second].name!r} at this configuration (it returned {result.min_distance:g}); "
+                                 f"they overlap deeply")
+        return result
 
     def jacobian(self, state: Configuration, distances: Distances, rows: np.ndarray) -> np.ndarray:
         """The distance Jacobian (k, nv), d' = J v, of the pairs ``rows`` (k,) (indices into the pairs) from their
