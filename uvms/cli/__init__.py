@@ -184,6 +184,9 @@ def build_parser() -> argparse.ArgumentParser:
                            "else of the model's neutral one) or OUT.gif/.mp4 (animation of --result) with matplotlib")
     view.add_argument("--frames", type=int, default=100, help="--headless animation: at most this many frames")
     view.add_argument("--fps", type=float, default=20.0, help="--headless animation: frames per second")
+    view.add_argument("--collision", action="store_true",
+                      help="show the collision shapes (the <collision> geometry the collision objectives check); a "
+                           "scenario's or a run's collision objectives have their closest pair marked anyway")
     view.add_argument("--quiet", action="store_true", help="no progress bar")
     view.add_argument("--watch", action="store_true",
                       help="reload the model in place when its files change; replay --result when it is rerun")

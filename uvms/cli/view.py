@@ -68,6 +68,48 @@ def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
                        options.ee), None
 
 
+#: The inequality types whose closest pair a drawing marks.
+COLLISION_TYPES = ("self_collision", "obstacle")
+
+
+def recorded_collision_types(folder: str) -> list[str]:
+    """The collision objective types (:data:`COLLISION_TYPES`) a run folder's ``metrics.json`` reports (its
+    ``inequalities[name]["type"]``), none when it has no metrics."""
+    from ..model.resources import read_json
+
+    path = Path(folder) / "metrics.json"
+    metrics = read_json(path, "run metrics", ViewerInputError) if path.is_file() else {}
+    tables = metrics.get("inequalities") if isinstance(metrics, dict) else None
+    kinds = [entry.get("type") for entry in (tables.values() if isinstance(tables, dict) else [])
+             if isinstance(entry, dict)]
+    return [kind for kind in COLLISION_TYPES if kind in kinds]
+
+
+def view_objectives(options: argparse.Namespace, robot: Robot) -> tuple[list, str | None]:
+    """The collision objectives whose closest pair ``uvms view`` marks, and a one-line note (or None).
+
+    A scenario ``.toml`` given: its ``self_collision`` and ``obstacle`` tables (with ``--result`` or
+    ``--collision``). Else a ``--result`` folder whose metrics report collision objectives: their tables are not
+    in the folder, so the model's own self-collision pairs with the default ``min`` are marked, and a note says
+    to give the scenario (an obstacle cannot be rebuilt from the folder).
+    """
+    from ..tasks.objectives import inequalities_from_table
+    from ..tasks.objectives.collision import SelfCollision
+
+    if str(options.model).endswith(".toml") and (options.result or options.collision):
+        from ..scenario.schema import read_scenario
+
+        tables = [table for table in read_scenario(options.model)["inequalities"] if table["type"] in COLLISION_TYPES]
+        return [item for table in tables for item in inequalities_from_table(robot, table)], None
+    kinds = recorded_collision_types(options.result) if options.result else []
+    if not kinds:
+        return [], None
+    marked = SelfCollision(robot)
+    return [marked], (f"note        the run's collision tables ({', '.join(kinds)}) are not in its folder: marking "
+                      f"the closest of the model's self-collision pairs (min {marked.min} m); give the scenario to "
+                      f"mark its own: uvms view SCENARIO.toml --result {options.result}")
+
+
 #: The most rows of a ``trajectory.npz`` that ``uvms view --result`` reads: 1,000,000 (a run of ``uvms run`` has
 #: at most ``uvms.numerics.integrate.MAX_STEPS`` + 1 = 200,001), 8 MB per coordinate of q.
 MAX_RESULT_ROWS = 1_000_000
@@ -169,31 +211,39 @@ def command_view(options: argparse.Namespace) -> int:
         say(notice, sys.stdout)
     q, title = start_configuration(options, robot)
     result = read_result(robot, options.result) if options.result else None
+    objectives, note = view_objectives(options, robot)
+    if note:
+        say(note, sys.stdout)
     if options.headless:
         from ..viz import drawing
+        from ..viz.collision_drawing import CollisionOverlay
+
+        overlay = CollisionOverlay(robot, options.collision, objectives) if options.collision or objectives else None
 
         out = Path(options.headless)
         if result is None:
             if out.suffix.lower() in drawing.WRITERS:
                 raise UVMSError(f"an animation ({out.suffix}) needs --result DIR; write a picture (.png) of one "
                                 f"configuration instead")
-            drawing.snapshot_figure(robot, [q], titles=[title], path=out, ncols=1, panel_size=6.0)
+            drawing.snapshot_figure(robot, [q], titles=[title], path=out, ncols=1, panel_size=6.0, overlay=overlay)
         else:
             t, qs = result
             if out.suffix.lower() in drawing.WRITERS:
                 rows = frame_indices(t, options.frames)
                 drawing.animate(robot, qs[rows], out, fps=options.fps, times=t[rows], trail_frame=robot.ee_frames[0],
-                                title=robot.name, progress=False if options.quiet else None)
+                                title=robot.name, progress=False if options.quiet else None, overlay=overlay)
             else:
                 rows = frame_indices(t, 4)
-                drawing.snapshot_figure(robot, qs[rows], titles=[f"t = {t[k]:.2f} s" for k in rows], path=out)
+                drawing.snapshot_figure(robot, qs[rows], titles=[f"t = {t[k]:.2f} s" for k in rows], path=out,
+                                        overlay=overlay)
         say(f"wrote {out}", sys.stdout)
         return 0
     from ..viz.viewer import Viewer
 
     with warnings.catch_warnings(record=True) as caught:  # said now, not when the viewer stops (meshes left out)
         warnings.simplefilter("always")
-        viewer = Viewer(robot, q, port=options.port)  # the camera framed on the robot at q
+        viewer = Viewer(robot, q, port=options.port, collision=options.collision)  # the camera framed on q
+        viewer.mark_closest(objectives)
     for warning in caught:
         say(f"uvms: warning: {' '.join(str(warning.message).split())}")
     try:

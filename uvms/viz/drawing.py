@@ -28,6 +28,7 @@ from ..errors import ConfigurationError, UVMSError, WorkspaceInputError
 from ..robot.robot import Robot
 from ..workspace.hull import HullShape, hull_shapes
 from ..io.progress import tqdm
+from .collision_drawing import CollisionOverlay
 
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
@@ -256,7 +257,7 @@ def _new_axes(figure: Figure, grid: tuple[int, int, int], plane: str | None, vie
 def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | None = None,
                     path: str | os.PathLike | None = None, view: tuple[float, float] = (20.0, -60.0),
                     plane: str | None = None, ncols: int | None = None, frames: Sequence[str] | None = None,
-                    panel_size: float = 4.0) -> Figure:
+                    panel_size: float = 4.0, overlay: CollisionOverlay | None = None) -> Figure:
     """Configuration snapshots (xiang2019 Figs. 7-8): a grid of panels on common equal-aspect limits.
 
     Args:
@@ -269,6 +270,7 @@ def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | Non
         ncols: panels per row (default min(N, 4)).
         frames: end-effector frames given a triad.
         panel_size: panel width and height [in].
+        overlay: collision shapes, obstacles and closest pairs drawn over each panel (``uvms view --collision``).
     """
     qs = as_configurations(robot, configurations)
     if titles is not None and len(titles) != len(qs):
@@ -280,10 +282,15 @@ def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | Non
     for k, q in enumerate(qs):
         ax = _new_axes(figure, (nrows, ncols, k + 1), plane, view)
         drawings.append(draw_configuration(ax, robot, q, plane=plane, frames=frames, autoscale=False))
+        if overlay is not None:
+            overlay.draw(ax, q, plane)
         ax.set_title(titles[k] if titles is not None else f"configuration {k + 1}")
-    points = np.concatenate([drawing.geometry.points() for drawing in drawings])
-    for drawing, ax in zip(drawings, figure.axes):
+    points = np.concatenate([drawing.geometry.points() for drawing in drawings]
+                            + ([overlay.points(q) for q in qs] if overlay is not None else []))
+    for drawing, ax in zip(drawings, figure.axes[:len(drawings)]):
         set_equal_limits(ax, points, plane)
+        if overlay is not None:
+            overlay.draw_obstacles(ax, points, plane)
     figure.tight_layout()
     if path is not None:
         outputs.save_figure(figure, path)
@@ -305,7 +312,7 @@ def _movie_writer(path: Path, fps: float) -> animation.AbstractMovieWriter:
 def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float = 20, times: np.ndarray | None = None,
             trail_frame: str | None = None, title: str = "", view: tuple[float, float] = (20.0, -60.0),
             plane: str | None = None, frames: Sequence[str] | None = None, figsize: tuple[float, float] = (6.0, 6.0),
-            dpi: int = 80, progress: bool | None = None) -> Path:
+            dpi: int = 80, progress: bool | None = None, overlay: CollisionOverlay | None = None) -> Path:
     """Write an animation of configurations (N, nq) to a ``.gif`` (Pillow) or ``.mp4`` (ffmpeg), atomically.
 
     The axis limits cover every frame, so the view does not jump.
@@ -320,6 +327,7 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
         title: title prefix; view, plane, frames: as in :func:`snapshot_figure`.
         figsize: figure size [in]; dpi: its resolution.
         progress: show a progress bar (None: only on a terminal).
+        overlay: collision shapes, obstacles and closest pairs drawn at each frame (``uvms view --collision``).
 
     Returns:
         The written path.
@@ -340,11 +348,18 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
     ax = _new_axes(figure, (1, 1, 1), plane, view)
     drawing = draw_configuration(ax, robot, qs[0], plane=plane, frames=frames, triad_length=first.triad_length,
                                  autoscale=False)
-    set_equal_limits(ax, np.concatenate([trail, *[geometry.points() for geometry in geometries]]), plane)
+    shapes = [overlay.points(q) for q in qs] if overlay is not None else []
+    points = np.concatenate([trail, *[geometry.points() for geometry in geometries], *shapes])
+    set_equal_limits(ax, points, plane)
+    if overlay is not None:
+        overlay.draw_obstacles(ax, points, plane)
+    marks = overlay.draw(ax, qs[0], plane) if overlay is not None else None
     trail_line = ax.plot(*_coordinates(trail[:1], plane), color="tab:purple", linestyle="--", linewidth=1)[0]
 
     def draw_frame(k: int) -> None:
         update_drawing(drawing, geometries[k])
+        if marks is not None:
+            overlay.move(marks, qs[k], plane)
         _set_line(trail_line, trail[: k + 1], plane)
         stamp = f"t = {times[k]:.2f} s" if times is not None else f"frame {k + 1}/{len(qs)}"
         ax.set_title(f"{title}  {stamp}".strip())

@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 import socket
 import threading
+from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -28,7 +29,10 @@ import pinocchio as pin
 from ..errors import UVMSError, ViewerInputError, ViewerUnavailable
 from ..robot.robot import Robot
 from ..numerics.validate import finite_array, time_vector
+from ..tasks.objectives.collision import NearestPairs
+from .collision_shapes import ClosestPairs
 from .drawing import as_configurations
+from .viewer_collision import CollisionControls
 from .viewer_geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, skeleton_geometry
 from .viewer_gui import Playback, TeachControls, guarded_servers, request_refusal
 from .viewer_scene import (EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box,
@@ -114,6 +118,7 @@ class Viewer:
         port: first port tried, 1..65535 (the next free one is taken when busy), or 0 (any free port); the
             host is always 127.0.0.1.
         skeleton: add the stick geometry (None: only when the model has no visual geometry).
+        collision: show the collision shapes at first (the panel's "Collision shapes" checkbox toggles them).
 
     Meshes are found as the robot was loaded (``package://`` through ``robot.packages``).
 
@@ -124,11 +129,13 @@ class Viewer:
         robot: the robot shown; visualizer: the ViserVisualizer; server: the ``viser.ViserServer``.
         q: the configuration shown (nq,). teach: the panel's sliders (:class:`TeachControls`).
         playback: the run's controls (:class:`Playback`), None before :meth:`play`. scene_frame: the
-        camera and seabed (:class:`~uvms.viz.viewer_scene.Framing`).
+        camera and seabed (:class:`~uvms.viz.viewer_scene.Framing`). collision: the collision shapes' checkbox
+        and closest-pair segments (:class:`~uvms.viz.viewer_collision.CollisionControls`); closest: the
+        objectives marked (:meth:`mark_closest`), None: none.
     """
 
     def __init__(self, robot: Robot, q: np.ndarray | None = None, *, port: int = DEFAULT_PORT,
-                 skeleton: bool | None = None) -> None:
+                 skeleton: bool | None = None, collision: bool = False) -> None:
         viser, _ = require_viser()
         port = first_free_port(port)  # the next free port if taken
         with guarded_servers() as guarded:
@@ -139,6 +146,9 @@ class Viewer:
                                     f"cannot guard (Host and Origin checks); install the viser of uvms[viz]")
         self.teach: TeachControls | None = None
         self.playback: Playback | None = None
+        self.collision: CollisionControls | None = None
+        self.closest: ClosestPairs | None = None
+        self._collision_shown = collision
         self._trajectory: tuple[np.ndarray, np.ndarray] | None = None
         self._lock = threading.RLock()
         try:
@@ -165,6 +175,12 @@ class Viewer:
             self.robot, self.visualizer = robot, visualizer
             if self.teach is not None:
                 self.teach.remove()
+            if self.collision is not None:
+                self._collision_shown = self.collision.shown
+                self.collision.remove()
+            self.closest = None  # built on the previous model
+            self.collision = CollisionControls(self.server, visualizer, self._collision_shown,
+                                               lambda: self.display(self.q))
             self.frame(q)
             self.triads = EndEffectorTriads(self.server, robot, self.scene_frame.size)
             self.teach = TeachControls(self.server, robot, q, self.display_from_page)
@@ -216,9 +232,20 @@ class Viewer:
             visualizer.display(q)
             pin.updateFramePlacements(visualizer.model, visualizer.data)
             self.triads.show(visualizer.data)
+            if self.closest is not None:
+                self.collision.mark(self.closest.at(q))
             if self.teach is not None:
                 poses = {name: visualizer.data.oMf[self.robot.frame_id(name)] for name in self.robot.ee_frames}
                 self.teach.sync(q, poses)
+
+    def mark_closest(self, objectives: Sequence[NearestPairs]) -> None:
+        """Mark the closest pair of each collision objective (built on the robot shown) at every configuration
+        shown, a segment between its witness points coloured by its distance (red below the objective's min);
+        none: no marks. A :meth:`reload` drops them."""
+        with self._lock:
+            self.closest = ClosestPairs(self.robot, objectives) if objectives else None
+            self.collision.mark([])
+            self.display(self.q)
 
     def display_from_page(self, q: np.ndarray) -> None:
         """Show q (nq,) set in the page (teach sliders, reset): a run that plays is paused first."""

@@ -19,6 +19,7 @@ import pinocchio as pin
 from ..errors import GeometryWarning, MissingMeshWarning
 from ..model.meshes import resolved_urdf
 from ..robot.robot import Robot
+from .viewer_collision import viewer_collision_model
 
 SKELETON_COLOUR = np.array([0.35, 0.35, 0.4, 1.0])
 EE_COLOUR = np.array([1.0, 0.5, 0.05, 1.0])
@@ -82,11 +83,13 @@ def geometry_models(robot: Robot, skeleton: bool | None = None) -> tuple[pin.Geo
             has no visual geometry (no URDF, or a URDF without ``<visual>``).
 
     Returns:
-        The visual model (URDF visuals, plus the skeleton) and the collision model (URDF collisions;
-        hidden by the viewer unless asked).
+        The visual model (URDF visuals, plus the skeleton) and the collision model (the shapes the collision
+        objectives check, :func:`uvms.viz.viewer_collision.viewer_collision_model`; hidden by the viewer unless
+        asked).
 
     Warns:
         MissingMeshWarning: some meshes cannot be found (they are left out).
+        GeometryWarning: the collision geometry cannot be built (no collision shapes shown).
     """
     visual, collision = pin.GeometryModel(), pin.GeometryModel()
     if robot.urdf is not None:
@@ -96,11 +99,11 @@ def geometry_models(robot: Robot, skeleton: bool | None = None) -> tuple[pin.Geo
                           f"they are not shown", MissingMeshWarning, stacklevel=2)
         try:
             visual = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.VISUAL)
-            collision = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.COLLISION)
         except (RuntimeError, ValueError) as exc:
             warnings.warn(f"{robot.source}: Pinocchio cannot read the geometry ({' '.join(str(exc).split())}); "
                           f"showing the skeleton", GeometryWarning, stacklevel=2)
-            visual, collision = pin.GeometryModel(), pin.GeometryModel()
+            visual = pin.GeometryModel()
+        collision = viewer_collision_model(robot)
     if skeleton or (skeleton is None and visual.ngeoms == 0):
         for item in skeleton_geometry(robot).geometryObjects:
             visual.addGeometryObject(item)

@@ -1,0 +1,161 @@
+"""Collision shapes, obstacles and closest pairs over a headless drawing (:mod:`uvms.viz.drawing`).
+
+:class:`CollisionOverlay` is what ``uvms view ... --collision`` and ``--result`` add to
+:func:`~uvms.viz.drawing.snapshot_figure` and :func:`~uvms.viz.drawing.animate`: the robot's collision shapes
+(:mod:`uvms.viz.collision_shapes`) translucent, one collection per shape, at each drawn configuration; the
+obstacles of the collision objectives, clipped to a box around the drawing (a pipe or a seabed plane runs beyond
+it); and for each objective a segment between the witness points of its nearest pair, coloured by its distance
+(red below the objective's ``min``), with the pairs and distances written in the panel's corner.
+
+In 3-D a shape is its hull's triangles (a ``Poly3DCollection``); in a plane (``"xy"``, ``"xz"``, ``"yz"``) the
+outline of its projection (a ``PolyCollection`` of the 2-D hull).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+from matplotlib.collections import PolyCollection
+from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+from ..model.collision import collision_geometry
+from ..robot.robot import Robot
+from ..tasks.objectives.collision import NearestPairs
+from .collision_shapes import ClosestPair, ClosestPairs, ShapeMesh, geometry_meshes, obstacle_meshes
+
+#: Style of the robot's collision shapes and of the obstacles.
+SHAPE_STYLE = {"facecolor": "tab:cyan", "edgecolor": "tab:blue", "alpha": 0.22, "linewidth": 0.3}
+OBSTACLE_STYLE = {"facecolor": "0.5", "edgecolor": "0.35", "alpha": 0.3, "linewidth": 0.3}
+#: The obstacles are clipped to the box of the drawing's points grown by this fraction of its largest side.
+CLIP_MARGIN = 0.5
+PLANE_AXES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
+
+
+@dataclass
+class OverlayArtists:
+    """The artists of a CollisionOverlay on one Axes: a collection per robot shape, a line per objective's closest
+    pair, the text listing them; ``closest`` the pairs drawn last."""
+
+    shapes: list
+    pairs: list
+    text: object | None
+    closest: list[ClosestPair] = field(default_factory=list)
+
+
+def outline(points: np.ndarray) -> np.ndarray:
+    """The 2-D convex hull (k, 2) of points (n, 2), in order around it."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        return points[ConvexHull(points).vertices]
+    except (QhullError, ValueError):  # a shape seen edge-on (a flat plane): its extent as a thin segment
+        return points[[int(np.argmin(points[:, 0] + points[:, 1])), int(np.argmax(points[:, 0] + points[:, 1]))]]
+
+
+def clip_polygon(polygon: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The part (k, 3) of a convex polygon (n, 3) [m] inside the box [lower, upper] (Sutherland-Hodgman)."""
+    for axis in range(3):
+        for bound, sign in ((lower[axis], 1.0), (upper[axis], -1.0)):
+            if len(polygon) == 0:
+                return polygon
+            inside = sign * (polygon[:, axis] - bound) >= 0
+            kept = []
+            for k in range(len(polygon)):
+                a, b = polygon[k], polygon[(k + 1) % len(polygon)]
+                if inside[k]:
+                    kept.append(a)
+                if inside[k] != inside[(k + 1) % len(polygon)]:
+                    kept.append(a + (bound - a[axis]) / (b[axis] - a[axis]) * (b - a))
+            polygon = np.array(kept).reshape(-1, 3)
+    return polygon
+
+
+class CollisionOverlay:
+    """What a drawing adds of the collision geometry (module docstring).
+
+    Args:
+        robot: the robot drawn.
+        shapes: draw the robot's collision shapes (:func:`uvms.model.collision.collision_geometry`).
+        objectives: collision objectives built on ``robot``: each one's nearest pair is marked, its obstacle drawn.
+
+    Raises:
+        ModelCheckError: ``shapes`` and the robot's collision geometry cannot be built (no URDF, a missing mesh).
+    """
+
+    def __init__(self, robot: Robot, shapes: bool = True, objectives: Sequence[NearestPairs] = ()) -> None:
+        self.robot = robot
+        self.meshes: list[ShapeMesh] = geometry_meshes(collision_geometry(robot)) if shapes else []
+        self.obstacles = obstacle_meshes(objectives)
+        self.closest = ClosestPairs(robot, objectives)
+
+    def robot_faces(self, q: np.ndarray) -> list[np.ndarray]:
+        """The triangles (f, 3, 3) [m] of each robot shape at configuration q (nq,)."""
+        data = self.robot.model.createData()
+        pin.forwardKinematics(self.robot.model, data, self.robot.check_configuration(q))
+        return [mesh.faces(data.oMi[mesh.joint]) for mesh in self.meshes]
+
+    def points(self, q: np.ndarray) -> np.ndarray:
+        """The robot shapes' vertices (m, 3) [m] at q (for the axis limits; obstacles are clipped to them)."""
+        return np.concatenate([faces.reshape(-1, 3) for faces in self.robot_faces(q)] or [np.empty((0, 3))])
+
+    def draw(self, ax, q: np.ndarray, plane: str | None = None) -> OverlayArtists:
+        """Draw the robot shapes and the closest pairs at q (nq,) on ``ax`` (3-D when ``plane`` is None)."""
+        shapes = []
+        for faces in self.robot_faces(q):
+            collection = (Poly3DCollection(faces, **SHAPE_STYLE) if plane is None
+                          else PolyCollection([outline(faces.reshape(-1, 3)[:, PLANE_AXES[plane]])], **SHAPE_STYLE))
+            shapes.append(ax.add_collection3d(collection, autolim=False) if plane is None
+                          else ax.add_collection(collection, autolim=False))
+        pairs = [ax.plot(*[[0.0, 0.0]] * (3 if plane is None else 2), linewidth=2.5, marker="o", markersize=3)[0]
+                 for _ in self.closest.objectives]
+        text = None
+        if pairs:
+            place = ax.text2D if plane is None else ax.text
+            text = place(0.02, 0.98, "", transform=ax.transAxes, va="top", fontsize=7)
+        artists = OverlayArtists(shapes, pairs, text)
+        self.move(artists, q, plane, shapes=False)
+        return artists
+
+    def move(self, artists: OverlayArtists, q: np.ndarray, plane: str | None = None, shapes: bool = True) -> None:
+        """Move the artists of :meth:`draw` to configuration q (nq,) (an animation frame)."""
+        if shapes:
+            for collection, faces in zip(artists.shapes, self.robot_faces(q)):
+                collection.set_verts(faces if plane is None else [outline(faces.reshape(-1, 3)[:, PLANE_AXES[plane]])])
+        artists.closest = self.closest.at(q)
+        for line, pair in zip(artists.pairs, artists.closest):
+            ends = np.array([pair.point1, pair.point2])
+            if plane is None:
+                line.set_data_3d(ends[:, 0], ends[:, 1], ends[:, 2])
+            else:
+                line.set_data(ends[:, PLANE_AXES[plane][0]], ends[:, PLANE_AXES[plane][1]])
+            line.set_color(pair.colour)
+        if artists.text is not None:
+            artists.text.set_text("\n".join(pair.label() for pair in artists.closest))
+
+    def draw_obstacles(self, ax, points: np.ndarray, plane: str | None = None) -> list:
+        """Draw the obstacles on ``ax`` after its limits are set, clipped to them (in a plane, the depth to the box
+        of ``points`` (m, 3) [m] grown by :data:`CLIP_MARGIN`); one collection per obstacle that reaches into it."""
+        finite = points[np.all(np.isfinite(points), axis=1)]
+        if not self.obstacles or len(finite) == 0:
+            return []
+        low, high = finite.min(axis=0), finite.max(axis=0)
+        grow = CLIP_MARGIN * float(np.max(high - low))
+        low, high = low - grow, high + grow  # the depth of a plane's drawing
+        limits = (ax.get_xlim(), ax.get_ylim(), ax.get_zlim()) if plane is None else (ax.get_xlim(), ax.get_ylim())
+        for axis, (start, end) in zip((0, 1, 2) if plane is None else PLANE_AXES[plane], limits):
+            low[axis], high[axis] = start, end  # what the Axes shows
+        drawn = []
+        for mesh in self.obstacles:
+            polygons = [clip_polygon(face, low, high) for face in mesh.faces(pin.SE3.Identity())]
+            polygons = [polygon for polygon in polygons if len(polygon) >= 3]
+            if not polygons:
+                continue
+            if plane is None:
+                drawn.append(ax.add_collection3d(Poly3DCollection(polygons, **OBSTACLE_STYLE), autolim=False))
+            else:
+                shadow = outline(np.concatenate(polygons)[:, PLANE_AXES[plane]])
+                drawn.append(ax.add_collection(PolyCollection([shadow], **OBSTACLE_STYLE), autolim=False))
+        return drawn
