@@ -49,3 +49,50 @@ def test_headless_view_of_a_scenario_draws_its_initial_configuration(tmp_path, m
     assert np.array_equal(drawn["q"], robot.configuration(arm=np.zeros(5)))  # --q wins
     assert main(["view", "bluerov2_alpha5", "--headless", str(tmp_path / "m.png")]) == 0
     assert np.array_equal(drawn["q"], robot.neutral()) and drawn["title"] == "bluerov2_alpha5"  # a model: neutral
+
+
+# ------------------------------------------------------------------ --collision, closest pairs
+FOLD = ROOT / "tests" / "fixtures" / "collision" / "box_arm_fold.toml"
+
+
+def spy_overlays(monkeypatch) -> list:
+    """The overlays ``uvms view`` hands to the drawing (the drawing itself still runs)."""
+    overlays = []
+    for name in ("snapshot_figure", "animate"):
+        original = getattr(drawing, name)
+
+        def spy(*args, original=original, **options):
+            overlays.append(options.get("overlay"))
+            return original(*args, **options)
+
+        monkeypatch.setattr(drawing, name, spy)
+    return overlays
+
+
+def test_collision_draws_the_shapes_and_a_scenarios_closest_pairs(tmp_path, monkeypatch, capsys):
+    from uvms.model.collision import collision_geometry
+
+    overlays = spy_overlays(monkeypatch)
+    assert main(["view", "--collision", str(FOLD), "--headless", str(tmp_path / "shapes.png")]) == 0
+    assert (tmp_path / "shapes.png").stat().st_size > 10_000
+    [overlay] = overlays
+    assert len(overlay.meshes) == collision_geometry(overlay.robot).ngeoms
+    assert [objective.name for objective in overlay.closest.objectives] == ["self_collision", "obstacle(mesh)"]
+    assert len(overlay.obstacles) == 1  # the rock
+    assert main(["view", str(FOLD), "--headless", str(tmp_path / "plain.png")]) == 0
+    assert overlays[-1] is None  # no toggle, no run: the plain drawing
+
+
+def test_a_runs_replay_marks_the_closest_pairs_of_its_collision_objectives(tmp_path, monkeypatch, capsys):
+    run = tmp_path / "run"
+    assert main(["run", str(FOLD), "--out", str(run), "--quiet", "--set", "simulation.duration=0.2"]) == 0
+    capsys.readouterr()
+    overlays = spy_overlays(monkeypatch)
+    assert main(["view", str(FOLD), "--result", str(run), "--headless", str(tmp_path / "run.png")]) == 0
+    assert [item.name for item in overlays[-1].closest.objectives] == ["self_collision", "obstacle(mesh)"]
+    assert overlays[-1].meshes == []  # marks without --collision
+    assert main(["view", "--result", str(run), "--collision", "--headless", str(tmp_path / "run.gif"),
+                 "--frames", "3"]) == 0
+    assert "not in its folder" in capsys.readouterr().out  # no scenario: the model's own self-collision pairs
+    [objective] = overlays[-1].closest.objectives
+    assert objective.name == "self_collision" and objective.min == 0.01 and overlays[-1].meshes
