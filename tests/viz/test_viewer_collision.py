@@ -72,5 +72,10 @@ def test_the_closest_pair_is_marked_at_every_configuration_shown(robot, rng):
             k = int(np.argmin(everything.distance))
             np.testing.assert_allclose(shown.collision.segments.points[0], [everything.point1[k], everything.point2[k]],
                                        atol=1e-6)  # viser keeps float32
+        shown.collision.checkbox.value = True
+        shown.reload(robot)  # the marks were built on the old model: dropped; the checkbox is kept
+        assert shown.closest is None and shown.collision.segments is None and shown.collision.shown
+        shown.mark_closest([objective])
+        assert shown.collision.segments is not None
         shown.mark_closest([])
         assert shown.collision.segments is None

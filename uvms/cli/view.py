@@ -295,7 +295,8 @@ def watch_viewer(options: argparse.Namespace, viewer) -> None:
             model_changed = now != shown[0] or any(path.name != "trajectory.npz" and path != result for path in paths)
             shown[0] = now
             if model_changed:
-                viewer.reload(robot)
+                viewer.reload(robot)  # drops the marks of the old model's objectives: built again on the new one
+                viewer.mark_closest(view_objectives(options, robot)[0])
             say(f"{time.strftime('%H:%M:%S')} {', '.join(sorted({p.name for p in paths}))} changed: "
                 f"{'model reloaded' if model_changed else 'replaying the new run'}", sys.stdout)
             if result is not None and (result / "trajectory.npz").is_file():

@@ -169,15 +169,15 @@ class Viewer:
             self.playback.remove()
             self.playback = None
         with self._lock:
+            if self.collision is not None:  # before the scene's reset, which would take its segments
+                self._collision_shown = self.collision.shown
+                self.collision.remove()
             self.server.scene.reset()  # the scene only: the page and the camera of open pages stay
             visualizer.initViewer(viewer=self.server, loadModel=True)
             add_lighting(self.server)
             self.robot, self.visualizer = robot, visualizer
             if self.teach is not None:
                 self.teach.remove()
-            if self.collision is not None:
-                self._collision_shown = self.collision.shown
-                self.collision.remove()
             self.closest = None  # built on the previous model
             self.collision = CollisionControls(self.server, visualizer, self._collision_shown,
                                                lambda: self.display(self.q))
