@@ -11,7 +11,9 @@ The page opens with the camera framed on the robot, a seabed grid under it and a
 effector; its panel is the teach panel (sliders for the vehicle pose and every arm joint, moving the robot
 live, and the end-effector poses) and, for a run, a time slider with play and pause. The geometry is the
 URDF's visuals, or a stick skeleton for a model without any (:mod:`uvms.viz.viewer_geometry`); the camera,
-seabed and triads are in :mod:`uvms.viz.viewer_scene`, the panel in :mod:`uvms.viz.viewer_gui`.
+seabed and triads are in :mod:`uvms.viz.viewer_scene`, the panel in :mod:`uvms.viz.viewer_gui`; the collision
+shapes (the panel's "Collision shapes" checkbox) and the closest pairs of collision objectives
+(:meth:`Viewer.mark_closest`) in :mod:`uvms.viz.viewer_collision`.
 
 Without the extra, :mod:`uvms.viz.drawing` draws the same configurations headless (``uvms view --headless OUT``).
 """
