@@ -19,11 +19,17 @@ The fit, in four steps
 4. **Constrained fit**: the weighted least squares with added mass symmetric positive semi-definite, damping
    coefficients >= 0 and volume > 0 (buoyancy positive), a convex problem solved by cvxpy with Clarabel.
 
-Standard errors: the Newey-West (heteroscedasticity and autocorrelation consistent) sandwich covariance of the
-unconstrained weighted least squares over the free parameters, Bartlett weights with a bandwidth of two
-smoothing windows (the smoothing correlates neighbouring residuals); intervals are +-1.96 standard errors
-(95 % under normal errors). For identifiability the standard error is the larger of that one and the one of
-residuals at the noise floor with the samples of one window counted once.
+Standard errors: the larger of two, per parameter: the Newey-West (heteroscedasticity and autocorrelation
+consistent) sandwich covariance of the weighted least squares over the free parameters (Bartlett weights, a
+bandwidth of two smoothing windows: the smoothing correlates neighbouring residuals), and the one residuals at the
+noise floor would give with the samples of one window counted once (what a nearly noise-free log is still not
+trusted better than: the model's own approximations, the smoothing's). The same standard error decides
+identifiability (step 3) and gives the interval, +-1.96 standard errors (95 % under normal errors).
+
+Errors in variables: the noise of the differentiated twist enters both the added-mass columns and, through the
+known rigid-body inertia, the target, which would bias the added mass low; its expected share (from the noise
+variance the smoothing estimates, :class:`~uvms.dynamics.identification_data.SmoothedStates`) is taken out of the
+normal equations (bias-compensated least squares, :func:`~uvms.dynamics.identification_model.acceleration_noise_terms`).
 """
 
 from __future__ import annotations
@@ -55,6 +61,8 @@ class ParameterEstimate:
         std_error: its standard error (None when held); interval: (low, high) +-1.96 standard errors (None).
         identified: False when held at the prior; reason: why it was held ("" when identified).
         relative_error: the standard error used for identifiability over the parameter's scale.
+        scale: the parameter's scale (its prior's magnitude, at least a floor from the rigid-body mass:
+            :func:`~uvms.dynamics.identification_model.parameter_layout`).
     """
 
     name: str
@@ -66,13 +74,15 @@ class ParameterEstimate:
     identified: bool
     reason: str
     relative_error: float
+    scale: float
 
     def as_dict(self) -> dict:
         """A JSON-ready mapping."""
         return {"name": self.name, "unit": self.unit, "prior": self.prior, "value": self.value,
                 "std_error": self.std_error, "interval_95": None if self.interval is None else list(self.interval),
                 "identified": self.identified, "held_because": self.reason or None,
-                "relative_error": None if not np.isfinite(self.relative_error) else self.relative_error}
+                "relative_error": None if not np.isfinite(self.relative_error) else self.relative_error,
+                "scale": self.scale}
 
 
 @dataclass(frozen=True)
@@ -233,14 +243,13 @@ def _identifiable_fit(data: Regression, layout: ParameterLayout, weights: np.nda
         if not np.any(free) or np.nanmax(relative) <= threshold:
             break
         worst = int(np.nanargmax(relative))
-        reasons[worst] = ("the log does not excite it (no information)" if not np.isfinite(relative[worst]) else
+        reasons[worst] = ("the log does not excite it above the odometry noise (no information)"
+                          if not np.isfinite(relative[worst]) else
                           f"relative standard error {relative[worst]:.3g} > {threshold:g}: too little excitation")
         free[worst] = False
     theta = prior.copy()
     theta[free] = _constrained(root, layout, free, prior, solution, prior_added)
-    std = np.full(count, np.nan)
-    std[free] = np.sqrt(np.diag(covariance))
-    return theta, std, relative, reasons
+    return theta, relative, relative, reasons
 
 
 def _normal_solve(flat: np.ndarray, rhs: np.ndarray, correction: tuple[np.ndarray, np.ndarray] | None = None
@@ -250,8 +259,9 @@ def _normal_solve(flat: np.ndarray, rhs: np.ndarray, correction: tuple[np.ndarra
     the noise's expected share ``correction`` = (gram (p, p), moment (p,)) taken out (bias compensation).
 
     Returns:
-        x (p,); the inverse of the corrected normal matrix (p, p); the undetermined parameters (p,) bool (those
-        with a component in a direction of eigenvalue below 1e-20 of the largest); a square root (r (p, p),
+        x (p,); the inverse of the corrected normal matrix (p, p); the undetermined parameters (p,) bool (the
+        largest component of each direction whose eigenvalue is below 1e-20 of the largest: no information, or
+        the noise's share larger than the signal's); a square root (r (p, p),
         d (p,)) with x^T G x - 2 c^T x = |r x - d|^2 + const.
     """
     gram = flat.T @ flat
@@ -263,7 +273,8 @@ def _normal_solve(flat: np.ndarray, rhs: np.ndarray, correction: tuple[np.ndarra
     keep = values > 1e-20 * max(values[-1], 1e-300)
     inverse = np.where(keep, 1.0 / np.where(keep, values, 1.0), 0.0)
     solution = vectors @ (inverse * (vectors.T @ moment))
-    undetermined = np.any(np.abs(vectors[:, ~keep]) > 1e-6, axis=1)
+    undetermined = np.zeros(len(values), dtype=bool)  # each direction without information: its main parameter
+    undetermined[np.argmax(np.abs(vectors[:, ~keep]), axis=0)] = True
     root = np.sqrt(np.maximum(values, 0.0))
     return (solution, (vectors * inverse) @ vectors.T, undetermined,
             (root[:, None] * vectors.T, np.where(keep, np.sqrt(inverse), 0.0) * (vectors.T @ moment)))
@@ -332,10 +343,11 @@ def _estimate(layout: ParameterLayout, k: int, value: float, std_scaled: float, 
     scale = layout.scale[k]
     if reason:
         return ParameterEstimate(layout.names[k], layout.units[k], float(layout.prior[k]), float(layout.prior[k]),
-                                 None, None, False, reason, float(relative))
+                                 None, None, False, reason, float(relative), float(scale))
     std = float(std_scaled * scale)
     return ParameterEstimate(layout.names[k], layout.units[k], float(layout.prior[k]), float(value), std,
-                             (float(value - Z95 * std), float(value + Z95 * std)), True, "", float(relative))
+                             (float(value - Z95 * std), float(value + Z95 * std)), True, "", float(relative),
+                             float(scale))
 
 
 def _metrics(data: Regression, residuals: np.ndarray, states, prediction: HeldOutPrediction | None,
