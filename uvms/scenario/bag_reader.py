@@ -57,7 +57,7 @@ def read_bag(path: str | os.PathLike, *, odom_topic: str = ODOM_TOPIC, joint_sta
     """
     folder = bag_folder(path)
     try:
-        from rosbags.highlevel import AnyReader, AnyReaderError
+        from rosbags.highlevel import AnyReader
         from rosbags.typesys import Stores, get_typestore
     except ImportError:
         raise IdentificationError(INSTALL_HINT.replace("writing", "reading")) from None
@@ -73,9 +73,10 @@ def read_bag(path: str | os.PathLike, *, odom_topic: str = ODOM_TOPIC, joint_sta
                 messages[role_of[id(connection)]].append((stamp.sec + 1e-9 * stamp.nanosec, message))
     except IdentificationError:
         raise
-    except (AnyReaderError, Exception) as exc:  # noqa: BLE001 - a broken file raises anything from the storage
+    except Exception as exc:  # noqa: BLE001 - a broken file raises anything from the storage (AnyReaderError...)
         raise IdentificationError(f"cannot read the bag {str(folder)!r} (truncated or damaged?): "
-                                  f"{type(exc).__name__}: {' '.join(str(exc).split())}") from None
+                                  f"{type(exc).__name__}: {' '.join(str(exc).split())}; a complete rosbag2 "
+                                  "recording is needed (ros2 bag reindex may repair one)") from None
     return _log(messages, topics, folder)
 
 

@@ -7,9 +7,10 @@ run into the log identification reads (:class:`uvms.dynamics.identification_data
 numbers ``write_bag`` writes (``/odom``, ``/joint_states``, ``/body_wrench``). Plan an experiment with it (are the
 thrusters within their limits, which axes move), and the tests get logs of known parameters.
 
-The multi-sine: per axis i, sum_k a_i sqrt(2/n) sin(2 pi f_ik t + phi_k), RMS a_i; the frequencies of the six axes
-interleave on one grid over ``band`` (axis i takes every sixth line from the i-th), so no two axes share a
-frequency and their effects separate; Schroeder's phases phi_k = -pi k (k - 1) / n keep the peaks low.
+The multi-sine: per axis i, sum_k a_i sqrt(2/n) sin(2 pi f_ik t + phi_k), RMS a_i over its period 1 / f_0; the
+frequencies of the six axes interleave on the grid f_0, 2 f_0, ..., 6 n f_0 = ``highest`` (axis i takes every sixth
+line from the i-th), so no two axes share a frequency and their effects separate; Schroeder's phases
+phi_k = -pi k (k - 1) / n keep the peaks low.
 """
 
 from __future__ import annotations
@@ -46,21 +47,21 @@ class Multisine:
         return self.amplitudes * np.sqrt(2.0 / count) * np.sum(waves, axis=1)
 
 
-def multisine(amplitudes: np.ndarray, *, band: tuple[float, float] = (0.02, 0.5), components: int = 8) -> Multisine:
-    """A multi-sine of RMS ``amplitudes`` (6,) [N, N m] (0: the axis is not excited) over ``band`` [Hz].
+def multisine(amplitudes: np.ndarray, *, highest: float = 0.5, components: int = 8) -> Multisine:
+    """A multi-sine of RMS ``amplitudes`` (6,) [N, N m] (0: the axis is not excited), ``components`` sines per axis
+    up to ``highest`` [Hz] (module docstring; the default's period is 96 s, its lowest line 0.0104 Hz).
 
     Raises:
-        IdentificationError: amplitudes not 6 numbers >= 0, a band not 0 < low < high, components < 1.
+        IdentificationError: amplitudes not 6 numbers >= 0, highest <= 0, components < 1.
     """
     amplitudes = np.asarray(amplitudes, dtype=float)
     if amplitudes.shape != (6,) or not np.all(np.isfinite(amplitudes)) or np.any(amplitudes < 0):
         raise IdentificationError(f"the excitation needs 6 amplitudes >= 0 [N, N m], got {amplitudes.tolist()}")
-    low, high = (float(value) for value in band)
-    if not 0.0 < low < high:
-        raise IdentificationError(f"the excitation band must be 0 < low < high [Hz], got {band!r}")
+    if not (np.isfinite(highest) and highest > 0.0):
+        raise IdentificationError(f"the excitation's highest frequency must be > 0 Hz, got {highest!r}")
     if components < 1:
         raise IdentificationError(f"the excitation needs at least 1 sine per axis, got {components}")
-    grid = np.linspace(low, high, 6 * components)
+    grid = highest / (6 * components) * np.arange(1, 6 * components + 1)
     frequencies = np.array([grid[axis::6] for axis in range(6)])
     k = np.arange(1, components + 1)
     phases = np.tile(-np.pi * k * (k - 1) / components, (6, 1))
