@@ -22,7 +22,8 @@ def test_the_models_hydrodynamics_round_trip_exactly(tmp_path):
     coupled[1, 5] = coupled[5, 1] = -0.1  # sway-yaw
     hydro = replace(hydro, current=np.array([0.1, -0.2, 0.0]), links={
         **hydro.links, "base_link": LinkHydrodynamics(0.0121, [0.001, -0.002, 0.01], coupled,
-                                                      [13.7, 0.0, 33.0, 0.0, 0.8, 0.0], [141, 217, 190, 1.19, 0.47, 1.5])})
+                                                      linear_damping=[13.7, 0.0, 33.0, 0.0, 0.8, 0.0],
+                                                      quadratic_damping=[141, 217, 190, 1.19, 0.47, 1.5])})
     path = tmp_path / "hydrodynamics.yaml"
     path.write_text(hydrodynamics_yaml_text(hydro, ["a comment"]))
     assert path.read_text().startswith("# a comment\n")

@@ -38,7 +38,8 @@ from .view import (
 from .workspace import command_workspace, parse_figure_counts
 
 __all__ = [
-    "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_identify", "command_info", "command_run",
+    "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_identify", "command_info",
+    "command_run",
     "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
     "parse_assignments", "parse_figure_counts", "printable", "read_result", "run_output_folder", "scenario_file",
     "view_configuration", "view_robot", "watch_job", "watch_viewer",

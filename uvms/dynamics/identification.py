@@ -12,10 +12,12 @@ The fit, in four steps
 2. **Weights**: each wrench axis is weighted by 1 / sigma_a, sigma_a the RMS residual of that axis after an
    ordinary least-squares fit, at least ``noise_floor`` (1 %) of the RMS measured force (force axes) or
    moment (moment axes): the wrench is never trusted better than that.
-3. **Identifiability**: the parameters are scaled by their scale (:func:`~uvms.dynamics.identification_model.parameter_layout`)
-   and their standard errors computed (step 4). While the largest relative standard error exceeds
-   ``max_relative_error`` (20 %), that parameter is held at its prior (the model's value) and the fit is
-   repeated, so a parameter the log does not excite is reported as such and never fitted to noise.
+3. **Identifiability**: the parameters are scaled by their scale
+   (:func:`~uvms.dynamics.identification_model.parameter_layout`) and their standard errors computed (below),
+   relative to the larger of the scale and the unconstrained estimate (a prior far too small does not hold a
+   parameter the log determines well). While the largest relative standard error exceeds ``max_relative_error``
+   (20 %), that parameter is held at its prior (the model's value) and the fit is repeated, so a parameter the
+   log does not excite is reported as such and never fitted to noise.
 4. **Constrained fit**: the weighted least squares with added mass symmetric positive semi-definite, damping
    coefficients >= 0 and volume > 0 (buoyancy positive), a convex problem solved by cvxpy with Clarabel.
 
@@ -60,7 +62,8 @@ class ParameterEstimate:
         prior: the model's value; value: the identified one (the prior when held).
         std_error: its standard error (None when held); interval: (low, high) +-1.96 standard errors (None).
         identified: False when held at the prior; reason: why it was held ("" when identified).
-        relative_error: the standard error used for identifiability over the parameter's scale.
+        relative_error: the standard error over the larger of the scale and the unconstrained estimate (what
+            identifiability compares with ``max_relative_error``).
         scale: the parameter's scale (its prior's magnitude, at least a floor from the rigid-body mass:
             :func:`~uvms.dynamics.identification_model.parameter_layout`).
     """
@@ -223,8 +226,10 @@ def _axis_weights(data: Regression, wrench: np.ndarray, layout: ParameterLayout,
 
 
 def _identifiable_fit(data: Regression, layout: ParameterLayout, weights: np.ndarray, threshold: float,
-                      window: int, prior_added: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, str]]:
-    """Scaled theta, standard errors and relative errors (p,), and {held parameter: reason} (module docstring)."""
+                      window: int, prior_added: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, str]]:
+    """Scaled theta, standard errors (scaled) and relative errors (p,), and {held parameter: reason} (module
+    docstring)."""
     count = len(layout.scale)
     a = data.regressor * layout.scale * weights[None, :, None]  # (K, 6, p) scaled, weighted
     b = data.target * weights
@@ -236,10 +241,13 @@ def _identifiable_fit(data: Regression, layout: ParameterLayout, weights: np.nda
     while True:
         columns = a[:, :, free]
         rhs = b - np.einsum("kap,p->ka", a[:, :, ~free], prior[~free])
-        correction = (noise_gram[np.ix_(free, free)], noise_moment[free] + noise_gram[np.ix_(free, ~free)] @ prior[~free])
+        correction = (noise_gram[np.ix_(free, free)],
+                      noise_moment[free] + noise_gram[np.ix_(free, ~free)] @ prior[~free])
         solution, covariance, floor_covariance, root = _least_squares(columns, rhs, 2 * window, correction)
-        relative = np.full(count, np.nan)
-        relative[free] = np.sqrt(np.maximum(np.diag(covariance), np.diag(floor_covariance) * window))
+        error, relative = np.full(count, np.nan), np.full(count, np.nan)
+        error[free] = np.sqrt(np.maximum(np.diag(covariance), np.diag(floor_covariance) * window))
+        # relative to the parameter's scale, or to its estimate when larger (a prior far too small holds nothing)
+        relative[free] = error[free] / np.maximum(1.0, np.abs(solution))
         if not np.any(free) or np.nanmax(relative) <= threshold:
             break
         worst = int(np.nanargmax(relative))
@@ -249,7 +257,7 @@ def _identifiable_fit(data: Regression, layout: ParameterLayout, weights: np.nda
         free[worst] = False
     theta = prior.copy()
     theta[free] = _constrained(root, layout, free, prior, solution, prior_added)
-    return theta, relative, relative, reasons
+    return theta, error, relative, reasons
 
 
 def _normal_solve(flat: np.ndarray, rhs: np.ndarray, correction: tuple[np.ndarray, np.ndarray] | None = None

@@ -111,7 +111,7 @@ def parameter_layout(link: LinkHydrodynamics, rigid_mass: np.ndarray, form: str 
         units.append("m^4")
         prior.append(value)
         floor.append(0.01 * max(volume, 1e-6))
-    prior_array = np.array(prior, dtype=float)
+    prior_array = np.array(prior, dtype=float) + 0.0  # + 0.0: no -0.0 (a file's 0 damping, negated)
     return ParameterLayout(tuple(names), tuple(kinds), tuple(units), prior_array,
                            np.maximum(np.abs(prior_array), np.array(floor)), pairs, form)
 
