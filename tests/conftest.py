@@ -262,3 +262,32 @@ gain = 5.0
 dt = 0.02
 """)
     return path
+
+
+#: The excitation logs of the identification tests (uvms.scenario.excitation): multi-sine RMS body wrench
+#: [N, N m] per axis, arm joint amplitudes [rad] (None: held), duration [s], step [s].
+EXCITATIONS = {
+    "held": ((20.0, 20.0, 30.0, 0.6, 0.6, 1.5), None, 60.0, 0.02),
+    "arm": ((20.0, 20.0, 30.0, 0.6, 0.6, 1.5), (0.4, 0.3, 0.3, 0.4, 0.0), 60.0, 0.02),
+    "heave_pitch": ((0.0, 0.0, 30.0, 0.0, 0.6, 0.0), None, 30.0, 0.02),
+}
+#: The arm's start [rad, m]: forward and down; in the vehicle's x-z plane for the heave-pitch log (E = pi), so that
+#: nothing drives sway, roll or yaw there.
+ARM_START = {"held": (3.0, 1.8, 1.8, 1.0, 0.0), "arm": (3.0, 1.8, 1.8, 1.0, 0.0),
+             "heave_pitch": (np.pi, 1.8, 1.8, 0.0, 0.0)}
+
+
+@functools.lru_cache(maxsize=None)
+def excitation(kind: str):
+    """(run, log) of the BlueROV2 + Alpha 5 (its own hydrodynamics, the truth) under an excitation of
+    :data:`EXCITATIONS`, from 5 m deep with the arm forward (simulated once per test process)."""
+    from uvms.scenario.excitation import excitation_run, log_of_run, multisine
+
+    robot = shipped("bluerov2_alpha5")
+    amplitudes, arm, duration, dt = EXCITATIONS[kind]
+    q0 = pin.neutral(robot.model)
+    q0[2] = -5.0
+    q0[7:12] = ARM_START[kind]
+    run, _ = excitation_run(robot, multisine(np.array(amplitudes)), q0, duration, dt,
+                            arm_amplitudes=None if arm is None else np.array(arm))
+    return run, log_of_run(robot, run, f"excitation {kind}")

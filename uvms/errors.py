@@ -146,6 +146,12 @@ class BagExportError(UVMSError):
 
 
 # ------------------------------------------------- inequality objectives (set-based control, QP hierarchy)
+class IdentificationError(UVMSError):
+    """A log cannot be used for hydrodynamic identification (truncated or unreadable, a missing topic or column, a
+    wrong message type, non-finite rows, too short or not matching the model), or an identification option is
+    invalid."""
+
+
 class ObjectiveError(UVMSError):
     """An inequality objective or a velocity limit has an invalid parameter (margin, band, bound, normal,
     gain) or does not fit the model (a vehicle objective on a fixed base)."""

@@ -1,7 +1,8 @@
 """The ``uvms`` command line. Every error prints one line on stderr and exits with 2.
 
 One module per command group: :mod:`.info` (``uvms info``), :mod:`.run` (``uvms run``, ``uvms sweep``,
-``--watch``), :mod:`.workspace` (``uvms workspace``), :mod:`.view` (``uvms view``); here the argument parser
+``--watch``), :mod:`.workspace` (``uvms workspace``), :mod:`.view` (``uvms view``), :mod:`.identify`
+(``uvms identify``); here the argument parser
 and :func:`main`, the one place that turns an error into one line and an exit status.
 
 Every line :func:`main` prints goes through :func:`.terminal.say`: control characters and bidirectional overrides
@@ -23,6 +24,7 @@ from collections.abc import Iterator, Sequence
 
 from ..errors import UVMSError
 from .terminal import printable, say
+from .identify import add_identify_parser, command_identify
 from .info import command_info, describe, format_limits, parse_assignments
 from .run import command_run, command_sweep, run_output_folder, scenario_file, watch_job
 from .view import (
@@ -36,7 +38,8 @@ from .view import (
 from .workspace import command_workspace, parse_figure_counts
 
 __all__ = [
-    "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_info", "command_run",
+    "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_identify", "command_info",
+    "command_run",
     "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
     "parse_assignments", "parse_figure_counts", "printable", "read_result", "run_output_folder", "scenario_file",
     "view_configuration", "view_robot", "watch_job", "watch_viewer",
@@ -192,6 +195,7 @@ def build_parser() -> argparse.ArgumentParser:
                       help="reload the model in place when its files change; replay --result when it is rerun")
     add_package_path(view)
     view.set_defaults(handler=command_view)
+    add_identify_parser(commands, add_package_path)
     return parser
 
 

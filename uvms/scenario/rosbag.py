@@ -48,11 +48,17 @@ from ..robot.robot import Robot
 from ..sim.result import SimulationResult
 from .tf_tree import WORLD_FRAME, TransformEdge, frame_tree, vehicle_root_link
 
-__all__ = ["BAG_VERSION", "BagSummary", "stamps_ns", "write_bag"]
+__all__ = ["BAG_VERSION", "BODY_WRENCH_TOPIC", "BagSummary", "JOINT_STATES_TOPIC", "ODOM_TOPIC", "stamps_ns",
+           "write_bag"]
 
 #: rosbag2 metadata version written: 8 keeps the QoS as a YAML string, which Humble's player also reads.
 BAG_VERSION = 8
 INSTALL_HINT = "writing a ROS 2 bag needs the 'rosbags' package: pip install 'uvms[ros]' (or pip install rosbags)"
+#: The topics of the vehicle's odometry, the arm's joint states and the thrusters' body wrench (read back by
+#: :mod:`uvms.scenario.bag_reader` for identification).
+ODOM_TOPIC = "/odom"
+JOINT_STATES_TOPIC = "/joint_states"
+BODY_WRENCH_TOPIC = "/body_wrench"
 #: A rosbag2 folder's file: without uvms's manifest (``outputs.MANIFEST``), an older uvms's bag; refused all the same.
 BAG_MARKERS = ("metadata.yaml",)
 
@@ -274,10 +280,10 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
     if robot.urdf is None:
         skipped["/robot_description"] = "the robot has no URDF text (composed robot): save its URDF and publish it"
     if vehicle_root_link(robot) is None:
-        skipped["/odom"] = "a fixed base has no vehicle" if robot.base_type == "fixed" else "no link on the vehicle joint"
+        skipped[ODOM_TOPIC] = "a fixed base has no vehicle" if robot.base_type == "fixed" else "no link on the vehicle joint"
     wide = [joint.name for joint in robot.arm_joints if joint.nv != 1]
     if wide:
-        skipped["/joint_states"] = f"joints {', '.join(wide)} have several values; JointState holds one per joint"
+        skipped[JOINT_STATES_TOPIC] = f"joints {', '.join(wide)} have several values; JointState holds one per joint"
     summary = BagSummary(path=Path(path), skipped=skipped)
     name = Path(os.path.realpath(os.path.abspath(path))).name
     with outputs.run_folder(path, lock=lock, legacy_markers=BAG_MARKERS) as folder:
@@ -341,11 +347,11 @@ def _write(api: dict[str, Any], staging: Path, robot: Robot, result: SimulationR
                 put("/tf_static", stamp, messages.tf(stamp, static, poses), "latched")
             if moving:
                 put("/tf", stamp, messages.tf(stamp, moving, poses))
-            if "/joint_states" not in summary.skipped:
-                put("/joint_states", stamp, _joint_state(messages, robot, result, k, stamp, q))
+            if JOINT_STATES_TOPIC not in summary.skipped:
+                put(JOINT_STATES_TOPIC, stamp, _joint_state(messages, robot, result, k, stamp, q))
             if root is not None:
                 twist = pin.getFrameVelocity(model, data, root, pin.ReferenceFrame.LOCAL)
-                put("/odom", stamp, messages.odometry(stamp, model.frames[root].name, poses[root], twist))
+                put(ODOM_TOPIC, stamp, messages.odometry(stamp, model.frames[root].name, poses[root], twist))
             if target is not None:
                 kind = "desired_pose" if target[1] is not None else "desired_position"
                 put(f"/{topic_token(frame)}/{kind}", stamp,
@@ -356,7 +362,7 @@ def _write(api: dict[str, Any], staging: Path, robot: Robot, result: SimulationR
                     put(f"/thrusters/{name}/thrust", stamp, messages.types["std_msgs/msg/Float64"](
                         data=float(thrusts[k, index])))
                 if root is not None:
-                    put("/body_wrench", stamp, messages.wrench(stamp, model.frames[root].name, wrenches[k]))
+                    put(BODY_WRENCH_TOPIC, stamp, messages.wrench(stamp, model.frames[root].name, wrenches[k]))
 
 
 def _joint_state(messages: Messages, robot: Robot, result: SimulationResult, k: int, stamp: int, q: np.ndarray) -> Any:

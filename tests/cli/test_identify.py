@@ -1,0 +1,97 @@
+"""``uvms identify LOG --model MODEL --out DIR`` (uvms.cli.identify): the files it writes, their round trip, and
+one clear line for a bad log with nothing written."""
+
+from __future__ import annotations
+
+import json
+import shutil
+
+import numpy as np
+import pytest
+
+from conftest import excitation, one_line, shipped
+
+from uvms.cli import main
+from uvms.dynamics.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.identification_data import log_csv_text
+from uvms.dynamics.thrusters import thrusters_of
+from uvms.scenario.rosbag import write_bag
+
+
+@pytest.fixture(scope="module")
+def bag(tmp_path_factory):
+    """The heave-pitch excitation (30 s at 50 Hz) as the bag ``uvms run --bag`` would write."""
+    robot = shipped("bluerov2_alpha5")
+    run, _ = excitation("heave_pitch")
+    path = tmp_path_factory.mktemp("identify") / "bag"
+    write_bag(path, robot, run, thrusters=thrusters_of(robot).names)
+    return path
+
+
+def test_identify_writes_the_yaml_the_json_and_the_figures(bag, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["identify", str(bag), "--model", "bluerov2_alpha5", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "added_mass[w]" in printed and "held: " in printed and f"wrote       {out}/" in printed
+    assert sorted(p.name for p in out.iterdir()) == [".uvms-run.json", "hydrodynamics.yaml", "identification.json",
+                                                     "prediction.png", "residuals.png"]
+    report = json.loads((out / "identification.json").read_text())
+    values = {p["name"]: p for p in report["parameters"]}
+    assert not values["linear_damping[v]"]["identified"] and "linear_damping[v]" in report["held_at_prior"]
+    assert values["added_mass[w]"]["identified"] and len(values["added_mass[w]"]["interval_95"]) == 2
+    # round trip: the model loaded with the written YAML has the identified numbers
+    robot = shipped("bluerov2_alpha5")
+    loaded = hydrodynamics_of(robot, out / "hydrodynamics.yaml").links["base_link"]
+    assert loaded.added_mass[2, 2] == values["added_mass[w]"]["value"]
+    assert loaded.quadratic_damping[2] == values["quadratic_damping[w]"]["value"]
+    assert loaded.volume == values["volume"]["value"]
+    np.testing.assert_allclose(loaded.center_of_buoyancy[2] * loaded.volume, values["buoyancy_moment[z]"]["value"],
+                               rtol=1e-12)
+    assert loaded.linear_damping[1] == values["linear_damping[v]"]["prior"]  # held
+    prior = hydrodynamics_of(robot)
+    for name in prior.links:  # the arm's links are written as the model has them
+        if name != "base_link":
+            np.testing.assert_array_equal(hydrodynamics_of(robot, out / "hydrodynamics.yaml").links[name].added_mass,
+                                          prior.links[name].added_mass)
+
+
+def test_identify_reads_a_csv_log_too(tmp_path, capsys):
+    _, log = excitation("heave_pitch")
+    path = tmp_path / "log.csv"
+    path.write_text(log_csv_text(log))
+    out = tmp_path / "out"
+    assert main(["identify", str(path), "--model", "bluerov2_alpha5", "--out", str(out), "--quiet"]) == 0
+    assert capsys.readouterr().out.count("\n") == 1
+    assert json.loads((out / "identification.json").read_text())["metrics"]["log_samples"] == len(log.t)
+
+
+@pytest.mark.parametrize("damage, message", [
+    ("truncate", "cannot read the bag"),
+    ("topic", "no wrench topic '/other'"),
+    ("type", "holds sensor_msgs/msg/JointState"),
+    ("nan", "non-finite value"),
+])
+def test_a_bad_log_gets_one_error_line_and_nothing_is_written(bag, tmp_path, capsys, damage, message):
+    log = tmp_path / "log"
+    shutil.copytree(bag, log)
+    extra = []
+    if damage == "truncate":
+        storage = next(log.glob("*.mcap"))
+        storage.write_bytes(storage.read_bytes()[:-4000])
+    elif damage == "topic":
+        extra = ["--wrench-topic", "/other"]
+    elif damage == "type":
+        extra = ["--odom-topic", "/joint_states"]
+    else:
+        _, clean = excitation("heave_pitch")
+        rows = log_csv_text(clean).splitlines()
+        cells = rows[120].split(",")
+        cells[9] = "nan"
+        rows[120] = ",".join(cells)
+        log = tmp_path / "log.csv"
+        log.write_text("\n".join(rows) + "\n")
+    out = tmp_path / "out"
+    assert main(["identify", str(log), "--model", "bluerov2_alpha5", "--out", str(out), *extra]) == 2
+    line = one_line(capsys)
+    assert line.startswith("uvms: error: ") and message in line
+    assert not out.exists()

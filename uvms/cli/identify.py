@@ -1,0 +1,110 @@
+"""``uvms identify LOG --model MODEL``: the vehicle's hydrodynamic parameters identified from a log.
+
+LOG is a rosbag2 folder (MCAP or sqlite3: :mod:`uvms.scenario.bag_reader`) or a CSV file
+(:data:`uvms.dynamics.identification_data.CSV_COLUMNS`). Writes into the output folder (replaced as a whole):
+
+- ``hydrodynamics.yaml``: the model's hydrodynamics with the vehicle's identified, in the form
+  :func:`uvms.dynamics.hydrodynamics.load_hydrodynamics_yaml` reads (``uvms.dynamics.hydrodynamics_of(robot, PATH)``);
+- ``identification.json``: every parameter with its prior, value, standard error and 95 % interval, what was
+  held at the prior and why, fit metrics and the options;
+- ``prediction.png`` (held-out segment) and ``residuals.png`` (:mod:`uvms.viz.identification`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .info import parse_assignments
+from .run import say_replaced
+from .terminal import say
+
+
+def add_identify_parser(commands: argparse._SubParsersAction, add_package_path) -> None:
+    """The ``identify`` subcommand's arguments."""
+    from ..scenario.rosbag import BODY_WRENCH_TOPIC, JOINT_STATES_TOPIC, ODOM_TOPIC
+
+    parser = commands.add_parser("identify", help="identify the vehicle's hydrodynamic parameters from a log "
+                                                  "(ROS 2 bag or CSV): hydrodynamics.yaml, identification.json")
+    parser.add_argument("log", help="a rosbag2 folder (MCAP or sqlite3) or a .csv file (see docs: identification)")
+    parser.add_argument("--model", required=True, help="the model (.urdf/.xacro or a shipped name) the log is of")
+    parser.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    parser.add_argument("--prior", metavar="YAML", help="hydrodynamics YAML to start from (default: the model's)")
+    parser.add_argument("--out", help="output folder (default: out/identify_<model>)")
+    parser.add_argument("--added-mass", choices=["diagonal", "full"], default="diagonal",
+                        help="identify the 6 diagonal entries of the added mass, or the full symmetric 6 x 6")
+    parser.add_argument("--window", type=float, default=0.3,
+                        help="Savitzky-Golay window [s] for the twist's derivative (short against the motion)")
+    parser.add_argument("--polyorder", type=int, default=3, help="Savitzky-Golay polynomial order")
+    parser.add_argument("--holdout", type=float, default=0.2,
+                        help="fraction of the log at its end kept out of the fit for the prediction check")
+    parser.add_argument("--max-relative-error", type=float, default=0.2,
+                        help="a parameter whose standard error exceeds this fraction of its scale is held")
+    parser.add_argument("--current", type=float, nargs=3, metavar=("X", "Y", "Z"),
+                        help="known constant current [m/s], world ENU (default: the prior's)")
+    parser.add_argument("--odom-topic", default=ODOM_TOPIC, help="nav_msgs/Odometry topic")
+    parser.add_argument("--joint-states-topic", default=JOINT_STATES_TOPIC, help="sensor_msgs/JointState topic")
+    parser.add_argument("--wrench-topic", default=BODY_WRENCH_TOPIC, help="geometry_msgs/WrenchStamped topic")
+    parser.add_argument("--quiet", action="store_true", help="print only the folder line")
+    add_package_path(parser)
+    parser.set_defaults(handler=command_identify)
+
+
+def read_log(options: argparse.Namespace):
+    """The log of ``options.log``: a CSV by its suffix, else a rosbag2 recording."""
+    from ..dynamics.identification_data import read_log_csv
+    from ..scenario.bag_reader import read_bag
+
+    if Path(options.log).suffix.lower() == ".csv":
+        return read_log_csv(options.log)
+    return read_bag(options.log, odom_topic=options.odom_topic, joint_states_topic=options.joint_states_topic,
+                    wrench_topic=options.wrench_topic)
+
+
+def command_identify(options: argparse.Namespace) -> int:
+    """``uvms identify LOG --model MODEL [--out DIR]``: identify, then write the folder (module docstring)."""
+    from ..dynamics.hydro_writer import hydrodynamics_yaml_text
+    from ..dynamics.hydrodynamics import hydrodynamics_of
+    from ..dynamics.identification import identify
+    from ..io import outputs
+    from ..model.loader import load
+    from ..scenario.watch import WatchedFiles
+    from ..viz.identification import identification_figures
+
+    robot = load(options.model, args=parse_assignments(options.arg), package_path=options.package_path)
+    log = read_log(options)
+    prior = hydrodynamics_of(robot, options.prior)
+    result = identify(robot, log, hydro=prior, added_mass=options.added_mass, current=options.current,
+                      window=options.window, polyorder=options.polyorder, holdout=options.holdout,
+                      max_relative_error=options.max_relative_error)
+    out = Path(options.out or Path("out") / f"identify_{robot.name}")
+    model_files = WatchedFiles.of(model=options.model)
+    inputs = [options.log, *model_files.files, *([options.prior] if options.prior else [])]
+    replacing = outputs.holds_run(out)
+    comments = [f"identified by uvms identify from {log.source} (model {robot.source})",
+                f"link {result.link}; identification.json beside this file gives the intervals and what was held"]
+    with outputs.run_folder(out, inputs=inputs) as folder:
+        outputs.write_text(folder / "hydrodynamics.yaml", hydrodynamics_yaml_text(result.hydro, comments))
+        outputs.write_json(folder / "identification.json", result.as_dict())
+        identification_figures(result, folder)
+    if not options.quiet:
+        for line in summary_lines(result):
+            say(line, sys.stdout)
+    say_replaced(replacing, out)
+    say(f"wrote       {out}/ (hydrodynamics.yaml, identification.json, figures)", sys.stdout)
+    return 0
+
+
+def summary_lines(result) -> list[str]:
+    """One line per parameter: name, prior, value, 95 % interval or why it was held."""
+    lines = [f"{'parameter':<24} {'prior':>11} {'identified':>11}  95 % interval / held because"]
+    for p in result.parameters:
+        detail = f"[{p.interval[0]:.4g}, {p.interval[1]:.4g}] {p.unit}" if p.identified else f"held: {p.reason}"
+        lines.append(f"{p.name:<24} {p.prior:>11.4g} {p.value:>11.4g}  {detail}")
+    held_out = result.metrics.get("held_out")
+    if held_out and held_out["fit_percent_identified"] is not None:
+        fits = ", ".join(f"{axis} {value:.1f}" for axis, value in held_out["fit_percent_identified"].items())
+        lines.append(f"held-out fit [%] ({held_out['duration_s']:.1f} s): {fits}")
+    return lines
+
