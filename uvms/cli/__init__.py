@@ -25,6 +25,7 @@ from ..errors import UVMSError
 from .terminal import printable, say
 from .info import command_info, describe, format_limits, parse_assignments
 from .run import command_run, command_sweep, run_output_folder, scenario_file, watch_job
+from .study import command_study
 from .view import (
     command_view,
     frame_indices,
@@ -37,7 +38,7 @@ from .workspace import command_workspace, parse_figure_counts
 
 __all__ = [
     "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_info", "command_run",
-    "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
+    "command_study", "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
     "parse_assignments", "parse_figure_counts", "printable", "read_result", "run_output_folder", "scenario_file",
     "view_configuration", "view_robot", "watch_job", "watch_viewer",
 ]
@@ -88,6 +89,39 @@ def add_package_path(parser: argparse.ArgumentParser) -> None:
                              "searched for package.xml); repeatable, before ROS_PACKAGE_PATH and the model's workspace")
 
 
+def add_parallel_options(parser: argparse.ArgumentParser) -> None:
+    """``--jobs``, ``--backend`` and ``--scheduler`` of ``uvms sweep`` and ``uvms study``."""
+    parser.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
+    parser.add_argument("--backend", choices=["loky", "dask"], default="loky",
+                        help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="Dask scheduler, e.g. tls://10.0.0.5:8786, with TLS credentials from Dask's config "
+                             "distributed.comm.tls.* (env DASK_DISTRIBUTED__COMM__TLS__CA_FILE, ..._CLIENT__CERT, "
+                             "..._CLIENT__KEY); a tcp:// one works but anyone reaching it can run code on its workers "
+                             "(default: a local TLS cluster of --jobs workers, no dashboard)")
+
+
+def add_study_parser(commands) -> None:
+    """``uvms study``: a Monte Carlo study of a scenario."""
+    study = commands.add_parser("study", help="Monte Carlo study of a scenario: study.csv, summary.json, figures")
+    study.add_argument("scenario", help="scenario file or shipped scenario name (its [study] table gives defaults)")
+    study.add_argument("--sample", action="append", metavar="KEY=DIST",
+                       help="sample a scenario key: normal(mu, sigma), normal(mu, sigma, low, high), uniform(a, b), "
+                            "loguniform(a, b), choice([...]); KEY[i] samples one element of a list key, e.g. "
+                            "plant.current[1]=uniform(-0.3, 0.3) (repeatable; default: [study] samples)")
+    study.add_argument("--samples", type=int, metavar="N", help="number of trials (default: [study] n)")
+    study.add_argument("--seed", type=int, help="the study's seed (default: [study] seed, else 0)")
+    study.add_argument("--method", choices=["random", "lhs", "sobol"],
+                       help="random (per-trial seeds), Latin hypercube or scrambled Sobol (default: [study] method)")
+    study.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key in every trial (repeatable)")
+    add_parallel_options(study)
+    study.add_argument("--out", help="study folder (default: out/<scenario name>_study); the same study there is "
+                                     "resumed (finished trials skipped), another is refused")
+    study.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_package_path(study)
+    study.set_defaults(handler=command_study)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``uvms``."""
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
@@ -118,18 +152,12 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--grid", action="append", metavar="KEY=START:STOP:N",
                        help="sweep a scenario key over N values from START to STOP, or KEY=[a,b,...], e.g. "
                             "model.args.l1=1.5:2.5:5 (repeatable: the grid is the product)")
-    sweep.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
-    sweep.add_argument("--backend", choices=["loky", "dask"], default="loky",
-                       help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
-    sweep.add_argument("--scheduler", metavar="ADDRESS",
-                       help="Dask scheduler, e.g. tls://10.0.0.5:8786, with TLS credentials from Dask's config "
-                            "distributed.comm.tls.* (env DASK_DISTRIBUTED__COMM__TLS__CA_FILE, ..._CLIENT__CERT, "
-                            "..._CLIENT__KEY); a tcp:// one works but anyone reaching it can run code on its workers "
-                            "(default: a local TLS cluster of --jobs workers, no dashboard)")
+    add_parallel_options(sweep)
     sweep.add_argument("--out", help="output folder (default: out/<scenario name>_sweep)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     add_package_path(sweep)
     sweep.set_defaults(handler=command_sweep)
+    add_study_parser(commands)
     workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
     workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
     workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")

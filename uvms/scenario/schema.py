@@ -172,6 +172,10 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "orientation_tolerance": (NUMBER, DEFAULT_ORIENTATION_TOLERANCE, None),
         "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.scenario.rosbag
     },
+    "study": {  # uvms study (uvms.scenario.study): Monte Carlo trials of this scenario; "KEY=DIST" strings
+        "samples": (list, [], None), "n": (int, 0, None), "seed": (int, 0, None),
+        "method": (str, "random", ("random", "lhs", "sobol")),
+    },
 }
 #: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.control.sequence.
 PHASE_SCHEMA: dict[str, tuple] = {

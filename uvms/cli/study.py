@@ -1,0 +1,42 @@
+"""``uvms study``: a Monte Carlo study of a scenario from the command line (:mod:`uvms.scenario.study`)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..errors import UVMSError
+from .run import package_path_overrides
+from .terminal import say
+
+
+def command_study(options: argparse.Namespace) -> int:
+    """``uvms study SCENARIO --sample KEY=DIST ... --samples N --seed S``: study.csv, summary.json, figures."""
+    from ..scenario.study import study  # joblib, scipy, and dask only with --backend dask
+
+    result = study(options.scenario, options.sample or None, n=options.samples, seed=options.seed,
+                   method=options.method, jobs=options.jobs, backend=options.backend, scheduler=options.scheduler,
+                   out=options.out, progress=False if options.quiet else None,
+                   overrides=[*(options.set or ()), *package_path_overrides(options)])
+    rate = result.summary["pass_rate"]
+    folder = result.files[0].parent
+    say(f"pass rate   {rate['passed']}/{rate['trials']} = {rate['rate']:.1%} (95 % Wilson interval "
+        f"{rate['ci_low']:.1%} to {rate['ci_high']:.1%})", sys.stdout)
+    for metric in result.metrics:
+        numbers = result.summary["metrics"][metric]
+        if numbers:
+            say(f"{metric:<26} median {numbers['p50']:.4g}  p95 {numbers['p95']:.4g}  max {numbers['max']:.4g}",
+                sys.stdout)
+    ranking = result.summary["sensitivity"].get(result.metrics[0], []) if result.metrics else []
+    if ranking:
+        shown = ", ".join(f"{e['key']} ({e['rho']:+.2f})" if e["rho"] is not None else f"{e['key']} (const.)"
+                          for e in ranking)
+        say(f"sensitivity of {result.metrics[0]} (Spearman rho): {shown}", sys.stdout)
+    resumed = f"; {result.resumed} trials were already done (resumed)" if result.resumed else ""
+    say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, trials/){resumed}", sys.stdout)
+    failed = result.summary["failed_trials"]
+    if failed:
+        first = next(row for row in result.rows if row["error"])
+        raise UVMSError(f"{len(failed)} of {len(result.rows)} trials failed (error column of {result.files[0]}); "
+                        f"trial {first['trial']}: {first['error']}")
+    return 0

@@ -1,0 +1,121 @@
+"""Figures of a Monte Carlo study (:mod:`uvms.scenario.study`): histograms, scatter plots, sensitivity ranking."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+from ..io import outputs
+
+PASS_COLOR, FAIL_COLOR = "tab:blue", "tab:red"
+
+
+def finite(values: Sequence) -> list[float]:
+    return [float(v) for v in values if isinstance(v, (int, float)) and math.isfinite(v)]
+
+
+def save_study_figures(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str], summary: dict,
+                       folder: Path, title: str = "") -> list[Path]:
+    """Write ``study_histograms.png``, ``study_scatter.png`` and ``study_sensitivity.png`` into ``folder``.
+
+    Args:
+        table: the rows of ``study.csv`` (sampled values under their keys, metrics, ``pass``, ``error``).
+        keys: the sampled keys; metrics: the metric columns; summary: ``summary.json`` (pass rate, sensitivity).
+
+    Returns:
+        The paths written.
+    """
+    rate = summary["pass_rate"]
+    head = (f"{title}: {rate['trials']} trials, pass rate {rate['rate']:.0%} "
+            f"({rate['confidence']:.0%} CI {rate['ci_low']:.0%}-{rate['ci_high']:.0%})")
+    paths = [folder / "study_histograms.png", folder / "study_scatter.png", folder / "study_sensitivity.png"]
+    histograms(table, metrics, head, paths[0])
+    scatter(table, keys, metrics, head, paths[1])
+    ranking(summary["sensitivity"], metrics, head, paths[2])
+    return paths
+
+
+def histograms(table: Sequence[dict], metrics: Sequence[str], head: str, path: Path) -> None:
+    """One histogram per metric, passed and not passed trials stacked."""
+    from matplotlib.figure import Figure
+
+    columns = min(3, len(metrics))
+    lines = math.ceil(len(metrics) / columns)
+    figure = Figure(figsize=(3.6 * columns, 2.8 * lines + 0.6))
+    axes = figure.subplots(lines, columns, squeeze=False).ravel()
+    for axis, metric in zip(axes, metrics):
+        passed = finite(row[metric] for row in table if row["pass"])
+        failed = finite(row[metric] for row in table if not row["pass"])
+        if passed or failed:
+            axis.hist([passed, failed], bins=20, stacked=True, color=[PASS_COLOR, FAIL_COLOR],
+                      label=["pass", "fail"])
+        axis.set_xlabel(metric.replace("_", " "), fontsize=8)
+        axis.set_ylabel("trials", fontsize=8)
+        axis.tick_params(labelsize=7)
+    axes[0].legend(fontsize=7)
+    for axis in axes[len(metrics):]:
+        axis.set_visible(False)
+    figure.suptitle(head, fontsize=9)
+    figure.tight_layout()
+    outputs.save_figure(figure, path)
+
+
+def scatter(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str], head: str, path: Path) -> None:
+    """Each metric (rows) against each sampled key (columns); blue: passed, red: not passed."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(2.8 * len(keys) + 0.8, 2.0 * len(metrics) + 0.6))
+    axes = figure.subplots(len(metrics), len(keys), squeeze=False, sharex="col")
+    for j, key in enumerate(keys):
+        labels = list(dict.fromkeys(str(row[key]) for row in table))
+        numeric = all(isinstance(row[key], (int, float)) for row in table)
+        for i, metric in enumerate(metrics):
+            axis = axes[i, j]
+            for passed, color in ((True, PASS_COLOR), (False, FAIL_COLOR)):
+                rows = [row for row in table if bool(row["pass"]) == passed and isinstance(row[metric], float)
+                        and math.isfinite(row[metric])]
+                xs = [row[key] if numeric else labels.index(str(row[key])) for row in rows]
+                axis.plot(xs, [row[metric] for row in rows], ".", color=color, markersize=4)
+            if j == 0:
+                axis.set_ylabel(metric.replace("_", " "), fontsize=7)
+            axis.tick_params(labelsize=6)
+            axis.grid(True, alpha=0.3)
+        if not numeric:
+            axes[-1, j].set_xticks(range(len(labels)), labels, fontsize=6)
+        axes[-1, j].set_xlabel(key, fontsize=7)
+    figure.suptitle(head, fontsize=9)
+    figure.tight_layout()
+    outputs.save_figure(figure, path)
+
+
+def ranking(sensitivity: dict, metrics: Sequence[str], head: str, path: Path) -> None:
+    """Spearman's |rho| of each key, one panel per outcome (metrics and pass), keys ranked; p-values on the bars."""
+    from matplotlib.figure import Figure
+
+    outcomes = [m for m in [*metrics, "pass"] if sensitivity.get(m)]
+    columns = min(3, max(len(outcomes), 1))
+    lines = max(1, math.ceil(len(outcomes) / columns))
+    figure = Figure(figsize=(4.2 * columns, 2.6 * lines + 0.6))
+    axes = figure.subplots(lines, columns, squeeze=False).ravel()
+    for axis, outcome in zip(axes, outcomes):
+        entries = sensitivity[outcome][::-1]  # the strongest at the top
+        rhos = [e["rho"] if e["rho"] is not None else 0.0 for e in entries]
+        axis.barh(range(len(entries)), [abs(r) for r in rhos],
+                  color=["tab:green" if r >= 0 else "tab:purple" for r in rhos])
+        axis.set_yticks(range(len(entries)), [e["key"] for e in entries], fontsize=7)
+        for y, entry in enumerate(entries):
+            text = "const." if entry["rho"] is None else f"rho {entry['rho']:+.2f}, p {entry['p_value']:.1g}"
+            axis.text(0.02, y, text, va="center", fontsize=6)
+        axis.set_xlim(0, 1)
+        axis.set_title(outcome.replace("_", " "), fontsize=8)
+        axis.tick_params(axis="x", labelsize=7)
+    for axis in axes[len(outcomes):]:
+        axis.set_visible(False)
+    axes[0].set_xlabel("|Spearman rho| (green: rises with the key)", fontsize=7)
+    figure.suptitle(head, fontsize=9)
+    figure.tight_layout()
+    outputs.save_figure(figure, path)
+
+
+__all__ = ["save_study_figures"]
