@@ -114,7 +114,7 @@ def stop_http_server(dask_scheduler: Any = None, dask_worker: Any = None) -> Non
 
 def run_tasks(function: Callable[..., dict], tasks: Sequence[tuple], *, jobs: int, backend: str,
               scheduler: str | None, progress: bool | None, error: type[UVMSError], desc: str = "runs",
-              client: Any = None) -> list[dict]:
+              client: Any = None, in_workers: bool = False) -> list[dict]:
     """Run ``function(*task)`` for every task through joblib (loky or dask); the rows in completion order.
 
     Args:
@@ -127,6 +127,7 @@ def run_tasks(function: Callable[..., dict], tasks: Sequence[tuple], *, jobs: in
         error: the exception class of the caller (SweepError, StudyError) for a cluster that cannot start.
         desc: the progress bar's label.
         client: an open Dask client (:func:`dask_client`) to reuse; None opens one for this call (dask only).
+        in_workers: run in worker processes even with one job or one task (loky runs those in this process).
 
     Raises:
         BaseException: a worker that died (loky's TerminatedWorkerError, Dask's KilledWorker), Ctrl-C; the
@@ -137,6 +138,8 @@ def run_tasks(function: Callable[..., dict], tasks: Sequence[tuple], *, jobs: in
     from ..io.progress import tqdm
 
     jobs = worker_count(jobs, len(tasks), remote=bool(scheduler))
+    if in_workers and jobs == 1:
+        jobs = 2  # joblib runs n_jobs=1 in this process; with 2 and one task, one worker process runs it
 
     def execute() -> list[dict]:
         parallel = Parallel(n_jobs=jobs, return_as="generator_unordered", batch_size=1)

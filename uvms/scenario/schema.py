@@ -174,7 +174,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
     },
     "study": {  # uvms study (uvms.scenario.study): Monte Carlo trials of this scenario; "KEY=DIST" strings
         "samples": (list, [], None), "n": (int, 0, None), "seed": (int, 0, None),
-        "method": (str, "random", ("random", "lhs", "sobol")),
+        "method": (str, "random", ("random", "lhs", "sobol")), "set": (list, [], None),
     },
 }
 #: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.control.sequence.

@@ -167,15 +167,17 @@ def study(
         jobs, backend, scheduler: as for :func:`uvms.scenario.sweep.sweep` (:mod:`uvms.scenario.parallel`).
         out: the study folder (default ``out/<scenario name>_study``); resumed if it holds the same study.
         progress: progress bar (None: on a terminal only).
-        overrides: ``SECTION.KEY=VALUE`` strings applied to every trial before its sampled values.
+        overrides: ``SECTION.KEY=VALUE`` strings applied to every trial before its sampled values (after
+            ``[study] set``).
 
     Raises:
         StudyError: bad samples, n, method, backend or jobs, or ``out`` holds another study or other files;
             ScenarioError: a key or value the scenario rejects, found before any trial runs.
     """
     scenario = resolve_scenario_path(scenario).resolve()
+    given = read_scenario(scenario, overrides)["study"]
+    overrides = [*given["set"], *overrides]
     table = read_scenario(scenario, overrides)
-    given = table["study"]
     samples = parse_samples(given["samples"] if samples is None else samples)
     n, seed = given["n"] if n is None else n, given["seed"] if seed is None else seed
     method = given["method"] if method is None else method
@@ -262,17 +264,18 @@ def run_study(scenario: Path, seeds: Sequence[int], values: Sequence[list], tria
     resumed = len(rows)
     pending = [k for k in range(len(seeds)) if k not in rows]
     suspects: list[int] = []
+    crashed = False  # after a dead worker, every trial runs in a worker process (never in this one)
     while pending or suspects:
         batch, alone = (suspects[:1], True) if suspects else (pending, False)
         token = secrets.token_hex(8)
         tasks = [(str(scenario), k, seeds[k], values[k], trials[k], str(folder), token) for k in batch]
-        options = {**executor, "jobs": 2 if alone and executor["backend"] == "loky" else executor["jobs"]}
-        try:  # alone on loky: 2 jobs for one task, so it runs in a worker process, not in this one
-            for row in run_tasks(run_trial, tasks, error=StudyError, desc="study", **options):
+        try:  # a suspect alone, in a worker process: if it kills that one too, it killed the first
+            for row in run_tasks(run_trial, tasks, error=StudyError, desc="study", in_workers=crashed, **executor):
                 rows[row["trial"]] = row
         except Exception as exc:  # noqa: BLE001 - a dead worker; anything else is raised again
             if type(exc).__name__ not in DEAD_WORKER:
                 raise
+            crashed = True
             rows.update(finished_rows(folder, seeds, values))
             if alone:
                 rows[batch[0]] = killed_row(folder, batch[0], seeds[batch[0]], values[batch[0]], exc)
