@@ -66,6 +66,7 @@ def test_sensitivity_ranks_the_one_key_the_metric_depends_on_first(reference):
     ranking = reference.summary["sensitivity"]
     first = ranking["max_position_error"][0]
     assert first["key"] == "model.args.l1" and first["rho"] < -0.95 and first["p_value"] < 1e-3
+    assert first["eta2"] > 0.8 > 2 / 9 == pytest.approx(reference.summary["eta2_noise_floor"])  # 3 bins of 10
     assert ranking["pass"][0]["key"] == "outputs.position_tolerance" and ranking["pass"][0]["rho"] > 0.6
 
 

@@ -27,11 +27,11 @@ def command_study(options: argparse.Namespace) -> int:
         if numbers:
             say(f"{metric:<26} median {numbers['p50']:.4g}  p95 {numbers['p95']:.4g}  max {numbers['max']:.4g}",
                 sys.stdout)
-    ranking = result.summary["sensitivity"].get(result.metrics[0], []) if result.metrics else []
-    if ranking:
-        shown = ", ".join(f"{e['key']} ({e['rho']:+.2f})" if e["rho"] is not None else f"{e['key']} (const.)"
-                          for e in ranking)
-        say(f"sensitivity of {result.metrics[0]} (Spearman rho): {shown}", sys.stdout)
+    for outcome in (result.metrics[0], "pass") if result.metrics else ():
+        shown = ", ".join(f"{e['key']} {e['eta2']:.2f}" if e["eta2"] is not None else f"{e['key']} const."
+                          for e in result.summary["sensitivity"][outcome])
+        say(f"sensitivity of {outcome} (eta^2, noise floor {result.summary['eta2_noise_floor']:.2f}): {shown}",
+            sys.stdout)
     resumed = f"; {result.resumed} trials were already done (resumed)" if result.resumed else ""
     say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, trials/){resumed}", sys.stdout)
     failed = result.summary["failed_trials"]

@@ -5,9 +5,16 @@ trial counting as not passed; its 95 % interval is Wilson's score interval
 (``scipy.stats.binomtest(k, n).proportion_ci(method="wilson")``), which keeps its coverage near 0 and 1 where the
 normal approximation does not.
 
-Sensitivity: for each metric (and ``pass``) and each numeric sampled key, Spearman's rank correlation rho with
-its two-sided p-value (``scipy.stats.spearmanr``) over the trials that ran; keys are ranked by |rho|. A key or
-metric that does not vary has no rho (``null``), never NaN.
+Sensitivity, for each metric (and ``pass``) and each sampled key, over the trials that ran:
+
+- Spearman's rank correlation rho with its two-sided p-value (``scipy.stats.spearmanr``, numeric keys): the sign
+  and strength of a monotonic effect;
+- a first-order variance-based index from the same samples, the correlation ratio eta^2 = Var(E[Y | X]) / Var(Y)
+  with E[Y | X] the mean of Y in each of ``round(sqrt(n))`` equal-count bins of X (each value of a choice its own
+  bin): the fraction of the metric's variance the key explains alone, monotonic or not (a current from either
+  side). A key without effect still gets about (bins - 1) / (n - 1), the ``eta2_noise_floor`` of the summary.
+
+Keys are ranked by eta^2. A key or metric that does not vary has no rho or index (``null``), never NaN.
 """
 
 from __future__ import annotations
@@ -55,19 +62,42 @@ def spearman(x: Sequence[float], y: Sequence[float]) -> dict:
     return {"rho": float(result.statistic), "p_value": float(result.pvalue)}
 
 
+def bin_count(n: int) -> int:
+    """The bins of the correlation ratio for n samples: round(sqrt(n)), at least 2."""
+    return max(2, round(math.sqrt(n)))
+
+
+def correlation_ratio(x: Sequence, y: Sequence[float]) -> float | None:
+    """eta^2 = Var(E[Y | X]) / Var(Y), E[Y | X] per equal-count bin of X (per value if X is not numeric).
+
+    Returns:
+        eta^2 in [0, 1], or None if Y does not vary or there are fewer than 3 samples.
+    """
+    y = np.asarray(y, dtype=float)
+    if len(y) < 3 or np.ptp(y) == 0:
+        return None
+    if is_numeric(x):
+        order = np.argsort(np.asarray(x, dtype=float), kind="stable")
+        groups = [y[part] for part in np.array_split(order, bin_count(len(y)))]
+    else:
+        labels = [repr(v) for v in x]
+        groups = [y[[i for i, label in enumerate(labels) if label == value]] for value in dict.fromkeys(labels)]
+    between = sum(len(g) * (g.mean() - y.mean()) ** 2 for g in groups if len(g))
+    return float(between / ((y - y.mean()) ** 2).sum())
+
+
 def sensitivity(table: Sequence[dict], keys: Sequence[str], outcomes: Sequence[str]) -> dict:
-    """Per outcome: the numeric keys ranked by |rho| (``[{"key", "rho", "p_value"}, ...]``), over the trials that ran."""
+    """Per outcome: the keys ranked by eta^2 (``[{"key", "eta2", "rho", "p_value"}, ...]``), over the trials that ran."""
     ran = [row for row in table if not row["error"]]
     ranking = {}
     for outcome in outcomes:
         rows = [row for row in ran if isinstance(row[outcome], (bool, int, float)) and math.isfinite(row[outcome])]
         entries = []
         for key in keys:
-            xs = [row[key] for row in rows]
-            if not is_numeric(xs):
-                continue  # a choice of strings has no order
-            entries.append({"key": key, **spearman(xs, [float(row[outcome]) for row in rows])})
-        entries.sort(key=lambda e: -abs(e["rho"]) if e["rho"] is not None else 1.0)
+            xs, ys = [row[key] for row in rows], [float(row[outcome]) for row in rows]
+            rank = spearman(xs, ys) if is_numeric(xs) else {"rho": None, "p_value": None}  # strings: no order
+            entries.append({"key": key, "eta2": correlation_ratio(xs, ys), **rank})
+        entries.sort(key=lambda e: -e["eta2"] if e["eta2"] is not None else 1.0)
         ranking[outcome] = entries
     return ranking
 
@@ -82,8 +112,10 @@ def summarize(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str]
         "samples": {key: percentiles([row[key] for row in table]) for key in keys
                     if is_numeric([row[key] for row in table])},
         "sensitivity": sensitivity(table, keys, [*metrics, "pass"]),
-        "sensitivity_method": "Spearman's rank correlation rho with its two-sided p-value (scipy.stats.spearmanr)",
+        "sensitivity_method": "keys ranked by the correlation ratio eta2 (first-order variance-based index, binned); "
+                              "Spearman's rho with its two-sided p-value (scipy.stats.spearmanr)",
+        "eta2_noise_floor": (bin_count(len(table) - len(failed)) - 1) / max(len(table) - len(failed) - 1, 1),
     }
 
 
-__all__ = ["pass_rate", "percentiles", "sensitivity", "spearman", "summarize"]
+__all__ = ["correlation_ratio", "pass_rate", "percentiles", "sensitivity", "spearman", "summarize"]

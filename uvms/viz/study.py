@@ -90,29 +90,29 @@ def scatter(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str], 
 
 
 def ranking(sensitivity: dict, metrics: Sequence[str], head: str, path: Path) -> None:
-    """Spearman's |rho| of each key, one panel per outcome (metrics and pass), keys ranked; p-values on the bars."""
+    """The first-order index eta^2 of each key, one panel per outcome (metrics and pass), keys ranked; Spearman's
+    rho on the bars."""
     from matplotlib.figure import Figure
 
     outcomes = [m for m in [*metrics, "pass"] if sensitivity.get(m)]
     columns = min(3, max(len(outcomes), 1))
     lines = max(1, math.ceil(len(outcomes) / columns))
-    figure = Figure(figsize=(4.2 * columns, 2.6 * lines + 0.6))
+    figure = Figure(figsize=(4.4 * columns, 0.4 * len(sensitivity.get("pass", [])) * lines + 1.6 * lines + 0.6))
     axes = figure.subplots(lines, columns, squeeze=False).ravel()
     for axis, outcome in zip(axes, outcomes):
         entries = sensitivity[outcome][::-1]  # the strongest at the top
-        rhos = [e["rho"] if e["rho"] is not None else 0.0 for e in entries]
-        axis.barh(range(len(entries)), [abs(r) for r in rhos],
-                  color=["tab:green" if r >= 0 else "tab:purple" for r in rhos])
+        axis.barh(range(len(entries)), [e["eta2"] or 0.0 for e in entries], color="tab:blue")
         axis.set_yticks(range(len(entries)), [e["key"] for e in entries], fontsize=7)
         for y, entry in enumerate(entries):
-            text = "const." if entry["rho"] is None else f"rho {entry['rho']:+.2f}, p {entry['p_value']:.1g}"
-            axis.text(0.02, y, text, va="center", fontsize=6)
+            rho = "" if entry["rho"] is None else f"rho {entry['rho']:+.2f} (p {entry['p_value']:.1g})"
+            axis.text(0.98, y, "const." if entry["eta2"] is None else rho, va="center", ha="right", fontsize=6)
         axis.set_xlim(0, 1)
         axis.set_title(outcome.replace("_", " "), fontsize=8)
         axis.tick_params(axis="x", labelsize=7)
     for axis in axes[len(outcomes):]:
         axis.set_visible(False)
-    axes[0].set_xlabel("|Spearman rho| (green: rises with the key)", fontsize=7)
+    for axis in axes[(lines - 1) * columns:]:
+        axis.set_xlabel("eta^2: variance explained by the key alone", fontsize=7)
     figure.suptitle(head, fontsize=9)
     figure.tight_layout()
     outputs.save_figure(figure, path)
