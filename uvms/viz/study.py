@@ -24,11 +24,13 @@ def save_study_figures(table: Sequence[dict], keys: Sequence[str], metrics: Sequ
         keys: the sampled keys; metrics: the metric columns; summary: ``summary.json`` (pass rate, sensitivity).
 
     Returns:
-        The paths written.
+        The paths written (none if no trial ran: no metric).
     """
     rate = summary["pass_rate"]
     head = (f"{title}: {rate['trials']} trials, pass rate {rate['rate']:.0%} "
             f"({rate['confidence']:.0%} CI {rate['ci_low']:.0%}-{rate['ci_high']:.0%})")
+    if not metrics:  # every trial failed: nothing to draw
+        return []
     paths = [folder / "study_histograms.png", folder / "study_scatter.png", folder / "study_sensitivity.png"]
     histograms(table, metrics, head, paths[0])
     scatter(table, keys, metrics, head, paths[1])
