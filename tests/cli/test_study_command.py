@@ -38,3 +38,19 @@ def test_cli_study_errors_are_one_line(tmp_path, capsys):
                  "--seed", "1", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2", "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err.splitlines()
     assert err[-1].startswith("uvms: error: 3 of 4 trials failed (error column of ") and "ModelCheckError" in err[-1]
+
+
+def test_cli_tune_prints_the_best_set_list(tmp_path, capsys):
+    import pytest
+
+    pytest.importorskip("optuna")
+    out = tmp_path / "t"
+    assert main(["tune", SCENARIO, "--param", "solver.gain=0.2:2:log", "--trials", "3", "--set",
+                 "trajectory.duration=10", "--set", "trajectory.accel_time=2", "--out", str(out)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    best = json.loads((out / "best.json").read_text())
+    assert lines[0] == f"best        max_position_error = {best['value']:.6g} (trial {best['trial']} of 3)"
+    assert lines[1] == f"--set       solver.gain={best['parameters']['solver.gain']!r}"
+    assert 0.2 <= best["parameters"]["solver.gain"] <= 2
+    assert main(["tune", SCENARIO, "--param", "solver.gain=2:1", "--out", str(out)]) == 2
+    assert capsys.readouterr().err.startswith("uvms: error: --param expects KEY=LOW:HIGH")

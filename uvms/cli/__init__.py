@@ -1,7 +1,8 @@
 """The ``uvms`` command line. Every error prints one line on stderr and exits with 2.
 
 One module per command group: :mod:`.info` (``uvms info``), :mod:`.run` (``uvms run``, ``uvms sweep``,
-``--watch``), :mod:`.workspace` (``uvms workspace``), :mod:`.view` (``uvms view``); here the argument parser
+``--watch``), :mod:`.study` (``uvms study``, ``uvms tune``), :mod:`.workspace` (``uvms workspace``), :mod:`.view`
+(``uvms view``); here the argument parser
 and :func:`main`, the one place that turns an error into one line and an exit status.
 
 Every line :func:`main` prints goes through :func:`.terminal.say`: control characters and bidirectional overrides
@@ -25,7 +26,7 @@ from ..errors import UVMSError
 from .terminal import printable, say
 from .info import command_info, describe, format_limits, parse_assignments
 from .run import command_run, command_sweep, run_output_folder, scenario_file, watch_job
-from .study import command_study
+from .study import command_study, command_tune
 from .view import (
     command_view,
     frame_indices,
@@ -38,7 +39,7 @@ from .workspace import command_workspace, parse_figure_counts
 
 __all__ = [
     "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_info", "command_run",
-    "command_study", "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
+    "command_study", "command_sweep", "command_tune", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
     "parse_assignments", "parse_figure_counts", "printable", "read_result", "run_output_folder", "scenario_file",
     "view_configuration", "view_robot", "watch_job", "watch_viewer",
 ]
@@ -122,6 +123,29 @@ def add_study_parser(commands) -> None:
     study.set_defaults(handler=command_study)
 
 
+def add_tune_parser(commands) -> None:
+    """``uvms tune``: tune scenario keys with Optuna."""
+    tune = commands.add_parser("tune", help="tune scenario keys (gains...) with Optuna: best --set list, best.toml")
+    tune.add_argument("scenario", help="scenario file or shipped scenario name")
+    tune.add_argument("--param", action="append", metavar="KEY=LOW:HIGH[:log]",
+                      help="a tuned key and its range, e.g. solver.gain=0.5:4:log (repeatable)")
+    tune.add_argument("--objective", default="max_position_error",
+                      help="a metric to minimise (max_position_error, final_position_error, rms_position_error, "
+                           "max_orientation_error, max_vehicle_tilt, max_joint_limit_violation) or pass_rate to "
+                           "maximise (default max_position_error)")
+    tune.add_argument("--trials", type=int, default=20, help="Optuna trials (default 20)")
+    tune.add_argument("--seed", type=int, default=0, help="seed of the TPE sampler")
+    tune.add_argument("--sample", action="append", metavar="KEY=DIST",
+                      help="robust tuning: every trial is a study over these disturbances (as uvms study)")
+    tune.add_argument("--samples", type=int, default=8, help="trials of each study (with --sample; default 8)")
+    tune.add_argument("--study-seed", type=int, default=0, help="seed of each study: the same disturbances each trial")
+    tune.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key in every run (repeatable)")
+    add_parallel_options(tune)
+    tune.add_argument("--out", help="output folder (default: out/<scenario name>_tune), replaced whole")
+    add_package_path(tune)
+    tune.set_defaults(handler=command_tune)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``uvms``."""
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
@@ -158,6 +182,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_package_path(sweep)
     sweep.set_defaults(handler=command_sweep)
     add_study_parser(commands)
+    add_tune_parser(commands)
     workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
     workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
     workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")

@@ -40,3 +40,22 @@ def command_study(options: argparse.Namespace) -> int:
         raise UVMSError(f"{len(failed)} of {len(result.rows)} trials failed (error column of {result.files[0]}); "
                         f"trial {first['trial']}: {first['error']}")
     return 0
+
+
+def command_tune(options: argparse.Namespace) -> int:
+    """``uvms tune SCENARIO --param KEY=LOW:HIGH[:log] ... --objective METRIC|pass_rate --trials N``."""
+    from ..scenario.tune import tune  # optuna
+
+    result = tune(options.scenario, options.param or (), objective=options.objective, trials=options.trials,
+                  seed=options.seed, samples=options.sample or (), study_n=options.samples,
+                  study_seed=options.study_seed, jobs=options.jobs, backend=options.backend,
+                  scheduler=options.scheduler, out=options.out,
+                  overrides=[*(options.set or ()), *package_path_overrides(options)])
+    best = result.best
+    failed = sum(1 for row in result.rows if row["error"])
+    say(f"best        {best['objective']} = {best['value']:.6g} (trial {best['trial']} of {len(result.rows)}"
+        f"{f', {failed} failed' if failed else ''})", sys.stdout)
+    say(f"--set       {' '.join(best['set'])}", sys.stdout)
+    folder = result.files[0].parent
+    say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)}, trials/)", sys.stdout)
+    return 0

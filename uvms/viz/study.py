@@ -120,4 +120,40 @@ def ranking(sensitivity: dict, metrics: Sequence[str], head: str, path: Path) ->
     outputs.save_figure(figure, path)
 
 
-__all__ = ["save_study_figures"]
+def save_tune_history(rows: Sequence[dict], keys: Sequence[str], objective: str, direction: str, path: Path,
+                      title: str = "") -> None:
+    """The optimisation history of ``uvms tune``: the objective per trial and the best so far, then each
+    parameter per trial (the best trial circled)."""
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(7, 2.4 * (1 + len(keys)) + 0.4))
+    axes = figure.subplots(1 + len(keys), 1, sharex=True, squeeze=False)[:, 0]
+    trials = [row["trial"] for row in rows]
+    values = [row["value"] for row in rows]
+    best, running = [], math.nan
+    for value in values:
+        if math.isfinite(value) and (math.isnan(running) or (value > running if direction == "maximize"
+                                                                 else value < running)):
+            running = value
+        best.append(running)
+    axes[0].plot(trials, values, "o", color="tab:blue", markersize=4, label="trial")
+    axes[0].plot(trials, best, "-", color="tab:red", label=f"best so far ({direction})")
+    axes[0].set_ylabel(objective.replace("_", " "), fontsize=8)
+    axes[0].legend(fontsize=7)
+    finite = [row for row in rows if math.isfinite(row["value"])]
+    chosen = (max if direction == "maximize" else min)(finite, key=lambda row: row["value"]) if finite else None
+    for axis, key in zip(axes[1:], keys):
+        axis.plot(trials, [row[key] for row in rows], "o", color="tab:gray", markersize=4)
+        if chosen is not None:
+            axis.plot([chosen["trial"]], [chosen[key]], "o", markersize=10, markerfacecolor="none", color="tab:red")
+        axis.set_ylabel(key, fontsize=8)
+    for axis in axes:
+        axis.grid(True, alpha=0.3)
+        axis.tick_params(labelsize=7)
+    axes[-1].set_xlabel("trial")
+    figure.suptitle(f"{title}: tuning {len(rows)} trials (Optuna TPE)", fontsize=9)
+    figure.tight_layout()
+    outputs.save_figure(figure, path)
+
+
+__all__ = ["save_study_figures", "save_tune_history"]
