@@ -139,8 +139,8 @@ def tune(
         parameters: ``KEY=LOW:HIGH[:log]`` strings (:func:`parse_parameter`).
         objective: a metric of :data:`uvms.scenario.study.METRICS` (minimised) or ``"pass_rate"`` (maximised).
         trials: Optuna trials; seed: the TPE sampler's seed.
-        samples: ``KEY=DIST`` strings: every trial is a study of ``study_n`` trials (seed ``study_seed``, the same
-            disturbances for every trial); empty: one run per trial.
+        samples: ``KEY=DIST`` strings: every trial is a study of ``study_n`` trials (seed ``study_seed``, the
+            method of the scenario's ``[study]`` table: the same disturbances for every trial); empty: one run.
         jobs, backend, scheduler: where the study trials run (:mod:`uvms.scenario.parallel`).
         out: output folder (default ``out/<scenario name>_tune``), replaced whole.
         overrides: ``SECTION.KEY=VALUE`` strings applied to every run.
