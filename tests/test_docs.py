@@ -138,3 +138,10 @@ def test_docs_build_without_warnings(tmp_path):
     assert done.returncode == 0, done.stderr[-4000:]
     assert (tmp_path / "scenarios.html").read_text().count("<tr") > 100  # the generated scenario reference
     assert (tmp_path / "notebooks" / "hoang2011.html").exists()
+
+
+def test_every_shipped_scenario_is_in_the_docs_table_once():
+    """docs/scenarios.md's *Shipped scenarios* is the one list (scenarios/README.md points to it)."""
+    table = (DOCS / "scenarios.md").read_text().split("## Shipped scenarios", 1)[1]
+    listed = re.findall(r"`(\w+\.toml)`", table)
+    assert sorted(listed) == sorted(path.name for path in (ROOT / "scenarios").glob("*.toml"))

@@ -65,6 +65,13 @@ class JointNotFound(NameNotFound):
         super().__init__("joint", name, valid)
 
 
+class LinkNotFound(NameNotFound, ModelCheckError):
+    """A link name (of a collision pair, an SRDF entry) is not in the model; the message lists the close names."""
+
+    def __init__(self, name: str, valid: Iterable[str], where: str = "") -> None:
+        super().__init__("link", name, valid, where=where)
+
+
 class ConfigurationError(UVMSError):
     """A configuration, velocity or pose has the wrong size or non-finite entries."""
 
@@ -202,6 +209,10 @@ class ThrusterDefaultWarning(UVMSWarning):
 class ThrusterFileWarning(UVMSWarning):
     """The ``thrusters.yaml`` beside a model cannot be read: the propellers it names are not known when loading
     (``uvms.dynamics.thrusters_of`` raises the same error when the thrusters are used)."""
+
+
+class CollidingPairWarning(UVMSWarning):
+    """Pairs of links in collision at the reference configuration were disabled (no SRDF says which to check)."""
 
 
 class GeometryWarning(UVMSWarning):

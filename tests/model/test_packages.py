@@ -93,7 +93,7 @@ def test_a_model_in_a_workspace_finds_its_packages_by_walking_up(untrusted, rng)
 
 
 def test_the_viewer_finds_the_meshes_through_the_packages_the_robot_was_loaded_with():
-    from uvms.viz.viewer_geometry import resolved_urdf
+    from uvms.model.meshes import resolved_urdf
 
     xml, missing = resolved_urdf(uvms.load(VEHICLE, trusted=True))
     assert missing == [] and str(VEHICLE_PACKAGE / "meshes" / "hull.stl") in xml and "package://" not in xml

@@ -86,8 +86,10 @@ def test_a_composed_robot_is_shown_as_a_skeleton_joining_its_joints(rng):
 
 
 def test_mesh_uris_are_resolved_and_missing_meshes_left_out():
+    from uvms.model.meshes import resolved_urdf
+
     panda = uvms.load(uvms.model.example_robot_urdf("panda"), base="fixed")
-    xml, missing = viewer.resolved_urdf(panda)
+    xml, missing = resolved_urdf(panda)
     assert not missing and "package://" not in xml and xml.count(".dae") > 0
     with pytest.warns(uvms.errors.MissingMeshWarning):
         robot = uvms.load(MISSING_MESH, base="floating")

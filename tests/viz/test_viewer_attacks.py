@@ -18,7 +18,8 @@ from conftest import MISSING_MESH, shipped
 import uvms
 from uvms.cli import main
 from uvms.errors import ViewerInputError, WorkspaceInputError
-from uvms.viz import viewer, viewer_geometry
+from uvms.model import meshes
+from uvms.viz import viewer
 
 PORT = 18480  # first port tried by the live tests (the next free one is taken when busy)
 
@@ -76,7 +77,7 @@ def test_a_zae_zip_bomb_mesh_is_left_out_with_a_warning_before_it_is_inflated(tm
     robot = uvms.load(MESHED.format(mesh=bomb), base="floating")
     before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     started = time.perf_counter()
-    with pytest.warns(UserWarning, match=r"hull\.zae.*not shown: format '\.zae' is not loaded; the viewer loads "
+    with pytest.warns(UserWarning, match=r"hull\.zae.*not shown: format '\.zae' is not loaded; uvms loads "
                                          r"\.stl, \.dae, \.obj, \.ply"):
         visual, _ = viewer.geometry_models(robot)
     assert time.perf_counter() - started < 1.0
@@ -86,7 +87,7 @@ def test_a_zae_zip_bomb_mesh_is_left_out_with_a_warning_before_it_is_inflated(tm
 
 @pytest.mark.parametrize(("name", "rule"), [
     ("hull.dae", "a compressed archive"),  # a zip under a mesh's name: assimp and pycollada open it as a .zae
-    ("hull.STL", "65.0 MiB on disk; the viewer loads meshes of at most 64 MiB"),
+    ("hull.STL", "65.0 MiB on disk; uvms loads meshes of at most 64 MiB"),
     ("hull.glb", "format '.glb' is not loaded"),
 ])
 def test_archives_oversized_and_other_formats_are_refused_by_name_and_rule(tmp_path, name, rule):
@@ -100,16 +101,16 @@ def test_archives_oversized_and_other_formats_are_refused_by_name_and_rule(tmp_p
         mesh.write_bytes(b"glTF")
     robot = uvms.load(MESHED.format(mesh=mesh), base="floating")
     with pytest.warns(UserWarning, match=f"{name}.*not shown: {rule}"):
-        xml, missing = viewer.resolved_urdf(robot)
+        xml, missing = meshes.resolved_urdf(robot)
     assert name not in xml and not missing
-    assert viewer_geometry.mesh_refusal(mesh) is not None
+    assert meshes.mesh_refusal(mesh) is not None
 
 
 def test_a_plain_mesh_within_the_rules_is_still_shown(tmp_path):
     trimesh = pytest.importorskip("trimesh")
     mesh = tmp_path / "hull.stl"
     trimesh.creation.box(extents=(0.4, 0.3, 0.2)).export(mesh)
-    assert viewer_geometry.mesh_refusal(mesh) is None
+    assert meshes.mesh_refusal(mesh) is None
     robot = uvms.load(MESHED.format(mesh=mesh), base="floating")
     visual, _ = viewer.geometry_models(robot)
     assert len(visual.geometryObjects) == 2 and visual.geometryObjects[0].meshPath == str(mesh.resolve())
@@ -132,7 +133,7 @@ def test_uvms_view_says_which_mesh_it_left_out_while_the_viewer_runs(tmp_path, c
     assert main(["view", str(model), "--base", "floating", "--port", str(PORT)]) == 0
     warning = [line for line in said[0].err.splitlines() if "hull.zae" in line]
     assert len(warning) == 1 and warning[0].startswith("uvms: warning: ")
-    assert "format '.zae' is not loaded; the viewer loads .stl, .dae, .obj, .ply" in warning[0]
+    assert "format '.zae' is not loaded; uvms loads .stl, .dae, .obj, .ply" in warning[0]
     assert "viewer      http://127.0.0.1:" in said[0].out
 
 

@@ -5,7 +5,9 @@
 ``resources`` (shipped models, example-robot-data, ``package://``, bounded reading of files), ``includes``
 (a xacro's static includes), ``sandbox`` (untrusted xacro in a kernel-confined child process), ``base_rule``
 (which root is the vehicle), ``compose`` (``mount_arm``), ``point_masses`` (links with a mass and no inertia),
-``joint_classes`` (arm joints, mimics, and the propellers, sensors and zero-range joints uvms freezes).
+``joint_classes`` (arm joints, mimics, and the propellers, sensors and zero-range joints uvms freezes), ``meshes``
+(mesh URIs resolved, mesh files refused by rule), ``collision`` (the ``<collision>`` shapes and the pairs checked),
+``distances`` (signed distances of pairs and their Jacobian).
 """
 
 from .compose import mount_arm

@@ -32,6 +32,7 @@ from ..solvers import SOLVERS, Solver
 from ..solvers.saturation import speed_maximum
 from ..robot.configuration import Configuration
 from ..tasks.objectives import Inequality, Objective, PlaneClearance, Manipulability, VelocityLimit, check_table
+from ..tasks.objectives.collision import NearestPairs, Obstacle, SelfCollision
 from ..tasks.objectives import inequalities_from_table
 
 #: An objective whose value is outside its valid set by more than this [its unit] is reported on the terminal:
@@ -126,7 +127,14 @@ class ObjectiveRecorder:
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
         state = Configuration(self.robot, q, check=False)
-        values = [objective.value(state) for objective in self.objectives]
+        values, pairs = [], []
+        for objective in self.objectives:
+            if isinstance(objective, NearestPairs):  # which pair each row is, for the metrics and the replay
+                chosen, found = objective.nearest(state)
+                values.append(found.distance)
+                pairs.append(chosen)
+            else:
+                values.append(objective.value(state))
         activations = [objective.activation(value) for objective, value in zip(self.objectives, values)]
         reported = {status.name: status.active for status in getattr(getattr(sample, "info", None), "objectives", ())}
         active = [reported.get(objective.name, bool(np.any(activation > 0)))
@@ -136,6 +144,7 @@ class ObjectiveRecorder:
         return {"objective_value": np.concatenate(values) if values else np.zeros(0),
                 "objective_activation": np.concatenate(activations) if activations else np.zeros(0),
                 "objective_active": np.array(active, dtype=bool),
+                "objective_pair": np.concatenate(pairs).astype(int) if pairs else np.zeros(0, dtype=int),
                 "speed_ratio": float(np.max(np.abs(v[limited]) / self.maximum[limited], initial=0.0))}
 
 
@@ -153,13 +162,18 @@ def inequality_metrics(inequalities: ScenarioInequalities, series: dict[str, np.
         (when any); ``max_joint_speed_ratio`` max_i |qdot_i| / max_i (when speed limits are given); and
         ``inequalities``: per objective its ``type``, ``level``, ``active_fraction`` (of the rows),
         ``max_activation``, ``max_violation`` (how far outside its valid set [its unit], 0 inside) and
-        ``value_range`` [min, max] of its value over the run and its rows.
+        ``value_range`` [min, max] of its value over the run and its rows; a collision objective also its
+        ``closest`` pair ({"pair", "distance" [m], "t" [s]}) and ``pairs_active``: per pair of links with an
+        active row, the fraction of the rows it was active ("link1 / link2": fraction, largest first). With
+        collision objectives ``min_self_distance`` and ``min_obstacle_distance`` [m] over them.
     """
     objectives = inequalities.objectives
     values, activations = series["objective_value"], series["objective_activation"]
     metrics: dict = {"inequalities_enforced": inequalities.enforced}
     per_objective, start = {}, 0
     clearances, manipulabilities = [], []
+    distances: dict[type, list[float]] = {SelfCollision: [], Obstacle: []}
+    pair_start = 0
     for index, objective in enumerate(objectives):
         rows = slice(start, start + objective.dim)
         start += objective.dim
@@ -173,6 +187,12 @@ def inequality_metrics(inequalities: ScenarioInequalities, series: dict[str, np.
             "max_violation": float(max(outside.max(initial=0.0), 0.0)),
             "value_range": [float(value.min()), float(value.max())],
         }
+        if isinstance(objective, NearestPairs):
+            pairs = series["objective_pair"][:, pair_start: pair_start + objective.dim]
+            pair_start += objective.dim
+            per_objective[objective.name].update(pair_metrics(objective, series["t"], value, activations[:, rows],
+                                                              pairs))
+            distances[type(objective)].append(float(value.min()))
         if isinstance(objective, PlaneClearance):
             clearances.append(float(value.min()))
         if isinstance(objective, Manipulability):
@@ -184,10 +204,31 @@ def inequality_metrics(inequalities: ScenarioInequalities, series: dict[str, np.
         metrics["min_clearance"] = min(clearances)
     if manipulabilities:
         metrics["min_manipulability"] = min(manipulabilities)
+    for kind, key in ((SelfCollision, "min_self_distance"), (Obstacle, "min_obstacle_distance")):
+        if distances[kind]:
+            metrics[key] = min(distances[kind])
     if inequalities.speed_limits:
         metrics["max_joint_speed_ratio"] = float(series["speed_ratio"].max())
     metrics["inequalities"] = per_objective
     return metrics
+
+
+def pair_metrics(objective: NearestPairs, t: np.ndarray, value: np.ndarray, activation: np.ndarray,
+                 pairs: np.ndarray) -> dict:
+    """The closest pair of a collision objective over a run and the fraction of rows each pair was active.
+
+    Args:
+        objective: the objective (its ``links`` name the pairs); t: (N,) [s].
+        value, activation, pairs: (N, dim) its rows' distances [m], activations and pair indices.
+    """
+    row, column = np.unravel_index(np.argmin(value), value.shape)
+    names = [f"{first} / {second}" for first, second in objective.links]
+    counts = np.zeros(len(names))
+    for index in range(len(names)):  # a pair holds at most one row per step
+        counts[index] = np.count_nonzero(np.any((pairs == index) & (activation > 0), axis=1))
+    active = {names[k]: float(counts[k] / len(t)) for k in np.argsort(-counts, kind="stable") if counts[k] > 0}
+    return {"closest": {"pair": names[pairs[row, column]], "distance": float(value[row, column]), "t": float(t[row])},
+            "pairs_active": active}
 
 
 def inequality_warnings(metrics: dict) -> list[str]:

@@ -72,3 +72,25 @@ def scenario_folders(names: list, scenario_file: str | os.PathLike, key: str) ->
         raise ScenarioError(f"{scenario_file}: {key} must be a list of folders (strings, relative to the scenario "
                             f"file's folder or absolute), got {names!r}")
     return [str((Path(scenario_file).parent / name).resolve()) for name in names]
+
+
+def scenario_file(name: object, scenario_file: str | os.PathLike, key: str) -> str:
+    """A file a scenario names (an obstacle's mesh, an SRDF), absolute: a relative path inside the scenario file's
+    folder. Confined to that folder (``..`` or a symbolic link leading out of it finds nothing), as a ``package://``
+    URI stays inside its package (:func:`uvms.model.resources.resolve_uri`): a scenario from someone else reads only
+    the files that came with it.
+
+    Raises:
+        ScenarioError: not a plain relative path, a path leading out of the folder, or no such file.
+    """
+    folder = Path(scenario_file).resolve().parent
+    if not isinstance(name, str) or not name or Path(name).is_absolute():
+        raise ScenarioError(f"{scenario_file}: {key} must be a file path relative to the scenario's folder "
+                            f"({folder}), got {name!r}")
+    path = (folder / name).resolve()
+    if not path.is_relative_to(folder):
+        raise ScenarioError(f"{scenario_file}: {key} = {name!r} leads out of the scenario's folder ({folder}); "
+                            f"put the file beside the scenario or below it")
+    if not path.is_file():
+        raise ScenarioError(f"{scenario_file}: {key} = {name!r} is not a file in the scenario's folder ({folder})")
+    return str(path)

@@ -25,8 +25,9 @@ from ..errors import ScenarioError
 from ..io import outputs
 from ..model.resources import MAX_TOML_BYTES, read_text
 from ..solvers import SOLVERS
+from ..tasks.objectives import FILE_KEYS
 from .inequalities import check_tables
-from .resources import resolve_scenario_path, scenario_folders
+from .resources import resolve_scenario_path, scenario_file, scenario_folders
 
 NUMBER = (int, float)
 #: Defaults of [outputs] position_tolerance [m] and orientation_tolerance [rad]: a run whose task error exceeds
@@ -37,9 +38,8 @@ DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
 #: free-floating dynamics of uvms.dynamics.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
-#: solver.method values: the names of the solvers registered in uvms.solvers.SOLVERS (CLIK, classic/robust task
-#: priority, santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based task
-#: priority (iCAT) and the QP hierarchy).
+#: solver.method values: the solvers registered in uvms.solvers.SOLVERS (CLIK, classic/robust task priority,
+#: santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based (iCAT) and the QP hierarchy).
 SOLVER_METHODS = SOLVERS.keys()  # a live view: a method registered later is valid
 NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
@@ -49,10 +49,9 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
 NAME_RULE = ("a plain name: letters, digits, '.', '_' and '-', starting with a letter or a digit, at most 128 "
              "characters, no '/' and no '..'")
 ANIMATION_SUFFIXES = (".gif", ".mp4")
-#: The largest magnitude of a number in a scenario (SI units; model.args excepted, the model checks them). No
-#: gain [1/s], damping, weight, length [m], speed [m/s], time [s] or angle [rad] of a vehicle-manipulator run
-#: comes near it, and beyond it products such as damping**2, gain * dt or weight ratios overflow or swamp the
-#: double precision of the solvers.
+#: The largest magnitude of a number in a scenario (SI units; model.args excepted, the model checks them). No gain
+#: [1/s], damping, weight, length [m], speed [m/s], time [s] or angle [rad] of a vehicle-manipulator run comes near it,
+#: and beyond it products such as damping**2, gain * dt or weight ratios overflow or swamp the solvers' doubles.
 MAX_MAGNITUDE = 1e6
 #: Keys that also have a sign: key -> (lowest value, whether the lowest value itself is excluded, meaning).
 LOWER_BOUNDS: dict[str, tuple[float, bool, str]] = {
@@ -172,10 +171,8 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "orientation_tolerance": (NUMBER, DEFAULT_ORIENTATION_TOLERANCE, None),
         "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.scenario.rosbag
     },
-    "study": {  # uvms study (uvms.scenario.study): Monte Carlo trials of this scenario; "KEY=DIST" strings
-        "samples": (list, [], None), "n": (int, 0, None), "seed": (int, 0, None),
-        "method": (str, "random", ("random", "lhs", "sobol")), "set": (list, [], None),
-    },
+    "study": {"samples": (list, [], None), "n": (int, 0, None), "seed": (int, 0, None), "set": (list, [], None),
+              "method": (str, "random", ("random", "lhs", "sobol"))},  # uvms study: Monte Carlo trials (scenario.study)
 }
 #: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.control.sequence.
 PHASE_SCHEMA: dict[str, tuple] = {
@@ -246,6 +243,9 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     if not model_path.is_absolute() and (path.parent / model_path).exists():
         scenario["model"]["path"] = str((path.parent / model_path).resolve())
     scenario["model"]["package_path"] = scenario_folders(scenario["model"]["package_path"], path, "model.package_path")
+    for index, table in enumerate(scenario["inequalities"]):
+        for key in set(FILE_KEYS.get(table["type"], ())) & set(table):
+            table[key] = scenario_file(table[key], path, f"inequalities[{index}].{key}")
     scenario["scenario"]["name"] = scenario["scenario"]["name"] or outputs.plain_file_name(path.stem, "scenario")
     return scenario
 

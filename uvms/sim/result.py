@@ -30,7 +30,7 @@ from .series import (ACTUATION_FIELDS, PLANT_FIELDS, TRACKING_FIELDS, ActuationS
 #: The time series of a task, in the order of ``trajectory.npz``.
 SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",
           "position_error", "orientation_error", "sigma_min", "damping", "limits_active", "objective_value",
-          "objective_activation", "objective_active", "speed_ratio")
+          "objective_activation", "objective_active", "objective_pair", "speed_ratio")
 #: The series of a tracking-controlled plant run, in the order of ``plant.npz``.
 PLANT_SERIES = ("t", "q", "v", "command", "rates", "joint_torque", "kinetic_energy", "potential_energy", "momentum",
                 "ee_position", "desired_position", "ee_velocity", "desired_velocity", "position_error", "sigma_min",
@@ -51,6 +51,8 @@ class SimulationResult:
         sigma_min, damping: (N,) of the inverted Jacobian; limits_active: (N,) joints held at a limit.
         objective_value, objective_activation: (N, k) the rows of a scenario's inequality objectives (their
             values in their units, activations in [0, 1]); objective_active: (N, n_objectives) bool;
+            objective_pair: (N, k_pairs) int, per row of a collision objective the index of its pair of shapes
+            (in the objective's ``links``), the collision objectives' rows in order;
             speed_ratio: (N,) max_i ``|v_i|`` / max_i over the speed limits (:mod:`uvms.scenario.inequalities`).
         robot: the model the run used (not saved); axes: the task axes; integrator: "euler" or "rk4";
             dt, wall_time: [s].
@@ -75,6 +77,7 @@ class SimulationResult:
     objective_value: np.ndarray | None = None
     objective_activation: np.ndarray | None = None
     objective_active: np.ndarray | None = None
+    objective_pair: np.ndarray | None = None
     speed_ratio: np.ndarray | None = None
     axes: tuple[str, ...] = ()
     integrator: str = "rk4"

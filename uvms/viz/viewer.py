@@ -29,13 +29,13 @@ from ..errors import UVMSError, ViewerInputError, ViewerUnavailable
 from ..robot.robot import Robot
 from ..numerics.validate import finite_array, time_vector
 from .drawing import as_configurations
-from .viewer_geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, resolved_urdf, skeleton_geometry
+from .viewer_geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, skeleton_geometry
 from .viewer_gui import Playback, TeachControls, guarded_servers, request_refusal
 from .viewer_scene import (EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box,
                            framing)
 
 __all__ = ["EE_COLOUR", "SKELETON_COLOUR", "Viewer", "ViewerUnavailable", "check_port", "geometry_models", "play",
-           "request_refusal", "require_viser", "resolved_urdf", "skeleton_geometry", "view"]
+           "request_refusal", "require_viser", "skeleton_geometry", "view"]
 
 
 #: The viewer binds to this address only: never to all interfaces.

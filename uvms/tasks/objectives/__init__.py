@@ -5,6 +5,8 @@
 * :class:`PlaneClearance` — a frame or the vehicle at least ``min`` from a plane (seabed, wall);
 * :class:`Manipulability` — the arm's manipulability at a frame above ``min``;
 * :class:`FrameBox` — a frame inside a box;
+* :class:`SelfCollision` — the robot's ``<collision>`` shapes at least ``min`` apart (the nearest pairs);
+* :class:`Obstacle` — the robot's shapes at least ``min`` from a box, sphere, cylinder, plane or mesh in the world;
 * :class:`JointVelocityLimits`, :class:`VehicleVelocityLimits` — speed limits, bounds of the solvers.
 
 :func:`inequalities_from_table` builds them from plain parameters (a scenario's ``[[inequalities]]`` table),
@@ -19,6 +21,7 @@ from collections.abc import Callable, Mapping
 from ...errors import ObjectiveError, ObjectiveNameNotFound
 from ...robot.robot import Robot
 from .base import ACTIVATION_SHAPES, Inequality, InequalityRows, bell
+from .collision import Obstacle, SelfCollision
 from .frames import FrameBox, PlaneClearance, VehicleAttitude
 from .joints import JointLimits
 from .manipulability import Manipulability
@@ -32,11 +35,16 @@ INEQUALITY_TYPES: dict[str, Callable[..., object]] = {
     "plane_clearance": PlaneClearance,
     "manipulability": Manipulability,
     "frame_box": FrameBox,
+    "self_collision": SelfCollision,
+    "obstacle": Obstacle,
 }
 
 Objective = Inequality | VelocityLimit
 #: Constructor parameters that take Python objects, not plain data: not keys of a table.
 NOT_TABLE_KEYS = ("limit",)
+#: Table keys that name a file: a scenario resolves them inside its own folder
+#: (:func:`uvms.scenario.resources.scenario_file`).
+FILE_KEYS = {"obstacle": ("mesh",), "self_collision": ("srdf",)}
 
 
 def table_keys(type_name: str) -> tuple[list[str], list[str]]:
@@ -90,7 +98,7 @@ def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[O
 
 
 __all__ = [
-    "ACTIVATION_SHAPES", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
-    "JointVelocityLimits", "Manipulability", "Objective", "PlaneClearance", "VehicleAttitude",
+    "ACTIVATION_SHAPES", "FILE_KEYS", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
+    "JointVelocityLimits", "Manipulability", "Objective", "Obstacle", "PlaneClearance", "SelfCollision", "VehicleAttitude",
     "VehicleVelocityLimits", "VelocityLimit", "bell", "check_table", "inequalities_from_table", "table_keys", "velocity_limits",
 ]

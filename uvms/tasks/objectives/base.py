@@ -174,11 +174,15 @@ class Inequality(ABC):
                                   reference)
         return activation, reference
 
+    def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
+        """(x(q) (k,), J (k, nv)) at ``state``; an objective whose two share one computation gives both at once."""
+        return self.value(state), self.jacobian(state)
+
     def rows(self, state: Configuration) -> InequalityRows:
         """Everything a solver reads, at ``state``."""
-        value = self.value(state)
+        value, jacobian = self.value_jacobian(state)
         activation, reference = self._activation_reference(value)
-        return InequalityRows(name=self.name, value=value, jacobian=self.jacobian(state), lower=self.lower,
+        return InequalityRows(name=self.name, value=value, jacobian=jacobian, lower=self.lower,
                               upper=self.upper, activation=activation, reference=reference, gain=self.gain)
 
     def __repr__(self) -> str:
