@@ -102,6 +102,10 @@ class SweepError(UVMSError):
     """A sweep is invalid (grid syntax, unknown key, backend) or cannot start."""
 
 
+class StudyError(UVMSError):
+    """A Monte Carlo study or a tuning is invalid (distribution, key, method, backend) or its folder holds another."""
+
+
 class RunFolderError(UVMSError):
     """An output folder cannot be replaced: unwritable, a file, or a folder that uvms did not write."""
 

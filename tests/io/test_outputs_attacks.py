@@ -242,7 +242,7 @@ def test_sweep_workers_are_capped_by_points_and_cores(tmp_path, monkeypatch):
     monkeypatch.setattr(joblib, "Parallel", recording)
     result = sweep(SANTOS, ["solver.gain=[0.5, 1.0]"], jobs=16, out=tmp_path / "s", progress=False)
     assert not result.failed and asked == [min(2, os.cpu_count() or 1)]
-    from uvms.scenario.sweep import worker_count
+    from uvms.scenario.parallel import worker_count
 
     assert worker_count(16, 2) == min(2, os.cpu_count() or 1) and worker_count(-1, 10**4) == (os.cpu_count() or 1)
     assert worker_count(1, 5) == 1 and worker_count(16, 2, remote=True) == 2 and worker_count(-1, 2, remote=True) == -1

@@ -17,7 +17,8 @@ from conftest import SCENARIOS
 from uvms import UVMSError
 from uvms.cli import main
 from uvms.scenario import ScenarioError
-from uvms.scenario.sweep import MAX_POINTS, METRICS, SweepError, dask_client, parse_grid, sweep
+from uvms.scenario.parallel import dask_client
+from uvms.scenario.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
 
 SCENARIO = SCENARIOS / "santos2006_task_priority.toml"  # 100 Euler steps
 GRID = ["solver.gain=0.5:1.5:2", "model.args.l1=1.5:2.0:2"]  # l1 moves the start; the gain the tracking
@@ -169,7 +170,7 @@ def test_the_local_dask_cluster_is_tls_only_and_opens_no_http_port():
     from distributed.security import Security
 
     before = listening_ports()
-    with dask_client(None, 2) as client:
+    with dask_client(None, 2, SweepError) as client:
         address = client.cluster.scheduler_address
         assert address.startswith("tls://127.0.0.1:")
         assert client.submit(os.getpid).result(timeout=30) != os.getpid()  # the cluster works for its client
@@ -203,5 +204,5 @@ def test_the_local_dask_cluster_is_tls_only_and_opens_no_http_port():
 def test_a_tls_scheduler_without_credentials_says_where_they_come_from():
     pytest.importorskip("dask.distributed")
     with pytest.raises(SweepError, match="tls:// scheduler needs credentials .*DASK_DISTRIBUTED__COMM__TLS__CA_FILE"):
-        with dask_client("tls://127.0.0.1:9", 1):
+        with dask_client("tls://127.0.0.1:9", 1, SweepError):
             pass

@@ -1,8 +1,8 @@
 """The ``uvms`` command line. Every error prints one line on stderr and exits with 2.
 
 One module per command group: :mod:`.info` (``uvms info``), :mod:`.run` (``uvms run``, ``uvms sweep``,
-``--watch``), :mod:`.workspace` (``uvms workspace``), :mod:`.view` (``uvms view``), :mod:`.identify`
-(``uvms identify``); here the argument parser
+``--watch``), :mod:`.study` (``uvms study``, ``uvms tune``), :mod:`.workspace` (``uvms workspace``), :mod:`.view`
+(``uvms view``), :mod:`.identify` (``uvms identify``); here the argument parser
 and :func:`main`, the one place that turns an error into one line and an exit status.
 
 Every line :func:`main` prints goes through :func:`.terminal.say`: control characters and bidirectional overrides
@@ -27,6 +27,7 @@ from .terminal import printable, say
 from .identify import add_identify_parser, command_identify
 from .info import command_info, describe, format_limits, parse_assignments
 from .run import command_run, command_sweep, run_output_folder, scenario_file, watch_job
+from .study import command_study, command_tune
 from .view import (
     command_view,
     frame_indices,
@@ -39,8 +40,8 @@ from .workspace import command_workspace, parse_figure_counts
 
 __all__ = [
     "EXIT_INTERRUPTED", "EXIT_USAGE", "OneLineParser", "build_parser", "command_identify", "command_info",
-    "command_run",
-    "command_sweep", "command_view", "command_workspace", "describe", "format_limits", "frame_indices", "main",
+    "command_run", "command_study", "command_sweep", "command_tune", "command_view", "command_workspace", "describe",
+    "format_limits", "frame_indices", "main",
     "parse_assignments", "parse_figure_counts", "printable", "read_result", "run_output_folder", "scenario_file",
     "view_configuration", "view_robot", "watch_job", "watch_viewer",
 ]
@@ -91,6 +92,62 @@ def add_package_path(parser: argparse.ArgumentParser) -> None:
                              "searched for package.xml); repeatable, before ROS_PACKAGE_PATH and the model's workspace")
 
 
+def add_parallel_options(parser: argparse.ArgumentParser) -> None:
+    """``--jobs``, ``--backend`` and ``--scheduler`` of ``uvms sweep`` and ``uvms study``."""
+    parser.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
+    parser.add_argument("--backend", choices=["loky", "dask"], default="loky",
+                        help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
+    parser.add_argument("--scheduler", metavar="ADDRESS",
+                        help="Dask scheduler, e.g. tls://10.0.0.5:8786, with TLS credentials from Dask's config "
+                             "distributed.comm.tls.* (env DASK_DISTRIBUTED__COMM__TLS__CA_FILE, ..._CLIENT__CERT, "
+                             "..._CLIENT__KEY); a tcp:// one works but anyone reaching it can run code on its workers "
+                             "(default: a local TLS cluster of --jobs workers, no dashboard)")
+
+
+def add_study_parser(commands) -> None:
+    """``uvms study``: a Monte Carlo study of a scenario."""
+    study = commands.add_parser("study", help="Monte Carlo study of a scenario: study.csv, summary.json, figures")
+    study.add_argument("scenario", help="scenario file or shipped scenario name (its [study] table gives defaults)")
+    study.add_argument("--sample", action="append", metavar="KEY=DIST",
+                       help="sample a scenario key: normal(mu, sigma), normal(mu, sigma, low, high), uniform(a, b), "
+                            "loguniform(a, b), choice([...]); KEY[i] samples one element of a list key, e.g. "
+                            "plant.current[1]=uniform(-0.3, 0.3) (repeatable; default: [study] samples)")
+    study.add_argument("--samples", type=int, metavar="N", help="number of trials (default: [study] n)")
+    study.add_argument("--seed", type=int, help="the study's seed (default: [study] seed, else 0)")
+    study.add_argument("--method", choices=["random", "lhs", "sobol"],
+                       help="random (per-trial seeds), Latin hypercube or scrambled Sobol (default: [study] method)")
+    study.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key in every trial (repeatable)")
+    add_parallel_options(study)
+    study.add_argument("--out", help="study folder (default: out/<scenario name>_study); the same study there is "
+                                     "resumed (finished trials skipped), another is refused")
+    study.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_package_path(study)
+    study.set_defaults(handler=command_study)
+
+
+def add_tune_parser(commands) -> None:
+    """``uvms tune``: tune scenario keys with Optuna."""
+    tune = commands.add_parser("tune", help="tune scenario keys (gains...) with Optuna: best --set list, best.toml")
+    tune.add_argument("scenario", help="scenario file or shipped scenario name")
+    tune.add_argument("--param", action="append", metavar="KEY=LOW:HIGH[:log]",
+                      help="a tuned key and its range, e.g. solver.gain=0.5:4:log (repeatable)")
+    tune.add_argument("--objective", default="max_position_error",
+                      help="a metric to minimise (max_position_error, final_position_error, rms_position_error, "
+                           "max_orientation_error, max_vehicle_tilt, max_joint_limit_violation) or pass_rate to "
+                           "maximise (default max_position_error)")
+    tune.add_argument("--trials", type=int, default=20, help="Optuna trials (default 20)")
+    tune.add_argument("--seed", type=int, default=0, help="seed of the TPE sampler")
+    tune.add_argument("--sample", action="append", metavar="KEY=DIST",
+                      help="robust tuning: every trial is a study over these disturbances (as uvms study)")
+    tune.add_argument("--samples", type=int, default=8, help="trials of each study (with --sample; default 8)")
+    tune.add_argument("--study-seed", type=int, default=0, help="seed of each study: the same disturbances each trial")
+    tune.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key in every run (repeatable)")
+    add_parallel_options(tune)
+    tune.add_argument("--out", help="output folder (default: out/<scenario name>_tune), replaced whole")
+    add_package_path(tune)
+    tune.set_defaults(handler=command_tune)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``uvms``."""
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
@@ -121,18 +178,13 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--grid", action="append", metavar="KEY=START:STOP:N",
                        help="sweep a scenario key over N values from START to STOP, or KEY=[a,b,...], e.g. "
                             "model.args.l1=1.5:2.5:5 (repeatable: the grid is the product)")
-    sweep.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
-    sweep.add_argument("--backend", choices=["loky", "dask"], default="loky",
-                       help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
-    sweep.add_argument("--scheduler", metavar="ADDRESS",
-                       help="Dask scheduler, e.g. tls://10.0.0.5:8786, with TLS credentials from Dask's config "
-                            "distributed.comm.tls.* (env DASK_DISTRIBUTED__COMM__TLS__CA_FILE, ..._CLIENT__CERT, "
-                            "..._CLIENT__KEY); a tcp:// one works but anyone reaching it can run code on its workers "
-                            "(default: a local TLS cluster of --jobs workers, no dashboard)")
+    add_parallel_options(sweep)
     sweep.add_argument("--out", help="output folder (default: out/<scenario name>_sweep)")
     sweep.add_argument("--quiet", action="store_true", help="no progress bar")
     add_package_path(sweep)
     sweep.set_defaults(handler=command_sweep)
+    add_study_parser(commands)
+    add_tune_parser(commands)
     workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
     workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
     workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")

@@ -263,7 +263,7 @@ def _os_failure(exc: OSError, parent: Path, what: str) -> RunFolderError:
     return RunFolderError(f"cannot write to {str(parent)!r}: {exc.strerror or exc}")
 
 
-def _lock(lock_path: Path, shown: str) -> Callable[[], None]:
+def hold_lock(lock_path: Path, shown: str) -> Callable[[], None]:
     """Take the lock of a run folder (never through a symbolic link); return its release.
 
     Raises:
@@ -349,7 +349,7 @@ def run_folder(path: str | os.PathLike, *, lock: bool = True, inputs: Iterable[s
     try:
         if lock:
             parent.mkdir(parents=True, exist_ok=True)
-            release = _lock(parent / f".{name}{LOCK_SUFFIX}", shown)
+            release = hold_lock(parent / f".{name}{LOCK_SUFFIX}", shown)
         elif not parent.is_dir():
             raise RunFolderError(f"cannot write {shown!r}: its parent folder {str(parent)!r} does not exist (any more)")
     except OSError as exc:

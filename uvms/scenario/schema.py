@@ -38,9 +38,8 @@ DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
 #: free-floating dynamics of uvms.dynamics.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
-#: solver.method values: the names of the solvers registered in uvms.solvers.SOLVERS (CLIK, classic/robust task
-#: priority, santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based task
-#: priority (iCAT) and the QP hierarchy).
+#: solver.method values: the solvers registered in uvms.solvers.SOLVERS (CLIK, classic/robust task priority,
+#: santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based (iCAT) and the QP hierarchy).
 SOLVER_METHODS = SOLVERS.keys()  # a live view: a method registered later is valid
 NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
@@ -50,10 +49,9 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
 NAME_RULE = ("a plain name: letters, digits, '.', '_' and '-', starting with a letter or a digit, at most 128 "
              "characters, no '/' and no '..'")
 ANIMATION_SUFFIXES = (".gif", ".mp4")
-#: The largest magnitude of a number in a scenario (SI units; model.args excepted, the model checks them). No
-#: gain [1/s], damping, weight, length [m], speed [m/s], time [s] or angle [rad] of a vehicle-manipulator run
-#: comes near it, and beyond it products such as damping**2, gain * dt or weight ratios overflow or swamp the
-#: double precision of the solvers.
+#: The largest magnitude of a number in a scenario (SI units; model.args excepted, the model checks them). No gain
+#: [1/s], damping, weight, length [m], speed [m/s], time [s] or angle [rad] of a vehicle-manipulator run comes near it,
+#: and beyond it products such as damping**2, gain * dt or weight ratios overflow or swamp the solvers' doubles.
 MAX_MAGNITUDE = 1e6
 #: Keys that also have a sign: key -> (lowest value, whether the lowest value itself is excluded, meaning).
 LOWER_BOUNDS: dict[str, tuple[float, bool, str]] = {
@@ -173,6 +171,8 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "orientation_tolerance": (NUMBER, DEFAULT_ORIENTATION_TOLERANCE, None),
         "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.scenario.rosbag
     },
+    "study": {"samples": (list, [], None), "n": (int, 0, None), "seed": (int, 0, None), "set": (list, [], None),
+              "method": (str, "random", ("random", "lhs", "sobol"))},  # uvms study: Monte Carlo trials (scenario.study)
 }
 #: keys of one [[phases]] table (a sequence scenario: several frames, no [trajectory]); see uvms.control.sequence.
 PHASE_SCHEMA: dict[str, tuple] = {

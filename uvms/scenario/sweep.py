@@ -2,25 +2,19 @@
 
 Every grid point is one :func:`uvms.scenario.run_scenario` with ``--set`` style overrides (any scenario key, xacro
 args included), executed through joblib: local processes (loky) by default, or the workers of a Dask
-cluster (``backend="dask"``, optional extra ``pip install uvms[dask]``). The table is sorted by point
-index, so it is the same whatever the backend and the number of jobs.
-
-A Dask scheduler runs whatever its clients submit. The local cluster speaks TLS with credentials made for it
-(client certificates required: another user of the machine cannot submit to it) and opens no HTTP port (no
-dashboard). A remote ``scheduler`` should be ``tls://``, with credentials from Dask's configuration
-``distributed.comm.tls.*`` (:data:`TLS_HINT`); a ``tcp://`` one works as in Dask, with a warning.
+cluster (``backend="dask"``, optional extra ``pip install uvms[dask]``), by :mod:`uvms.scenario.parallel`
+(the local TLS cluster, remote schedulers, worker counts). The table is sorted by point index, so it is the same
+whatever the backend and the number of jobs.
 """
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import io
 import itertools
 import json
 import math
 import os
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -29,23 +23,20 @@ from typing import Any
 import numpy as np
 
 from ..io import outputs
-from ..errors import InsecureSchedulerWarning, SweepError
+from ..errors import SweepError
+from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
 from .record import scenario_model
 from .resources import resolve_scenario_path
 from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
 METRICS = ("max_position_error", "final_position_error", "arm_travel", "vehicle_travel", "wall_time")
-BACKENDS = ("loky", "dask")
 #: The most points of one sweep. Every point is checked before any worker starts (about 0.2 ms a point, a
 #: progress bar past one second) and is a whole scenario run (seconds to minutes) with its own folder; a larger
 #: study is several sweeps, e.g. one per value of the first key.
 MAX_POINTS = 10_000
 #: A text cell starting with one of these is a formula to a spreadsheet: ``sweep.csv`` prefixes it with ``'``.
 FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
-#: Where the credentials of a remote tls:// scheduler come from (Dask's configuration).
-TLS_HINT = ("credentials from Dask's configuration distributed.comm.tls.* (DASK_DISTRIBUTED__COMM__TLS__CA_FILE, "
-            "DASK_DISTRIBUTED__COMM__TLS__CLIENT__CERT, DASK_DISTRIBUTED__COMM__TLS__CLIENT__KEY)")
 
 
 def parse_grid(text: str) -> tuple[str, list]:
@@ -139,13 +130,6 @@ def csv_cell(value: Any) -> Any:
     return value
 
 
-def worker_count(jobs: int, points: int, remote: bool = False) -> int:
-    """The parallel jobs of a sweep: ``jobs`` (-1: all cores), at most one per point and, locally, per core."""
-    if remote:  # the cluster's size is its own; -1: all its workers
-        return jobs if jobs == -1 else min(jobs, points)
-    return max(1, min(points, os.cpu_count() or 1, jobs if jobs > 0 else points))
-
-
 def run_point(scenario: str, index: int, assignments: Sequence[str], out: str) -> dict:
     """Run one grid point (in a worker); an exception becomes the row's ``error`` text, metrics NaN."""
     from .runs import run_scenario
@@ -161,70 +145,6 @@ def run_point(scenario: str, index: int, assignments: Sequence[str], out: str) -
         message = " ".join(str(exc).split())
         row["error"] = f"{type(exc).__name__}: {message}" if message else type(exc).__name__
     return row
-
-
-def use_thread_lock_for_progress_bars() -> None:
-    """In a worker (no progress bar is shown): give tqdm a thread lock instead of its default semaphore.
-
-    tqdm creates an inter-process semaphore on first use; a worker killed by a Ctrl-C never releases it, and
-    the parent's resource tracker would then print a "leaked semaphore" warning after the one-line message.
-    """
-    import threading
-
-    from tqdm.std import tqdm
-
-    if "_lock" not in vars(tqdm):
-        tqdm.set_lock(threading.RLock())
-
-
-@contextlib.contextmanager
-def dask_client(scheduler: str | None, jobs: int):
-    """A dask.distributed Client on ``scheduler`` (TLS credentials from Dask's configuration; a warning if not
-    ``tls://``), or on a local cluster of ``jobs`` workers with TLS credentials of its own and no HTTP port."""
-    try:
-        import dask
-        from dask.distributed import Client, LocalCluster
-        from distributed.security import Security
-    except ImportError:
-        raise SweepError("the dask backend needs `pip install uvms[dask]` (dask.distributed)") from None
-    try:
-        if scheduler:
-            if not scheduler.startswith("tls://"):
-                warnings.warn(f"the Dask scheduler {scheduler} is not tls://: neither encrypted nor authenticated, "
-                              f"so anyone who can reach it can run code on its workers; prefer a tls:// scheduler "
-                              f"with {TLS_HINT}", InsecureSchedulerWarning, stacklevel=3)
-            client = Client(scheduler, timeout="20s", security=Security())
-        else:
-            try:
-                security = Security.temporary()
-            except ImportError:
-                raise SweepError("the local Dask cluster needs the 'cryptography' package for its TLS credentials: "
-                                 "pip install cryptography") from None
-            no_http = {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
-            with dask.config.set(no_http):  # the workers get this configuration too
-                cluster = LocalCluster(n_workers=max(jobs, 1), threads_per_worker=1, processes=True, protocol="tls",
-                                       security=security, dashboard_address=None, host="127.0.0.1")
-            client = Client(cluster, security=security)
-            client.run_on_scheduler(stop_http_server)  # Dask always starts one (routes emptied above)
-            client.run(stop_http_server)
-    except (OSError, TypeError, ValueError) as exc:  # TypeError: a tls:// address without credentials
-        message = " ".join(str(exc).split())
-        hint = f"; a tls:// scheduler needs {TLS_HINT}" if scheduler and scheduler.startswith("tls://") else ""
-        raise SweepError(f"cannot reach the Dask scheduler {scheduler or '(local cluster)'}: {message}{hint}") from None
-    try:
-        yield client
-    finally:
-        cluster = client.cluster if not scheduler else None
-        client.close()
-        if cluster is not None:
-            cluster.close()
-
-
-def stop_http_server(dask_scheduler: Any = None, dask_worker: Any = None) -> None:
-    """Close the HTTP port of a Dask scheduler or worker (run in its event loop by ``Client.run``)."""
-    server = getattr(dask_scheduler or dask_worker, "http_server", None)
-    if server is not None:
-        server.stop()
 
 
 def sweep(
@@ -245,7 +165,7 @@ def sweep(
         grids: ``(key, values)`` pairs or ``KEY=START:STOP:N`` strings; points are their Cartesian product,
             the first key varying slowest.
         jobs: parallel jobs for loky (-1: all cores); for dask without ``scheduler``, the local workers;
-            locally at most one per point and per core (:func:`worker_count`).
+            locally at most one per point and per core (:func:`uvms.scenario.parallel.worker_count`).
         backend: ``"loky"`` (local processes) or ``"dask"`` (a dask.distributed cluster; its workers must
             see the same files).
         scheduler: address of a Dask scheduler, ``tls://`` with credentials from Dask's configuration (e.g.
@@ -263,12 +183,7 @@ def sweep(
     keys = [key for key, _ in grids]
     if not grids or len(set(keys)) != len(keys):
         raise SweepError(f"a sweep needs at least one --grid and distinct keys, got {keys}")
-    if backend not in BACKENDS:
-        raise SweepError(f"backend {backend!r} is not valid; valid: {', '.join(BACKENDS)}")
-    if scheduler and backend != "dask":
-        raise SweepError(f"a scheduler address ({scheduler!r}) needs the dask backend")
-    if not isinstance(jobs, int) or jobs == 0 or jobs < -1:
-        raise SweepError(f"jobs must be >= 1 or -1 (all cores), got {jobs!r}")
+    check_backend(backend, scheduler, jobs, SweepError)
     count = math.prod(len(values) for _, values in grids)
     if count > MAX_POINTS:
         sizes = " x ".join(f"{len(values):,} ({key})" for key, values in grids)
@@ -288,7 +203,8 @@ def sweep(
     with outputs.run_folder(given, inputs=inputs) as folder:  # replaced whole, point folders included
         tasks = [(str(Path(scenario).resolve()), k, overrides, str(folder / f"point_{k:0{width}d}"))
                  for k, overrides in enumerate(assignments)]
-        rows = run_tasks(tasks, jobs, backend, scheduler, progress)
+        rows = sorted(run_tasks(run_point, tasks, jobs=jobs, backend=backend, scheduler=scheduler, progress=progress,
+                                error=SweepError, desc="sweep"), key=lambda row: row["point"])
         for row, point in zip(rows, points):
             row.update(zip(keys, point))
             row["error"] = row["error"].replace(str(folder), str(out))  # the paths the user will find
@@ -318,50 +234,6 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]],
         checked = scenario_from_raw(raw, scenario, overrides)
         models[checked["model"]["path"]] = None
     return checked, list(models)
-
-
-def run_tasks(tasks: list[tuple], jobs: int, backend: str, scheduler: str | None, progress: bool | None) -> list[dict]:
-    """Run the points through joblib (loky or dask); rows sorted by point index."""
-    from joblib import Parallel, delayed, parallel_config
-    from ..io.progress import tqdm
-
-    jobs = worker_count(jobs, len(tasks), remote=bool(scheduler))
-
-    def execute() -> list[dict]:
-        parallel = Parallel(n_jobs=jobs, return_as="generator")
-        results = parallel(delayed(run_point)(*task) for task in tasks)
-        try:
-            return list(tqdm(results, total=len(tasks), desc="sweep", unit="point", disable=progress is False,
-                             leave=False))
-        except BaseException:  # Ctrl-C or an error: no worker may go on writing into the sweep folder
-            stop_workers(results)
-            raise
-
-    if backend == "dask":
-        with dask_client(scheduler, jobs), parallel_config(backend="dask"):
-            rows = execute()
-    else:
-        with parallel_config(backend="loky"):
-            rows = execute()
-    return sorted(rows, key=lambda row: row["point"])
-
-
-def stop_workers(results) -> None:
-    """Abort a joblib generator and kill the loky workers (before the sweep's temporary folder is removed).
-
-    Closing the generator makes joblib abort its backend (loky: ``kill_workers=True``, waiting for the workers
-    to exit); then any reusable loky executor left is shut down the same way (dask: :func:`dask_client`).
-    """
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # joblib warns that the generator was exited early: that is the point
-        with contextlib.suppress(Exception):
-            results.close()
-        with contextlib.suppress(Exception):
-            from joblib.externals.loky import reusable_executor
-
-            executor = getattr(reusable_executor, "_executor", None)
-            if executor is not None:
-                executor.shutdown(wait=True, kill_workers=True)
 
 
 def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:

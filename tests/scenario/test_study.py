@@ -1,0 +1,175 @@
+"""`uvms study` (uvms.scenario.study): one table on any backend and worker count, resume after SIGKILL, failed and
+killed trials, sensitivity, refused folders and bad input before any trial."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import signal
+import subprocess
+
+import pytest
+
+from conftest import SCENARIOS, uvms_command, wait_for
+from uvms.errors import StudyError, UVMSError
+from uvms.scenario import ScenarioError
+from uvms.scenario import study as study_module
+from uvms.scenario.study import study
+
+SCENARIO = SCENARIOS / "hoang2011_w1.toml"
+SHORT = ["trajectory.duration=10", "trajectory.accel_time=2"]  # 500 steps
+# max_position_error depends on l1 only (about 3.65e-10 m, falling with l1); the tolerance sets pass/fail alone
+SAMPLES = ["model.args.l1=uniform(0.35, 0.5)", "outputs.position_tolerance=loguniform(1e-10, 1e-9)"]
+N, SEED = 10, 7
+
+
+def trials_of(folder) -> list[str]:
+    return sorted(path.name for path in (folder / "trials").glob("trial_*.json"))
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    return study(SCENARIO, SAMPLES, n=N, seed=SEED, out=tmp_path_factory.mktemp("study1") / "s", progress=False,
+                 overrides=SHORT)
+
+
+def test_the_table_holds_one_row_per_trial_with_its_seed_values_metrics_and_verdict(reference):
+    folder = reference.files[0].parent
+    assert reference.columns[:4] == ["trial", "seed", "model.args.l1", "outputs.position_tolerance"]
+    assert reference.columns[-2:] == ["pass", "error"] and "max_vehicle_tilt" not in reference.columns  # planar
+    rows = reference.rows
+    assert [row["trial"] for row in rows] == list(range(N)) and not any(row["error"] for row in rows)
+    assert all(0.35 <= row["model.args.l1"] <= 0.5 and 1e-10 <= row["outputs.position_tolerance"] <= 1e-9
+               for row in rows)
+    for row in rows:  # the verdict of each run: its error against its own sampled tolerance
+        assert row["pass"] == (row["max_position_error"] <= row["outputs.position_tolerance"])
+        assert 3e-10 < row["max_position_error"] < 4e-10
+    passed = sum(row["pass"] for row in rows)
+    assert 0 < passed < N and reference.summary["pass_rate"]["passed"] == passed
+    table = list(csv.DictReader((folder / "study.csv").read_text().splitlines()))
+    assert [float(row["max_position_error"]) for row in table] == [row["max_position_error"] for row in rows]
+    assert [int(row["seed"]) for row in table] == [row["seed"] for row in rows]
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["pass_rate"]["rate"] == passed / N and summary["pass_rate"]["ci_method"] == "wilson"
+    metric = sorted(row["max_position_error"] for row in rows)
+    assert summary["metrics"]["max_position_error"]["max"] == metric[-1]
+    assert [path.name for path in reference.files] == ["study.csv", "summary.json", "study_histograms.png",
+                                                       "study_scatter.png", "study_sensitivity.png"]
+    assert (folder / "trials" / "trial_00009" / "metrics.json").is_file()
+    assert not list((folder / "trials").glob("*.started"))
+
+
+def test_sensitivity_ranks_the_one_key_the_metric_depends_on_first(reference):
+    ranking = reference.summary["sensitivity"]
+    first = ranking["max_position_error"][0]
+    assert first["key"] == "model.args.l1" and first["rho"] < -0.95 and first["p_value"] < 1e-3
+    assert first["eta2"] > 0.8 > 2 / 9 == pytest.approx(reference.summary["eta2_noise_floor"])  # 3 bins of 10
+    assert ranking["pass"][0]["key"] == "outputs.position_tolerance" and ranking["pass"][0]["rho"] > 0.6
+
+
+def same_table(result, reference) -> bool:
+    """Trials, seeds, sampled values, verdicts and errors equal; metrics equal to 1e-6 relative: this scenario's
+    errors (3.7e-10 m) are rounding, and the parent (jobs=1) and the workers round alike only to about 1e-16 m."""
+    assert len(result.rows) == len(reference.rows)
+    for row, expected in zip(result.rows, reference.rows):
+        assert {k: v for k, v in row.items() if k not in result.metrics} == \
+            {k: v for k, v in expected.items() if k not in reference.metrics}
+        assert [row[m] for m in result.metrics] == pytest.approx([expected[m] for m in reference.metrics], rel=1e-6)
+    return True
+
+
+def test_two_jobs_give_the_same_table(reference, tmp_path):
+    result = study(SCENARIO, SAMPLES, n=N, seed=SEED, jobs=2, out=tmp_path / "s", progress=False, overrides=SHORT)
+    assert same_table(result, reference)
+
+
+def test_a_local_dask_cluster_gives_the_same_table(reference, tmp_path):
+    pytest.importorskip("dask.distributed")
+    result = study(SCENARIO, SAMPLES, n=N, seed=SEED, jobs=2, backend="dask", out=tmp_path / "s", progress=False,
+                   overrides=SHORT)
+    assert same_table(result, reference)
+
+
+def test_resume_after_a_sigkill_of_the_study(reference, tmp_path):
+    folder = tmp_path / "s"
+    command = uvms_command("study", str(SCENARIO), *[f"--sample={s}" for s in SAMPLES], "--samples", str(N),
+                           "--seed", str(SEED), *[f"--set={s}" for s in SHORT], "--jobs", "2", "--out", str(folder),
+                           "--quiet")
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)
+    try:
+        wait_for(lambda: len(trials_of(folder)) >= 3 if folder.is_dir() else False, process=child)
+    finally:
+        os.killpg(child.pid, signal.SIGKILL)  # the study and its workers, mid-study
+        child.communicate()
+    done = trials_of(folder)
+    assert 3 <= len(done) < N and not (folder / "study.csv").exists()
+    result = study(SCENARIO, SAMPLES, n=N, seed=SEED, out=folder, progress=False, overrides=SHORT)
+    assert result.resumed >= len(done)  # those were not run again
+    assert same_table(result, reference)  # none lost, none twice
+    assert trials_of(folder) == [f"trial_{k:05d}.json" for k in range(N)]
+    assert not list((folder / "trials").glob(".trial_*"))  # the killed trials' unfinished run folders are gone
+
+
+def test_another_study_or_other_files_are_refused(reference, tmp_path):
+    folder = reference.files[0].parent
+    with pytest.raises(StudyError, match="holds another study \\(it differs in seed\\)"):
+        study(SCENARIO, SAMPLES, n=N, seed=SEED + 1, out=folder, progress=False, overrides=SHORT)
+    with pytest.raises(StudyError, match="differs in n, samples"):
+        study(SCENARIO, SAMPLES[:1], n=N + 1, seed=SEED, out=folder, progress=False, overrides=SHORT)
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep")
+    with pytest.raises(StudyError, match="is not a study folder"):
+        study(SCENARIO, SAMPLES, n=2, seed=SEED, out=tmp_path / "mine", progress=False, overrides=SHORT)
+    assert sorted(p.name for p in (tmp_path / "mine").iterdir()) == ["notes.txt"]
+
+
+def test_a_failed_trial_is_recorded_and_the_study_goes_on(tmp_path):
+    result = study(SCENARIO, ["model.args.vehicle_mass=choice([120.0, -5.0])"], n=4, seed=1, out=tmp_path / "s",
+                   progress=False, overrides=SHORT)
+    bad = [row for row in result.rows if row["model.args.vehicle_mass"] < 0]
+    good = [row for row in result.rows if row["model.args.vehicle_mass"] > 0]
+    assert bad and good and len(bad) + len(good) == 4
+    assert all("ModelCheckError" in row["error"] and not row["pass"] and math.isnan(row["max_position_error"])
+               for row in bad)
+    assert all(not row["error"] and math.isfinite(row["max_position_error"]) for row in good)
+    assert result.summary["failed_trials"] == [row["trial"] for row in bad]
+    assert result.summary["pass_rate"]["trials"] == 4
+
+
+def crashing_trial(scenario, index, *arguments):
+    """Trial 1 kills its worker process when its run starts (after its marker); the others run as usual."""
+    from uvms.scenario import runs
+    from uvms.scenario import study as module  # in a worker: not monkeypatched
+
+    if index == 1:  # in this worker only, which dies with it
+        runs.run_scenario = lambda *args, **kwargs: os._exit(3)
+    return module.run_trial(scenario, index, *arguments)
+
+
+def test_a_trial_that_kills_its_worker_is_recorded_and_the_others_run(tmp_path, monkeypatch):
+    monkeypatch.setattr(study_module, "run_trial", crashing_trial)
+    result = study(SCENARIO, SAMPLES, n=4, seed=SEED, jobs=2, out=tmp_path / "s", progress=False, overrides=SHORT)
+    killed = [row for row in result.rows if row["error"]]
+    assert [row["trial"] for row in killed] == [1] and killed[0]["error"].startswith("killed: the worker")
+    assert all(math.isfinite(row["max_position_error"]) for row in result.rows if row["trial"] != 1)
+
+
+def test_bad_samples_keys_and_options_fail_before_any_trial(tmp_path):
+    out = tmp_path / "s"
+    cases = [
+        (StudyError, "valid forms", dict(samples=["solver.gain=gauss(1, 2)"])),
+        (ScenarioError, "valid in \\[solver\\]", dict(samples=["solver.gian=uniform(1, 2)"])),
+        (UVMSError, "unknown xacro arg.*l1, l2, l3", dict(samples=["model.args.l9=uniform(1, 2)"])),
+        (StudyError, "has no element 3", dict(samples=["trajectory.start[3]=uniform(1, 2)"])),
+        (StudyError, "1 to 100,000 trials", dict(samples=SAMPLES, n=0)),
+        (StudyError, "method 'grid'", dict(samples=SAMPLES, method="grid")),
+        (StudyError, "backend 'ray'", dict(samples=SAMPLES, backend="ray")),
+        (StudyError, "at least one --sample", dict(samples=None)),  # the scenario has no [study] table
+    ]
+    for error, words, options in cases:
+        with pytest.raises(error, match=words):
+            study(SCENARIO, n=options.pop("n", 3), out=out, progress=False, **options)
+        assert not out.exists()

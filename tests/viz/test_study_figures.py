@@ -1,0 +1,35 @@
+"""The figures of a study (uvms.viz.study): three PNGs of the sizes the table implies; none without a metric."""
+
+from __future__ import annotations
+
+import struct
+
+from uvms.scenario.sensitivity import summarize
+from uvms.viz.study import save_study_figures
+
+
+def png_size(path) -> tuple[int, int]:
+    data = path.read_bytes()
+    assert data.startswith(b"\x89PNG")
+    return struct.unpack(">II", data[16:24])
+
+
+def test_the_three_figures_have_one_panel_per_metric_and_key(tmp_path, rng):
+    keys, metrics = ["a", "b"], ["m1", "m2", "m3", "m4"]
+    table = [{"trial": k, "a": float(a), "b": str(b), "m1": float(a), "m2": float(a**2), "m3": 1.0, "m4": float(b),
+              "pass": bool(a > 0.5), "error": ""} for k, (a, b) in enumerate(zip(rng.uniform(0, 1, 30),
+                                                                                rng.integers(0, 3, 30)))]
+    summary = summarize(table, keys, metrics)
+    paths = save_study_figures(table, keys, metrics, summary, tmp_path, title="t")
+    assert [p.name for p in paths] == ["study_histograms.png", "study_scatter.png", "study_sensitivity.png"]
+    dpi = 110  # uvms.io.outputs.save_figure
+    assert png_size(paths[0]) == (round(3 * 3.6 * dpi), round((2 * 2.8 + 0.6) * dpi))  # 4 metrics: 3 columns, 2 lines
+    assert png_size(paths[1]) == (round((2 * 2.8 + 0.8) * dpi), round((4 * 2.0 + 0.6) * dpi))  # metrics x keys
+    assert png_size(paths[2])[0] == round(3 * 4.4 * dpi)  # m1, m2, m4 and pass (m3 is constant but listed)
+    assert summary["sensitivity"]["m3"][0]["eta2"] is None  # a constant metric: no index
+
+
+def test_no_figure_when_every_trial_failed(tmp_path):
+    table = [{"trial": 0, "a": 1.0, "pass": False, "error": "ModelCheckError: x"}]
+    assert save_study_figures(table, ["a"], [], summarize(table, ["a"], []), tmp_path) == []
+    assert not list(tmp_path.iterdir())
