@@ -35,8 +35,6 @@ SCENARIOS = {"stow": ("bluerov2_alpha5_stow", "self_collision"), "pipe": ("bluer
 RUNS = {"with": [], "without": ["--set", "solver.method=clik"]}
 COLOURS = {"with": "tab:blue", "without": "tab:red"}
 PLANE = "xz"
-#: A row's distance agrees with its neighbours when within this of their mean [m].
-AGREEMENT = 0.005
 #: Side of the drawn square around the closest pair [m].
 WINDOW = 0.5
 
@@ -52,22 +50,6 @@ def run(toml: Path, folder: Path, extra: list[str]) -> tuple[np.ndarray, np.ndar
 def smallest(objective, robot, qs: np.ndarray) -> np.ndarray:
     """The objective's smallest distance (N,) [m] at each configuration."""
     return np.array([objective.nearest(Configuration(robot, q))[1].distance[0] for q in qs])
-
-
-def closest_moment(distance: np.ndarray) -> int:
-    """The row of the smallest distance among the rows that agree with their neighbours (within
-    :data:`AGREEMENT` of the mean of the rows either side): at isolated rows of a deep overlap coal's EPA returns a
-    penetration far deeper than at the rows around it (the pipe run without its objective: -143 mm between -5.5 and
-    -6.1 mm, deeper than the jaws' box can be in a 6 cm pipe); the drawing shows a row that agrees with its
-    neighbours."""
-    agrees = agreeing(distance)
-    return int(np.flatnonzero(agrees)[np.argmin(distance[agrees])])
-
-
-def agreeing(distance: np.ndarray) -> np.ndarray:
-    """Whether each row's distance (N,) [m] is within :data:`AGREEMENT` of the mean of the rows either side."""
-    padded = np.r_[distance[0], distance, distance[-1]]
-    return np.abs(distance - (padded[:-2] + padded[2:]) / 2) <= AGREEMENT
 
 
 def side_view(ax, robot, overlay: CollisionOverlay, q: np.ndarray, title: str) -> None:
@@ -96,13 +78,10 @@ def main_figure(out: Path) -> None:
             for column, (label, extra) in enumerate(RUNS.items(), start=1):
                 t, qs = run(toml, Path(scratch) / f"{key}_{label}", extra)
                 distance = smallest(objective, robot, qs)
-                k = closest_moment(distance)
-                print(f"{name} {label}: smallest {1000 * distance.min():.1f} mm at t = {t[np.argmin(distance)]:.2f} s; "
-                      f"drawn: {1000 * distance[k]:.1f} mm at t = {t[k]:.2f} s")
-                spikes = len(distance) - int(np.count_nonzero(agreeing(distance)))
-                note = f";\n{spikes} rows off their neighbours: coal's EPA" if spikes else ""
+                k = int(np.argmin(distance))
+                print(f"{name} {label}: smallest {1000 * distance[k]:.1f} mm at t = {t[k]:.2f} s")
                 curve.plot(t, 1000 * distance, color=COLOURS[label], linewidth=1.2,
-                           label=f"{label} (drawn: {1000 * distance[k]:.1f} mm at {t[k]:.2f} s{note})")
+                           label=f"{label} (smallest: {1000 * distance[k]:.1f} mm at {t[k]:.2f} s)")
                 curve.plot(t[k], 1000 * distance[k], "o", color=COLOURS[label])
                 solver = "set-based" if label == "with" else "CLIK, monitored only"
                 side_view(figure.add_subplot(grid[row, column]), robot, overlay, qs[k],

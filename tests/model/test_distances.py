@@ -184,3 +184,28 @@ def test_a_deep_cylinder_overlap_is_a_penetration_depth_not_a_failed_query():
                   placements[1], request, result)
     assert -0.0033 < found.distance[0] < -0.0031
     assert found.distance[0] == pytest.approx(result.min_distance, abs=5e-5)  # a looser EPA: the same depth
+
+
+def test_a_penetration_where_epa_stops_at_a_wrong_face_is_the_converged_depth():
+    """The jaws' box 5.8 mm inside the pipe of scenarios/bluerov2_alpha5_pipe.toml (a CLIK run, t = 4.92 s): EPA at
+    1e-9 returned -142.8 mm; the depth is the one of EPA at 1e-6 and of the pair queried the other way round."""
+    from uvms.tasks.objectives import Obstacle
+
+    robot = uvms.load("bluerov2_alpha5")
+    q = np.array([0.0330461586, 0.0310548046, -5.04432606, 0.00259802066, 0.00201081663, 0.00325488173, 0.999989306,
+                  2.34563627, 1.97213232, 2.76357314, 1.0, 0.0])
+    q[3:7] /= np.linalg.norm(q[3:7])
+    pipe = Obstacle(robot, "cylinder", radius=0.06, length=2.0, position=[0.5, 0.0, -5.42], rpy=[1.5707963, 0, 0],
+                    min=0.02, band=0.03, count=4, name="pipe")
+    chosen, found = pipe.nearest(Configuration(robot, q))
+    assert pipe.links[chosen[0]] == ("pipe", "alpha_jaw_link")
+    first, second = (pipe.distances.geometry.geometryObjects[int(i)] for i in pipe.distances.pairs[chosen[0]])
+    data = pin.GeometryData(pipe.distances.geometry)
+    pin.updateGeometryPlacements(robot.model, pin.Data(robot.model), pipe.distances.geometry, data, q)
+    place = {obj.name: coal.Transform3s(data.oMg[k].rotation, data.oMg[k].translation)
+             for k, obj in enumerate(pipe.distances.geometry.geometryObjects)}
+    request, result = coal.DistanceRequest(), coal.DistanceResult()
+    request.enable_signed_distance, request.gjk_tolerance, request.epa_tolerance = True, 1e-9, 1e-9
+    coal.distance(second.geometry, place[second.name], first.geometry, place[first.name], request, result)
+    assert found.distance[0] == pytest.approx(result.min_distance, abs=1e-6)  # the swapped query
+    assert -0.0060 < found.distance[0] < -0.0055

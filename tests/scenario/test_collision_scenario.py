@@ -124,4 +124,4 @@ def test_the_jaws_slide_along_the_pipe_instead_of_into_it(tmp_path):
     assert 0.02 < run.metrics["final_position_error"] < 0.05  # the line's end is inside the pipe: the task yields
     clik = uvms.run_scenario(scenario, tmp_path / "clik", overrides=["outputs.figures=false", "solver.method=clik"],
                              progress=False)
-    assert recorded_distances(clik, table).min() < -0.1
+    assert recorded_distances(clik, table).min() < -0.02  # the jaws 2.7 cm into the pipe

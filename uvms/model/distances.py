@@ -34,6 +34,8 @@ DISTANCE_TOLERANCE = 1e-9
 #: cylinder-cylinder overlaps (coal then returns -1.8e308; the Alpha 5's base tube through its E housing); at 1e-6 it
 #: does.
 RETRY_TOLERANCE = 1e-6
+#: A penetration depth at 1e-9 is kept when the retry at 1e-6 agrees within this [m].
+RETRY_AGREEMENT = 1e-5
 #: A distance beyond this [m] is a failed query, not a distance (checked, never passed on).
 LARGEST_DISTANCE = 1e6
 
@@ -140,8 +142,10 @@ class PairDistances:
                          np.array([result.normal for result in results]).reshape(-1, 3))
 
     def _checked(self, pair: int) -> object:
-        """The last DistanceResult of ``pair``; a failed one (EPA not converged) queried again at
-        :data:`RETRY_TOLERANCE`.
+        """The last DistanceResult of ``pair``; a penetration is queried again at :data:`RETRY_TOLERANCE` and that
+        result kept when the two disagree by more than :data:`RETRY_AGREEMENT` (EPA at 1e-9 can fail, returning
+        -1.8e308, or stop at a wrong face: -142.8 mm for a jaw box 5.8 mm inside a pipe, which 1e-6 and the
+        swapped pair both give).
 
         Raises:
             NumericalError: coal fails at that tolerance too (never a distance of -1.8e308 passed on).
@@ -149,20 +153,21 @@ class PairDistances:
         import coal  # shipped with the pin wheel
 
         result = self._results[pair]
-        if abs(result.min_distance) <= LARGEST_DISTANCE:
+        if 0.0 <= result.min_distance <= LARGEST_DISTANCE:
             return result
         first, second = (int(i) for i in self.pairs[pair])
         objects, placements = self.geometry.geometryObjects, self._data.oMg
-        result = coal.DistanceResult()
+        retry = coal.DistanceResult()
         coal.distance(objects[first].geometry, coal.Transform3s(placements[first].rotation, placements[first].translation),
                       objects[second].geometry,
                       coal.Transform3s(placements[second].rotation, placements[second].translation),
-                      distance_request(RETRY_TOLERANCE), result)
-        if not abs(result.min_distance) <= LARGEST_DISTANCE:
+                      distance_request(RETRY_TOLERANCE), retry)
+        if not abs(retry.min_distance) <= LARGEST_DISTANCE:
             raise NumericalError(f"coal cannot compute the distance between the shapes {objects[first].name!r} and "
-                                 f"{objects[second].name!r} at this configuration (it returned {result.min_distance:g}); "
+                                 f"{objects[second].name!r} at this configuration (it returned {retry.min_distance:g}); "
                                  f"they overlap deeply")
-        return result
+        agree = abs(result.min_distance - retry.min_distance) <= RETRY_AGREEMENT
+        return result if agree else retry
 
     def jacobian(self, state: Configuration, distances: Distances, rows: np.ndarray) -> np.ndarray:
         """The distance Jacobian (k, nv), d' = J v, of the pairs ``rows`` (k,) (indices into the pairs) from their
