@@ -22,3 +22,24 @@ def test_a_frame_task_computes_its_three_terms_at_once_as_separately(rng):
             assert np.array_equal(feedforward, task.feedforward(state))
             if orientation == "euler" and "yaw" in axes:  # the yaw row is a wrapped angle difference
                 assert -np.pi <= error[-1] < np.pi
+
+
+def test_the_euler_feedforward_is_the_rate_of_the_target_rpy(rng):
+    """The feedforward of an Euler task: [v; rpy rates] of a target turning at omega (world), equal to the finite
+    difference of the target's rpy; a target that does not turn gives zero rates."""
+    import pinocchio as pin
+
+    robot = uvms.load("bluerov2_alpha5")
+    task = uvms.FrameTask(robot, orientation="euler")
+    state = Configuration(robot, robot.neutral())
+    for omega in (rng.normal(size=3), np.zeros(3)):
+        rotation = pin.rpy.rpyToMatrix(*rng.uniform(-1.0, 1.0, size=3))
+        twist = np.concatenate([rng.normal(size=3), omega])
+        task.set_target(pin.SE3(rotation, np.zeros(3)))
+        task.set_target_velocity(twist)
+        h = 1e-6
+        later, earlier = (pin.rpy.matrixToRpy(pin.exp3(sign * h * omega) @ rotation) for sign in (1.0, -1.0))
+        feedforward = task.feedforward(state)
+        assert np.array_equal(feedforward[:3], twist[:3])
+        assert np.allclose(feedforward[3:], (later - earlier) / (2 * h), atol=1e-8)
+        assert np.any(feedforward[3:] != 0.0) == np.any(omega != 0.0)

@@ -117,10 +117,11 @@ class TaskRecorder:
         # q comes from pin.integrate in the loop (checked once at its start): Robot.fk would check it at every row
         pose = kinematics.frame_pose(self.robot.model, self.data, q, task.frame_id)
         target = self.desired(t)
-        full_error = task.full_error_between(target, pose)
+        pose_rpy, target_rpy = pin.rpy.matrixToRpy(pose.rotation), pin.rpy.matrixToRpy(target.rotation)
+        full_error = task.full_error_between(target, pose, target_rpy, pose_rpy)
         position, orientation = full_error[self.position_rows], full_error[self.orientation_rows]
         return {"ee_position": pose.translation.copy(), "desired_position": target.translation.copy(),
-                "ee_rpy": pin.rpy.matrixToRpy(pose.rotation), "desired_rpy": pin.rpy.matrixToRpy(target.rotation),
+                "ee_rpy": pose_rpy, "desired_rpy": target_rpy,
                 "task_error": full_error[task.rows],
                 # numpy's norm of a vector in its own operations (sqrt of x.dot(x)) without its 1 us of dispatch
                 "position_error": math.sqrt(position.dot(position)),

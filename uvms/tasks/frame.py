@@ -103,11 +103,15 @@ class FrameTask(Task):
         """All six error rows (6,): position then orientation."""
         return self.full_error_between(self._target(), state.pose(self.frame_id))
 
-    def full_error_between(self, target: pin.SE3, pose: pin.SE3) -> np.ndarray:
-        """Six error rows (6,) of ``pose`` with respect to ``target``, in this task's orientation form."""
+    def full_error_between(self, target: pin.SE3, pose: pin.SE3, target_rpy: np.ndarray | None = None,
+                           pose_rpy: np.ndarray | None = None) -> np.ndarray:
+        """Six error rows (6,) of ``pose`` with respect to ``target``, in this task's orientation form (the rpy (3,)
+        of both [rad], when the caller has them, serve the Euler error)."""
         if self.orientation == "log":
             return log_pose_error(target.translation, target.rotation, pose)
-        return euler_pose_error(target.translation, pose, matrixToRpy(target.rotation), matrixToRpy(pose.rotation))
+        return euler_pose_error(target.translation, pose,
+                                matrixToRpy(target.rotation) if target_rpy is None else target_rpy,
+                                matrixToRpy(pose.rotation) if pose_rpy is None else pose_rpy)
 
     def error(self, state: Configuration) -> np.ndarray:
         return self.full_error(state)[self.rows]
@@ -136,7 +140,9 @@ class FrameTask(Task):
     def _euler_feedforward(self, target_rpy: np.ndarray) -> np.ndarray:
         """The target twist (6,) with its angular part as rpy rates [m/s, rad/s]."""
         feedforward = self.target_twist.copy()
-        feedforward[3:] = pin.rpy.computeRpyJacobianInverse(target_rpy, pin.WORLD) @ feedforward[3:]
+        omega = feedforward[3:]
+        if omega[0] != 0.0 or omega[1] != 0.0 or omega[2] != 0.0:  # a constant orientation has no rpy rates to map
+            feedforward[3:] = pin.rpy.computeRpyJacobianInverse(target_rpy, pin.WORLD) @ omega
         return feedforward
 
     def target_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, np.ndarray]:
