@@ -47,3 +47,19 @@ def test_initial_fixed_base_names_are_checked():
     scenario["initial"]["method"] = "given"
     with pytest.raises(ScenarioError, match="initial.fixed_base .* needs initial.method = 'optimize'"):
         build(scenario)
+
+
+def test_the_initial_configuration_does_not_depend_on_the_blas_threads():
+    """hoang2011 sec. 2.3: SLSQP's q0 differed by 4e-16 (and a run by up to 3e-10) between 1 and 2 BLAS threads;
+    it is solved on one thread, so a caller's thread setting (a sweep's worker: one) gives the same q0."""
+    from threadpoolctl import threadpool_limits
+
+    import uvms
+
+    robot = shipped("hoang2011")
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0.0, -2.0, 0.0, 0.0, 0.0, 1.0])
+    found = []
+    for threads in (1, 2, 4):
+        with threadpool_limits(limits=threads, user_api="blas"):
+            found.append(uvms.solvers.initial_configuration(robot, task).q)
+    assert all(np.array_equal(found[0], q) for q in found[1:])

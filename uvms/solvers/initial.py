@@ -137,14 +137,18 @@ def initial_configuration(
         return whole[free] if fixed.size else whole
 
     import scipy.optimize  # here, not at import: 0.2 s that `uvms info`, `view` and most runs do not need
+    from threadpoolctl import threadpool_limits
 
-    solution = scipy.optimize.minimize(
-        objective, start[free] if fixed.size else start, jac=gradient, method="SLSQP", bounds=bounds,
-        constraints=[{"type": "eq", "fun": constraint, "jac": constraint_jacobian}],
-        options={"maxiter": max_iterations, "ftol": 1e-14},
-    )
-    free_vehicle = n - fixed.size  # the fixed coordinates are vehicle ones: x = [free vehicle, arm]
-    x = polish(solution.x, constraint, constraint_jacobian, limit, free_vehicle)
+    # SLSQP's numbers depend on how many BLAS threads share its sums (q0 moved by 1e-16 and a run by up to 3e-10
+    # between 1 and 2 threads): on one thread, q0 is the same on every machine, in a sweep's or a Dask worker
+    with threadpool_limits(limits=1, user_api="blas"):
+        solution = scipy.optimize.minimize(
+            objective, start[free] if fixed.size else start, jac=gradient, method="SLSQP", bounds=bounds,
+            constraints=[{"type": "eq", "fun": constraint, "jac": constraint_jacobian}],
+            options={"maxiter": max_iterations, "ftol": 1e-14},
+        )
+        free_vehicle = n - fixed.size  # the fixed coordinates are vehicle ones: x = [free vehicle, arm]
+        x = polish(solution.x, constraint, constraint_jacobian, limit, free_vehicle)
     residual = float(np.linalg.norm(constraint(x)))
     chart = full(x)
     q = configuration_of(robot, chart)
