@@ -10,7 +10,7 @@ import pytest
 import uvms
 from conftest import FIXED_ARM
 from uvms.errors import NumericalError
-from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator, rk4_step, solve_square
+from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator, rk4_step, solve_square, stage_times
 from uvms.trajectory import CirclePath, PathTrajectory, RecentSamples, TrapezoidLaw
 
 
@@ -55,6 +55,24 @@ def test_recent_samples_evaluate_the_trajectory_twice_per_rk4_step():
     assert np.array_equal(sample.pose.translation, trajectory(0.5).pose.translation)
     assert np.array_equal(sample.twist, trajectory(0.5).twist)
     assert isinstance(sample.pose, pin.SE3)
+
+
+@pytest.mark.parametrize("integrator", INTEGRATORS)
+def test_stage_times_are_every_time_a_run_asks_its_controller_for(integrator):
+    """The times of a kinematic run's controller calls (rows and stages), bit for bit, over steps where k dt and
+    (k - 1) dt + dt round apart (dt = 0.1)."""
+    robot = uvms.load("hoang2011")
+    asked: list[float] = []
+
+    def controller(t, q, v=None):
+        asked.append(t)
+        return np.full(robot.nv, 0.01), uvms.solvers.SolverResult(np.zeros(robot.nv), 1.0, 0.0)
+
+    steps, dt = 40, 0.1
+    assert misses(dt, steps) > 0
+    uvms.simulate(robot, controller, robot.neutral(), steps * dt, dt, integrator=integrator, progress=False)
+    times = stage_times(steps, dt, integrator)
+    assert set(asked) == set(times) and len(times) == (steps + 1 if integrator == "euler" else 3 * steps + 1)
 
 
 # ------------------------------------------------------------ one step per scheme, for q alone and for (q, v)

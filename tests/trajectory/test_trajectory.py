@@ -193,3 +193,39 @@ def test_ctraj_is_a_straight_line_with_slerp():
 def test_via_point_errors(arguments, message):
     with pytest.raises(UVMSError, match=message):
         ViaPointTrajectory(**arguments)
+
+
+def test_a_path_trajectory_at_many_times_is_its_samples_one_by_one_bit_for_bit():
+    """``at`` over 1,001 times (numpy's vector loops) against one call per time, for a circle, a line and a hold."""
+    from uvms.trajectory import PointPath, hold
+
+    times = np.linspace(-1.0, 200.0, 1001)
+    circle = PathTrajectory(CirclePath([0.0, 2.0, 0.0], [0.0, -2.0, 0.0]), LAWS[0], orientation=[0.0, 0.0, 1.0])
+    line = PathTrajectory(LinePath([0.1, 0.2, 0.3], [1.0, -1.0, 2.0]), LAWS[3], orientation=[0.2, 0.0, 0.0])
+    held = hold(pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.array([1.0, 2.0, 3.0])), 5.0)
+    for trajectory in (circle, line, held):
+        table = trajectory.at(times)
+        assert len(table) == len(times)
+        for index in (0, 1, 137, 500, 999, 1000):
+            one, row = trajectory(times[index]), table.sample(index)
+            assert np.array_equal(one.pose.homogeneous, row.pose.homogeneous)
+            assert np.array_equal(one.twist, row.twist) and np.array_equal(one.acceleration, row.acceleration)
+        with pytest.raises(ValueError, match="read-only"):
+            table.twists[0, 0] = 1.0  # a sample's arrays are views of the table's
+    assert np.array_equal(held.at(times).translations, np.tile([1.0, 2.0, 3.0], (len(times), 1)))
+    assert np.array_equal(PointPath([1.0, 2.0, 3.0])(7.0).tangent, np.zeros(3))
+
+
+def test_a_trajectory_table_gives_the_trajectorys_samples_and_evaluates_other_times_when_asked():
+    from uvms.trajectory import TrajectoryTable
+
+    circle = PathTrajectory(CirclePath([0.0, 2.0, 0.0], [0.0, -2.0, 0.0]), LAWS[0], orientation=[0.0, 0.0, 1.0])
+    se3 = SE3Trajectory([0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.5, 0.3, -0.2, 1.0], LAWS[2])  # without `at`
+    times = [k * 0.02 for k in range(200)]
+    for trajectory in (circle, se3):
+        table = TrajectoryTable(trajectory, times + times[:5])  # repeated times: one row each
+        assert table.duration == trajectory.duration
+        for t in (times[0], times[77], 0.0123, 500.0):  # two in the table, two outside it
+            sample, expected = table(t), trajectory(t)
+            assert np.array_equal(sample.pose.homogeneous, expected.pose.homogeneous)
+            assert np.array_equal(sample.twist, expected.twist)

@@ -142,3 +142,14 @@ def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 
 #: The step of each scheme.
 STEPS: dict[str, Callable[..., tuple[np.ndarray, np.ndarray]]] = {"euler": euler_step, "rk4": rk4_step}
+
+
+def stage_times(steps: int, dt: float, integrator: str) -> list[float]:
+    """The times [s] at which a run of ``steps`` steps of dt [s] from 0 evaluates its rate, computed as the loop
+    and the steps compute them (t = k dt; RK4's t + dt/2 and t + dt, which need not equal the next k dt), so that
+    a table of a trajectory at these times holds every time the run asks for."""
+    starts = [k * dt for k in range(steps + 1)]
+    if check_integrator(integrator) == "euler":
+        return starts
+    half = 0.5 * dt
+    return starts + [t + half for t in starts[:-1]] + [t + dt for t in starts[:-1]]

@@ -12,11 +12,12 @@ from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
 from ..dynamics.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
+from ..numerics.integrate import stage_times, step_count
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, CLIKSolver, Solver, VariableDamping, initial_configuration
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
-from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, RecentSamples, SE3Trajectory, TrapezoidLaw,
-                          VelocityRamps)
+from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, RecentSamples, SE3Trajectory, TrajectoryTable,
+                          TrapezoidLaw, VelocityRamps)
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .inequalities import ScenarioInequalities, build_inequalities
 from .plant import check_kinematic_plant, make_plant
@@ -80,7 +81,9 @@ def build(scenario: dict) -> Setup:
     check_kinematic_plant(scenario["plant"])
     inequalities = (build_inequalities(robot, scenario["inequalities"], SOLVERS[scenario["solver"]["method"]])
                     if scenario["inequalities"] else None)
-    samples = RecentSamples(trajectory)  # the controller's stages and the recorder share its samples
+    dt, integrator = float(scenario["simulation"]["dt"]), scenario["simulation"]["integrator"]
+    times = stage_times(check_step_count(scenario, duration), dt, integrator)  # every time the run asks for
+    samples = RecentSamples(TrajectoryTable(trajectory, times))  # the controller's stages and the recorder share it
     controller = make_controller(robot, task, samples, scenario, inequalities)
     return Setup(robot, task, trajectory, q0, controller, duration, residual, inequalities=inequalities,
                  samples=samples)
@@ -398,3 +401,13 @@ def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, scena
     except UVMSError as exc:
         raise ScenarioError(f"solver ({solver['method']}): {exc}") from None
     return TrackingController(robot, task, samples, built)
+
+
+def check_step_count(scenario: dict, duration: float) -> int:
+    """The number of steps of a run, checked before it starts (:func:`uvms.numerics.integrate.step_count`)."""
+    if scenario["simulation"]["duration"]:
+        duration_name = "simulation.duration"
+    else:
+        duration_name = "the phases' durations" if scenario["phases"] else "trajectory.duration"
+    return step_count(duration, float(scenario["simulation"]["dt"]), dt_name="simulation.dt",
+                      duration_name=duration_name)

@@ -14,11 +14,10 @@ import numpy as np
 from ..io import outputs
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError
-from ..numerics.integrate import step_count
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
-from .build import Setup, build
+from .build import Setup, build, check_step_count
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
 from .resources import resolve_scenario_path
@@ -147,16 +146,6 @@ def numerics_guard(name: str) -> Iterator[None]:
         raise NumericalError(f"scenario {name!r}: the numerics failed ({type(exc).__name__}"
                              f"{': ' + message if message else ''}); a number of the scenario (gain, damping, "
                              f"weight, dt, a model dimension) is too large or too small for the solvers") from exc
-
-
-def check_step_count(scenario: dict, duration: float) -> int:
-    """The number of steps of a run, checked before it starts (:func:`uvms.numerics.integrate.step_count`)."""
-    if scenario["simulation"]["duration"]:
-        duration_name = "simulation.duration"
-    else:
-        duration_name = "the phases' durations" if scenario["phases"] else "trajectory.duration"
-    return step_count(duration, float(scenario["simulation"]["dt"]), dt_name="simulation.dt",
-                      duration_name=duration_name)
 
 
 def write_run_bag(folder: Path, setup: Setup, result: SimulationResult, metrics: dict) -> Path:

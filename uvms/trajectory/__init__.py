@@ -3,14 +3,17 @@
 - ``laws``: s(t) with two derivatives (trapezoid, cubic, quintic).
 - ``cartesian``: paths (circle, line) and pose trajectories (constant orientation, SE(3) interpolation).
 - ``recent``: a trajectory that returns its last samples again (integrator stages share times).
+- ``table``: a trajectory evaluated once at every time of a fixed-step run.
 - ``joint``: joint-space interpolation through via points (cubic, quintic), ``jtraj`` and ``ctraj``.
 """
 
-from .cartesian import CirclePath, LinePath, PathSample, PathTrajectory, PoseSample, SE3Trajectory, hold
+from .cartesian import (CirclePath, LinePath, PathSample, PathSamples, PathTrajectory, PointPath, PoseSample, PoseSamples,
+                        SE3Trajectory, hold)
 from .joint import CartesianSamples, JointSamples, ViaPointTrajectory, ctraj, jtraj
 from .laws import LawSample, PolynomialLaw, TimeLaw, TrapezoidLaw, check_positive
 from .ramps import VelocityRamps
 from .recent import RecentSamples
+from .table import TrajectoryTable
 
 __all__ = [
     "CartesianSamples",
@@ -19,12 +22,16 @@ __all__ = [
     "LawSample",
     "LinePath",
     "PathSample",
+    "PathSamples",
     "PathTrajectory",
     "PolynomialLaw",
     "PoseSample",
+    "PoseSamples",
+    "PointPath",
     "RecentSamples",
     "SE3Trajectory",
     "TimeLaw",
+    "TrajectoryTable",
     "TrapezoidLaw",
     "VelocityRamps",
     "ViaPointTrajectory",

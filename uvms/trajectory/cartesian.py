@@ -27,6 +27,24 @@ class PathSample:
     curvature: np.ndarray
 
 
+@dataclass(frozen=True)
+class PathSamples:
+    """A path at N arc lengths: p(s) (N, 3) [m], dp/ds (N, 3), d2p/ds2 (N, 3) [1/m]."""
+
+    points: np.ndarray
+    tangents: np.ndarray
+    curvatures: np.ndarray
+
+    def sample(self, index: int) -> PathSample:
+        """The sample of row ``index``."""
+        return PathSample(self.points[index], self.tangents[index], self.curvatures[index])
+
+
+def first_of(path, s: float) -> PathSample:
+    """A path's sample at one arc length s [m] (its ``at`` over one value)."""
+    return path.at(np.array([float(s)])).sample(0)
+
+
 class CirclePath:
     """Circle through ``start`` around ``center`` in the plane normal to ``normal`` (counter-clockwise about it).
 
@@ -48,9 +66,6 @@ class CirclePath:
             raise UVMSError("the circle's start point must lie in the plane through the centre normal to `normal`")
         self.e1 = radial / self.radius
         self.e2 = np.cross(normal, self.e1)
-        # Python floats of the constant vectors: a sample's 3-vectors in float arithmetic cost half as much as
-        # thirteen numpy operations on them, with the same IEEE operations in the same order (the same bits)
-        self._columns = tuple(zip(self.center.tolist(), self.e1.tolist(), self.e2.tolist()))
 
     @property
     def length(self) -> float:
@@ -58,16 +73,17 @@ class CirclePath:
         return 2 * np.pi * self.radius
 
     def __call__(self, s: float) -> PathSample:
-        """p = center + r (cos a e1 + sin a e2), its tangent and curvature vectors at arc length s [m], a = s / r."""
+        """The sample at arc length s [m] (:meth:`at`)."""
+        return first_of(self, s)
+
+    def at(self, s: np.ndarray) -> PathSamples:
+        """p = center + r (cos a e1 + sin a e2), its tangent and curvature vectors at the arc lengths s (N,) [m],
+        a = s / r."""
         radius = self.radius
         angle = s / radius
-        c, sn = float(np.cos(angle)), float(np.sin(angle))
-        columns = self._columns  # (center_i, e1_i, e2_i) for i = x, y, z
-        return PathSample(
-            np.array([center + radius * (c * e1 + sn * e2) for center, e1, e2 in columns]),
-            np.array([-sn * e1 + c * e2 for _, e1, e2 in columns]),
-            np.array([(-c * e1 - sn * e2) / radius for _, e1, e2 in columns]),
-        )
+        c, sn = np.cos(angle)[:, None], np.sin(angle)[:, None]  # (N, 1)
+        center, e1, e2 = self.center, self.e1, self.e2
+        return PathSamples(center + radius * (c * e1 + sn * e2), -sn * e1 + c * e2, (-c * e1 - sn * e2) / radius)
 
 
 class LinePath:
@@ -82,7 +98,30 @@ class LinePath:
         self.direction = delta / self.length
 
     def __call__(self, s: float) -> PathSample:
-        return PathSample(self.start + s * self.direction, self.direction.copy(), np.zeros(3))
+        """The sample at arc length s [m] (:meth:`at`)."""
+        return first_of(self, s)
+
+    def at(self, s: np.ndarray) -> PathSamples:
+        """p = start + s d, d, 0 at the arc lengths s (N,) [m]."""
+        count = len(s)
+        return PathSamples(self.start + s[:, None] * self.direction, np.tile(self.direction, (count, 1)),
+                           np.zeros((count, 3)))
+
+
+class PointPath:
+    """A path that stays at ``point`` (3,) [m] whatever s (a trajectory that holds a pose)."""
+
+    def __init__(self, point: np.ndarray) -> None:
+        self.point = np.array(point, dtype=float)
+
+    def __call__(self, s: float) -> PathSample:
+        """The sample at arc length s [m] (:meth:`at`)."""
+        return first_of(self, s)
+
+    def at(self, s: np.ndarray) -> PathSamples:
+        """The point, zero tangent and curvature at each of the arc lengths s (N,)."""
+        count = len(s)
+        return PathSamples(np.tile(self.point, (count, 1)), np.zeros((count, 3)), np.zeros((count, 3)))
 
 
 @dataclass(frozen=True)
@@ -94,11 +133,34 @@ class PoseSample:
     acceleration: np.ndarray
 
 
+@dataclass(frozen=True)
+class PoseSamples:
+    """A pose trajectory at N times: positions (N, 3) [m], rotations (N, 3, 3), twists [v; omega] (N, 6) and
+    accelerations (N, 6) in world axes (read-only arrays: a sample's arrays are views of them)."""
+
+    translations: np.ndarray
+    rotations: np.ndarray
+    twists: np.ndarray
+    accelerations: np.ndarray
+
+    def __post_init__(self) -> None:
+        for array in (self.translations, self.rotations, self.twists, self.accelerations):
+            array.flags.writeable = False
+
+    def __len__(self) -> int:
+        return len(self.translations)
+
+    def sample(self, index: int) -> PoseSample:
+        """The sample of row ``index``."""
+        return PoseSample(pin.SE3(self.rotations[index], self.translations[index]), self.twists[index],
+                          self.accelerations[index])
+
+
 class PathTrajectory:
     """A path travelled with a time law, at a constant orientation.
 
     Args:
-        path: CirclePath, LinePath or any callable s -> PathSample.
+        path: CirclePath, LinePath, PointPath or any path with ``at(s (N,)) -> PathSamples``.
         law: a TimeLaw giving s(t).
         orientation: constant rotation (3x3) or [roll, pitch, yaw] [rad].
     """
@@ -110,12 +172,19 @@ class PathTrajectory:
         self.duration = law.duration
 
     def __call__(self, t: float) -> PoseSample:
-        timing = self.law(t)
-        sample = self.path(timing.s)
-        twist, acceleration = np.zeros(6), np.zeros(6)  # constant orientation: no angular parts
-        twist[:3] = sample.tangent * timing.ds
-        acceleration[:3] = sample.tangent * timing.dds + sample.curvature * timing.ds**2
-        return PoseSample(pin.SE3(self.rotation, sample.point), twist, acceleration)
+        """The sample at t [s] (:meth:`at`)."""
+        return self.at(np.array([float(t)])).sample(0)
+
+    def at(self, times: np.ndarray) -> PoseSamples:
+        """The samples at the times (N,) [s], the path evaluated once over all of them."""
+        timings = [self.law(t) for t in times.tolist()]  # a law's sample is a few float operations
+        s, ds, dds, ds_squared = (np.array(values) for values in zip(*((t.s, t.ds, t.dds, t.ds**2) for t in timings)))
+        path = self.path.at(s)
+        count = len(times)
+        twists, accelerations = np.zeros((count, 6)), np.zeros((count, 6))  # constant orientation: no angular parts
+        twists[:, :3] = path.tangents * ds[:, None]
+        accelerations[:, :3] = path.tangents * dds[:, None] + path.curvatures * ds_squared[:, None]
+        return PoseSamples(path.points, np.broadcast_to(self.rotation, (count, 3, 3)), twists, accelerations)
 
 
 class SE3Trajectory:
@@ -150,5 +219,5 @@ class SE3Trajectory:
 def hold(pose: pin.SE3, duration: float) -> PathTrajectory:
     """A trajectory that stays at ``pose`` for ``duration`` [s]."""
     law = PolynomialLaw(distance=0.0, duration=duration, degree=5)
-    return PathTrajectory(lambda s: PathSample(pose.translation.copy(), np.zeros(3), np.zeros(3)), law, pose.rotation)
+    return PathTrajectory(PointPath(pose.translation), law, pose.rotation)
 
