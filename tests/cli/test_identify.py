@@ -77,6 +77,16 @@ def test_identify_reads_the_thruster_topics_instead_of_the_wrench(bag, tmp_path,
         assert runs["thrusts"][parameter] == pytest.approx(value, rel=1e-6, abs=1e-9)
 
 
+def test_identify_current_reports_and_writes_the_current(bag, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["identify", str(bag), "--model", "bluerov2_alpha5", "--out", str(out), "--identify-current"]) == 0
+    assert "current[x]" in capsys.readouterr().out
+    values = {p["name"]: p["value"] for p in json.loads((out / "identification.json").read_text())["parameters"]}
+    written = hydrodynamics_of(shipped("bluerov2_alpha5"), out / "hydrodynamics.yaml").current
+    np.testing.assert_array_equal(written, [values["current[x]"], values["current[y]"], values["current[z]"]])
+    np.testing.assert_allclose(written, 0.0, atol=1e-3)  # the log was simulated in still water
+
+
 @pytest.mark.parametrize("damage, message", [
     ("commands", "--thrust-commands says what the thruster topics hold: give --thrust-topics too"),
     ("thrust topic", "the bag has no thrust of thruster_1 topic '/t/thruster_1'"),

@@ -42,7 +42,9 @@ def add_identify_parser(commands: argparse._SubParsersAction, add_package_path) 
     parser.add_argument("--max-relative-error", type=float, default=0.2,
                         help="a parameter whose standard error exceeds this fraction of its scale is held")
     parser.add_argument("--current", type=float, nargs=3, metavar=("X", "Y", "Z"),
-                        help="known constant current [m/s], world ENU (default: the prior's)")
+                        help="constant current [m/s], world ENU (default: the prior's): known, or the search's start")
+    parser.add_argument("--identify-current", action="store_true",
+                        help="identify the constant current too (the vehicle must turn and change speed)")
     parser.add_argument("--odom-topic", default=ODOM_TOPIC, help="nav_msgs/Odometry topic")
     parser.add_argument("--joint-states-topic", default=JOINT_STATES_TOPIC, help="sensor_msgs/JointState topic")
     parser.add_argument("--wrench-topic", default=BODY_WRENCH_TOPIC, help="geometry_msgs/WrenchStamped topic")
@@ -91,6 +93,7 @@ def command_identify(options: argparse.Namespace) -> int:
     log = read_log(options, robot)
     prior = hydrodynamics_of(robot, options.prior)
     result = identify(robot, log, hydro=prior, added_mass=options.added_mass, current=options.current,
+                      identify_current=options.identify_current,
                       window=options.window, polyorder=options.polyorder, holdout=options.holdout,
                       max_relative_error=options.max_relative_error)
     out = Path(options.out or Path("out") / f"identify_{robot.name}")
