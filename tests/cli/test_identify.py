@@ -65,7 +65,31 @@ def test_identify_reads_a_csv_log_too(tmp_path, capsys):
     assert json.loads((out / "identification.json").read_text())["metrics"]["log_samples"] == len(log.t)
 
 
+def test_identify_reads_the_thruster_topics_instead_of_the_wrench(bag, tmp_path, capsys):
+    """--thrust-topics: the wrench of the thrusts through the model's thrusters (the same fit as /body_wrench's)."""
+    runs = {}
+    for name, extra in (("wrench", []), ("thrusts", ["--thrust-topics", "/thrusters/{name}/thrust",
+                                                      "--wrench-topic", "/absent"])):
+        out = tmp_path / name
+        assert main(["identify", str(bag), "--model", "bluerov2_alpha5", "--out", str(out), "--quiet", *extra]) == 0
+        runs[name] = {p["name"]: p["value"] for p in json.loads((out / "identification.json").read_text())["parameters"]}
+    for parameter, value in runs["wrench"].items():
+        assert runs["thrusts"][parameter] == pytest.approx(value, rel=1e-6, abs=1e-9)
+
+
+def test_identify_current_reports_and_writes_the_current(bag, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(["identify", str(bag), "--model", "bluerov2_alpha5", "--out", str(out), "--identify-current"]) == 0
+    assert "current[x]" in capsys.readouterr().out
+    values = {p["name"]: p["value"] for p in json.loads((out / "identification.json").read_text())["parameters"]}
+    written = hydrodynamics_of(shipped("bluerov2_alpha5"), out / "hydrodynamics.yaml").current
+    np.testing.assert_array_equal(written, [values["current[x]"], values["current[y]"], values["current[z]"]])
+    np.testing.assert_allclose(written, 0.0, atol=1e-3)  # the log was simulated in still water
+
+
 @pytest.mark.parametrize("damage, message", [
+    ("commands", "--thrust-commands says what the thruster topics hold: give --thrust-topics too"),
+    ("thrust topic", "the bag has no thrust of thruster_1 topic '/t/thruster_1'"),
     ("truncate", "cannot read the bag"),
     ("topic", "no wrench topic '/other'"),
     ("type", "holds sensor_msgs/msg/JointState"),
@@ -82,6 +106,10 @@ def test_a_bad_log_gets_one_error_line_and_nothing_is_written(bag, tmp_path, cap
         extra = ["--wrench-topic", "/other"]
     elif damage == "type":
         extra = ["--odom-topic", "/joint_states"]
+    elif damage == "commands":
+        extra = ["--thrust-commands"]
+    elif damage == "thrust topic":
+        extra = ["--thrust-topics", "/t/{name}"]
     else:
         _, clean = excitation("heave_pitch")
         rows = log_csv_text(clean).splitlines()

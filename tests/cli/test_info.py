@@ -147,6 +147,28 @@ def test_info_lists_the_thrusters_and_the_hydrodynamics(capsys):
     # the URDF's underwater-object plugin: base_link's volume and added-mass diagonal (FLU: a diagonal keeps signs)
     assert "hydrodynamics (7 links, rho 1028 kg/m^3)" in out and "  base_link: V 0.01197  CoB [+0.000 +0.000 +0.010]" in out
     assert "    added mass [6.36 7.12 18.68 0.189 0.135 0.222]\n" in out
+    assert f"  from the uuv_simulator block of {ROOT}/models/bluerov2_alpha5/uvms.urdf.xacro\n" in out
+
+
+def test_info_shows_a_hydrodynamics_yaml_with_where_it_comes_from(tmp_path, capsys):
+    """An identified YAML (uvms identify writes it with two comment lines on top): its path, its notes and its
+    values in place of the model's."""
+    import dataclasses
+
+    from conftest import shipped
+    from uvms.dynamics.hydro_writer import hydrodynamics_yaml_text
+    from uvms.dynamics.hydrodynamics import hydrodynamics_of
+
+    model = hydrodynamics_of(shipped("bluerov2_alpha5"))
+    link = dataclasses.replace(model.links["base_link"], linear_damping=[13.8, 0.0, 33.13, 0.0014, 0.8, 0.0024])
+    path = tmp_path / "hydrodynamics.yaml"
+    path.write_text(hydrodynamics_yaml_text(dataclasses.replace(model, links={**model.links, "base_link": link}),
+                                            ["identified by uvms identify from my_bag", "link base_link"]))
+    assert main(["info", "bluerov2_alpha5", "--hydrodynamics", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert f"  from {path}\n  note: identified by uvms identify from my_bag\n  note: link base_link\n" in out
+    # the file stores 0 as -0.0 of the SNAME convention (X_v = -0.0): shown as 0, not -0
+    assert "    linear [13.8 0 33.13 0.0014 0.8 0.0024]  quadratic [141 217 190 1.19 0.47 1.5]\n" in out
 
 
 def test_info_says_which_thruster_values_are_defaults(capsys):

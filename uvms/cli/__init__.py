@@ -157,6 +157,8 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
     info.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
     info.add_argument("--ee", action="append", metavar="FRAME", help="end-effector frame (repeatable)")
+    info.add_argument("--hydrodynamics", metavar="YAML", help="show the hydrodynamics of this YAML file (e.g. what "
+                                                               "uvms identify wrote) in place of the model's")
     add_package_path(info)
     info.set_defaults(handler=command_info)
     run = commands.add_parser("run", help="run a scenario (TOML): metrics.json, trajectory.csv/.npz, figures")

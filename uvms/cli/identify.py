@@ -42,24 +42,41 @@ def add_identify_parser(commands: argparse._SubParsersAction, add_package_path) 
     parser.add_argument("--max-relative-error", type=float, default=0.2,
                         help="a parameter whose standard error exceeds this fraction of its scale is held")
     parser.add_argument("--current", type=float, nargs=3, metavar=("X", "Y", "Z"),
-                        help="known constant current [m/s], world ENU (default: the prior's)")
+                        help="constant current [m/s], world ENU (default: the prior's): known, or the search's start")
+    parser.add_argument("--identify-current", action="store_true",
+                        help="identify the constant current too (the vehicle must turn and change speed)")
     parser.add_argument("--odom-topic", default=ODOM_TOPIC, help="nav_msgs/Odometry topic")
     parser.add_argument("--joint-states-topic", default=JOINT_STATES_TOPIC, help="sensor_msgs/JointState topic")
     parser.add_argument("--wrench-topic", default=BODY_WRENCH_TOPIC, help="geometry_msgs/WrenchStamped topic")
+    parser.add_argument("--thrust-topics", metavar="PATTERN",
+                        help="read the wrench from one std_msgs/Float64 topic per thruster instead, {name} the "
+                             "model's thruster name (e.g. /thrusters/{name}/thrust, as uvms run --bag writes)")
+    parser.add_argument("--thrust-commands", action="store_true",
+                        help="the thruster topics hold commands: the model's thrust limits and first-order lag apply")
     parser.add_argument("--quiet", action="store_true", help="print only the folder line")
     add_package_path(parser)
     parser.set_defaults(handler=command_identify)
 
 
-def read_log(options: argparse.Namespace):
-    """The log of ``options.log``: a CSV by its suffix, else a rosbag2 recording."""
+def read_log(options: argparse.Namespace, robot):
+    """The log of ``options.log``: a CSV by its suffix, else a rosbag2 recording (its wrench from the thruster
+    topics of ``robot`` with ``--thrust-topics``)."""
     from ..dynamics.identification_data import read_log_csv
+    from ..errors import IdentificationError
     from ..scenario.bag_reader import read_bag
+    from ..scenario.thrust_log import thrust_input
 
+    if options.thrust_commands and not options.thrust_topics:
+        raise IdentificationError("--thrust-commands says what the thruster topics hold: give --thrust-topics too")
     if Path(options.log).suffix.lower() == ".csv":
+        if options.thrust_topics:
+            raise IdentificationError("--thrust-topics reads a bag's thruster topics; a CSV log holds the body "
+                                      "wrench (columns fx ... mz)")
         return read_log_csv(options.log)
+    thrust = (thrust_input(robot, options.thrust_topics, commands=options.thrust_commands)
+              if options.thrust_topics else None)
     return read_bag(options.log, odom_topic=options.odom_topic, joint_states_topic=options.joint_states_topic,
-                    wrench_topic=options.wrench_topic)
+                    wrench_topic=options.wrench_topic, thrust=thrust)
 
 
 def command_identify(options: argparse.Namespace) -> int:
@@ -73,9 +90,10 @@ def command_identify(options: argparse.Namespace) -> int:
     from ..viz.identification import identification_figures
 
     robot = load(options.model, args=parse_assignments(options.arg), package_path=options.package_path)
-    log = read_log(options)
+    log = read_log(options, robot)
     prior = hydrodynamics_of(robot, options.prior)
     result = identify(robot, log, hydro=prior, added_mass=options.added_mass, current=options.current,
+                      identify_current=options.identify_current,
                       window=options.window, polyorder=options.polyorder, holdout=options.holdout,
                       max_relative_error=options.max_relative_error)
     out = Path(options.out or Path("out") / f"identify_{robot.name}")

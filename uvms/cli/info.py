@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from ..errors import UVMSError
 from ..model.loader import load
+from ..model.resources import MAX_YAML_BYTES, read_text
 from ..robot.robot import Robot
 from .terminal import say
 
@@ -33,6 +34,8 @@ def format_limits(lower: np.ndarray, upper: np.ndarray) -> str:
     return f"[{lower[0]:+.4f}, {upper[0]:+.4f}]"
 
 
+#: The top comment lines of a hydrodynamics YAML shown (uvms identify writes two).
+MAX_NOTE_LINES = 4
 #: The groups of ``uvms info``: joint class -> what the group is.
 JOINT_GROUPS = {
     "arm": ("arm joints", "what a user commands"),
@@ -44,9 +47,10 @@ JOINT_GROUPS = {
 }
 
 
-def describe(robot: Robot) -> str:
+def describe(robot: Robot, hydrodynamics: str | None = None) -> str:
     """The text of ``uvms info``: joints, DOF split, why the base is what it is, each joint's class and why, frames,
-    mass, end-effector poses and the rule that chose them."""
+    mass, end-effector poses and the rule that chose them, thrusters, and the hydrodynamics (the model's, or those of
+    the YAML file ``hydrodynamics``) with where they come from."""
     lines = [
         f"model       {robot.name}  ({robot.source})",
         f"base        {robot.base_type}: vehicle DOF {robot.n_vehicle}, arm DOF {robot.n_arm} "
@@ -67,7 +71,7 @@ def describe(robot: Robot) -> str:
         lines.append(f"  {frame:<{width}} xyz {np.array2string(pose.translation, precision=4, suppress_small=True)}"
                      f"  rpy {np.array2string(rpy, precision=4, suppress_small=True)}")
     lines.append(f"ee rule     {robot.ee_reason}")
-    lines += thruster_lines(robot) + hydrodynamics_lines(robot)
+    lines += thruster_lines(robot) + hydrodynamics_lines(robot, hydrodynamics)
     lines.append("checks      passed (unit axes, finite numbers, positive masses, inertias and geometry sizes, one tree, "
                  "base)")
     return "\n".join(lines)
@@ -102,7 +106,7 @@ def joint_groups(robot: Robot) -> list[str]:
 
 def vector(values: Sequence[float], style: str = "+.3f") -> str:
     """Numbers as ``[a b c]`` in one format (fixed decimals for positions, significant digits for data)."""
-    return "[" + " ".join(f"{value:{style}}" for value in values) + "]"
+    return "[" + " ".join(f"{value + 0.0:{style}}" for value in values) + "]"  # + 0.0: no -0
 
 
 def thruster_lines(robot: Robot) -> list[str]:
@@ -124,13 +128,14 @@ def thruster_lines(robot: Robot) -> list[str]:
     return lines
 
 
-def hydrodynamics_lines(robot: Robot) -> list[str]:
-    """Per link the hydrodynamic data (``uvms.dynamics.hydrodynamics_of``), FLU axes, order [u v w p q r]."""
+def hydrodynamics_lines(robot: Robot, path: str | None = None) -> list[str]:
+    """Per link the hydrodynamic data (``uvms.dynamics.hydrodynamics_of``, of the YAML file ``path`` when given),
+    FLU axes, order [u v w p q r], after where they come from."""
     from ..dynamics.hydro_parameters import hydro_rows
     from ..dynamics.hydrodynamics import hydrodynamics_of
 
     try:
-        hydro = hydrodynamics_of(robot, required=False)
+        hydro = hydrodynamics_of(robot, path, required=False)
     except UVMSError as exc:
         return [f"hydrodynamics not usable: {' '.join(str(exc).split())}"]
     rows = hydro_rows(hydro)
@@ -138,7 +143,7 @@ def hydrodynamics_lines(robot: Robot) -> list[str]:
         return ["hydrodynamics none (no uuv_simulator underwater-object plugin, no hydrodynamics.yaml beside the model)"]
     lines = [f"hydrodynamics ({len(rows)} links, rho {hydro.fluid_density:g} kg/m^3): volume [m^3], centre of "
              "buoyancy [m], diagonals of added mass [kg, kg m^2], linear [N s/m, N m s] and quadratic damping "
-             "[N s^2/m^2, N m s^2]"]
+             "[N s^2/m^2, N m s^2]", *hydrodynamics_source(robot, hydro.source)]
     for row in rows:
         lines += [f"  {row['link']}: V {row['volume']:.4g}  CoB {vector(row['center_of_buoyancy'])}",
                   f"    added mass {vector(row['added_mass_diagonal'], '.4g')}",
@@ -146,9 +151,26 @@ def hydrodynamics_lines(robot: Robot) -> list[str]:
     return lines
 
 
+def hydrodynamics_source(robot: Robot, source: str) -> list[str]:
+    """Where the hydrodynamics come from: the model's uuv_simulator block, or a YAML file with the ``#`` lines at its
+    top (``uvms identify`` writes there what it was identified from)."""
+    if source == robot.source:
+        return [f"  from the uuv_simulator block of {source}"]
+    lines = [f"  from {source}"]
+    try:
+        text = read_text(source, "hydrodynamics", MAX_YAML_BYTES)
+    except UVMSError:  # it was just read: only a file replaced since then fails here
+        return lines
+    for line in text.splitlines()[:MAX_NOTE_LINES]:
+        if not line.startswith("#"):
+            break
+        lines.append(f"  note: {line.lstrip('# ')}")
+    return lines
+
+
 def command_info(options: argparse.Namespace) -> int:
     """``uvms info MODEL``: load the model (running its checks) and describe it."""
     robot = load(options.model, base=options.base, args=parse_assignments(options.arg), ee=options.ee or None,
                  package_path=options.package_path)
-    say(describe(robot), sys.stdout, lines=True)
+    say(describe(robot, options.hydrodynamics), sys.stdout, lines=True)
     return 0

@@ -43,6 +43,7 @@ import numpy as np
 from ..errors import IdentificationError, UVMSError
 from .hydro_parameters import HydroParameters
 from .hydrodynamics import hydrodynamics_of
+from .identification_current import CurrentEstimate, estimate_current
 from .identification_data import IdentificationLog, smoothed_states
 from .identification_model import (AXES, ParameterLayout, Regression, acceleration_noise_terms, identified_link_name,
                                    known_plant, link_from_theta, parameter_layout, regression, rigid_vehicle_mass)
@@ -132,8 +133,9 @@ class IdentificationResult:
 
 
 def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = None, added_mass: str = "diagonal",
-             current: np.ndarray | None = None, window: float = 0.3, polyorder: int = 3, holdout: float = 0.2,
-             max_relative_error: float = 0.2, noise_floor: float = 0.01) -> IdentificationResult:
+             current: np.ndarray | None = None, identify_current: bool = False, window: float = 0.3,
+             polyorder: int = 3, holdout: float = 0.2, max_relative_error: float = 0.2,
+             noise_floor: float = 0.01) -> IdentificationResult:
     """Identify the vehicle's hydrodynamic parameters from a log (module docstring).
 
     Args:
@@ -142,7 +144,9 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
         hydro: the prior hydrodynamics (None: the model's own, :func:`hydrodynamics_of`); every link but the
             vehicle's root link is taken as known.
         added_mass: "diagonal" (6 entries) or "full" (symmetric 6 x 6, 21 entries).
-        current: (3,) the known constant current [m/s], world ENU (None: the prior's); it is not identified.
+        current: (3,) the constant current [m/s], world ENU (None: the prior's): known, or where the search starts.
+        identify_current: identify the current too (:mod:`uvms.dynamics.identification_current`), reported as
+            the parameters current[x], current[y], current[z] and written into the hydrodynamics.
         window: Savitzky-Golay window [s]; polyorder: its order.
         holdout: the fraction of the log at its end kept for the prediction check, in [0, 0.5].
         max_relative_error: the largest relative standard error of an identified parameter, in (0, 1].
@@ -153,13 +157,19 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
         UVMSError: a model without hydrodynamic parameters to start from.
     """
     options = _check_options(holdout, max_relative_error, noise_floor, added_mass)
-    options.update(window_s=float(window), polyorder=int(polyorder))
+    options.update(window_s=float(window), polyorder=int(polyorder), identify_current=bool(identify_current))
     prior = hydrodynamics_of(robot) if hydro is None else hydro
     link = identified_link_name(robot, prior)
     log = _arm_in_model_order(robot, log)
-    plant = known_plant(robot, prior, link, prior.current if current is None else np.asarray(current, dtype=float))
     fit_stop = len(log.t) - int(round(holdout * len(log.t)))
     states = smoothed_states(log.segment(0, fit_stop), window, polyorder)
+    water = prior.current if current is None else np.asarray(current, dtype=float)
+    found = None
+    if identify_current:
+        search = parameter_layout(prior.links[link], np.eye(6), added_mass)
+        found = estimate_current(lambda c, s: regression(known_plant(robot, prior, link, c), search, s), search,
+                                 states, water)
+    plant = known_plant(robot, prior, link, water if found is None else found.value)
     data = regression(plant, parameter_layout(prior.links[link], np.eye(6), added_mass), states)
     layout = parameter_layout(prior.links[link], rigid_vehicle_mass(plant, data.q[0]), added_mass)
     weights = _axis_weights(data, states.wrench, layout, noise_floor)
@@ -174,7 +184,7 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
                                    {**prior.links, link: identified}, source=f"identified from {log.source}")
     residuals = data.target - np.einsum("kap,p->ka", data.regressor, theta)
     estimates = tuple(_estimate(layout, k, theta[k], std_s[k], relative[k], reasons.get(k, ""))
-                      for k in range(len(theta)))
+                      for k in range(len(theta))) + (() if found is None else _current_estimates(found))
     prediction = None
     if fit_stop < len(log.t):
         held_out = smoothed_states(log.segment(fit_stop, len(log.t)), window, polyorder)
@@ -356,6 +366,16 @@ def _estimate(layout: ParameterLayout, k: int, value: float, std_scaled: float, 
     return ParameterEstimate(layout.names[k], layout.units[k], float(layout.prior[k]), float(value), std,
                              (float(value - Z95 * std), float(value + Z95 * std)), True, "", float(relative),
                              float(scale))
+
+
+def _current_estimates(found: CurrentEstimate) -> tuple[ParameterEstimate, ...]:
+    """current[x], current[y], current[z] [m/s] world ENU (scale 1 m/s)."""
+    if found.std_error is None:
+        return tuple(ParameterEstimate(f"current[{axis}]", "m/s", float(start), float(start), None, None, False,
+                                       found.reason, np.inf, 1.0) for axis, start in zip("xyz", found.start))
+    return tuple(ParameterEstimate(f"current[{axis}]", "m/s", float(start), float(value), float(std),
+                                   (float(value - Z95 * std), float(value + Z95 * std)), True, "", float(std), 1.0)
+                 for axis, start, value, std in zip("xyz", found.start, found.value, found.std_error))
 
 
 def _metrics(data: Regression, residuals: np.ndarray, states, prediction: HeldOutPrediction | None,

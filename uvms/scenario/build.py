@@ -6,7 +6,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
 from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
@@ -16,14 +15,16 @@ from ..numerics.integrate import stage_times, step_count
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, CLIKSolver, Solver, VariableDamping, initial_configuration
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
-from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, RecentSamples, SE3Trajectory, TrajectoryTable,
-                          TrapezoidLaw, VelocityRamps)
+from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
+from .excitation import check_excitation_used, scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
 from .plant import check_kinematic_plant, make_plant
 from .record import scenario_model
-from .schema import NUMBER, changed_keys
+from .schema import changed_keys
+from .schema_dynamics import NUMBER
 from .tracking import TrackingController
+from .trajectories import make_trajectory
 
 #: [solver] keys -> the solver constructor's keyword they set (solver.method and solver.joint_limit_weights,
 #: which the initial configuration also reads, are not options of a solver).
@@ -64,10 +65,15 @@ def build(scenario: dict) -> Setup:
                                 "remove [plant] or set plant.type = 'kinematic'")
         return build_sequence(robot, scenario)
     check_vehicle_control_used(scenario)
+    check_excitation_used(scenario)
     task, q0, residual = scenario_start(robot, scenario)
     trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
     duration = float(scenario["simulation"]["duration"] or trajectory.duration)
     if scenario["plant"]["type"] != "kinematic":
+        if scenario["excitation"]["wrench"] and scenario["plant"]["thrusters"]:
+            actuation = scenario_excitation(robot, make_plant(robot, scenario["plant"]), scenario, duration)
+            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
+                         actuation=actuation)
         if scenario["plant"]["thrusters"]:
             cls = solver_class(scenario["solver"])
             options = solver_options(robot, scenario["solver"], cls, scenario["simulation"]["dt"])
@@ -177,78 +183,6 @@ def initial_arm(robot: Robot, arm: list | dict) -> np.ndarray | None:
             raise ScenarioError(f"initial.arm.{joint} must be a number [rad or m], got {value!r}")
         values[names.index(joint)] = value
     return values
-
-
-def vector(values: list[float], size: int, name: str) -> np.ndarray:
-    if len(values) != size:
-        raise ScenarioError(f"trajectory.{name} must have {size} numbers, got {len(values)}")
-    return np.array(values, dtype=float)
-
-
-def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3Trajectory | VelocityRamps:
-    """The desired end-effector motion; start and orientation default to the frame's initial pose."""
-    start = vector(section["start"], 3, "start") if section["start"] else start_pose.translation.copy()
-    orientation = (vector(section["orientation"], 3, "orientation") if section["orientation"]
-                   else pin.rpy.matrixToRpy(start_pose.rotation))
-    kind = section["type"]
-    if kind == "hold":  # the start pose held for the duration (station keeping)
-        return VelocityRamps.trapezoid(start, np.zeros(3), section["duration"], section["duration"] / 2,
-                                       rotation=pin.rpy.rpyToMatrix(*orientation))
-    if kind == "ramps":
-        if not section["velocity"]:
-            raise ScenarioError("a ramps trajectory needs trajectory.velocity (the cruise velocity [m/s], world axes)")
-        if not 0 < section["accel_time"] <= section["duration"] / 2:
-            raise ScenarioError(f"a ramps trajectory needs trajectory.accel_time (the ramp time) in (0, duration/2] = "
-                                f"(0, {section['duration'] / 2:g}] s, got {section['accel_time']:g}")
-        return VelocityRamps.trapezoid(start, vector(section["velocity"], 3, "velocity"), section["duration"],
-                                       section["accel_time"], rotation=pin.rpy.rpyToMatrix(*orientation))
-    if kind == "circle":
-        if section["center"]:
-            center = vector(section["center"], 3, "center")
-        elif section["center_offset"]:
-            center = start + vector(section["center_offset"], 3, "center_offset")
-        else:
-            raise ScenarioError("a circle trajectory needs trajectory.center or trajectory.center_offset")
-        path = CirclePath(center, start, vector(section["normal"], 3, "normal"))
-    else:
-        if section["end"]:
-            end = vector(section["end"], 3, "end")
-        elif section["end_offset"]:
-            end = start + vector(section["end_offset"], 3, "end_offset")
-        else:
-            raise ScenarioError(f"a {kind} trajectory needs trajectory.end or trajectory.end_offset")
-        path = LinePath(start, end)
-    law = make_law(section, path.length)
-    if kind == "pose":
-        end_orientation = (vector(section["end_orientation"], 3, "end_orientation") if section["end_orientation"]
-                           else orientation)
-        return SE3Trajectory(np.concatenate([start, orientation]), np.concatenate([path(path.length).point, end_orientation]),
-                             law)
-    return PathTrajectory(path, law, orientation)
-
-
-def make_law(section: dict, path_length: float):
-    """Time law: trapezoid from a speed, or any law from laps (circle) / the path length.
-
-    Raises:
-        ScenarioError: both trajectory.speed and trajectory.laps (a speed fixes the distance, the laps would be
-            ignored), or a speed with a law other than the trapezoid (which alone has a cruise speed).
-    """
-    duration, accel_time = section["duration"], section["accel_time"]
-    if section["speed"] and section["laps"]:
-        raise ScenarioError("trajectory.speed and trajectory.laps are both set, but the speed fixes the distance "
-                            "(speed x duration) and the laps would be ignored: keep laps (the circle that many times "
-                            "in trajectory.duration) or speed (the trapezoid's cruise speed [m/s]), not both")
-    if section["speed"] and section["law"] != "trapezoid":
-        raise ScenarioError(f"trajectory.speed is the cruise speed of the trapezoid law, and law = "
-                            f"{section['law']!r} would ignore it: set law = 'trapezoid' or remove speed (the "
-                            f"{section['law']} law covers the path, or its laps, in trajectory.duration)")
-    distance = section["laps"] * path_length if section["laps"] else path_length
-    if section["law"] == "trapezoid":
-        if section["speed"]:
-            return TrapezoidLaw(speed=section["speed"], duration=duration, accel_time=accel_time)
-        return TrapezoidLaw.from_distance(distance, duration, accel_time)
-    return PolynomialLaw(distance=distance, duration=duration, degree=3 if section["law"] == "cubic" else 5)
 
 
 def make_plant_controller(robot: Robot, task: FrameTask, trajectory,

@@ -25,10 +25,12 @@ from ..dynamics.hydro_parameters import HydroParameters
 from ..dynamics.identification_data import IdentificationLog
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import thrusters_of
-from ..errors import IdentificationError
+from ..errors import IdentificationError, ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
+from .actuated import Actuation, check_actuated_scenario
+from .schema import changed_keys
 from .tf_tree import vehicle_root_link
 
 
@@ -47,9 +49,10 @@ class Multisine:
         return self.amplitudes * np.sqrt(2.0 / count) * np.sum(waves, axis=1)
 
 
-def multisine(amplitudes: np.ndarray, *, highest: float = 0.5, components: int = 8) -> Multisine:
+def multisine(amplitudes: np.ndarray, *, highest: float = 0.5, components: int = 8, seed: int = 0) -> Multisine:
     """A multi-sine of RMS ``amplitudes`` (6,) [N, N m] (0: the axis is not excited), ``components`` sines per axis
-    up to ``highest`` [Hz] (module docstring; the default's period is 96 s, its lowest line 0.0104 Hz).
+    up to ``highest`` [Hz] (module docstring; the default's period is 96 s, its lowest line 0.0104 Hz), with
+    Schroeder's phases (``seed`` 0) or phases drawn uniformly in [0, 2 pi) from ``seed`` (another realization).
 
     Raises:
         IdentificationError: amplitudes not 6 numbers >= 0, highest <= 0, components < 1.
@@ -64,7 +67,8 @@ def multisine(amplitudes: np.ndarray, *, highest: float = 0.5, components: int =
     grid = highest / (6 * components) * np.arange(1, 6 * components + 1)
     frequencies = np.array([grid[axis::6] for axis in range(6)])
     k = np.arange(1, components + 1)
-    phases = np.tile(-np.pi * k * (k - 1) / components, (6, 1))
+    phases = (np.tile(-np.pi * k * (k - 1) / components, (6, 1)) if seed == 0
+              else np.random.default_rng(seed).uniform(0.0, 2.0 * np.pi, (6, components)))
     return Multisine(amplitudes, frequencies, phases)
 
 
@@ -92,13 +96,38 @@ def excitation_run(robot: Robot, wrench: Multisine, q0: np.ndarray, duration: fl
     """
     plant = Plant(robot, hydro, gravity=True, current=current)
     actuated = ActuatedPlant(plant, thrusters_of(robot))
-    allocation = np.linalg.pinv(actuated.matrix)
-    arm = (lambda t: np.zeros(plant.n_arm)) if arm_amplitudes is None else arm_motion(arm_amplitudes)
-
-    def controller(t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
-        return ActuatedCommand(arm(t), actuated.saturate(allocation @ wrench(t)), {})
-
+    controller = ExcitationControl(actuated, wrench, arm_amplitudes)
     return simulate(actuated, controller, q0, duration, dt, progress=False), actuated
+
+
+class ExcitationControl:
+    """The open-loop commands of an excitation: thrusts sat(B^+ tau(t)), the arm's sum of sines (or held).
+
+    Args:
+        actuated: the plant with its thrusters (B (6, n), bounds); wrench: tau(t).
+        arm_amplitudes: (n_arm,) [rad or m] (:func:`arm_motion`), None: the arm held; arm_period: [s].
+    """
+
+    def __init__(self, actuated: ActuatedPlant, wrench: Multisine, arm_amplitudes: np.ndarray | None = None,
+                 arm_period: float = 20.0) -> None:
+        self.actuated, self.wrench = actuated, wrench
+        self.allocation = np.linalg.pinv(actuated.matrix)  # (n, 6)
+        n_arm = actuated.plant.n_arm
+        self.arm = (lambda t: np.zeros(n_arm)) if arm_amplitudes is None else arm_motion(arm_amplitudes, arm_period)
+
+    def thrust(self, t: float) -> np.ndarray:
+        """B^+ tau(t) (n,) [N], before saturation."""
+        return self.allocation @ self.wrench(t)
+
+    def __call__(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
+        return ActuatedCommand(self.arm(t), self.actuated.saturate(self.thrust(t)), {})
+
+    def peak_ratio(self, duration: float, dt: float) -> float:
+        """The largest |thrust command| over its limit on the run's steps (> 1: the excitation saturates)."""
+        times = np.arange(0.0, duration + 0.5 * dt, dt)
+        thrust = np.array([self.thrust(t) for t in times])  # (N, n)
+        limit = np.where(thrust >= 0.0, self.actuated.upper, -self.actuated.lower)
+        return float(np.max(np.abs(thrust) / np.maximum(limit, 1e-12)))
 
 
 def log_of_run(robot: Robot, result: SimulationResult, source: str = "simulated run") -> IdentificationLog:
@@ -140,3 +169,54 @@ def with_odometry_noise(log: IdentificationLog, *, position: float = 0.0, attitu
     return IdentificationLog(log.t, log.position + rng.normal(0.0, position, (count, 3)), np.array(quaternions),
                              twist, log.wrench, log.joint_names, log.joint_position, log.joint_velocity,
                              f"{log.source} + odometry noise")
+
+
+def check_excitation_used(scenario: dict) -> None:
+    """[excitation] keys set without excitation.wrench and plant.thrusters = true are refused (they would do
+    nothing)."""
+    given = changed_keys(scenario, "excitation")
+    needs = (("excitation.wrench (6 RMS values [N, N m])", scenario["excitation"]["wrench"]),
+             ("plant.thrusters = true", scenario["plant"]["thrusters"]))
+    missing = [need for need, present in needs if not present]
+    if given and missing:
+        raise ScenarioError(f"excitation.{given[0]} needs {' and '.join(missing)}: the excitation drives the "
+                            f"vehicle's thrusters")
+
+
+def scenario_excitation(robot: Robot, plant: Plant, scenario: dict, duration: float) -> Actuation:
+    """The actuated part of an excitation scenario (``[excitation]`` with plant.thrusters): the model's thrusters
+    driven open loop by the multi-sine, the arm held or moving; ``uvms run --bag`` then writes the log that
+    ``uvms identify`` reads.
+
+    Raises:
+        ScenarioError: what :func:`~uvms.scenario.actuated.check_actuated_scenario` refuses, [vehicle_control] or
+            [[inequalities]] given (no closed loop here), bad excitation values, or thrust commands beyond the
+            thrusters' limits (the message gives the factor to scale excitation.wrench by).
+    """
+    check_actuated_scenario(robot, scenario)
+    unused = changed_keys(scenario, "vehicle_control")
+    if unused or scenario["inequalities"]:
+        what = f"vehicle_control.{unused[0]}" if unused else "[[inequalities]]"
+        raise ScenarioError(f"{what} is not used by an excitation ([excitation] wrench): the vehicle is driven open "
+                            f"loop; remove it, or remove excitation.wrench for the closed-loop chain")
+    section, dt = scenario["excitation"], float(scenario["simulation"]["dt"])
+    if section["arm"] and len(section["arm"]) != robot.n_arm:
+        raise ScenarioError(f"excitation.arm needs {robot.n_arm} amplitudes [rad or m] "
+                            f"({', '.join(robot.arm_joint_names)}), got {len(section['arm'])}; [] holds the arm")
+    if not section["arm_period"] > 0:
+        raise ScenarioError(f"excitation.arm_period must be > 0 s, got {section['arm_period']:g}")
+    try:
+        thrusters = thrusters_of(robot)
+        wrench = multisine(np.array(section["wrench"]), highest=float(section["highest"]),
+                           components=int(section["components"]), seed=int(section["seed"]))
+    except UVMSError as exc:
+        raise ScenarioError(f"excitation: {' '.join(str(exc).split())}") from None
+    actuated = ActuatedPlant(plant, thrusters)
+    controller = ExcitationControl(actuated, wrench, np.array(section["arm"]) if section["arm"] else None,
+                                   float(section["arm_period"]))
+    ratio = controller.peak_ratio(duration, dt)
+    if ratio > 1.0:
+        raise ScenarioError(f"excitation.wrench asks up to {ratio:.3g} times the thrusters' limits "
+                            f"({thrusters.source}); scale it by {1.0 / ratio:.3g} or less so that the log's wrench is "
+                            f"what was commanded")
+    return Actuation(plant, thrusters, controller)

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.hydrodynamics import HydroParameters
+from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
 from ..dynamics.plant import Plant
-from ..errors import ScenarioError
+from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from .schema import changed_keys
 
@@ -14,7 +14,8 @@ from .schema import changed_keys
 def check_kinematic_plant(section: dict) -> None:
     """Reject [plant] keys that only a dynamic plant uses when plant.type = 'kinematic'."""
     unused = changed_keys({"plant": section}, "plant", ("gjm", "motor_feedforward", "control_dt", "gravity",
-                                                        "added_mass", "damping", "current", "thrusters"))
+                                                        "added_mass", "damping", "current", "thrusters",
+                                                        "hydrodynamics"))
     if unused:
         raise ScenarioError(f"plant.{unused[0]} needs a dynamic plant: the kinematic one moves the vehicle by momentum "
                             f"conservation (solver.free_floating) or as commanded; set plant.type = 'rigid' or "
@@ -38,17 +39,32 @@ def make_plant(robot: Robot, section: dict) -> Plant:
         for key in ("added_mass", "damping"):
             if section[key]:
                 raise ScenarioError(f"plant.{key} = true needs plant.type = 'hydrodynamic'; a rigid plant has no fluid")
-        if section["gravity"] or current is not None:
-            raise ScenarioError("plant.gravity and plant.current need plant.type = 'hydrodynamic' (buoyancy, fluid); "
-                                "a rigid plant floats weightless in vacuum")
+        if section["gravity"] or current is not None or section["hydrodynamics"]:
+            raise ScenarioError("plant.gravity, current and hydrodynamics need plant.type = 'hydrodynamic' (buoyancy, "
+                                "fluid); a rigid plant floats weightless in vacuum")
         return Plant(robot, HydroParameters(source="rigid plant (no fluid)"), gravity=False, motor_time_constant=tau,
                      added_mass=False, damping=False)
     added_mass = True if section["added_mass"] is None else section["added_mass"]
     damping = True if section["damping"] is None else section["damping"]
-    plant = Plant(robot, None, gravity=section["gravity"], motor_time_constant=tau, current=current,
-                  added_mass=added_mass, damping=damping)
+    plant = Plant(robot, scenario_hydrodynamics(robot, section), gravity=section["gravity"], motor_time_constant=tau,
+                  current=current, added_mass=added_mass, damping=damping)
     if not plant.links:
         raise ScenarioError(f"plant.type = 'hydrodynamic' needs hydrodynamic parameters, and {robot.source} has none; "
                             f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.dynamics.hydrodynamics), "
                             f"or use plant.type = 'rigid'")
     return plant
+
+
+def scenario_hydrodynamics(robot: Robot, section: dict) -> HydroParameters | None:
+    """The hydrodynamics of plant.hydrodynamics (a YAML file in the scenario's folder, e.g. what ``uvms identify``
+    wrote), checked against the model's links; None when not given (the model's own).
+
+    Raises:
+        ScenarioError: the file is not a hydrodynamics YAML of this model (the loader's message).
+    """
+    if not section["hydrodynamics"]:
+        return None
+    try:
+        return hydrodynamics_of(robot, section["hydrodynamics"])
+    except UVMSError as exc:
+        raise ScenarioError(f"plant.hydrodynamics: {' '.join(str(exc).split())}") from None

@@ -20,7 +20,6 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
-from ..control import gjm, vehicle
 from ..errors import ScenarioError
 from ..io import outputs
 from ..model.resources import MAX_TOML_BYTES, read_text
@@ -28,20 +27,16 @@ from ..solvers import SOLVERS
 from ..tasks.objectives import FILE_KEYS
 from .inequalities import check_tables
 from .resources import resolve_scenario_path, scenario_file, scenario_folders
+from .schema_dynamics import EXCITATION, NUMBER, NUMBERS, PLANT, VEHICLE_CONTROL
 
-NUMBER = (int, float)
 #: Defaults of [outputs] position_tolerance [m] and orientation_tolerance [rad]: a run whose task error exceeds
 #: them is reported as not meeting its task (a terminal warning, metrics.json "verdict"). 1 cm and 1 degree: far
 #: above what closed-loop kinematic control reaches (1e-10 m), and an error a user sees in a figure.
 DEFAULT_POSITION_TOLERANCE = 0.01
 DEFAULT_ORIENTATION_TOLERANCE = 0.0175
-#: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
-#: free-floating dynamics of uvms.dynamics.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
-PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
 #: solver.method values: the solvers registered in uvms.solvers.SOLVERS (CLIK, classic/robust task priority,
 #: santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based (iCAT) and the QP hierarchy).
 SOLVER_METHODS = SOLVERS.keys()  # a live view: a method registered later is valid
-NUMBERS = "numbers"  # a list of numbers
 REQUIRED = object()
 #: A name read from a scenario that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,
 #: ``outputs.animation``) is a plain name: one path component, never a path that leads outside ``--out``.
@@ -139,31 +134,9 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "duration": (NUMBER, 0.0, None),
         "integrator": (str, "rk4", ("euler", "rk4")),
     },
-    "plant": {
-        "type": (str, "kinematic", PLANT_TYPES),
-        "gjm": (str, "rigid", gjm.GJM_KINDS),
-        "motor_time_constant": (NUMBER, 0.1, None),
-        "motor_feedforward": (bool, False, None),
-        "control_dt": (NUMBER, 0.0, None),
-        "gravity": (bool, False, None),
-        "added_mass": (bool, None, None),
-        "damping": (bool, None, None),
-        "current": (NUMBERS, [], None),
-        "thrusters": (bool, False, None),  # the vehicle actuated by its thrusters ([vehicle_control])
-    },
-    "vehicle_control": {  # plant.thrusters = true: the vehicle loop, the allocation and the arm's coordination
-        "kp": ((int, float, list), None, None),  # None: from bandwidth, damping_ratio and the vehicle's inertia
-        "ki": ((int, float, list), None, None),  # (uvms.control.vehicle.velocity_gains); given: used as it is
-        "bandwidth": ((int, float, list), list(vehicle.DEFAULT_BANDWIDTH), None),  # [rad/s] per body axis
-        "damping_ratio": ((int, float, list), list(vehicle.DEFAULT_DAMPING_RATIO), None),
-        "pose_gains": ((int, float, list), 1.5, None),
-        "max_speed": ((int, float, list), 0.5, None),
-        "priorities": (list, [], None),
-        "coordination": (bool, True, None),
-        "arm_feedforward": (bool, True, None),
-        "knows_current": (bool, False, None),
-        "saturation_feedback": (bool, False, None),  # the allocation's shortfall bounds the vehicle's reference
-    },
+    "plant": PLANT,
+    "vehicle_control": VEHICLE_CONTROL,
+    "excitation": EXCITATION,
     "outputs": {
         "figures": (bool, True, None),
         "animation": (str, "", None),
@@ -243,6 +216,9 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     if not model_path.is_absolute() and (path.parent / model_path).exists():
         scenario["model"]["path"] = str((path.parent / model_path).resolve())
     scenario["model"]["package_path"] = scenario_folders(scenario["model"]["package_path"], path, "model.package_path")
+    if scenario["plant"]["hydrodynamics"]:
+        scenario["plant"]["hydrodynamics"] = scenario_file(scenario["plant"]["hydrodynamics"], path,
+                                                           "plant.hydrodynamics")
     for index, table in enumerate(scenario["inequalities"]):
         for key in set(FILE_KEYS.get(table["type"], ())) & set(table):
             table[key] = scenario_file(table[key], path, f"inequalities[{index}].{key}")

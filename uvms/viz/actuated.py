@@ -106,10 +106,12 @@ def comparison_figure(runs: Mapping[str, SimulationResult], title: str = "",
 
 def actuated_figures(result: SimulationResult, thrusters: Thrusters, folder: str | os.PathLike,
                      title: str = "") -> list[Path]:
-    """Write ``thrusters.png`` and ``station.png`` of an actuated run into ``folder``; returns their paths."""
+    """Write ``thrusters.png`` and ``station.png`` of an actuated run into ``folder`` (station.png when the run kept
+    a station: an open-loop excitation has none); returns their paths."""
     folder = Path(folder)
-    figures = {"thrusters.png": thrust_figure(result, thrusters, title),
-               "station.png": coordination_figure({"this run": result}, title)}
+    figures = {"thrusters.png": thrust_figure(result, thrusters, title)}
+    if result.actuation.series("vehicle_position_error") is not None:
+        figures["station.png"] = coordination_figure({"this run": result}, title)
     for name, figure in figures.items():
         outputs.save_figure(figure, folder / name)
     return [folder / name for name in figures]
