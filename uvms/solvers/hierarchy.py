@@ -25,7 +25,6 @@ from ..tasks.task import Task
 from ..numerics.checks import check_scalar, prepared_gain
 from ..numerics.inverses import SolverInputError
 from .result import SolvedRows
-from .saturation import position_rate_bounds
 from .stack import stacked_terms
 
 #: What a level may hold.
@@ -219,16 +218,6 @@ class HierarchyPlan:
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""
         return q if isinstance(q, Configuration) else Configuration(self.robot, q, check=check)
-
-
-def rate_bounds(hierarchy: Hierarchy, dt: float | None, fraction: float,
-                valid_set: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Position-rate bounds (nv,) of the hierarchy's joint limits over ``dt`` (unbounded without dt)."""
-    nv = hierarchy.state.robot.nv
-    if dt is None or not hierarchy.joint_limits:
-        return np.full(nv, -np.inf), np.full(nv, np.inf)
-    dt = check_scalar(dt, "dt", positive=True)
-    return position_rate_bounds(hierarchy.state.q, nv, hierarchy.joint_limits, dt, fraction, valid_set)
 
 
 # --------------------------------------------------------------------------------- reporting

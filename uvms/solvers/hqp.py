@@ -42,9 +42,9 @@ from ..tasks.objectives import JointLimits, VelocityLimit
 from ..numerics.checks import check_damping, check_scalar, check_weights
 from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value
 from .base import Solver
-from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, rate_bounds, solved_rows, speed_ratio
+from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, solved_rows, speed_ratio
 from .result import SolverResult
-from .saturation import speed_maximum, velocity_box
+from .saturation import RateRows, speed_maximum, velocity_box
 
 #: QP solvers tried, in order, when none is named.
 PREFERRED_SOLVERS = ("daqp", "proxqp")
@@ -82,12 +82,11 @@ class Cascade:
         self.rows.append(-rows)
         self.bounds.append(-kept)
 
-    def matrices(self, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
-        """(G, h) with every kept row loosened by tolerance (1 + |h|)."""
+    def stacked(self) -> tuple[np.ndarray, np.ndarray]:
+        """(G (k, n), h (k,)) of the rows kept so far, before their loosening."""
         if not self.rows:
             return np.zeros((0, self.size)), np.zeros(0)
-        bounds = np.concatenate(self.bounds)
-        return np.vstack(self.rows), bounds + tolerance * (1.0 + np.abs(bounds))
+        return np.vstack(self.rows), np.concatenate(self.bounds)
 
 
 def qp_solver(name: str | None) -> str:
@@ -112,13 +111,29 @@ def qp_solver(name: str | None) -> str:
     return name
 
 
-def solve_qp(cost: np.ndarray, linear: np.ndarray, rows: np.ndarray, bounds: np.ndarray, lower: np.ndarray,
-             upper: np.ndarray, solver: str, options: dict | None = None) -> np.ndarray | None:
-    """min 1/2 z^T P z + c^T z s.t. rows z <= bounds, lower <= z <= upper; None when not found."""
+def solve_qp(cost: np.ndarray, linear: np.ndarray, rows: np.ndarray, upper: np.ndarray, lower: np.ndarray,
+             solver: str, options: dict | None = None) -> np.ndarray | None:
+    """min 1/2 z^T P z + c^T z s.t. lower <= [z; rows z] <= upper (z (s,), the first s entries of the bounds its
+    box, the rest the rows'; a row's lower -1e30: one-sided); None when not found.
+
+    DAQP is called through its own API with these arrays (what qpsolvers' DAQP interface passes it, without its
+    problem object and checks, which cost three times the solve at these sizes), every other solver through
+    qpsolvers (a row's upper bound as G z <= h).
+    """
+    size = linear.size
+    if solver == "daqp":
+        import daqp  # its Python API (a compiled module), installed with qpsolvers[daqp]
+
+        try:
+            x, _, exitflag, _ = daqp.solve(cost, linear, rows, upper, lower, np.zeros(upper.size, dtype=np.intc),
+                                           **(options or {}))
+        except Exception:  # noqa: BLE001 - a solver's failure is reported as a status, never raised
+            return None
+        return x if exitflag > 0 and x is not None and np.isfinite(x).all() else None
     from qpsolvers import Problem, solve_problem
 
-    problem = Problem(cost, linear, rows if rows.size else None, bounds if rows.size else None, None, None,
-                      lower, upper)
+    problem = Problem(cost, linear, rows if rows.size else None, upper[size:] if rows.size else None, None, None,
+                      lower[:size], upper[:size])
     try:
         solution = solve_problem(problem, solver=solver, **(options or {}))
     except Exception:  # noqa: BLE001 - a solver's failure is reported as a status, never raised
@@ -142,25 +157,29 @@ def level_attempts(solvers: Sequence[str]) -> list[tuple[str, dict, float]]:
 
 def solve_level(cascade: Cascade, equality: np.ndarray, command: np.ndarray, inequality: np.ndarray,
                 bound: np.ndarray, weights: np.ndarray, regularization: float,
-                solvers: Sequence[str]) -> tuple[np.ndarray, np.ndarray, str]:
-    """One level's QP over z = [x, w]: (x, w, status); if every attempt fails, the cascade's x is kept.
-    ``regularization``: the weight rho + lambda^2 of |x|^2_W in this level."""
+                attempts: Sequence[tuple[str, dict, float]]) -> tuple[np.ndarray, np.ndarray, str]:
+    """One level's QP over z = [x, w]: (x, w, status); if every attempt (:func:`level_attempts`) fails, the
+    cascade's x is kept. ``regularization``: the weight rho + lambda^2 of |x|^2_W in this level. The QP's arrays
+    are written by one compiled call (:func:`~uvms.numerics._kernels.qp.level_qp_into`)."""
+    from ..numerics._kernels.qp import level_qp_into, loosened_bounds_into  # numba: loaded at the first solve
+
     n, m = cascade.size, inequality.shape[0]
-    cost = np.zeros((n + m, n + m))
-    cost[:n, :n] = equality.T @ equality + regularization * weights
-    cost[n:, n:] = np.eye(m)
-    linear = np.concatenate([-equality.T @ command, np.zeros(m)])
-    lower = np.concatenate([cascade.lower, np.zeros(m)])
-    upper = np.concatenate([cascade.upper, np.full(m, np.inf)])
-    for index, (solver, options, tolerance) in enumerate(level_attempts(solvers)):
-        kept_rows, kept_bounds = cascade.matrices(tolerance)
-        rows = np.vstack([np.hstack([kept_rows, np.zeros((kept_rows.shape[0], m))]),
-                          np.hstack([-inequality, -np.eye(m)])])
-        z = solve_qp(cost, linear, rows, np.concatenate([kept_bounds, -bound]), lower, upper, solver, options)
+    kept_rows, kept = cascade.stacked()
+    total, count = n + m, kept.size + m
+    cost, rows = np.zeros((total, total)), np.zeros((count, total))
+    linear, upper, lower = np.empty(total), np.empty(total + count), np.empty(total + count)
+    tolerance = attempts[0][2]
+    level_qp_into(equality.T @ equality + regularization * weights, -equality.T @ command, kept_rows, kept,
+                  tolerance, inequality, bound, cascade.lower, cascade.upper, cost, linear, rows, upper, lower)
+    for index, (solver, options, keep) in enumerate(attempts):
+        if keep != tolerance:
+            loosened_bounds_into(kept, keep, total, upper)
+            tolerance = keep
+        z = solve_qp(cost, linear, rows, upper, lower, solver, options)
         if z is not None:  # x* clipped into the box the solver kept to its tolerance: exactly feasible below
             x = np.clip(z[:n], cascade.lower, cascade.upper)
             notes = [f"{key}={value}" for key, value in options.items()]
-            notes += [f"levels above kept to {tolerance:g}"] if tolerance > KEEP_TOLERANCE else []
+            notes += [f"levels above kept to {keep:g}"] if keep > KEEP_TOLERANCE else []
             how = f" ({solver}{', ' if notes else ''}{', '.join(notes)})" if index else ""
             return x, np.maximum(bound - inequality @ x, 0.0), f"optimal{how}"
     return cascade.x, np.maximum(bound - inequality @ cascade.x, 0.0), "failed: kept the solution of the levels above"
@@ -247,21 +266,25 @@ class HQPSolver(Solver):
         self.solver = qp_solver(solver)
         self._solvers = [self.solver] + [name for name in PREFERRED_SOLVERS
                                          if name != self.solver and name in _installed()]
+        self._attempts = level_attempts(self._solvers)  # (solver, options, keep tolerance) in the order tried
         self._weights = _weight_matrix(weights, self.plan.size)
         self._inverse_root = np.linalg.inv(np.linalg.cholesky(self._weights)).T  # W^-1/2 = L^-T, W = L L^T
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
+        self._rate_rows = RateRows.of(self.plan.joint_limits, valid_set=True)  # the valid sets' rows, stacked once
+        self._unbounded = np.full(robot.nv, -np.inf), np.full(robot.nv, np.inf)
 
     def velocity(self, configuration: Configuration) -> SolverResult:
         """The velocity of the QP hierarchy at ``configuration``: the objectives active when a constraint binds
         or is relaxed; ``extras`` has ``solver_status`` and ``slacks`` per level and the ``solver`` used."""
         hierarchy = self.plan.evaluate(self._checked(configuration))
         maximum = self.maximum
-        rate_lower, rate_upper = rate_bounds(hierarchy, self.dt, self.fraction, valid_set=True)
+        rate_lower, rate_upper = (self._rate_rows.bounds(hierarchy.state.q, self.robot.nv, self.dt, self.fraction)
+                                  if self.plan.joint_limits else self._unbounded)
         lower, upper = velocity_box(maximum, rate_lower, rate_upper)
         cascade = initial_cascade(hierarchy, lower, upper)
 
-        freedom = joint_freedom(hierarchy)
+        freedom = joint_freedom(hierarchy) if isinstance(self.damping, VariableDamping) else None
         used = 0.0
 
         def solve(equality, command, inequality, bound):
@@ -269,7 +292,7 @@ class HQPSolver(Solver):
             damping = level_damping(equality, freedom, self._inverse_root, self.damping)
             used = max(used, damping)
             return solve_level(cascade, equality, command, inequality, bound, self._weights,
-                               self.regularization + damping**2, self._solvers)
+                               self.regularization + damping**2, self._attempts)
 
         vehicle_rows, vehicle_bounds = vehicle_speed_rows(hierarchy, lower, upper)
         if vehicle_bounds.size:  # a slacked level of its own, above the others
@@ -285,13 +308,19 @@ class HQPSolver(Solver):
             statuses.append(status)
             slacks.append(float(np.linalg.norm(slack)))
             solved.append((inequality, bound, slack, spans))
-        binding = {}  # read at the final x: the levels below are what push a row onto its bound
-        for inequality, bound, slack, spans in solved:
-            binding.update(inequalities_binding(inequality @ cascade.x - (bound - slack), slack, spans))
         v = hierarchy.velocity(cascade.x)
-        binding.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
-        return SolverResult(v=v, sigma_min=task_sigma_min(hierarchy), damping=used, free_floating=self.free_floating,
-                            scales=(1.0,) * len(hierarchy.levels), speed_ratio=speed_ratio(v, maximum),
+        x = cascade.x
+
+        def binding() -> dict[str, bool]:  # read at the final x: the levels below are what push a row onto its bound
+            found = {}
+            for inequality, bound, slack, spans in solved:
+                found.update(inequalities_binding(inequality @ x - (bound - slack), slack, spans))
+            found.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
+            return found
+
+        return SolverResult(v=v, sigma_min=lambda: task_sigma_min(hierarchy), damping=used,
+                            free_floating=self.free_floating, scales=(1.0,) * len(hierarchy.levels),
+                            speed_ratio=speed_ratio(v, maximum),
                             extras={"solver_status": tuple(statuses), "slacks": tuple(slacks), "solver": self.solver},
                             levels=solved_rows(hierarchy), binding=binding)
 
@@ -316,10 +345,11 @@ def joint_freedom(hierarchy: Hierarchy) -> np.ndarray:
     return freedom
 
 
-def level_damping(equality: np.ndarray, freedom: np.ndarray, inverse_root: np.ndarray,
+def level_damping(equality: np.ndarray, freedom: np.ndarray | None, inverse_root: np.ndarray,
                   damping: float | VariableDamping) -> float:
     """lambda of a level with task rows E (k, n): fixed, or amundsen2018 eq. 6 of sigma_min of
-    E diag(freedom) W^-1/2 (the columns the joint limits hold taken out); 0 without task rows."""
+    E diag(freedom) W^-1/2 (the columns the joint limits hold taken out; ``freedom`` read only by a variable
+    damping); 0 without task rows."""
     if not equality.size:
         return 0.0
     if not isinstance(damping, VariableDamping):
