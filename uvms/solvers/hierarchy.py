@@ -22,7 +22,7 @@ from ..robot.robot import Robot, check_robot
 from ..robot.configuration import Configuration
 from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
 from ..tasks.task import Task
-from ..numerics.checks import check_scalar, prepared_gain
+from ..numerics.checks import prepared_gain
 from ..numerics.inverses import SolverInputError
 from .result import SolvedRows
 from .stack import stacked_terms
@@ -176,6 +176,9 @@ class HierarchyPlan:
         self.joint_limits = [item for level in self.levels for item in level.inequalities
                              if isinstance(item, JointLimits)]
         self.size = robot.n_arm if free_floating else robot.nv
+        sizes = [sum(item.dim for item in (*level.tasks, *level.inequalities)) for level in self.levels]
+        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)  # (L + 1,) each level's first row
+        self.equality = np.array([bool(level.tasks) and not level.inequalities for level in self.levels])  # (L,)
 
     def evaluate(self, state: Configuration) -> Hierarchy:
         """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v."""
@@ -231,9 +234,11 @@ def solved_rows(hierarchy: Hierarchy) -> tuple[SolvedRows, ...]:
 
 
 def speed_ratio(v: np.ndarray, maximum: np.ndarray) -> float:
-    """max_i |v_i| / max_i over the finite speed limits (0 without any)."""
-    limited = np.isfinite(maximum)
-    return float(np.max(np.abs(v[limited]) / maximum[limited], initial=0.0))
+    """max_i |v_i| / max_i over the finite speed limits (0 without any;
+    :func:`~uvms.numerics._kernels.boxes.speed_ratio_of`)."""
+    from ..numerics._kernels.boxes import speed_ratio_of  # numba: loaded at the first solve, not by ``import uvms``
+
+    return float(speed_ratio_of(v, maximum))
 
 
 def last_task_sigma(hierarchy: Hierarchy, sigmas: Sequence[float]) -> float:
