@@ -139,6 +139,7 @@ class PlannedLevel:
     tasks: tuple[Task, ...]
     inequalities: tuple[Inequality, ...]
     command: object  # (error (k,), feedforward (k,)) -> xdot_d + K e (k,), the task gain prepared
+    ones: np.ndarray  # (k,) the equality rows' activations, shared by every evaluation (read, never written)
 
 
 class HierarchyPlan:
@@ -170,9 +171,10 @@ class HierarchyPlan:
         self.levels = []
         for index, level in items:
             tasks = tuple(item for item in level if isinstance(item, Task))
-            command = prepared_gain(gain, sum(task.dim for task in tasks)) if tasks else None
+            dim = sum(task.dim for task in tasks)
+            command = prepared_gain(gain, dim) if tasks else None
             self.levels.append(PlannedLevel(index, tasks, tuple(i for i in level if isinstance(i, Inequality)),
-                                            command))
+                                            command, np.ones(dim)))
         self.joint_limits = [item for level in self.levels for item in level.inequalities
                              if isinstance(item, JointLimits)]
         self.size = robot.n_arm if free_floating else robot.nv
@@ -193,30 +195,27 @@ class HierarchyPlan:
     def _level_rows(self, state: Configuration, level: PlannedLevel) -> LevelRows:
         """One level's rows at ``state``: equality tasks first, then the inequalities in their order."""
         inequalities = [item.rows(state) for item in level.inequalities]
-        blocks, references, activations = [], [], []
         task_jacobian = task_error = task_command = None
         if level.tasks:
             task_jacobian, task_error, feedforward = stacked_terms(state, level.tasks)
             task_command = level.command(task_error, feedforward)
             if not inequalities:  # the common equality level: its own arrays, nothing to stack
                 solved = state.generalized(task_jacobian) if self.free_floating else task_jacobian
-                return LevelRows(index=level.index, jacobian=task_jacobian, solved=solved, reference=task_command,
-                                 activation=np.ones(task_error.size), task_jacobian=task_jacobian,
-                                 task_error=task_error, task_command=task_command, equality=True)
-            blocks.append(task_jacobian)
-            references.append(task_command)
-            activations.append(np.ones(task_error.size))
-        for rows in inequalities:
-            blocks.append(rows.jacobian)
-            references.append(rows.reference)
-            activations.append(rows.activation)
-        jacobian = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
+                return LevelRows(level.index, task_jacobian, solved, task_command, level.ones,
+                                 task_jacobian=task_jacobian, task_error=task_error, task_command=task_command,
+                                 equality=True)
+        if task_jacobian is None and len(inequalities) == 1:  # one objective: its own arrays
+            rows = inequalities[0]
+            jacobian, reference, activation = rows.jacobian, rows.reference, rows.activation
+        else:
+            head = [(task_jacobian, task_command, level.ones)] if task_jacobian is not None else []
+            blocks = head + [(rows.jacobian, rows.reference, rows.activation) for rows in inequalities]
+            jacobian = np.vstack([block[0] for block in blocks])
+            reference = np.concatenate([block[1] for block in blocks])
+            activation = np.concatenate([block[2] for block in blocks])
         solved = state.generalized(jacobian) if self.free_floating else jacobian
-        return LevelRows(index=level.index, jacobian=jacobian, solved=solved,
-                         reference=references[0] if len(references) == 1 else np.concatenate(references),
-                         activation=activations[0] if len(activations) == 1 else np.concatenate(activations),
-                         objectives=inequalities, inequalities=list(level.inequalities), task_jacobian=task_jacobian,
-                         task_error=task_error, task_command=task_command)
+        return LevelRows(level.index, jacobian, solved, reference, activation, inequalities, list(level.inequalities),
+                         task_jacobian, task_error, task_command)
 
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""

@@ -78,6 +78,9 @@ class ICAT:
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self._root_eta = np.sqrt(self.eta)
         self._kernel_constants = (*self.inverse.kernel_weights, *damping_parameters(self.damping), RCOND, self.eta)
+        from ..numerics._kernels.icat import icat_into  # numba: loaded where a solver is built, not by ``import uvms``
+
+        self._icat_into = icat_into
 
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
@@ -109,8 +112,6 @@ class ICAT:
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
-        from ..numerics._kernels.icat import icat_into  # numba: loaded at the first solve, not by ``import uvms``
-
         levels = hierarchy.levels
         count = len(levels)
         contributions, sigmas = np.empty((count, self.size)), np.empty(count)
@@ -121,10 +122,12 @@ class ICAT:
             references = np.concatenate([level.reference for level in levels])
             activations = np.concatenate([level.activation for level in levels])
         else:
-            jacobians, references, activations = levels[0].solved, levels[0].reference, levels[0].activation
-        converged, largest = icat_into(np.ascontiguousarray(jacobians, dtype=float), references, activations,
-                                       offsets, equality, *self._kernel_constants, contributions, sigmas)
-        converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
+            jacobians = np.ascontiguousarray(levels[0].solved, dtype=float)
+            references, activations = levels[0].reference, levels[0].activation
+        converged, largest = self._icat_into(jacobians, references, activations, offsets, equality,
+                                             *self._kernel_constants, contributions, sigmas)
+        if not converged:
+            converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
         return contributions, sigmas, largest
 
 
@@ -222,7 +225,7 @@ def saturate(hierarchy: Hierarchy, contributions: np.ndarray, q: np.ndarray,
     """The solved columns (n,): the levels' contributions (L, n) summed in order, scaled lowest first so that v
     stays inside the velocity box at q (``box``: the constants of
     :func:`~uvms.numerics._kernels.boxes.saturated_sum_into` after the contributions and q); and the scales."""
-    from ..numerics._kernels.boxes import saturated_sum_into  # numba: loaded at the first solve
+    from ..numerics._kernels.boxes import saturated_sum_into  # numba: loaded where a solver is built
 
     if not contributions.shape[0]:
         return np.zeros(hierarchy.size), ()
