@@ -111,9 +111,12 @@ class Problem:
 
 # ------------------------------------------------------------------------------------------- steppers
 def ours(solver_class: type[Solver], problem: Problem):
-    """A stepper (q, levels) -> (q+, v, infeasible) of a SetBasedSolver or HQPSolver built at every step."""
+    """A stepper (q, levels) -> (q+, v, infeasible) of a SetBasedSolver or HQPSolver built at every step (one
+    Configuration moved to q, as pink's is)."""
+    configuration = uvms.Configuration(problem.robot, problem.robot.neutral())
+
     def stepper(q, levels):
-        configuration = uvms.Configuration(problem.robot, q, check=False)
+        configuration.update(q, check=False)  # q from pin.integrate
         try:
             result = solver_class(problem.robot, levels, dt=DT, gain=GAIN).step(configuration, DT)
         except Exception:  # noqa: BLE001 - counted as infeasible, like pink's

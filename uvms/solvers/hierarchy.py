@@ -12,6 +12,7 @@ Both hierarchical solvers read their levels from here: the set-based (iCAT) prio
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -179,7 +180,7 @@ class HierarchyPlan:
                              if isinstance(item, JointLimits)]
         self.size = robot.n_arm if free_floating else robot.nv
         sizes = [sum(item.dim for item in (*level.tasks, *level.inequalities)) for level in self.levels]
-        self.offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)  # (L + 1,) each level's first row
+        self.offsets = np.array([0, *itertools.accumulate(sizes)], dtype=np.int64)  # (L + 1,) each level's first row
         self.equality = np.array([bool(level.tasks) and not level.inequalities for level in self.levels])  # (L,)
 
     def evaluate(self, state: Configuration) -> Hierarchy:

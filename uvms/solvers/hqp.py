@@ -39,7 +39,7 @@ from ..robot.robot import Robot
 from ..robot.configuration import Configuration
 from ..tasks.objectives import JointLimits, VelocityLimit
 from ..numerics.checks import check_damping, check_scalar, check_weights
-from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value
+from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value, weights_factor
 from .base import Solver
 from .cascade import PREFERRED_SOLVERS, Cascade, installed_solvers, level_attempts, qp_solver, solve_level
 from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, solved_rows, speed_ratio
@@ -133,8 +133,11 @@ class HQPSolver(Solver):
                                          if name != self.solver and name in installed_solvers()]
         self._attempts = level_attempts(self._solvers)  # (solver, options, keep tolerance) in the order tried
         self._weights = _weight_matrix(weights, self.plan.size)
-        self._inverse_root = np.linalg.inv(np.linalg.cholesky(self._weights)).T  # W^-1/2 = L^-T, W = L L^T
+        if weights is not None:
+            weights_factor(weights, self.plan.size)  # W positive definite (SolverInputError otherwise)
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
+        variable = isinstance(self.damping, VariableDamping)  # W^-1/2 = L^-T (W = L L^T): what its sigma_min reads
+        self._inverse_root = np.linalg.inv(np.linalg.cholesky(self._weights)).T if variable else None
         self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
         self._rate_rows = RateRows.of(self.plan.joint_limits, valid_set=True)  # the valid sets' rows, stacked once
         self._unbounded = np.full(robot.nv, -np.inf), np.full(robot.nv, np.inf)
@@ -210,11 +213,11 @@ def joint_freedom(hierarchy: Hierarchy) -> np.ndarray:
     return freedom
 
 
-def level_damping(equality: np.ndarray, freedom: np.ndarray | None, inverse_root: np.ndarray,
+def level_damping(equality: np.ndarray, freedom: np.ndarray | None, inverse_root: np.ndarray | None,
                   damping: float | VariableDamping) -> float:
     """lambda of a level with task rows E (k, n): fixed, or amundsen2018 eq. 6 of sigma_min of
-    E diag(freedom) W^-1/2 (the columns the joint limits hold taken out; ``freedom`` read only by a variable
-    damping); 0 without task rows."""
+    E diag(freedom) W^-1/2 (the columns the joint limits hold taken out; ``freedom`` and ``inverse_root`` = W^-1/2
+    read only by a variable damping); 0 without task rows."""
     if not equality.size:
         return 0.0
     if not isinstance(damping, VariableDamping):
