@@ -213,24 +213,25 @@ class SetBasedSolver(Solver):
         plan = self.plan
         hierarchy = plan.evaluate(state)
         contributions, sigmas, used = self.icat.solve(hierarchy, plan.offsets, plan.equality)
-        solved, scales = saturate(hierarchy, contributions, state.q, self._box_constants)
+        solved, scales, ratio = saturate(hierarchy, contributions, state.q, self._box_constants)
         v = hierarchy.velocity(solved)
         return SolverResult(v, lambda: last_task_sigma(hierarchy, sigmas), used, lambda: solved_rows(hierarchy),
                             free_floating=self.free_floating, scales=scales,
-                            speed_ratio=speed_ratio(v, self.maximum))
+                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio)
 
 
 def saturate(hierarchy: Hierarchy, contributions: np.ndarray, q: np.ndarray,
-             box: tuple) -> tuple[np.ndarray, tuple[float, ...]]:
+             box: tuple) -> tuple[np.ndarray, tuple[float, ...], float]:
     """The solved columns (n,): the levels' contributions (L, n) summed in order, scaled lowest first so that v
     stays inside the velocity box at q (``box``: the constants of
-    :func:`~uvms.numerics._kernels.boxes.saturated_sum_into` after the contributions and q); and the scales."""
+    :func:`~uvms.numerics._kernels.boxes.saturated_sum_into` after the contributions and q); the scales; the
+    speed ratio of that sum (0 when free floating: v is formed from it after)."""
     from ..numerics._kernels.boxes import saturated_sum_into  # numba: loaded where a solver is built
 
     if not contributions.shape[0]:
-        return np.zeros(hierarchy.size), ()
+        return np.zeros(hierarchy.size), (), 0.0
     velocities = (np.array([hierarchy.to_velocity(c) for c in contributions]) if hierarchy.free_floating
                   else contributions)
     total, scales = np.empty(hierarchy.size), np.empty(contributions.shape[0])
-    saturated_sum_into(contributions, velocities, q, *box, total, scales)
-    return total, tuple(scales.tolist())
+    ratio = saturated_sum_into(contributions, velocities, q, *box, total, scales)
+    return total, tuple(scales.tolist()), ratio

@@ -127,10 +127,24 @@ def scale_lowest_first_into(contributions: np.ndarray, lower: np.ndarray, upper:
 
 
 @njit(cache=True)
+def speed_ratio_of(v: np.ndarray, maximum: np.ndarray) -> float:
+    """max_i |v_i| / max_i over the finite speed limits (0 without any; NaN if a ratio is NaN)."""
+    largest = 0.0
+    for entry in range(v.size):
+        if np.isfinite(maximum[entry]):
+            ratio = np.abs(v[entry]) / maximum[entry]
+            if ratio > largest or ratio != ratio:
+                largest = ratio
+                if ratio != ratio:
+                    return ratio
+    return largest
+
+
+@njit(cache=True)
 def saturated_sum_into(solved: np.ndarray, velocities: np.ndarray, q: np.ndarray, q_index: np.ndarray,
                        v_index: np.ndarray, low: np.ndarray, high: np.ndarray, dt: float, fraction: float,
                        maximum: np.ndarray, check_inside: bool, tolerance: float, total: np.ndarray,
-                       scales: np.ndarray) -> None:
+                       scales: np.ndarray) -> float:
     """The set-based solver's sum of its levels inside the velocity box, the lowest levels scaled first.
 
     The box is that of :func:`velocity_box_into` (``contain_zero``) over the speed limits ``maximum`` and the
@@ -147,6 +161,9 @@ def saturated_sum_into(solved: np.ndarray, velocities: np.ndarray, q: np.ndarray
         check_inside: keep the plain sum when it is inside the box (False: always scale, free floating).
         tolerance: the slack of :func:`inside_box`.
         total: (n,) written; scales: (L,) written.
+
+    Returns:
+        :func:`speed_ratio_of` the total when it is v (n = nv; free floating: 0, v is formed after).
     """
     count, size = solved.shape
     nv = maximum.size
@@ -167,26 +184,12 @@ def saturated_sum_into(solved: np.ndarray, velocities: np.ndarray, q: np.ndarray
     bounded = False
     for entry in range(nv):
         bounded = bounded or np.isfinite(lower[entry]) or np.isfinite(upper[entry])
-    if not bounded or (check_inside and inside_box(total, lower, upper, tolerance)):
-        return
-    out = np.empty(nv)
-    scale_lowest_first_into(velocities, lower, upper, tolerance, out, scales)
-    for entry in range(size):
-        total[entry] = scales[0] * solved[0, entry]
-    for level in range(1, count):
+    if bounded and not (check_inside and inside_box(total, lower, upper, tolerance)):
+        out = np.empty(nv)
+        scale_lowest_first_into(velocities, lower, upper, tolerance, out, scales)
         for entry in range(size):
-            total[entry] += scales[level] * solved[level, entry]
-
-
-@njit(cache=True)
-def speed_ratio_of(v: np.ndarray, maximum: np.ndarray) -> float:
-    """max_i |v_i| / max_i over the finite speed limits (0 without any; NaN if a ratio is NaN)."""
-    largest = 0.0
-    for entry in range(v.size):
-        if np.isfinite(maximum[entry]):
-            ratio = np.abs(v[entry]) / maximum[entry]
-            if ratio > largest or ratio != ratio:
-                largest = ratio
-                if ratio != ratio:
-                    return ratio
-    return largest
+            total[entry] = scales[0] * solved[0, entry]
+        for level in range(1, count):
+            for entry in range(size):
+                total[entry] += scales[level] * solved[level, entry]
+    return speed_ratio_of(total, maximum) if size == nv else 0.0
