@@ -353,6 +353,9 @@ def test_names_and_parameters_are_checked_with_the_valid_ones():
         VehicleAttitude(shipped("hoang2011"), 0.1)
     with pytest.raises(uvms.UVMSError, match="close names: vx"):
         VehicleVelocityLimits(robot, {"vxx": 0.3})
+    indefinite = np.diag(np.r_[1.0, -1.0, np.ones(robot.nv - 2)])  # symmetric, one negative eigenvalue
+    with pytest.raises(uvms.UVMSError, match="positive definite"):
+        HQPSolver(robot, [FrameTask(robot)], dt=DT, weights=indefinite + 1e-3 * np.eye(robot.nv)[::-1])
     built = inequalities_from_table(robot, {"type": "joint_velocity", "max": 0.3, "vehicle_max": [0.5, 0.2]})
     assert [type(item).__name__ for item in built] == ["JointVelocityLimits", "VehicleVelocityLimits"]
     assert built[1].maximum[:6].tolist() == [0.5, 0.5, 0.5, 0.2, 0.2, 0.2]
