@@ -39,10 +39,12 @@ def test_daqp_through_its_own_api_is_qpsolvers_daqp_bit_for_bit_and_another_solv
     for trial in range(60):
         size, count = int(rng.integers(2, 14)), int(rng.integers(0, 9))
         cost, linear, matrix, bounds, lower, upper = random_qp(rng, size, count)
-        z = solve_qp(cost, linear, matrix, np.concatenate([upper, bounds]),
-                     np.concatenate([lower, np.full(count, -1e30)]), "daqp", options)
+        inputs = (cost, linear, matrix, np.concatenate([upper, bounds]), np.concatenate([lower, np.full(count, -1e30)]))
+        copies = [array.copy() for array in inputs]
+        z = solve_qp(*inputs, "daqp", options)
         expected = qpsolvers_solution(cost, linear, matrix, bounds, lower, upper, "daqp", **options)
         assert z is not None and np.array_equal(z, expected), trial
+        assert all(np.array_equal(a, b) for a, b in zip(inputs, copies))  # a level's retries reuse its arrays
         assert np.all(matrix @ z <= bounds + 1e-9) and np.all(z >= lower - 1e-12) and np.all(z <= upper + 1e-12)
         if independent is not None:
             other = qpsolvers_solution(cost, linear, matrix, bounds, lower, upper, independent)
