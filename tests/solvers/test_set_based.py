@@ -135,8 +135,8 @@ def saturated(contributions, lower, upper, maximum=None, check_inside=True):
     finite_low, finite_high = np.isfinite(lower), np.isfinite(upper)
     rows = np.flatnonzero(finite_low | finite_high).astype(np.int64)
     total, scales = np.empty(size), np.empty(len(contributions))
-    ratio = saturated_sum_into(stacked, stacked, np.zeros(size), rows, rows, np.where(finite_low, lower, -1e300)[rows],
-                               np.where(finite_high, upper, 1e300)[rows], 1.0, 1.0,
+    low, high = np.where(finite_low, lower, -1e300)[rows], np.where(finite_high, upper, 1e300)[rows]
+    ratio = saturated_sum_into(stacked, stacked, np.zeros(size), rows, rows, low, high, 1.0, 1.0,
                                np.full(size, np.inf) if maximum is None else maximum, check_inside, 1e-12, total, scales)
     return total, tuple(scales.tolist()), ratio
 
