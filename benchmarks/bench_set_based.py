@@ -111,9 +111,12 @@ class Problem:
 
 # ------------------------------------------------------------------------------------------- steppers
 def ours(solver_class: type[Solver], problem: Problem):
-    """A stepper (q, levels) -> (q+, v, infeasible) of a SetBasedSolver or HQPSolver built at every step."""
+    """A stepper (q, levels) -> (q+, v, infeasible) of a SetBasedSolver or HQPSolver built at every step (one
+    Configuration moved to q, as pink's is)."""
+    configuration = uvms.Configuration(problem.robot, problem.robot.neutral())
+
     def stepper(q, levels):
-        configuration = uvms.Configuration(problem.robot, q, check=False)
+        configuration.update(q, check=False)  # q from pin.integrate
         try:
             result = solver_class(problem.robot, levels, dt=DT, gain=GAIN).step(configuration, DT)
         except Exception:  # noqa: BLE001 - counted as infeasible, like pink's
@@ -125,22 +128,28 @@ def ours(solver_class: type[Solver], problem: Problem):
 
 
 class PreparedStepper:
-    """uvms.SetBasedSolver built once per start (its levels checked and prepared there, as pink's tasks are
-    in ``PinkStepper.set_target``); a step is its velocity (diagnostics computed only when read) and the integration."""
+    """A solver built once per start (its levels checked and prepared there, as pink's tasks are in
+    ``PinkStepper.set_target``) stepping one Configuration moved to q (as pink's configuration is): a step is
+    ``Configuration.update``, its velocity (diagnostics computed only when read) and the integration."""
 
-    def __init__(self, problem: Problem) -> None:
-        self.problem, self.solver = problem, None
+    def __init__(self, problem: Problem, solver_class: type[Solver] = SetBasedSolver) -> None:
+        self.problem, self.solver_class, self.solver = problem, solver_class, None
+        self.configuration = uvms.Configuration(problem.robot, problem.robot.neutral())
 
     def set_target(self, target: pin.SE3, q0: np.ndarray) -> None:  # noqa: ARG002 - PinkStepper's signature
-        self.solver = SetBasedSolver(self.problem.robot, self.problem.levels(target), gain=GAIN, dt=DT)
+        self.solver = self.solver_class(self.problem.robot, self.problem.levels(target), gain=GAIN, dt=DT)
 
     def __call__(self, q, levels=None):  # noqa: ARG002 - the same signature as ours
-        configuration = uvms.Configuration(self.problem.robot, q, check=False)  # q from pin.integrate
+        configuration = self.configuration
+        configuration.update(q, check=False)  # q from pin.integrate
         try:
-            v = self.solver.step(configuration, DT).v
+            result = self.solver.step(configuration, DT)
         except Exception:  # noqa: BLE001 - counted as infeasible, like pink's
             return q, None, True
-        return configuration.q, v, not np.all(np.isfinite(v))
+        v = result.v
+        statuses = result.extras.get("solver_status", ())
+        infeasible = not np.all(np.isfinite(v)) or not all(s.startswith("optimal") for s in statuses)
+        return configuration.q, v, infeasible
 
 
 class PinkStepper:
@@ -283,6 +292,7 @@ def main() -> None:
     logging.disable(logging.WARNING)  # pink logs every start outside a limit (safety_break=False)
     problem = Problem()
     steppers = {"uvms SetBasedSolver (built per start)": PreparedStepper(problem),
+                "uvms HQPSolver (built per start)": PreparedStepper(problem, uvms.HQPSolver),
                 "uvms SetBasedSolver (built per step)": ours(uvms.SetBasedSolver, problem),
                 "uvms HQPSolver (built per step)": ours(uvms.HQPSolver, problem)}
     try:

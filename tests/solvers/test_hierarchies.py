@@ -15,7 +15,6 @@ from hypothesis import strategies as st
 import uvms
 from uvms.robot.limits import Limit
 from uvms.solvers import CLIKSolver, HQPSolver, SetBasedSolver, Solver, SolverResult, VariableDamping
-from uvms.solvers.saturation import scale_lowest_first
 from uvms.robot.configuration import Configuration
 from uvms.tasks import FrameTask, PostureTask
 from uvms.tasks.objectives import (FrameBox, JointLimits, JointVelocityLimits, Manipulability, PlaneClearance,
@@ -282,8 +281,11 @@ def test_saturation_scales_the_lowest_level_first_and_keeps_the_higher_ones():
     hqp = solve_once(HQPSolver, robot, q, [reach, posture, *limits], dt=DT, gain=2.0)
     assert hqp.task_residuals[0] <= 1e-7 and hqp.speed_ratio <= 1.0 + 1e-9
     contributions = [np.array([0.5, 0.0]), np.array([1.0, 1.0])]
-    total, scales = scale_lowest_first(contributions, -np.ones(2), np.ones(2))
-    assert scales == (1.0, 0.5) and np.allclose(total, [1.0, 0.5])
+    from uvms.numerics._kernels.boxes import scale_lowest_first_into
+
+    total, scales = np.empty(2), np.empty(2)
+    scale_lowest_first_into(np.array(contributions), -np.ones(2), np.ones(2), 1e-12, total, scales)
+    assert scales.tolist() == [1.0, 0.5] and np.allclose(total, [1.0, 0.5])
 
 
 def test_a_passive_vehicles_speed_limits_hold_through_momentum_conservation():
@@ -351,6 +353,9 @@ def test_names_and_parameters_are_checked_with_the_valid_ones():
         VehicleAttitude(shipped("hoang2011"), 0.1)
     with pytest.raises(uvms.UVMSError, match="close names: vx"):
         VehicleVelocityLimits(robot, {"vxx": 0.3})
+    indefinite = np.diag(np.r_[1.0, -1.0, np.ones(robot.nv - 2)])  # symmetric, one negative eigenvalue
+    with pytest.raises(uvms.UVMSError, match="positive definite"):
+        HQPSolver(robot, [FrameTask(robot)], dt=DT, weights=indefinite + 1e-3 * np.eye(robot.nv)[::-1])
     built = inequalities_from_table(robot, {"type": "joint_velocity", "max": 0.3, "vehicle_max": [0.5, 0.2]})
     assert [type(item).__name__ for item in built] == ["JointVelocityLimits", "VehicleVelocityLimits"]
     assert built[1].maximum[:6].tolist() == [0.5, 0.5, 0.5, 0.2, 0.2, 0.2]

@@ -126,10 +126,27 @@ def test_malformed_levels_are_refused_by_what_a_level_holds(levels, message):
         SetBasedSolver(robot, levels)
 
 
+def saturated(contributions, lower, upper, maximum=None, check_inside=True):
+    """saturated_sum_into over the box [lower, upper] (containing 0): rate rows of q = 0, dt = 1, fraction = 1."""
+    from uvms.numerics._kernels.boxes import saturated_sum_into
+
+    stacked = np.array(contributions, dtype=float)
+    size = stacked.shape[1]
+    finite_low, finite_high = np.isfinite(lower), np.isfinite(upper)
+    rows = np.flatnonzero(finite_low | finite_high).astype(np.int64)
+    total, scales = np.empty(size), np.empty(len(contributions))
+    low, high = np.where(finite_low, lower, -1e300)[rows], np.where(finite_high, upper, 1e300)[rows]
+    ratio = saturated_sum_into(stacked, stacked, np.zeros(size), rows, rows, low, high, 1.0, 1.0,
+                               np.full(size, np.inf) if maximum is None else maximum, check_inside, 1e-12, total, scales)
+    return total, tuple(scales.tolist()), ratio
+
+
+def inside(values, lower, upper, tolerance=1e-12):
+    return bool(np.all(values >= lower - tolerance) and np.all(values <= upper + tolerance))
+
+
 def test_the_largest_scale_keeps_the_sum_in_the_box_and_no_larger_one_does(rng):
     """The compiled saturation: the lowest level is scaled by the largest s that keeps the sum in the box."""
-    from uvms.solvers.saturation import inside, scale_lowest_first
-
     for _ in range(300):
         upper = rng.uniform(0.1, 1.0, 5)
         lower = -rng.uniform(0.1, 1.0, 5)
@@ -137,21 +154,29 @@ def test_the_largest_scale_keeps_the_sum_in_the_box_and_no_larger_one_does(rng):
         base = rng.uniform(lower, np.minimum(upper, 2.0)) * 0.9
         step = rng.normal(size=5) * rng.choice([0.1, 1.0, 10.0])
         step[rng.integers(5)] = 0.0
-        total, (first, scale) = scale_lowest_first([base, step], lower, upper)
-        assert first == 1.0 and 0.0 <= scale <= 1.0 and inside(total, lower, upper, 1e-12)
-        assert np.array_equal(total, base + scale * step)
+        total, (first, scale), ratio = saturated([base, step], lower, upper)
+        assert first == 1.0 and 0.0 <= scale <= 1.0 and inside(total, lower, upper) and ratio == 0.0  # no speed limit
+        assert np.array_equal(total, 1.0 * base + scale * step)
         if scale < 1.0:  # the largest: a bit more leaves the box
-            assert not inside(base + (scale + 1e-6) * step, lower, upper, 1e-12)
+            assert not inside(base + (scale + 1e-6) * step, lower, upper)
     # a level above that leaves the box on its own: the lowest is dropped and that one scaled
-    total, scales = scale_lowest_first([np.array([0.5, 0.0]), np.array([2.0, 0.0]), np.array([0.0, 5.0])],
-                                       -np.ones(2), np.ones(2))
+    total, scales, _ = saturated([np.array([0.5, 0.0]), np.array([2.0, 0.0]), np.array([0.0, 5.0])], -np.ones(2),
+                                 np.ones(2))
     assert scales == (1.0, 0.25, 0.0) and np.array_equal(total, [1.0, 0.0])
+    # the speed limits clip the box: |v_i| <= 0.5 scales the second level to 0.25 / 2
+    total, scales, ratio = saturated([np.array([0.25, 0.0]), np.array([2.0, 0.0])], -np.ones(2), np.ones(2),
+                                     maximum=np.array([0.5, np.inf]))
+    assert scales == (1.0, 0.125) and np.array_equal(total, [0.5, 0.0]) and ratio == 1.0
 
 
 def test_the_levels_are_added_in_order_as_numpy_sums_them(rng):
-    from uvms.solvers.set_based import sum_in_order
-
+    """Inside the box (or without one) the velocity is the plain sum, numpy's numbers, every scale 1; free
+    floating (no inside check) scales even then by 1."""
     for count in (1, 2, 3, 5):
         vectors = [rng.normal(size=11) * 10.0 ** rng.integers(-8, 8) for _ in range(count)]
-        assert np.array_equal(sum_in_order(vectors), np.sum(vectors, axis=0))
-        assert sum_in_order(vectors) is not vectors[0]  # a new array: the contributions stay as they were
+        unbounded = np.full(11, np.inf)
+        for check_inside in (True, False):
+            total, scales, _ = saturated(vectors, -unbounded, unbounded, check_inside=check_inside)
+            assert np.array_equal(total, np.sum(vectors, axis=0)) and scales == (1.0,) * count
+        total, scales, _ = saturated(vectors, -np.full(11, 1e30), np.full(11, 1e30), check_inside=False)
+        assert np.array_equal(total, np.sum(vectors, axis=0)) and scales == (1.0,) * count

@@ -12,6 +12,7 @@ Both hierarchical solvers read their levels from here: the set-based (iCAT) prio
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -22,10 +23,9 @@ from ..robot.robot import Robot, check_robot
 from ..robot.configuration import Configuration
 from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
 from ..tasks.task import Task
-from ..numerics.checks import check_scalar, prepared_gain
+from ..numerics.checks import prepared_gain
 from ..numerics.inverses import SolverInputError
 from .result import SolvedRows
-from .saturation import position_rate_bounds
 from .stack import stacked_terms
 
 #: What a level may hold.
@@ -140,6 +140,7 @@ class PlannedLevel:
     tasks: tuple[Task, ...]
     inequalities: tuple[Inequality, ...]
     command: object  # (error (k,), feedforward (k,)) -> xdot_d + K e (k,), the task gain prepared
+    ones: np.ndarray  # (k,) the equality rows' activations, shared by every evaluation (read, never written)
 
 
 class HierarchyPlan:
@@ -171,12 +172,16 @@ class HierarchyPlan:
         self.levels = []
         for index, level in items:
             tasks = tuple(item for item in level if isinstance(item, Task))
-            command = prepared_gain(gain, sum(task.dim for task in tasks)) if tasks else None
+            dim = sum(task.dim for task in tasks)
+            command = prepared_gain(gain, dim) if tasks else None
             self.levels.append(PlannedLevel(index, tasks, tuple(i for i in level if isinstance(i, Inequality)),
-                                            command))
+                                            command, np.ones(dim)))
         self.joint_limits = [item for level in self.levels for item in level.inequalities
                              if isinstance(item, JointLimits)]
         self.size = robot.n_arm if free_floating else robot.nv
+        sizes = [sum(item.dim for item in (*level.tasks, *level.inequalities)) for level in self.levels]
+        self.offsets = np.array([0, *itertools.accumulate(sizes)], dtype=np.int64)  # (L + 1,) each level's first row
+        self.equality = np.array([bool(level.tasks) and not level.inequalities for level in self.levels])  # (L,)
 
     def evaluate(self, state: Configuration) -> Hierarchy:
         """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v."""
@@ -191,44 +196,31 @@ class HierarchyPlan:
     def _level_rows(self, state: Configuration, level: PlannedLevel) -> LevelRows:
         """One level's rows at ``state``: equality tasks first, then the inequalities in their order."""
         inequalities = [item.rows(state) for item in level.inequalities]
-        blocks, references, activations = [], [], []
         task_jacobian = task_error = task_command = None
         if level.tasks:
             task_jacobian, task_error, feedforward = stacked_terms(state, level.tasks)
             task_command = level.command(task_error, feedforward)
             if not inequalities:  # the common equality level: its own arrays, nothing to stack
                 solved = state.generalized(task_jacobian) if self.free_floating else task_jacobian
-                return LevelRows(index=level.index, jacobian=task_jacobian, solved=solved, reference=task_command,
-                                 activation=np.ones(task_error.size), task_jacobian=task_jacobian,
-                                 task_error=task_error, task_command=task_command, equality=True)
-            blocks.append(task_jacobian)
-            references.append(task_command)
-            activations.append(np.ones(task_error.size))
-        for rows in inequalities:
-            blocks.append(rows.jacobian)
-            references.append(rows.reference)
-            activations.append(rows.activation)
-        jacobian = blocks[0] if len(blocks) == 1 else np.vstack(blocks)
+                return LevelRows(level.index, task_jacobian, solved, task_command, level.ones,
+                                 task_jacobian=task_jacobian, task_error=task_error, task_command=task_command,
+                                 equality=True)
+        if task_jacobian is None and len(inequalities) == 1:  # one objective: its own arrays
+            rows = inequalities[0]
+            jacobian, reference, activation = rows.jacobian, rows.reference, rows.activation
+        else:
+            head = [(task_jacobian, task_command, level.ones)] if task_jacobian is not None else []
+            blocks = head + [(rows.jacobian, rows.reference, rows.activation) for rows in inequalities]
+            jacobian = np.vstack([block[0] for block in blocks])
+            reference = np.concatenate([block[1] for block in blocks])
+            activation = np.concatenate([block[2] for block in blocks])
         solved = state.generalized(jacobian) if self.free_floating else jacobian
-        return LevelRows(index=level.index, jacobian=jacobian, solved=solved,
-                         reference=references[0] if len(references) == 1 else np.concatenate(references),
-                         activation=activations[0] if len(activations) == 1 else np.concatenate(activations),
-                         objectives=inequalities, inequalities=list(level.inequalities), task_jacobian=task_jacobian,
-                         task_error=task_error, task_command=task_command)
+        return LevelRows(level.index, jacobian, solved, reference, activation, inequalities, list(level.inequalities),
+                         task_jacobian, task_error, task_command)
 
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""
         return q if isinstance(q, Configuration) else Configuration(self.robot, q, check=check)
-
-
-def rate_bounds(hierarchy: Hierarchy, dt: float | None, fraction: float,
-                valid_set: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Position-rate bounds (nv,) of the hierarchy's joint limits over ``dt`` (unbounded without dt)."""
-    nv = hierarchy.state.robot.nv
-    if dt is None or not hierarchy.joint_limits:
-        return np.full(nv, -np.inf), np.full(nv, np.inf)
-    dt = check_scalar(dt, "dt", positive=True)
-    return position_rate_bounds(hierarchy.state.q, nv, hierarchy.joint_limits, dt, fraction, valid_set)
 
 
 # --------------------------------------------------------------------------------- reporting
@@ -242,9 +234,11 @@ def solved_rows(hierarchy: Hierarchy) -> tuple[SolvedRows, ...]:
 
 
 def speed_ratio(v: np.ndarray, maximum: np.ndarray) -> float:
-    """max_i |v_i| / max_i over the finite speed limits (0 without any)."""
-    limited = np.isfinite(maximum)
-    return float(np.max(np.abs(v[limited]) / maximum[limited], initial=0.0))
+    """max_i |v_i| / max_i over the finite speed limits (0 without any;
+    :func:`~uvms.numerics._kernels.boxes.speed_ratio_of`)."""
+    from ..numerics._kernels.boxes import speed_ratio_of  # numba: loaded at the first solve, not by ``import uvms``
+
+    return float(speed_ratio_of(v, maximum))
 
 
 def last_task_sigma(hierarchy: Hierarchy, sigmas: Sequence[float]) -> float:

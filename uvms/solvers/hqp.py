@@ -23,7 +23,7 @@ is never empty and a joint started outside its valid set comes back at the allow
 vehicle's speed limits are rows of the arm velocity (v_b = T_b qdot_arm); they get a slacked level of
 their own above the others. Every level is feasible (its slacks absorb its inequalities, and the solution
 of the level above meets the rest); a level whose QP fails keeps that solution and says so in
-``solver_status``. The QPs go through qpsolvers (DAQP, else ProxQP).
+``solver_status``. The QPs go to DAQP (its own API), else ProxQP through qpsolvers (:mod:`uvms.solvers.cascade`).
 
 This is the optimization family of pink/mink with strict priorities (Kanoun et al. 2011, Escande et al.
 2014 style), here on the same levels as :class:`~uvms.solvers.set_based.SetBasedSolver`.
@@ -32,7 +32,6 @@ This is the optimization family of pink/mink with strict priorities (Kanoun et a
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -40,130 +39,15 @@ from ..robot.robot import Robot
 from ..robot.configuration import Configuration
 from ..tasks.objectives import JointLimits, VelocityLimit
 from ..numerics.checks import check_damping, check_scalar, check_weights
-from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value
+from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value, weights_factor
 from .base import Solver
-from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, rate_bounds, solved_rows, speed_ratio
+from .cascade import PREFERRED_SOLVERS, Cascade, installed_solvers, level_attempts, qp_solver, solve_level
+from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, solved_rows, speed_ratio
 from .result import SolverResult
-from .saturation import speed_maximum, velocity_box
+from .saturation import RateRows, speed_maximum, velocity_box
 
-#: QP solvers tried, in order, when none is named.
-PREFERRED_SOLVERS = ("daqp", "proxqp")
-#: Retries of a solver whose QP failed: DAQP with proximal-point iterations copes with the degenerate
-#: feasible sets a cascade produces (a level pinned to a vertex of the box by the optimum above).
-RETRY_OPTIONS = {"daqp": {"eps_prox": 1e-6}}
-#: Looser keep tolerances tried when a level's QP fails at KEEP_TOLERANCE.
-LOOSER_KEEP_TOLERANCES = (1e-6, 1e-4)
-#: Tolerance [same units as the rows] with which the rows of the levels above are kept at their optimum.
-KEEP_TOLERANCE = 1e-9
 #: Tolerance within which a constraint row counts as binding.
 BINDING_TOLERANCE = 1e-7
-
-
-@dataclass
-class Cascade:
-    """The rows G x <= h that keep the levels solved at their optimum, and the current solution x (n,)."""
-
-    size: int
-    lower: np.ndarray
-    upper: np.ndarray
-    x: np.ndarray
-    rows: list[np.ndarray] = field(default_factory=list)
-    bounds: list[np.ndarray] = field(default_factory=list)
-
-    def keep_equalities(self, jacobian: np.ndarray) -> None:
-        """Keep J x at its value J x*."""
-        achieved = jacobian @ self.x
-        self.rows += [jacobian, -jacobian]
-        self.bounds += [achieved, -achieved]
-
-    def keep_inequalities(self, rows: np.ndarray, bounds: np.ndarray, slacks: np.ndarray) -> None:
-        """Keep G x >= b - w* (w* the optimal slacks), or G x* where the solver left x* a little short of it."""
-        kept = np.minimum(bounds - slacks, rows @ self.x)  # x* itself stays feasible
-        self.rows.append(-rows)
-        self.bounds.append(-kept)
-
-    def matrices(self, tolerance: float) -> tuple[np.ndarray, np.ndarray]:
-        """(G, h) with every kept row loosened by tolerance (1 + |h|)."""
-        if not self.rows:
-            return np.zeros((0, self.size)), np.zeros(0)
-        bounds = np.concatenate(self.bounds)
-        return np.vstack(self.rows), bounds + tolerance * (1.0 + np.abs(bounds))
-
-
-def qp_solver(name: str | None) -> str:
-    """The QP solver to use: ``name`` if qpsolvers has it, else the first of PREFERRED_SOLVERS installed.
-
-    Raises:
-        SolverInputError: qpsolvers missing, or the solver named not installed (the message lists those that are).
-    """
-    try:
-        import qpsolvers
-    except ImportError:  # pragma: no cover - a declared dependency
-        raise SolverInputError("the QP hierarchy needs qpsolvers and a QP solver: "
-                               "pip install 'qpsolvers[daqp]'") from None
-    available = list(qpsolvers.available_solvers)
-    if name is None:
-        for preferred in PREFERRED_SOLVERS:
-            if preferred in available:
-                return preferred
-        raise SolverInputError(f"no QP solver for the hierarchy: install daqp or proxsuite (found {available})")
-    if name not in available:
-        raise SolverInputError(f"QP solver {name!r} is not installed; installed: {', '.join(available) or 'none'}")
-    return name
-
-
-def solve_qp(cost: np.ndarray, linear: np.ndarray, rows: np.ndarray, bounds: np.ndarray, lower: np.ndarray,
-             upper: np.ndarray, solver: str, options: dict | None = None) -> np.ndarray | None:
-    """min 1/2 z^T P z + c^T z s.t. rows z <= bounds, lower <= z <= upper; None when not found."""
-    from qpsolvers import Problem, solve_problem
-
-    problem = Problem(cost, linear, rows if rows.size else None, bounds if rows.size else None, None, None,
-                      lower, upper)
-    try:
-        solution = solve_problem(problem, solver=solver, **(options or {}))
-    except Exception:  # noqa: BLE001 - a solver's failure is reported as a status, never raised
-        return None
-    if not solution.found or solution.x is None or not np.all(np.isfinite(solution.x)):
-        return None
-    return solution.x
-
-
-def level_attempts(solvers: Sequence[str]) -> list[tuple[str, dict, float]]:
-    """(solver, options, keep tolerance) in the order tried: the first solver as is, with its retry options,
-    then with the levels above kept to 1e-6 and 1e-4 (a cascade can pin a level to a vertex of the box,
-    a feasible set a solver may call empty), then the other solvers."""
-    first = solvers[0]
-    attempts = [(first, {}, KEEP_TOLERANCE)]
-    if first in RETRY_OPTIONS:
-        attempts.append((first, RETRY_OPTIONS[first], KEEP_TOLERANCE))
-    attempts += [(first, RETRY_OPTIONS.get(first, {}), tolerance) for tolerance in LOOSER_KEEP_TOLERANCES]
-    return attempts + [(solver, {}, KEEP_TOLERANCE) for solver in solvers[1:]]
-
-
-def solve_level(cascade: Cascade, equality: np.ndarray, command: np.ndarray, inequality: np.ndarray,
-                bound: np.ndarray, weights: np.ndarray, regularization: float,
-                solvers: Sequence[str]) -> tuple[np.ndarray, np.ndarray, str]:
-    """One level's QP over z = [x, w]: (x, w, status); if every attempt fails, the cascade's x is kept.
-    ``regularization``: the weight rho + lambda^2 of |x|^2_W in this level."""
-    n, m = cascade.size, inequality.shape[0]
-    cost = np.zeros((n + m, n + m))
-    cost[:n, :n] = equality.T @ equality + regularization * weights
-    cost[n:, n:] = np.eye(m)
-    linear = np.concatenate([-equality.T @ command, np.zeros(m)])
-    lower = np.concatenate([cascade.lower, np.zeros(m)])
-    upper = np.concatenate([cascade.upper, np.full(m, np.inf)])
-    for index, (solver, options, tolerance) in enumerate(level_attempts(solvers)):
-        kept_rows, kept_bounds = cascade.matrices(tolerance)
-        rows = np.vstack([np.hstack([kept_rows, np.zeros((kept_rows.shape[0], m))]),
-                          np.hstack([-inequality, -np.eye(m)])])
-        z = solve_qp(cost, linear, rows, np.concatenate([kept_bounds, -bound]), lower, upper, solver, options)
-        if z is not None:  # x* clipped into the box the solver kept to its tolerance: exactly feasible below
-            x = np.clip(z[:n], cascade.lower, cascade.upper)
-            notes = [f"{key}={value}" for key, value in options.items()]
-            notes += [f"levels above kept to {tolerance:g}"] if tolerance > KEEP_TOLERANCE else []
-            how = f" ({solver}{', ' if notes else ''}{', '.join(notes)})" if index else ""
-            return x, np.maximum(bound - inequality @ x, 0.0), f"optimal{how}"
-    return cascade.x, np.maximum(bound - inequality @ cascade.x, 0.0), "failed: kept the solution of the levels above"
 
 
 def level_constraints(hierarchy: Hierarchy, level: LevelRows) -> tuple[np.ndarray, np.ndarray, list[tuple[str, slice]]]:
@@ -246,22 +130,29 @@ class HQPSolver(Solver):
         self.regularization = check_scalar(regularization, "regularization")
         self.solver = qp_solver(solver)
         self._solvers = [self.solver] + [name for name in PREFERRED_SOLVERS
-                                         if name != self.solver and name in _installed()]
+                                         if name != self.solver and name in installed_solvers()]
+        self._attempts = level_attempts(self._solvers)  # (solver, options, keep tolerance) in the order tried
         self._weights = _weight_matrix(weights, self.plan.size)
-        self._inverse_root = np.linalg.inv(np.linalg.cholesky(self._weights)).T  # W^-1/2 = L^-T, W = L L^T
+        if weights is not None:
+            weights_factor(weights, self.plan.size)  # W positive definite (SolverInputError otherwise)
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
+        variable = isinstance(self.damping, VariableDamping)  # W^-1/2 = L^-T (W = L L^T): what its sigma_min reads
+        self._inverse_root = np.linalg.inv(np.linalg.cholesky(self._weights)).T if variable else None
         self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
+        self._rate_rows = RateRows.of(self.plan.joint_limits, valid_set=True)  # the valid sets' rows, stacked once
+        self._unbounded = np.full(robot.nv, -np.inf), np.full(robot.nv, np.inf)
 
     def velocity(self, configuration: Configuration) -> SolverResult:
         """The velocity of the QP hierarchy at ``configuration``: the objectives active when a constraint binds
         or is relaxed; ``extras`` has ``solver_status`` and ``slacks`` per level and the ``solver`` used."""
         hierarchy = self.plan.evaluate(self._checked(configuration))
         maximum = self.maximum
-        rate_lower, rate_upper = rate_bounds(hierarchy, self.dt, self.fraction, valid_set=True)
+        rate_lower, rate_upper = (self._rate_rows.bounds(hierarchy.state.q, self.robot.nv, self.dt, self.fraction)
+                                  if self.plan.joint_limits else self._unbounded)
         lower, upper = velocity_box(maximum, rate_lower, rate_upper)
         cascade = initial_cascade(hierarchy, lower, upper)
 
-        freedom = joint_freedom(hierarchy)
+        freedom = joint_freedom(hierarchy) if isinstance(self.damping, VariableDamping) else None
         used = 0.0
 
         def solve(equality, command, inequality, bound):
@@ -269,7 +160,7 @@ class HQPSolver(Solver):
             damping = level_damping(equality, freedom, self._inverse_root, self.damping)
             used = max(used, damping)
             return solve_level(cascade, equality, command, inequality, bound, self._weights,
-                               self.regularization + damping**2, self._solvers)
+                               self.regularization + damping**2, self._attempts)
 
         vehicle_rows, vehicle_bounds = vehicle_speed_rows(hierarchy, lower, upper)
         if vehicle_bounds.size:  # a slacked level of its own, above the others
@@ -285,13 +176,19 @@ class HQPSolver(Solver):
             statuses.append(status)
             slacks.append(float(np.linalg.norm(slack)))
             solved.append((inequality, bound, slack, spans))
-        binding = {}  # read at the final x: the levels below are what push a row onto its bound
-        for inequality, bound, slack, spans in solved:
-            binding.update(inequalities_binding(inequality @ cascade.x - (bound - slack), slack, spans))
         v = hierarchy.velocity(cascade.x)
-        binding.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
-        return SolverResult(v=v, sigma_min=task_sigma_min(hierarchy), damping=used, free_floating=self.free_floating,
-                            scales=(1.0,) * len(hierarchy.levels), speed_ratio=speed_ratio(v, maximum),
+        x = cascade.x
+
+        def binding() -> dict[str, bool]:  # read at the final x: the levels below are what push a row onto its bound
+            found = {}
+            for inequality, bound, slack, spans in solved:
+                found.update(inequalities_binding(inequality @ x - (bound - slack), slack, spans))
+            found.update(joint_limits_binding(hierarchy, v, rate_lower, rate_upper, maximum))
+            return found
+
+        return SolverResult(v=v, sigma_min=lambda: task_sigma_min(hierarchy), damping=used,
+                            free_floating=self.free_floating, scales=(1.0,) * len(hierarchy.levels),
+                            speed_ratio=speed_ratio(v, maximum),
                             extras={"solver_status": tuple(statuses), "slacks": tuple(slacks), "solver": self.solver},
                             levels=solved_rows(hierarchy), binding=binding)
 
@@ -316,10 +213,11 @@ def joint_freedom(hierarchy: Hierarchy) -> np.ndarray:
     return freedom
 
 
-def level_damping(equality: np.ndarray, freedom: np.ndarray, inverse_root: np.ndarray,
+def level_damping(equality: np.ndarray, freedom: np.ndarray | None, inverse_root: np.ndarray | None,
                   damping: float | VariableDamping) -> float:
     """lambda of a level with task rows E (k, n): fixed, or amundsen2018 eq. 6 of sigma_min of
-    E diag(freedom) W^-1/2 (the columns the joint limits hold taken out); 0 without task rows."""
+    E diag(freedom) W^-1/2 (the columns the joint limits hold taken out; ``freedom`` and ``inverse_root`` = W^-1/2
+    read only by a variable damping); 0 without task rows."""
     if not equality.size:
         return 0.0
     if not isinstance(damping, VariableDamping):
@@ -357,12 +255,6 @@ def joint_limits_binding(hierarchy: Hierarchy, v: np.ndarray, rate_lower: np.nda
         high = (rate_upper[index] < maximum[index]) & (v[index] >= rate_upper[index] - BINDING_TOLERANCE)
         result[objective.name] = bool(np.any(low | high))
     return result
-
-
-def _installed() -> list[str]:
-    import qpsolvers
-
-    return list(qpsolvers.available_solvers)
 
 
 def _weight_matrix(weights: np.ndarray | None, size: int) -> np.ndarray:

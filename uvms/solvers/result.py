@@ -141,14 +141,17 @@ class SolverResult:
                  levels: tuple[SolvedRows, ...] | Callable[[], tuple[SolvedRows, ...]] = (), *,
                  free_floating: bool = False, limits_active: tuple[str, ...] = (), scales: tuple[float, ...] = (),
                  speed_ratio: float = 0.0, extras: Mapping[str, object] | None = None,
-                 binding: Mapping[str, bool] | None = None) -> None:
+                 binding: Mapping[str, bool] | Callable[[], Mapping[str, bool]] | None = None) -> None:
         self.v = v
         self.damping = damping
         self.free_floating = free_floating
         self.limits_active = limits_active
         self.scales = scales
         self.speed_ratio = speed_ratio
-        self.binding = binding
+        if callable(binding):  # computed when read
+            self._binding = binding
+        else:
+            self.binding = binding
         self.extras = MappingProxyType(dict(extras)) if extras else NO_EXTRAS  # read-only, whatever mapping given
         if callable(sigma_min):  # computed when read
             self._sigma_min = sigma_min
@@ -168,6 +171,11 @@ class SolverResult:
         """The smallest singular value over the Jacobians the solver inverted (weighted, projected as it inverted
         them; the QP hierarchy: that of the last level's task rows)."""
         return float(self._sigma_min())
+
+    @cached_property
+    def binding(self) -> Mapping[str, bool] | None:
+        """Per objective name, whether it binds (the QP hierarchy); None: active = some activation > 0."""
+        return self._binding()
 
     @cached_property
     def levels(self) -> tuple[SolvedRows, ...]:

@@ -9,8 +9,9 @@ The bounds are a box lower <= v <= upper on the entries of v (nv,), from
 clipped into the speed limits, so the box is never empty: started outside a position limit, the joint
 must come back at the allowed speed (the rate bound min(fraction (q_min - q) / dt, max) stays reachable).
 
-A hierarchy's velocity is the sum of its levels' contributions v = sum_k c_k. :func:`scale_lowest_first`
-meets the box by the per-level task scaling of the saturation literature (Flacco, De Luca and Khatib,
+A hierarchy's velocity is the sum of its levels' contributions v = sum_k c_k. The set-based solver meets
+the box (:func:`~uvms.numerics._kernels.boxes.saturated_sum_into`, one compiled call with the box's rows) by
+the per-level task scaling of the saturation literature (Flacco, De Luca and Khatib,
 "Control of redundant robots under hard joint constraints: saturation in the null space", IEEE T-RO 2015,
 in its simpler per-level form): if the sum leaves the box, the lowest level's contribution is scaled by
 the largest s in [0, 1] that brings it back; if even s = 0 does not, that level is dropped and the next
@@ -35,24 +36,6 @@ def speed_maximum(nv: int, limits: Sequence[VelocityLimit]) -> np.ndarray:
     for limit in limits:
         maximum = np.minimum(maximum, limit.maximum)
     return maximum
-
-
-def position_rate_bounds(q: np.ndarray, nv: int, joint_limits: Sequence[JointLimits], dt: float,
-                         fraction: float = 1.0, valid_set: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity bounds (nv,), (nv,) that keep joints inside their limits after one step of ``dt`` [s].
-
-    Args:
-        q: configuration (nq,).
-        nv: size of v.
-        joint_limits: the joint-limit objectives whose limits are kept (their rows' joints).
-        dt: step [s] > 0.
-        fraction: the part of the distance to a limit that one step may cover, in (0, 1].
-        valid_set: keep the valid set (the limits moved in by the margin) instead of the model's limits.
-
-    Returns:
-        (lower, upper), -inf / +inf on the entries no objective limits.
-    """
-    return RateRows.of(joint_limits, valid_set).bounds(q, nv, dt, fraction)
 
 
 class RateRows:
@@ -94,7 +77,7 @@ def velocity_box(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.nda
 
     Args:
         maximum: speed limits (nv,), +inf where none.
-        rate_lower, rate_upper: position-rate bounds (nv,) (:func:`position_rate_bounds`).
+        rate_lower, rate_upper: position-rate bounds (nv,) (:meth:`RateRows.bounds`).
         contain_zero: also widen the box to hold v = 0 (what scaling needs; a joint outside its limit is
             then stopped, not pushed further out, and its objective brings it back).
     """
@@ -104,33 +87,3 @@ def velocity_box(maximum: np.ndarray, rate_lower: np.ndarray, rate_upper: np.nda
     velocity_box_into(np.ascontiguousarray(maximum, dtype=float), np.ascontiguousarray(rate_lower, dtype=float),
                       np.ascontiguousarray(rate_upper, dtype=float), contain_zero, lower, upper)
     return lower, upper
-
-
-def inside(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, tolerance: float = TOLERANCE) -> bool:
-    """Whether lower <= values <= upper, up to ``tolerance`` (:func:`~uvms.numerics._kernels.boxes.inside_box`, the saturation's)."""
-    from ..numerics._kernels.boxes import inside_box  # numba: loaded at the first use, not by ``import uvms``
-
-    return bool(inside_box(*(np.ascontiguousarray(array, dtype=float) for array in (values, lower, upper)),
-                           float(tolerance)))
-
-
-def scale_lowest_first(contributions: Sequence[np.ndarray], lower: np.ndarray,
-                       upper: np.ndarray) -> tuple[np.ndarray, tuple[float, ...]]:
-    """sum_k s_k c_k inside the box, the lowest levels scaled first (one compiled call,
-    :func:`~uvms.numerics._kernels.boxes.scale_lowest_first_into`).
-
-    Args:
-        contributions: c_k (nv,) per level, highest priority first.
-        lower, upper: the box (nv,); it must contain 0 (:func:`velocity_box` with ``contain_zero``).
-
-    Returns:
-        (the scaled sum (nv,), the scales s_k).
-    """
-    from ..numerics._kernels.boxes import scale_lowest_first_into  # numba: loaded at the first solve, not by ``import uvms``
-
-    count = len(contributions)
-    stacked = np.array(contributions, dtype=float).reshape(count, lower.size)
-    out, scales = np.empty(lower.size), np.empty(count)
-    scale_lowest_first_into(stacked, np.ascontiguousarray(lower, dtype=float),
-                            np.ascontiguousarray(upper, dtype=float), TOLERANCE, out, scales)
-    return out, tuple(scales.tolist())

@@ -56,7 +56,7 @@ from .hierarchy import Hierarchy, HierarchyPlan, Levels, last_task_sigma, solved
 from ..numerics.inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, converged_or_refused,
                        damping_parameters)
 from .result import SolverResult
-from .saturation import RateRows, inside, scale_lowest_first, speed_maximum, velocity_box
+from .saturation import TOLERANCE, RateRows, speed_maximum
 
 # ----------------------------------------------------------------------------- the iCAT levels
 class ICAT:
@@ -77,6 +77,10 @@ class ICAT:
         self.inverse = WeightedInverse(weights, size)  # (rows (r, n), damping) -> inverse (n, r), sigma_min, used
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self._root_eta = np.sqrt(self.eta)
+        self._kernel_constants = (*self.inverse.kernel_weights, *damping_parameters(self.damping), RCOND, self.eta)
+        from ..numerics._kernels.icat import icat_into  # numba: loaded where a solver is built, not by ``import uvms``
+
+        self._icat_into = icat_into
 
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
@@ -99,31 +103,32 @@ class ICAT:
             *damping_parameters(damping), RCOND, 0.0, inverse)
         return inverse, *converged_or_refused(converged, scaled.shape, sigma_min, used)
 
-    def solve(self, hierarchy: Hierarchy) -> tuple[list[np.ndarray], list[float], float]:
-        """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (n,), its sigma_min,
-        and the largest damping used (one compiled call, :func:`~uvms.numerics._kernels.icat.icat_into`).
+    def solve(self, hierarchy: Hierarchy, offsets: np.ndarray,
+              equality: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """The iCAT recursion over the levels: each level's contribution rho_k - rho_{k-1} (L, n), its sigma_min
+        (L,), and the largest damping used (one compiled call, :func:`~uvms.numerics._kernels.icat.icat_into`);
+        ``offsets`` (L + 1,) and ``equality`` (L,) of the levels as :class:`HierarchyPlan` lays them out.
 
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
-        from ..numerics._kernels.icat import icat_into  # numba: loaded at the first solve, not by ``import uvms``
-
         levels = hierarchy.levels
         count = len(levels)
         contributions, sigmas = np.empty((count, self.size)), np.empty(count)
         if not count:
-            return [], [], 0.0
-        sizes = [level.activation.size for level in levels]
-        offsets = np.zeros(count + 1, dtype=np.int64)
-        offsets[1:] = np.cumsum(sizes)
-        jacobians = np.concatenate([level.solved for level in levels]) if count > 1 else levels[0].solved
-        converged, largest = icat_into(
-            np.ascontiguousarray(jacobians, dtype=float), np.concatenate([level.reference for level in levels]),
-            np.concatenate([level.activation for level in levels]), offsets,
-            np.array([level.equality for level in levels]), *self.inverse.kernel_weights,
-            *damping_parameters(self.damping), RCOND, self.eta, contributions, sigmas)
-        converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
-        return list(contributions), sigmas.tolist(), largest
+            return contributions, sigmas, 0.0
+        if count > 1:
+            jacobians = np.concatenate([level.solved for level in levels])
+            references = np.concatenate([level.reference for level in levels])
+            activations = np.concatenate([level.activation for level in levels])
+        else:
+            jacobians = np.ascontiguousarray(levels[0].solved, dtype=float)
+            references, activations = levels[0].reference, levels[0].activation
+        converged, largest = self._icat_into(jacobians, references, activations, offsets, equality,
+                                             *self._kernel_constants, contributions, sigmas)
+        if not converged:
+            converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
+        return contributions, sigmas, largest
 
 
 def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.ndarray | None,
@@ -196,49 +201,37 @@ class SetBasedSolver(Solver):
             raise SolverInputError(f"position_fraction must be in (0, 1], got {position_fraction!r}")
         self.dt = None if dt is None else check_scalar(dt, "dt", positive=True)
         self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
-        self._rates = self.dt is not None and bool(self.plan.joint_limits)  # position-rate bounds at every q
-        self._rate_rows = RateRows.of(self.plan.joint_limits)  # their rows, stacked once
-        unbounded = np.full(robot.nv, np.inf)
-        self._box = velocity_box(self.maximum, -unbounded, unbounded, contain_zero=True)  # (nv,), (nv,) without them
-
-    def _box_at(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The velocity box (nv,), (nv,) at q: speed limits and the joint limits' rate bounds over dt."""
-        if not self._rates:
-            return self._box
-        rates = self._rate_rows.bounds(q, self.robot.nv, self.dt, self.fraction)
-        return velocity_box(self.maximum, *rates, contain_zero=True)
+        rates = self.dt is not None and bool(self.plan.joint_limits)  # position-rate bounds at every q
+        rows = RateRows.of(self.plan.joint_limits if rates else [])  # their rows, stacked once (none without dt)
+        self._box_constants = (rows.q_index, rows.v_index, rows.low, rows.high, self.dt or 1.0, self.fraction,
+                               self.maximum, not free_floating, TOLERANCE)
 
     def velocity(self, configuration: Configuration) -> SolverResult:
-        """The set-based velocity at ``configuration`` and its diagnostics (the residuals and the objectives'
-        statuses when read); ``sigma_min`` that of the last level holding equality tasks."""
+        """The set-based velocity at ``configuration`` and its diagnostics (sigma_min, the residuals and the
+        objectives' statuses computed when read); ``sigma_min`` that of the last level holding equality tasks."""
         state = self._checked(configuration)
-        hierarchy = self.plan.evaluate(state)
-        contributions, sigmas, used = self.icat.solve(hierarchy)
-        solved, scales = saturate(hierarchy, contributions, *self._box_at(state.q))
+        plan = self.plan
+        hierarchy = plan.evaluate(state)
+        contributions, sigmas, used = self.icat.solve(hierarchy, plan.offsets, plan.equality)
+        solved, scales, ratio = saturate(hierarchy, contributions, state.q, self._box_constants)
         v = hierarchy.velocity(solved)
-        return SolverResult(v=v, sigma_min=last_task_sigma(hierarchy, sigmas), damping=used,
-                            free_floating=self.free_floating, scales=scales, speed_ratio=speed_ratio(v, self.maximum),
-                            levels=solved_rows(hierarchy))
+        return SolverResult(v, lambda: last_task_sigma(hierarchy, sigmas), used, lambda: solved_rows(hierarchy),
+                            free_floating=self.free_floating, scales=scales,
+                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio)
 
 
-def saturate(hierarchy: Hierarchy, contributions: list[np.ndarray], lower: np.ndarray,
-             upper: np.ndarray) -> tuple[np.ndarray, tuple[float, ...]]:
-    """The solved columns (n,) with the levels scaled lowest first so that v stays inside the box."""
-    if not contributions:
-        return np.zeros(hierarchy.size), ()
-    total = sum_in_order(contributions)
-    unbounded = not (np.isfinite(lower).any() or np.isfinite(upper).any())
-    if unbounded or (not hierarchy.free_floating and inside(total, lower, upper)):  # nothing to scale (the common case)
-        return total, (1.0,) * len(contributions)
-    _, scales = scale_lowest_first([hierarchy.to_velocity(c) for c in contributions], lower, upper)
-    return sum_in_order([scale * c for scale, c in zip(scales, contributions)]), scales
+def saturate(hierarchy: Hierarchy, contributions: np.ndarray, q: np.ndarray,
+             box: tuple) -> tuple[np.ndarray, tuple[float, ...], float]:
+    """The solved columns (n,): the levels' contributions (L, n) summed in order, scaled lowest first so that v
+    stays inside the velocity box at q (``box``: the constants of
+    :func:`~uvms.numerics._kernels.boxes.saturated_sum_into` after the contributions and q); the scales; the
+    speed ratio of that sum (0 when free floating: v is formed from it after)."""
+    from ..numerics._kernels.boxes import saturated_sum_into  # numba: loaded where a solver is built
 
-
-def sum_in_order(vectors: Sequence[np.ndarray]) -> np.ndarray:
-    """v_0 + v_1 + ... (n,), added in order: the numbers of ``np.sum(vectors, axis=0)`` without stacking them."""
-    total = vectors[0].copy()
-    for vector in vectors[1:]:
-        total += vector
-    return total
-
-
+    if not contributions.shape[0]:
+        return np.zeros(hierarchy.size), (), 0.0
+    velocities = (np.array([hierarchy.to_velocity(c) for c in contributions]) if hierarchy.free_floating
+                  else contributions)
+    total, scales = np.empty(hierarchy.size), np.empty(contributions.shape[0])
+    ratio = saturated_sum_into(contributions, velocities, q, *box, total, scales)
+    return total, tuple(scales.tolist()), ratio

@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["inside_box", "project_into_box", "rate_bounds_into", "scale_lowest_first_into", "velocity_box_into"]
+__all__ = ["inside_box", "project_into_box", "rate_bounds_into", "saturated_sum_into", "scale_lowest_first_into",
+           "speed_ratio_of", "velocity_box_into"]
 
 
 @njit(cache=True)
@@ -123,3 +124,72 @@ def scale_lowest_first_into(contributions: np.ndarray, lower: np.ndarray, upper:
                 out[entry] = base[entry] + scale * contributions[level, entry]
             return
     out[:] = 0.0
+
+
+@njit(cache=True)
+def speed_ratio_of(v: np.ndarray, maximum: np.ndarray) -> float:
+    """max_i |v_i| / max_i over the finite speed limits (0 without any; NaN if a ratio is NaN)."""
+    largest = 0.0
+    for entry in range(v.size):
+        if np.isfinite(maximum[entry]):
+            ratio = np.abs(v[entry]) / maximum[entry]
+            if ratio > largest or ratio != ratio:
+                largest = ratio
+                if ratio != ratio:
+                    return ratio
+    return largest
+
+
+@njit(cache=True)
+def saturated_sum_into(solved: np.ndarray, velocities: np.ndarray, q: np.ndarray, q_index: np.ndarray,
+                       v_index: np.ndarray, low: np.ndarray, high: np.ndarray, dt: float, fraction: float,
+                       maximum: np.ndarray, check_inside: bool, tolerance: float, total: np.ndarray,
+                       scales: np.ndarray) -> float:
+    """The set-based solver's sum of its levels inside the velocity box, the lowest levels scaled first.
+
+    The box is that of :func:`velocity_box_into` (``contain_zero``) over the speed limits ``maximum`` and the
+    position-rate bounds of the rows (:func:`rate_bounds_into`; no row: none). total = c_0 + c_1 + ... in order;
+    if the box bounds anything and (``check_inside`` False, or the total is outside it) the scales s_k of
+    :func:`scale_lowest_first_into` on the contributions in v and total = s_0 c_0 + s_1 c_1 + ... in order.
+
+    Args:
+        solved: c_k (L, n) over the solved columns; velocities: the same in v (L, nv) (the same array unless
+            free floating).
+        q: configuration (nq,); q_index, v_index, low, high: the rate rows (m,); dt [s], fraction: as
+            :func:`rate_bounds_into`.
+        maximum: speed limits (nv,), +inf where none.
+        check_inside: keep the plain sum when it is inside the box (False: always scale, free floating).
+        tolerance: the slack of :func:`inside_box`.
+        total: (n,) written; scales: (L,) written.
+
+    Returns:
+        :func:`speed_ratio_of` the total when it is v (n = nv; free floating: 0, v is formed after).
+    """
+    count, size = solved.shape
+    nv = maximum.size
+    lower, upper = np.empty(nv), np.empty(nv)
+    if q_index.size:
+        rate_bounds_into(q, q_index, v_index, low, high, dt, fraction, lower, upper)
+    else:
+        for entry in range(nv):
+            lower[entry], upper[entry] = -np.inf, np.inf
+    velocity_box_into(maximum, lower, upper, True, lower, upper)
+    for level in range(count):
+        scales[level] = 1.0
+    for entry in range(size):
+        total[entry] = solved[0, entry]
+    for level in range(1, count):
+        for entry in range(size):
+            total[entry] += solved[level, entry]
+    bounded = False
+    for entry in range(nv):
+        bounded = bounded or np.isfinite(lower[entry]) or np.isfinite(upper[entry])
+    if bounded and not (check_inside and inside_box(total, lower, upper, tolerance)):
+        out = np.empty(nv)
+        scale_lowest_first_into(velocities, lower, upper, tolerance, out, scales)
+        for entry in range(size):
+            total[entry] = scales[0] * solved[0, entry]
+        for level in range(1, count):
+            for entry in range(size):
+                total[entry] += scales[level] * solved[level, entry]
+    return speed_ratio_of(total, maximum) if size == nv else 0.0

@@ -104,6 +104,7 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
     root_eta = np.sqrt(eta)
     no_rows = np.zeros((0, size))
     largest = 0.0
+    last_level = offsets.size - 2
     for level in range(offsets.size - 1):
         first, last = offsets[level], offsets[level + 1]
         contributions[level, :] = 0.0
@@ -128,7 +129,8 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
             if not converged:
                 return False, largest
             contribution = apply(inverse, remaining)
-            subtract_in_place(projector, product(inverse, jacobian))
+            if level < last_level:  # Q of the levels above: no level below reads the last one
+                subtract_in_place(projector, product(inverse, jacobian))
         else:
             rows = np.empty(active, dtype=np.int64)  # the active rows, their a^1/2 and a^1.5
             root, power = np.empty(active), np.empty(active)
@@ -168,7 +170,8 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
             for row in range(active):
                 wanted[row] = remaining[rows[row]]
             contribution = apply(projector, apply(inverse, apply(transfer, wanted)))
-            subtract_in_place(projector, product(projector, product(inverse, projected)))
+            if level < last_level:
+                subtract_in_place(projector, product(projector, product(inverse, projected)))
         for entry in range(size):
             rho[entry] += contribution[entry]
         unrestricted = False
