@@ -89,6 +89,7 @@ def test_identify_current_reports_and_writes_the_current(bag, tmp_path, capsys):
 
 @pytest.mark.parametrize("damage, message", [
     ("commands", "--thrust-commands says what the thruster topics hold: give --thrust-topics too"),
+    ("csv thrust", "--thrust-topics reads a bag's thruster topics"),
     ("thrust topic", "the bag has no thrust of thruster_1 topic '/t/thruster_1'"),
     ("truncate", "cannot read the bag"),
     ("topic", "no wrench topic '/other'"),
@@ -110,6 +111,11 @@ def test_a_bad_log_gets_one_error_line_and_nothing_is_written(bag, tmp_path, cap
         extra = ["--thrust-commands"]
     elif damage == "thrust topic":
         extra = ["--thrust-topics", "/t/{name}"]
+    elif damage == "csv thrust":
+        _, clean = excitation("heave_pitch")
+        log = tmp_path / "log.csv"
+        log.write_text(log_csv_text(clean))
+        extra = ["--thrust-topics", "/thrusters/{name}/thrust"]
     else:
         _, clean = excitation("heave_pitch")
         rows = log_csv_text(clean).splitlines()

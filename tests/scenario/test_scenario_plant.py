@@ -66,3 +66,27 @@ def test_plant_hydrodynamics_needs_the_hydrodynamic_plant(tmp_path, plant, messa
     overrides = ["solver.free_floating=false"] if plant == "kinematic" else []
     with pytest.raises(ScenarioError, match=message):
         build(read_scenario(scenario, overrides))
+
+
+def test_the_hydrodynamics_yaml_is_an_input_of_the_run_and_of_watch(tmp_path):
+    """An identified YAML read from a previous output folder: a run into that folder would replace the file it
+    reads, so it is refused before anything is written; --watch reruns when the YAML changes."""
+    from uvms.errors import RunFolderError
+    from uvms.io import outputs
+    from uvms.scenario.runs import run_scenario
+    from uvms.scenario.watch import WatchedFiles
+
+    scenario = station_in(tmp_path)
+    robot = build(read_scenario(scenario)).robot
+    identified = tmp_path / "identified"
+    with outputs.run_folder(identified) as folder:  # what `uvms identify --out identified` leaves
+        (folder / "hydrodynamics.yaml").write_text(hydrodynamics_yaml_text(hydrodynamics_of(robot)))
+    text = scenario.read_text()
+    scenario.write_text(text.replace("[plant]", "[plant]\nhydrodynamics = \"identified/hydrodynamics.yaml\"", 1))
+    assert "identified/hydrodynamics.yaml" in scenario.read_text()
+    before = sorted(path.name for path in identified.iterdir())
+    with pytest.raises(RunFolderError, match="hydrodynamics.yaml"):
+        run_scenario(scenario, out=identified, progress=False)
+    assert sorted(path.name for path in identified.iterdir()) == before
+    watched = WatchedFiles.of(scenario=scenario)
+    assert watched.wants(identified / "hydrodynamics.yaml") and not watched.wants(identified / "other.yaml")

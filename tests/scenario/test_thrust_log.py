@@ -72,6 +72,17 @@ def test_a_bag_without_a_thruster_topic_is_refused(bags):
         read_bag(bags[0], thrust=thrust_input(robot, "/t/{name}/x"))
 
 
+def test_a_thruster_topic_of_the_wrong_type_is_refused(bags):
+    """The thrust topics are std_msgs/Float64: a pattern leading to the odometry is named with both types."""
+    robot = shipped("bluerov2_alpha5")
+    names = thrusters_of(robot).names
+    renamed = thrust_input(robot, "/{name}")
+    renamed = dataclasses.replace(renamed, topics=("/odom", *renamed.topics[1:]))
+    with pytest.raises(IdentificationError, match=f"topic '/odom' holds nav_msgs/msg/Odometry; the thrust of "
+                                                  f"{names[0]} must be std_msgs/msg/Float64"):
+        read_bag(bags[0], thrust=renamed)
+
+
 @pytest.mark.parametrize("pattern", ["/thrusters/thrust", "/{name}/{name}", "/{id}"])
 def test_a_pattern_without_one_name_is_refused(pattern):
     with pytest.raises(IdentificationError, match=r"must hold \{name\} once"):

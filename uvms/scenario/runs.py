@@ -21,7 +21,7 @@ from .build import Setup, build, check_step_count
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
 from .resources import resolve_scenario_path
-from .schema import read_scenario
+from .schema import named_files, read_scenario
 from .verdict import run_verdict
 
 @dataclass
@@ -117,19 +117,21 @@ def run_scenario(
     with numerics_guard(name):
         setup = build(scenario)
     check_step_count(scenario, setup.duration)
-    inputs = run_inputs(resolve_scenario_path(scenario_path), [scenario["model"]["path"]])
+    inputs = run_inputs(resolve_scenario_path(scenario_path), [scenario["model"]["path"]], named_files(scenario))
     with outputs.run_folder(out, lock=lock, inputs=inputs) as folder, numerics_guard(name):
         result = execute(scenario, setup, folder, progress, started)
     result.files = [out / path.relative_to(folder) for path in result.files]
     return result
 
 
-def run_inputs(scenario_file: str | os.PathLike, models: Iterable[str]) -> list[Path]:
-    """What a run reads, which its output folder must not hold: the scenario file, and each model file (a path
-    or a shipped name) with the files it includes and their folders (meshes, YAML beside the model)."""
+def run_inputs(scenario_file: str | os.PathLike, models: Iterable[str], files: Iterable[str] = ()) -> list[Path]:
+    """What a run reads, which its output folder must not hold: the scenario file, the files it names
+    (:func:`~uvms.scenario.schema.named_files`: e.g. an identified hydrodynamics YAML in a previous output folder),
+    and each model file (a path or a shipped name) with the files it includes and their folders (meshes, YAML
+    beside the model)."""
     from .watch import WatchedFiles
 
-    found = {Path(scenario_file).resolve()}
+    found = {Path(scenario_file).resolve(), *(Path(file).resolve() for file in files)}
     for model in models:
         watched = WatchedFiles.of(model=model)  # an unreadable model adds nothing: the run reports it
         found |= watched.files | watched.folders

@@ -226,6 +226,16 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     return scenario
 
 
+def named_files(scenario: dict) -> list[str]:
+    """The files a checked scenario names besides its model, absolute (:func:`scenario_from_raw`): the plant's
+    hydrodynamics YAML and the inequalities' files (meshes). What a run reads, which ``--watch`` watches and an
+    output folder must not hold."""
+    files = [scenario["plant"]["hydrodynamics"]] if scenario["plant"]["hydrodynamics"] else []
+    for table in scenario["inequalities"]:
+        files += [table[key] for key in FILE_KEYS.get(table["type"], ()) if key in table]
+    return files
+
+
 def check_name(name: str, value: str, origin: str, role: str, suffixes: Sequence[str] = (), example: str = "") -> str:
     """A scenario string that becomes a file name: a plain name (:data:`NAME_PATTERN`), with one of ``suffixes``."""
     plain = NAME_PATTERN.fullmatch(value) is not None and ".." not in value

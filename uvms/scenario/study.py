@@ -34,7 +34,7 @@ from ..io import outputs
 from .distributions import METHODS, Distribution, parse_samples, sample_table
 from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
 from .resources import resolve_scenario_path
-from .schema import read_scenario, read_toml, scenario_from_raw
+from .schema import named_files, read_scenario, read_toml, scenario_from_raw
 from .sensitivity import summarize
 from .sweep import csv_cell, toml_literal
 
@@ -193,7 +193,8 @@ def study(
     trials = check_trials(scenario, keys, values, overrides)
     from .runs import run_inputs
 
-    spec = study_spec(scenario, samples, n, seed, method, overrides, run_inputs(scenario, [table["model"]["path"]]))
+    inputs = run_inputs(scenario, [table["model"]["path"]], named_files(table))
+    spec = study_spec(scenario, samples, n, seed, method, overrides, inputs)
     folder = Path(out) if out is not None else Path("out") / f"{table['scenario']['name']}_study"
     release = open_study_folder(folder, spec)
     try:

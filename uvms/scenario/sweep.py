@@ -27,7 +27,7 @@ from ..errors import SweepError
 from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
 from .record import scenario_model
 from .resources import resolve_scenario_path
-from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
+from .schema import named_files, parse_value, read_scenario, read_toml, scenario_from_raw
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
 METRICS = ("max_position_error", "final_position_error", "arm_travel", "vehicle_travel", "wall_time")
@@ -191,7 +191,7 @@ def sweep(
                          f"into several sweeps (e.g. one per value of {keys[0]}) or take fewer values")
     points = list(itertools.product(*(values for _, values in grids)))
     assignments = [[*overrides, *(f"{key}={toml_literal(v)}" for key, v in zip(keys, point))] for point in points]
-    checked, models = check_points(scenario, assignments, progress)
+    checked, models, files = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
         scenario_model(read_scenario(scenario, assignments[0])["model"])
     given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
@@ -199,7 +199,7 @@ def sweep(
     width = len(str(len(points) - 1))
     from .runs import run_inputs
 
-    inputs = run_inputs(scenario, models)
+    inputs = run_inputs(scenario, models, files)
     with outputs.run_folder(given, inputs=inputs) as folder:  # replaced whole, point folders included
         tasks = [(str(Path(scenario).resolve()), k, overrides, str(folder / f"point_{k:0{width}d}"))
                  for k, overrides in enumerate(assignments)]
@@ -216,24 +216,27 @@ def sweep(
 
 
 def check_points(scenario: str | os.PathLike, assignments: list[list[str]],
-                 progress: bool | None) -> tuple[dict, list[str]]:
+                 progress: bool | None) -> tuple[dict, list[str], list[str]]:
     """Check every point's keys and values in the parent, before any worker starts.
 
     The file is parsed once; a progress bar shows up if the checks take more than a second.
 
     Returns:
-        The last point's scenario, and the model paths of all points (``model.path`` may be a grid key).
+        The last point's scenario, the model paths of all points (``model.path`` may be a grid key) and the other
+        files they name (:func:`~uvms.scenario.schema.named_files`).
     """
     from ..io.progress import tqdm
 
     raw = read_toml(scenario)
     checked: dict = {}
     models: dict[str, None] = {}
+    files: dict[str, None] = {}
     for overrides in tqdm(assignments, desc="checking the grid", unit="point", disable=progress is False,
                           leave=False, delay=1.0):
         checked = scenario_from_raw(raw, scenario, overrides)
         models[checked["model"]["path"]] = None
-    return checked, list(models)
+        files.update(dict.fromkeys(named_files(checked)))
+    return checked, list(models), list(files)
 
 
 def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:

@@ -63,6 +63,17 @@ def scenario_model(scenario: Path) -> str | None:
     return str(relative) if relative.exists() else model
 
 
+def scenario_named_files(scenario: Path) -> list[str]:
+    """The files a scenario names besides its model (:func:`~uvms.scenario.schema.named_files`); none when it
+    cannot be read (the run reports why)."""
+    from .schema import named_files, read_scenario
+
+    try:
+        return named_files(read_scenario(scenario))
+    except UVMSError:
+        return []
+
+
 @dataclass
 class WatchedFiles:
     """Which changes rerun a job: listed files, and model data in the model folders (and their direct subfolders),
@@ -83,7 +94,7 @@ class WatchedFiles:
         files: set[Path] = set()
         folders: set[Path] = set()
         if scenario is not None:
-            files.add(real(scenario))
+            files |= {real(scenario), *(real(file) for file in scenario_named_files(Path(scenario)))}
             model = model or scenario_model(Path(scenario))
         if model is not None:
             try:

@@ -134,7 +134,6 @@ class SolverResult:
         extras: what one method alone reports (read-only): ``method`` (task priority: "classic" or
             "robust"), ``level_sigma_min`` (task priority: one per level), ``solver_status``, ``slacks`` and
             ``solver`` (QP hierarchy).
-        binding: per objective name, whether it binds (the QP hierarchy); None: active = some activation > 0.
     """
 
     def __init__(self, v: np.ndarray, sigma_min: float | Callable[[], float], damping: float,
