@@ -104,16 +104,16 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
     try:
         import pink
 
-        configuration = pink.Configuration(robot.model.copy(), robot.model.copy().createData(), q)
+        pink_configuration = pink.Configuration(robot.model.copy(), robot.model.copy().createData(), q)
         pink_task = pink.tasks.FrameTask(robot.ee_frames[0], position_cost=1.0, orientation_cost=1.0)
         pink_task.set_target(target)
         posture = pink.tasks.PostureTask(cost=1e-3)
         posture.set_target(q)
 
         def pink_step():
-            configuration.update(q)
-            velocity = pink.solve_ik(configuration, [pink_task, posture], DT, solver="daqp")
-            return pin.integrate(configuration.model, q, velocity * DT)
+            pink_configuration.update(q)
+            velocity = pink.solve_ik(pink_configuration, [pink_task, posture], DT, solver="daqp")
+            return pin.integrate(pink_configuration.model, q, velocity * DT)
 
         calls["pink solve_ik step (daqp)"] = pink_step
     except ImportError:
