@@ -161,6 +161,7 @@ class Inequality(ABC):
         # the rows' constants as the compiled activation takes them (5, k): lower, upper, band, and the inner
         # edges lower + band and upper - band where the activation falls to 0
         self._bounds = np.array([lower, upper, band, lower + band, upper - band])
+        self._step = shape == "step"
 
     @abstractmethod
     def value(self, state: Configuration) -> np.ndarray:
@@ -183,7 +184,7 @@ class Inequality(ABC):
         (:func:`uvms.numerics._kernels.activation.activation_reference_into`)."""
         kernel = _ACTIVATION_KERNEL or _activation_kernel()
         out = np.empty((2, self.dim))  # activation, reference
-        kernel(np.ascontiguousarray(value, dtype=float), self._bounds, self.gain, self.shape == "step", out)
+        kernel(np.ascontiguousarray(value, dtype=float), self._bounds, self.gain, self._step, out)
         return out[0], out[1]
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
