@@ -12,6 +12,7 @@ Cholesky/DLS solve), :mod:`.weighted` (the weighted inverse), :mod:`.icat` (the 
 solution and joint-limit motion), :mod:`.pose` (pose errors, the pose DLS step), :mod:`.activation` (objectives'
 bells), :mod:`.boxes` (position and velocity boxes, saturation scaling), :mod:`.distance` (the distance Jacobian
 of collision pairs).
+
 Import a kernel from its module; this package imports nothing, so ``import uvms`` never loads numba.
 
 Each module imports numba, so it is loaded where a solver first uses it. The kernels compile at their
