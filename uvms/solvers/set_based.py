@@ -203,7 +203,10 @@ class SetBasedSolver(Solver):
         self.maximum = speed_maximum(robot.nv, self.plan.speed_limits)  # (nv,)
         rates = self.dt is not None and bool(self.plan.joint_limits)  # position-rate bounds at every q
         rows = RateRows.of(self.plan.joint_limits if rates else [])  # their rows, stacked once (none without dt)
-        self._box_constants = (rows.q_index, rows.v_index, rows.low, rows.high, self.dt or 1.0, self.fraction,
+        from ..numerics._kernels.boxes import saturated_sum_into  # numba: loaded where a solver is built
+
+        self._box_constants = (saturated_sum_into, rows.q_index, rows.v_index, rows.low, rows.high, self.dt or 1.0,
+                               self.fraction,
                                self.maximum, not free_floating, TOLERANCE)
 
     def velocity(self, configuration: Configuration) -> SolverResult:
@@ -223,15 +226,14 @@ class SetBasedSolver(Solver):
 def saturate(hierarchy: Hierarchy, contributions: np.ndarray, q: np.ndarray,
              box: tuple) -> tuple[np.ndarray, tuple[float, ...], float]:
     """The solved columns (n,): the levels' contributions (L, n) summed in order, scaled lowest first so that v
-    stays inside the velocity box at q (``box``: the constants of
-    :func:`~uvms.numerics._kernels.boxes.saturated_sum_into` after the contributions and q); the scales; the
-    speed ratio of that sum (0 when free floating: v is formed from it after)."""
-    from ..numerics._kernels.boxes import saturated_sum_into  # numba: loaded where a solver is built
-
+    stays inside the velocity box at q (``box``: :func:`~uvms.numerics._kernels.boxes.saturated_sum_into`, then
+    its constants after the contributions and q); the scales; the speed ratio of that sum (0 when free floating:
+    v is formed from it after)."""
+    saturated_sum_into, *constants = box
     if not contributions.shape[0]:
         return np.zeros(hierarchy.size), (), 0.0
     velocities = (np.array([hierarchy.to_velocity(c) for c in contributions]) if hierarchy.free_floating
                   else contributions)
     total, scales = np.empty(hierarchy.size), np.empty(contributions.shape[0])
-    ratio = saturated_sum_into(contributions, velocities, q, *box, total, scales)
+    ratio = saturated_sum_into(contributions, velocities, q, *constants, total, scales)
     return total, tuple(scales.tolist()), ratio

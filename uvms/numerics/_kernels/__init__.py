@@ -8,9 +8,11 @@ Jacobian, logarithm and integration.
 
 Modules: :mod:`.svd` (the Jacobi SVD and the damped inverse), :mod:`.dense` (products in loops, the
 Cholesky/DLS solve), :mod:`.weighted` (the weighted inverse), :mod:`.icat` (the set-based recursion),
-:mod:`.clik` (the CLIK's solution and joint-limit motion), :mod:`.pose` (pose errors, the pose DLS step),
-:mod:`.activation` (objectives' bells), :mod:`.boxes` (position and velocity boxes, saturation scaling),
-:mod:`.distance` (the distance Jacobian of collision pairs).
+:mod:`.qr` (the pivoted QR triangle, the few rows with a matrix's Gram matrix), :mod:`.clik` (the CLIK's
+solution and joint-limit motion), :mod:`.pose` (pose errors, the pose DLS step), :mod:`.activation` (objectives'
+bells), :mod:`.boxes` (position and velocity boxes, saturation scaling), :mod:`.distance` (the distance Jacobian
+of collision pairs).
+
 Import a kernel from its module; this package imports nothing, so ``import uvms`` never loads numba.
 
 Each module imports numba, so it is loaded where a solver first uses it. The kernels compile at their

@@ -13,6 +13,8 @@ import numpy as np
 from numba import njit
 
 from .dense import apply, copy_into, product, scale_matrix, subtract_in_place
+from .qr import gram_rows
+from .svd import EPSILON
 from .weighted import weighted_inverse_into, weighted_norm
 
 __all__ = ["eta_rows", "icat_into", "level_inverse_into"]
@@ -42,7 +44,8 @@ def level_inverse_into(scaled: np.ndarray, power: np.ndarray, penalty: np.ndarra
     """The iCAT inverse X^{#,A,Q} (n, m) of one level (Simetti and Casalino 2016), written to ``out``.
 
     The weighted, damped inverse of Z = [A^1/2 X; P] (without P when it has no row), its first m columns
-    scaled by a^1.5: (X^T A X + P^T P)^# X^T A A, P the eta rows (:func:`eta_rows`).
+    scaled by a^1.5: (X^T A X + P^T P)^# X^T A A, P the eta rows (:func:`eta_rows`). Undamped, P is replaced
+    by its few rows F with the same Gram matrix (:func:`~.qr.gram_rows`): the same inverse to rounding.
 
     Args:
         scaled: A^1/2 X (m, n); power: a^1.5 (m,); penalty: the eta rows P (p, n), p = 0 for X^{#,A,I}.
@@ -55,7 +58,23 @@ def level_inverse_into(scaled: np.ndarray, power: np.ndarray, penalty: np.ndarra
     """
     active, size = scaled.shape
     stacked = scaled
-    if penalty.shape[0] > 0:
+    compressed = penalty.shape[0] > 0 and damping == 0.0 and epsilon == 0.0
+    if compressed:
+        # P's rank is the number of directions the levels above hold: its few rows F with F^T F = P^T P
+        # (rows at the stack's rounding level left out) give the same Gram matrix, and the inverse's first m
+        # columns (X^T A X + P^T P)^# X^T A^1/2, from m + r rows instead of m + n
+        total = 0.0
+        for row in range(active):
+            for col in range(size):
+                total += scaled[row, col] * scaled[row, col]
+        for row in range(penalty.shape[0]):
+            for col in range(size):
+                total += penalty[row, col] * penalty[row, col]
+        factor = gram_rows(penalty, (size * EPSILON) ** 2 * total)
+        stacked = np.empty((active + factor.shape[0], size))
+        copy_into(stacked[:active], scaled)
+        copy_into(stacked[active:], factor)
+    elif penalty.shape[0] > 0:  # damped: l, and sigma_min the variable damping reads, are those of Z (m + n, n)
         stacked = np.empty((active + penalty.shape[0], size))
         copy_into(stacked[:active], scaled)
         copy_into(stacked[active:], penalty)
@@ -65,6 +84,8 @@ def level_inverse_into(scaled: np.ndarray, power: np.ndarray, penalty: np.ndarra
     for row in range(size):
         for col in range(active):
             out[row, col] = full[row, col] * power[col]
+    if compressed:
+        sigma_min = 0.0  # of Z (m + n rows, tall), as without the compression
     return converged, sigma_min, used
 
 

@@ -17,8 +17,8 @@ from numba import njit
 JACOBI_SWEEPS = 64
 EPSILON = np.finfo(np.float64).eps
 
-__all__ = ["JACOBI_SWEEPS", "decompose", "orthogonalize_rows", "svd_inverse_into", "variable_damping_value",
-           "zero_negligible_row"]
+__all__ = ["JACOBI_SWEEPS", "decompose", "orthogonalize_rows", "squared_norm", "svd_inverse_into",
+           "variable_damping_value", "zero_negligible_row"]
 
 
 @njit(cache=True)
@@ -34,6 +34,15 @@ def zero_negligible_row(rows: np.ndarray, row: int) -> None:
     """Set row ``row`` of B to exact zeros (its norm is at the rounding level of the matrix)."""
     for col in range(rows.shape[1]):
         rows[row, col] = 0.0
+
+
+@njit(cache=True)
+def squared_norm(rows: np.ndarray, row: int) -> float:
+    """|b_row|^2 of row ``row`` of B, summed in column order."""
+    total = 0.0
+    for col in range(rows.shape[1]):
+        total += rows[row, col] * rows[row, col]
+    return total
 
 
 @njit(cache=True)
@@ -61,22 +70,31 @@ def orthogonalize_rows(rows: np.ndarray, rotation: np.ndarray) -> bool:
     if frobenius_squared != frobenius_squared or frobenius_squared == np.inf:  # NaN or an infinite entry
         return False
     negligible = tolerance * tolerance * frobenius_squared  # a squared row norm at the rounding level
+    # squared row norms, each summed again only after its row was rotated (the same sums: a row left alone
+    # keeps its norm, so the late sweeps, which rotate few pairs, compute one product per pair instead of three)
+    norms = np.empty(count)
+    fresh = np.zeros(count, dtype=np.bool_)
     for _ in range(JACOBI_SWEEPS):
         rotated = False
         for first in range(count - 1):
             for second in range(first + 1, count):
-                alpha = beta = gamma = 0.0
-                for col in range(length):
-                    a, b = rows[first, col], rows[second, col]
-                    alpha += a * a
-                    beta += b * b
-                    gamma += a * b
+                for row in (first, second):
+                    if not fresh[row]:
+                        norms[row] = squared_norm(rows, row)
+                        fresh[row] = True
+                alpha, beta = norms[first], norms[second]
                 if alpha <= negligible or beta <= negligible:
-                    zero_negligible_row(rows, first if alpha <= negligible else second)
+                    row = first if alpha <= negligible else second
+                    zero_negligible_row(rows, row)
+                    norms[row] = 0.0
                     continue
+                gamma = 0.0
+                for col in range(length):
+                    gamma += rows[first, col] * rows[second, col]
                 if not abs(gamma) > tolerance * np.sqrt(alpha) * np.sqrt(beta):
                     continue
                 rotated = True
+                fresh[first] = fresh[second] = False
                 zeta = (beta - alpha) / (2.0 * gamma)
                 tangent = (1.0 if zeta >= 0.0 else -1.0) / (abs(zeta) + np.sqrt(1.0 + zeta * zeta))
                 cosine = 1.0 / np.sqrt(1.0 + tangent * tangent)

@@ -42,6 +42,19 @@ from ...robot.configuration import Configuration
 ACTIVATION_SHAPES = ("cosine", "step")
 
 
+#: The compiled activation and reference, bound at the first evaluation (:func:`_activation_kernel`).
+_ACTIVATION_KERNEL = None
+
+
+def _activation_kernel():
+    """Bind :func:`uvms.numerics._kernels.activation.activation_reference_into` (numba: loaded where an objective
+    is first evaluated, not by ``import uvms``; later evaluations skip the import)."""
+    global _ACTIVATION_KERNEL
+    from ...numerics._kernels.activation import activation_reference_into
+    _ACTIVATION_KERNEL = activation_reference_into
+    return activation_reference_into
+
+
 def bell(depth: np.ndarray, band: np.ndarray, shape: str = "cosine") -> np.ndarray:
     """Activation (k,) in [0, 1] of rows ``depth`` [units of x] inside their border, over ``band`` (k,) > 0.
 
@@ -57,9 +70,9 @@ def bell(depth: np.ndarray, band: np.ndarray, shape: str = "cosine") -> np.ndarr
     return out
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class InequalityRows:
-    """An inequality objective evaluated at one configuration.
+    """An inequality objective evaluated at one configuration (plain slots: built at every step of a solver).
 
     Attributes:
         name: the objective's name (as results report it).
@@ -145,7 +158,10 @@ class Inequality(ABC):
                                  f"{', '.join(ACTIVATION_SHAPES)}")
         self.lower, self.upper, self.band, self.gain, self.shape = lower, upper, band, float(gain), shape
         self.dim = lower.size
-        self._inner_lower, self._inner_upper = lower + band, upper - band  # where the activation falls to 0
+        # the rows' constants as the compiled activation takes them (5, k): lower, upper, band, and the inner
+        # edges lower + band and upper - band where the activation falls to 0
+        self._bounds = np.array([lower, upper, band, lower + band, upper - band])
+        self._step = shape == "step"
 
     @abstractmethod
     def value(self, state: Configuration) -> np.ndarray:
@@ -166,13 +182,10 @@ class Inequality(ABC):
     def _activation_reference(self, value: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(activation (k,), reference (k,)) at x = ``value`` in one compiled call
         (:func:`uvms.numerics._kernels.activation.activation_reference_into`)."""
-        from ...numerics._kernels.activation import activation_reference_into  # numba: loaded at the first use, not by ``import uvms``
-
-        activation, reference = np.empty(self.dim), np.empty(self.dim)
-        activation_reference_into(np.ascontiguousarray(value, dtype=float), self.lower, self.upper, self.band,
-                                  self._inner_lower, self._inner_upper, self.gain, self.shape == "step", activation,
-                                  reference)
-        return activation, reference
+        kernel = _ACTIVATION_KERNEL or _activation_kernel()
+        out = np.empty((2, self.dim))  # activation, reference
+        kernel(np.ascontiguousarray(value, dtype=float), self._bounds, self.gain, self._step, out)
+        return out[0], out[1]
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
         """(x(q) (k,), J (k, nv)) at ``state``; an objective whose two share one computation gives both at once."""

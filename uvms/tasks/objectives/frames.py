@@ -51,16 +51,20 @@ class VehicleAttitude(Inequality):
         self._set_valid_set([-np.inf], [max_tilt], band, gain, shape)
 
     def value(self, state: Configuration) -> np.ndarray:
-        cosine = float(state.pose(self.frame_id).rotation[2, 2])  # the body z axis's world z
-        return np.array([np.arccos(min(max(cosine, -1.0), 1.0))])
+        return self.value_jacobian(state)[0]
 
     def jacobian(self, state: Configuration) -> np.ndarray:
-        z_axis = state.pose(self.frame_id).rotation[:, 2]
+        return self.value_jacobian(state)[1]
+
+    def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
+        """(tilt (1,), its Jacobian (1, nv)) from one read of the vehicle's pose."""
+        z_axis = state.pose(self.frame_id).rotation[:, 2]  # the body z axis in world axes
+        tilt = np.array([np.arccos(min(max(float(z_axis[2]), -1.0), 1.0))])
         axis = np.array([z_axis[1], -z_axis[0], 0.0])  # z_b x e_z, |axis| = sin(tilt)
         length = math.sqrt(axis.dot(axis))  # np.linalg.norm's numbers
         if length < LEVEL_TILT:
-            return np.zeros((1, state.robot.nv))
-        return -((axis / length) @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
+            return tilt, np.zeros((1, state.robot.nv))
+        return tilt, -((axis / length) @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
 
 
 class PlaneClearance(Inequality):
