@@ -41,7 +41,11 @@ def test_readme_quickstart_is_two_commands_and_ci_runs_them_as_written():
     assert commands[1] == "python -m pytest"
     ci = (ROOT / ".ci" / "run").read_text()
     assert "awk '/^## Quickstart/{q=1} q && /^```bash/{b=1; next} b && /^```/{exit} b' README.md" in ci
-    assert ci.rstrip().endswith('bash -c "$(printf \'%s\\n\' "$quickstart" | sed -n 2p)"')
+    # a fresh venv, then the two commands as written, before CI installs anything else (extras, apt packages)
+    first, second = (ci.index(f'bash -c "$(printf \'%s\\n\' "$quickstart" | sed -n {n}p)"') for n in (1, 2))
+    assert ci.index('python3 -m venv "$venv"') < ci.index('. "$venv/bin/activate"') < first < second
+    installs = [ci.index(word) for word in ("pip install", "apt-get install") if word in ci]
+    assert installs and min(installs) > second
 
 
 # ------------------------------------------------------------------ the documentation site (docs/)
