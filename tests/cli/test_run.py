@@ -84,3 +84,30 @@ def test_quiet_prints_the_one_result_line_and_a_rerun_says_it_replaced_the_previ
     assert lines[-1] == f"replaced    the previous run in {out}/" and lines[-2].startswith(f"outputs     {out}/ (")
     assert main(["run", str(scenario), "--out", str(scenario.parent / "fresh")]) == 0
     assert not any(line.startswith("replaced") for line in capsys.readouterr().out.splitlines())
+
+
+def test_the_first_line_says_what_runs_before_it_starts(scenario, capsys, monkeypatch):
+    """``uvms run`` names the scenario, model, simulated time, steps, solver, plant and folder before the build and
+    the loop (a run of minutes says within a second what it is doing)."""
+    import uvms.scenario
+
+    before: list[str] = []
+    real = uvms.scenario.run_scenario
+
+    def spy(*args, **kwargs):
+        before.append(capsys.readouterr().out)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(uvms.scenario, "run_scenario", spy)
+    assert main(["run", str(scenario), "--set", "simulation.dt=0.05"]) == 0
+    first = ("run         s: model vehicle.urdf.xacro, 0.4 s in 8 steps of 0.05 s, solver clik, kinematic plant "
+             "-> out/s/\n")
+    assert before == [first]
+    assert capsys.readouterr().out.startswith("scenario    s  (8 steps, ")
+
+
+def test_a_step_count_out_of_range_is_refused_before_the_run(scenario, capsys):
+    assert main(["run", str(scenario), "--set", "simulation.dt=1e-9"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and captured.err.startswith("uvms: error: ") and "simulation.dt" in captured.err
+    assert not (scenario.parent / "out").exists()

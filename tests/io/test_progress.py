@@ -59,3 +59,21 @@ def test_the_compile_notice_says_one_line_once_numba_runs_past_its_delay(monkeyp
     late = compile_notice(after=0.01)
     late.join(5.0)
     assert sys.stderr.text == COMPILE_NOTICE + "\n" and not early.is_alive() and not late.is_alive()
+
+
+def test_a_terminal_that_reports_no_width_still_gets_a_bar(monkeypatch):
+    """A pty never sized (``script``, some CI terminals) reports 0 columns: tqdm alone draws an empty line there."""
+    import os
+
+    leader, follower = os.openpty()  # a new pty: 0 columns, 0 rows
+    try:
+        assert os.get_terminal_size(follower).columns == 0
+        with os.fdopen(os.dup(follower), "w") as terminal:
+            monkeypatch.setattr(sys, "stderr", terminal)
+            assert list(progress_bar(range(5), None, desc="simulate", mininterval=0)) == list(range(5))
+            terminal.flush()
+        shown = os.read(leader, 65536).decode()
+    finally:
+        os.close(leader)
+        os.close(follower)
+    assert "simulate:" in shown and "/5 [" in shown and "%|" in shown

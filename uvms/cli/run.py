@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -21,15 +22,19 @@ HEADLINE_METRICS = ("max_position_error", "final_position_error", "max_orientati
 def command_run(options: argparse.Namespace) -> int:
     """``uvms run SCENARIO``: run a scenario and write metrics, trajectory and figures (``--watch``: rerun on edits)."""
     from ..io.outputs import holds_run
-    from ..scenario import run_scenario  # the scenario layer pulls in scipy and matplotlib
+    from ..scenario import read_scenario, run_scenario  # the scenario layer pulls in scipy and matplotlib
     from ..scenario.verdict import verdict_line
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
     overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else []),
                  *package_path_overrides(options)]
-    replacing = holds_run(run_output_folder(options))
-    result = run_scenario(options.scenario, out=options.out, overrides=overrides, progress=False if options.quiet else None)
+    scenario = read_scenario(options.scenario, overrides)  # a bad scenario is said here, before anything runs
+    out = Path(options.out) if options.out else Path("out") / scenario["scenario"]["name"]
+    if not options.quiet:  # the first line, within a second: what runs and where it goes (the loop shows a bar)
+        say(start_line(scenario, out), sys.stdout)
+    replacing = holds_run(out)
+    result = run_scenario(options.scenario, out=out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
     if options.quiet:  # the one result line; warnings and notes still go to stderr
@@ -54,6 +59,21 @@ def command_run(options: argparse.Namespace) -> int:
         say(f"bag         {folder / 'bag'}/ ({counts}); replay: ros2 bag play {folder / 'bag'}", sys.stdout)
     say_run_warnings(metrics)
     return 0
+
+
+def start_line(scenario: dict, out: Path) -> str:
+    """The first line of ``uvms run``: scenario, model, simulated time and steps, solver, plant, output folder."""
+    from ..scenario.build import check_step_count, scenario_duration
+
+    duration = scenario_duration(scenario)
+    steps = check_step_count(scenario, duration)  # a step count out of range is refused here, before the build
+    plant = scenario["plant"]["type"] + (" with thrusters" if scenario["plant"]["thrusters"] else "")
+    model = Path(scenario["model"]["path"])
+    with contextlib.suppress(ValueError):  # a model below the current folder is shown from there
+        model = model.relative_to(Path.cwd())
+    return (f"run         {scenario['scenario']['name']}: model {model}, {duration:g} s in {steps} "
+            f"steps of {scenario['simulation']['dt']:g} s, solver {scenario['solver']['method']}, {plant} plant "
+            f"-> {out}/")
 
 
 def say_run_warnings(metrics: dict) -> None:

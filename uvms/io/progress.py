@@ -8,6 +8,7 @@ a terminal), and ``tqdm`` itself is imported at its first use (``from uvms.io.pr
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
 import warnings
@@ -17,9 +18,11 @@ from typing import Any, TypeVar
 __all__ = ["COMPILE_NOTICE", "compile_notice", "progress_bar", "tqdm"]
 
 #: What a first solve slower than :data:`COMPILE_NOTICE_AFTER` says: numba compiles the kernels at their first call.
-COMPILE_NOTICE = ("uvms: note: compiling the solvers' kernels for this machine (numba; once after an install or an "
-                  "upgrade, later runs load them from its cache)")
+COMPILE_NOTICE = ("uvms: note: compiling the solvers' kernels for this machine (numba: about 10-30 s, once after an "
+                  "install or an upgrade; later runs load them from its cache)")
 COMPILE_NOTICE_AFTER = 2.0  # [s]
+#: (columns, lines) of a terminal that reports no size.
+DEFAULT_SIZE = (80, 24)
 
 Item = TypeVar("Item")
 
@@ -32,7 +35,18 @@ def progress_bar(iterable: Iterable[Item], progress: bool | None, **options: Any
     """
     if progress is False or (progress is None and not _terminal_or_notebook()):
         return iterable
+    size = _terminal_size()
+    if size is not None and 0 in size:  # a pty never sized (script, some CI terminals): tqdm would draw nothing
+        options = {"ncols": size[0] or DEFAULT_SIZE[0], "nrows": size[1] or DEFAULT_SIZE[1], **options}
     return _tqdm()(iterable, disable=None if progress is None else False, **options)
+
+
+def _terminal_size() -> tuple[int, int] | None:
+    """(columns, lines) stderr's terminal reports (0 for a pty whose size was never set), None if not a terminal."""
+    try:
+        return tuple(os.get_terminal_size(sys.stderr.fileno()))
+    except (AttributeError, OSError, ValueError):  # not a terminal, or a stream without a file descriptor
+        return None
 
 
 def _terminal_or_notebook() -> bool:

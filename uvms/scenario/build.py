@@ -68,7 +68,7 @@ def build(scenario: dict) -> Setup:
     check_excitation_used(scenario)
     task, q0, residual = scenario_start(robot, scenario)
     trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
-    duration = float(scenario["simulation"]["duration"] or trajectory.duration)
+    duration = scenario_duration(scenario)
     if scenario["plant"]["type"] != "kinematic":
         if scenario["excitation"]["wrench"] and scenario["plant"]["thrusters"]:
             actuation = scenario_excitation(robot, make_plant(robot, scenario["plant"]), scenario, duration)
@@ -116,9 +116,8 @@ def build_sequence(robot: Robot, scenario: dict) -> Setup:
                                         **options)
     except UVMSError as exc:
         raise ScenarioError(f"solver: {exc}") from None
-    duration = scenario["simulation"]["duration"] or plan.duration
-    return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller, float(duration),
-                 0.0, plan)
+    return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller,
+                 scenario_duration(scenario), 0.0, plan)
 
 
 def scenario_start(robot: Robot, scenario: dict) -> tuple[FrameTask | None, np.ndarray, float]:
@@ -345,3 +344,13 @@ def check_step_count(scenario: dict, duration: float) -> int:
         duration_name = "the phases' durations" if scenario["phases"] else "trajectory.duration"
     return step_count(duration, float(scenario["simulation"]["dt"]), dt_name="simulation.dt",
                       duration_name=duration_name)
+
+
+def scenario_duration(scenario: dict) -> float:
+    """The simulated time [s] a checked scenario asks for, from its tables alone (nothing built): ``simulation.duration``,
+    else the sum of the phases' durations, else ``trajectory.duration`` (every trajectory type lasts that long)."""
+    if scenario["simulation"]["duration"]:
+        return float(scenario["simulation"]["duration"])
+    if scenario["phases"]:
+        return float(sum(phase["duration"] for phase in scenario["phases"]))
+    return float(scenario["trajectory"]["duration"])
