@@ -192,6 +192,10 @@ class MissingMeshWarning(UVMSWarning):
     """A mesh of the model cannot be found; kinematics does not need it."""
 
 
+class OutputFailedWarning(UVMSWarning):
+    """A figure or bag of a run could not be written (a defect of uvms); the run's data are complete."""
+
+
 class PackageSearchWarning(UVMSWarning):
     """A search for ROS packages stopped at a bound, or met a ``package.xml`` it cannot read or two of one name."""
 

@@ -306,3 +306,60 @@ def test_numerical_failures_become_one_uvms_error_naming_the_scenario(tmp_path, 
     err = capsys.readouterr().err
     assert err.startswith("uvms: error: scenario 'santos2006_task_priority': the numerics failed")
     assert len(err.splitlines()) == 1
+
+
+def armless_vehicle(folder: Path) -> Path:
+    """The RexROV-sized fixture without its arm (a vehicle alone, its thrusters and hydrodynamics) holding station
+    in a 0.3 m/s current for 2 s, written into ``folder``; returns the scenario."""
+    import shutil
+    import xml.etree.ElementTree as ET
+
+    fixture = Path(__file__).parents[1] / "fixtures" / "rexrov_like"
+    for name in ("thrusters.yaml", "hydrodynamics.yaml"):
+        shutil.copy(fixture / name, folder)
+    tree = ET.parse(fixture / "rexrov_like.urdf")
+    for element in list(tree.getroot()):
+        if element.get("name") not in ("world", "base_link", "base_joint"):
+            tree.getroot().remove(element)
+    tree.write(folder / "vehicle.urdf")
+    text = (fixture / "station_current.toml").read_text()
+    for old, new in (('path = "rexrov_like.urdf"\nee = "tool"', 'path = "vehicle.urdf"'),
+                     ('axes = ["x", "y", "z"]', 'frame = "base_link"\naxes = ["x", "y", "z"]'),
+                     ("duration = 6.0", "duration = 2.0")):
+        assert old in text
+        text = text.replace(old, new)
+    text = "\n".join(line for line in text.splitlines() if not line.startswith("arm = "))
+    (folder / "station.toml").write_text(text)
+    return folder / "station.toml"
+
+
+def test_a_vehicle_without_an_arm_runs_with_its_figures(tmp_path):
+    """No arm joints: no joints.png (nothing to draw), every other figure, and the station held in the current."""
+    run = run_scenario(armless_vehicle(tmp_path), out=tmp_path / "out", progress=False)
+    assert run.setup.robot.n_arm == 0
+    names = {path.name for path in run.files}
+    assert {"vehicle.png", "errors.png", "path.png", "thrusters.png", "station.png", "metrics.json"} <= names
+    assert "joints.png" not in names and all(path.exists() for path in run.files)
+    assert run.metrics["verdict"]["ok"] and 1e-4 < run.metrics["vehicle_position_error"] < 0.05
+    assert run.metrics["arm_travel"] == 0.0 and "outputs_failed" not in run.metrics
+
+
+def test_a_figure_that_fails_does_not_lose_the_run(tmp_path, monkeypatch):
+    """A defect in drawing (here a figure raising ValueError) leaves the run's data, its metrics and a warning that
+    names the failure; a previous run in the folder is replaced by the new, complete data."""
+    import uvms.viz.plotting
+
+    def broken(*args, **kwargs):
+        raise ValueError("Number of rows must be a positive integer, not 0")
+
+    scenario = SCENARIOS / "hoang2011_w1.toml"
+    overrides = ["simulation.duration=1.0"]
+    run_scenario(scenario, out=tmp_path / "run", overrides=[*overrides, "outputs.figures=false"], progress=False)
+    monkeypatch.setattr(uvms.viz.plotting, "scenario_figures", broken)
+    with pytest.warns(uvms.errors.OutputFailedWarning, match="figures could not be written .ValueError: Number of rows"):
+        run = run_scenario(scenario, out=tmp_path / "run", overrides=overrides, progress=False)
+    metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
+    assert metrics["outputs_failed"] == {"figures": "ValueError: Number of rows must be a positive integer, not 0"}
+    assert metrics["steps"] == 50 and np.load(tmp_path / "run" / "trajectory.npz")["q"].shape[0] == 51
+    assert {path.name for path in run.files} == {"trajectory.csv", "trajectory.npz", "metrics.json"}
+    assert not list((tmp_path / "run").glob("*.png"))

@@ -5,7 +5,8 @@ from __future__ import annotations
 import contextlib
 import os
 import time
-from collections.abc import Iterable, Iterator, Sequence
+import warnings
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -13,7 +14,7 @@ import numpy as np
 
 from ..io import outputs
 from ..control.sequence import sequence_metrics
-from ..errors import NumericalError
+from ..errors import NumericalError, OutputFailedWarning, UVMSError
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
@@ -161,6 +162,52 @@ def write_run_bag(folder: Path, setup: Setup, result: SimulationResult, metrics:
     return bag.path
 
 
+def run_figures(scenario: dict, setup: Setup, result: SimulationResult, plant_run: SimulationResult | None,
+                folder: Path, progress: bool | None) -> list[Path]:
+    """The figures of a run in ``folder`` (``[outputs] figures``): the standard ones, and those of its plant,
+    actuation, inequalities and phases."""
+    from ..viz.plotting import scenario_figures  # matplotlib only when figures are asked for
+
+    title = scenario["scenario"]["name"]
+    files = scenario_figures(result, setup.trajectory, folder, title=title)
+    if setup.actuation is not None:
+        from ..viz.actuated import actuated_figures
+
+        files += actuated_figures(result, setup.actuation.thrusters, folder, title=title)
+    if setup.inequalities is not None and setup.inequalities.objectives:
+        from ..viz.objectives import inequality_figure
+
+        inequality_figure(result, setup.inequalities.objectives, title, label=scenario["solver"]["method"],
+                          path=folder / "inequalities.png")
+        files.append(folder / "inequalities.png")
+    if plant_run is not None:
+        from ..viz.plotting import gjm_figures
+
+        files += gjm_figures(plant_run, folder, title=title)
+    if setup.plan is not None:
+        from ..viz.plotting import sequence_figures
+
+        files += sequence_figures(result, setup.plan, folder, title=title, animation=scenario["outputs"]["animation"],
+                                  progress=progress)
+    return files
+
+
+def optional_output(name: str, failed: dict[str, str], write: Callable[[], list[Path]]) -> list[Path]:
+    """The files ``write`` writes, or none when it fails on a defect of uvms (not on bad input: a UVMSError, a
+    MemoryError or Ctrl-C go on): the failure is recorded in ``failed`` and said as a :class:`OutputFailedWarning`,
+    and the run keeps its data and its other files (no internal error loses a run)."""
+    try:
+        return write()
+    except (UVMSError, MemoryError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - a defect in drawing must not lose the run
+        failed[name] = f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        warnings.warn(f"the run's {name} could not be written ({failed[name]}); its data (trajectory, metrics) are "
+                      f"complete. This is a defect of uvms: please report it with the scenario", OutputFailedWarning,
+                      stacklevel=2)
+        return []
+
+
 def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, started: float) -> RunResult:
     """Simulate a built scenario and write its files into ``folder``."""
     simulation_section = scenario["simulation"]
@@ -193,31 +240,14 @@ def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, s
     if plant_run is not None:
         outputs.write_npz(folder / "plant.npz", **plant_run.plant_arrays())
         files.append(folder / "plant.npz")
+    failed: dict[str, str] = {}  # the run's data are written: a figure or bag that fails does not lose them
     if scenario["outputs"]["figures"]:
-        from ..viz.plotting import scenario_figures  # matplotlib only when figures are asked for
-
-        files += scenario_figures(result, setup.trajectory, folder, title=scenario["scenario"]["name"])
-        if setup.actuation is not None:
-            from ..viz.actuated import actuated_figures
-
-            files += actuated_figures(result, setup.actuation.thrusters, folder, title=scenario["scenario"]["name"])
-        if setup.inequalities is not None and setup.inequalities.objectives:
-            from ..viz.objectives import inequality_figure
-
-            inequality_figure(result, setup.inequalities.objectives, scenario["scenario"]["name"],
-                              label=scenario["solver"]["method"], path=folder / "inequalities.png")
-            files.append(folder / "inequalities.png")
-        if plant_run is not None:
-            from ..viz.plotting import gjm_figures
-
-            files += gjm_figures(plant_run, folder, title=scenario["scenario"]["name"])
-        if setup.plan is not None:
-            from ..viz.plotting import sequence_figures
-
-            files += sequence_figures(result, setup.plan, folder, title=scenario["scenario"]["name"],
-                                      animation=scenario["outputs"]["animation"], progress=progress)
+        files += optional_output("figures", failed, lambda: run_figures(scenario, setup, result, plant_run, folder,
+                                                                         progress))
     if scenario["outputs"]["bag"]:
-        files.append(write_run_bag(folder, setup, result, metrics))
+        files += optional_output("bag", failed, lambda: [write_run_bag(folder, setup, result, metrics)])
+    if failed:
+        metrics["outputs_failed"] = failed
     metrics["verdict"] = run_verdict(metrics, scenario["outputs"], inequality_warnings(metrics))
     outputs.write_json(folder / "metrics.json", metrics)
     files.append(folder / "metrics.json")

@@ -102,8 +102,9 @@ def run_figures(result: SimulationResult, trajectory, title: str = "") -> dict[s
                                          f"{title}: vehicle pose")
         figures["vehicle_velocity.png"] = stacked(t, result.v[:, : robot.n_vehicle], list(robot.base.velocity_labels),
                                                   f"{title}: vehicle velocities in its body axes (FLU)")
-    figures["joints.png"] = stacked(t, result.arm(), arm_joint_labels(robot), f"{title}: arm joints (dotted: limits)",
-                                    limits=robot.arm_limits)
+    if robot.n_arm:  # a vehicle without an arm has no joints to draw
+        figures["joints.png"] = stacked(t, result.arm(), arm_joint_labels(robot),
+                                        f"{title}: arm joints (dotted: limits)", limits=robot.arm_limits)
     figures["errors.png"] = error_figure(result, title)
     figures["path.png"] = path_figure(result, title)
     return figures
