@@ -216,6 +216,10 @@ class ThrusterDefaultWarning(UVMSWarning):
     """A plugin thruster took a value of :data:`uvms.dynamics.thrusters.DEFAULT_VALUES` (the plugin and the YAML give none)."""
 
 
+class ThrusterLayoutWarning(UVMSWarning):
+    """The thrusters cannot produce every body-wrench direction (the allocation's rank is below 6)."""
+
+
 class ThrusterFileWarning(UVMSWarning):
     """The ``thrusters.yaml`` beside a model cannot be read: the propellers it names are not known when loading
     (``uvms.dynamics.thrusters_of`` raises the same error when the thrusters are used)."""

@@ -178,3 +178,13 @@ def test_info_says_which_thruster_values_are_defaults(capsys):
     assert "  thruster_3   xyz [-0.400 +0.200 -0.100]  dir [-1.000 +0.000 +0.000]  [-2000, 300]  0.05\n" in captured.out
     assert "hydrodynamics none" in captured.out
     assert "uvms's default thruster values" in captured.err and "max_reverse = 2000 N for thruster_0" in captured.err
+
+
+def test_info_says_which_wrench_directions_the_thrusters_cannot_produce(capsys):
+    """Four thrusters give at most four of the six directions: info names the two missing (rank 4), and says that
+    the BlueROV2 Heavy's eight give all six."""
+    assert main(["info", str(ROOT / "tests" / "fixtures" / "uuv" / "four_thrusters.urdf")]) == 0
+    line = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("allocation  "))
+    assert line.startswith("allocation  the thrusters produce 4 of the 6 body-wrench directions; missing: a ")
+    assert main(["info", "bluerov2_alpha5"]) == 0
+    assert "allocation  every body-wrench direction (rank 6)\n" in capsys.readouterr().out

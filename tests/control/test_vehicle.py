@@ -9,6 +9,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from conftest import ROOT
 from uvms.control.coordination import CoordinatedControl, coordinated_arm_rates
 from uvms.control.station import actuated_control, station_keeping
 from uvms.trajectory import VelocityRamps
@@ -167,3 +168,18 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
         result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)
         final[coordination] = result.actuation.controller["ee_point_error"][-1]
     assert final[True] < 2e-3 and final[True] < 0.5 * final[False], final
+
+
+def test_station_keeping_says_which_directions_the_thrusters_cannot_hold():
+    """Four thrusters cannot hold six degrees of freedom: the chain is built, and says so once, naming them."""
+    import warnings
+
+    from uvms.errors import PointMassWarning, ThrusterDefaultWarning, ThrusterLayoutWarning
+
+    with warnings.catch_warnings():  # the fixture's thruster links and plugin values are warned of elsewhere
+        warnings.simplefilter("ignore", PointMassWarning)
+        warnings.simplefilter("ignore", ThrusterDefaultWarning)
+        robot = uvms.load(ROOT / "tests" / "fixtures" / "uuv" / "four_thrusters.urdf")
+        thrusters = uvms.dynamics.thrusters_of(robot)
+    with pytest.warns(ThrusterLayoutWarning, match="produce 4 of the 6 body-wrench directions; missing: a roll moment"):
+        uvms.control.station_keeping(uvms.Plant(robot), thrusters, robot.neutral(), 0.01)

@@ -124,3 +124,48 @@ def test_bad_allocation_input():
         ThrustAllocator(matrix, -np.ones(6), np.ones(6)).allocate(np.zeros(5))
     with pytest.raises(SolverInputError, match="finite"):
         ThrustAllocator(matrix, -np.ones(6), np.ones(6)).allocate(np.array([np.nan, 0, 0, 0, 0, 0]))
+
+
+def near_singular_layout(offsets=(1e-9, -2e-9, 5e-10, 3e-9)) -> np.ndarray:
+    """B (6, 6) of a six-thruster vehicle with no roll authority: four vectored horizontal thrusters and two
+    verticals on the centre line, the horizontals placed ``offsets`` [m] off z = 0 (the rounding of xacro sums)."""
+    s = np.sqrt(0.5)
+    layout = [((0.6, -0.4, offsets[0]), (s, s, 0)), ((0.6, 0.4, offsets[1]), (s, -s, 0)),
+              ((-0.6, -0.4, offsets[2]), (-s, s, 0)), ((-0.6, 0.4, offsets[3]), (-s, -s, 0)),
+              ((0.5, 0.0, 0.0), (0, 0, 1)), ((-0.5, 0.0, 0.0), (0, 0, 1))]
+    return np.column_stack([np.concatenate([d, np.cross(p, d)]) for p, d in
+                            ((np.array(p), np.array(d, float)) for p, d in layout)])
+
+
+def test_a_direction_given_only_by_rounding_is_unreachable_and_no_thrusters_fight_for_it():
+    """cond(B) = 8e9 and numpy counts rank 6: the old allocation drove the four horizontal thrusters to about -2000 N
+    (one at its limit) to produce 3 N m of roll from 1e-9 m lever arms. Judged at RANK_TOLERANCE, roll is
+    unreachable; the thrusts are the least-norm ones of the exact layout (no offsets) and the roll moment is left."""
+    matrix = near_singular_layout()
+    assert np.linalg.matrix_rank(matrix) == 6 and np.linalg.cond(matrix) > 1e9
+    bound = np.full(6, 2000.0)
+    allocator = ThrustAllocator(matrix, -bound, bound)
+    assert allocator.rank == 5 and len(allocator.unreachable) == 1
+    roll = allocator.unreachable[0]
+    assert roll.axis == "roll" and roll.thrusters == (0, 1, 2, 3) and 1e-11 < roll.ratio < 1e-9
+    np.testing.assert_allclose(np.abs(roll.wrench), [0, 0, 0, 1, 0, 0], atol=1e-8)
+    wrench = np.array([50.0, 20.0, 100.0, 3.0, 10.0, 5.0])
+    result = allocator.allocate(wrench)
+    exact = near_singular_layout(offsets=(0.0, 0.0, 0.0, 0.0))  # rank 5 exactly
+    least_norm = np.linalg.lstsq(exact, wrench, rcond=None)[0]
+    np.testing.assert_allclose(result.thrusts, least_norm, atol=1e-6)
+    assert np.abs(result.thrusts).max() < 70 and not result.saturated.any() and result.solver == "pinv"
+    np.testing.assert_allclose(result.residual, [0, 0, 0, 3.0, 0, 0], atol=1e-6)
+    assert not result.attainable
+    # beyond the layout's surge (5657 N) the bounded stages run on the reachable directions: the horizontals push
+    # together at their limits, the verticals stay at 0, and no thrust is spent on the unreachable roll
+    strong = allocator.allocate(np.array([8000.0, 0.0, 0.0, 50.0, 0.0, 0.0]))
+    assert strong.solver == "bounded"
+    np.testing.assert_allclose(strong.thrusts, [2000, 2000, -2000, -2000, 0, 0], atol=1e-4)  # DAQP: 4e-6 N
+    assert abs(strong.achieved_wrench[0] - 4 * np.sqrt(0.5) * 2000) < 1e-6 and abs(strong.achieved_wrench[3]) < 1e-4
+
+
+def test_a_full_layout_reaches_every_direction_and_says_nothing(vehicle):
+    allocator = ThrustAllocator(*vehicle)
+    assert allocator.rank == 6 and allocator.unreachable == () and allocator.reach_note(["t"] * allocator.n) == ""
+    np.testing.assert_allclose(allocator.reachable, vehicle[0], atol=1e-12)

@@ -111,7 +111,8 @@ def vector(values: Sequence[float], style: str = "+.3f") -> str:
 
 def thruster_lines(robot: Robot) -> list[str]:
     """The thrusters (``uvms.dynamics.thrusters_of``): placement and direction in the base frame, limits, lag."""
-    from ..dynamics.thrusters import thruster_rows, thrusters_of
+    from ..dynamics.allocation import ThrustAllocator
+    from ..dynamics.thrusters import allocation_matrix, thruster_rows, thrusters_of
 
     try:
         thrusters = thrusters_of(robot, required=False)
@@ -125,6 +126,8 @@ def thruster_lines(robot: Robot) -> list[str]:
              "time constant [s]"]
     lines += [f"  {row['name']:<{width}} xyz {vector(row['position'])}  dir {vector(row['direction'])}  "
               f"[{-row['max_reverse']:g}, {row['max_forward']:g}]  {row['time_constant']:g}" for row in rows]
+    allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper)
+    lines.append(f"allocation  {allocator.reach_note(thrusters.names) or 'every body-wrench direction (rank 6)'}")
     return lines
 
 

@@ -23,6 +23,7 @@ Station keeping (:func:`station_keeping`) is one case: a held end-effector point
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -31,7 +32,7 @@ import pinocchio as pin
 from ..dynamics.allocation import ThrustAllocator
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, allocation_matrix
-from ..errors import SolverInputError
+from ..errors import SolverInputError, ThrusterLayoutWarning
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers.base import Solver
@@ -220,6 +221,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                   added_mass=plant.added_mass, damping=plant.damping)
     allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper,
                                 priorities=priorities)
+    if allocator.unreachable:  # a vehicle that cannot hold every degree of freedom is told so, once
+        warnings.warn(allocator.reach_note(thrusters.names), ThrusterLayoutWarning, stacklevel=2)
     if kp is None or ki is None:
         derived = velocity_gains(vehicle_inertia(model, q0), bandwidth, damping_ratio)
         kp, ki = derived[0] if kp is None else kp, derived[1] if ki is None else ki

@@ -13,6 +13,13 @@ Three steps, the cheap one first:
 
 With one group of all six axes (the default) the achieved wrench is the bounded least-squares optimum
 B f* with f* = argmin |W (B f - tau)| s.t. bounds.
+
+The rank of B is judged with a tolerance that matches the physics (:data:`RANK_TOLERANCE`, relative to the largest
+singular value), not numpy's rounding-level one: a wrench direction that a layout gives only through rounding (a
+roll moment from vertical thrusters placed 1e-10 m off the centre line) is not reachable, and every stage works on B
+truncated to its reachable directions. Otherwise a pair of nearly dependent thrusters is driven to opposite limits
+to produce a newton of it, and no least-norm step runs (the matrix looks square and full rank).
+:attr:`ThrustAllocator.unreachable` names the directions left out.
 """
 
 from __future__ import annotations
@@ -29,6 +36,28 @@ from ..numerics.inverses import pinv
 
 #: Slack [N] on the bounds and the wrench when deciding that the pseudo-inverse solution is good enough.
 TOLERANCE = 1e-9
+#: A singular value of B below this fraction of the largest is a direction the thrusters cannot produce: a wrench of
+#: 1e-6 N (or N m) per newton of thrust is far below any thruster's resolution, and far above rounding (1e-16).
+RANK_TOLERANCE = 1e-6
+
+
+@dataclass(frozen=True)
+class UnreachableDirection:
+    """A body-wrench direction the thrusters cannot produce (a singular direction of B below the rank tolerance).
+
+    Attributes:
+        wrench: (6,) unit vector in wrench space [fx, fy, fz, mx, my, mz] (N and N m mixed, as B's rows).
+        axis: the name of its largest component (``uvms.robot.conventions.AXIS_NAMES``: x, y, z forces; roll, pitch,
+            yaw moments).
+        thrusters: indices of the thrusters that would have to fight each other to produce it (the large entries of
+            the matching right singular vector); empty when no combination produces it at all.
+        ratio: its singular value over the largest (0 when exactly unreachable).
+    """
+
+    wrench: np.ndarray
+    axis: str
+    thrusters: tuple[int, ...]
+    ratio: float
 
 
 @dataclass(frozen=True)
@@ -84,7 +113,8 @@ class ThrustAllocator:
             raise SolverInputError(f"weights must be 6 numbers > 0, got {weights!r}")
         self.groups = _priority_groups(priorities)
         self.tolerance = float(tolerance)
-        self.inverse = pinv(self.matrix)  # (n, 6), computed once: the attainable case is one product
+        self.reachable, self.unreachable = _reachable(self.matrix)  # B on its reachable directions (6, n)
+        self.inverse = pinv(self.reachable)  # (n, 6), computed once: the attainable case is one product
         self._rows = sorted(row for group in self.groups for row in group)
         self._all_rows = len(self._rows) == 6
 
@@ -92,6 +122,32 @@ class ThrustAllocator:
     def n(self) -> int:
         """Number of thrusters."""
         return self.matrix.shape[1]
+
+    def reach_note(self, names: Sequence[str]) -> str:
+        """One sentence on what the thrusters cannot produce ("" when they produce every direction).
+
+        Args:
+            names: the thrusters' names, in the order of B's columns.
+        """
+        if not self.unreachable:
+            return ""
+        parts = []
+        for direction in self.unreachable:
+            kind = "force" if AXIS_NAMES.index(direction.axis) < 3 else "moment"
+            part = f"a {direction.axis} {kind}"
+            if direction.thrusters:
+                part += (f" (only through {', '.join(names[i] for i in direction.thrusters)} pushing against each "
+                         f"other: {direction.ratio:.1e} of the layout's largest authority)")
+            parts.append(part)
+        them = "it" if len(parts) == 1 else "them"
+        return (f"the thrusters produce {self.rank} of the 6 body-wrench directions; missing: {', '.join(parts)} (each "
+                f"named by its largest component); the allocation leaves {them} to the vehicle's own dynamics "
+                f"(buoyancy, damping) rather than drive thrusters to their limits for {them}")
+
+    @property
+    def rank(self) -> int:
+        """The number of independent wrench directions the thrusters produce (6 for a fully actuated vehicle)."""
+        return 6 - len(self.unreachable)
 
     def unconstrained(self, wrench: np.ndarray) -> np.ndarray:
         """The minimum-norm thrusts B^+ tau (n,) [N], bounds ignored."""
@@ -106,14 +162,16 @@ class ThrustAllocator:
         """
         wrench = _wrench(wrench)
         if self._all_rows:
+            # the least-squares optimum of least norm on the reachable directions (B_r B_r^+ is the projection on
+            # them); within the bounds it is the answer, exact unless tau has an unreachable part
             thrusts = self.inverse @ wrench
             slack = self.tolerance
             if (thrusts >= self.lower - slack).all() and (thrusts <= self.upper + slack).all():
+                thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # the slack, never beyond
                 achieved = self.matrix @ thrusts
                 residual = wrench - achieved
-                if np.abs(residual).max() <= 10 * slack * max(1.0, np.abs(wrench).max()):  # B has full row rank
-                    thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # the slack, never beyond
-                    return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, True, "pinv")
+                exact = np.abs(residual).max() <= 10 * slack * max(1.0, np.abs(wrench).max())
+                return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact), "pinv")
         return self._result(self._least_norm(self._lexicographic(wrench)), wrench, "bounded")
 
     # ------------------------------------------------------------------ the bounded stages
@@ -123,24 +181,25 @@ class ThrustAllocator:
         thrusts = None
         for group in self.groups:
             weights = self.weights[group][:, None]
-            a, b = weights * self.matrix[group], self.weights[group] * wrench[group]
+            a, b = weights * self.reachable[group], self.weights[group] * wrench[group]
             if not kept:
                 from scipy.optimize import lsq_linear  # when first saturated: scipy.optimize costs 0.2 s to import
 
                 thrusts = lsq_linear(a, b, bounds=(self.lower, self.upper), method="bvls", tol=1e-12).x
             else:
-                thrusts = self._solve_qp(a.T @ a, -a.T @ b, self.matrix[kept], self.matrix[kept] @ thrusts, thrusts)
+                thrusts = self._solve_qp(a.T @ a, -a.T @ b, self.reachable[kept], self.reachable[kept] @ thrusts,
+                                         thrusts)
             thrusts = np.clip(thrusts, self.lower, self.upper)
             kept += list(group)
         return thrusts
 
     def _least_norm(self, thrusts: np.ndarray) -> np.ndarray:
         """The thrusts of least norm within bounds giving the same allocated wrench rows as ``thrusts``."""
-        rows = self._rows
-        if self.n <= np.linalg.matrix_rank(self.matrix[rows]):
+        rows = self.reachable[self._rows]
+        if self.n <= _rank(rows):
             return thrusts  # no freedom left: the wrench fixes the thrusts
-        return np.clip(self._solve_qp(np.eye(self.n), np.zeros(self.n), self.matrix[rows],
-                                      self.matrix[rows] @ thrusts, thrusts), self.lower, self.upper)
+        return np.clip(self._solve_qp(np.eye(self.n), np.zeros(self.n), rows, rows @ thrusts, thrusts), self.lower,
+                       self.upper)
 
     def _solve_qp(self, p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray, start: np.ndarray) -> np.ndarray:
         """min 1/2 x^T P x + q^T x s.t. A x = b, bounds, by DAQP; ``start`` is feasible, and kept if DAQP fails."""
@@ -196,6 +255,28 @@ def _priority_groups(priorities: Sequence[Sequence[str]] | None) -> list[list[in
     if not groups or any(not group for group in groups):
         raise SolverInputError("priorities must be non-empty groups of wrench axes, highest first")
     return groups
+
+
+def _rank(matrix: np.ndarray) -> int:
+    """The rank of ``matrix`` judged at :data:`RANK_TOLERANCE` of its largest singular value."""
+    singular = np.linalg.svd(matrix, compute_uv=False)
+    return int(np.sum(singular > RANK_TOLERANCE * singular[0])) if singular.size and singular[0] > 0 else 0
+
+
+def _reachable(matrix: np.ndarray) -> tuple[np.ndarray, tuple[UnreachableDirection, ...]]:
+    """B (6, n) truncated to the singular directions above :data:`RANK_TOLERANCE`, and the directions left out."""
+    u, singular, vt = np.linalg.svd(matrix)  # u (6, 6), vt (n, n); singular (min(6, n),), descending
+    largest = singular[0] if singular.size else 0.0
+    kept = int(np.sum(singular > RANK_TOLERANCE * largest)) if largest > 0 else 0
+    reachable = (u[:, :kept] * singular[:kept]) @ vt[:kept]
+    unreachable = []
+    for index in range(kept, 6):
+        direction = u[:, index] * np.sign(u[np.argmax(np.abs(u[:, index])), index])  # its largest entry positive
+        ratio = float(singular[index] / largest) if index < singular.size and largest > 0 else 0.0
+        fighting = np.abs(vt[index]) if index < singular.size and ratio > 0 else np.zeros(matrix.shape[1])
+        unreachable.append(UnreachableDirection(direction, AXIS_NAMES[int(np.argmax(np.abs(direction)))],
+                                                tuple(int(i) for i in np.flatnonzero(fighting > 0.3)), ratio))
+    return reachable, tuple(unreachable)
 
 
 def _independent_rows(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
