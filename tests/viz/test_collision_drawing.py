@@ -1,5 +1,7 @@
 """The collision overlay of the headless drawing: one translucent collection per collision shape at the drawn
-configuration, the closest pair's segment on coal's witness points, obstacles clipped to the Axes."""
+configuration, the closest pair's segment on coal's witness points, obstacles clipped to the Axes; no text on the
+shapes (the pairs are named in a legend below each panel, a key explains shapes, pair colours and frame axes); the
+docs figure (docs/figures/collision.py) with unique panel letters."""
 
 from __future__ import annotations
 
@@ -7,12 +9,16 @@ import os
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import ROOT
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PolyCollection
+from matplotlib.colors import same_color
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -21,8 +27,8 @@ from uvms.model.collision import collision_geometry
 from uvms.robot.configuration import Configuration
 from uvms.tasks.objectives import Obstacle, SelfCollision
 from uvms.viz import drawing
-from uvms.viz.collision_drawing import CollisionOverlay, clip_polygon
-from uvms.viz.collision_shapes import geometry_meshes
+from uvms.viz.collision_drawing import SHAPE_STYLE, CollisionOverlay, clip_polygon
+from uvms.viz.collision_shapes import PAIR_COLOURS, geometry_meshes
 
 FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"
 
@@ -108,7 +114,9 @@ def test_the_marked_segment_joins_coals_witness_points_at_each_drawn_configurati
         np.testing.assert_allclose(np.column_stack([x, y, z]), [point1, point2], atol=1e-9)
         expected = "tab:red" if distance < 0.02 else "tab:orange" if distance < 0.07 else "tab:green"
         assert marks.pairs[0].get_color() == expected
-        assert f"{1000 * distance:.1f} mm" in marks.text.get_text()
+        (label,) = marks.legend.get_texts()  # the legend below the panel follows the frame
+        assert f"{1000 * distance:.1f} mm" in label.get_text()
+        assert same_color(marks.legend.legend_handles[0].get_color(), expected)
         q = arm_pose(robot, rng)
         overlay.move(marks, q)  # the next animation frame
 
@@ -147,3 +155,71 @@ def test_clip_polygon_keeps_the_part_inside_the_box():
     assert {tuple(point) for point in clipped.tolist()} == {(-1.0, 0.0, 0.0), (1.0, 0.0, 0.0), (1.0, 1.0, 0.0),
                                                            (-1.0, 1.0, 0.0)}
     assert len(clip_polygon(square, np.array([3.0, 3.0, -1.0]), np.array([4.0, 4.0, 1.0]))) == 0
+
+
+def key(figure) -> dict[str, object]:
+    """label -> handle of the figure's key (its one figure-level legend)."""
+    (legend,) = figure.legends
+    return {text.get_text(): handle for text, handle in zip(legend.get_texts(), legend.legend_handles)}
+
+
+def assert_no_text_on_the_panels(figure) -> None:
+    """No text artist inside any panel; each panel's legend (the closest pairs) lies below it, off its area."""
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    for ax in figure.axes:
+        assert len(ax.texts) == 0
+        if ax.get_legend() is not None:
+            box, area = ax.get_legend().get_window_extent(renderer), ax.get_window_extent(renderer)
+            assert box.y1 < area.y0 and not box.overlaps(area)
+
+
+@pytest.mark.parametrize("plane", [None, "xz"])
+def test_the_pairs_are_named_below_the_panels_and_a_key_explains_the_drawing(robot, objective, rng, plane):
+    q = arm_pose(robot, rng)
+    pipe = Obstacle(robot, "cylinder", radius=0.05, length=2.0, position=[0.6, 0.0, 0.0])
+    overlay = CollisionOverlay(robot, objectives=[objective, pipe])
+    figure = drawing.snapshot_figure(robot, [q, q], plane=plane, overlay=overlay)
+    assert_no_text_on_the_panels(figure)
+    labels = [[text.get_text() for text in ax.get_legend().get_texts()] for ax in figure.axes]
+    assert labels[0][0].startswith("self_collision: ") and labels[0][1].startswith("obstacle(cylinder): ")
+    geometry = drawing.configuration_geometry(robot, q)
+    entries = {label: handle for handle, label in drawing.legend_entries(geometry) + overlay.legend_entries()}
+    assert list(key(figure)) == list(entries)  # the key shows them all, in this order
+    triad = entries["frame axes: x red, y green, z blue"]
+    assert [line.get_color() for line in triad] == list(drawing.TRIAD_COLOURS) == ["tab:red", "tab:green", "tab:blue"]
+    assert same_color(entries["collision shapes"].get_facecolor()[:3], SHAPE_STYLE["facecolor"])
+    pair = next(handle for label, handle in entries.items() if label.startswith("closest pair"))
+    assert [line.get_color() for line in pair] == list(PAIR_COLOURS)
+    assert {"links and joints", "obstacle"} <= set(entries)
+
+
+def load_docs_figure():
+    spec = importlib.util.spec_from_file_location("collision_figure", ROOT / "docs" / "figures" / "collision.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_docs_figure_letters_each_panel_once_and_keys_its_marks(monkeypatch, tmp_path):
+    figure_script = load_docs_figure()
+
+    def still(toml, folder, extra):  # instead of the four runs: two steps at a bent-arm configuration
+        robot = figure_script.named_model(str(toml))
+        q = robot.configuration(base=np.r_[0.0, 0.0, -5.0, 0.0, 0.0, 0.0], arm=np.full(robot.n_arm, 0.4))
+        return np.array([0.0, 0.1]), np.stack([q, q])
+
+    drawn = []
+    monkeypatch.setattr(figure_script, "run", still)
+    monkeypatch.setattr(figure_script, "save_figure", lambda figure, path: drawn.append(figure))
+    figure_script.main_figure(tmp_path / "collision.png")
+    (figure,) = drawn
+    titles = [ax.get_title() for ax in figure.axes]
+    letters = [title[:3] for title in titles]
+    assert letters == ["(a)", "(b)", "(c)", "(d)", "(e)", "(f)"] and len(set(titles)) == 6
+    assert_no_text_on_the_panels(figure)
+    entries = key(figure)
+    assert {"links and joints", "vehicle box", "frame axes: x red, y green, z blue", "collision shapes",
+            "obstacle"} <= set(entries)
+    assert any(label.startswith("closest pair") for label in entries)

@@ -1,5 +1,6 @@
 """path.png (uvms.viz.paths): the task's own axes (3-D or a plane), where each path starts and ends, arrows in the
-direction of travel, the desired path on top of the tracked one, equal scales and a readable z label in 3-D."""
+direction of travel, the end effector's thin line on top of the desired path's wide light band, the legend below the
+axes (off the data), equal scales and a readable z label in 3-D."""
 
 from __future__ import annotations
 
@@ -21,6 +22,21 @@ def hoang(tmp_path_factory):
 
 def lines_by_label(axis) -> dict:
     return {line.get_label(): line for line in axis.lines}
+
+
+def assert_legend_outside_every_axes(figure) -> None:
+    """The figure's legend (one, at figure level) overlaps no Axes' area, in the drawn picture."""
+    canvas = FigureCanvasAgg(figure)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    assert all(axis.get_legend() is None for axis in figure.axes)
+    (legend,) = figure.legends
+    box = legend.get_window_extent(renderer)
+    assert figure.bbox.x0 <= box.x0 and box.x1 <= figure.bbox.x1 and figure.bbox.y0 <= box.y0  # inside the picture
+    for axis in figure.axes:
+        assert not box.overlaps(axis.get_window_extent(renderer))
+        for label in (axis.xaxis.label, axis.yaxis.label):
+            assert not box.overlaps(label.get_window_extent(renderer))
 
 
 def markers_at(axis, marker: str) -> np.ndarray:
@@ -46,16 +62,18 @@ def test_arrows_point_along_the_direction_of_travel():
     assert arrow_segments(np.ones((10, 2))) == []
 
 
-def test_a_planar_path_shows_start_end_direction_and_the_desired_path_on_top(hoang):
+def test_a_planar_path_shows_start_end_direction_and_the_end_effector_above_the_desired_band(hoang):
     result = hoang.simulation
     figure = path_figure(result, "h")
     (axis,) = figure.axes
     assert (axis.get_xlabel(), axis.get_ylabel()) == ("x [m]", "y [m]")
     assert figure.get_suptitle() == "h: paths in the x-y plane"
     lines = lines_by_label(axis)
-    desired, tracked = lines["desired (on top)"], lines["end effector"]
-    assert desired.get_zorder() > tracked.get_zorder() and desired.get_linestyle() == "--"
-    assert desired.get_marker() == "x" and 1 < desired.get_markevery() < len(result.t) // 4  # sparse markers
+    desired, tracked, vehicle_line = lines["desired (light band)"], lines["end effector"], lines["vehicle"]
+    assert tracked.get_zorder() > desired.get_zorder() and vehicle_line.get_zorder() > desired.get_zorder()
+    assert tracked.get_linestyle() == "-" and tracked.get_alpha() is None  # solid and opaque on top
+    assert desired.get_linewidth() >= 4 * tracked.get_linewidth() and desired.get_alpha() < 0.5  # a light band below
+    np.testing.assert_allclose(np.column_stack(tracked.get_data()), result.ee_position[:, :2], atol=1e-12)
     vehicle = np.array([result.robot.base_pose(q).translation[:2] for q in result.q])
     ee = result.ee_position[:, :2]
     ends, starts = markers_at(axis, "s"), markers_at(axis, "o")
@@ -68,8 +86,9 @@ def test_a_planar_path_shows_start_end_direction_and_the_desired_path_on_top(hoa
         tail, head = np.array(arrow.xyann), np.array(arrow.xy)
         path = next(p for p in (ee, vehicle) if np.any(np.all(p == tail, axis=1)))
         assert np.flatnonzero(np.all(path == head, axis=1))[0] > np.flatnonzero(np.all(path == tail, axis=1))[0]
-    legend = [text.get_text() for text in axis.get_legend().get_texts()]
-    assert {"start", "end", "direction of travel", "desired (on top)", "vehicle"} <= set(legend)
+    legend = [text.get_text() for text in figure.legends[0].get_texts()]
+    assert {"start", "end", "direction of travel", "desired (light band)", "end effector", "vehicle"} <= set(legend)
+    assert_legend_outside_every_axes(figure)
 
 
 def test_a_3d_path_has_equal_scales_and_a_z_label_clear_of_the_ticks(tmp_path):
@@ -93,6 +112,7 @@ def test_a_3d_path_has_equal_scales_and_a_z_label_clear_of_the_ticks(tmp_path):
         ticks = [tick.label1.get_window_extent(renderer) for tick in coordinate.majorTicks
                  if tick.label1.get_visible() and tick.label1.get_text()]
         assert ticks and not any(label.overlaps(tick) for tick in ticks)
+    assert_legend_outside_every_axes(figure)
 
 
 def test_a_planar_task_is_drawn_in_its_own_plane(tmp_path):

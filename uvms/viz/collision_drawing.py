@@ -5,7 +5,8 @@
 (:mod:`uvms.viz.collision_shapes`) translucent, one collection per shape, at each drawn configuration; the
 obstacles of the collision objectives, clipped to a box around the drawing (a pipe or a seabed plane runs beyond
 it); and for each objective a segment between the witness points of its nearest pair, coloured by its distance
-(red below the objective's ``min``), with the pairs and distances written in the panel's corner.
+(red below the objective's ``min``), named with its distance in a legend below the panel (off the shapes).
+:meth:`CollisionOverlay.legend_entries` explains the shapes, the obstacles and the colours in a figure's key.
 
 In 3-D a shape is its hull's triangles (a ``Poly3DCollection``); in a plane (``"xy"``, ``"xz"``, ``"yz"``) the
 outline of its projection (a ``PolyCollection`` of the 2-D hull).
@@ -19,12 +20,22 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 from matplotlib.collections import PolyCollection
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
 from ..model.collision import collision_geometry
 from ..robot.robot import Robot
 from ..tasks.objectives.collision import NearestPairs
-from .collision_shapes import ClosestPair, ClosestPairs, ShapeMesh, geometry_meshes, obstacle_meshes
+from .collision_shapes import (
+    PAIR_COLOURS,
+    ClosestPair,
+    ClosestPairs,
+    ShapeMesh,
+    geometry_meshes,
+    obstacle_meshes,
+)
+from .labels import legend_under
 
 #: Style of the robot's collision shapes and of the obstacles.
 SHAPE_STYLE = {"facecolor": "tab:cyan", "edgecolor": "tab:blue", "alpha": 0.22, "linewidth": 0.3}
@@ -37,11 +48,11 @@ PLANE_AXES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 @dataclass
 class OverlayArtists:
     """The artists of a CollisionOverlay on one Axes: a collection per robot shape, a line per objective's closest
-    pair, the text listing them; ``closest`` the pairs drawn last."""
+    pair, the legend below the Axes naming them (links, distance); ``closest`` the pairs drawn last."""
 
     shapes: list
     pairs: list
-    text: object | None
+    legend: object | None
     closest: list[ClosestPair] = field(default_factory=list)
 
 
@@ -111,13 +122,24 @@ class CollisionOverlay:
                           else ax.add_collection(collection, autolim=False))
         pairs = [ax.plot(*[[0.0, 0.0]] * (3 if plane is None else 2), linewidth=2.5, marker="o", markersize=3)[0]
                  for _ in self.closest.objectives]
-        text = None
-        if pairs:
-            place = ax.text2D if plane is None else ax.text
-            text = place(0.02, 0.98, "", transform=ax.transAxes, va="top", fontsize=7)
-        artists = OverlayArtists(shapes, pairs, text)
+        artists = OverlayArtists(shapes, pairs, None)
         self.move(artists, q, plane, shapes=False)
+        if pairs:  # below the Axes, clear of the shapes
+            artists.legend = legend_under(ax, pairs, [pair.label() for pair in artists.closest])
         return artists
+
+    def legend_entries(self) -> list[tuple]:
+        """(handle, label) pairs of a figure's key: the robot's shapes, the obstacles, the closest pairs' colours."""
+        entries = []
+        if self.meshes:
+            entries.append((Patch(**SHAPE_STYLE), "collision shapes"))
+        if self.obstacles:
+            entries.append((Patch(**OBSTACLE_STYLE), "obstacle"))
+        if self.closest.objectives:
+            marks = tuple(Line2D([], [], color=colour, linewidth=2.5, marker="o", markersize=3)
+                          for colour in PAIR_COLOURS)
+            entries.append((marks, "closest pair (red: < min, orange: < min + band, green: beyond)"))
+        return entries
 
     def move(self, artists: OverlayArtists, q: np.ndarray, plane: str | None = None, shapes: bool = True) -> None:
         """Move the artists of :meth:`draw` to configuration q (nq,) (an animation frame)."""
@@ -132,8 +154,10 @@ class CollisionOverlay:
             else:
                 line.set_data(ends[:, PLANE_AXES[plane][0]], ends[:, PLANE_AXES[plane][1]])
             line.set_color(pair.colour)
-        if artists.text is not None:
-            artists.text.set_text("\n".join(pair.label() for pair in artists.closest))
+        if artists.legend is not None:
+            for text, handle, pair in zip(artists.legend.get_texts(), artists.legend.legend_handles, artists.closest):
+                text.set_text(pair.label())
+                handle.set_color(pair.colour)
 
     def draw_obstacles(self, ax, points: np.ndarray, plane: str | None = None) -> list:
         """Draw the obstacles on ``ax`` after its limits are set, clipped to them (in a plane, the depth to the box

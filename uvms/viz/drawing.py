@@ -22,18 +22,24 @@ import pinocchio as pin
 from matplotlib import animation
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
-from ..io import outputs
 from ..errors import ConfigurationError, UVMSError, WorkspaceInputError
+from ..io import outputs
+from ..io.progress import tqdm
 from ..robot.robot import Robot
 from ..workspace.hull import HullShape, hull_shapes
-from ..io.progress import tqdm
 from .collision_drawing import CollisionOverlay
-
+from .labels import legend_below
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 WRITERS = {".gif": animation.PillowWriter, ".mp4": animation.FFMpegWriter}
 TRIAD_COLOURS = ("tab:red", "tab:green", "tab:blue")
+#: [in] Room a snapshot figure keeps above and below its panels: tight_layout misses a 3-D panel's title and labels.
+LABEL_MARGIN = 0.3
+#: Ticks on each axis of a 3-D panel (more crowd its slanted labels).
+TICKS_3D = 4
 CORNER_SIGNS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))  # (8, 3), corner k = signs[k] * size / 2
 BOX_EDGES = [(i, j) for i, j in itertools.combinations(range(8), 2)
              if np.count_nonzero(CORNER_SIGNS[i] != CORNER_SIGNS[j]) == 1]  # 12 pairs
@@ -179,6 +185,8 @@ def set_equal_limits(ax, points: np.ndarray, plane: str | None = None, margin: f
         ax.set_aspect("equal", adjustable="box")
     else:
         ax.set_box_aspect((1, 1, 1))
+        for coordinate in (ax.xaxis, ax.yaxis, ax.zaxis):
+            coordinate.set_major_locator(MaxNLocator(TICKS_3D))  # slanted tick labels clear of each other
 
 
 def draw_configuration(ax, robot: Robot, q: np.ndarray, *, plane: str | None = None,
@@ -223,6 +231,19 @@ def draw_configuration(ax, robot: Robot, q: np.ndarray, *, plane: str | None = N
     return Drawing(geometry, artists, plane)
 
 
+def legend_entries(geometry: ConfigurationGeometry, color: str = "0.2", vehicle_color: str = "tab:orange",
+                   linewidth: float = 2.0) -> list[tuple]:
+    """(handle, label) pairs that explain a drawing in the styles of :func:`draw_configuration`: links and joints,
+    the vehicle box (when it has one), the frames' axes (x red, y green, z blue) as one entry."""
+    entries = [(Line2D([], [], color=color, linewidth=linewidth, marker="o", markersize=4), "links and joints")]
+    if geometry.box_corners is not None:
+        entries.append((Line2D([], [], color=vehicle_color, linewidth=1.2), "vehicle box"))
+    if len(geometry.triads):
+        entries.append((tuple(Line2D([], [], color=c, linewidth=1.5) for c in TRIAD_COLOURS),
+                        "frame axes: x red, y green, z blue"))
+    return entries
+
+
 def update_drawing(drawing: Drawing, geometry: ConfigurationGeometry) -> None:
     """Move the artists of a Drawing to another geometry of the same robot (an animation frame)."""
     for name, points in _line_data(geometry).items():
@@ -258,7 +279,8 @@ def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | Non
                     path: str | os.PathLike | None = None, view: tuple[float, float] = (20.0, -60.0),
                     plane: str | None = None, ncols: int | None = None, frames: Sequence[str] | None = None,
                     panel_size: float = 4.0, overlay: CollisionOverlay | None = None) -> Figure:
-    """Configuration snapshots (xiang2019 Figs. 7-8): a grid of panels on common equal-aspect limits.
+    """Configuration snapshots (xiang2019 Figs. 7-8): a grid of panels on common equal-aspect limits, and a key
+    below them (:func:`legend_entries`, and the overlay's :meth:`~CollisionOverlay.legend_entries`).
 
     Args:
         robot: the robot.
@@ -291,7 +313,10 @@ def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | Non
         set_equal_limits(ax, points, plane)
         if overlay is not None:
             overlay.draw_obstacles(ax, points, plane)
-    figure.tight_layout()
+    entries = legend_entries(drawings[0].geometry) + (overlay.legend_entries() if overlay is not None else [])
+    key = legend_below(figure, entries, columns=len(entries))
+    height, margin = figure.bbox.height, LABEL_MARGIN * figure.dpi  # [px]
+    figure.tight_layout(rect=(0.0, (key.get_window_extent().height + margin) / height, 1.0, 1.0 - margin / height))
     if path is not None:
         outputs.save_figure(figure, path)
     return figure

@@ -1,8 +1,9 @@
 """``path.png``: the end effector, its desired path and the vehicle in the task's axes, read at a glance.
 
 Each path the robot travels shows where it starts (circle), where it ends (square) and which way it goes (arrows
-along it). The desired path is drawn last, dashed with sparse markers, so that it stays visible where the end
-effector tracks it exactly. A 3-D path keeps equal scales on x, y and z (the box is shaped by the data's ranges).
+along it). The desired path lies underneath as a wide light band and the travelled paths on top as thin solid lines,
+so that the end effector stays visible inside the band where it tracks it exactly. The legend sits below the axes,
+clear of the data. A 3-D path keeps equal scales on x, y and z (the box is shaped by the data's ranges).
 """
 
 from __future__ import annotations
@@ -15,12 +16,16 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from ..sim.result import SimulationResult
-from .labels import figure_title
+from .labels import figure_title, legend_below
 
 #: Direction arrows along each travelled path.
 ARROWS = 4
-#: Markers on the desired path (sparse: the tracked path stays readable under it).
-DESIRED_MARKERS = 12
+#: Style of the desired path: a wide light band under the travelled paths (drawn first, lowest zorder).
+DESIRED_STYLE = {"color": "C1", "linewidth": 7.0, "alpha": 0.35, "solid_capstyle": "round", "zorder": 1}
+#: [in] Room at the bottom of a 3-D path figure for the legend's two rows (a 2-D one is laid out by matplotlib).
+LEGEND_ROOM = 0.75
+#: Style of a travelled path: a thin solid line above the desired band.
+TRAVELLED_STYLE = {"linewidth": 1.4, "zorder": 3}
 #: The smallest side of a 3-D path's box, as a fraction of its largest (a flat path keeps a readable box; the
 #: scale stays equal on every axis because the limits grow with the box).
 MIN_BOX_SIDE = 0.25
@@ -95,7 +100,7 @@ def path_figure(result: SimulationResult, title: str = "") -> Figure:
     shown = list(path_coordinates(result.axes or robot.base.task_axes, result.desired_position))
     names = ["xyz"[index] for index in shown]
     three_d = len(shown) == 3
-    figure = Figure(figsize=(7, 6.5) if three_d else (6, 6), layout=None if three_d else "constrained")
+    figure = Figure(figsize=(7, 7.2) if three_d else (6, 6.6), layout=None if three_d else "constrained")
     axis = figure.add_subplot(projection="3d") if three_d else figure.subplots()
     travelled = [(result.ee_position[:, shown], "C0", "end effector")]
     if robot.base_type != "fixed":
@@ -104,17 +109,16 @@ def path_figure(result: SimulationResult, title: str = "") -> Figure:
     desired = result.desired_position[:, shown]
     everything = np.vstack([desired, *(points for points, _, _ in travelled)])
     size = 0.06 * float(np.ptp(everything, axis=0).max())
+    axis.plot(*desired.T, label="desired (light band)", **DESIRED_STYLE)
     for points, colour, label in travelled:
-        axis.plot(*points.T, color=colour, linewidth=2.2, alpha=0.8, label=label)
+        axis.plot(*points.T, color=colour, label=label, **TRAVELLED_STYLE)
         draw_travel(axis, points, colour, size)
-    axis.plot(*desired.T, linestyle=(0, (4, 3)), color="C1", linewidth=1.3, marker="x", markersize=5,
-              markevery=max(1, len(desired) // DESIRED_MARKERS), zorder=5, label="desired (on top)")
-    handles, _ = axis.get_legend_handles_labels()
-    handles += [Line2D([], [], marker="o", color="0.4", linestyle="none", label="start"),
-                Line2D([], [], marker="s", color="0.4", markeredgecolor="k", linestyle="none", label="end"),
-                Line2D([], [], marker=r"$\rightarrow$", color="0.4", markersize=12, linestyle="none",
-                       label="direction of travel")]
-    axis.legend(handles=handles, fontsize=8, loc="best")
+    entries = list(zip(*axis.get_legend_handles_labels()))
+    entries += [(Line2D([], [], marker="o", color="0.4", linestyle="none"), "start"),
+                (Line2D([], [], marker="s", color="0.4", markeredgecolor="k", linestyle="none"), "end"),
+                (Line2D([], [], marker=r"$\rightarrow$", color="0.4", markersize=12, linestyle="none"),
+                 "direction of travel")]
+    legend_below(figure, entries, columns=3)
     if three_d:
         equal_box(axis, everything)
         axis.tick_params(pad=4)  # minus signs clear of the tick marks
@@ -130,5 +134,6 @@ def path_figure(result: SimulationResult, title: str = "") -> Figure:
     text = figure_title(f"{title}: paths in {plane}", figure.get_figwidth())
     figure.suptitle(text)
     if three_d:  # the constrained layout does not fit 3-D axes: room for the title's lines by hand
-        figure.subplots_adjust(left=0.0, right=0.94, bottom=0.02, top=0.97 - 0.045 * (text.count("\n") + 1))
+        figure.subplots_adjust(left=0.0, right=0.94, bottom=LEGEND_ROOM / figure.get_figheight(),
+                               top=0.97 - 0.045 * (text.count("\n") + 1))
     return figure

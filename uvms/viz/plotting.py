@@ -11,13 +11,16 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
+from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 from ..errors import UVMSError
 from ..io import outputs
 from ..robot.conventions import AXIS_NAMES
 from ..sim.result import SimulationResult
-from .labels import arm_joint_labels
+from .labels import arm_joint_labels, legend_below
 from .paths import path_figure
 
 #: [m, rad] Errors below this are at the rounding level of double precision over a run: errors.png draws them on
@@ -41,8 +44,8 @@ def stacked(t: np.ndarray, series: np.ndarray, labels, title: str, limits=None, 
                 axis.axhline(bound, color="0.5", linestyle=":", linewidth=1)
         axis.set_ylabel(labels[index])
         axis.grid(True, alpha=0.3)
-    if dashed is not None:
-        axes[0, 0].legend(loc="upper right", fontsize=8)
+    if dashed is not None:  # above the first panel, clear of the curves
+        axes[0, 0].legend(loc="lower right", bbox_to_anchor=(1.0, 1.0), ncol=2, fontsize=8)
     axes[-1, 0].set_xlabel("t [s]")
     figure.suptitle(title)
     return figure
@@ -68,8 +71,9 @@ def desired_motion_figure(result: SimulationResult, trajectory, title: str = "")
 
 def error_figure(result: SimulationResult, title: str = "") -> Figure:
     """Position [m] and orientation [rad] errors on a log axis; values below :data:`ROUNDING_LEVEL` (exact zeros
-    included) lie on a floor line labelled "rounding level", and a series that never rises above it says so."""
-    figure = Figure(figsize=(7, 3.2), layout="constrained")
+    included) lie on a floor line labelled "rounding level", and a series that never rises above it says so. The
+    legend sits below the axes, clear of the curves."""
+    figure = Figure(figsize=(7, 3.8), layout="constrained")
     axis = figure.subplots()
     series = [(result.position_error, "position error [m]")]
     if np.any(result.orientation_error > 0):
@@ -82,8 +86,9 @@ def error_figure(result: SimulationResult, title: str = "") -> Figure:
                  label=f"rounding level ({ROUNDING_LEVEL:g})")
     axis.set_ylim(bottom=ROUNDING_LEVEL / 3)
     axis.set_xlabel("t [s]")
+    axis.set_ylabel("error [m] or [rad]" if len(series) == 2 else "position error [m]")
     axis.grid(True, which="both", alpha=0.3)
-    axis.legend(fontsize=8)
+    legend_below(figure, list(zip(*axis.get_legend_handles_labels())), columns=2)
     axis.set_title(f"{title}: tracking error")
     return figure
 
@@ -121,12 +126,23 @@ def scenario_figures(result: SimulationResult, trajectory, folder: str | os.Path
 
 #: Cloud colours in frame order: xiang2019 draws the left arm blue and the right arm red.
 CLOUD_COLOURS = ("tab:blue", "tab:red", "tab:green", "tab:orange")
+#: Ticks on each axis of the 3-D cloud (more crowd its slanted labels).
+CLOUD_TICKS = 4
+
+
+def cloud_alpha(total: int) -> float:
+    """Opacity of the points of a cloud of ``total`` points: lower for denser clouds, so that where two frames'
+    clouds overlap both colours show (mixed), and a dense cloud does not turn into a flat blot."""
+    return float(np.clip(np.sqrt(20_000.0 / max(total, 1)), 0.2, 0.6))
 
 
 def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, title: str = "",
                      max_points: int | None = 100_000, values: dict[str, np.ndarray] | None = None,
                      value_label: str = "", outlines=None, marker_size: float | None = None) -> Path:
     """A 3-D cloud and its x-z, x-y, y-z projections (xiang2019 Fig. 4), one colour per frame.
+
+    The frames' points are drawn as one collection in a shuffled order, translucent (:func:`cloud_alpha`): no
+    frame's cloud hides another's by being drawn after it; the legend sits below the panels.
 
     Args:
         positions: per frame, points (N, 3) [m]; frames are drawn blue, red, green, orange in order.
@@ -144,45 +160,46 @@ def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, 
     Returns:
         The path written.
     """
-    figure = Figure(figsize=(11, 9), layout="constrained" if values is not None else None)  # room for a colour bar
+    figure = Figure(figsize=(11, 9.4), layout="constrained")
+    figure.get_layout_engine().set(wspace=0.1)  # the 3-D z label sticks out of its Axes: clear of the next panel
     cloud = figure.add_subplot(2, 2, 1, projection="3d")
     planes = [figure.add_subplot(2, 2, k) for k in (2, 3, 4)]
     pairs = ((0, 2), (0, 1), (1, 2))
-    shown_clouds = {}
-    for frame, points in positions.items():
+    shown, colours = [], []
+    for (frame, points), frame_colour in zip(positions.items(), CLOUD_COLOURS):
         points = np.asarray(points, dtype=float).reshape(-1, 3)
         step = 1 if max_points is None else max(1, -(-len(points) // max_points))  # no more points than pixels
-        colour = None if values is None else np.asarray(values[frame], dtype=float)[::step]
-        shown = points[::step]
-        if colour is not None:
-            order = np.argsort(colour, kind="stable")
-            shown, colour = shown[order], colour[order]
-        shown_clouds[frame] = (shown, colour)
-    total = sum(len(shown) for shown, _ in shown_clouds.values())
-    size = marker_size if marker_size is not None else float(np.clip(3000.0 / max(total, 1), 0.2, 8.0))
-    limits = [0.0, max((float(np.max(c)) for _, c in shown_clouds.values() if c is not None and c.size), default=1.0)]
-    mappable = None
-    for (frame, (shown, colour)), frame_colour in zip(shown_clouds.items(), CLOUD_COLOURS):
-        style = ({"color": frame_colour, "alpha": 0.5} if colour is None else
-                 {"c": colour, "cmap": "viridis", "vmin": limits[0], "vmax": limits[1] or 1.0})
-        mappable = cloud.scatter(shown[:, 0], shown[:, 1], shown[:, 2], s=size, label=frame, **style)
-        for axis, (a, b) in zip(planes, pairs):
-            axis.scatter(shown[:, a], shown[:, b], s=size, **style)
+        shown.append(points[::step])
+        colours.append(np.asarray(values[frame], dtype=float)[::step] if values is not None
+                       else np.broadcast_to(to_rgba(frame_colour), (len(shown[-1]), 4)))
+    points, colour = np.concatenate(shown or [np.empty((0, 3))]), np.concatenate(colours or [np.empty((0, 4))])
+    total = len(points)
+    size = marker_size if marker_size is not None else float(np.clip(20_000.0 / max(total, 1), 1.5, 12.0))
+    if values is not None:  # the highest value last: each projection shows the largest along the line of sight
+        order = np.argsort(colour, kind="stable")
+        style = {"cmap": "viridis", "vmin": 0.0, "vmax": float(np.max(colour, initial=0.0)) or 1.0}
+    else:  # the frames interleaved: none drawn over another as a whole
+        order = np.random.default_rng(0).permutation(total)
+        style = {"alpha": cloud_alpha(total), "linewidths": 0}  # no edges: the marker's area is its size
+    points, colour = points[order], colour[order]
+    mappable = cloud.scatter(points[:, 0], points[:, 1], points[:, 2], s=size, c=colour, depthshade=False, **style)
+    for axis, (a, b) in zip(planes, pairs):
+        axis.scatter(points[:, a], points[:, b], s=size, c=colour, **style)
     for line in outlines or ():
         line = np.asarray(line, dtype=float)
         cloud.plot(line[:, 0], line[:, 1], line[:, 2], color="0.4", linewidth=0.8)
         for axis, (a, b) in zip(planes, pairs):
             axis.plot(line[:, a], line[:, b], color="0.4", linewidth=0.8)
-    everything = [shown for shown, _ in shown_clouds.values() if len(shown)]
-    if everything:
-        span = np.ptp(np.vstack(everything), axis=0)
+    if total:
+        span = np.ptp(points, axis=0)
         cloud.set_box_aspect(np.maximum(span, 0.05 * max(float(span.max()), 1e-9)))  # true proportions
-    cloud.set_xlabel("x [m]")
-    cloud.set_ylabel("y [m]")
-    cloud.set_zlabel("z [m]")
+    for coordinate, name in zip((cloud.xaxis, cloud.yaxis, cloud.zaxis), "xyz"):
+        coordinate.set_major_locator(MaxNLocator(CLOUD_TICKS))  # slanted labels clear of each other
+        coordinate.set_label_text(f"{name} [m]")
     if values is None:
-        cloud.legend(loc="upper left", markerscale=max(1.0, np.sqrt(30.0 / size)), fontsize=8)  # "best" is slow
-    elif mappable is not None:
+        legend_below(figure, [(Line2D([], [], marker="o", linestyle="none", color=frame_colour), frame)
+                              for frame, frame_colour in zip(positions, CLOUD_COLOURS)], columns=len(positions))
+    elif total:
         figure.colorbar(mappable, ax=[cloud, *planes], shrink=0.6, label=value_label)
     for axis, (a, b) in zip(planes, ("xz", "xy", "yz")):
         axis.set_xlabel(f"{a} [m]")
@@ -191,8 +208,6 @@ def workspace_figure(positions: dict[str, np.ndarray], path: str | os.PathLike, 
         axis.grid(True, alpha=0.3)
         axis.set_title(f"{a}-o-{b} projection")
     figure.suptitle(title)
-    if values is None:
-        figure.tight_layout()
     outputs.save_figure(figure, path)
     return Path(path)
 
@@ -284,7 +299,7 @@ def gjm_tracking_figure(result, title: str = "", path: str | os.PathLike | None 
         title: figure title; path: where to save the PNG (atomically), None to only return it.
     """
     t = result.t
-    figure = Figure(figsize=(7.5, 6.5))
+    figure = Figure(figsize=(8.8, 6.5), layout="constrained")
     velocity_axis, position_axis = figure.subplots(2, 1, sharex=True)
     tracking = result.tracking
     start = tracking.desired_position[0]
@@ -301,10 +316,9 @@ def gjm_tracking_figure(result, title: str = "", path: str | os.PathLike | None 
     position_axis.set_xlabel("t [s]")
     for axis in (velocity_axis, position_axis):
         axis.grid(True, alpha=0.3)
-        axis.legend(ncol=3, fontsize=7, loc="best")
+        axis.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))  # beside the axes, off the data
     velocity_axis.set_title(f"{title}: solid measured, dashed reference; final |p_d - p| = "
                             f"{1000 * result.final_position_error:.3g} mm", fontsize=9)
-    figure.tight_layout()
     if path is not None:
         outputs.save_figure(figure, path)
     return figure
