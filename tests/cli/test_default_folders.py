@@ -46,8 +46,7 @@ def test_a_robot_name_that_is_a_path_never_chooses_the_folder(tmp_path, monkeypa
 def test_identify_refuses_the_same_name(tmp_path, monkeypatch, capsys):
     """The default folder of ``uvms identify`` (the identification itself stubbed: it is not under test)."""
     import uvms.cli.identify as command
-    import uvms.dynamics.hydrodynamics as hydrodynamics
-    import uvms.dynamics.identification as identification
+    from uvms.dynamics import hydrodynamics, identification
 
     model = tmp_path / "evil.urdf"
     model.write_text(urdf(root=FLOATING_ROOT).replace('<robot name="probe">', f'<robot name="{ESCAPING}">'))
