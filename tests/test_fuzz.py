@@ -3,16 +3,14 @@ random broken trees are refused with one line, at once."""
 
 from __future__ import annotations
 
-import contextlib
 import re
-import signal
 import subprocess
 import time
 
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import finite_difference_jacobian, uvms_command
+from conftest import deadline, finite_difference_jacobian, uvms_command
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
@@ -179,20 +177,6 @@ def malformed_trees(draw):
         child = draw(st.sampled_from(links[1:]))
         edges.append((draw(st.sampled_from([link for link in links if link != child])), child))
     return tree_text(links, edges), kind
-
-
-@contextlib.contextmanager
-def deadline(seconds: float):
-    """Raise TimeoutError in the block after ``seconds`` (a loop that never ends fails the test, not the suite)."""
-    def expire(*_):
-        raise TimeoutError(f"still running after {seconds} s")
-    previous = signal.signal(signal.SIGALRM, expire)
-    signal.setitimer(signal.ITIMER_REAL, seconds)
-    try:
-        yield
-    finally:
-        signal.setitimer(signal.ITIMER_REAL, 0)
-        signal.signal(signal.SIGALRM, previous)
 
 
 @settings(max_examples=60, deadline=None)
