@@ -7,6 +7,7 @@ with ``from conftest import ...`` (test basenames are unique across the folders:
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
 import os
@@ -167,6 +168,22 @@ def xiang_eq6(theta: np.ndarray) -> pin.SE3:
     ])
     position = np.array([c1 * reach, s1 * reach, -0.370 * s2 - 0.220 * s23 - 0.308 * s234])
     return pin.SE3(rotation, position)
+
+
+# ------------------------------------------------------------------ hangs fail, they do not hang the suite
+@contextlib.contextmanager
+def deadline(seconds: float):
+    """Raise TimeoutError in the block after ``seconds`` [s] (SIGALRM: a Python loop that never ends, or a Python
+    ``open`` of a FIFO that never gets a writer, fails the test instead of hanging the suite)."""
+    def expire(*_):
+        raise TimeoutError(f"still running after {seconds} s")
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.setitimer(signal.ITIMER_REAL, seconds)
+    try:
+        yield
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
 
 
 # ------------------------------------------------------------------ child processes of `uvms`

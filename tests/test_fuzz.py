@@ -1,13 +1,18 @@
-"""Property-based tests: random valid URDF trees load with consistent kinematics; solvers never fake success."""
+"""Property-based tests: random valid URDF trees load with consistent kinematics; solvers never fake success;
+random broken trees are refused with one line, at once."""
 
 from __future__ import annotations
+
+import re
+import subprocess
+import time
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from conftest import deadline, finite_difference_jacobian, uvms_command
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
-from conftest import finite_difference_jacobian
 
 import uvms
 from uvms.robot.limits import Limit
@@ -131,3 +136,80 @@ def assert_limit_projection_and_clamping(robot: uvms.Robot, leaf: str, rng: np.r
         assert np.all(np.isfinite(configuration.q))
         q = configuration.q
         assert limit.contains(robot.arm_configuration(q))
+
+
+# ------------------------------------------------------------------ broken trees
+#: How a URDF's links can fail to be one tree (each drawn by malformed_trees).
+DEFECTS = ("cycle beside the root", "cycle through the root", "self-parent", "two roots", "missing link",
+           "two parents", "empty robot")
+MASSIVE = '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
+
+
+def tree_text(links: list[str], edges: list[tuple[str, str]]) -> str:
+    """A URDF of massive links joined by revolute joints, one per (parent, child) edge."""
+    body = [f'<link name="{link}">{MASSIVE}</link>' for link in links]
+    body += [f'<joint name="j{index}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+             '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+             for index, (parent, child) in enumerate(edges)]
+    return f'<robot name="broken">{"".join(body)}</robot>'
+
+
+@st.composite
+def malformed_trees(draw):
+    """(URDF text, defect): a random tree of 1-6 links broken one way; cycles of 2-5 links."""
+    kind = draw(st.sampled_from(DEFECTS))
+    if kind == "empty robot":
+        return '<robot name="broken"/>', kind
+    links = ["base"] + [f"l{index}" for index in range(draw(st.integers(1, 5)))]
+    edges = [(draw(st.sampled_from(links[:index])), link) for index, link in enumerate(links) if index]
+    if kind in ("cycle beside the root", "self-parent"):  # one root, and links no walk from it reaches
+        ring = [f"c{index}" for index in range(1 if kind == "self-parent" else draw(st.integers(2, 5)))]
+        links += ring
+        edges += [(link, ring[(index + 1) % len(ring)]) for index, link in enumerate(ring)]
+    elif kind == "cycle through the root":  # the root hangs below one of its descendants: no root at all
+        edges.append((draw(st.sampled_from(links[1:])), "base"))
+    elif kind == "two roots":
+        links.append("loose")
+    elif kind == "missing link":
+        edge = draw(st.sampled_from([("base", "ghost"), ("ghost", links[-1])]))
+        edges = [e for e in edges if e[1] != edge[1]] + [edge]
+    elif kind == "two parents":
+        child = draw(st.sampled_from(links[1:]))
+        edges.append((draw(st.sampled_from([link for link in links if link != child])), child))
+    return tree_text(links, edges), kind
+
+
+@settings(max_examples=60, deadline=None)
+@given(broken=malformed_trees())
+def test_broken_trees_are_refused_at_once(broken):
+    text, kind = broken
+    started = time.perf_counter()
+    with deadline(2.0), pytest.raises(uvms.UVMSError) as refused:
+        uvms.load(text)
+    assert time.perf_counter() - started < 1.0, kind
+    assert len(str(refused.value).splitlines()) == 1
+
+
+#: One broken tree of each kind, and what the refusal says.
+BROKEN = {
+    "cycle beside the root": (tree_text(["r", "a", "b", "c"], [("a", "b"), ("b", "c"), ("c", "a")]),
+                              "the joints form a cycle (a -> b -> c -> a)"),
+    "cycle through the root": (tree_text(["a", "b"], [("a", "b"), ("b", "a")]), "the joints form a cycle"),
+    "self-parent": (tree_text(["r", "a"], [("a", "a")]), "the joints form a cycle (a -> a)"),
+    "two roots": (tree_text(["r", "a", "b"], [("r", "a")]), "2 roots (r, b)"),
+    "missing link": (tree_text(["r"], [("r", "ghost")]), "names link 'ghost', which is not defined"),
+    "two parents": (tree_text(["r", "a", "b"], [("r", "a"), ("r", "b"), ("a", "b")]), "child of two joints"),
+    "empty robot": ('<robot name="broken"/>', "has no <link>"),
+}
+
+
+@pytest.mark.parametrize("kind", DEFECTS)
+def test_broken_trees_give_one_line_from_the_cli(kind, tmp_path):
+    text, says = BROKEN[kind]
+    with pytest.raises(uvms.errors.ModelCheckError, match=re.escape(says)):
+        uvms.load(text)
+    path = tmp_path / "broken.urdf"
+    path.write_text(text)
+    done = subprocess.run(uvms_command("info", str(path)), capture_output=True, text=True, timeout=20,
+                          check=False)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1 and says in done.stderr, done.stderr

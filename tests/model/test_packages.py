@@ -14,13 +14,13 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import ROOT
 from xacro import substitution_args
 
 import uvms
-from conftest import ROOT
-from uvms.errors import ModelFileNotFound, UVMSError, XacroError
+from uvms.cli import main
+from uvms.errors import MissingMeshWarning, ModelFileNotFound, UVMSError, XacroError
 from uvms.model import packages, resources, sandbox
-from uvms.errors import MissingMeshWarning
 from uvms.model.sandbox_worker import PackageNotFound, packages_for_find
 
 WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"
@@ -99,7 +99,7 @@ def test_the_viewer_finds_the_meshes_through_the_packages_the_robot_was_loaded_w
     assert missing == [] and str(VEHICLE_PACKAGE / "meshes" / "hull.stl") in xml and "package://" not in xml
 
 
-def test_the_workspace_is_the_src_above_the_model_s_package_else_the_folder_holding_it(tmp_path):
+def test_the_workspace_is_the_src_above_the_model_s_package_else_the_package_itself(tmp_path):
     assert packages.model_workspace(VEHICLE) == WORKSPACE
     own_src = tmp_path / "ws" / "src" / "pkg" / "src" / "urdf"  # a package's own src/ is not a workspace
     own_src.mkdir(parents=True)
@@ -108,9 +108,72 @@ def test_the_workspace_is_the_src_above_the_model_s_package_else_the_folder_hold
     (tmp_path / "downloads" / "rov_description" / "urdf").mkdir(parents=True)
     (tmp_path / "downloads" / "rov_description" / "package.xml").write_text("<package><name>rov</name></package>")
     assert packages.model_workspace(tmp_path / "downloads" / "rov_description" / "urdf" / "m.urdf") == (
-        tmp_path / "downloads")
+        tmp_path / "downloads" / "rov_description")  # no src above: its own package, not the folder beside it
     assert packages.model_workspace(tmp_path / "downloads" / "m.urdf") is None  # in no package: no workspace
     assert packages.model_workspace(resources.shipped_models()["hoang2011"]) is None
+
+
+SECRET = "uvms-test-secret-19"
+#: A downloaded vehicle that reads a YAML file of another package by $(find) (or by a relative path) into a link name.
+READS_SECRET = f"""<robot name="rov" {XACRO}>
+  <xacro:property name="creds" value="${{xacro.load_yaml('{{path}}')}}"/>
+  <link name="world"/>
+  <link name="hull_${{creds['token']}}"><inertial><mass value="1"/>
+    <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="base_joint" type="floating"><parent link="world"/><child link="hull_${{creds['token']}}"/></joint>
+</robot>"""
+
+
+def downloads_folder(tmp_path, path: str):
+    """downloads/{secret_pkg (config/creds.yaml), rov_description (urdf/rov.urdf.xacro reading ``path``)}: two
+    packages side by side in a folder that is no workspace (no src); the model's file."""
+    downloads = tmp_path / "downloads"
+    for name in ("secret_pkg", "rov_description"):
+        (downloads / name).mkdir(parents=True)
+        (downloads / name / "package.xml").write_text(f"<package><name>{name}</name></package>")
+    (downloads / "secret_pkg" / "config").mkdir()
+    (downloads / "secret_pkg" / "config" / "creds.yaml").write_text(f"token: {SECRET}\n")
+    (downloads / "rov_description" / "urdf").mkdir()
+    model = downloads / "rov_description" / "urdf" / "rov.urdf.xacro"
+    model.write_text(READS_SECRET.replace("{path}", path))
+    return model
+
+
+@pytest.mark.parametrize("untrusted", SANDBOX)
+def test_a_downloaded_package_does_not_find_the_packages_beside_it(tmp_path, monkeypatch, untrusted, capsys):
+    """The finding: $(find secret_pkg) of a model unpacked beside it read its credentials into `uvms info`."""
+    model = downloads_folder(tmp_path, "$(find secret_pkg)/config/creds.yaml")
+    with pytest.raises(XacroError) as raised:
+        uvms.load(model, trusted=not untrusted)
+    message = str(raised.value)
+    assert "no ROS package 'secret_pkg'" in message and SECRET not in message
+    assert f"the model's own package {model.parents[1]} (no workspace: no src folder above it)" in message
+    assert main(["info", str(model)]) == 2
+    said = capsys.readouterr()
+    assert SECRET not in said.out + said.err and said.err.count("\n") == 1
+    for named in ([model.parents[2] / "secret_pkg"], [model.parents[2]]):  # the user's choice: then it may
+        assert f"hull_{SECRET}" in uvms.load(model, trusted=not untrusted, package_path=named).frame_names
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(model.parents[2]))
+    assert f"hull_{SECRET}" in uvms.load(model, trusted=not untrusted).frame_names
+
+
+@pytest.mark.skipif(sandbox.confinement_problem() is not None or sandbox.landlock_abi() == 0,
+                    reason="needs the sandbox with Landlock")
+def test_a_downloaded_package_cannot_read_the_packages_beside_it_by_path(tmp_path):
+    model = downloads_folder(tmp_path, "../../secret_pkg/config/creds.yaml")
+    with pytest.raises(XacroError, match="may read only") as raised:
+        uvms.load(model)  # a file from outside the shipped models: untrusted, in the sandbox
+    assert SECRET not in str(raised.value)
+
+
+def test_a_package_in_a_workspace_still_finds_its_siblings(tmp_path, rng):
+    workspace = tmp_path / "ws" / "src"
+    shutil.copytree(WORKSPACE, workspace)
+    model = workspace / "fixture_vehicle_description" / "urdf" / "vehicle.urdf.xacro"
+    assert packages.model_workspace(model) == workspace
+    robot = uvms.load(model, trusted=True)
+    assert robot.packages["fixture_arm_description"] == workspace / "fixture_arm"
+    assert_arm_lengths(robot, FIXTURE_LENGTHS, rng)
 
 
 # ------------------------------------------------------------------ the folders a user names

@@ -85,6 +85,7 @@ def command_identify(options: argparse.Namespace) -> int:
     from ..dynamics.hydrodynamics import hydrodynamics_of
     from ..dynamics.identification import identify
     from ..io import outputs
+    from ..io.names import default_output_folder
     from ..model.loader import load
     from ..scenario.watch import WatchedFiles
     from ..viz.identification import identification_figures
@@ -96,7 +97,7 @@ def command_identify(options: argparse.Namespace) -> int:
                       identify_current=options.identify_current,
                       window=options.window, polyorder=options.polyorder, holdout=options.holdout,
                       max_relative_error=options.max_relative_error)
-    out = Path(options.out or Path("out") / f"identify_{robot.name}")
+    out = Path(options.out or default_output_folder("identify", robot.name))
     model_files = WatchedFiles.of(model=options.model)
     inputs = [options.log, *model_files.files, *([options.prior] if options.prior else [])]
     replacing = outputs.holds_run(out)

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ..errors import UVMSError
+from ..io.names import default_output_folder
 from ..model.loader import load
 from .info import parse_assignments
 from .run import say_replaced, watch_job
@@ -49,7 +50,7 @@ def command_workspace(options: argparse.Namespace) -> int:
     if not 0.0 <= options.dexterous_threshold <= 1.0:
         raise UVMSError(f"--dexterous-threshold must be in [0, 1], got {options.dexterous_threshold}")
     grid = OrientationGrid(options.directions, options.roll_bins, options.approach) if options.dexterity else False
-    out = Path(options.out or Path("out") / f"workspace_{robot.name}")
+    out = Path(options.out or default_output_folder("workspace", robot.name))
     if options.watch:
         return watch_job(options, out, model=options.model)
     from ..scenario.watch import WatchedFiles

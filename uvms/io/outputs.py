@@ -47,12 +47,6 @@ SHOWN = 5  # foreign files a refusal names before "and N more"
 _RENAME_EXCHANGE, _AT_FDCWD = 2, -100  # linux/fs.h
 
 
-def plain_file_name(text: str, fallback: str) -> str:
-    """``text`` (a frame or scenario name) as one file name: ``rexrov/ee`` -> ``rexrov_ee`` (see the code), or ``fallback``."""
-    name = re.sub(r"\.{2,}", ".", re.sub(r"[^A-Za-z0-9._-]+", "_", text)).lstrip("._-")[:128]
-    return name or fallback
-
-
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, keep_suffix: bool = False) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success it replaces ``path`` atomically.

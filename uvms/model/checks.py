@@ -269,9 +269,14 @@ def summarize_tree(robot: ET.Element, origin: str) -> TreeSummary:
         parents[child_link] = name
         children_of[parent_link].append(joint)
     roots = [name for name in links if name not in parents]
-    if len(roots) != 1:
-        what = "no root (the joints form a cycle)" if not roots else f"{len(roots)} roots ({', '.join(roots)})"
-        raise ModelCheckError(f"{origin}: the link tree has {what}; a URDF must have exactly one root link")
+    if len(roots) > 1:
+        raise ModelCheckError(f"{origin}: the link tree has {len(roots)} roots ({', '.join(roots)}); a URDF must "
+                              "have exactly one root link")
+    below = links_below(roots[0], children_of) if roots else set()
+    if len(below) != len(links):  # each link has one parent: the ones not below the root hang in a cycle
+        start = next(name for name in links if name not in below)
+        raise ModelCheckError(f"{origin}: the joints form a cycle ({parent_cycle(start, parents, robot)}); a URDF "
+                              "must be a tree with exactly one root link")
     root = roots[0]
     root_mass = link_mass(robot.findall("link")[links.index(root)], origin)
     for joint in robot.findall("joint"):
@@ -291,6 +296,33 @@ def summarize_tree(robot: ET.Element, origin: str) -> TreeSummary:
         )
     return TreeSummary(root_link=root, base_type=base_joints[0].get("type"), base_joint=base_joints[0].get("name"),
                        root_mass=root_mass)
+
+
+def links_below(root: str, children_of: dict[str, list[ET.Element]]) -> set[str]:
+    """The root and every link below it (iterative: a chain may be long, and a cycle ends the walk)."""
+    below, frontier = {root}, [root]
+    while frontier:
+        for joint in children_of[frontier.pop()]:
+            child = joint.find("child").get("link")
+            if child not in below:
+                below.add(child)
+                frontier.append(child)
+    return below
+
+
+def parent_cycle(start: str, parents: dict[str, str], robot: ET.Element) -> str:
+    """The cycle reached by walking up the parent joints from ``start``, as ``"a -> b -> a"`` (links, each the
+    parent of the next).
+
+    Args:
+        parents: {child link: the joint above it}; every link on the walk has one (else it would be a root).
+    """
+    parent_link = {joint.get("name"): joint.find("parent").get("link") for joint in robot.findall("joint")}
+    walk, link = [], start
+    while link not in walk:
+        walk.append(link)
+        link = parent_link[parents[link]]
+    return " -> ".join([link, *reversed(walk[walk.index(link):])])
 
 
 def link_mass(link: ET.Element, origin: str) -> float:
@@ -351,10 +383,11 @@ def check_urdf(robot: ET.Element, origin: str) -> TreeSummary:
     """
     check_size(robot, origin)
     tag_owners(robot)
-    check_numbers(robot, origin)
     check_joints(robot, origin)
+    tree = summarize_tree(robot, origin)  # first: every later stage walks the tree (a cycle would never end)
+    check_numbers(robot, origin)
     check_joint_axes(robot, origin)
     point_masses = check_inertias(robot, origin)
     check_geometry(robot, origin)
-    return replace(summarize_tree(robot, origin), point_masses=point_masses)
+    return replace(tree, point_masses=point_masses)
 

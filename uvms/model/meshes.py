@@ -3,16 +3,24 @@
 The viewer (:mod:`uvms.viz.viewer_geometry`) and the collision geometry (:mod:`uvms.model.collision`) read the
 meshes of a URDF through :func:`resolved_urdf`: mesh URIs resolved as :func:`uvms.load` does (``package://``
 through the packages the robot was loaded with, ``robot.packages``, :mod:`uvms.model.packages`). A mesh is a
-stranger's file too: only the formats of :data:`MESH_FORMATS`, at most :data:`MAX_MESH_BYTES` each, and never a
-compressed archive (a ``.zae`` or a zip under any name: a 4 MB zip inflates to gigabytes) are loaded
-(:func:`mesh_refusal`, checked before any loader opens the file).
+stranger's file too: only regular files of the formats of :data:`MESH_FORMATS`, at most :data:`MAX_MESH_BYTES` each,
+and never a compressed archive (a ``.zae`` or a zip under any name: a 4 MB zip inflates to gigabytes) are loaded
+(:func:`mesh_refusal`, checked before any loader opens the file). The files a mesh names for its loaders to open
+next (an OBJ's ``mtllib`` materials and their texture maps, a PLY's ``TextureFile``, a Collada ``<init_from>``
+image) are checked the same way (:func:`named_file_refusal`): assimp (coal, Pinocchio) and trimesh (the viewer)
+open them by name, and a FIFO there blocks the loader where neither Ctrl-C nor SIGTERM reaches it.
 """
 
 from __future__ import annotations
 
+import io
+import os
+import re
+import stat
+import urllib.parse
 import warnings
-import zipfile
 import xml.etree.ElementTree as ET
+import zipfile
 from pathlib import Path
 
 from ..errors import GeometryWarning, ModelCheckError
@@ -28,28 +36,95 @@ MAX_MESH_BYTES = 64 << 20
 ARCHIVE_MAGIC = (b"PK\x03\x04", b"PK\x05\x06", b"\x1f\x8b")
 
 
+#: The most file names a mesh may give its loaders (materials, textures); a mesh naming more is refused.
+MAX_NAMED_FILES = 64
+#: Where each format names further files: the rest of the line after the keyword (an OBJ's ``mtllib``, a
+#: material's texture maps, a PLY header's ``comment TextureFile``) or a Collada image's ``<init_from>``. Matched
+#: anywhere, as trimesh does (it takes the first ``mtllib`` even inside a comment), so a superset is checked.
+NAMED_FILES = {
+    ".obj": re.compile(rb"mtllib([^\r\n]*)"),
+    ".mtl": re.compile(rb"(?im)^[ \t]*(?:map_\w+|bump|disp|decal|refl|norm)\b([^\r\n]*)"),
+    ".ply": re.compile(rb"(?i)texturefile([^\r\n]*)"),
+    ".dae": re.compile(rb"<init_from>([^<]*)</init_from>"),
+}
+
+
 def mesh_refusal(path: Path) -> str | None:
     """Why uvms does not load the mesh file ``path`` (None: it may).
 
-    The checks read the file's size and first bytes only: a suffix outside :data:`MESH_FORMATS`, more than
-    :data:`MAX_MESH_BYTES` on disk, or a compressed archive (assimp and pycollada open a zip as a Collada
-    ``.zae`` whatever its name, inflating it whole).
+    A suffix outside :data:`MESH_FORMATS`; not a regular file (a FIFO, ``/dev/zero``: checked before it is opened)
+    or more than :data:`MAX_MESH_BYTES` (read by :func:`uvms.model.resources.read_file`); a compressed archive
+    (assimp and pycollada open a zip as a Collada ``.zae`` whatever its name, inflating it whole); or a file it
+    names that :func:`named_file_refusal` refuses.
     """
     formats = ", ".join(MESH_FORMATS)
     if path.suffix.lower() not in MESH_FORMATS:
         return f"format {path.suffix or '(no suffix)'!r} is not loaded; uvms loads {formats} meshes"
     try:
-        size = path.stat().st_size
-        with open(path, "rb") as handle:
-            head = handle.read(4)
-        archive = head.startswith(ARCHIVE_MAGIC) or zipfile.is_zipfile(path)
+        size = os.stat(path).st_size
+        data = resources.read_file(path, "mesh", MAX_MESH_BYTES, ModelCheckError)  # a regular file, bounded
     except OSError as exc:
         return f"cannot be read ({exc.strerror or exc})"
-    if size > MAX_MESH_BYTES:
-        return f"{size / 2**20:.1f} MiB on disk; uvms loads meshes of at most {MAX_MESH_BYTES >> 20} MiB"
-    if archive:
+    except ModelCheckError as exc:
+        if size > MAX_MESH_BYTES:
+            return f"{size / 2**20:.1f} MiB on disk; uvms loads meshes of at most {MAX_MESH_BYTES >> 20} MiB"
+        return str(exc).removeprefix(f"{path}: ")
+    if data.startswith(ARCHIVE_MAGIC) or zipfile.is_zipfile(io.BytesIO(data)):
         return f"a compressed archive (zip/gzip); uvms loads uncompressed {formats} meshes only"
+    return named_file_refusal(path, data)
+
+
+def named_file_refusal(path: Path, data: bytes) -> str | None:
+    """Why a mesh ``path`` (its bytes ``data``) is refused for a file its loaders would open next (None: none is).
+
+    Every file a name of :data:`NAMED_FILES` may lead to is checked, as assimp and trimesh look it up: the name
+    beside the mesh, without a leading ``/``, its last component, each word of it, and an OBJ's ``<stem>.mtl``
+    (assimp's fallback). One that exists must be a regular file (or a folder, which a loader cannot read and
+    skips) of at most :data:`MAX_MESH_BYTES`; a material file is read and its texture maps checked in turn.
+    A missing one is left to the loader (it loads the geometry without it).
+    """
+    pending, names, checked = [(path, data)], set(), set()
+    while pending:
+        source, text = pending.pop()
+        pattern = NAMED_FILES.get(source.suffix.lower())
+        found = [os.fsdecode(match.group(1)) for match in pattern.finditer(text)] if pattern else []
+        names.update(found)
+        if len(names) > MAX_NAMED_FILES:
+            return f"it names more than {MAX_NAMED_FILES} files (materials, textures) for its loader to open"
+        candidates = [path.with_suffix(".mtl")] if source.suffix.lower() == ".obj" else []
+        for name in found:
+            candidates += named_candidates(path.parent, name) + named_candidates(source.parent, name)
+        for candidate in dict.fromkeys(candidate for candidate in candidates if candidate not in checked):
+            checked.add(candidate)
+            try:
+                info = os.stat(candidate)
+            except (OSError, ValueError):  # missing or unreachable: the loader cannot open it either
+                continue
+            if stat.S_ISDIR(info.st_mode):  # a loader's open fails at once
+                continue
+            if not stat.S_ISREG(info.st_mode):
+                return f"it names {str(candidate)!r}, {resources.file_kind(info)}, for its loader to open next"
+            if info.st_size > MAX_MESH_BYTES:
+                return (f"it names {str(candidate)!r} ({info.st_size / 2**20:.1f} MiB) for its loader to open next; "
+                        f"at most {MAX_MESH_BYTES >> 20} MiB")
+            if candidate.suffix.lower() == ".mtl":
+                try:
+                    pending.append((candidate, resources.read_file(candidate, "material", MAX_MESH_BYTES,
+                                                                   ModelCheckError)))
+                except ModelCheckError as exc:
+                    return f"it names a material file that cannot be read ({exc})"
     return None
+
+
+def named_candidates(folder: Path, name: str) -> list[Path]:
+    """The files a name written in a mesh may open, looked up as assimp and trimesh do (see
+    :func:`named_file_refusal`); a Collada ``file://`` URI and %-escapes decoded too."""
+    name = name.strip()
+    names = {name, name.lstrip("/"), os.path.basename(name), *name.split()}
+    for uri in list(names):
+        decoded = urllib.parse.unquote(uri.removeprefix("file://"))
+        names |= {decoded, decoded.lstrip("/"), os.path.basename(decoded)}
+    return [folder / item for item in sorted(names) if item.strip()]
 
 
 def resolved_urdf(robot: Robot, strict: bool = False) -> tuple[str, list[str]]:

@@ -9,7 +9,8 @@ The folders searched, first in precedence first (a name found twice keeps its fi
 3. ``AMENT_PREFIX_PATH``: install prefixes, ``<prefix>/share/<pkg>/package.xml`` (the package is named by its
    folder, as ament_index does);
 4. the model's own workspace (:func:`model_workspace`): the ``src`` folder above a model that lies in a ROS
-   package, else the folder holding that package;
+   package, else that package alone (a package unpacked in a downloads folder does not get the packages beside
+   it: they are not its workspace, and their files are not its to read);
 5. example-robot-data's installed share folder (its URDFs say ``package://example-robot-data/...``).
 
 A search (:func:`find_packages`) stops descending at a folder holding ``package.xml``, skips hidden folders
@@ -209,15 +210,17 @@ def model_workspace(model: str | os.PathLike) -> Path | None:
     """The folder searched for the packages of a model's own workspace, or None when the model is in no package.
 
     Walking up at most :data:`MAX_WORKSPACE_LEVELS` folders from the model file: when one of them holds
-    ``package.xml`` (the model lies in a ROS package), the nearest folder named ``src`` (a colcon/catkin
-    workspace's sources) within those levels, else the folder holding that package.
+    ``package.xml`` (the model lies in a ROS package), the nearest folder named ``src`` above that package (a
+    colcon/catkin workspace's sources) within those levels, else that package's own folder: without a workspace
+    the folders beside the package (a downloads folder) are not searched, so ``$(find other_pkg)`` of a stranger's
+    model cannot reach them unless the user names them (``--package-path``, ``ROS_PACKAGE_PATH``).
     """
     ancestors = list(Path(os.path.abspath(model)).parents)[:MAX_WORKSPACE_LEVELS]
     package = next((folder for folder in ancestors if (folder / "package.xml").is_file()), None)
     if package is None:
         return None
     above = ancestors[ancestors.index(package) + 1:]  # a package's own src/ is not a workspace
-    return next((folder for folder in above if folder.name == "src"), package.parent)
+    return next((folder for folder in above if folder.name == "src"), package)
 
 
 def unknown_package(name: str, packages: Mapping[str, Path], model: str | os.PathLike) -> str:
@@ -231,7 +234,12 @@ def unknown_package(name: str, packages: Mapping[str, Path], model: str | os.Pat
     for variable in ("ROS_PACKAGE_PATH", "AMENT_PREFIX_PATH"):
         places.append(f"{variable}={os.environ[variable]}" if os.environ.get(variable) else f"no {variable}")
     workspace = model_workspace(model)
-    places.append(f"the model's workspace {workspace}" if workspace else "no workspace (the model is in no package)")
+    if workspace is None:
+        places.append("no workspace (the model is in no package)")
+    elif (workspace / "package.xml").is_file():
+        places.append(f"the model's own package {workspace} (no workspace: no src folder above it)")
+    else:
+        places.append(f"the model's workspace {workspace}")
     listed = ", ".join(list(packages)[:LISTED_PACKAGES]) + (", ..." if len(packages) > LISTED_PACKAGES else "")
     return (f"{model}: $(find {name}): no ROS package {name!r} (looked in: {'; '.join(places)}; found "
             f"{len(packages)}: {listed or 'none'}); {HOW_TO_ADD}")

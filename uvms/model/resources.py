@@ -173,9 +173,7 @@ def read_file(path: str | os.PathLike, what: str, limit: int, error: type[UVMSEr
 
     def refuse(info: os.stat_result) -> None:
         if not stat.S_ISREG(info.st_mode):
-            kind = "a folder" if stat.S_ISDIR(info.st_mode) else "a FIFO" if stat.S_ISFIFO(info.st_mode) else (
-                "a device or socket")
-            raise error(f"{path}: the {what} file is {kind}, not a regular file; give a file")
+            raise error(f"{path}: the {what} file is {file_kind(info)}, not a regular file; give a file")
         if info.st_size > limit:
             raise error(f"{path}: the {what} file holds {info.st_size / 2**20:,.1f} MiB; at most {limit / 2**20:g} "
                         f"MiB are accepted (no real one is that large)")
@@ -193,6 +191,14 @@ def read_file(path: str | os.PathLike, what: str, limit: int, error: type[UVMSEr
     if len(data) > limit:  # it grew since it was checked
         raise error(f"{path}: the {what} file holds more than {limit / 2**20:g} MiB; at most that is accepted")
     return data
+
+
+def file_kind(info: os.stat_result) -> str:
+    """What a file is, for messages: "a regular file", "a folder", "a FIFO" or "a device or socket"."""
+    if stat.S_ISREG(info.st_mode):
+        return "a regular file"
+    return "a folder" if stat.S_ISDIR(info.st_mode) else "a FIFO" if stat.S_ISFIFO(info.st_mode) else (
+        "a device or socket")
 
 
 def read_text(path: str | os.PathLike, what: str, limit: int, error: type[UVMSError] = ModelFileNotFound) -> str:

@@ -9,7 +9,6 @@ from __future__ import annotations
 import copy
 import math
 import os
-import re
 import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -21,7 +20,7 @@ else:  # pragma: no cover - Python 3.10
     import tomli as tomllib
 
 from ..errors import ScenarioError
-from ..io import outputs
+from ..io.names import NAME_RULE, is_plain_name, plain_file_name
 from ..model.resources import MAX_TOML_BYTES, read_text
 from ..solvers import SOLVERS
 from ..tasks.objectives import FILE_KEYS
@@ -38,11 +37,6 @@ DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: santos2006's kinematic constraint, and the two that enforce [[inequalities]]: set-based (iCAT) and the QP hierarchy).
 SOLVER_METHODS = SOLVERS.keys()  # a live view: a method registered later is valid
 REQUIRED = object()
-#: A name read from a scenario that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,
-#: ``outputs.animation``) is a plain name: one path component, never a path that leads outside ``--out``.
-NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,127}")
-NAME_RULE = ("a plain name: letters, digits, '.', '_' and '-', starting with a letter or a digit, at most 128 "
-             "characters, no '/' and no '..'")
 ANIMATION_SUFFIXES = (".gif", ".mp4")
 #: The largest magnitude of a number in a scenario (SI units; model.args excepted, the model checks them). No gain
 #: [1/s], damping, weight, length [m], speed [m/s], time [s] or angle [rad] of a vehicle-manipulator run comes near it,
@@ -222,7 +216,7 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     for index, table in enumerate(scenario["inequalities"]):
         for key in set(FILE_KEYS.get(table["type"], ())) & set(table):
             table[key] = scenario_file(table[key], path, f"inequalities[{index}].{key}")
-    scenario["scenario"]["name"] = scenario["scenario"]["name"] or outputs.plain_file_name(path.stem, "scenario")
+    scenario["scenario"]["name"] = scenario["scenario"]["name"] or plain_file_name(path.stem, "scenario")
     return scenario
 
 
@@ -237,8 +231,9 @@ def named_files(scenario: dict) -> list[str]:
 
 
 def check_name(name: str, value: str, origin: str, role: str, suffixes: Sequence[str] = (), example: str = "") -> str:
-    """A scenario string that becomes a file name: a plain name (:data:`NAME_PATTERN`), with one of ``suffixes``."""
-    plain = NAME_PATTERN.fullmatch(value) is not None and ".." not in value
+    """A scenario string that becomes a file or folder name (``scenario.name`` -> ``out/<name>``,
+    ``outputs.animation``): a plain name (:func:`uvms.io.names.is_plain_name`), with one of ``suffixes``."""
+    plain = is_plain_name(value)
     suffix_ok = not suffixes or Path(value).suffix.lower() in suffixes
     if not (plain and suffix_ok):
         ending = f", ending in {' or '.join(suffixes)}" if suffixes else ""

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..io import outputs
+from ..io.names import plain_file_name
 from ..robot.robot import Robot
 from ..workspace import CONVERGENCE_TOLERANCE, WorkspaceResult
 from .plotting import workspace_figure
@@ -49,7 +50,7 @@ def write_workspace_outputs(robot: Robot, result: WorkspaceResult, frames: Seque
         written.append(name)
     for frame, dexterity in (result.dexterity or {}).items():
         grid = result.orientation_grid
-        name = f"dexterity_{outputs.plain_file_name(frame, 'frame')}.png"  # "rexrov/ee" is one file, not a folder
+        name = f"dexterity_{plain_file_name(frame, 'frame')}.png"  # "rexrov/ee" is one file, not a folder
         workspace_figure({frame: dexterity.centres}, folder / name, values={frame: dexterity.dexterity},
                          value_label=f"dexterity (fraction of {grid.count} orientation cells)", outlines=outlines,
                          marker_size=16.0,

@@ -14,6 +14,7 @@ import pinocchio as pin
 
 from ..errors import GeometryWarning, MissingMeshWarning, WorkspaceInputError
 from ..model import resources
+from ..model.meshes import mesh_refusal
 from ..robot.robot import Robot
 from .voxels import check_points
 
@@ -228,13 +229,19 @@ def _urdf_shape(link: str, item: ET.Element, placement: pin.SE3, folder: Path | 
 def mesh_vertices(link: str, uri: str, scale: np.ndarray, folder: Path | None,
                   packages: Mapping[str, Path]) -> np.ndarray | None:
     """The vertices (K, 3) [m] of a URDF mesh, scaled, in the mesh's frame; None (with a warning) when its file
-    cannot be found (``package://`` through the robot's ``packages``) or read."""
+    cannot be found (``package://`` through the robot's ``packages``), is refused
+    (:func:`uvms.model.meshes.mesh_refusal`) or cannot be read."""
     import coal
 
     path = resources.resolve_uri(uri, folder, packages)
     if path is None or scale.shape != (3,):
         warnings.warn(f"hull of link {link!r}: mesh {uri!r} not found (or its scale is not 3 numbers); it is not "
                       "used", MissingMeshWarning, stacklevel=4)
+        return None
+    reason = mesh_refusal(path)
+    if reason is not None:  # checked before assimp opens it or a file it names (a FIFO would block it)
+        warnings.warn(f"hull of link {link!r}: mesh {str(path)!r} is refused: {reason}; it is not used",
+                      GeometryWarning, stacklevel=4)
         return None
     try:
         return np.asarray(coal.MeshLoader().load(str(path), scale).vertices(), dtype=float)

@@ -76,7 +76,7 @@ def mesh_obstacle(name: str, path: Path) -> object:
     """
     import coal  # shipped with the pin wheel
 
-    if not path.is_file():
+    if not path.exists():  # a FIFO or a device exists and is refused below, before anything opens it
         raise ObjectiveError(f"{name}: the mesh file {str(path)!r} does not exist; give a mesh file (.stl, .dae, "
                              f".obj, .ply) inside the scenario's folder")
     reason = mesh_refusal(path)
