@@ -178,3 +178,15 @@ def test_info_says_which_thruster_values_are_defaults(capsys):
     assert "  thruster_3   xyz [-0.400 +0.200 -0.100]  dir [-1.000 +0.000 +0.000]  [-2000, 300]  0.05\n" in captured.out
     assert "hydrodynamics none" in captured.out
     assert "uvms's default thruster values" in captured.err and "max_reverse = 2000 N for thruster_0" in captured.err
+
+
+@pytest.mark.parametrize("content", [None, "links: [1, 2\n", "links:\n  nowhere_link: {volume: 1}\n"])
+def test_info_with_a_hydrodynamics_file_it_cannot_use_exits_2_with_one_line(tmp_path, capsys, content):
+    """The file the user named is the subject of the command: missing or invalid is an error, not a described line."""
+    path = tmp_path / "hydrodynamics.yaml"
+    if content is not None:
+        path.write_text(content)
+    assert main(["info", "bluerov2_alpha5", "--hydrodynamics", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.splitlines()) == 1
+    assert captured.err.startswith("uvms: error: ") and "hydrodynamics" in captured.err
