@@ -76,7 +76,7 @@ def read_log(options: argparse.Namespace, robot):
     thrust = (thrust_input(robot, options.thrust_topics, commands=options.thrust_commands)
               if options.thrust_topics else None)
     return read_bag(options.log, odom_topic=options.odom_topic, joint_states_topic=options.joint_states_topic,
-                    wrench_topic=options.wrench_topic, thrust=thrust)
+                    wrench_topic=options.wrench_topic, thrust=thrust, arm_joints=robot.arm_joint_names)
 
 
 def command_identify(options: argparse.Namespace) -> int:

@@ -43,7 +43,7 @@ import numpy as np
 from ..errors import IdentificationError, UVMSError
 from .hydro_parameters import HydroParameters
 from .hydrodynamics import hydrodynamics_of
-from .identification_current import CurrentEstimate, estimate_current
+from .identification_current import CurrentEstimate, checked_current, estimate_current
 from .identification_data import IdentificationLog, smoothed_states
 from .identification_model import (AXES, ParameterLayout, Regression, acceleration_noise_terms, identified_link_name,
                                    known_plant, link_from_theta, parameter_layout, regression, rigid_vehicle_mass)
@@ -52,6 +52,8 @@ from .identification_predict import HeldOutPrediction, predict_held_out
 INSTALL_HINT = "identification needs cvxpy and Clarabel: pip install 'uvms[identify]' (cvxpy, clarabel)"
 #: z of a two-sided 95 % interval.
 Z95 = 1.959963984540054
+#: How far [fraction of the range, at least 0.1 rad or m] a logged joint position may be outside the model's limits.
+JOINT_LIMIT_MARGIN = 0.1
 
 
 @dataclass(frozen=True)
@@ -163,7 +165,8 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
     log = _arm_in_model_order(robot, log)
     fit_stop = len(log.t) - int(round(holdout * len(log.t)))
     states = smoothed_states(log.segment(0, fit_stop), window, polyorder)
-    water = prior.current if current is None else np.asarray(current, dtype=float)
+    water = checked_current(prior.current if current is None else current,
+                            f"the prior's current ({prior.source})" if current is None else "the current")
     found = None
     if identify_current:
         search = parameter_layout(prior.links[link], np.eye(6), added_mass)
@@ -209,7 +212,8 @@ def _arm_in_model_order(robot, log: IdentificationLog) -> IdentificationLog:
     """The log with its joint columns in the order of ``robot.arm_joint_names``.
 
     Raises:
-        IdentificationError: an arm joint of the model the log does not hold.
+        IdentificationError: an arm joint of the model the log does not hold, or a joint position outside the
+            model's limits by more than :data:`JOINT_LIMIT_MARGIN` of its range (at least 0.1 rad or m).
     """
     names = list(robot.arm_joint_names)
     missing = [name for name in names if name not in log.joint_names]
@@ -218,9 +222,19 @@ def _arm_in_model_order(robot, log: IdentificationLog) -> IdentificationLog:
                                   f"{', '.join(missing)} of {robot.name} (it holds: "
                                   f"{', '.join(log.joint_names) or 'none'}); the arm's motion is a known term")
     order = [log.joint_names.index(name) for name in names]
+    position = log.joint_position[:, order]
+    lower, upper = robot.arm_limits
+    margin = np.where(np.isfinite(upper - lower), np.maximum(JOINT_LIMIT_MARGIN * (upper - lower), 0.1), 0.0)
+    outside = (position < lower - margin) | (position > upper + margin)
+    if np.any(outside):
+        k, j = (int(index[0]) for index in np.nonzero(outside))
+        raise IdentificationError(f"{log.source}: joint {names[j]} is at {position[k, j]:.6g} in sample {k} "
+                                  f"(t = {log.t[k]:.6g} s), outside its limits [{lower[j]:.6g}, {upper[j]:.6g}] in "
+                                  f"{robot.name} (by more than {JOINT_LIMIT_MARGIN:.0%} of its range); the log is not "
+                                  "of this model, or its joint states are not in its units")
     velocity = None if log.joint_velocity is None else log.joint_velocity[:, order]
-    return IdentificationLog(log.t, log.position, log.quaternion, log.twist, log.wrench, tuple(names),
-                             log.joint_position[:, order], velocity, log.source)
+    return IdentificationLog(log.t, log.position, log.quaternion, log.twist, log.wrench, tuple(names), position,
+                             velocity, log.source)
 
 
 def _axis_weights(data: Regression, wrench: np.ndarray, layout: ParameterLayout, noise_floor: float) -> np.ndarray:
