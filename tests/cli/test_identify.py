@@ -50,7 +50,7 @@ def test_identify_writes_the_yaml_the_json_and_the_figures(bag, tmp_path, capsys
     assert loaded.volume == values["volume"]["value"]
     np.testing.assert_allclose(loaded.center_of_buoyancy[2] * loaded.volume, values["buoyancy_moment[z]"]["value"],
                                rtol=1e-12)
-    assert loaded.linear_damping[1] == values["linear_damping[v]"]["prior"]  # held
+    assert loaded.linear_damping[1] == values["linear_damping[v]"]["value"]  # held by its prior
     prior = hydrodynamics_of(robot)
     for name in prior.links:  # the arm's links are written as the model has them
         if name != "base_link":

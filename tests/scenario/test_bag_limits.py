@@ -113,7 +113,7 @@ def test_an_mcap_chunk_is_inflated_no_further_than_it_declares_and_the_cap(tmp_p
 def test_a_compressed_bag_is_refused_with_how_to_decompress_it(tmp_path):
     """rosbags would inflate a file-compressed bag into $TMPDIR, outside --out and without a bound."""
     bag = small_bag(tmp_path / "bag", compression=CompressionMode.FILE)
-    with pytest.raises(IdentificationError, match=r"compressed \(compression_mode: file\).*ros2 bag decompress"):
+    with pytest.raises(IdentificationError, match=r"compressed \(compression_mode: file\).*ros2 bag convert"):
         read_bag(bag, arm_joints=())
 
 

@@ -58,8 +58,8 @@ _RECORD = struct.Struct("<BQ")  # opcode, length
 _CHUNK = struct.Struct("<QQQI")  # start, end, uncompressed size, crc
 _U32, _U64 = struct.Struct("<I"), struct.Struct("<Q")
 _CHUNK_OP, _MESSAGE_OP, _CHUNK_INDEX_OP, _FOOTER_OP, _SUMMARY_OFFSET_OP = 0x06, 0x05, 0x08, 0x02, 0x0E
-DECOMPRESS_HINT = ("decompress it first (ros2 bag decompress BAG, or ros2 bag convert with compression_mode: none "
-                   "in the output options)")
+DECOMPRESS_HINT = ("decompress it first: ros2 bag convert -i BAG -o OUT.yaml, OUT.yaml naming an output bag without "
+                   "compression")
 FILTER_HINT = "cut it to the topics and the time span identification reads (ros2 bag convert)"
 
 
