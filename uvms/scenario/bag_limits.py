@@ -81,7 +81,7 @@ def check_bag(folder: Path, topics: Mapping[str, str]) -> None:
     try:
         document = read_yaml(folder / "metadata.yaml", "rosbag2 metadata")
     except UVMSError as exc:
-        raise IdentificationError(f"{' '.join(str(exc).split())} (a rosbag2 metadata.yaml is a few KiB)") from None
+        raise IdentificationError(" ".join(str(exc).split())) from None
     info = document.get("rosbag2_bagfile_information") if isinstance(document, dict) else None
     if not isinstance(info, dict):
         raise damaged(folder, "metadata.yaml has no rosbag2_bagfile_information mapping")
