@@ -4,6 +4,8 @@ one clear line for a bad log with nothing written."""
 from __future__ import annotations
 
 import json
+import os
+import re
 import shutil
 
 import numpy as np
@@ -15,6 +17,7 @@ from uvms.cli import main
 from uvms.dynamics.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.identification_data import log_csv_text
 from uvms.dynamics.thrusters import thrusters_of
+from uvms.io import outputs
 from uvms.scenario.rosbag import write_bag
 
 
@@ -47,7 +50,7 @@ def test_identify_writes_the_yaml_the_json_and_the_figures(bag, tmp_path, capsys
     assert loaded.volume == values["volume"]["value"]
     np.testing.assert_allclose(loaded.center_of_buoyancy[2] * loaded.volume, values["buoyancy_moment[z]"]["value"],
                                rtol=1e-12)
-    assert loaded.linear_damping[1] == values["linear_damping[v]"]["prior"]  # held
+    assert loaded.linear_damping[1] == values["linear_damping[v]"]["value"]  # held by its prior
     prior = hydrodynamics_of(robot)
     for name in prior.links:  # the arm's links are written as the model has them
         if name != "base_link":
@@ -129,3 +132,64 @@ def test_a_bad_log_gets_one_error_line_and_nothing_is_written(bag, tmp_path, cap
     line = one_line(capsys)
     assert line.startswith("uvms: error: ") and message in line
     assert not out.exists()
+
+
+def csv_log(path, row: int | None = None, column: int | None = None, value: str = "") -> str:
+    """The heave-pitch log as a CSV at ``path``, one cell (or a whole column with row None) set to ``value``."""
+    _, clean = excitation("heave_pitch")
+    rows = log_csv_text(clean).splitlines()
+    if column is not None:
+        for k in ([row] if row is not None else range(1, len(rows))):
+            cells = rows[k].split(",")
+            cells[column] = value
+            rows[k] = ",".join(cells)
+    path.write_text("\n".join(rows) + "\n")
+    return str(path)
+
+
+@pytest.mark.parametrize("cell, extra, message", [
+    ((6, 8, "1e200"), [], (r"the linear velocity of sample 5 \(t = 0.1 s\) is 1e\+200; a log's linear velocity "
+                           r"must be within \+-100")),
+    ((None, 20, "1e300"), [], (r"the joint position of sample 0 .* is 1e\+300; a log's joint position must be "
+                               r"within \+-1000")),
+    ((2, 20, "100"), [], r"joint alpha_axis_e is at 100 in sample 1 \(t = 0.02 s\), outside its limits \[0, 6.3\]"),
+    (None, ["--window", "1e308"], r"the smoothing window must be in \(0, 24\] s \(the log's duration\), got 1e\+308"),
+    (None, ["--current", "1e308", "0", "0"], r"the current must be finite and at most 10 m/s"),
+])
+def test_numbers_out_of_range_get_one_error_line(tmp_path, capsys, cell, extra, message):
+    """Before: LinAlgError, OverflowError, or a joint at 1e300 rad accepted and 43 % more added mass written."""
+    log = csv_log(tmp_path / "log.csv", *(cell or ()))
+    out = tmp_path / "out"
+    assert main(["identify", log, "--model", "bluerov2_alpha5", "--out", str(out), *extra]) == 2
+    line = one_line(capsys)
+    assert line.startswith("uvms: error: ") and re.search(message, line), line
+    assert not out.exists()
+
+
+def test_a_line_break_in_the_logs_name_stays_in_its_comment(tmp_path, capsys):
+    """The log's name is written on the comment line of hydrodynamics.yaml; a line break would start a YAML line."""
+    log = csv_log(tmp_path / "log\nx.csv")
+    out = tmp_path / "out"
+    assert main(["identify", log, "--model", "bluerov2_alpha5", "--out", str(out), "--quiet"]) == 0
+    text = (out / "hydrodynamics.yaml").read_text()
+    assert text.splitlines()[0].startswith("# identified by uvms identify from ") and "log\\nx.csv (model " in text
+    identified = json.loads((out / "identification.json").read_text())["parameters"]
+    written = hydrodynamics_of(shipped("bluerov2_alpha5"), out / "hydrodynamics.yaml").links["base_link"]
+    assert written.added_mass[2, 2] == next(p["value"] for p in identified if p["name"] == "added_mass[w]")
+
+
+def test_an_input_inside_the_output_is_refused_and_leaves_no_lock_behind(tmp_path, capsys):
+    """identify RUN/sub/log.csv --out RUN/sub left .sub.uvms-lock in the run folder RUN, which then held a file uvms
+    had not listed: every later run into RUN was refused."""
+    run = tmp_path / "run"
+    with outputs.run_folder(run) as folder:
+        (folder / "sub").mkdir()
+        csv_log(folder / "sub" / "log.csv")
+    before = sorted(os.listdir(run))
+    assert main(["identify", str(run / "sub" / "log.csv"), "--model", "bluerov2_alpha5", "--out",
+                 str(run / "sub")]) == 2
+    assert "an input of this run" in one_line(capsys)
+    assert sorted(os.listdir(run)) == before
+    with outputs.run_folder(run) as folder:  # the run folder is still uvms's to replace
+        (folder / "again.txt").write_text("replaced")
+    assert (run / "again.txt").exists()

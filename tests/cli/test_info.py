@@ -188,3 +188,15 @@ def test_info_says_which_wrench_directions_the_thrusters_cannot_produce(capsys):
     assert line.startswith("allocation  the thrusters produce 4 of the 6 body-wrench directions; missing: a ")
     assert main(["info", "bluerov2_alpha5"]) == 0
     assert "allocation  every body-wrench direction (rank 6)\n" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("content", [None, "links: [1, 2\n", "links:\n  nowhere_link: {volume: 1}\n"])
+def test_info_with_a_hydrodynamics_file_it_cannot_use_exits_2_with_one_line(tmp_path, capsys, content):
+    """The file the user named is the subject of the command: missing or invalid is an error, not a described line."""
+    path = tmp_path / "hydrodynamics.yaml"
+    if content is not None:
+        path.write_text(content)
+    assert main(["info", "bluerov2_alpha5", "--hydrodynamics", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.splitlines()) == 1
+    assert captured.err.startswith("uvms: error: ") and "hydrodynamics" in captured.err

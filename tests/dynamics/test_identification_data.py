@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.signal import savgol_coeffs
 
+from uvms.dynamics import identification_data
 from uvms.dynamics.identification_data import (CSV_COLUMNS, IdentificationLog, log_csv_text, read_log_csv,
                                                smoothed_states, uniform_log)
 from uvms.errors import IdentificationError
@@ -36,11 +42,16 @@ def test_a_nan_row_is_refused_naming_the_sample_and_its_time():
     (lambda a: a.update(quaternion=0 * a["quaternion"]), "quaternion of sample 0"),
     (lambda a: a.update(**{k: v[:20] for k, v in a.items() if hasattr(v, "__len__") and len(v) == 200}),
      "holds 20 samples"),
+    # values no underwater vehicle logs: the fit's products overflowed (LinAlgError) or a joint's sin/cos was garbage
+    (lambda a: a["twist"].__setitem__((7, 1), 1e200), (r"linear velocity of sample 7 \(t = 0.14 s\) is 1e\+200; "
+                                                       r".* within \+-100")),
+    (lambda a: a["joint_position"].__setitem__(slice(None), 1e300), "joint position of sample 0 .* within \\+-1000"),
+    (lambda a: a.update(t=a["t"] + 1e12), "time of sample 0"),
 ])
 def test_bad_arrays_are_refused(change, message):
     log = make_log()
-    arrays = {"t": log.t, "position": log.position, "quaternion": log.quaternion, "twist": log.twist,
-              "wrench": log.wrench, "joint_position": log.joint_position}
+    arrays = {"t": log.t, "position": log.position, "quaternion": log.quaternion, "twist": np.array(log.twist),
+              "wrench": log.wrench, "joint_position": np.array(log.joint_position)}
     change(arrays)
     with pytest.raises(IdentificationError, match=message):
         IdentificationLog(joint_names=log.joint_names, source="test log", **arrays)
@@ -68,6 +79,35 @@ def test_a_bad_csv_gets_one_clear_error(tmp_path, text, message):
     path.write_text(text)
     with pytest.raises(IdentificationError, match=message):
         read_log_csv(path)
+
+
+def test_a_csv_log_is_read_bounded(tmp_path, monkeypatch):
+    """Not a regular file (a device), larger than MAX_LOG_BYTES (a sparse file: nothing on disk), or more rows than
+    MAX_LOG_SAMPLES: refused before the text is parsed (a device reached MemoryError before)."""
+    zero = tmp_path / "zero.csv"
+    zero.symlink_to("/dev/zero")
+    with pytest.raises(IdentificationError, match=r"zero.csv: the CSV log file is a device or socket, not a regular"):
+        read_log_csv(zero)
+    sparse = tmp_path / "sparse.csv"
+    with open(sparse, "wb") as handle:
+        handle.truncate(identification_data.MAX_LOG_BYTES + 1)
+    with pytest.raises(IdentificationError, match=r"the CSV log file holds 128.0 MiB; at most 128 MiB"):
+        read_log_csv(sparse)
+    rows = tmp_path / "rows.csv"
+    rows.write_text(log_csv_text(make_log(count=60)))
+    monkeypatch.setattr(identification_data, "MAX_LOG_SAMPLES", 59)
+    with pytest.raises(IdentificationError, match=r"rows.csv: the CSV holds more than 59 rows"):
+        read_log_csv(rows)
+
+
+def test_a_csv_log_that_is_a_fifo_is_refused_not_waited_on(tmp_path):
+    fifo = tmp_path / "log.csv"
+    os.mkfifo(fifo)
+    code = (f"from uvms.dynamics.identification_data import read_log_csv\ntry:\n    read_log_csv({str(fifo)!r})\n"
+            "except Exception as exc:\n    print(exc)")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False,
+                          env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])})
+    assert "the CSV log file is a FIFO, not a regular file" in done.stdout, done.stderr[-2000:]
 
 
 def test_the_savitzky_golay_derivative_of_a_cubic_is_exact():

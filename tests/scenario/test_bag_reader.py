@@ -75,6 +75,34 @@ def test_not_a_bag_is_refused(tmp_path, bag):
         read_bag(tmp_path / "copy")
 
 
+def copy_bag(source, target, topics, storage=None):
+    """The messages of ``topics`` rewritten with rosbags' writer (MCAP, or ``storage``)."""
+    from rosbags.highlevel import AnyReader
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    with AnyReader([source], default_typestore=store) as reader, \
+            Writer(target, version=8, storage_plugin=storage or StoragePlugin.MCAP) as writer:
+        wanted = [c for c in reader.connections if c.topic in topics]
+        out = {c.topic: writer.add_connection(c.topic, c.msgtype, typestore=store) for c in wanted}
+        for connection, stamp, raw in reader.messages(connections=wanted):
+            writer.write(out[connection.topic], stamp, raw)
+    return target
+
+
+def test_a_vehicle_without_an_arm_needs_no_joint_states(tmp_path, bag):
+    """arm_joints=() (uvms identify passes the model's): the joint-states topic is optional, as in a CSV log."""
+    vehicle = copy_bag(bag, tmp_path / "vehicle", ("/odom", "/body_wrench"))
+    with pytest.raises(IdentificationError, match="the bag has no joint states topic '/joint_states'"):
+        read_bag(vehicle, arm_joints=["alpha_axis_e"])
+    log = read_bag(vehicle, arm_joints=())
+    assert log.joint_names == () and log.joint_position.shape == (61, 0) and log.joint_velocity is None
+    _, expected = short_run()
+    for name in ("t", "position", "quaternion", "twist", "wrench"):
+        np.testing.assert_allclose(getattr(log, name), getattr(expected, name), atol=1e-12, err_msg=name)
+
+
 def test_a_sqlite3_bag_is_read_too(tmp_path, bag):
     """The same messages rewritten with rosbag2's sqlite3 storage (rosbags' writer)."""
     from rosbags.highlevel import AnyReader

@@ -251,6 +251,17 @@ def test_bad_input_is_refused_before_anything_is_written(tmp_path, floating_bag)
     assert not (tmp_path / "bag").exists()
 
 
+def test_thruster_names_that_share_a_topic_are_refused(tmp_path, floating_bag):
+    """thruster_1 and thruster.1 both became /thrusters/thruster_1/thrust: two thrusters interleaved on one topic."""
+    robot, result, *_ = floating_bag
+    actuation = types.SimpleNamespace(thrusts=np.zeros((21, 3)), body_wrench=np.zeros((21, 6)))
+    with pytest.raises(BagExportError, match="thrusters 'thruster_1' and 'thruster.1' both become the topic token "
+                                             "'thruster_1'"):
+        write_bag(tmp_path / "bag", robot, dataclasses.replace(result, actuation=actuation),
+                  thrusters=["thruster_1", "thruster_2", "thruster.1"])
+    assert not (tmp_path / "bag").exists()
+
+
 def test_without_rosbags_the_error_gives_the_install_command(monkeypatch, tmp_path, floating_bag):
     robot, result, *_ = floating_bag
     monkeypatch.setitem(sys.modules, "rosbags.rosbag2", None)  # import fails as if not installed

@@ -6,7 +6,7 @@ LOG is a rosbag2 folder (MCAP or sqlite3: :mod:`uvms.scenario.bag_reader`) or a 
 - ``hydrodynamics.yaml``: the model's hydrodynamics with the vehicle's identified, in the form
   :func:`uvms.dynamics.hydrodynamics.load_hydrodynamics_yaml` reads (``uvms.dynamics.hydrodynamics_of(robot, PATH)``);
 - ``identification.json``: every parameter with its prior, value, standard error and 95 % interval, what was
-  held at the prior and why, fit metrics and the options;
+  held by its prior (a soft constraint, :mod:`uvms.dynamics.identification_fit`) and why, fit metrics and the options;
 - ``prediction.png`` (held-out segment) and ``residuals.png`` (:mod:`uvms.viz.identification`).
 """
 
@@ -76,7 +76,7 @@ def read_log(options: argparse.Namespace, robot):
     thrust = (thrust_input(robot, options.thrust_topics, commands=options.thrust_commands)
               if options.thrust_topics else None)
     return read_bag(options.log, odom_topic=options.odom_topic, joint_states_topic=options.joint_states_topic,
-                    wrench_topic=options.wrench_topic, thrust=thrust)
+                    wrench_topic=options.wrench_topic, thrust=thrust, arm_joints=robot.arm_joint_names)
 
 
 def command_identify(options: argparse.Namespace) -> int:
@@ -116,11 +116,12 @@ def command_identify(options: argparse.Namespace) -> int:
 
 
 def summary_lines(result) -> list[str]:
-    """One line per parameter: name, prior, value, 95 % interval or why it was held."""
-    lines = [f"{'parameter':<24} {'prior':>11} {'identified':>11}  95 % interval / held because"]
+    """One line per parameter: name, prior, value, 95 % interval, and why it was held by its prior."""
+    lines = [f"{'parameter':<24} {'prior':>11} {'identified':>11}  95 % interval; held because"]
     for p in result.parameters:
-        detail = f"[{p.interval[0]:.4g}, {p.interval[1]:.4g}] {p.unit}" if p.identified else f"held: {p.reason}"
-        lines.append(f"{p.name:<24} {p.prior:>11.4g} {p.value:>11.4g}  {detail}")
+        detail = "" if p.interval is None else f"[{p.interval[0]:.4g}, {p.interval[1]:.4g}] {p.unit}"
+        held = "" if p.identified else f"held: {p.reason}"
+        lines.append(f"{p.name:<24} {p.prior:>11.4g} {p.value:>11.4g}  {'; '.join(filter(None, (detail, held)))}")
     held_out = result.metrics.get("held_out")
     if held_out and held_out["fit_percent_identified"] is not None:
         fits = ", ".join(f"{axis} {value:.1f}" for axis, value in held_out["fit_percent_identified"].items())

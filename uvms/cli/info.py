@@ -133,13 +133,20 @@ def thruster_lines(robot: Robot) -> list[str]:
 
 def hydrodynamics_lines(robot: Robot, path: str | None = None) -> list[str]:
     """Per link the hydrodynamic data (``uvms.dynamics.hydrodynamics_of``, of the YAML file ``path`` when given),
-    FLU axes, order [u v w p q r], after where they come from."""
+    FLU axes, order [u v w p q r], after where they come from.
+
+    Raises:
+        UVMSError: the file ``path`` the user named cannot be read or is invalid (the model's own data's problem
+            is a line of the description instead: info describes the model).
+    """
     from ..dynamics.hydro_parameters import hydro_rows
     from ..dynamics.hydrodynamics import hydrodynamics_of
 
     try:
         hydro = hydrodynamics_of(robot, path, required=False)
     except UVMSError as exc:
+        if path is not None:
+            raise
         return [f"hydrodynamics not usable: {' '.join(str(exc).split())}"]
     rows = hydro_rows(hydro)
     if not rows:

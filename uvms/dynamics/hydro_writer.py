@@ -24,6 +24,12 @@ def _row(values: Iterable[float]) -> str:
     return "[" + ", ".join(_number(value) for value in values) + "]"
 
 
+def comment_line(text: str) -> str:
+    """``text`` on one line: every character that is not printable (line breaks of any kind, control characters)
+    replaced by its Python escape, so that a comment cannot end early and start a YAML line."""
+    return "".join(character if character.isprintable() else repr(character)[1:-1] for character in text)
+
+
 def link_yaml_lines(name: str, link: LinkHydrodynamics) -> list[str]:
     """The lines of one link's entry under ``links:`` (indented by two spaces)."""
     added = flip_frd_flu(link.added_mass)  # uvms FLU -> the file's SNAME axes
@@ -38,8 +44,9 @@ def link_yaml_lines(name: str, link: LinkHydrodynamics) -> list[str]:
 
 
 def hydrodynamics_yaml_text(hydro: HydroParameters, comments: Iterable[str] = ()) -> str:
-    """The YAML text of ``hydro`` (fluid, current and every link), ``comments`` as ``#`` lines at the top."""
-    lines = [f"# {line}" for line in comments]
+    """The YAML text of ``hydro`` (fluid, current and every link), ``comments`` as ``#`` lines at the top, one line
+    each: a character that is not printable (a line break in a file name) is written as its escape (``\\n``)."""
+    lines = [f"# {comment_line(line)}" for line in comments]
     lines += [f"fluid_density: {_number(hydro.fluid_density)}   # [kg/m^3]",
               f"gravity: {_number(hydro.gravity)}   # [m/s^2]",
               f"current: {_row(np.asarray(hydro.current))}   # [m/s], world ENU", "links:"]

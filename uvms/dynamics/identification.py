@@ -13,20 +13,18 @@ The fit, in four steps
    ordinary least-squares fit, at least ``noise_floor`` (1 %) of the RMS measured force (force axes) or
    moment (moment axes): the wrench is never trusted better than that.
 3. **Identifiability**: the parameters are scaled by their scale
-   (:func:`~uvms.dynamics.identification_model.parameter_layout`) and their standard errors computed (below),
-   relative to the larger of the scale and the unconstrained estimate (a prior far too small does not hold a
-   parameter the log determines well). While the largest relative standard error exceeds ``max_relative_error``
-   (20 %), that parameter is held at its prior (the model's value) and the fit is repeated, so a parameter the
-   log does not excite is reported as such and never fitted to noise.
+   (:func:`~uvms.dynamics.identification_model.parameter_layout`) and their standard errors computed, relative to
+   the larger of the scale and the estimate. While the largest relative standard error exceeds
+   ``max_relative_error`` (20 %), that parameter is held by its prior (the model's value, known to within its
+   scale, combined with the log's estimate) and the fit is repeated, its uncertainty carried into every other
+   interval: a parameter the log does not excite is reported as such, never fitted to noise, and its prior biases
+   no other parameter unseen (:mod:`uvms.dynamics.identification_fit`).
 4. **Constrained fit**: the weighted least squares with added mass symmetric positive semi-definite, damping
    coefficients >= 0 and volume > 0 (buoyancy positive), a convex problem solved by cvxpy with Clarabel.
 
-Standard errors: the larger of two, per parameter: the Newey-West (heteroscedasticity and autocorrelation
-consistent) sandwich covariance of the weighted least squares over the free parameters (Bartlett weights, a
-bandwidth of two smoothing windows: the smoothing correlates neighbouring residuals), and the one residuals at the
-noise floor would give with the samples of one window counted once (what a nearly noise-free log is still not
-trusted better than: the model's own approximations, the smoothing's). The same standard error decides
-identifiability (step 3) and gives the interval, +-1.96 standard errors (95 % under normal errors).
+Standard errors (:mod:`uvms.dynamics.identification_fit`): the larger of the Newey-West sandwich covariance and the
+one residuals at the noise floor would give with the samples of one window counted once. The same standard error
+decides identifiability (step 3) and gives the interval, +-1.96 standard errors (95 % under normal errors).
 
 Errors in variables: the noise of the differentiated twist enters both the added-mass columns and, through the
 known rigid-body inertia, the target, which would bias the added mass low; its expected share (from the noise
@@ -43,28 +41,32 @@ import numpy as np
 from ..errors import IdentificationError, UVMSError
 from .hydro_parameters import HydroParameters
 from .hydrodynamics import hydrodynamics_of
-from .identification_current import CurrentEstimate, estimate_current
+from .identification_current import CurrentEstimate, checked_current, estimate_current
 from .identification_data import IdentificationLog, smoothed_states
-from .identification_model import (AXES, ParameterLayout, Regression, acceleration_noise_terms, identified_link_name,
-                                   known_plant, link_from_theta, parameter_layout, regression, rigid_vehicle_mass)
+from .identification_fit import PRIOR_SCALES, identifiable_fit, normal_solve
+from .identification_model import (AXES, ParameterLayout, Regression, identified_link_name, known_plant,
+                                   link_from_theta, parameter_layout, regression, rigid_vehicle_mass)
 from .identification_predict import HeldOutPrediction, predict_held_out
 
-INSTALL_HINT = "identification needs cvxpy and Clarabel: pip install 'uvms[identify]' (cvxpy, clarabel)"
 #: z of a two-sided 95 % interval.
 Z95 = 1.959963984540054
+#: How far [fraction of the range, at least 0.1 rad or m] a logged joint position may be outside the model's limits.
+JOINT_LIMIT_MARGIN = 0.1
 
 
 @dataclass(frozen=True)
 class ParameterEstimate:
-    """One identified (or held) parameter.
+    """One identified parameter, or one held by its prior (the log does not determine it).
 
     Attributes:
         name, unit: e.g. "quadratic_damping[u]", "N s^2/m^2" (FLU axes, uvms's coefficients >= 0).
-        prior: the model's value; value: the identified one (the prior when held).
-        std_error: its standard error (None when held); interval: (low, high) +-1.96 standard errors (None).
-        identified: False when held at the prior; reason: why it was held ("" when identified).
-        relative_error: the standard error over the larger of the scale and the unconstrained estimate (what
-            identifiability compares with ``max_relative_error``).
+        prior: the model's value; value: the identified one (held: the fit with the prior as a soft constraint,
+            near the prior where the log holds no information).
+        std_error: its standard error (None for a direction without any information); interval: (low, high)
+            +-1.96 standard errors (None likewise). A held parameter's include its prior's uncertainty (one scale).
+        identified: False when held by its prior; reason: why it was held ("" when identified).
+        relative_error: the standard error over the larger of the scale and the estimate (what identifiability
+            compares with ``max_relative_error``; a held parameter's when it was held).
         scale: the parameter's scale (its prior's magnitude, at least a floor from the rigid-body mass:
             :func:`~uvms.dynamics.identification_model.parameter_layout`).
     """
@@ -163,7 +165,8 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
     log = _arm_in_model_order(robot, log)
     fit_stop = len(log.t) - int(round(holdout * len(log.t)))
     states = smoothed_states(log.segment(0, fit_stop), window, polyorder)
-    water = prior.current if current is None else np.asarray(current, dtype=float)
+    water = checked_current(prior.current if current is None else current,
+                            f"the prior's current ({prior.source})" if current is None else "the current")
     found = None
     if identify_current:
         search = parameter_layout(prior.links[link], np.eye(6), added_mass)
@@ -173,8 +176,8 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
     data = regression(plant, parameter_layout(prior.links[link], np.eye(6), added_mass), states)
     layout = parameter_layout(prior.links[link], rigid_vehicle_mass(plant, data.q[0]), added_mass)
     weights = _axis_weights(data, states.wrench, layout, noise_floor)
-    theta_s, std_s, relative, reasons = _identifiable_fit(data, layout, weights, max_relative_error, states.window,
-                                                          prior.links[link].added_mass)
+    theta_s, std_s, relative, reasons = identifiable_fit(data, layout, weights, max_relative_error, states.window,
+                                                         prior.links[link].added_mass)
     theta = theta_s * layout.scale
     try:
         identified = link_from_theta(layout, theta, prior.links[link])
@@ -209,7 +212,8 @@ def _arm_in_model_order(robot, log: IdentificationLog) -> IdentificationLog:
     """The log with its joint columns in the order of ``robot.arm_joint_names``.
 
     Raises:
-        IdentificationError: an arm joint of the model the log does not hold.
+        IdentificationError: an arm joint of the model the log does not hold, or a joint position outside the
+            model's limits by more than :data:`JOINT_LIMIT_MARGIN` of its range (at least 0.1 rad or m).
     """
     names = list(robot.arm_joint_names)
     missing = [name for name in names if name not in log.joint_names]
@@ -218,15 +222,25 @@ def _arm_in_model_order(robot, log: IdentificationLog) -> IdentificationLog:
                                   f"{', '.join(missing)} of {robot.name} (it holds: "
                                   f"{', '.join(log.joint_names) or 'none'}); the arm's motion is a known term")
     order = [log.joint_names.index(name) for name in names]
+    position = log.joint_position[:, order]
+    lower, upper = robot.arm_limits
+    margin = np.where(np.isfinite(upper - lower), np.maximum(JOINT_LIMIT_MARGIN * (upper - lower), 0.1), 0.0)
+    outside = (position < lower - margin) | (position > upper + margin)
+    if np.any(outside):
+        k, j = (int(index[0]) for index in np.nonzero(outside))
+        raise IdentificationError(f"{log.source}: joint {names[j]} is at {position[k, j]:.6g} in sample {k} "
+                                  f"(t = {log.t[k]:.6g} s), outside its limits [{lower[j]:.6g}, {upper[j]:.6g}] in "
+                                  f"{robot.name} (by more than {JOINT_LIMIT_MARGIN:.0%} of its range); the log is not "
+                                  "of this model, or its joint states are not in its units")
     velocity = None if log.joint_velocity is None else log.joint_velocity[:, order]
-    return IdentificationLog(log.t, log.position, log.quaternion, log.twist, log.wrench, tuple(names),
-                             log.joint_position[:, order], velocity, log.source)
+    return IdentificationLog(log.t, log.position, log.quaternion, log.twist, log.wrench, tuple(names), position,
+                             velocity, log.source)
 
 
 def _axis_weights(data: Regression, wrench: np.ndarray, layout: ParameterLayout, noise_floor: float) -> np.ndarray:
     """1 / sigma_a (6,): the RMS residual of an ordinary least-squares fit per axis, floored (module docstring)."""
     regressor = (data.regressor * layout.scale).reshape(-1, len(layout.scale))
-    solution = _normal_solve(regressor, data.target.ravel())[0]
+    solution = normal_solve(regressor.T @ regressor, regressor.T @ data.target.ravel())[0]
     residual = data.target - (regressor @ solution).reshape(data.target.shape)
     sigma = np.sqrt(np.mean(residual ** 2, axis=0))
     for group in (slice(0, 3), slice(3, 6)):
@@ -235,137 +249,17 @@ def _axis_weights(data: Regression, wrench: np.ndarray, layout: ParameterLayout,
     return 1.0 / sigma
 
 
-def _identifiable_fit(data: Regression, layout: ParameterLayout, weights: np.ndarray, threshold: float,
-                      window: int, prior_added: np.ndarray
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[int, str]]:
-    """Scaled theta, standard errors (scaled) and relative errors (p,), and {held parameter: reason} (module
-    docstring)."""
-    count = len(layout.scale)
-    a = data.regressor * layout.scale * weights[None, :, None]  # (K, 6, p) scaled, weighted
-    b = data.target * weights
-    noise_gram, noise_moment = acceleration_noise_terms(layout, weights, data)
-    noise_gram, noise_moment = len(b) * noise_gram, len(b) * noise_moment
-    prior = layout.prior / layout.scale
-    free = np.ones(count, dtype=bool)
-    reasons: dict[int, str] = {}
-    while True:
-        columns = a[:, :, free]
-        rhs = b - np.einsum("kap,p->ka", a[:, :, ~free], prior[~free])
-        correction = (noise_gram[np.ix_(free, free)],
-                      noise_moment[free] + noise_gram[np.ix_(free, ~free)] @ prior[~free])
-        solution, covariance, floor_covariance, root = _least_squares(columns, rhs, 2 * window, correction)
-        error, relative = np.full(count, np.nan), np.full(count, np.nan)
-        error[free] = np.sqrt(np.maximum(np.diag(covariance), np.diag(floor_covariance) * window))
-        # relative to the parameter's scale, or to its estimate when larger (a prior far too small holds nothing)
-        relative[free] = error[free] / np.maximum(1.0, np.abs(solution))
-        if not np.any(free) or np.nanmax(relative) <= threshold:
-            break
-        worst = int(np.nanargmax(relative))
-        reasons[worst] = ("the log does not excite it above the odometry noise (no information)"
-                          if not np.isfinite(relative[worst]) else
-                          f"relative standard error {relative[worst]:.3g} > {threshold:g}: too little excitation")
-        free[worst] = False
-    theta = prior.copy()
-    theta[free] = _constrained(root, layout, free, prior, solution, prior_added)
-    return theta, error, relative, reasons
-
-
-def _normal_solve(flat: np.ndarray, rhs: np.ndarray, correction: tuple[np.ndarray, np.ndarray] | None = None
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray]]:
-    """Least squares of flat (m, p) x = rhs (m,) through the normal equations (the columns are scaled, so
-    their conditioning is fine, and a (p, p) eigendecomposition is far cheaper than an SVD of the tall matrix),
-    the noise's expected share ``correction`` = (gram (p, p), moment (p,)) taken out (bias compensation).
-
-    Returns:
-        x (p,); the inverse of the corrected normal matrix (p, p); the undetermined parameters (p,) bool (the
-        largest component of each direction whose eigenvalue is below 1e-20 of the largest: no information, or
-        the noise's share larger than the signal's); a square root (r (p, p),
-        d (p,)) with x^T G x - 2 c^T x = |r x - d|^2 + const.
-    """
-    gram = flat.T @ flat
-    moment = flat.T @ rhs
-    if correction is not None:
-        gram = gram - correction[0]
-        moment = moment + correction[1]
-    values, vectors = np.linalg.eigh(0.5 * (gram + gram.T))
-    keep = values > 1e-20 * max(values[-1], 1e-300)
-    inverse = np.where(keep, 1.0 / np.where(keep, values, 1.0), 0.0)
-    solution = vectors @ (inverse * (vectors.T @ moment))
-    undetermined = np.zeros(len(values), dtype=bool)  # each direction without information: its main parameter
-    undetermined[np.argmax(np.abs(vectors[:, ~keep]), axis=0)] = True
-    root = np.sqrt(np.maximum(values, 0.0))
-    return (solution, (vectors * inverse) @ vectors.T, undetermined,
-            (root[:, None] * vectors.T, np.where(keep, np.sqrt(inverse), 0.0) * (vectors.T @ moment)))
-
-
-def _least_squares(a: np.ndarray, b: np.ndarray, bandwidth: int, correction: tuple[np.ndarray, np.ndarray]
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, tuple]:
-    """Least squares of (K, 6, p) a against (K, 6) b (:func:`_normal_solve`): the solution, its Newey-West
-    covariance, the inverse normal matrix (inf on the diagonal for the parameters the data leave
-    undetermined) and the square root of the objective."""
-    count = a.shape[2]
-    if count == 0:
-        return np.zeros(0), np.zeros((0, 0)), np.zeros((0, 0)), (np.zeros((0, 0)), np.zeros(0))
-    solution, bread, undetermined, root = _normal_solve(a.reshape(-1, count), b.ravel(), correction)
-    residual = b - np.einsum("kap,p->ka", a, solution)
-    scores = np.einsum("kap,ka->kp", a, residual)  # (K, p)
-    scores -= scores.mean(axis=0)  # the compensated noise share leaves a mean score
-    meat = scores.T @ scores
-    for lag in range(1, min(bandwidth, len(scores) - 1) + 1):
-        gamma = scores[lag:].T @ scores[:-lag]
-        meat += (1.0 - lag / (bandwidth + 1.0)) * (gamma + gamma.T)
-    covariance = bread @ meat @ bread
-    for matrix in (covariance, bread):
-        matrix[undetermined, undetermined] = np.inf
-    return solution, covariance, bread, root
-
-
-def _constrained(root: tuple[np.ndarray, np.ndarray], layout: ParameterLayout, free: np.ndarray, prior: np.ndarray,
-                 start: np.ndarray, prior_added: np.ndarray) -> np.ndarray:
-    """The free scaled parameters minimising |r x - d|^2 (root = (r, d), the least squares' square root) with
-    M_A PSD, damping >= 0, volume > 0 (cvxpy)."""
-    try:
-        import cvxpy as cp
-    except ImportError:
-        raise IdentificationError(INSTALL_HINT) from None
-    r, d = root
-    x = cp.Variable(int(np.sum(free)))
-    theta = [x[int(np.sum(free[:k]))] if free[k] else prior[k] for k in range(len(prior))]
-    kinds = layout.kinds
-    constraints = [theta[k] >= 0 for k in range(len(prior)) if free[k] and kinds[k].endswith("damping")]
-    constraints += [theta[k] >= 1e-9 for k in range(len(prior)) if free[k] and kinds[k] == "volume"]
-    entries = {pair: k for pair, k in zip(layout.pairs, layout.indices("added_mass"))}
-    if any(free[k] for k in entries.values()):
-        matrix = cp.Variable((6, 6), symmetric=True)
-        for i in range(6):
-            for j in range(i, 6):
-                k = entries.get((i, j))  # an entry not identified (a coupling of the diagonal form) keeps its prior
-                constraints.append(matrix[i, j] == (theta[k] * layout.scale[k] if k is not None
-                                                    else prior_added[i, j]))
-        constraints.append(matrix >> 0)
-    problem = cp.Problem(cp.Minimize(cp.sum_squares(r @ x - d)), constraints)
-    x.value = start
-    try:
-        problem.solve(solver=cp.CLARABEL)
-    except (cp.error.SolverError, ValueError) as exc:
-        if "CLARABEL" in str(exc) and "not installed" in str(exc):
-            raise IdentificationError(INSTALL_HINT) from None
-        raise IdentificationError(f"the constrained fit failed ({exc})") from None
-    if problem.status not in ("optimal", "optimal_inaccurate") or x.value is None:
-        raise IdentificationError(f"the constrained fit did not converge (solver status {problem.status})")
-    return np.asarray(x.value, dtype=float)
-
-
 def _estimate(layout: ParameterLayout, k: int, value: float, std_scaled: float, relative: float,
               reason: str) -> ParameterEstimate:
+    """The estimate of parameter k; one the log does not determine (``reason``) is not identified, its value and
+    interval those of the fit with its prior as a soft constraint."""
     scale = layout.scale[k]
-    if reason:
-        return ParameterEstimate(layout.names[k], layout.units[k], float(layout.prior[k]), float(layout.prior[k]),
-                                 None, None, False, reason, float(relative), float(scale))
     std = float(std_scaled * scale)
-    return ParameterEstimate(layout.names[k], layout.units[k], float(layout.prior[k]), float(value), std,
-                             (float(value - Z95 * std), float(value + Z95 * std)), True, "", float(relative),
-                             float(scale))
+    interval = (float(value - Z95 * std), float(value + Z95 * std)) if np.isfinite(std) else None
+    return ParameterEstimate(layout.names[k], layout.units[k], float(layout.prior[k]), float(value),
+                             std if np.isfinite(std) else None, interval, not reason,
+                             f"{reason}; held by its prior (+-{PRIOR_SCALES:g} scale)" if reason else "",
+                             float(relative), float(scale))
 
 
 def _current_estimates(found: CurrentEstimate) -> tuple[ParameterEstimate, ...]:

@@ -31,6 +31,24 @@ from .identification_model import ParameterLayout, Regression
 STRIDE = 4
 #: A current whose standard error is above this [m/s] is not determined by the log: held at its start.
 MAX_CURRENT_ERROR = 0.05
+#: The fastest current [m/s] given or identified (the strongest tidal streams run at about 5 m/s).
+MAX_CURRENT_SPEED = 10.0
+
+
+def checked_current(current: object, what: str) -> np.ndarray:
+    """``current`` as (3,) [m/s] world ENU, finite, at most :data:`MAX_CURRENT_SPEED`.
+
+    Raises:
+        IdentificationError: not three finite numbers, or faster than MAX_CURRENT_SPEED.
+    """
+    try:
+        value = np.array(current, dtype=float).reshape(3)
+    except (TypeError, ValueError):
+        raise IdentificationError(f"{what} must be three numbers [m/s] (world ENU), got {current!r}") from None
+    if not (np.all(np.isfinite(value)) and np.linalg.norm(value) <= MAX_CURRENT_SPEED):
+        raise IdentificationError(f"{what} must be finite and at most {MAX_CURRENT_SPEED:g} m/s (world ENU), got "
+                                  f"{np.array2string(value, precision=4)}")
+    return value
 
 
 @dataclass(frozen=True)
@@ -88,7 +106,8 @@ def estimate_current(regression_of: Callable[[np.ndarray, SmoothedStates], Regre
         raise IdentificationError(f"the search for the current failed ({exc})") from None
     # neighbours within a smoothing window are correlated: about one independent sample per window, not per stride
     error = _standard_error(system, found.x, len(layout.scale)) * np.sqrt(max(states.window / STRIDE, 1.0))
-    if not np.all(np.isfinite(error)) or np.max(error) > MAX_CURRENT_ERROR:
+    if not np.all(np.isfinite(error)) or np.max(error) > MAX_CURRENT_ERROR or \
+            not np.linalg.norm(found.x) <= MAX_CURRENT_SPEED:
         shown = "undetermined" if not np.all(np.isfinite(error)) else f"{np.max(error):.3g} m/s"
         return CurrentEstimate(np.asarray(start, dtype=float), None, np.asarray(start, dtype=float),
                                f"the log does not determine it (standard error {shown} > {MAX_CURRENT_ERROR:g} m/s; "

@@ -22,6 +22,7 @@ end of the log is dropped (the filter's edge fits are less accurate).
 
 from __future__ import annotations
 
+import array
 import csv
 import io
 import os
@@ -31,6 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import IdentificationError
+from ..model.resources import read_text
 
 #: The CSV's fixed columns, in this order: time [s], position [m] (ENU), quaternion x, y, z, w (body -> world),
 #: body twist [m/s, rad/s] (FLU), body wrench [N, N m] (FLU, at the root link's origin). Then ``position:<joint>``
@@ -41,6 +43,16 @@ CSV_COLUMNS = ("t", "x", "y", "z", "qx", "qy", "qz", "qw", "vx", "vy", "vz", "wx
 MIN_SAMPLES = 50
 #: The largest gap between samples, in median steps, that is bridged by interpolation.
 MAX_GAP_STEPS = 5.0
+#: The most samples a log may hold (an hour at 50 Hz; the regression holds about 1.3 kB per sample), and the
+#: largest CSV log read [bytes] (an hour at 50 Hz of 30 columns of 18 characters).
+MAX_LOG_SAMPLES = 200_000
+MAX_LOG_BYTES = 128 << 20
+#: The largest magnitudes a log's values may have: beyond them a log is not of an underwater vehicle (or not in SI
+#: units), and the fit's products overflow. Time [s] (Unix stamps stay below), position [m] (UTM coordinates stay below), linear velocity [m/s],
+#: angular velocity [rad/s], force [N], moment [N m], joint position [rad or m] (about 160 turns of a continuous
+#: joint), joint velocity [rad/s or m/s].
+MAX_MAGNITUDES = {"time": 1e10, "position": 1e8, "linear velocity": 100.0, "angular velocity": 100.0, "force": 1e7,
+                  "moment": 1e7, "joint position": 1e3, "joint velocity": 100.0}
 
 
 @dataclass(frozen=True)
@@ -56,8 +68,9 @@ class IdentificationLog:
         source: where the log was read (for messages).
 
     Raises:
-        IdentificationError: wrong shapes, non-finite entries (the first such sample is named), times not
-            strictly increasing, fewer than :data:`MIN_SAMPLES` samples, a zero quaternion.
+        IdentificationError: wrong shapes, non-finite entries (the first such sample is named), values beyond
+            :data:`MAX_MAGNITUDES`, times not strictly increasing, fewer than :data:`MIN_SAMPLES` or more than
+            :data:`MAX_LOG_SAMPLES` samples, a zero quaternion.
     """
 
     t: np.ndarray
@@ -76,6 +89,9 @@ class IdentificationLog:
         if count < MIN_SAMPLES:
             raise IdentificationError(f"{self.source}: the log holds {count} samples; identification needs at least "
                                       f"{MIN_SAMPLES} (a log of tens of seconds at 10-50 Hz)")
+        if count > MAX_LOG_SAMPLES:
+            raise IdentificationError(f"{self.source}: the log holds {count:,} samples; identification reads at most "
+                                      f"{MAX_LOG_SAMPLES:,} (cut the log to its excitation)")
         steps = np.diff(t)
         if np.any(steps <= 0):
             k = int(np.flatnonzero(steps <= 0)[0]) + 1
@@ -97,6 +113,7 @@ class IdentificationLog:
             raise IdentificationError(f"{self.source}: the orientation quaternion of sample {k} (t = {t[k]:.6g} s) "
                                       "is zero; a pose needs a unit quaternion x, y, z, w")
         values["quaternion"] = values["quaternion"] / norms[:, None]
+        _check_magnitudes(values, self.source)
         for name, value in values.items():
             object.__setattr__(self, name, value)
         object.__setattr__(self, "joint_names", names)
@@ -112,6 +129,23 @@ class IdentificationLog:
         velocity = None if self.joint_velocity is None else self.joint_velocity[pick]
         return IdentificationLog(self.t[pick], self.position[pick], self.quaternion[pick], self.twist[pick],
                                  self.wrench[pick], self.joint_names, self.joint_position[pick], velocity, self.source)
+
+
+def _check_magnitudes(values: dict[str, np.ndarray], source: str) -> None:
+    """Refuse a value beyond :data:`MAX_MAGNITUDES` (naming the first such sample and the bound)."""
+    parts = {"time": values["t"][:, None], "position": values["position"], "linear velocity": values["twist"][:, :3],
+             "angular velocity": values["twist"][:, 3:], "force": values["wrench"][:, :3],
+             "moment": values["wrench"][:, 3:], "joint position": values["joint_position"],
+             "joint velocity": values["joint_velocity"]}
+    for what, part in parts.items():
+        if part is None or not part.size:
+            continue
+        over = np.abs(part) > MAX_MAGNITUDES[what]
+        if np.any(over):
+            k = int(np.flatnonzero(over.any(axis=1))[0])
+            raise IdentificationError(f"{source}: the {what} of sample {k} (t = {values['t'][k]:.6g} s) is "
+                                      f"{part[k][over[k]][0]:.6g}; a log's {what} must be within +-"
+                                      f"{MAX_MAGNITUDES[what]:g} (SI units)")
 
 
 def _series(value: object, what: str, shape: tuple[int, int] | None, source: str,
@@ -138,30 +172,41 @@ def read_log_csv(path: str | os.PathLike) -> IdentificationLog:
     """A log from a CSV file: a header row with :data:`CSV_COLUMNS` and ``position:<joint>`` (optionally
     ``velocity:<joint>``) per arm joint, then one row of numbers per sample.
 
+    The file is read by :func:`uvms.model.resources.read_text`: a regular file of at most :data:`MAX_LOG_BYTES`,
+    at most :data:`MAX_LOG_SAMPLES` rows.
+
     Raises:
-        IdentificationError: the file cannot be read, a column is missing, a cell is not a number, a row
-            is short or long, non-finite values (via :class:`IdentificationLog`).
+        IdentificationError: the file cannot be read (not a regular file, too large), a column is missing, a cell
+            is not a number, a row is short or long, too many rows, non-finite values (via :class:`IdentificationLog`).
     """
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise IdentificationError(f"cannot read the log {str(path)!r}: {getattr(exc, 'strerror', None) or exc}") \
-            from None
-    rows = list(csv.reader(io.StringIO(text)))
-    if not rows:
+    rows = csv.reader(io.StringIO(read_text(path, "CSV log", MAX_LOG_BYTES, IdentificationError)))
+    header = [name.strip() for name in next(rows, [])]
+    if not header:
         raise IdentificationError(f"{path}: the CSV is empty; expected a header with {', '.join(CSV_COLUMNS)}")
-    header = [name.strip() for name in rows[0]]
     missing = [name for name in CSV_COLUMNS if name not in header]
     if missing:
         raise IdentificationError(f"{path}: the CSV has no column(s) {', '.join(missing)}; expected "
                                   f"{', '.join(CSV_COLUMNS)} and position:<joint> per arm joint")
+    cells = array.array("d")  # 8 bytes a cell, whatever the text
+    count = 0
     try:
-        table = np.array([[float(cell) for cell in row] for row in rows[1:] if row], dtype=float)
+        for row in rows:
+            if not row:
+                continue
+            if len(row) != len(header):
+                raise IdentificationError(f"{path}: every row must have {len(header)} cells like the header; row "
+                                          f"{count + 2} has {len(row)}")
+            count += 1
+            if count > MAX_LOG_SAMPLES:
+                raise IdentificationError(f"{path}: the CSV holds more than {MAX_LOG_SAMPLES:,} rows; identification "
+                                          "reads at most that many (cut the log to its excitation)")
+            cells.extend(float(cell) for cell in row)
     except ValueError as exc:
         raise IdentificationError(f"{path}: a cell is not a number ({exc})") from None
-    if table.ndim != 2 or table.shape[1:] != (len(header),):
-        raise IdentificationError(f"{path}: every row must have {len(header)} cells like the header")
+    except csv.Error as exc:
+        raise IdentificationError(f"{path}: not a CSV file ({exc})") from None
+    table = np.frombuffer(cells, dtype=float).reshape(count, len(header))
     column = {name: index for index, name in enumerate(header)}
     joints = [name.split(":", 1)[1] for name in header if name.startswith("position:")]
     velocities = [f"velocity:{joint}" for joint in joints]
@@ -254,16 +299,19 @@ class SmoothedStates:
     dt: float
 
 
-def window_samples(window: float, dt: float, polyorder: int) -> int:
+def window_samples(window: float, dt: float, polyorder: int, duration: float | None = None) -> int:
     """The Savitzky-Golay window [samples, odd, > polyorder] of ``window`` seconds at the step dt [s].
 
     Raises:
-        IdentificationError: a window shorter than polyorder + 2 samples, or a polyorder outside 1..6.
+        IdentificationError: a window shorter than polyorder + 2 samples or longer than ``duration`` [s] (the
+            log's), or a polyorder outside 1..6.
     """
     if not (isinstance(polyorder, (int, np.integer)) and 1 <= polyorder <= 6):
         raise IdentificationError(f"polyorder must be an integer in 1..6 (3: cubic), got {polyorder!r}")
-    if not (np.isfinite(window) and window > 0):
-        raise IdentificationError(f"the smoothing window must be > 0 s, got {window!r}")
+    longest = np.inf if duration is None else duration
+    if not (isinstance(window, (int, float, np.number)) and np.isfinite(window) and 0 < window <= longest):
+        within = "> 0 s" if duration is None else f"in (0, {duration:.6g}] s (the log's duration)"
+        raise IdentificationError(f"the smoothing window must be {within}, got {window!r}")
     samples = int(round(window / dt)) | 1
     if samples < polyorder + 2:
         raise IdentificationError(f"the smoothing window {window:g} s holds {samples} samples at dt = {dt:.3g} s; "
@@ -284,7 +332,7 @@ def smoothed_states(log: IdentificationLog, window: float = 0.3, polyorder: int 
 
     log = uniform_log(log)
     dt = float(np.median(np.diff(log.t)))
-    samples = window_samples(window, dt, polyorder)
+    samples = window_samples(window, dt, polyorder, log.duration)
     half = samples // 2
     if len(log.t) - 2 * half < MIN_SAMPLES:
         raise IdentificationError(f"{log.source}: {len(log.t)} samples leave fewer than {MIN_SAMPLES} once the "

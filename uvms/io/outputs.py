@@ -203,11 +203,6 @@ def _check_replaceable(final: Path, shown: str, inputs: Sequence[str | os.PathLi
     Returns:
         Whether ``final`` exists and is not empty (a previous run is there).
     """
-    for given in inputs:  # the input run must survive the run: checked first, for the clearest message
-        real = Path(os.path.realpath(os.path.abspath(given)))
-        if real == final or final in real.parents:
-            raise RunFolderError(f"{shown!r} holds {os.fspath(given)!r}, an input of this run, and a run replaces "
-                                 f"its output folder whole; choose another --out")
     if not final.is_dir():
         return False
     entries, inodes = _entries(final)
@@ -339,6 +334,11 @@ def run_folder(path: str | os.PathLike, *, lock: bool = True, inputs: Iterable[s
     parent, name = final.parent, final.name
     if not name or final == parent:
         raise RunFolderError(f"{shown!r} cannot be an output folder (a file system root); choose a folder below it")
+    for given in inputs:  # the input must survive the run; checked before the lock, so a refusal leaves no lock
+        real = Path(os.path.realpath(os.path.abspath(given)))
+        if real == final or final in real.parents:
+            raise RunFolderError(f"{shown!r} holds {os.fspath(given)!r}, an input of this run, and a run replaces "
+                                 f"its output folder whole; choose another --out")
     release = None
     try:
         if lock:

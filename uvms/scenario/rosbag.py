@@ -165,6 +165,24 @@ def topic_token(name: str) -> str:
     return f"frame_{token}" if token[0].isdigit() else token
 
 
+def thruster_tokens(names: Sequence[str]) -> list[str]:
+    """The thrusters' names as topic tokens (``/thrusters/<token>/thrust``), one topic each.
+
+    Raises:
+        BagExportError: two names that give the same token (``thruster_1`` and ``thruster.1``), whose thrusts would
+            share one topic.
+    """
+    tokens = [topic_token(name) for name in names]
+    owner: dict[str, str] = {}
+    for name, token in zip(names, tokens):
+        if token in owner:
+            raise BagExportError(f"thrusters {owner[token]!r} and {name!r} both become the topic token {token!r} "
+                                 "(a topic name holds letters, digits and underscores); rename one of them in the "
+                                 "model so that each thruster has its own topic")
+        owner[token] = name
+    return tokens
+
+
 # ------------------------------------------------------------------ the messages
 class Messages:
     """Builds the ROS 2 messages of a bag from Pinocchio quantities (one ``rosbags`` typestore)."""
@@ -304,7 +322,7 @@ def _thrust_series(result: SimulationResult, names: Sequence[str]) -> tuple | No
     """(names, thrusts (N, n) [N], body wrench (N, 6)) of an actuated run, or None.
 
     Raises:
-        BagExportError: names given that do not match the run's thrust columns.
+        BagExportError: names given that do not match the run's thrust columns, or two that share a topic.
     """
     actuation = result.actuation
     if not names or actuation is None:
@@ -312,7 +330,7 @@ def _thrust_series(result: SimulationResult, names: Sequence[str]) -> tuple | No
     thrusts = np.asarray(actuation.thrusts)
     if thrusts.shape != (len(result.t), len(names)):
         raise BagExportError(f"{len(names)} thruster names for thrusts of shape {thrusts.shape}")
-    return [topic_token(name) for name in names], thrusts, np.asarray(actuation.body_wrench)
+    return thruster_tokens(names), thrusts, np.asarray(actuation.body_wrench)
 
 
 def _write(api: dict[str, Any], staging: Path, robot: Robot, result: SimulationResult, stamps: np.ndarray,

@@ -23,7 +23,7 @@ import numpy as np
 from ..dynamics.thrusters import allocation_matrix, thrusters_of
 from ..errors import IdentificationError, UVMSError
 from ..robot.robot import Robot
-from .rosbag import topic_token
+from .rosbag import thruster_tokens
 
 #: The default topic of each thruster: ``{name}`` is the thruster's name as a topic token (as ``uvms run --bag``).
 THRUST_TOPIC = "/thrusters/{name}/thrust"
@@ -71,7 +71,8 @@ def thrust_input(robot: Robot, pattern: str = THRUST_TOPIC, *, commands: bool = 
     """The thrusters of ``robot`` and their topics, ``pattern`` with ``{name}`` replaced by each thruster's name.
 
     Raises:
-        IdentificationError: a pattern without ``{name}``, or a model without usable thrusters.
+        IdentificationError: a pattern without ``{name}``, a model without usable thrusters, or two thrusters whose
+            names give the same topic (:func:`uvms.scenario.rosbag.thruster_tokens`).
     """
     if "{name}" not in pattern or pattern.count("{") != 1 or pattern.count("}") != 1:
         raise IdentificationError(f"the thrust topic pattern must hold {{name}} once (e.g. {THRUST_TOPIC!r}), "
@@ -79,9 +80,9 @@ def thrust_input(robot: Robot, pattern: str = THRUST_TOPIC, *, commands: bool = 
     try:
         thrusters = thrusters_of(robot)
         matrix = allocation_matrix(robot, thrusters)
+        tokens = thruster_tokens(thrusters.names)
     except UVMSError as exc:
         raise IdentificationError(f"a log of thrusts needs the model's thrusters: {' '.join(str(exc).split())}") \
             from None
-    names = tuple(thrusters.names)
-    return ThrustInput(names, tuple(pattern.replace("{name}", topic_token(name)) for name in names), matrix,
+    return ThrustInput(tuple(thrusters.names), tuple(pattern.replace("{name}", token) for token in tokens), matrix,
                        thrusters.time_constants, thrusters.lower, thrusters.upper, commands)
