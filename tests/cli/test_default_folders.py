@@ -66,3 +66,22 @@ def test_plain_robot_names_keep_their_folder(name):
 
     assert str(default_output_folder("workspace", uvms.load(FIXED_ARM.replace('"arm"', f'"{name}"')).name)) == \
         f"out/workspace_{name}"
+
+
+def test_identify_refuses_a_folder_before_it_fits(tmp_path, monkeypatch, capsys):
+    """An output folder that holds the log is refused before the (seconds-long) identification runs, and leaves no
+    lock: the fit is never called."""
+    import uvms.cli.identify as command
+    from uvms.dynamics import hydrodynamics, identification
+
+    def never(*args, **kwargs):
+        raise AssertionError("the identification ran before the output folder was checked")
+
+    run = tmp_path / "run"
+    (run / "bag").mkdir(parents=True)
+    monkeypatch.setattr(command, "read_log", lambda options, robot: None)
+    monkeypatch.setattr(hydrodynamics, "hydrodynamics_of", lambda robot, prior: None)
+    monkeypatch.setattr(identification, "identify", never)
+    assert main(["identify", str(run / "bag"), "--model", "bluerov2_alpha5", "--out", str(run)]) == 2
+    assert "uvms: error: " in one_line(capsys)
+    assert sorted(path.name for path in run.iterdir()) == ["bag"]

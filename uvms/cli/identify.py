@@ -91,19 +91,19 @@ def command_identify(options: argparse.Namespace) -> int:
     from ..viz.identification import identification_figures
 
     robot = load(options.model, args=parse_assignments(options.arg), package_path=options.package_path)
-    log = read_log(options, robot)
-    prior = hydrodynamics_of(robot, options.prior)
-    result = identify(robot, log, hydro=prior, added_mass=options.added_mass, current=options.current,
-                      identify_current=options.identify_current,
-                      window=options.window, polyorder=options.polyorder, holdout=options.holdout,
-                      max_relative_error=options.max_relative_error)
-    out = Path(options.out or default_output_folder("identify", robot.name))
+    out = Path(options.out or default_output_folder("identify", robot.name))  # a bad folder is said before the fit
     model_files = WatchedFiles.of(model=options.model)
     inputs = [options.log, *model_files.files, *([options.prior] if options.prior else [])]
+    log = read_log(options, robot)
+    prior = hydrodynamics_of(robot, options.prior)
     replacing = outputs.holds_run(out)
-    comments = [f"identified by uvms identify from {log.source} (model {robot.source})",
-                f"link {result.link}; identification.json beside this file gives the intervals and what was held"]
-    with outputs.run_folder(out, inputs=inputs) as folder:
+    with outputs.run_folder(out, inputs=inputs) as folder:  # refused (an input inside, a busy folder) before the fit
+        result = identify(robot, log, hydro=prior, added_mass=options.added_mass, current=options.current,
+                          identify_current=options.identify_current,
+                          window=options.window, polyorder=options.polyorder, holdout=options.holdout,
+                          max_relative_error=options.max_relative_error)
+        comments = [f"identified by uvms identify from {log.source} (model {robot.source})",
+                    f"link {result.link}; identification.json beside this file gives the intervals and what was held"]
         outputs.write_text(folder / "hydrodynamics.yaml", hydrodynamics_yaml_text(result.hydro, comments))
         outputs.write_json(folder / "identification.json", result.as_dict())
         identification_figures(result, folder)
