@@ -8,6 +8,7 @@ import csv
 import json
 import math
 import os
+import shutil
 import signal
 import subprocess
 import time
@@ -16,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from conftest import SCENARIOS, uvms_command, wait_for
-from uvms.errors import StudyError, UVMSError
+from uvms.errors import StudyError, StudyResumeWarning, UVMSError
 from uvms.scenario import ScenarioError
 from uvms.scenario import study as study_module
 from uvms.scenario.study import study
@@ -212,3 +213,41 @@ def test_bad_samples_keys_and_options_fail_before_any_trial(tmp_path):
         with pytest.raises(error, match=words):
             study(SCENARIO, n=options.pop("n", 3), out=out, progress=False, **options)
         assert not out.exists()
+
+
+def test_resume_refuses_a_planted_link_and_runs_edited_rows_again(tmp_path):
+    folder, trials = tmp_path / "s", tmp_path / "s" / "trials"
+    options = dict(n=5, seed=SEED, out=folder, progress=False, overrides=["trajectory.duration=2",
+                                                                            "trajectory.accel_time=0.5"])
+    first = study(SCENARIO, SAMPLES, **options)
+    user = tmp_path / "user" / "important_run"  # a run folder of the user's (here a copy of a trial's)
+    shutil.copytree(trials / "trial_00002", user)
+    (user / "metrics.json").write_text((user / "metrics.json").read_text().replace("{", '{"mine": 1,', 1))
+    shutil.rmtree(trials / "trial_00002")
+    (trials / "trial_00002.json").unlink()
+    (trials / "trial_00002").symlink_to(Path("..", "..", "user", "important_run"))
+    with pytest.raises(StudyError, match=r"trial_00002' in the study folder .* is a symbolic link, which uvms never"):
+        study(SCENARIO, SAMPLES, **options)
+    assert json.loads((user / "metrics.json").read_text())["mine"] == 1  # not replaced
+    (trials / "trial_00002").unlink()
+
+    def edit(index: int, change) -> None:
+        path = trials / f"trial_{index:05d}.json"
+        row = json.loads(path.read_text())
+        change(row)
+        path.write_text(json.dumps(row))
+
+    edit(0, lambda row: row.update(max_position_error=123.0))  # 123 m, by hand
+    edit(1, lambda row: row.update(trial=0))  # a second trial 0
+    edit(3, lambda row: row.pop("pass"))
+    edit(4, lambda row: row.update(wall_time="x"))
+    with pytest.warns(StudyResumeWarning) as caught:
+        result = study(SCENARIO, SAMPLES, **options)
+    message = str(caught[0].message)
+    assert message.startswith("4 row(s) in ") and "are not the trials they claim and are run again" in message
+    for words in ("trial 0: its metrics or verdict differ from those of trial_00000/metrics.json",
+                  "trial 1: it claims trial 0", "trial 3: no boolean pass", "trial 4: a metric or wall_time"):
+        assert words in message
+    assert result.resumed == 0 and [row["trial"] for row in result.rows] == list(range(5))
+    assert same_table(result, first)  # as if never touched: 3.7e-10 m errors, the same pass rate
+    assert result.summary["pass_rate"]["passed"] == first.summary["pass_rate"]["passed"]
