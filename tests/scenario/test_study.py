@@ -217,8 +217,8 @@ def test_bad_samples_keys_and_options_fail_before_any_trial(tmp_path):
 
 def test_resume_refuses_a_planted_link_and_runs_edited_rows_again(tmp_path):
     folder, trials = tmp_path / "s", tmp_path / "s" / "trials"
-    options = dict(n=5, seed=SEED, out=folder, progress=False, overrides=["trajectory.duration=2",
-                                                                            "trajectory.accel_time=0.5"])
+    options = {"n": 5, "seed": SEED, "out": folder, "progress": False,
+               "overrides": ["trajectory.duration=2", "trajectory.accel_time=0.5"]}
     first = study(SCENARIO, SAMPLES, **options)
     user = tmp_path / "user" / "important_run"  # a run folder of the user's (here a copy of a trial's)
     shutil.copytree(trials / "trial_00002", user)

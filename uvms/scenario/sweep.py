@@ -253,6 +253,8 @@ def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:
     """Each metric against the first grid key, one line per combination of the other keys (NaN: failed)."""
     from matplotlib.figure import Figure
 
+    from ..viz.labels import plain_text
+
     first, others = result.keys[0], result.keys[1:]
     xs = [row[first] for row in result.rows]
     numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in xs)
@@ -265,17 +267,19 @@ def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:
     for axis, metric in zip(axes, METRICS):
         for group, rows in groups.items():
             x = [row[first] if numeric else categories.index(row[first]) for row in rows]
-            label = ", ".join(f"{key.split('.')[-1]}={value}" for key, value in zip(others, group)) or None
+            label = ", ".join(plain_text(f"{key.split('.')[-1]}={value}")
+                              for key, value in zip(others, group)) or None
             axis.plot(x, [row[metric] for row in rows], "o-", label=label)
         axis.set_ylabel(metric.replace("_", " "), fontsize=8)
         axis.grid(True, alpha=0.3)
     if others:
         axes[0].legend(fontsize=7)
     if not numeric:
-        axes[-1].set_xticks(range(len(categories)), [str(c) for c in categories])
-    axes[-1].set_xlabel(first)
+        axes[-1].set_xticks(range(len(categories)), [plain_text(c) for c in categories])
+    axes[-1].set_xlabel(plain_text(first))
     failed = len(result.failed)
-    figure.suptitle(f"{title}: sweep of {len(result.rows)} points" + (f" ({failed} failed)" if failed else ""))
+    figure.suptitle(f"{plain_text(title)}: sweep of {len(result.rows)} points"
+                    + (f" ({failed} failed)" if failed else ""))
     figure.tight_layout()
     outputs.save_figure(figure, path)
 

@@ -1,5 +1,6 @@
 """Labels of figures that follow the model and the run: joint units from the joint's type, the vehicle's body
-velocities by their FLU axis, solver methods by their full name, titles wrapped to the figure's width."""
+velocities by their FLU axis, solver methods by their full name, titles wrapped to the figure's width, text from a
+file drawn as plain text."""
 
 from __future__ import annotations
 
@@ -44,3 +45,10 @@ def figure_title(text: str, width: float) -> str:
     line breaks are kept."""
     columns = int(width * TITLE_CHARACTERS_PER_INCH)
     return "\n".join(textwrap.fill(line, width=columns, break_on_hyphens=False) for line in text.split("\n"))
+
+
+def plain_text(text: object) -> str:
+    """``text`` (a scenario's name, a sampled string, a key...) as matplotlib draws it literally: every ``$``
+    escaped, so that a stranger's string is never parsed as mathtext (``"$\\undefinedcmd{$"`` would make the
+    whole figure fail)."""
+    return str(text).replace("$", r"\$")
