@@ -9,7 +9,8 @@ from the rows at the end.
 
 Resume: ``DIR/study.json`` holds the study's spec (scenario and model files by content hash, samples, n, seed,
 method, overrides). Running the same spec into ``DIR`` again skips the trials whose row is there and runs the
-rest; a different spec is refused (a study folder never mixes two studies). A trial that raises is a row with
+rest; a different spec is refused (a study folder never mixes two studies). Each row found is checked against
+the trial it claims and a symbolic link in the folder is refused (:mod:`uvms.scenario.study_folder`). A trial that raises is a row with
 its error text; a trial whose worker dies is run again alone, and if it kills that worker too it is a row
 "killed". The table does not depend on the backend, the number of jobs or the interruptions.
 """
