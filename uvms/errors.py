@@ -234,4 +234,10 @@ class GeometryWarning(UVMSWarning):
 
 
 class InsecureSchedulerWarning(UVMSWarning):
-    """A Dask scheduler is reached without TLS: anyone who can reach it can run code on its workers."""
+    """A Dask scheduler is reached without TLS (``insecure_scheduler=True``): anyone who can reach it can run code on
+    its workers and, through the pickled results, in the uvms process."""
+
+
+class StudyResumeWarning(UVMSWarning):
+    """A resumed study found rows that are not the trials they claim (edited, truncated, of another trial): those
+    trials run again."""

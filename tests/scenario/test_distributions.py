@@ -88,3 +88,14 @@ def test_each_key_once():
         parse_samples(["plant.current=uniform(0, 1)", "plant.current[0]=uniform(0, 1)"])
     with pytest.raises(StudyError, match="at least one"):
         parse_samples([])
+
+
+def test_a_truncation_that_collapses_the_normal_is_refused():
+    with pytest.raises(StudyError, match=r"solver.damping=normal\(0.5, 1e50\): the truncation to \[0, 1e\+06\] "
+                                         r"collapses this normal: the interval keeps 0 of its mass, and its samples "
+                                         r"would be 0.5 to 0.5 \(1 % to 99 %\).* sample uniform\(0, 1e\+06\)"):
+        parse_sample("solver.damping=normal(0.5, 1e50)")  # every trial 0.5, before
+    with pytest.raises(StudyError, match="collapses this normal"):
+        parse_sample("solver.damping=normal(0.5, 1e20)")  # quantiles outside the interval
+    wide = column("solver.damping=normal(0.5, 1e7)", n=2000)  # still a distribution: nearly flat on [0, 1e6]
+    assert wide.min() >= 0 and wide.max() <= 1e6 and abs(np.median(wide) - 5e5) < 5e4

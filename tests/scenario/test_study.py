@@ -3,17 +3,21 @@ killed trials, sensitivity, refused folders and bad input before any trial."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import math
 import os
+import shutil
 import signal
 import subprocess
+import time
+from pathlib import Path
 
 import pytest
 
 from conftest import SCENARIOS, uvms_command, wait_for
-from uvms.errors import StudyError, UVMSError
+from uvms.errors import StudyError, StudyResumeWarning, UVMSError
 from uvms.scenario import ScenarioError
 from uvms.scenario import study as study_module
 from uvms.scenario.study import study
@@ -92,20 +96,56 @@ def test_a_local_dask_cluster_gives_the_same_table(reference, tmp_path):
     assert same_table(result, reference)
 
 
-def test_resume_after_a_sigkill_of_the_study(reference, tmp_path):
+def descendants(pid: int) -> set[int]:
+    """The processes whose parent chain leads to ``pid`` (from /proc: psutil is not required)."""
+    parents = {}
+    for entry in Path("/proc").iterdir():
+        with contextlib.suppress(OSError, IndexError, ValueError):
+            parents[int(entry.name)] = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+    found, frontier = set(), {pid}
+    while frontier:
+        frontier = {child for child, parent in parents.items() if parent in frontier} - found
+        found |= frontier
+    return found
+
+
+def running(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie, which no one may reap in a container, does not)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] not in ("Z", "X")
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process tree from /proc")
+def test_resume_after_a_sigkill_of_the_study_whose_workers_stop_with_it(reference, tmp_path):
     folder = tmp_path / "s"
     command = uvms_command("study", str(SCENARIO), *[f"--sample={s}" for s in SAMPLES], "--samples", str(N),
                            "--seed", str(SEED), *[f"--set={s}" for s in SHORT], "--jobs", "2", "--out", str(folder),
                            "--quiet")
-    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             start_new_session=True)
+    errors = tmp_path / "stderr.txt"
+    with errors.open("w") as stderr:  # not a pipe: the old code's surviving workers held it open
+        child = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=stderr, start_new_session=True)
     try:
-        wait_for(lambda: len(trials_of(folder)) >= 3 if folder.is_dir() else False, process=child)
+        def some_rows() -> bool:
+            assert child.poll() is None, errors.read_text()
+            return folder.is_dir() and len(trials_of(folder)) >= 2
+
+        wait_for(some_rows)
+        workers = descendants(child.pid)  # 2 loky workers and resource trackers
+        os.kill(child.pid, signal.SIGKILL)  # the study alone, as `kill -9 PID` or the OOM killer would
+        child.wait()
+        done = trials_of(folder)
+        assert len(workers) >= 2 and 2 <= len(done) < N
+        started = time.monotonic()
+        wait_for(lambda: not any(running(pid) for pid in workers), timeout=5)
+        assert time.monotonic() - started < 2  # PARENT_POLL is 0.1 s
+        time.sleep(0.3)
+        assert trials_of(folder) == done  # none written without the study (and its lock)
     finally:
-        os.killpg(child.pid, signal.SIGKILL)  # the study and its workers, mid-study
-        child.communicate()
-    done = trials_of(folder)
-    assert 3 <= len(done) < N and not (folder / "study.csv").exists()
+        with contextlib.suppress(OSError):
+            os.killpg(child.pid, signal.SIGKILL)  # whatever outlived it (the old code's workers)
+    assert not (folder / "study.csv").exists()
     result = study(SCENARIO, SAMPLES, n=N, seed=SEED, out=folder, progress=False, overrides=SHORT)
     assert result.resumed >= len(done)  # those were not run again
     assert same_table(result, reference)  # none lost, none twice
@@ -173,3 +213,41 @@ def test_bad_samples_keys_and_options_fail_before_any_trial(tmp_path):
         with pytest.raises(error, match=words):
             study(SCENARIO, n=options.pop("n", 3), out=out, progress=False, **options)
         assert not out.exists()
+
+
+def test_resume_refuses_a_planted_link_and_runs_edited_rows_again(tmp_path):
+    folder, trials = tmp_path / "s", tmp_path / "s" / "trials"
+    options = {"n": 5, "seed": SEED, "out": folder, "progress": False,
+               "overrides": ["trajectory.duration=2", "trajectory.accel_time=0.5"]}
+    first = study(SCENARIO, SAMPLES, **options)
+    user = tmp_path / "user" / "important_run"  # a run folder of the user's (here a copy of a trial's)
+    shutil.copytree(trials / "trial_00002", user)
+    (user / "metrics.json").write_text((user / "metrics.json").read_text().replace("{", '{"mine": 1,', 1))
+    shutil.rmtree(trials / "trial_00002")
+    (trials / "trial_00002.json").unlink()
+    (trials / "trial_00002").symlink_to(Path("..", "..", "user", "important_run"))
+    with pytest.raises(StudyError, match=r"trial_00002' in the study folder .* is a symbolic link, which uvms never"):
+        study(SCENARIO, SAMPLES, **options)
+    assert json.loads((user / "metrics.json").read_text())["mine"] == 1  # not replaced
+    (trials / "trial_00002").unlink()
+
+    def edit(index: int, change) -> None:
+        path = trials / f"trial_{index:05d}.json"
+        row = json.loads(path.read_text())
+        change(row)
+        path.write_text(json.dumps(row))
+
+    edit(0, lambda row: row.update(max_position_error=123.0))  # 123 m, by hand
+    edit(1, lambda row: row.update(trial=0))  # a second trial 0
+    edit(3, lambda row: row.pop("pass"))
+    edit(4, lambda row: row.update(wall_time="x"))
+    with pytest.warns(StudyResumeWarning) as caught:
+        result = study(SCENARIO, SAMPLES, **options)
+    message = str(caught[0].message)
+    assert message.startswith("4 row(s) in ") and "are not the trials they claim and are run again" in message
+    for words in ("trial 0: its metrics or verdict differ from those of trial_00000/metrics.json",
+                  "trial 1: it claims trial 0", "trial 3: no boolean pass", "trial 4: a metric or wall_time"):
+        assert words in message
+    assert result.resumed == 0 and [row["trial"] for row in result.rows] == list(range(5))
+    assert same_table(result, first)  # as if never touched: 3.7e-10 m errors, the same pass rate
+    assert result.summary["pass_rate"]["passed"] == first.summary["pass_rate"]["passed"]

@@ -5,7 +5,8 @@ from __future__ import annotations
 import struct
 
 from uvms.scenario.sensitivity import summarize
-from uvms.viz.study import save_study_figures
+from uvms.viz.labels import plain_text
+from uvms.viz.study import save_study_figures, save_tune_history
 
 
 def png_size(path) -> tuple[int, int]:
@@ -33,3 +34,17 @@ def test_no_figure_when_every_trial_failed(tmp_path):
     table = [{"trial": 0, "a": 1.0, "pass": False, "error": "ModelCheckError: x"}]
     assert save_study_figures(table, ["a"], [], summarize(table, ["a"], []), tmp_path) == []
     assert not list(tmp_path.iterdir())
+
+
+def test_strings_from_a_scenario_are_drawn_as_plain_text(tmp_path):
+    text = "$\\undefinedcmd{$"  # mathtext would fail on it: the figures draw it as it is
+    table = [{"trial": k, "scenario.description": [text, "plain $5"][k % 2], "m1": float(k), "pass": k > 1,
+              "error": ""} for k in range(4)]
+    summary = summarize(table, ["scenario.description"], ["m1"])
+    paths = save_study_figures(table, ["scenario.description"], ["m1"], summary, tmp_path, title="a $b$ {c")
+    assert [p.name for p in paths] == ["study_histograms.png", "study_scatter.png", "study_sensitivity.png"]
+    assert all(png_size(path)[0] > 100 for path in paths)
+    rows = [{"trial": k, "model.args.l1": 0.1 * k, "value": float(k)} for k in range(3)]
+    save_tune_history(rows, ["model.args.l1"], "max_position_error", "minimize", tmp_path / "tune.png", title=text)
+    assert png_size(tmp_path / "tune.png") == (7 * 110, round((2 * 2.4 + 0.4) * 110))
+    assert plain_text(text) == "\\$\\undefinedcmd{\\$" and plain_text("no dollar") == "no dollar"

@@ -93,15 +93,17 @@ def add_package_path(parser: argparse.ArgumentParser) -> None:
 
 
 def add_parallel_options(parser: argparse.ArgumentParser) -> None:
-    """``--jobs``, ``--backend`` and ``--scheduler`` of ``uvms sweep`` and ``uvms study``."""
+    """``--jobs``, ``--backend``, ``--scheduler`` and ``--insecure-scheduler`` of ``uvms sweep``, ``study`` and ``tune``."""
     parser.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
     parser.add_argument("--backend", choices=["loky", "dask"], default="loky",
                         help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")
     parser.add_argument("--scheduler", metavar="ADDRESS",
                         help="Dask scheduler, e.g. tls://10.0.0.5:8786, with TLS credentials from Dask's config "
                              "distributed.comm.tls.* (env DASK_DISTRIBUTED__COMM__TLS__CA_FILE, ..._CLIENT__CERT, "
-                             "..._CLIENT__KEY); a tcp:// one works but anyone reaching it can run code on its workers "
-                             "(default: a local TLS cluster of --jobs workers, no dashboard)")
+                             "..._CLIENT__KEY) (default: a local TLS cluster of --jobs workers, no dashboard)")
+    parser.add_argument("--insecure-scheduler", action="store_true",
+                        help="accept a --scheduler that is not tls:// (tcp://): anyone who can reach it can run any "
+                             "code on its workers and, through the pickled results, in this uvms process")
 
 
 def add_study_parser(commands) -> None:

@@ -103,7 +103,7 @@ def command_sweep(options: argparse.Namespace) -> int:
     replacing = holds_run(run_output_folder(options, "_sweep"))
     result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,
                    scheduler=options.scheduler, out=options.out, progress=False if options.quiet else None,
-                   overrides=package_path_overrides(options))
+                   overrides=package_path_overrides(options), insecure_scheduler=options.insecure_scheduler)
     for line in result.text().splitlines():
         say(line, sys.stdout)
     folder = result.files[0].parent

@@ -17,7 +17,8 @@ def command_study(options: argparse.Namespace) -> int:
     result = study(options.scenario, options.sample or None, n=options.samples, seed=options.seed,
                    method=options.method, jobs=options.jobs, backend=options.backend, scheduler=options.scheduler,
                    out=options.out, progress=False if options.quiet else None,
-                   overrides=[*(options.set or ()), *package_path_overrides(options)])
+                   overrides=[*(options.set or ()), *package_path_overrides(options)],
+                   insecure_scheduler=options.insecure_scheduler)
     rate = result.summary["pass_rate"]
     folder = result.files[0].parent
     say(f"pass rate   {rate['passed']}/{rate['trials']} = {rate['rate']:.1%} (95 % Wilson interval "
@@ -50,7 +51,8 @@ def command_tune(options: argparse.Namespace) -> int:
                   seed=options.seed, samples=options.sample or (), study_n=options.samples,
                   study_seed=options.study_seed, jobs=options.jobs, backend=options.backend,
                   scheduler=options.scheduler, out=options.out,
-                  overrides=[*(options.set or ()), *package_path_overrides(options)])
+                  overrides=[*(options.set or ()), *package_path_overrides(options)],
+                  insecure_scheduler=options.insecure_scheduler)
     best = result.best
     failed = sum(1 for row in result.rows if row["error"])
     say(f"best        {best['objective']} = {best['value']:.6g} (trial {best['trial']} of {len(result.rows)}"

@@ -77,22 +77,22 @@ def atomic_path(path: str | os.PathLike, keep_suffix: bool = False) -> Iterator[
             os.unlink(temporary)
 
 
-def write_text(path: str | os.PathLike, text: str) -> None:
-    """Write text atomically."""
+def write_text(path: str | os.PathLike, text: str, before_replace: Callable[[], None] | None = None) -> None:
+    """Write text atomically; ``before_replace()`` runs just before it replaces ``path`` (a last check)."""
     with atomic_path(path) as temporary:
         temporary.write_text(text, encoding="utf-8")
+        before_replace and before_replace()
 
 
-def write_json(path: str | os.PathLike, data: dict) -> None:
-    """Write a JSON document atomically (sorted keys, 2-space indent)."""
-    write_text(path, json.dumps(data, indent=2, sort_keys=True) + "\n")
+def write_json(path: str | os.PathLike, data: dict, before_replace: Callable[[], None] | None = None) -> None:
+    """Write a JSON document atomically (sorted keys, 2-space indent; ``before_replace`` of :func:`write_text`)."""
+    write_text(path, json.dumps(data, indent=2, sort_keys=True) + "\n", before_replace)
 
 
 def write_npz(path: str | os.PathLike, **arrays: np.ndarray) -> None:
     """Write a compressed ``.npz`` atomically."""
-    with atomic_path(path) as temporary:
-        with open(temporary, "wb") as handle:
-            np.savez_compressed(handle, **arrays)
+    with atomic_path(path) as temporary, open(temporary, "wb") as handle:
+        np.savez_compressed(handle, **arrays)
 
 
 def save_figure(figure, path: str | os.PathLike, dpi: int = 110) -> None:

@@ -5,7 +5,7 @@ bounds; reading and ``--set`` overrides), ``build`` (model, task, initial config
 plant), ``runs`` (the one simulation of :mod:`uvms.sim.loop`, metrics, the files of the run folder),
 ``verdict`` (joint limits kept, task error within tolerance), ``record`` (the model a run folder records, read
 back by ``uvms view --result``), ``sweep`` (grids of overrides), ``study`` (Monte Carlo studies: ``distributions``,
-``sensitivity``), ``tune`` (Optuna over scenario keys), all run by ``parallel`` (joblib's loky or Dask).
+``sensitivity``, ``study_folder``), ``tune`` (Optuna over scenario keys), all run by ``parallel`` (joblib's loky or Dask).
 
 By default the motion is integrated kinematically. A ``[plant]`` section with ``type = "rigid"`` or
 ``"hydrodynamic"`` runs the free-floating dynamics of :mod:`uvms.dynamics.plant` instead, the joints driven by

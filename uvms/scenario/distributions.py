@@ -141,7 +141,11 @@ def parse_distribution(key: str, spec: str) -> Distribution:
         cut = (max(numbers[2], low), min(numbers[3], high)) if len(numbers) == 4 else (low, high)
         if not cut[0] < cut[1] or not cut[0] - 8 * sigma < mu < cut[1] + 8 * sigma:
             raise bad(f"the truncation [{cut[0]:g}, {cut[1]:g}] must be an interval within 8 sigma of mu ({allowed})")
-        return Distribution("normal", (mu, sigma), *cut)
+        distribution = Distribution("normal", (mu, sigma), *cut)
+        collapse = truncation_collapse(distribution)
+        if collapse:
+            raise bad(collapse)
+        return distribution
     a, b = numbers
     if not a < b:
         raise bad("a < b is required")
@@ -150,6 +154,28 @@ def parse_distribution(key: str, spec: str) -> Distribution:
     if a < low or (strict and a == low) or b > high:
         raise bad(allowed)
     return Distribution(kind, (a, b))
+
+
+def truncation_collapse(distribution: Distribution) -> str:
+    """Why sampling a truncated normal would not give its distribution ("" if it would).
+
+    With sigma far larger than the interval (``normal(0.5, 1e50)`` on [0, 1e6]), the interval keeps a vanishing
+    share of the mass and ``truncnorm``'s quantiles lose their precision: they collapse onto one value (every
+    trial alike) or fall outside the interval. Quantiles 1 %, 50 %, 99 % that are not increasing inside the
+    interval, 1 %-99 % apart by at least 1e-3 of min(sigma, interval), are that case.
+    """
+    from scipy import stats
+
+    (mu, sigma), low, high = distribution.parameters, distribution.low, distribution.high
+    if math.isinf(low) and math.isinf(high):
+        return ""
+    q01, q50, q99 = distribution.ppf(np.array([0.01, 0.5, 0.99]))
+    if low <= q01 < q50 < q99 <= high and q99 - q01 >= 1e-3 * min(sigma, high - low):
+        return ""
+    kept = float(stats.norm.cdf(high, mu, sigma) - stats.norm.cdf(low, mu, sigma))
+    return (f"the truncation to [{low:g}, {high:g}] collapses this normal: the interval keeps {kept:.2g} of its mass, "
+            f"and its samples would be {q01:g} to {q99:g} (1 % to 99 %), not a distribution over the interval; for "
+            f"a flat distribution there sample uniform({low:g}, {high:g}), else give a sigma of the interval's size")
 
 
 def parse_samples(texts: Sequence[str]) -> list[tuple[str, Distribution]]:

@@ -9,7 +9,8 @@ from the rows at the end.
 
 Resume: ``DIR/study.json`` holds the study's spec (scenario and model files by content hash, samples, n, seed,
 method, overrides). Running the same spec into ``DIR`` again skips the trials whose row is there and runs the
-rest; a different spec is refused (a study folder never mixes two studies). A trial that raises is a row with
+rest; a different spec is refused (a study folder never mixes two studies). Each row found is checked against
+the trial it claims and a symbolic link in the folder is refused (:mod:`uvms.scenario.study_folder`). A trial that raises is a row with
 its error text; a trial whose worker dies is run again alone, and if it kills that worker too it is a row
 "killed". The table does not depend on the backend, the number of jobs or the interruptions.
 """
@@ -19,11 +20,9 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
-import json
 import math
 import os
 import secrets
-import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,17 +31,22 @@ from typing import Any
 from ..errors import StudyError
 from ..io import outputs
 from .distributions import METHODS, Distribution, parse_samples, sample_table
-from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
+from .parallel import check_backend, exit_if_orphaned, run_tasks
+from .parallel import use_thread_lock_for_progress_bars as thread_lock
 from .resources import resolve_scenario_path
 from .schema import named_files, read_scenario, read_toml, scenario_from_raw
 from .sensitivity import summarize
+from .study_folder import (
+    METRICS,
+    TRIALS,
+    finished_rows,
+    killed_row,
+    open_study_folder,
+    started_by,
+    trial_name,
+)
 from .sweep import csv_cell, toml_literal
 
-#: the metrics of each trial (from ``metrics.json``; one absent from every trial is left out of the table)
-METRICS = ("max_position_error", "final_position_error", "rms_position_error", "max_orientation_error",
-           "max_vehicle_tilt", "max_joint_limit_violation")
-SPEC = "study.json"
-TRIALS = "trials"
 MAX_TRIALS = 100_000
 #: exceptions (by name) by which joblib reports a dead worker: loky's, concurrent.futures', Dask's
 DEAD_WORKER = ("TerminatedWorkerError", "BrokenProcessPool", "KilledWorker")
@@ -126,8 +130,8 @@ def run_trial(scenario: str, index: int, seed: int, values: list, assignments: l
     """Run one trial (in a worker) and write its row to ``folder/trial_k.json``; an exception is the row's error."""
     from .runs import run_scenario
 
-    use_thread_lock_for_progress_bars()
-    name = f"trial_{index:05d}"
+    thread_lock()
+    name = trial_name(index)
     outputs.write_text(Path(folder) / f"{name}.started", token)  # which trials a dead worker was running
     row: dict[str, Any] = {"trial": index, "seed": seed, "values": values, "error": "", "pass": False}
     try:
@@ -138,7 +142,8 @@ def run_trial(scenario: str, index: int, seed: int, values: list, assignments: l
     except Exception as exc:  # noqa: BLE001 - one failed trial must not stop the study; it is reported
         message = " ".join(str(exc).split())
         row["error"] = f"{type(exc).__name__}: {message}" if message else type(exc).__name__
-    outputs.write_json(Path(folder) / f"{name}.json", row)
+    # no row once the study's process is gone (its lock with it): checked last, just before the row appears
+    outputs.write_json(Path(folder) / f"{name}.json", row, before_replace=exit_if_orphaned)
     (Path(folder) / f"{name}.started").unlink(missing_ok=True)
     return row
 
@@ -156,6 +161,7 @@ def study(
     out: str | os.PathLike | None = None,
     progress: bool | None = None,
     overrides: Sequence[str] = (),
+    insecure_scheduler: bool = False,
 ) -> StudyResult:
     """Run a Monte Carlo study of a scenario; write ``study.csv``, ``summary.json`` and figures into ``out``.
 
@@ -169,6 +175,7 @@ def study(
         progress: progress bar (None: on a terminal only).
         overrides: ``SECTION.KEY=VALUE`` strings applied to every trial before its sampled values (after
             ``[study] set``).
+        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.sweep.sweep`).
 
     Raises:
         StudyError: bad samples, n, method, backend or jobs, or ``out`` holds another study or other files;
@@ -187,7 +194,7 @@ def study(
         raise StudyError(f"the seed of a study is an integer >= 0, got {seed!r}")
     if method not in METHODS:
         raise StudyError(f"study method {method!r} is not valid; valid: {', '.join(METHODS)}")
-    check_backend(backend, scheduler, jobs, StudyError)
+    check_backend(backend, scheduler, jobs, StudyError, insecure_scheduler)
     keys = [key for key, _ in samples]
     seeds, values = sample_table(samples, n, seed, method)
     trials = check_trials(scenario, keys, values, overrides)
@@ -199,69 +206,16 @@ def study(
     release = open_study_folder(folder, spec)
     try:
         rows, resumed = run_study(scenario, seeds, values, trials, folder / TRIALS, jobs=jobs, backend=backend,
-                                  scheduler=scheduler, progress=progress)
+                                  scheduler=scheduler, progress=progress, insecure_scheduler=insecure_scheduler)
         return finish(folder, keys, rows, resumed, spec, table["scenario"]["name"])
     finally:
         release()
 
 
-def open_study_folder(folder: Path, spec: dict) -> Any:
-    """Lock ``folder``, refuse it if it holds anything but this study, write the spec; return the lock's release.
-
-    Raises:
-        StudyError: ``folder`` is a file, holds another study (the differing fields named), or other files.
-    """
-    shown = os.fspath(folder)
-    final = Path(os.path.realpath(os.path.abspath(folder)))
-    final.parent.mkdir(parents=True, exist_ok=True)
-    release = outputs.hold_lock(final.parent / f".{final.name}{outputs.LOCK_SUFFIX}", shown)
-    try:
-        if os.path.lexists(final) and not final.is_dir():
-            raise StudyError(f"{shown!r} is a file, not a study folder; choose another --out")
-        stored = final / SPEC
-        if stored.is_file() and not stored.is_symlink():
-            try:
-                previous = json.loads(stored.read_text(encoding="utf-8"))
-            except (OSError, UnicodeDecodeError, ValueError):
-                previous = None
-            if previous != spec:
-                fields = sorted(k for k in {*spec, *(previous or {})} if (previous or {}).get(k) != spec.get(k))
-                raise StudyError(f"{shown!r} holds another study (it differs in {', '.join(fields)}); a study folder "
-                                 f"holds one study, resumed only with the same spec: choose another --out, or "
-                                 f"delete the folder to start over")
-        elif final.is_dir() and any(final.iterdir()):
-            raise StudyError(f"{shown!r} exists and is not a study folder (no {SPEC}); a study writes only into a "
-                             f"new or empty folder, or resumes its own")
-        else:
-            (final / TRIALS).mkdir(parents=True, exist_ok=True)
-            outputs.write_json(stored, spec)
-        (final / TRIALS).mkdir(exist_ok=True)
-        for stale in (final / TRIALS).glob(f".trial_*{outputs.TEMPORARY_MARK}*"):  # of a killed trial; ours (locked)
-            shutil.rmtree(stale, ignore_errors=True)
-    except BaseException:
-        release()
-        raise
-    return release
-
-
-def finished_rows(trials: Path, seeds: Sequence[int], values: Sequence[list]) -> dict[int, dict]:
-    """The rows found in ``trials`` whose seed and values are this study's (others are run again)."""
-    rows = {}
-    for index, (seed, sampled) in enumerate(zip(seeds, values)):
-        path = trials / f"trial_{index:05d}.json"
-        try:
-            row = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
-        except (OSError, UnicodeDecodeError, ValueError):
-            row = None
-        if isinstance(row, dict) and row.get("seed") == seed and row.get("values") == json.loads(json.dumps(sampled)):
-            rows[index] = row
-    return rows
-
-
 def run_study(scenario: Path, seeds: Sequence[int], values: Sequence[list], trials: Sequence[list[str]],
               folder: Path, **executor: Any) -> tuple[list[dict], int]:
     """Run the trials without a row in ``folder``; a dead worker's trials again, each alone; the rows by trial."""
-    rows = finished_rows(folder, seeds, values)
+    rows = finished_rows(folder, seeds, values, warn=True)
     resumed = len(rows)
     pending = [k for k in range(len(seeds)) if k not in rows]
     suspects: list[int] = []
@@ -273,7 +227,7 @@ def run_study(scenario: Path, seeds: Sequence[int], values: Sequence[list], tria
         try:  # a suspect alone, in a worker process: if it kills that one too, it killed the first
             for row in run_tasks(run_trial, tasks, error=StudyError, desc="study", in_workers=crashed, **executor):
                 rows[row["trial"]] = row
-        except Exception as exc:  # noqa: BLE001 - a dead worker; anything else is raised again
+        except Exception as exc:  # a dead worker; anything else is raised again
             if type(exc).__name__ not in DEAD_WORKER:
                 raise
             crashed = True
@@ -286,24 +240,6 @@ def run_study(scenario: Path, seeds: Sequence[int], values: Sequence[list], tria
             suspects = suspects[1:]
         pending = [k for k in pending if k not in rows and k not in suspects]
     return [rows[k] for k in range(len(seeds))], resumed
-
-
-def started_by(folder: Path, index: int, token: str) -> bool:
-    """Whether trial ``index`` was started by the batch ``token`` (its marker file)."""
-    marker = folder / f"trial_{index:05d}.started"
-    try:
-        return marker.read_text(encoding="utf-8") == token
-    except OSError:
-        return False
-
-
-def killed_row(folder: Path, index: int, seed: int, values: list, exc: BaseException) -> dict:
-    """The row of a trial whose worker died twice (written like any row: it is not run again on resume)."""
-    message = " ".join(str(exc).split())[:300]
-    row = {"trial": index, "seed": seed, "values": values, "pass": False,
-           "error": f"killed: the worker running this trial died, twice ({type(exc).__name__}: {message})"}
-    outputs.write_json(folder / f"trial_{index:05d}.json", row)
-    return row
 
 
 def finish(folder: Path, keys: list[str], rows: list[dict], resumed: int, spec: dict, name: str) -> StudyResult:

@@ -22,12 +22,18 @@ from typing import Any
 
 import numpy as np
 
-from ..io import outputs
 from ..errors import SweepError
+from ..io import outputs
 from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
 from .record import scenario_model
 from .resources import resolve_scenario_path
-from .schema import named_files, parse_value, read_scenario, read_toml, scenario_from_raw
+from .schema import (
+    named_files,
+    parse_value,
+    read_scenario,
+    read_toml,
+    scenario_from_raw,
+)
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
 METRICS = ("max_position_error", "final_position_error", "arm_travel", "vehicle_travel", "wall_time")
@@ -157,6 +163,7 @@ def sweep(
     out: str | os.PathLike | None = None,
     progress: bool | None = None,
     overrides: Sequence[str] = (),
+    insecure_scheduler: bool = False,
 ) -> SweepResult:
     """Run a scenario on every point of a grid; write ``sweep.csv`` and ``sweep.png`` into ``out``.
 
@@ -169,13 +176,15 @@ def sweep(
         backend: ``"loky"`` (local processes) or ``"dask"`` (a dask.distributed cluster; its workers must
             see the same files).
         scheduler: address of a Dask scheduler, ``tls://`` with credentials from Dask's configuration (e.g.
-            ``tls://10.0.0.5:8786``; a ``tcp://`` one works, with a warning); None starts a local TLS cluster.
+            ``tls://10.0.0.5:8786``); None starts a local TLS cluster.
         out: output folder (default ``out/<scenario name>_sweep``); point k runs into ``out/point_k``.
         progress: progress bar (None: on a terminal only).
         overrides: ``SECTION.KEY=VALUE`` strings applied to every point before its grid values.
+        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (``tcp://``): anyone who can reach it
+            can run code on its workers and in this process (:data:`uvms.scenario.parallel.OPEN_SCHEDULER`).
 
     Raises:
-        SweepError: bad grid, backend or jobs; ScenarioError: a key or value the scenario rejects, found
+        SweepError: bad grid, backend or jobs, a scheduler that is not tls:// without ``insecure_scheduler``; ScenarioError: a key or value the scenario rejects, found
             before any worker starts.
     """
     scenario = resolve_scenario_path(scenario)
@@ -183,7 +192,7 @@ def sweep(
     keys = [key for key, _ in grids]
     if not grids or len(set(keys)) != len(keys):
         raise SweepError(f"a sweep needs at least one --grid and distinct keys, got {keys}")
-    check_backend(backend, scheduler, jobs, SweepError)
+    check_backend(backend, scheduler, jobs, SweepError, insecure_scheduler)
     count = math.prod(len(values) for _, values in grids)
     if count > MAX_POINTS:
         sizes = " x ".join(f"{len(values):,} ({key})" for key, values in grids)
@@ -204,7 +213,8 @@ def sweep(
         tasks = [(str(Path(scenario).resolve()), k, overrides, str(folder / f"point_{k:0{width}d}"))
                  for k, overrides in enumerate(assignments)]
         rows = sorted(run_tasks(run_point, tasks, jobs=jobs, backend=backend, scheduler=scheduler, progress=progress,
-                                error=SweepError, desc="sweep"), key=lambda row: row["point"])
+                                error=SweepError, desc="sweep", insecure_scheduler=insecure_scheduler),
+                      key=lambda row: row["point"])
         for row, point in zip(rows, points):
             row.update(zip(keys, point))
             row["error"] = row["error"].replace(str(folder), str(out))  # the paths the user will find
@@ -243,6 +253,8 @@ def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:
     """Each metric against the first grid key, one line per combination of the other keys (NaN: failed)."""
     from matplotlib.figure import Figure
 
+    from ..viz.labels import plain_text
+
     first, others = result.keys[0], result.keys[1:]
     xs = [row[first] for row in result.rows]
     numeric = all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in xs)
@@ -255,17 +267,19 @@ def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:
     for axis, metric in zip(axes, METRICS):
         for group, rows in groups.items():
             x = [row[first] if numeric else categories.index(row[first]) for row in rows]
-            label = ", ".join(f"{key.split('.')[-1]}={value}" for key, value in zip(others, group)) or None
+            label = ", ".join(plain_text(f"{key.split('.')[-1]}={value}")
+                              for key, value in zip(others, group)) or None
             axis.plot(x, [row[metric] for row in rows], "o-", label=label)
         axis.set_ylabel(metric.replace("_", " "), fontsize=8)
         axis.grid(True, alpha=0.3)
     if others:
         axes[0].legend(fontsize=7)
     if not numeric:
-        axes[-1].set_xticks(range(len(categories)), [str(c) for c in categories])
-    axes[-1].set_xlabel(first)
+        axes[-1].set_xticks(range(len(categories)), [plain_text(c) for c in categories])
+    axes[-1].set_xlabel(plain_text(first))
     failed = len(result.failed)
-    figure.suptitle(f"{title}: sweep of {len(result.rows)} points" + (f" ({failed} failed)" if failed else ""))
+    figure.suptitle(f"{plain_text(title)}: sweep of {len(result.rows)} points"
+                    + (f" ({failed} failed)" if failed else ""))
     figure.tight_layout()
     outputs.save_figure(figure, path)
 

@@ -27,6 +27,7 @@ from typing import Any
 from ..errors import StudyError
 from ..io import outputs
 from .distributions import KEY_PATTERN, parse_samples
+from .parallel import check_backend
 from .resources import resolve_scenario_path
 from .schema import read_scenario
 from .study import METRICS, study
@@ -131,6 +132,7 @@ def tune(
     scheduler: str | None = None,
     out: str | os.PathLike | None = None,
     overrides: Sequence[str] = (),
+    insecure_scheduler: bool = False,
 ) -> TuneResult:
     """Tune scenario keys with Optuna's TPE sampler; write tune.csv, best.json, best.toml, tune_history.png.
 
@@ -144,6 +146,7 @@ def tune(
         jobs, backend, scheduler: where the study trials run (:mod:`uvms.scenario.parallel`).
         out: output folder (default ``out/<scenario name>_tune``), replaced whole.
         overrides: ``SECTION.KEY=VALUE`` strings applied to every run.
+        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.sweep.sweep`).
 
     Raises:
         StudyError: bad parameters, objective or trials, Optuna not installed; ScenarioError: a key the
@@ -162,6 +165,7 @@ def tune(
         raise StudyError(f"objective {objective!r} is not valid; valid: {', '.join(OBJECTIVES)}")
     if not isinstance(trials, int) or not 1 <= trials <= MAX_TUNE_TRIALS:
         raise StudyError(f"uvms tune runs 1 to {MAX_TUNE_TRIALS:,} trials, got {trials!r}")
+    check_backend(backend, scheduler, jobs, StudyError, insecure_scheduler)
     if samples:
         parse_samples(samples)  # the distributions' errors before the first trial (the keys: by each study)
     for end in ("low", "high"):  # every key and both ends checked before the first trial
@@ -172,7 +176,7 @@ def tune(
     sampler = optuna.samplers.TPESampler(seed=seed)
     optimisation = optuna.create_study(direction=direction, sampler=sampler)
     options = {"n": study_n, "seed": study_seed, "jobs": jobs, "backend": backend, "scheduler": scheduler,
-               "progress": False}
+               "progress": False, "insecure_scheduler": insecure_scheduler}
     rows = []
     from .runs import run_inputs
 

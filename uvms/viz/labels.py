@@ -1,6 +1,6 @@
 """Labels of figures that follow the model and the run: joint units from the joint's type, the vehicle's body
 velocities by their FLU axis, solver methods by their full name, titles wrapped to the figure's width, legends
-below the axes (clear of the data)."""
+below the axes (clear of the data), text from a file drawn as plain text."""
 
 from __future__ import annotations
 
@@ -81,3 +81,10 @@ def legend_under(ax, handles, labels, fontsize: float = 7, drop: float = LEGEND_
     offset = ScaledTranslation(0.0, -drop, ax.figure.dpi_scale_trans)
     return ax.legend(handles, labels, loc="upper center", bbox_to_anchor=(0.5, 0.0),
                      bbox_transform=ax.transAxes + offset, fontsize=fontsize)
+
+
+def plain_text(text: object) -> str:
+    """``text`` (a scenario's name, a sampled string, a key...) as matplotlib draws it literally: every ``$``
+    escaped, so that a stranger's string is never parsed as mathtext (``"$\\undefinedcmd{$"`` would make the
+    whole figure fail)."""
+    return str(text).replace("$", r"\$")

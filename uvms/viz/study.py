@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from ..io import outputs
+from .labels import plain_text
 
 PASS_COLOR, FAIL_COLOR = "tab:blue", "tab:red"
 
@@ -27,7 +28,7 @@ def save_study_figures(table: Sequence[dict], keys: Sequence[str], metrics: Sequ
         The paths written (none if no trial ran: no metric).
     """
     rate = summary["pass_rate"]
-    head = (f"{title}: {rate['trials']} trials, pass rate {rate['rate']:.0%} "
+    head = (f"{plain_text(title)}: {rate['trials']} trials, pass rate {rate['rate']:.0%} "
             f"({rate['confidence']:.0%} CI {rate['ci_low']:.0%}-{rate['ci_high']:.0%})")
     if not metrics:  # every trial failed: nothing to draw
         return []
@@ -70,14 +71,14 @@ def scatter(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str], 
     figure = Figure(figsize=(2.8 * len(keys) + 0.8, 2.0 * len(metrics) + 0.6))
     axes = figure.subplots(len(metrics), len(keys), squeeze=False, sharex="col")
     for j, key in enumerate(keys):
-        labels = list(dict.fromkeys(str(row[key]) for row in table))
+        labels = list(dict.fromkeys(plain_text(row[key]) for row in table))
         numeric = all(isinstance(row[key], (int, float)) for row in table)
         for i, metric in enumerate(metrics):
             axis = axes[i, j]
             for passed, color in ((True, PASS_COLOR), (False, FAIL_COLOR)):
                 rows = [row for row in table if bool(row["pass"]) == passed and isinstance(row[metric], float)
                         and math.isfinite(row[metric])]
-                xs = [row[key] if numeric else labels.index(str(row[key])) for row in rows]
+                xs = [row[key] if numeric else labels.index(plain_text(row[key])) for row in rows]
                 axis.plot(xs, [row[metric] for row in rows], ".", color=color, markersize=4)
             if j == 0:
                 axis.set_ylabel(metric.replace("_", " "), fontsize=7)
@@ -85,7 +86,7 @@ def scatter(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str], 
             axis.grid(True, alpha=0.3)
         if not numeric:
             axes[-1, j].set_xticks(range(len(labels)), labels, fontsize=6)
-        axes[-1, j].set_xlabel(key, fontsize=7)
+        axes[-1, j].set_xlabel(plain_text(key), fontsize=7)
     figure.suptitle(head, fontsize=9)
     figure.tight_layout()
     outputs.save_figure(figure, path)
@@ -104,7 +105,7 @@ def ranking(sensitivity: dict, metrics: Sequence[str], head: str, path: Path) ->
     for axis, outcome in zip(axes, outcomes):
         entries = sensitivity[outcome][::-1]  # the strongest at the top
         axis.barh(range(len(entries)), [e["eta2"] or 0.0 for e in entries], color="tab:blue")
-        axis.set_yticks(range(len(entries)), [e["key"] for e in entries], fontsize=7)
+        axis.set_yticks(range(len(entries)), [plain_text(e["key"]) for e in entries], fontsize=7)
         for y, entry in enumerate(entries):
             rho = "" if entry["rho"] is None else f"rho {entry['rho']:+.2f} (p {entry['p_value']:.1g})"
             axis.text(0.98, y, "const." if entry["eta2"] is None else rho, va="center", ha="right", fontsize=6)
@@ -146,12 +147,12 @@ def save_tune_history(rows: Sequence[dict], keys: Sequence[str], objective: str,
         axis.plot(trials, [row[key] for row in rows], "o", color="tab:gray", markersize=4)
         if chosen is not None:
             axis.plot([chosen["trial"]], [chosen[key]], "o", markersize=10, markerfacecolor="none", color="tab:red")
-        axis.set_ylabel(key, fontsize=8)
+        axis.set_ylabel(plain_text(key), fontsize=8)
     for axis in axes:
         axis.grid(True, alpha=0.3)
         axis.tick_params(labelsize=7)
     axes[-1].set_xlabel("trial")
-    figure.suptitle(f"{title}: tuning {len(rows)} trials (Optuna TPE)", fontsize=9)
+    figure.suptitle(f"{plain_text(title)}: tuning {len(rows)} trials (Optuna TPE)", fontsize=9)
     figure.tight_layout()
     outputs.save_figure(figure, path)
 
