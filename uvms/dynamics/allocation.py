@@ -268,7 +268,8 @@ def _reachable(matrix: np.ndarray) -> tuple[np.ndarray, tuple[UnreachableDirecti
     u, singular, vt = np.linalg.svd(matrix)  # u (6, 6), vt (n, n); singular (min(6, n),), descending
     largest = singular[0] if singular.size else 0.0
     kept = int(np.sum(singular > RANK_TOLERANCE * largest)) if largest > 0 else 0
-    reachable = (u[:, :kept] * singular[:kept]) @ vt[:kept]
+    # nothing dropped: B itself (the same numbers as B, not U S V^T's rounding of them)
+    reachable = matrix if kept == min(matrix.shape) else (u[:, :kept] * singular[:kept]) @ vt[:kept]
     unreachable = []
     for index in range(kept, 6):
         direction = u[:, index] * np.sign(u[np.argmax(np.abs(u[:, index])), index])  # its largest entry positive
