@@ -64,7 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from .added_mass import LOCAL, HydroLink, _cross, added_mass_coriolis, augmented_mass_matrix, resolve_links
+from .added_mass import LOCAL, HydroLink, _cross, augmented_mass_matrix, resolve_links
 from .hydrodynamics import HydroParameters, hydrodynamics_of
 from ..robot.robot import Robot, check_robot
 from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
@@ -95,6 +95,63 @@ class PlantDynamics:
     acceleration: np.ndarray
     joint_torque: np.ndarray
     mass_matrix: np.ndarray
+
+
+@dataclass(frozen=True)
+class StackedLinks:
+    """The hydrodynamic links' constants as arrays over the links (L of them), for one numpy pass per evaluation.
+
+    Attributes:
+        frames, joints: (L,) the links' frame ids and their parent joints.
+        motion_to_link: (L, 6, 6) the action of the inverse placement: a motion of the joint in the link frame.
+        rotations: (L, 3, 3) the links' rotations in their joints' frames.
+        added_mass: (L, 6, 6); linear_damping, quadratic_damping: (L, 6) (link frames, FLU).
+        buoyancy: (L,) rho g V [N] (0 without gravity); center_of_buoyancy: (L, 3) [m] in the link frames.
+        buoyant: whether any link has a volume.
+    """
+
+    frames: tuple[int, ...]
+    joints: tuple[int, ...]
+    motion_to_link: np.ndarray
+    rotations: np.ndarray
+    added_mass: np.ndarray
+    linear_damping: np.ndarray
+    quadratic_damping: np.ndarray
+    buoyancy: np.ndarray
+    center_of_buoyancy: np.ndarray
+    buoyant: bool
+
+    @property
+    def count(self) -> int:
+        """The number of links L."""
+        return len(self.frames)
+
+    @property
+    def no_bias(self) -> np.ndarray:
+        """(L, 6) zeros: the joints' bias accelerations where no term reads them."""
+        return np.zeros((self.count, 6))
+
+    @property
+    def no_rotations(self) -> np.ndarray:
+        """(L, 3, 3) zeros: the links' rotations where no term reads them."""
+        return np.zeros((self.count, 3, 3))
+
+    @classmethod
+    def of(cls, links: list[HydroLink], hydro: HydroParameters, gravity: bool) -> StackedLinks:
+        """The arrays of ``links`` (their parameters from ``hydro``)."""
+        def stack(values, shape) -> np.ndarray:
+            return np.array(values, dtype=float).reshape((len(links), *shape))
+
+        buoyancy = stack([hydro.fluid_density * hydro.gravity * link.params.volume if gravity else 0.0
+                          for link in links], ())
+        return cls(tuple(link.frame_id for link in links), tuple(link.joint_id for link in links),
+                   stack([link.placement.inverse().action for link in links], (6, 6)),
+                   stack([link.placement.rotation for link in links], (3, 3)),
+                   stack([link.params.added_mass for link in links], (6, 6)),
+                   stack([link.params.linear_damping for link in links], (6,)),
+                   stack([link.params.quadratic_damping for link in links], (6,)),
+                   buoyancy, stack([link.params.center_of_buoyancy for link in links], (3,)),
+                   bool(np.any(buoyancy > 0.0)))
 
 
 class Plant:
@@ -155,7 +212,12 @@ class Plant:
         self.nb = robot.n_vehicle
         self._current = hydro.current
         self._moving_fluid = bool(np.any(hydro.current != 0.0))
-        self._base_placement = self.model.frames[self.model.getFrameId(robot.root_link)].placement.copy()
+        self._base_frame = self.model.getFrameId(robot.root_link)
+        self._base_placement = self.model.frames[self._base_frame].placement.copy()
+        self._stacked = StackedLinks.of(self.links, hydro, gravity)
+        self._lower = np.tril_indices(self.model.nv, -1)
+        self._zero_velocity = np.zeros(self.model.nv)
+        self._buoyant = self.gravity and self._stacked.buoyant
 
     def system(self, controller: Command | np.ndarray | None, *, dt: float, control_dt: float = 0.0) -> PlantSystem:
         """This plant under a joint-velocity command, the system :func:`uvms.sim.loop.simulate` integrates.
@@ -219,35 +281,37 @@ class Plant:
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """Mbar (nv, nv) and nbar (nv,) at (q, v): Mbar v' + nbar = [0; tau_m] (nbar = h - sum J^T fext)."""
-        model, data = self.model, self.data
-        nv = model.nv
-        pin.forwardKinematics(model, data, q, v, np.zeros(nv))  # data.a = the bias accelerations Jdot v
-        if self.added_mass and self.links:
+        """Mbar (nv, nv) and nbar (nv,) at (q, v): Mbar v' + nbar = [0; tau_m] (nbar = h - sum J^T f).
+
+        Pinocchio gives M (crba), h (rnea, gravity included), the links' LOCAL Jacobians J_l and their joints'
+        bias accelerations and poses; the links' wrenches f_l (their frames) are summed by virtual work in one
+        compiled pass (:func:`uvms.numerics._kernels.hydro.hydro_terms_into`): Mbar = M + sum_l J_l^T M_A,l J_l,
+        nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea with the wrenches as external
+        forces, to rounding).
+        """
+        model, data, dynamics = self.model, self.data, self._dynamics_data
+        mass = pin.crba(model, dynamics, q).copy()
+        mass[self._lower] = mass.T[self._lower]  # crba fills the upper triangle
+        bias_forces = pin.rnea(model, dynamics, q, v, self._zero_velocity)  # h(q, v), gravity included
+        stacked = self._stacked
+        if stacked.count or body_wrench is not None:
+            pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
             pin.computeJointJacobians(model, data)
-        mass = pin.crba(model, self._dynamics_data, q)
-        mass = np.triu(mass) + np.triu(mass, 1).T
-        fext = [pin.Force.Zero() for _ in range(model.njoints)]
-        for link in self.links:
-            params = link.params
-            nu, bias, pose = self._link_motion(link)
-            nu_r, current_rate = self._relative_twist(nu, pose)
-            wrench = np.zeros(6)
-            if self.added_mass:
-                jacobian = pin.getFrameJacobian(model, data, link.frame_id, LOCAL)
-                mass += jacobian.T @ params.added_mass @ jacobian
-                wrench -= params.added_mass @ (bias - current_rate) + added_mass_coriolis(params.added_mass, nu_r)
-            if self.damping:
-                wrench += params.damping_wrench(nu_r)
-            if self.gravity and params.volume > 0.0:
-                buoyancy = pose.rotation.T @ np.array([0.0, 0.0, self.hydro.fluid_density * self.hydro.gravity
-                                                       * params.volume])
-                wrench[:3] += buoyancy
-                wrench[3:] += _cross(params.center_of_buoyancy, buoyancy)
-            fext[link.joint_id] += link.placement.act(pin.Force(wrench))
-        if body_wrench is not None:  # the base frame's placement on the vehicle joint carries it there
-            fext[1] += self._base_placement.act(pin.Force(body_wrench))
-        return mass, pin.rnea(model, self._dynamics_data, q, v, np.zeros(nv), fext)  # h(q, v) - sum J^T fext
+        if stacked.count:
+            from ..numerics._kernels.hydro import hydro_terms_into  # numba: loaded when a plant first runs
+
+            joints = stacked.joints
+            hydro_terms_into(np.array([pin.getFrameJacobian(model, data, frame, LOCAL) for frame in stacked.frames]),
+                             v, np.array([data.a[joint].vector for joint in joints]) if self.added_mass
+                             else stacked.no_bias,
+                             np.array([data.oMi[joint].rotation for joint in joints]) @ stacked.rotations
+                             if self._moving_fluid or self._buoyant else stacked.no_rotations,
+                             stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
+                             stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, self._current,
+                             self.added_mass, self.damping, self._moving_fluid, self._buoyant, mass, bias_forces)
+        if body_wrench is not None:  # the thrusters' wrench on the vehicle, at the base frame
+            bias_forces -= body_wrench @ pin.getFrameJacobian(model, data, self._base_frame, LOCAL)
+        return mass, bias_forces
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""
@@ -265,8 +329,8 @@ class Plant:
     def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
         """The GJM (6, n_arm) this plant conserves momentum with: added-mass-augmented when ``added_mass``."""
         q = self.robot.check_configuration(q)
-        return generalized_jacobian_from_parts(self.robot.jacobian(q, frame), *mass_matrix_split(self.mass_matrix(q), self.nb),
-                                               self.nb)
+        split = mass_matrix_split(self.mass_matrix(q), self.nb)
+        return generalized_jacobian_from_parts(self.robot.jacobian(q, frame), *split, self.nb)
 
     # ------------------------------------------------------- conserved things
     def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
