@@ -139,13 +139,9 @@ def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> float:
     """Power [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water)."""
     if not plant.damping or not plant.links:
         return 0.0
-    pin.forwardKinematics(plant.model, plant.data, q, v)
-    total = 0.0
-    for link in plant.links:
-        nu, _, pose = plant._link_motion(link)
-        nu_r, _ = plant._relative_twist(nu, pose)
-        total += float(link.params.damping_wrench(nu_r) @ nu)
-    return total
+    links, stacked = plant._link_states(q, v), plant._stacked
+    wrenches = -(stacked.linear_damping + stacked.quadratic_damping * np.abs(links.relative)) * links.relative
+    return float((wrenches * links.twists).sum())
 
 
 # ------------------------------------------------------------------ the system of the one loop

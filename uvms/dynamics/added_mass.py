@@ -3,9 +3,9 @@
 A link with Fossen parameters (:mod:`uvms.dynamics.hydro_parameters`) is placed on the model by
 :func:`resolve_links`. Its added mass M_A enters the equations of motion twice (derivation: the docstring
 of :mod:`uvms.dynamics.plant`): in the mass matrix, Mbar = M + sum_l J_l^T M_A,l J_l
-(:func:`augmented_mass_matrix`), and as the Coriolis term C_A(nu) nu (:func:`added_mass_coriolis`). With no
-current, damping or gravity the added-mass-augmented momentum is conserved;
-:func:`generalized_jacobian_added_mass` is the generalized Jacobian of that momentum.
+(:func:`augmented_mass_matrix`), and as the Coriolis term C_A(nu) nu (formed with the other wrenches of a link in
+:mod:`uvms.numerics._kernels.hydro`). With no current, damping or gravity the added-mass-augmented momentum is
+conserved; :func:`generalized_jacobian_added_mass` is the generalized Jacobian of that momentum.
 """
 
 from __future__ import annotations
@@ -48,25 +48,6 @@ def resolve_links(model: pin.Model, hydro: HydroParameters) -> list[HydroLink]:
         frame = model.frames[frame_id]
         links.append(HydroLink(name, frame_id, frame.parentJoint, frame.placement.copy(), params))
     return links
-
-
-def added_mass_coriolis(added_mass: np.ndarray, nu: np.ndarray) -> np.ndarray:
-    """Fossen's C_A(nu) nu = nu x* (M_A nu) (6,) for a body twist nu (6,) = [v; w].
-
-    Args:
-        added_mass: M_A (6, 6), same frame as nu.
-        nu: [linear; angular] velocity [m/s, rad/s].
-
-    Returns:
-        [w x a1; v x a1 + w x a2] with a = M_A nu [N, N m].
-    """
-    a = added_mass @ nu
-    return np.concatenate([_cross(nu[3:], a[:3]), _cross(nu[:3], a[:3]) + _cross(nu[3:], a[3:])])
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b of two (3,) vectors: numpy's cross is ten times slower on them, and this runs per link and stage."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 def augmented_mass_matrix(model: pin.Model, data: pin.Data, links: list[HydroLink], q: np.ndarray) -> np.ndarray:

@@ -64,7 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from .added_mass import LOCAL, HydroLink, _cross, augmented_mass_matrix, resolve_links
+from .added_mass import LOCAL, HydroLink, augmented_mass_matrix, resolve_links
 from .hydrodynamics import HydroParameters, hydrodynamics_of
 from ..robot.robot import Robot, check_robot
 from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
@@ -98,13 +98,28 @@ class PlantDynamics:
 
 
 @dataclass(frozen=True)
+class LinkStates:
+    """The hydrodynamic links at one (q, v), stacked (L links).
+
+    Attributes:
+        twists: nu_l (L, 6) body twists [m/s, rad/s] in the link frames; relative: nu_r,l = nu_l - [R_l^T v_c; 0].
+        rotations: (L, 3, 3) link to world; positions: (L, 3) the link frames' origins in the world [m].
+    """
+
+    twists: np.ndarray
+    relative: np.ndarray
+    rotations: np.ndarray
+    positions: np.ndarray
+
+
+@dataclass(frozen=True)
 class StackedLinks:
     """The hydrodynamic links' constants as arrays over the links (L of them), for one numpy pass per evaluation.
 
     Attributes:
         frames, joints: (L,) the links' frame ids and their parent joints.
         motion_to_link: (L, 6, 6) the action of the inverse placement: a motion of the joint in the link frame.
-        rotations: (L, 3, 3) the links' rotations in their joints' frames.
+        rotations: (L, 3, 3) the links' rotations in their joints' frames; translations: (L, 3) their origins there.
         added_mass: (L, 6, 6); linear_damping, quadratic_damping: (L, 6) (link frames, FLU).
         buoyancy: (L,) rho g V [N] (0 without gravity); center_of_buoyancy: (L, 3) [m] in the link frames.
         buoyant: whether any link has a volume.
@@ -114,6 +129,7 @@ class StackedLinks:
     joints: tuple[int, ...]
     motion_to_link: np.ndarray
     rotations: np.ndarray
+    translations: np.ndarray
     added_mass: np.ndarray
     linear_damping: np.ndarray
     quadratic_damping: np.ndarray
@@ -147,6 +163,7 @@ class StackedLinks:
         return cls(tuple(link.frame_id for link in links), tuple(link.joint_id for link in links),
                    stack([link.placement.inverse().action for link in links], (6, 6)),
                    stack([link.placement.rotation for link in links], (3, 3)),
+                   stack([link.placement.translation for link in links], (3,)),
                    stack([link.params.added_mass for link in links], (6, 6)),
                    stack([link.params.linear_damping for link in links], (6,)),
                    stack([link.params.quadratic_damping for link in links], (6,)),
@@ -238,21 +255,21 @@ class Plant:
         return self.model.nv - self.nb
 
     # -------------------------------------------------------------- dynamics
-    def _link_motion(self, link: HydroLink) -> tuple[np.ndarray, np.ndarray, pin.SE3]:
-        """Body twist nu (6,) and bias acceleration Jdot v (6,) of a link, and its pose, after forwardKinematics."""
-        placement = link.placement
-        nu = placement.actInv(self.data.v[link.joint_id]).vector
-        bias = placement.actInv(self.data.a[link.joint_id]).vector
-        return nu, bias, self.data.oMi[link.joint_id] * placement
-
-    def _relative_twist(self, nu: np.ndarray, pose: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
-        """nu_r = nu - [R^T v_c; 0] and the current's body-frame rate nu_c' = [-w x R^T v_c; 0]."""
-        if not self._moving_fluid:
-            return nu, np.zeros(6)
-        current = pose.rotation.T @ self._current
-        nu_r = nu.copy()
-        nu_r[:3] -= current
-        return nu_r, np.concatenate([-_cross(nu[3:], current), np.zeros(3)])
+    def _link_states(self, q: np.ndarray, v: np.ndarray) -> LinkStates:
+        """The hydrodynamic links' twists and poses at (q, v), every link at once (runs forwardKinematics)."""
+        model, data, stacked = self.model, self.data, self._stacked
+        pin.forwardKinematics(model, data, q, v)
+        joints = stacked.joints
+        twists = (stacked.motion_to_link @ np.array([data.v[joint].vector for joint in joints])[:, :, None])[:, :, 0]
+        joint_rotations = np.array([data.oMi[joint].rotation for joint in joints])
+        rotations = joint_rotations @ stacked.rotations  # (L, 3, 3) link to world
+        positions = np.array([data.oMi[joint].translation for joint in joints]) + \
+            (joint_rotations @ stacked.translations[:, :, None])[:, :, 0]
+        relative = twists
+        if self._moving_fluid:  # nu_r = nu - [R^T v_c; 0]
+            relative = twists.copy()
+            relative[:, :3] -= self._current @ rotations
+        return LinkStates(twists, relative, rotations, positions)
 
     def evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> PlantDynamics:
         """Accelerations and motor torques at (q, v) under a joint-velocity command.
@@ -339,20 +356,19 @@ class Plant:
         Kinetic: 1/2 v^T M v + sum_l 1/2 nu_r^T M_A nu_r (the fluid's share, when
         ``added_mass``). Potential (``gravity`` on): sum m g z_com - rho g V z_cob.
         """
-        model, data = self.model, self.data
-        pin.forwardKinematics(model, data, q, v)
-        mass = pin.crba(model, self._dynamics_data, q)
-        mass = np.triu(mass) + np.triu(mass, 1).T
+        mass = pin.crba(self.model, self._dynamics_data, q).copy()
+        mass[self._lower] = mass.T[self._lower]  # crba fills the upper triangle
         kinetic = 0.5 * float(v @ mass @ v)
-        potential = weight_potential(model, self._dynamics_data, q) if self.gravity else 0.0
-        for link in self.links:
-            nu, _, pose = self._link_motion(link)
+        potential = weight_potential(self.model, self._dynamics_data, q) if self.gravity else 0.0
+        stacked = self._stacked
+        if stacked.count and (self.added_mass or self.gravity):
+            links = self._link_states(q, v)
             if self.added_mass:
-                nu_r, _ = self._relative_twist(nu, pose)
-                kinetic += 0.5 * float(nu_r @ link.params.added_mass @ nu_r)
-            if self.gravity:
-                height = (pose * pin.SE3(np.eye(3), link.params.center_of_buoyancy)).translation[2]
-                potential -= self.hydro.fluid_density * self.hydro.gravity * link.params.volume * height
+                relative = links.relative[:, :, None]
+                kinetic += 0.5 * float((relative.transpose(0, 2, 1) @ stacked.added_mass @ relative).sum())
+            if self.gravity:  # the centres of buoyancy's heights [m]
+                heights = links.positions[:, 2] + (links.rotations[:, 2, :] * stacked.center_of_buoyancy).sum(axis=1)
+                potential -= float(stacked.buoyancy @ heights)
         return kinetic, potential
 
     def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -362,13 +378,17 @@ class Plant:
         (the fluid impulse, when ``added_mass``).
         """
         model, data = self.model, self.data
-        pin.forwardKinematics(model, data, q, v)
+        links = self._link_states(q, v) if self.added_mass and self._stacked.count else None  # forwardKinematics
+        if links is None:
+            pin.forwardKinematics(model, data, q, v)
         total = pin.Force.Zero()
         for joint in range(1, model.njoints):
             total += data.oMi[joint].act(model.inertias[joint] * data.v[joint])
-        if self.added_mass:
-            for link in self.links:
-                nu, _, pose = self._link_motion(link)
-                nu_r, _ = self._relative_twist(nu, pose)
-                total += pose.act(pin.Force(link.params.added_mass @ nu_r))
-        return total.vector.copy()
+        momentum = total.vector.copy()
+        if links is not None:  # the fluid impulse M_A nu_r of each link, its frame to the world origin
+            impulse = (self._stacked.added_mass @ links.relative[:, :, None])[:, :, 0]
+            linear = (links.rotations @ impulse[:, :3, None])[:, :, 0]
+            momentum[:3] += linear.sum(axis=0)
+            momentum[3:] += ((links.rotations @ impulse[:, 3:, None])[:, :, 0]
+                             + np.cross(links.positions, linear)).sum(axis=0)
+        return momentum
