@@ -39,10 +39,12 @@ Conventions of the file (those of uuv_simulator's ``HMFossen``)
   z down: uuv_simulator converts the link velocity with ``ToNEDConvention``),
   order [u v w p q r], about the link frame origin.
 * Damping values are Fossen's hydrodynamic derivatives, which are negative:
-  ``linear_damping`` = [X_u, Y_v, Z_w, K_p, M_q, N_r] <= 0 and
-  ``quadratic_damping`` = [X_u|u|, ...] <= 0; the plugin applies
-  D(nu) = -diag(linear) - diag(quadratic) |nu|. A positive value would feed energy
-  into the motion and is refused.
+  ``linear_damping`` = [X_u, Y_v, Z_w, K_p, M_q, N_r] <= 0,
+  ``quadratic_damping`` = [X_u|u|, ...] <= 0 and ``linear_damping_forward_speed``
+  = [X_uu, ...] <= 0 (the linear damping that grows with the forward speed u); the plugin
+  applies D(nu) = -diag(linear) - u diag(linear_damping_forward_speed) - diag(quadratic) |nu|
+  (``HMFossen::ComputeDampingMatrix``: u the signed surge speed relative to the water). A
+  positive value would feed energy into the motion and is refused.
 
 The parameters themselves (:class:`LinkHydrodynamics`, :class:`HydroParameters`, in uvms's own FLU
 conventions) live in :mod:`uvms.dynamics.hydro_parameters` and are importable from here.
@@ -63,6 +65,7 @@ from ..model.resources import read_yaml
 from .hydro_parameters import (GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names,
                                flip_frd_flu, symmetrized_added_mass)
 from .hydro_shapes import BOX_KEYS, SHAPE_KEYS, SHAPE_TYPES, shape_coefficients
+from .plugin_readers import read_hydro_plugins
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -102,9 +105,6 @@ def link_from_uuv(
         kind = str(model.get("type", "fossen")).strip()
         if kind not in MODEL_TYPES:
             raise ModelCheckError(f"hydrodynamic model type {kind!r} is not supported; valid: {', '.join(MODEL_TYPES)}")
-        forward = model.get("linear_damping_forward_speed")
-        if forward is not None and np.any(_numbers(forward, "linear_damping_forward_speed") != 0):
-            raise ModelCheckError("linear_damping_forward_speed is not supported (give zeros or leave it out)")
         volume = float(_numbers(values.get("volume", 0.0), "volume", 1)[0])
         if _flag(values.get("neutrally_buoyant", False)):
             if link_mass is None:
@@ -114,6 +114,7 @@ def link_from_uuv(
         added = _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6).copy()
         linear = _diagonal(model.get("linear_damping", np.zeros(6)), "linear_damping")
         quadratic = _diagonal(model.get("quadratic_damping", np.zeros(6)), "quadratic_damping").copy()
+        forward = _diagonal(model.get("linear_damping_forward_speed", np.zeros(6)), "linear_damping_forward_speed")
         if kind in SHAPE_TYPES:  # a fossen model whose diagonal entries the shape then sets, as uuv_simulator's
             box = values.get("box") or None
             if box is not None and not isinstance(box, Mapping):
@@ -123,7 +124,8 @@ def link_from_uuv(
                 added[index, index] = value
             quadratic[list(shape_drag)] = list(shape_drag.values())
         added = symmetrized_added_mass(added, where)
-        for name, derivatives in (("linear_damping", linear), ("quadratic_damping", quadratic)):
+        for name, derivatives in (("linear_damping", linear), ("quadratic_damping", quadratic),
+                                  ("linear_damping_forward_speed", forward)):
             if np.any(derivatives > 0):
                 raise ModelCheckError(
                     f"{name} holds positive values {derivatives.tolist()}: uuv_simulator's form takes Fossen's "
@@ -135,6 +137,7 @@ def link_from_uuv(
             added_mass=flip_frd_flu(added),
             linear_damping=-linear,
             quadratic_damping=-quadratic,
+            linear_damping_forward_speed=-forward,
         )
     except ModelCheckError as exc:
         raise ModelCheckError(f"{where}: {exc}") from None
@@ -181,58 +184,32 @@ def _flag(value: object) -> bool:
     raise ModelCheckError(f"neutrally_buoyant must be 0/1 or true/false, got {value!r}")
 
 
-def _is_uuv_plugin(plugin: ET.Element) -> bool:
-    return "underwater_object" in plugin.get("filename", "")
-
-
 def parse_hydrodynamics(
     urdf: str, origin: str = "<string>", link_names: Iterable[str] | None = None
 ) -> HydroParameters | None:
-    """The hydrodynamic parameters written in a URDF's uuv_simulator plugin block(s).
+    """The hydrodynamic parameters written in a URDF's plugin blocks: uuv_simulator's underwater-object plugin,
+    Gazebo Sim's Hydrodynamics and Buoyancy, HippoCampus's (:mod:`uvms.dynamics.plugin_readers`).
 
     Args:
         urdf: URDF text (xacro already expanded).
         origin: name of the model for messages.
-        link_names: the model's links, checked before any value (None: not checked here).
+        link_names: the model's links (None: not checked here); a block naming another link is skipped.
 
     Returns:
-        The parameters, or None when the URDF has no underwater-object plugin.
+        The parameters, or None when the URDF has no such plugin.
 
     Raises:
         ModelParseError: not well-formed XML.
-        NameNotFound: a link the model does not have (with the close names).
-        ModelCheckError: an invalid value, a link given twice, two plugins with different densities.
+        ModelCheckError: an invalid value, a link given twice, plugins with different densities.
+
+    Warns:
+        SkippedLinkWarning: a block naming a link the model does not have (skipped, as Gazebo does).
     """
     try:
         root = ET.fromstring(urdf)
     except ET.ParseError as exc:
         raise ModelParseError(f"{origin}: malformed XML ({exc})") from None
-    plugins = [plugin for gazebo in root.findall("gazebo") for plugin in gazebo.findall("plugin")
-               if _is_uuv_plugin(plugin)]
-    if not plugins:
-        return None
-    masses = urdf_link_masses(root)
-    densities = {float(_numbers(p.findtext("fluid_density", str(SEA_WATER_DENSITY)), "fluid_density", 1)[0])
-                 for p in plugins}
-    if len(densities) > 1:
-        raise ModelCheckError(
-            f"{origin}: the underwater-object plugins give different fluid densities {sorted(densities)}")
-    density = densities.pop()
-    check_link_names((e.get("name", "") for p in plugins for e in p.findall("link")), link_names, origin)
-    links: dict[str, LinkHydrodynamics] = {}
-    for plugin in plugins:
-        for element in plugin.findall("link"):
-            name = element.get("name", "")
-            where = f"{origin}: hydrodynamics of link {name!r}"
-            if name in links:
-                raise ModelCheckError(f"{where}: the link is given twice")
-            values: dict[str, object] = {child.tag: (child.text or "") for child in element}
-            for tag in ("hydrodynamic_model", "box"):
-                nested = element.find(tag)
-                if nested is not None:
-                    values[tag] = {child.tag: (child.text or "") for child in nested}
-            links[name] = link_from_uuv(values, fluid_density=density, link_mass=masses.get(name), where=where)
-    return HydroParameters(fluid_density=density, links=links, source=origin)
+    return read_hydro_plugins(root, origin, link_names)
 
 
 def urdf_link_masses(root: ET.Element) -> dict[str, float]:
