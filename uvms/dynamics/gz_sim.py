@@ -61,14 +61,7 @@ import numpy as np
 
 from ..errors import ModelCheckError, PluginSettingWarning
 from .hydro_parameters import symmetrized_added_mass
-from .thruster_sources import (
-    PluginThruster,
-    _float,
-    _floats,
-    _optional,
-    joint_axis,
-    thrust_limits,
-)
+from .thruster_sources import PluginThruster, _float, _floats, _optional, joint_axis, thrust_limits
 
 #: SNAME letters: force/moment axes and velocities, in the order [u v w p q r].
 AXES, VELOCITIES = "xyzkmn", "UVWPQR"

@@ -48,13 +48,7 @@ import xml.etree.ElementTree as ET
 import numpy as np
 
 from ..errors import ModelCheckError
-from .thruster_sources import (
-    PluginThruster,
-    _floats,
-    _optional,
-    joint_axis,
-    thrust_limits,
-)
+from .thruster_sources import PluginThruster, _floats, _optional, joint_axis, thrust_limits
 
 
 def read_hippo_thruster(plugin: ET.Element, root: ET.Element, name: str, where: str) -> PluginThruster:

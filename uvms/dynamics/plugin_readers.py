@@ -1,13 +1,12 @@
 """The readers of simulator plugins, one module per simulator, registered by simulator: a model's thrusters and
 hydrodynamics from its ``<gazebo>`` plugin blocks.
 
-=============  ==================================  ============================================================
-simulator      thrusters                           hydrodynamics / buoyancy
-=============  ==================================  ============================================================
-uuv_simulator  :func:`~.thruster_sources.read_uuv_thruster`   :func:`~.hydrodynamics.link_from_uuv` (underwater object)
-Gazebo Sim     :func:`~.gz_sim.read_gz_thruster`  :func:`~.gz_sim.gz_hydrodynamics_fields`, :func:`~.gz_sim.gz_buoyancy_density`
-HippoCampus    :func:`~.hippo.read_hippo_thruster`  :func:`~.hippo.hippo_hydrodynamics_fields`, :func:`~.hippo.hippo_buoyancy_fields`
-=============  ==================================  ============================================================
+* uuv_simulator: :func:`~.thruster_sources.read_uuv_thruster`, the underwater-object block
+  (:func:`~.uuv_hydro.link_from_uuv`);
+* Gazebo Sim: :func:`~.gz_sim.read_gz_thruster`, :func:`~.gz_sim.gz_hydrodynamics_fields`,
+  :func:`~.gz_sim.gz_buoyancy_density`;
+* HippoCampus: :func:`~.hippo.read_hippo_thruster`, :func:`~.hippo.hippo_hydrodynamics_fields`,
+  :func:`~.hippo.hippo_buoyancy_fields`.
 
 Which ``<plugin>`` is of which kind: :mod:`uvms.model.plugins`. A new simulator is one module of readers and one
 entry in each of :data:`THRUSTER_READERS`, :data:`HYDRO_BLOCKS` (and :data:`DENSITIES` when its plugins give the
@@ -16,7 +15,8 @@ fluid density) beside a :class:`~uvms.model.plugins.PluginKind`.
 Hydrodynamics of several blocks are merged per link: each block gives some fields of a link (a hippo buoyancy its
 volume, a hippo hydrodynamics its damping); a field given twice is refused. A block naming a link the model does not
 have is skipped with a :class:`~uvms.errors.SkippedLinkWarning`, as Gazebo does (DAVE's RexROV names
-``oberon7/base``); ``uvms --strict`` (``warnings.simplefilter("error", SkippedLinkWarning)``) refuses it.
+``oberon7/base``); ``--strict`` on a uvms command (in Python: ``warnings.simplefilter("error",
+SkippedLinkWarning)``) refuses it.
 """
 
 from __future__ import annotations
@@ -32,13 +32,10 @@ import numpy as np
 from ..errors import ModelCheckError, SkippedLinkWarning
 from ..model.plugins import GZ, HIPPO, UUV, plugins_of
 from .gz_sim import gz_buoyancy_density, gz_hydrodynamics_fields, read_gz_thruster
-from .hippo import (
-    hippo_buoyancy_fields,
-    hippo_hydrodynamics_fields,
-    read_hippo_thruster,
-)
+from .hippo import hippo_buoyancy_fields, hippo_hydrodynamics_fields, read_hippo_thruster
 from .hydro_parameters import SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics
 from .thruster_sources import PluginThruster, _float, read_uuv_thruster
+from .uuv_hydro import link_from_uuv, urdf_link_masses
 
 #: simulator -> reader(plugin, robot root, thruster name, where) -> PluginThruster.
 THRUSTER_READERS: dict[str, Callable[[ET.Element, ET.Element, str, str], PluginThruster]] = {
@@ -52,6 +49,7 @@ class Context:
     root: ET.Element
     origin: str
     density: float
+    moving: frozenset[str] = frozenset()
 
 
 @dataclass(frozen=True)
@@ -72,29 +70,14 @@ def read_thruster_plugins(root: ET.Element, origin: str) -> list[PluginThruster]
     """
     thrusters = []
     for index, (kind, plugin) in enumerate(plugins_of(root, "thruster")):
-        name = plugin_label(kind.simulator, plugin, kind.joint_tag, index)
+        name = kind.label(plugin, index)
         thrusters.append(THRUSTER_READERS[kind.simulator](
             plugin, root, name, f"{origin}: {kind.simulator} thruster plugin {name!r}"))
     return thrusters
 
 
-def plugin_label(simulator: str, plugin: ET.Element, joint_tag: str | None, index: int) -> str:
-    """A thruster's name: uuv_simulator's plugin name; Gazebo Sim's joint (its plugins share a class name);
-    HippoCampus's ``thruster_<thruster_number>``, as its topics."""
-    if simulator == GZ:
-        return (plugin.findtext(joint_tag or "") or "").strip() or f"thruster_{index}"
-    if simulator == HIPPO:
-        return f"thruster_{(plugin.findtext('thruster_number') or str(index)).strip()}"
-    return plugin.get("name") or f"thruster_{index}"
-
-
 # ------------------------------------------------------------------ hydrodynamics
 def _uuv_blocks(plugin: ET.Element, context: Context) -> Iterator[Block]:
-    from .hydrodynamics import (  # at call time: it imports this module
-        link_from_uuv,
-        urdf_link_masses,
-    )
-
     masses = urdf_link_masses(context.root)
     for element in plugin.findall("link"):
         name = element.get("name", "")
@@ -128,7 +111,7 @@ def _hippo_buoyancy(plugin: ET.Element, context: Context) -> Iterator[Block]:
         name = (element.findtext("link_name") or "base_link").strip()
         where = f"{context.origin}: HippoCampus buoyancy of link {name!r}"
         yield Block(name, where, lambda e=element, n=name, w=where: hippo_buoyancy_fields(
-            e, lumped_mass(context.root, n), context.density, w))
+            e, lumped_mass(context.root, n, context.moving), context.density, w))
 
 
 #: (simulator, role) -> blocks(plugin, context): the links a plugin gives hydrodynamic data for.
@@ -142,12 +125,13 @@ DENSITIES: dict[tuple[str, str], Callable[[ET.Element, str], float | None]] = {
     (GZ, "buoyancy"): gz_buoyancy_density}
 
 
-def read_hydro_plugins(root: ET.Element, origin: str, link_names: Iterable[str] | None = None) -> HydroParameters | None:
+def read_hydro_plugins(root: ET.Element, origin: str, link_names: Iterable[str] | None = None,
+                       moving: Iterable[str] = ()) -> HydroParameters | None:
     """The hydrodynamic parameters of a URDF's plugin blocks of every simulator uvms reads (the module docstring).
 
     Args:
         root: the URDF ``<robot>``; origin: the model, for messages; link_names: the model's links (None: not
-            checked here).
+            checked here); moving: the joints that move in the model's file (fixed in ``root`` once frozen).
 
     Returns:
         The parameters, or None when the URDF has no hydrodynamic or buoyancy plugin uvms reads.
@@ -167,7 +151,7 @@ def read_hydro_plugins(root: ET.Element, origin: str, link_names: Iterable[str] 
                  and (d := DENSITIES[kind.simulator, kind.role](plugin, where[kind])) is not None}
     if len(densities) > 1:
         raise ModelCheckError(f"{origin}: the plugins give different fluid densities {sorted(densities)} kg/m^3")
-    context = Context(root, origin, densities.pop() if densities else SEA_WATER_DENSITY)
+    context = Context(root, origin, densities.pop() if densities else SEA_WATER_DENSITY, frozenset(moving))
     valid = None if link_names is None else list(link_names)
     fields: dict[str, dict[str, object]] = {}
     given_by: dict[tuple[str, str], str] = {}
@@ -178,7 +162,7 @@ def read_hydro_plugins(root: ET.Element, origin: str, link_names: Iterable[str] 
                 close = difflib.get_close_matches(block.link, valid, n=5, cutoff=0.4)
                 warnings.warn(f"{block.where}: the model has no link {block.link!r}"
                               f"{'; close names: ' + ', '.join(close) if close else ''}; the block is skipped, as "
-                              f"Gazebo skips it (uvms --strict refuses it)", SkippedLinkWarning, stacklevel=4)
+                              f"Gazebo skips it (--strict refuses it)", SkippedLinkWarning, stacklevel=4)
                 continue
             for key, value in block.read().items():
                 if key == "current":
@@ -204,13 +188,14 @@ def link_fields(link: LinkHydrodynamics) -> dict[str, object]:
     return {name: getattr(link, name) for name in LinkHydrodynamics.__dataclass_fields__}
 
 
-def lumped_mass(root: ET.Element, link: str) -> float | None:
+def lumped_mass(root: ET.Element, link: str, moving: Iterable[str] = ()) -> float | None:
     """A link's mass [kg] as Gazebo sees it: its own and that of the links below it through fixed joints, which
     the URDF-to-SDF conversion lumps into it (unless ``<preserveFixedJoint>`` or ``<disableFixedJointLumping>``
-    keeps a joint); None when none of them has an ``<inertial>`` mass."""
+    keeps a joint, or the joint is one of ``moving``: a joint of the file that uvms froze); None when none of them
+    has an ``<inertial>`` mass."""
     kept = {gazebo.get("reference") for gazebo in root.findall("gazebo")
             if any((gazebo.findtext(tag) or "").strip().lower() in ("true", "1")
-                   for tag in ("preserveFixedJoint", "disableFixedJointLumping"))}
+                   for tag in ("preserveFixedJoint", "disableFixedJointLumping"))} | set(moving)
     own = {}
     for element in root.findall("link"):
         mass = element.find("inertial/mass")

@@ -57,6 +57,15 @@ class PluginKind:
             return True
         return plugin.get("name", "") in self.names
 
+    def label(self, plugin: ET.Element, index: int) -> str:
+        """The name of a thruster plugin: uuv_simulator's ``name``; Gazebo Sim's ``<joint_name>`` (its ``name`` is
+        the class, the same for all); HippoCampus's ``thruster_<thruster_number>``, as its topics; else by index."""
+        if self.simulator == GZ:
+            return (plugin.findtext(self.joint_tag or "") or "").strip() or f"thruster_{index}"
+        if self.simulator == HIPPO:
+            return f"thruster_{(plugin.findtext('thruster_number') or str(index)).strip()}"
+        return plugin.get("name") or f"thruster_{index}"
+
 
 def _gz(system: str, cls: str) -> PluginKind:
     """A Gazebo Sim system: ``[lib]gz-sim[N]-<system>-system[.so]`` or ``[lib]ignition-gazebo[N]-...``."""

@@ -56,8 +56,8 @@ def propeller_joints(robot: ET.Element, moving: Mapping[str, ET.Element], model_
     """
     by_child = {joint.find("child").get("link"): name for name, joint in moving.items()}
     found: dict[str, str] = {}
-    for kind, plugin in plugins_of(robot, "thruster"):
-        label = plugin.get("name", "")
+    for index, (kind, plugin) in enumerate(plugins_of(robot, "thruster")):
+        label = kind.label(plugin, index)
         joint = (plugin.findtext(kind.joint_tag) or "").strip() if kind.joint_tag else ""
         link = (plugin.findtext(kind.link_tag) or "").strip() if kind.link_tag else ""
         if joint in moving:
