@@ -204,12 +204,21 @@ class ParserWarning(UVMSWarning):
     """Pinocchio's URDF parser printed something while building a model it accepted."""
 
 
+class PluginSettingWarning(UVMSWarning):
+    """A simulator plugin's setting that uvms does not follow; the message says what uvms does instead."""
+
+
 class PointMassWarning(UVMSWarning):
     """A link has a positive mass and an all-zero inertia (a point mass), as uuv_simulator's thruster links do."""
 
 
 class ShapeCoefficientWarning(UVMSWarning):
     """A shape model took a coefficient that uuv_simulator leaves undefined (a cylinder longer than its table)."""
+
+
+class SkippedLinkWarning(UVMSWarning):
+    """A hydrodynamic plugin block names a link the model does not have and is skipped, as Gazebo does (``--strict``
+    or ``warnings.simplefilter("error", SkippedLinkWarning)`` refuses it)."""
 
 
 class ThrusterDefaultWarning(UVMSWarning):

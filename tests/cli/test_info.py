@@ -147,7 +147,7 @@ def test_info_lists_the_thrusters_and_the_hydrodynamics(capsys):
     # the URDF's underwater-object plugin: base_link's volume and added-mass diagonal (FLU: a diagonal keeps signs)
     assert "hydrodynamics (7 links, rho 1028 kg/m^3)" in out and "  base_link: V 0.01197  CoB [+0.000 +0.000 +0.010]" in out
     assert "    added mass [6.36 7.12 18.68 0.189 0.135 0.222]\n" in out
-    assert f"  from the uuv_simulator block of {ROOT}/models/bluerov2_alpha5/uvms.urdf.xacro\n" in out
+    assert f"  from the uuv_simulator hydrodynamics plugin blocks of {ROOT}/models/bluerov2_alpha5/uvms.urdf.xacro\n" in out
 
 
 def test_info_shows_a_hydrodynamics_yaml_with_where_it_comes_from(tmp_path, capsys):
@@ -200,3 +200,42 @@ def test_info_with_a_hydrodynamics_file_it_cannot_use_exits_2_with_one_line(tmp_
     captured = capsys.readouterr()
     assert captured.out == "" and len(captured.err.splitlines()) == 1
     assert captured.err.startswith("uvms: error: ") and "hydrodynamics" in captured.err
+
+
+def test_a_hydrodynamic_block_naming_a_missing_link_is_skipped_or_refused_with_strict(tmp_path, capsys):
+    """DAVE's RexROV idiom: an underwater-object block for 'oberon7/base', which the model does not have. uvms info
+    skips it with a warning naming the link (as Gazebo skips it) and lists the other block; --strict refuses."""
+    text = urdf(root=FLOATING_ROOT).replace("</robot>", """
+  <gazebo><plugin name="uuv_plugin" filename="libuuv_underwater_object_ros_plugin.so">
+    <fluid_density>1028.0</fluid_density>
+    <link name="base_link"><volume>0.0195</volume><hydrodynamic_model><type>fossen</type>
+      <linear_damping>-10 -20 -30 -1 -2 -3</linear_damping></hydrodynamic_model></link>
+    <link name="oberon7/base"><volume>0.01</volume></link>
+  </plugin></gazebo></robot>""")
+    path = tmp_path / "rexrov_oberon.urdf"
+    path.write_text(text)
+    assert main(["info", str(path)]) == 0
+    captured = capsys.readouterr()
+    assert "hydrodynamics (1 links, rho 1028 kg/m^3)" in captured.out and "  base_link: V 0.0195" in captured.out
+    assert ("uvms: warning: " + str(path) + ": hydrodynamics of link 'oberon7/base': the model has no link "
+            "'oberon7/base'") in captured.err and "the block is skipped, as Gazebo skips it" in captured.err
+    assert main(["info", str(path), "--strict"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("uvms: error: ") and "the model has no link 'oberon7/base'" in err
+    assert "(--strict: a warning is an error)" in err and err.count("\n") == 1
+
+
+def test_info_of_gazebo_sim_and_hippocampus_models(capsys):
+    """The fixtures written as blue (use_sim:=true) and hippo_sim write their vehicles: thrusters and hydrodynamics
+    read from their plugins, no arm joint."""
+    folder = ROOT / "tests" / "fixtures" / "gz"
+    assert main(["info", str(folder / "bluerov2_heavy_sim.urdf")]) == 0
+    out = capsys.readouterr().out
+    assert "arm DOF 0" in out and "propellers (8)" in out and "thrusters (8) from" in out
+    assert "  thruster5_joint xyz [+0.118 -0.215 +0.064]  dir [+0.000 +0.000 -1.000]  [-40.2, 51.5]  0.1\n" in out
+    assert "    linear [0 0 0 0 0 0]  quadratic [58.42 55.14 124.8 4 4 4]\n" in out
+    assert main(["info", str(folder / "hippo" / "hippo_bluerov.urdf")]) == 0
+    out = capsys.readouterr().out
+    assert "  thruster_4   xyz [+0.120 -0.220 +0.060]  dir [+0.000 +0.000 +1.000]  [-43.0438, 43.0438]  0.05\n" in out
+    assert "from the HippoCampus hydrodynamics, HippoCampus buoyancy plugin blocks of" in out
+    assert "  bluerov/base_link: V 0.01071  CoB [+0.000 +0.000 +0.005]\n" in out

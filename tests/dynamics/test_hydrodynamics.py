@@ -106,3 +106,31 @@ def test_hydro_rows_list_each_links_diagonals_volume_and_centre_of_buoyancy():
     np.testing.assert_allclose(rows[0]["quadratic_damping"], [0.25 * RHO * PI * r * r] * 3 + [0] * 3, rtol=1e-14)
     bluerov = hydro_rows(hydrodynamics_of(uvms.load("bluerov2_alpha5")))
     assert len(bluerov) > 1 and all(isinstance(value, (str, float, list)) for row in bluerov for value in row.values())
+
+
+def test_linear_damping_forward_speed_is_applied_as_hmfossen_does(tmp_path):
+    """uuv_simulator's HMFossen::ComputeDampingMatrix, in SNAME axes: D = -DLin - u DLinForwardSpeed
+    - diag(DNonLin) |nu| (u = nu[0], signed), tau = -D nu; uvms's wrench in FLU is the same, at forward and backward
+    speeds; ``uvms info`` and the YAML writer carry it."""
+    from uvms.dynamics.hydro_writer import hydrodynamics_yaml_text
+    from uvms.dynamics.hydrodynamics import load_hydrodynamics_yaml
+
+    lin, forward = [-2.0, -3, -4, -0.5, -0.6, -0.7], [-1.5, -8.0, -9.0, 0.0, -2.5, -3.0]
+    quad = [-10.0, -20, -30, -1, -2, -3]
+    model = (f"<type>fossen</type><linear_damping>{' '.join(map(str, lin))}</linear_damping>"
+             f"<linear_damping_forward_speed>{' '.join(map(str, forward))}</linear_damping_forward_speed>"
+             f"<quadratic_damping>{' '.join(map(str, quad))}</quadratic_damping>")
+    link = parse_hydrodynamics(shape_urdf(model), "auv.urdf").links["body"]
+    flip = np.array([1.0, -1, -1, 1, -1, -1])  # FLU <-> SNAME (FRD)
+    for nu in ([1.5, 0.2, -0.1, 0.05, 0.3, -0.2], [-0.8, -0.3, 0.4, -0.1, 0.2, 0.1]):
+        ned = flip * np.array(nu)
+        damping = -np.diag(lin) - ned[0] * np.diag(forward) - np.diag(quad) * np.abs(ned)
+        np.testing.assert_allclose(link.damping_wrench(np.array(nu)), flip * (-damping @ ned), rtol=1e-13)
+    row = hydro_rows(uvms.dynamics.HydroParameters(links={"body": link}))[0]
+    assert row["linear_damping_forward_speed"] == [1.5, 8.0, 9.0, 0.0, 2.5, 3.0]
+    path = tmp_path / "hydrodynamics.yaml"
+    path.write_text(hydrodynamics_yaml_text(uvms.dynamics.HydroParameters(links={"body": link})))
+    again = load_hydrodynamics_yaml(path).links["body"]
+    np.testing.assert_allclose(again.linear_damping_forward_speed, link.linear_damping_forward_speed)
+    with pytest.raises(uvms.errors.ModelCheckError, match="linear_damping_forward_speed holds positive values"):
+        parse_hydrodynamics(shape_urdf(model.replace("-1.5 -8.0", "1.5 -8.0")), "auv.urdf")

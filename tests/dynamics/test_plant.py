@@ -3,12 +3,14 @@ motors, parsing."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
 import uvms
 from conftest import shipped
-from uvms.errors import ModelCheckError, ModelParseError, NameNotFound, UVMSError
+from uvms.errors import ModelCheckError, ModelParseError, SkippedLinkWarning, UVMSError
 from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
 from uvms.dynamics.added_mass import generalized_jacobian_added_mass
 from uvms.dynamics.plant import Plant
@@ -276,11 +278,19 @@ def test_bad_hydrodynamic_values_are_refused(change, message):
     assert "probe.urdf: hydrodynamics of link 'hull'" in str(error.value)
 
 
-def test_an_unknown_link_is_named_with_the_valid_ones():
-    extra = "<link name='hul'><volume>0.01</volume></link>"
+def test_a_block_of_an_unknown_link_is_skipped_with_a_warning_naming_it():
+    """As Gazebo does (DAVE's RexROV names 'oberon7/base'): the block is skipped, its values unread; the warning names
+    the link and the close names; made an error (uvms --strict), it refuses the model."""
+    extra = "<link name='hul'><volume>not a number</volume></link>"
     robot = uvms.load(body_urdf(extra_link=extra))
-    with pytest.raises(NameNotFound, match="unknown link .* 'hul'; close names: hull"):
-        Plant(robot)
+    with pytest.warns(SkippedLinkWarning, match="hydrodynamics of link 'hul': the model has no link 'hul'; close "
+                                                "names: hull; the block is skipped"):
+        plant = Plant(robot)
+    assert list(plant.hydro.links) == ["hull"] and plant.hydro.links["hull"].volume > 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", SkippedLinkWarning)
+        with pytest.raises(SkippedLinkWarning, match="'hul'"):
+            Plant(robot)
     with pytest.raises(ModelCheckError, match="given twice"):
         parse_hydrodynamics(body_urdf(extra_link="<link name='hull'/>"))
 

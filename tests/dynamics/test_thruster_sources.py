@@ -11,7 +11,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from uvms.dynamics.thruster_sources import plugin_thrust_range, plugin_time_constant, read_thruster_plugins
+from uvms.dynamics.plugin_readers import read_thruster_plugins
+from uvms.dynamics.thruster_sources import plugin_thrust_range, plugin_time_constant
 from uvms.errors import ModelCheckError
 
 BASIC = "<conversion><type>Basic</type><rotorConstant>0.00031</rotorConstant></conversion>"
@@ -80,7 +81,7 @@ def test_plugins_are_read_with_what_they_give_and_the_joint_axis():
 
 
 @pytest.mark.parametrize("body, message", [
-    (FIRST, "m: thruster plugin 'a': <linkName> is missing"),
+    (FIRST, "m: uuv_simulator thruster plugin 'a': <linkName> is missing"),
     ("<linkName>p</linkName><thrustMax>-5</thrustMax>", "its largest thrust is -5 N; a thruster must push forward"),
     ("<linkName>p</linkName><jointName>k</jointName>", "unknown joint 'k'; valid joints: j"),
     ("<linkName>b</linkName><jointName>j</jointName>", "jointName 'j' does not carry linkName 'b'"),

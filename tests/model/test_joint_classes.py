@@ -12,8 +12,7 @@ import pytest
 import uvms
 from conftest import ROOT, urdf
 from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
-from uvms.errors import ModelCheckError, NameNotFound
-from uvms.errors import ThrusterFileWarning
+from uvms.errors import ModelCheckError, NameNotFound, ThrusterFileWarning
 
 IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"
 ARM = ["j1", "j2", "j3", "j4", "j5", "j6", "finger_a"]
@@ -43,7 +42,7 @@ def test_the_arm_is_six_joints_and_a_gripper_and_every_other_joint_has_its_class
                      "finger_b": "mimic", "finger_c": "mimic"}
     reasons = {name: joint_class.reason for name, joint_class in rov.joint_classes.items()}
     assert "thruster plugin 'thruster_0' names it (<jointName>)" in reasons["thruster_0_joint"]
-    assert "'thruster_1' is the <linkName> of thruster plugin 'thruster_1'" in reasons["thruster_1_joint"]
+    assert "'thruster_1' is the <linkName> of uuv_simulator thruster plugin 'thruster_1'" in reasons["thruster_1_joint"]
     assert reasons["rov/dvl_sonar0_joint"] == "zero range [0, 0], 'rov/dvl_sonar0_link' named like a sensor (dvl); held at 0"
     assert reasons["rov/pressure_joint"].startswith("'rov/pressure_link' named like a sensor (pressure) and no mass")
     assert reasons["anchor"] == "limits [0.2, 0.2]: upper - lower <= 1e-09; held at 0.2"
@@ -90,22 +89,22 @@ def test_thrusters_on_frozen_propellers_push_along_their_joint_axis(rov):
 
 PROPELLER_ROV = urdf(root='<link name="world"/><joint name="float" type="floating"><parent link="world"/>'
                           '<child link="base_link"/></joint>',
-                     extra='<link name="prop_link"/><joint name="prop_joint" type="continuous"><parent '
-                           'link="base_link"/><child link="prop_link"/><axis xyz="1 0 0"/></joint>')
+                     extra='<link name="aft_link"/><joint name="aft_joint" type="continuous"><parent '
+                           'link="base_link"/><child link="aft_link"/><axis xyz="1 0 0"/></joint>')
 
 
 def test_a_thrusters_yaml_beside_the_model_names_propellers(tmp_path):
     (tmp_path / "rov.urdf").write_text(PROPELLER_ROV)
-    assert uvms.load(tmp_path / "rov.urdf").joint_classes["prop_joint"].kind == "arm"  # nothing says it pushes
-    (tmp_path / "thrusters.yaml").write_text("thrusters:\n  aft: {frame: prop_link, max_forward: 5, max_reverse: 4, "
+    assert uvms.load(tmp_path / "rov.urdf").joint_classes["aft_joint"].kind == "arm"  # nothing says it pushes
+    (tmp_path / "thrusters.yaml").write_text("thrusters:\n  aft: {frame: aft_link, max_forward: 5, max_reverse: 4, "
                                              "time_constant: 0.1}\n")
     robot = uvms.load(tmp_path / "rov.urdf")
-    assert robot.joint_classes["prop_joint"].reason == ("its link 'prop_link' is the frame of thruster 'aft' in "
+    assert robot.joint_classes["aft_joint"].reason == ("its link 'aft_link' is the frame of thruster 'aft' in "
                                                         "thrusters.yaml; held at 0")
     assert robot.arm_joint_names == ["j1"]
     (tmp_path / "thrusters.yaml").write_text("thrusters: [unclosed\n")
     with pytest.warns(ThrusterFileWarning, match="thrusters.yaml: malformed YAML.*propellers it names are not known"):
-        assert uvms.load(tmp_path / "rov.urdf").joint_classes["prop_joint"].kind == "arm"
+        assert uvms.load(tmp_path / "rov.urdf").joint_classes["aft_joint"].kind == "arm"
 
 
 def test_arm_joints_keeps_exactly_the_listed_joints_and_freezes_the_others(rov, rng):

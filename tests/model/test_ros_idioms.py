@@ -104,14 +104,17 @@ def test_a_tiny_point_mass_thruster_link_loads_with_one_warning_naming_it(hoang)
 
 def test_a_point_mass_on_its_own_joint_makes_the_mass_matrix_singular_and_is_refused(hoang):
     with pytest.warns(PointMassWarning), pytest.raises(
-            uvms.errors.ModelCheckError, match=r"mass matrix is singular.*thruster_0.*positive definite <inertia>"):
-        uvms.load(with_link(hoang, "continuous"))  # a propeller spinning about its own axis: no inertia at all
+            uvms.errors.ModelCheckError, match=r"mass matrix is singular.*spinner.*positive definite <inertia>"):
+        uvms.load(with_link(hoang, "continuous", name="spinner"))  # spinning about its own axis: no inertia at all
+    with pytest.warns(PointMassWarning):  # named like a propeller: frozen (uvms.model.propellers), a point mass
+        robot = uvms.load(with_link(hoang, "continuous"))
+    assert robot.joint_classes["thruster_0_joint"].kind == "propeller" and robot.model.nv == 6
 
 
 def test_a_propeller_with_an_inertia_is_no_point_mass(hoang):
     with warnings.catch_warnings():
         warnings.simplefilter("error", PointMassWarning)
-        robot = uvms.load(with_link(hoang, "continuous", inertia=1e-6))
+        robot = uvms.load(with_link(hoang, "continuous", name="spinner", inertia=1e-6))
     assert robot.model.nv == 7
 
 

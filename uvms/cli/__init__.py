@@ -22,7 +22,7 @@ import threading
 import warnings
 from collections.abc import Iterator, Sequence
 
-from ..errors import UVMSError
+from ..errors import UVMSError, UVMSWarning
 from .terminal import printable, say
 from .identify import add_identify_parser, command_identify
 from .info import command_info, describe, format_limits, parse_assignments
@@ -86,10 +86,14 @@ class OneLineParser(argparse.ArgumentParser):
 
 
 def add_package_path(parser: argparse.ArgumentParser) -> None:
-    """``--package-path DIR`` (repeatable) on a command that loads a model (:mod:`uvms.model.packages`)."""
+    """The options of every command that loads a model: ``--package-path DIR`` (repeatable,
+    :mod:`uvms.model.packages`) and ``--strict`` (every uvms warning an error, :func:`main`)."""
     parser.add_argument("--package-path", action="append", default=[], metavar="DIR",
                         help="folder of ROS packages for $(find pkg) and package://pkg/ (a package, or a folder "
                              "searched for package.xml); repeatable, before ROS_PACKAGE_PATH and the model's workspace")
+    parser.add_argument("--strict", action="store_true",
+                        help="refuse what uvms would only warn about (a hydrodynamic block naming a link the model "
+                             "does not have, a default thruster value, ...): the first warning is an error, exit 2")
 
 
 def add_parallel_options(parser: argparse.ArgumentParser) -> None:
@@ -263,6 +267,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
+                if getattr(options, "strict", False):
+                    warnings.simplefilter("error", UVMSWarning)
                 status = options.handler(options)
             for warning in caught:
                 say(f"uvms: warning: {warning.message}")
@@ -274,6 +280,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                 return interrupted(exc, options, received)
             if isinstance(exc, UVMSError):
                 say(f"uvms: error: {' '.join(str(exc).split())}")
+                return EXIT_USAGE
+            if isinstance(exc, UVMSWarning):  # --strict
+                say(f"uvms: error: {' '.join(str(exc).split())} (--strict: a warning is an error)")
                 return EXIT_USAGE
             if os.environ.get("UVMS_DEBUG"):
                 raise

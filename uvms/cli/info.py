@@ -120,7 +120,8 @@ def thruster_lines(robot: Robot) -> list[str]:
     except UVMSError as exc:  # info describes the model; the data's problem is stated, not fatal
         return [f"thrusters   not usable: {' '.join(str(exc).split())}"]
     if not rows:
-        return ["thrusters   none (no uuv_simulator thruster plugin, no thrusters.yaml beside the model)"]
+        return ["thrusters   none (no thruster plugin of uuv_simulator, Gazebo Sim or HippoCampus, no thrusters.yaml "
+                "beside the model)"]
     width = max([12, *(len(row["name"]) for row in rows)])
     lines = [f"thrusters ({len(rows)}) from {thrusters.source}: position [m], direction (base frame), thrust [N], "
              "time constant [s]"]
@@ -150,7 +151,8 @@ def hydrodynamics_lines(robot: Robot, path: str | None = None) -> list[str]:
         return [f"hydrodynamics not usable: {' '.join(str(exc).split())}"]
     rows = hydro_rows(hydro)
     if not rows:
-        return ["hydrodynamics none (no uuv_simulator underwater-object plugin, no hydrodynamics.yaml beside the model)"]
+        return ["hydrodynamics none (no hydrodynamic plugin of uuv_simulator, Gazebo Sim or HippoCampus, no "
+                "hydrodynamics.yaml beside the model)"]
     lines = [f"hydrodynamics ({len(rows)} links, rho {hydro.fluid_density:g} kg/m^3): volume [m^3], centre of "
              "buoyancy [m], diagonals of added mass [kg, kg m^2], linear [N s/m, N m s] and quadratic damping "
              "[N s^2/m^2, N m s^2]", *hydrodynamics_source(robot, hydro.source)]
@@ -158,14 +160,20 @@ def hydrodynamics_lines(robot: Robot, path: str | None = None) -> list[str]:
         lines += [f"  {row['link']}: V {row['volume']:.4g}  CoB {vector(row['center_of_buoyancy'])}",
                   f"    added mass {vector(row['added_mass_diagonal'], '.4g')}",
                   f"    linear {vector(row['linear_damping'], '.4g')}  quadratic {vector(row['quadratic_damping'], '.4g')}"]
+        if any(row["linear_damping_forward_speed"]):
+            lines.append(f"    linear per m/s of forward speed {vector(row['linear_damping_forward_speed'], '.4g')}")
     return lines
 
 
 def hydrodynamics_source(robot: Robot, source: str) -> list[str]:
-    """Where the hydrodynamics come from: the model's uuv_simulator block, or a YAML file with the ``#`` lines at its
-    top (``uvms identify`` writes there what it was identified from)."""
+    """Where the hydrodynamics come from: the model's plugin blocks (of which simulators), or a YAML file with the
+    ``#`` lines at its top (``uvms identify`` writes there what it was identified from)."""
+    from ..model.plugins import simulators
+
     if source == robot.source:
-        return [f"  from the uuv_simulator block of {source}"]
+        names = [f"{name} {role}" for role in ("hydrodynamics", "buoyancy")
+                 for name in simulators(robot.urdf_root, role)] if robot.urdf_root is not None else []
+        return [f"  from the {', '.join(names) or 'hydrodynamic'} plugin blocks of {source}"]
     lines = [f"  from {source}"]
     try:
         text = read_text(source, "hydrodynamics", MAX_YAML_BYTES)

@@ -7,18 +7,18 @@ Conventions inside uvms
 -----------------------
 Everything in the link frame, FLU (REP-103), [linear; angular] like Pinocchio's
 spatial vectors, about the link frame origin: ``added_mass`` M_A (6, 6) symmetric
-positive semi-definite, and damping *coefficients* d_l, d_q >= 0 so that the
-damping wrench on the link is -(diag(d_l) + diag(d_q) |nu_r|) nu_r. The
+positive semi-definite, and damping *coefficients* d_l, d_f, d_q >= 0 so that the
+damping wrench on the link is -(diag(d_l) + u diag(d_f) + diag(d_q) |nu_r|) nu_r, u the
+surge speed relative to the water (uuv_simulator's forward-speed term, ``HMFossen.cc``). The
 conversion from the file is M_A = T M_file T with T = diag(1, -1, -1, 1, -1, -1)
-and d = -file values (a diagonal is the same in FRD and FLU).
+and d = -file values (a diagonal is the same in FRD and FLU, and so is u).
 """
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
-
-import warnings
 
 import numpy as np
 
@@ -46,6 +46,8 @@ class LinkHydrodynamics:
             its largest entry is averaged to exactly symmetric, with an :class:`AddedMassSymmetrizedWarning`).
         linear_damping: (6,) d_l >= 0 [N s/m, N m s/rad].
         quadratic_damping: (6,) d_q >= 0 [N s^2/m^2, N m s^2/rad^2].
+        linear_damping_forward_speed: (6,) d_f >= 0 [N s^2/m^2, N m s^2/(rad m)]: linear damping per m/s of
+            forward speed (uuv_simulator's ``linear_damping_forward_speed``, an AUV's lift-like damping).
 
     Raises:
         ModelCheckError: a wrong shape, a non-finite number, a negative volume or
@@ -57,6 +59,7 @@ class LinkHydrodynamics:
     added_mass: np.ndarray = field(default_factory=lambda: np.zeros((6, 6)))
     linear_damping: np.ndarray = field(default_factory=lambda: np.zeros(6))
     quadratic_damping: np.ndarray = field(default_factory=lambda: np.zeros(6))
+    linear_damping_forward_speed: np.ndarray = field(default_factory=lambda: np.zeros(6))
 
     def __post_init__(self) -> None:
         volume = _array(self.volume, (), "volume")
@@ -70,7 +73,7 @@ class LinkHydrodynamics:
         else:
             added = _array(symmetrized_added_mass(added, "LinkHydrodynamics"), (6, 6), "added_mass")
         object.__setattr__(self, "added_mass", added)
-        for name in ("linear_damping", "quadratic_damping"):
+        for name in ("linear_damping", "quadratic_damping", "linear_damping_forward_speed"):
             values = _array(getattr(self, name), (6,), name)
             if np.any(values < 0):
                 raise ModelCheckError(
@@ -78,8 +81,10 @@ class LinkHydrodynamics:
             object.__setattr__(self, name, values)
 
     def damping_wrench(self, nu_r: np.ndarray) -> np.ndarray:
-        """Fossen's damping wrench ``-(D_l + D_q |nu_r|) nu_r`` (6,) [N, N m] for a relative twist nu_r (6,)."""
-        return -(self.linear_damping + self.quadratic_damping * np.abs(nu_r)) * nu_r
+        """Fossen's damping wrench ``-(D_l + u D_f + D_q |nu_r|) nu_r`` (6,) [N, N m] for a relative twist nu_r (6,),
+        u = nu_r[0] (uuv_simulator's ``HMFossen::ComputeDampingMatrix``: ``-DLin - vel[0] * DLinForwardSpeed``)."""
+        linear = self.linear_damping + nu_r[0] * self.linear_damping_forward_speed
+        return -(linear + self.quadratic_damping * np.abs(nu_r)) * nu_r
 
 
 @dataclass(frozen=True)
@@ -210,9 +215,12 @@ def hydro_rows(hydro: HydroParameters) -> list[dict[str, object]]:
     Returns:
         [{"link": str, "volume": float [m^3], "center_of_buoyancy": [x, y, z] [m] (link frame),
         "added_mass_diagonal": 6 floats [kg, kg, kg, kg m^2, kg m^2, kg m^2], "linear_damping": 6 floats
-        [N s/m, N m s/rad] and "quadratic_damping": 6 floats [N s^2/m^2, N m s^2/rad^2] (coefficients >= 0),
+        [N s/m, N m s/rad], "quadratic_damping": 6 floats [N s^2/m^2, N m s^2/rad^2] and
+        "linear_damping_forward_speed": 6 floats [N s^2/m^2, N m s^2/(rad m)] (coefficients >= 0),
         all about the link origin, FLU, order [u v w p q r]}], in the order of ``hydro.links``.
     """
     return [{"link": name, "volume": link.volume, "center_of_buoyancy": link.center_of_buoyancy.tolist(),
              "added_mass_diagonal": np.diag(link.added_mass).tolist(), "linear_damping": link.linear_damping.tolist(),
-             "quadratic_damping": link.quadratic_damping.tolist()} for name, link in hydro.links.items()]
+             "quadratic_damping": link.quadratic_damping.tolist(),
+             "linear_damping_forward_speed": link.linear_damping_forward_speed.tolist()}
+            for name, link in hydro.links.items()]

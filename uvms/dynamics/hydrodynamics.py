@@ -39,10 +39,12 @@ Conventions of the file (those of uuv_simulator's ``HMFossen``)
   z down: uuv_simulator converts the link velocity with ``ToNEDConvention``),
   order [u v w p q r], about the link frame origin.
 * Damping values are Fossen's hydrodynamic derivatives, which are negative:
-  ``linear_damping`` = [X_u, Y_v, Z_w, K_p, M_q, N_r] <= 0 and
-  ``quadratic_damping`` = [X_u|u|, ...] <= 0; the plugin applies
-  D(nu) = -diag(linear) - diag(quadratic) |nu|. A positive value would feed energy
-  into the motion and is refused.
+  ``linear_damping`` = [X_u, Y_v, Z_w, K_p, M_q, N_r] <= 0,
+  ``quadratic_damping`` = [X_u|u|, ...] <= 0 and ``linear_damping_forward_speed``
+  = [X_uu, ...] <= 0 (the linear damping that grows with the forward speed u); the plugin
+  applies D(nu) = -diag(linear) - u diag(linear_damping_forward_speed) - diag(quadratic) |nu|
+  (``HMFossen::ComputeDampingMatrix``: u the signed surge speed relative to the water). A
+  positive value would feed energy into the motion and is refused.
 
 The parameters themselves (:class:`LinkHydrodynamics`, :class:`HydroParameters`, in uvms's own FLU
 conventions) live in :mod:`uvms.dynamics.hydro_parameters` and are importable from here.
@@ -56,13 +58,14 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ..errors import ModelCheckError, ModelParseError, UVMSError
 from ..model.resources import read_yaml
-from .hydro_parameters import (GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names,
-                               flip_frd_flu, symmetrized_added_mass)
-from .hydro_shapes import BOX_KEYS, SHAPE_KEYS, SHAPE_TYPES, shape_coefficients
+from .hydro_parameters import GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names
+from .plugin_readers import read_hydro_plugins
+from .uuv_hydro import MODEL_KEYS, MODEL_TYPES, _numbers, link_from_uuv, urdf_link_masses
+
+__all__ = ["MODEL_KEYS", "MODEL_TYPES", "HydroParameters", "LinkHydrodynamics", "hydrodynamics_of",
+           "link_from_uuv", "load_hydrodynamics_yaml", "parse_hydrodynamics", "urdf_link_masses"]
 
 if TYPE_CHECKING:
     import pinocchio as pin
@@ -71,178 +74,34 @@ if TYPE_CHECKING:
 
 #: Name of the YAML file looked for beside a model.
 YAML_NAME = "hydrodynamics.yaml"
-#: Hydrodynamic model types understood: uuv_simulator's.
-MODEL_TYPES = ("fossen",) + SHAPE_TYPES
-#: The keys of a ``hydrodynamic_model``.
-MODEL_KEYS = ("type", "added_mass", "linear_damping", "quadratic_damping", "linear_damping_forward_speed") + SHAPE_KEYS
-
-
-# --------------------------------------------------------- uuv_simulator form
-def link_from_uuv(
-    values: Mapping[str, object], *, fluid_density: float, link_mass: float | None, where: str
-) -> LinkHydrodynamics:
-    """A LinkHydrodynamics from the values of one uuv_simulator ``<link>`` entry (file conventions).
-
-    Args:
-        values: ``volume``, ``center_of_buoyancy``, ``neutrally_buoyant``, ``box`` = {width, length, height} and
-            ``hydrodynamic_model`` = {``type``, ``added_mass``, ``linear_damping``,
-            ``quadratic_damping``, ``linear_damping_forward_speed``, and the shape's dimensions
-            (:data:`MODEL_KEYS`)}, as numbers or whitespace-separated text.
-        fluid_density: rho [kg/m^3], for ``neutrally_buoyant``.
-        link_mass: the link's mass [kg] in the model, for ``neutrally_buoyant`` (None: unknown).
-        where: prefix of error messages.
-
-    Raises:
-        ModelCheckError: a missing or invalid value (the message says which and what is valid).
-    """
-    try:
-        model = values.get("hydrodynamic_model") or {}
-        if not isinstance(model, Mapping):
-            raise ModelCheckError("hydrodynamic_model must hold type, added_mass, linear_damping, quadratic_damping")
-        kind = str(model.get("type", "fossen")).strip()
-        if kind not in MODEL_TYPES:
-            raise ModelCheckError(f"hydrodynamic model type {kind!r} is not supported; valid: {', '.join(MODEL_TYPES)}")
-        forward = model.get("linear_damping_forward_speed")
-        if forward is not None and np.any(_numbers(forward, "linear_damping_forward_speed") != 0):
-            raise ModelCheckError("linear_damping_forward_speed is not supported (give zeros or leave it out)")
-        volume = float(_numbers(values.get("volume", 0.0), "volume", 1)[0])
-        if _flag(values.get("neutrally_buoyant", False)):
-            if link_mass is None:
-                raise ModelCheckError("neutrally_buoyant needs the link's mass, and the model gives it none (no "
-                                      "<inertial> mass on this link); give volume [m^3] instead")
-            volume = link_mass / fluid_density  # as uuv_simulator's BuoyantObject::SetNeutrallyBuoyant
-        added = _numbers(model.get("added_mass", np.zeros(36)), "added_mass", 36).reshape(6, 6).copy()
-        linear = _diagonal(model.get("linear_damping", np.zeros(6)), "linear_damping")
-        quadratic = _diagonal(model.get("quadratic_damping", np.zeros(6)), "quadratic_damping").copy()
-        if kind in SHAPE_TYPES:  # a fossen model whose diagonal entries the shape then sets, as uuv_simulator's
-            box = values.get("box") or None
-            if box is not None and not isinstance(box, Mapping):
-                raise ModelCheckError(f"box must hold {', '.join(BOX_KEYS)} [m], got {box!r}")
-            shape_added, shape_drag = shape_coefficients(kind, model, box, fluid_density, where)
-            for index, value in shape_added.items():
-                added[index, index] = value
-            quadratic[list(shape_drag)] = list(shape_drag.values())
-        added = symmetrized_added_mass(added, where)
-        for name, derivatives in (("linear_damping", linear), ("quadratic_damping", quadratic)):
-            if np.any(derivatives > 0):
-                raise ModelCheckError(
-                    f"{name} holds positive values {derivatives.tolist()}: uuv_simulator's form takes Fossen's "
-                    f"hydrodynamic derivatives (X_u, Y_v, ... <= 0) and a positive one would add energy; "
-                    f"negate them")
-        return LinkHydrodynamics(
-            volume=volume,
-            center_of_buoyancy=_numbers(values.get("center_of_buoyancy", np.zeros(3)), "center_of_buoyancy", 3),
-            added_mass=flip_frd_flu(added),
-            linear_damping=-linear,
-            quadratic_damping=-quadratic,
-        )
-    except ModelCheckError as exc:
-        raise ModelCheckError(f"{where}: {exc}") from None
-
-
-def _numbers(value: object, what: str, count: int | None = None) -> np.ndarray:
-    """Numbers from text ("1 2 3") or a (nested) list; ModelCheckError when not ``count`` finite numbers."""
-    try:
-        if isinstance(value, str):
-            array = np.array([float(token) for token in value.split()], dtype=float)
-        else:
-            array = np.asarray(value, dtype=float).ravel()
-    except (TypeError, ValueError):
-        raise ModelCheckError(f"{what} is not a list of numbers: {value!r}") from None
-    if count is not None and array.size != count:
-        raise ModelCheckError(f"{what} holds {array.size} numbers, expected {count}")
-    if not np.all(np.isfinite(array)):
-        raise ModelCheckError(f"{what} has non-finite entries")
-    return array
-
-
-def _diagonal(value: object, what: str) -> np.ndarray:
-    """6 damping values, or the diagonal of 36 (uuv_simulator accepts both) when nothing is off it."""
-    array = _numbers(value, what)
-    if array.size == 6:
-        return array
-    if array.size == 36:
-        matrix = array.reshape(6, 6)
-        if np.any(matrix - np.diag(np.diag(matrix)) != 0):
-            raise ModelCheckError(f"{what}: only a diagonal is supported; its 36 values have off-diagonal entries")
-        return np.diag(matrix).copy()
-    raise ModelCheckError(f"{what} holds {array.size} numbers, expected 6 (or 36 for a diagonal matrix)")
-
-
-def _flag(value: object) -> bool:
-    """uuv_simulator's boolean text: 1/0, true/false."""
-    if isinstance(value, bool):
-        return value
-    text = str(value).strip().lower()
-    if text in ("1", "true"):
-        return True
-    if text in ("0", "false", ""):
-        return False
-    raise ModelCheckError(f"neutrally_buoyant must be 0/1 or true/false, got {value!r}")
-
-
-def _is_uuv_plugin(plugin: ET.Element) -> bool:
-    return "underwater_object" in plugin.get("filename", "")
-
-
 def parse_hydrodynamics(
-    urdf: str, origin: str = "<string>", link_names: Iterable[str] | None = None
+    urdf: str, origin: str = "<string>", link_names: Iterable[str] | None = None, moving: Iterable[str] = ()
 ) -> HydroParameters | None:
-    """The hydrodynamic parameters written in a URDF's uuv_simulator plugin block(s).
+    """The hydrodynamic parameters written in a URDF's plugin blocks: uuv_simulator's underwater-object plugin,
+    Gazebo Sim's Hydrodynamics and Buoyancy, HippoCampus's (:mod:`uvms.dynamics.plugin_readers`).
 
     Args:
         urdf: URDF text (xacro already expanded).
         origin: name of the model for messages.
-        link_names: the model's links, checked before any value (None: not checked here).
+        link_names: the model's links (None: not checked here); a block naming another link is skipped.
+        moving: the joints that move in the model's file (``robot.joint_classes``; frozen since, they are fixed in
+            ``urdf``): Gazebo lumps no link through them (:func:`~uvms.dynamics.plugin_readers.lumped_mass`).
 
     Returns:
-        The parameters, or None when the URDF has no underwater-object plugin.
+        The parameters, or None when the URDF has no such plugin.
 
     Raises:
         ModelParseError: not well-formed XML.
-        NameNotFound: a link the model does not have (with the close names).
-        ModelCheckError: an invalid value, a link given twice, two plugins with different densities.
+        ModelCheckError: an invalid value, a link given twice, plugins with different densities.
+
+    Warns:
+        SkippedLinkWarning: a block naming a link the model does not have (skipped, as Gazebo does).
     """
     try:
         root = ET.fromstring(urdf)
     except ET.ParseError as exc:
         raise ModelParseError(f"{origin}: malformed XML ({exc})") from None
-    plugins = [plugin for gazebo in root.findall("gazebo") for plugin in gazebo.findall("plugin")
-               if _is_uuv_plugin(plugin)]
-    if not plugins:
-        return None
-    masses = urdf_link_masses(root)
-    densities = {float(_numbers(p.findtext("fluid_density", str(SEA_WATER_DENSITY)), "fluid_density", 1)[0])
-                 for p in plugins}
-    if len(densities) > 1:
-        raise ModelCheckError(
-            f"{origin}: the underwater-object plugins give different fluid densities {sorted(densities)}")
-    density = densities.pop()
-    check_link_names((e.get("name", "") for p in plugins for e in p.findall("link")), link_names, origin)
-    links: dict[str, LinkHydrodynamics] = {}
-    for plugin in plugins:
-        for element in plugin.findall("link"):
-            name = element.get("name", "")
-            where = f"{origin}: hydrodynamics of link {name!r}"
-            if name in links:
-                raise ModelCheckError(f"{where}: the link is given twice")
-            values: dict[str, object] = {child.tag: (child.text or "") for child in element}
-            for tag in ("hydrodynamic_model", "box"):
-                nested = element.find(tag)
-                if nested is not None:
-                    values[tag] = {child.tag: (child.text or "") for child in nested}
-            links[name] = link_from_uuv(values, fluid_density=density, link_mass=masses.get(name), where=where)
-    return HydroParameters(fluid_density=density, links=links, source=origin)
-
-
-def urdf_link_masses(root: ET.Element) -> dict[str, float]:
-    """{link name: mass [kg]} of the URDF links that have an ``<inertial>``."""
-    masses = {}
-    for link in root.findall("link"):
-        mass = link.find("inertial/mass")
-        if mass is not None:
-            masses[link.get("name", "")] = float(mass.get("value", "0"))
-    return masses
+    return read_hydro_plugins(root, origin, link_names, moving)
 
 
 # ---------------------------------------------------------------------- YAML
@@ -349,7 +208,7 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
     if path is not None:
         hydro = load_hydrodynamics_yaml(path, masses, names)
     else:
-        from_urdf = parse_hydrodynamics(robot.urdf, robot.source, names) if robot.urdf else None
+        from_urdf = parse_hydrodynamics(robot.urdf, robot.source, names, robot.joint_classes) if robot.urdf else None
         folder = Path(robot.source).parent if robot.source and not robot.source.startswith("<") else None
         beside = folder / YAML_NAME if folder is not None and (folder / YAML_NAME).is_file() else None
         if from_urdf is not None and beside is not None:

@@ -12,7 +12,7 @@ times ``propeller_efficiency``, converted to a thrust by ``<conversion>`` (``Bas
 ``thrust_efficiency``, clipped to [``thrustMin``, ``thrustMax``]. The thrust pushes along the thruster link's x
 axis, or along the axis of ``<jointName>`` (later versions of the plugin).
 
-What uvms reads from it (:func:`read_thruster_plugins`):
+What uvms reads from it (:func:`read_uuv_thruster`; the readers of every simulator: :mod:`uvms.dynamics.plugin_readers`):
 
 * the limits: the range of thrust that chain can hold in steady state (:func:`plugin_thrust_range`). A side
   left unbounded (uuv_simulator's defaults: no clamp and no thrustMin/thrustMax with a Basic conversion, as the
@@ -38,7 +38,6 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelCheckError, ModelParseError
-from ..model.joint_classes import is_thruster_plugin
 from ..model.resources import read_yaml
 
 #: How one thruster is written, quoted by every error about thruster data.
@@ -104,40 +103,48 @@ def read_thrusters_document(path: str | os.PathLike, *, entries_required: bool) 
     return {key: document[key] for key in LIMIT_KEYS if key in document}, {str(k): v for k, v in entries.items()}
 
 
-def read_thruster_plugins(root: ET.Element, origin: str) -> list[PluginThruster]:
-    """The thruster plugins of a URDF ``<robot>``, in file order (empty when it has none).
+def read_uuv_thruster(plugin: ET.Element, root: ET.Element, name: str, where: str) -> PluginThruster:
+    """What one uuv_simulator thruster plugin says (the module docstring); registered for uuv_simulator in
+    :data:`uvms.dynamics.plugin_readers.THRUSTER_READERS`.
+
+    Args:
+        plugin: the ``<plugin>``; root: the URDF ``<robot>``; name: the thruster's name; where: for messages.
 
     Raises:
-        ModelCheckError: a plugin without ``linkName``, a jointName that is no joint of the model or does not carry
-            the link, a non-numeric value, thrustMin >= thrustMax, a thrust range without positive thrust or with a
-            positive lowest thrust (the message names the plugin).
+        ModelCheckError: no ``linkName``, a jointName that is no joint of the model or does not carry the link, a
+            non-numeric value, thrustMin >= thrustMax, a thrust range without positive thrust or with a positive
+            lowest thrust.
     """
-    plugins = [p for gazebo in root.findall("gazebo") for p in gazebo.findall("plugin") if is_thruster_plugin(p)]
-    thrusters = []
-    for index, plugin in enumerate(plugins):
-        name = plugin.get("name") or f"thruster_{index}"
-        where = f"{origin}: thruster plugin {name!r}"
-        link = (plugin.findtext("linkName") or "").strip()
-        if not link:
-            raise ModelCheckError(f"{where}: <linkName> is missing; it names the link the thrust acts on")
-        given = {}
-        low, high = plugin_thrust_range(plugin, where)
-        if math.isfinite(high):
-            if high <= 0:
-                raise ModelCheckError(f"{where}: its largest thrust is {high:g} N; a thruster must push forward "
-                                      f"(> 0 N): check thrustMax, the clamp and the conversion")
-            given["max_forward"] = high
-        if math.isfinite(low):
-            if low > 0:
-                raise ModelCheckError(f"{where}: its lowest thrust is {low:g} N; it must be <= 0 N (thrustMin "
-                                      f"and the clamp must allow zero thrust)")
-            given["max_reverse"] = -low
-        tau = plugin_time_constant(plugin, where)
-        if tau is not None:
-            given["time_constant"] = tau
-        joint = (plugin.findtext("jointName") or "").strip()
-        thrusters.append(PluginThruster(name, link, joint_axis(root, joint, link, where) if joint else None, given))
-    return thrusters
+    link = (plugin.findtext("linkName") or "").strip()
+    if not link:
+        raise ModelCheckError(f"{where}: <linkName> is missing; it names the link the thrust acts on")
+    low, high = plugin_thrust_range(plugin, where)
+    given = thrust_limits(low, high, where, "check thrustMax, the clamp and the conversion")
+    tau = plugin_time_constant(plugin, where)
+    if tau is not None:
+        given["time_constant"] = tau
+    joint = (plugin.findtext("jointName") or "").strip()
+    return PluginThruster(name, link, joint_axis(root, joint, link, where) if joint else None, given)
+
+
+def thrust_limits(low: float, high: float, where: str, check: str) -> dict[str, float]:
+    """{max_forward, max_reverse} [N] of a plugin's thrust range [low, high] (a side that is infinite: not given).
+
+    Raises:
+        ModelCheckError: a largest thrust <= 0 or a lowest thrust > 0 (``check``: what to look at).
+    """
+    given = {}
+    if math.isfinite(high):
+        if high <= 0:
+            raise ModelCheckError(f"{where}: its largest thrust is {high:g} N; a thruster must push forward "
+                                  f"(> 0 N): {check}")
+        given["max_forward"] = high
+    if math.isfinite(low):
+        if low > 0:
+            raise ModelCheckError(f"{where}: its lowest thrust is {low:g} N; it must be <= 0 N (a thruster must "
+                                  f"allow zero thrust): {check}")
+        given["max_reverse"] = -low
+    return given
 
 
 def joint_axis(root: ET.Element, joint_name: str, link: str, where: str) -> np.ndarray:

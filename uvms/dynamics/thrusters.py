@@ -6,8 +6,9 @@ its command through a first-order lag f' = (f_cmd - f) / time_constant.
 
 Where they come from
 ====================
-uuv_simulator's thruster plugins in the URDF (one per thruster; what is read from them:
-:mod:`uvms.dynamics.thruster_sources`)::
+The thruster plugins in the URDF, one per thruster, of uuv_simulator (what is read from them:
+:mod:`uvms.dynamics.thruster_sources`), Gazebo Sim (``gz::sim::systems::Thruster``: :mod:`uvms.dynamics.gz_sim`)
+or HippoCampus (``hippo_gz_plugins::thruster``: :mod:`uvms.dynamics.hippo`), e.g. uuv_simulator's::
 
     <plugin name="thruster_1" filename="libuuv_thruster_ros_plugin.so">
       <linkName>thruster_1</linkName>       <!-- a link of the model: thrust along its x axis at the joint's zero -->
@@ -58,8 +59,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelCheckError, ModelParseError, ThrusterDefaultWarning, UVMSError
-from .thruster_sources import (LIMIT_KEYS, THRUSTER_KEYS, PluginThruster, fail,
-                               read_thruster_plugins, read_thrusters_document)
+from .plugin_readers import read_thruster_plugins
+from .thruster_sources import LIMIT_KEYS, THRUSTER_KEYS, PluginThruster, fail, read_thrusters_document
 
 if TYPE_CHECKING:
     from ..robot.robot import Robot
@@ -71,9 +72,12 @@ YAML_NAME = "thrusters.yaml"
 DEFAULT_VALUES = {"max_forward": 2000.0, "max_reverse": 2000.0, "time_constant": 0.05}
 DEFAULTS_WHY = ("These are uuv_simulator's RexROV values: max_thrust 2000 N of its thruster manager (uuv_simulator "
                 "docs, 'Configuring the thruster manager') and the 0.05 s time constant of rexrov_actuators.xacro. "
-                "A plugin gives limits by thrustMin/thrustMax, a clamp or a LinearInterp table, and a time constant "
-                f"with FirstOrder dynamics only; give your thrusters' values there or in {YAML_NAME} (max_forward, "
-                "max_reverse, time_constant, per thruster or as file defaults)")
+                "A uuv_simulator plugin gives limits by thrustMin/thrustMax, a clamp or a LinearInterp table, and a "
+                "time constant with FirstOrder dynamics only; a Gazebo Sim Thruster limits by max_thrust_cmd/"
+                "min_thrust_cmd and has no time constant; a HippoCampus thruster limits by maximum_rpm and its "
+                "thrust coefficients, its time constant is timeconstant_up = timeconstant_down > 0; give your "
+                f"thrusters' values there or in {YAML_NAME} (max_forward, max_reverse, time_constant, per thruster "
+                "or as file defaults)")
 
 
 @dataclass(frozen=True)
@@ -224,10 +228,10 @@ def load_thrusters_yaml(path: str | os.PathLike, frames: Sequence[str] | None = 
     return Thrusters(tuple(items), source=str(path))
 
 
-# ------------------------------------------------------------------ uuv_simulator plugins, completed
+# ------------------------------------------------------------------ simulator plugins, completed
 def complete_plugin_thrusters(plugins: Sequence[PluginThruster], origin: str, frames: Sequence[str] | None = None,
                               completion: str | os.PathLike | None = None) -> Thrusters:
-    """The Thrusters of uuv_simulator plugins, each value from the first source that gives it.
+    """The Thrusters of simulator plugins, each value from the first source that gives it.
 
     For each of max_forward, max_reverse and time_constant of a thruster: its entry in the completion YAML
     (same name as the plugin; the user's own word, so it wins over the plugin), else the plugin
@@ -235,7 +239,7 @@ def complete_plugin_thrusters(plugins: Sequence[PluginThruster], origin: str, fr
     (:data:`DEFAULT_VALUES`) with one :class:`ThrusterDefaultWarning` naming the thrusters that got it.
 
     Args:
-        plugins: the plugins (:func:`~uvms.dynamics.thruster_sources.read_thruster_plugins`); origin: the model,
+        plugins: the plugins (:func:`~uvms.dynamics.plugin_readers.read_thruster_plugins`); origin: the model,
             for messages; frames: the model's frame names (checked); completion: the YAML file that completes
             them (None: none).
 
@@ -280,7 +284,7 @@ def complete_plugin_thrusters(plugins: Sequence[PluginThruster], origin: str, fr
 
 def parse_thrusters_urdf(urdf: str, origin: str = "<string>", frames: Sequence[str] | None = None,
                          completion: str | os.PathLike | None = None) -> Thrusters | None:
-    """The thrusters of a URDF's uuv_simulator thruster plugins (completed, :func:`complete_plugin_thrusters`),
+    """The thrusters of a URDF's thruster plugins (completed, :func:`complete_plugin_thrusters`),
     or None when it has none.
 
     Raises:
@@ -321,8 +325,8 @@ def thrusters_of(robot: Robot, path: str | os.PathLike | None = None, *, require
     if yaml_path is not None:
         return load_thrusters_yaml(yaml_path, frames)
     if required:
-        raise UVMSError(f"{robot.source}: the model has no thrusters; add uuv_simulator thruster plugins to the "
-                        f"URDF or a {YAML_NAME} beside it (see uvms.dynamics.thrusters)")
+        raise UVMSError(f"{robot.source}: the model has no thrusters; add thruster plugins (uuv_simulator, Gazebo "
+                        f"Sim or HippoCampus) to the URDF or a {YAML_NAME} beside it (see uvms.dynamics.thrusters)")
     return Thrusters((), source=f"{robot.source} (no thrusters)")
 
 

@@ -3,10 +3,12 @@
 Every joint that moves in the file (revolute, continuous, prismatic; the vehicle's floating/planar joint aside)
 gets a class (:class:`uvms.robot.structure.JointClass`, ``robot.joint_classes``, printed by ``uvms info``):
 
-* ``propeller``: it carries a thruster: a uuv_simulator thruster plugin names it (``<jointName>``) or its child
-  link (``<linkName>``), or the ``thrusters.yaml`` beside the model names its child link as a thruster's
-  ``frame`` or ``parent``. A propeller's spin changes nothing uvms computes (kinematics; the thrust acts along
-  the joint's axis, which stays in the URDF): it is frozen, and its link's frame stays.
+* ``propeller``: it carries a thruster: a thruster plugin of a simulator uvms reads names it or its child link
+  (:mod:`uvms.model.plugins`), the ``thrusters.yaml`` beside the model names its child link as a thruster's
+  ``frame`` or ``parent``, or, with no plugin, its structure says so: a continuous joint to a leaf link named like
+  a propeller, massless or tiny (:mod:`uvms.model.propellers`). A propeller's spin changes nothing uvms computes
+  (kinematics; the thrust acts along the joint's axis, which stays in the URDF): it is frozen, its link's frame
+  stays.
 * ``sensor``: the joint or its child link is named like a sensor (:data:`uvms.robot.structure.SENSOR_WORDS`:
   the names of uuv_simulator's sensor macros), and the joint has a zero range (uuv_simulator mounts its sensors
   on revolute joints with limits [0, 0]) or its subtree carries no mass. Frozen.
@@ -29,7 +31,6 @@ safety_controller and mimic elements dropped, its axis kept (a thruster plugin's
 
 from __future__ import annotations
 
-import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -38,9 +39,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError, NameNotFound, ThrusterFileWarning, UVMSError
+from ..errors import ModelCheckError, NameNotFound
 from ..robot.structure import JointClass, sensor_word
-from .resources import read_yaml
+from .propellers import propeller_joints
 
 #: [rad or m] a revolute or prismatic joint whose upper - lower limit is at most this cannot move.
 RANGE_TOLERANCE = 1e-9
@@ -48,8 +49,6 @@ RANGE_TOLERANCE = 1e-9
 MOVING_TYPES = ("revolute", "continuous", "prismatic")
 #: Children of a joint that a fixed joint does not have (its <axis> is kept: a thruster plugin reads it).
 DROPPED_WHEN_FROZEN = ("limit", "dynamics", "calibration", "safety_controller", "mimic")
-#: The thruster file beside a model (read by uvms.dynamics.thrusters).
-THRUSTERS_YAML = "thrusters.yaml"
 
 
 @dataclass(frozen=True)
@@ -68,11 +67,6 @@ class Mimic:
     multiplier: float
     offset: float
     through: tuple[str, ...]  # the mimic joints between it and the root (empty: it mimics the root itself)
-
-
-def is_thruster_plugin(plugin: ET.Element) -> bool:
-    """Whether a ``<gazebo><plugin>`` is uuv_simulator's thruster plugin (``libuuv_thruster_ros_plugin.so``)."""
-    return "uuv_thruster" in plugin.get("filename", "")
 
 
 def classify_joints(
@@ -102,8 +96,8 @@ def classify_joints(
     joints = {joint.get("name"): joint for joint in robot.findall("joint")}
     moving = {name: joint for name, joint in joints.items() if joint.get("type") in MOVING_TYPES}
     mimics = composed_mimics(moving, joints, origin)
-    propellers = propeller_joints(robot, moving, model_dir)
     masses = subtree_masses(robot)
+    propellers = propeller_joints(robot, moving, model_dir, masses)
     limits = {name: joint_limits(joint) for name, joint in moving.items()}
     classes = {name: rule_class(name, joint, limits[name], propellers.get(name), masses)
                for name, joint in moving.items() if name not in mimics}
@@ -201,39 +195,6 @@ def subtree_masses(robot: ET.Element) -> dict[str, float]:
         order.pop()
         totals[name] = own[name] + sum(totals[child] for child in children[name])
     return totals
-
-
-def propeller_joints(robot: ET.Element, moving: Mapping[str, ET.Element], model_dir: Path | None) -> dict[str, str]:
-    """{joint: why it carries a thruster} from the uuv_simulator thruster plugins and the ``thrusters.yaml``
-    beside the model (its ``thrusters`` entries' ``frame``/``parent``; the file's other contents are checked by
-    :mod:`uvms.dynamics.thrusters` when thrusters are used)."""
-    by_child = {joint.find("child").get("link"): name for name, joint in moving.items()}
-    found: dict[str, str] = {}
-    for plugin in (p for gazebo in robot.findall("gazebo") for p in gazebo.findall("plugin")):
-        if not is_thruster_plugin(plugin):
-            continue
-        label = plugin.get("name", "")
-        joint, link = (plugin.findtext("jointName") or "").strip(), (plugin.findtext("linkName") or "").strip()
-        if joint in moving:
-            found.setdefault(joint, f"uuv_simulator thruster plugin {label!r} names it (<jointName>)")
-        elif link in by_child:
-            found.setdefault(by_child[link], f"its link {link!r} is the <linkName> of thruster plugin {label!r}")
-    path = model_dir / THRUSTERS_YAML if model_dir is not None else None
-    if path is not None and path.is_file():
-        try:
-            document = read_yaml(path, "thrusters")
-        except UVMSError as exc:
-            warnings.warn(f"{exc}; the propellers it names are not known, their joints are classed by the other "
-                          f"rules", ThrusterFileWarning, stacklevel=4)
-            return found
-        entries = document.get("thrusters") if isinstance(document, Mapping) else None
-        for thruster, entry in (entries.items() if isinstance(entries, Mapping) else ()):
-            for key in ("frame", "parent"):
-                link = entry.get(key) if isinstance(entry, Mapping) else None
-                if isinstance(link, str) and link in by_child:
-                    found.setdefault(by_child[link], f"its link {link!r} is the {key} of thruster {thruster!r} "
-                                                     f"in {THRUSTERS_YAML}")
-    return found
 
 
 # ------------------------------------------------------------------ mimics

@@ -19,7 +19,7 @@ import pinocchio as pin
 
 from . import checks, includes, joint_classes, point_masses, resources, sandbox
 from .packages import package_index, unknown_package
-from .base_rule import ADDED_BASE_JOINT, decide_base
+from .base_rule import ADDED_BASE_JOINT, decide_base, rigid_body
 from ..errors import (BaseGuessWarning, MissingMeshWarning, ModelCheckError, ModelFileNotFound, ModelParseError,
                       ParserWarning, UVMSError, XacroError)
 from ..robot.robot import Robot
@@ -100,9 +100,9 @@ def load(
         tree = checks.check_urdf(robot_element, origin)
     except ModelCheckError as exc:
         raise ModelCheckError(f"{exc}{blamed_args(exc, source, args, trusted, packages)}") from None
-    chosen, reason = decide_base(base, tree, origin)
-    warn_missing_meshes(robot_element, base_dir, packages, origin)
     classified = joint_classes.classify_joints(xml, origin, base_dir, arm_joints)
+    chosen, reason = decide_base(base, tree, origin, rigid_body(robot_element, tree.root_link, classified.classes))
+    warn_missing_meshes(robot_element, base_dir, packages, origin)
     model = build_model(classified.urdf, chosen, tree, origin)
     point_masses.check_mass_matrix(model, tree.point_masses, origin)
     if model.nv == 0:  # nothing to move, and Pinocchio's Jacobians crash on an empty velocity space
