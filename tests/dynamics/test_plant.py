@@ -390,12 +390,17 @@ def fossen_terms_link_by_link(plant: Plant, q: np.ndarray, v: np.ndarray, body_w
 
 @pytest.mark.parametrize("name", ["bluerov2_alpha5", "amundsen2018"])
 def test_the_compiled_hydrodynamic_terms_are_the_link_by_link_rnea_with_external_forces(name, rng):
-    """Every term on (added mass in M and as C_A, damping, a current, buoyancy, a thrusters' wrench): the plant's
-    Mbar and nbar equal the link-by-link derivation to rounding, at random states."""
+    """Every term on (added mass in M and as C_A, damping with its forward-speed part, a current, buoyancy, a
+    thrusters' wrench): the plant's Mbar and nbar equal the link-by-link derivation to rounding, at random states."""
+    import dataclasses
+
     import pinocchio as pin
 
     robot = shipped(name)
-    plant = Plant(robot, gravity=True, current=[0.3, -0.2, 0.1])
+    hydro = hydrodynamics_of(robot)
+    forward = {link: dataclasses.replace(params, linear_damping_forward_speed=rng.uniform(0.0, 5.0, 6))
+               for link, params in hydro.links.items()}  # uuv_simulator's forward-speed damping on every link
+    plant = Plant(robot, dataclasses.replace(hydro, links=forward), gravity=True, current=[0.3, -0.2, 0.1])
     for _ in range(5):
         q = pin.integrate(robot.model, robot.neutral(), rng.normal(size=robot.nv))
         v, wrench = rng.normal(size=robot.nv), rng.normal(size=6) * 20.0

@@ -139,9 +139,8 @@ def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> float:
     """Power [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water)."""
     if not plant.damping or not plant.links:
         return 0.0
-    links, stacked = plant._link_states(q, v), plant._stacked
-    wrenches = -(stacked.linear_damping + stacked.quadratic_damping * np.abs(links.relative)) * links.relative
-    return float((wrenches * links.twists).sum())
+    links = plant._link_states(q, v)
+    return float((plant._stacked.damping_wrenches(links.relative) * links.twists).sum())
 
 
 # ------------------------------------------------------------------ the system of the one loop

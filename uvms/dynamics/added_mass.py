@@ -4,7 +4,7 @@ A link with Fossen parameters (:mod:`uvms.dynamics.hydro_parameters`) is placed 
 :func:`resolve_links`. Its added mass M_A enters the equations of motion twice (derivation: the docstring
 of :mod:`uvms.dynamics.plant`): in the mass matrix, Mbar = M + sum_l J_l^T M_A,l J_l
 (:func:`augmented_mass_matrix`), and as the Coriolis term C_A(nu) nu (formed with the other wrenches of a link in
-:mod:`uvms.numerics._kernels.hydro`). With no current, damping or gravity the added-mass-augmented momentum is
+:mod:`uvms.numerics._kernels.hydro`, from the links' constants stacked in :class:`StackedLinks`). With no current, damping or gravity the added-mass-augmented momentum is
 conserved; :func:`generalized_jacobian_added_mass` is the generalized Jacobian of that momentum.
 """
 
@@ -33,6 +33,88 @@ class HydroLink:
     joint_id: int
     placement: pin.SE3  # link frame in its parent joint's frame
     params: LinkHydrodynamics
+
+
+@dataclass(frozen=True)
+class LinkStates:
+    """The hydrodynamic links at one (q, v), stacked (L links).
+
+    Attributes:
+        twists: nu_l (L, 6) body twists [m/s, rad/s] in the link frames; relative: nu_r,l = nu_l - [R_l^T v_c; 0].
+        rotations: (L, 3, 3) link to world; positions: (L, 3) the link frames' origins in the world [m].
+    """
+
+    twists: np.ndarray
+    relative: np.ndarray
+    rotations: np.ndarray
+    positions: np.ndarray
+
+
+@dataclass(frozen=True)
+class StackedLinks:
+    """The hydrodynamic links' constants as arrays over the links (L of them), for one numpy pass per evaluation.
+
+    Attributes:
+        frames, joints: (L,) the links' frame ids and their parent joints.
+        motion_to_link: (L, 6, 6) the action of the inverse placement: a motion of the joint in the link frame.
+        rotations: (L, 3, 3) the links' rotations in their joints' frames; translations: (L, 3) their origins there.
+        added_mass: (L, 6, 6); linear_damping, quadratic_damping: (L, 6) (link frames, FLU).
+        buoyancy: (L,) rho g V [N] (0 without gravity); center_of_buoyancy: (L, 3) [m] in the link frames.
+        buoyant: whether any link has a volume.
+    """
+
+    frames: tuple[int, ...]
+    joints: tuple[int, ...]
+    motion_to_link: np.ndarray
+    rotations: np.ndarray
+    translations: np.ndarray
+    added_mass: np.ndarray
+    linear_damping: np.ndarray
+    forward_damping: np.ndarray
+    quadratic_damping: np.ndarray
+    buoyancy: np.ndarray
+    center_of_buoyancy: np.ndarray
+    buoyant: bool
+
+    @property
+    def count(self) -> int:
+        """The number of links L."""
+        return len(self.frames)
+
+    def damping_wrenches(self, relative: np.ndarray) -> np.ndarray:
+        """The links' damping wrenches (L, 6) [N, N m] at their relative twists nu_r (L, 6): the stacked form of
+        :meth:`uvms.dynamics.hydro_parameters.LinkHydrodynamics.damping_wrench`."""
+        linear = self.linear_damping + relative[:, :1] * self.forward_damping
+        return -(linear + self.quadratic_damping * np.abs(relative)) * relative
+
+    @property
+    def no_bias(self) -> np.ndarray:
+        """(L, 6) zeros: the joints' bias accelerations where no term reads them."""
+        return np.zeros((self.count, 6))
+
+    @property
+    def no_rotations(self) -> np.ndarray:
+        """(L, 3, 3) zeros: the links' rotations where no term reads them."""
+        return np.zeros((self.count, 3, 3))
+
+    @classmethod
+    def of(cls, links: list[HydroLink], hydro: HydroParameters, gravity: bool) -> StackedLinks:
+        """The arrays of ``links`` (their parameters from ``hydro``)."""
+        def stack(values, shape) -> np.ndarray:
+            return np.array(values, dtype=float).reshape((len(links), *shape))
+
+        buoyancy = stack([hydro.fluid_density * hydro.gravity * link.params.volume if gravity else 0.0
+                          for link in links], ())
+        return cls(tuple(link.frame_id for link in links), tuple(link.joint_id for link in links),
+                   stack([link.placement.inverse().action for link in links], (6, 6)),
+                   stack([link.placement.rotation for link in links], (3, 3)),
+                   stack([link.placement.translation for link in links], (3,)),
+                   stack([link.params.added_mass for link in links], (6, 6)),
+                   stack([link.params.linear_damping for link in links], (6,)),
+                   stack([link.params.linear_damping_forward_speed for link in links], (6,)),
+                   stack([link.params.quadratic_damping for link in links], (6,)),
+                   buoyancy, stack([link.params.center_of_buoyancy for link in links], (3,)),
+                   bool(np.any(buoyancy > 0.0)))
 
 
 def resolve_links(model: pin.Model, hydro: HydroParameters) -> list[HydroLink]:

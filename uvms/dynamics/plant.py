@@ -64,7 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from .added_mass import LOCAL, HydroLink, augmented_mass_matrix, resolve_links
+from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
 from .hydrodynamics import HydroParameters, hydrodynamics_of
 from ..robot.robot import Robot, check_robot
 from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
@@ -95,80 +95,6 @@ class PlantDynamics:
     acceleration: np.ndarray
     joint_torque: np.ndarray
     mass_matrix: np.ndarray
-
-
-@dataclass(frozen=True)
-class LinkStates:
-    """The hydrodynamic links at one (q, v), stacked (L links).
-
-    Attributes:
-        twists: nu_l (L, 6) body twists [m/s, rad/s] in the link frames; relative: nu_r,l = nu_l - [R_l^T v_c; 0].
-        rotations: (L, 3, 3) link to world; positions: (L, 3) the link frames' origins in the world [m].
-    """
-
-    twists: np.ndarray
-    relative: np.ndarray
-    rotations: np.ndarray
-    positions: np.ndarray
-
-
-@dataclass(frozen=True)
-class StackedLinks:
-    """The hydrodynamic links' constants as arrays over the links (L of them), for one numpy pass per evaluation.
-
-    Attributes:
-        frames, joints: (L,) the links' frame ids and their parent joints.
-        motion_to_link: (L, 6, 6) the action of the inverse placement: a motion of the joint in the link frame.
-        rotations: (L, 3, 3) the links' rotations in their joints' frames; translations: (L, 3) their origins there.
-        added_mass: (L, 6, 6); linear_damping, quadratic_damping: (L, 6) (link frames, FLU).
-        buoyancy: (L,) rho g V [N] (0 without gravity); center_of_buoyancy: (L, 3) [m] in the link frames.
-        buoyant: whether any link has a volume.
-    """
-
-    frames: tuple[int, ...]
-    joints: tuple[int, ...]
-    motion_to_link: np.ndarray
-    rotations: np.ndarray
-    translations: np.ndarray
-    added_mass: np.ndarray
-    linear_damping: np.ndarray
-    quadratic_damping: np.ndarray
-    buoyancy: np.ndarray
-    center_of_buoyancy: np.ndarray
-    buoyant: bool
-
-    @property
-    def count(self) -> int:
-        """The number of links L."""
-        return len(self.frames)
-
-    @property
-    def no_bias(self) -> np.ndarray:
-        """(L, 6) zeros: the joints' bias accelerations where no term reads them."""
-        return np.zeros((self.count, 6))
-
-    @property
-    def no_rotations(self) -> np.ndarray:
-        """(L, 3, 3) zeros: the links' rotations where no term reads them."""
-        return np.zeros((self.count, 3, 3))
-
-    @classmethod
-    def of(cls, links: list[HydroLink], hydro: HydroParameters, gravity: bool) -> StackedLinks:
-        """The arrays of ``links`` (their parameters from ``hydro``)."""
-        def stack(values, shape) -> np.ndarray:
-            return np.array(values, dtype=float).reshape((len(links), *shape))
-
-        buoyancy = stack([hydro.fluid_density * hydro.gravity * link.params.volume if gravity else 0.0
-                          for link in links], ())
-        return cls(tuple(link.frame_id for link in links), tuple(link.joint_id for link in links),
-                   stack([link.placement.inverse().action for link in links], (6, 6)),
-                   stack([link.placement.rotation for link in links], (3, 3)),
-                   stack([link.placement.translation for link in links], (3,)),
-                   stack([link.params.added_mass for link in links], (6, 6)),
-                   stack([link.params.linear_damping for link in links], (6,)),
-                   stack([link.params.quadratic_damping for link in links], (6,)),
-                   buoyancy, stack([link.params.center_of_buoyancy for link in links], (3,)),
-                   bool(np.any(buoyancy > 0.0)))
 
 
 class Plant:
@@ -324,7 +250,7 @@ class Plant:
                              np.array([data.oMi[joint].rotation for joint in joints]) @ stacked.rotations
                              if self._moving_fluid or self._buoyant else stacked.no_rotations,
                              stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
-                             stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, self._current,
+                             stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, self._current,
                              self.added_mass, self.damping, self._moving_fluid, self._buoyant, mass, bias_forces)
         if body_wrench is not None:  # the thrusters' wrench on the vehicle, at the base frame
             bias_forces -= body_wrench @ pin.getFrameJacobian(model, data, self._base_frame, LOCAL)

@@ -25,8 +25,8 @@ def _cross(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> 
 
 @njit(cache=True)
 def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarray, rotations: np.ndarray,
-                     motion_to_link: np.ndarray, added_mass: np.ndarray, linear: np.ndarray, quadratic: np.ndarray,
-                     buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray, with_added_mass: bool,
+                     motion_to_link: np.ndarray, added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray,
+                     quadratic: np.ndarray, buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray, with_added_mass: bool,
                      with_damping: bool, with_current: bool, with_buoyancy: bool, mass: np.ndarray,
                      bias_forces: np.ndarray) -> None:
     """Add the links' added mass to ``mass`` and subtract their wrenches' generalized forces from ``bias_forces``.
@@ -36,7 +36,8 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
         joint_bias: (L, 6) the spatial bias acceleration of each link's joint (its frame), Pinocchio's data.a.
         rotations: (L, 3, 3) the links' rotations in the world (read only with a current or buoyancy).
         motion_to_link: (L, 6, 6) a joint-frame motion in the link frame; added_mass: M_A (L, 6, 6);
-        linear, quadratic: (L, 6) damping [N s/m, N s^2/m^2 ...]; buoyancy: (L,) rho g V [N];
+        linear, forward, quadratic: (L, 6) damping d_l, d_f, d_q: -(d_l + u d_f + d_q |nu_r|) nu_r, u = nu_r[0]
+            (uuv_simulator's forward-speed term); buoyancy: (L,) rho g V [N];
         center_of_buoyancy: (L, 3) [m] link frame; current: (3,) world [m/s].
         with_added_mass, with_damping, with_current, with_buoyancy: which terms are on.
         mass: Mbar (nv, nv), updated in place; bias_forces: nbar (nv,), updated in place.
@@ -107,8 +108,10 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
                         total += jacobian[i, row] * inner
                     mass[row, column] += total
         if with_damping:
+            surge = relative[0]
             for row in range(6):
-                wrench[row] -= (linear[link, row] + quadratic[link, row] * abs(relative[row])) * relative[row]
+                wrench[row] -= (linear[link, row] + surge * forward[link, row]
+                                + quadratic[link, row] * abs(relative[row])) * relative[row]
         if with_buoyancy and buoyancy[link] > 0.0:  # R^T [0, 0, rho g V] at the centre of buoyancy
             rotation, up = rotations[link], buoyancy[link]
             f0, f1, f2 = rotation[2, 0] * up, rotation[2, 1] * up, rotation[2, 2] * up
