@@ -199,6 +199,27 @@ def wait_for_interrupt() -> None:
         time.sleep(3600)
 
 
+def headless_path(name: str) -> Path:
+    """The file ``--headless NAME`` writes: NAME, with ``.png`` added when it has no suffix.
+
+    Raises:
+        UVMSError: a suffix that is neither a picture format matplotlib writes nor an animation (.gif, .mp4).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from ..viz.drawing import WRITERS
+
+    out = Path(name)
+    if not out.suffix:
+        return out.with_name(f"{out.name}.png")
+    pictures = sorted(f".{suffix}" for suffix in FigureCanvasAgg(Figure()).get_supported_filetypes())
+    if out.suffix.lower() not in {*pictures, *WRITERS}:
+        raise UVMSError(f"--headless {name!r}: unknown suffix {out.suffix!r}; write a picture "
+                        f"({', '.join(pictures)}; none: .png) or, with --result, an animation ({', '.join(WRITERS)})")
+    return out
+
+
 def command_view(options: argparse.Namespace) -> int:
     """``uvms view MODEL [--q ...]`` / ``uvms view MODEL --result DIR``: the 3-D viewer, or a headless picture."""
     from ..viz.viewer import check_port
@@ -218,9 +239,9 @@ def command_view(options: argparse.Namespace) -> int:
         from ..viz import drawing
         from ..viz.collision_drawing import CollisionOverlay
 
-        overlay = CollisionOverlay(robot, options.collision, objectives) if options.collision or objectives else None
-
-        out = Path(options.headless)
+        out = headless_path(options.headless)
+        # the visual meshes unless the collision shapes are asked for (one kind of shape in a picture)
+        overlay = CollisionOverlay(robot, options.collision, objectives, visual=not options.collision)
         if result is None:
             if out.suffix.lower() in drawing.WRITERS:
                 raise UVMSError(f"an animation ({out.suffix}) needs --result DIR; write a picture (.png) of one "
