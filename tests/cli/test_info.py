@@ -188,3 +188,35 @@ def test_info_says_which_wrench_directions_the_thrusters_cannot_produce(capsys):
     assert line.startswith("allocation  the thrusters produce 4 of the 6 body-wrench directions; missing: a ")
     assert main(["info", "bluerov2_alpha5"]) == 0
     assert "allocation  every body-wrench direction (rank 6)\n" in capsys.readouterr().out
+
+
+IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"
+
+
+def test_arm_joints_on_info_view_and_workspace(tmp_path, monkeypatch, capsys):
+    """``--arm-joints`` (repeatable or comma-separated, "" for none) on the three commands that load a model, as a
+    scenario's [model] arm_joints: the other joints frozen and listed so (before: an unknown option, exit 2)."""
+    assert main(["info", str(IDIOMS), "--arm-joints", "j1,j2", "--arm-joints", "j3"]) == 0
+    out = capsys.readouterr().out
+    assert "arm DOF 3 (nq 10, nv 9)" in out and "frozen (4): left out of arm_joints" in out
+    assert re.search(r"j6 +not in arm_joints: held at 0.3", out)
+    assert main(["info", str(IDIOMS), "--arm-joints", ""]) == 0
+    assert "vehicle DOF 6, arm DOF 0 (nq 7, nv 6)" in capsys.readouterr().out  # the fins of an AUV, frozen
+    assert main(["info", str(IDIOMS), "--arm-joints", "j1,nope"]) == 2
+    assert "unknown arm joint 'nope'" in one_line(capsys)
+
+    from uvms.viz import drawing
+
+    drawn = []
+    monkeypatch.setattr(drawing, "snapshot_figure", lambda robot, *args, **options: drawn.append(robot))
+    assert main(["view", str(IDIOMS), "--arm-joints", "j1", "--headless", str(tmp_path / "j1.png")]) == 0
+    assert drawn[-1].n_arm == 1 and [joint.name for joint in drawn[-1].arm_joints] == ["j1"]
+    assert main(["view", "--result", str(tmp_path), "--arm-joints", "j1", "--headless", str(tmp_path / "r.png")]) == 2
+    assert "drawn with the arm joints it was run with" in one_line(capsys)
+
+    out = tmp_path / "workspace"
+    assert main(["workspace", str(IDIOMS), "--arm-joints", "j1", "-n", "200", "--quiet", "--out", str(out)]) == 0
+    import numpy as np
+
+    with np.load(out / "points.npz") as points:
+        assert points["q_arm_tool"].shape == (200, 1)  # one joint sampled

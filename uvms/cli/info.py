@@ -10,7 +10,6 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from ..model.loader import load
 from ..model.resources import MAX_YAML_BYTES, read_text
 from ..robot.robot import Robot
 from .terminal import say
@@ -25,6 +24,24 @@ def parse_assignments(items: Sequence[str] | None) -> dict[str, str]:
             raise UVMSError(f"--arg expects NAME=VALUE, got {item!r}")
         assignments[name] = value
     return assignments
+
+
+def parse_arm_joints(items: Sequence[str] | None) -> list[str] | None:
+    """``--arm-joints`` values (repeatable, each one name or names separated by commas) -> the joint names, [] for
+    ``--arm-joints ""`` (every joint frozen), None when not given (:func:`uvms.load`'s rule)."""
+    if items is None:
+        return None
+    return [name.strip() for item in items for name in item.split(",") if name.strip()]
+
+
+def command_model(options: argparse.Namespace) -> Robot:
+    """The model of ``uvms info``, ``uvms view`` and ``uvms workspace``: a model file, a shipped name or a scenario
+    ``.toml`` (its ``[model]``), with ``--base``, ``--arg``, ``--ee``, ``--arm-joints`` and ``--package-path``
+    (:func:`uvms.scenario.record.named_model`, which loads it as :func:`uvms.load` does)."""
+    from ..scenario.record import named_model
+
+    return named_model(options.model, parse_assignments(options.arg), options.base, options.package_path,
+                       options.ee, parse_arm_joints(options.arm_joints))
 
 
 def format_limits(lower: np.ndarray, upper: np.ndarray) -> str:
@@ -173,7 +190,6 @@ def hydrodynamics_source(robot: Robot, source: str) -> list[str]:
 
 def command_info(options: argparse.Namespace) -> int:
     """``uvms info MODEL``: load the model (running its checks) and describe it."""
-    robot = load(options.model, base=options.base, args=parse_assignments(options.arg), ee=options.ee or None,
-                 package_path=options.package_path)
+    robot = command_model(options)
     say(describe(robot, options.hydrodynamics), sys.stdout, lines=True)
     return 0

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import UVMSError, ViewerInputError
 from ..robot.robot import Robot
-from .info import parse_assignments
+from .info import command_model, parse_assignments
 from .terminal import say
 
 
@@ -53,19 +53,20 @@ def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
     """The model of ``uvms view`` and a one-line note on it (or None): with ``--result DIR``, the model the run
     folder records (a MODEL, ``--arg`` or ``--base`` given too must describe it; an older folder without a record:
     MODEL as given, and a note); else a model file/name or the model of a scenario ``.toml``."""
-    from ..scenario.record import named_model, replay_model
+    from ..scenario.record import replay_model
 
     if options.result:
-        if options.ee:
-            raise UVMSError("--ee is for a model; a run folder (--result) is drawn with the end effectors it was run "
-                            "with")
+        for given, option, what in ((options.ee, "--ee", "end effectors"),
+                                    (options.arm_joints is not None, "--arm-joints", "arm joints")):
+            if given:
+                raise UVMSError(f"{option} is for a model; a run folder (--result) is drawn with the {what} it was "
+                                f"run with")
         return replay_model(options.result, options.model, parse_assignments(options.arg), options.base,
                             options.package_path)
     if options.model is None:
         raise UVMSError("uvms view needs the model: `uvms view MODEL`, or `uvms view --result DIR` of a run folder "
                         "(which records its model)")
-    return named_model(options.model, parse_assignments(options.arg), options.base, options.package_path,
-                       options.ee), None
+    return command_model(options), None
 
 
 #: The inequality types whose closest pair a drawing marks.
