@@ -220,3 +220,21 @@ def test_arm_joints_on_info_view_and_workspace(tmp_path, monkeypatch, capsys):
 
     with np.load(out / "points.npz") as points:
         assert points["q_arm_tool"].shape == (200, 1)  # one joint sampled
+
+
+def test_info_says_when_a_continuous_joints_written_limits_are_ignored(tmp_path, capsys):
+    """URDF gives a continuous joint no position limits (urdfdom, Pinocchio): right, and now said (the Girona 500's
+    ARM5E writes them); a continuous joint writing only velocity and effort, and a revolute one, get no line."""
+    second = ('<link name="l2"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+              '</inertial></link><joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/>'
+              '<axis xyz="1 0 0"/><limit effort="1" velocity="2"/></joint>')
+    path = tmp_path / "girona_like.urdf"
+    path.write_text(urdf(root=FLOATING_ROOT, extra=second).replace('"revolute"', '"continuous"', 1))
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "arm DOF 2" in out
+    assert [line for line in out.splitlines() if line.startswith("limits ")] == [
+        "limits      j1: continuous, so its written limits [-1, 1] are ignored (a continuous joint turns without "
+        "position limits; its velocity and effort limits are kept); make it revolute to keep them"]
+    assert main(["info", "bluerov2_alpha5"]) == 0
+    assert not [line for line in capsys.readouterr().out.splitlines() if line.startswith("limits ")]

@@ -76,6 +76,7 @@ def describe(robot: Robot, hydrodynamics: str | None = None) -> str:
         f"total mass  {robot.total_mass:.3f} kg",
         *joint_table(robot),
         *joint_groups(robot),
+        *ignored_limit_lines(robot),
     ]
     body_frames = [f.name for f in robot.model.frames if f.type == pin.FrameType.BODY]
     lines.append(f"frames      {', '.join(body_frames)}")
@@ -118,6 +119,25 @@ def joint_groups(robot: Robot) -> list[str]:
         if members:
             lines.append(f"{title} ({len(members)}): {meaning}")
             lines.extend(f"  {name:<{width}} {reason}" for name, reason in members)
+    return lines
+
+
+def ignored_limit_lines(robot: Robot) -> list[str]:
+    """A line per arm joint of type continuous whose ``<limit>`` writes a lower or upper bound: URDF gives a
+    continuous joint no position limits (urdfdom and Pinocchio ignore them), which is right but silent."""
+    if robot.urdf_root is None:
+        return []
+    lines = []
+    for joint in robot.urdf_root.iter("joint"):
+        name, limit = joint.get("name", ""), joint.find("limit")
+        joint_class = robot.joint_classes.get(name)
+        if (joint.get("type") != "continuous" or limit is None or joint_class is None or joint_class.kind != "arm"
+                or (limit.get("lower") is None and limit.get("upper") is None)):
+            continue
+        written = f"[{float(limit.get('lower', '0')):g}, {float(limit.get('upper', '0')):g}]"  # checked numbers
+        lines.append(f"limits      {name}: continuous, so its written limits {written} are ignored (a continuous "
+                     f"joint turns without position limits; its velocity and effort limits are kept); make it "
+                     f"revolute to keep them")
     return lines
 
 
