@@ -270,8 +270,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always")
                 status = options.handler(options)
-            for warning in caught:
-                say(f"uvms: warning: {warning.message}")
+            for message in dict.fromkeys(str(warning.message) for warning in caught):  # each text once
+                say(f"uvms: warning: {message}")
             return status
         except KeyboardInterrupt as exc:
             return interrupted(exc, options, received)

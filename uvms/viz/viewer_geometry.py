@@ -12,12 +12,13 @@ joint origin), a sphere per joint, and the end effectors in orange.
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import GeometryWarning, MissingMeshWarning
-from ..model.meshes import resolved_urdf
+from ..model.meshes import missing_meshes_note, resolved_urdf
 from ..robot.robot import Robot
 from .viewer_collision import viewer_collision_model
 
@@ -110,8 +111,10 @@ def visual_geometry(robot: Robot) -> pin.GeometryModel:
         return pin.GeometryModel()
     xml, missing = resolved_urdf(robot)
     if missing:
-        warnings.warn(f"{robot.source}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); "
-                      f"they are not shown", MissingMeshWarning, stacklevel=3)
+        source = Path(robot.source)
+        folder = source.parent if source.is_file() else None
+        warnings.warn(missing_meshes_note(robot.source, missing, folder, robot.packages,
+                                          robot.source if folder else ""), MissingMeshWarning, stacklevel=3)
     try:
         return pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.VISUAL)
     except (RuntimeError, ValueError) as exc:
