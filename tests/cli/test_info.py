@@ -239,3 +239,53 @@ def test_info_of_gazebo_sim_and_hippocampus_models(capsys):
     assert "  thruster_4   xyz [+0.120 -0.220 +0.060]  dir [+0.000 +0.000 +1.000]  [-43.0438, 43.0438]  0.05\n" in out
     assert "from the HippoCampus hydrodynamics, HippoCampus buoyancy plugin blocks of" in out
     assert "  bluerov/base_link: V 0.01071  CoB [+0.000 +0.000 +0.005]\n" in out
+
+
+IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"
+
+
+def test_arm_joints_on_info_view_and_workspace(tmp_path, monkeypatch, capsys):
+    """``--arm-joints`` (repeatable or comma-separated, "" for none) on the three commands that load a model, as a
+    scenario's [model] arm_joints: the other joints frozen and listed so (before: an unknown option, exit 2)."""
+    assert main(["info", str(IDIOMS), "--arm-joints", "j1,j2", "--arm-joints", "j3"]) == 0
+    out = capsys.readouterr().out
+    assert "arm DOF 3 (nq 10, nv 9)" in out and "frozen (4): left out of arm_joints" in out
+    assert re.search(r"j6 +not in arm_joints: held at 0.3", out)
+    assert main(["info", str(IDIOMS), "--arm-joints", ""]) == 0
+    assert "vehicle DOF 6, arm DOF 0 (nq 7, nv 6)" in capsys.readouterr().out  # the fins of an AUV, frozen
+    assert main(["info", str(IDIOMS), "--arm-joints", "j1,nope"]) == 2
+    assert "unknown arm joint 'nope'" in one_line(capsys)
+
+    from uvms.viz import drawing
+
+    drawn = []
+    monkeypatch.setattr(drawing, "snapshot_figure", lambda robot, *args, **options: drawn.append(robot))
+    assert main(["view", str(IDIOMS), "--arm-joints", "j1", "--headless", str(tmp_path / "j1.png")]) == 0
+    assert drawn[-1].n_arm == 1 and [joint.name for joint in drawn[-1].arm_joints] == ["j1"]
+    assert main(["view", "--result", str(tmp_path), "--arm-joints", "j1", "--headless", str(tmp_path / "r.png")]) == 2
+    assert "drawn with the arm joints it was run with" in one_line(capsys)
+
+    out = tmp_path / "workspace"
+    assert main(["workspace", str(IDIOMS), "--arm-joints", "j1", "-n", "200", "--quiet", "--out", str(out)]) == 0
+    import numpy as np
+
+    with np.load(out / "points.npz") as points:
+        assert points["q_arm_tool"].shape == (200, 1)  # one joint sampled
+
+
+def test_info_says_when_a_continuous_joints_written_limits_are_ignored(tmp_path, capsys):
+    """URDF gives a continuous joint no position limits (urdfdom, Pinocchio): right, and now said (the Girona 500's
+    ARM5E writes them); a continuous joint writing only velocity and effort, and a revolute one, get no line."""
+    second = ('<link name="l2"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/>'
+              '</inertial></link><joint name="j2" type="continuous"><parent link="l1"/><child link="l2"/>'
+              '<axis xyz="1 0 0"/><limit effort="1" velocity="2"/></joint>')
+    path = tmp_path / "girona_like.urdf"
+    path.write_text(urdf(root=FLOATING_ROOT, extra=second).replace('"revolute"', '"continuous"', 1))
+    assert main(["info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "arm DOF 2" in out
+    assert [line for line in out.splitlines() if line.startswith("limits ")] == [
+        "limits      j1: continuous, so its written limits [-1, 1] are ignored (a continuous joint turns without "
+        "position limits; its velocity and effort limits are kept); make it revolute to keep them"]
+    assert main(["info", "bluerov2_alpha5"]) == 0
+    assert not [line for line in capsys.readouterr().out.splitlines() if line.startswith("limits ")]

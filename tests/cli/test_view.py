@@ -51,6 +51,21 @@ def test_headless_view_of_a_scenario_draws_its_initial_configuration(tmp_path, m
     assert np.array_equal(drawn["q"], robot.neutral()) and drawn["title"] == "bluerov2_alpha5"  # a model: neutral
 
 
+def test_headless_writes_a_png_when_the_name_has_no_suffix(tmp_path, monkeypatch, capsys):
+    """``--headless NAME`` writes NAME.png (before: a PNG named NAME); an unknown suffix is one line, exit 2 (before:
+    an internal error of matplotlib's)."""
+    armless = ROOT / "tests" / "fixtures" / "armless" / "vehicle.urdf"
+    overlays = spy_overlays(monkeypatch)
+    assert main(["view", str(armless), "--headless", str(tmp_path / "smilodon")]) == 0
+    assert (tmp_path / "smilodon.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not (tmp_path / "smilodon").exists() and f"wrote {tmp_path / 'smilodon.png'}" in capsys.readouterr().out
+    assert [len(mesh.triangles) for mesh in overlays[-1].visuals] == [12]  # the hull mesh drawn
+    assert main(["view", str(armless), "--headless", str(tmp_path / "smilodon.foo")]) == 2
+    message = one_line(capsys)
+    assert "unknown suffix '.foo'" in message and ".png" in message and ".gif" in message
+    assert not list(tmp_path.glob("smilodon.foo*"))
+
+
 # ------------------------------------------------------------------ --collision, closest pairs
 FOLD = ROOT / "tests" / "fixtures" / "collision" / "box_arm_fold.toml"
 
@@ -80,7 +95,8 @@ def test_collision_draws_the_shapes_and_a_scenarios_closest_pairs(tmp_path, monk
     assert [objective.name for objective in overlay.closest.objectives] == ["self_collision", "obstacle(mesh)"]
     assert len(overlay.obstacles) == 1  # the rock
     assert main(["view", str(FOLD), "--headless", str(tmp_path / "plain.png")]) == 0
-    assert overlays[-1] is None  # no toggle, no run: the plain drawing
+    plain = overlays[-1]  # no toggle, no run: the visual meshes, no collision shapes nor pairs
+    assert plain.meshes == [] and not plain.closest.objectives and not plain.obstacles
 
 
 def test_a_runs_replay_marks_the_closest_pairs_of_its_collision_objectives(tmp_path, monkeypatch, capsys):

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import uvms
-from uvms.control.coordination import CoordinatedControl, achieved_ratio, arm_rates_for_task
+from uvms.control.coordination import CoordinatedControl, achieved_ratio, arm_rates_for_task, vehicle_rates_for_task
 from uvms.control.station import ActuatedKinematics
 from uvms.control.vehicle import VehiclePoseController
 from uvms.tasks import FrameTask
@@ -25,6 +26,28 @@ def test_achieved_ratio_is_what_the_allocation_gave_per_axis():
     asked = np.array([200.0, 10.0, -50.0, 1.0, 0.0, 3.0])
     achieved = np.array([130.0, 10.0, -25.0, 1.0, 0.0, -1.0])
     np.testing.assert_allclose(achieved_ratio(asked, achieved), [0.65, 1.0, 0.5, 1.0, 1.0, 0.0])
+
+
+def vehicle_columns(rotation: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """J_v (6, 6) of a frame at ``offset`` [m] in the body (rows world [linear; angular], columns body [v; w])."""
+    skew = np.array([[0.0, -offset[2], offset[1]], [offset[2], 0.0, -offset[0]], [-offset[1], offset[0], 0.0]])
+    return np.block([[rotation, -rotation @ skew], [np.zeros((3, 3)), rotation]])
+
+
+def test_the_vehicle_carries_what_the_arm_cannot_translation_first():
+    """No arm, a point 1.5 m off the vehicle's origin: the vehicle translates, it does not turn (a plain J_v^+
+    would give 0.69 of the motion to a rotation); with orientation rows it gets them exactly; an arm that moves the
+    point along x keeps x, the vehicle gives y and z."""
+    rotation = pin.rpy.rpyToMatrix(0.1, -0.2, 0.7)
+    jacobian = vehicle_columns(rotation, np.array([1.5, 0.0, -0.4]))
+    wanted = np.array([0.3, -0.2, 0.1, 0.05, 0.0, -0.02])
+    point = vehicle_rates_for_task(jacobian[:3], wanted[:3], 6)
+    np.testing.assert_allclose(point[3:], 0.0, atol=1e-12)
+    np.testing.assert_allclose(jacobian[:3] @ point, wanted[:3], atol=1e-12)
+    np.testing.assert_allclose(jacobian @ vehicle_rates_for_task(jacobian, wanted, 6), wanted, atol=1e-12)
+    with_arm = np.hstack([jacobian[:3], [[1.0], [0.0], [0.0]]])  # (3, 7): a prismatic joint along world x
+    shared = vehicle_rates_for_task(with_arm, wanted[:3], 6)
+    np.testing.assert_allclose(jacobian[:3] @ shared, [0.0, -0.2, 0.1], atol=1e-12)
 
 
 def test_vehicle_bounds_lie_between_the_measured_velocity_and_what_the_thrusters_give(robot):

@@ -139,3 +139,36 @@ def test_uvms_view_headless_leaves_out_a_visual_mesh_whose_material_is_a_fifo(tm
     done = run_uvms("view", str(model), "--headless", str(tmp_path / "rov.png"))
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "rov.png").stat().st_size > 1000
+
+
+def test_a_missing_meshs_warning_says_why_per_cause(tmp_path):
+    """The Girona 500 case: UWSim's .osg scenes are a format uvms does not read, said as such even when their
+    package is named (before: 'Name the folder of their package', which is not the cause); a package not found says
+    where it was looked for; a package found says where, and that it lacks the file; a relative path says from where."""
+    import warnings
+
+    import uvms
+    from uvms.errors import MissingMeshWarning
+
+    for name in ("uwsim", "known_pkg"):
+        (tmp_path / "share" / name / "meshes").mkdir(parents=True)
+        (tmp_path / "share" / name / "package.xml").write_text(f"<package><name>{name}</name></package>")
+    meshes = ["package://uwsim/data/objects/g500.osg", "package://uwsim/data/objects/arm5e.osg",
+              "package://known_pkg/meshes/none.stl", "package://unknown_pkg/meshes/hull.stl", "meshes/missing.dae"]
+    visuals = "".join(f'<visual><geometry><mesh filename="{uri}"/></geometry></visual>' for uri in meshes)
+    model = tmp_path / "girona.urdf"
+    model.write_text(f'<robot name="girona_like">{FLOATING_ROOT}<link name="base_link"><inertial><mass value="140"/>'
+                     f'<inertia ixx="10" iyy="20" izz="20" ixy="0" ixz="0" iyz="0"/></inertial>{visuals}</link>'
+                     f'</robot>')
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        uvms.load(model, package_path=[tmp_path / "share"])
+    [message] = [str(warning.message) for warning in caught if issubclass(warning.category, MissingMeshWarning)]
+    assert message.startswith(f"{model}: 5 mesh file(s) not found, not shown (kinematics is unaffected): ")
+    assert ("2 (e.g. 'package://uwsim/data/objects/arm5e.osg'): '.osg' files are OpenSceneGraph (UWSim) scenes, not "
+            "meshes: uvms reads .stl, .dae, .obj, .ply meshes; convert them (e.g. to .stl or .dae) to show them"
+            in message)
+    assert f"1 ('package://known_pkg/meshes/none.stl'): package 'known_pkg' (searched at {tmp_path / 'share'}" in message
+    assert "1 ('package://unknown_pkg/meshes/hull.stl'): no ROS package 'unknown_pkg' (looked in: " in message
+    assert f"1 ('meshes/missing.dae'): no such file (relative paths from {tmp_path})" in message
+    assert "Name the folder" not in message

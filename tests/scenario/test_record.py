@@ -19,7 +19,8 @@ from uvms.scenario.resources import SCENARIOS_DIR
 
 
 def view_options(result: Path, model: str | None = None, args: list[str] | None = None) -> argparse.Namespace:
-    return argparse.Namespace(model=model, result=str(result), arg=args, base=None, package_path=[], ee=None)
+    return argparse.Namespace(model=model, result=str(result), arg=args, base=None, package_path=[], ee=None,
+                              arm_joints=None)
 
 
 @pytest.fixture(scope="module")

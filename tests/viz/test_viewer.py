@@ -93,7 +93,7 @@ def test_mesh_uris_are_resolved_and_missing_meshes_left_out():
     assert not missing and "package://" not in xml and xml.count(".dae") > 0
     with pytest.warns(uvms.errors.MissingMeshWarning):
         robot = uvms.load(MISSING_MESH, base="floating")
-    with pytest.warns(uvms.errors.MissingMeshWarning, match="1 mesh file.*no_such_pkg.*not shown"):
+    with pytest.warns(uvms.errors.MissingMeshWarning, match="1 mesh file.*not shown.*no ROS package .no_such_pkg."):
         visual, _ = viewer.geometry_models(robot)
     assert [item.geometry.__class__.__name__ for item in visual.geometryObjects] == ["Box"]
 

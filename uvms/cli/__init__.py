@@ -96,6 +96,19 @@ def add_package_path(parser: argparse.ArgumentParser) -> None:
                              "does not have, a default thruster value, ...): the first warning is an error, exit 2")
 
 
+def add_model_options(parser: argparse.ArgumentParser, ee_help: str) -> None:
+    """``--base``, ``--arg``, ``--ee`` and ``--arm-joints`` on a command that loads a model (``uvms info``, ``view``,
+    ``workspace``): what :func:`uvms.load` takes, as a scenario's ``[model]`` table gives it
+    (:func:`.info.command_model`)."""
+    parser.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    parser.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    parser.add_argument("--ee", action="append", metavar="FRAME", help=ee_help)
+    parser.add_argument("--arm-joints", action="append", metavar="J1,J2,...",
+                        help="the joints that move besides the vehicle, every other one frozen (repeatable or "
+                             "comma-separated; \"\": none; default: the rule of uvms info's joint classes), as a "
+                             "scenario's [model] arm_joints")
+
+
 def add_parallel_options(parser: argparse.ArgumentParser) -> None:
     """``--jobs``, ``--backend``, ``--scheduler`` and ``--insecure-scheduler`` of ``uvms sweep``, ``study`` and ``tune``."""
     parser.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
@@ -159,10 +172,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog="uvms", description="Kinematics of underwater vehicle-manipulator systems.")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=OneLineParser)
     info = commands.add_parser("info", help="describe a model and run its checks")
-    info.add_argument("model", help="a .urdf/.xacro file or a shipped model name (e.g. hoang2011)")
-    info.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
-    info.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
-    info.add_argument("--ee", action="append", metavar="FRAME", help="end-effector frame (repeatable)")
+    info.add_argument("model", help="a .urdf/.xacro file, a shipped model name (e.g. hoang2011) or a scenario .toml "
+                                    "(its model)")
+    add_model_options(info, "end-effector frame (repeatable)")
     info.add_argument("--hydrodynamics", metavar="YAML", help="show the hydrodynamics of this YAML file (e.g. what "
                                                                "uvms identify wrote) in place of the model's")
     add_package_path(info)
@@ -194,14 +206,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_study_parser(commands)
     add_tune_parser(commands)
     workspace = commands.add_parser("workspace", help="Monte Carlo reachable workspace of end-effector frames")
-    workspace.add_argument("model", help="a .urdf/.xacro file or a shipped model name")
-    workspace.add_argument("--ee", action="append", metavar="FRAME", help="frame (repeatable; default: the end effectors)")
+    workspace.add_argument("model", help="a .urdf/.xacro file, a shipped model name or a scenario .toml (its model)")
+    add_model_options(workspace, "frame (repeatable; default: the end effectors)")
     workspace.add_argument("-n", "--samples", default="10000",
                            help="joint samples per frame, e.g. 100000 or 1e9 (streamed: memory does not grow with N)")
     workspace.add_argument("--seed", type=int, default=0, help="random seed")
     workspace.add_argument("--voxel", type=float, default=0.05, help="voxel edge for the volume [m]")
-    workspace.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
-    workspace.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
     workspace.add_argument("--figures", metavar="N1,N2,...",
                            help="also draw the first N1, N2, ... samples, e.g. 10000,50000,100000 "
                                 "(xiang2019 Fig. 4): workspace_<N>.png")
@@ -234,10 +244,8 @@ def build_parser() -> argparse.ArgumentParser:
                            "--result: not needed (the run folder records its model), and if given it must match")
     view.add_argument("--result", metavar="DIR",
                       help="play the trajectory.npz of a run folder (uvms run) on the model it records")
-    view.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
-    view.add_argument("--ee", action="append", metavar="FRAME",
-                      help="end-effector frame drawn with a triad (repeatable; default: the model's rule, see uvms info)")
-    view.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
+    add_model_options(view, "end-effector frame drawn with a triad (repeatable; default: the model's rule, see uvms "
+                            "info)")
     view.add_argument("--q", nargs="+", type=float, metavar="V",
                       help="configuration: nq numbers (q), vehicle pose + arm joints, or arm joints only")
     view.add_argument("--port", type=int, default=8080, help="first port tried on 127.0.0.1 (default 8080)")
@@ -270,8 +278,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                 if getattr(options, "strict", False):
                     warnings.simplefilter("error", UVMSWarning)
                 status = options.handler(options)
-            for warning in caught:
-                say(f"uvms: warning: {warning.message}")
+            for message in dict.fromkeys(str(warning.message) for warning in caught):  # each text once
+                say(f"uvms: warning: {message}")
             return status
         except KeyboardInterrupt as exc:
             return interrupted(exc, options, received)

@@ -10,7 +10,6 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
-from ..model.loader import load
 from ..model.resources import MAX_YAML_BYTES, read_text
 from ..robot.robot import Robot
 from .terminal import say
@@ -25,6 +24,24 @@ def parse_assignments(items: Sequence[str] | None) -> dict[str, str]:
             raise UVMSError(f"--arg expects NAME=VALUE, got {item!r}")
         assignments[name] = value
     return assignments
+
+
+def parse_arm_joints(items: Sequence[str] | None) -> list[str] | None:
+    """``--arm-joints`` values (repeatable, each one name or names separated by commas) -> the joint names, [] for
+    ``--arm-joints ""`` (every joint frozen), None when not given (:func:`uvms.load`'s rule)."""
+    if items is None:
+        return None
+    return [name.strip() for item in items for name in item.split(",") if name.strip()]
+
+
+def command_model(options: argparse.Namespace) -> Robot:
+    """The model of ``uvms info``, ``uvms view`` and ``uvms workspace``: a model file, a shipped name or a scenario
+    ``.toml`` (its ``[model]``), with ``--base``, ``--arg``, ``--ee``, ``--arm-joints`` and ``--package-path``
+    (:func:`uvms.scenario.record.named_model`, which loads it as :func:`uvms.load` does)."""
+    from ..scenario.record import named_model
+
+    return named_model(options.model, parse_assignments(options.arg), options.base, options.package_path,
+                       options.ee, parse_arm_joints(options.arm_joints))
 
 
 def format_limits(lower: np.ndarray, upper: np.ndarray) -> str:
@@ -59,6 +76,7 @@ def describe(robot: Robot, hydrodynamics: str | None = None) -> str:
         f"total mass  {robot.total_mass:.3f} kg",
         *joint_table(robot),
         *joint_groups(robot),
+        *ignored_limit_lines(robot),
     ]
     body_frames = [f.name for f in robot.model.frames if f.type == pin.FrameType.BODY]
     lines.append(f"frames      {', '.join(body_frames)}")
@@ -101,6 +119,25 @@ def joint_groups(robot: Robot) -> list[str]:
         if members:
             lines.append(f"{title} ({len(members)}): {meaning}")
             lines.extend(f"  {name:<{width}} {reason}" for name, reason in members)
+    return lines
+
+
+def ignored_limit_lines(robot: Robot) -> list[str]:
+    """A line per arm joint of type continuous whose ``<limit>`` writes a lower or upper bound: URDF gives a
+    continuous joint no position limits (urdfdom and Pinocchio ignore them), which is right but silent."""
+    if robot.urdf_root is None:
+        return []
+    lines = []
+    for joint in robot.urdf_root.iter("joint"):
+        name, limit = joint.get("name", ""), joint.find("limit")
+        joint_class = robot.joint_classes.get(name)
+        if (joint.get("type") != "continuous" or limit is None or joint_class is None or joint_class.kind != "arm"
+                or (limit.get("lower") is None and limit.get("upper") is None)):
+            continue
+        written = f"[{float(limit.get('lower', '0')):g}, {float(limit.get('upper', '0')):g}]"  # checked numbers
+        lines.append(f"limits      {name}: continuous, so its written limits {written} are ignored (a continuous "
+                     f"joint turns without position limits; its velocity and effort limits are kept); make it "
+                     f"revolute to keep them")
     return lines
 
 
@@ -188,7 +225,6 @@ def hydrodynamics_source(robot: Robot, source: str) -> list[str]:
 
 def command_info(options: argparse.Namespace) -> int:
     """``uvms info MODEL``: load the model (running its checks) and describe it."""
-    robot = load(options.model, base=options.base, args=parse_assignments(options.arg), ee=options.ee or None,
-                 package_path=options.package_path)
+    robot = command_model(options)
     say(describe(robot, options.hydrodynamics), sys.stdout, lines=True)
     return 0

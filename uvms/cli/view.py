@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import UVMSError, ViewerInputError
 from ..robot.robot import Robot
-from .info import parse_assignments
+from .info import command_model, parse_assignments
 from .terminal import say
 
 
@@ -53,19 +53,20 @@ def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
     """The model of ``uvms view`` and a one-line note on it (or None): with ``--result DIR``, the model the run
     folder records (a MODEL, ``--arg`` or ``--base`` given too must describe it; an older folder without a record:
     MODEL as given, and a note); else a model file/name or the model of a scenario ``.toml``."""
-    from ..scenario.record import named_model, replay_model
+    from ..scenario.record import replay_model
 
     if options.result:
-        if options.ee:
-            raise UVMSError("--ee is for a model; a run folder (--result) is drawn with the end effectors it was run "
-                            "with")
+        for given, option, what in ((options.ee, "--ee", "end effectors"),
+                                    (options.arm_joints is not None, "--arm-joints", "arm joints")):
+            if given:
+                raise UVMSError(f"{option} is for a model; a run folder (--result) is drawn with the {what} it was "
+                                f"run with")
         return replay_model(options.result, options.model, parse_assignments(options.arg), options.base,
                             options.package_path)
     if options.model is None:
         raise UVMSError("uvms view needs the model: `uvms view MODEL`, or `uvms view --result DIR` of a run folder "
                         "(which records its model)")
-    return named_model(options.model, parse_assignments(options.arg), options.base, options.package_path,
-                       options.ee), None
+    return command_model(options), None
 
 
 #: The inequality types whose closest pair a drawing marks.
@@ -199,6 +200,27 @@ def wait_for_interrupt() -> None:
         time.sleep(3600)
 
 
+def headless_path(name: str) -> Path:
+    """The file ``--headless NAME`` writes: NAME, with ``.png`` added when it has no suffix.
+
+    Raises:
+        UVMSError: a suffix that is neither a picture format matplotlib writes nor an animation (.gif, .mp4).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from ..viz.drawing import WRITERS
+
+    out = Path(name)
+    if not out.suffix:
+        return out.with_name(f"{out.name}.png")
+    pictures = sorted(f".{suffix}" for suffix in FigureCanvasAgg(Figure()).get_supported_filetypes())
+    if out.suffix.lower() not in {*pictures, *WRITERS}:
+        raise UVMSError(f"--headless {name!r}: unknown suffix {out.suffix!r}; write a picture "
+                        f"({', '.join(pictures)}; none: .png) or, with --result, an animation ({', '.join(WRITERS)})")
+    return out
+
+
 def command_view(options: argparse.Namespace) -> int:
     """``uvms view MODEL [--q ...]`` / ``uvms view MODEL --result DIR``: the 3-D viewer, or a headless picture."""
     from ..viz.viewer import check_port
@@ -218,9 +240,9 @@ def command_view(options: argparse.Namespace) -> int:
         from ..viz import drawing
         from ..viz.collision_drawing import CollisionOverlay
 
-        overlay = CollisionOverlay(robot, options.collision, objectives) if options.collision or objectives else None
-
-        out = Path(options.headless)
+        out = headless_path(options.headless)
+        # the visual meshes unless the collision shapes are asked for (one kind of shape in a picture)
+        overlay = CollisionOverlay(robot, options.collision, objectives, visual=not options.collision)
         if result is None:
             if out.suffix.lower() in drawing.WRITERS:
                 raise UVMSError(f"an animation ({out.suffix}) needs --result DIR; write a picture (.png) of one "

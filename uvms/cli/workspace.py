@@ -8,8 +8,7 @@ from pathlib import Path
 
 from ..errors import UVMSError
 from ..io.names import default_output_folder
-from ..model.loader import load
-from .info import parse_assignments
+from .info import command_model
 from .run import say_replaced, watch_job
 from .terminal import say
 
@@ -43,9 +42,8 @@ def command_workspace(options: argparse.Namespace) -> int:
     check_seed(options.seed)
     if not 0.0 < options.convergence_tolerance < 1.0:
         raise UVMSError(f"--convergence-tolerance must be in (0, 1) (0.01: 1 %), got {options.convergence_tolerance}")
-    robot = load(options.model, base=options.base, args=parse_assignments(options.arg),
-                 package_path=options.package_path)
-    frames = options.ee or robot.ee_frames
+    robot = command_model(options)
+    frames = robot.ee_frames  # --ee, else the model's rule
     figure_counts = parse_figure_counts(options.figures, samples)
     if not 0.0 <= options.dexterous_threshold <= 1.0:
         raise UVMSError(f"--dexterous-threshold must be in [0, 1], got {options.dexterous_threshold}")

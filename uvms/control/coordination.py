@@ -67,6 +67,49 @@ def arm_rates_for_task(jacobian: np.ndarray, task: np.ndarray, vehicle_velocity:
     return inverse @ (task - jacobian[:, :n_vehicle] @ vehicle_velocity)
 
 
+#: A singular value of the arm's task Jacobian J_a below this fraction of its largest is a task direction the arm
+#: cannot move (a singular arm, fewer joints than task rows, no arm); above it the arm is left to do the work.
+ARM_RANK_TOLERANCE = 1e-6
+
+
+def vehicle_rates_for_task(jacobian: np.ndarray, residual: np.ndarray, n_vehicle: int, *,
+                           damping: float = 0.0) -> np.ndarray:
+    """dnu (n_vehicle,) [m/s, rad/s] the vehicle adds to give the part of a task velocity the arm cannot.
+
+    The residual's part outside the range of the arm's columns J_a (judged at :data:`ARM_RANK_TOLERANCE`), r_v, is
+    given by the vehicle, translation first and rotation only for what translation cannot do:
+    dw = ((I - P_t) J_w)^# (I - P_t) r_v with P_t = J_t J_t^#, then dv = J_t^# (r_v - J_w dw). A point task moves
+    the vehicle without turning it (a plain J_v^# would turn a vehicle whose task frame is off its origin); a task
+    with orientation rows gets its rotation. What the arm could give but did not (its DLS damping) stays the arm's.
+
+    Args:
+        jacobian: J (k, nv) of the task, columns in the order of v (the vehicle joint's local twist [v; w] first).
+        residual: r (k,) the task velocity still wanted [m/s, rad/s].
+        n_vehicle: velocity entries of the vehicle (6).
+        damping: DLS damping of the vehicle's inverses.
+    """
+    residual = outside_range(jacobian[:, n_vehicle:]) @ residual  # what the arm cannot give
+    translation, rotation = jacobian[:, :3], jacobian[:, 3:n_vehicle]
+    outside = outside_range(translation)  # the rows translation cannot give
+    turn_inverse, _, _ = damped_weighted_inverse(outside @ rotation, None, damping)
+    turn = turn_inverse @ (outside @ residual)
+    translation_inverse, _, _ = damped_weighted_inverse(translation, None, damping)  # (3, k)
+    return np.concatenate([translation_inverse @ (residual - rotation @ turn), turn])
+
+
+def outside_range(matrix: np.ndarray) -> np.ndarray:
+    """P (k, k) the orthogonal projector onto the complement of the range of ``matrix`` (k, n), its rank judged at
+    :data:`ARM_RANK_TOLERANCE` of its largest singular value; exactly zero for a full row rank (no rounding left
+    for an inverse to blow up), the identity for no columns."""
+    rows = matrix.shape[0]
+    if not matrix.size:
+        return np.eye(rows)
+    u, singular, _ = np.linalg.svd(matrix)  # u (k, k)
+    kept = int(np.sum(singular > ARM_RANK_TOLERANCE * singular[0])) if singular[0] > 0 else 0
+    complement = u[:, kept:]
+    return complement @ complement.T
+
+
 class KinematicLayer(Protocol):
     """What :class:`CoordinatedControl` asks of its kinematic layer (:class:`uvms.control.station.ActuatedKinematics`)."""
 

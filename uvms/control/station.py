@@ -16,7 +16,12 @@ Per control step (period dt), from the measured (q, v):
 
 CLIK has no priorities: its levels would be stacked and traded off, not held. With CLIK the vehicle's given
 velocity nu is taken out of the task: qd_arm = J_a^# (K e + xdot_d - J_v nu) (DLS ``damping``): the same law
-as the priority methods' with the vehicle level on top, without inequalities.
+as the priority methods' with the vehicle level on top, without inequalities. Where the vehicle's velocity is
+given to the task (CLIK, or a solver that puts the pose objective above the task), the vehicle's reference then
+adds the part of the task the arm cannot give: of r = K e + xdot_d - J v, the part r_v outside the range of
+the arm's columns, nu_ref = nu_pose + J_v^# r_v, translation first
+(:func:`uvms.control.coordination.vehicle_rates_for_task`). An able arm leaves none; a vehicle without an arm
+carries the whole task, the pose objective acting only in the task's null space.
 
 Station keeping (:func:`station_keeping`) is one case: a held end-effector point and the CLIK law.
 """
@@ -40,7 +45,7 @@ from ..solvers.stack import stacked_terms
 from ..tasks.frame import FrameTask
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
-from .coordination import CoordinatedControl, arm_rates_for_task
+from .coordination import CoordinatedControl, arm_rates_for_task, vehicle_rates_for_task
 from .vehicle import (DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, VehiclePoseController, VehicleVelocityController,
                       gain_vector, vehicle_inertia, velocity_gains)
 
@@ -65,7 +70,10 @@ class ActuatedKinematics:
         vehicle_level: where the vehicle's pose objective goes relative to the task: 0 above it, 1 or None below
             (the solver's :attr:`~uvms.solvers.base.Solver.vehicle_level`). Below, the task takes the vehicle too
             and the pose objective brings the vehicle back to its station in the task's null space (the arm does
-            the work while it can); above, the arm alone follows the task.
+            the work while it can); above (and with the CLIK law), the arm follows the task with the vehicle's
+            velocity given, and the vehicle adds what the arm cannot give (a vehicle without an arm carries the
+            whole task). The vehicle's added share is not bounded by saturation feedback (which bounds the pose
+            objective).
 
     Raises:
         SolverInputError: a non-floating base, a bad gain, or a solver that refuses the levels.
@@ -88,6 +96,9 @@ class ActuatedKinematics:
         reference = [task]
         reference.insert(len(reference) if vehicle_level is None else vehicle_level, [self._vehicle_reference])
         self.reference_solver = None if solver is None else solver([*levels, *reference])
+        #: the vehicle's velocity is given to the task (the CLIK law, a pose objective above it): the vehicle then
+        #: adds the part of the task the arm cannot give (all of it without an arm)
+        self.vehicle_given = solver is None or vehicle_level == 0
         self.arm_solver = None if solver is None else solver([[self._vehicle_measured], *levels, task])
         self._configuration: Configuration | None = None
         self._time: float | None = None
@@ -122,11 +133,24 @@ class ActuatedKinematics:
         if self.reference_solver is None:  # the CLIK law
             jacobian, error, feedforward = stacked_terms(configuration, [self.task])
             arm = arm_rates_for_task(jacobian, self.gain * error + feedforward, vehicle, nb, damping=self.damping)
-            return np.concatenate([vehicle, arm]), None
-        level = self._vehicle_reference if reference else self._vehicle_measured
-        level.velocity_values[:] = vehicle
-        result = (self.reference_solver if reference else self.arm_solver).velocity(configuration)
-        return result.v, result
+            v, result = np.concatenate([vehicle, arm]), None
+        else:
+            level = self._vehicle_reference if reference else self._vehicle_measured
+            level.velocity_values[:] = vehicle
+            result = (self.reference_solver if reference else self.arm_solver).velocity(configuration)
+            v = result.v
+        if reference and self.vehicle_given:
+            v = v.copy()
+            v[:nb] += self._vehicle_share(configuration, v)
+        return v, result
+
+    def _vehicle_share(self, configuration: Configuration, v: np.ndarray) -> np.ndarray:
+        """What the vehicle adds (n_vehicle,) (joint axes) for the part of the task the arm cannot give: of the
+        residual r = K e + xdot_d - J v, what lies outside the arm's range
+        (:func:`~uvms.control.coordination.vehicle_rates_for_task`)."""
+        jacobian, error, feedforward = stacked_terms(configuration, [self.task])
+        residual = self.gain * error + feedforward - jacobian @ v
+        return vehicle_rates_for_task(jacobian, residual, self.robot.n_vehicle, damping=self.damping)
 
     def reference(self, t: float, q: np.ndarray,
                   bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]:

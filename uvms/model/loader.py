@@ -18,6 +18,7 @@ from xml.parsers.expat import ExpatError
 import pinocchio as pin
 
 from . import checks, includes, joint_classes, point_masses, resources, sandbox
+from .meshes import missing_meshes_note
 from .packages import package_index, unknown_package
 from .base_rule import ADDED_BASE_JOINT, decide_base, rigid_body
 from ..errors import (BaseGuessWarning, MissingMeshWarning, ModelCheckError, ModelFileNotFound, ModelParseError,
@@ -375,11 +376,7 @@ def warn_missing_meshes(
         else:
             found[uri] = path
     if missing:
-        warnings.warn(
-            f"{origin}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); kinematics is unaffected. "
-            f"Name the folder of their package (package_path=, --package-path DIR or ROS_PACKAGE_PATH) to "
-            f"show them.",
-            MissingMeshWarning,
-            stacklevel=3,
-        )
+        model = origin if base_dir is not None else ""  # a URDF string has no workspace
+        warnings.warn(missing_meshes_note(origin, missing, base_dir, packages, model), MissingMeshWarning,
+                      stacklevel=3)
     return found

@@ -21,6 +21,7 @@ import urllib.parse
 import warnings
 import xml.etree.ElementTree as ET
 import zipfile
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 from ..errors import GeometryWarning, ModelCheckError
@@ -127,6 +128,47 @@ def named_candidates(folder: Path, name: str) -> list[Path]:
     return [folder / item for item in sorted(names) if item.strip()]
 
 
+#: Scene formats a URDF of a public package may name in a ``<mesh>`` that are not meshes (UWSim's OpenSceneGraph).
+SCENE_FORMATS = {".osg": "OpenSceneGraph (UWSim)", ".osgb": "OpenSceneGraph (UWSim)", ".osgt": "OpenSceneGraph (UWSim)",
+                 ".ive": "OpenSceneGraph (UWSim)"}
+#: How many causes a note on meshes that cannot be found lists (each with a count and an example).
+LISTED_CAUSES = 4
+
+
+def missing_mesh_cause(uri: str, base_dir: Path | None, packages: Mapping[str, Path], model: str = "") -> str:
+    """Why the mesh ``uri`` that :func:`uvms.model.resources.resolve_uri` could not find is not shown, in words a
+    user can act on: a format uvms does not read (whatever the path), a ``package://`` of a package the index
+    lacks (where it looked, :func:`uvms.model.packages.package_search`), a package found without that file, or a
+    path with no file. Several URIs of one cause give the same text (the note groups them)."""
+    from .packages import package_search
+
+    suffix = os.path.splitext(uri)[1].lower()
+    if suffix not in MESH_FORMATS:
+        what = (f"{suffix!r} files are {SCENE_FORMATS[suffix]} scenes, not meshes" if suffix in SCENE_FORMATS
+                else f"format {suffix or '(no suffix)'!r} is not a mesh format")
+        return f"{what}: uvms reads {', '.join(MESH_FORMATS)} meshes; convert them (e.g. to .stl or .dae) to show them"
+    if uri.startswith("package://"):
+        package = uri[len("package://"):].partition("/")[0]
+        if package not in packages:
+            return package_search(package, packages, model)
+        return f"package {package!r} (searched at {packages[package]}) does not hold them"
+    return f"no such file{f' (relative paths from {base_dir})' if base_dir is not None else ''}"
+
+
+def missing_meshes_note(origin: str, missing: Sequence[str], base_dir: Path | None, packages: Mapping[str, Path],
+                        model: str = "") -> str:
+    """The one warning of meshes that cannot be found: their count, then per cause (:func:`missing_mesh_cause`,
+    at most :data:`LISTED_CAUSES`) how many and an example."""
+    causes: dict[str, list[str]] = {}
+    for uri in sorted(set(missing)):  # one text for the same meshes, whoever found them missing
+        causes.setdefault(missing_mesh_cause(uri, base_dir, packages, model), []).append(uri)
+    parts = [f"{len(uris)} ({'e.g. ' if len(uris) > 1 else ''}{uris[0]!r}): {cause}"
+             for cause, uris in list(causes.items())[:LISTED_CAUSES]]
+    more = f"; and {len(causes) - LISTED_CAUSES} more causes" if len(causes) > LISTED_CAUSES else ""
+    return (f"{origin}: {len(set(missing))} mesh file(s) not found, not shown (kinematics is unaffected): "
+            f"{'; '.join(parts)}{more}")
+
+
 def resolved_urdf(robot: Robot, strict: bool = False) -> tuple[str, list[str]]:
     """The robot's URDF text with every mesh URI made an absolute path (``package://`` through ``robot.packages``).
 
@@ -165,10 +207,9 @@ def resolved_urdf(robot: Robot, strict: bool = False) -> tuple[str, list[str]]:
                 path = resources.resolve_uri(uri, base_dir, robot.packages)
                 if path is None:
                     if strict:
+                        cause = missing_mesh_cause(uri, base_dir, robot.packages, robot.source if base_dir else "")
                         raise ModelCheckError(f"{robot.source}: link {link.get('name')!r}: the {kind} mesh {uri!r} "
-                                              f"cannot be found; give a file path relative to the model, or a "
-                                              f"package:// URI of a package it was loaded with "
-                                              f"({', '.join(sorted(robot.packages)) or 'none'})")
+                                              f"cannot be found: {cause}")
                     missing.append(uri)
                     link.remove(element)
                     continue

@@ -230,10 +230,17 @@ def unknown_package(name: str, packages: Mapping[str, Path], model: str | os.Pat
     Returns:
         "<model>: $(find x): no ROS package 'x' (looked in: ...; found 3: a, b, c); add the folder holding it ...".
     """
+    return f"{model}: $(find {name}): {package_search(name, packages, model)}"
+
+
+def package_search(name: str, packages: Mapping[str, Path], model: str | os.PathLike) -> str:
+    """Where the index of ``model`` looked for the package ``name`` it lacks, what it found, how to add a folder:
+    "no ROS package 'x' (looked in: ...; found 3: a, b, c); add the folder holding it ..." (a ``$(find)``, a
+    ``package://`` mesh)."""
     places = ["the folders named by package_path (if any)"]
     for variable in ("ROS_PACKAGE_PATH", "AMENT_PREFIX_PATH"):
         places.append(f"{variable}={os.environ[variable]}" if os.environ.get(variable) else f"no {variable}")
-    workspace = model_workspace(model)
+    workspace = model_workspace(model) if model else None
     if workspace is None:
         places.append("no workspace (the model is in no package)")
     elif (workspace / "package.xml").is_file():
@@ -241,5 +248,5 @@ def unknown_package(name: str, packages: Mapping[str, Path], model: str | os.Pat
     else:
         places.append(f"the model's workspace {workspace}")
     listed = ", ".join(list(packages)[:LISTED_PACKAGES]) + (", ..." if len(packages) > LISTED_PACKAGES else "")
-    return (f"{model}: $(find {name}): no ROS package {name!r} (looked in: {'; '.join(places)}; found "
-            f"{len(packages)}: {listed or 'none'}); {HOW_TO_ADD}")
+    return (f"no ROS package {name!r} (looked in: {'; '.join(places)}; found {len(packages)}: {listed or 'none'}); "
+            f"{HOW_TO_ADD}")

@@ -187,24 +187,28 @@ def check_given_model(record: RunRecord, recorded: Robot, given: Robot, given_te
 
 
 def scenario_model(section: Mapping[str, Any], args: Mapping[str, object] | None = None, base: str | None = None,
-                   package_path: Sequence[str | os.PathLike] = (), ee: Sequence[str] | None = None) -> Robot:
+                   package_path: Sequence[str | os.PathLike] = (), ee: Sequence[str] | None = None,
+                   arm_joints: Sequence[str] | None = None) -> Robot:
     """The robot of a scenario's checked ``[model]`` section (the one way a scenario loads its model), with
-    ``args`` over its xacro args, ``base`` and ``ee`` over its own and the folders of ``package_path`` first."""
+    ``args`` over its xacro args, ``base``, ``ee`` and ``arm_joints`` (None: the section's) over its own and the
+    folders of ``package_path`` first."""
     return load(section["path"], base=base or section["base"] or None, args={**section["args"], **(args or {})} or None,
                 ee=ee or section["ee"] or None, package_path=[*package_path, *section["package_path"]],
-                arm_joints=section["arm_joints"])
+                arm_joints=section["arm_joints"] if arm_joints is None else arm_joints)
 
 
 def named_model(model: str, args: Mapping[str, object] | None = None, base: str | None = None,
-                package_path: Sequence[str | os.PathLike] = (), ee: Sequence[str] | None = None) -> Robot:
+                package_path: Sequence[str | os.PathLike] = (), ee: Sequence[str] | None = None,
+                arm_joints: Sequence[str] | None = None) -> Robot:
     """A model named on a command line: a model file or shipped name, or the ``[model]`` of a scenario ``.toml``
-    (or shipped scenario name ending in ``.toml``): :func:`scenario_model` with these overrides."""
+    (or shipped scenario name ending in ``.toml``): :func:`scenario_model` with these overrides; ``arm_joints``
+    as :func:`uvms.load` takes it (None: the rule, or the scenario's ``arm_joints``)."""
     args = dict(args or {})
     if str(model).endswith(".toml"):
         from .schema import read_scenario
 
-        return scenario_model(read_scenario(model)["model"], args, base, package_path, ee)
-    return load(model, base=base, args=args, package_path=package_path, ee=ee or None)
+        return scenario_model(read_scenario(model)["model"], args, base, package_path, ee, arm_joints)
+    return load(model, base=base, args=args, package_path=package_path, ee=ee or None, arm_joints=arm_joints)
 
 
 def replay_model(folder: str | os.PathLike, model: str | None = None, args: Mapping[str, object] | None = None,

@@ -1,7 +1,8 @@
-"""Collision shapes, obstacles and closest pairs over a headless drawing (:mod:`uvms.viz.drawing`).
+"""Visual meshes, collision shapes, obstacles and closest pairs over a headless drawing (:mod:`uvms.viz.drawing`).
 
-:class:`CollisionOverlay` is what ``uvms view ... --collision`` and ``--result`` add to
-:func:`~uvms.viz.drawing.snapshot_figure` and :func:`~uvms.viz.drawing.animate`: the robot's collision shapes
+:class:`CollisionOverlay` is what ``uvms view --headless`` adds to :func:`~uvms.viz.drawing.snapshot_figure` and
+:func:`~uvms.viz.drawing.animate`: the model's visual meshes (:mod:`uvms.viz.visual_shapes`, grey) without
+``--collision``; with it (or ``--result`` of a run with collision objectives) the robot's collision shapes
 (:mod:`uvms.viz.collision_shapes`) translucent, one collection per shape, at each drawn configuration; the
 obstacles of the collision objectives, clipped to a box around the drawing (a pipe or a seabed plane runs beyond
 it); and for each objective a segment between the witness points of its nearest pair, coloured by its distance
@@ -9,7 +10,8 @@ it); and for each objective a segment between the witness points of its nearest 
 :meth:`CollisionOverlay.legend_entries` explains the shapes, the obstacles and the colours in a figure's key.
 
 In 3-D a shape is its hull's triangles (a ``Poly3DCollection``); in a plane (``"xy"``, ``"xz"``, ``"yz"``) the
-outline of its projection (a ``PolyCollection`` of the 2-D hull).
+outline of its projection (a ``PolyCollection`` of the 2-D hull). A visual mesh is its own triangles, projected in a
+plane (it need not be convex).
 """
 
 from __future__ import annotations
@@ -36,8 +38,10 @@ from .collision_shapes import (
     obstacle_meshes,
 )
 from .labels import legend_under
+from .visual_shapes import visual_meshes
 
-#: Style of the robot's collision shapes and of the obstacles.
+#: Style of the robot's visual meshes, its collision shapes and the obstacles.
+VISUAL_STYLE = {"facecolor": "0.62", "edgecolor": "0.45", "alpha": 0.35, "linewidth": 0.15}
 SHAPE_STYLE = {"facecolor": "tab:cyan", "edgecolor": "tab:blue", "alpha": 0.22, "linewidth": 0.3}
 OBSTACLE_STYLE = {"facecolor": "0.5", "edgecolor": "0.35", "alpha": 0.3, "linewidth": 0.3}
 #: The obstacles are clipped to the box of the drawing's points grown by this fraction of its largest side.
@@ -91,22 +95,34 @@ class CollisionOverlay:
         robot: the robot drawn.
         shapes: draw the robot's collision shapes (:func:`uvms.model.collision.collision_geometry`).
         objectives: collision objectives built on ``robot``: each one's nearest pair is marked, its obstacle drawn.
+        visual: draw the robot's visual meshes (:func:`uvms.viz.visual_shapes.visual_meshes`), under the shapes.
 
     Raises:
         ModelCheckError: ``shapes`` and the robot's collision geometry cannot be built (no URDF, a missing mesh).
+
+    Warns:
+        MissingMeshWarning, GeometryWarning: ``visual`` and some visual meshes cannot be drawn (left out).
     """
 
-    def __init__(self, robot: Robot, shapes: bool = True, objectives: Sequence[NearestPairs] = ()) -> None:
+    def __init__(self, robot: Robot, shapes: bool = True, objectives: Sequence[NearestPairs] = (),
+                 visual: bool = False) -> None:
         self.robot = robot
+        self.visuals: list[ShapeMesh] = visual_meshes(robot) if visual else []
         self.meshes: list[ShapeMesh] = geometry_meshes(collision_geometry(robot)) if shapes else []
         self.obstacles = obstacle_meshes(objectives)
         self.closest = ClosestPairs(robot, objectives)
 
     def robot_faces(self, q: np.ndarray) -> list[np.ndarray]:
-        """The triangles (f, 3, 3) [m] of each robot shape at configuration q (nq,)."""
+        """The triangles (f, 3, 3) [m] of each visual mesh, then each collision shape, at configuration q (nq,)."""
         data = self.robot.model.createData()
         pin.forwardKinematics(self.robot.model, data, self.robot.check_configuration(q))
-        return [mesh.faces(data.oMi[mesh.joint]) for mesh in self.meshes]
+        return [mesh.faces(data.oMi[mesh.joint]) for mesh in self.visuals + self.meshes]
+
+    def _polygons(self, index: int, faces: np.ndarray, plane: str) -> list[np.ndarray]:
+        """The 2-D polygons of robot shape ``index`` (of :meth:`robot_faces`) in ``plane``: a visual mesh's
+        triangles, a (convex) collision shape's outline."""
+        axes = list(PLANE_AXES[plane])
+        return list(faces[:, :, axes]) if index < len(self.visuals) else [outline(faces.reshape(-1, 3)[:, axes])]
 
     def points(self, q: np.ndarray) -> np.ndarray:
         """The robot shapes' vertices (m, 3) [m] at q (for the axis limits; obstacles are clipped to them)."""
@@ -115,9 +131,10 @@ class CollisionOverlay:
     def draw(self, ax, q: np.ndarray, plane: str | None = None) -> OverlayArtists:
         """Draw the robot shapes and the closest pairs at q (nq,) on ``ax`` (3-D when ``plane`` is None)."""
         shapes = []
-        for faces in self.robot_faces(q):
-            collection = (Poly3DCollection(faces, **SHAPE_STYLE) if plane is None
-                          else PolyCollection([outline(faces.reshape(-1, 3)[:, PLANE_AXES[plane]])], **SHAPE_STYLE))
+        for index, faces in enumerate(self.robot_faces(q)):
+            style = VISUAL_STYLE if index < len(self.visuals) else SHAPE_STYLE
+            collection = (Poly3DCollection(faces, **style) if plane is None
+                          else PolyCollection(self._polygons(index, faces, plane), **style))
             shapes.append(ax.add_collection3d(collection, autolim=False) if plane is None
                           else ax.add_collection(collection, autolim=False))
         pairs = [ax.plot(*[[0.0, 0.0]] * (3 if plane is None else 2), linewidth=2.5, marker="o", markersize=3)[0]
@@ -131,6 +148,8 @@ class CollisionOverlay:
     def legend_entries(self) -> list[tuple]:
         """(handle, label) pairs of a figure's key: the robot's shapes, the obstacles, the closest pairs' colours."""
         entries = []
+        if self.visuals:
+            entries.append((Patch(**VISUAL_STYLE), "visual meshes"))
         if self.meshes:
             entries.append((Patch(**SHAPE_STYLE), "collision shapes"))
         if self.obstacles:
@@ -144,8 +163,8 @@ class CollisionOverlay:
     def move(self, artists: OverlayArtists, q: np.ndarray, plane: str | None = None, shapes: bool = True) -> None:
         """Move the artists of :meth:`draw` to configuration q (nq,) (an animation frame)."""
         if shapes:
-            for collection, faces in zip(artists.shapes, self.robot_faces(q)):
-                collection.set_verts(faces if plane is None else [outline(faces.reshape(-1, 3)[:, PLANE_AXES[plane]])])
+            for index, (collection, faces) in enumerate(zip(artists.shapes, self.robot_faces(q))):
+                collection.set_verts(faces if plane is None else self._polygons(index, faces, plane))
         artists.closest = self.closest.at(q)
         for line, pair in zip(artists.pairs, artists.closest):
             ends = np.array([pair.point1, pair.point2])

@@ -1,18 +1,18 @@
 """Headless stick pictures of a configuration: kinematic tree, joints, end-effector triads, vehicle box.
 
 Everything is drawn with matplotlib's object interface (``matplotlib.figure.Figure``), never pyplot,
-so no display is needed and a notebook keeps its backend. No meshes: the tree is one segment per arm
-joint (parent joint origin -> joint origin, the universe being the world origin), a dot per joint,
-a segment and an RGB triad (x red, y green, z blue) per end-effector frame, and the vehicle as the
-12 edges of the box of its link's ``<visual>`` (else ``<collision>``), or a triad when it has none.
+so no display is needed and a notebook keeps its backend. The tree is one segment per arm joint (parent joint
+origin -> joint origin, the universe being the world origin), a dot per joint, a segment and an RGB triad (x red,
+y green, z blue) per end-effector frame, and the vehicle as the 12 edges of the box of its link's ``<visual>``
+(else ``<collision>``), or a triad when it has none; the triads' length follows the robot's size
+(:func:`configuration_geometry`). Meshes come with an overlay (:class:`~uvms.viz.collision_drawing.CollisionOverlay`:
+the visual meshes of ``uvms view --headless``, or the collision shapes).
 """
 
 from __future__ import annotations
 
-import functools
 import itertools
 import os
-import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -25,13 +25,13 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from ..errors import ConfigurationError, UVMSError, WorkspaceInputError
+from ..errors import ConfigurationError, UVMSError
 from ..io import outputs
 from ..io.progress import tqdm
 from ..robot.robot import Robot
-from ..workspace.hull import HullShape, hull_shapes
 from .collision_drawing import CollisionOverlay
 from .labels import legend_below
+from .visual_shapes import body_size, vehicle_box
 
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 WRITERS = {".gif": animation.PillowWriter, ".mp4": animation.FFMpegWriter}
@@ -91,32 +91,17 @@ class Drawing:
     plane: str | None = None
 
 
-@functools.lru_cache(maxsize=16)
-def vehicle_box(robot: Robot) -> HullShape | None:
-    """The vehicle's first box solid from its URDF (`uvms.workspace.hull_shapes`), None without one or for a fixed base."""
-    if robot.base_type == "fixed" or robot.urdf is None:
-        return None
-    for element in ("visual", "collision"):  # the visual envelope, not the first of many collision solids
-        with warnings.catch_warnings():  # meshes are skipped silently here: the drawing falls back to a triad
-            warnings.simplefilter("ignore")
-            try:
-                shapes = hull_shapes(robot, element=element)
-            except WorkspaceInputError:
-                continue
-        box = next((shape for shape in shapes if shape.kind == "box"), None)
-        if box is not None:
-            return box
-    return None
-
-
 def _triad(pose: pin.SE3, length: float) -> np.ndarray:
     """The x, y, z axes of a pose as segments (3, 2, 3)."""
     return np.array([[pose.translation, pose.translation + length * pose.rotation[:, k]] for k in range(3)])
 
 
 def configuration_geometry(robot: Robot, q: np.ndarray, frames: Sequence[str] | None = None,
-                           triad_length: float | None = None) -> ConfigurationGeometry:
-    """World geometry of configuration q (nq,); ``triad_length`` [m] defaults to 8 % of the robot's extent."""
+                           triad_length: float | None = None,
+                           shapes: np.ndarray | None = None) -> ConfigurationGeometry:
+    """World geometry of configuration q (nq,); ``triad_length`` [m] defaults to 8 % of the robot's extent (its
+    joints, frames, vehicle box, the points (m, 3) [m] of ``shapes`` drawn with it, and the vehicle's
+    :func:`body_size`), so the frames are seen on a vehicle of any size."""
     q = robot.check_configuration(q)
     model, data = robot.model, robot.data
     frame_ids = [robot.frame_id(name) for name in (robot.ee_frames if frames is None else frames)]
@@ -133,8 +118,10 @@ def configuration_geometry(robot: Robot, q: np.ndarray, frames: Sequence[str] | 
         placement = vehicle_pose * pin.SE3(box.rotation, box.centre)
         corners = np.array([placement.act(sign * box.size / 2) for sign in CORNER_SIGNS])
     if triad_length is None:
-        shown = np.concatenate([origins, ee.reshape(-1, 3), np.reshape([] if corners is None else corners, (-1, 3))])
-        triad_length = 0.08 * max(float(np.ptp(shown, axis=0).max()), 0.1)
+        drawn = origins[first_arm - 1:]  # the world origin only under a fixed base (a vehicle may be far from it)
+        shown = np.concatenate([drawn, ee.reshape(-1, 3), np.reshape([] if corners is None else corners, (-1, 3)),
+                                np.reshape([] if shapes is None else shapes, (-1, 3))])
+        triad_length = 0.08 * max(float(np.ptp(shown, axis=0).max()), body_size(robot), 0.1)
     poses = [data.oMf[f] for f in frame_ids] + ([vehicle_pose] if vehicle_pose is not None and box is None else [])
     triads = np.array([_triad(pose, triad_length * (2 if f >= len(frame_ids) else 1)) for f, pose in enumerate(poses)])
     return ConfigurationGeometry(list(model.names)[1:], origins[1:].copy(), segments, ee,
@@ -300,10 +287,12 @@ def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | Non
     ncols = ncols or min(len(qs), 4)
     nrows = -(-len(qs) // ncols)
     figure = Figure(figsize=(panel_size * ncols, panel_size * nrows))
+    triad = _first_geometry(robot, qs[0], frames, overlay).triad_length  # one length in every panel
     drawings = []
     for k, q in enumerate(qs):
         ax = _new_axes(figure, (nrows, ncols, k + 1), plane, view)
-        drawings.append(draw_configuration(ax, robot, q, plane=plane, frames=frames, autoscale=False))
+        drawings.append(draw_configuration(ax, robot, q, plane=plane, frames=frames, triad_length=triad,
+                                           autoscale=False))
         if overlay is not None:
             overlay.draw(ax, q, plane)
         ax.set_title(titles[k] if titles is not None else f"configuration {k + 1}")
@@ -320,6 +309,12 @@ def snapshot_figure(robot: Robot, configurations, *, titles: Sequence[str] | Non
     if path is not None:
         outputs.save_figure(figure, path)
     return figure
+
+
+def _first_geometry(robot: Robot, q: np.ndarray, frames: Sequence[str] | None,
+                    overlay: CollisionOverlay | None) -> ConfigurationGeometry:
+    """The geometry of q, its triads sized with the overlay's shapes (the visual meshes of a vehicle alone)."""
+    return configuration_geometry(robot, q, frames, shapes=None if overlay is None else overlay.points(q))
 
 
 def _movie_writer(path: Path, fps: float) -> animation.AbstractMovieWriter:
@@ -365,7 +360,7 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
     qs = as_configurations(robot, configurations)
     if times is not None and np.shape(times) != (len(qs),):
         raise UVMSError(f"times must have shape ({len(qs)},) (one per configuration), got {np.shape(times)}")
-    first = configuration_geometry(robot, qs[0], frames)
+    first = _first_geometry(robot, qs[0], frames, overlay)
     geometries = [first] + [configuration_geometry(robot, q, frames, first.triad_length) for q in qs[1:]]
     trail = np.array([robot.fk(q, trail_frame).translation for q in qs]) if trail_frame else np.empty((0, 3))
     figure = Figure(figsize=figsize)

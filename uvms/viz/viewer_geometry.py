@@ -12,12 +12,13 @@ joint origin), a sphere per joint, and the end effectors in orange.
 from __future__ import annotations
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import GeometryWarning, MissingMeshWarning
-from ..model.meshes import resolved_urdf
+from ..model.meshes import missing_meshes_note, resolved_urdf
 from ..robot.robot import Robot
 from .viewer_collision import viewer_collision_model
 
@@ -91,20 +92,32 @@ def geometry_models(robot: Robot, skeleton: bool | None = None) -> tuple[pin.Geo
         MissingMeshWarning: some meshes cannot be found (they are left out).
         GeometryWarning: the collision geometry cannot be built (no collision shapes shown).
     """
-    visual, collision = pin.GeometryModel(), pin.GeometryModel()
-    if robot.urdf is not None:
-        xml, missing = resolved_urdf(robot)
-        if missing:
-            warnings.warn(f"{robot.source}: {len(missing)} mesh file(s) not found (e.g. {missing[0]!r}); "
-                          f"they are not shown", MissingMeshWarning, stacklevel=2)
-        try:
-            visual = pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.VISUAL)
-        except (RuntimeError, ValueError) as exc:
-            warnings.warn(f"{robot.source}: Pinocchio cannot read the geometry ({' '.join(str(exc).split())}); "
-                          f"showing the skeleton", GeometryWarning, stacklevel=2)
-            visual = pin.GeometryModel()
-        collision = viewer_collision_model(robot)
+    visual = visual_geometry(robot)
+    collision = viewer_collision_model(robot) if robot.urdf is not None else pin.GeometryModel()
     if skeleton or (skeleton is None and visual.ngeoms == 0):
         for item in skeleton_geometry(robot).geometryObjects:
             visual.addGeometryObject(item)
     return visual, collision
+
+
+def visual_geometry(robot: Robot) -> pin.GeometryModel:
+    """The URDF's ``<visual>`` geometry (meshes as they are, their URIs resolved); empty without a URDF.
+
+    Warns:
+        MissingMeshWarning: some meshes cannot be found (they are left out).
+        GeometryWarning: Pinocchio cannot read the geometry (an empty model).
+    """
+    if robot.urdf is None:
+        return pin.GeometryModel()
+    xml, missing = resolved_urdf(robot)
+    if missing:
+        source = Path(robot.source)
+        folder = source.parent if source.is_file() else None
+        warnings.warn(missing_meshes_note(robot.source, missing, folder, robot.packages,
+                                          robot.source if folder else ""), MissingMeshWarning, stacklevel=3)
+    try:
+        return pin.buildGeomFromUrdfString(robot.model, xml, pin.GeometryType.VISUAL)
+    except (RuntimeError, ValueError) as exc:
+        warnings.warn(f"{robot.source}: Pinocchio cannot read the geometry ({' '.join(str(exc).split())}); "
+                      f"it is not shown", GeometryWarning, stacklevel=3)
+        return pin.GeometryModel()
