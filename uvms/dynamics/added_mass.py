@@ -58,7 +58,8 @@ class StackedLinks:
         frames, joints: (L,) the links' frame ids and their parent joints.
         motion_to_link: (L, 6, 6) the action of the inverse placement: a motion of the joint in the link frame.
         rotations: (L, 3, 3) the links' rotations in their joints' frames; translations: (L, 3) their origins there.
-        added_mass: (L, 6, 6); linear_damping, quadratic_damping: (L, 6) (link frames, FLU).
+        added_mass: (L, 6, 6); linear_damping, forward_damping, quadratic_damping: (L, 6) d_l, d_f, d_q (link
+            frames, FLU; :meth:`uvms.dynamics.hydro_parameters.LinkHydrodynamics.damping_wrench`).
         buoyancy: (L,) rho g V [N] (0 without gravity); center_of_buoyancy: (L, 3) [m] in the link frames.
         buoyant: whether any link has a volume.
     """
