@@ -81,7 +81,7 @@ def test_below_the_minimum_speed_the_fins_stay_at_rest(torpedo):
 
 def test_priorities_order_what_is_left_of_an_unreachable_wrench():
     """A thruster and a fin that gives heave 20 with pitch 15 per unit: pitch 2.6 N m and heave -1.4 N cannot both be
-    had. Before, the least squares over all axes (no bound reached) ignored the priorities: pitch 0.1 N m; with pitch
+    had. Before, the least squares over all axes (no bound reached) ignored the priorities: pitch 0.26 N m; with pitch
     first the fin gives the whole pitch moment."""
     matrix = np.array([[1.0, 0, 0, 0, 0, 0], [0, 0, 20.0, 0, 15.0, 0]]).T
     wrench = np.array([3.0, 0.0, -1.4, 0.0, 2.6, 0.0])

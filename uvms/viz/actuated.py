@@ -36,7 +36,8 @@ def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "
     panels = [(result.actuation.thrusts[:, i], result.actuation.thrust_command[:, i], thrusters.lower[i],
                thrusters.upper[i], f"{thrusters.names[i]} [N]") for i in range(len(thrusters))]
     panels += [(result.actuation.series("fin_angles")[:, i], result.actuation.series("fin_command")[:, i],
-                fins.lower[i], fins.upper[i], f"{fins.names[i]} [rad]") for i in range(len(fins))]
+                fins.lower[i], fins.upper[i], f"{fins.names[i]} [rad]") for i in range(len(fins))
+               if fins.items[i].moves]  # a fixed lifting surface has no angle to draw
     count = len(panels)
     columns = 2 if count > 1 else 1
     rows = int(np.ceil(count / columns))
