@@ -225,6 +225,11 @@ class ThrusterDefaultWarning(UVMSWarning):
     """A plugin thruster took a value of :data:`uvms.dynamics.thrusters.DEFAULT_VALUES` (the plugin and the YAML give none)."""
 
 
+class FinDefaultWarning(UVMSWarning):
+    """A fin took :data:`uvms.dynamics.fins.DEFAULT_TIME_CONSTANT` (its plugin gives no first-order time constant), or
+    a fin plugin is left out of the plant (its joint is not a fin: ``arm_joints`` makes it an arm joint)."""
+
+
 class ThrusterLayoutWarning(UVMSWarning):
     """The thrusters cannot produce every body-wrench direction (the allocation's rank is below 6)."""
 

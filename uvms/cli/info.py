@@ -58,6 +58,8 @@ JOINT_GROUPS = {
     "arm": ("arm joints", "what a user commands"),
     "mimic": ("mimics", "follow an arm joint, no degree of freedom of their own"),
     "propeller": ("propellers", "carry a thruster; frozen (their spin changes no kinematics)"),
+    "fin": ("fins", ("control surfaces turned by a fin plugin; frozen in the kinematics, their angle an actuator "
+                     "of the actuated plant (lift and drag with the vehicle's speed)")),
     "sensor": ("sensors", "sensor mounts; frozen"),
     "fixed by range": ("fixed by range", "no motion between their limits; frozen"),
     "frozen": ("frozen", "left out of arm_joints"),
@@ -149,7 +151,9 @@ def vector(values: Sequence[float], style: str = "+.3f") -> str:
 def thruster_lines(robot: Robot) -> list[str]:
     """The thrusters (``uvms.dynamics.thrusters_of``): placement and direction in the base frame, limits, lag."""
     from ..dynamics.allocation import ThrustAllocator
+    from ..dynamics.fin_allocation import FinAllocator
     from ..dynamics.thrusters import allocation_matrix, thruster_rows, thrusters_of
+    from .info_fins import fin_lines
 
     try:
         thrusters = thrusters_of(robot, required=False)
@@ -164,8 +168,11 @@ def thruster_lines(robot: Robot) -> list[str]:
              "time constant [s]"]
     lines += [f"  {row['name']:<{width}} xyz {vector(row['position'])}  dir {vector(row['direction'])}  "
               f"[{-row['max_reverse']:g}, {row['max_forward']:g}]  {row['time_constant']:g}" for row in rows]
-    allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper)
-    lines.append(f"allocation  {allocator.reach_note(thrusters.names) or 'every body-wrench direction (rank 6)'}")
+    fins, fin_data = fin_lines(robot)
+    matrix = allocation_matrix(robot, thrusters)
+    allocator = FinAllocator(matrix, thrusters.lower, thrusters.upper, fin_data) if len(fin_data) \
+        else ThrustAllocator(matrix, thrusters.lower, thrusters.upper)
+    lines += [*fins, f"allocation  {allocator.reach_note(thrusters.names) or 'every body-wrench direction (rank 6)'}"]
     return lines
 
 

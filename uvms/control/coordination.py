@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..dynamics.actuated import ActuatedCommand, base_twist
+from ..dynamics.fin_allocation import split_actuators
 from ..errors import SolverInputError
 from ..robot.limits import Limit
 from ..robot.robot import Robot
@@ -190,7 +191,8 @@ class CoordinatedControl:
         info = {"wrench_command": control.wrench, "achieved_wrench": allocation.achieved_wrench,
                 "attainable": allocation.attainable, "velocity_integral": self.velocity.integral.copy(),
                 "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
-        return ActuatedCommand(arm, allocation.thrusts, info)
+        thrusts, fins = split_actuators(self.velocity.allocator, allocation.thrusts)
+        return ActuatedCommand(arm, thrusts, info, fins)
 
 
 def achieved_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:

@@ -35,6 +35,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..dynamics.allocation import ThrustAllocator
+from ..dynamics.fin_allocation import FinAllocator
+from ..dynamics.fins import Fins
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError, ThrusterLayoutWarning
@@ -222,7 +224,7 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                      damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO,
                      pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                      priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
-                     vehicle_level: int | None = None) -> CoordinatedControl:
+                     vehicle_level: int | None = None, fins: Fins | None = None) -> CoordinatedControl:
     """The whole chain on ``plant``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
 
     Args:
@@ -238,15 +240,19 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
         max_speed: [m/s, rad/s] bound of the pose objective; priorities: of the allocation
             (:class:`uvms.dynamics.allocation.ThrustAllocator`); arm_feedforward: as in
             :class:`uvms.control.vehicle.VehicleVelocityController`.
+        fins: the vehicle's fins (:func:`uvms.dynamics.fins.fins_of`), allocated with the thrusters at each step's
+            velocity (:class:`uvms.dynamics.fin_allocation.FinAllocator`); None or empty: thrusters alone.
     """
     robot = plant.robot
     model = Plant(robot, plant.hydro if knows_current else plant.hydro.with_current(np.zeros(3)),
                   gravity=plant.gravity, motor_time_constant=plant.motor_time_constant,
                   added_mass=plant.added_mass, damping=plant.damping)
-    allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper,
-                                priorities=priorities)
-    if allocator.unreachable:  # a vehicle that cannot hold every degree of freedom is told so, once
-        warnings.warn(allocator.reach_note(thrusters.names), ThrusterLayoutWarning, stacklevel=2)
+    matrix = allocation_matrix(robot, thrusters)
+    allocator = FinAllocator(matrix, thrusters.lower, thrusters.upper, fins, priorities=priorities) if fins \
+        else ThrustAllocator(matrix, thrusters.lower, thrusters.upper, priorities=priorities)
+    note = allocator.reach_note(thrusters.names)
+    if note:  # a vehicle that cannot hold every degree of freedom is told so, once
+        warnings.warn(note, ThrusterLayoutWarning, stacklevel=2)
     if kp is None or ki is None:
         derived = velocity_gains(vehicle_inertia(model, q0), bandwidth, damping_ratio)
         kp, ki = derived[0] if kp is None else kp, derived[1] if ki is None else ki

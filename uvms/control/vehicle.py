@@ -40,8 +40,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.actuated import base_twist, vehicle_inverse_dynamics
+from ..dynamics.actuated import base_twist, vehicle_inverse_dynamics, water_in_base
 from ..dynamics.allocation import AllocationResult, ThrustAllocator
+from ..dynamics.fin_allocation import FinAllocator
 from ..dynamics.plant import Plant
 from ..errors import SolverInputError
 
@@ -138,7 +139,8 @@ class VehicleVelocityController:
 
     Args:
         model: the controller's model of the UVMS (a Plant; e.g. the true one without the current).
-        allocator: the thrust allocation.
+        allocator: the thrust allocation (a FinAllocator: thrusters and fins, linearized at the measured velocity
+            through the water the model knows).
         kp: (6,) or a number [N s/m, N m s/rad] proportional gains.
         ki: (6,) or a number [N/m, N m/rad] integral gains.
         arm_feedforward: feed the arm's reaction forward (module docstring).
@@ -147,7 +149,8 @@ class VehicleVelocityController:
         SolverInputError: bad gains; an allocator with another number of rows.
     """
 
-    def __init__(self, model: Plant, allocator: ThrustAllocator, kp: float | np.ndarray, ki: float | np.ndarray,
+    def __init__(self, model: Plant, allocator: ThrustAllocator | FinAllocator, kp: float | np.ndarray,
+                 ki: float | np.ndarray,
                  *, arm_feedforward: bool = True) -> None:
         if model.nb != 6:
             raise SolverInputError(f"vehicle control needs a floating base (6 body velocities), "
@@ -180,12 +183,13 @@ class VehicleVelocityController:
             reference_rate: nu_ref' (6,) (None: 0); arm_acceleration: (n_arm,) the arm's commanded
                 acceleration (None: 0), used with ``arm_feedforward``.
         """
-        error = reference - base_twist(self.model, v)
+        nu = base_twist(self.model, v)
+        error = reference - nu
         rate = np.zeros(6) if reference_rate is None else reference_rate
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
         feedforward = self.feedforward(q, v, rate, arm)
         wrench = feedforward + self.kp * error + self.ki * self.integral
-        allocation = self.allocator.allocate(wrench)
+        allocation = self.allocator.allocate(wrench, nu, water_in_base(self.model, q))
         self._integrate(error, allocation, dt)
         return VehicleControl(wrench, feedforward, allocation, error)
 

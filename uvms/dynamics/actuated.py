@@ -1,13 +1,16 @@
-"""An actuated vehicle in the free-floating plant: thrusters with a first-order response and saturation.
+"""An actuated vehicle in the free-floating plant: thrusters and fins with a first-order response and saturation.
 
-The state of :class:`ActuatedPlantSystem` is (q, x) with x = [v (nv,), f (n,)], f the thrusts [N]; its rate is
+The state of :class:`ActuatedPlantSystem` is (q, x) with x = [v (nv,), f (n,), delta (m,)], f the thrusts [N],
+delta the fins' angles [rad] (none without fins); its rate is
 
-    q' = v,   v' = plant acceleration under the joint command u and the body wrench B f,
+    q' = v,   v' = plant acceleration under the joint command u and the body wrench B f + w_fins(nu_r, delta),
     f' = (sat(f_cmd) - f) / tau,   sat = clip to [-max_reverse, +max_forward]
+    delta' = (sat(delta_cmd) - delta) / tau_fin,   sat = clip to the fin joints' limits
 
-with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.allocation_matrix`) and the wrench applied
+with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.allocation_matrix`), w_fins the fins' lift and
+drag at the vehicle's velocity through the water nu_r (:class:`uvms.dynamics.fins.Fins`), the wrench applied
 at the vehicle's base frame (:meth:`uvms.dynamics.plant.Plant._evaluate`). Since the command is clipped and
-f moves towards it, f stays inside the bounds. A plant without thrusters keeps its state (q, v):
+f moves towards it, f stays inside the bounds (delta likewise). A plant without thrusters keeps its state (q, v):
 :class:`uvms.dynamics.plant.PlantSystem`. :class:`ActuatedPlant` (plant + thrusters) builds the system
 (:meth:`ActuatedPlant.system`).
 
@@ -15,19 +18,20 @@ The controller is digital: called once per step at the step's start, its command
 integrator's stages, as a vehicle computer at 1/dt does; its state (integrators) advances per call.
 
 Power terms for the energy balance (no current): d(kinetic + potential)/dt = thrust power (B f . nu_base,
-the sum of each thruster's f_i (B_i . nu))
+the sum of each thruster's f_i (B_i . nu)) + fin power (w_fins . nu_base, the drag's: <= 0 at rest angles)
 + motor power (tau_m . qd_m) + damping power (sum over links of the damping wrench . nu_l, <= 0).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import ConfigurationError, StepCountError, UVMSError
+from .fins import Fins
 from .plant import Plant, PlantDynamics
 from .plant_system import PlantSample, PlantSystem, check_finite_state
 from .thrusters import Thrusters, allocation_matrix
@@ -44,11 +48,13 @@ class ActuatedCommand:
         arm: joint-velocity command u (n_arm,) [rad/s or m/s].
         thrust: thrust command f_cmd (n,) [N] (clipped to the bounds by the thrusters).
         info: series to record for the row, name -> value (e.g. the wrench asked for).
+        fins: fin angle command delta_cmd (m,) [rad] (clipped to the fins' limits); empty without fins.
     """
 
     arm: np.ndarray
     thrust: np.ndarray
     info: dict
+    fins: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 class ActuatedPlant:
@@ -60,6 +66,7 @@ class ActuatedPlant:
     Args:
         plant: the Plant (its robot gives the frames; its current, damping, gravity apply); thrusters: their data.
         thrusts0: (n,) [N] the thrusts at t = 0, within the bounds (None: zero).
+        fins: the vehicle's fins (:func:`uvms.dynamics.fins.fins_of`; None: none), at their rest angles at t = 0.
 
     Raises:
         ModelCheckError: a thruster on an arm link, a fixed base.
@@ -67,7 +74,8 @@ class ActuatedPlant:
         ConfigurationError: thrusts0 of the wrong size, non-finite or outside the bounds.
     """
 
-    def __init__(self, plant: Plant, thrusters: Thrusters, *, thrusts0: np.ndarray | None = None) -> None:
+    def __init__(self, plant: Plant, thrusters: Thrusters, *, thrusts0: np.ndarray | None = None,
+                 fins: Fins | None = None) -> None:
         if len(thrusters) == 0:
             raise UVMSError(f"{thrusters.source}: no thrusters to actuate the vehicle with")
         self.plant, self.robot, self.model = plant, plant.robot, plant.model
@@ -81,6 +89,14 @@ class ActuatedPlant:
             raise ConfigurationError(f"thrusts0 {f.tolist()} must lie within [{self.lower.tolist()}, "
                                      f"{self.upper.tolist()}] N")
         self.thrusts0 = f
+        self.fins = Fins() if fins is None else fins
+        self.m = len(self.fins)
+
+    def fin_wrench(self, q: np.ndarray, v: np.ndarray, angles: np.ndarray) -> np.ndarray:
+        """The fins' lift and drag (6,) [N, N m] at the base frame at the velocity v (nv,) and angles (m,) [rad]."""
+        if not self.m:
+            return np.zeros(6)
+        return self.fins.wrench(base_twist(self.plant, v), water_in_base(self.plant, q), angles)
 
     def saturate(self, command: np.ndarray) -> np.ndarray:
         """The command (n,) clipped to [lower, upper] [N]."""
@@ -111,6 +127,14 @@ def base_twist(plant: Plant, v: np.ndarray) -> np.ndarray:
     """The vehicle's body twist (6,) [m/s, rad/s] in its base frame (FLU) from the velocity v (nv,)."""
     joint_twist = pin.Motion(v[:6]) if plant.nb == 6 else pin.Motion(np.array([v[0], v[1], 0.0, 0.0, 0.0, v[2]]))
     return plant._base_placement.actInv(joint_twist).vector
+
+
+def water_in_base(plant: Plant, q: np.ndarray) -> np.ndarray:
+    """The plant's ocean current (3,) [m/s] in the vehicle's base frame at q."""
+    if not np.any(plant._current):
+        return np.zeros(3)
+    rotation = (plant.robot.base_pose(q) * plant._base_placement).rotation
+    return rotation.T @ plant._current
 
 
 def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
@@ -149,14 +173,16 @@ class ActuatedSample:
     """The plant at the start of a step: the held commands and the dynamics they give.
 
     Attributes:
-        rate: (v (nv,), [v' (nv,), f' (n,)]); command: the controller's ActuatedCommand;
-        thrust_command: sat(f_cmd) (n,) [N]; dynamics: accelerations and motor torques.
+        rate: (v (nv,), [v' (nv,), f' (n,), delta' (m,)]); command: the controller's ActuatedCommand;
+        thrust_command: sat(f_cmd) (n,) [N]; dynamics: accelerations and motor torques;
+        fin_command: sat(delta_cmd) (m,) [rad].
     """
 
     rate: tuple[np.ndarray, np.ndarray]
     command: ActuatedCommand
     thrust_command: np.ndarray
     dynamics: PlantDynamics
+    fin_command: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
 
 class ActuatedPlantSystem:
@@ -171,53 +197,71 @@ class ActuatedPlantSystem:
     def __init__(self, actuated: ActuatedPlant, controller: ActuatedController) -> None:
         self.plant, self.thrusters, self.controller = actuated.plant, actuated, controller
         self.robot, self.model = actuated.robot, actuated.model
-        self.nv = actuated.model.nv
+        self.nv, self.m = actuated.model.nv, actuated.m
         self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its record: energies, momentum, torques
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """(q0, [v0, thrusts0]) checked (v0 None: rest; thrusts0 the ActuatedPlant's).
+        """(q0, [v0, thrusts0, fin angles at rest]) checked (v0 None: rest; thrusts0 the ActuatedPlant's).
 
         Raises:
             ConfigurationError: q0 or v0 of the wrong size or non-finite, a non-unit quaternion.
         """
         q, v = self._passive.initial_state(q0, v0)
-        return q, np.concatenate([v, self.thrusters.thrusts0])
+        return q, np.concatenate([v, self.thrusters.thrusts0, self.thrusters.fins.held])
 
     def _command(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
         command = self.controller(t, q, v, thrusts)
         arm, thrust = np.asarray(command.arm, dtype=float), np.asarray(command.thrust, dtype=float)
-        if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) \
-                or not (np.all(np.isfinite(arm)) and np.all(np.isfinite(thrust))):
-            raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities and "
-                            f"{self.thrusters.n} finite thrusts [N], got {arm!r} and {thrust!r} at t = {t:.6g} s")
-        return ActuatedCommand(arm, thrust, command.info)
+        fins = np.asarray(command.fins, dtype=float)
+        if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
+                or not (np.all(np.isfinite(arm)) and np.all(np.isfinite(thrust)) and np.all(np.isfinite(fins))):
+            raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
+                            f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
+                            f"{thrust!r} and {fins!r} at t = {t:.6g} s")
+        return ActuatedCommand(arm, thrust, command.info, fins)
 
-    def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray,
-              thrust_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
-        v, thrusts = x[:self.nv], x[self.nv:]
-        dynamics = self.plant._evaluate(q, v, arm, self.thrusters.wrench(thrusts))
-        return dynamics, (v, np.concatenate([dynamics.acceleration, self.thrusters.rate(thrusts, thrust_command)]))
+    def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
+              fin_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
+        v, thrusts, angles = self._split(x)
+        wrench = self.thrusters.wrench(thrusts) + self.thrusters.fin_wrench(q, v, angles)
+        dynamics = self.plant._evaluate(q, v, arm, wrench)
+        rates = [dynamics.acceleration, self.thrusters.rate(thrusts, thrust_command)]
+        if self.m:
+            rates.append(self.thrusters.fins.rate(angles, fin_command))
+        return dynamics, (v, np.concatenate(rates))
+
+    def _split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(v (nv,), thrusts (n,), fin angles (m,)) of the state x."""
+        n = self.nv + self.thrusters.n
+        return x[:self.nv], x[self.nv:n], x[n:]
 
     def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> ActuatedSample:
         """The controller's command at the step's start and the rate it gives."""
-        command = self._command(t, q, x[:self.nv], x[self.nv:])
+        v, thrusts, _ = self._split(x)
+        command = self._command(t, q, v, thrusts)
         saturated = self.thrusters.saturate(command.thrust)
-        dynamics, rate = self._rate(q, x, command.arm, saturated)
-        return ActuatedSample(rate, command, saturated, dynamics)
+        fins = self.thrusters.fins.saturate(command.fins)
+        dynamics, rate = self._rate(q, x, command.arm, saturated, fins)
+        return ActuatedSample(rate, command, saturated, dynamics, fins)
 
     def stage_rate(self, sample: ActuatedSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
         """(t, q, x) -> (v, [v', f']) with the step's commands held."""
-        arm, thrust_command = sample.command.arm, sample.thrust_command
-        return lambda t, q, x: self._rate(q, x, arm, thrust_command)[1]
+        arm, thrust_command, fin_command = sample.command.arm, sample.thrust_command, sample.fin_command
+        return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command)[1]
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
         """The plant series (v, command, torques, energies, momentum) and the thrusters' and controller's."""
-        v, thrusts = x[:self.nv], x[self.nv:]
+        v, thrusts, angles = self._split(x)
         passive = PlantSample(sample.rate, sample.command.arm, sample.dynamics)
         row = self._passive.record(t, q, v, passive)
-        wrench = self.thrusters.wrench(thrusts)
+        nu = base_twist(self.plant, v)
+        fin_wrench = self.thrusters.fin_wrench(q, v, angles)
+        wrench = self.thrusters.wrench(thrusts) + fin_wrench
+        if self.m:  # the fins' angles and what they give (their power: the drag's, <= 0 at rest angles)
+            row.update(fin_angles=angles.copy(), fin_command=sample.fin_command, fin_wrench=fin_wrench,
+                       fin_power=float(fin_wrench @ nu))
         # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu)
-        powers = thrusts * (self.thrusters.matrix.T @ base_twist(self.plant, v))
+        powers = thrusts * (self.thrusters.matrix.T @ nu)
         row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
                    thrust_power=float(np.sum(powers)), thruster_power_abs=float(np.sum(np.abs(powers))),
                    motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]),

@@ -39,6 +39,9 @@ TOLERANCE = 1e-9
 #: A singular value of B below this fraction of the largest is a direction the thrusters cannot produce: a wrench of
 #: 1e-6 N (or N m) per newton of thrust is far below any thruster's resolution, and far above rounding (1e-16).
 RANK_TOLERANCE = 1e-6
+#: A singular value below this fraction of the largest is rounding: the direction is exactly unreachable (a symmetric
+#: fin cross's null pattern gives 4e-17), and no thrusters are named as fighting for it.
+ROUNDING = 1e-12
 
 
 @dataclass(frozen=True)
@@ -117,17 +120,18 @@ class ThrustAllocator:
         self.inverse = pinv(self.reachable)  # (n, 6), computed once: the attainable case is one product
         self._rows = sorted(row for group in self.groups for row in group)
         self._all_rows = len(self._rows) == 6
+        self._plain = len(self.groups) == 1 and bool(np.all(self.weights == self.weights[0]))
 
     @property
     def n(self) -> int:
         """Number of thrusters."""
         return self.matrix.shape[1]
 
-    def reach_note(self, names: Sequence[str]) -> str:
+    def reach_note(self, names: Sequence[str], actuators: str = "thrusters") -> str:
         """One sentence on what the thrusters cannot produce ("" when they produce every direction).
 
         Args:
-            names: the thrusters' names, in the order of B's columns.
+            names: the thrusters' names, in the order of B's columns; actuators: what the columns are, for the text.
         """
         if not self.unreachable:
             return ""
@@ -140,9 +144,9 @@ class ThrustAllocator:
                          f"other: {direction.ratio:.1e} of the layout's largest authority)")
             parts.append(part)
         them = "it" if len(parts) == 1 else "them"
-        return (f"the thrusters produce {self.rank} of the 6 body-wrench directions; missing: {', '.join(parts)} (each "
-                f"named by its largest component); the allocation leaves {them} to the vehicle's own dynamics "
-                f"(buoyancy, damping) rather than drive thrusters to their limits for {them}")
+        return (f"the {actuators} produce {self.rank} of the 6 body-wrench directions; missing: {', '.join(parts)} "
+                f"(each named by its largest component); the allocation leaves {them} to the vehicle's own dynamics "
+                f"(buoyancy, damping) rather than drive {actuators} to their limits for {them}")
 
     @property
     def rank(self) -> int:
@@ -153,8 +157,10 @@ class ThrustAllocator:
         """The minimum-norm thrusts B^+ tau (n,) [N], bounds ignored."""
         return self.inverse @ _wrench(wrench)
 
-    def allocate(self, wrench: np.ndarray) -> AllocationResult:
-        """The thrusts for ``wrench`` (6,) [N, N m] within the bounds (module docstring).
+    def allocate(self, wrench: np.ndarray, twist: np.ndarray | None = None,
+                 current: np.ndarray | None = None) -> AllocationResult:
+        """The thrusts for ``wrench`` (6,) [N, N m] within the bounds (module docstring); ``twist`` and ``current``
+        are not used (a thruster's column does not change with the velocity; fins': :mod:`.fin_allocation`).
 
         Raises:
             SolverInputError: a wrench that is not 6 finite numbers.
@@ -171,7 +177,11 @@ class ThrustAllocator:
                 achieved = self.matrix @ thrusts
                 residual = wrench - achieved
                 exact = np.abs(residual).max() <= 10 * slack * max(1.0, np.abs(wrench).max())
-                return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact), "pinv")
+                # short of tau (an unreachable part), the plain least squares is the answer only when no priority
+                # or weight orders the axes; else the lexicographic stages trade the part off by them
+                if exact or self._plain:
+                    return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact),
+                                            "pinv")
         return self._result(self._least_norm(self._lexicographic(wrench)), wrench, "bounded")
 
     # ------------------------------------------------------------------ the bounded stages
@@ -274,6 +284,7 @@ def _reachable(matrix: np.ndarray) -> tuple[np.ndarray, tuple[UnreachableDirecti
     for index in range(kept, 6):
         direction = u[:, index] * np.sign(u[np.argmax(np.abs(u[:, index])), index])  # its largest entry positive
         ratio = float(singular[index] / largest) if index < singular.size and largest > 0 else 0.0
+        ratio = ratio if ratio > ROUNDING else 0.0  # a rounding-level value: exactly unreachable, no pair to name
         fighting = np.abs(vt[index]) if index < singular.size and ratio > 0 else np.zeros(matrix.shape[1])
         unreachable.append(UnreachableDirection(direction, AXIS_NAMES[int(np.argmax(np.abs(direction)))],
                                                 tuple(int(i) for i in np.flatnonzero(fighting > 0.3)), ratio))

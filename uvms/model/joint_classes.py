@@ -9,6 +9,8 @@ gets a class (:class:`uvms.robot.structure.JointClass`, ``robot.joint_classes``,
   a propeller, massless or tiny (:mod:`uvms.model.propellers`). A propeller's spin changes nothing uvms computes
   (kinematics; the thrust acts along the joint's axis, which stays in the URDF): it is frozen, its link's frame
   stays.
+* ``fin``: a control surface: a uuv_simulator fin plugin or a Gazebo Sim LiftDrag turns it
+  (:mod:`uvms.model.control_surfaces`). Frozen; its angle is an actuator of the actuated plant.
 * ``sensor``: the joint or its child link is named like a sensor (:data:`uvms.robot.structure.SENSOR_WORDS`:
   the names of uuv_simulator's sensor macros), and the joint has a zero range (uuv_simulator mounts its sensors
   on revolute joints with limits [0, 0]) or its subtree carries no mass. Frozen.
@@ -41,6 +43,7 @@ import pinocchio as pin
 
 from ..errors import ModelCheckError, NameNotFound
 from ..robot.structure import JointClass, sensor_word
+from .control_surfaces import fin_classes
 from .propellers import propeller_joints
 
 #: [rad or m] a revolute or prismatic joint whose upper - lower limit is at most this cannot move.
@@ -101,6 +104,7 @@ def classify_joints(
     limits = {name: joint_limits(joint) for name, joint in moving.items()}
     classes = {name: rule_class(name, joint, limits[name], propellers.get(name), masses)
                for name, joint in moving.items() if name not in mimics}
+    classes.update(fin_classes(robot, moving, limits, skip=set(mimics) | set(propellers)))
     if arm_joints is not None:
         classes = overridden(classes, arm_joints, mimics, limits, origin)
     mimics, leaders = leader_first(mimics, pinocchio_order(robot), origin, frozen=lambda root: classes[root].frozen)

@@ -13,9 +13,9 @@ import numpy as np
 import pinocchio as pin
 
 #: Kinds of joint: "arm" (commanded), "mimic" (follows an arm joint, adds no degree of freedom), and the kinds
-#: uvms freezes (writes as fixed joints into the URDF Pinocchio builds): "propeller", "sensor", "fixed by range"
-#: and "frozen" (left out of ``arm_joints=``).
-JOINT_KINDS = ("arm", "mimic", "propeller", "sensor", "fixed by range", "frozen")
+#: uvms freezes (writes as fixed joints into the URDF Pinocchio builds): "propeller", "fin" (a control surface: its
+#: angle is an actuator of the actuated plant), "sensor", "fixed by range" and "frozen" (left out of ``arm_joints=``).
+JOINT_KINDS = ("arm", "mimic", "propeller", "fin", "sensor", "fixed by range", "frozen")
 
 #: Words of the link and joint names of uuv_simulator's sensor macros (uuv_sensor_ros_plugins/urdf/*.xacro: dvl,
 #: dvl_sonarN, imu, pressure, camera and camera_link_optical, sonar (multibeam and side-scan), gps, magnetometer,
@@ -54,11 +54,13 @@ class JointClass:
         reason: why, one line (``uvms info`` prints it).
         value: the value the joint is held at [rad or m] when it is frozen (written as a fixed joint, its motion
             at that value folded into its origin); None when it moves.
+        limits: the file's (lower, upper) [rad] of a fin (the range of its angle, an actuator), else None.
     """
 
     kind: str
     reason: str
     value: float | None = None
+    limits: tuple[float, float] | None = None
 
     @property
     def frozen(self) -> bool:

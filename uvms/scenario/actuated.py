@@ -13,7 +13,7 @@ plant simulates their first-order response. The thrusters are model data
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from types import SimpleNamespace
 
 import numpy as np
@@ -21,6 +21,7 @@ import numpy as np
 from ..control.coordination import CoordinatedControl
 from ..control.station import actuated_control
 from ..dynamics.actuated import ActuatedPlant
+from ..dynamics.fins import Fins, fins_of
 from ..dynamics.plant import Plant
 from ..dynamics.thrusters import Thrusters, thrusters_of
 from ..errors import ScenarioError, UVMSError
@@ -38,12 +39,13 @@ WRENCH_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
 
 @dataclass
 class Actuation:
-    """The actuated part of a run: the plant, its thrusters and the station-keeping controller."""
+    """The actuated part of a run: the plant, its thrusters (and fins) and the station-keeping controller."""
 
     plant: Plant
     thrusters: Thrusters
     controller: CoordinatedControl
     inequalities: ScenarioInequalities | None = None
+    fins: Fins = field(default_factory=Fins)
 
 
 def check_actuated_scenario(robot: Robot, scenario: dict) -> None:
@@ -116,6 +118,7 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
     check_actuated_scenario(robot, scenario)
     try:
         thrusters = thrusters_of(robot)
+        fins = fins_of(robot)
     except UVMSError as exc:
         raise ScenarioError(f"plant.thrusters = true: {exc}") from None
     control, section, tables = scenario["vehicle_control"], scenario["solver"], scenario["inequalities"]
@@ -133,10 +136,11 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
             pose_gains=np.asarray(control["pose_gains"], dtype=float),
             max_speed=np.asarray(control["max_speed"], dtype=float),
             priorities=allocation_priorities(control["priorities"]), arm_feedforward=control["arm_feedforward"],
-            gain=float(section["gain"]), damping=float(section["damping"]), vehicle_level=solver.vehicle_level)
+            gain=float(section["gain"]), damping=float(section["damping"]), vehicle_level=solver.vehicle_level,
+            fins=fins)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None
-    return Actuation(plant, thrusters, controller, inequalities)
+    return Actuation(plant, thrusters, controller, inequalities, fins)
 
 
 class ActuatedObjectives:
@@ -156,15 +160,16 @@ def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np
     """The run, with the task series (the end effector against the held point) recorded."""
     recorders = [] if actuation.inequalities is None else [ActuatedObjectives(actuation.plant.robot,
                                                                                   actuation.inequalities)]
-    return simulate(ActuatedPlant(actuation.plant, actuation.thrusters), actuation.controller, q0, duration,
-                    float(scenario["simulation"]["dt"]), integrator=scenario["simulation"]["integrator"], task=task,
-                    desired=lambda t: trajectory(t).pose, progress=progress, recorders=recorders)
+    return simulate(ActuatedPlant(actuation.plant, actuation.thrusters, fins=actuation.fins), actuation.controller,
+                    q0, duration, float(scenario["simulation"]["dt"]), integrator=scenario["simulation"]["integrator"],
+                    task=task, desired=lambda t: trajectory(t).pose, progress=progress, recorders=recorders)
 
 
 def actuated_metrics(result: SimulationResult, actuation: Actuation, scenario: dict) -> dict:
     """``metrics.json``'s actuated entries: the thrusters' (:meth:`uvms.sim.result.SimulationResult.actuation_metrics`)
     and what the run was (thruster count, coordination, current)."""
-    return {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names,
+    fins = {"fins": actuation.fins.names} if len(actuation.fins) else {}
+    return {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names, **fins,
             "coordination": bool(scenario["vehicle_control"]["coordination"]),
             "saturation_feedback": bool(scenario["vehicle_control"]["saturation_feedback"]),
             "current": list(scenario["plant"]["current"]) or [0.0, 0.0, 0.0]}

@@ -173,7 +173,7 @@ def run_figures(scenario: dict, setup: Setup, result: SimulationResult, plant_ru
     if setup.actuation is not None:
         from ..viz.actuated import actuated_figures
 
-        files += actuated_figures(result, setup.actuation.thrusters, folder, title=title)
+        files += actuated_figures(result, setup.actuation.thrusters, folder, title=title, fins=setup.actuation.fins)
     if setup.inequalities is not None and setup.inequalities.objectives:
         from ..viz.objectives import inequality_figure
 

@@ -1,6 +1,7 @@
 """Figures of an actuated run: the thrusts against their limits, and how well the vehicle and the end effector hold.
 
-``thrusters.png``: one panel per thruster, its thrust [N] and the command, the forward and reverse limits dotted.
+``thrusters.png``: one panel per thruster, its thrust [N] and the command, the forward and reverse limits dotted;
+then one per fin, its angle [rad] and the command, its limits dotted.
 ``station.png``: the vehicle's position [m] and attitude [rad] errors from its station and the end effector's
 distance [m] from the held point. :func:`coordination_figure` overlays runs (with and without coordination).
 """
@@ -15,6 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..io import outputs
+from ..dynamics.fins import Fins
 from ..dynamics.thrusters import Thrusters
 from ..sim.result import SimulationResult
 
@@ -27,28 +29,36 @@ def log_bottom(values: list[np.ndarray]) -> float:
     return 10.0 ** np.floor(np.log10(np.percentile(positive, 1))) if positive.size else FLOOR
 
 
-def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "") -> Figure:
-    """Each thruster's thrust and saturated command [N] over time, its limits dotted (4 per row)."""
-    count = len(thrusters)
+def thrust_figure(result: SimulationResult, thrusters: Thrusters, title: str = "", fins: Fins | None = None) -> Figure:
+    """Each thruster's thrust and saturated command [N] over time, its limits dotted, then each fin's angle and
+    command [rad] (2 per row)."""
+    fins = Fins() if fins is None or result.actuation.series("fin_angles") is None else fins
+    panels = [(result.actuation.thrusts[:, i], result.actuation.thrust_command[:, i], thrusters.lower[i],
+               thrusters.upper[i], f"{thrusters.names[i]} [N]") for i in range(len(thrusters))]
+    panels += [(result.actuation.series("fin_angles")[:, i], result.actuation.series("fin_command")[:, i],
+                fins.lower[i], fins.upper[i], f"{fins.names[i]} [rad]") for i in range(len(fins))
+               if fins.items[i].moves]  # a fixed lifting surface has no angle to draw
+    count = len(panels)
     columns = 2 if count > 1 else 1
     rows = int(np.ceil(count / columns))
     figure = Figure(figsize=(9, 1.7 * rows + 0.8), layout="constrained")  # the title above the panels
     axes = figure.subplots(rows, columns, sharex=True, squeeze=False).reshape(-1)
-    thrusts, commands = result.actuation.thrusts, result.actuation.thrust_command
     for index, axis in enumerate(axes):
         if index >= count:
             axis.set_visible(False)
             continue
-        axis.plot(result.t, commands[:, index], color="C1", linewidth=0.8, label="command (saturated)")
-        axis.plot(result.t, thrusts[:, index], color="C0", label="thrust")
-        for bound in (thrusters.lower[index], thrusters.upper[index]):
+        values, commands, lower, upper, label = panels[index]
+        axis.plot(result.t, commands, color="C1", linewidth=0.8, label="command (saturated)")
+        axis.plot(result.t, values, color="C0", label="thrust or angle")
+        for bound in (lower, upper):
             axis.axhline(bound, color="k", linestyle=":", linewidth=1)
-        axis.set_ylabel(f"{thrusters.names[index]} [N]", fontsize=8)
+        axis.set_ylabel(label, fontsize=8)
         axis.grid(True, alpha=0.3)
     axes[0].legend(fontsize=7, loc="lower right")
     for axis in axes[-columns:]:
         axis.set_xlabel("t [s]")
-    figure.suptitle(f"{title}: thrusts (dotted: the thrusters' limits)")
+    what = "thrusts and fin angles" if len(fins) else "thrusts"
+    figure.suptitle(f"{title}: {what} (dotted: the limits)")
     return figure
 
 
@@ -105,11 +115,11 @@ def comparison_figure(runs: Mapping[str, SimulationResult], title: str = "",
 
 
 def actuated_figures(result: SimulationResult, thrusters: Thrusters, folder: str | os.PathLike,
-                     title: str = "") -> list[Path]:
-    """Write ``thrusters.png`` and ``station.png`` of an actuated run into ``folder`` (station.png when the run kept
-    a station: an open-loop excitation has none); returns their paths."""
+                     title: str = "", fins: Fins | None = None) -> list[Path]:
+    """Write ``thrusters.png`` (with the fins' angles) and ``station.png`` of an actuated run into ``folder``
+    (station.png when the run kept a station: an open-loop excitation has none); returns their paths."""
     folder = Path(folder)
-    figures = {"thrusters.png": thrust_figure(result, thrusters, title)}
+    figures = {"thrusters.png": thrust_figure(result, thrusters, title, fins)}
     if result.actuation.series("vehicle_position_error") is not None:
         figures["station.png"] = coordination_figure({"this run": result}, title)
     for name, figure in figures.items():

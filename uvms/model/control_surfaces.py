@@ -1,0 +1,100 @@
+"""Which joints of a URDF carry a control surface (a fin), read from the simulator plugins that give it lift and drag.
+
+Two plugins make a fin (:data:`FIN_PLUGINS`):
+
+* uuv_simulator's fin plugin (``libuuv_fin_ros_plugin.so``, ``uuv_gazebo_plugins/src/FinPlugin.cc``): the fin is
+  ``<joint_name>`` (the revolute joint the plugin turns to the commanded angle); ``<link_name>`` the link the lift
+  and drag act on. A plugin without ``<joint_name>`` names its fin by the joint whose child is ``<link_name>``.
+* Gazebo Sim's lift-drag system (``gz::sim::systems::LiftDrag``, ``gz-sim src/systems/lift_drag/LiftDrag.cc``): the
+  fin is ``<control_joint_name>`` (its angle adds ``control_joint_rad_to_cl`` per radian to the lift coefficient),
+  else the moving joint whose child is ``<link_name>`` (the link turns with it, which changes the angle of attack:
+  the LRAUV's fins). A LiftDrag on a link no joint moves is a fixed lifting surface, not a control surface; one on
+  a continuous joint is a rotor blade (Gazebo's propeller demo), not one either: a fin is a revolute joint.
+
+Such a joint is class ``fin`` (:mod:`uvms.model.joint_classes`): frozen in the kinematics at 0 (or the limit nearest),
+its angle an actuator of the actuated plant (:mod:`uvms.dynamics.fins`), its written limits kept in its class.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections.abc import Collection, Mapping
+
+from ..robot.structure import JointClass
+
+#: The plugins that make a fin, by kind: uuv_simulator's fin plugin and Gazebo Sim's LiftDrag system.
+FIN_PLUGINS = ("uuv_fin", "gz_lift_drag")
+#: Names (``name`` attribute) of Gazebo Sim's lift-drag system, current and Ignition-era.
+GZ_LIFT_DRAG_NAMES = ("gz::sim::systems::LiftDrag", "ignition::gazebo::systems::LiftDrag")
+
+
+def fin_plugin_kind(plugin: ET.Element) -> str | None:
+    """The kind of a ``<gazebo><plugin>`` that makes a fin (one of :data:`FIN_PLUGINS`), or None."""
+    filename, name = plugin.get("filename", ""), plugin.get("name", "")
+    if "uuv_fin" in filename:
+        return "uuv_fin"
+    if name in GZ_LIFT_DRAG_NAMES or filename.endswith(("lift-drag-system", "lift-drag-system.so",
+                                                        "libLiftDrag.so", "LiftDrag")):
+        return "gz_lift_drag"
+    return None
+
+
+def fin_plugins(robot: ET.Element) -> list[tuple[ET.Element, str]]:
+    """The fin plugins of a URDF ``<robot>``, in the file's order, with their kinds."""
+    found = []
+    for plugin in (p for gazebo in robot.findall("gazebo") for p in gazebo.findall("plugin")):
+        kind = fin_plugin_kind(plugin)
+        if kind is not None:
+            found.append((plugin, kind))
+    return found
+
+
+def text(plugin: ET.Element, tag: str) -> str:
+    """The stripped text of ``<tag>`` in a plugin ("" when absent)."""
+    return (plugin.findtext(tag) or "").strip()
+
+
+def fin_joint(plugin: ET.Element, kind: str, moving: Mapping[str, ET.Element]) -> tuple[str | None, str]:
+    """(the joint a fin plugin turns, or None for a fixed lifting surface; why, one line).
+
+    Args:
+        plugin, kind: the plugin and its kind (:func:`fin_plugin_kind`); moving: {name: joint} of the file's
+            revolute, continuous and prismatic joints.
+    """
+    label = plugin.get("name", "")
+    link = text(plugin, "link_name")
+    by_child = {joint.find("child").get("link"): name for name, joint in moving.items()}
+    named = text(plugin, "joint_name" if kind == "uuv_fin" else "control_joint_name")
+    what = "uuv_simulator fin plugin" if kind == "uuv_fin" else "Gazebo Sim LiftDrag"
+    if named:
+        tag = "<joint_name>" if kind == "uuv_fin" else "<control_joint_name>"
+        why = f"{what} {label!r} names it ({tag})"
+    elif link in by_child:
+        named, why = by_child[link], f"its link {link!r} is the <link_name> of {what} {label!r}"
+    # a fin turns through an angle range: a continuous joint under a LiftDrag is a rotor blade (gz's propeller demo)
+    if named in moving and moving[named].get("type") == "revolute":
+        return named, why
+    return None, ""
+
+
+def control_surface_joints(robot: ET.Element, moving: Mapping[str, ET.Element]) -> dict[str, str]:
+    """{joint: why it is a fin} of the fin plugins of a URDF (see the module docstring); the first plugin wins."""
+    found: dict[str, str] = {}
+    for plugin, kind in fin_plugins(robot):
+        joint, why = fin_joint(plugin, kind, moving)
+        if joint is not None:
+            found.setdefault(joint, why)
+    return found
+
+
+def fin_classes(robot: ET.Element, moving: Mapping[str, ET.Element], limits: Mapping[str, tuple[float, float] | None],
+                skip: Collection[str] = ()) -> dict[str, JointClass]:
+    """{joint: class ``fin``} of the joints the fin plugins turn, except ``skip`` (mimics, propellers): frozen at 0 or
+    the limit nearest to 0, their written ``limits`` (lower, upper) [rad] kept (the range of the fin's angle)."""
+    from .joint_classes import (
+        held_value,  # the one rule of where a frozen joint is held
+    )
+
+    return {name: JointClass("fin", f"{why}; held at {held_value(limits[name]):g}", held_value(limits[name]),
+                             limits[name])
+            for name, why in control_surface_joints(robot, moving).items() if name not in skip}
