@@ -11,42 +11,25 @@ Two plugins make a fin (:data:`FIN_PLUGINS`):
   the LRAUV's fins). A LiftDrag on a link no joint moves is a fixed lifting surface, not a control surface; one on
   a continuous joint is a rotor blade (Gazebo's propeller demo), not one either: a fin is a revolute joint.
 
-Such a joint is class ``fin`` (:mod:`uvms.model.joint_classes`): frozen in the kinematics at 0 (or the limit nearest),
+Such a joint is class ``fin`` (:mod:`uvms.model.joint_classes` makes the class from :func:`control_surface_joints`): frozen in the kinematics at 0 (or the limit nearest),
 its angle an actuator of the actuated plant (:mod:`uvms.dynamics.fins`), its written limits kept in its class.
 """
 
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections.abc import Collection, Mapping
+from collections.abc import Mapping
 
-from ..robot.structure import JointClass
+from .plugins import UUV, plugins_of
 
-#: The plugins that make a fin, by kind: uuv_simulator's fin plugin and Gazebo Sim's LiftDrag system.
+#: The plugins that make a fin, by kind: uuv_simulator's fin plugin and Gazebo Sim's LiftDrag system (recognised
+#: by their entries of role ``fin`` in :data:`uvms.model.plugins.PLUGIN_KINDS`).
 FIN_PLUGINS = ("uuv_fin", "gz_lift_drag")
-#: Names (``name`` attribute) of Gazebo Sim's lift-drag system, current and Ignition-era.
-GZ_LIFT_DRAG_NAMES = ("gz::sim::systems::LiftDrag", "ignition::gazebo::systems::LiftDrag")
-
-
-def fin_plugin_kind(plugin: ET.Element) -> str | None:
-    """The kind of a ``<gazebo><plugin>`` that makes a fin (one of :data:`FIN_PLUGINS`), or None."""
-    filename, name = plugin.get("filename", ""), plugin.get("name", "")
-    if "uuv_fin" in filename:
-        return "uuv_fin"
-    if name in GZ_LIFT_DRAG_NAMES or filename.endswith(("lift-drag-system", "lift-drag-system.so",
-                                                        "libLiftDrag.so", "LiftDrag")):
-        return "gz_lift_drag"
-    return None
 
 
 def fin_plugins(robot: ET.Element) -> list[tuple[ET.Element, str]]:
-    """The fin plugins of a URDF ``<robot>``, in the file's order, with their kinds."""
-    found = []
-    for plugin in (p for gazebo in robot.findall("gazebo") for p in gazebo.findall("plugin")):
-        kind = fin_plugin_kind(plugin)
-        if kind is not None:
-            found.append((plugin, kind))
-    return found
+    """The fin plugins of a URDF ``<robot>``, in the file's order, with their kinds (one of :data:`FIN_PLUGINS`)."""
+    return [(plugin, "uuv_fin" if kind.simulator == UUV else "gz_lift_drag") for kind, plugin in plugins_of(robot, "fin")]
 
 
 def text(plugin: ET.Element, tag: str) -> str:
@@ -85,16 +68,3 @@ def control_surface_joints(robot: ET.Element, moving: Mapping[str, ET.Element]) 
         if joint is not None:
             found.setdefault(joint, why)
     return found
-
-
-def fin_classes(robot: ET.Element, moving: Mapping[str, ET.Element], limits: Mapping[str, tuple[float, float] | None],
-                skip: Collection[str] = ()) -> dict[str, JointClass]:
-    """{joint: class ``fin``} of the joints the fin plugins turn, except ``skip`` (mimics, propellers): frozen at 0 or
-    the limit nearest to 0, their written ``limits`` (lower, upper) [rad] kept (the range of the fin's angle)."""
-    from .joint_classes import (
-        held_value,  # the one rule of where a frozen joint is held
-    )
-
-    return {name: JointClass("fin", f"{why}; held at {held_value(limits[name]):g}", held_value(limits[name]),
-                             limits[name])
-            for name, why in control_surface_joints(robot, moving).items() if name not in skip}

@@ -43,7 +43,7 @@ import pinocchio as pin
 
 from ..errors import ModelCheckError, NameNotFound
 from ..robot.structure import JointClass, sensor_word
-from .control_surfaces import fin_classes
+from .control_surfaces import control_surface_joints
 from .propellers import propeller_joints
 
 #: [rad or m] a revolute or prismatic joint whose upper - lower limit is at most this cannot move.
@@ -104,7 +104,10 @@ def classify_joints(
     limits = {name: joint_limits(joint) for name, joint in moving.items()}
     classes = {name: rule_class(name, joint, limits[name], propellers.get(name), masses)
                for name, joint in moving.items() if name not in mimics}
-    classes.update(fin_classes(robot, moving, limits, skip=set(mimics) | set(propellers)))
+    classes.update({name: JointClass("fin", f"{why}; held at {held_value(limits[name]):g}", held_value(limits[name]),
+                                     limits[name])  # frozen; its written limits: the range of the fin's angle
+                    for name, why in control_surface_joints(robot, moving).items()
+                    if name not in mimics and name not in propellers})
     if arm_joints is not None:
         classes = overridden(classes, arm_joints, mimics, limits, origin)
     mimics, leaders = leader_first(mimics, pinocchio_order(robot), origin, frozen=lambda root: classes[root].frozen)

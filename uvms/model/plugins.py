@@ -38,7 +38,8 @@ class PluginKind:
     """One kind of simulator plugin uvms reads.
 
     Attributes:
-        simulator: :data:`UUV`, :data:`GZ` or :data:`HIPPO`; role: ``thruster``, ``hydrodynamics`` or ``buoyancy``.
+        simulator: :data:`UUV`, :data:`GZ` or :data:`HIPPO`; role: ``thruster``, ``hydrodynamics``, ``buoyancy``
+            or ``fin`` (a control surface, :mod:`uvms.model.control_surfaces`).
         filename: a regular expression searched in the plugin's ``filename`` (None: not recognised by it).
         names: ``name`` attributes that recognise it (the class names the simulator registers).
         joint_tag, link_tag: the tags of a thruster plugin naming its propeller joint and link (None: it has none).
@@ -83,6 +84,10 @@ PLUGIN_KINDS: tuple[PluginKind, ...] = (
                ("gz::sim::systems::Hydrodynamics", "ignition::gazebo::systems::Hydrodynamics")),
     PluginKind(GZ, "buoyancy", r"(gz-sim|ignition-gazebo)\d*-buoyancy-system",
                ("gz::sim::systems::Buoyancy", "ignition::gazebo::systems::Buoyancy")),
+    PluginKind(UUV, "fin", r"uuv_fin", joint_tag="joint_name", link_tag="link_name"),
+    PluginKind(GZ, "fin", r"((gz-sim|ignition-gazebo)\d*-lift-drag-system|LiftDrag)",
+               ("gz::sim::systems::LiftDrag", "ignition::gazebo::systems::LiftDrag"),
+               joint_tag="control_joint_name", link_tag="link_name"),
     PluginKind(HIPPO, "thruster", None, ("hippo_gz_plugins::thruster",), joint_tag="joint", link_tag="link"),
     PluginKind(HIPPO, "hydrodynamics", None, ("hippo_gz_plugins::hydrodynamics",)),
     PluginKind(HIPPO, "buoyancy", None, ("hippo_gz_plugins::buoyancy",)),
