@@ -11,8 +11,9 @@ Two plugins make a fin (:data:`FIN_PLUGINS`):
   the LRAUV's fins). A LiftDrag on a link no joint moves is a fixed lifting surface, not a control surface; one on
   a continuous joint is a rotor blade (Gazebo's propeller demo), not one either: a fin is a revolute joint.
 
-Such a joint is class ``fin`` (:mod:`uvms.model.joint_classes` makes the class from :func:`control_surface_joints`): frozen in the kinematics at 0 (or the limit nearest),
-its angle an actuator of the actuated plant (:mod:`uvms.dynamics.fins`), its written limits kept in its class.
+Such a joint is class ``fin`` (made by :mod:`uvms.model.joint_classes` from :func:`control_surface_joints`): frozen
+in the kinematics at 0 (or the limit nearest), its angle an actuator of the actuated plant (:mod:`uvms.dynamics.fins`),
+its written limits kept in its class.
 """
 
 from __future__ import annotations
@@ -29,7 +30,8 @@ FIN_PLUGINS = ("uuv_fin", "gz_lift_drag")
 
 def fin_plugins(robot: ET.Element) -> list[tuple[ET.Element, str]]:
     """The fin plugins of a URDF ``<robot>``, in the file's order, with their kinds (one of :data:`FIN_PLUGINS`)."""
-    return [(plugin, "uuv_fin" if kind.simulator == UUV else "gz_lift_drag") for kind, plugin in plugins_of(robot, "fin")]
+    return [(plugin, "uuv_fin" if kind.simulator == UUV else "gz_lift_drag")
+            for kind, plugin in plugins_of(robot, "fin")]
 
 
 def text(plugin: ET.Element, tag: str) -> str:
