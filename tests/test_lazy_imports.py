@@ -50,7 +50,7 @@ def test_the_command_line_and_a_quiet_run_load_what_they_use_only():
 
 
 def test_a_layer_or_a_name_of_the_top_level_is_imported_at_its_first_use():
-    from uvms.dynamics.allocation import ThrustAllocator
+    from uvms.dynamics.thrusters.allocation import ThrustAllocator
     from uvms.model import load
 
     assert uvms.dynamics.ThrustAllocator is ThrustAllocator and uvms.load is load

@@ -153,7 +153,7 @@ def test_the_top_level_is_small():
 def test_one_result_type_and_no_old_paths():
     """One simulate, one result type; the module paths and names of before the layer folders are gone (no shims)."""
     from uvms.control import gjm
-    from uvms.dynamics import plant
+    from uvms.dynamics.plant import plant
     from uvms.sim.result import SimulationResult
 
     robot = shipped("hoang2011")

@@ -46,7 +46,8 @@ def test_a_robot_name_that_is_a_path_never_chooses_the_folder(tmp_path, monkeypa
 def test_identify_refuses_the_same_name(tmp_path, monkeypatch, capsys):
     """The default folder of ``uvms identify`` (the identification itself stubbed: it is not under test)."""
     import uvms.cli.identify as command
-    from uvms.dynamics import hydrodynamics, identification
+    from uvms.dynamics.hydro import hydrodynamics
+    from uvms.dynamics.identification import identify as identification
 
     model = tmp_path / "evil.urdf"
     model.write_text(urdf(root=FLOATING_ROOT).replace('<robot name="probe">', f'<robot name="{ESCAPING}">'))
@@ -72,7 +73,8 @@ def test_identify_refuses_a_folder_before_it_fits(tmp_path, monkeypatch, capsys)
     """An output folder that holds the log is refused before the (seconds-long) identification runs, and leaves no
     lock: the fit is never called."""
     import uvms.cli.identify as command
-    from uvms.dynamics import hydrodynamics, identification
+    from uvms.dynamics.hydro import hydrodynamics
+    from uvms.dynamics.identification import identify as identification
 
     def never(*args, **kwargs):
         raise AssertionError("the identification ran before the output folder was checked")

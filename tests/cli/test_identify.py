@@ -14,9 +14,9 @@ import pytest
 from conftest import excitation, one_line, shipped
 
 from uvms.cli import main
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.identification_data import log_csv_text
-from uvms.dynamics.thrusters import thrusters_of
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.identification.data import log_csv_text
+from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.io import outputs
 from uvms.scenario.rosbag import write_bag
 

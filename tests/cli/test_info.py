@@ -156,8 +156,8 @@ def test_info_shows_a_hydrodynamics_yaml_with_where_it_comes_from(tmp_path, caps
     import dataclasses
 
     from conftest import shipped
-    from uvms.dynamics.hydro_writer import hydrodynamics_yaml_text
-    from uvms.dynamics.hydrodynamics import hydrodynamics_of
+    from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
+    from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 
     model = hydrodynamics_of(shipped("bluerov2_alpha5"))
     link = dataclasses.replace(model.links["base_link"], linear_damping=[13.8, 0.0, 33.13, 0.0014, 0.8, 0.0024])

@@ -14,7 +14,7 @@ import pytest
 import uvms
 from conftest import FIXED_ARM, NO_FIGURES, SCENARIOS, shipped
 from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps
-from uvms.dynamics.plant import Plant
+from uvms.dynamics.plant.plant import Plant
 from uvms.scenario import ScenarioError, run_scenario
 from uvms.errors import StepCountError
 from uvms.numerics.inverses import damped_weighted_inverse

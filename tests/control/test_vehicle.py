@@ -14,9 +14,9 @@ from uvms.control.coordination import CoordinatedControl, coordinated_arm_rates
 from uvms.control.station import actuated_control, station_keeping
 from uvms.trajectory import VelocityRamps
 from uvms.control.vehicle import pose_velocity_reference
-from uvms.dynamics.actuated import ActuatedPlant, vehicle_inverse_dynamics
-from uvms.dynamics.plant import Plant
-from uvms.dynamics.thrusters import Thrusters, thrusters_of
+from uvms.dynamics.plant.actuated import ActuatedPlant, vehicle_inverse_dynamics
+from uvms.dynamics.plant.plant import Plant
+from uvms.dynamics.thrusters.thrusters import Thrusters, thrusters_of
 from uvms.sim import simulate
 from uvms.tasks import FrameTask
 

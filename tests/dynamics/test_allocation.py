@@ -1,4 +1,4 @@
-"""Thrust allocation (uvms.dynamics.allocation): exact when attainable, the bounded least-squares optimum when not."""
+"""Thrust allocation (uvms.dynamics.thrusters.allocation): exact when attainable, the bounded least-squares optimum when not."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from scipy.optimize import lsq_linear, minimize
 
 import uvms
 from conftest import THRUSTER_BOX
-from uvms.dynamics.allocation import ThrustAllocator
-from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
+from uvms.dynamics.thrusters.allocation import ThrustAllocator
+from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import SolverInputError
 
 

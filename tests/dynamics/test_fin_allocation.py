@@ -1,4 +1,4 @@
-"""Thrusters and fins allocated together (uvms.dynamics.fin_allocation): the fins' columns at the step's speed, what
+"""Thrusters and fins allocated together (uvms.dynamics.thrusters.fin_allocation): the fins' columns at the step's speed, what
 they make reachable, and no fin swung to its limit for a direction it cannot give."""
 
 from pathlib import Path
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 import uvms
-from uvms.dynamics.allocation import ThrustAllocator
-from uvms.dynamics.fin_allocation import MIN_SPEED, FinAllocator
-from uvms.dynamics.fins import fins_of
-from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
+from uvms.dynamics.thrusters.allocation import ThrustAllocator
+from uvms.dynamics.thrusters.fin_allocation import MIN_SPEED, FinAllocator
+from uvms.dynamics.thrusters.fins import fins_of
+from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import BaseGuessWarning, PointMassWarning
 
 TORPEDO = Path(__file__).parents[1] / "fixtures" / "auv" / "torpedo.urdf"

@@ -1,4 +1,4 @@
-"""Fins as model data (uvms.dynamics.fins): read from uuv_simulator's fin plugin and Gazebo Sim's LiftDrag, their
+"""Fins as model data (uvms.dynamics.thrusters.fins): read from uuv_simulator's fin plugin and Gazebo Sim's LiftDrag, their
 wrench on the vehicle at an angle, and the actuated plant turning them with their time constant."""
 
 import math
@@ -9,10 +9,10 @@ import pytest
 
 import uvms
 from uvms.dynamics import Plant
-from uvms.dynamics.actuated import ActuatedCommand, ActuatedPlant
-from uvms.dynamics.fins import DEFAULT_TIME_CONSTANT, fins_of
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.thrusters import thrusters_of
+from uvms.dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
+from uvms.dynamics.thrusters.fins import DEFAULT_TIME_CONSTANT, fins_of
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import (
     BaseGuessWarning,
     FinDefaultWarning,

@@ -1,4 +1,4 @@
-"""Gazebo Sim's Thruster, Hydrodynamics and Buoyancy systems read as model data (uvms.dynamics.gz_sim), checked
+"""Gazebo Sim's Thruster, Hydrodynamics and Buoyancy systems read as model data (uvms.dynamics.plugins.gz_sim), checked
 against gz-sim's own equations (Thruster.cc AngularVelToThrust, Hydrodynamics.cc and HydrodynamicsUtils.hh
 buildDampingMatrix / buildCoriolisMatrix, rewritten below in numpy), and the blue package's BlueROV2 Heavy written with
 use_sim:=true (tests/fixtures/gz/bluerov2_heavy_sim.urdf) loading and holding station."""
@@ -15,10 +15,10 @@ import pytest
 import uvms
 from conftest import ROOT
 from uvms.cli.info import describe
-from uvms.dynamics.gz_sim import gz_buoyancy_density
-from uvms.dynamics.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
-from uvms.dynamics.plugin_readers import read_thruster_plugins
-from uvms.dynamics.thrusters import placements_in_base, thrusters_of
+from uvms.dynamics.plugins.gz_sim import gz_buoyancy_density
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
+from uvms.dynamics.plugins.readers import read_thruster_plugins
+from uvms.dynamics.thrusters.thrusters import placements_in_base, thrusters_of
 from uvms.errors import ModelCheckError, PluginSettingWarning
 from uvms.scenario import run_scenario
 

@@ -1,4 +1,4 @@
-"""HippoCampus's hippo_gz_plugins read as model data (uvms.dynamics.hippo), checked against the plugins' own
+"""HippoCampus's hippo_gz_plugins read as model data (uvms.dynamics.plugins.hippo), checked against the plugins' own
 equations (thruster_private.cpp ThrusterForce, hydrodynamics.cpp UpdateForcesAndMoments, buoyancy_private.cpp
 ApplyBuoyancy), and hippo_sim's BlueROV (tests/fixtures/gz/hippo/hippo_bluerov.urdf) loading and holding station."""
 
@@ -11,9 +11,9 @@ import pytest
 
 import uvms
 from conftest import ROOT
-from uvms.dynamics.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
-from uvms.dynamics.plugin_readers import lumped_mass, read_thruster_plugins
-from uvms.dynamics.thrusters import placements_in_base, thrusters_of
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
+from uvms.dynamics.plugins.readers import lumped_mass, read_thruster_plugins
+from uvms.dynamics.thrusters.thrusters import placements_in_base, thrusters_of
 from uvms.errors import ModelCheckError
 from uvms.scenario import run_scenario
 

@@ -1,4 +1,4 @@
-"""uuv_simulator's shape models (uvms.dynamics.hydro_shapes) against their closed forms, each written here again
+"""uuv_simulator's shape models (uvms.dynamics.hydro.shapes) against their closed forms, each written here again
 from the formula of HydrodynamicModel.cc (sphere, cylinder, box) or from Lamb's integrals by quadrature (spheroid).
 
 Parsed from a URDF block, the values arrive in uvms's conventions: added mass (6, 6) in FLU and damping
@@ -14,7 +14,7 @@ import pytest
 from scipy.integrate import quad
 
 from uvms.errors import ShapeCoefficientWarning
-from uvms.dynamics.hydrodynamics import parse_hydrodynamics
+from uvms.dynamics.hydro.hydrodynamics import parse_hydrodynamics
 from uvms.errors import ModelCheckError
 
 RHO = 1000.0

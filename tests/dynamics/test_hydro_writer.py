@@ -1,4 +1,4 @@
-"""The hydrodynamics YAML writer (uvms.dynamics.hydro_writer): what it writes reads back as the same numbers."""
+"""The hydrodynamics YAML writer (uvms.dynamics.hydro.writer): what it writes reads back as the same numbers."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import numpy as np
 
 from conftest import shipped
 
-from uvms.dynamics.hydro_parameters import LinkHydrodynamics
-from uvms.dynamics.hydro_writer import hydrodynamics_yaml_text
-from uvms.dynamics.hydrodynamics import hydrodynamics_of, load_hydrodynamics_yaml
+from uvms.dynamics.hydro.parameters import LinkHydrodynamics
+from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, load_hydrodynamics_yaml
 
 
 def test_the_models_hydrodynamics_round_trip_exactly(tmp_path):
@@ -41,7 +41,7 @@ def test_the_file_is_in_the_uuv_simulator_conventions(tmp_path):
     added = np.diag([6.0, 7.0, 18.0, 0.2, 0.15, 0.25])
     added[0, 1] = added[1, 0] = 0.3
     link = LinkHydrodynamics(0.01, [0.0, 0.0, 0.01], added, [1.0] * 6, [2.0] * 6)
-    from uvms.dynamics.hydro_parameters import HydroParameters
+    from uvms.dynamics.hydro.parameters import HydroParameters
 
     path = tmp_path / "h.yaml"
     path.write_text(hydrodynamics_yaml_text(HydroParameters(links={"base_link": link})))

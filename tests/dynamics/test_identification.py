@@ -1,4 +1,4 @@
-"""Hydrodynamic identification (uvms.dynamics.identification): the regression against the plant's own equations,
+"""Hydrodynamic identification (uvms.dynamics.identification.identify): the regression against the plant's own equations,
 then recovery of the BlueROV2 + Alpha 5's parameters from logs simulated with them (conftest.excitation).
 
 Odometry noise of the noisy cases (white, per sample at 50 Hz): position 5 cm, attitude 0.005 rad (0.3 deg),
@@ -13,12 +13,12 @@ import pytest
 
 from conftest import excitation, shipped
 
-from uvms.dynamics.actuated import vehicle_inverse_dynamics
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.identification import identify
-from uvms.dynamics.identification_data import SmoothedStates
-from uvms.dynamics.identification_model import AXES, known_plant, parameter_layout, regression
-from uvms.dynamics.plant import Plant
+from uvms.dynamics.plant.actuated import vehicle_inverse_dynamics
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.identification.identify import identify
+from uvms.dynamics.identification.data import SmoothedStates
+from uvms.dynamics.identification.model import AXES, known_plant, parameter_layout, regression
+from uvms.dynamics.plant.plant import Plant
 from uvms.errors import IdentificationError
 from uvms.scenario.excitation import with_odometry_noise
 

@@ -1,4 +1,4 @@
-"""A constant current identified with the vehicle's parameters (uvms.dynamics.identification_current): the
+"""A constant current identified with the vehicle's parameters (uvms.dynamics.identification.current): the
 BlueROV2 + Alpha 5 under the multi-sine in a current of (0.2, -0.1, 0.03) m/s (world ENU), noise free and with the
 odometry noise of test_identification (position 5 cm, attitude 0.005 rad, 0.01 m/s, 0.01 rad/s)."""
 
@@ -11,11 +11,11 @@ import pinocchio as pin
 
 from conftest import ARM_START, EXCITATIONS, shipped
 
-from uvms.dynamics.identification import identify
-from uvms.dynamics.identification_current import MAX_CURRENT_ERROR, estimate_current
-from uvms.dynamics.identification_data import SmoothedStates
-from uvms.dynamics.identification_model import Regression, parameter_layout
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.identification.identify import identify
+from uvms.dynamics.identification.current import MAX_CURRENT_ERROR, estimate_current
+from uvms.dynamics.identification.data import SmoothedStates
+from uvms.dynamics.identification.model import Regression, parameter_layout
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.scenario.excitation import excitation_run, log_of_run, multisine, with_odometry_noise
 
 CURRENT = np.array([0.2, -0.1, 0.03])

@@ -1,4 +1,4 @@
-"""The log of an identification as arrays (uvms.dynamics.identification_data): checks, CSV, smoothing."""
+"""The log of an identification as arrays (uvms.dynamics.identification.data): checks, CSV, smoothing."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from scipy.signal import savgol_coeffs
 
-from uvms.dynamics import identification_data
-from uvms.dynamics.identification_data import (CSV_COLUMNS, IdentificationLog, log_csv_text, read_log_csv,
+from uvms.dynamics.identification import data as identification_data
+from uvms.dynamics.identification.data import (CSV_COLUMNS, IdentificationLog, log_csv_text, read_log_csv,
                                                smoothed_states, uniform_log)
 from uvms.errors import IdentificationError
 
@@ -103,7 +103,7 @@ def test_a_csv_log_is_read_bounded(tmp_path, monkeypatch):
 def test_a_csv_log_that_is_a_fifo_is_refused_not_waited_on(tmp_path):
     fifo = tmp_path / "log.csv"
     os.mkfifo(fifo)
-    code = (f"from uvms.dynamics.identification_data import read_log_csv\ntry:\n    read_log_csv({str(fifo)!r})\n"
+    code = (f"from uvms.dynamics.identification.data import read_log_csv\ntry:\n    read_log_csv({str(fifo)!r})\n"
             "except Exception as exc:\n    print(exc)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False,
                           env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])})

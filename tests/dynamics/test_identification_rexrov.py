@@ -11,7 +11,7 @@ import pinocchio as pin
 from conftest import ROOT
 
 import uvms
-from uvms.dynamics.identification import identify
+from uvms.dynamics.identification.identify import identify
 from uvms.scenario.bag_reader import read_bag
 from uvms.scenario.excitation import ExcitationControl, excitation_run, multisine
 from uvms.scenario.rosbag import write_bag

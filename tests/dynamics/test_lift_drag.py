@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from uvms.dynamics.lift_drag import (
+from uvms.dynamics.thrusters.lift_drag import (
     GzLiftDrag,
     UUVQuadratic,
     UUVTwoLines,

@@ -1,4 +1,4 @@
-"""The free-floating plant (uvms.dynamics.plant): conservation laws, the added-mass GJM, hydrostatics, damping,
+"""The free-floating plant (uvms.dynamics.plant.plant): conservation laws, the added-mass GJM, hydrostatics, damping,
 motors, parsing."""
 
 from __future__ import annotations
@@ -11,9 +11,9 @@ import pytest
 import uvms
 from conftest import shipped
 from uvms.errors import ModelCheckError, ModelParseError, SkippedLinkWarning, UVMSError
-from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
-from uvms.dynamics.added_mass import generalized_jacobian_added_mass
-from uvms.dynamics.plant import Plant
+from uvms.dynamics.hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
+from uvms.dynamics.plant.added_mass import generalized_jacobian_added_mass
+from uvms.dynamics.plant.plant import Plant
 from uvms.sim import simulate
 
 RHO = 1000.0

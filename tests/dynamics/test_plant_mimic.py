@@ -1,4 +1,4 @@
-"""The dynamic plant (uvms.dynamics.plant) with a mimic joint: a gripper whose second finger mimics the first.
+"""The dynamic plant (uvms.dynamics.plant.plant) with a mimic joint: a gripper whose second finger mimics the first.
 
 The oracle is the same URDF without the ``<mimic>`` tag (every joint free, built independently here), mapped
 through the mimic relation written in the file: q_full = q with finger_b = MULTIPLIER q_a + OFFSET,
@@ -15,8 +15,8 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from uvms.dynamics.hydrodynamics import HydroParameters, LinkHydrodynamics
-from uvms.dynamics.plant import Plant
+from uvms.dynamics.hydro.hydrodynamics import HydroParameters, LinkHydrodynamics
+from uvms.dynamics.plant.plant import Plant
 from uvms.scenario import run_scenario
 from uvms.sim import simulate
 

@@ -1,4 +1,4 @@
-"""What uvms reads from uuv_simulator's thruster plugin (uvms.dynamics.thruster_sources): the steady-state thrust
+"""What uvms reads from uuv_simulator's thruster plugin (uvms.dynamics.thrusters.sources): the steady-state thrust
 range of the plugin's chain (clamp, gain, efficiencies, conversion, thrustMin/thrustMax) and the time constant.
 
 The expected numbers are the plugin's chain evaluated by hand at the ends of the input range.
@@ -11,8 +11,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from uvms.dynamics.plugin_readers import read_thruster_plugins
-from uvms.dynamics.thruster_sources import plugin_thrust_range, plugin_time_constant
+from uvms.dynamics.plugins.readers import read_thruster_plugins
+from uvms.dynamics.thrusters.sources import plugin_thrust_range, plugin_time_constant
 from uvms.errors import ModelCheckError
 
 BASIC = "<conversion><type>Basic</type><rotorConstant>0.00031</rotorConstant></conversion>"

@@ -1,4 +1,4 @@
-"""Thrusters as model data (uvms.dynamics.thrusters) and their first-order dynamics in the plant."""
+"""Thrusters as model data (uvms.dynamics.thrusters.thrusters) and their first-order dynamics in the plant."""
 
 from __future__ import annotations
 
@@ -9,10 +9,10 @@ import pytest
 
 import uvms
 from conftest import THRUSTER_BOX
-from uvms.dynamics.actuated import ActuatedCommand, ActuatedPlant
-from uvms.dynamics.hydrodynamics import HydroParameters
-from uvms.dynamics.plant import Plant
-from uvms.dynamics.thrusters import (allocation_matrix, load_thrusters_yaml,
+from uvms.dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
+from uvms.dynamics.hydro.hydrodynamics import HydroParameters
+from uvms.dynamics.plant.plant import Plant
+from uvms.dynamics.thrusters.thrusters import (allocation_matrix, load_thrusters_yaml,
                                      parse_thrusters_urdf, thruster_rows, thrusters_of)
 from uvms.errors import ModelCheckError, PointMassWarning, ThrusterDefaultWarning
 from uvms.sim import simulate

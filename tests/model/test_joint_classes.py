@@ -11,7 +11,7 @@ import pytest
 
 import uvms
 from conftest import ROOT, urdf
-from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
+from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import ModelCheckError, NameNotFound, ThrusterFileWarning
 
 IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"

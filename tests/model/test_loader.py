@@ -18,8 +18,8 @@ import pytest
 import uvms
 from conftest import ROOT, SHIPPED, shipped
 from uvms.cli import main
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.plant import Plant
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.plant.plant import Plant
 from uvms.errors import NoVehicleError
 from uvms.errors import BaseGuessWarning
 from uvms.model import ADDED_BASE_JOINT

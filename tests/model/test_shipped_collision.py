@@ -19,7 +19,7 @@ import pytest
 
 import uvms
 from conftest import ROOT, SCENARIOS, shipped
-from uvms.dynamics.thrusters import thrusters_of
+from uvms.dynamics.thrusters.thrusters import thrusters_of
 
 MODEL = "bluerov2_alpha5"
 SRDF = ROOT / "models" / MODEL / "uvms.srdf"

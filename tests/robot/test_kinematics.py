@@ -9,8 +9,8 @@ import pytest
 
 import uvms
 from conftest import FIXED_ARM, shipped
-from uvms.dynamics.added_mass import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.plant.added_mass import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.errors import ModelCheckError
 from uvms.robot import kinematics
 from uvms.robot.configuration import Configuration

@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 
 import uvms.scenario.actuated
-from uvms.dynamics.fins import Fins
+from uvms.dynamics.thrusters.fins import Fins
 from uvms.errors import (
     BaseGuessWarning,
     FinDefaultWarning,

@@ -11,7 +11,7 @@ import pytest
 
 from conftest import shipped
 
-from uvms.dynamics.thrusters import thrusters_of
+from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import IdentificationError
 from uvms.scenario.bag_reader import read_bag
 from uvms.scenario.excitation import excitation_run, log_of_run, multisine

@@ -48,7 +48,7 @@ def test_the_excitation_run_moves_every_axis_within_the_thrusters_limits():
 
 
 def test_a_run_without_thrusters_has_no_log():
-    from uvms.dynamics.plant import Plant
+    from uvms.dynamics.plant.plant import Plant
     from uvms.sim.loop import simulate
 
     robot = shipped("bluerov2_alpha5")

@@ -12,9 +12,9 @@ import pytest
 
 from conftest import NO_FIGURES, ROOT, SCENARIOS
 
-from uvms.dynamics.hydro_writer import hydrodynamics_yaml_text
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.identification import identify
+from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.identification.identify import identify
 from uvms.errors import ScenarioError
 from uvms.scenario.bag_reader import read_bag
 from uvms.scenario.build import build

@@ -17,7 +17,7 @@ import pytest
 
 import uvms
 from conftest import ROOT
-from uvms.dynamics.thrusters import allocation_matrix, thrusters_of
+from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import AddedMassSymmetrizedWarning, BaseGuessWarning, PointMassWarning
 
 PACKAGE = ROOT / "tests" / "fixtures" / "uuv_ws" / "src" / "fixture_uuv_rov"

@@ -234,7 +234,7 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
 
 def test_library_simulations_share_the_step_bound():
     from uvms.errors import StepCountError
-    from uvms.dynamics.plant import Plant
+    from uvms.dynamics.plant.plant import Plant
     from uvms.sim import simulate
 
     robot = uvms.load("hoang2011")

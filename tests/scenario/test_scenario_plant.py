@@ -11,8 +11,8 @@ import pytest
 
 from conftest import ROOT, SCENARIOS
 
-from uvms.dynamics.hydro_writer import hydrodynamics_yaml_text
-from uvms.dynamics.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.errors import ScenarioError
 from uvms.scenario.build import build
 from uvms.scenario.schema import read_scenario

@@ -10,8 +10,8 @@ import pytest
 
 from conftest import excitation, shipped
 
-from uvms.dynamics.identification import identify
-from uvms.dynamics.thrusters import thrusters_of
+from uvms.dynamics.identification.identify import identify
+from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import IdentificationError
 from uvms.scenario.bag_reader import read_bag
 from uvms.scenario.rosbag import write_bag

@@ -13,7 +13,7 @@ import pytest
 import uvms
 from conftest import shipped
 from uvms.control.gjm import GJMController, VelocityRamps
-from uvms.dynamics.actuated import ActuatedPlant
+from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.errors import ConfigurationError, StepCountError, UVMSError
 from uvms.sim import SimulationResult, simulate
 

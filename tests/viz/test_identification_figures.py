@@ -7,7 +7,7 @@ import pytest
 
 from conftest import excitation, shipped
 
-from uvms.dynamics.identification import identify
+from uvms.dynamics.identification.identify import identify
 from uvms.errors import IdentificationError
 from uvms.viz.identification import identification_figures, prediction_figure, residual_figure
 

@@ -1,12 +1,12 @@
 """``uvms identify LOG --model MODEL``: the vehicle's hydrodynamic parameters identified from a log.
 
 LOG is a rosbag2 folder (MCAP or sqlite3: :mod:`uvms.scenario.bag_reader`) or a CSV file
-(:data:`uvms.dynamics.identification_data.CSV_COLUMNS`). Writes into the output folder (replaced as a whole):
+(:data:`uvms.dynamics.identification.data.CSV_COLUMNS`). Writes into the output folder (replaced as a whole):
 
 - ``hydrodynamics.yaml``: the model's hydrodynamics with the vehicle's identified, in the form
-  :func:`uvms.dynamics.hydrodynamics.load_hydrodynamics_yaml` reads (``uvms.dynamics.hydrodynamics_of(robot, PATH)``);
+  :func:`uvms.dynamics.hydro.hydrodynamics.load_hydrodynamics_yaml` reads (``uvms.dynamics.hydrodynamics_of(robot, PATH)``);
 - ``identification.json``: every parameter with its prior, value, standard error and 95 % interval, what was
-  held by its prior (a soft constraint, :mod:`uvms.dynamics.identification_fit`) and why, fit metrics and the options;
+  held by its prior (a soft constraint, :mod:`uvms.dynamics.identification.fit`) and why, fit metrics and the options;
 - ``prediction.png`` (held-out segment) and ``residuals.png`` (:mod:`uvms.viz.identification`).
 """
 
@@ -61,7 +61,7 @@ def add_identify_parser(commands: argparse._SubParsersAction, add_package_path) 
 def read_log(options: argparse.Namespace, robot):
     """The log of ``options.log``: a CSV by its suffix, else a rosbag2 recording (its wrench from the thruster
     topics of ``robot`` with ``--thrust-topics``)."""
-    from ..dynamics.identification_data import read_log_csv
+    from ..dynamics.identification.data import read_log_csv
     from ..errors import IdentificationError
     from ..scenario.bag_reader import read_bag
     from ..scenario.thrust_log import thrust_input
@@ -81,9 +81,9 @@ def read_log(options: argparse.Namespace, robot):
 
 def command_identify(options: argparse.Namespace) -> int:
     """``uvms identify LOG --model MODEL [--out DIR]``: identify, then write the folder (module docstring)."""
-    from ..dynamics.hydro_writer import hydrodynamics_yaml_text
-    from ..dynamics.hydrodynamics import hydrodynamics_of
-    from ..dynamics.identification import identify
+    from ..dynamics.hydro.writer import hydrodynamics_yaml_text
+    from ..dynamics.hydro.hydrodynamics import hydrodynamics_of
+    from ..dynamics.identification.identify import identify
     from ..io import outputs
     from ..io.names import default_output_folder
     from ..model.loader import load

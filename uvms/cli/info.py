@@ -150,9 +150,9 @@ def vector(values: Sequence[float], style: str = "+.3f") -> str:
 
 def thruster_lines(robot: Robot) -> list[str]:
     """The thrusters (``uvms.dynamics.thrusters_of``): placement and direction in the base frame, limits, lag."""
-    from ..dynamics.allocation import ThrustAllocator
-    from ..dynamics.fin_allocation import FinAllocator
-    from ..dynamics.thrusters import allocation_matrix, thruster_rows, thrusters_of
+    from ..dynamics.thrusters.allocation import ThrustAllocator
+    from ..dynamics.thrusters.fin_allocation import FinAllocator
+    from ..dynamics.thrusters.thrusters import allocation_matrix, thruster_rows, thrusters_of
     from .info_fins import fin_lines
 
     try:
@@ -184,8 +184,8 @@ def hydrodynamics_lines(robot: Robot, path: str | None = None) -> list[str]:
         UVMSError: the file ``path`` the user named cannot be read or is invalid (the model's own data's problem
             is a line of the description instead: info describes the model).
     """
-    from ..dynamics.hydro_parameters import hydro_rows
-    from ..dynamics.hydrodynamics import hydrodynamics_of
+    from ..dynamics.hydro.parameters import hydro_rows
+    from ..dynamics.hydro.hydrodynamics import hydrodynamics_of
 
     try:
         hydro = hydrodynamics_of(robot, path, required=False)

@@ -7,8 +7,8 @@ import warnings
 
 import numpy as np
 
-from ..dynamics.fins import Fin, Fins
-from ..dynamics.lift_drag import GzLiftDrag, UUVQuadratic
+from ..dynamics.thrusters.fins import Fin, Fins
+from ..dynamics.thrusters.lift_drag import GzLiftDrag, UUVQuadratic
 from ..errors import UVMSError
 from ..robot.robot import Robot
 
@@ -27,9 +27,9 @@ def model_text(fin: Fin) -> str:
 
 
 def fin_lines(robot: Robot) -> tuple[list[str], Fins]:
-    """The fins of the model (:func:`uvms.dynamics.fins.fins_of`): joint, link origin in the base frame, angle range,
+    """The fins of the model (:func:`uvms.dynamics.thrusters.fins.fins_of`): joint, link origin in the base frame, angle range,
     time constant, model; their warnings become lines ("not usable" when their data are wrong)."""
-    from ..dynamics.fins import fins_of
+    from ..dynamics.thrusters.fins import fins_of
 
     try:
         with warnings.catch_warnings(record=True) as caught:

@@ -22,8 +22,8 @@ from typing import Protocol
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.actuated import ActuatedCommand, base_twist
-from ..dynamics.fin_allocation import split_actuators
+from ..dynamics.plant.actuated import ActuatedCommand, base_twist
+from ..dynamics.thrusters.fin_allocation import split_actuators
 from ..errors import SolverInputError
 from ..robot.limits import Limit
 from ..robot.robot import Robot

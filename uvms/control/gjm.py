@@ -19,7 +19,7 @@ Which GJM (``gjm``):
 
 * ``"rigid"`` — the classic one, from the rigid-body momentum (``Robot.generalized_jacobian``);
 * ``"added_mass"`` — from the momentum of the links *and the water they carry*
-  (link inertias augmented with their added mass, :func:`uvms.dynamics.added_mass.generalized_jacobian_added_mass`):
+  (link inertias augmented with their added mass, :func:`uvms.dynamics.plant.added_mass.generalized_jacobian_added_mass`):
   exact in an inviscid fluid at rest, where that augmented momentum is conserved;
 * ``"fixed_base"`` — the arm columns J_m of the ordinary Jacobian, as if the vehicle
   were held still (the traditional scheme the paper contrasts with; for comparisons).
@@ -60,8 +60,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
-from ..dynamics.added_mass import augmented_mass_matrix, resolve_links
+from ..dynamics.hydro.hydrodynamics import HydroParameters, hydrodynamics_of
+from ..dynamics.plant.added_mass import augmented_mass_matrix, resolve_links
 from ..errors import GJMControlError, UVMSError
 from ..robot.kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
 from ..robot.robot import Robot

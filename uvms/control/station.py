@@ -34,11 +34,11 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.allocation import ThrustAllocator
-from ..dynamics.fin_allocation import FinAllocator
-from ..dynamics.fins import Fins
-from ..dynamics.plant import Plant
-from ..dynamics.thrusters import Thrusters, allocation_matrix
+from ..dynamics.thrusters.allocation import ThrustAllocator
+from ..dynamics.thrusters.fin_allocation import FinAllocator
+from ..dynamics.thrusters.fins import Fins
+from ..dynamics.plant.plant import Plant
+from ..dynamics.thrusters.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError, ThrusterLayoutWarning
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
@@ -238,10 +238,10 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
             M_ii at q0, kp = 2 zeta omega M_ii, ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`); a
             kp or ki given is used as it is. pose_gains [1/s];
         max_speed: [m/s, rad/s] bound of the pose objective; priorities: of the allocation
-            (:class:`uvms.dynamics.allocation.ThrustAllocator`); arm_feedforward: as in
+            (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`); arm_feedforward: as in
             :class:`uvms.control.vehicle.VehicleVelocityController`.
-        fins: the vehicle's fins (:func:`uvms.dynamics.fins.fins_of`), allocated with the thrusters at each step's
-            velocity (:class:`uvms.dynamics.fin_allocation.FinAllocator`); None or empty: thrusters alone.
+        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), allocated with the thrusters at each step's
+            velocity (:class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`); None or empty: thrusters alone.
     """
     robot = plant.robot
     model = Plant(robot, plant.hydro if knows_current else plant.hydro.with_current(np.zeros(3)),

@@ -5,7 +5,7 @@ Velocity loop (body FLU at the vehicle's base frame, nu = [v; w] [m/s, rad/s])::
     tau = tau_model + Kp (nu_ref - nu) + Ki integral(nu_ref - nu)
     tau_model = vehicle rows of Mbar [nu_ref'; a_m] + nbar(q, v)   (the plant's own model)
 
-tau_model is :func:`uvms.dynamics.actuated.vehicle_inverse_dynamics` of a *model* plant (the controller's
+tau_model is :func:`uvms.dynamics.plant.actuated.vehicle_inverse_dynamics` of a *model* plant (the controller's
 knowledge: rigid-body + added-mass inertia, Coriolis, damping, restoring; usually no current, which the
 integral learns). With ``arm_feedforward`` the arm's measured velocity and commanded acceleration go in too,
 so the arm's reaction wrench is compensated before it moves the vehicle; without it, the model sees the arm
@@ -40,10 +40,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.actuated import base_twist, vehicle_inverse_dynamics, water_in_base
-from ..dynamics.allocation import AllocationResult, ThrustAllocator
-from ..dynamics.fin_allocation import FinAllocator
-from ..dynamics.plant import Plant
+from ..dynamics.plant.actuated import base_twist, vehicle_inverse_dynamics, water_in_base
+from ..dynamics.thrusters.allocation import AllocationResult, ThrustAllocator
+from ..dynamics.thrusters.fin_allocation import FinAllocator
+from ..dynamics.plant.plant import Plant
 from ..errors import SolverInputError
 
 

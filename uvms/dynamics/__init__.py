@@ -1,20 +1,21 @@
-"""The dynamics layer: Fossen hydrodynamics of the model's links, the free-floating plant (Pinocchio), the
-vehicle's thrusters and their allocation; the identification of the vehicle's hydrodynamics from a log
-(:func:`identify`).
+"""The dynamics layer, a folder per concern: ``hydro`` (Fossen hydrodynamics of the model's links), ``plant`` (the
+free-floating plant, Pinocchio), ``thrusters`` (the vehicle's thrusters and fins and their allocation), ``plugins``
+(the readers of simulator plugin blocks), ``identification`` (the vehicle's hydrodynamics from a log,
+:func:`identify`).
 
 The one simulation, :func:`uvms.sim.loop.simulate`, integrates a ``Plant`` and, with thrusters, an
 ``ActuatedPlant`` (each builds its system of the loop: ``PlantSystem``, ``ActuatedPlantSystem``).
 """
 
-from .actuated import ActuatedCommand, ActuatedPlant, ActuatedPlantSystem, vehicle_inverse_dynamics
-from .allocation import AllocationResult, ThrustAllocator
-from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from .identification import IdentificationResult, identify
-from .identification_data import IdentificationLog
-from .added_mass import generalized_jacobian_added_mass
-from .plant import Plant
-from .plant_system import PlantSystem
-from .thrusters import Thruster, Thrusters, allocation_matrix, thrusters_of
+from .plant.actuated import ActuatedCommand, ActuatedPlant, ActuatedPlantSystem, vehicle_inverse_dynamics
+from .thrusters.allocation import AllocationResult, ThrustAllocator
+from .hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
+from .identification.identify import IdentificationResult, identify
+from .identification.data import IdentificationLog
+from .plant.added_mass import generalized_jacobian_added_mass
+from .plant.plant import Plant
+from .plant.system import PlantSystem
+from .thrusters.thrusters import Thruster, Thrusters, allocation_matrix, thrusters_of
 
 __all__ = ["ActuatedCommand", "ActuatedPlant", "ActuatedPlantSystem", "AllocationResult", "HydroParameters",
            "IdentificationLog", "IdentificationResult", "LinkHydrodynamics", "Plant", "PlantSystem", "ThrustAllocator",

@@ -5,7 +5,7 @@ reads is one :class:`PluginKind` of :data:`PLUGIN_KINDS`: the simulator, the rol
 ``hydrodynamics``, ``buoyancy``), how a ``<plugin>`` element is recognised (its ``filename`` or its ``name``) and,
 for a thruster, the tags naming its propeller joint and link. The loader uses it to class propeller joints
 (:mod:`uvms.model.joint_classes`); the readers of each kind, one module per simulator, are registered by simulator
-in :mod:`uvms.dynamics.plugin_readers`.
+in :mod:`uvms.dynamics.plugins.readers`.
 
 ======================  =============  ===========================================================================
 simulator               role           recognised by

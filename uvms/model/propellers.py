@@ -26,7 +26,7 @@ from ..errors import ThrusterFileWarning, UVMSError
 from .plugins import plugins_of
 from .resources import read_yaml
 
-#: The thruster file beside a model (read by uvms.dynamics.thrusters).
+#: The thruster file beside a model (read by uvms.dynamics.thrusters.thrusters).
 THRUSTERS_YAML = "thrusters.yaml"
 #: Words (digits stripped) of a link or joint name that name a propeller.
 PROPELLER_WORDS = frozenset({"thruster", "propeller", "prop"})
@@ -52,7 +52,7 @@ def propeller_joints(robot: ET.Element, moving: Mapping[str, ET.Element], model_
 
     Warns:
         ThrusterFileWarning: a ``thrusters.yaml`` beside the model that cannot be read (its other contents are
-            checked by :mod:`uvms.dynamics.thrusters` when thrusters are used).
+            checked by :mod:`uvms.dynamics.thrusters.thrusters` when thrusters are used).
     """
     by_child = {joint.find("child").get("link"): name for name, joint in moving.items()}
     found: dict[str, str] = {}

@@ -8,7 +8,7 @@ back by ``uvms view --result``), ``sweep`` (grids of overrides), ``study`` (Mont
 ``sensitivity``, ``study_folder``), ``tune`` (Optuna over scenario keys), all run by ``parallel`` (joblib's loky or Dask).
 
 By default the motion is integrated kinematically. A ``[plant]`` section with ``type = "rigid"`` or
-``"hydrodynamic"`` runs the free-floating dynamics of :mod:`uvms.dynamics.plant` instead, the joints driven by
+``"hydrodynamic"`` runs the free-floating dynamics of :mod:`uvms.dynamics.plant.plant` instead, the joints driven by
 the generalized-Jacobian controller of :mod:`uvms.control.gjm` (amundsen2018 eq. 4-8; the vehicle passive).
 """
 

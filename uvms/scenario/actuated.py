@@ -8,7 +8,7 @@ feedback); with ``vehicle_control.coordination`` the arm is solved again through
 measured vehicle velocity held; the allocation turns the wrench into thrusts within the thrusters' limits
 (``vehicle_control.saturation_feedback``: its shortfall bounds the vehicle's part of the next reference), and the
 plant simulates their first-order response. The thrusters are model data
-(:func:`uvms.dynamics.thrusters.thrusters_of`). Station keeping is ``trajectory.type = "hold"``.
+(:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`). Station keeping is ``trajectory.type = "hold"``.
 """
 
 from __future__ import annotations
@@ -20,10 +20,10 @@ import numpy as np
 
 from ..control.coordination import CoordinatedControl
 from ..control.station import actuated_control
-from ..dynamics.actuated import ActuatedPlant
-from ..dynamics.fins import Fins, fins_of
-from ..dynamics.plant import Plant
-from ..dynamics.thrusters import Thrusters, thrusters_of
+from ..dynamics.plant.actuated import ActuatedPlant
+from ..dynamics.thrusters.fins import Fins, fins_of
+from ..dynamics.plant.plant import Plant
+from ..dynamics.thrusters.thrusters import Thrusters, thrusters_of
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, CLIKSolver, Solver

@@ -11,7 +11,7 @@ byte of the storage:
 - a storage file named in ``metadata.yaml`` that is not a regular file (a FIFO would block the read), or storage
   files above :data:`MAX_BAG_BYTES` together;
 - more than :data:`MAX_BAG_MESSAGES` messages in the bag, or more than
-  :data:`~uvms.dynamics.identification_data.MAX_LOG_SAMPLES` on a topic identification reads (as
+  :data:`~uvms.dynamics.identification.data.MAX_LOG_SAMPLES` on a topic identification reads (as
   ``metadata.yaml`` declares them and as the storage holds them);
 - an MCAP file whose records do not fit in it, a chunk that declares more than :data:`MAX_CHUNK_BYTES` inflated,
   chunks that declare more than :data:`MAX_INFLATED_BYTES` together (counted per chunk index entry, as ``rosbags``
@@ -34,7 +34,7 @@ from collections.abc import Mapping
 from pathlib import Path, PurePath
 from urllib.parse import quote
 
-from ..dynamics.identification_data import MAX_LOG_SAMPLES
+from ..dynamics.identification.data import MAX_LOG_SAMPLES
 from ..errors import IdentificationError, UVMSError
 from ..model.resources import read_yaml
 

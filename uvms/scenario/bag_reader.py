@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from ..dynamics.identification_data import MAX_LOG_SAMPLES, IdentificationLog
+from ..dynamics.identification.data import MAX_LOG_SAMPLES, IdentificationLog
 from ..errors import IdentificationError
 from .bag_limits import check_bag, check_topic_count, damaged
 from .rosbag import BODY_WRENCH_TOPIC, INSTALL_HINT, JOINT_STATES_TOPIC, ODOM_TOPIC
@@ -61,7 +61,7 @@ def read_bag(path: str | os.PathLike, *, odom_topic: str = ODOM_TOPIC, joint_sta
 
     The bag is checked first (:func:`uvms.scenario.bag_limits.check_bag`: sizes, counts, compression, storage), and
     read with ROS 2's standard message definitions (a bag whose own definition of a type read here differs is
-    refused); at most :data:`~uvms.dynamics.identification_data.MAX_LOG_SAMPLES` messages per topic are kept.
+    refused); at most :data:`~uvms.dynamics.identification.data.MAX_LOG_SAMPLES` messages per topic are kept.
 
     Args:
         arm_joints: the model's arm joints; an empty sequence (a vehicle without an arm) makes the joint-states

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
-from ..dynamics.plant import Plant
+from ..dynamics.plant.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..numerics.integrate import stage_times, step_count
 from ..robot.robot import Robot

@@ -1,9 +1,9 @@
 """Excitation for hydrodynamic identification: a multi-sine body wrench through the thrusters, arm held or moving.
 
-:func:`excitation_run` simulates the model's actuated plant (:class:`uvms.dynamics.actuated.ActuatedPlant`, the
+:func:`excitation_run` simulates the model's actuated plant (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`, the
 one loop :func:`uvms.sim.loop.simulate`) under open-loop thrust commands f = sat(B^+ tau(t)), tau(t) a
 :class:`Multisine` body wrench, and the arm under a sum of sines of joint velocity; :func:`log_of_run` turns the
-run into the log identification reads (:class:`uvms.dynamics.identification_data.IdentificationLog`), the same
+run into the log identification reads (:class:`uvms.dynamics.identification.data.IdentificationLog`), the same
 numbers ``write_bag`` writes (``/odom``, ``/joint_states``, ``/body_wrench``). Plan an experiment with it (are the
 thrusters within their limits, which axes move), and the tests get logs of known parameters.
 
@@ -20,11 +20,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.actuated import ActuatedCommand, ActuatedPlant
-from ..dynamics.hydro_parameters import HydroParameters
-from ..dynamics.identification_data import IdentificationLog
-from ..dynamics.plant import Plant
-from ..dynamics.thrusters import thrusters_of
+from ..dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
+from ..dynamics.hydro.parameters import HydroParameters
+from ..dynamics.identification.data import IdentificationLog
+from ..dynamics.plant.plant import Plant
+from ..dynamics.thrusters.thrusters import thrusters_of
 from ..errors import IdentificationError, ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate

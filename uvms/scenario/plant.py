@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.hydrodynamics import HydroParameters, hydrodynamics_of
-from ..dynamics.plant import Plant
+from ..dynamics.hydro.hydrodynamics import HydroParameters, hydrodynamics_of
+from ..dynamics.plant.plant import Plant
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from .schema import changed_keys
@@ -50,7 +50,7 @@ def make_plant(robot: Robot, section: dict) -> Plant:
                   current=current, added_mass=added_mass, damping=damping)
     if not plant.links:
         raise ScenarioError(f"plant.type = 'hydrodynamic' needs hydrodynamic parameters, and {robot.source} has none; "
-                            f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.dynamics.hydrodynamics), "
+                            f"add a uuv_simulator block or hydrodynamics.yaml (see uvms.dynamics.hydro.hydrodynamics), "
                             f"or use plant.type = 'rigid'")
     return plant
 

@@ -11,7 +11,7 @@ from ..control import gjm, vehicle
 NUMBER = (int, float)
 NUMBERS = "numbers"  # a list of numbers
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
-#: free-floating dynamics of uvms.dynamics.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
+#: free-floating dynamics of uvms.dynamics.plant.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
 PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
 
 PLANT: dict[str, tuple] = {

@@ -2,9 +2,9 @@
 
 A bag without a body-wrench topic can still be identified from when it holds one ``std_msgs/msg/Float64`` topic per
 thruster, as ``uvms run --bag`` writes them (``/thrusters/<name>/thrust``, the thrust [N]) and uuv_simulator's
-thruster topics do. The model's thrusters (:func:`uvms.dynamics.thrusters.thrusters_of`: their frames, limits and
+thruster topics do. The model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`: their frames, limits and
 time constants) give the wrench tau = B f, B (6, n) the allocation matrix
-(:func:`uvms.dynamics.thrusters.allocation_matrix`) at the vehicle's root link, body FLU, as the
+(:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`) at the vehicle's root link, body FLU, as the
 ``/body_wrench`` topic holds it.
 
 When the topics hold the thrust *commands*, the thrust is what the thrusters' model makes of them: the command
@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.thrusters import allocation_matrix, thrusters_of
+from ..dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from ..errors import IdentificationError, UVMSError
 from ..robot.robot import Robot
 from .rosbag import thruster_tokens

@@ -8,9 +8,9 @@ What is simulated decides the system:
 * a ``Robot``: q' = v from a kinematic controller (t, q, None) -> (v, diagnostics)
   (:class:`uvms.sim.kinematic.KinematicSystem`);
 * a ``Plant`` (rigid or hydrodynamic): the passive free-floating plant under a joint-velocity command — the GJM
-  controller, any (t, q, v) -> u, a constant u or None (:class:`uvms.dynamics.plant.PlantSystem`);
+  controller, any (t, q, v) -> u, a constant u or None (:class:`uvms.dynamics.plant.plant.PlantSystem`);
 * an ``ActuatedPlant`` (plant + thrusters): under a digital vehicle controller such as station keeping
-  (:class:`uvms.dynamics.actuated.ActuatedPlantSystem`).
+  (:class:`uvms.dynamics.plant.actuated.ActuatedPlantSystem`).
 
 ::
 

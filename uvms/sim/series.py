@@ -20,7 +20,7 @@ TRACKING_FIELDS = ("rates", "ee_velocity", "desired_velocity")
 #: The series an actuated plant records itself (:class:`ActuationSeries`); its controller's go to ``controller``.
 ACTUATION_FIELDS = ("thrusts", "thrust_command", "body_wrench", "thrust_power", "thruster_power_abs", "motor_power",
                     "damping_power")
-#: The series of a plant with fins (:class:`uvms.dynamics.actuated.ActuatedPlant`): their angles and command [rad],
+#: The series of a plant with fins (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`): their angles and command [rad],
 #: their wrench (6,) [N, N m] and its power [W].
 FIN_SERIES = ("fin_angles", "fin_command", "fin_wrench", "fin_power")
 #: The actuation series that ``actuation.npz`` holds, in its order (the others stay in memory; the fins' with fins).
@@ -31,7 +31,7 @@ ACTUATION_SERIES = ("thrusts", "thrust_command", "body_wrench", "wrench_command"
 
 @dataclass(frozen=True)
 class PlantSeries:
-    """The series of a free-floating plant run (:class:`uvms.dynamics.plant.Plant`).
+    """The series of a free-floating plant run (:class:`uvms.dynamics.plant.plant.Plant`).
 
     Attributes:
         command: (N, n_arm) joint-velocity commands u [rad/s or m/s].
@@ -89,7 +89,7 @@ class TrackingSeries:
 
 @dataclass(frozen=True)
 class ActuationSeries:
-    """The series of a plant with thrusters (:class:`uvms.dynamics.actuated.ActuatedPlant`).
+    """The series of a plant with thrusters (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`).
 
     Attributes:
         thrusts: (N, n) [N] each thruster's thrust; thrust_command: (N, n) [N] the saturated command.

@@ -7,8 +7,8 @@ joint or thrust command, with the state's rate ``sample.rate``), integrates with
 integrator's stages, records the row with ``record`` and refuses a bad state with ``check``.
 
 Three kinds ship: :class:`uvms.sim.kinematic.KinematicSystem` (q' = v from a kinematic controller),
-:class:`uvms.dynamics.plant.PlantSystem` (a free-floating plant under a joint-velocity command) and
-:class:`uvms.dynamics.actuated.ActuatedPlantSystem` (a plant with thrusters under a digital vehicle controller).
+:class:`uvms.dynamics.plant.plant.PlantSystem` (a free-floating plant under a joint-velocity command) and
+:class:`uvms.dynamics.plant.actuated.ActuatedPlantSystem` (a plant with thrusters under a digital vehicle controller).
 What :func:`uvms.sim.loop.simulate` is given builds its system: a :class:`Simulable` (``Plant``,
 ``ActuatedPlant``) by its ``system`` method, a ``Robot`` as a kinematic system.
 """
@@ -30,7 +30,7 @@ Recorder = Callable[[float, np.ndarray, np.ndarray, Any], dict]
 #: Every controller takes (t [s], q (nq,), v): v the plant's velocity (nv,), or None in a kinematic run. A kinematic
 #: controller returns (v (nv,) to integrate, diagnostics with sigma_min, damping, limits_active); a plant command
 #: returns the joint-velocity command u (n_arm,); an actuated plant's controller takes (t, q, v, thrusts) and
-#: returns an :class:`uvms.dynamics.actuated.ActuatedCommand`.
+#: returns an :class:`uvms.dynamics.plant.actuated.ActuatedCommand`.
 Controller = Callable[..., Any]
 
 

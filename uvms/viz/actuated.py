@@ -16,8 +16,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from ..io import outputs
-from ..dynamics.fins import Fins
-from ..dynamics.thrusters import Thrusters
+from ..dynamics.thrusters.fins import Fins
+from ..dynamics.thrusters.thrusters import Thrusters
 from ..sim.result import SimulationResult
 
 FLOOR = 1e-9  # [m, rad] log axes: errors below are drawn at the floor

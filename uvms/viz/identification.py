@@ -1,4 +1,4 @@
-"""Figures of a hydrodynamic identification (:func:`uvms.dynamics.identification.identify`).
+"""Figures of a hydrodynamic identification (:func:`uvms.dynamics.identification.identify.identify`).
 
 ``prediction.png``: per body axis, on the held-out segment, the measured twist and the twist simulated from its
 first state under the logged wrench and arm motion, with the identified and with the prior hydrodynamics.
@@ -12,8 +12,8 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from ..dynamics.identification import IdentificationResult
-from ..dynamics.identification_model import AXES
+from ..dynamics.identification.identify import IdentificationResult
+from ..dynamics.identification.model import AXES
 from ..io import outputs
 
 #: The unit of each body axis' velocity and wrench.

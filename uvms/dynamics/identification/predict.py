@@ -3,7 +3,7 @@
 From the first smoothed state of the held-out segment, the vehicle's velocity is integrated (RK4 on the
 manifold, :func:`uvms.numerics.integrate.rk4_step`, at the log's step) under the logged body wrench, with the
 arm's motion prescribed from the log (positions, velocities, accelerations interpolated linearly): the plant's
-vehicle rows, Mbar_bb a_b = -(Mbar_bm a_m + nbar_b(q, v, wrench)) (:mod:`uvms.dynamics.plant`). Nothing of the
+vehicle rows, Mbar_bb a_b = -(Mbar_bm a_m + nbar_b(q, v, wrench)) (:mod:`uvms.dynamics.plant.plant`). Nothing of the
 held-out segment but its first state is fed back: an output-error check of the model, identified or prior.
 """
 
@@ -14,11 +14,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..numerics.integrate import rk4_step
-from .hydro_parameters import HydroParameters
-from .identification_data import SmoothedStates
-from .identification_model import AXES, configurations
-from .plant import Plant
+from ...numerics.integrate import rk4_step
+from ..hydro.parameters import HydroParameters
+from .data import SmoothedStates
+from .model import AXES, configurations
+from ..plant.plant import Plant
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """Hydrodynamic parameters of the links of a UVMS as uvms holds them: buoyancy, added mass, damping (Fossen).
 
 Where they come from (a uuv_simulator block in the URDF or a YAML file) and the conventions of those files:
-:mod:`uvms.dynamics.hydrodynamics` and README.md, "Hydrodynamics of your vehicle".
+:mod:`uvms.dynamics.hydro.hydrodynamics` and README.md, "Hydrodynamics of your vehicle".
 
 Conventions inside uvms
 -----------------------
@@ -22,7 +22,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import AddedMassSymmetrizedWarning, ModelCheckError, NameNotFound
+from ...errors import AddedMassSymmetrizedWarning, ModelCheckError, NameNotFound
 
 #: Fluid density of sea water [kg/m^3] (uuv_simulator's default) and gravity [m/s^2].
 SEA_WATER_DENSITY = 1028.0

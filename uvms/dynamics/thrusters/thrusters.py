@@ -7,8 +7,8 @@ its command through a first-order lag f' = (f_cmd - f) / time_constant.
 Where they come from
 ====================
 The thruster plugins in the URDF, one per thruster, of uuv_simulator (what is read from them:
-:mod:`uvms.dynamics.thruster_sources`), Gazebo Sim (``gz::sim::systems::Thruster``: :mod:`uvms.dynamics.gz_sim`)
-or HippoCampus (``hippo_gz_plugins::thruster``: :mod:`uvms.dynamics.hippo`), e.g. uuv_simulator's::
+:mod:`uvms.dynamics.thrusters.sources`), Gazebo Sim (``gz::sim::systems::Thruster``: :mod:`uvms.dynamics.plugins.gz_sim`)
+or HippoCampus (``hippo_gz_plugins::thruster``: :mod:`uvms.dynamics.plugins.hippo`), e.g. uuv_simulator's::
 
     <plugin name="thruster_1" filename="libuuv_thruster_ros_plugin.so">
       <linkName>thruster_1</linkName>       <!-- a link of the model: thrust along its x axis at the joint's zero -->
@@ -58,12 +58,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError, ModelParseError, ThrusterDefaultWarning, UVMSError
-from .plugin_readers import read_thruster_plugins
-from .thruster_sources import LIMIT_KEYS, THRUSTER_KEYS, PluginThruster, fail, read_thrusters_document
+from ...errors import ModelCheckError, ModelParseError, ThrusterDefaultWarning, UVMSError
+from ..plugins.readers import read_thruster_plugins
+from .sources import LIMIT_KEYS, THRUSTER_KEYS, PluginThruster, fail, read_thrusters_document
 
 if TYPE_CHECKING:
-    from ..robot.robot import Robot
+    from ...robot.robot import Robot
 
 #: Name of the YAML file looked for beside a model.
 YAML_NAME = "thrusters.yaml"
@@ -235,11 +235,11 @@ def complete_plugin_thrusters(plugins: Sequence[PluginThruster], origin: str, fr
 
     For each of max_forward, max_reverse and time_constant of a thruster: its entry in the completion YAML
     (same name as the plugin; the user's own word, so it wins over the plugin), else the plugin
-    (:mod:`uvms.dynamics.thruster_sources`), else the file default of the YAML, else uvms's default
+    (:mod:`uvms.dynamics.thrusters.sources`), else the file default of the YAML, else uvms's default
     (:data:`DEFAULT_VALUES`) with one :class:`ThrusterDefaultWarning` naming the thrusters that got it.
 
     Args:
-        plugins: the plugins (:func:`~uvms.dynamics.plugin_readers.read_thruster_plugins`); origin: the model,
+        plugins: the plugins (:func:`~uvms.dynamics.plugins.readers.read_thruster_plugins`); origin: the model,
             for messages; frames: the model's frame names (checked); completion: the YAML file that completes
             them (None: none).
 
@@ -311,7 +311,7 @@ def thrusters_of(robot: Robot, path: str | os.PathLike | None = None, *, require
         UVMSError: no thrusters (and ``required``).
         ModelCheckError, ModelParseError: invalid thruster data.
     """
-    from ..robot.robot import check_robot  # at call time: robot.py imports this package
+    from ...robot.robot import check_robot  # at call time: robot.py imports this package
 
     check_robot(robot, "thrusters_of")
     frames = robot.frame_names
@@ -326,7 +326,7 @@ def thrusters_of(robot: Robot, path: str | os.PathLike | None = None, *, require
         return load_thrusters_yaml(yaml_path, frames)
     if required:
         raise UVMSError(f"{robot.source}: the model has no thrusters; add thruster plugins (uuv_simulator, Gazebo "
-                        f"Sim or HippoCampus) to the URDF or a {YAML_NAME} beside it (see uvms.dynamics.thrusters)")
+                        f"Sim or HippoCampus) to the URDF or a {YAML_NAME} beside it (see uvms.dynamics.thrusters.thrusters)")
     return Thrusters((), source=f"{robot.source} (no thrusters)")
 
 

@@ -25,7 +25,7 @@ the other::
 
 The shape models (``sphere``, ``cylinder``, ``spheroid``, ``box``) set added-mass and drag entries from
 ``<radius>``, ``<length>``, ``<width>``, ``<height>``, ``<axis>``, ``<cd>`` (or the link's ``<box>``) over those
-of ``fossen``, as uuv_simulator does (:mod:`uvms.dynamics.hydro_shapes`). Volume, centre of buoyancy and
+of ``fossen``, as uuv_simulator does (:mod:`uvms.dynamics.hydro.shapes`). Volume, centre of buoyancy and
 ``neutrally_buoyant`` are read for every type.
 
 Or a YAML file beside the model (``hydrodynamics.yaml``, same keys and the same conventions; see
@@ -47,7 +47,7 @@ Conventions of the file (those of uuv_simulator's ``HMFossen``)
   positive value would feed energy into the motion and is refused.
 
 The parameters themselves (:class:`LinkHydrodynamics`, :class:`HydroParameters`, in uvms's own FLU
-conventions) live in :mod:`uvms.dynamics.hydro_parameters` and are importable from here.
+conventions) live in :mod:`uvms.dynamics.hydro.parameters` and are importable from here.
 """
 
 from __future__ import annotations
@@ -58,11 +58,11 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ..errors import ModelCheckError, ModelParseError, UVMSError
-from ..model.resources import read_yaml
-from .hydro_parameters import GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names
-from .plugin_readers import read_hydro_plugins
-from .uuv_hydro import MODEL_KEYS, MODEL_TYPES, _numbers, link_from_uuv, urdf_link_masses
+from ...errors import ModelCheckError, ModelParseError, UVMSError
+from ...model.resources import read_yaml
+from .parameters import GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names
+from ..plugins.readers import read_hydro_plugins
+from .uuv import MODEL_KEYS, MODEL_TYPES, _numbers, link_from_uuv, urdf_link_masses
 
 __all__ = ["MODEL_KEYS", "MODEL_TYPES", "HydroParameters", "LinkHydrodynamics", "hydrodynamics_of",
            "link_from_uuv", "load_hydrodynamics_yaml", "parse_hydrodynamics", "urdf_link_masses"]
@@ -70,7 +70,7 @@ __all__ = ["MODEL_KEYS", "MODEL_TYPES", "HydroParameters", "LinkHydrodynamics", 
 if TYPE_CHECKING:
     import pinocchio as pin
 
-    from ..robot.robot import Robot
+    from ...robot.robot import Robot
 
 #: Name of the YAML file looked for beside a model.
 YAML_NAME = "hydrodynamics.yaml"
@@ -78,14 +78,14 @@ def parse_hydrodynamics(
     urdf: str, origin: str = "<string>", link_names: Iterable[str] | None = None, moving: Iterable[str] = ()
 ) -> HydroParameters | None:
     """The hydrodynamic parameters written in a URDF's plugin blocks: uuv_simulator's underwater-object plugin,
-    Gazebo Sim's Hydrodynamics and Buoyancy, HippoCampus's (:mod:`uvms.dynamics.plugin_readers`).
+    Gazebo Sim's Hydrodynamics and Buoyancy, HippoCampus's (:mod:`uvms.dynamics.plugins.readers`).
 
     Args:
         urdf: URDF text (xacro already expanded).
         origin: name of the model for messages.
         link_names: the model's links (None: not checked here); a block naming another link is skipped.
         moving: the joints that move in the model's file (``robot.joint_classes``; frozen since, they are fixed in
-            ``urdf``): Gazebo lumps no link through them (:func:`~uvms.dynamics.plugin_readers.lumped_mass`).
+            ``urdf``): Gazebo lumps no link through them (:func:`~uvms.dynamics.plugins.readers.lumped_mass`).
 
     Returns:
         The parameters, or None when the URDF has no such plugin.
@@ -200,7 +200,7 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         NameNotFound: a link that the model does not have (the message lists close names).
         ModelCheckError, ModelParseError: invalid parameters.
     """
-    from ..robot.robot import check_robot  # at call time: robot.py imports this package
+    from ...robot.robot import check_robot  # at call time: robot.py imports this package
 
     check_robot(robot, "hydrodynamics_of")
     masses = urdf_link_masses(robot.urdf_root) if robot.urdf_root is not None else {}
@@ -221,7 +221,7 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         if required:
             raise UVMSError(
                 f"{robot.source}: the model has no hydrodynamic parameters; add a uuv_simulator underwater-object "
-                f"plugin block to the URDF or a {YAML_NAME} beside it (see uvms.dynamics.hydrodynamics)")
+                f"plugin block to the URDF or a {YAML_NAME} beside it (see uvms.dynamics.hydro.hydrodynamics)")
         return HydroParameters(source=f"{robot.source} (no hydrodynamic parameters)")
     hydro.check_links(names)
     return hydro

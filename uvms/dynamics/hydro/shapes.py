@@ -55,7 +55,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import ModelCheckError, ShapeCoefficientWarning
+from ...errors import ModelCheckError, ShapeCoefficientWarning
 
 #: The shape models, by their ``<type>``.
 SHAPE_TYPES = ("sphere", "cylinder", "spheroid", "box")

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .added_mass import _cross
+from ..plant.added_mass import _cross
 
 #: Speed [m/s] at or below which Gazebo Sim's LiftDrag applies no force (``vel.Length() <= 0.01``).
 GZ_MIN_SPEED = 0.01

@@ -1,6 +1,6 @@
 """What a model's files say about its thrusters, read and checked for their form: uuv_simulator's thruster plugins
 (``libuuv_thruster_ros_plugin.so``) in the URDF and the thrusters YAML document (:func:`read_thrusters_document`).
-:mod:`uvms.dynamics.thrusters` builds the Thrusters from them.
+:mod:`uvms.dynamics.thrusters.thrusters` builds the Thrusters from them.
 
 The plugin: where each thruster pushes and what it says about the thrust limits and the time constant.
 
@@ -12,17 +12,17 @@ times ``propeller_efficiency``, converted to a thrust by ``<conversion>`` (``Bas
 ``thrust_efficiency``, clipped to [``thrustMin``, ``thrustMax``]. The thrust pushes along the thruster link's x
 axis, or along the axis of ``<jointName>`` (later versions of the plugin).
 
-What uvms reads from it (:func:`read_uuv_thruster`; the readers of every simulator: :mod:`uvms.dynamics.plugin_readers`):
+What uvms reads from it (:func:`read_uuv_thruster`; the readers of every simulator: :mod:`uvms.dynamics.plugins.readers`):
 
 * the limits: the range of thrust that chain can hold in steady state (:func:`plugin_thrust_range`). A side
   left unbounded (uuv_simulator's defaults: no clamp and no thrustMin/thrustMax with a Basic conversion, as the
   RexROV's ``thruster_snippets.xacro`` writes them) is a limit the plugin does not give.
 * the time constant: ``timeConstant`` of a ``FirstOrder`` dynamics. ``ZeroOrder`` means no lag at all, and the
   nonlinear rotor models are no first-order lag on the thrust; uvms models every thruster as a first-order lag
-  (:mod:`uvms.dynamics.actuated`), so for them the plugin gives no time constant.
+  (:mod:`uvms.dynamics.plant.actuated`), so for them the plugin gives no time constant.
 
 What a plugin does not give is completed by ``thrusters.yaml`` or a documented default
-(:func:`uvms.dynamics.thrusters.complete_plugin_thrusters`).
+(:func:`uvms.dynamics.thrusters.thrusters.complete_plugin_thrusters`).
 """
 
 from __future__ import annotations
@@ -37,8 +37,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ModelCheckError, ModelParseError
-from ..model.resources import read_yaml
+from ...errors import ModelCheckError, ModelParseError
+from ...model.resources import read_yaml
 
 #: How one thruster is written, quoted by every error about thruster data.
 VALID_FORM = ("a thruster is {frame: FRAME} or {parent: FRAME, xyz: [x, y, z] m, rpy: [r, p, y] rad or direction: "
@@ -105,7 +105,7 @@ def read_thrusters_document(path: str | os.PathLike, *, entries_required: bool) 
 
 def read_uuv_thruster(plugin: ET.Element, root: ET.Element, name: str, where: str) -> PluginThruster:
     """What one uuv_simulator thruster plugin says (the module docstring); registered for uuv_simulator in
-    :data:`uvms.dynamics.plugin_readers.THRUSTER_READERS`.
+    :data:`uvms.dynamics.plugins.readers.THRUSTER_READERS`.
 
     Args:
         plugin: the ``<plugin>``; root: the URDF ``<robot>``; name: the thruster's name; where: for messages.

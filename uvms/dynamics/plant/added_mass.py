@@ -1,8 +1,8 @@
 """The hydrodynamic links of a UVMS on its Pinocchio model, and what their added mass adds to the dynamics.
 
-A link with Fossen parameters (:mod:`uvms.dynamics.hydro_parameters`) is placed on the model by
+A link with Fossen parameters (:mod:`uvms.dynamics.hydro.parameters`) is placed on the model by
 :func:`resolve_links`. Its added mass M_A enters the equations of motion twice (derivation: the docstring
-of :mod:`uvms.dynamics.plant`): in the mass matrix, Mbar = M + sum_l J_l^T M_A,l J_l
+of :mod:`uvms.dynamics.plant.plant`): in the mass matrix, Mbar = M + sum_l J_l^T M_A,l J_l
 (:func:`augmented_mass_matrix`), and as the Coriolis term C_A(nu) nu (formed with the other wrenches of a link in
 :mod:`uvms.numerics._kernels.hydro`, from the links' constants stacked in :class:`StackedLinks`). With no current, damping or gravity the added-mass-augmented momentum is
 conserved; :func:`generalized_jacobian_added_mass` is the generalized Jacobian of that momentum.
@@ -15,10 +15,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError
-from .hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from ..robot.robot import Robot
-from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
+from ...errors import UVMSError
+from ..hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
+from ...robot.robot import Robot
+from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 
 
 LOCAL = pin.ReferenceFrame.LOCAL
@@ -59,7 +59,7 @@ class StackedLinks:
         motion_to_link: (L, 6, 6) the action of the inverse placement: a motion of the joint in the link frame.
         rotations: (L, 3, 3) the links' rotations in their joints' frames; translations: (L, 3) their origins there.
         added_mass: (L, 6, 6); linear_damping, forward_damping, quadratic_damping: (L, 6) d_l, d_f, d_q (link
-            frames, FLU; :meth:`uvms.dynamics.hydro_parameters.LinkHydrodynamics.damping_wrench`).
+            frames, FLU; :meth:`uvms.dynamics.hydro.parameters.LinkHydrodynamics.damping_wrench`).
         buoyancy: (L,) rho g V [N] (0 without gravity); center_of_buoyancy: (L, 3) [m] in the link frames.
         buoyant: whether any link has a volume.
     """
@@ -84,7 +84,7 @@ class StackedLinks:
 
     def damping_wrenches(self, relative: np.ndarray) -> np.ndarray:
         """The links' damping wrenches (L, 6) [N, N m] at their relative twists nu_r (L, 6): the stacked form of
-        :meth:`uvms.dynamics.hydro_parameters.LinkHydrodynamics.damping_wrench`."""
+        :meth:`uvms.dynamics.hydro.parameters.LinkHydrodynamics.damping_wrench`."""
         linear = self.linear_damping + relative[:, :1] * self.forward_damping
         return -(linear + self.quadratic_damping * np.abs(relative)) * relative
 
@@ -162,7 +162,7 @@ def generalized_jacobian_added_mass(
 
     Args:
         robot: a floating- or planar-base Robot.
-        hydro: the parameters (None: the model's own, see :func:`uvms.dynamics.hydrodynamics.hydrodynamics_of`).
+        hydro: the parameters (None: the model's own, see :func:`uvms.dynamics.hydro.hydrodynamics.hydrodynamics_of`).
         q: configuration (nq,).
         frame: end-effector frame (default: the first).
 

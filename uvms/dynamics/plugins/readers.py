@@ -1,8 +1,8 @@
 """The readers of simulator plugins, one module per simulator, registered by simulator: a model's thrusters and
 hydrodynamics from its ``<gazebo>`` plugin blocks.
 
-* uuv_simulator: :func:`~.thruster_sources.read_uuv_thruster`, the underwater-object block
-  (:func:`~.uuv_hydro.link_from_uuv`);
+* uuv_simulator: :func:`~.sources.read_uuv_thruster`, the underwater-object block
+  (:func:`~.uuv.link_from_uuv`);
 * Gazebo Sim: :func:`~.gz_sim.read_gz_thruster`, :func:`~.gz_sim.gz_hydrodynamics_fields`,
   :func:`~.gz_sim.gz_buoyancy_density`;
 * HippoCampus: :func:`~.hippo.read_hippo_thruster`, :func:`~.hippo.hippo_hydrodynamics_fields`,
@@ -29,13 +29,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ModelCheckError, SkippedLinkWarning
-from ..model.plugins import GZ, HIPPO, UUV, plugins_of
+from ...errors import ModelCheckError, SkippedLinkWarning
+from ...model.plugins import GZ, HIPPO, UUV, plugins_of
 from .gz_sim import gz_buoyancy_density, gz_hydrodynamics_fields, read_gz_thruster
 from .hippo import hippo_buoyancy_fields, hippo_hydrodynamics_fields, read_hippo_thruster
-from .hydro_parameters import SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics
-from .thruster_sources import PluginThruster, _float, read_uuv_thruster
-from .uuv_hydro import link_from_uuv, urdf_link_masses
+from ..hydro.parameters import SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics
+from ..thrusters.sources import PluginThruster, _float, read_uuv_thruster
+from ..hydro.uuv import link_from_uuv, urdf_link_masses
 
 #: simulator -> reader(plugin, robot root, thruster name, where) -> PluginThruster.
 THRUSTER_READERS: dict[str, Callable[[ET.Element, ET.Element, str, str], PluginThruster]] = {

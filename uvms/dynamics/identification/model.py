@@ -1,6 +1,6 @@
 """The vehicle's equations of motion as a regression linear in its hydrodynamic parameters.
 
-The vehicle rows of the plant (:func:`uvms.dynamics.actuated.vehicle_inverse_dynamics`, Fossen's
+The vehicle rows of the plant (:func:`uvms.dynamics.plant.actuated.vehicle_inverse_dynamics`, Fossen's
 M_RB nu' + M_A nu_r' + C(nu) nu + C_A(nu_r) nu_r + D(nu_r) nu_r + g(eta) = tau for the whole UVMS) split into
 
     tau - known(q, v, a) = Phi(q, v, a) theta
@@ -25,11 +25,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pinocchio as pin
 
-from ..errors import IdentificationError
-from .actuated import base_twist, vehicle_inverse_dynamics
-from .hydro_parameters import HydroParameters, LinkHydrodynamics
-from .identification_data import SmoothedStates
-from .plant import Plant
+from ...errors import IdentificationError
+from ..plant.actuated import base_twist, vehicle_inverse_dynamics
+from ..hydro.parameters import HydroParameters, LinkHydrodynamics
+from .data import SmoothedStates
+from ..plant.plant import Plant
 
 #: The body axes, FLU, in the order of the twist and wrench.
 AXES = ("u", "v", "w", "p", "q", "r")

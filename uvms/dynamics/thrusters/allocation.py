@@ -29,10 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..robot.conventions import AXIS_NAMES
-from ..errors import SolverInputError, UVMSError
-from ..robot.kinematics import axis_rows
-from ..numerics.inverses import pinv
+from ...robot.conventions import AXIS_NAMES
+from ...errors import SolverInputError, UVMSError
+from ...robot.kinematics import axis_rows
+from ...numerics.inverses import pinv
 
 #: Slack [N] on the bounds and the wrench when deciding that the pseudo-inverse solution is good enough.
 TOLERANCE = 1e-9
@@ -88,7 +88,7 @@ class ThrustAllocator:
     """Allocation of body wrenches to thrusters with bounds and axis priorities.
 
     Args:
-        matrix: B (6, n) (:func:`uvms.dynamics.thrusters.allocation_matrix`).
+        matrix: B (6, n) (:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`).
         lower, upper: (n,) thrust bounds [N], lower <= 0 <= upper.
         priorities: groups of wrench axes, highest first, e.g. ``[("z", "roll", "pitch"), ("x", "y", "yaw")]``
             (attitude and depth before surge, sway and yaw); the names of ``uvms.robot.conventions.AXIS_NAMES``

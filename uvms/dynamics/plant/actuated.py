@@ -7,11 +7,11 @@ delta the fins' angles [rad] (none without fins); its rate is
     f' = (sat(f_cmd) - f) / tau,   sat = clip to [-max_reverse, +max_forward]
     delta' = (sat(delta_cmd) - delta) / tau_fin,   sat = clip to the fin joints' limits
 
-with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.allocation_matrix`), w_fins the fins' lift and
-drag at the vehicle's velocity through the water nu_r (:class:`uvms.dynamics.fins.Fins`), the wrench applied
-at the vehicle's base frame (:meth:`uvms.dynamics.plant.Plant._evaluate`). Since the command is clipped and
+with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`), w_fins the fins' lift and
+drag at the vehicle's velocity through the water nu_r (:class:`uvms.dynamics.thrusters.fins.Fins`), the wrench applied
+at the vehicle's base frame (:meth:`uvms.dynamics.plant.plant.Plant._evaluate`). Since the command is clipped and
 f moves towards it, f stays inside the bounds (delta likewise). A plant without thrusters keeps its state (q, v):
-:class:`uvms.dynamics.plant.PlantSystem`. :class:`ActuatedPlant` (plant + thrusters) builds the system
+:class:`uvms.dynamics.plant.plant.PlantSystem`. :class:`ActuatedPlant` (plant + thrusters) builds the system
 (:meth:`ActuatedPlant.system`).
 
 The controller is digital: called once per step at the step's start, its command held over the
@@ -30,11 +30,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ConfigurationError, StepCountError, UVMSError
-from .fins import Fins
+from ...errors import ConfigurationError, StepCountError, UVMSError
+from ..thrusters.fins import Fins
 from .plant import Plant, PlantDynamics
-from .plant_system import PlantSample, PlantSystem, check_finite_state
-from .thrusters import Thrusters, allocation_matrix
+from .system import PlantSample, PlantSystem, check_finite_state
+from ..thrusters.thrusters import Thrusters, allocation_matrix
 
 #: The controller of an actuated plant: (t [s], q (nq,), v (nv,), f (n,) [N]) -> ActuatedCommand.
 ActuatedController = Callable[[float, np.ndarray, np.ndarray, np.ndarray], "ActuatedCommand"]
@@ -66,7 +66,7 @@ class ActuatedPlant:
     Args:
         plant: the Plant (its robot gives the frames; its current, damping, gravity apply); thrusters: their data.
         thrusts0: (n,) [N] the thrusts at t = 0, within the bounds (None: zero).
-        fins: the vehicle's fins (:func:`uvms.dynamics.fins.fins_of`; None: none), at their rest angles at t = 0.
+        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`; None: none), at their rest angles at t = 0.
 
     Raises:
         ModelCheckError: a thruster on an arm link, a fixed base.

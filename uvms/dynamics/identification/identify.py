@@ -1,35 +1,35 @@
 """Hydrodynamic identification from a log: physically consistent Fossen parameters of the vehicle, with intervals.
 
 :func:`identify` fits the vehicle's (root link's) added mass, linear and quadratic damping, volume and centre of
-buoyancy to a log (:class:`uvms.dynamics.identification_data.IdentificationLog`) with the regression of
-:mod:`uvms.dynamics.identification_model`: the arm's multibody effects and hydrodynamics, the rigid-body
+buoyancy to a log (:class:`uvms.dynamics.identification.data.IdentificationLog`) with the regression of
+:mod:`uvms.dynamics.identification.model`: the arm's multibody effects and hydrodynamics, the rigid-body
 inertia and the weights are known terms from the model (Pinocchio), so logs with a moving arm are usable.
 
 The fit, in four steps
 ======================
-1. **Smoothing**: Savitzky-Golay twist and accelerations (:func:`~uvms.dynamics.identification_data.smoothed_states`).
+1. **Smoothing**: Savitzky-Golay twist and accelerations (:func:`~uvms.dynamics.identification.data.smoothed_states`).
    The last ``holdout`` fraction of the log (default 20 %) is kept out of the fit, for the prediction check.
 2. **Weights**: each wrench axis is weighted by 1 / sigma_a, sigma_a the RMS residual of that axis after an
    ordinary least-squares fit, at least ``noise_floor`` (1 %) of the RMS measured force (force axes) or
    moment (moment axes): the wrench is never trusted better than that.
 3. **Identifiability**: the parameters are scaled by their scale
-   (:func:`~uvms.dynamics.identification_model.parameter_layout`) and their standard errors computed, relative to
+   (:func:`~uvms.dynamics.identification.model.parameter_layout`) and their standard errors computed, relative to
    the larger of the scale and the estimate. While the largest relative standard error exceeds
    ``max_relative_error`` (20 %), that parameter is held by its prior (the model's value, known to within its
    scale, combined with the log's estimate) and the fit is repeated, its uncertainty carried into every other
    interval: a parameter the log does not excite is reported as such, never fitted to noise, and its prior biases
-   no other parameter unseen (:mod:`uvms.dynamics.identification_fit`).
+   no other parameter unseen (:mod:`uvms.dynamics.identification.fit`).
 4. **Constrained fit**: the weighted least squares with added mass symmetric positive semi-definite, damping
    coefficients >= 0 and volume > 0 (buoyancy positive), a convex problem solved by cvxpy with Clarabel.
 
-Standard errors (:mod:`uvms.dynamics.identification_fit`): the larger of the Newey-West sandwich covariance and the
+Standard errors (:mod:`uvms.dynamics.identification.fit`): the larger of the Newey-West sandwich covariance and the
 one residuals at the noise floor would give with the samples of one window counted once. The same standard error
 decides identifiability (step 3) and gives the interval, +-1.96 standard errors (95 % under normal errors).
 
 Errors in variables: the noise of the differentiated twist enters both the added-mass columns and, through the
 known rigid-body inertia, the target, which would bias the added mass low; its expected share (from the noise
-variance the smoothing estimates, :class:`~uvms.dynamics.identification_data.SmoothedStates`) is taken out of the
-normal equations (bias-compensated least squares, :func:`~uvms.dynamics.identification_model.acceleration_noise_terms`).
+variance the smoothing estimates, :class:`~uvms.dynamics.identification.data.SmoothedStates`) is taken out of the
+normal equations (bias-compensated least squares, :func:`~uvms.dynamics.identification.model.acceleration_noise_terms`).
 """
 
 from __future__ import annotations
@@ -38,15 +38,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import IdentificationError, UVMSError
-from .hydro_parameters import HydroParameters
-from .hydrodynamics import hydrodynamics_of
-from .identification_current import CurrentEstimate, checked_current, estimate_current
-from .identification_data import IdentificationLog, smoothed_states
-from .identification_fit import PRIOR_SCALES, identifiable_fit, normal_solve
-from .identification_model import (AXES, ParameterLayout, Regression, identified_link_name, known_plant,
+from ...errors import IdentificationError, UVMSError
+from ..hydro.parameters import HydroParameters
+from ..hydro.hydrodynamics import hydrodynamics_of
+from .current import CurrentEstimate, checked_current, estimate_current
+from .data import IdentificationLog, smoothed_states
+from .fit import PRIOR_SCALES, identifiable_fit, normal_solve
+from .model import (AXES, ParameterLayout, Regression, identified_link_name, known_plant,
                                    link_from_theta, parameter_layout, regression, rigid_vehicle_mass)
-from .identification_predict import HeldOutPrediction, predict_held_out
+from .predict import HeldOutPrediction, predict_held_out
 
 #: z of a two-sided 95 % interval.
 Z95 = 1.959963984540054
@@ -68,7 +68,7 @@ class ParameterEstimate:
         relative_error: the standard error over the larger of the scale and the estimate (what identifiability
             compares with ``max_relative_error``; a held parameter's when it was held).
         scale: the parameter's scale (its prior's magnitude, at least a floor from the rigid-body mass:
-            :func:`~uvms.dynamics.identification_model.parameter_layout`).
+            :func:`~uvms.dynamics.identification.model.parameter_layout`).
     """
 
     name: str
@@ -147,7 +147,7 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
             vehicle's root link is taken as known.
         added_mass: "diagonal" (6 entries) or "full" (symmetric 6 x 6, 21 entries).
         current: (3,) the constant current [m/s], world ENU (None: the prior's): known, or where the search starts.
-        identify_current: identify the current too (:mod:`uvms.dynamics.identification_current`), reported as
+        identify_current: identify the current too (:mod:`uvms.dynamics.identification.current`), reported as
             the parameters current[x], current[y], current[z] and written into the hydrodynamics.
         window: Savitzky-Golay window [s]; polyorder: its order.
         holdout: the fraction of the log at its end kept for the prediction check, in [0, 0.5].

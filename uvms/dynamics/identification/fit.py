@@ -1,10 +1,10 @@
-"""The fit of :func:`uvms.dynamics.identification.identify`: weighted, bias-compensated least squares, parameters the
+"""The fit of :func:`uvms.dynamics.identification.identify.identify`: weighted, bias-compensated least squares, parameters the
 log does not determine held by their priors with their uncertainty carried into the others' intervals, Newey-West
 standard errors, and the constrained solution.
 
 Identifiability and the prior
 =============================
-The parameters are scaled by their scale s_k (:func:`~uvms.dynamics.identification_model.parameter_layout`),
+The parameters are scaled by their scale s_k (:func:`~uvms.dynamics.identification.model.parameter_layout`),
 x_k = theta_k / s_k. While the largest relative standard error of the parameters still free exceeds ``threshold``
 (the standard error over the larger of the scale and the estimate: a prior far too small does not hold a parameter
 the log determines well), that parameter is held and the fit is repeated without it, so a parameter the log does
@@ -33,8 +33,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import IdentificationError
-from .identification_model import ParameterLayout, Regression, acceleration_noise_terms
+from ...errors import IdentificationError
+from .model import ParameterLayout, Regression, acceleration_noise_terms
 
 INSTALL_HINT = "identification needs cvxpy and Clarabel: pip install 'uvms[identify]' (cvxpy, clarabel)"
 #: The prior's standard deviation, in units of the parameter's scale (its magnitude, or the floor of the scale), for a

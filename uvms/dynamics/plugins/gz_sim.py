@@ -1,6 +1,6 @@
 """What Gazebo Sim's plugins say about a vehicle: the Thruster, Hydrodynamics and Buoyancy systems.
 
-Registered for Gazebo Sim in :mod:`uvms.dynamics.plugin_readers`; recognised by :mod:`uvms.model.plugins`
+Registered for Gazebo Sim in :mod:`uvms.dynamics.plugins.readers`; recognised by :mod:`uvms.model.plugins`
 (``gz-sim-thruster-system``, ``gz::sim::systems::Thruster``, their ``ignition-gazebo`` names, ...). Read from
 gz-sim's sources (github.com/gazebosim/gz-sim, ``src/systems/thruster/Thruster.cc``,
 ``src/systems/hydrodynamics/Hydrodynamics.cc`` and ``HydrodynamicsUtils.hh``, ``src/systems/buoyancy/Buoyancy.hh``,
@@ -19,7 +19,7 @@ a thrust [N] (default), or a propeller speed omega [rad/s] with ``<use_angvel_cm
 
 (defaults 1, 1000 kg/m^3, 0.02 m). The limits uvms takes are that clamp: in newtons, or through that law at the
 ends of the speed range. A side the plugin leaves at its internal default (+-1000) is no limit the plugin gives:
-``thrusters.yaml`` or uvms's default completes it (:func:`uvms.dynamics.thrusters.complete_plugin_thrusters`), as
+``thrusters.yaml`` or uvms's default completes it (:func:`uvms.dynamics.thrusters.thrusters.complete_plugin_thrusters`), as
 it does the time constant, which gz's Thruster does not have (its thrust follows the command at once).
 ``<velocity_control>``, ``<topic>``, ``<namespace>``, ``<deadband>``, the PID gains and the battery tags change how
 gz spins the propeller or listens, not the thrust uvms models; the boolean tags are checked. gz's Thruster has no
@@ -35,7 +35,7 @@ no NED turn): added mass ``<xDotU>`` ... ``<nDotR>`` (all 36 ``<{x..n}Dot{U..R}>
 
     f = Ma nu_r'  +  (L + Q_abs |nu_r|) nu_r  (+ its Coriolis term)      Ma = [<xDotU> ...], L = [<xU> ...]
 
-so uvms's M_A = -Ma (made symmetric, :func:`~uvms.dynamics.hydro_parameters.symmetrized_added_mass`), d_l = -L and
+so uvms's M_A = -Ma (made symmetric, :func:`~uvms.dynamics.hydro.parameters.symmetrized_added_mass`), d_l = -L and
 d_q = -Q_abs on the diagonal: the same values negated, as from uuv_simulator's file, without its FRD turn. uvms
 damps with diagonal matrices: an off-diagonal damping tag, or a signed quadratic ``<xUU>`` (which gz warns may be
 unstable), is refused. The Coriolis term uvms applies is Fossen's -C_A(nu_r) nu_r (eq. 6.43) of the full M_A, its
@@ -59,9 +59,9 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..errors import ModelCheckError, PluginSettingWarning
-from .hydro_parameters import symmetrized_added_mass
-from .thruster_sources import PluginThruster, _float, _floats, _optional, joint_axis, thrust_limits
+from ...errors import ModelCheckError, PluginSettingWarning
+from ..hydro.parameters import symmetrized_added_mass
+from ..thrusters.sources import PluginThruster, _float, _floats, _optional, joint_axis, thrust_limits
 
 #: SNAME letters: force/moment axes and velocities, in the order [u v w p q r].
 AXES, VELOCITIES = "xyzkmn", "UVWPQR"

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import IdentificationError
-from ..model.resources import read_text
+from ...errors import IdentificationError
+from ...model.resources import read_text
 
 #: The CSV's fixed columns, in this order: time [s], position [m] (ENU), quaternion x, y, z, w (body -> world),
 #: body twist [m/s, rad/s] (FLU), body wrench [N, N m] (FLU, at the root link's origin). Then ``position:<joint>``

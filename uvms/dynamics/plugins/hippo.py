@@ -1,6 +1,6 @@
 """What HippoCampus's Gazebo plugins (``hippo_gz_plugins``) say about a vehicle: thruster, hydrodynamics, buoyancy.
 
-Registered for HippoCampus in :mod:`uvms.dynamics.plugin_readers`; recognised by their ``name`` attribute
+Registered for HippoCampus in :mod:`uvms.dynamics.plugins.readers`; recognised by their ``name`` attribute
 (``hippo_gz_plugins::thruster``, ``::hydrodynamics``, ``::buoyancy``: :mod:`uvms.model.plugins`). Read from
 github.com/HippoCampusRobotics/hippo_simulation, ``hippo_gz_plugins/src/thruster/thruster_private.{hpp,cpp}``,
 ``src/hydrodynamics/hydrodynamics.cpp``, ``src/buoyancy/buoyancy_private.cpp`` (as ``hippo_sim``'s
@@ -47,8 +47,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from ..errors import ModelCheckError
-from .thruster_sources import PluginThruster, _floats, _optional, joint_axis, thrust_limits
+from ...errors import ModelCheckError
+from ..thrusters.sources import PluginThruster, _floats, _optional, joint_axis, thrust_limits
 
 
 def read_hippo_thruster(plugin: ET.Element, root: ET.Element, name: str, where: str) -> PluginThruster:

@@ -3,10 +3,10 @@
 Model
 =====
 The vehicle is passive here (its thrusters, when it has some, add a body wrench B f on the
-vehicle: :mod:`uvms.dynamics.actuated`): the joints are actuated, and each
+vehicle: :mod:`uvms.dynamics.plant.actuated`): the joints are actuated, and each
 follows its commanded velocity through a first-order motor, qdd_m = (u - qd_m) / tau
 (the joint servo of amundsen2018, tau = 100 ms). Every link l may carry Fossen's
-hydrodynamics (:mod:`uvms.dynamics.hydrodynamics`), written in its own frame with nu_l = J_l v
+hydrodynamics (:mod:`uvms.dynamics.hydro.hydrodynamics`), written in its own frame with nu_l = J_l v
 its body twist (Pinocchio ``LOCAL``), nu_c = [R_l^T v_c; 0] the ocean current and
 nu_r = nu_l - nu_c::
 
@@ -53,7 +53,7 @@ refuse mimic joints, so the plant calls none of them: the kinetic energy is 1/2 
 -m g . c from the centre of mass (:func:`weight_potential`).
 
 The links on the model, M_A in the mass matrix, C_A and the GJM of the augmented
-momentum live in :mod:`uvms.dynamics.added_mass` (importable from here too).
+momentum live in :mod:`uvms.dynamics.plant.added_mass` (importable from here too).
 """
 
 from __future__ import annotations
@@ -63,12 +63,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError
+from ...errors import UVMSError
 from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
-from .hydrodynamics import HydroParameters, hydrodynamics_of
-from ..robot.robot import Robot, check_robot
-from ..robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
-from .plant_system import Command, PlantSystem
+from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
+from ...robot.robot import Robot, check_robot
+from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
+from .system import Command, PlantSystem
 
 
 
@@ -241,7 +241,7 @@ class Plant:
             pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
             pin.computeJointJacobians(model, data)
         if stacked.count:
-            from ..numerics._kernels.hydro import hydro_terms_into  # numba: loaded when a plant first runs
+            from ...numerics._kernels.hydro import hydro_terms_into  # numba: loaded when a plant first runs
 
             joints = stacked.joints
             hydro_terms_into(np.array([pin.getFrameJacobian(model, data, frame, LOCAL) for frame in stacked.frames]),

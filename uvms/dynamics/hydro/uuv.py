@@ -1,8 +1,8 @@
 """uuv_simulator's underwater-object plugin (``libuuv_underwater_object_ros_plugin.so``) read as model data: one
-``<link>`` entry to a :class:`~uvms.dynamics.hydro_parameters.LinkHydrodynamics` (:func:`link_from_uuv`), the
-reader of uuv_simulator registered in :mod:`uvms.dynamics.plugin_readers`; the same keys make uvms's
-``hydrodynamics.yaml`` (:func:`uvms.dynamics.hydrodynamics.load_hydrodynamics_yaml`). The form and its conventions
-(uuv_simulator's ``HMFossen``, ``HydrodynamicModel.cc``): :mod:`uvms.dynamics.hydrodynamics`.
+``<link>`` entry to a :class:`~uvms.dynamics.hydro.parameters.LinkHydrodynamics` (:func:`link_from_uuv`), the
+reader of uuv_simulator registered in :mod:`uvms.dynamics.plugins.readers`; the same keys make uvms's
+``hydrodynamics.yaml`` (:func:`uvms.dynamics.hydro.hydrodynamics.load_hydrodynamics_yaml`). The form and its conventions
+(uuv_simulator's ``HMFossen``, ``HydrodynamicModel.cc``): :mod:`uvms.dynamics.hydro.hydrodynamics`.
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ..errors import ModelCheckError
-from .hydro_parameters import LinkHydrodynamics, flip_frd_flu, symmetrized_added_mass
-from .hydro_shapes import BOX_KEYS, SHAPE_KEYS, SHAPE_TYPES, shape_coefficients
+from ...errors import ModelCheckError
+from .parameters import LinkHydrodynamics, flip_frd_flu, symmetrized_added_mass
+from .shapes import BOX_KEYS, SHAPE_KEYS, SHAPE_TYPES, shape_coefficients
 
 #: Hydrodynamic model types understood: uuv_simulator's.
 MODEL_TYPES = ("fossen",) + SHAPE_TYPES

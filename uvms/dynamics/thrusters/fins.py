@@ -2,9 +2,9 @@
 
 A fin is a plugin of the model file (:mod:`uvms.model.control_surfaces`): uuv_simulator's fin plugin or Gazebo Sim's
 LiftDrag, on a link that a revolute joint turns. uvms freezes the joint in the kinematics (class ``fin``) and makes
-its angle an actuator of the actuated plant (:class:`uvms.dynamics.actuated.ActuatedPlant`): a first-order lag
+its angle an actuator of the actuated plant (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`): a first-order lag
 delta' = (sat(delta_cmd) - delta) / time_constant within the joint's limits, and the plugin's lift and drag
-(:mod:`uvms.dynamics.lift_drag`) at the link turned by delta, fixed to the vehicle body.
+(:mod:`uvms.dynamics.thrusters.lift_drag`) at the link turned by delta, fixed to the vehicle body.
 
 What is read (uuv_simulator: ``uuv_gazebo_plugins/src/FinPlugin.cc``; Gazebo Sim: ``src/systems/lift_drag/LiftDrag.cc``):
 
@@ -13,7 +13,7 @@ What is read (uuv_simulator: ``uuv_gazebo_plugins/src/FinPlugin.cc``; Gazebo Sim
   ``cda``, ``cda_stall``; every one required, as the plugin requires them), ``<dynamics>`` (``FirstOrder``:
   ``timeConstant``). The angle command is clipped to the joint's limits (as ``FinPlugin::OnUpdate``). The velocity
   is the water's relative to the link (``current_velocity_topic``: the plant's current).
-* Gazebo Sim: ``<link_name>`` and the tags of :class:`uvms.dynamics.lift_drag.GzLiftDrag` with its defaults,
+* Gazebo Sim: ``<link_name>`` and the tags of :class:`uvms.dynamics.thrusters.lift_drag.GzLiftDrag` with its defaults,
   ``<control_joint_name>``. It has no dynamics of its own (a joint controller turns the fin): the time constant is
   :data:`DEFAULT_TIME_CONSTANT` with a :class:`~uvms.errors.FinDefaultWarning`. Gazebo subtracts only a wind from the
   link's velocity, so the ocean current does not enter.
@@ -32,13 +32,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from ..errors import FinDefaultWarning, ModelCheckError
-from ..model.control_surfaces import fin_joint, fin_plugins, text
-from .added_mass import _cross
+from ...errors import FinDefaultWarning, ModelCheckError
+from ...model.control_surfaces import fin_joint, fin_plugins, text
+from ..plant.added_mass import _cross
 from .lift_drag import GzLiftDrag, UUVQuadratic, UUVTwoLines, gz_wrench, uuv_force
 
 if TYPE_CHECKING:
-    from ..robot.robot import Robot
+    from ...robot.robot import Robot
 
 #: [s] the time constant of a fin whose plugin gives none (Gazebo Sim's LiftDrag; a uuv fin plugin without FirstOrder
 #: dynamics): a hobby/AUV servo turning 20 degrees in about 0.1 s.
@@ -63,7 +63,7 @@ class Fin:
         name: its plugin's name (a Gazebo Sim LiftDrag's link: gz names each by its class); kind: ``uuv_fin`` or
             ``gz_lift_drag``; link: the link the force acts on.
         joint: the joint that turns it, or None (a fixed lifting surface).
-        model: the lift-and-drag parameters (:mod:`uvms.dynamics.lift_drag`).
+        model: the lift-and-drag parameters (:mod:`uvms.dynamics.thrusters.lift_drag`).
         lower, upper: the angle's range [rad] (the joint's limits; 0, 0 for a fixed surface).
         held: the angle [rad] the kinematic model holds the joint at (0, or the limit nearest).
         time_constant: tau [s] of delta' = (delta_cmd - delta) / tau.

@@ -1,4 +1,4 @@
-"""A constant ocean current identified with the vehicle's parameters (:func:`uvms.dynamics.identification.identify`
+"""A constant ocean current identified with the vehicle's parameters (:func:`uvms.dynamics.identification.identify.identify`
 with ``identify_current``).
 
 The current v_c (3,) [m/s, world ENU] enters the equations of motion through the relative twist
@@ -10,7 +10,7 @@ in v_c. Variable projection: v_c minimises the residual left by the least-square
 solved by ``scipy.optimize.least_squares`` (trust region, finite-difference Jacobian in v_c) on every
 :data:`STRIDE`-th sample of the smoothed log (the smoothing window correlates neighbours anyway). W weights each axis
 by 1 / the RMS of its measured wrench. The parameters are then fitted on every sample with v_c held (the four
-steps of :mod:`uvms.dynamics.identification`). The current's standard error is that of the Gauss-Newton
+steps of :mod:`uvms.dynamics.identification.identify`). The current's standard error is that of the Gauss-Newton
 linearisation at the optimum, theta and v_c together, the residual variance from the fit: the current is
 identifiable when the vehicle turns (the current's direction in the body axes changes) and moves at several speeds.
 """
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import IdentificationError
-from .identification_data import SmoothedStates
-from .identification_model import ParameterLayout, Regression
+from ...errors import IdentificationError
+from .data import SmoothedStates
+from .model import ParameterLayout, Regression
 
 #: Every STRIDE-th sample enters the search for the current.
 STRIDE = 4

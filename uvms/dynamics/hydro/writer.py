@@ -1,4 +1,4 @@
-"""Hydrodynamic parameters written as the YAML file that :func:`uvms.dynamics.hydrodynamics.load_hydrodynamics_yaml`
+"""Hydrodynamic parameters written as the YAML file that :func:`uvms.dynamics.hydro.hydrodynamics.load_hydrodynamics_yaml`
 reads: the inverse of that reader, in the file's uuv_simulator conventions (SNAME axes for the added mass and
 damping, Fossen's negative derivatives, the centre of buoyancy in the link frame).
 
@@ -13,7 +13,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from .hydro_parameters import HydroParameters, LinkHydrodynamics, flip_frd_flu
+from .parameters import HydroParameters, LinkHydrodynamics, flip_frd_flu
 
 
 def _number(value: float) -> str:
