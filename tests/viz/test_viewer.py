@@ -22,7 +22,7 @@ from conftest import MISSING_MESH, shipped
 from PIL import Image
 
 import uvms
-from uvms.viz import teach
+from uvms.viz.viewer import teach
 from uvms.viz import viewer
 from uvms.cli import main
 
@@ -293,7 +293,7 @@ def test_a_panel_slider_moves_the_robot_and_its_end_effector_triads():
 @pytest.mark.parametrize("name", ["bluerov2_alpha5", "hoang2011", "xiang2019"])
 def test_the_camera_is_framed_on_the_robot_over_a_seabed_below_it(name):
     pytest.importorskip("viser")
-    from uvms.viz.viewer_scene import FOV, MIN_ASPECT, bounding_box, box_corners
+    from uvms.viz.viewer.scene import FOV, MIN_ASPECT, bounding_box, box_corners
 
     robot = shipped(name)
     with viewer.Viewer(robot, port=PORT) as shown:
@@ -334,7 +334,7 @@ def test_the_time_slider_shows_frame_k_and_play_pause_drive_the_run(rng):
             np.testing.assert_array_equal(shown.q, qs[k])
             assert shown.teach.sliders["base_x"].value == pytest.approx(0.2 * k)
         # the whole run is framed: the box of every configuration is inside the camera's target box
-        from uvms.viz.viewer_scene import bounding_box
+        from uvms.viz.viewer.scene import bounding_box
 
         lower, upper = bounding_box(robot, shown.visualizer.visual_model, qs)
         np.testing.assert_allclose(shown.server.initial_camera.look_at, (lower + upper) / 2)

@@ -28,7 +28,7 @@ viser = pytest.importorskip("viser")
 from websockets.sync.client import connect  # noqa: E402  (viser's own dependency)
 
 from uvms.viz import viewer  # noqa: E402
-from uvms.viz.viewer_scene import bounding_box, box_corners  # noqa: E402
+from uvms.viz.viewer.scene import bounding_box, box_corners  # noqa: E402
 
 PORT = 18380
 WINDOW = (900, 600)  # [px]

@@ -15,7 +15,7 @@ from uvms.robot.configuration import Configuration
 from uvms.tasks.objectives import SelfCollision
 from uvms.viz import viewer
 from uvms.viz.collision_shapes import geometry_meshes
-from uvms.viz.viewer_collision import COLLISION_COLOUR, viewer_collision_model
+from uvms.viz.viewer.collision import COLLISION_COLOUR, viewer_collision_model
 
 FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"
 PORT = 18280

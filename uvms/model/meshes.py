@@ -1,6 +1,6 @@
 """Mesh files of a model: which ones uvms loads, and the URDF with every mesh URI made an absolute path.
 
-The viewer (:mod:`uvms.viz.viewer_geometry`) and the collision geometry (:mod:`uvms.model.collision`) read the
+The viewer (:mod:`uvms.viz.viewer.geometry`) and the collision geometry (:mod:`uvms.model.collision`) read the
 meshes of a URDF through :func:`resolved_urdf`: mesh URIs resolved as :func:`uvms.load` does (``package://``
 through the packages the robot was loaded with, ``robot.packages``, :mod:`uvms.model.packages`). A mesh is a
 stranger's file too: only regular files of the formats of :data:`MESH_FORMATS`, at most :data:`MAX_MESH_BYTES` each,

@@ -1,6 +1,6 @@
 """Collision shapes as triangle meshes, and the closest pair of each collision objective, for the drawings.
 
-What :mod:`uvms.viz.collision_drawing` (matplotlib) and the browser viewer (:mod:`uvms.viz.viewer_geometry`) show
+What :mod:`uvms.viz.collision_drawing` (matplotlib) and the browser viewer (:mod:`uvms.viz.viewer.geometry`) show
 of the collision geometry the objectives check (:func:`uvms.model.collision.collision_geometry`: boxes, spheres,
 cylinders, capsules, meshes as their convex hulls): every shape is convex, so it is drawn as the convex hull of
 points on its surface (coal's Qhull): a box's 8 corners, a cylinder's two rings of :data:`RING_POINTS`, a sphere's

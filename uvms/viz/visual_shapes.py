@@ -1,7 +1,7 @@
 """The model's geometry for the headless drawings (:mod:`uvms.viz.drawing`, ``uvms view --headless``): its
 ``<visual>`` geometry as triangle meshes, the vehicle's box and its size.
 
-The geometry is what the browser viewer shows (:func:`uvms.viz.viewer_geometry.visual_geometry`: the URDF's
+The geometry is what the browser viewer shows (:func:`uvms.viz.viewer.geometry.visual_geometry`: the URDF's
 visuals, mesh URIs resolved as :func:`uvms.load` does, missing or refused meshes left out with a warning). A mesh
 is drawn as its own triangles (not its hull: a vehicle's frame stays a frame); a primitive (box, cylinder,
 sphere) as the hull of points on its surface (:func:`uvms.viz.collision_shapes.shape_mesh`). matplotlib draws a
@@ -69,11 +69,11 @@ def visual_meshes(robot: Robot, budget: int = MAX_DRAWN_TRIANGLES) -> list[Shape
     (module docstring); empty for a model without visuals.
 
     Warns:
-        MissingMeshWarning, GeometryWarning: as :func:`uvms.viz.viewer_geometry.visual_geometry`.
+        MissingMeshWarning, GeometryWarning: as :func:`uvms.viz.viewer.geometry.visual_geometry`.
     """
     import coal  # shipped with the pin wheel
 
-    from .viewer_geometry import visual_geometry
+    from .viewer.geometry import visual_geometry
 
     meshes = []
     for item in visual_geometry(robot).geometryObjects:

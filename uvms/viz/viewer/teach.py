@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..robot.bases import BASE_TYPES
-from ..errors import TeachUnavailable, UVMSError
-from ..robot.robot import Robot
-from .labels import joint_unit
+from ...robot.bases import BASE_TYPES
+from ...errors import TeachUnavailable, UVMSError
+from ...robot.robot import Robot
+from ..labels import joint_unit
 
 INSTALL_HINT = "the teach panel needs ipywidgets: `pip install uvms[viz]`"
 #: Slider names of the vehicle pose, by base type: position [m], then angles [rad].
@@ -136,7 +136,7 @@ def picture_png(robot: Robot, q: np.ndarray, plane: str | None, size: float = 5.
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .drawing import draw_configuration
+    from ..drawing import draw_configuration
 
     figure = Figure(figsize=(size, size))
     canvas = FigureCanvasAgg(figure)
@@ -169,7 +169,7 @@ def teach(robot: Robot, q: np.ndarray | None = None, *, plane: str | None = "aut
     try:
         import ipywidgets as widgets
     except ImportError:
-        raise TeachUnavailable(f"{INSTALL_HINT}; without widgets, use uvms.viz.teach.teach_state(robot, values)") from None
+        raise TeachUnavailable(f"{INSTALL_HINT}; without widgets, use uvms.viz.viewer.teach.teach_state(robot, values)") from None
     import html
 
     start = robot.neutral() if q is None else robot.check_configuration(q)

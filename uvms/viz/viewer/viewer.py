@@ -5,15 +5,15 @@ URL on the same machine (or through an SSH tunnel, ``ssh -L 8080:127.0.0.1:8080 
 loopback does not stop a web page in the same browser from reaching it, so every request must name the
 viewer: its Host must be ``127.0.0.1:PORT``, ``localhost:PORT`` or ``[::1]:PORT`` and its Origin, if any (a
 browser's WebSocket always sends one), ``http://`` one of those; anything else is answered 403
-(:func:`~uvms.viz.viewer_gui.request_refusal`). The values a page sends are clamped to the sliders' ranges.
+(:func:`~uvms.viz.viewer.gui.request_refusal`). The values a page sends are clamped to the sliders' ranges.
 
 The page opens with the camera framed on the robot, a seabed grid under it and a triad on every end
 effector; its panel is the teach panel (sliders for the vehicle pose and every arm joint, moving the robot
 live, and the end-effector poses) and, for a run, a time slider with play and pause. The geometry is the
-URDF's visuals, or a stick skeleton for a model without any (:mod:`uvms.viz.viewer_geometry`); the camera,
-seabed and triads are in :mod:`uvms.viz.viewer_scene`, the panel in :mod:`uvms.viz.viewer_gui`; the collision
+URDF's visuals, or a stick skeleton for a model without any (:mod:`uvms.viz.viewer.geometry`); the camera,
+seabed and triads are in :mod:`uvms.viz.viewer.scene`, the panel in :mod:`uvms.viz.viewer.gui`; the collision
 shapes (the panel's "Collision shapes" checkbox) and the closest pairs of collision objectives
-(:meth:`Viewer.mark_closest`) in :mod:`uvms.viz.viewer_collision`.
+(:meth:`Viewer.mark_closest`) in :mod:`uvms.viz.viewer.collision`.
 
 Without the extra, :mod:`uvms.viz.drawing` draws the same configurations headless (``uvms view --headless OUT``).
 """
@@ -28,16 +28,16 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError, ViewerInputError, ViewerUnavailable
-from ..robot.robot import Robot
-from ..numerics.validate import finite_array, time_vector
-from ..tasks.objectives.collision import NearestPairs
-from .collision_shapes import ClosestPairs
-from .drawing import as_configurations
-from .viewer_collision import CollisionControls
-from .viewer_geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, skeleton_geometry
-from .viewer_gui import Playback, TeachControls, guarded_servers, request_refusal
-from .viewer_scene import (EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box,
+from ...errors import UVMSError, ViewerInputError, ViewerUnavailable
+from ...robot.robot import Robot
+from ...numerics.validate import finite_array, time_vector
+from ...tasks.objectives.collision import NearestPairs
+from ..collision_shapes import ClosestPairs
+from ..drawing import as_configurations
+from .collision import CollisionControls
+from .geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, skeleton_geometry
+from .gui import Playback, TeachControls, guarded_servers, request_refusal
+from .scene import (EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box,
                            framing)
 
 __all__ = ["EE_COLOUR", "SKELETON_COLOUR", "Viewer", "ViewerUnavailable", "check_port", "geometry_models", "play",
@@ -131,8 +131,8 @@ class Viewer:
         robot: the robot shown; visualizer: the ViserVisualizer; server: the ``viser.ViserServer``.
         q: the configuration shown (nq,). teach: the panel's sliders (:class:`TeachControls`).
         playback: the run's controls (:class:`Playback`), None before :meth:`play`. scene_frame: the
-        camera and seabed (:class:`~uvms.viz.viewer_scene.Framing`). collision: the collision shapes' checkbox
-        and closest-pair segments (:class:`~uvms.viz.viewer_collision.CollisionControls`); closest: the
+        camera and seabed (:class:`~uvms.viz.viewer.scene.Framing`). collision: the collision shapes' checkbox
+        and closest-pair segments (:class:`~uvms.viz.viewer.collision.CollisionControls`); closest: the
         objectives marked (:meth:`mark_closest`), None: none.
     """
 

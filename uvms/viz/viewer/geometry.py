@@ -17,10 +17,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import GeometryWarning, MissingMeshWarning
-from ..model.meshes import missing_meshes_note, resolved_urdf
-from ..robot.robot import Robot
-from .viewer_collision import viewer_collision_model
+from ...errors import GeometryWarning, MissingMeshWarning
+from ...model.meshes import missing_meshes_note, resolved_urdf
+from ...robot.robot import Robot
+from .collision import viewer_collision_model
 
 SKELETON_COLOUR = np.array([0.35, 0.35, 0.4, 1.0])
 EE_COLOUR = np.array([1.0, 0.5, 0.05, 1.0])
@@ -85,7 +85,7 @@ def geometry_models(robot: Robot, skeleton: bool | None = None) -> tuple[pin.Geo
 
     Returns:
         The visual model (URDF visuals, plus the skeleton) and the collision model (the shapes the collision
-        objectives check, :func:`uvms.viz.viewer_collision.viewer_collision_model`; hidden by the viewer unless
+        objectives check, :func:`uvms.viz.viewer.collision.viewer_collision_model`; hidden by the viewer unless
         asked).
 
     Warns:

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..robot.robot import Robot
+from ...robot.robot import Robot
 
 #: Camera direction (world, from the look-at point towards the camera): front-right, above.
 VIEW_DIRECTION = np.array([1.0, -1.1, 0.65])

@@ -3,7 +3,7 @@ what a page may do: who may connect (:func:`request_refusal`, checked on every r
 :func:`guarded_servers`) and the values it may set (clamped to the sliders' ranges, finite).
 
 The slider ranges and the configuration of slider values are those of the notebook teach panel
-(:func:`uvms.viz.teach.sliders`, :func:`uvms.viz.teach.teach_state`): one implementation for both.
+(:func:`uvms.viz.viewer.teach.sliders`, :func:`uvms.viz.viewer.teach.teach_state`): one implementation for both.
 
 viser calls every callback synchronously when Python assigns a value, and in its thread pool when a page
 changes one; a thread-local flag tells the two apart, so showing a configuration on the sliders never
@@ -23,9 +23,9 @@ from collections.abc import Callable, Iterator, Mapping
 import numpy as np
 import pinocchio as pin
 
-from ..errors import UVMSError
-from ..io.progress import tqdm
-from ..robot.robot import Robot
+from ...errors import UVMSError
+from ...io.progress import tqdm
+from ...robot.robot import Robot
 from . import teach
 
 #: Panel order of the groups (smallest first).
@@ -132,7 +132,7 @@ class TeachControls:
 
     Attributes:
         sliders: {slider name (``base_x``... or joint name): viser slider handle}.
-        specs: {slider name: :class:`uvms.viz.teach.Slider`} at the start.
+        specs: {slider name: :class:`uvms.viz.viewer.teach.Slider`} at the start.
         ranges: {slider name: (lower, upper)} the slider values are clamped to (a page can send any number):
             the joint limits, the vehicle's range (widened when the robot is shown beyond it).
     """

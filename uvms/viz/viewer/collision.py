@@ -16,10 +16,10 @@ import numpy as np
 import pinocchio as pin
 from matplotlib.colors import to_rgb
 
-from ..errors import GeometryWarning, ModelCheckError
-from ..model.collision import collision_geometry
-from ..robot.robot import Robot
-from .collision_shapes import ClosestPair, shape_mesh
+from ...errors import GeometryWarning, ModelCheckError
+from ...model.collision import collision_geometry
+from ...robot.robot import Robot
+from ..collision_shapes import ClosestPair, shape_mesh
 
 #: RGBA of the collision shapes in the viewer.
 COLLISION_COLOUR = np.array([0.1, 0.65, 0.85, 0.35])
