@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from uvms.scenario.sweep import METRICS, sweep
+from uvms.scenario.studies.sweep import METRICS, sweep
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -18,7 +18,7 @@ from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.identification.data import log_csv_text
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.io import outputs
-from uvms.scenario.rosbag import write_bag
+from uvms.scenario.bags.writer import write_bag
 
 
 @pytest.fixture(scope="module")

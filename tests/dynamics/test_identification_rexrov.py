@@ -12,9 +12,9 @@ from conftest import ROOT
 
 import uvms
 from uvms.dynamics.identification.identify import identify
-from uvms.scenario.bag_reader import read_bag
+from uvms.scenario.bags.reader import read_bag
 from uvms.scenario.excitation import ExcitationControl, excitation_run, multisine
-from uvms.scenario.rosbag import write_bag
+from uvms.scenario.bags.writer import write_bag
 
 FIXTURE = ROOT / "tests" / "fixtures" / "rexrov_like" / "rexrov_like.urdf"
 #: RMS body wrench [N, N m]: heave strongest (its linear damping, 728 N s/m, hides the quadratic one at low speed);

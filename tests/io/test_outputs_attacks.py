@@ -24,7 +24,7 @@ from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import RunFolderError
 from uvms.scenario import run_scenario
-from uvms.scenario.sweep import SweepError, SweepResult, sweep
+from uvms.scenario.studies.sweep import SweepError, SweepResult, sweep
 
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps
 HOANG = ROOT / "scenarios" / "hoang2011_w1.toml"  # 9,500 RK4 steps: several seconds
@@ -153,7 +153,7 @@ def test_workspace_never_deletes_its_model(tmp_path, capsys):
 
 
 def test_a_bag_folder_needs_the_manifest(tmp_path):
-    from uvms.scenario.rosbag import write_bag
+    from uvms.scenario.bags.writer import write_bag
 
     pytest.importorskip("rosbags")
     result = run_scenario(SANTOS, out=tmp_path / "run", overrides=NO_FIGURES, progress=False)
@@ -242,7 +242,7 @@ def test_sweep_workers_are_capped_by_points_and_cores(tmp_path, monkeypatch):
     monkeypatch.setattr(joblib, "Parallel", recording)
     result = sweep(SANTOS, ["solver.gain=[0.5, 1.0]"], jobs=16, out=tmp_path / "s", progress=False)
     assert not result.failed and asked == [min(2, os.cpu_count() or 1)]
-    from uvms.scenario.parallel import worker_count
+    from uvms.scenario.studies.parallel import worker_count
 
     assert worker_count(16, 2) == min(2, os.cpu_count() or 1) and worker_count(-1, 10**4) == (os.cpu_count() or 1)
     assert worker_count(1, 5) == 1 and worker_count(16, 2, remote=True) == 2 and worker_count(-1, 2, remote=True) == -1

@@ -1,4 +1,4 @@
-"""A stranger's bag checked before rosbags reads it (uvms.scenario.bag_limits, through read_bag): decompression
+"""A stranger's bag checked before rosbags reads it (uvms.scenario.bags.limits, through read_bag): decompression
 bombs, compressed bags, message counts, an oversized metadata.yaml, a FIFO for a storage file, SQLite views and a
 bag's own definition of a standard message. The bags are a few messages written with rosbags' writer."""
 
@@ -19,9 +19,10 @@ from rosbags.rosbag2 import CompressionFormat, CompressionMode, StoragePlugin, W
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from uvms.errors import IdentificationError
-from uvms.scenario import bag_limits, bag_reader
-from uvms.scenario.bag_reader import read_bag
-from uvms.scenario.rosbag import Messages
+from uvms.scenario.bags import limits as bag_limits
+from uvms.scenario.bags import reader as bag_reader
+from uvms.scenario.bags.reader import read_bag
+from uvms.scenario.bags.writer import Messages
 
 ROOT = Path(__file__).resolve().parents[2]
 STORE = get_typestore(Stores.ROS2_HUMBLE)
@@ -82,8 +83,8 @@ def in_child(code: str) -> str:
 
 READ_IN_CHILD = """
 from uvms.errors import IdentificationError
-from uvms.scenario.bag_reader import read_bag
-from uvms.scenario.rosbag import Messages
+from uvms.scenario.bags.reader import read_bag
+from uvms.scenario.bags.writer import Messages
 try:
     read_bag({path!r}, arm_joints=())
 except IdentificationError as exc:

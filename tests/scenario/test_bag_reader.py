@@ -1,4 +1,4 @@
-"""A ROS 2 bag read back for identification (uvms.scenario.bag_reader): what write_bag wrote, and bad bags."""
+"""A ROS 2 bag read back for identification (uvms.scenario.bags.reader): what write_bag wrote, and bad bags."""
 
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ from conftest import shipped
 
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import IdentificationError
-from uvms.scenario.bag_reader import read_bag
+from uvms.scenario.bags.reader import read_bag
 from uvms.scenario.excitation import excitation_run, log_of_run, multisine
-from uvms.scenario.rosbag import write_bag
+from uvms.scenario.bags.writer import write_bag
 
 
 @functools.lru_cache(maxsize=None)

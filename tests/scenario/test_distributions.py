@@ -1,4 +1,4 @@
-"""The distributions of `uvms study` (uvms.scenario.distributions): parsing as data, moments, truncation, seeds."""
+"""The distributions of `uvms study` (uvms.scenario.studies.distributions): parsing as data, moments, truncation, seeds."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from uvms.errors import StudyError
-from uvms.scenario.distributions import FORMS, parse_sample, parse_samples, sample_table, trial_seeds
+from uvms.scenario.studies.distributions import FORMS, parse_sample, parse_samples, sample_table, trial_seeds
 
 N = 10_000  # standard errors about 1 % of sigma: tolerances of 4 of them
 

@@ -16,7 +16,7 @@ from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.identification.identify import identify
 from uvms.errors import ScenarioError
-from uvms.scenario.bag_reader import read_bag
+from uvms.scenario.bags.reader import read_bag
 from uvms.scenario.build import build
 from uvms.scenario.excitation import log_of_run, multisine
 from uvms.scenario.runs import run_scenario

@@ -1,4 +1,4 @@
-"""The executor of sweeps and studies (uvms.scenario.parallel): remote Dask schedulers that are not tls:// only when
+"""The executor of sweeps and studies (uvms.scenario.studies.parallel): remote Dask schedulers that are not tls:// only when
 the user says so, and a scheduler that stays silent or speaks another protocol ends the command within the
 timeout, in one line."""
 
@@ -17,9 +17,9 @@ import pytest
 from conftest import SCENARIOS
 from uvms.cli import main
 from uvms.errors import StudyError, SweepError
-from uvms.scenario import parallel
-from uvms.scenario.study import study
-from uvms.scenario.sweep import sweep
+from uvms.scenario.studies import parallel
+from uvms.scenario.studies.study import study
+from uvms.scenario.studies.sweep import sweep
 
 SCENARIO = SCENARIOS / "santos2006_task_priority.toml"
 GRID = ["solver.gain=0.5:1.5:2"]

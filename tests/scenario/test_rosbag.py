@@ -1,4 +1,4 @@
-"""ROS 2 files out (uvms.scenario.rosbag): a run written as a rosbag2 (MCAP) with rosbags, read back with rosbags."""
+"""ROS 2 files out (uvms.scenario.bags.writer): a run written as a rosbag2 (MCAP) with rosbags, read back with rosbags."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from rosbags.typesys import Stores, get_typestore
 import uvms
 from conftest import FIXED_ARM, SCENARIOS, shipped
 from uvms.errors import BagExportError, RunFolderError
-from uvms.scenario.rosbag import write_bag
+from uvms.scenario.bags.writer import write_bag
 from uvms.scenario import run_scenario
 from uvms.sim import PlantSeries, simulate
 from uvms.tasks.frame import FrameTask

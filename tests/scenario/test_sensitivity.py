@@ -1,4 +1,4 @@
-"""The numbers of a study's summary (uvms.scenario.sensitivity): Wilson interval, percentiles, Spearman ranking."""
+"""The numbers of a study's summary (uvms.scenario.studies.sensitivity): Wilson interval, percentiles, Spearman ranking."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from uvms.scenario.sensitivity import correlation_ratio, pass_rate, percentiles, sensitivity, spearman
+from uvms.scenario.studies.sensitivity import correlation_ratio, pass_rate, percentiles, sensitivity, spearman
 
 
 @pytest.mark.parametrize(("passed", "trials"), [(8, 10), (0, 12), (64, 64), (37, 64)])

@@ -1,4 +1,4 @@
-"""`uvms study` (uvms.scenario.study): one table on any backend and worker count, resume after SIGKILL, failed and
+"""`uvms study` (uvms.scenario.studies.study): one table on any backend and worker count, resume after SIGKILL, failed and
 killed trials, sensitivity, refused folders and bad input before any trial."""
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import pytest
 from conftest import SCENARIOS, uvms_command, wait_for
 from uvms.errors import StudyError, StudyResumeWarning, UVMSError
 from uvms.scenario import ScenarioError
-from uvms.scenario import study as study_module
-from uvms.scenario.study import study
+from uvms.scenario.studies import study as study_module
+from uvms.scenario.studies.study import study
 
 SCENARIO = SCENARIOS / "hoang2011_w1.toml"
 SHORT = ["trajectory.duration=10", "trajectory.accel_time=2"]  # 500 steps
@@ -182,7 +182,7 @@ def test_a_failed_trial_is_recorded_and_the_study_goes_on(tmp_path):
 def crashing_trial(scenario, index, *arguments):
     """Trial 1 kills its worker process when its run starts (after its marker); the others run as usual."""
     from uvms.scenario import runs
-    from uvms.scenario import study as module  # in a worker: not monkeypatched
+    from uvms.scenario.studies import study as module  # in a worker: not monkeypatched
 
     if index == 1:  # in this worker only, which dies with it
         runs.run_scenario = lambda *args, **kwargs: os._exit(3)

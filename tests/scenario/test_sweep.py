@@ -1,4 +1,4 @@
-"""`uvms sweep` (uvms.scenario.sweep): the same table with 1 and 2 loky jobs and on a local Dask cluster, failures,
+"""`uvms sweep` (uvms.scenario.studies.sweep): the same table with 1 and 2 loky jobs and on a local Dask cluster, failures,
 bad input."""
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from conftest import SCENARIOS
 from uvms import UVMSError
 from uvms.cli import main
 from uvms.scenario import ScenarioError
-from uvms.scenario.parallel import dask_client
-from uvms.scenario.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
+from uvms.scenario.studies.parallel import dask_client
+from uvms.scenario.studies.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
 
 SCENARIO = SCENARIOS / "santos2006_task_priority.toml"  # 100 Euler steps
 GRID = ["solver.gain=0.5:1.5:2", "model.args.l1=1.5:2.0:2"]  # l1 moves the start; the gain the tracking

@@ -1,4 +1,4 @@
-"""A log's thruster topics as the body wrench (uvms.scenario.thrust_log, read_bag(..., thrust=...)): the thrusts
+"""A log's thruster topics as the body wrench (uvms.scenario.bags.thrust_log, read_bag(..., thrust=...)): the thrusts
 uvms run --bag writes, or thrust commands through the thrusters' limits and lag, mapped by the allocation matrix."""
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ from conftest import excitation, shipped
 from uvms.dynamics.identification.identify import identify
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import IdentificationError
-from uvms.scenario.bag_reader import read_bag
-from uvms.scenario.rosbag import write_bag
-from uvms.scenario.thrust_log import SETTLING, thrust_input
+from uvms.scenario.bags.reader import read_bag
+from uvms.scenario.bags.writer import write_bag
+from uvms.scenario.bags.thrust_log import SETTLING, thrust_input
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""`uvms tune` (uvms.scenario.tune): Optuna finds a known optimum; outputs; bad input before any trial."""
+"""`uvms tune` (uvms.scenario.studies.tune): Optuna finds a known optimum; outputs; bad input before any trial."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import pytest
 import uvms
 from conftest import ROOT
 from uvms.errors import StudyError
-from uvms.scenario.tune import parse_parameter, toml_fragment, tune
+from uvms.scenario.studies.tune import parse_parameter, toml_fragment, tune
 
 pytest.importorskip("optuna")
 ARM = [0.5, 0.8, 0.6]

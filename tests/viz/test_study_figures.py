@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import struct
 
-from uvms.scenario.sensitivity import summarize
+from uvms.scenario.studies.sensitivity import summarize
 from uvms.viz.labels import plain_text
 from uvms.viz.study import save_study_figures, save_tune_history
 

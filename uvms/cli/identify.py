@@ -1,6 +1,6 @@
 """``uvms identify LOG --model MODEL``: the vehicle's hydrodynamic parameters identified from a log.
 
-LOG is a rosbag2 folder (MCAP or sqlite3: :mod:`uvms.scenario.bag_reader`) or a CSV file
+LOG is a rosbag2 folder (MCAP or sqlite3: :mod:`uvms.scenario.bags.reader`) or a CSV file
 (:data:`uvms.dynamics.identification.data.CSV_COLUMNS`). Writes into the output folder (replaced as a whole):
 
 - ``hydrodynamics.yaml``: the model's hydrodynamics with the vehicle's identified, in the form
@@ -23,7 +23,7 @@ from .terminal import say
 
 def add_identify_parser(commands: argparse._SubParsersAction, add_package_path) -> None:
     """The ``identify`` subcommand's arguments."""
-    from ..scenario.rosbag import BODY_WRENCH_TOPIC, JOINT_STATES_TOPIC, ODOM_TOPIC
+    from ..scenario.bags.writer import BODY_WRENCH_TOPIC, JOINT_STATES_TOPIC, ODOM_TOPIC
 
     parser = commands.add_parser("identify", help="identify the vehicle's hydrodynamic parameters from a log "
                                                   "(ROS 2 bag or CSV): hydrodynamics.yaml, identification.json")
@@ -63,8 +63,8 @@ def read_log(options: argparse.Namespace, robot):
     topics of ``robot`` with ``--thrust-topics``)."""
     from ..dynamics.identification.data import read_log_csv
     from ..errors import IdentificationError
-    from ..scenario.bag_reader import read_bag
-    from ..scenario.thrust_log import thrust_input
+    from ..scenario.bags.reader import read_bag
+    from ..scenario.bags.thrust_log import thrust_input
 
     if options.thrust_commands and not options.thrust_topics:
         raise IdentificationError("--thrust-commands says what the thruster topics hold: give --thrust-topics too")

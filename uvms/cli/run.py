@@ -98,7 +98,7 @@ def say_replaced(replacing: bool, folder: Path) -> None:
 def command_sweep(options: argparse.Namespace) -> int:
     """``uvms sweep SCENARIO --grid KEY=START:STOP:N ...``: run a grid of overrides, write sweep.csv and sweep.png."""
     from ..io.outputs import holds_run
-    from ..scenario.sweep import sweep  # joblib, and dask only with --backend dask
+    from ..scenario.studies.sweep import sweep  # joblib, and dask only with --backend dask
 
     replacing = holds_run(run_output_folder(options, "_sweep"))
     result = sweep(options.scenario, options.grid or (), jobs=options.jobs, backend=options.backend,

@@ -1,4 +1,4 @@
-"""``uvms study``: a Monte Carlo study of a scenario from the command line (:mod:`uvms.scenario.study`)."""
+"""``uvms study``: a Monte Carlo study of a scenario from the command line (:mod:`uvms.scenario.studies.study`)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from .terminal import say
 
 def command_study(options: argparse.Namespace) -> int:
     """``uvms study SCENARIO --sample KEY=DIST ... --samples N --seed S``: study.csv, summary.json, figures."""
-    from ..scenario.study import study  # joblib, scipy, and dask only with --backend dask
+    from ..scenario.studies.study import study  # joblib, scipy, and dask only with --backend dask
 
     result = study(options.scenario, options.sample or None, n=options.samples, seed=options.seed,
                    method=options.method, jobs=options.jobs, backend=options.backend, scheduler=options.scheduler,
@@ -45,7 +45,7 @@ def command_study(options: argparse.Namespace) -> int:
 
 def command_tune(options: argparse.Namespace) -> int:
     """``uvms tune SCENARIO --param KEY=LOW:HIGH[:log] ... --objective METRIC|pass_rate --trials N``."""
-    from ..scenario.tune import tune  # optuna
+    from ..scenario.studies.tune import tune  # optuna
 
     result = tune(options.scenario, options.param or (), objective=options.objective, trials=options.trials,
                   seed=options.seed, samples=options.sample or (), study_n=options.samples,

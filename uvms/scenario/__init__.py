@@ -4,8 +4,10 @@
 bounds; reading and ``--set`` overrides), ``build`` (model, task, initial configuration, trajectory, controller,
 plant), ``runs`` (the one simulation of :mod:`uvms.sim.loop`, metrics, the files of the run folder),
 ``verdict`` (joint limits kept, task error within tolerance), ``record`` (the model a run folder records, read
-back by ``uvms view --result``), ``sweep`` (grids of overrides), ``study`` (Monte Carlo studies: ``distributions``,
-``sensitivity``, ``study_folder``), ``tune`` (Optuna over scenario keys), all run by ``parallel`` (joblib's loky or Dask).
+back by ``uvms view --result``); ``studies/`` (many runs: ``sweep``, grids of overrides; ``study``, Monte Carlo studies
+with ``distributions``, ``sensitivity`` and their ``folder``; ``tune``, Optuna over scenario keys; all run by
+``parallel``, joblib's loky or Dask); ``bags/`` (a run as a ROS 2 bag with its TF tree, ``writer``, ``tf_tree``; a bag
+read back as a log for identification, ``reader``, ``limits``, ``thrust_log``).
 
 By default the motion is integrated kinematically. A ``[plant]`` section with ``type = "rigid"`` or
 ``"hydrodynamic"`` runs the free-floating dynamics of :mod:`uvms.dynamics.plant.plant` instead, the joints driven by

@@ -31,7 +31,7 @@ from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import Actuation, check_actuated_scenario
 from .schema import changed_keys
-from .tf_tree import vehicle_root_link
+from .bags.tf_tree import vehicle_root_link
 
 
 @dataclass(frozen=True)

@@ -104,7 +104,7 @@ def run_scenario(
         overrides: ``SECTION.KEY=VALUE`` strings.
         progress: progress bar (None: on a terminal only).
         lock: hold the lock of ``out`` (False only for a folder inside another run folder, as the points of
-            :func:`uvms.scenario.sweep.sweep`).
+            :func:`uvms.scenario.studies.sweep.sweep`).
 
     Raises:
         ScenarioError: a bad scenario or override; StepCountError: no step or too many steps;
@@ -153,7 +153,7 @@ def numerics_guard(name: str) -> Iterator[None]:
 
 def write_run_bag(folder: Path, setup: Setup, result: SimulationResult, metrics: dict) -> Path:
     """The run as a ROS 2 bag in ``folder/bag`` (``[outputs] bag``); its topics and counts go into the metrics."""
-    from .rosbag import write_bag  # rosbags only when a bag is asked for
+    from .bags.writer import write_bag  # rosbags only when a bag is asked for
 
     frame = setup.task.frame if setup.task is not None else None
     thrusters = setup.actuation.thrusters.names if setup.actuation is not None else ()

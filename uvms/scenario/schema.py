@@ -136,7 +136,7 @@ SCHEMA: dict[str, dict[str, tuple]] = {
         "animation": (str, "", None),
         "position_tolerance": (NUMBER, DEFAULT_POSITION_TOLERANCE, None),
         "orientation_tolerance": (NUMBER, DEFAULT_ORIENTATION_TOLERANCE, None),
-        "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.scenario.rosbag
+        "bag": (bool, False, None),  # also write the run as a ROS 2 bag (bag/, MCAP) through uvms.scenario.bags.writer
     },
     "study": {"samples": (list, [], None), "n": (int, 0, None), "seed": (int, 0, None), "set": (list, [], None),
               "method": (str, "random", ("random", "lhs", "sobol"))},  # uvms study: Monte Carlo trials (scenario.study)

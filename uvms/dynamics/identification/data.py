@@ -10,7 +10,7 @@ A log holds, per sample k at time t[k] [s]:
 * the body wrench (6,) [N, N m] that the thrusters exert on the vehicle, FLU at the root link's origin
   (``geometry_msgs/WrenchStamped``, what ``uvms run --bag`` writes on ``/body_wrench``).
 
-:mod:`uvms.scenario.bag_reader` fills one from a ROS 2 bag; :func:`read_log_csv` from a CSV whose columns are
+:mod:`uvms.scenario.bags.reader` fills one from a ROS 2 bag; :func:`read_log_csv` from a CSV whose columns are
 :data:`CSV_COLUMNS` plus ``position:<joint>`` (and optionally ``velocity:<joint>``) per arm joint.
 
 Derivatives (:func:`smoothed_states`): Savitzky-Golay (``scipy.signal.savgol_filter``), a least-squares

@@ -142,7 +142,7 @@ def identify(robot, log: IdentificationLog, *, hydro: HydroParameters | None = N
 
     Args:
         robot: the model (a floating-base :class:`uvms.Robot`); its URDF gives the known terms.
-        log: the log (:class:`IdentificationLog`, e.g. from :func:`uvms.scenario.bag_reader.read_bag`).
+        log: the log (:class:`IdentificationLog`, e.g. from :func:`uvms.scenario.bags.reader.read_bag`).
         hydro: the prior hydrodynamics (None: the model's own, :func:`hydrodynamics_of`); every link but the
             vehicle's root link is taken as known.
         added_mass: "diagonal" (6 entries) or "full" (symmetric 6 x 6, 21 entries).

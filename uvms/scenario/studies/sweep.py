@@ -2,7 +2,7 @@
 
 Every grid point is one :func:`uvms.scenario.run_scenario` with ``--set`` style overrides (any scenario key, xacro
 args included), executed through joblib: local processes (loky) by default, or the workers of a Dask
-cluster (``backend="dask"``, optional extra ``pip install uvms[dask]``), by :mod:`uvms.scenario.parallel`
+cluster (``backend="dask"``, optional extra ``pip install uvms[dask]``), by :mod:`uvms.scenario.studies.parallel`
 (the local TLS cluster, remote schedulers, worker counts). The table is sorted by point index, so it is the same
 whatever the backend and the number of jobs.
 """
@@ -22,12 +22,12 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import SweepError
-from ..io import outputs
+from ...errors import SweepError
+from ...io import outputs
 from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
-from .record import scenario_model
-from .resources import resolve_scenario_path
-from .schema import (
+from ..record import scenario_model
+from ..resources import resolve_scenario_path
+from ..schema import (
     named_files,
     parse_value,
     read_scenario,
@@ -138,7 +138,7 @@ def csv_cell(value: Any) -> Any:
 
 def run_point(scenario: str, index: int, assignments: Sequence[str], out: str) -> dict:
     """Run one grid point (in a worker); an exception becomes the row's ``error`` text, metrics NaN."""
-    from .runs import run_scenario
+    from ..runs import run_scenario
 
     use_thread_lock_for_progress_bars()
     row: dict[str, Any] = {"point": index, "error": ""}
@@ -172,7 +172,7 @@ def sweep(
         grids: ``(key, values)`` pairs or ``KEY=START:STOP:N`` strings; points are their Cartesian product,
             the first key varying slowest.
         jobs: parallel jobs for loky (-1: all cores); for dask without ``scheduler``, the local workers;
-            locally at most one per point and per core (:func:`uvms.scenario.parallel.worker_count`).
+            locally at most one per point and per core (:func:`uvms.scenario.studies.parallel.worker_count`).
         backend: ``"loky"`` (local processes) or ``"dask"`` (a dask.distributed cluster; its workers must
             see the same files).
         scheduler: address of a Dask scheduler, ``tls://`` with credentials from Dask's configuration (e.g.
@@ -181,7 +181,7 @@ def sweep(
         progress: progress bar (None: on a terminal only).
         overrides: ``SECTION.KEY=VALUE`` strings applied to every point before its grid values.
         insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (``tcp://``): anyone who can reach it
-            can run code on its workers and in this process (:data:`uvms.scenario.parallel.OPEN_SCHEDULER`).
+            can run code on its workers and in this process (:data:`uvms.scenario.studies.parallel.OPEN_SCHEDULER`).
 
     Raises:
         SweepError: bad grid, backend or jobs, a scheduler that is not tls:// without ``insecure_scheduler``; ScenarioError: a key or value the scenario rejects, found
@@ -206,7 +206,7 @@ def sweep(
     given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
     out = given.resolve()
     width = len(str(len(points) - 1))
-    from .runs import run_inputs
+    from ..runs import run_inputs
 
     inputs = run_inputs(scenario, models, files)
     with outputs.run_folder(given, inputs=inputs) as folder:  # replaced whole, point folders included
@@ -235,7 +235,7 @@ def check_points(scenario: str | os.PathLike, assignments: list[list[str]],
         The last point's scenario, the model paths of all points (``model.path`` may be a grid key) and the other
         files they name (:func:`~uvms.scenario.schema.named_files`).
     """
-    from ..io.progress import tqdm
+    from ...io.progress import tqdm
 
     raw = read_toml(scenario)
     checked: dict = {}
@@ -253,7 +253,7 @@ def save_sweep_figure(result: SweepResult, path: Path, title: str = "") -> None:
     """Each metric against the first grid key, one line per combination of the other keys (NaN: failed)."""
     from matplotlib.figure import Figure
 
-    from ..viz.labels import plain_text
+    from ...viz.labels import plain_text
 
     first, others = result.keys[0], result.keys[1:]
     xs = [row[first] for row in result.rows]

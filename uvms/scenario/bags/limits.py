@@ -19,7 +19,7 @@ byte of the storage:
 - a SQLite file whose tables ``rosbags`` reads are views, virtual tables or have generated columns, or whose
   checks take more than :data:`SQLITE_SECONDS` (a progress handler interrupts SQLite).
 
-:func:`uvms.scenario.bag_reader.read_bag` counts the messages it keeps again while reading.
+:func:`uvms.scenario.bags.reader.read_bag` counts the messages it keeps again while reading.
 """
 
 from __future__ import annotations
@@ -34,9 +34,9 @@ from collections.abc import Mapping
 from pathlib import Path, PurePath
 from urllib.parse import quote
 
-from ..dynamics.identification.data import MAX_LOG_SAMPLES
-from ..errors import IdentificationError, UVMSError
-from ..model.resources import read_yaml
+from ...dynamics.identification.data import MAX_LOG_SAMPLES
+from ...errors import IdentificationError, UVMSError
+from ...model.resources import read_yaml
 
 #: The storage files of a bag on disk together [bytes].
 MAX_BAG_BYTES = 1 << 30

@@ -1,16 +1,16 @@
 """Monte Carlo studies of a scenario: sampled overrides, one run per trial, resumable, on joblib or Dask.
 
 ``study(scenario, ["model.args.l1=normal(0.4, 0.02)", ...], n=64, seed=1)`` draws n trials
-(:mod:`uvms.scenario.distributions`), checks every trial's keys and values before any runs, and runs trial k as
+(:mod:`uvms.scenario.studies.distributions`), checks every trial's keys and values before any runs, and runs trial k as
 :func:`uvms.scenario.run_scenario` with its values as ``--set`` overrides into ``DIR/trials/trial_k`` (no
-figures), through :mod:`uvms.scenario.parallel`. Each finished trial writes its row atomically to
+figures), through :mod:`uvms.scenario.studies.parallel`. Each finished trial writes its row atomically to
 ``DIR/trials/trial_k.json``; ``study.csv``, ``summary.json`` and the figures (:mod:`uvms.viz.study`) are written
 from the rows at the end.
 
 Resume: ``DIR/study.json`` holds the study's spec (scenario and model files by content hash, samples, n, seed,
 method, overrides). Running the same spec into ``DIR`` again skips the trials whose row is there and runs the
 rest; a different spec is refused (a study folder never mixes two studies). Each row found is checked against
-the trial it claims and a symbolic link in the folder is refused (:mod:`uvms.scenario.study_folder`). A trial that raises is a row with
+the trial it claims and a symbolic link in the folder is refused (:mod:`uvms.scenario.studies.folder`). A trial that raises is a row with
 its error text; a trial whose worker dies is run again alone, and if it kills that worker too it is a row
 "killed". The table does not depend on the backend, the number of jobs or the interruptions.
 """
@@ -28,15 +28,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import StudyError
-from ..io import outputs
+from ...errors import StudyError
+from ...io import outputs
 from .distributions import METHODS, Distribution, parse_samples, sample_table
 from .parallel import check_backend, exit_if_orphaned, run_tasks
 from .parallel import use_thread_lock_for_progress_bars as thread_lock
-from .resources import resolve_scenario_path
-from .schema import named_files, read_scenario, read_toml, scenario_from_raw
+from ..resources import resolve_scenario_path
+from ..schema import named_files, read_scenario, read_toml, scenario_from_raw
 from .sensitivity import summarize
-from .study_folder import (
+from .folder import (
     METRICS,
     TRIALS,
     finished_rows,
@@ -54,7 +54,7 @@ DEAD_WORKER = ("TerminatedWorkerError", "BrokenProcessPool", "KilledWorker")
 
 @dataclass
 class StudyResult:
-    """A finished study: one row per trial, the summary (:func:`uvms.scenario.sensitivity.summarize`), files."""
+    """A finished study: one row per trial, the summary (:func:`uvms.scenario.studies.sensitivity.summarize`), files."""
 
     keys: list[str]
     metrics: list[str]
@@ -119,7 +119,7 @@ def check_trials(scenario: Path, keys: Sequence[str], table: Sequence[Sequence[A
         scenario_from_raw(raw, scenario, assignments)
         trials.append(assignments)
     if any(key.startswith("model.args.") for key in keys) and trials:  # xacro args: the model declares them
-        from .record import scenario_model
+        from ..record import scenario_model
 
         scenario_model(read_scenario(scenario, trials[0])["model"])
     return trials
@@ -128,7 +128,7 @@ def check_trials(scenario: Path, keys: Sequence[str], table: Sequence[Sequence[A
 def run_trial(scenario: str, index: int, seed: int, values: list, assignments: list[str], folder: str,
               token: str) -> dict:
     """Run one trial (in a worker) and write its row to ``folder/trial_k.json``; an exception is the row's error."""
-    from .runs import run_scenario
+    from ..runs import run_scenario
 
     thread_lock()
     name = trial_name(index)
@@ -167,15 +167,15 @@ def study(
 
     Args:
         scenario: the TOML file, or the name of a shipped scenario.
-        samples: ``KEY=DIST`` strings (:mod:`uvms.scenario.distributions`); None: ``[study] samples``.
+        samples: ``KEY=DIST`` strings (:mod:`uvms.scenario.studies.distributions`); None: ``[study] samples``.
         n: trials (None: ``[study] n``); seed: the study's seed (None: ``[study] seed``); method: ``"random"``,
             ``"lhs"`` or ``"sobol"`` (None: ``[study] method``).
-        jobs, backend, scheduler: as for :func:`uvms.scenario.sweep.sweep` (:mod:`uvms.scenario.parallel`).
+        jobs, backend, scheduler: as for :func:`uvms.scenario.studies.sweep.sweep` (:mod:`uvms.scenario.studies.parallel`).
         out: the study folder (default ``out/<scenario name>_study``); resumed if it holds the same study.
         progress: progress bar (None: on a terminal only).
         overrides: ``SECTION.KEY=VALUE`` strings applied to every trial before its sampled values (after
             ``[study] set``).
-        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.sweep.sweep`).
+        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.studies.sweep.sweep`).
 
     Raises:
         StudyError: bad samples, n, method, backend or jobs, or ``out`` holds another study or other files;
@@ -198,7 +198,7 @@ def study(
     keys = [key for key, _ in samples]
     seeds, values = sample_table(samples, n, seed, method)
     trials = check_trials(scenario, keys, values, overrides)
-    from .runs import run_inputs
+    from ..runs import run_inputs
 
     inputs = run_inputs(scenario, [table["model"]["path"]], named_files(table))
     spec = study_spec(scenario, samples, n, seed, method, overrides, inputs)
@@ -244,7 +244,7 @@ def run_study(scenario: Path, seeds: Sequence[int], values: Sequence[list], tria
 
 def finish(folder: Path, keys: list[str], rows: list[dict], resumed: int, spec: dict, name: str) -> StudyResult:
     """The table, summary.json and the figures from the rows."""
-    from ..viz.study import save_study_figures
+    from ...viz.study import save_study_figures
 
     metrics = [m for m in METRICS if any(m in row for row in rows)]
     table = [{"trial": row["trial"], "seed": row["seed"], **dict(zip(keys, row["values"])),

@@ -3,18 +3,18 @@
 Reads a rosbag2 folder (MCAP or sqlite3 storage; the folder with ``metadata.yaml``, or one of its files) with
 
 - ``nav_msgs/msg/Odometry`` (default ``/odom``): the vehicle root link's pose in the world and its body twist
-  in its own axes (REP-105), as :mod:`uvms.scenario.rosbag` writes them;
+  in its own axes (REP-105), as :mod:`uvms.scenario.bags.writer` writes them;
 - ``sensor_msgs/msg/JointState`` (default ``/joint_states``): the arm's joint positions and velocities
   (velocities optional: without them they are differentiated from the positions); optional for a vehicle without
   an arm (``arm_joints=()``);
 - ``geometry_msgs/msg/WrenchStamped`` (default ``/body_wrench``): the thrusters' wrench on the vehicle, in the
   odometry's child frame (body FLU at the root link's origin); or, with ``thrust``, one ``std_msgs/msg/Float64``
-  topic per thruster (thrusts or commands) mapped through the model's thrusters (:mod:`uvms.scenario.thrust_log`).
+  topic per thruster (thrusts or commands) mapped through the model's thrusters (:mod:`uvms.scenario.bags.thrust_log`).
 
 Stamps are the messages' header stamps (the bag's receive times for Float64, which has no header). The joint
 states and the wrench are interpolated linearly at the odometry's stamps; odometry samples outside their time span are dropped. The topic names default to those the
-writer uses (:data:`uvms.scenario.rosbag.ODOM_TOPIC` ...). A bag is a stranger's file: it is checked before it is
-read (:mod:`uvms.scenario.bag_limits`).
+writer uses (:data:`uvms.scenario.bags.writer.ODOM_TOPIC` ...). A bag is a stranger's file: it is checked before it is
+read (:mod:`uvms.scenario.bags.limits`).
 """
 
 from __future__ import annotations
@@ -26,10 +26,10 @@ from typing import Any
 
 import numpy as np
 
-from ..dynamics.identification.data import MAX_LOG_SAMPLES, IdentificationLog
-from ..errors import IdentificationError
-from .bag_limits import check_bag, check_topic_count, damaged
-from .rosbag import BODY_WRENCH_TOPIC, INSTALL_HINT, JOINT_STATES_TOPIC, ODOM_TOPIC
+from ...dynamics.identification.data import MAX_LOG_SAMPLES, IdentificationLog
+from ...errors import IdentificationError
+from .limits import check_bag, check_topic_count, damaged
+from .writer import BODY_WRENCH_TOPIC, INSTALL_HINT, JOINT_STATES_TOPIC, ODOM_TOPIC
 from .thrust_log import ThrustInput
 
 #: The message type each role needs.
@@ -56,10 +56,10 @@ def bag_folder(path: str | os.PathLike) -> Path:
 def read_bag(path: str | os.PathLike, *, odom_topic: str = ODOM_TOPIC, joint_states_topic: str = JOINT_STATES_TOPIC,
              wrench_topic: str = BODY_WRENCH_TOPIC, thrust: ThrustInput | None = None,
              arm_joints: Sequence[str] | None = None) -> IdentificationLog:
-    """The log of a rosbag2 recording (module docstring); with ``thrust`` (:func:`uvms.scenario.thrust_log.thrust_input`)
+    """The log of a rosbag2 recording (module docstring); with ``thrust`` (:func:`uvms.scenario.bags.thrust_log.thrust_input`)
     the wrench is that of the thruster topics, and ``wrench_topic`` is not read.
 
-    The bag is checked first (:func:`uvms.scenario.bag_limits.check_bag`: sizes, counts, compression, storage), and
+    The bag is checked first (:func:`uvms.scenario.bags.limits.check_bag`: sizes, counts, compression, storage), and
     read with ROS 2's standard message definitions (a bag whose own definition of a type read here differs is
     refused); at most :data:`~uvms.dynamics.identification.data.MAX_LOG_SAMPLES` messages per topic are kept.
 

@@ -1,6 +1,6 @@
 """The tf tree of a robot as a ROS 2 bag gives it (REP-103/105): ``odom`` -> the vehicle's root link, every other
 link under its URDF parent link, end-effector frames that are not links under their nearest link
-(:mod:`uvms.scenario.rosbag` writes it)."""
+(:mod:`uvms.scenario.bags.writer` writes it)."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import pinocchio as pin
 
-from ..errors import BagExportError
-from ..robot.robot import Robot
+from ...errors import BagExportError
+from ...robot.robot import Robot
 
 #: The world frame of a bag (REP-105): the model's world, ENU, z up.
 WORLD_FRAME = "odom"

@@ -20,10 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
-from ..errors import IdentificationError, UVMSError
-from ..robot.robot import Robot
-from .rosbag import thruster_tokens
+from ...dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
+from ...errors import IdentificationError, UVMSError
+from ...robot.robot import Robot
+from .writer import thruster_tokens
 
 #: The default topic of each thruster: ``{name}`` is the thruster's name as a topic token (as ``uvms run --bag``).
 THRUST_TOPIC = "/thrusters/{name}/thrust"
@@ -72,7 +72,7 @@ def thrust_input(robot: Robot, pattern: str = THRUST_TOPIC, *, commands: bool = 
 
     Raises:
         IdentificationError: a pattern without ``{name}``, a model without usable thrusters, or two thrusters whose
-            names give the same topic (:func:`uvms.scenario.rosbag.thruster_tokens`).
+            names give the same topic (:func:`uvms.scenario.bags.writer.thruster_tokens`).
     """
     if "{name}" not in pattern or pattern.count("{") != 1 or pattern.count("}") != 1:
         raise IdentificationError(f"the thrust topic pattern must hold {{name}} once (e.g. {THRUST_TOPIC!r}), "

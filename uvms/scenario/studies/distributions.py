@@ -26,8 +26,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import StudyError
-from .schema import LOWER_BOUNDS, MAX_MAGNITUDE, parse_value
+from ...errors import StudyError
+from ..schema import LOWER_BOUNDS, MAX_MAGNITUDE, parse_value
 
 FORMS = ("normal(mu, sigma), normal(mu, sigma, low, high), uniform(a, b), loguniform(a, b) with 0 < a < b, "
          "choice([v1, v2, ...])")

@@ -3,9 +3,9 @@
 ``tune(scenario, ["solver.gain=0.5:4:log"], objective="max_position_error", trials=30)`` asks Optuna's TPE
 sampler (seeded: the same seed gives the same history) for values of the parameters, runs the scenario with
 them (``--set`` overrides) and minimises the metric; with ``samples`` (``KEY=DIST`` as for
-:func:`uvms.scenario.study.study`), every trial is a small study over the sampled disturbances, and the
+:func:`uvms.scenario.studies.study.study`), every trial is a small study over the sampled disturbances, and the
 objective is the mean of the metric over its trials, or ``pass_rate`` (maximised): robust tuning. The study
-trials run on loky or Dask (:mod:`uvms.scenario.parallel`); the Optuna trials one after the other.
+trials run on loky or Dask (:mod:`uvms.scenario.studies.parallel`); the Optuna trials one after the other.
 
 The output folder (replaced whole, :func:`uvms.io.outputs.run_folder`) holds ``tune.csv`` (one row per trial),
 ``best.json`` (the best parameters, value, and the ``--set`` list), ``best.toml`` (the same as a TOML fragment
@@ -24,12 +24,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import StudyError
-from ..io import outputs
+from ...errors import StudyError
+from ...io import outputs
 from .distributions import KEY_PATTERN, parse_samples
 from .parallel import check_backend
-from .resources import resolve_scenario_path
-from .schema import read_scenario
+from ..resources import resolve_scenario_path
+from ..schema import read_scenario
 from .study import METRICS, study
 from .sweep import csv_cell, toml_literal
 
@@ -99,7 +99,7 @@ def table_text(rows: Sequence[dict], columns: Sequence[str]) -> str:
 def evaluate(scenario: Path, assignments: list[str], objective: str, samples: Sequence[str], folder: Path,
              study_options: dict) -> tuple[float, dict]:
     """One trial's value: the metric of one run, or the mean metric / pass rate of a study; and its details."""
-    from .runs import run_scenario
+    from ..runs import run_scenario
 
     if not samples:
         metrics = run_scenario(scenario, out=folder, overrides=[*assignments, "outputs.figures=false"],
@@ -139,14 +139,14 @@ def tune(
     Args:
         scenario: the TOML file or a shipped scenario name.
         parameters: ``KEY=LOW:HIGH[:log]`` strings (:func:`parse_parameter`).
-        objective: a metric of :data:`uvms.scenario.study.METRICS` (minimised) or ``"pass_rate"`` (maximised).
+        objective: a metric of :data:`uvms.scenario.studies.study.METRICS` (minimised) or ``"pass_rate"`` (maximised).
         trials: Optuna trials; seed: the TPE sampler's seed.
         samples: ``KEY=DIST`` strings: every trial is a study of ``study_n`` trials (seed ``study_seed``, the
             method of the scenario's ``[study]`` table: the same disturbances for every trial); empty: one run.
-        jobs, backend, scheduler: where the study trials run (:mod:`uvms.scenario.parallel`).
+        jobs, backend, scheduler: where the study trials run (:mod:`uvms.scenario.studies.parallel`).
         out: output folder (default ``out/<scenario name>_tune``), replaced whole.
         overrides: ``SECTION.KEY=VALUE`` strings applied to every run.
-        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.sweep.sweep`).
+        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.studies.sweep.sweep`).
 
     Raises:
         StudyError: bad parameters, objective or trials, Optuna not installed; ScenarioError: a key the
@@ -178,7 +178,7 @@ def tune(
     options = {"n": study_n, "seed": study_seed, "jobs": jobs, "backend": backend, "scheduler": scheduler,
                "progress": False, "insecure_scheduler": insecure_scheduler}
     rows = []
-    from .runs import run_inputs
+    from ..runs import run_inputs
 
     given = Path(out) if out is not None else Path("out") / f"{name}_tune"
     with outputs.run_folder(given, inputs=run_inputs(scenario, [])) as folder:
@@ -214,7 +214,7 @@ def tune(
         outputs.write_json(folder / "best.json", best)
         outputs.write_text(folder / "best.toml", f"# uvms tune: best {objective} = {best_row['value']:.6g} "
                                                  f"(trial {best_row['trial']})\n" + toml_fragment(best["parameters"]))
-        from ..viz.study import save_tune_history
+        from ...viz.study import save_tune_history
 
         save_tune_history(rows, keys, objective, direction, folder / "tune_history.png", title=name)
     final = given.resolve()

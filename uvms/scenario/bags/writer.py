@@ -41,11 +41,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from ..errors import BagExportError
-from ..io import outputs
-from ..numerics.validate import finite_array, time_vector
-from ..robot.robot import Robot
-from ..sim.result import SimulationResult
+from ...errors import BagExportError
+from ...io import outputs
+from ...numerics.validate import finite_array, time_vector
+from ...robot.robot import Robot
+from ...sim.result import SimulationResult
 from .tf_tree import WORLD_FRAME, TransformEdge, frame_tree, vehicle_root_link
 
 __all__ = ["BAG_VERSION", "BODY_WRENCH_TOPIC", "BagSummary", "JOINT_STATES_TOPIC", "ODOM_TOPIC", "stamps_ns",
@@ -55,7 +55,7 @@ __all__ = ["BAG_VERSION", "BODY_WRENCH_TOPIC", "BagSummary", "JOINT_STATES_TOPIC
 BAG_VERSION = 8
 INSTALL_HINT = "writing a ROS 2 bag needs the 'rosbags' package: pip install 'uvms[ros]' (or pip install rosbags)"
 #: The topics of the vehicle's odometry, the arm's joint states and the thrusters' body wrench (read back by
-#: :mod:`uvms.scenario.bag_reader` for identification).
+#: :mod:`uvms.scenario.bags.reader` for identification).
 ODOM_TOPIC = "/odom"
 JOINT_STATES_TOPIC = "/joint_states"
 BODY_WRENCH_TOPIC = "/body_wrench"

@@ -1,4 +1,4 @@
-"""The folder of a Monte Carlo study (:mod:`uvms.scenario.study`): its lock and spec, and the rows a resume reuses.
+"""The folder of a Monte Carlo study (:mod:`uvms.scenario.studies.study`): its lock and spec, and the rows a resume reuses.
 
 A study folder holds ``study.json`` (the spec), ``trials/trial_k.json`` (the row of trial k) and
 ``trials/trial_k/`` (its run folder), all written by uvms. A resume trusts none of it blindly:
@@ -23,9 +23,9 @@ import stat
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from ..errors import StudyError, StudyResumeWarning
-from ..io import outputs
-from ..model.resources import read_json
+from ...errors import StudyError, StudyResumeWarning
+from ...io import outputs
+from ...model.resources import read_json
 
 #: the metrics of each trial (from ``metrics.json``; one absent from every trial is left out of the table)
 METRICS = ("max_position_error", "final_position_error", "rms_position_error", "max_orientation_error",

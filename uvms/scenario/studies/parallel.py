@@ -1,6 +1,6 @@
 """Running many scenario runs in parallel: local processes (joblib's loky) or a Dask cluster.
 
-The one executor of :mod:`uvms.scenario.sweep` (grid points) and :mod:`uvms.scenario.study` (Monte Carlo
+The one executor of :mod:`uvms.scenario.studies.sweep` (grid points) and :mod:`uvms.scenario.studies.study` (Monte Carlo
 trials). A task is ``function(*arguments)`` returning a row (a dict); the rows come back in completion order and
 the caller sorts them by their index, so a table is the same whatever the backend and the number of jobs.
 
@@ -30,7 +30,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from ..errors import InsecureSchedulerWarning, UVMSError
+from ...errors import InsecureSchedulerWarning, UVMSError
 
 BACKENDS = ("loky", "dask")
 #: Where the credentials of a remote tls:// scheduler come from (Dask's configuration).
@@ -264,7 +264,7 @@ def run_tasks(function: Callable[..., dict], tasks: Sequence[tuple], *, jobs: in
     """
     from joblib import Parallel, delayed, parallel_config
 
-    from ..io.progress import tqdm
+    from ...io.progress import tqdm
 
     jobs = worker_count(jobs, len(tasks), remote=bool(scheduler))
     if in_workers and jobs == 1:
