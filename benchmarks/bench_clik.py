@@ -26,10 +26,9 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from timing import interleaved_ratios
 
 import uvms
-
-from timing import interleaved_ratios
 
 DT = 0.01
 

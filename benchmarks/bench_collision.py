@@ -19,9 +19,9 @@ import argparse
 
 import numpy as np
 import pinocchio as pin
+from timing import interleaved_ratios
 
 import uvms
-from timing import interleaved_ratios
 from uvms.model.collision import collision_geometry
 from uvms.model.distances import PairDistances
 from uvms.solvers import SetBasedSolver

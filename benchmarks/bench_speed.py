@@ -31,11 +31,11 @@ import time
 import warnings
 from pathlib import Path
 
-import numpy as np
-
 import bench_clik
 import bench_ik
 import bench_set_based
+import numpy as np
+
 import uvms
 from uvms.workspace import monte_carlo
 

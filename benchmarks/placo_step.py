@@ -23,7 +23,6 @@ import tempfile
 
 import numpy as np
 import pinocchio as pin
-
 from timing import interleaved_ratios
 
 

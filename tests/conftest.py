@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-from hypothesis import settings
 import pytest
+from hypothesis import settings
 
 import uvms
 

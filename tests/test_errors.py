@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import FLOATING_ROOT, shipped, urdf
 from uvms.cli import main
+
+from conftest import FLOATING_ROOT, shipped, urdf
 
 
 def test_a_valid_user_urdf_loads(tmp_path):

@@ -10,12 +10,13 @@ import time
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import deadline, finite_difference_jacobian, uvms_command
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import uvms
 from uvms.robot.limits import Limit
+
+from conftest import deadline, finite_difference_jacobian, uvms_command
 
 finite = st.floats(-1.0, 1.0, allow_nan=False)
 unit_axis = st.tuples(finite, finite, finite).filter(lambda v: np.linalg.norm(v) > 0.2).map(

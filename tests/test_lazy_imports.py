@@ -10,6 +10,7 @@ import sys
 import pytest
 
 import uvms
+
 from conftest import ROOT
 
 #: Libraries that only some runs need: none may load with ``import uvms`` or the command line's parser.

@@ -12,6 +12,7 @@ import sys
 import pytest
 
 from conftest import ROOT
+
 spec = importlib.util.spec_from_file_location("notebook_execute", ROOT / "notebooks" / "execute.py")
 notebook_execute = importlib.util.module_from_spec(spec)
 sys.modules["notebook_execute"] = notebook_execute  # dataclasses look their module up

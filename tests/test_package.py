@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import uvms
+
 from conftest import shipped
 
 PACKAGE = Path(uvms.__file__).parent

@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any
 from .errors import UVMSError
 
 if TYPE_CHECKING:  # the names below, for type checkers and editors (imported at first use at run time)
-    from . import control, dynamics, errors, model, robot, scenario, sim, solvers, tasks, trajectory, workspace
+    from . import control, dynamics, errors, model, robot, scenario, sim, solvers, tasks, trajectory, workspace  # noqa: F401
     from .dynamics import Plant
     from .model import load
     from .robot import Configuration, Limit, Robot

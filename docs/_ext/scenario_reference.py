@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import inspect
 import math
-import tomllib
 from pathlib import Path
 
+import tomllib
 from docutils.parsers.rst import Directive
 from docutils.statemachine import StringList
 

@@ -22,21 +22,21 @@ from matplotlib.figure import Figure
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-
-from uvms.cli import main
-from uvms.io.outputs import save_figure
-from uvms.robot.configuration import Configuration
-from uvms.scenario.record import named_model
-from uvms.scenario.schema import read_scenario
-from uvms.tasks.objectives import inequalities_from_table
-from uvms.viz.collision_drawing import CollisionOverlay
-from uvms.viz.drawing import (
+# uvms after the line above (E402): this checkout's, not an installed one
+from uvms.cli import main  # noqa: E402
+from uvms.io.outputs import save_figure  # noqa: E402
+from uvms.robot.configuration import Configuration  # noqa: E402
+from uvms.scenario.record import named_model  # noqa: E402
+from uvms.scenario.schema import read_scenario  # noqa: E402
+from uvms.tasks.objectives import inequalities_from_table  # noqa: E402
+from uvms.viz.collision_drawing import CollisionOverlay  # noqa: E402
+from uvms.viz.drawing import (  # noqa: E402
     configuration_geometry,
     draw_configuration,
     legend_entries,
     set_equal_limits,
 )
-from uvms.viz.labels import legend_below, legend_under
+from uvms.viz.labels import legend_below, legend_under  # noqa: E402
 
 SCENARIOS = {"stow": ("bluerov2_alpha5_stow", "self_collision"), "pipe": ("bluerov2_alpha5_pipe", "obstacle")}
 RUNS = {"with": [], "without": ["--set", "solver.method=clik"]}

@@ -6,10 +6,11 @@ from __future__ import annotations
 import json
 
 import pytest
-from conftest import FIXED_ARM, FLOATING_ROOT, one_line, urdf
 
 import uvms
 from uvms.cli import main
+
+from conftest import FIXED_ARM, FLOATING_ROOT, one_line, urdf
 
 ESCAPING = "x/../../../important_run"
 

@@ -11,14 +11,14 @@ import shutil
 import numpy as np
 import pytest
 
-from conftest import excitation, one_line, shipped
-
 from uvms.cli import main
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.identification.data import log_csv_text
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.io import outputs
 from uvms.scenario.bags.writer import write_bag
+
+from conftest import excitation, one_line, shipped
 
 
 @pytest.fixture(scope="module")

@@ -8,9 +8,9 @@ import re
 
 import pytest
 
-from conftest import ESCAPES, FLOATING_ROOT, one_line, raising, ROOT, ROS_WORKSPACE, SHIPPED, urdf
 from uvms.cli import main
 
+from conftest import ESCAPES, FLOATING_ROOT, ROOT, ROS_WORKSPACE, SHIPPED, one_line, raising, urdf
 
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"
 
@@ -155,9 +155,10 @@ def test_info_shows_a_hydrodynamics_yaml_with_where_it_comes_from(tmp_path, caps
     values in place of the model's."""
     import dataclasses
 
-    from conftest import shipped
-    from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
     from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+    from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
+
+    from conftest import shipped
 
     model = hydrodynamics_of(shipped("bluerov2_alpha5"))
     link = dataclasses.replace(model.links["base_link"], linear_damping=[13.8, 0.0, 33.13, 0.0014, 0.8, 0.0024])

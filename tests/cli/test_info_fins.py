@@ -3,9 +3,9 @@ allocation line that says what the propeller gives at rest and what the fins add
 
 from __future__ import annotations
 
-from conftest import ROOT
-
 from uvms.cli import main
+
+from conftest import ROOT
 
 AUV = ROOT / "tests" / "fixtures" / "auv"
 

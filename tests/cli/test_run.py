@@ -11,11 +11,11 @@ import shutil
 import numpy as np
 import pytest
 
-from conftest import ROS_SHORT_RUN, ROS_WORKSPACE
 from uvms.cli import main
 from uvms.errors import MissingMeshWarning
 from uvms.scenario import read_run_record
 
+from conftest import ROS_SHORT_RUN, ROS_WORKSPACE
 
 
 @pytest.fixture

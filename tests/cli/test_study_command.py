@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import json
 
-from conftest import SCENARIOS
 from uvms.cli import main
+
+from conftest import SCENARIOS
 
 SCENARIO = str(SCENARIOS / "hoang2011_w1.toml")
 ARGS = ["--sample", "model.args.l1=uniform(0.35, 0.5)", "--sample", "outputs.position_tolerance=loguniform(1e-10, 1e-9)",

@@ -6,12 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import ROOT, SCENARIOS, one_line
 from uvms.cli import main
 from uvms.scenario.build import build
 from uvms.scenario.record import named_model
 from uvms.scenario.schema import read_scenario
 from uvms.viz import drawing
+
+from conftest import ROOT, SCENARIOS, one_line
 
 IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"
 

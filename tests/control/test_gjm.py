@@ -12,15 +12,16 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import FIXED_ARM, NO_FIGURES, SCENARIOS, shipped
 from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps
 from uvms.dynamics.plant.plant import Plant
-from uvms.scenario import ScenarioError, run_scenario
 from uvms.errors import StepCountError
 from uvms.numerics.inverses import damped_weighted_inverse
 from uvms.robot import kinematics
 from uvms.robot.configuration import Configuration
+from uvms.scenario import ScenarioError, run_scenario
 from uvms.sim import simulate
+
+from conftest import FIXED_ARM, NO_FIGURES, SCENARIOS, shipped
 
 AMUNDSEN = ("rigid_open_loop", "hydro_open_loop", "hydro_open_loop_servo_inverted", "hydro_open_loop_righting",
             "hydro_closed_loop", "hydro_open_loop_added_mass")

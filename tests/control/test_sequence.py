@@ -8,16 +8,17 @@ import json
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import SCENARIOS, shipped
 from PIL import Image
 
 from uvms import UVMSError
+from uvms.control.sequence import Phase, PhasePlan, SequenceController
+from uvms.robot.configuration import Configuration
 from uvms.scenario import ScenarioError, read_scenario, run_scenario
 from uvms.scenario.build import build
-from uvms.control.sequence import Phase, PhasePlan, SequenceController
 from uvms.solvers import CLIKSolver, PrioritySolver
-from uvms.robot.configuration import Configuration
 from uvms.tasks import DistanceTask, FrameTask, JointTask
+
+from conftest import SCENARIOS, shipped
 
 GRIP = SCENARIOS / "xiang2019_grip.toml"
 ARMS = [-1.57, 0.6, -0.5, -0.4, 0.0, -1.57, -0.6, 0.5, 0.4, 0.0]  # mirror postures, claws closed

@@ -9,16 +9,17 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import ROOT
 from uvms.control.coordination import CoordinatedControl, coordinated_arm_rates
 from uvms.control.station import actuated_control, station_keeping
-from uvms.trajectory import VelocityRamps
 from uvms.control.vehicle import pose_velocity_reference
 from uvms.dynamics.plant.actuated import ActuatedPlant, vehicle_inverse_dynamics
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.thrusters import Thrusters, thrusters_of
 from uvms.sim import simulate
 from uvms.tasks import FrameTask
+from uvms.trajectory import VelocityRamps
+
+from conftest import ROOT
 
 DT = 0.01
 ARM = [3.0, 1.8, 1.8, 1.0, 0.0]  # the arm reaching forward and down, away from its limits

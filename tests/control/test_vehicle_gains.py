@@ -10,7 +10,7 @@ import pytest
 
 import uvms
 from uvms.control.station import station_keeping
-from uvms.control.vehicle import (DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, vehicle_inertia, velocity_gains)
+from uvms.control.vehicle import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, vehicle_inertia, velocity_gains
 from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.thrusters import thrusters_of

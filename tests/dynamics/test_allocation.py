@@ -7,10 +7,11 @@ import pytest
 from scipy.optimize import lsq_linear, minimize
 
 import uvms
-from conftest import THRUSTER_BOX
 from uvms.dynamics.thrusters.allocation import ThrustAllocator
 from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import SolverInputError
+
+from conftest import THRUSTER_BOX
 
 
 @pytest.fixture(scope="module", params=["box", "bluerov2_alpha5"])

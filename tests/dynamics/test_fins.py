@@ -9,9 +9,9 @@ import pytest
 
 import uvms
 from uvms.dynamics import Plant
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
 from uvms.dynamics.thrusters.fins import DEFAULT_TIME_CONSTANT, fins_of
-from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import (
     BaseGuessWarning,

@@ -13,14 +13,15 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import ROOT
 from uvms.cli.info import describe
-from uvms.dynamics.plugins.gz_sim import gz_buoyancy_density
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
+from uvms.dynamics.plugins.gz_sim import gz_buoyancy_density
 from uvms.dynamics.plugins.readers import read_thruster_plugins
 from uvms.dynamics.thrusters.thrusters import placements_in_base, thrusters_of
 from uvms.errors import ModelCheckError, PluginSettingWarning
 from uvms.scenario import run_scenario
+
+from conftest import ROOT
 
 FIXTURES = ROOT / "tests" / "fixtures" / "gz"
 

@@ -10,12 +10,13 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import ROOT
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
 from uvms.dynamics.plugins.readers import lumped_mass, read_thruster_plugins
 from uvms.dynamics.thrusters.thrusters import placements_in_base, thrusters_of
 from uvms.errors import ModelCheckError
 from uvms.scenario import run_scenario
+
+from conftest import ROOT
 
 FIXTURES = ROOT / "tests" / "fixtures" / "gz" / "hippo"
 T200 = ("<maximum_rpm>3240</maximum_rpm><quadratic_coeff>0.015547</quadratic_coeff><linear_coeff>-0.04243"

@@ -13,9 +13,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from uvms.errors import ShapeCoefficientWarning
 from uvms.dynamics.hydro.hydrodynamics import parse_hydrodynamics
-from uvms.errors import ModelCheckError
+from uvms.errors import ModelCheckError, ShapeCoefficientWarning
 
 RHO = 1000.0
 PI = math.pi

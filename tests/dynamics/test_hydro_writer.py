@@ -6,11 +6,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from conftest import shipped
-
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, load_hydrodynamics_yaml
 from uvms.dynamics.hydro.parameters import LinkHydrodynamics
 from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
-from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, load_hydrodynamics_yaml
+
+from conftest import shipped
 
 
 def test_the_models_hydrodynamics_round_trip_exactly(tmp_path):

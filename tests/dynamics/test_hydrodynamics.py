@@ -7,13 +7,13 @@ import math
 
 import numpy as np
 import pytest
+from test_hydro_shapes import RHO, shape_urdf
 
 import uvms
-from test_hydro_shapes import RHO, shape_urdf
-from uvms.errors import AddedMassSymmetrizedWarning
-from uvms.dynamics.hydro.parameters import hydro_rows
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of, parse_hydrodynamics
+from uvms.dynamics.hydro.parameters import hydro_rows
 from uvms.dynamics.plant.plant import Plant
+from uvms.errors import AddedMassSymmetrizedWarning
 from uvms.sim import simulate
 
 PI = math.pi
@@ -112,8 +112,8 @@ def test_linear_damping_forward_speed_is_applied_as_hmfossen_does(tmp_path):
     """uuv_simulator's HMFossen::ComputeDampingMatrix, in SNAME axes: D = -DLin - u DLinForwardSpeed
     - diag(DNonLin) |nu| (u = nu[0], signed), tau = -D nu; uvms's wrench in FLU is the same, at forward and backward
     speeds; ``uvms info`` and the YAML writer carry it."""
-    from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
     from uvms.dynamics.hydro.hydrodynamics import load_hydrodynamics_yaml
+    from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
 
     lin, forward = [-2.0, -3, -4, -0.5, -0.6, -0.7], [-1.5, -8.0, -9.0, 0.0, -2.5, -3.0]
     quad = [-10.0, -20, -30, -1, -2, -3]

@@ -11,16 +11,16 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import excitation, shipped
-
-from uvms.dynamics.plant.actuated import vehicle_inverse_dynamics
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.identification.identify import identify
 from uvms.dynamics.identification.data import SmoothedStates
+from uvms.dynamics.identification.identify import identify
 from uvms.dynamics.identification.model import AXES, known_plant, parameter_layout, regression
+from uvms.dynamics.plant.actuated import vehicle_inverse_dynamics
 from uvms.dynamics.plant.plant import Plant
 from uvms.errors import IdentificationError
 from uvms.scenario.excitation import with_odometry_noise
+
+from conftest import excitation, shipped
 
 NOISE = {"position": 0.05, "attitude": 0.005, "linear": 0.01, "angular": 0.01}
 

@@ -9,14 +9,14 @@ import functools
 import numpy as np
 import pinocchio as pin
 
-from conftest import ARM_START, EXCITATIONS, shipped
-
-from uvms.dynamics.identification.identify import identify
+from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.identification.current import MAX_CURRENT_ERROR, estimate_current
 from uvms.dynamics.identification.data import SmoothedStates
+from uvms.dynamics.identification.identify import identify
 from uvms.dynamics.identification.model import Regression, parameter_layout
-from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.scenario.excitation import excitation_run, log_of_run, multisine, with_odometry_noise
+
+from conftest import ARM_START, EXCITATIONS, shipped
 
 CURRENT = np.array([0.2, -0.1, 0.03])
 NOISE = {"position": 0.05, "attitude": 0.005, "linear": 0.01, "angular": 0.01}

@@ -12,8 +12,14 @@ import pytest
 from scipy.signal import savgol_coeffs
 
 from uvms.dynamics.identification import data as identification_data
-from uvms.dynamics.identification.data import (CSV_COLUMNS, IdentificationLog, log_csv_text, read_log_csv,
-                                               smoothed_states, uniform_log)
+from uvms.dynamics.identification.data import (
+    CSV_COLUMNS,
+    IdentificationLog,
+    log_csv_text,
+    read_log_csv,
+    smoothed_states,
+    uniform_log,
+)
 from uvms.errors import IdentificationError
 
 

@@ -8,13 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from conftest import ROOT
-
 import uvms
 from uvms.dynamics.identification.identify import identify
 from uvms.scenario.bags.reader import read_bag
-from uvms.scenario.excitation import ExcitationControl, excitation_run, multisine
 from uvms.scenario.bags.writer import write_bag
+from uvms.scenario.excitation import ExcitationControl, excitation_run, multisine
+
+from conftest import ROOT
 
 FIXTURE = ROOT / "tests" / "fixtures" / "rexrov_like" / "rexrov_like.urdf"
 #: RMS body wrench [N, N m]: heave strongest (its linear damping, 728 N s/m, hides the quadratic one at low speed);

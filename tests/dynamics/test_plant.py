@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import shipped
-from uvms.errors import ModelCheckError, ModelParseError, SkippedLinkWarning, UVMSError
 from uvms.dynamics.hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
 from uvms.dynamics.plant.added_mass import generalized_jacobian_added_mass
 from uvms.dynamics.plant.plant import Plant
+from uvms.errors import ModelCheckError, ModelParseError, SkippedLinkWarning, UVMSError
 from uvms.sim import simulate
+
+from conftest import shipped
 
 RHO = 1000.0
 G = 9.81

@@ -8,14 +8,20 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import THRUSTER_BOX
-from uvms.dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
 from uvms.dynamics.hydro.hydrodynamics import HydroParameters
+from uvms.dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
 from uvms.dynamics.plant.plant import Plant
-from uvms.dynamics.thrusters.thrusters import (allocation_matrix, load_thrusters_yaml,
-                                     parse_thrusters_urdf, thruster_rows, thrusters_of)
+from uvms.dynamics.thrusters.thrusters import (
+    allocation_matrix,
+    load_thrusters_yaml,
+    parse_thrusters_urdf,
+    thruster_rows,
+    thrusters_of,
+)
 from uvms.errors import ModelCheckError, PointMassWarning, ThrusterDefaultWarning
 from uvms.sim import simulate
+
+from conftest import THRUSTER_BOX
 
 S = np.sqrt(0.5)
 

@@ -14,9 +14,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import SCENARIOS
 from uvms import UVMSError
 from uvms.io import outputs
+
+from conftest import SCENARIOS
 
 SCENARIO = SCENARIOS / "santos2006_task_priority.toml"
 

@@ -19,12 +19,13 @@ from pathlib import Path
 
 import pytest
 
-from conftest import NO_FIGURES, ROOT, one_line, raising, signal_a_running_sweep, uvms_command, wait_for
-from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import RunFolderError
+from uvms.io import outputs
 from uvms.scenario import run_scenario
 from uvms.scenario.studies.sweep import SweepError, SweepResult, sweep
+
+from conftest import NO_FIGURES, ROOT, one_line, raising, signal_a_running_sweep, uvms_command, wait_for
 
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps
 HOANG = ROOT / "scenarios" / "hoang2011_w1.toml"  # 9,500 RK4 steps: several seconds

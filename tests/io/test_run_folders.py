@@ -18,12 +18,13 @@ from pathlib import Path
 import pytest
 
 from uvms import UVMSError
-from uvms.io import outputs
 from uvms.cli import main
 from uvms.errors import DiskFullError, RunFolderBusy, RunFolderError
+from uvms.io import outputs
 from uvms.scenario import run_scenario
 
 from conftest import ROOT, signal_a_running_sweep, uvms_command, wait_for
+
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps, 6 figures
 HOANG = ROOT / "scenarios" / "hoang2011_w1.toml"  # 9,500 RK4 steps: several seconds per run
 RUN_FILES = {"metrics.json", "trajectory.csv", "trajectory.npz", "desired_motion.png", "vehicle.png",

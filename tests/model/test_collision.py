@@ -15,8 +15,16 @@ import pytest
 
 import uvms
 from uvms.errors import CollidingPairWarning, LinkNotFound, ModelCheckError
-from uvms.model.collision import (ADJACENT, COLLIDING, SAME_BODY, SRDF, candidate_pairs, collision_geometry,
-                                  collision_pairs, read_srdf)
+from uvms.model.collision import (
+    ADJACENT,
+    COLLIDING,
+    SAME_BODY,
+    SRDF,
+    candidate_pairs,
+    collision_geometry,
+    collision_pairs,
+    read_srdf,
+)
 from uvms.robot.configuration import Configuration
 
 FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"

@@ -7,6 +7,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
+
 from conftest import ROOT, shipped
 
 

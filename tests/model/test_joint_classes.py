@@ -10,9 +10,10 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import ROOT, urdf
 from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import ModelCheckError, NameNotFound, ThrusterFileWarning
+
+from conftest import ROOT, urdf
 
 IDIOMS = ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf"
 ARM = ["j1", "j2", "j3", "j4", "j5", "j6", "finger_a"]

@@ -16,13 +16,13 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import ROOT, SHIPPED, shipped
 from uvms.cli import main
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.plant.plant import Plant
-from uvms.errors import NoVehicleError
-from uvms.errors import BaseGuessWarning
+from uvms.errors import BaseGuessWarning, NoVehicleError
 from uvms.model import ADDED_BASE_JOINT
+
+from conftest import ROOT, SHIPPED, shipped
 
 EXAMPLE_HYDRODYNAMICS = ROOT / "models" / "example_hydrodynamics.yaml"
 

@@ -17,9 +17,10 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import FLOATING_ROOT, ROOT, deadline, uvms_command
 
 from uvms.model.meshes import MAX_NAMED_FILES, mesh_refusal
+
+from conftest import FLOATING_ROOT, ROOT, deadline, uvms_command
 
 FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"
 #: A tetrahedron (unit legs along x, y, z), then {tail}.

@@ -14,7 +14,6 @@ import warnings
 
 import numpy as np
 import pytest
-from conftest import ROOT
 from xacro import substitution_args
 
 import uvms
@@ -22,6 +21,8 @@ from uvms.cli import main
 from uvms.errors import MissingMeshWarning, ModelFileNotFound, UVMSError, XacroError
 from uvms.model import packages, resources, sandbox
 from uvms.model.sandbox_worker import PackageNotFound, packages_for_find
+
+from conftest import ROOT
 
 WORKSPACE = ROOT / "tests" / "fixtures" / "ros_ws" / "src"
 VEHICLE_PACKAGE = WORKSPACE / "fixture_vehicle_description"

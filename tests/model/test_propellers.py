@@ -9,8 +9,9 @@ import xml.etree.ElementTree as ET
 import pytest
 
 import uvms
-from conftest import ROOT
 from uvms.cli.info import describe
+
+from conftest import ROOT
 
 BLUE = ROOT / "tests" / "fixtures" / "gz" / "bluerov2_heavy_sim.urdf"
 

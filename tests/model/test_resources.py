@@ -19,7 +19,6 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import FLOATING_ROOT, ROOT, urdf
 
 import uvms
 import uvms.scenario.watch
@@ -29,6 +28,8 @@ from uvms.model import includes, resources
 from uvms.scenario import read_scenario
 from uvms.scenario.build import build
 from uvms.scenario.watch import WatchedFiles
+
+from conftest import FLOATING_ROOT, ROOT, urdf
 
 XACRO = 'xmlns:xacro="http://www.ros.org/wiki/xacro"'
 

@@ -10,11 +10,12 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import ESCAPE, IMPORT, urdf, xacro_file
 
 import uvms
 from uvms.model import sandbox
 from uvms.model.sandbox import expand_untrusted
+
+from conftest import ESCAPE, IMPORT, urdf, xacro_file
 
 
 def test_untrusted_xacro_cannot_write_a_file(tmp_path):

@@ -21,11 +21,12 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import IMPORT, xacro_file
 
 import uvms
 from uvms.model import sandbox
 from uvms.model.sandbox import expand_untrusted, read_answer
+
+from conftest import IMPORT, xacro_file
 
 OS = f"{IMPORT}('os')"
 FCNTL = f"{IMPORT}('fcntl')"

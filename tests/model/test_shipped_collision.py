@@ -10,16 +10,17 @@ jaw box's corner above the frame's bottom face (an independent computation from 
 from __future__ import annotations
 
 import itertools
-import tomllib
 import xml.etree.ElementTree as ET
 
 import numpy as np
 import pinocchio as pin
 import pytest
+import tomllib
 
 import uvms
-from conftest import ROOT, SCENARIOS, shipped
 from uvms.dynamics.thrusters.thrusters import thrusters_of
+
+from conftest import ROOT, SCENARIOS, shipped
 
 MODEL = "bluerov2_alpha5"
 SRDF = ROOT / "models" / MODEL / "uvms.srdf"

@@ -11,11 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import ESCAPE, FLOATING_ROOT, ROOT, urdf
 
 import uvms
-from uvms.model import loader as model
 from uvms.cli import main
+from uvms.model import loader as model
+
+from conftest import ESCAPE, FLOATING_ROOT, ROOT, urdf
 
 
 def payload(target: Path) -> str:

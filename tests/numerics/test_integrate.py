@@ -8,10 +8,11 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import FIXED_ARM
 from uvms.errors import NumericalError
 from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator, rk4_step, solve_square, stage_times
 from uvms.trajectory import CirclePath, PathTrajectory, RecentSamples, TrapezoidLaw
+
+from conftest import FIXED_ARM
 
 
 def test_the_square_solve_of_the_rk4_stages_is_numpy_solve_and_refuses_a_singular_system(rng):

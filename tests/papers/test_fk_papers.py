@@ -8,12 +8,12 @@ import pinocchio as pin
 from conftest import shipped, xiang_eq6
 
 
-def hoang_closed_form(q_vehicle: np.ndarray, q_arm: np.ndarray, a=0.4, b=0.6, l=(0.4, 0.4, 0.3)) -> np.ndarray:
+def hoang_closed_form(q_vehicle: np.ndarray, q_arm: np.ndarray, a=0.4, b=0.6, lengths=(0.4, 0.4, 0.3)) -> np.ndarray:
     """x_E, y_E, phi_E of hoang2011 section 3."""
     x, y, psi = q_vehicle
     s1, s12, s123 = psi + q_arm[0], psi + q_arm[0] + q_arm[1], psi + q_arm.sum()
-    x_e = x + a * np.cos(psi) + b * np.sin(psi) + l[0] * np.sin(s1) + l[1] * np.sin(s12) + l[2] * np.sin(s123)
-    y_e = y + a * np.sin(psi) - b * np.cos(psi) - l[0] * np.cos(s1) - l[1] * np.cos(s12) - l[2] * np.cos(s123)
+    x_e = x + a * np.cos(psi) + b * np.sin(psi) + lengths[0] * np.sin(s1) + lengths[1] * np.sin(s12) + lengths[2] * np.sin(s123)
+    y_e = y + a * np.sin(psi) - b * np.cos(psi) - lengths[0] * np.cos(s1) - lengths[1] * np.cos(s12) - lengths[2] * np.cos(s123)
     return np.array([x_e, y_e, s123 - np.pi / 2])
 
 
@@ -36,7 +36,7 @@ def test_hoang2011_xacro_args_change_the_kinematics(rng):
     for _ in range(20):
         base = np.array([*rng.uniform(-5, 5, 2), rng.uniform(-np.pi, np.pi)])
         arm = rng.uniform(*robot.arm_limits)
-        expected = hoang_closed_form(base, arm, a=0.5, b=0.7, l=(0.6, 0.4, 0.25))
+        expected = hoang_closed_form(base, arm, a=0.5, b=0.7, lengths=(0.6, 0.4, 0.25))
         assert np.allclose(robot.fk(robot.configuration(base=base, arm=arm)).translation[:2], expected[:2], atol=1e-12)
 
 

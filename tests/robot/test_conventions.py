@@ -8,8 +8,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from conftest import shipped
 from uvms.robot import conventions
+
+from conftest import shipped
 
 angles = st.floats(-3.1, 3.1)
 positions = st.floats(-50, 50)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import uvms
+
 from conftest import ROOT, SHIPPED, finite_difference_jacobian, shipped
 
 

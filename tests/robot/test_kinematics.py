@@ -8,12 +8,13 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import FIXED_ARM, shipped
-from uvms.dynamics.plant.added_mass import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.plant.added_mass import augmented_mass_matrix, generalized_jacobian_added_mass, resolve_links
 from uvms.errors import ModelCheckError
 from uvms.robot import kinematics
 from uvms.robot.configuration import Configuration
+
+from conftest import FIXED_ARM, shipped
 
 FREE_FLOATING = ["hoang2011", "santos2006", "xiang2019", "amundsen2018", "bluerov2_alpha5"]
 ROWS = {"floating": slice(0, 6), "planar": [0, 1, 5]}

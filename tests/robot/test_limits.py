@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import shipped
 from uvms.errors import LimitError
 from uvms.robot.limits import Limit
 from uvms.solvers.ik import project_to_limits
 from uvms.tasks.objectives import JointLimits, JointVelocityLimits
+
+from conftest import shipped
 
 CONTINUOUS_ARM = """<robot name="mixed">
   <link name="world"/><link name="base"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>

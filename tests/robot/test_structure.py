@@ -8,8 +8,9 @@ import re
 import pytest
 
 import uvms
-from conftest import ROOT, SHIPPED, shipped
 from uvms.robot.structure import EE_GIVEN, default_end_effectors, sensor_word
+
+from conftest import ROOT, SHIPPED, shipped
 
 IDIOMS = (ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf").read_text()
 WRIST_CAMERA = ('<link name="wrist_camera_link"/><joint name="wrist_camera_joint" type="revolute"><parent link="link6"/>'

@@ -7,7 +7,6 @@ bluerov2_alpha5_station_saturated (1.0 m/s: the thrusters saturate).
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
@@ -15,6 +14,7 @@ from uvms.errors import ScenarioError
 from uvms.scenario import run_scenario
 
 from conftest import NO_FIGURES, SCENARIOS
+
 CURRENT = SCENARIOS / "bluerov2_alpha5_station_current.toml"
 
 

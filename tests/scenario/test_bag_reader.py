@@ -9,13 +9,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import shipped
-
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import IdentificationError
 from uvms.scenario.bags.reader import read_bag
-from uvms.scenario.excitation import excitation_run, log_of_run, multisine
 from uvms.scenario.bags.writer import write_bag
+from uvms.scenario.excitation import excitation_run, log_of_run, multisine
+
+from conftest import shipped
 
 
 @functools.lru_cache(maxsize=None)

@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import NO_FIGURES, ROOT, shipped
 from uvms.errors import ScenarioError, SolverInputError
 from uvms.scenario import run_scenario
 from uvms.scenario.record import read_run_record
+
+from conftest import NO_FIGURES, ROOT, shipped
 
 
 def test_free_floating_weights_of_size_nv_name_the_key_and_the_arm_joints(tmp_path):

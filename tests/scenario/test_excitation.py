@@ -6,10 +6,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import excitation, shipped
-
 from uvms.errors import IdentificationError
 from uvms.scenario.excitation import arm_motion, log_of_run, multisine, with_odometry_noise
+
+from conftest import excitation, shipped
 
 
 def test_the_multisine_has_its_rms_and_no_shared_frequency():

@@ -10,10 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import NO_FIGURES, ROOT, SCENARIOS
-
-from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
 from uvms.dynamics.identification.identify import identify
 from uvms.errors import ScenarioError
 from uvms.scenario.bags.reader import read_bag
@@ -21,6 +19,8 @@ from uvms.scenario.build import build
 from uvms.scenario.excitation import log_of_run, multisine
 from uvms.scenario.runs import run_scenario
 from uvms.scenario.schema import read_scenario
+
+from conftest import NO_FIGURES, ROOT, SCENARIOS
 
 EXCITATION = SCENARIOS / "bluerov2_excitation.toml"
 #: A shorter excitation for the tests: 40 s, 4 sines per axis up to 0.5 Hz.

@@ -21,6 +21,7 @@ from uvms.scenario import read_scenario, run_scenario
 from uvms.tasks.objectives import INEQUALITY_TYPES
 
 from conftest import NO_FIGURES, SCENARIOS
+
 PANEL = SCENARIOS / "bluerov2_alpha5_panel.toml"
 FREE_FLOATING = SCENARIOS / "bluerov2_alpha5_free_floating_limit.toml"
 MAX_TILT = 0.0873  # [rad] the panel scenario's vehicle_attitude

@@ -14,12 +14,13 @@ from collections.abc import Iterator
 
 import pytest
 
-from conftest import SCENARIOS
 from uvms.cli import main
 from uvms.errors import StudyError, SweepError
 from uvms.scenario.studies import parallel
 from uvms.scenario.studies.study import study
 from uvms.scenario.studies.sweep import sweep
+
+from conftest import SCENARIOS
 
 SCENARIO = SCENARIOS / "santos2006_task_priority.toml"
 GRID = ["solver.gain=0.5:1.5:2"]

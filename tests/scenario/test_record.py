@@ -10,12 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import NO_FIGURES, one_line, shipped
 from uvms.cli import main, view_robot
 from uvms.errors import RunRecordError
 from uvms.scenario import run_scenario
 from uvms.scenario.record import read_run_record
 from uvms.scenario.resources import SCENARIOS_DIR
+
+from conftest import NO_FIGURES, one_line, shipped
 
 
 def view_options(result: Path, model: str | None = None, args: list[str] | None = None) -> argparse.Namespace:

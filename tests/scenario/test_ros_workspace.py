@@ -16,9 +16,10 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import ROOT
 from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import AddedMassSymmetrizedWarning, BaseGuessWarning, PointMassWarning
+
+from conftest import ROOT
 
 PACKAGE = ROOT / "tests" / "fixtures" / "uuv_ws" / "src" / "fixture_uuv_rov"
 MODEL = PACKAGE / "urdf" / "rov.urdf.xacro"

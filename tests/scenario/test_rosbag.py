@@ -16,12 +16,13 @@ from rosbags.rosbag2 import Reader
 from rosbags.typesys import Stores, get_typestore
 
 import uvms
-from conftest import FIXED_ARM, SCENARIOS, shipped
 from uvms.errors import BagExportError, RunFolderError
-from uvms.scenario.bags.writer import write_bag
 from uvms.scenario import run_scenario
+from uvms.scenario.bags.writer import write_bag
 from uvms.sim import PlantSeries, simulate
 from uvms.tasks.frame import FrameTask
+
+from conftest import FIXED_ARM, SCENARIOS, shipped
 
 START = 1_700_000_000_123_456_789  # [ns]
 

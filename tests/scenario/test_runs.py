@@ -17,6 +17,7 @@ import uvms
 from uvms.scenario import ScenarioError, read_scenario, run_scenario
 
 from conftest import SCENARIOS
+
 HOANG = ("w1", "w100", "w500", "wpsi500")
 
 
@@ -203,8 +204,8 @@ def test_cli_refuses_a_path_as_scenario_name_in_one_line(tmp_path):
 
 
 def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
-    from uvms.numerics import integrate
     from uvms.errors import StepCountError
+    from uvms.numerics import integrate
 
     def never(*args, **kwargs):
         raise AssertionError("the simulation must not start")
@@ -233,8 +234,8 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
 
 
 def test_library_simulations_share_the_step_bound():
-    from uvms.errors import StepCountError
     from uvms.dynamics.plant.plant import Plant
+    from uvms.errors import StepCountError
     from uvms.sim import simulate
 
     robot = uvms.load("hoang2011")

@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import ROOT, SCENARIOS
-
-from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
 from uvms.errors import ScenarioError
 from uvms.scenario.build import build
 from uvms.scenario.schema import read_scenario
+
+from conftest import ROOT, SCENARIOS
 
 STATION = SCENARIOS / "bluerov2_alpha5_station_current.toml"
 

@@ -7,9 +7,10 @@ import argparse
 import json
 from pathlib import Path
 
-from conftest import one_line
 from uvms.cli import main, run_output_folder, scenario_file
 from uvms.scenario.resources import SCENARIOS_DIR, resolve_scenario_path, shipped_scenarios
+
+from conftest import one_line
 
 
 def test_a_shipped_scenario_runs_by_name_from_any_folder(tmp_path, monkeypatch, capsys):

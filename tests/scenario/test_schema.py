@@ -10,10 +10,10 @@ import shutil
 import numpy as np
 import pytest
 
-from conftest import ROS_SHORT_RUN, ROS_WORKSPACE
 from uvms.cli import main
 from uvms.scenario import ScenarioError, read_run_record, read_scenario, run_scenario
 
+from conftest import ROS_SHORT_RUN, ROS_WORKSPACE
 
 
 @pytest.fixture

@@ -16,11 +16,12 @@ from pathlib import Path
 
 import pytest
 
-from conftest import SCENARIOS, uvms_command, wait_for
 from uvms.errors import StudyError, StudyResumeWarning, UVMSError
 from uvms.scenario import ScenarioError
 from uvms.scenario.studies import study as study_module
 from uvms.scenario.studies.study import study
+
+from conftest import SCENARIOS, uvms_command, wait_for
 
 SCENARIO = SCENARIOS / "hoang2011_w1.toml"
 SHORT = ["trajectory.duration=10", "trajectory.accel_time=2"]  # 500 steps

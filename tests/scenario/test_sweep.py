@@ -13,12 +13,13 @@ import time
 
 import pytest
 
-from conftest import SCENARIOS
 from uvms import UVMSError
 from uvms.cli import main
 from uvms.scenario import ScenarioError
 from uvms.scenario.studies.parallel import dask_client
 from uvms.scenario.studies.sweep import MAX_POINTS, METRICS, SweepError, parse_grid, sweep
+
+from conftest import SCENARIOS
 
 SCENARIO = SCENARIOS / "santos2006_task_priority.toml"  # 100 Euler steps
 GRID = ["solver.gain=0.5:1.5:2", "model.args.l1=1.5:2.0:2"]  # l1 moves the start; the gain the tracking

@@ -8,14 +8,14 @@ import dataclasses
 import numpy as np
 import pytest
 
-from conftest import excitation, shipped
-
 from uvms.dynamics.identification.identify import identify
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import IdentificationError
 from uvms.scenario.bags.reader import read_bag
-from uvms.scenario.bags.writer import write_bag
 from uvms.scenario.bags.thrust_log import SETTLING, thrust_input
+from uvms.scenario.bags.writer import write_bag
+
+from conftest import excitation, shipped
 
 
 @pytest.fixture(scope="module")

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 import uvms
-from conftest import ROOT
 from uvms.errors import StudyError
 from uvms.scenario.studies.tune import parse_parameter, toml_fragment, tune
+
+from conftest import ROOT
 
 pytest.importorskip("optuna")
 ARM = [0.5, 0.8, 0.6]

@@ -11,11 +11,12 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from conftest import shipped
 from uvms.control.gjm import GJMController, VelocityRamps
 from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.errors import ConfigurationError, StepCountError, UVMSError
 from uvms.sim import SimulationResult, simulate
+
+from conftest import shipped
 
 INFO = types.SimpleNamespace(sigma_min=1.0, damping=0.0, limits_active=())
 

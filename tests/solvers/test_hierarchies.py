@@ -13,12 +13,21 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import uvms
+from uvms.robot.configuration import Configuration
 from uvms.robot.limits import Limit
 from uvms.solvers import CLIKSolver, HQPSolver, SetBasedSolver, Solver, SolverResult, VariableDamping
-from uvms.robot.configuration import Configuration
 from uvms.tasks import FrameTask, PostureTask
-from uvms.tasks.objectives import (FrameBox, JointLimits, JointVelocityLimits, Manipulability, PlaneClearance,
-                                   VehicleAttitude, VehicleVelocityLimits, bell, inequalities_from_table)
+from uvms.tasks.objectives import (
+    FrameBox,
+    JointLimits,
+    JointVelocityLimits,
+    Manipulability,
+    PlaneClearance,
+    VehicleAttitude,
+    VehicleVelocityLimits,
+    bell,
+    inequalities_from_table,
+)
 
 from conftest import SHIPPED, shipped
 

@@ -7,10 +7,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import shipped
 from uvms.errors import ScenarioError
 from uvms.scenario import scenario_from_raw
 from uvms.scenario.build import build
+
+from conftest import shipped
 
 
 def level_vehicle_scenario(fixed: list[str]) -> dict:

@@ -11,11 +11,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import uvms
-from conftest import shipped
 from uvms.errors import SolverInputError
 from uvms.numerics.inverses import damped_weighted_inverse, dls, dls_solve, pinv, variable_damping, weighted_pinv
 from uvms.solvers.priority import prioritized
 from uvms.solvers.screws import davies_solve, network_matrix
+
+from conftest import shipped
 
 
 def clik_velocity(robot, q, tasks, **options):

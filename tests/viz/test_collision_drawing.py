@@ -15,7 +15,6 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import ROOT
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PolyCollection
 from matplotlib.colors import same_color
@@ -29,6 +28,8 @@ from uvms.tasks.objectives import Obstacle, SelfCollision
 from uvms.viz import drawing
 from uvms.viz.collision_drawing import SHAPE_STYLE, CollisionOverlay, clip_polygon
 from uvms.viz.collision_shapes import PAIR_COLOURS, geometry_meshes
+
+from conftest import ROOT
 
 FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"
 

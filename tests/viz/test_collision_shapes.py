@@ -14,8 +14,15 @@ import uvms
 from uvms.model.collision import collision_geometry
 from uvms.robot.configuration import Configuration
 from uvms.tasks.objectives import Obstacle, SelfCollision
-from uvms.viz.collision_shapes import (PAIR_COLOURS, RING_POINTS, ClosestPairs, geometry_meshes, obstacle_meshes,
-                                       pair_colour, shape_mesh)
+from uvms.viz.collision_shapes import (
+    PAIR_COLOURS,
+    RING_POINTS,
+    ClosestPairs,
+    geometry_meshes,
+    obstacle_meshes,
+    pair_colour,
+    shape_mesh,
+)
 
 FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"
 

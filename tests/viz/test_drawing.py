@@ -9,13 +9,14 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import numpy as np
 import pytest
-from conftest import shipped
 from matplotlib import animation
 from matplotlib.figure import Figure
 from PIL import Image
 
-from uvms.viz import drawing
 from uvms.errors import ConfigurationError, UVMSError
+from uvms.viz import drawing
+
+from conftest import shipped
 
 #: xiang2019 hull: the xacro defaults hull_length x hull_width x hull_height [m], at the base_link origin.
 XIANG_HULL = np.array([2.0, 0.6, 0.5])

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import excitation, shipped
-
 from uvms.dynamics.identification.identify import identify
 from uvms.errors import IdentificationError
 from uvms.viz.identification import identification_figures, prediction_figure, residual_figure
+
+from conftest import excitation, shipped
 
 
 def test_the_figures_draw_the_results_series(tmp_path):

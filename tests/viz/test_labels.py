@@ -6,10 +6,17 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from conftest import shipped
 from uvms.solvers import SOLVERS
-from uvms.viz.labels import (METHOD_NAMES, TITLE_CHARACTERS_PER_INCH, arm_joint_labels, figure_title, joint_unit,
-                             method_name)
+from uvms.viz.labels import (
+    METHOD_NAMES,
+    TITLE_CHARACTERS_PER_INCH,
+    arm_joint_labels,
+    figure_title,
+    joint_unit,
+    method_name,
+)
+
+from conftest import shipped
 
 
 def test_prismatic_joints_are_metres_and_every_other_joint_radians():

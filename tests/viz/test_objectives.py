@@ -6,9 +6,10 @@ from __future__ import annotations
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from conftest import NO_FIGURES
 from uvms.scenario import run_scenario
 from uvms.viz.objectives import ROW_STYLES, inequality_figure
+
+from conftest import NO_FIGURES
 
 
 def test_the_inequality_figure_names_its_rows_and_method_and_keeps_its_title(tmp_path):

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-from conftest import NO_FIGURES, yz_circle
 from uvms.scenario import run_scenario
 from uvms.viz.paths import ARROWS, arrow_segments, path_figure
+
+from conftest import NO_FIGURES, yz_circle
 
 
 @pytest.fixture(scope="module")

@@ -13,11 +13,21 @@ import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgba
 
-from conftest import NO_FIGURES, yz_circle
 from uvms.scenario import run_scenario
 from uvms.viz import plotting
-from uvms.viz.plotting import (CLOUD_COLOURS, ROUNDING_LEVEL, desired_motion_figure, error_figure,
-                               gjm_tracking_figure, joint_trajectory_figure, run_figures, stacked, workspace_figure)
+from uvms.viz.plotting import (
+    CLOUD_COLOURS,
+    ROUNDING_LEVEL,
+    desired_motion_figure,
+    error_figure,
+    gjm_tracking_figure,
+    joint_trajectory_figure,
+    run_figures,
+    stacked,
+    workspace_figure,
+)
+
+from conftest import NO_FIGURES, yz_circle
 
 
 @pytest.fixture(scope="module")

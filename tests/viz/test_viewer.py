@@ -18,13 +18,14 @@ import time
 import numpy as np
 import pinocchio as pin
 import pytest
-from conftest import MISSING_MESH, shipped
 from PIL import Image
 
 import uvms
-from uvms.viz.viewer import teach
-from uvms.viz import viewer
 from uvms.cli import main
+from uvms.viz import viewer
+from uvms.viz.viewer import teach
+
+from conftest import MISSING_MESH, shipped
 
 PORT = 18080  # first port tried by the live tests (the next free one is taken when busy)
 

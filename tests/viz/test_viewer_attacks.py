@@ -13,13 +13,14 @@ import zipfile
 
 import numpy as np
 import pytest
-from conftest import MISSING_MESH, shipped
 
 import uvms
 from uvms.cli import main
 from uvms.errors import ViewerInputError, WorkspaceInputError
 from uvms.model import meshes
 from uvms.viz import viewer
+
+from conftest import MISSING_MESH, shipped
 
 PORT = 18480  # first port tried by the live tests (the next free one is taken when busy)
 

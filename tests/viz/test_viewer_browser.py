@@ -21,8 +21,9 @@ import time
 
 import numpy as np
 import pytest
-from conftest import shipped
 from PIL import Image
+
+from conftest import shipped
 
 viser = pytest.importorskip("viser")
 from websockets.sync.client import connect  # noqa: E402  (viser's own dependency)

@@ -9,7 +9,6 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import numpy as np
 import pytest
-from conftest import ROOT
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -17,6 +16,8 @@ import uvms
 from uvms.viz import drawing
 from uvms.viz.collision_drawing import CollisionOverlay
 from uvms.viz.visual_shapes import MAX_DRAWN_TRIANGLES, body_size, coarsened
+
+from conftest import ROOT
 
 #: A Smilodon-sized vehicle alone: a 2.0 x 1.0 x 0.8 m box mesh 0.1 m ahead of its origin.
 ARMLESS = ROOT / "tests" / "fixtures" / "armless" / "vehicle.urdf"

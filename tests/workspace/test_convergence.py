@@ -8,9 +8,10 @@ import json
 import numpy as np
 import pytest
 
-from conftest import one_line, shipped
 from uvms.cli import main
 from uvms.workspace import monte_carlo, volume_convergence
+
+from conftest import one_line, shipped
 
 
 def test_volume_convergence_from_the_last_doubling():

@@ -9,7 +9,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from conftest import shipped, xiang_eq6
 import uvms
 from uvms.cli import main
 from uvms.workspace import (
@@ -29,6 +28,8 @@ from uvms.workspace import (
     voxel_keys,
     voxel_volume,
 )
+
+from conftest import shipped, xiang_eq6
 
 INERTIAL = '<inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial>'
 

@@ -23,11 +23,11 @@ import warnings
 from collections.abc import Iterator, Sequence
 
 from ..errors import UVMSError, UVMSWarning
-from .terminal import printable, say
 from .identify import add_identify_parser, command_identify
 from .info import command_info, describe, format_limits, parse_assignments
 from .run import command_run, command_sweep, run_output_folder, scenario_file, watch_job
 from .study import command_study, command_tune
+from .terminal import printable, say
 from .view import (
     command_view,
     frame_indices,

@@ -81,8 +81,8 @@ def read_log(options: argparse.Namespace, robot):
 
 def command_identify(options: argparse.Namespace) -> int:
     """``uvms identify LOG --model MODEL [--out DIR]``: identify, then write the folder (module docstring)."""
-    from ..dynamics.hydro.writer import hydrodynamics_yaml_text
     from ..dynamics.hydro.hydrodynamics import hydrodynamics_of
+    from ..dynamics.hydro.writer import hydrodynamics_yaml_text
     from ..dynamics.identification.identify import identify
     from ..io import outputs
     from ..io.names import default_output_folder

@@ -184,8 +184,8 @@ def hydrodynamics_lines(robot: Robot, path: str | None = None) -> list[str]:
         UVMSError: the file ``path`` the user named cannot be read or is invalid (the model's own data's problem
             is a line of the description instead: info describes the model).
     """
-    from ..dynamics.hydro.parameters import hydro_rows
     from ..dynamics.hydro.hydrodynamics import hydrodynamics_of
+    from ..dynamics.hydro.parameters import hydro_rows
 
     try:
         hydro = hydrodynamics_of(robot, path, required=False)

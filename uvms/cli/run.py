@@ -11,7 +11,6 @@ from pathlib import Path
 from ..errors import UVMSError
 from .terminal import say
 
-
 #: The metrics ``uvms run`` prints, those a run has (all are in metrics.json).
 HEADLINE_METRICS = ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
                     "vehicle_travel", "vehicle_yaw_range", "arm_travel", "max_vehicle_tilt", "min_clearance",

@@ -25,10 +25,11 @@ import pinocchio as pin
 from ..dynamics.plant.actuated import ActuatedCommand, base_twist
 from ..dynamics.thrusters.fin_allocation import split_actuators
 from ..errors import SolverInputError
+from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from ..robot.limits import Limit
 from ..robot.robot import Robot
-from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from .vehicle import VehicleVelocityController
+
 
 def coordinated_arm_rates(
     jacobian: np.ndarray,

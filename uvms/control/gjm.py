@@ -63,10 +63,10 @@ import pinocchio as pin
 from ..dynamics.hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from ..dynamics.plant.added_mass import augmented_mass_matrix, resolve_links
 from ..errors import GJMControlError, UVMSError
-from ..robot.kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
-from ..robot.robot import Robot
 from ..numerics.inverses import VariableDamping, weights_factor
 from ..robot.configuration import Configuration, MomentumRows
+from ..robot.kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
+from ..robot.robot import Robot
 from ..solvers import CLIKSolver, Solver, SolverResult
 from ..tasks.frame import FrameTask
 from ..trajectory.cartesian import PoseSample

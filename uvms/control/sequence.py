@@ -19,9 +19,9 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, Solver, SolverResult
-from ..robot.configuration import Configuration
 from ..tasks import DistanceTask, FrameTask, JointTask, VehicleTask
 from ..tasks.vehicle import VELOCITY_NAMES
 from ..trajectory import PolynomialLaw, PoseSample

@@ -34,10 +34,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
+from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
 from ..dynamics.thrusters.fins import Fins
-from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError, ThrusterLayoutWarning
 from ..robot.configuration import Configuration
@@ -48,8 +48,15 @@ from ..tasks.frame import FrameTask
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, arm_rates_for_task, vehicle_rates_for_task
-from .vehicle import (DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, VehiclePoseController, VehicleVelocityController,
-                      gain_vector, vehicle_inertia, velocity_gains)
+from .vehicle import (
+    DEFAULT_BANDWIDTH,
+    DEFAULT_DAMPING_RATIO,
+    VehiclePoseController,
+    VehicleVelocityController,
+    gain_vector,
+    vehicle_inertia,
+    velocity_gains,
+)
 
 #: levels -> a solver built on them (the scenario's class and options); None: the CLIK law (module docstring).
 SolverFactory = Callable[[list], Solver]

@@ -41,11 +41,10 @@ import numpy as np
 import pinocchio as pin
 
 from ..dynamics.plant.actuated import base_twist, vehicle_inverse_dynamics, water_in_base
+from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import AllocationResult, ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
-from ..dynamics.plant.plant import Plant
 from ..errors import SolverInputError
-
 
 #: Default natural frequency omega [rad/s] of the velocity loop per body axis (surge, sway, heave, roll, pitch,
 #: yaw): the BlueROV2's hand-tuned surge loop (2.75 rad/s) and roll loop (5.0 rad/s); below the thrusters' 1/tau

@@ -7,14 +7,14 @@ The one simulation, :func:`uvms.sim.loop.simulate`, integrates a ``Plant`` and, 
 ``ActuatedPlant`` (each builds its system of the loop: ``PlantSystem``, ``ActuatedPlantSystem``).
 """
 
-from .plant.actuated import ActuatedCommand, ActuatedPlant, ActuatedPlantSystem, vehicle_inverse_dynamics
-from .thrusters.allocation import AllocationResult, ThrustAllocator
 from .hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from .identification.identify import IdentificationResult, identify
 from .identification.data import IdentificationLog
+from .identification.identify import IdentificationResult, identify
+from .plant.actuated import ActuatedCommand, ActuatedPlant, ActuatedPlantSystem, vehicle_inverse_dynamics
 from .plant.added_mass import generalized_jacobian_added_mass
 from .plant.plant import Plant
 from .plant.system import PlantSystem
+from .thrusters.allocation import AllocationResult, ThrustAllocator
 from .thrusters.thrusters import Thruster, Thrusters, allocation_matrix, thrusters_of
 
 __all__ = ["ActuatedCommand", "ActuatedPlant", "ActuatedPlantSystem", "AllocationResult", "HydroParameters",

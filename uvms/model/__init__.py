@@ -10,8 +10,8 @@
 ``distances`` (signed distances of pairs and their Jacobian).
 """
 
-from .compose import mount_arm
 from .base_rule import ADDED_BASE_JOINT, BASE_CHOICES
+from .compose import mount_arm
 from .loader import load, read_model_text
 from .packages import package_index
 from .resources import example_robot_urdf, shipped_models

@@ -16,9 +16,9 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from collections.abc import Mapping
 
-from . import checks
 from ..errors import BaseMismatchError, UVMSError
 from ..robot.structure import JointClass
+from . import checks
 
 BASE_CHOICES = ("floating", "planar", "fixed")
 #: Name given to a vehicle joint that uvms adds (base="floating"/"planar" on a plain root link).

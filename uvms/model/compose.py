@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from . import checks, point_masses, resources
-from .joint_classes import classify_joints
+from ..errors import FrameNotFound, JointOrderWarning, UVMSError
 from ..robot import urdf_export
 from ..robot.conventions import pose_from_xyzrpy
-from ..errors import FrameNotFound, JointOrderWarning, UVMSError
 from ..robot.robot import Robot
 from ..robot.structure import EE_GIVEN, default_end_effectors
+from . import checks, point_masses, resources
+from .joint_classes import classify_joints
 from .loader import build_model, captured_stderr, read_model_text, warn_missing_meshes
 from .packages import package_index
 
@@ -169,7 +169,7 @@ def composed_urdf(
                 and j.find("parent").get("link") == link]
     while mount in taken or any(name >= mount for name in siblings):
         mount = "~" + mount  # Pinocchio orders sibling joints by name: the arm's come after the vehicle's
-    arm_root = next(iter({l.get("name") for l in arm.findall("link")} - {c.get("link") for c in arm.iter("child")}))
+    arm_root = next(iter({link.get("name") for link in arm.findall("link")} - {c.get("link") for c in arm.iter("child")}))
     for element in arm:
         if element.tag in ("link", "joint", "material"):
             document.append(element)

@@ -17,13 +17,21 @@ from xml.parsers.expat import ExpatError
 
 import pinocchio as pin
 
+from ..errors import (
+    BaseGuessWarning,
+    MissingMeshWarning,
+    ModelCheckError,
+    ModelFileNotFound,
+    ModelParseError,
+    ParserWarning,
+    UVMSError,
+    XacroError,
+)
+from ..robot.robot import Robot
 from . import checks, includes, joint_classes, point_masses, resources, sandbox
+from .base_rule import ADDED_BASE_JOINT, decide_base, rigid_body
 from .meshes import missing_meshes_note
 from .packages import package_index, unknown_package
-from .base_rule import ADDED_BASE_JOINT, decide_base, rigid_body
-from ..errors import (BaseGuessWarning, MissingMeshWarning, ModelCheckError, ModelFileNotFound, ModelParseError,
-                      ParserWarning, UVMSError, XacroError)
-from ..robot.robot import Robot
 
 ROOT_JOINTS = {"floating": pin.JointModelFreeFlyer, "planar": pin.JointModelPlanar}
 

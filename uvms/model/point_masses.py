@@ -12,7 +12,7 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ModelCheckError, PointMassWarning
+from ..errors import ModelCheckError
 
 #: A mass matrix whose smallest eigenvalue is at most this fraction of its largest is singular (rounding of an
 #: exactly singular one stays near 1e-16 of it).

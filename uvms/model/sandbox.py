@@ -62,8 +62,8 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from ..errors import ModelParseError, XacroError
-from .packages import package_index, unknown_package
 from .checks import MAX_URDF_BYTES  # the largest URDF the child may hand back [bytes]
+from .packages import package_index, unknown_package
 
 #: Seconds an untrusted xacro expansion may take [s].
 DEFAULT_TIMEOUT = 30.0

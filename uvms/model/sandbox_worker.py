@@ -327,10 +327,11 @@ def main() -> None:
         limit_resources(request["memory_bytes"], request["cpu_seconds"])
         # trusted code, imported before the filters: what it loads (libseccomp, yaml's C part) comes from
         # system folders that Landlock then hides; xacro imports substitution_args and yaml lazily
+        from xml.parsers.expat import ExpatError
+
         import pyseccomp  # noqa: F401
         import xacro
         import xacro.substitution_args  # noqa: F401 - imports yaml
-        from xml.parsers.expat import ExpatError
 
         if request["landlock"]:
             restrict_reading(python_folders() | set(request["read_roots"]), ("/dev/null", "/dev/urandom"))

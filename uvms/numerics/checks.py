@@ -7,7 +7,6 @@ and raises with a message that names the argument and what would be valid.
 from __future__ import annotations
 
 import math
-
 from collections.abc import Callable
 
 import numpy as np

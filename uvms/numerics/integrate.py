@@ -26,6 +26,7 @@ from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
+
 from ..errors import NumericalError, StepCountError, UVMSError
 from .lapack import lapack
 

@@ -32,8 +32,8 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from .conventions import AXIS_NAMES
 from ..errors import ModelCheckError, NoVehicleError, NumericalError, UVMSError
+from .conventions import AXIS_NAMES
 
 WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 

@@ -17,8 +17,16 @@ from ..io import outputs
 from ..numerics.validate import finite_array
 from . import kinematics, urdf_export
 from .bases import BASE_TYPES, BaseType
-from .structure import (EE_GIVEN, JointClass, JointInfo, base_type_of, default_end_effectors, joint_class_table,
-                        joint_infos, unit_norm_slices)
+from .structure import (
+    EE_GIVEN,
+    JointClass,
+    JointInfo,
+    base_type_of,
+    default_end_effectors,
+    joint_class_table,
+    joint_infos,
+    unit_norm_slices,
+)
 from .vehicle_pose import VehicleAccessors
 
 #: Default task axes by base type (the facts live in `uvms.robot.bases`).

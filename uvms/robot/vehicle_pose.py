@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from . import conventions
 from ..errors import ConfigurationError, NoVehicleError
+from . import conventions
 
 
 class VehicleAccessors:

@@ -21,14 +21,14 @@ import numpy as np
 from ..control.coordination import CoordinatedControl
 from ..control.station import actuated_control
 from ..dynamics.plant.actuated import ActuatedPlant
-from ..dynamics.thrusters.fins import Fins, fins_of
 from ..dynamics.plant.plant import Plant
+from ..dynamics.thrusters.fins import Fins, fins_of
 from ..dynamics.thrusters.thrusters import Thrusters, thrusters_of
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
-from ..solvers import SOLVERS, CLIKSolver, Solver
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
+from ..solvers import SOLVERS, CLIKSolver, Solver
 from ..tasks.frame import FrameTask
 from .inequalities import ObjectiveRecorder, ScenarioInequalities, build_inequalities
 from .schema import changed_keys

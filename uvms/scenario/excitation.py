@@ -20,9 +20,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
 from ..dynamics.hydro.parameters import HydroParameters
 from ..dynamics.identification.data import IdentificationLog
+from ..dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
 from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.thrusters import thrusters_of
 from ..errors import IdentificationError, ScenarioError, UVMSError
@@ -30,8 +30,8 @@ from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import Actuation, check_actuated_scenario
-from .schema import changed_keys
 from .bags.tf_tree import vehicle_root_link
+from .schema import changed_keys
 
 
 @dataclass(frozen=True)

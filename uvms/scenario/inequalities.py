@@ -27,13 +27,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ScenarioError, UVMSError
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, Solver
 from ..solvers.saturation import speed_maximum
-from ..robot.configuration import Configuration
-from ..tasks.objectives import Inequality, Objective, PlaneClearance, Manipulability, VelocityLimit, check_table
+from ..tasks.objectives import (
+    Inequality,
+    Manipulability,
+    Objective,
+    PlaneClearance,
+    VelocityLimit,
+    check_table,
+    inequalities_from_table,
+)
 from ..tasks.objectives.collision import NearestPairs, Obstacle, SelfCollision
-from ..tasks.objectives import inequalities_from_table
 
 #: An objective whose value is outside its valid set by more than this [its unit] is reported on the terminal:
 #: the activation keeps it inside up to the step's discretization (a tilt limit can be passed by a fraction

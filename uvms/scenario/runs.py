@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import outputs
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError, OutputFailedWarning, UVMSError
+from ..io import outputs
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
@@ -24,6 +24,7 @@ from .record import model_record
 from .resources import resolve_scenario_path
 from .schema import named_files, read_scenario
 from .verdict import run_verdict
+
 
 @dataclass
 class RunResult:

@@ -7,8 +7,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ScenarioError
-from ..trajectory import (CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw,
-                          VelocityRamps)
+from ..trajectory import CirclePath, LinePath, PathTrajectory, PolynomialLaw, SE3Trajectory, TrapezoidLaw, VelocityRamps
 
 
 def vector(values: list[float], size: int, name: str) -> np.ndarray:

@@ -24,8 +24,7 @@ from ..errors import UVMSError
 from ..io import outputs
 from ..robot.robot import Robot
 from ..tasks.vehicle import VELOCITY_NAMES
-from .series import (ACTUATION_FIELDS, PLANT_FIELDS, TRACKING_FIELDS, ActuationSeries, PlantSeries,
-                     TrackingSeries)
+from .series import ACTUATION_FIELDS, PLANT_FIELDS, TRACKING_FIELDS, ActuationSeries, PlantSeries, TrackingSeries
 
 #: The time series of a task, in the order of ``trajectory.npz``.
 SERIES = ("t", "q", "v", "ee_position", "ee_rpy", "desired_position", "desired_rpy", "task_error",

@@ -21,16 +21,22 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import NumericalError
+from ..numerics.checks import check_damping, check_scalar, check_weights, free_floating_weights_note, prepared_gain
+from ..numerics.inverses import (
+    RCOND,
+    SolverInputError,
+    VariableDamping,
+    WeightedInverse,
+    damping_parameters,
+    weights_subset,
+)
+from ..robot.configuration import Configuration
 from ..robot.kinematics import base_velocity_from_momentum
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
-from ..robot.configuration import Configuration
 from ..tasks.frame import FrameTask
 from ..tasks.joint_limits import JointLimitPotential, NullspaceTerms
 from ..tasks.task import Task, as_task_list
-from ..numerics.checks import check_damping, check_scalar, check_weights, free_floating_weights_note, prepared_gain
-from ..numerics.inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, damping_parameters,
-                                 weights_subset)
 from .base import Solver, check_free_floating, checked_step
 from .result import SolvedRows, SolverResult
 from .stack import stacked_terms

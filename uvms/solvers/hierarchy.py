@@ -18,13 +18,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..robot.kinematics import base_velocity_from_momentum, solve_base_block
-from ..robot.robot import Robot, check_robot
-from ..robot.configuration import Configuration
-from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
-from ..tasks.task import Task
 from ..numerics.checks import prepared_gain
 from ..numerics.inverses import SolverInputError
+from ..robot.configuration import Configuration
+from ..robot.kinematics import base_velocity_from_momentum, solve_base_block
+from ..robot.robot import Robot, check_robot
+from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
+from ..tasks.task import Task
 from .result import SolvedRows
 from .stack import stacked_terms
 

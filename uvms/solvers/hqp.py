@@ -35,11 +35,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot.robot import Robot
-from ..robot.configuration import Configuration
-from ..tasks.objectives import JointLimits, VelocityLimit
 from ..numerics.checks import check_damping, check_scalar, check_weights
 from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value, weights_factor
+from ..robot.configuration import Configuration
+from ..robot.robot import Robot
+from ..tasks.objectives import JointLimits, VelocityLimit
 from .base import Solver
 from .cascade import PREFERRED_SOLVERS, Cascade, installed_solvers, level_attempts, qp_solver, solve_level
 from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, solved_rows, speed_ratio

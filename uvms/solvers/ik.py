@@ -19,11 +19,11 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import SolverInputError
+from ..numerics.checks import check_count, check_scalar
 from ..robot.kinematics import WORLD_ALIGNED
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
 from ..tasks.frame import FrameTask, log_pose_error
-from ..numerics.checks import check_count, check_scalar
 from .result import IKResult
 
 Target = pin.SE3 | Sequence[float]
@@ -204,7 +204,9 @@ class PoseProblem:
         The Newton loop calls it once per iteration, where each attribute lookup and call layer costs about
         as much as a Pinocchio call; the numbers are those of :meth:`pose_error` and the frame Jacobian.
         """
-        from ..numerics._kernels.pose import pose_error_norm as error_norm  # numba: loaded by the IK, not by ``import uvms``
+        from ..numerics._kernels.pose import (
+            pose_error_norm as error_norm,  # numba: loaded by the IK, not by ``import uvms``
+        )
         from ..numerics._kernels.pose import rotation_to_target as to_target
 
         model, data, frame, nv = self.model, self.data, self.frame_ids[0], self.model.nv

@@ -14,15 +14,15 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..robot.conventions import pose_from_xyyaw, pose_from_xyzrpy
 from ..errors import NameNotFound, SolverInputError
-from ..robot.limits import Limit
-from ..robot.robot import Robot, check_robot
-from ..robot.configuration import Configuration
-from ..tasks.joint_limits import JointLimitPotential
-from ..tasks.task import Task
 from ..numerics.checks import check_count, check_scalar
 from ..numerics.inverses import pinv
+from ..robot.configuration import Configuration
+from ..robot.conventions import pose_from_xyyaw, pose_from_xyzrpy
+from ..robot.limits import Limit
+from ..robot.robot import Robot, check_robot
+from ..tasks.joint_limits import JointLimitPotential
+from ..tasks.task import Task
 from .result import InitialConfigurationResult
 from .stack import as_task_list
 

@@ -15,9 +15,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot.configuration import Configuration
 from ..errors import SolverInputError
 from ..numerics.checks import check_matrix, check_vector
+from ..robot.configuration import Configuration
 
 #: Virtual joints of the PPPS chain, in order (prismatic x, y, z; spherical as rotations about x, y, z).
 VIRTUAL_JOINTS = ("px", "py", "pz", "rx", "ry", "rz")

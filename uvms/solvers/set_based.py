@@ -47,16 +47,23 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot.robot import Robot
-from ..robot.configuration import Configuration
-from ..tasks.objectives import VelocityLimit
 from ..numerics.checks import check_damping, check_scalar
+from ..numerics.inverses import (
+    RCOND,
+    SolverInputError,
+    VariableDamping,
+    WeightedInverse,
+    converged_or_refused,
+    damping_parameters,
+)
+from ..robot.configuration import Configuration
+from ..robot.robot import Robot
+from ..tasks.objectives import VelocityLimit
 from .base import Solver
 from .hierarchy import Hierarchy, HierarchyPlan, Levels, last_task_sigma, solved_rows, speed_ratio
-from ..numerics.inverses import (RCOND, SolverInputError, VariableDamping, WeightedInverse, converged_or_refused,
-                       damping_parameters)
 from .result import SolverResult
 from .saturation import TOLERANCE, RateRows, speed_maximum
+
 
 # ----------------------------------------------------------------------------- the iCAT levels
 class ICAT:

@@ -6,10 +6,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..robot.configuration import Configuration
-from ..tasks.task import Task
-from ..tasks.task import as_task_list
 from ..numerics.checks import apply_gain, gain_matrix
+from ..robot.configuration import Configuration
+from ..tasks.task import Task, as_task_list
 
 __all__ = ["as_task_list", "gain_matrix", "stack", "stacked_terms"]
 

@@ -8,8 +8,18 @@ instead of a target; the set-based and QP hierarchies of :mod:`uvms.solvers` pla
 from .frame import FrameTask
 from .joint_limits import JointLimitPotential
 from .joints import JointTask
-from .objectives import (FrameBox, Inequality, JointLimits, JointVelocityLimits, Manipulability, PlaneClearance,
-                         VehicleAttitude, VehicleVelocityLimits, VelocityLimit, inequalities_from_table)
+from .objectives import (
+                         FrameBox,
+                         Inequality,
+                         JointLimits,
+                         JointVelocityLimits,
+                         Manipulability,
+                         PlaneClearance,
+                         VehicleAttitude,
+                         VehicleVelocityLimits,
+                         VelocityLimit,
+                         inequalities_from_table,
+)
 from .posture import PostureTask
 from .relative import DistanceTask
 from .task import Task

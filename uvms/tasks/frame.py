@@ -7,12 +7,12 @@ from collections.abc import Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..robot.conventions import pose_from_xyzrpy, wrap_angles
 from ..errors import UVMSError
 from ..numerics.validate import finite_array
+from ..robot.configuration import Configuration
+from ..robot.conventions import pose_from_xyzrpy, wrap_angles
 from ..robot.kinematics import axis_rows
 from ..robot.robot import Robot, check_robot
-from ..robot.configuration import Configuration
 from .task import Task
 
 ORIENTATION_ERRORS = ("log", "euler")

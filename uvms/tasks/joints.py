@@ -7,8 +7,8 @@ from collections.abc import Mapping
 import numpy as np
 
 from ..errors import UVMSError
-from ..robot.robot import Robot
 from ..robot.configuration import Configuration
+from ..robot.robot import Robot
 from .task import Task
 
 

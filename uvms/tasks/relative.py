@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import UVMSError
-from ..robot.robot import Robot
 from ..robot.configuration import Configuration
+from ..robot.robot import Robot
 from .task import Task
 
 

@@ -7,11 +7,11 @@ from collections.abc import Mapping
 import numpy as np
 import pinocchio as pin
 
-from ..robot.bases import BASE_TYPES
-from ..robot.conventions import wrap_angle
 from ..errors import UVMSError
-from ..robot.robot import Robot, check_robot
+from ..robot.bases import BASE_TYPES
 from ..robot.configuration import Configuration
+from ..robot.conventions import wrap_angle
+from ..robot.robot import Robot, check_robot
 from .task import Task
 
 #: Names of the vehicle velocity entries (body twist in local FLU axes), per base type with a vehicle.

@@ -7,8 +7,18 @@
 - ``joint``: joint-space interpolation through via points (cubic, quintic), ``jtraj`` and ``ctraj``.
 """
 
-from .cartesian import (CirclePath, LinePath, PathSample, PathSamples, PathTrajectory, PointPath, PoseSample, PoseSamples,
-                        SE3Trajectory, hold)
+from .cartesian import (
+                        CirclePath,
+                        LinePath,
+                        PathSample,
+                        PathSamples,
+                        PathTrajectory,
+                        PointPath,
+                        PoseSample,
+                        PoseSamples,
+                        SE3Trajectory,
+                        hold,
+)
 from .joint import CartesianSamples, JointSamples, ViaPointTrajectory, ctraj, jtraj
 from .laws import LawSample, PolynomialLaw, TimeLaw, TrapezoidLaw, check_positive
 from .ramps import VelocityRamps

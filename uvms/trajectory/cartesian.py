@@ -13,8 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..robot.conventions import pose_from_xyzrpy
 from ..errors import UVMSError
+from ..robot.conventions import pose_from_xyzrpy
 from .laws import PolynomialLaw, TimeLaw
 
 

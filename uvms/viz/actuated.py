@@ -15,9 +15,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from ..io import outputs
 from ..dynamics.thrusters.fins import Fins
 from ..dynamics.thrusters.thrusters import Thrusters
+from ..io import outputs
 from ..sim.result import SimulationResult
 
 FLOOR = 1e-9  # [m, rad] log axes: errors below are drawn at the floor

@@ -34,9 +34,9 @@ from .dexterity import (
     DexterityAccumulator,
     DexterityMap,
     OrientationGrid,
-    pose_dexterity,
     dexterity_map,
     equal_area_rings,
+    pose_dexterity,
 )
 from .hull import HullShape, hull_shapes, outside_hull, vehicle_links
 from .montecarlo import POINTS_KEPT, WorkspaceResult, monte_carlo, parse_sample_count

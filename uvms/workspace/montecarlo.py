@@ -18,14 +18,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import WorkspaceInputError
+from ..io.progress import tqdm
 from ..robot.robot import Robot
 from .batch import CHUNK, BatchKinematics
 from .convergence import CONVERGENCE_TOLERANCE, VolumeConvergence, volume_convergence
 from .dexterity import DexterityAccumulator, DexterityMap, OrientationGrid
 from .hull import HullShape, hull_shapes, outside_hull
 from .voxels import VoxelOccupancy, check_voxel
-from ..io.progress import tqdm
-
 
 #: Samples per frame whose joint values and positions are kept (`WorkspaceResult.joints`/``positions``,
 #: ``points.npz``, the scatter figures): the first ones drawn, a uniform random subsample since the draws are

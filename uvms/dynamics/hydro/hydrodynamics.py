@@ -60,8 +60,8 @@ from typing import TYPE_CHECKING
 
 from ...errors import ModelCheckError, ModelParseError, UVMSError
 from ...model.resources import read_yaml
-from .parameters import GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names
 from ..plugins.readers import read_hydro_plugins
+from .parameters import GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names
 from .uuv import MODEL_KEYS, MODEL_TYPES, _numbers, link_from_uuv, urdf_link_masses
 
 __all__ = ["MODEL_KEYS", "MODEL_TYPES", "HydroParameters", "LinkHydrodynamics", "hydrodynamics_of",

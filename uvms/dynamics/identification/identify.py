@@ -39,13 +39,22 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import IdentificationError, UVMSError
-from ..hydro.parameters import HydroParameters
 from ..hydro.hydrodynamics import hydrodynamics_of
+from ..hydro.parameters import HydroParameters
 from .current import CurrentEstimate, checked_current, estimate_current
 from .data import IdentificationLog, smoothed_states
 from .fit import PRIOR_SCALES, identifiable_fit, normal_solve
-from .model import (AXES, ParameterLayout, Regression, identified_link_name, known_plant,
-                                   link_from_theta, parameter_layout, regression, rigid_vehicle_mass)
+from .model import (
+    AXES,
+    ParameterLayout,
+    Regression,
+    identified_link_name,
+    known_plant,
+    link_from_theta,
+    parameter_layout,
+    regression,
+    rigid_vehicle_mass,
+)
 from .predict import HeldOutPrediction, predict_held_out
 
 #: z of a two-sided 95 % interval.

@@ -26,10 +26,10 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import IdentificationError
-from ..plant.actuated import base_twist, vehicle_inverse_dynamics
 from ..hydro.parameters import HydroParameters, LinkHydrodynamics
-from .data import SmoothedStates
+from ..plant.actuated import base_twist, vehicle_inverse_dynamics
 from ..plant.plant import Plant
+from .data import SmoothedStates
 
 #: The body axes, FLU, in the order of the twist and wrench.
 AXES = ("u", "v", "w", "p", "q", "r")
@@ -257,8 +257,8 @@ def acceleration_noise_terms(layout: ParameterLayout, weights: np.ndarray,
     gram, moment = np.zeros((count, count)), np.zeros(count)
     for row, (k, left) in enumerate(zip(added, bases)):
         moment[k] = layout.scale[k] * np.trace(left @ weight @ data.vehicle_mass @ sigma)
-        for l, right in zip(added, bases):
-            gram[k, l] = layout.scale[k] * layout.scale[l] * np.trace(left @ weight @ right @ sigma)
+        for m, right in zip(added, bases):
+            gram[k, m] = layout.scale[k] * layout.scale[m] * np.trace(left @ weight @ right @ sigma)
     return gram, moment
 
 

@@ -16,9 +16,9 @@ import pinocchio as pin
 
 from ...numerics.integrate import rk4_step
 from ..hydro.parameters import HydroParameters
+from ..plant.plant import Plant
 from .data import SmoothedStates
 from .model import AXES, configurations
-from ..plant.plant import Plant
 
 
 @dataclass(frozen=True)

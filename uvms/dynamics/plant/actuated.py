@@ -32,9 +32,9 @@ import pinocchio as pin
 
 from ...errors import ConfigurationError, StepCountError, UVMSError
 from ..thrusters.fins import Fins
+from ..thrusters.thrusters import Thrusters, allocation_matrix
 from .plant import Plant, PlantDynamics
 from .system import PlantSample, PlantSystem, check_finite_state
-from ..thrusters.thrusters import Thrusters, allocation_matrix
 
 #: The controller of an actuated plant: (t [s], q (nq,), v (nv,), f (n,) [N]) -> ActuatedCommand.
 ActuatedController = Callable[[float, np.ndarray, np.ndarray, np.ndarray], "ActuatedCommand"]

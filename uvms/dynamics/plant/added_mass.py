@@ -16,10 +16,9 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import UVMSError
-from ..hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
-from ...robot.robot import Robot
 from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
-
+from ...robot.robot import Robot
+from ..hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
 
 LOCAL = pin.ReferenceFrame.LOCAL
 

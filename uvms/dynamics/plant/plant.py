@@ -64,12 +64,11 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import UVMSError
-from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
-from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
-from ...robot.robot import Robot, check_robot
 from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
+from ...robot.robot import Robot, check_robot
+from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
+from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
 from .system import Command, PlantSystem
-
 
 
 def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:

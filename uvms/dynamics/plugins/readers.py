@@ -31,11 +31,11 @@ import numpy as np
 
 from ...errors import ModelCheckError, SkippedLinkWarning
 from ...model.plugins import GZ, HIPPO, UUV, plugins_of
+from ..hydro.parameters import SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics
+from ..hydro.uuv import link_from_uuv, urdf_link_masses
+from ..thrusters.sources import PluginThruster, _float, read_uuv_thruster
 from .gz_sim import gz_buoyancy_density, gz_hydrodynamics_fields, read_gz_thruster
 from .hippo import hippo_buoyancy_fields, hippo_hydrodynamics_fields, read_hippo_thruster
-from ..hydro.parameters import SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics
-from ..thrusters.sources import PluginThruster, _float, read_uuv_thruster
-from ..hydro.uuv import link_from_uuv, urdf_link_masses
 
 #: simulator -> reader(plugin, robot root, thruster name, where) -> PluginThruster.
 THRUSTER_READERS: dict[str, Callable[[ET.Element, ET.Element, str, str], PluginThruster]] = {

@@ -29,10 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...robot.conventions import AXIS_NAMES
 from ...errors import SolverInputError, UVMSError
-from ...robot.kinematics import axis_rows
 from ...numerics.inverses import pinv
+from ...robot.conventions import AXIS_NAMES
+from ...robot.kinematics import axis_rows
 
 #: Slack [N] on the bounds and the wrench when deciding that the pseudo-inverse solution is good enough.
 TOLERANCE = 1e-9

@@ -29,8 +29,8 @@ import numpy as np
 from ...dynamics.identification.data import MAX_LOG_SAMPLES, IdentificationLog
 from ...errors import IdentificationError
 from .limits import check_bag, check_topic_count, damaged
-from .writer import BODY_WRENCH_TOPIC, INSTALL_HINT, JOINT_STATES_TOPIC, ODOM_TOPIC
 from .thrust_log import ThrustInput
+from .writer import BODY_WRENCH_TOPIC, INSTALL_HINT, JOINT_STATES_TOPIC, ODOM_TOPIC
 
 #: The message type each role needs.
 MESSAGE_TYPES = {"odometry": "nav_msgs/msg/Odometry", "joint states": "sensor_msgs/msg/JointState",

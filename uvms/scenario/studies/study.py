@@ -30,12 +30,9 @@ from typing import Any
 
 from ...errors import StudyError
 from ...io import outputs
-from .distributions import METHODS, Distribution, parse_samples, sample_table
-from .parallel import check_backend, exit_if_orphaned, run_tasks
-from .parallel import use_thread_lock_for_progress_bars as thread_lock
 from ..resources import resolve_scenario_path
 from ..schema import named_files, read_scenario, read_toml, scenario_from_raw
-from .sensitivity import summarize
+from .distributions import METHODS, Distribution, parse_samples, sample_table
 from .folder import (
     METRICS,
     TRIALS,
@@ -45,6 +42,9 @@ from .folder import (
     started_by,
     trial_name,
 )
+from .parallel import check_backend, exit_if_orphaned, run_tasks
+from .parallel import use_thread_lock_for_progress_bars as thread_lock
+from .sensitivity import summarize
 from .sweep import csv_cell, toml_literal
 
 MAX_TRIALS = 100_000

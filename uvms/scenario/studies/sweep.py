@@ -24,7 +24,6 @@ import numpy as np
 
 from ...errors import SweepError
 from ...io import outputs
-from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
 from ..record import scenario_model
 from ..resources import resolve_scenario_path
 from ..schema import (
@@ -34,6 +33,7 @@ from ..schema import (
     read_toml,
     scenario_from_raw,
 )
+from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
 METRICS = ("max_position_error", "final_position_error", "arm_travel", "vehicle_travel", "wall_time")

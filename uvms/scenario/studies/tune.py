@@ -26,10 +26,10 @@ from typing import Any
 
 from ...errors import StudyError
 from ...io import outputs
-from .distributions import KEY_PATTERN, parse_samples
-from .parallel import check_backend
 from ..resources import resolve_scenario_path
 from ..schema import read_scenario
+from .distributions import KEY_PATTERN, parse_samples
+from .parallel import check_backend
 from .study import METRICS, study
 from .sweep import csv_cell, toml_literal
 

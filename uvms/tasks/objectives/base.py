@@ -35,8 +35,8 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import ObjectiveError
-from ...robot.robot import Robot
 from ...robot.configuration import Configuration
+from ...robot.robot import Robot
 
 #: Shapes of the activation across the band.
 ACTIVATION_SHAPES = ("cosine", "step")

@@ -29,8 +29,15 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import FrameNotFound, LinkNotFound, ObjectiveError
-from ...model.collision import (CollisionPairs, candidate_pairs, collision_geometry, collision_links, collision_pairs,
-                                geometry_link, pair_set)
+from ...model.collision import (
+    CollisionPairs,
+    candidate_pairs,
+    collision_geometry,
+    collision_links,
+    collision_pairs,
+    geometry_link,
+    pair_set,
+)
 from ...model.distances import Distances, PairDistances
 from ...robot.configuration import Configuration
 from ...robot.robot import Robot

@@ -8,9 +8,9 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...errors import FrameNotFound, ObjectiveError
-from ...robot.robot import Robot
-from ...robot.configuration import Configuration
 from ...numerics.validate import finite_array
+from ...robot.configuration import Configuration
+from ...robot.robot import Robot
 from .base import Inequality, finite_number, vehicle_frame_id
 
 #: Below this tilt [rad] the tilt's gradient is undefined (a cone's apex); the Jacobian row is taken as 0.

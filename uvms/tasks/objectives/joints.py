@@ -7,9 +7,9 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from ...errors import ObjectiveError
+from ...robot.configuration import Configuration
 from ...robot.limits import Limit
 from ...robot.robot import Robot
-from ...robot.configuration import Configuration
 from .base import Inequality, finite_number
 
 #: The band is capped at this fraction of each joint's valid range (a narrow jaw next to wide joints).

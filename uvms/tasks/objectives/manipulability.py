@@ -8,9 +8,9 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import ObjectiveError
+from ...robot.configuration import Configuration
 from ...robot.kinematics import WORLD_ALIGNED, axis_rows, manipulability_of
 from ...robot.robot import Robot
-from ...robot.configuration import Configuration
 from .base import Inequality, finite_number
 
 POSITION_AXES = ("x", "y", "z")

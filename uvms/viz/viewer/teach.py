@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ...robot.bases import BASE_TYPES
 from ...errors import TeachUnavailable, UVMSError
+from ...robot.bases import BASE_TYPES
 from ...robot.robot import Robot
 from ..labels import joint_unit
 

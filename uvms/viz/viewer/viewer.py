@@ -29,16 +29,15 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import UVMSError, ViewerInputError, ViewerUnavailable
-from ...robot.robot import Robot
 from ...numerics.validate import finite_array, time_vector
+from ...robot.robot import Robot
 from ...tasks.objectives.collision import NearestPairs
 from ..collision_shapes import ClosestPairs
 from ..drawing import as_configurations
 from .collision import CollisionControls
 from .geometry import EE_COLOUR, SKELETON_COLOUR, geometry_models, skeleton_geometry
 from .gui import Playback, TeachControls, guarded_servers, request_refusal
-from .scene import (EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box,
-                           framing)
+from .scene import EndEffectorTriads, Framing, add_lighting, add_seabed, apply_camera, bounding_box, framing
 
 __all__ = ["EE_COLOUR", "SKELETON_COLOUR", "Viewer", "ViewerUnavailable", "check_port", "geometry_models", "play",
            "request_refusal", "require_viser", "skeleton_geometry", "view"]
