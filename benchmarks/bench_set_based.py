@@ -2,8 +2,8 @@
 
 Objectives, highest priority first: arm joint position limits, vehicle attitude (tilt <= 5 deg), then the
 end-effector pose task; arm joint (the model's: 0.5 rad/s, the jaw 10 m/s) and vehicle (0.5 m/s, 0.5 rad/s)
-speed limits as bounds. Step times are ratios to one ``pin.forwardKinematics`` on the same model measured in the same run
-(interleaved, median over repeats; this machine is shared and noisy: absolute times are not comparable).
+speed limits as bounds. Step times are ratios to one ``pin.forwardKinematics`` on the same model measured in the same
+run (interleaved, median over repeats; this machine is shared and noisy: absolute times are not comparable).
 Then every method runs ``--steps`` steps from each of ``--starts`` seeded random starts (inside the limits,
 and a tenth of them 0.01-0.10 rad past one joint limit) towards a random reachable target, and the
 violations of the position and speed limits and the infeasible reports (or exceptions) are counted; the

@@ -2,7 +2,8 @@
 
 Rows (goals of the issue in the last column):
 
-* the general CLIK step and the pose-task ``CLIKSolver.step`` (UR5 on a 6-DOF floating base, nv = 12; ``bench_clik.py``);
+* the general CLIK step and the pose-task ``CLIKSolver.step`` (UR5 on a 6-DOF floating base, nv = 12;
+  ``bench_clik.py``);
 * the set-based step (BlueROV2 + Alpha 5: joint limits, speed limits, attitude, pose; ``bench_set_based.py``),
   beside pink's ``solve_ik`` with configuration and velocity limits;
 * ``uvms run scenarios/hoang2011_w1.toml`` with figures off, as a user runs it (fresh processes, wall time), and the

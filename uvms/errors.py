@@ -226,8 +226,8 @@ class ThrusterDefaultWarning(UVMSWarning):
 
 
 class FinDefaultWarning(UVMSWarning):
-    """A fin took :data:`uvms.dynamics.thrusters.fins.DEFAULT_TIME_CONSTANT` (its plugin gives no first-order time constant), or
-    a fin plugin is left out of the plant (its joint is not a fin: ``arm_joints`` makes it an arm joint)."""
+    """A fin took :data:`uvms.dynamics.thrusters.fins.DEFAULT_TIME_CONSTANT` (its plugin gives no first-order time
+    constant), or a fin plugin is left out of the plant (its joint is not a fin: ``arm_joints`` makes it an arm joint)."""
 
 
 class ThrusterLayoutWarning(UVMSWarning):

@@ -1,5 +1,5 @@
-"""Thrusters and fins allocated together (uvms.dynamics.thrusters.fin_allocation): the fins' columns at the step's speed, what
-they make reachable, and no fin swung to its limit for a direction it cannot give."""
+"""Thrusters and fins allocated together (uvms.dynamics.thrusters.fin_allocation): the fins' columns at the step's
+speed, what they make reachable, and no fin swung to its limit for a direction it cannot give."""
 
 from pathlib import Path
 

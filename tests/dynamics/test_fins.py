@@ -1,5 +1,5 @@
-"""Fins as model data (uvms.dynamics.thrusters.fins): read from uuv_simulator's fin plugin and Gazebo Sim's LiftDrag, their
-wrench on the vehicle at an angle, and the actuated plant turning them with their time constant."""
+"""Fins as model data (uvms.dynamics.thrusters.fins): read from uuv_simulator's fin plugin and Gazebo Sim's LiftDrag,
+their wrench on the vehicle at an angle, and the actuated plant turning them with their time constant."""
 
 import math
 from pathlib import Path

@@ -1,5 +1,5 @@
-"""uuv_simulator's shape models in the plant and in both file forms (uvms.dynamics.hydro.hydrodynamics), and the per-link
-rows for ``uvms info`` (uvms.dynamics.hydro.parameters.hydro_rows)."""
+"""uuv_simulator's shape models in the plant and in both file forms (uvms.dynamics.hydro.hydrodynamics), and the
+per-link rows for ``uvms info`` (uvms.dynamics.hydro.parameters.hydro_rows)."""
 
 from __future__ import annotations
 

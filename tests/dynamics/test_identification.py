@@ -1,5 +1,5 @@
-"""Hydrodynamic identification (uvms.dynamics.identification.identify): the regression against the plant's own equations,
-then recovery of the BlueROV2 + Alpha 5's parameters from logs simulated with them (conftest.excitation).
+"""Hydrodynamic identification (uvms.dynamics.identification.identify): the regression against the plant's own
+equations, then recovery of the BlueROV2 + Alpha 5's parameters from logs simulated with them (conftest.excitation).
 
 Odometry noise of the noisy cases (white, per sample at 50 Hz): position 5 cm, attitude 0.005 rad (0.3 deg),
 linear velocity 0.01 m/s (a DVL's), angular velocity 0.01 rad/s (a MEMS gyro's); the wrench is exact.

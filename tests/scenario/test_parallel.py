@@ -1,5 +1,5 @@
-"""The executor of sweeps and studies (uvms.scenario.studies.parallel): remote Dask schedulers that are not tls:// only when
-the user says so, and a scheduler that stays silent or speaks another protocol ends the command within the
+"""The executor of sweeps and studies (uvms.scenario.studies.parallel): remote Dask schedulers that are not tls:// only
+when the user says so, and a scheduler that stays silent or speaks another protocol ends the command within the
 timeout, in one line."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""`uvms study` (uvms.scenario.studies.study): one table on any backend and worker count, resume after SIGKILL, failed and
-killed trials, sensitivity, refused folders and bad input before any trial."""
+"""`uvms study` (uvms.scenario.studies.study): one table on any backend and worker count, resume after SIGKILL, failed
+and killed trials, sensitivity, refused folders and bad input before any trial."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
-"""`uvms sweep` (uvms.scenario.studies.sweep): the same table with 1 and 2 loky jobs and on a local Dask cluster, failures,
-bad input."""
+"""`uvms sweep` (uvms.scenario.studies.sweep): the same table with 1 and 2 loky jobs and on a local Dask cluster,
+failures, bad input."""
 
 from __future__ import annotations
 

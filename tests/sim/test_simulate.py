@@ -79,8 +79,8 @@ def test_a_free_floating_rigid_run_conserves_momentum():
 def test_an_actuated_run_equals_the_former_simulate_actuated():
     """Station keeping in a 0.3 m/s current through ``simulate(ActuatedPlant(plant, thrusters), ...)``: the numbers
     of the former ``simulate_actuated`` to 2e-6 relative (issue 31: the arm is re-solved for the task's command
-    K e, not J v_ref; the numbers below are the chain's, to rounding), with the former default gains (the defaults now scale with
-    the vehicle's inertia)."""
+    K e, not J v_ref; the numbers below are the chain's, to rounding), with the former default gains (the defaults now
+    scale with the vehicle's inertia)."""
     robot = shipped("bluerov2_alpha5")
     plant = uvms.Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
     thrusters = uvms.dynamics.thrusters_of(robot)

@@ -384,9 +384,10 @@ def icat_reference(levels: list, weights: np.ndarray, damping: float, eta: float
     """Simetti and Casalino (2016) eqs. 18-20 in numpy: rho_k - rho_{k-1} of each level (L, n).
 
     rho_k = rho_{k-1} + Q (J Q)^{#,A,I} W_k (xdot - J rho_{k-1}), W_k = J Q (J Q)^{#,A,Q},
-    Q_k = Q (I - (J Q)^{#,A,I} J Q), X^{#,A,Q} = (X^T A X + eta (I - Q)^T D^2 (I - Q))^# X^T A A (D = diag of the column norms of A^1/2 J), the damping in
-    X^{#,A,I} only; a level of activations 1 while Q = I is plain CLIK. Below the first level, singular values
-    of X = J Q under 1e-12 of |A^1/2 J L^-T|_F count as zero: the rounding Q keeps of the levels above.
+    Q_k = Q (I - (J Q)^{#,A,I} J Q), X^{#,A,Q} = (X^T A X + eta (I - Q)^T D^2 (I - Q))^# X^T A A (D = diag of the column
+    norms of A^1/2 J), the damping in X^{#,A,I} only; a level of activations 1 while Q = I is plain CLIK. Below the
+    first level, singular values of X = J Q under 1e-12 of |A^1/2 J L^-T|_F count as zero: the rounding Q keeps of the
+    levels above.
     """
     size = weights.shape[0]
     rho, projector, unrestricted = np.zeros(size), np.eye(size), True

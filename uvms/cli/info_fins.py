@@ -27,8 +27,8 @@ def model_text(fin: Fin) -> str:
 
 
 def fin_lines(robot: Robot) -> tuple[list[str], Fins]:
-    """The fins of the model (:func:`uvms.dynamics.thrusters.fins.fins_of`): joint, link origin in the base frame, angle range,
-    time constant, model; their warnings become lines ("not usable" when their data are wrong)."""
+    """The fins of the model (:func:`uvms.dynamics.thrusters.fins.fins_of`): joint, link origin in the base frame, angle
+    range, time constant, model; their warnings become lines ("not usable" when their data are wrong)."""
     from ..dynamics.thrusters.fins import fins_of
 
     try:

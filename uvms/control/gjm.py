@@ -19,8 +19,9 @@ Which GJM (``gjm``):
 
 * ``"rigid"`` — the classic one, from the rigid-body momentum (``Robot.generalized_jacobian``);
 * ``"added_mass"`` — from the momentum of the links *and the water they carry*
-  (link inertias augmented with their added mass, :func:`uvms.dynamics.plant.added_mass.generalized_jacobian_added_mass`):
-  exact in an inviscid fluid at rest, where that augmented momentum is conserved;
+  (link inertias augmented with their added mass,
+  :func:`uvms.dynamics.plant.added_mass.generalized_jacobian_added_mass`): exact in an inviscid fluid at rest, where
+  that augmented momentum is conserved;
 * ``"fixed_base"`` — the arm columns J_m of the ordinary Jacobian, as if the vehicle
   were held still (the traditional scheme the paper contrasts with; for comparisons).
 

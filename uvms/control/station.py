@@ -247,7 +247,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
         max_speed: [m/s, rad/s] bound of the pose objective; priorities: of the allocation
             (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`); arm_feedforward: as in
             :class:`uvms.control.vehicle.VehicleVelocityController`.
-        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), allocated with the thrusters at each step's
+        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), allocated with the thrusters at each
+        step's
             velocity (:class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`); None or empty: thrusters alone.
     """
     robot = plant.robot

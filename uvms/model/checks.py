@@ -203,7 +203,8 @@ GEOMETRY_SIZES = {"box": ("size",), "cylinder": ("radius", "length"), "sphere": 
 
 
 def check_geometry(robot: ET.Element, origin: str) -> None:
-    """Box sides, cylinder/sphere/capsule radii and lengths of every visual and collision are > 0; mesh scales are not 0.
+    """Box sides, cylinder/sphere/capsule radii and lengths of every visual and collision are > 0; mesh scales are not
+    0.
 
     Raises:
         ModelCheckError: naming the link, the element and the value.

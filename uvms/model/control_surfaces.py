@@ -12,8 +12,8 @@ Two plugins make a fin (:data:`FIN_PLUGINS`):
   a continuous joint is a rotor blade (Gazebo's propeller demo), not one either: a fin is a revolute joint.
 
 Such a joint is class ``fin`` (made by :mod:`uvms.model.joint_classes` from :func:`control_surface_joints`): frozen
-in the kinematics at 0 (or the limit nearest), its angle an actuator of the actuated plant (:mod:`uvms.dynamics.thrusters.fins`),
-its written limits kept in its class.
+in the kinematics at 0 (or the limit nearest), its angle an actuator of the actuated plant
+(:mod:`uvms.dynamics.thrusters.fins`), its written limits kept in its class.
 """
 
 from __future__ import annotations

@@ -11,9 +11,9 @@ guard cannot hold such code, so a model from someone else is expanded in a child
   renicing, pinning, rescheduling or migrating another process (setpriority, ioprio_set, sched_set*,
   migrate_pages, move_pages and prlimit64 are allowed only on the caller itself); file locks and leases;
   every ioctl but six harmless requests (reading a terminal's state or window size, bytes waiting,
-  close-on-exec, non-blocking; generic numbering as on x86 and arm), so no terminal setting (tcsetattr, TIOCSWINSZ, TIOCSTI...) and no
-  FIOASYNC/FIOSETOWN; sockets and System V / POSIX IPC; opening any file for writing (O_WRONLY, O_RDWR,
-  O_CREAT, O_TRUNC, O_APPEND); every file-system change (rename, unlink, mkdir, chmod, chown, truncate,
+  close-on-exec, non-blocking; generic numbering as on x86 and arm), so no terminal setting (tcsetattr, TIOCSWINSZ,
+  TIOCSTI...) and no FIOASYNC/FIOSETOWN; sockets and System V / POSIX IPC; opening any file for writing (O_WRONLY,
+  O_RDWR, O_CREAT, O_TRUNC, O_APPEND); every file-system change (rename, unlink, mkdir, chmod, chown, truncate,
   utime, mknod, xattrs, mount...); io_uring; raising its limits, changing identity or namespaces.
   Syscalls newer than its list are refused with ENOSYS;
 - **Landlock** (Linux 5.13+, when the kernel has it): the child may read only the model's folder and

@@ -128,7 +128,8 @@ def dls_solve(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float) -> 
 
     One Cholesky factorization of the (k, k) row-space matrix in the compiled kernel
     :func:`~uvms.numerics._kernels.dense.dls_solve_into` (the one the Newton steps of
-    :func:`~uvms.solvers.ik.solve_ik` call), no inverse formed and no validation: the caller has checked its inputs once.
+    :func:`~uvms.solvers.ik.solve_ik` call), no inverse formed and no validation: the caller has checked its inputs
+    once.
 
     Args:
         jacobian: J (k, n), finite.

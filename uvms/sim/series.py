@@ -20,7 +20,8 @@ TRACKING_FIELDS = ("rates", "ee_velocity", "desired_velocity")
 #: The series an actuated plant records itself (:class:`ActuationSeries`); its controller's go to ``controller``.
 ACTUATION_FIELDS = ("thrusts", "thrust_command", "body_wrench", "thrust_power", "thruster_power_abs", "motor_power",
                     "damping_power")
-#: The series of a plant with fins (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`): their angles and command [rad],
+#: The series of a plant with fins (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`): their angles and command
+# [rad],
 #: their wrench (6,) [N, N m] and its power [W].
 FIN_SERIES = ("fin_angles", "fin_command", "fin_wrench", "fin_power")
 #: The actuation series that ``actuation.npz`` holds, in its order (the others stay in memory; the fins' with fins).

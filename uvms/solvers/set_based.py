@@ -19,8 +19,8 @@ X^{#,A,Q} minimizes |A (xdot - X y)|^2 + |X y|^2_{A (I - A)} + eta |D (I - Q) y|
 a row whose activation falls to 0 fades out continuously, and the eta term keeps directions already used
 by the levels above from being inverted when they are only partly released, so no activation change
 causes a discontinuity. Both inverses are the library's one inverse
-(:class:`~uvms.numerics.inverses.WeightedInverse`, that of :func:`~uvms.numerics.inverses.damped_weighted_inverse`) of the stack
-Z = [A^1/2 X; eta^1/2 D (I - Q)]. Adaptations, stated: the paper's singular-value
+(:class:`~uvms.numerics.inverses.WeightedInverse`, that of :func:`~uvms.numerics.inverses.damped_weighted_inverse`) of
+the stack Z = [A^1/2 X; eta^1/2 D (I - Q)]. Adaptations, stated: the paper's singular-value
 regularization V^T P V is the damping lambda of that inverse (fixed, or amundsen2018 eq. 6 variable), put
 in (J Q)^{#,A,I} only; W_k uses the undamped inverse, so that with Q = I and A = I the step is
 J^# J J^+ xdot = J^# xdot exactly (J J^+ projects on the range of J, on which J^# acts). The eta term

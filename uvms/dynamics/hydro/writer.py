@@ -1,6 +1,7 @@
-"""Hydrodynamic parameters written as the YAML file that :func:`uvms.dynamics.hydro.hydrodynamics.load_hydrodynamics_yaml`
-reads: the inverse of that reader, in the file's uuv_simulator conventions (SNAME axes for the added mass and
-damping, Fossen's negative derivatives, the centre of buoyancy in the link frame).
+"""Hydrodynamic parameters written as the YAML file that
+:func:`uvms.dynamics.hydro.hydrodynamics.load_hydrodynamics_yaml` reads: the inverse of that reader, in the file's
+uuv_simulator conventions (SNAME axes for the added mass and damping, Fossen's negative derivatives, the centre of
+buoyancy in the link frame).
 
 Every number is written with Python's shortest round-trip representation, so reading the file back gives the
 same floats; a link's ``neutrally_buoyant`` or shape model (cylinder, box...) is written as its resolved

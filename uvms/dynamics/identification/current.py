@@ -1,5 +1,5 @@
-"""A constant ocean current identified with the vehicle's parameters (:func:`uvms.dynamics.identification.identify.identify`
-with ``identify_current``).
+"""A constant ocean current identified with the vehicle's parameters
+(:func:`uvms.dynamics.identification.identify.identify` with ``identify_current``).
 
 The current v_c (3,) [m/s, world ENU] enters the equations of motion through the relative twist
 nu_r = nu - [R^T v_c; 0] of every link's hydrodynamics, so the regression is linear in the parameters theta but not

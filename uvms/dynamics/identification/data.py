@@ -48,7 +48,8 @@ MAX_GAP_STEPS = 5.0
 MAX_LOG_SAMPLES = 200_000
 MAX_LOG_BYTES = 128 << 20
 #: The largest magnitudes a log's values may have: beyond them a log is not of an underwater vehicle (or not in SI
-#: units), and the fit's products overflow. Time [s] (Unix stamps stay below), position [m] (UTM coordinates stay below), linear velocity [m/s],
+#: units), and the fit's products overflow. Time [s] (Unix stamps stay below), position [m] (UTM coordinates stay
+# below), linear velocity [m/s],
 #: angular velocity [rad/s], force [N], moment [N m], joint position [rad or m] (about 160 turns of a continuous
 #: joint), joint velocity [rad/s or m/s].
 MAX_MAGNITUDES = {"time": 1e10, "position": 1e8, "linear velocity": 100.0, "angular velocity": 100.0, "force": 1e7,

@@ -1,6 +1,6 @@
-"""The fit of :func:`uvms.dynamics.identification.identify.identify`: weighted, bias-compensated least squares, parameters the
-log does not determine held by their priors with their uncertainty carried into the others' intervals, Newey-West
-standard errors, and the constrained solution.
+"""The fit of :func:`uvms.dynamics.identification.identify.identify`: weighted, bias-compensated least squares,
+parameters the log does not determine held by their priors with their uncertainty carried into the others' intervals,
+Newey-West standard errors, and the constrained solution.
 
 Identifiability and the prior
 =============================

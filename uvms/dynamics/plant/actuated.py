@@ -7,10 +7,10 @@ delta the fins' angles [rad] (none without fins); its rate is
     f' = (sat(f_cmd) - f) / tau,   sat = clip to [-max_reverse, +max_forward]
     delta' = (sat(delta_cmd) - delta) / tau_fin,   sat = clip to the fin joints' limits
 
-with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`), w_fins the fins' lift and
-drag at the vehicle's velocity through the water nu_r (:class:`uvms.dynamics.thrusters.fins.Fins`), the wrench applied
-at the vehicle's base frame (:meth:`uvms.dynamics.plant.plant.Plant._evaluate`). Since the command is clipped and
-f moves towards it, f stays inside the bounds (delta likewise). A plant without thrusters keeps its state (q, v):
+with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`), w_fins the fins' lift
+and drag at the vehicle's velocity through the water nu_r (:class:`uvms.dynamics.thrusters.fins.Fins`), the wrench
+applied at the vehicle's base frame (:meth:`uvms.dynamics.plant.plant.Plant._evaluate`). Since the command is clipped
+and f moves towards it, f stays inside the bounds (delta likewise). A plant without thrusters keeps its state (q, v):
 :class:`uvms.dynamics.plant.plant.PlantSystem`. :class:`ActuatedPlant` (plant + thrusters) builds the system
 (:meth:`ActuatedPlant.system`).
 
@@ -66,7 +66,8 @@ class ActuatedPlant:
     Args:
         plant: the Plant (its robot gives the frames; its current, damping, gravity apply); thrusters: their data.
         thrusts0: (n,) [N] the thrusts at t = 0, within the bounds (None: zero).
-        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`; None: none), at their rest angles at t = 0.
+        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`; None: none), at their rest angles at t =
+        0.
 
     Raises:
         ModelCheckError: a thruster on an arm link, a fixed base.

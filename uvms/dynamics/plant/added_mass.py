@@ -4,8 +4,9 @@ A link with Fossen parameters (:mod:`uvms.dynamics.hydro.parameters`) is placed 
 :func:`resolve_links`. Its added mass M_A enters the equations of motion twice (derivation: the docstring
 of :mod:`uvms.dynamics.plant.plant`): in the mass matrix, Mbar = M + sum_l J_l^T M_A,l J_l
 (:func:`augmented_mass_matrix`), and as the Coriolis term C_A(nu) nu (formed with the other wrenches of a link in
-:mod:`uvms.numerics._kernels.hydro`, from the links' constants stacked in :class:`StackedLinks`). With no current, damping or gravity the added-mass-augmented momentum is
-conserved; :func:`generalized_jacobian_added_mass` is the generalized Jacobian of that momentum.
+:mod:`uvms.numerics._kernels.hydro`, from the links' constants stacked in :class:`StackedLinks`). With no current,
+damping or gravity the added-mass-augmented momentum is conserved; :func:`generalized_jacobian_added_mass` is the
+generalized Jacobian of that momentum.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """The free-floating plant under a joint-velocity command, as a system of the one loop (:mod:`uvms.sim.system`).
 
 (q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)), the command continuous (evaluated at every
-integrator stage) or digital (sampled every control_dt and held). :meth:`uvms.dynamics.plant.plant.Plant.system` builds it.
+integrator stage) or digital (sampled every control_dt and held). :meth:`uvms.dynamics.plant.plant.Plant.system` builds
+it.
 """
 
 from __future__ import annotations

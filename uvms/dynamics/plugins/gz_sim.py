@@ -19,8 +19,8 @@ a thrust [N] (default), or a propeller speed omega [rad/s] with ``<use_angvel_cm
 
 (defaults 1, 1000 kg/m^3, 0.02 m). The limits uvms takes are that clamp: in newtons, or through that law at the
 ends of the speed range. A side the plugin leaves at its internal default (+-1000) is no limit the plugin gives:
-``thrusters.yaml`` or uvms's default completes it (:func:`uvms.dynamics.thrusters.thrusters.complete_plugin_thrusters`), as
-it does the time constant, which gz's Thruster does not have (its thrust follows the command at once).
+``thrusters.yaml`` or uvms's default completes it (:func:`uvms.dynamics.thrusters.thrusters.complete_plugin_thrusters`),
+as it does the time constant, which gz's Thruster does not have (its thrust follows the command at once).
 ``<velocity_control>``, ``<topic>``, ``<namespace>``, ``<deadband>``, the PID gains and the battery tags change how
 gz spins the propeller or listens, not the thrust uvms models; the boolean tags are checked. gz's Thruster has no
 ``<max_velocity>``/``<min_velocity>`` tag: the speed range is ``<min/max_thrust_cmd>`` in ``use_angvel_cmd`` mode.

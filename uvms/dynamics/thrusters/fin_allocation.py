@@ -1,20 +1,21 @@
 """Thrusters and fins allocated together: the fins linearized about the step's velocity, as more columns of B.
 
 A fin's wrench is nonlinear in its angle delta and grows with the square of the speed through the water (lift =
-C_L(alpha) rho u^2 area / 2, :mod:`uvms.dynamics.thrusters.lift_drag`). At each control step the fins' wrench is linearized in
-delta about the rest angles at the measured body velocity nu (:meth:`uvms.dynamics.thrusters.fins.Fins.linearized`):
+C_L(alpha) rho u^2 area / 2, :mod:`uvms.dynamics.thrusters.lift_drag`). At each control step the fins' wrench is
+linearized in delta about the rest angles at the measured body velocity nu
+(:meth:`uvms.dynamics.thrusters.fins.Fins.linearized`):
 
     w_fins(nu, delta) ~ w0(nu) + B_fins(u_r) (delta - delta_rest)
 
 (w0: the fins' drag and lift at rest at nu; B_fins: the lift per radian at the surge through the water u_r,
 proportional to u_r^2 below the stall; :meth:`FinAllocator.at` says why the surge alone). The
-allocation then solves the same bounded problem as for thrusters alone (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`)
-on the columns [B | B_fins(nu)] for the wrench tau - w0, the fins' variables bounded by their angle ranges: thrusts and
-fin angles are allocated together, with the same priorities, least squares and least norm. The plant applies the true
-lift and drag of the angles reached (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`); what the linearization misses
-(the drag, even in delta, the stall) is a disturbance the velocity loop's integral takes up. At rest the fins'
-columns are zero and the reachable directions are the thrusters'; with speed, their lift adds directions
-(:meth:`FinAllocator.reach_note`).
+allocation then solves the same bounded problem as for thrusters alone
+(:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`) on the columns [B | B_fins(nu)] for the wrench tau - w0,
+the fins' variables bounded by their angle ranges: thrusts and fin angles are allocated together, with the same
+priorities, least squares and least norm. The plant applies the true lift and drag of the angles reached
+(:class:`uvms.dynamics.plant.actuated.ActuatedPlant`); what the linearization misses (the drag, even in delta, the
+stall) is a disturbance the velocity loop's integral takes up. At rest the fins' columns are zero and the reachable
+directions are the thrusters'; with speed, their lift adds directions (:meth:`FinAllocator.reach_note`).
 """
 
 from __future__ import annotations

@@ -6,7 +6,8 @@ its angle an actuator of the actuated plant (:class:`uvms.dynamics.plant.actuate
 delta' = (sat(delta_cmd) - delta) / time_constant within the joint's limits, and the plugin's lift and drag
 (:mod:`uvms.dynamics.thrusters.lift_drag`) at the link turned by delta, fixed to the vehicle body.
 
-What is read (uuv_simulator: ``uuv_gazebo_plugins/src/FinPlugin.cc``; Gazebo Sim: ``src/systems/lift_drag/LiftDrag.cc``):
+What is read (uuv_simulator: ``uuv_gazebo_plugins/src/FinPlugin.cc``; Gazebo Sim:
+``src/systems/lift_drag/LiftDrag.cc``):
 
 * uuv_simulator: ``<link_name>``, ``<joint_name>``, ``<liftdrag>`` of ``<type>`` ``Quadratic`` (``lift_constant``,
   ``drag_constant``) or ``TwoLines`` (``area``, ``fluid_density``, ``a0``, ``alpha_stall``, ``cla``, ``cla_stall``,

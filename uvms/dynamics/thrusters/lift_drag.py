@@ -21,10 +21,11 @@ subtracted); no force when ``|v|`` <= 0.01 m/s, nor when ``forward . v <= 0`` un
 forward, u = R upward (or, ``radial_symmetry``, f x (f x v) normalized), s = f x u normalized, sin(sweep) = s . v /
 ``|v|``, v_p = v - (v . s) s the velocity in the lift-drag plane, the lift direction l = s x v_p normalized and the
 drag direction -v_p normalized: alpha = a0 +- acos(l . u) (+ when l . f >= 0) folded into [-pi/2, pi/2];
-q = rho ``|v_p|``^2 / 2; cl = cla alpha cos^2(sweep) below the stall, (cla alpha_stall + cla_stall (alpha - alpha_stall))
-cos^2(sweep) beyond (kept >= 0; and mirrored, <= 0, below -alpha_stall), plus control_joint_rad_to_cl delta with a
-control joint at delta; cd likewise with cda and cda_stall, then ``|cd|``; cm likewise with cma, cma_stall, plus
-cm_delta delta. Force lift + drag = (cl l + cd (-v_p/``|v_p|``)) q area at the centre of pressure, moment cm q area s.
+q = rho ``|v_p|``^2 / 2; cl = cla alpha cos^2(sweep) below the stall, (cla alpha_stall + cla_stall (alpha -
+alpha_stall)) cos^2(sweep) beyond (kept >= 0; and mirrored, <= 0, below -alpha_stall), plus control_joint_rad_to_cl
+delta with a control joint at delta; cd likewise with cda and cda_stall, then ``|cd|``; cm likewise with cma, cma_stall,
+plus cm_delta delta. Force lift + drag = (cl l + cd (-v_p/``|v_p|``)) q area at the centre of pressure, moment cm q area
+s.
 """
 
 from __future__ import annotations

@@ -12,7 +12,8 @@ times ``propeller_efficiency``, converted to a thrust by ``<conversion>`` (``Bas
 ``thrust_efficiency``, clipped to [``thrustMin``, ``thrustMax``]. The thrust pushes along the thruster link's x
 axis, or along the axis of ``<jointName>`` (later versions of the plugin).
 
-What uvms reads from it (:func:`read_uuv_thruster`; the readers of every simulator: :mod:`uvms.dynamics.plugins.readers`):
+What uvms reads from it (:func:`read_uuv_thruster`; the readers of every simulator:
+:mod:`uvms.dynamics.plugins.readers`):
 
 * the limits: the range of thrust that chain can hold in steady state (:func:`plugin_thrust_range`). A side
   left unbounded (uuv_simulator's defaults: no clamp and no thrustMin/thrustMax with a Basic conversion, as the

@@ -7,8 +7,9 @@ its command through a first-order lag f' = (f_cmd - f) / time_constant.
 Where they come from
 ====================
 The thruster plugins in the URDF, one per thruster, of uuv_simulator (what is read from them:
-:mod:`uvms.dynamics.thrusters.sources`), Gazebo Sim (``gz::sim::systems::Thruster``: :mod:`uvms.dynamics.plugins.gz_sim`)
-or HippoCampus (``hippo_gz_plugins::thruster``: :mod:`uvms.dynamics.plugins.hippo`), e.g. uuv_simulator's::
+:mod:`uvms.dynamics.thrusters.sources`), Gazebo Sim (``gz::sim::systems::Thruster``:
+:mod:`uvms.dynamics.plugins.gz_sim`) or HippoCampus (``hippo_gz_plugins::thruster``:
+:mod:`uvms.dynamics.plugins.hippo`), e.g. uuv_simulator's::
 
     <plugin name="thruster_1" filename="libuuv_thruster_ros_plugin.so">
       <linkName>thruster_1</linkName>       <!-- a link of the model: thrust along its x axis at the joint's zero -->

@@ -12,9 +12,9 @@ Reads a rosbag2 folder (MCAP or sqlite3 storage; the folder with ``metadata.yaml
   topic per thruster (thrusts or commands) mapped through the model's thrusters (:mod:`uvms.scenario.bags.thrust_log`).
 
 Stamps are the messages' header stamps (the bag's receive times for Float64, which has no header). The joint
-states and the wrench are interpolated linearly at the odometry's stamps; odometry samples outside their time span are dropped. The topic names default to those the
-writer uses (:data:`uvms.scenario.bags.writer.ODOM_TOPIC` ...). A bag is a stranger's file: it is checked before it is
-read (:mod:`uvms.scenario.bags.limits`).
+states and the wrench are interpolated linearly at the odometry's stamps; odometry samples outside their time span are
+dropped. The topic names default to those the writer uses (:data:`uvms.scenario.bags.writer.ODOM_TOPIC` ...). A bag is a
+stranger's file: it is checked before it is read (:mod:`uvms.scenario.bags.limits`).
 """
 
 from __future__ import annotations
@@ -56,8 +56,9 @@ def bag_folder(path: str | os.PathLike) -> Path:
 def read_bag(path: str | os.PathLike, *, odom_topic: str = ODOM_TOPIC, joint_states_topic: str = JOINT_STATES_TOPIC,
              wrench_topic: str = BODY_WRENCH_TOPIC, thrust: ThrustInput | None = None,
              arm_joints: Sequence[str] | None = None) -> IdentificationLog:
-    """The log of a rosbag2 recording (module docstring); with ``thrust`` (:func:`uvms.scenario.bags.thrust_log.thrust_input`)
-    the wrench is that of the thruster topics, and ``wrench_topic`` is not read.
+    """The log of a rosbag2 recording (module docstring); with ``thrust``
+    (:func:`uvms.scenario.bags.thrust_log.thrust_input`) the wrench is that of the thruster topics, and ``wrench_topic``
+    is not read.
 
     The bag is checked first (:func:`uvms.scenario.bags.limits.check_bag`: sizes, counts, compression, storage), and
     read with ROS 2's standard message definitions (a bag whose own definition of a type read here differs is

@@ -2,8 +2,8 @@
 
 A bag without a body-wrench topic can still be identified from when it holds one ``std_msgs/msg/Float64`` topic per
 thruster, as ``uvms run --bag`` writes them (``/thrusters/<name>/thrust``, the thrust [N]) and uuv_simulator's
-thruster topics do. The model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`: their frames, limits and
-time constants) give the wrench tau = B f, B (6, n) the allocation matrix
+thruster topics do. The model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`: their frames, limits
+and time constants) give the wrench tau = B f, B (6, n) the allocation matrix
 (:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`) at the vehicle's root link, body FLU, as the
 ``/body_wrench`` topic holds it.
 

@@ -1,4 +1,5 @@
-"""The folder of a Monte Carlo study (:mod:`uvms.scenario.studies.study`): its lock and spec, and the rows a resume reuses.
+"""The folder of a Monte Carlo study (:mod:`uvms.scenario.studies.study`): its lock and spec, and the rows a resume
+reuses.
 
 A study folder holds ``study.json`` (the spec), ``trials/trial_k.json`` (the row of trial k) and
 ``trials/trial_k/`` (its run folder), all written by uvms. A resume trusts none of it blindly:

@@ -10,9 +10,9 @@ from the rows at the end.
 Resume: ``DIR/study.json`` holds the study's spec (scenario and model files by content hash, samples, n, seed,
 method, overrides). Running the same spec into ``DIR`` again skips the trials whose row is there and runs the
 rest; a different spec is refused (a study folder never mixes two studies). Each row found is checked against
-the trial it claims and a symbolic link in the folder is refused (:mod:`uvms.scenario.studies.folder`). A trial that raises is a row with
-its error text; a trial whose worker dies is run again alone, and if it kills that worker too it is a row
-"killed". The table does not depend on the backend, the number of jobs or the interruptions.
+the trial it claims and a symbolic link in the folder is refused (:mod:`uvms.scenario.studies.folder`). A trial that
+raises is a row with its error text; a trial whose worker dies is run again alone, and if it kills that worker too it is
+a row "killed". The table does not depend on the backend, the number of jobs or the interruptions.
 """
 
 from __future__ import annotations
@@ -170,12 +170,13 @@ def study(
         samples: ``KEY=DIST`` strings (:mod:`uvms.scenario.studies.distributions`); None: ``[study] samples``.
         n: trials (None: ``[study] n``); seed: the study's seed (None: ``[study] seed``); method: ``"random"``,
             ``"lhs"`` or ``"sobol"`` (None: ``[study] method``).
-        jobs, backend, scheduler: as for :func:`uvms.scenario.studies.sweep.sweep` (:mod:`uvms.scenario.studies.parallel`).
-        out: the study folder (default ``out/<scenario name>_study``); resumed if it holds the same study.
-        progress: progress bar (None: on a terminal only).
+        jobs, backend, scheduler: as for :func:`uvms.scenario.studies.sweep.sweep`
+        (:mod:`uvms.scenario.studies.parallel`). out: the study folder (default ``out/<scenario name>_study``); resumed
+        if it holds the same study. progress: progress bar (None: on a terminal only).
         overrides: ``SECTION.KEY=VALUE`` strings applied to every trial before its sampled values (after
             ``[study] set``).
-        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.studies.sweep.sweep`).
+        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for
+        :func:`uvms.scenario.studies.sweep.sweep`).
 
     Raises:
         StudyError: bad samples, n, method, backend or jobs, or ``out`` holds another study or other files;

@@ -184,7 +184,8 @@ def sweep(
             can run code on its workers and in this process (:data:`uvms.scenario.studies.parallel.OPEN_SCHEDULER`).
 
     Raises:
-        SweepError: bad grid, backend or jobs, a scheduler that is not tls:// without ``insecure_scheduler``; ScenarioError: a key or value the scenario rejects, found
+        SweepError: bad grid, backend or jobs, a scheduler that is not tls:// without ``insecure_scheduler``;
+        ScenarioError: a key or value the scenario rejects, found
             before any worker starts.
     """
     scenario = resolve_scenario_path(scenario)

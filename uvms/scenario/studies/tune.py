@@ -146,7 +146,8 @@ def tune(
         jobs, backend, scheduler: where the study trials run (:mod:`uvms.scenario.studies.parallel`).
         out: output folder (default ``out/<scenario name>_tune``), replaced whole.
         overrides: ``SECTION.KEY=VALUE`` strings applied to every run.
-        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for :func:`uvms.scenario.studies.sweep.sweep`).
+        insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for
+        :func:`uvms.scenario.studies.sweep.sweep`).
 
     Raises:
         StudyError: bad parameters, objective or trials, Optuna not installed; ScenarioError: a key the
