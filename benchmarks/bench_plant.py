@@ -33,7 +33,8 @@ def main() -> None:
         plant._mass_and_bias(q, v, wrench)  # numba loads its kernel once
         calls = {
             "plant Mbar, nbar": lambda: plant._mass_and_bias(q, v, wrench),
-            "pin.crba + pin.nonLinearEffects": lambda: (pin.crba(model, data, q), pin.nonLinearEffects(model, data, q, v)),
+            "pin.crba + pin.nonLinearEffects": lambda: (pin.crba(model, data, q),
+                                                        pin.nonLinearEffects(model, data, q, v)),
             "pin.forwardKinematics (position, velocity)": lambda: pin.forwardKinematics(model, data, q, v),
         }
         ratios, reference = interleaved_ratios(calls, lambda: pin.aba(model, data, q, v, zero), repeat)

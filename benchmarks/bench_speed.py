@@ -115,7 +115,8 @@ def run_row(repeat: int = 3) -> tuple[str, str, str, str]:
         builds.append(time.perf_counter() - started)
     return ("`uvms run hoang2011_w1`, figures off (9,500 RK4 steps)",
             f"{np.median(walls):.2f} s ({min(walls):.2f}-{max(walls):.2f}; import + load + build "
-            f"{np.median(builds):.2f} s; {', '.join(inside)} s of build and loop)", "", "<= 1 s (import + load + build <= 0.5 s)")
+            f"{np.median(builds):.2f} s; {', '.join(inside)} s of build and loop)", "",
+            "<= 1 s (import + load + build <= 0.5 s)")
 
 
 def ik_rows(targets: int) -> list[tuple[str, str, str, str]]:
@@ -140,7 +141,8 @@ def workspace_rows() -> list[tuple[str, str, str, str]]:
     for dexterity, goal in ((False, "<= 1 s"), (True, "<= 3 s")):
         started = time.perf_counter()
         monte_carlo(robot, ["left_ee", "right_ee"], 1_000_000, dexterity=dexterity, progress=False)
-        rows.append((f"Monte Carlo workspace, both xiang2019 arms, 1 M samples each{' + dexterity' if dexterity else ''}",
+        rows.append(("Monte Carlo workspace, both xiang2019 arms, 1 M "
+                     f"samples each{' + dexterity' if dexterity else ''}",
                      f"{time.perf_counter() - started:.2f} s", "", goal))
     return rows
 

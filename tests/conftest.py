@@ -67,7 +67,8 @@ def urdf(axis="0 0 1", xyz="1 0 0", mass="1", ixx="1", root="", extra="") -> str
       {extra}</robot>"""
 
 
-FLOATING_ROOT = '<link name="world"/><joint name="float" type="floating"><parent link="world"/><child link="base_link"/></joint>'
+FLOATING_ROOT = ('<link name="world"/><joint name="float" type="floating"><parent link="world"/>'
+                 '<child link="base_link"/></joint>')
 
 #: a one-joint arm on a massless base: a fixed base by the base rule (``base="floating"`` makes it a vehicle)
 FIXED_ARM = """<robot name="arm"><link name="base"/><link name="tip"><inertial><mass value="1"/>

@@ -74,7 +74,8 @@ def test_every_scenario_key_is_documented_and_every_documented_key_exists():
     reference = scenario_reference()
     schema, documented = reference.schema_keys(), reference.documented_keys()
     assert "model.path" in schema and "inequalities.plane_clearance.normal" in schema and "phases.offsets" in schema
-    assert not schema - documented, f"keys without a meaning in docs/reference/scenario_keys.toml: {sorted(schema - documented)}"
+    assert not schema - documented, \
+        f"keys without a meaning in docs/reference/scenario_keys.toml: {sorted(schema - documented)}"
     assert not documented - schema, f"documented keys the schema does not have: {sorted(documented - schema)}"
     meanings = reference.meanings()
     empty = [f"{section}.{key}" for section, table in meanings.items() for key, text in table.items()

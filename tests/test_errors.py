@@ -65,9 +65,11 @@ def test_massless_link_idiom_is_accepted():
          '<box size="${w} 1 1"/></geometry></visual></link></robot>', {}, "name 'w' is not defined"),
         ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="a"><visual><geometry>'
          '<box size="$(arg w) 1 1"/></geometry></visual></link></robot>', {}, "Undefined substitution argument w"),
-        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:include filename="missing.xacro"/></robot>',
+        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:include '
+         'filename="missing.xacro"/></robot>',
          {}, "No such file"),
-        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:arg name="w" default="1"/><link name="a"/></robot>',
+        ('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><xacro:arg '
+         'name="w" default="1"/><link name="a"/></robot>',
          {"width": 2}, "unknown xacro arg"),
     ],
 )
@@ -177,7 +179,8 @@ def test_cli_malformed_file(tmp_path, capsys):
 
 def test_missing_meshes_only_warn_and_package_path_resolves_them(tmp_path):
     mesh_link = ('<link name="shell"><visual><geometry><mesh filename="package://my_rov/meshes/hull.stl"/>'
-                 '</geometry></visual></link><joint name="s" type="fixed"><parent link="l1"/><child link="shell"/></joint>')
+                 '</geometry></visual></link><joint name="s" '
+                 'type="fixed"><parent link="l1"/><child link="shell"/></joint>')
     source = urdf(extra=mesh_link)
     with pytest.warns(uvms.errors.MissingMeshWarning, match="package://my_rov/meshes/hull.stl"):
         assert uvms.load(source).nq == 1

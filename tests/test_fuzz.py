@@ -26,7 +26,8 @@ KINDS = ("revolute", "prismatic", "continuous", "fixed")
 
 @st.composite
 def urdf_trees(draw):
-    """A random tree: 1-6 moving or fixed joints, each child hung on any earlier link; floating, planar or fixed root."""
+    """A random tree: 1-6 moving or fixed joints, each child hung on any earlier link; floating, planar or fixed
+    root."""
     count = draw(st.integers(1, 6))
     links, joints = ["base"], []
     for index in range(count):
@@ -36,7 +37,8 @@ def urdf_trees(draw):
         xyz = draw(st.tuples(finite, finite, finite))
         rpy = draw(st.tuples(finite, finite, finite))
         lower = draw(st.floats(-2.0, 0.0))
-        joints.append((f"j{index}", kind, parent, f"l{index}", axis, xyz, rpy, lower, lower + draw(st.floats(0.1, 3.0))))
+        joints.append((f"j{index}", kind, parent, f"l{index}", axis, xyz, rpy, lower,
+                       lower + draw(st.floats(0.1, 3.0))))
         links.append(f"l{index}")
     root = draw(st.sampled_from(("floating", "planar", "fixed")))
     masses = draw(st.lists(st.floats(0.1, 10.0), min_size=len(links), max_size=len(links)))
@@ -48,7 +50,8 @@ def urdf_trees(draw):
         body.append(f'<link name="{link}"><inertial><mass value="{mass}"/>'
                     f'<inertia ixx="{mass}" iyy="{mass}" izz="{mass}" ixy="0" ixz="0" iyz="0"/></inertial></link>')
     for name, kind, parent, child, axis, xyz, rpy, lower, upper in joints:
-        limit = f'<limit lower="{lower}" upper="{upper}" effort="1" velocity="1"/>' if kind in ("revolute", "prismatic") else ""
+        limit = (f'<limit lower="{lower}" upper="{upper}" effort="1" velocity="1"/>'
+                 if kind in ("revolute", "prismatic") else "")
         body.append(f'<joint name="{name}" type="{kind}"><parent link="{parent}"/><child link="{child}"/>'
                     f'<origin xyz="{" ".join(map(repr, xyz))}" rpy="{" ".join(map(repr, rpy))}"/>'
                     f'<axis xyz="{" ".join(map(repr, axis))}"/>{limit}</joint>')
@@ -85,9 +88,12 @@ def test_random_trees_load_with_consistent_kinematics(tree, seed):
 
 #: Found by hypothesis in CI: one joint, held at its limit by the clamping, left no column to solve (IndexError).
 #: Its root link is massless, so by uvms.load's base rule it stays a fixed-base arm.
-ONE_HELD_JOINT = ('<robot name="fuzz"><link name="base"/><link name="l0"><inertial><mass value="1.0"/><inertia ixx="1.0" iyy="1.0'
-                  '" izz="1.0" ixy="0" ixz="0" iyz="0"/></inertial></link><joint name="j0" type="revolute"><parent link="base"/><'
-                  'child link="l0"/><origin xyz="0.0 0.0 0.0" rpy="0.0 0.0 0.0"/><axis xyz="0.0 0.0 1.0"/><limit lower="0.0" uppe'
+ONE_HELD_JOINT = ('<robot name="fuzz"><link name="base"/><link '
+                  'name="l0"><inertial><mass value="1.0"/><inertia ixx="1.0" iyy="1.0'
+                  '" izz="1.0" ixy="0" ixz="0" iyz="0"/></inertial></link><joint '
+                  'name="j0" type="revolute"><parent link="base"/><'
+                  'child link="l0"/><origin xyz="0.0 0.0 0.0" rpy="0.0 0.0 '
+                  '0.0"/><axis xyz="0.0 0.0 1.0"/><limit lower="0.0" uppe'
                   'r="1.0" effort="1" velocity="1"/></joint></robot>')
 
 
@@ -108,7 +114,8 @@ def test_ik_never_reports_a_false_success(tree, seed):
         assert np.all(np.isfinite(result.q)) and np.isfinite(result.error)
         error = np.concatenate([target.translation - robot.fk(result.q, leaf).translation,
                                 pin.log3(target.rotation @ robot.fk(result.q, leaf).rotation.T)])
-        axes_error = np.linalg.norm(error[uvms.robot.kinematics.axis_rows(uvms.robot.robot.DEFAULT_AXES[robot.base_type])])
+        rows = uvms.robot.kinematics.axis_rows(uvms.robot.robot.DEFAULT_AXES[robot.base_type])
+        axes_error = np.linalg.norm(error[rows])
         assert result.success == (axes_error <= 1e-10)  # the flag is the truth
         lower, upper = robot.arm_limits
         arm = robot.arm_configuration(result.q)

@@ -36,7 +36,8 @@ def test_every_notebook_is_found():
 def test_the_stored_outputs_are_current(path):
     stored = notebook_execute.nbformat.read(path, as_version=4)
     missing = notebook_execute.unexecuted(stored)
-    assert not missing, f"{path.name} is stored without outputs in cells {missing}: python notebooks/execute.py {path.stem}"
+    assert not missing, (f"{path.name} is stored without outputs in cells {missing}: "
+                         f"python notebooks/execute.py {path.stem}")
     fresh = notebook_execute.execute(path)  # raises CellExecutionError (with the traceback) if a cell fails
     stale = notebook_execute.differences(stored, fresh)
     assert not stale, (f"{path.name}: stored outputs are stale, {stale[0].first_line()} "

@@ -9,7 +9,10 @@ from __future__ import annotations
 
 import ast
 import importlib
+import importlib.util
 import pkgutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +20,7 @@ import pytest
 
 import uvms
 
-from conftest import shipped
+from conftest import ROOT, shipped
 
 PACKAGE = Path(uvms.__file__).parent
 #: The layers, lowest first: a module may import its own folder and the folders of lower rank only.
@@ -173,3 +176,15 @@ def test_one_result_type_and_no_old_paths():
             importlib.import_module(old)
     with pytest.raises(TypeError):  # integrator is the one name of the choice
         uvms.simulate(uvms.Plant(robot), None, robot.neutral(), 0.1, 0.01, method="euler")
+
+
+#: What ``ruff check`` reads (the rules and line length: pyproject.toml's [tool.ruff]).
+RUFF_PATHS = ("uvms", "tests", "benchmarks", "docs", "notebooks/execute.py")
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ruff") is None, reason="ruff is not installed (pip install -e .[test])")
+def test_ruff_is_clean():
+    """Import order, unused names, line length: the rules of pyproject.toml hold on every file ruff reads."""
+    done = subprocess.run([sys.executable, "-m", "ruff", "check", "--no-cache", *RUFF_PATHS], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120, check=False)
+    assert done.returncode == 0, done.stdout + done.stderr

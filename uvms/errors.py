@@ -173,11 +173,13 @@ class ViewerInputError(UVMSError):
 # ------------------------------------------------- warnings: what uvms did that the user should know (a guess, a
 # default taken, a file left out); never a failure
 class UVMSWarning(UserWarning):
-    """Root of every warning uvms gives (``warnings.simplefilter("error", uvms.errors.UVMSWarning)`` makes them errors)."""
+    """Root of every warning uvms gives (``warnings.simplefilter("error", uvms.errors.UVMSWarning)`` makes them
+    errors)."""
 
 
 class AddedMassSymmetrizedWarning(UVMSWarning):
-    """An added-mass matrix that was symmetric within :data:`uvms.dynamics.hydro.parameters.MATRIX_TOLERANCE` was replaced by (M + M^T) / 2."""
+    """An added-mass matrix that was symmetric within :data:`uvms.dynamics.hydro.parameters.MATRIX_TOLERANCE` was
+    replaced by (M + M^T) / 2."""
 
 
 class BaseGuessWarning(UVMSWarning):
@@ -222,12 +224,14 @@ class SkippedLinkWarning(UVMSWarning):
 
 
 class ThrusterDefaultWarning(UVMSWarning):
-    """A plugin thruster took a value of :data:`uvms.dynamics.thrusters.thrusters.DEFAULT_VALUES` (the plugin and the YAML give none)."""
+    """A plugin thruster took a value of :data:`uvms.dynamics.thrusters.thrusters.DEFAULT_VALUES` (the plugin and the
+    YAML give none)."""
 
 
 class FinDefaultWarning(UVMSWarning):
     """A fin took :data:`uvms.dynamics.thrusters.fins.DEFAULT_TIME_CONSTANT` (its plugin gives no first-order time
-    constant), or a fin plugin is left out of the plant (its joint is not a fin: ``arm_joints`` makes it an arm joint)."""
+    constant), or a fin plugin is left out of the plant (its joint is not a fin: ``arm_joints`` makes it an arm
+    joint)."""
 
 
 class ThrusterLayoutWarning(UVMSWarning):

@@ -158,7 +158,8 @@ class ScenarioKeys(Directive):
         from docutils import nodes
 
         node = nodes.container(classes=["scenario-reference"])
-        self.state.nested_parse(StringList(reference_markdown(self.arguments[0]).splitlines(), source="scenario_keys.toml"),
+        self.state.nested_parse(StringList(reference_markdown(self.arguments[0]).splitlines(),
+                                           source="scenario_keys.toml"),
                                 self.content_offset, node)
         return [node]
 

@@ -95,7 +95,8 @@ def main_figure(out: Path) -> None:
                 solver = "set-based" if label == "with" else "CLIK, monitored only"
                 side_view(figure.add_subplot(grid[row, column]), robot, overlay, qs[k],
                           f"({'abcdef'[3 * row + column]}) {label} ({solver}): t = {t[k]:.2f} s")
-            curve.axhline(1000 * objective.min, color="0.3", linestyle="--", label=f"min = {1000 * objective.min:.0f} mm")
+            curve.axhline(1000 * objective.min, color="0.3", linestyle="--",
+                          label=f"min = {1000 * objective.min:.0f} mm")
             curve.axhline(0.0, color="0.6", linewidth=0.8)
             curve.set_xlabel("t [s]")
             curve.set_ylabel(f"smallest {kind} distance [mm]")

@@ -75,7 +75,8 @@ def test_identify_reads_the_thruster_topics_instead_of_the_wrench(bag, tmp_path,
                                                       "--wrench-topic", "/absent"])):
         out = tmp_path / name
         assert main(["identify", str(bag), "--model", "bluerov2_alpha5", "--out", str(out), "--quiet", *extra]) == 0
-        runs[name] = {p["name"]: p["value"] for p in json.loads((out / "identification.json").read_text())["parameters"]}
+        parameters = json.loads((out / "identification.json").read_text())["parameters"]
+        runs[name] = {p["name"]: p["value"] for p in parameters}
     for parameter, value in runs["wrench"].items():
         assert runs["thrusts"][parameter] == pytest.approx(value, rel=1e-6, abs=1e-9)
 

@@ -82,8 +82,10 @@ def test_names_from_a_model_reach_the_terminal_escaped(tmp_path, capsys):
     evil = "arm\u202egpj.exe\u2066"
     urdf = tmp_path / "evil.urdf"
     urdf.write_text(f"""<robot name="r{evil}">
-  <link name="hull"><inertial><mass value="10"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="{evil}"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="hull"><inertial><mass value="10"/>
+    <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="{evil}"><inertial><mass value="1"/>
+    <inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
   <joint name="j{evil}" type="revolute"><parent link="hull"/><child link="{evil}"/><axis xyz="0 0 1"/>
     <limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
 </robot>""")
@@ -145,9 +147,11 @@ def test_info_lists_the_thrusters_and_the_hydrodynamics(capsys):
     assert re.search(r"thrusters \(8\) from .*thrusters.yaml", out)
     assert "  thruster_1   xyz [+0.140 -0.092 +0.000]  dir [-0.707 -0.707 +0.000]  [-40.2, 51.5]  0.1\n" in out
     # the URDF's underwater-object plugin: base_link's volume and added-mass diagonal (FLU: a diagonal keeps signs)
-    assert "hydrodynamics (7 links, rho 1028 kg/m^3)" in out and "  base_link: V 0.01197  CoB [+0.000 +0.000 +0.010]" in out
+    assert "hydrodynamics (7 links, rho 1028 kg/m^3)" in out
+    assert "  base_link: V 0.01197  CoB [+0.000 +0.000 +0.010]" in out
     assert "    added mass [6.36 7.12 18.68 0.189 0.135 0.222]\n" in out
-    assert f"  from the uuv_simulator hydrodynamics plugin blocks of {ROOT}/models/bluerov2_alpha5/uvms.urdf.xacro\n" in out
+    assert (f"  from the uuv_simulator hydrodynamics plugin blocks of {ROOT}/models/bluerov2_alpha5/"
+            "uvms.urdf.xacro\n") in out
 
 
 def test_info_shows_a_hydrodynamics_yaml_with_where_it_comes_from(tmp_path, capsys):

@@ -36,6 +36,7 @@ def test_info_lists_gazebo_sim_lift_drag_fins_and_their_defaults(capsys):
     assert ("  horizontal_fins  horizontal_fins_joint  xyz [-0.6  0.   0. ]  [-0.26, 0.26]  0.1  gz LiftDrag cla 4.13 "
             "cda 0.2 stall 0.17 rad, area 0.0244 m^2, rho 1000 (no ocean current: gz subtracts a wind only)\n"
             ) in captured.out
-    assert "  base_link  no joint: a fixed lifting surface  xyz [0. 0. 0.]  fixed (no angle)  gz LiftDrag" in captured.out
+    assert ("  base_link  no joint: a fixed lifting surface  xyz [0. 0. 0.]  fixed (no angle)  "
+            "gz LiftDrag") in captured.out
     assert "  note: " in captured.out and "horizontal_fins, vertical_fins take uvms's default time constant 0.1 s" \
         in captured.out

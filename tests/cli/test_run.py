@@ -28,7 +28,8 @@ def scenario(tmp_path, monkeypatch):
     shutil.copy(ROS_WORKSPACE / "fixture_vehicle_description" / "urdf" / "vehicle.urdf.xacro", tmp_path)
     arm = shutil.copytree(ROS_WORKSPACE / "fixture_arm", tmp_path / "arms" / "other_arm")
     (arm / "urdf" / "arm.xacro").write_text((arm / "urdf" / "arm.xacro").read_text()
-                                            .replace('value="0.35"', 'value="0.5"').replace('value="0.25"', 'value="0.1"'))
+                                            .replace('value="0.35"', 'value="0.5"')
+                                            .replace('value="0.25"', 'value="0.1"'))
     path = tmp_path / "s.toml"
     path.write_text(ROS_SHORT_RUN.format(package_path='package_path = ["arms"]'))
     return path
@@ -42,7 +43,8 @@ def ee_at_start(folder) -> np.ndarray:
 
 def test_run_puts_the_folders_given_before_the_scenario_s_own(scenario, capsys):
     shoulder, elbow = 0.3, -0.4  # q1 and q1 + q2 of the initial arm; the vehicle starts at the origin
-    for given, lengths in (([], (0.5, 0.1)), (["--package-path", os.path.relpath(ROS_WORKSPACE)], (0.35, 0.25))):  # from the cwd
+    for given, lengths in (([], (0.5, 0.1)),
+                           (["--package-path", os.path.relpath(ROS_WORKSPACE)], (0.35, 0.25))):  # from the cwd
         out = scenario.parent / f"out{len(given)}"
         assert main(["run", str(scenario), "--out", str(out), "--quiet", *given]) == 0, capsys.readouterr().err
         expected = [0.5 + lengths[0] * np.cos(shoulder) + lengths[1] * np.cos(elbow),

@@ -9,8 +9,10 @@ from uvms.cli import main
 from conftest import SCENARIOS
 
 SCENARIO = str(SCENARIOS / "hoang2011_w1.toml")
-ARGS = ["--sample", "model.args.l1=uniform(0.35, 0.5)", "--sample", "outputs.position_tolerance=loguniform(1e-10, 1e-9)",
-        "--samples", "4", "--seed", "5", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2", "--quiet"]
+ARGS = ["--sample", "model.args.l1=uniform(0.35, 0.5)",
+        "--sample", "outputs.position_tolerance=loguniform(1e-10, 1e-9)",
+        "--samples", "4", "--seed", "5", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2",
+        "--quiet"]
 
 
 def test_cli_study_prints_the_pass_rate_and_resumes(tmp_path, capsys):
@@ -36,7 +38,8 @@ def test_cli_study_errors_are_one_line(tmp_path, capsys):
     assert main(["study", SCENARIO, "--samples", "3", "--out", str(out)]) == 2  # no --sample, no [study] table
     assert "a study needs at least one --sample" in capsys.readouterr().err and not out.exists()
     assert main(["study", SCENARIO, "--sample", "model.args.vehicle_mass=choice([120.0, -5.0])", "--samples", "4",
-                 "--seed", "1", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2", "--out", str(out), "--quiet"]) == 2
+                 "--seed", "1", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2", "--out",
+                 str(out), "--quiet"]) == 2
     err = capsys.readouterr().err.splitlines()
     assert err[-1].startswith("uvms: error: 3 of 4 trials failed (error column of ") and "ModelCheckError" in err[-1]
 

@@ -40,7 +40,8 @@ def runs(tmp_path_factory):
     for name, gjm in (("inviscid_rigid_gjm", "rigid"), ("inviscid_added_mass_gjm", "added_mass")):
         results[name] = run_scenario(SCENARIOS / "amundsen2018_hydro_open_loop_servo_inverted.toml", out=out / name,
                             progress=False, overrides=[*NO_FIGURES, *NO_DAMPING, f"plant.gjm={gjm}"])
-    results["hydrostatics_off"] = run_scenario(SCENARIOS / "amundsen2018_hydro_open_loop.toml", out=out / "no_hydrostatics",
+    results["hydrostatics_off"] = run_scenario(SCENARIOS / "amundsen2018_hydro_open_loop.toml",
+                                               out=out / "no_hydrostatics",
                                       progress=False, overrides=[*NO_FIGURES, "plant.gravity=false"])
     results["hoang2011"] = run_scenario(SCENARIOS / "hoang2011_gjm.toml", out=out / "hoang", overrides=NO_FIGURES,
                                progress=False)
@@ -168,7 +169,8 @@ def test_cli_runs_a_plant_scenario(tmp_path):
     ("scenario", "overrides", "words"),
     [
         ("amundsen2018_hydro_open_loop", ["plant.tau=0.1"], r"unknown key.*plant\.tau.*valid in \[plant\]: type, gjm"),
-        ("amundsen2018_hydro_open_loop", ["plant.type=vortex"], "not valid; valid: 'kinematic', 'rigid', 'hydrodynamic'"),
+        ("amundsen2018_hydro_open_loop", ["plant.type=vortex"], "not valid; valid: 'kinematic', "
+                                                                "'rigid', 'hydrodynamic'"),
         ("amundsen2018_hydro_open_loop", ["plant.gjm=exact"], "valid: 'rigid', 'added_mass', 'fixed_base'"),
         ("amundsen2018_hydro_open_loop", ["plant.added_mass=1"], "plant.added_mass must be true/false"),
         ("amundsen2018_hydro_open_loop", ["plant.current=[0.1, 0.0]"], "plant.current must have 3 numbers"),
@@ -182,7 +184,8 @@ def test_cli_runs_a_plant_scenario(tmp_path):
         ("amundsen2018_rigid_open_loop", ["plant.type=kinematic"], "plant.gjm|plant.motor_feedforward.*dynamic plant"),
         ("hoang2011_gjm", ["plant.type=hydrodynamic"], "needs hydrodynamic parameters"),
         ("amundsen2018_rigid_open_loop", ["trajectory.velocity=[1.0, 2.0]"], "trajectory.velocity must have 3 numbers"),
-        ("amundsen2018_rigid_open_loop", ["trajectory.accel_time=5.0"], r"accel_time \(the ramp time\) in \(0, duration/2\] = \(0, 4\] s"),
+        ("amundsen2018_rigid_open_loop", ["trajectory.accel_time=5.0"], r"accel_time \(the ramp time\) in "
+                                                                        r"\(0, duration/2\] = \(0, 4\] s"),
         ("xiang2019_grip", ["plant.type=rigid"], r"sequence scenario \(\[\[phases\]\]\) runs on the kinematic plant"),
     ],
 )
@@ -284,12 +287,14 @@ def test_the_gjm_controller_keeps_the_numbers_of_its_own_law(name, axes, rng):
     pose = data.oMf[robot.frame_id()]
     for gain, damping in ((0.0, 0.0), (3.0, uvms.solvers.VariableDamping(0.5, 0.2))):
         controller = GJMController(robot, reference, axes=axes, gain=gain, damping=damping)
-        expected = old_gjm_rates(robot, jacobian, robot.generalized_jacobian(q), reference(3.0), pose, rows, gain, damping)
+        expected = old_gjm_rates(robot, jacobian, robot.generalized_jacobian(q), reference(3.0), pose, rows, gain,
+                                 damping)
         # the controller's Configuration computes all joint Jacobians (computeJointJacobians) where the old law
         # called computeFrameJacobian: the same terms summed in another order, rounding apart
         assert np.allclose(controller.sample(q, 3.0).rates, expected, rtol=1e-12, atol=1e-14)
         task = uvms.FrameTask(robot, axes=axes, orientation="log", target=reference(3.0).pose)
         task.set_target_velocity(reference(3.0).twist)
         gains = np.array([gain if row < 3 else 0.0 for row in rows])
-        clik = uvms.CLIKSolver(robot, task, gain=gains, damping=damping, free_floating=True).velocity(Configuration(robot, q))
+        clik = uvms.CLIKSolver(robot, task, gain=gains, damping=damping,
+                               free_floating=True).velocity(Configuration(robot, q))
         assert np.allclose(clik.v[robot.n_vehicle:], expected, atol=1e-12)  # the same law through CLIKSolver

@@ -102,7 +102,8 @@ def test_distance_has_priority_over_inconsistent_claw_targets():
     plan = PhasePlan(robot, q, ["left_ee", "right_ee"], [Phase("grip", 1.0, distance=0.3)])
     controller = SequenceController(robot, plan, method="task_priority", priority="classic")
     controller.set_targets(1.0)
-    controller.frame_tasks[0].set_target(pin.SE3(np.eye(3), controller.frame_tasks[0].target.translation + [0, 0.05, 0]))
+    target = controller.frame_tasks[0].target
+    controller.frame_tasks[0].set_target(pin.SE3(np.eye(3), target.translation + [0, 0.05, 0]))
     solver = PrioritySolver(robot, controller.levels(with_distance=True), priority="classic")
     for _ in range(80):
         q = pin.integrate(robot.model, q, solver.velocity(Configuration(robot, q)).v * 0.5)
@@ -138,7 +139,8 @@ def test_grip_scenario_writes_snapshots_and_an_animation(grip_run):
 
 def test_unknown_phase_key_lists_the_valid_ones(tmp_path):
     path = tmp_path / "bad.toml"
-    path.write_text(GRIP.read_text().replace("[[phases]]\nname = \"lower\"", "[[phases]]\noffset = {}\nname = \"lower\""))
+    path.write_text(GRIP.read_text().replace("[[phases]]\nname = \"lower\"", "[[phases]]\noffset = "
+                                                                             "{}\nname = \"lower\""))
     with pytest.raises(ScenarioError, match=r"phases\[1\].offset.*valid in \[phases\[1\]\]: name, duration, offsets"):
         read_scenario(path)
 

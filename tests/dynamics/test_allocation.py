@@ -1,4 +1,5 @@
-"""Thrust allocation (uvms.dynamics.thrusters.allocation): exact when attainable, the bounded least-squares optimum when not."""
+"""Thrust allocation (uvms.dynamics.thrusters.allocation): exact when attainable, the bounded least-squares optimum
+when not."""
 
 from __future__ import annotations
 

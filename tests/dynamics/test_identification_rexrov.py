@@ -29,7 +29,8 @@ def test_a_rexrov_sized_vehicle_gets_every_parameter_within_2_percent(tmp_path):
     q0[7:] = [0.0, 0.5, 0.5, 0.0, 0.02]  # the arm forward and down, the gripper half open
     wrench = multisine(WRENCH)
     run, actuated = excitation_run(robot, wrench, q0, 60.0, 0.02)
-    assert ExcitationControl(actuated, wrench).peak_ratio(60.0, 0.02) < 0.8  # never saturated: the log's wrench is exact
+    # never saturated: the log's wrench is exact
+    assert ExcitationControl(actuated, wrench).peak_ratio(60.0, 0.02) < 0.8
     bag = write_bag(tmp_path / "bag", robot, run, thrusters=[f"thruster_{k}" for k in range(8)])
     result = identify(robot, read_bag(bag.path), added_mass="full")
     truth = result.prior.links["base_link"]  # the fixture's hydrodynamics.yaml: the run was simulated with it

@@ -68,7 +68,8 @@ def test_a_user_folder_with_a_metrics_json_and_the_scenario_is_kept(tmp_path, mo
     (tmp_path / "elsewhere.toml").write_text((mine / "my.toml").read_text())  # the scenario outside: still refused
     assert main(["run", str(tmp_path / "elsewhere.toml"), "--out", ".", "--quiet"]) == 2
     err = one_line(capsys)
-    assert "holds metrics.json but no .uvms-run.json" in err and "delete the folder yourself or choose another --out" in err
+    assert "holds metrics.json but no .uvms-run.json" in err
+    assert "delete the folder yourself or choose another --out" in err
     assert "metrics.json, my.toml, notes.txt" in err and contents(mine) == before
 
 
@@ -226,7 +227,8 @@ def test_a_full_disk_in_the_cli_is_one_line_naming_the_disk(tmp_path, monkeypatc
     full_elsewhere = OSError(errno.ENOSPC, "No space left on device", "/data/cache/file.bin")  # not in a run folder
     monkeypatch.setattr("uvms.cli.command_info", raising(full_elsewhere))
     assert main(["info", "hoang2011"]) == 2
-    assert one_line(capsys) == "uvms: error: no space left on the device holding '/data/cache' (No space left on device)\n"
+    assert one_line(capsys) == ("uvms: error: no space left on the device holding '/data/cache' "
+                                "(No space left on device)\n")
 
 
 # ------------------------------------------------------------------ 16. workers, CSV cells, SIGTERM/SIGHUP

@@ -64,7 +64,8 @@ def test_mount_save_load_keeps_the_end_effectors_and_the_arm_joints(arm_joints, 
     robot = uvms.model.mount_arm(vehicle, "z1", placement=[0.2, 0.0, -0.4, np.pi, 0.0, 0.0])
     expected = ["arm_tool", "arm_gripperMover"] if arm_joints is None else ["arm_gripperMover"]
     assert robot.ee_frames == expected and robot.ee_reason.count("on the arm of joint") == len(expected)
-    assert robot.joint_classes["thruster_0_joint"].kind == "propeller" and robot.joint_classes["arm_joint1"].kind == "arm"
+    assert robot.joint_classes["thruster_0_joint"].kind == "propeller"
+    assert robot.joint_classes["arm_joint1"].kind == "arm"
     again = uvms.load(robot.save_urdf(tmp_path / "composed.urdf"))
     assert again.ee_frames == robot.ee_frames and again.arm_joint_names == robot.arm_joint_names
     assert again.mimic_joint_names == robot.mimic_joint_names and list(again.model.names) == list(robot.model.names)

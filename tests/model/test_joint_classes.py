@@ -44,7 +44,8 @@ def test_the_arm_is_six_joints_and_a_gripper_and_every_other_joint_has_its_class
     reasons = {name: joint_class.reason for name, joint_class in rov.joint_classes.items()}
     assert "thruster plugin 'thruster_0' names it (<jointName>)" in reasons["thruster_0_joint"]
     assert "'thruster_1' is the <linkName> of uuv_simulator thruster plugin 'thruster_1'" in reasons["thruster_1_joint"]
-    assert reasons["rov/dvl_sonar0_joint"] == "zero range [0, 0], 'rov/dvl_sonar0_link' named like a sensor (dvl); held at 0"
+    assert reasons["rov/dvl_sonar0_joint"] == ("zero range [0, 0], 'rov/dvl_sonar0_link' named like a sensor (dvl); "
+                                               "held at 0")
     assert reasons["rov/pressure_joint"].startswith("'rov/pressure_link' named like a sensor (pressure) and no mass")
     assert reasons["anchor"] == "limits [0.2, 0.2]: upper - lower <= 1e-09; held at 0.2"
     assert reasons["finger_c"] == "follows 'finger_a' (composed through finger_b): q = -0.5 q(finger_a) + 0.1"
@@ -142,9 +143,11 @@ def test_arm_joints_that_cannot_be_commanded_are_refused_with_the_valid_ones():
     with pytest.raises(NameNotFound) as caught:
         uvms.load(IDIOMS, arm_joints=["j1", "j7"])
     assert str(caught.value).endswith(f"arm_joints: unknown arm joint 'j7'; close names: {valid}")
-    with pytest.raises(ModelCheckError, match=r"'finger_b', which mimics 'finger_a': name 'finger_a' instead \(valid: "):
+    with pytest.raises(ModelCheckError,
+                       match=r"'finger_b', which mimics 'finger_a': name 'finger_a' instead \(valid: "):
         uvms.load(IDIOMS, arm_joints=["finger_b"])
-    with pytest.raises(ModelCheckError, match=re.escape(f"'anchor', which cannot move (limits [0.2, 0.2]); valid: {valid}")):
+    with pytest.raises(ModelCheckError, match=re.escape("'anchor', which cannot move (limits "
+                                                        f"[0.2, 0.2]); valid: {valid}")):
         uvms.load(IDIOMS, arm_joints=["anchor"])
     with pytest.raises(ModelCheckError, match="arm_joints must be a list of joint names, got 'j1'"):
         uvms.load(IDIOMS, arm_joints="j1")

@@ -206,7 +206,8 @@ def test_save_urdf_without_a_urdf_is_an_error(tmp_path):
 
 # ------------------------------------------------------------------ xacro args and sizes
 def test_a_non_numeric_xacro_arg_names_the_arg_and_asks_for_a_number(capsys):
-    with pytest.raises(uvms.errors.XacroError, match=r"xacro arg l1='abc' is not a number.*default is 0\.4.*give a number"):
+    with pytest.raises(uvms.errors.XacroError, match=r"xacro arg l1='abc' is not a "
+                                                     r"number.*default is 0\.4.*give a number"):
         uvms.load("hoang2011", args={"l1": "abc"})
     assert main(["info", "bluerov2_alpha5", "--arg", "vehicle_mass=heavy"]) == 2
     assert "xacro arg vehicle_mass='heavy' is not a number" in capsys.readouterr().err
@@ -235,7 +236,8 @@ def test_geometry_sizes_of_any_urdf_must_be_positive():
     for bad, words in (('<box size="1 -2 1"/>', "<box size='1 -2 1'>"),
                        ('<cylinder radius="0" length="1"/>', "<cylinder radius='0'>"),
                        ('<sphere radius="-0.1"/>', "<sphere radius='-0.1'>")):
-        with pytest.raises(uvms.errors.ModelCheckError, match=f"link 'hull' visual {words}: a geometry size must be > 0"):
+        with pytest.raises(uvms.errors.ModelCheckError, match=f"link 'hull' visual {words}: "
+                                                              "a geometry size must be > 0"):
             uvms.load(work_rov().replace('<box size="2.5 1.5 1.6"/>', bad))
 
 

@@ -55,8 +55,10 @@ def test_a_mesh_that_is_dev_zero_is_refused_in_bounded_memory(tmp_path):
     """In a child limited to 2 GiB of address space: reading /dev/zero as a zip (zipfile.is_zipfile) never ends."""
     mesh = tmp_path / "hull.stl"
     mesh.symlink_to("/dev/zero")
-    code = f"from pathlib import Path; from uvms.model.meshes import mesh_refusal; print(mesh_refusal(Path({str(mesh)!r})))"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False, cwd=ROOT,
+    code = ("from pathlib import Path; from uvms.model.meshes import mesh_refusal; "
+            f"print(mesh_refusal(Path({str(mesh)!r})))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False,
+                          cwd=ROOT,
                           preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_AS, (2 << 30, 2 << 30)))
     assert done.stdout == "the mesh file is a device or socket, not a regular file; give a file\n", done.stderr
 
@@ -169,7 +171,8 @@ def test_a_missing_meshs_warning_says_why_per_cause(tmp_path):
     assert ("2 (e.g. 'package://uwsim/data/objects/arm5e.osg'): '.osg' files are OpenSceneGraph (UWSim) scenes, not "
             "meshes: uvms reads .stl, .dae, .obj, .ply meshes; convert them (e.g. to .stl or .dae) to show them"
             in message)
-    assert f"1 ('package://known_pkg/meshes/none.stl'): package 'known_pkg' (searched at {tmp_path / 'share'}" in message
+    assert (f"1 ('package://known_pkg/meshes/none.stl'): package 'known_pkg' "
+            f"(searched at {tmp_path / 'share'}") in message
     assert "1 ('package://unknown_pkg/meshes/hull.stl'): no ROS package 'unknown_pkg' (looked in: " in message
     assert f"1 ('meshes/missing.dae'): no such file (relative paths from {tmp_path})" in message
     assert "Name the folder" not in message

@@ -307,14 +307,16 @@ def test_the_search_is_bounded_in_depth_and_folders(tmp_path, monkeypatch):
 
 
 def test_a_package_is_named_by_its_package_xml_else_by_its_folder(tmp_path):
-    cases = {"named": "<package><name> real_name </name></package>", "unnamed": "<package><version>1</version></package>",
+    cases = {"named": "<package><name> real_name </name></package>",
+             "unnamed": "<package><version>1</version></package>",
              "odd": "<package><name>not/a/name</name></package>"}
     for folder, text in cases.items():
         (tmp_path / folder).mkdir()
         (tmp_path / folder / "package.xml").write_text(text)
     assert packages.find_packages(tmp_path) == {"real_name": tmp_path / "named", "unnamed": tmp_path / "unnamed",
                                                 "odd": tmp_path / "odd"}
-    bombs = {"broken": "<package><name>x</name>", "entity": '<!DOCTYPE p [<!ENTITY a "aaaa">]><package><name>&a;</name></package>',
+    bombs = {"broken": "<package><name>x</name>", "entity": '<!DOCTYPE p [<!ENTITY a '
+                                                            '"aaaa">]><package><name>&a;</name></package>',
              "huge": "<package><name>x</name>" + " " * packages.MAX_PACKAGE_XML_BYTES + "</package>"}
     for folder, text in bombs.items():
         (tmp_path / "bad" / folder).mkdir(parents=True)
@@ -343,5 +345,6 @@ def test_the_includes_of_a_package_are_walked_through_the_index():
     walk = walk_xacro(model, package_index(None, model))
     assert walk.args == {"namespace": "rov"} and arm.resolve() in walk.files
     assert arm.resolve() in model_files(model)
-    with pytest.raises(uvms.errors.XacroError, match=r"unknown xacro arg\(s\) namespce; this model declares: namespace$"):
+    with pytest.raises(uvms.errors.XacroError, match=r"unknown xacro arg\(s\) namespce; "
+                                                     r"this model declares: namespace$"):
         uvms.load(model, args={"namespce": "x"})

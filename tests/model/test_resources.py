@@ -153,7 +153,8 @@ def test_an_include_of_a_symbolic_link_loop_is_one_line(tmp_path, capsys):
     model = tmp_path / "rov.urdf.xacro"
     model.write_text(f'<robot name="r" {XACRO}><xacro:include filename="a.xacro"/><link name="a"/></robot>')
     for trusted in (True, False):
-        with pytest.raises(uvms.errors.XacroError, match="a.xacro: cannot read the xacro include file .*symbolic links"):
+        with pytest.raises(uvms.errors.XacroError,
+                           match="a.xacro: cannot read the xacro include file .*symbolic links"):
             uvms.load(model, trusted=trusted)  # was RuntimeError: Symlink loop from Path.resolve
     assert "Too many levels of symbolic links" in one_line(capsys, ["info", str(model)])
     assert WatchedFiles.of(model=model).files == {model}
@@ -261,7 +262,8 @@ def test_deep_toml_and_a_huge_integer_are_one_line(tmp_path, capsys):
         assert words in one_line(capsys, ["run", str(path), "--out", str(tmp_path / "out")])
     with pytest.raises(ScenarioError, match="--set value .*a number has too many digits"):
         read_scenario("hoang2011_w1", ["simulation.dt=" + "1" * 5000])
-    err = one_line(capsys, ["run", "hoang2011_w1", "--out", str(tmp_path / "out"), "--set", "simulation.dt=" + "1" * 5000])
+    err = one_line(capsys,
+                   ["run", "hoang2011_w1", "--out", str(tmp_path / "out"), "--set", "simulation.dt=" + "1" * 5000])
     assert "a number has too many digits" in err and len(err) < 400
 
 

@@ -42,7 +42,8 @@ def test_untrusted_xacro_gives_the_same_model_and_errors(tmp_path):
     for path in uvms.model.resources.shipped_models().values():  # the filter refuses nothing real xacro needs
         assert uvms.load(path, trusted=False).urdf == uvms.load(path).urdf
     broken = tmp_path / "broken.urdf.xacro"
-    broken.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="${undefined_x}"/></robot>')
+    broken.write_text('<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro"><link '
+                      'name="${undefined_x}"/></robot>')
     with pytest.raises(uvms.errors.XacroError, match="undefined_x"):
         uvms.load(broken)
     malformed = tmp_path / "malformed.urdf.xacro"

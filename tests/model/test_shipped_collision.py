@@ -151,7 +151,8 @@ def test_scenarios_start_clear_of_every_checked_pair(scenario, base, arm):
 
 def test_arm_stretched_ahead_is_clear():
     robot = shipped(MODEL)
-    values = distances(robot, collision_model(robot), robot.configuration(arm=np.array([np.pi, np.pi / 2, np.pi, 0, 0])))
+    values = distances(robot, collision_model(robot),
+                       robot.configuration(arm=np.array([np.pi, np.pi / 2, np.pi, 0, 0])))
     assert min(values.values()) > 0.02
 
 

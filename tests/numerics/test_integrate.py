@@ -91,7 +91,8 @@ def test_one_step_per_scheme_serves_q_alone_and_q_with_x_exactly_on_the_manifold
                 q, v = STEPS[name](model, lambda t, qq, vv: (vv, np.zeros(7)), k * dt, q, v, dt, (v, np.zeros(7)))
             q_alone = pin.neutral(model)
             for k in range(steps):
-                q_alone, _ = STEPS[name](model, lambda t, qq, x: (twist, empty), k * dt, q_alone, empty, dt, (twist, empty))
+                q_alone, _ = STEPS[name](model, lambda t, qq, x: (twist, empty), k * dt, q_alone, empty, dt,
+                                         (twist, empty))
             assert np.array_equal(q, q_alone)
             errors.append(np.linalg.norm(pin.difference(model, q, exact)))
         assert errors[1] <= 1e-12  # a constant body twist is the exponential map: exact for both

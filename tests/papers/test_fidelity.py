@@ -14,7 +14,8 @@ from conftest import SCENARIOS
 def test_hoang2011_error_feedback_beats_the_open_loop_under_euler(tmp_path):
     errors = {}
     for name in ("hoang2011_w1_euler", "hoang2011_w1_euler_open_loop"):
-        result = run_scenario(SCENARIOS / f"{name}.toml", out=tmp_path / name, progress=False, overrides=["outputs.figures=false"])
+        result = run_scenario(SCENARIOS / f"{name}.toml", out=tmp_path / name, progress=False,
+                              overrides=["outputs.figures=false"])
         errors[name] = result.metrics["max_position_error"]
     assert errors["hoang2011_w1_euler"] * 10 < errors["hoang2011_w1_euler_open_loop"]
     assert 1e-3 < errors["hoang2011_w1_euler"] < 5e-3 and 3e-2 < errors["hoang2011_w1_euler_open_loop"] < 1e-1
@@ -28,7 +29,8 @@ def test_hoang2011_printed_q0_is_the_optimum_with_q1_below_three_quarter_pi():
     found = np.r_[robot.base_values(initial.q), robot.arm_configuration(initial.q)]
     assert np.abs(found - paper).max() < 1e-3 and found[3] <= 0.75 * np.pi
     stated = uvms.load("hoang2011")  # the printed limit 3*pi/2 gives q1 = 3*pi/4 instead
-    other = uvms.solvers.initial_configuration(stated, uvms.FrameTask(stated, axes=("x", "y", "yaw"), orientation="euler",
+    other = uvms.solvers.initial_configuration(stated,
+                                               uvms.FrameTask(stated, axes=("x", "y", "yaw"), orientation="euler",
                                                               target=[0, -2, 0, 0, 0, 1.0]))
     assert abs(stated.arm_configuration(other.q)[0] - 0.75 * np.pi) < 1e-6
 
@@ -49,7 +51,8 @@ def test_xiang2019_trajectories_fed_with_the_printed_tables_pass_through_them():
         np.testing.assert_allclose(at.qd, velocities, atol=1e-12)
     np.testing.assert_allclose(quintic(times).qdd, accelerations, atol=1e-12)
     assert np.rad2deg(cubic.sample(0.01).q[:, 0].min()) < -91.5  # joint 1 overshoots the final -90 deg
-    assert np.abs(quintic.sample(0.01).qdd).max() > 0.039 > np.abs(ViaPointTrajectory(points, times, 5).sample(0.01).qdd).max()
+    cubic = ViaPointTrajectory(points, times, 5).sample(0.01).qdd
+    assert np.abs(quintic.sample(0.01).qdd).max() > 0.039 > np.abs(cubic).max()
 
 
 def test_santos2006_classic_priority_meets_the_vehicle_task_the_robust_form_does_not(tmp_path):

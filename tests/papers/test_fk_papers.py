@@ -12,8 +12,10 @@ def hoang_closed_form(q_vehicle: np.ndarray, q_arm: np.ndarray, a=0.4, b=0.6, le
     """x_E, y_E, phi_E of hoang2011 section 3."""
     x, y, psi = q_vehicle
     s1, s12, s123 = psi + q_arm[0], psi + q_arm[0] + q_arm[1], psi + q_arm.sum()
-    x_e = x + a * np.cos(psi) + b * np.sin(psi) + lengths[0] * np.sin(s1) + lengths[1] * np.sin(s12) + lengths[2] * np.sin(s123)
-    y_e = y + a * np.sin(psi) - b * np.cos(psi) - lengths[0] * np.cos(s1) - lengths[1] * np.cos(s12) - lengths[2] * np.cos(s123)
+    x_e = (x + a * np.cos(psi) + b * np.sin(psi)
+           + lengths[0] * np.sin(s1) + lengths[1] * np.sin(s12) + lengths[2] * np.sin(s123))
+    y_e = (y + a * np.sin(psi) - b * np.cos(psi)
+           - lengths[0] * np.cos(s1) - lengths[1] * np.cos(s12) - lengths[2] * np.cos(s123))
     return np.array([x_e, y_e, s123 - np.pi / 2])
 
 

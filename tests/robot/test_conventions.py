@@ -83,7 +83,8 @@ def test_nu_is_the_body_velocity_seen_in_ned(rng):
     q = robot.random_configuration(rng)
     v = rng.normal(size=robot.nv)
     dt = 1e-7
-    eta_rate = (robot.eta_ned(pin.integrate(robot.model, q, v * dt)) - robot.eta_ned(pin.integrate(robot.model, q, -v * dt))) / (2 * dt)
+    eta_rate = (robot.eta_ned(pin.integrate(robot.model, q, v * dt))
+                - robot.eta_ned(pin.integrate(robot.model, q, -v * dt))) / (2 * dt)
     pose = conventions.pose_from_eta(robot.eta_ned(q))
     rotation_ned_frd = conventions.R_NED_ENU @ pose.rotation @ conventions.R_FLU_FRD
     assert np.allclose(rotation_ned_frd @ robot.nu_frd(q, v)[:3], eta_rate[:3], atol=1e-6)

@@ -54,4 +54,5 @@ def test_manipulability_is_product_of_singular_values(rng):
     assert robot.generalized_manipulability(q) == pytest.approx(abs(np.linalg.det(generalized)), rel=1e-10)
     # stretched arm (q2 = q3 = 0): the arm alone is singular in the plane only when fully aligned
     stretched = robot.configuration(arm=[1.0, 0.0, 0.0])
-    assert robot.generalized_manipulability(stretched) < robot.generalized_manipulability(robot.configuration(arm=[1.0, 1.0, 1.0]))
+    bent = robot.configuration(arm=[1.0, 1.0, 1.0])
+    assert robot.generalized_manipulability(stretched) < robot.generalized_manipulability(bent)

@@ -118,7 +118,8 @@ def test_every_caller_keeps_its_numbers_exactly(rng):
         data = robot.model.createData()
         jacobian = pin.computeFrameJacobian(robot.model, data, q, robot.frame_id(), pin.LOCAL_WORLD_ALIGNED)
         a_base, a_arm = kinematics.centroidal_map_split(robot.model, data, q, robot.base_type, nb)
-        assert np.array_equal(robot.generalized_jacobian(q), jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(a_base, a_arm))
+        assert np.array_equal(robot.generalized_jacobian(q),
+                              jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(a_base, a_arm))
         mass = augmented_mass_matrix(robot.model, robot.model.createData(), links, q)
         old = jacobian[:, nb:] - jacobian[:, :nb] @ np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:])
         assert np.array_equal(generalized_jacobian_added_mass(robot, hydro, q), old)
@@ -127,7 +128,8 @@ def test_every_caller_keeps_its_numbers_exactly(rng):
         # computeJointJacobians and computeFrameJacobian sum the same terms in another order: rounding apart
         assert np.allclose(held.generalized(held.jacobian(robot.frame_id())), jacobian[:, nb:], rtol=0, atol=1e-13)
         state = Configuration(robot, q)
-        assert np.allclose(state.generalized(state.jacobian(robot.frame_id())), robot.generalized_jacobian(q), atol=1e-13)
+        assert np.allclose(state.generalized(state.jacobian(robot.frame_id())), robot.generalized_jacobian(q),
+                           atol=1e-13)
 
 
 def test_a_fixed_base_has_no_generalized_jacobian_with_a_clear_error():

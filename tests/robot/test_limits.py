@@ -15,12 +15,16 @@ from uvms.tasks.objectives import JointLimits, JointVelocityLimits
 from conftest import shipped
 
 CONTINUOUS_ARM = """<robot name="mixed">
-  <link name="world"/><link name="base"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="world"/>
+  <link name="base">
+    <inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
   <joint name="root" type="floating"><parent link="world"/><child link="base"/></joint>
   <link name="a"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
   <link name="b"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <link name="ee"><inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
-  <joint name="spin" type="continuous"><parent link="base"/><child link="a"/><origin xyz="0.1 0 0"/><axis xyz="0 0 1"/></joint>
+  <link name="ee">
+    <inertial><mass value="1"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="spin" type="continuous"><parent link="base"/><child link="a"/><origin xyz="0.1 0 0"/>
+    <axis xyz="0 0 1"/></joint>
   <joint name="lift" type="prismatic"><parent link="a"/><child link="b"/><origin xyz="0.2 0 0"/><axis xyz="1 0 0"/>
     <limit lower="-0.1" upper="0.3" effort="1" velocity="0.5"/></joint>
   <joint name="tilt" type="revolute"><parent link="b"/><child link="ee"/><origin xyz="0.3 0 0"/><axis xyz="0 1 0"/>

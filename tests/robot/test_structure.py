@@ -13,7 +13,8 @@ from uvms.robot.structure import EE_GIVEN, default_end_effectors, sensor_word
 from conftest import ROOT, SHIPPED, shipped
 
 IDIOMS = (ROOT / "tests" / "fixtures" / "joints" / "rov_idioms.urdf").read_text()
-WRIST_CAMERA = ('<link name="wrist_camera_link"/><joint name="wrist_camera_joint" type="revolute"><parent link="link6"/>'
+WRIST_CAMERA = ('<link name="wrist_camera_link"/><joint name="wrist_camera_joint" '
+                'type="revolute"><parent link="link6"/>'
                 '<child link="wrist_camera_link"/><limit lower="0" upper="0" effort="0" velocity="0"/></joint></robot>')
 
 
@@ -60,7 +61,8 @@ def test_example_arms_keep_their_end_effectors_and_mimics_are_no_arm_joints():
     panda = uvms.load(uvms.model.example_robot_urdf("panda"), base="fixed")
     assert panda.n_arm == len(panda.arm_joint_names) == 8
     assert panda.mimic_joint_names == ["panda_finger_joint2"]
-    assert panda.joint_classes["panda_finger_joint2"].reason == "follows 'panda_finger_joint1': q = 1 q(panda_finger_joint1) + 0"
+    assert panda.joint_classes["panda_finger_joint2"].reason == \
+        "follows 'panda_finger_joint1': q = 1 q(panda_finger_joint1) + 0"
     bare = uvms.Robot(panda.model)  # from a Pinocchio model alone: its moving joints are what it has
     assert bare.joint_classes["panda_finger_joint2"].kind == "mimic"
     assert bare.joint_classes["panda_joint1"].reason == "a moving joint of the Pinocchio model"

@@ -65,7 +65,8 @@ def test_a_current_beyond_the_thrusters_saturates_them_and_surge_gives_way(tmp_p
 
 @pytest.mark.parametrize("overrides, message", [
     (["plant.type=kinematic"], "needs a dynamic plant"),
-    (["plant.type=rigid", "plant.gravity=false", "plant.current=[]"], "thrusters = true needs plant.type = 'hydrodynamic'"),
+    (["plant.type=rigid", "plant.gravity=false", "plant.current=[]"], "thrusters = true needs "
+                                                                      "plant.type = 'hydrodynamic'"),
     (["solver.free_floating=true"], "leaves the vehicle passive"),
     (["solver.gain=[1.0, 1.0, 1.0]"], "solver.gain is one number"),
     (['vehicle_control.priorities=[["surge"]]'], "groups of wrench axes among x, y, z, roll, pitch, yaw"),
@@ -91,7 +92,8 @@ def test_the_bag_of_an_actuated_run_has_the_thrusts_and_the_body_wrench(tmp_path
     from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
 
-    result = run_scenario(CURRENT, tmp_path / "b", [*NO_FIGURES, "outputs.bag=true", "trajectory.duration=0.5"], progress=False)
+    result = run_scenario(CURRENT, tmp_path / "b", [*NO_FIGURES, "outputs.bag=true", "trajectory.duration=0.5"],
+                          progress=False)
     typestore, series = get_typestore(Stores.ROS2_HUMBLE), {}
     with Reader(tmp_path / "b" / "bag") as reader:
         for connection, _, raw in reader.messages():

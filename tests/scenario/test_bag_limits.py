@@ -153,7 +153,8 @@ def test_a_storage_file_that_is_a_fifo_is_refused_not_waited_on(tmp_path):
 
 @pytest.mark.parametrize("table, statement, message", [
     ("schema", ("CREATE VIEW schema AS WITH RECURSIVE c(x) AS (SELECT 1 UNION ALL SELECT x + 1 FROM c) "
-                "SELECT 4 AS schema_version, 'humble' AS ros_distro FROM (SELECT max(x) FROM c)"), "'schema' is a view"),
+                "SELECT 4 AS schema_version, 'humble' AS ros_distro FROM (SELECT max(x) FROM c)"),
+     "'schema' is a view"),
     ("messages", ("CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER, timestamp INTEGER, "
                   "data BLOB GENERATED ALWAYS AS (zeroblob(2000000000)))"), "'messages' has generated columns"),
 ])

@@ -16,7 +16,8 @@ from conftest import NO_FIGURES, ROOT, shipped
 def test_free_floating_weights_of_size_nv_name_the_key_and_the_arm_joints(tmp_path):
     for name, extra in (("hoang2011_gjm", []), ("hoang2011_w1_euler", ["solver.free_floating=true"])):
         with pytest.raises(ScenarioError) as caught:
-            run_scenario(name, out=tmp_path / name, overrides=[*NO_FIGURES, *extra, "solver.weights=[1, 1, 1, 1, 1, 1]"])
+            run_scenario(name, out=tmp_path / name,
+                         overrides=[*NO_FIGURES, *extra, "solver.weights=[1, 1, 1, 1, 1, 1]"])
         message = str(caught.value)
         assert "solver.weights has 6 numbers, hoang2011_uvms needs 3" in message
         assert "free-floating (generalized-Jacobian) weights cover the arm joints only" in message

@@ -1,4 +1,5 @@
-"""The distributions of `uvms study` (uvms.scenario.studies.distributions): parsing as data, moments, truncation, seeds."""
+"""The distributions of `uvms study` (uvms.scenario.studies.distributions): parsing as data, moments, truncation,
+seeds."""
 
 from __future__ import annotations
 

@@ -147,7 +147,8 @@ def test_model_names_and_solver_keys_are_checked_when_built(tmp_path):
     with pytest.raises(ScenarioError, match="not used by solver.method = 'hqp'"):
         run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "solver.method=hqp", "solver.eta=0.5"],
             progress=False)
-    with pytest.raises(ScenarioError, match=r"leaves the vehicle passive \(no actuators\).*solver.free_floating = true"):
+    with pytest.raises(ScenarioError,
+                       match=r"leaves the vehicle passive \(no actuators\).*solver.free_floating = true"):
         run_scenario(write(tmp_path, tilt), tmp_path / "o", [*NO_FIGURES, "plant.type=rigid"], progress=False)
     assert not (tmp_path / "o").exists()  # refused before anything is written
 

@@ -52,7 +52,8 @@ def test_view_refuses_a_model_that_contradicts_the_record(long_arm_run, tmp_path
     assert main(["view", "--result", str(long_arm_run), "--headless", png]) == 0
     assert main(["view", "hoang2011", "--arg", "l1=0.7", "--result", str(long_arm_run), "--headless", png]) == 0
     capsys.readouterr()
-    for argv in (["view", "hoang2011"], ["view", str(SCENARIOS_DIR / "hoang2011_w1_euler.toml")], ["view", "--arg", "l1=0.5"]):
+    for argv in (["view", "hoang2011"], ["view", str(SCENARIOS_DIR / "hoang2011_w1_euler.toml")],
+                 ["view", "--arg", "l1=0.5"]):
         assert main([*argv, "--result", str(long_arm_run), "--headless", png]) == 2
         err = one_line(capsys)
         assert "contradicts the model" in err and "joint q2 placed differently" in err

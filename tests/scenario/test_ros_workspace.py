@@ -52,7 +52,8 @@ def test_the_mimic_chain_moves_the_fingers_as_the_file_says(robot):
 
     def angle(frame: str, parent: str, q: np.ndarray) -> float:
         pin.framesForwardKinematics(robot.model, data, q)
-        relative = data.oMf[robot.model.getFrameId(parent)].rotation.T @ data.oMf[robot.model.getFrameId(frame)].rotation
+        relative = (data.oMf[robot.model.getFrameId(parent)].rotation.T
+                    @ data.oMf[robot.model.getFrameId(frame)].rotation)
         return float(np.arctan2(relative[1, 0], relative[0, 0]))
 
     for finger_b in (-0.7, -0.3, 0.0):

@@ -1,4 +1,5 @@
-"""ROS 2 files out (uvms.scenario.bags.writer): a run written as a rosbag2 (MCAP) with rosbags, read back with rosbags."""
+"""ROS 2 files out (uvms.scenario.bags.writer): a run written as a rosbag2 (MCAP) with rosbags, read back with
+rosbags."""
 
 from __future__ import annotations
 
@@ -211,7 +212,8 @@ def test_given_poses_torques_and_a_position_only_desired(tmp_path, floating_bag)
     _, messages = read_bag(tmp_path / "poses")
     heights = [message.pose.position.z for _, message in messages["/alpha_jaw_link/desired_pose"]]
     assert heights == [-k for k in range(n)]
-    np.testing.assert_array_equal([state.effort for _, state in messages["/joint_states"]], plant_like.plant.joint_torque)
+    np.testing.assert_array_equal([state.effort for _, state in messages["/joint_states"]],
+                                  plant_like.plant.joint_torque)
     position_only = dataclasses.replace(result, desired_rpy=None)
     summary = write_bag(tmp_path / "points", robot, position_only)
     assert summary.types["/ee/desired_position"] == "geometry_msgs/msg/PointStamped"

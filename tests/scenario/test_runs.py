@@ -28,7 +28,8 @@ def hoang_runs(tmp_path_factory):
     runs = {}
     for name in HOANG:
         overrides = [] if name == "w1" else ["outputs.figures=false"]
-        runs[name] = run_scenario(SCENARIOS / f"hoang2011_{name}.toml", out=out / name, overrides=overrides, progress=False)
+        runs[name] = run_scenario(SCENARIOS / f"hoang2011_{name}.toml", out=out / name, overrides=overrides,
+                                  progress=False)
     return runs
 
 
@@ -73,7 +74,8 @@ def test_hoang2011_outputs(hoang_runs):
 
 
 def test_santos2006_kinematic_constraint_keeps_the_vehicle_still_and_task_priority_does_not(tmp_path):
-    constraint = run_scenario(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc", progress=False).metrics
+    constraint = run_scenario(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "kc",
+                              progress=False).metrics
     priority = run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "tp", progress=False).metrics
     assert constraint["vehicle_travel"] <= 1e-12
     assert priority["vehicle_travel"] > 0.1
@@ -92,7 +94,8 @@ def test_set_overrides_change_the_run(tmp_path):
                overrides=["outputs.figures=false"])
     longer = run_scenario(SCENARIOS / "santos2006_kinematic_constraint.toml", out=tmp_path / "b", progress=False,
                  overrides=["outputs.figures=false", "model.args.l1=2.5", "vehicle.heading=0.5"])
-    assert longer.setup.robot.fk(longer.setup.q0).translation[1] > base.setup.robot.fk(base.setup.q0).translation[1] + 0.4
+    assert (longer.setup.robot.fk(longer.setup.q0).translation[1]
+            > base.setup.robot.fk(base.setup.q0).translation[1] + 0.4)
     assert longer.metrics["arm_travel"] != base.metrics["arm_travel"]
     assert np.arctan2(longer.simulation.q[-1, 3], longer.simulation.q[-1, 2]) == pytest.approx(0.5 * (1 - 0.9**100))
 
@@ -214,7 +217,8 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
     started = time.perf_counter()
     with pytest.raises(StepCountError, match=r"simulation.dt = 1e-07 s over 190 s gives 1.9e\+09 steps; at most "
                                              r"200,000 are allowed .*raise simulation.dt or shorten"):
-        run_scenario(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=["simulation.dt=1e-7"], progress=False)
+        run_scenario(SCENARIOS / "hoang2011_w1.toml", out=tmp_path / "run", overrides=["simulation.dt=1e-7"],
+                     progress=False)
     assert time.perf_counter() - started < 30 and not (tmp_path / "run").exists()
     with pytest.raises(StepCountError, match="longer than trajectory.duration = 10 s: the run would have no step"):
         run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=["simulation.dt=100"])
@@ -223,7 +227,8 @@ def test_step_count_is_bounded_before_anything_runs(tmp_path, monkeypatch):
             overrides=["simulation.dt=1.0", "simulation.duration=0.5"])
     for dt in ("0", "-0.1"):
         with pytest.raises(ScenarioError, match=r"simulation.dt = .* is out of range: it is the integration step"):
-            run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run", overrides=[f"simulation.dt={dt}"])
+            run_scenario(SCENARIOS / "santos2006_task_priority.toml", out=tmp_path / "run",
+                         overrides=[f"simulation.dt={dt}"])
     amundsen = SCENARIOS / "amundsen2018_rigid_open_loop.toml"  # the dynamic plant: the same check
     monkeypatch.setattr("uvms.scenario.runs.simulate", never)
     with pytest.raises(StepCountError, match="at most 200,000"):
@@ -357,7 +362,8 @@ def test_a_figure_that_fails_does_not_lose_the_run(tmp_path, monkeypatch):
     overrides = ["simulation.duration=1.0"]
     run_scenario(scenario, out=tmp_path / "run", overrides=[*overrides, "outputs.figures=false"], progress=False)
     monkeypatch.setattr(uvms.viz.plotting, "scenario_figures", broken)
-    with pytest.warns(uvms.errors.OutputFailedWarning, match="figures could not be written .ValueError: Number of rows"):
+    with pytest.warns(uvms.errors.OutputFailedWarning,
+                      match="figures could not be written .ValueError: Number of rows"):
         run = run_scenario(scenario, out=tmp_path / "run", overrides=overrides, progress=False)
     metrics = json.loads((tmp_path / "run" / "metrics.json").read_text())
     assert metrics["outputs_failed"] == {"figures": "ValueError: Number of rows must be a positive integer, not 0"}

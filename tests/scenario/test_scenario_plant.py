@@ -32,7 +32,8 @@ def test_plant_hydrodynamics_replaces_the_models_own(tmp_path):
     robot = build(read_scenario(scenario)).robot
     model = hydrodynamics_of(robot)
     link = model.links["base_link"]
-    heavier = dataclasses.replace(link, added_mass=2.0 * link.added_mass, quadratic_damping=link.quadratic_damping + 7.0)
+    heavier = dataclasses.replace(link, added_mass=2.0 * link.added_mass,
+                                  quadratic_damping=link.quadratic_damping + 7.0)
     (tmp_path / "mine.yaml").write_text(hydrodynamics_yaml_text(
         dataclasses.replace(model, links={**model.links, "base_link": heavier})))
     setup = build(read_scenario(scenario, ["plant.hydrodynamics='mine.yaml'"]))

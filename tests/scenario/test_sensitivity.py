@@ -1,4 +1,5 @@
-"""The numbers of a study's summary (uvms.scenario.studies.sensitivity): Wilson interval, percentiles, Spearman ranking."""
+"""The numbers of a study's summary (uvms.scenario.studies.sensitivity): Wilson interval, percentiles, Spearman
+ranking."""
 
 from __future__ import annotations
 

@@ -55,7 +55,8 @@ def test_tpe_finds_the_known_optimum_within_a_centimetre_in_25_trials(tmp_path):
         assert row["value"] == pytest.approx(abs(row["model.args.l1"] - OPTIMUM), abs=1e-9)
     assert best["value"] == min(row["value"] for row in result.rows)
     folder = tmp_path / "t"
-    assert json.loads((folder / "best.json").read_text())["set"] == [f"model.args.l1={best['parameters']['model.args.l1']!r}"]
+    assert json.loads((folder / "best.json").read_text())["set"] == \
+        [f"model.args.l1={best['parameters']['model.args.l1']!r}"]
     assert (folder / "best.toml").read_text().splitlines()[1:] == ["[model.args]",
                                                                   f"l1 = {best['parameters']['model.args.l1']!r}"]
     assert (folder / "tune_history.png").read_bytes().startswith(b"\x89PNG")

@@ -26,7 +26,8 @@ def copy_hoang2011(folder: Path) -> tuple[Path, Path]:
     shutil.copy(ROOT / "models" / "hoang2011" / "uvms.urdf.xacro", model)
     text = (ROOT / "scenarios" / "hoang2011_w1.toml").read_text()
     scenario = folder / "scenarios" / "w1.toml"
-    scenario.write_text(text.replace('path = "../models/hoang2011/uvms.urdf.xacro"', 'path = "../models/uvms.urdf.xacro"'))
+    scenario.write_text(text.replace('path = "../models/hoang2011/uvms.urdf.xacro"',
+                                     'path = "../models/uvms.urdf.xacro"'))
     assert "../models/uvms.urdf.xacro" in scenario.read_text()
     return scenario, model
 
@@ -99,7 +100,8 @@ def test_watch_api_calls_back_on_a_change(tmp_path):
     model = tmp_path / "arm.urdf"
     model.write_text('<robot name="r"><link name="a"/></robot>')
     seen: list[list[Path]] = []
-    thread = threading.Thread(target=uvms.scenario.watch.watch, args=(model, seen.append), kwargs={"once": True}, daemon=True)
+    thread = threading.Thread(target=uvms.scenario.watch.watch, args=(model, seen.append), kwargs={"once": True},
+                              daemon=True)
     thread.start()
     time.sleep(0.5)
     model.write_text('<robot name="r"><link name="b"/></robot>')

@@ -234,7 +234,8 @@ def test_hqp_started_outside_a_limit_comes_back_at_the_allowed_speed_and_is_neve
     assert np.allclose(steps[:40], 0.5 * DT, atol=1e-9)  # back at its 0.5 rad/s while outside (0.25 rad: 50 steps)
     assert max(elbow[-1] - 3.45, 0.0) <= 1e-9  # then inside the valid set
     q = robot.configuration(base=[0, 0, -5, 0, 0, 0], arm=[3.0, 1.5, 3.7, 3.0, 0.007])
-    back = one_step(SetBasedSolver, robot, q, levels, DT, gain=2.0, weights=HEAVY_VEHICLE)  # set-based: back, never further
+    # set-based: back, never further
+    back = one_step(SetBasedSolver, robot, q, levels, DT, gain=2.0, weights=HEAVY_VEHICLE)
     assert robot.arm_configuration(back.q)[2] < 3.7 and back.velocity.speed_ratio <= 1.0 + 1e-12
 
 

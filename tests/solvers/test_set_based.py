@@ -109,7 +109,8 @@ def test_text_and_none_options_are_refused_by_what_is_valid(options, message):
         SetBasedSolver(robot, levels, **options)
     if "speed_limits" not in options:  # CLIK reads its gain and W through the same checks
         hoang, task = hoang_setup()
-        with pytest.raises(uvms.errors.SolverInputError, match=r"(gain must be a finite scalar >= 0, \(3,\)|W must be \(6,\))"):
+        with pytest.raises(uvms.errors.SolverInputError, match=r"(gain must be a finite scalar "
+                                                               r">= 0, \(3,\)|W must be \(6,\))"):
             uvms.CLIKSolver(hoang, task, **options)
 
 
@@ -137,7 +138,8 @@ def saturated(contributions, lower, upper, maximum=None, check_inside=True):
     total, scales = np.empty(size), np.empty(len(contributions))
     low, high = np.where(finite_low, lower, -1e300)[rows], np.where(finite_high, upper, 1e300)[rows]
     ratio = saturated_sum_into(stacked, stacked, np.zeros(size), rows, rows, low, high, 1.0, 1.0,
-                               np.full(size, np.inf) if maximum is None else maximum, check_inside, 1e-12, total, scales)
+                               np.full(size, np.inf) if maximum is None else maximum, check_inside, 1e-12, total,
+                               scales)
     return total, tuple(scales.tolist()), ratio
 
 

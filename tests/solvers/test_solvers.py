@@ -1,4 +1,5 @@
-"""The solver layer (uvms.solvers): inverses, CLIK, null space, task priority, constraints, IK, initial configuration."""
+"""The solver layer (uvms.solvers): inverses, CLIK, null space, task priority, constraints, IK, initial
+configuration."""
 
 from __future__ import annotations
 
@@ -104,7 +105,8 @@ def test_one_inverse_module_its_forms_agree(rng):
             assert np.allclose(dls_solve(jacobian, rhs, damping**2), inverse @ rhs, atol=1e-10)
         assert np.allclose(damped_weighted_inverse(jacobian, None, 0.0)[0], pinv(jacobian), atol=1e-10)
         weights = rng.uniform(0.5, 50, shape[1])
-        assert np.allclose(damped_weighted_inverse(jacobian, weights, 0.0)[0], weighted_pinv(jacobian, weights), atol=1e-10)
+        assert np.allclose(damped_weighted_inverse(jacobian, weights, 0.0)[0], weighted_pinv(jacobian, weights),
+                           atol=1e-10)
     with pytest.raises(SolverInputError, match="not positive definite"):
         dls_solve(np.zeros((3, 4)), np.ones(3), 0.0)
 
@@ -175,7 +177,8 @@ def test_joint_limit_potential_gradient_matches_finite_differences(rng):
     for index in range(robot.nv):
         step = np.zeros(robot.nv)
         step[index] = 1e-6
-        numeric = (potential.value(pin.integrate(robot.model, q, step)) - potential.value(pin.integrate(robot.model, q, -step))) / 2e-6
+        numeric = (potential.value(pin.integrate(robot.model, q, step))
+                   - potential.value(pin.integrate(robot.model, q, -step))) / 2e-6
         assert numeric == pytest.approx(gradient[index], abs=1e-8)
     assert potential.value(robot.configuration(arm=[0.75 * np.pi, 0, 0])) == 0.0
 
@@ -272,7 +275,8 @@ def test_solve_ik_reaches_random_reachable_targets_within_limits(rng):
         pose_error = pin.log6(robot.fk(result.q).actInv(target)).vector
         assert np.linalg.norm(pose_error) <= 1e-9
         arm = slice(robot.nq_vehicle, robot.nq)
-        assert np.all(result.q[arm] >= model.lowerPositionLimit[arm]) and np.all(result.q[arm] <= model.upperPositionLimit[arm])
+        assert np.all(result.q[arm] >= model.lowerPositionLimit[arm])
+        assert np.all(result.q[arm] <= model.upperPositionLimit[arm])
 
 
 def test_solve_ik_unreachable_target_is_not_a_false_success():
@@ -387,7 +391,8 @@ def test_free_floating_on_a_fixed_base_is_one_clear_error():
     arm = uvms.load(uvms.model.example_robot_urdf("ur5"))  # fixed base: no generalized Jacobian
     assert arm.base_type == "fixed"
     task = uvms.FrameTask(arm, target=arm.fk(arm.neutral()))
-    with pytest.raises(SolverInputError, match="ur5 has a fixed base: free_floating=True needs a floating or planar base"):
+    with pytest.raises(SolverInputError, match="ur5 has a fixed base: free_floating=True "
+                                               "needs a floating or planar base"):
         clik_velocity(arm, arm.neutral(), task, free_floating=True)
     with pytest.raises(SolverInputError, match="fixed base"):
         clik_step(arm, arm.neutral(), task, 0.1, free_floating=True)
@@ -410,7 +415,7 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
     task = hoang_task(robot, target=xdot)
     for free_floating in (False, True):
         result = clik_velocity(robot, q, task, damping=uvms.solvers.VariableDamping(0.1, 0.2) if damping else 0.0,
-                                    free_floating=free_floating, potential=uvms.tasks.JointLimitPotential(robot), alpha=10.0)
+                               free_floating=free_floating, potential=uvms.tasks.JointLimitPotential(robot), alpha=10.0)
         assert np.all(np.isfinite(result.v)) and np.isfinite(result.residual) and np.isfinite(result.sigma_min)
     state = uvms.Configuration(robot, q)
     jacobian = task.jacobian(state)[:, 3:]  # arm only: singular when stretched

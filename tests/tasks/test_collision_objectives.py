@@ -53,7 +53,8 @@ def test_self_collision_rows_are_the_nearest_pairs_distances_and_jacobians(robot
         nearest = np.argsort(everything.distance)[:3]
         rows = objective.rows(state)
         np.testing.assert_allclose(rows.value, everything.distance[nearest], rtol=0, atol=1e-12)
-        np.testing.assert_allclose(rows.jacobian, every_pair.jacobian(state, everything.take(nearest), nearest), atol=1e-12)
+        np.testing.assert_allclose(rows.jacobian, every_pair.jacobian(state, everything.take(nearest), nearest),
+                                   atol=1e-12)
         np.testing.assert_array_equal(rows.value, objective.value(state))
         np.testing.assert_array_equal(rows.jacobian, objective.jacobian(state))
         inside = np.clip((rows.value - 0.02) / 0.05, 0, 1)
@@ -71,7 +72,8 @@ def test_fewer_pairs_than_count_give_one_row_per_pair_and_listed_pairs_check_onl
 
 
 @pytest.mark.parametrize(("options", "error", "words"), [
-    (dict(pairs=[["jaw", "hull"]]), LinkNotFound, r"pair \[jaw, hull\] \(links with collision shapes\): unknown link 'hull'; valid names: base_link, arm_base"),
+    (dict(pairs=[["jaw", "hull"]]), LinkNotFound, r"pair \[jaw, hull\] \(links with collision shapes\): "
+                                                  r"unknown link 'hull'; valid names: base_link, arm_base"),
     (dict(pairs=[["link2", "jaw"]]), ObjectiveError, "'link2' and 'jaw' are adjacent"),
     (dict(pairs=[["link3", "jaw"]]), ObjectiveError, "'link3' and 'jaw' are same body"),
     (dict(pairs="jaw"), ObjectiveError, "pairs must be None, 'all' or a list"),

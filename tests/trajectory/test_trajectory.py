@@ -78,7 +78,8 @@ def test_circle_geometry_and_trajectory_derivatives():
 
 def test_line_and_se3_interpolation():
     law = PolynomialLaw(distance=1.0, duration=2.0, degree=5)
-    start, end = pin.SE3(np.eye(3), np.zeros(3)), pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0), np.array([1.0, 2.0, -0.5]))
+    start, end = pin.SE3(np.eye(3), np.zeros(3)), pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0),
+                                                          np.array([1.0, 2.0, -0.5]))
     trajectory = SE3Trajectory(start, end, law)
     assert np.allclose(trajectory(0.0).pose.homogeneous, start.homogeneous)
     assert np.allclose(trajectory(2.0).pose.homogeneous, end.homogeneous)
@@ -170,7 +171,8 @@ def test_jtraj_boundaries_exact_and_time_forms():
 
 
 def test_ctraj_is_a_straight_line_with_slerp():
-    start, end = pin.SE3(np.eye(3), np.zeros(3)), pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0), np.array([1.0, 2.0, -0.5]))
+    start, end = pin.SE3(np.eye(3), np.zeros(3)), pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.2, 1.0),
+                                                          np.array([1.0, 2.0, -0.5]))
     samples = ctraj(start, end, 21)
     assert samples.matrices.shape == (21, 4, 4)
     assert np.allclose(samples.poses[0].homogeneous, start.homogeneous)

@@ -67,7 +67,8 @@ def test_xiang2019_vehicle_box_is_the_base_pose_times_the_hull(rng):
     np.testing.assert_allclose(geometry.box_corners, expected, rtol=0, atol=1e-12)
     edges = geometry.box_edges
     assert edges.shape == (12, 2, 3)
-    np.testing.assert_allclose(sorted(np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1)), np.repeat(np.sort(XIANG_HULL), 4))
+    np.testing.assert_allclose(sorted(np.linalg.norm(edges[:, 1] - edges[:, 0], axis=1)),
+                               np.repeat(np.sort(XIANG_HULL), 4))
 
 
 def test_vehicle_box_is_the_visual_envelope_not_a_collision_solid():

@@ -122,7 +122,8 @@ def test_view_headless_writes_a_snapshot_and_an_animation(tmp_path, capsys):
     robot = shipped("hoang2011")
     run = tmp_path / "run"
     write_run(run, robot)
-    assert main(["view", "hoang2011", "--q", "0", "0", "0", "1", "0.5", "0.2", "--headless", str(tmp_path / "a.png")]) == 0
+    assert main(["view", "hoang2011", "--q", "0", "0", "0", "1", "0.5", "0.2", "--headless",
+                 str(tmp_path / "a.png")]) == 0
     assert Image.open(tmp_path / "a.png").size[0] > 100
     assert main(["view", "hoang2011", "--result", str(run), "--headless", str(tmp_path / "b.gif"), "--frames", "4",
                  "--quiet"]) == 0
@@ -275,7 +276,8 @@ def test_a_panel_slider_moves_the_robot_and_its_end_effector_triads():
         for frame, handle in shown.triads.handles.items():
             pose = robot.fk(expected, frame)
             np.testing.assert_allclose(handle.position, pose.translation, atol=1e-9)
-            np.testing.assert_allclose(np.abs(np.dot(handle.wxyz, pin.Quaternion(pose.rotation).coeffs()[[3, 0, 1, 2]])),
+            np.testing.assert_allclose(np.abs(np.dot(handle.wxyz,
+                                                     pin.Quaternion(pose.rotation).coeffs()[[3, 0, 1, 2]])),
                                        1.0, atol=1e-9)
             assert f"{pose.translation[2]:+.3f}" in shown.teach.poses.content
         visualizer = shown.visualizer

@@ -261,7 +261,8 @@ def test_dexterity_map_counts_distinct_cells_per_voxel():
 
 
 def test_outside_hull_removes_points_inside_the_solids():
-    box = HullShape("hull", "box", pin.rpy.rpyToMatrix(0, 0, np.pi / 2), np.array([1.0, 0, 0]), np.array([2.0, 0.6, 0.5]))
+    box = HullShape("hull", "box", pin.rpy.rpyToMatrix(0, 0, np.pi / 2), np.array([1.0, 0, 0]),
+                    np.array([2.0, 0.6, 0.5]))
     # rotated 90 deg about z: 0.6 m along x, 2 m along y
     points = np.array([[1.0, 0, 0], [1.29, 0.99, 0.24], [1.31, 0, 0], [1.0, 1.01, 0], [1.0, 0, 0.26], [-5, 0, 0]])
     assert outside_hull(points, box).tolist() == [False, False, True, True, True, True]

@@ -100,7 +100,8 @@ def add_model_options(parser: argparse.ArgumentParser, ee_help: str) -> None:
     """``--base``, ``--arg``, ``--ee`` and ``--arm-joints`` on a command that loads a model (``uvms info``, ``view``,
     ``workspace``): what :func:`uvms.load` takes, as a scenario's ``[model]`` table gives it
     (:func:`.info.command_model`)."""
-    parser.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: as in the file)")
+    parser.add_argument("--base", choices=["floating", "planar", "fixed"], help="vehicle base (default: "
+                                                                                "as in the file)")
     parser.add_argument("--arg", action="append", metavar="NAME=VALUE", help="xacro argument (repeatable)")
     parser.add_argument("--ee", action="append", metavar="FRAME", help=ee_help)
     parser.add_argument("--arm-joints", action="append", metavar="J1,J2,...",
@@ -110,7 +111,8 @@ def add_model_options(parser: argparse.ArgumentParser, ee_help: str) -> None:
 
 
 def add_parallel_options(parser: argparse.ArgumentParser) -> None:
-    """``--jobs``, ``--backend``, ``--scheduler`` and ``--insecure-scheduler`` of ``uvms sweep``, ``study`` and ``tune``."""
+    """``--jobs``, ``--backend``, ``--scheduler`` and ``--insecure-scheduler`` of ``uvms sweep``, ``study`` and
+    ``tune``."""
     parser.add_argument("--jobs", type=int, default=1, help="parallel jobs (-1: all cores; dask: local workers)")
     parser.add_argument("--backend", choices=["loky", "dask"], default="loky",
                         help="joblib backend: local processes, or a Dask cluster (needs uvms[dask])")

@@ -92,7 +92,8 @@ def describe(robot: Robot, hydrodynamics: str | None = None) -> str:
                      f"  rpy {np.array2string(rpy, precision=4, suppress_small=True)}")
     lines.append(f"ee rule     {robot.ee_reason}")
     lines += thruster_lines(robot) + hydrodynamics_lines(robot, hydrodynamics)
-    lines.append("checks      passed (unit axes, finite numbers, positive masses, inertias and geometry sizes, one tree, "
+    lines.append("checks      passed (unit axes, finite numbers, positive "
+                 "masses, inertias and geometry sizes, one tree, "
                  "base)")
     return "\n".join(lines)
 
@@ -203,7 +204,8 @@ def hydrodynamics_lines(robot: Robot, path: str | None = None) -> list[str]:
     for row in rows:
         lines += [f"  {row['link']}: V {row['volume']:.4g}  CoB {vector(row['center_of_buoyancy'])}",
                   f"    added mass {vector(row['added_mass_diagonal'], '.4g')}",
-                  f"    linear {vector(row['linear_damping'], '.4g')}  quadratic {vector(row['quadratic_damping'], '.4g')}"]
+                  f"    linear {vector(row['linear_damping'], '.4g')}  "
+                  f"quadratic {vector(row['quadratic_damping'], '.4g')}"]
         if any(row["linear_damping_forward_speed"]):
             lines.append(f"    linear per m/s of forward speed {vector(row['linear_damping_forward_speed'], '.4g')}")
     return lines

@@ -14,7 +14,8 @@ from .terminal import say
 #: The metrics ``uvms run`` prints, those a run has (all are in metrics.json).
 HEADLINE_METRICS = ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
                     "vehicle_travel", "vehicle_yaw_range", "arm_travel", "max_vehicle_tilt", "min_clearance",
-                    "min_self_distance", "min_obstacle_distance", "min_manipulability", "max_joint_speed_ratio", "max_thrust_ratio", "saturated_time_fraction",
+                    "min_self_distance", "min_obstacle_distance", "min_manipulability", "max_joint_speed_ratio",
+                    "max_thrust_ratio", "saturated_time_fraction",
                     "vehicle_position_error", "thruster_energy")
 
 

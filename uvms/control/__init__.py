@@ -11,6 +11,6 @@ from .sequence import Phase, PhasePlan, SequenceController
 from .station import ActuatedKinematics, actuated_control, station_keeping
 from .vehicle import VehiclePoseController, VehicleVelocityController, pose_velocity_reference
 
-__all__ = ["ActuatedKinematics", "CoordinatedControl", "GJMControlError", "GJMController", "Phase", "PhasePlan", "SequenceController",
-           "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
+__all__ = ["ActuatedKinematics", "CoordinatedControl", "GJMControlError", "GJMController", "Phase", "PhasePlan",
+           "SequenceController", "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
            "actuated_control", "coordinated_arm_rates", "pose_velocity_reference", "station_keeping"]

@@ -113,7 +113,8 @@ def outside_range(matrix: np.ndarray) -> np.ndarray:
 
 
 class KinematicLayer(Protocol):
-    """What :class:`CoordinatedControl` asks of its kinematic layer (:class:`uvms.control.station.ActuatedKinematics`)."""
+    """What :class:`CoordinatedControl` asks of its kinematic layer
+    (:class:`uvms.control.station.ActuatedKinematics`)."""
 
     def vehicle_objective(self, q: np.ndarray,
                           bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray: ...

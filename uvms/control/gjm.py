@@ -158,7 +158,8 @@ class GJMController:
         options: Mapping[str, object] | None = None,
     ) -> None:
         if robot.base_type == "fixed":
-            raise GJMControlError(f"{robot.name} has a fixed base: GJM control needs a free-floating (or planar) vehicle")
+            raise GJMControlError(f"{robot.name} has a fixed base: GJM control "
+                                  "needs a free-floating (or planar) vehicle")
         if gjm not in GJM_KINDS:
             raise GJMControlError(f"unknown gjm {gjm!r}; valid: {', '.join(GJM_KINDS)}")
         try:
@@ -258,7 +259,8 @@ class GJMController:
 
     def tracking(self, t: float, q: np.ndarray, v: np.ndarray) -> dict:
         """The tracking series of a run's row at (t, q, v): pose and velocity of the frame and of the reference,
-        the joint rates w and the inverse's sigma_min and damping (what :func:`uvms.sim.simulate` records of a plant run)."""
+        the joint rates w and the inverse's sigma_min and damping (what :func:`uvms.sim.simulate` records of a plant
+        run)."""
         state = self.state(q)
         sample = self._sample(state, t)
         reference = self.reference(t)

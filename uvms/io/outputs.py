@@ -267,7 +267,8 @@ def hold_lock(lock_path: Path, shown: str) -> Callable[[], None]:
         try:
             holder.acquire()
         except Timeout:
-            raise RunFolderBusy(f"another uvms process is writing {shown}; wait for it or choose another --out") from None
+            raise RunFolderBusy(f"another uvms process is writing {shown}; wait for it or choose another "
+                                "--out") from None
         return holder.release
     flags = os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC
     try:

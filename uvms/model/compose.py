@@ -169,7 +169,8 @@ def composed_urdf(
                 and j.find("parent").get("link") == link]
     while mount in taken or any(name >= mount for name in siblings):
         mount = "~" + mount  # Pinocchio orders sibling joints by name: the arm's come after the vehicle's
-    arm_root = next(iter({link.get("name") for link in arm.findall("link")} - {c.get("link") for c in arm.iter("child")}))
+    children = {c.get("link") for c in arm.iter("child")}
+    arm_root = next(iter({link.get("name") for link in arm.findall("link")} - children))
     for element in arm:
         if element.tag in ("link", "joint", "material"):
             document.append(element)

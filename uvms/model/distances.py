@@ -99,7 +99,8 @@ class PairDistances:
         self._data = pin.GeometryData(self.geometry)
         for k in range(len(self.pairs)):  # Pinocchio's requests carry GJK's last guess between calls: fresh ones
             self._data.distanceRequests[k] = distance_request()
-        self._results = list(self._data.distanceResults)  # views of the results (a pass over the vector costs 1 us/pair)
+        # views of the results (a pass over the vector costs 1 us/pair)
+        self._results = list(self._data.distanceResults)
         self._bounds = BoundingSpheres(geometry, self.pairs)
 
     @property
@@ -158,13 +159,15 @@ class PairDistances:
         first, second = (int(i) for i in self.pairs[pair])
         objects, placements = self.geometry.geometryObjects, self._data.oMg
         retry = coal.DistanceResult()
-        coal.distance(objects[first].geometry, coal.Transform3s(placements[first].rotation, placements[first].translation),
+        coal.distance(objects[first].geometry,
+                      coal.Transform3s(placements[first].rotation, placements[first].translation),
                       objects[second].geometry,
                       coal.Transform3s(placements[second].rotation, placements[second].translation),
                       distance_request(RETRY_TOLERANCE), retry)
         if not abs(retry.min_distance) <= LARGEST_DISTANCE:
             raise NumericalError(f"coal cannot compute the distance between the shapes {objects[first].name!r} and "
-                                 f"{objects[second].name!r} at this configuration (it returned {retry.min_distance:g}); "
+                                 f"{objects[second].name!r} at this configuration "
+                                 f"(it returned {retry.min_distance:g}); "
                                  f"they overlap deeply")
         agree = abs(result.min_distance - retry.min_distance) <= RETRY_AGREEMENT
         return result if agree else retry

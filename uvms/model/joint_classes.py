@@ -205,7 +205,8 @@ def subtree_masses(robot: ET.Element) -> dict[str, float]:
 
 
 # ------------------------------------------------------------------ mimics
-def composed_mimics(moving: Mapping[str, ET.Element], joints: Mapping[str, ET.Element], origin: str) -> dict[str, Mimic]:
+def composed_mimics(moving: Mapping[str, ET.Element], joints: Mapping[str, ET.Element],
+                    origin: str) -> dict[str, Mimic]:
     """{mimic joint: its relation to the root of its chain} of the moving joints with a ``<mimic>``.
 
     Raises:
@@ -237,7 +238,8 @@ def composed_mimics(moving: Mapping[str, ET.Element], joints: Mapping[str, ET.El
 
 
 def pinocchio_order(robot: ET.Element) -> dict[str, int]:
-    """{joint name: its rank in Pinocchio's model}: depth first, siblings by name (urdfdom's map, walked by Pinocchio)."""
+    """{joint name: its rank in Pinocchio's model}: depth first, siblings by name (urdfdom's map, walked by
+    Pinocchio)."""
     below: dict[str, list[tuple[str, str]]] = {}
     children = set()
     for joint in robot.findall("joint"):
@@ -276,7 +278,8 @@ def leader_first(mimics: Mapping[str, Mimic], order: Mapping[str, int], origin: 
             continue
         k, o = mimics[leader].multiplier, mimics[leader].offset
         if k == 0.0:
-            raise ModelCheckError(f"{origin}: joint {leader!r} mimics {root!r} with multiplier 0 and comes before it in "
+            raise ModelCheckError(f"{origin}: joint {leader!r} mimics {root!r} "
+                                  "with multiplier 0 and comes before it in "
                                   "Pinocchio's order (depth first, siblings by name), which needs the followed joint "
                                   "first; give a non-zero multiplier or rename the joints")
         leaders[leader] = root

@@ -111,7 +111,8 @@ def free_floating_weights_note(n_arm: int) -> str:
 def check_variable_damping(epsilon: float, lambda_max: float) -> None:
     """The parameters of the variable damping (amundsen2018 eq. 6): epsilon > 0, lambda_max >= 0."""
     if not (np.isfinite(epsilon) and epsilon > 0 and np.isfinite(lambda_max) and lambda_max >= 0):
-        raise SolverInputError(f"variable damping needs epsilon > 0 and lambda_max >= 0, got {epsilon!r}, {lambda_max!r}")
+        raise SolverInputError("variable damping needs epsilon > 0 and "
+                               f"lambda_max >= 0, got {epsilon!r}, {lambda_max!r}")
 
 
 def check_choice(value: str, what: str, valid: tuple[str, ...]) -> str:
@@ -133,7 +134,8 @@ def apply_gain(gain: float | np.ndarray, error: np.ndarray) -> np.ndarray:
             raise SolverInputError(f"gain must be a finite scalar >= 0, ({error.size},) or ({error.size}, "
                                    f"{error.size}), got {gain!r}")
         return float(gain) * error
-    gain_array = numbers(gain, f"gain must be a finite scalar >= 0, ({error.size},) or ({error.size}, {error.size}) [1/s]")
+    gain_array = numbers(gain, f"gain must be a finite scalar >= 0, ({error.size},) "
+                               f"or ({error.size}, {error.size}) [1/s]")
     if gain_array.ndim == 0:
         return apply_gain(float(gain_array), error)
     if gain_array.ndim == 1 and gain_array.shape == error.shape and np.all(gain_array >= 0) \
@@ -162,7 +164,8 @@ def prepared_gain(gain: float | np.ndarray, size: int) -> Callable[[np.ndarray, 
 
 
 def gain_matrix(gain: float | np.ndarray, size: int) -> np.ndarray:
-    """The CLIK gain K as a (size, size) positive (semi-)definite matrix, from a scalar, a diagonal (size,) or a matrix [1/s]."""
+    """The CLIK gain K as a (size, size) positive (semi-)definite matrix, from a scalar, a diagonal (size,) or a matrix
+    [1/s]."""
     gain_array = numbers(gain, f"gain must be a finite scalar >= 0, ({size},) or ({size}, {size}) [1/s]")
     if gain_array.ndim == 0:
         gain_array = np.full(size, float(gain_array))
@@ -171,7 +174,8 @@ def gain_matrix(gain: float | np.ndarray, size: int) -> np.ndarray:
             raise SolverInputError(f"gain must be a finite scalar >= 0, ({size},) or ({size}, {size}), got {gain!r}")
         return np.diag(gain_array)
     if gain_array.shape != (size, size) or not np.all(np.isfinite(gain_array)):
-        raise SolverInputError(f"gain must be a finite scalar, ({size},) or ({size}, {size}), got shape {gain_array.shape}")
+        raise SolverInputError(f"gain must be a finite scalar, ({size},) or "
+                               f"({size}, {size}), got shape {gain_array.shape}")
     symmetric = 0.5 * (gain_array + gain_array.T)
     if np.any(np.linalg.eigvalsh(symmetric) < 0):
         raise SolverInputError("gain K must be positive (semi-)definite")

@@ -69,7 +69,8 @@ def step_count(duration: float, dt: float, *, dt_name: str = "dt", duration_name
     try:
         dt, duration = float(dt), float(duration)
     except (TypeError, ValueError):
-        raise StepCountError(f"{dt_name} and {duration_name} must be numbers [s], got {dt!r} and {duration!r}") from None
+        raise StepCountError(f"{dt_name} and {duration_name} must be numbers [s], "
+                             f"got {dt!r} and {duration!r}") from None
     if not (math.isfinite(dt) and dt > 0 and math.isfinite(duration) and duration > 0):
         raise StepCountError(f"{dt_name} and {duration_name} must be finite and > 0, got dt={dt!r}, "
                              f"duration={duration!r}")

@@ -65,7 +65,8 @@ def weights_factor(weights: np.ndarray, size: int) -> WeightsFactor:
     try:
         return WeightsFactor(cholesky=np.linalg.cholesky(weights))
     except np.linalg.LinAlgError:
-        raise SolverInputError(f"W must be positive definite (eigenvalues {np.linalg.eigvalsh(weights).round(6)})") from None
+        raise SolverInputError("W must be positive definite "
+                               f"(eigenvalues {np.linalg.eigvalsh(weights).round(6)})") from None
 
 
 def weights_subset(weights: np.ndarray, indices: np.ndarray, size: int) -> np.ndarray:

@@ -42,7 +42,8 @@ class Configuration:
             configuration (nq,).
     """
 
-    def __init__(self, robot: Robot, q: np.ndarray, *, check: bool = True, momentum: MomentumRows | None = None) -> None:
+    def __init__(self, robot: Robot, q: np.ndarray, *, check: bool = True,
+                 momentum: MomentumRows | None = None) -> None:
         self.robot = check_robot(robot, type(self).__name__)
         self.model = robot.model  # read at every update and step
         self.data = robot.model.createData()

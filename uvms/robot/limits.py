@@ -69,7 +69,8 @@ class Limit:
         upper = np.array(self.upper, dtype=float).reshape(-1)
         size = lower.size
         names = tuple(self.names) if self.names else tuple(f"x{i}" for i in range(size))
-        q_index = np.full(size, -1, dtype=int) if self.q_index is None else np.array(self.q_index, dtype=int).reshape(-1)
+        q_index = (np.full(size, -1, dtype=int) if self.q_index is None
+                   else np.array(self.q_index, dtype=int).reshape(-1))
         if upper.size != size or len(names) != size or q_index.size != size:
             raise LimitError(f"a limit needs as many lower/upper bounds, names and q indices, got "
                                    f"{size}, {upper.size}, {len(names)}, {q_index.size}")

@@ -36,9 +36,8 @@ DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
 class Robot(VehicleAccessors):
     """A UVMS model: Pinocchio ``model``/``data``, the vehicle/arm split and end-effector frames.
 
-    Configuration q = [vehicle (7 floating, 4 planar, 0 fixed), arm...] and
-    velocity v = [vehicle twist in its local axes (6 or 3), arm...], exactly
-    Pinocchio's. Poses are in the model's world frame (ENU, z up).
+    Configuration q = [vehicle (7 floating, 4 planar, 0 fixed), arm...] and velocity v = [vehicle twist in its local
+    axes (6 or 3), arm...], exactly Pinocchio's. Poses are in the model's world frame (ENU, z up).
 
     Attributes:
         model: the Pinocchio model.
@@ -252,7 +251,8 @@ class Robot(VehicleAccessors):
         """The neutral configuration (vehicle at the origin, arm joints at zero)."""
         return pin.neutral(self.model)
 
-    def random_configuration(self, rng: np.random.Generator | int | None = None, position_range: float = 1.0) -> np.ndarray:
+    def random_configuration(self, rng: np.random.Generator | int | None = None,
+                             position_range: float = 1.0) -> np.ndarray:
         """A configuration with arm joints uniform inside their limits.
 
         Args:
@@ -329,8 +329,7 @@ class Robot(VehicleAccessors):
     def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
         """Generalized Jacobian (6, n_arm) of a free-floating base at zero momentum.
 
-        twist_ee (world-aligned) = GJM @ qdot_arm when the vehicle is passive and
-        the system momentum is zero.
+        twist_ee (world-aligned) = GJM @ qdot_arm when the vehicle is passive and the system momentum is zero.
 
         Raises:
             NoVehicleError: a fixed base has no vehicle: use :meth:`jacobian`.
@@ -357,11 +356,13 @@ class Robot(VehicleAccessors):
         q = self.check_configuration(q)
         arm_velocity = self.check_velocity(arm_velocity, self.n_arm, "arm velocity")
         if momentum is not None:
-            momentum = self.check_velocity(momentum, len(kinematics.CONSERVED_MOMENTUM_ROWS[self.base_type]), "momentum")
+            momentum = self.check_velocity(momentum, len(kinematics.CONSERVED_MOMENTUM_ROWS[self.base_type]),
+                                           "momentum")
         a_base, a_arm = self._free_floating_parts(q)
         return kinematics.base_velocity_from_momentum(a_base, a_arm, arm_velocity, momentum)
 
-    def free_floating_velocity(self, q: np.ndarray, arm_velocity: np.ndarray, momentum: np.ndarray | None = None) -> np.ndarray:
+    def free_floating_velocity(self, q: np.ndarray, arm_velocity: np.ndarray,
+                               momentum: np.ndarray | None = None) -> np.ndarray:
         """Full velocity v (nv,) of the free-floating system: base from momentum, arm as given."""
         return np.concatenate([self.base_velocity(q, arm_velocity, momentum), arm_velocity])
 
@@ -373,7 +374,8 @@ class Robot(VehicleAccessors):
         rows = kinematics.axis_rows(axes or self.base.task_axes)
         return kinematics.manipulability_of(self.jacobian(q, frame)[rows])
 
-    def generalized_manipulability(self, q: np.ndarray, frame: str | None = None, axes: Sequence[str] | None = None) -> float:
+    def generalized_manipulability(self, q: np.ndarray, frame: str | None = None,
+                                   axes: Sequence[str] | None = None) -> float:
         """Manipulability of the generalized Jacobian (free-floating base), same ``axes`` rule."""
         rows = kinematics.axis_rows(axes or self.base.task_axes)
         return kinematics.manipulability_of(self.generalized_jacobian(q, frame)[rows])

@@ -88,7 +88,8 @@ class VehicleAccessors:
         """v (nv,) from Fossen's nu (body FRD) and arm velocities: the inverse of :meth:`nu_frd`."""
         self._require_vehicle()
         nu = self.check_velocity(nu, self.n_vehicle, "nu")
-        arm = np.zeros(self.n_arm) if arm_velocity is None else self.check_velocity(arm_velocity, self.n_arm, "arm velocity")
+        arm = (np.zeros(self.n_arm) if arm_velocity is None
+               else self.check_velocity(arm_velocity, self.n_arm, "arm velocity"))
         return np.concatenate([conventions.twist_from_nu(nu), arm])
 
     def _require_vehicle(self, what: str = "a vehicle state (eta, nu)") -> None:

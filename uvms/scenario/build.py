@@ -348,7 +348,8 @@ def check_step_count(scenario: dict, duration: float) -> int:
 
 def scenario_duration(scenario: dict) -> float:
     """The simulated time [s] a checked scenario asks for, from its tables alone (nothing built):
-    ``simulation.duration``, else the sum of the phases' durations, else ``trajectory.duration`` (every trajectory type lasts that long)."""
+    ``simulation.duration``, else the sum of the phases' durations, else ``trajectory.duration`` (every trajectory
+    type lasts that long)."""
     if scenario["simulation"]["duration"]:
         return float(scenario["simulation"]["duration"])
     if scenario["phases"]:

@@ -261,7 +261,8 @@ def apply_override(raw: dict, assignment: str) -> None:
     key, sep, text = assignment.partition("=")
     parts = key.strip().split(".")
     if not sep or len(parts) < 2 or not all(parts):
-        raise ScenarioError(f"--set expects SECTION.KEY=VALUE (e.g. solver.gain=2, model.args.l1=0.6), got {assignment!r}")
+        raise ScenarioError("--set expects SECTION.KEY=VALUE (e.g. solver.gain=2, "
+                            f"model.args.l1=0.6), got {assignment!r}")
     node = raw
     for part in parts[:-1]:
         node = node.setdefault(part, {})
@@ -355,7 +356,8 @@ def check_range(name: str, value: Any, origin: str) -> None:
         return
     if not is_number(value):
         return
-    shown = f"{value:.6g}" if isinstance(value, float) or abs(value) < 10**15 else f"a {len(str(abs(value)))}-digit integer"
+    shown = (f"{value:.6g}" if isinstance(value, float) or abs(value) < 10**15
+             else f"a {len(str(abs(value)))}-digit integer")
     if not (isinstance(value, int) or math.isfinite(value)):
         raise ScenarioError(f"{origin}: {name} must be finite, got {value!r}")
     if abs(value) > MAX_MAGNITUDE:

@@ -53,8 +53,8 @@ def make_trajectory(start_pose: pin.SE3, section: dict) -> PathTrajectory | SE3T
     if kind == "pose":
         end_orientation = (vector(section["end_orientation"], 3, "end_orientation") if section["end_orientation"]
                            else orientation)
-        return SE3Trajectory(np.concatenate([start, orientation]), np.concatenate([path(path.length).point, end_orientation]),
-                             law)
+        return SE3Trajectory(np.concatenate([start, orientation]),
+                             np.concatenate([path(path.length).point, end_orientation]), law)
     return PathTrajectory(path, law, orientation)
 
 

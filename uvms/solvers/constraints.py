@@ -77,5 +77,6 @@ class ConstraintSolver(Solver):
             solved = solved + pinv(solved_tasks @ projector) @ (command - solved_tasks @ solved)
         levels = (SolvedRows(0, constraint_jacobian, constraint_values, constraint_error),
                   SolvedRows(1, jacobian, command, error))
-        return SolverResult(v=full_velocity(state, solved, self.free_floating), sigma_min=smallest_singular_value(system),
-                            damping=0.0, free_floating=self.free_floating, levels=levels)
+        return SolverResult(v=full_velocity(state, solved, self.free_floating),
+                            sigma_min=smallest_singular_value(system), damping=0.0, free_floating=self.free_floating,
+                            levels=levels)

@@ -46,7 +46,8 @@ def prioritized(jacobians: Sequence[np.ndarray], commands: Sequence[np.ndarray],
     size = jacobians[0].shape[1]
     for level, jacobian in enumerate(jacobians):
         if jacobian.shape[1] != size:
-            raise SolverInputError(f"level {level}: the Jacobian {jacobian.shape} must have the {size} columns of level 0")
+            raise SolverInputError(f"level {level}: the Jacobian {jacobian.shape} "
+                                   f"must have the {size} columns of level 0")
     commands = [check_vector(command, f"level {level} command", jacobian.shape[0])
                 for level, (jacobian, command) in enumerate(zip(jacobians, commands))]
     v = np.zeros(size)

@@ -13,7 +13,8 @@ from ..tasks.task import Task, as_task_list
 __all__ = ["as_task_list", "gain_matrix", "stack", "stacked_terms"]
 
 
-def stack(state: Configuration, tasks: Sequence[Task], gain: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def stack(state: Configuration, tasks: Sequence[Task],
+          gain: float | np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Stacked Jacobian (k, nv), error (k,) and command xdot_d + K e (k,) of several tasks."""
     jacobian, error, feedforward = stacked_terms(state, tasks)
     return jacobian, error, feedforward + apply_gain(gain, error)

@@ -90,7 +90,8 @@ class FrameTask(Task):
         try:
             values = finite_array(twist, "a target twist", (6,))
         except UVMSError:
-            raise UVMSError(f"a target twist must be 6 finite numbers [vx, vy, vz, wx, wy, wz], got {twist!r}") from None
+            raise UVMSError("a target twist must be 6 finite numbers [vx, vy, vz, wx, wy, wz], "
+                            f"got {twist!r}") from None
         self.target_twist = values
         self._target_parts = None
 

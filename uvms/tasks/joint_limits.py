@@ -1,4 +1,5 @@
-"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient, over the limits of :class:`uvms.robot.limits.Limit`."""
+"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient, over the limits of
+:class:`uvms.robot.limits.Limit`."""
 
 from __future__ import annotations
 

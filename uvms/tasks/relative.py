@@ -55,7 +55,8 @@ class DistanceTask(Task):
         offset = self._offset(state)
         length = np.linalg.norm(offset)
         if length < 1e-9:
-            raise UVMSError(f"frames {self.frames[0]!r} and {self.frames[1]!r} coincide: their distance has no gradient")
+            raise UVMSError(f"frames {self.frames[0]!r} and {self.frames[1]!r} "
+                            "coincide: their distance has no gradient")
         a, b = self.frame_ids
         return ((offset / length) @ (state.jacobian(b)[:3] - state.jacobian(a)[:3]))[None, :]  # (1, nv)
 

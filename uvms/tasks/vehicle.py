@@ -49,7 +49,8 @@ class VehicleTask(Task):
         velocities = dict(velocities or {})
         unknown = sorted(set(velocities) - set(names))
         if unknown:
-            raise UVMSError(f"unknown vehicle velocities {unknown}; valid for a {robot.base_type} base: {', '.join(names)}")
+            raise UVMSError(f"unknown vehicle velocities {unknown}; valid for "
+                            f"a {robot.base_type} base: {', '.join(names)}")
         if depth is not None and robot.base_type != "floating":
             raise UVMSError("depth can only be held by a floating base")
         values = [heading, depth, *velocities.values()]

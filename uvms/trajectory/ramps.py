@@ -42,7 +42,8 @@ class VelocityRamps:
         self.times = _finite(times, (None,), "times")
         self.velocities = _finite(velocities, (len(self.times), 3), "velocities")
         if len(self.times) < 2 or np.any(np.diff(self.times) <= 0):
-            raise GJMControlError(f"times must be at least 2 strictly increasing knot times [s], got {self.times.tolist()}")
+            raise GJMControlError("times must be at least 2 strictly increasing "
+                                  f"knot times [s], got {self.times.tolist()}")
         self.rotation = np.eye(3) if rotation is None else _finite(rotation, (3, 3), "rotation")
         self._knots = self.times.tolist()
         spans = np.diff(self.times)

@@ -109,7 +109,8 @@ def configuration_geometry(robot: Robot, q: np.ndarray, frames: Sequence[str] | 
     pin.updateFramePlacements(model, data)
     origins = np.array([data.oMi[j].translation for j in range(model.njoints)])  # (njoints, 3), universe = 0
     first_arm = 1 if robot.base_type == "fixed" else 2
-    segments = np.reshape([[origins[model.parents[j]], origins[j]] for j in range(first_arm, model.njoints)], (-1, 2, 3))
+    segments = np.reshape([[origins[model.parents[j]], origins[j]] for j in range(first_arm, model.njoints)],
+                          (-1, 2, 3))
     ee = np.reshape([[origins[model.frames[f].parentJoint], data.oMf[f].translation] for f in frame_ids], (-1, 2, 3))
     box = vehicle_box(robot)
     vehicle_pose = data.oMi[1] if robot.base_type != "fixed" else None  # the vehicle joint's frame
@@ -386,7 +387,8 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
 
     movie = animation.FuncAnimation(figure, draw_frame, frames=len(qs), interval=1000 / fps, repeat=False,
                                     cache_frame_data=False)
-    with tqdm(total=len(qs), disable=(not progress) if progress is not None else None, desc="animation", leave=False) as bar, \
+    with tqdm(total=len(qs), disable=(not progress) if progress is not None else None, desc="animation",
+              leave=False) as bar, \
             outputs.atomic_path(path, keep_suffix=True) as temporary:
         movie.save(temporary, writer=writer, dpi=dpi, progress_callback=lambda *_: bar.update(1))
     return path

@@ -43,7 +43,8 @@ def write_workspace_outputs(robot: Robot, result: WorkspaceResult, frames: Seque
             shutil.copyfile(folder / drawn[count], folder / name)
         else:
             shown = min(count, stored)  # beyond the kept samples: the first ones, a uniform subsample
-            label = f"{count} samples per arm" if shown == count else f"{count} samples per arm, the first {shown} drawn"
+            label = (f"{count} samples per arm" if shown == count
+                     else f"{count} samples per arm, the first {shown} drawn")
             workspace_figure({frame: result.cloud(frame, shown) for frame in frames}, folder / name, outlines=outlines,
                              title=f"{robot.name}: reachable workspace (vehicle frame), {label}{hull_note}")
             drawn[count] = name

@@ -1,4 +1,5 @@
-"""Figures of a Monte Carlo study (:mod:`uvms.scenario.studies.study`): histograms, scatter plots, sensitivity ranking."""
+"""Figures of a Monte Carlo study (:mod:`uvms.scenario.studies.study`): histograms, scatter plots, sensitivity
+ranking."""
 
 from __future__ import annotations
 

@@ -93,7 +93,8 @@ def visual_meshes(robot: Robot, budget: int = MAX_DRAWN_TRIANGLES) -> list[Shape
 
 @functools.lru_cache(maxsize=16)
 def vehicle_box(robot: Robot) -> HullShape | None:
-    """The vehicle's first box solid from its URDF (`uvms.workspace.hull_shapes`), None without one or for a fixed base."""
+    """The vehicle's first box solid from its URDF (`uvms.workspace.hull_shapes`), None without one or for a fixed
+    base."""
     if robot.base_type == "fixed" or robot.urdf is None:
         return None
     for element in ("visual", "collision"):  # the visual envelope, not the first of many collision solids

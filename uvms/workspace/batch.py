@@ -191,7 +191,8 @@ class BatchKinematics:
         return values
 
     def _root_pose(self, base: pin.SE3 | None) -> pin.SE3:
-        """World pose of the joint the chain starts from: the vehicle body (oMi[1], see Robot.base_pose) or the world."""
+        """World pose of the joint the chain starts from: the vehicle body (oMi[1], see Robot.base_pose) or the
+        world."""
         if self.root_joint == 0 or base is None:
             return pin.SE3.Identity()
         return base

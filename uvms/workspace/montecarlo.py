@@ -166,7 +166,8 @@ class WorkspaceResult:
             "frames": list(self.frames), "samples": self.samples, "voxel": self.voxel,
             "volume": {**self.volume, **common},
             "volume_convergence": {frame: [[n, v] for n, v in series] for frame, series in self.convergence.items()},
-            "volume_converged": {frame: verdict.as_dict() for frame, verdict in self.volume_converged(tolerance).items()},
+            "volume_converged": {frame: verdict.as_dict()
+                                 for frame, verdict in self.volume_converged(tolerance).items()},
             "samples_per_second": self.samples_per_second,
             "points_sampled": {frame: self.samples for frame in self.frames},
             "points_stored": stored,

@@ -42,7 +42,8 @@ def link_yaml_lines(name: str, link: LinkHydrodynamics) -> list[str]:
     lines += [f"      linear_damping: {_row(-link.linear_damping)}   # X_u, Y_v, ... <= 0",
               f"      quadratic_damping: {_row(-link.quadratic_damping)}   # X_u|u|, ... <= 0"]
     if np.any(link.linear_damping_forward_speed != 0):
-        lines.append(f"      linear_damping_forward_speed: {_row(-link.linear_damping_forward_speed)}   # X_uu, ... <= 0")
+        lines.append("      linear_damping_forward_speed: "
+                     f"{_row(-link.linear_damping_forward_speed)}   # X_uu, ... <= 0")
     return lines
 
 

@@ -249,7 +249,8 @@ class Plant:
                              np.array([data.oMi[joint].rotation for joint in joints]) @ stacked.rotations
                              if self._moving_fluid or self._buoyant else stacked.no_rotations,
                              stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
-                             stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, self._current,
+                             stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy,
+                             stacked.center_of_buoyancy, self._current,
                              self.added_mass, self.damping, self._moving_fluid, self._buoyant, mass, bias_forces)
         if body_wrench is not None:  # the thrusters' wrench on the vehicle, at the base frame
             bias_forces -= body_wrench @ pin.getFrameJacobian(model, data, self._base_frame, LOCAL)

@@ -43,7 +43,8 @@ GZ_MIN_SPEED = 0.01
 
 @dataclass(frozen=True)
 class UUVQuadratic:
-    """uuv_simulator's ``Quadratic`` lift and drag: lift_constant [N s^2/(m^2 rad)], drag_constant [N s^2/(m^2 rad^2)]."""
+    """uuv_simulator's ``Quadratic`` lift and drag: lift_constant [N s^2/(m^2 rad)], drag_constant [N s^2/(m^2
+    rad^2)]."""
 
     lift_constant: float
     drag_constant: float

@@ -66,8 +66,7 @@ from .sources import LIMIT_KEYS, THRUSTER_KEYS, PluginThruster, fail, read_thrus
 if TYPE_CHECKING:
     from ...robot.robot import Robot
 
-#: Name of the YAML file looked for beside a model.
-YAML_NAME = "thrusters.yaml"
+YAML_NAME = "thrusters.yaml"  #: Name of the YAML file looked for beside a model.
 #: What a plugin thruster gets when neither its plugin nor the YAML gives a value: uuv_simulator's RexROV, whose
 #: plugins give neither limits nor (with FirstOrder) anything but the time constant.
 DEFAULT_VALUES = {"max_forward": 2000.0, "max_reverse": 2000.0, "time_constant": 0.05}
@@ -327,7 +326,8 @@ def thrusters_of(robot: Robot, path: str | os.PathLike | None = None, *, require
         return load_thrusters_yaml(yaml_path, frames)
     if required:
         raise UVMSError(f"{robot.source}: the model has no thrusters; add thruster plugins (uuv_simulator, Gazebo "
-                        f"Sim or HippoCampus) to the URDF or a {YAML_NAME} beside it (see uvms.dynamics.thrusters.thrusters)")
+                        f"Sim or HippoCampus) to the URDF or a {YAML_NAME} "
+                        "beside it (see uvms.dynamics.thrusters.thrusters)")
     return Thrusters((), source=f"{robot.source} (no thrusters)")
 
 

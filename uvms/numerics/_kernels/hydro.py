@@ -26,7 +26,8 @@ def _cross(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> 
 @njit(cache=True)
 def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarray, rotations: np.ndarray,
                      motion_to_link: np.ndarray, added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray,
-                     quadratic: np.ndarray, buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray, with_added_mass: bool,
+                     quadratic: np.ndarray, buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray,
+                     with_added_mass: bool,
                      with_damping: bool, with_current: bool, with_buoyancy: bool, mass: np.ndarray,
                      bias_forces: np.ndarray) -> None:
     """Add the links' added mass to ``mass`` and subtract their wrenches' generalized forces from ``bias_forces``.

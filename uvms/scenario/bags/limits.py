@@ -235,7 +235,8 @@ def inflate(compression: str, payload: bytes, declared: int, path: Path, folder:
         raise IdentificationError(f"{path}: an MCAP chunk inflates to more than the {declared:,} bytes it declares "
                                   "(a decompression bomb?); uvms inflates no more than a chunk declares")
     if len(raw) != declared:
-        raise damaged(folder, f"{path.name}: an MCAP chunk inflates to {len(raw)} bytes, not the {declared} it declares")
+        raise damaged(folder, f"{path.name}: an MCAP chunk inflates to "
+                              f"{len(raw)} bytes, not the {declared} it declares")
     return raw
 
 

@@ -298,7 +298,8 @@ def write_bag(path: str | os.PathLike, robot: Robot, result: SimulationResult, *
     if robot.urdf is None:
         skipped["/robot_description"] = "the robot has no URDF text (composed robot): save its URDF and publish it"
     if vehicle_root_link(robot) is None:
-        skipped[ODOM_TOPIC] = "a fixed base has no vehicle" if robot.base_type == "fixed" else "no link on the vehicle joint"
+        skipped[ODOM_TOPIC] = ("a fixed base has no vehicle" if robot.base_type == "fixed"
+                               else "no link on the vehicle joint")
     wide = [joint.name for joint in robot.arm_joints if joint.nv != 1]
     if wide:
         skipped[JOINT_STATES_TOPIC] = f"joints {', '.join(wide)} have several values; JointState holds one per joint"

@@ -87,7 +87,8 @@ def correlation_ratio(x: Sequence, y: Sequence[float]) -> float | None:
 
 
 def sensitivity(table: Sequence[dict], keys: Sequence[str], outcomes: Sequence[str]) -> dict:
-    """Per outcome: the keys ranked by eta^2 (``[{"key", "eta2", "rho", "p_value"}, ...]``), over the trials that ran."""
+    """Per outcome: the keys ranked by eta^2 (``[{"key", "eta2", "rho", "p_value"}, ...]``), over the trials that
+    ran."""
     ran = [row for row in table if not row["error"]]
     ranking = {}
     for outcome in outcomes:

@@ -60,7 +60,8 @@ def parse_grid(text: str) -> tuple[str, list]:
     if spec.startswith("["):
         values = parse_value(spec)
         if not isinstance(values, list) or not values or any(isinstance(v, (list, dict)) for v in values):
-            raise SweepError(f"--grid {key}: expected a non-empty TOML list of numbers, strings or booleans, got {spec!r}")
+            raise SweepError(f"--grid {key}: expected a non-empty TOML list "
+                             f"of numbers, strings or booleans, got {spec!r}")
         if any(isinstance(v, str) and any(c in v for c in "\r\n\x0b\x0c") for v in values):  # a row per point
             raise SweepError(f"--grid {key}: a string value holds a line break; values are one-line, got {spec!r}")
     else:

@@ -99,6 +99,7 @@ def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[O
 
 __all__ = [
     "ACTIVATION_SHAPES", "FILE_KEYS", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
-    "JointVelocityLimits", "Manipulability", "Objective", "Obstacle", "PlaneClearance", "SelfCollision", "VehicleAttitude",
-    "VehicleVelocityLimits", "VelocityLimit", "bell", "check_table", "inequalities_from_table", "table_keys", "velocity_limits",
+    "JointVelocityLimits", "Manipulability", "Objective", "Obstacle", "PlaneClearance", "SelfCollision",
+    "VehicleAttitude", "VehicleVelocityLimits", "VelocityLimit", "bell", "check_table", "inequalities_from_table",
+    "table_keys", "velocity_limits",
 ]

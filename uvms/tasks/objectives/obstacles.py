@@ -85,7 +85,8 @@ def mesh_obstacle(name: str, path: Path) -> object:
     try:
         loaded = coal.MeshLoader().load(str(path))
     except (RuntimeError, ValueError) as exc:
-        raise ObjectiveError(f"{name}: cannot read the mesh file {str(path)!r} ({' '.join(str(exc).split())})") from None
+        raise ObjectiveError(f"{name}: cannot read the mesh file {str(path)!r} "
+                             f"({' '.join(str(exc).split())})") from None
     try:
         return convex_shape(loaded, f"{name}: mesh {str(path)!r}")
     except ModelCheckError as exc:

@@ -169,7 +169,8 @@ def teach(robot: Robot, q: np.ndarray | None = None, *, plane: str | None = "aut
     try:
         import ipywidgets as widgets
     except ImportError:
-        raise TeachUnavailable(f"{INSTALL_HINT}; without widgets, use uvms.viz.viewer.teach.teach_state(robot, values)") from None
+        raise TeachUnavailable(f"{INSTALL_HINT}; without widgets, "
+                               "use uvms.viz.viewer.teach.teach_state(robot, values)") from None
     import html
 
     start = robot.neutral() if q is None else robot.check_configuration(q)
