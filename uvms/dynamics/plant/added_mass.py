@@ -133,11 +133,6 @@ def resolve_links(model: pin.Model, hydro: HydroParameters) -> list[HydroLink]:
     return links
 
 
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b of two (3,) vectors: numpy's cross is ten times slower on them (the fins' lift and drag per stage)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
-
-
 def augmented_mass_matrix(model: pin.Model, data: pin.Data, links: list[HydroLink], q: np.ndarray) -> np.ndarray:
     """Mbar = M + sum_l J_l^T M_A,l J_l (nv, nv): the rigid mass matrix with the links' added mass."""
     matrix = pin.crba(model, data, q)

@@ -35,8 +35,7 @@ import pinocchio as pin
 
 from ...errors import FinDefaultWarning, ModelCheckError
 from ...model.control_surfaces import fin_joint, fin_plugins, text
-from ..plant.added_mass import _cross
-from .lift_drag import GzLiftDrag, UUVQuadratic, UUVTwoLines, gz_wrench, uuv_force
+from .lift_drag import GzLiftDrag, UUVQuadratic, UUVTwoLines, _cross, gz_wrench, uuv_force
 
 if TYPE_CHECKING:
     from ...robot.robot import Robot

@@ -35,10 +35,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..plant.added_mass import _cross
-
 #: Speed [m/s] at or below which Gazebo Sim's LiftDrag applies no force (``vel.Length() <= 0.01``).
 GZ_MIN_SPEED = 0.01
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b of two (3,) vectors: numpy's cross is ten times slower on them (the fins' lift and drag per stage)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
 
 
 @dataclass(frozen=True)
