@@ -248,8 +248,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
             (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`); arm_feedforward: as in
             :class:`uvms.control.vehicle.VehicleVelocityController`.
         fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), allocated with the thrusters at each
-        step's
-            velocity (:class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`); None or empty: thrusters alone.
+            step's velocity (:class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`); None or empty: thrusters
+            alone.
     """
     robot = plant.robot
     model = Plant(robot, plant.hydro if knows_current else plant.hydro.with_current(np.zeros(3)),

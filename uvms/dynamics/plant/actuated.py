@@ -66,8 +66,8 @@ class ActuatedPlant:
     Args:
         plant: the Plant (its robot gives the frames; its current, damping, gravity apply); thrusters: their data.
         thrusts0: (n,) [N] the thrusts at t = 0, within the bounds (None: zero).
-        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`; None: none), at their rest angles at t =
-        0.
+        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`; None: none), at their rest angles
+            at t = 0.
 
     Raises:
         ModelCheckError: a thruster on an arm link, a fixed base.

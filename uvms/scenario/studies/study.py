@@ -171,12 +171,13 @@ def study(
         n: trials (None: ``[study] n``); seed: the study's seed (None: ``[study] seed``); method: ``"random"``,
             ``"lhs"`` or ``"sobol"`` (None: ``[study] method``).
         jobs, backend, scheduler: as for :func:`uvms.scenario.studies.sweep.sweep`
-        (:mod:`uvms.scenario.studies.parallel`). out: the study folder (default ``out/<scenario name>_study``); resumed
-        if it holds the same study. progress: progress bar (None: on a terminal only).
+            (:mod:`uvms.scenario.studies.parallel`).
+        out: the study folder (default ``out/<scenario name>_study``); resumed if it holds the same study.
+        progress: progress bar (None: on a terminal only).
         overrides: ``SECTION.KEY=VALUE`` strings applied to every trial before its sampled values (after
             ``[study] set``).
         insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for
-        :func:`uvms.scenario.studies.sweep.sweep`).
+            :func:`uvms.scenario.studies.sweep.sweep`).
 
     Raises:
         StudyError: bad samples, n, method, backend or jobs, or ``out`` holds another study or other files;

@@ -147,7 +147,7 @@ def tune(
         out: output folder (default ``out/<scenario name>_tune``), replaced whole.
         overrides: ``SECTION.KEY=VALUE`` strings applied to every run.
         insecure_scheduler: accept a ``scheduler`` that is not ``tls://`` (as for
-        :func:`uvms.scenario.studies.sweep.sweep`).
+            :func:`uvms.scenario.studies.sweep.sweep`).
 
     Raises:
         StudyError: bad parameters, objective or trials, Optuna not installed; ScenarioError: a key the
