@@ -33,8 +33,8 @@ import pinocchio as pin
 from ...errors import ConfigurationError, StepCountError, UVMSError
 from ..thrusters.fins import Fins
 from ..thrusters.thrusters import Thrusters, allocation_matrix
-from .plant import Plant, PlantDynamics
-from .system import PlantSample, PlantSystem, check_finite_state
+from .plant import Plant
+from .system import PlantDynamics, PlantSample, PlantSystem, check_finite_state
 
 #: The controller of an actuated plant: (t [s], q (nq,), v (nv,), f (n,) [N]) -> ActuatedCommand.
 ActuatedController = Callable[[float, np.ndarray, np.ndarray, np.ndarray], "ActuatedCommand"]

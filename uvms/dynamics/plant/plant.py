@@ -58,8 +58,6 @@ momentum live in :mod:`uvms.dynamics.plant.added_mass` (importable from here too
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pinocchio as pin
 
@@ -68,7 +66,7 @@ from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_spl
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
-from .system import Command, PlantSystem
+from .system import Command, PlantDynamics, PlantSystem
 
 
 def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
@@ -79,21 +77,6 @@ def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
     """
     center = pin.centerOfMass(model, data, q)
     return -float(data.mass[0]) * float(model.gravity.linear @ center)
-
-
-@dataclass(frozen=True)
-class PlantDynamics:
-    """What the plant computes at one (q, v, u): accelerations and the motor torques that produce them.
-
-    Attributes:
-        acceleration: v' (nv,) [m/s^2, rad/s^2] (vehicle body twist rate, local; joint accelerations).
-        joint_torque: tau_m (n_arm,) [N m or N] the motors exert.
-        mass_matrix: Mbar (nv, nv), rigid + added mass.
-    """
-
-    acceleration: np.ndarray
-    joint_torque: np.ndarray
-    mass_matrix: np.ndarray
 
 
 class Plant:

@@ -9,19 +9,46 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
 
 import numpy as np
 
 from ...errors import StepCountError, UVMSError
 
-if TYPE_CHECKING:
-    from .plant import Plant, PlantDynamics
-
 #: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
 Command = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
 #: The rate at an integrator stage: (t [s], q (nq,), v (nv,)) -> (v (nv,), v' (nv,)).
 StageRate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True)
+class PlantDynamics:
+    """What the plant computes at one (q, v, u): accelerations and the motor torques that produce them.
+
+    Attributes:
+        acceleration: v' (nv,) [m/s^2, rad/s^2] (vehicle body twist rate, local; joint accelerations).
+        joint_torque: tau_m (n_arm,) [N m or N] the motors exert.
+        mass_matrix: Mbar (nv, nv), rigid + added mass.
+    """
+
+    acceleration: np.ndarray
+    joint_torque: np.ndarray
+    mass_matrix: np.ndarray
+
+
+class Plant(Protocol):
+    """What a plant system asks of its plant (:class:`uvms.dynamics.plant.plant.Plant` is one; named here so that
+    this module needs nothing of that one, which builds its systems from here)."""
+
+    robot: Any
+    model: Any
+    n_arm: int
+
+    def _evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> PlantDynamics: ...
+
+    def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]: ...
+
+    def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
