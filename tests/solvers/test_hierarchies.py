@@ -462,9 +462,13 @@ def test_the_compiled_icat_recursion_is_the_papers_formulas(rng, weighting, damp
 
 
 def test_icat_inverse_is_the_papers_regularized_inverse(rng):
-    """icat_inverse (one level, the same compiled inverse as the recursion) against (X^T A X + eta (I - Q)^T
-    D^2 (I - Q) + l^2 W)^-1 X^T A A, X = J Q, D = diag of the column norms of A^1/2 J."""
-    from uvms.solvers.set_based import icat_inverse
+    """The iCAT's one-level inverse (ICAT.level_inverse, the same compiled inverse as the recursion) against
+    (X^T A X + eta (I - Q)^T D^2 (I - Q) + l^2 W)^-1 X^T A A, X = J Q, D = diag of the column norms of A^1/2 J."""
+    from uvms.solvers.set_based import ICAT
+
+    def icat_inverse(jacobian, activation, projector, weights, damping, eta):
+        icat = ICAT(jacobian.shape[1], weights, damping, eta)
+        return icat.level_inverse(jacobian, np.sqrt(activation)[:, None], activation**1.5, projector, icat.damping)
 
     size = 7
     jacobian, activation = rng.normal(size=(3, size)), np.array([0.3, 1.0, 0.6])

@@ -25,11 +25,6 @@ BASE_CHOICES = ("floating", "planar", "fixed")
 ADDED_BASE_JOINT = "base_joint"
 
 
-def choose_base(requested: str | None, tree: checks.TreeSummary, origin: str) -> str:
-    """The base type to build (see :func:`decide_base`)."""
-    return decide_base(requested, tree, origin)[0]
-
-
 def rigid_body(robot: ET.Element, root: str, classes: Mapping[str, JointClass]) -> tuple[float, int]:
     """(mass [kg], propeller joints) of the root link's rigid body: the root and the links fixed to it (through
     fixed joints, recursively), and the joints of class ``propeller`` hanging from them."""

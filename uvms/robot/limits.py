@@ -31,17 +31,6 @@ TOLERANCE = 1e-12
 KINDS = ("position", "velocity")
 
 
-def index_or_slice(index: np.ndarray) -> slice | np.ndarray:
-    """``index`` (m,) as the slice it spans when its entries are consecutive, else itself.
-
-    Indexing by a slice reads a view (no gather): the same numbers at a fraction of the cost in a hot loop.
-    """
-    index = np.asarray(index, dtype=int)
-    if index.size and np.array_equal(index, np.arange(index[0], index[0] + index.size)):
-        return slice(int(index[0]), int(index[0]) + index.size)
-    return index
-
-
 @dataclass(frozen=True, eq=False)
 class Limit:
     """Box limits lower <= x <= upper on n coordinates.

@@ -138,24 +138,6 @@ class ICAT:
         return contributions, sigmas, largest
 
 
-def icat_inverse(jacobian: np.ndarray, activation: np.ndarray, projector: np.ndarray | None,
-                 weights: np.ndarray | None, damping: float | VariableDamping,
-                 eta: float) -> tuple[np.ndarray, float, float]:
-    """X^{#,A,Q} (n, m) of the iCAT, X = J Q (module docstring), sigma_min of the weighted A^1/2 X (Q = None: I)
-    and the damping used (an :class:`ICAT` of one use).
-
-    Args:
-        jacobian: J (m, n), the level's Jacobian (unprojected: X = J Q is formed here).
-        activation: diag(A) (m,) in [0, 1].
-        projector: Q (n, n) of the levels above, or None for Q = I (no eta term).
-        weights: W of the solved columns, or None.
-        damping: lambda (fixed or variable) of the one inverse.
-        eta: weight of the eta (I - Q)^T D^2 (I - Q) term [-] >= 0.
-    """
-    icat = ICAT(jacobian.shape[1], weights, damping, eta)
-    return icat.level_inverse(jacobian, np.sqrt(activation)[:, None], activation**1.5, projector, icat.damping)
-
-
 # ------------------------------------------------------------------------------- the solver
 class SetBasedSolver(Solver):
     """Set-based (iCAT) priority over fixed levels (scenario method "set_based"), its inputs checked and its
