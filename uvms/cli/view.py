@@ -69,21 +69,18 @@ def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
     return command_model(options), None
 
 
-#: The inequality types whose closest pair a drawing marks.
-COLLISION_TYPES = ("self_collision", "obstacle")
-
-
 def recorded_collision_types(folder: str) -> list[str]:
-    """The collision objective types (:data:`COLLISION_TYPES`) a run folder's ``metrics.json`` reports (its
-    ``inequalities[name]["type"]``), none when it has no metrics."""
+    """The collision objective types (:func:`~uvms.tasks.objectives.collision_types`) a run folder's
+    ``metrics.json`` reports (its ``inequalities[name]["type"]``), none when it has no metrics."""
     from ..model.resources import read_json
+    from ..tasks.objectives import collision_types
 
     path = Path(folder) / "metrics.json"
     metrics = read_json(path, "run metrics", ViewerInputError) if path.is_file() else {}
     tables = metrics.get("inequalities") if isinstance(metrics, dict) else None
     kinds = [entry.get("type") for entry in (tables.values() if isinstance(tables, dict) else [])
              if isinstance(entry, dict)]
-    return [kind for kind in COLLISION_TYPES if kind in kinds]
+    return [kind for kind in collision_types() if kind in kinds]
 
 
 def view_objectives(options: argparse.Namespace, robot: Robot) -> tuple[list, str | None]:
@@ -94,13 +91,13 @@ def view_objectives(options: argparse.Namespace, robot: Robot) -> tuple[list, st
     in the folder, so the model's own self-collision pairs with the default ``min`` are marked, and a note says
     to give the scenario (an obstacle cannot be rebuilt from the folder).
     """
-    from ..tasks.objectives import inequalities_from_table
+    from ..tasks.objectives import collision_types, inequalities_from_table
     from ..tasks.objectives.collision import SelfCollision
 
     if str(options.model).endswith(".toml") and (options.result or options.collision):
         from ..scenario.schema import read_scenario
 
-        tables = [table for table in read_scenario(options.model)["inequalities"] if table["type"] in COLLISION_TYPES]
+        tables = [table for table in read_scenario(options.model)["inequalities"] if table["type"] in collision_types()]
         return [item for table in tables for item in inequalities_from_table(robot, table)], None
     kinds = recorded_collision_types(options.result) if options.result else []
     if not kinds:

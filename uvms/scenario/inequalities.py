@@ -31,16 +31,8 @@ from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, Solver
 from ..solvers.saturation import speed_maximum
-from ..tasks.objectives import (
-    Inequality,
-    Manipulability,
-    Objective,
-    PlaneClearance,
-    VelocityLimit,
-    check_table,
-    inequalities_from_table,
-)
-from ..tasks.objectives.collision import NearestPairs, Obstacle, SelfCollision
+from ..tasks.objectives import Inequality, Objective, VelocityLimit, check_table, inequalities_from_table
+from ..tasks.objectives.collision import NearestPairs
 
 #: An objective whose value is outside its valid set by more than this [its unit] is reported on the terminal:
 #: the activation keeps it inside up to the step's discretization (a tilt limit can be passed by a fraction
@@ -136,7 +128,7 @@ class ObjectiveRecorder:
         state = Configuration(self.robot, q, check=False)
         values, pairs = [], []
         for objective in self.objectives:
-            if isinstance(objective, NearestPairs):  # which pair each row is, for the metrics and the replay
+            if objective.collision:  # which pair each row is, for the metrics and the replay
                 chosen, found = objective.nearest(state)
                 values.append(found.distance)
                 pairs.append(chosen)
@@ -178,8 +170,7 @@ def inequality_metrics(inequalities: ScenarioInequalities, series: dict[str, np.
     values, activations = series["objective_value"], series["objective_activation"]
     metrics: dict = {"inequalities_enforced": inequalities.enforced}
     per_objective, start = {}, 0
-    clearances, manipulabilities = [], []
-    distances: dict[type, list[float]] = {SelfCollision: [], Obstacle: []}
+    minima: dict[str, list[float]] = {}  # an objective's min_metric -> the smallest value of each objective
     pair_start = 0
     for index, objective in enumerate(objectives):
         rows = slice(start, start + objective.dim)
@@ -194,26 +185,17 @@ def inequality_metrics(inequalities: ScenarioInequalities, series: dict[str, np.
             "max_violation": float(max(outside.max(initial=0.0), 0.0)),
             "value_range": [float(value.min()), float(value.max())],
         }
-        if isinstance(objective, NearestPairs):
+        if objective.collision:
             pairs = series["objective_pair"][:, pair_start: pair_start + objective.dim]
             pair_start += objective.dim
             per_objective[objective.name].update(pair_metrics(objective, series["t"], value, activations[:, rows],
                                                               pairs))
-            distances[type(objective)].append(float(value.min()))
-        if isinstance(objective, PlaneClearance):
-            clearances.append(float(value.min()))
-        if isinstance(objective, Manipulability):
-            manipulabilities.append(float(value.min()))
+        if objective.min_metric:
+            minima.setdefault(objective.min_metric, []).append(float(value.min()))
     for limit in inequalities.speed_limits:
         per_objective[limit.name] = {"type": inequalities.type_of(limit.name),
                                      "level": inequalities.level_of(limit.name)}
-    if clearances:
-        metrics["min_clearance"] = min(clearances)
-    if manipulabilities:
-        metrics["min_manipulability"] = min(manipulabilities)
-    for kind, key in ((SelfCollision, "min_self_distance"), (Obstacle, "min_obstacle_distance")):
-        if distances[kind]:
-            metrics[key] = min(distances[kind])
+    metrics.update({key: min(values) for key, values in minima.items()})
     if inequalities.speed_limits:
         metrics["max_joint_speed_ratio"] = float(series["speed_ratio"].max())
     metrics["inequalities"] = per_objective

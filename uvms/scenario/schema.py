@@ -23,7 +23,7 @@ from ..errors import ScenarioError
 from ..io.names import NAME_RULE, is_plain_name, plain_file_name
 from ..model.resources import MAX_TOML_BYTES, read_text
 from ..solvers import SOLVERS
-from ..tasks.objectives import FILE_KEYS
+from ..tasks.objectives import file_keys
 from .inequalities import check_tables
 from .resources import resolve_scenario_path, scenario_file, scenario_folders
 from .schema_dynamics import EXCITATION, NUMBER, NUMBERS, PLANT, VEHICLE_CONTROL
@@ -214,7 +214,7 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
         scenario["plant"]["hydrodynamics"] = scenario_file(scenario["plant"]["hydrodynamics"], path,
                                                            "plant.hydrodynamics")
     for index, table in enumerate(scenario["inequalities"]):
-        for key in set(FILE_KEYS.get(table["type"], ())) & set(table):
+        for key in set(file_keys(table["type"])) & set(table):
             table[key] = scenario_file(table[key], path, f"inequalities[{index}].{key}")
     scenario["scenario"]["name"] = scenario["scenario"]["name"] or plain_file_name(path.stem, "scenario")
     return scenario
@@ -226,7 +226,7 @@ def named_files(scenario: dict) -> list[str]:
     output folder must not hold."""
     files = [scenario["plant"]["hydrodynamics"]] if scenario["plant"]["hydrodynamics"] else []
     for table in scenario["inequalities"]:
-        files += [table[key] for key in FILE_KEYS.get(table["type"], ()) if key in table]
+        files += [table[key] for key in file_keys(table["type"]) if key in table]
     return files
 
 

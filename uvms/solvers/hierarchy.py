@@ -177,7 +177,7 @@ class HierarchyPlan:
             self.levels.append(PlannedLevel(index, tasks, tuple(i for i in level if isinstance(i, Inequality)),
                                             command, np.ones(dim)))
         self.joint_limits = [item for level in self.levels for item in level.inequalities
-                             if isinstance(item, JointLimits)]
+                             if item.bounds_joint_positions]
         self.size = robot.n_arm if free_floating else robot.nv
         sizes = [sum(item.dim for item in (*level.tasks, *level.inequalities)) for level in self.levels]
         self.offsets = np.array([0, *itertools.accumulate(sizes)], dtype=np.int64)  # (L + 1,) each level's first row

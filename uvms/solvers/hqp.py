@@ -39,7 +39,7 @@ from ..numerics.checks import check_damping, check_scalar, check_weights
 from ..numerics.inverses import SolverInputError, VariableDamping, smallest_singular_value, weights_factor
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
-from ..tasks.objectives import JointLimits, VelocityLimit
+from ..tasks.objectives import VelocityLimit
 from .base import Solver
 from .cascade import PREFERRED_SOLVERS, Cascade, installed_solvers, level_attempts, qp_solver, solve_level
 from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, solved_rows, speed_ratio
@@ -54,7 +54,7 @@ def level_constraints(hierarchy: Hierarchy, level: LevelRows) -> tuple[np.ndarra
     """The level's inequality rows G x >= b (solved columns) and each objective's rows (joint limits: bounds)."""
     blocks, bounds, spans, start = [], [], [], 0
     for objective, rows in zip(level.inequalities, level.objectives):
-        if isinstance(objective, JointLimits):
+        if objective.bounds_joint_positions:
             continue
         matrix, bound = rows.constraint()
         solved = hierarchy.state.generalized(matrix) if hierarchy.free_floating else matrix
@@ -207,7 +207,7 @@ def joint_freedom(hierarchy: Hierarchy) -> np.ndarray:
     offset = hierarchy.state.robot.n_vehicle if hierarchy.free_floating else 0
     for level in hierarchy.levels:
         for objective, rows in zip(level.inequalities, level.objectives):
-            if isinstance(objective, JointLimits):
+            if objective.bounds_joint_positions:
                 index = objective.v_index - offset
                 freedom[index] = np.minimum(freedom[index], 1.0 - rows.activation)
     return freedom

@@ -18,7 +18,7 @@ from matplotlib.lines import Line2D
 
 from ..io import outputs
 from ..sim.result import SimulationResult
-from ..tasks.objectives import FrameBox, Inequality, JointLimits, Manipulability, PlaneClearance, VehicleAttitude
+from ..tasks.objectives import Inequality
 from .labels import figure_title, method_name
 
 #: Colours of the overlaid runs, in order: the run itself first.
@@ -37,39 +37,15 @@ def objective_slices(objectives: list[Inequality]) -> list[slice]:
 
 
 def shown_value(objective: Inequality, value: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, str]:
-    """(value, lower, upper, label) as drawn: joint limits as the fraction of each joint's range, a tilt in degrees,
-    the rest in their own units."""
-    lower, upper = objective.lower, objective.upper
-    if isinstance(objective, JointLimits):
-        width = upper - lower
-        return (value - lower) / width, np.zeros_like(lower), np.ones_like(upper), "position in range [-]"
-    if isinstance(objective, VehicleAttitude):
-        return np.degrees(value), np.degrees(lower), np.degrees(upper), "tilt [deg]"
-    unit = ("distance [m]" if isinstance(objective, PlaneClearance) else "position [m]"
-            if isinstance(objective, FrameBox) else "manipulability" if isinstance(objective, Manipulability)
-            else "value")
-    return value, lower, upper, unit
+    """(value, lower, upper, label) as drawn, in the objective's own figure units (:meth:`Inequality.shown`,
+    :attr:`Inequality.unit`): joint limits as the fraction of each joint's range, a tilt in degrees, ..."""
+    shown = objective.shown
+    return shown(value), shown(objective.lower), shown(objective.upper), objective.unit
 
 
 def band_edges(objective: Inequality) -> tuple[np.ndarray, np.ndarray]:
     """Where each row's activation starts to rise, in the drawn units (lower + band, upper - band)."""
-    low, high = objective.lower + objective.band, objective.upper - objective.band
-    if isinstance(objective, JointLimits):
-        width = objective.upper - objective.lower
-        return (low - objective.lower) / width, (high - objective.lower) / width
-    if isinstance(objective, VehicleAttitude):
-        return np.degrees(low), np.degrees(high)
-    return low, high
-
-
-def row_names(objective: Inequality) -> list[str]:
-    """A name per row of an objective (k,): its joints (joint limits), x, y, z (a frame box), else its name."""
-    names = getattr(objective, "names", None)
-    if names is not None and len(names) == objective.dim:
-        return list(names)
-    if isinstance(objective, FrameBox):
-        return ["x", "y", "z"]
-    return [objective.name] if objective.dim == 1 else [f"{objective.name}[{row}]" for row in range(objective.dim)]
+    return (objective.shown(objective.lower + objective.band), objective.shown(objective.upper - objective.band))
 
 
 def inequality_figure(result: SimulationResult, objectives: list[Inequality], title: str = "",
@@ -108,7 +84,7 @@ def inequality_figure(result: SimulationResult, objectives: list[Inequality], ti
 def draw_objective(axis, objective: Inequality, columns: slice, runs: Mapping[str, SimulationResult],
                    result: SimulationResult) -> None:
     """One panel: every run's rows (colour: run, style: row), the valid set, its band and ``result``'s activation."""
-    names = row_names(objective)
+    names = objective.row_names()
     for colour, run in zip(RUN_COLOURS, runs.values()):
         value, lower, upper, unit = shown_value(objective, run.objective_value[:, columns])
         for row in range(value.shape[1]):

@@ -27,24 +27,34 @@ from .joints import JointLimits
 from .manipulability import Manipulability
 from .velocity import JointVelocityLimits, VehicleVelocityLimits, VelocityLimit, velocity_limits
 
-#: A scenario's inequality ``type`` -> the constructor its other keys are passed to (as keywords).
+
+def registered(*kinds: type[Inequality]) -> dict[str, Callable[..., object]]:
+    """Registry entries of objective classes: each one's ``type_name`` -> the class."""
+    return {kind.type_name: kind for kind in kinds}
+
+
+#: A scenario's inequality ``type`` -> the constructor its other keys are passed to (as keywords): every
+#: :class:`Inequality` class by its ``type_name``, and the speed limits' factory.
 INEQUALITY_TYPES: dict[str, Callable[..., object]] = {
-    "joint_limits": JointLimits,
+    **registered(JointLimits),
     "joint_velocity": velocity_limits,
-    "vehicle_attitude": VehicleAttitude,
-    "plane_clearance": PlaneClearance,
-    "manipulability": Manipulability,
-    "frame_box": FrameBox,
-    "self_collision": SelfCollision,
-    "obstacle": Obstacle,
+    **registered(VehicleAttitude, PlaneClearance, Manipulability, FrameBox, SelfCollision, Obstacle),
 }
 
 Objective = Inequality | VelocityLimit
 #: Constructor parameters that take Python objects, not plain data: not keys of a table.
 NOT_TABLE_KEYS = ("limit",)
-#: Table keys that name a file: a scenario resolves them inside its own folder
-#: (:func:`uvms.scenario.resources.scenario_file`).
-FILE_KEYS = {"obstacle": ("mesh",), "self_collision": ("srdf",)}
+
+
+def file_keys(type_name: str) -> tuple[str, ...]:
+    """The table keys of an inequality type that name a file (its class's ``file_keys``): a scenario resolves them
+    inside its own folder (:func:`uvms.scenario.resources.scenario_file`)."""
+    return tuple(getattr(INEQUALITY_TYPES.get(type_name), "file_keys", ()))
+
+
+def collision_types() -> list[str]:
+    """The inequality types of collision objectives (their class's ``collision``), in registry order."""
+    return [name for name, kind in INEQUALITY_TYPES.items() if getattr(kind, "collision", False)]
 
 
 def table_keys(type_name: str) -> tuple[list[str], list[str]]:
@@ -98,8 +108,8 @@ def inequalities_from_table(robot: Robot, table: Mapping[str, object]) -> list[O
 
 
 __all__ = [
-    "ACTIVATION_SHAPES", "FILE_KEYS", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
+    "ACTIVATION_SHAPES", "FrameBox", "INEQUALITY_TYPES", "Inequality", "InequalityRows", "JointLimits",
     "JointVelocityLimits", "Manipulability", "Objective", "Obstacle", "PlaneClearance", "SelfCollision",
-    "VehicleAttitude", "VehicleVelocityLimits", "VelocityLimit", "bell", "check_table", "inequalities_from_table",
-    "table_keys", "velocity_limits",
+    "VehicleAttitude", "VehicleVelocityLimits", "VelocityLimit", "bell", "check_table", "collision_types",
+    "file_keys", "inequalities_from_table", "registered", "table_keys", "velocity_limits",
 ]

@@ -117,7 +117,17 @@ class Inequality(ABC):
     """An objective with a valid set lower <= x(q) <= upper (k rows) instead of a target.
 
     Subclasses set their bounds with :meth:`_set_valid_set` in their constructor and give
-    :meth:`value` and :meth:`jacobian`.
+    :meth:`value` and :meth:`jacobian`. What the rest of uvms asks of a kind of objective it reads from the class
+    (never from an ``isinstance``), so a new kind is one class and one entry of
+    :data:`uvms.tasks.objectives.INEQUALITY_TYPES`:
+
+    * ``type_name``: its scenario ``[[inequalities]]`` ``type``;
+    * ``unit``: the label of its value on figures (:meth:`shown` maps a value to it);
+    * ``min_metric``: the ``metrics.json`` key of its smallest value over a run (None: none);
+    * ``collision``: a collision objective (its nearest pairs are recorded, reported and drawn);
+    * ``bounds_joint_positions``: it holds arm joint positions (``v_index``, ``hard_lower``, ``hard_upper``),
+      which the solvers turn into joint bounds (the QP hierarchy) or free columns (the damping);
+    * ``file_keys``: its table keys that name a file (resolved inside the scenario's folder).
 
     Attributes:
         name: how results name it.
@@ -135,6 +145,12 @@ class Inequality(ABC):
     band: np.ndarray
     gain: float
     shape: str
+    type_name: str = ""
+    unit: str = "value"
+    min_metric: str | None = None
+    collision: bool = False
+    bounds_joint_positions: bool = False
+    file_keys: tuple[str, ...] = ()
 
     def _set_valid_set(self, lower: np.ndarray, upper: np.ndarray, band: float | np.ndarray, gain: float,
                        shape: str) -> None:
@@ -197,6 +213,17 @@ class Inequality(ABC):
         activation, reference = self._activation_reference(value)
         return InequalityRows(name=self.name, value=value, jacobian=jacobian, lower=self.lower,
                               upper=self.upper, activation=activation, reference=reference, gain=self.gain)
+
+    def shown(self, value: np.ndarray) -> np.ndarray:
+        """A value (..., k) in the units figures draw it in (:attr:`unit`): its own, unless a kind says otherwise."""
+        return value
+
+    def row_names(self) -> list[str]:
+        """A name per row (k,): its ``names`` (e.g. joints) when it has one per row, else its name (indexed)."""
+        names = getattr(self, "names", None)
+        if names is not None and len(names) == self.dim:
+            return list(names)
+        return [self.name] if self.dim == 1 else [f"{self.name}[{row}]" for row in range(self.dim)]
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.name!r}, dim={self.dim})"

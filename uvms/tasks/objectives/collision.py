@@ -52,6 +52,8 @@ class NearestPairs(Inequality):
         distances: the pairs' :class:`~uvms.model.distances.PairDistances`; links: (link1, link2) of each pair.
     """
 
+    collision = True
+
     distances: PairDistances
     links: list[tuple[str, str]]
 
@@ -114,6 +116,10 @@ class SelfCollision(NearestPairs):
         LinkNotFound: a listed link that carries no collision shape (the message lists those that do).
         ModelCheckError: a missing or refused mesh, an unreadable SRDF.
     """
+
+    type_name = "self_collision"
+    min_metric = "min_self_distance"
+    file_keys = ("srdf",)
 
     def __init__(self, robot: Robot, min: float = 0.01, band: float = 0.05,  # noqa: A002
                  pairs: str | Sequence[Sequence[str]] | None = None, count: int = 5, gain: float = 1.0,
@@ -185,6 +191,10 @@ class Obstacle(NearestPairs):
             take, a missing or refused mesh file, no shape to keep clear.
         FrameNotFound: an unknown frame (the message lists close names).
     """
+
+    type_name = "obstacle"
+    min_metric = "min_obstacle_distance"
+    file_keys = ("mesh",)
 
     def __init__(self, robot: Robot, geometry: str, size: Sequence[float] | None = None, radius: float | None = None,
                  length: float | None = None, point: Sequence[float] | None = None,

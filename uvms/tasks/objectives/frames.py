@@ -34,6 +34,13 @@ class VehicleAttitude(Inequality):
         name: the name results report.
     """
 
+    type_name = "vehicle_attitude"
+    unit = "tilt [deg]"
+
+    def shown(self, value: np.ndarray) -> np.ndarray:
+        """The tilt in degrees."""
+        return np.degrees(value)
+
     def __init__(self, robot: Robot, max_tilt: float, band: float | None = None, gain: float = 1.0,
                  shape: str = "cosine", name: str = "vehicle_attitude") -> None:
         self.name = name
@@ -82,6 +89,10 @@ class PlaneClearance(Inequality):
         name: the name results report (default ``plane_clearance(<frame>)``).
     """
 
+    type_name = "plane_clearance"
+    unit = "distance [m]"
+    min_metric = "min_clearance"
+
     def __init__(self, robot: Robot, frame: str, point: Sequence[float], normal: Sequence[float],
                  min: float = 0.0, band: float = 0.2, gain: float = 1.0, shape: str = "cosine",  # noqa: A002
                  name: str | None = None) -> None:
@@ -122,6 +133,12 @@ class FrameBox(Inequality):
         shape: activation shape, "cosine" or "step".
         name: the name results report (default ``frame_box(<frame>)``).
     """
+
+    type_name = "frame_box"
+    unit = "position [m]"
+
+    def row_names(self) -> list[str]:
+        return ["x", "y", "z"]
 
     def __init__(self, robot: Robot, frame: str | None = None, lower: Sequence[float] = (-np.inf,) * 3,
                  upper: Sequence[float] = (np.inf,) * 3, band: float = 0.1, gain: float = 1.0,

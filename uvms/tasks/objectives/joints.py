@@ -51,6 +51,10 @@ class JointLimits(Inequality):
         ObjectiveError: no limited joint, a joint without finite limits, a bad band, gain or shape.
     """
 
+    type_name = "joint_limits"
+    unit = "position in range [-]"
+    bounds_joint_positions = True
+
     def __init__(self, robot: Robot, margin: float | Mapping[str, float] = 0.0, band: float = 0.2, gain: float = 1.0,
                  joints: Sequence[str] | None = None, limit: Limit | None = None, shape: str = "cosine",
                  name: str = "joint_limits") -> None:
@@ -90,6 +94,10 @@ class JointLimits(Inequality):
                                      f"are: {', '.join(sorted({limit.names[i] for i in np.flatnonzero(usable)}))}")
             rows.extend(found)
         return np.array(sorted(set(rows)), dtype=int)
+
+    def shown(self, value: np.ndarray) -> np.ndarray:
+        """The fraction of each joint's valid range (0: lower, 1: upper)."""
+        return (value - self.lower) / (self.upper - self.lower)
 
     def value(self, state: Configuration) -> np.ndarray:
         return state.q[self.q_index]

@@ -40,6 +40,10 @@ class Manipulability(Inequality):
         name: the name results report (default ``manipulability(<frame>)``).
     """
 
+    type_name = "manipulability"
+    unit = "manipulability"
+    min_metric = "min_manipulability"
+
     def __init__(self, robot: Robot, frame: str | None = None, min: float = 0.0, band: float = 0.01,  # noqa: A002
                  gain: float = 1.0, axes: Sequence[str] | None = None, step: float = 1e-6, shape: str = "cosine",
                  name: str | None = None) -> None:
