@@ -55,16 +55,18 @@ def test_a_bandwidth_or_damping_ratio_that_is_not_positive_is_refused(bandwidth,
         velocity_gains(np.ones(6), bandwidth, damping_ratio)
 
 
-def test_the_inertia_is_the_kinetic_energy_of_a_unit_body_twist(vehicles):
+def test_the_inertia_is_the_kinetic_energy_of_a_unit_body_twist(vehicles, monkeypatch):
     """M_ii = 2 T(e_i): the plant's kinetic energy (rigid + added mass, the arm included) of a unit twist of the base
-    frame along axis i, mapped to the vehicle joint; here with a base frame that is not the joint's frame."""
+    frame along axis i, mapped to the vehicle joint; here with a base frame that is not the joint's frame (a URDF
+    puts a link's frame on its joint, so the robot's base placement is replaced for the test)."""
     robot, _, arm = vehicles["rexrov"]
+    placement = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.4, -0.1, 0.2]))
+    monkeypatch.setattr(type(robot), "base_placement", property(lambda self: placement.copy()))
     plant = Plant(robot, gravity=True)
-    plant._base_placement = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.4, -0.1, 0.2]))
     q = robot.configuration(base=[1.0, 2.0, -20.0, 0.05, -0.1, 0.7], arm=arm)
     inertia = vehicle_inertia(plant, q)
     for i in range(6):
-        joint_twist = plant._base_placement.act(pin.Motion(np.eye(6)[i])).vector
+        joint_twist = placement.act(pin.Motion(np.eye(6)[i])).vector
         kinetic, _ = plant.energy(q, np.concatenate([joint_twist, np.zeros(robot.n_arm)]))
         assert inertia[i] == pytest.approx(2.0 * kinetic, rel=1e-12)
     assert inertia[0] > 1862.87 + 79.79  # rigid + added surge mass, the arm on top

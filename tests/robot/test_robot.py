@@ -53,3 +53,21 @@ def test_a_run_checks_its_configurations_once_and_refuses_a_bad_row_by_its_index
     bad[1, -1] = np.nan
     with pytest.raises(uvms.UVMSError, match="non-finite"):
         robot.check_configurations(bad)
+
+
+def test_base_placement_puts_the_root_link_where_the_kinematics_does(rng):
+    """``base_pose(q) * base_placement`` is the root link's pose (Pinocchio's frame placement), for a vehicle joint
+    placed away from the world origin (0.1 m and a yaw) and for the shipped BlueROV2; it is a copy."""
+    import pinocchio as pin
+
+    from conftest import FLOATING_ROOT, urdf
+
+    placed_joint = FLOATING_ROOT.replace('type="floating">', 'type="floating"><origin xyz="0.1 0 0" rpy="0 0 0.3"/>')
+    for robot in (uvms.load("bluerov2_alpha5"), uvms.load(urdf(root=placed_joint))):
+        q = robot.random_configuration(rng)
+        expected = robot.fk(q, robot.root_link)
+        placement = robot.base_placement
+        assert isinstance(placement, pin.SE3)
+        np.testing.assert_allclose((robot.base_pose(q) * placement).homogeneous, expected.homogeneous, atol=1e-12)
+        placement.translation = np.full(3, 5.0)  # a copy: the model is not changed
+        np.testing.assert_allclose(robot.fk(q, robot.root_link).homogeneous, expected.homogeneous, atol=1e-12)

@@ -184,7 +184,7 @@ class CoordinatedControl:
         reference, _ = self.kinematic.reference(t, q, bounds)
         arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
         arm = np.clip(arm, -self.max_arm_rate, self.max_arm_rate)
-        nu_ref = model._base_placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
+        nu_ref = model.robot.base_placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
         arm_acceleration = (arm - v[nb:]) / model.motor_time_constant  # the servo the model knows
         control = self.velocity.control(q, v, nu_ref, self.dt, arm_acceleration=arm_acceleration)
         allocation = control.allocation

@@ -75,7 +75,7 @@ class ActuatedKinematics:
         solver: levels -> Solver (built twice, once per level order), or None: the CLIK law.
         inequalities: the levels of inequality objectives the solver enforces, highest first.
         gain: K [1/s] of the CLIK law; damping: its DLS damping.
-        base_placement: the base frame in the vehicle joint's frame (``Plant._base_placement``; None: identity).
+        base_placement: the base frame in the vehicle joint's frame (``Robot.base_placement``; None: identity).
         vehicle_level: where the vehicle's pose objective goes relative to the task: 0 above it, 1 or None below
             (the solver's :attr:`~uvms.solvers.base.Solver.vehicle_level`). Below, the task takes the vehicle too
             and the pose objective brings the vehicle back to its station in the task's null space (the arm does
@@ -267,8 +267,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
     velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=arm_feedforward)
     pose = VehiclePoseController(velocity, pose_gains, max_speed)
     kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) *
-                                   model._base_placement, solver=solver, inequalities=inequalities, gain=gain,
-                                   damping=damping, base_placement=model._base_placement,
+                                   model.robot.base_placement, solver=solver, inequalities=inequalities, gain=gain,
+                                   damping=damping, base_placement=model.robot.base_placement,
                                    vehicle_level=vehicle_level)
     return CoordinatedControl(robot, velocity, kinematic, dt, coordination=coordination and trajectory is not None,
                               saturation_feedback=saturation_feedback)

@@ -78,7 +78,7 @@ def vehicle_inertia(model: Plant, q: np.ndarray) -> np.ndarray:
         model: the controller's model (its ``added_mass`` choice applies); q: (nq,) the station.
     """
     mass = model.mass_matrix(q)[:6, :6]  # vehicle joint axes
-    to_joint = model._base_placement.toActionMatrix()  # base-frame twist -> vehicle-joint twist
+    to_joint = model.robot.base_placement.toActionMatrix()  # base-frame twist -> vehicle-joint twist
     return np.diag(to_joint.T @ mass @ to_joint).copy()
 
 
@@ -167,7 +167,7 @@ class VehicleVelocityController:
                     arm_acceleration: np.ndarray) -> np.ndarray:
         """tau_model (6,) [N, N m]: the model's wrench for the vehicle rate ``reference_rate`` (6,), body FLU."""
         model = self.model
-        base_rate = model._base_placement.act(pin.Motion(reference_rate)).vector  # base frame -> vehicle joint
+        base_rate = model.robot.base_placement.act(pin.Motion(reference_rate)).vector  # base frame -> vehicle joint
         if not self.arm_feedforward:
             v = np.concatenate([v[:6], np.zeros(model.n_arm)])
             arm_acceleration = np.zeros(model.n_arm)

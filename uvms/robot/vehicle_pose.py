@@ -35,6 +35,12 @@ class VehicleAccessors:
             raise ConfigurationError("a planar base pose must lie in the x-y plane of the planar joint")
         return np.array([translation[0], translation[1], rotation[0, 0], rotation[1, 0]])
 
+    @property
+    def base_placement(self) -> pin.SE3:
+        """joint_M_base: the vehicle's root link frame in its vehicle joint's frame (identity unless the URDF places
+        the link away from its joint); ``base_pose(q) * base_placement`` is the root link's pose in the world."""
+        return self.model.frames[self.model.getFrameId(self.root_link)].placement.copy()
+
     def base_pose(self, q: np.ndarray, check: bool = True) -> pin.SE3:
         """Pose of the vehicle body in the world, ``transform_base_to_world`` (identity for a fixed base).
 

@@ -73,7 +73,7 @@ def simulate_twist(plant: Plant, states: SmoothedStates) -> np.ndarray:
             twists += [np.full(nb, np.nan)] * (len(t) - 1 - k)
             break
         twists.append(x.copy())
-    placement = plant._base_placement  # the vehicle joint's twist back to the root link's axes
+    placement = plant.robot.base_placement  # the vehicle joint's twist back to the root link's axes
     return np.array([placement.actInv(pin.Motion(row)).vector for row in twists])
 
 

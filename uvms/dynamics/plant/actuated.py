@@ -127,14 +127,14 @@ class ActuatedPlant:
 def base_twist(plant: Plant, v: np.ndarray) -> np.ndarray:
     """The vehicle's body twist (6,) [m/s, rad/s] in its base frame (FLU) from the velocity v (nv,)."""
     joint_twist = pin.Motion(v[:6]) if plant.nb == 6 else pin.Motion(np.array([v[0], v[1], 0.0, 0.0, 0.0, v[2]]))
-    return plant._base_placement.actInv(joint_twist).vector
+    return plant.robot.base_placement.actInv(joint_twist).vector
 
 
 def water_in_base(plant: Plant, q: np.ndarray) -> np.ndarray:
     """The plant's ocean current (3,) [m/s] in the vehicle's base frame at q."""
     if not np.any(plant._current):
         return np.zeros(3)
-    rotation = (plant.robot.base_pose(q) * plant._base_placement).rotation
+    rotation = (plant.robot.base_pose(q) * plant.robot.base_placement).rotation
     return rotation.T @ plant._current
 
 
@@ -157,7 +157,7 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     generalized = mass[:nb, :nb] @ base_acceleration + mass[:nb, nb:] @ arm_acceleration + bias[:nb]
     if nb == 3:  # planar: the joint's (fx, fy, mz) rows
         generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
-    return plant._base_placement.actInv(pin.Force(generalized)).vector
+    return plant.robot.base_placement.actInv(pin.Force(generalized)).vector
 
 
 def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> float:

@@ -138,7 +138,7 @@ class Plant:
         self._current = hydro.current
         self._moving_fluid = bool(np.any(hydro.current != 0.0))
         self._base_frame = self.model.getFrameId(robot.root_link)
-        self._base_placement = self.model.frames[self._base_frame].placement.copy()
+        self._base_placement = robot.base_placement
         self._stacked = StackedLinks.of(self.links, hydro, gravity)
         self._lower = np.tril_indices(self.model.nv, -1)
         self._zero_velocity = np.zeros(self.model.nv)
