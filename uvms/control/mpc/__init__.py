@@ -1,0 +1,49 @@
+"""Whole-body model-predictive control of the vehicle and the arm on Crocoddyl (issue 49).
+
+- :mod:`.settings`: :class:`MPCSettings` (horizon, node step, iterations, weights); no Crocoddyl needed.
+- :mod:`.prediction`: the plant's equations of motion with thrusts and arm commands as inputs, and their analytical
+  derivatives (:class:`PlantPrediction`; Pinocchio and numpy, no Crocoddyl).
+- :mod:`.action`: the plant as a Crocoddyl differential action model, and the costs of a node.
+- :mod:`.controller`: :class:`MPCController` (``reset``, ``command(q, v, t)`` -> thrusts and arm commands).
+
+Crocoddyl is optional (``pip install 'uvms[mpc]'``); it is imported when an MPC is built, never by ``import uvms``.
+"""
+
+from __future__ import annotations
+
+import importlib
+from types import ModuleType
+
+from ...errors import UVMSError
+
+INSTALL_HINT = "the whole-body MPC needs Crocoddyl: pip install 'uvms[mpc]'"
+
+__all__ = ["INSTALL_HINT", "MPCController", "MPCSettings", "PlantPrediction", "require_crocoddyl"]
+
+
+def require_crocoddyl() -> ModuleType:
+    """The ``crocoddyl`` module.
+
+    Raises:
+        UVMSError: Crocoddyl is not installed (the message names the extra).
+    """
+    try:
+        return importlib.import_module("crocoddyl")
+    except ImportError as exc:
+        raise UVMSError(f"{INSTALL_HINT} ({exc})") from None
+
+
+def __getattr__(name: str):
+    if name == "MPCController":
+        from .controller import MPCController
+
+        return MPCController
+    if name == "MPCSettings":
+        from .settings import MPCSettings
+
+        return MPCSettings
+    if name == "PlantPrediction":
+        from .prediction import PlantPrediction
+
+        return PlantPrediction
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,0 +1,182 @@
+"""The whole-body MPC controller: each control step, Box-FDDP on the plant's model from the measured state.
+
+Its surface is the controllers': ``reset(q, v, t)`` and ``command(q, v, t)`` -> the thrusts [N] and the arm's
+velocity commands (an :class:`uvms.dynamics.plant.actuated.ActuatedCommand`); :meth:`MPCController.actuated` is the
+(t, q, v, f) callable an :class:`~uvms.dynamics.plant.actuated.ActuatedPlant` runs. Every control_period it sets the
+problem's initial state to the measurement and the nodes' targets to the trajectory over the horizon, shifts the
+previous solution by the time gone (the warm start) and runs a few Box-FDDP iterations; the first node's input is
+applied and held until the next solve.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+import pinocchio as pin
+
+from ...dynamics.plant.actuated import ActuatedCommand
+from ...dynamics.plant.plant import Plant
+from ...dynamics.thrusters.thrusters import Thrusters, allocation_matrix
+from ...errors import UVMSError
+from . import require_crocoddyl
+from .prediction import PlantPrediction
+from .settings import MPCSettings
+
+
+def prediction_plant(plant: Plant, knows_current: bool) -> Plant:
+    """The plant the MPC predicts with: ``plant`` itself when the current is known, else the same in still water."""
+    if knows_current or not np.any(plant.hydro.current):
+        return plant
+    return Plant(plant.robot, plant.hydro.with_current(np.zeros(3)), gravity=plant.gravity,
+                 motor_time_constant=plant.motor_time_constant, added_mass=plant.added_mass, damping=plant.damping)
+
+
+class MPCController:
+    """Whole-body model-predictive control of the vehicle (its thrusters) and the arm (its joint servos).
+
+    Args:
+        plant: the plant the controller acts on (its model, hydrodynamics, gravity, servos: the prediction's;
+            its current only when ``settings.knows_current``).
+        thrusters: the vehicle's thrusters (their allocation geometry and thrust bounds).
+        target: t [s] -> the end effector's position (3,) [m], world frame.
+        frame: the end-effector frame (None: the robot's first).
+        settings: horizon, node step, iterations, weights (:class:`uvms.control.mpc.settings.MPCSettings`).
+        floor: the lowest world z [m] of the vehicle's origin (a barrier), or None.
+
+    Raises:
+        UVMSError: Crocoddyl not installed (the ``mpc`` extra), a vehicle that is not floating, no thrusters.
+    """
+
+    def __init__(self, plant: Plant, thrusters: Thrusters, target: Callable[[float], np.ndarray], *,
+                 frame: str | None = None, settings: MPCSettings | None = None, floor: float | None = None) -> None:
+        crocoddyl = require_crocoddyl()
+        from .action import NodeCosts, PlantActionModel, input_bounds, integrated
+
+        robot = plant.robot
+        if robot.base_type != "floating":
+            raise UVMSError(f"the MPC needs a floating vehicle (6 degrees of freedom); {robot.name} has a "
+                            f"{robot.base_type} base")
+        if len(thrusters) == 0:
+            raise UVMSError(f"{thrusters.source}: the MPC needs thrusters to move the vehicle")
+        self.settings = settings = MPCSettings() if settings is None else settings
+        self.robot, self.target, self.n = robot, target, len(thrusters)
+        self.time_constants = thrusters.time_constants
+        self.prediction = PlantPrediction(prediction_plant(plant, settings.knows_current),
+                                          allocation_matrix(robot, thrusters))
+        model = self.prediction.model
+        self.state = crocoddyl.StateMultibody(model)
+        frame_id, base_frame = robot.frame_id(frame), plant._base_frame
+        lower, upper = input_bounds(self.prediction, thrusters.lower, thrusters.upper)
+        x_rest = np.concatenate([pin.neutral(model), np.zeros(model.nv)])
+        self.nodes, running = [], []
+        for index in range(settings.horizon + 1):
+            terminal = index == settings.horizon
+            costs = NodeCosts(self.state, self.prediction.nu, settings, frame_id, base_frame, x_rest, self.n,
+                              terminal=terminal, floor=floor)
+            action = PlantActionModel(self.prediction, self.state, costs.sum, lower, upper)
+            self.nodes.append((costs, action))
+            running.append(integrated(action, 0.0 if terminal else settings.node_dt, settings.integrator))
+        self.problem = crocoddyl.ShootingProblem(x_rest, running[:-1], running[-1])
+        self.solver = crocoddyl.SolverBoxFDDP(self.problem)
+        self.lower, self.upper = lower, upper
+        self.solve_times: list[float] = []  # [s] per solve
+        self.iterations: list[int] = []
+        self._held: ActuatedCommand | None = None
+        self._solved_at: float | None = None
+        self._last: tuple | None = None  # (q, v, t, thrusts) at the last solve: the estimate's
+        self._xs: list[np.ndarray] = []
+        self._us: list[np.ndarray] = []
+
+    @property
+    def horizon(self) -> float:
+        """The prediction horizon [s]."""
+        return self.settings.duration
+
+    def reset(self, q: np.ndarray, v: np.ndarray | None = None, t: float = 0.0) -> None:
+        """Start from the state (q (nq,), v (nv,); None: rest) at t [s]: the station is the vehicle's pose and the
+        arm's joints there, level at the vehicle's heading; the first guess holds the state with zero input."""
+        q = self.robot.check_configuration(q)
+        v = np.zeros(self.robot.model.nv) if v is None else self.robot.check_velocity(v)
+        station = np.concatenate([q, np.zeros(self.robot.model.nv)])
+        yaw = pin.rpy.matrixToRpy(pin.Quaternion(q[6], *q[3:6]).toRotationMatrix())[2]
+        level = pin.rpy.rpyToMatrix(0.0, 0.0, yaw)
+        for costs, _ in self.nodes:
+            costs.move(np.zeros(3), station, level)
+        x0 = np.concatenate([q, v])
+        self._xs = [x0.copy() for _ in range(self.settings.horizon + 1)]
+        self._us = [np.clip(np.zeros(self.prediction.nu), self.lower, self.upper)
+                    for _ in range(self.settings.horizon)]
+        self._held, self._solved_at, self._last = None, None, None
+        self.prediction.disturbance = np.zeros(6)
+        self.solve_times.clear()
+        self.iterations.clear()
+
+    def command(self, q: np.ndarray, v: np.ndarray, t: float, thrusts: np.ndarray | None = None) -> ActuatedCommand:
+        """The thrusts (n,) [N] and arm velocity commands (n_arm,) for the measured (q, v) at t [s].
+
+        Solves when a control period has passed since the last solve (or at the first call), else holds. With the
+        measured thrusts (n,) [N] and ``settings.lag_compensation``, the thrust command is the one that brings the
+        thrusters' first-order response to the planned thrust at the end of the control period (the lag the
+        prediction leaves out), f_cmd = (f_plan - f e^(-h/tau)) / (1 - e^(-h/tau)), clipped to the bounds.
+        """
+        if not self._xs:
+            self.reset(q, v, t)
+        period = self.settings.control_period
+        if self._held is not None and t < self._solved_at + period - 1e-9:
+            return self._held
+        if thrusts is not None:
+            self._estimate(q, v, float(t), np.asarray(thrusts, dtype=float))
+        self._held = self._solve(np.concatenate([q, v]), float(t))
+        if thrusts is not None and self.settings.lag_compensation and period > 0.0:
+            decay = np.exp(-period / self.time_constants)
+            planned = self._held.thrust
+            thrust = np.clip((planned - decay * np.asarray(thrusts, dtype=float)) / (1.0 - decay),
+                             self.lower[:self.n], self.upper[:self.n])
+            self._held = ActuatedCommand(self._held.arm, thrust, self._held.info)
+        return self._held
+
+    def actuated(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
+        """The controller of an ActuatedPlant: (t, q, v, thrusts) -> :meth:`command`."""
+        return self.command(q, v, t, thrusts)
+
+    def _estimate(self, q: np.ndarray, v: np.ndarray, t: float, thrusts: np.ndarray) -> None:
+        """Update the estimated wrench on the vehicle from the last period's mismatch (measured - predicted vehicle
+        acceleration, the thrusts the mean of the measured ones), low-pass filtered."""
+        last, self._last = self._last, (q.copy(), v.copy(), t, thrusts.copy())
+        constant = self.settings.disturbance_time_constant
+        if last is None or constant <= 0.0 or self._held is None or t <= last[2]:
+            return
+        q0, v0, t0, f0 = last
+        prediction, nb = self.prediction, self.prediction.nb
+        dynamics = prediction.evaluate(q0, v0, np.concatenate([0.5 * (f0 + thrusts), self._held.arm]))
+        mismatch = (v[:nb] - v0[:nb]) / (t - t0) - dynamics.acceleration[:nb]
+        gain = 1.0 - np.exp(-(t - t0) / constant)
+        prediction.disturbance = prediction.disturbance + gain * prediction.wrench_of(
+            dynamics.mass_matrix[:nb, :nb] @ mismatch)
+
+    def _solve(self, x0: np.ndarray, t: float) -> ActuatedCommand:
+        settings = self.settings
+        shift = 0 if self._solved_at is None else int(round((t - self._solved_at) / settings.node_dt))
+        shift = min(max(shift, 0), settings.horizon)
+        xs = self._xs[shift:] + [self._xs[-1]] * shift
+        us = self._us[shift:] + [self._us[-1]] * shift
+        xs[0] = x0
+        for index, (costs, _) in enumerate(self.nodes):
+            costs.move(np.asarray(self.target(t + index * settings.node_dt), dtype=float))
+        self.problem.x0 = x0
+        started = time.perf_counter()
+        self.solver.solve(xs, us, settings.iterations, False)
+        elapsed = time.perf_counter() - started
+        self._xs, self._us = list(self.solver.xs), list(self.solver.us)
+        if not all(np.all(np.isfinite(u)) for u in self._us[:1]):
+            raise UVMSError(f"the MPC's solution is not finite at t = {t:.6g} s; lower its weights or node_dt")
+        self.solve_times.append(elapsed)
+        self.iterations.append(int(self.solver.iter))
+        self._solved_at = t
+        first = np.clip(self._us[0], self.lower, self.upper)
+        thrust, arm = self.prediction.split(first)
+        return ActuatedCommand(arm.copy(), thrust.copy(), {"mpc_solve_time": elapsed,
+                                                           "mpc_iterations": float(self.solver.iter),
+                                                           "mpc_cost": float(self.solver.cost)})

@@ -1,0 +1,85 @@
+"""The whole-body MPC's settings: horizon, node step, solver iterations, the costs' weights and the bounds' margins.
+
+Kept apart from the Crocoddyl code so that a scenario can be checked, and its settings read, without Crocoddyl.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ...errors import UVMSError
+
+#: The integrators of the prediction: Crocoddyl's symplectic Euler (one evaluation per node) or its RK4 (four).
+INTEGRATORS = ("euler", "rk4")
+
+
+@dataclass(frozen=True)
+class MPCSettings:
+    """What the MPC solves each control step.
+
+    Attributes:
+        horizon: the number of nodes N (>= 1); the horizon is N * node_dt [s].
+        node_dt: the step between nodes [s] (> 0).
+        iterations: Box-FDDP iterations per control step (>= 1), warm-started from the previous solution.
+        control_period: [s] the MPC solves every control_period and holds its first input in between (0: at every
+            call of ``command``).
+        integrator: "euler" (Crocoddyl's symplectic Euler) or "rk4" (Crocoddyl's Runge-Kutta 4).
+        end_effector: weight [1/m^2] of the end effector's position error at each node.
+        terminal_end_effector: the same at the last node.
+        vehicle_position, vehicle_attitude: weights [1/m^2], [1/rad^2] of the vehicle's pose error against the
+            station it was reset at (its posture; attitude = roll, pitch and yaw about the station).
+        arm_posture: weight [1/rad^2] of the arm joints against their positions at reset.
+        vehicle_velocity, arm_velocity: weights [s^2/m^2 or s^2/rad^2] of the velocities (damping of the plan).
+        thrust: weight [1/N^2] of the thrusts (effort); arm_command: [s^2/rad^2] of the arm's velocity commands.
+        joint_limits: weight of the quadratic barrier on the arm joints outside their limits less joint_margin [rad].
+        tilt: weight of the quadratic barrier on the vehicle's roll and pitch beyond max_tilt [rad].
+        knows_current: the prediction uses the plant's current (True) or still water (False: the current unknown).
+        lag_compensation: invert the thrusters' first-order lag over a control period from the measured thrusts.
+        disturbance_time_constant: [s] the filter of the estimated wrench on the vehicle (the vehicle rows of the
+            mismatch between the measured and the predicted acceleration over the last control period); 0: none.
+    """
+
+    horizon: int = 20
+    node_dt: float = 0.05
+    iterations: int = 1
+    control_period: float = 0.05
+    integrator: str = "euler"
+    end_effector: float = 1.0e4
+    terminal_end_effector: float = 1.0e5
+    vehicle_position: float = 10.0
+    vehicle_attitude: float = 1.0e3
+    arm_posture: float = 1.0
+    vehicle_velocity: float = 10.0
+    arm_velocity: float = 1.0
+    thrust: float = 1.0e-3
+    arm_command: float = 1.0
+    joint_limits: float = 1.0e5
+    joint_margin: float = 0.05
+    tilt: float = 1.0e5
+    max_tilt: float = 0.0873
+    knows_current: bool = False
+    lag_compensation: bool = True
+    disturbance_time_constant: float = 0.5
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.horizon, int) and self.horizon >= 1):
+            raise UVMSError(f"mpc horizon must be an integer >= 1 (nodes), got {self.horizon!r}")
+        if not (isinstance(self.iterations, int) and self.iterations >= 1):
+            raise UVMSError(f"mpc iterations must be an integer >= 1, got {self.iterations!r}")
+        if self.integrator not in INTEGRATORS:
+            raise UVMSError(f"mpc integrator must be one of {', '.join(INTEGRATORS)}, got {self.integrator!r}")
+        for item in fields(self):
+            value = getattr(self, item.name)
+            if item.name in ("horizon", "iterations", "integrator", "knows_current", "lag_compensation"):
+                continue
+            if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0.0):
+                raise UVMSError(f"mpc {item.name} must be a finite number >= 0, got {value!r}")
+        if self.node_dt <= 0.0:
+            raise UVMSError(f"mpc node_dt must be > 0 s, got {self.node_dt!r}")
+
+    @property
+    def duration(self) -> float:
+        """The horizon [s]."""
+        return self.horizon * self.node_dt
