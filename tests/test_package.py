@@ -104,6 +104,10 @@ def circles(graph: dict[str, set[str]]) -> list[list[str]]:
     return found
 
 
+#: Modules only an optional extra installs, that some of uvms's modules import at their top (the mpc extra).
+OPTIONAL_MODULES = ("crocoddyl",)
+
+
 def test_the_top_of_the_package_holds_only_the_entry_errors_and_folders():
     loose = sorted(path.name for path in PACKAGE.glob("*.py") if path.name not in ("__init__.py", "errors.py"))
     assert loose == []
@@ -138,7 +142,12 @@ def test_no_module_is_hidden_behind_a_name_of_its_package():
         if info.name.endswith("__main__"):
             continue
         parent, leaf = info.name.rsplit(".", 1)
-        module = importlib.import_module(info.name)
+        try:
+            module = importlib.import_module(info.name)
+        except ModuleNotFoundError as exc:  # a module of an extra that is not installed (the mpc extra's Crocoddyl)
+            if exc.name not in OPTIONAL_MODULES:
+                raise
+            continue
         if getattr(importlib.import_module(parent), leaf, module) is not module:
             hidden.append(info.name)
     assert hidden == []

@@ -11,26 +11,9 @@ Crocoddyl is optional (``pip install 'uvms[mpc]'``); it is imported when an MPC 
 
 from __future__ import annotations
 
-import importlib
-from types import ModuleType
-
-from ...errors import UVMSError
-
-INSTALL_HINT = "the whole-body MPC needs Crocoddyl: pip install 'uvms[mpc]'"
+from .optional import INSTALL_HINT, require_crocoddyl
 
 __all__ = ["INSTALL_HINT", "MPCController", "MPCSettings", "PlantPrediction", "require_crocoddyl"]
-
-
-def require_crocoddyl() -> ModuleType:
-    """The ``crocoddyl`` module.
-
-    Raises:
-        UVMSError: Crocoddyl is not installed (the message names the extra).
-    """
-    try:
-        return importlib.import_module("crocoddyl")
-    except ImportError as exc:
-        raise UVMSError(f"{INSTALL_HINT} ({exc})") from None
 
 
 def __getattr__(name: str):

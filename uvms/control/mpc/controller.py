@@ -20,7 +20,7 @@ from ...dynamics.plant.actuated import ActuatedCommand
 from ...dynamics.plant.plant import Plant
 from ...dynamics.thrusters.thrusters import Thrusters, allocation_matrix
 from ...errors import UVMSError
-from . import require_crocoddyl
+from .optional import require_crocoddyl
 from .prediction import PlantPrediction
 from .settings import MPCSettings
 
