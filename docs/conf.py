@@ -19,7 +19,7 @@ extensions = [
     "sphinx.ext.autosummary",
     "sphinx.ext.napoleon",
     "sphinx.ext.mathjax",
-    "scenario_reference",  # the scenario reference, generated from uvms.scenario.schema.SCHEMA
+    "scenario_reference",  # the scenario reference, generated from the typed spec uvms.scenario.spec
 ]
 source_suffix = {".md": "myst-nb", ".ipynb": "myst-nb"}
 exclude_patterns = ["_build", "notebooks/execute.py", "notebooks/.ipynb_checkpoints"]

@@ -1,8 +1,10 @@
 """The scenario reference, generated: ``{scenario-keys} SECTION`` renders the keys of a section of a scenario file.
 
-Types, defaults and allowed values come from :data:`uvms.scenario.schema.SCHEMA` (``[[phases]]``: ``PHASE_SCHEMA``;
-``[[inequalities]]``: the objectives' constructors); the meaning of each key from ``reference/scenario_keys.toml``
-beside this page. :func:`documented_keys` and :func:`schema_keys` are what tests/test_docs.py compares.
+Types, defaults, allowed values and meanings come from the scenario spec, :mod:`uvms.scenario.spec` (each section a
+frozen dataclass, each key a field whose :class:`~uvms.scenario.spec.keys.Key` says all of it; the section's
+introduction its ``ABOUT``; ``[[phases]]``: ``PhaseSpec``). ``[[inequalities]]``: keys and defaults from the
+objectives' constructors, their meanings from ``reference/scenario_keys.toml`` beside this page.
+:func:`documented_keys` and :func:`schema_keys` are what tests/test_docs.py compares.
 """
 
 from __future__ import annotations
@@ -16,14 +18,20 @@ from docutils.parsers.rst import Directive
 from docutils.statemachine import StringList
 
 MEANINGS = Path(__file__).resolve().parents[1] / "reference" / "scenario_keys.toml"
-#: the extra sections of a scenario file besides SCHEMA's: arrays of tables
-ARRAYS = ("phases", "inequalities")
 
 
 def meanings() -> dict:
-    """The meanings table: section -> key -> Markdown text (``_about``: the section's introduction)."""
+    """The meanings of the ``[[inequalities]]`` keys: ``{"inequalities": {"_about": ..., "common": {key: text},
+    TYPE: {key: text}}}`` (Markdown)."""
     with MEANINGS.open("rb") as file:
         return tomllib.load(file)
+
+
+def spec_class(section: str):
+    """The spec dataclass of a section with a table of keys (``phases``: one ``[[phases]]`` table)."""
+    from uvms.scenario.spec import SECTIONS, PhaseSpec
+
+    return PhaseSpec if section == "phases" else SECTIONS[section]
 
 
 def inequality_keys() -> dict[str, dict[str, object]]:
@@ -39,20 +47,18 @@ def inequality_keys() -> dict[str, dict[str, object]]:
 
 def schema_keys() -> set[str]:
     """Every key a scenario file may hold, as ``section.key`` (inequalities: ``inequalities.TYPE.key``)."""
-    from uvms.scenario.schema import PHASE_SCHEMA, SCHEMA
-
-    keys = {f"{section}.{key}" for section, table in SCHEMA.items() for key in table}
-    keys |= {f"phases.{key}" for key in PHASE_SCHEMA}
+    keys = {f"{section}.{key}" for section in sections() if section != "inequalities"
+            for key in spec_class(section).keys()}
     keys |= {f"inequalities.{kind}.{key}" for kind, table in inequality_keys().items() for key in table}
     return keys
 
 
 def documented_keys() -> set[str]:
-    """Every key the meanings table explains, in the form of :func:`schema_keys` (common inequality keys expanded)."""
-    table = meanings()
-    keys = {f"{section}.{key}" for section, entries in table.items() if section != "inequalities"
-            for key in entries if key != "_about"}
-    inequalities = table["inequalities"]
+    """Every key with a meaning (a spec field's ``doc``, or a line of the inequalities' meanings table), in the form
+    of :func:`schema_keys` (common inequality keys expanded)."""
+    keys = {f"{section}.{key}" for section in sections() if section != "inequalities"
+            for key, spec in spec_class(section).keys().items() if spec.doc.strip()}
+    inequalities = meanings()["inequalities"]
     common = set(inequalities.get("common", {}))
     for kind, entries in inequality_keys().items():
         own = inequalities.get(kind, {})
@@ -62,7 +68,7 @@ def documented_keys() -> set[str]:
 
 
 def type_text(accepted: object) -> str:
-    """The schema's accepted types, in words."""
+    """A key's accepted types, in words."""
     words = {str: "string", bool: "bool", int: "number", float: "number", list: "list", dict: "table",
              "numbers": "list of numbers"}
     kinds = accepted if isinstance(accepted, tuple) else (accepted,)
@@ -76,7 +82,7 @@ def type_text(accepted: object) -> str:
 
 def value_text(value: object) -> str:
     """A default or an allowed value as it is written in TOML."""
-    from uvms.scenario.schema import REQUIRED
+    from uvms.scenario.spec import REQUIRED
 
     if value is REQUIRED or value is inspect.Parameter.empty:
         return "**required**"
@@ -100,14 +106,14 @@ def cell(text: str) -> str:
     return text.replace("|", "\\|").replace("\n", " ")
 
 
-def section_table(table: dict[str, tuple], about: dict[str, str]) -> list[str]:
+def section_table(section: str) -> list[str]:
     """Markdown lines of one section: its introduction and a table of its keys."""
-    lines = [about.get("_about", ""), "",
-             "| key | type | default | values | meaning |", "|---|---|---|---|---|"]
-    for key, (accepted, default, allowed) in table.items():
-        values = ", ".join(value_text(value) for value in allowed) if allowed else ""
-        lines.append(f"| `{key}` | {type_text(accepted)} | {cell(value_text(default))} | {cell(values)} | "
-                     f"{cell(about.get(key, ''))} |")
+    cls = spec_class(section)
+    lines = [cls.ABOUT, "", "| key | type | default | values | meaning |", "|---|---|---|---|---|"]
+    for key, spec in cls.keys().items():
+        values = ", ".join(value_text(value) for value in spec.allowed) if spec.allowed else ""
+        lines.append(f"| `{key}` | {type_text(spec.kinds)} | {cell(value_text(spec.default))} | {cell(values)} | "
+                     f"{cell(spec.doc)} |")
     return lines + [""]
 
 
@@ -125,26 +131,22 @@ def inequality_tables(about: dict) -> list[str]:
 
 
 def sections() -> list[str]:
-    """Every section of a scenario file, in the order of the reference: SCHEMA's, then the arrays of tables."""
-    from uvms.scenario.schema import SCHEMA
+    """Every section of a scenario file, in the order of the reference: the spec's sections, then the arrays of
+    tables."""
+    from uvms.scenario.spec import ARRAYS, SECTIONS
 
-    return [*SCHEMA, *ARRAYS]
+    return [*SECTIONS, *ARRAYS]
 
 
 def reference_markdown(section: str | None = None) -> str:
     """The reference of one section as Markdown (None: every section, in the order of :func:`sections`)."""
-    from uvms.scenario.schema import PHASE_SCHEMA, SCHEMA
-
     if section is None:
         return "\n".join(reference_markdown(name) for name in sections())
     if section not in sections():
         raise ValueError(f"no scenario section {section!r}; sections: {', '.join(sections())}")
-    about = meanings().get(section, {})
     if section == "inequalities":
-        return "\n".join(inequality_tables(about))
-    if section == "phases":
-        return "\n".join(section_table(PHASE_SCHEMA, about))
-    return "\n".join(section_table(SCHEMA[section], about))
+        return "\n".join(inequality_tables(meanings()["inequalities"]))
+    return "\n".join(section_table(section))
 
 
 class ScenarioKeys(Directive):

@@ -80,7 +80,7 @@ def main_figure(out: Path) -> None:
         for row, (key, (name, kind)) in enumerate(SCENARIOS.items()):
             toml = ROOT / "scenarios" / f"{name}.toml"
             robot = named_model(str(toml))
-            [table] = [table for table in read_scenario(toml)["inequalities"] if table["type"] == kind]
+            [table] = [table.table for table in read_scenario(toml).inequalities if table.type == kind]
             [objective] = inequalities_from_table(robot, table)
             overlay = CollisionOverlay(robot, True, [objective])
             curve = figure.add_subplot(grid[row, 0])

@@ -199,6 +199,6 @@ def test_the_station_keeping_scenario_with_a_mimic_gripper_runs_with_gravity(tmp
     scenario = ROOT / "tests" / "fixtures" / "rexrov_like" / "station_current.toml"
     result = run_scenario(scenario, tmp_path / "run", ["outputs.figures=false", "trajectory.duration=0.2"],
                           progress=False)
-    assert result.metrics["plant"] == "hydrodynamic" and result.scenario["plant"]["gravity"] is True
+    assert result.metrics["plant"] == "hydrodynamic" and result.scenario.plant.gravity is True
     potential = result.simulation.plant.potential_energy
     assert len(potential) == 21 and np.all(np.isfinite(potential)) and np.ptp(potential) > 0.0

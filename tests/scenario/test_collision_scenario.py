@@ -67,16 +67,16 @@ def test_a_scenario_reads_only_the_files_inside_its_folder(tmp_path, mesh, words
 
 def test_the_mesh_and_srdf_of_a_scenario_resolve_beside_it(tmp_path):
     scenario = uvms.scenario.schema.read_scenario(SCENARIO)
-    assert scenario["inequalities"][1]["mesh"] == str((FIXTURES / "rock.stl").resolve())
+    assert scenario.inequalities[1].keys["mesh"] == str((FIXTURES / "rock.stl").resolve())
     folder = tmp_path / "scenario"
     shutil.copytree(FIXTURES, folder)
     (folder / "box_arm.srdf").write_text('<robot><disable_collisions link1="base_link" link2="jaw"/></robot>')
     text = SCENARIO.read_text().replace('pairs = "all"', 'srdf = "box_arm.srdf"')
     (folder / "fold.toml").write_text(text)
     scenario = uvms.scenario.schema.read_scenario(folder / "fold.toml")
-    assert scenario["inequalities"][0]["srdf"] == str((folder / "box_arm.srdf").resolve())
+    assert scenario.inequalities[0].keys["srdf"] == str((folder / "box_arm.srdf").resolve())
     robot = uvms.load(folder / "box_arm.urdf", base="floating")
-    built = uvms.tasks.objectives.inequalities_from_table(robot, scenario["inequalities"][0])[0]
+    built = uvms.tasks.objectives.inequalities_from_table(robot, scenario.inequalities[0].table)[0]
     assert ("base_link", "jaw") not in built.links and built.disabled[("base_link", "jaw")] == "srdf"
     assert np.isfinite(built.value(Configuration(robot, robot.neutral()))).all()
 
@@ -93,7 +93,7 @@ def recorded_distances(run, table: dict) -> np.ndarray:
 
 def test_the_jaws_tuck_under_the_bow_clear_of_the_vehicle_where_straight_clik_puts_them_in_it(tmp_path):
     scenario = SCENARIOS / "bluerov2_alpha5_stow.toml"
-    table = uvms.scenario.schema.read_scenario(scenario)["inequalities"][1]
+    table = uvms.scenario.schema.read_scenario(scenario).inequalities[1].table
     run = uvms.run_scenario(scenario, tmp_path / "stow", overrides=["outputs.figures=false"], progress=False)
     distances = recorded_distances(run, table)
     assert distances.min() >= table["min"] - 1e-4  # every recorded step, every row (the 6 nearest pairs)
@@ -115,7 +115,7 @@ def test_the_jaws_tuck_under_the_bow_clear_of_the_vehicle_where_straight_clik_pu
 
 def test_the_jaws_slide_along_the_pipe_instead_of_into_it(tmp_path):
     scenario = SCENARIOS / "bluerov2_alpha5_pipe.toml"
-    table = uvms.scenario.schema.read_scenario(scenario)["inequalities"][1]
+    table = uvms.scenario.schema.read_scenario(scenario).inequalities[1].table
     run = uvms.run_scenario(scenario, tmp_path / "pipe", overrides=["outputs.figures=false"], progress=False)
     distances = recorded_distances(run, table)
     assert distances.min() >= table["min"] - 1e-4

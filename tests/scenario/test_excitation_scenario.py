@@ -70,7 +70,7 @@ def test_the_excitation_scenario_drives_the_thrusters_with_the_multisine(tmp_pat
     scenario = read_scenario(scenario_copy(tmp_path), ["excitation.arm=[0.4, 0.3, 0.3, 0.4, 0.0]", "excitation.seed=3"])
     setup = build(scenario)
     control = setup.actuation.controller
-    wrench = multisine(np.array(scenario["excitation"]["wrench"]), components=8, seed=3)
+    wrench = multisine(np.array(scenario.excitation.wrench), components=8, seed=3)
     q, v = setup.q0, np.zeros(setup.robot.nv)
     command = control(12.3, q, v, np.zeros(8))
     # the commanded thrusts give the multi-sine's wrench through the allocation matrix (B B^+ = I: 8 thrusters)

@@ -190,7 +190,7 @@ def test_plain_names_are_accepted(tmp_path, monkeypatch):
     result = run_scenario(SCENARIOS / "santos2006_task_priority.toml", progress=False,
                  overrides=['scenario.name="my-run_2.v1"', "outputs.figures=false"])
     assert result.files[0].parent == Path("out") / "my-run_2.v1" and result.metrics["scenario"] == "my-run_2.v1"
-    assert read_scenario(GRIP, ['outputs.animation="Grip.MP4"'])["outputs"]["animation"] == "Grip.MP4"
+    assert read_scenario(GRIP, ['outputs.animation="Grip.MP4"']).outputs.animation == "Grip.MP4"
     from uvms.io.names import plain_file_name
 
     assert plain_file_name("hoang2011_w1", "scenario") == "hoang2011_w1"  # the shipped scenarios keep their names

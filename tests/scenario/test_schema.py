@@ -35,7 +35,7 @@ def test_a_scenario_names_its_package_folders_relative_to_its_own_folder(scenari
     relative = os.path.relpath(ROS_WORKSPACE, scenario_folder)
     assert relative.startswith("..")
     scenario = write_scenario(scenario_folder, f"package_path = [{json.dumps(relative)}]")
-    assert read_scenario(scenario)["model"]["package_path"] == [str(ROS_WORKSPACE)]
+    assert read_scenario(scenario).model.package_path == (str(ROS_WORKSPACE),)
     result = run_scenario(scenario, out=scenario_folder / "out", progress=False)
     assert result.metrics["steps"] == 4 and result.metrics["max_position_error"] < 0.01
     arm_start = np.load(scenario_folder / "out" / "trajectory.npz")["q"][0, 7:]

@@ -10,6 +10,7 @@ import pytest
 from uvms.cli import main
 from uvms.errors import ScenarioError
 from uvms.scenario import run_scenario
+from uvms.scenario.spec import OutputsSpec
 from uvms.scenario.verdict import LIMIT_SLACK, run_verdict
 
 
@@ -45,7 +46,7 @@ def test_a_task_error_above_the_stated_tolerance_says_so_and_the_default_passes_
 
 def test_rounding_at_a_limit_is_not_a_violation():
     base = {"max_position_error": 0.0, "max_orientation_error": 0.0}
-    tolerances = {"position_tolerance": 0.01, "orientation_tolerance": 0.0175}
+    tolerances = OutputsSpec(position_tolerance=0.01, orientation_tolerance=0.0175)
     assert run_verdict({**base, "max_joint_limit_violation": 3.4e-11}, tolerances)["ok"]  # xiang2019_grip's
     assert not run_verdict({**base, "max_joint_limit_violation": 10 * LIMIT_SLACK}, tolerances)["ok"]
     assert not run_verdict({**base, "max_joint_limit_violation": 0.0, "max_orientation_error": 0.02},

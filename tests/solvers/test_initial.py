@@ -3,6 +3,8 @@ still reaches the target; its names are checked."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -45,9 +47,9 @@ def test_initial_fixed_base_names_are_checked():
     with pytest.raises(ScenarioError, match="unknown vehicle coordinate 'rol'; close names: roll"):
         build(level_vehicle_scenario(["rol"]))
     scenario = level_vehicle_scenario(["roll"])
-    scenario["initial"]["method"] = "given"
+    given = dataclasses.replace(scenario, initial=dataclasses.replace(scenario.initial, method="given"))
     with pytest.raises(ScenarioError, match="initial.fixed_base .* needs initial.method = 'optimize'"):
-        build(scenario)
+        build(given)
 
 
 def test_the_initial_configuration_does_not_depend_on_the_blas_threads():

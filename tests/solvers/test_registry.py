@@ -119,9 +119,9 @@ def test_free_floating_conserves_the_momentum_with_every_solver(method, rng):
 
 
 def test_the_registry_is_what_the_scenario_schema_offers():
-    from uvms.scenario.schema import SCHEMA
+    from uvms.scenario.spec import SolverSpec
 
-    assert tuple(SCHEMA["solver"]["method"][2]) == tuple(SOLVERS) == (  # the schema holds a live view of the keys
+    assert tuple(SolverSpec.keys()["method"].allowed) == tuple(SOLVERS) == (  # the schema holds a live view of the keys
         "clik", "task_priority", "kinematic_constraint", "set_based", "hqp")
     assert [name for name, cls in SOLVERS.items() if cls.enforces_inequalities] == ["set_based", "hqp"]
     assert {name: cls.vehicle_level for name, cls in SOLVERS.items() if cls.vehicle_level is not None} == {

@@ -7,9 +7,13 @@ import contextlib
 import json
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from ..errors import UVMSError
 from .terminal import say
+
+if TYPE_CHECKING:
+    from ..scenario.spec import ScenarioSpec
 
 #: The metrics ``uvms run`` prints, those a run has (all are in metrics.json).
 HEADLINE_METRICS = ("max_position_error", "final_position_error", "max_orientation_error", "max_joint_limit_violation",
@@ -29,10 +33,10 @@ def command_run(options: argparse.Namespace) -> int:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
     overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else []),
                  *package_path_overrides(options)]
-    scenario = read_scenario(options.scenario, overrides)  # a bad scenario is said here, before anything runs
-    out = Path(options.out) if options.out else Path("out") / scenario["scenario"]["name"]
+    spec = read_scenario(options.scenario, overrides)  # a bad scenario is said here, before anything runs
+    out = Path(options.out) if options.out else Path("out") / spec.name
     if not options.quiet:  # the first line, within a second: what runs and where it goes (the loop shows a bar)
-        say(start_line(scenario, out), sys.stdout)
+        say(start_line(spec, out), sys.stdout)
     replacing = holds_run(out)
     result = run_scenario(options.scenario, out=out, overrides=overrides, progress=False if options.quiet else None)
     folder = result.files[0].parent
@@ -61,18 +65,18 @@ def command_run(options: argparse.Namespace) -> int:
     return 0
 
 
-def start_line(scenario: dict, out: Path) -> str:
+def start_line(spec: ScenarioSpec, out: Path) -> str:
     """The first line of ``uvms run``: scenario, model, simulated time and steps, solver, plant, output folder."""
     from ..scenario.build import check_step_count, scenario_duration
 
-    duration = scenario_duration(scenario)
-    steps = check_step_count(scenario, duration)  # a step count out of range is refused here, before the build
-    plant = scenario["plant"]["type"] + (" with thrusters" if scenario["plant"]["thrusters"] else "")
-    model = Path(scenario["model"]["path"])
+    duration = scenario_duration(spec)
+    steps = check_step_count(spec, duration)  # a step count out of range is refused here, before the build
+    plant = spec.plant.type + (" with thrusters" if spec.plant.thrusters else "")
+    model = Path(spec.model.path)
     with contextlib.suppress(ValueError):  # a model below the current folder is shown from there
         model = model.relative_to(Path.cwd())
-    return (f"run         {scenario['scenario']['name']}: model {model}, {duration:g} s in {steps} "
-            f"steps of {scenario['simulation']['dt']:g} s, solver {scenario['solver']['method']}, {plant} plant "
+    return (f"run         {spec.name}: model {model}, {duration:g} s in {steps} "
+            f"steps of {spec.simulation.dt:g} s, solver {spec.solver.method}, {plant} plant "
             f"-> {out}/")
 
 
@@ -123,7 +127,7 @@ def package_path_overrides(options: argparse.Namespace) -> list[str]:
         return []
     from ..scenario import read_scenario
 
-    own = read_scenario(options.scenario, getattr(options, "set", None) or ())["model"]["package_path"]
+    own = list(read_scenario(options.scenario, getattr(options, "set", None) or ()).model.package_path)
     folders = [str(Path(folder).absolute()) for folder in options.package_path] + own
     return [f"model.package_path={json.dumps(folders, ensure_ascii=False)}"]  # a TOML array of basic strings
 
@@ -143,7 +147,7 @@ def run_output_folder(options: argparse.Namespace, suffix: str = "") -> Path:
     from ..scenario import read_scenario
 
     try:
-        name = read_scenario(options.scenario, getattr(options, "set", None) or ())["scenario"]["name"]
+        name = read_scenario(options.scenario, getattr(options, "set", None) or ()).name
     except UVMSError:
         name = Path(options.scenario).stem
     return Path("out") / f"{name}{suffix}"

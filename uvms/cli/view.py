@@ -45,8 +45,8 @@ def start_configuration(options: argparse.Namespace, robot: Robot) -> tuple[np.n
     from ..scenario.build import scenario_start
     from ..scenario.schema import read_scenario
 
-    scenario = read_scenario(options.model)
-    return scenario_start(robot, scenario)[1], f"{scenario['scenario']['name']}: initial configuration ({robot.name})"
+    spec = read_scenario(options.model)
+    return scenario_start(robot, spec)[1], f"{spec.name}: initial configuration ({robot.name})"
 
 
 def view_robot(options: argparse.Namespace) -> tuple[Robot, str | None]:
@@ -97,8 +97,8 @@ def view_objectives(options: argparse.Namespace, robot: Robot) -> tuple[list, st
     if str(options.model).endswith(".toml") and (options.result or options.collision):
         from ..scenario.schema import read_scenario
 
-        tables = [table for table in read_scenario(options.model)["inequalities"] if table["type"] in collision_types()]
-        return [item for table in tables for item in inequalities_from_table(robot, table)], None
+        tables = [table for table in read_scenario(options.model).inequalities if table.type in collision_types()]
+        return [item for table in tables for item in inequalities_from_table(robot, table.table)], None
     kinds = recorded_collision_types(options.result) if options.result else []
     if not kinds:
         return [], None

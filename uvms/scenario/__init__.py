@@ -1,7 +1,8 @@
 """Scenarios: one TOML file names a model, a task, a trajectory and a solver; ``run`` computes it.
 
-``resources`` (scenario files and the shipped scenarios by name), ``schema`` (sections, keys, types, defaults,
-bounds; reading and ``--set`` overrides), ``build`` (model, task, initial configuration, trajectory, controller,
+``resources`` (scenario files and the shipped scenarios by name), ``spec`` (the typed scenario: one frozen
+dataclass per section, each key's type, default, allowed values, bound and meaning), ``schema`` (reading a file into
+its spec, ``--set`` overrides), ``build`` (model, task, initial configuration, trajectory, controller,
 plant), ``runs`` (the one simulation of :mod:`uvms.sim.loop`, metrics, the files of the run folder),
 ``verdict`` (joint limits kept, task error within tolerance), ``record`` (the model a run folder records, read
 back by ``uvms view --result``); ``studies/`` (many runs: ``sweep``, grids of overrides; ``study``, Monte Carlo studies
@@ -18,8 +19,9 @@ from ..errors import ScenarioError
 from .record import RunRecord, read_run_record
 from .resources import resolve_scenario_path, shipped_scenarios
 from .runs import RunResult, compute_metrics, run_scenario
-from .schema import SCHEMA, parse_value, read_scenario, read_toml, scenario_from_raw
+from .schema import parse_value, read_scenario, read_toml, scenario_from_raw
+from .spec import SECTIONS, ScenarioSpec
 
-__all__ = ["RunRecord", "RunResult", "SCHEMA", "ScenarioError", "compute_metrics",
+__all__ = ["RunRecord", "RunResult", "SECTIONS", "ScenarioError", "ScenarioSpec", "compute_metrics",
            "parse_value", "read_run_record", "read_scenario", "read_toml", "resolve_scenario_path", "run_scenario",
            "scenario_from_raw", "shipped_scenarios"]

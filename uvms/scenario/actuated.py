@@ -31,7 +31,8 @@ from ..sim.result import SimulationResult
 from ..solvers import SOLVERS, CLIKSolver, Solver
 from ..tasks.frame import FrameTask
 from .inequalities import ObjectiveRecorder, ScenarioInequalities, build_inequalities
-from .schema import changed_keys
+from .spec import ScenarioSpec, SimulationSpec
+from .spec.keys import thaw
 
 #: The wrench axes the allocation priorities name (body FLU: forces, then moments).
 WRENCH_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -48,56 +49,58 @@ class Actuation:
     fins: Fins = field(default_factory=Fins)
 
 
-def check_actuated_scenario(robot: Robot, scenario: dict) -> None:
+def check_actuated_scenario(robot: Robot, spec: ScenarioSpec) -> None:
     """Refuse only what is meaningless on an actuated vehicle (a message per case: why, and what works)."""
-    plant, solver = scenario["plant"], scenario["solver"]
-    if plant["type"] != "hydrodynamic":
+    plant, solver = spec.plant, spec.solver
+    if plant.type != "hydrodynamic":
         raise ScenarioError(f"plant.thrusters = true needs plant.type = 'hydrodynamic' (thrusters push against "
-                            f"water), got {plant['type']!r}")
+                            f"water), got {plant.type!r}")
     if robot.base_type != "floating":
         raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
                             f"base")
-    if solver["free_floating"]:
+    if solver.free_floating:
         raise ScenarioError("solver.free_floating = true leaves the vehicle passive (momentum conservation), but "
                             "plant.thrusters = true actuates it: the solver's vehicle part is the vehicle "
                             "controller's setpoint; remove solver.free_floating (or plant.thrusters for a passive "
                             "vehicle)")
-    if isinstance(solver["gain"], list):
+    if isinstance(solver.gain, tuple):
         raise ScenarioError("plant.thrusters = true: solver.gain is one number (K [1/s] of every level; the levels "
                             "are the inequalities, the vehicle's pose objective and the task)")
-    if SOLVERS[solver["method"]] is CLIKSolver and (solver["alpha"] or solver["enforce_limits"] or solver["weights"]
-                                                   or solver["damping_epsilon"]):
+    if SOLVERS[solver.method] is CLIKSolver and (solver.alpha or solver.enforce_limits or solver.weights
+                                                   or solver.damping_epsilon):
         raise ScenarioError("plant.thrusters = true with solver.method = 'clik': CLIK has no priorities to hold the "
                             "vehicle's velocity above the task, so the arm is solved with the vehicle's given: "
                             "J_a^# (K e + xdot_d - J_v nu) (solver.gain, a fixed solver.damping); solver.alpha, "
                             "enforce_limits, weights and damping_epsilon are not used. For joint limits use "
                             "solver.method = 'set_based' or 'hqp' with an [[inequalities]] joint_limits table")
-    if changed_keys(scenario, "vehicle"):
+    if spec.vehicle.changed():
         raise ScenarioError("plant.thrusters = true: the vehicle holds its station by the vehicle controller's pose "
                             "objective (vehicle_control.pose_gains, max_speed), not a [vehicle] task; remove "
                             "[vehicle]")
-    if plant["motor_feedforward"] or plant["control_dt"]:
+    if plant.motor_feedforward or plant.control_dt:
         raise ScenarioError("plant.motor_feedforward and plant.control_dt are the GJM controller's; the actuated "
                             "chain runs its controller once per simulation.dt")
 
 
-def check_vehicle_control_used(scenario: dict) -> None:
+def check_vehicle_control_used(spec: ScenarioSpec) -> None:
     """A [vehicle_control] key set without plant.thrusters = true is refused (it would do nothing)."""
-    if scenario["plant"]["thrusters"]:
+    if spec.plant.thrusters:
         return
-    given = changed_keys(scenario, "vehicle_control")
+    given = spec.vehicle_control.changed()
     if given:
         raise ScenarioError(f"vehicle_control.{given[0]} needs plant.thrusters = true (an actuated vehicle); without "
                             f"thrusters the vehicle moves by momentum conservation or as commanded")
 
 
-def allocation_priorities(value: list, origin: str = "vehicle_control.priorities") -> list[tuple[str, ...]] | None:
+def allocation_priorities(value: tuple, origin: str = "vehicle_control.priorities") -> list[tuple[str, ...]] | None:
     """``[["yaw", "z", "roll", "pitch"], ["x", "y"]]`` -> groups of wrench axes, highest first (None: one group)."""
     if not value:
         return None
-    if not all(isinstance(group, list) and group and all(axis in WRENCH_AXES for axis in group) for group in value):
+    if not all(isinstance(group, (list, tuple)) and group and all(axis in WRENCH_AXES for axis in group)
+               for group in value):
         raise ScenarioError(f"{origin} must be a list of groups of wrench axes among {', '.join(WRENCH_AXES)}, "
-                            f"highest priority first, e.g. [['yaw', 'z', 'roll', 'pitch'], ['x', 'y']]; got {value!r}")
+                            f"highest priority first, e.g. [['yaw', 'z', 'roll', 'pitch'], ['x', 'y']]; "
+                            f"got {thaw(value)!r}")
     return [tuple(group) for group in value]
 
 
@@ -106,7 +109,7 @@ def optional_gain(value: float | list | None) -> np.ndarray | None:
     return None if value is None else np.asarray(value, dtype=float)
 
 
-def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray, scenario: dict,
+def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray, spec: ScenarioSpec,
                    solver: type[Solver], options: dict) -> Actuation:
     """The thrusters of the model and the whole chain of the scenario (:func:`uvms.control.station.actuated_control`).
 
@@ -115,28 +118,28 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
             given, no levels). The scenario's ``[[inequalities]]`` are levels above the task when the solver
             enforces them, else monitored.
     """
-    check_actuated_scenario(robot, scenario)
+    check_actuated_scenario(robot, spec)
     try:
         thrusters = thrusters_of(robot)
         fins = fins_of(robot)
     except UVMSError as exc:
         raise ScenarioError(f"plant.thrusters = true: {exc}") from None
-    control, section, tables = scenario["vehicle_control"], scenario["solver"], scenario["inequalities"]
+    control, section, tables = spec.vehicle_control, spec.solver, spec.inequalities
     inequalities = build_inequalities(robot, tables, solver) if tables else None
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
         controller = actuated_control(
-            plant, thrusters, q0, float(scenario["simulation"]["dt"]), task, trajectory,
+            plant, thrusters, q0, float(spec.simulation.dt), task, trajectory,
             solver=None if solver is CLIKSolver else lambda levels: solver(robot, levels, **options),
-            inequalities=enforced, coordination=control["coordination"],
-            saturation_feedback=control["saturation_feedback"], knows_current=control["knows_current"],
-            kp=optional_gain(control["kp"]), ki=optional_gain(control["ki"]),
-            bandwidth=np.asarray(control["bandwidth"], dtype=float),
-            damping_ratio=np.asarray(control["damping_ratio"], dtype=float),
-            pose_gains=np.asarray(control["pose_gains"], dtype=float),
-            max_speed=np.asarray(control["max_speed"], dtype=float),
-            priorities=allocation_priorities(control["priorities"]), arm_feedforward=control["arm_feedforward"],
-            gain=float(section["gain"]), damping=float(section["damping"]), vehicle_level=solver.vehicle_level,
+            inequalities=enforced, coordination=control.coordination,
+            saturation_feedback=control.saturation_feedback, knows_current=control.knows_current,
+            kp=optional_gain(control.kp), ki=optional_gain(control.ki),
+            bandwidth=np.asarray(control.bandwidth, dtype=float),
+            damping_ratio=np.asarray(control.damping_ratio, dtype=float),
+            pose_gains=np.asarray(control.pose_gains, dtype=float),
+            max_speed=np.asarray(control.max_speed, dtype=float),
+            priorities=allocation_priorities(control.priorities), arm_feedforward=control.arm_feedforward,
+            gain=float(section.gain), damping=float(section.damping), vehicle_level=solver.vehicle_level,
             fins=fins)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None
@@ -156,20 +159,20 @@ class ActuatedObjectives:
 
 
 def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np.ndarray, duration: float,
-                       scenario: dict, progress: bool | None) -> SimulationResult:
+                       simulation: SimulationSpec, progress: bool | None) -> SimulationResult:
     """The run, with the task series (the end effector against the held point) recorded."""
     recorders = [] if actuation.inequalities is None else [ActuatedObjectives(actuation.plant.robot,
                                                                                   actuation.inequalities)]
     return simulate(ActuatedPlant(actuation.plant, actuation.thrusters, fins=actuation.fins), actuation.controller,
-                    q0, duration, float(scenario["simulation"]["dt"]), integrator=scenario["simulation"]["integrator"],
+                    q0, duration, float(simulation.dt), integrator=simulation.integrator,
                     task=task, desired=lambda t: trajectory(t).pose, progress=progress, recorders=recorders)
 
 
-def actuated_metrics(result: SimulationResult, actuation: Actuation, scenario: dict) -> dict:
+def actuated_metrics(result: SimulationResult, actuation: Actuation, spec: ScenarioSpec) -> dict:
     """``metrics.json``'s actuated entries: the thrusters' (:meth:`uvms.sim.result.SimulationResult.actuation_metrics`)
     and what the run was (thruster count, coordination, current)."""
     fins = {"fins": actuation.fins.names} if len(actuation.fins) else {}
     return {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names, **fins,
-            "coordination": bool(scenario["vehicle_control"]["coordination"]),
-            "saturation_feedback": bool(scenario["vehicle_control"]["saturation_feedback"]),
-            "current": list(scenario["plant"]["current"]) or [0.0, 0.0, 0.0]}
+            "coordination": bool(spec.vehicle_control.coordination),
+            "saturation_feedback": bool(spec.vehicle_control.saturation_feedback),
+            "current": list(spec.plant.current) or [0.0, 0.0, 0.0]}

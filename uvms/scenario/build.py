@@ -21,8 +21,8 @@ from .excitation import check_excitation_used, scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
 from .plant import check_kinematic_plant, make_plant
 from .record import scenario_model
-from .schema import changed_keys
-from .schema_dynamics import NUMBER
+from .spec import NUMBER, ScenarioSpec, SolverSpec
+from .spec.keys import thaw
 from .tracking import TrackingController
 from .trajectories import make_trajectory
 
@@ -52,103 +52,103 @@ class Setup:
     samples: RecentSamples | None = None  # the trajectory as the kinematic controller samples it (None: trajectory)
 
 
-def build(scenario: dict) -> Setup:
+def build(spec: ScenarioSpec) -> Setup:
     """Model, task, initial configuration, trajectory and controller of a scenario."""
-    model = scenario["model"]
+    model = spec.model
     robot = scenario_model(model)
-    if scenario["phases"]:
-        if scenario["inequalities"]:
+    if spec.phases:
+        if spec.inequalities:
             raise ScenarioError("[[inequalities]] need a [task] and a [trajectory]; a sequence scenario ([[phases]]) "
                                 "has neither")
-        if scenario["plant"]["type"] != "kinematic":
+        if spec.plant.type != "kinematic":
             raise ScenarioError("a sequence scenario ([[phases]]) runs on the kinematic plant only; "
                                 "remove [plant] or set plant.type = 'kinematic'")
-        return build_sequence(robot, scenario)
-    check_vehicle_control_used(scenario)
-    check_excitation_used(scenario)
-    task, q0, residual = scenario_start(robot, scenario)
-    trajectory = make_trajectory(robot.fk(q0, task.frame), scenario["trajectory"])
-    duration = scenario_duration(scenario)
-    if scenario["plant"]["type"] != "kinematic":
-        if scenario["excitation"]["wrench"] and scenario["plant"]["thrusters"]:
-            actuation = scenario_excitation(robot, make_plant(robot, scenario["plant"]), scenario, duration)
+        return build_sequence(robot, spec)
+    check_vehicle_control_used(spec)
+    check_excitation_used(spec)
+    task, q0, residual = scenario_start(robot, spec)
+    trajectory = make_trajectory(robot.fk(q0, task.frame), spec.trajectory)
+    duration = scenario_duration(spec)
+    if spec.plant.type != "kinematic":
+        if spec.excitation.wrench and spec.plant.thrusters:
+            actuation = scenario_excitation(robot, make_plant(robot, spec.plant), spec, duration)
             return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
                          actuation=actuation)
-        if scenario["plant"]["thrusters"]:
-            cls = solver_class(scenario["solver"])
-            options = solver_options(robot, scenario["solver"], cls, scenario["simulation"]["dt"])
-            actuation = make_actuation(robot, make_plant(robot, scenario["plant"]), task, RecentSamples(trajectory), q0,
-                                       scenario, cls, options)
+        if spec.plant.thrusters:
+            cls = solver_class(spec.solver)
+            options = solver_options(robot, spec.solver, cls, spec.simulation.dt)
+            actuation = make_actuation(robot, make_plant(robot, spec.plant), task, RecentSamples(trajectory), q0,
+                                       spec, cls, options)
             return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
                          actuation=actuation, inequalities=actuation.inequalities)
-        plant, controller, inequalities = make_plant_controller(robot, task, trajectory, scenario)
+        plant, controller, inequalities = make_plant_controller(robot, task, trajectory, spec)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
-                     control_dt=float(scenario["plant"]["control_dt"]), inequalities=inequalities)
-    check_kinematic_plant(scenario["plant"])
-    inequalities = (build_inequalities(robot, scenario["inequalities"], SOLVERS[scenario["solver"]["method"]])
-                    if scenario["inequalities"] else None)
-    dt, integrator = float(scenario["simulation"]["dt"]), scenario["simulation"]["integrator"]
-    times = stage_times(check_step_count(scenario, duration), dt, integrator)  # every time the run asks for
+                     control_dt=float(spec.plant.control_dt), inequalities=inequalities)
+    check_kinematic_plant(spec.plant)
+    inequalities = (build_inequalities(robot, spec.inequalities, SOLVERS[spec.solver.method])
+                    if spec.inequalities else None)
+    dt, integrator = float(spec.simulation.dt), spec.simulation.integrator
+    times = stage_times(check_step_count(spec, duration), dt, integrator)  # every time the run asks for
     samples = RecentSamples(TrajectoryTable(trajectory, times))  # the controller's stages and the recorder share it
-    controller = make_controller(robot, task, samples, scenario, inequalities)
+    controller = make_controller(robot, task, samples, spec, inequalities)
     return Setup(robot, task, trajectory, q0, controller, duration, residual, inequalities=inequalities,
                  samples=samples)
 
 
-def build_sequence(robot: Robot, scenario: dict) -> Setup:
+def build_sequence(robot: Robot, spec: ScenarioSpec) -> Setup:
     """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.control.sequence)."""
-    solver, frames = scenario["solver"], scenario["task"]["frames"] or robot.ee_frames
-    if SOLVERS[solver["method"]].level_count is not None:
+    solver, frames = spec.solver, spec.task.frames or robot.ee_frames
+    if SOLVERS[solver.method].level_count is not None:
         valid = [name for name, cls in SOLVERS.items() if cls.level_count is None]
         raise ScenarioError(f"a sequence scenario needs solver.method in {', '.join(valid)} (a solver of any number "
-                            f"of levels: vehicle, distance, frames and joints), got {solver['method']!r}")
+                            f"of levels: vehicle, distance, frames and joints), got {solver.method!r}")
     solver_type = solver_class(solver)
-    if scenario["initial"]["method"] != "given" or not isinstance(solver["gain"], NUMBER):
+    if spec.initial.method != "given" or not isinstance(solver.gain, NUMBER):
         raise ScenarioError("a sequence scenario needs initial.method = 'given' and one number for solver.gain")
-    q0, _ = initial_q(robot, None, scenario)
-    phases = [Phase(name=phase["name"] or f"phase {index + 1}", duration=float(phase["duration"]),
-                    offsets=phase["offsets"], joints=phase["joints"], distance=phase["distance"])
-              for index, phase in enumerate(scenario["phases"])]
+    q0, _ = initial_q(robot, None, spec)
+    phases = [Phase(name=phase.name or f"phase {index + 1}", duration=float(phase.duration),
+                    offsets=phase.offsets, joints=phase.joints, distance=phase.distance)
+              for index, phase in enumerate(spec.phases)]
     plan = PhasePlan(robot, q0, frames, phases)
-    options = solver_options(robot, solver, solver_type, float(scenario["simulation"]["dt"]))
+    options = solver_options(robot, solver, solver_type, float(spec.simulation.dt))
     try:
-        controller = SequenceController(robot, plan, method=solver["method"], hold_vehicle=scenario["vehicle"]["hold"],
+        controller = SequenceController(robot, plan, method=solver.method, hold_vehicle=spec.vehicle.hold,
                                         **options)
     except UVMSError as exc:
         raise ScenarioError(f"solver: {exc}") from None
     return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller,
-                 scenario_duration(scenario), 0.0, plan)
+                 scenario_duration(spec), 0.0, plan)
 
 
-def scenario_start(robot: Robot, scenario: dict) -> tuple[FrameTask | None, np.ndarray, float]:
+def scenario_start(robot: Robot, spec: ScenarioSpec) -> tuple[FrameTask | None, np.ndarray, float]:
     """(task (None with [[phases]]), q0 (nq,), its residual) of a checked scenario; ``uvms view SCENARIO`` draws q0."""
-    task = None if scenario["phases"] else FrameTask(robot, scenario["task"]["frame"] or None,
-                     axes=scenario["task"]["axes"] or None, orientation=scenario["task"]["orientation_error"])
-    return (task, *initial_q(robot, task, scenario))
+    task = None if spec.phases else FrameTask(robot, spec.task.frame or None,
+                     axes=spec.task.axes or None, orientation=spec.task.orientation_error)
+    return (task, *initial_q(robot, task, spec))
 
 
-def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.ndarray, float]:
+def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple[np.ndarray, float]:
     """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start."""
-    initial = scenario["initial"]
-    base = initial["base"] or None
+    initial = spec.initial
+    base = initial.base or None
     try:
-        q_given = robot.configuration(base=np.array(base) if base else None, arm=initial_arm(robot, initial["arm"]))
+        q_given = robot.configuration(base=np.array(base) if base else None, arm=initial_arm(robot, initial.arm))
     except UVMSError as exc:
         raise ScenarioError(f"initial.base/initial.arm: {exc}") from None
-    fixed = initial["fixed_base"]
-    if initial["method"] == "given":
+    fixed = initial.fixed_base
+    if initial.method == "given":
         if fixed:
             raise ScenarioError("initial.fixed_base holds vehicle coordinates during the optimization of q0: it needs "
                                 "initial.method = 'optimize' (with 'given', initial.base is used as it is)")
         return q_given, 0.0
-    trajectory = scenario["trajectory"]
-    if not trajectory["start"] or not trajectory["orientation"]:
+    trajectory = spec.trajectory
+    if not trajectory.start or not trajectory.orientation:
         raise ScenarioError("initial.method = 'optimize' needs trajectory.start and trajectory.orientation")
     if not all(isinstance(name, str) for name in fixed):
         raise ScenarioError(f"initial.fixed_base must be a list of vehicle coordinate names "
-                            f"({', '.join(robot.base.pose_names) or 'none: the base is fixed'}), got {fixed!r}")
-    task.set_target(np.concatenate([trajectory["start"], trajectory["orientation"]]))
-    potential = JointLimitPotential(robot, weights=np.asarray(scenario["solver"]["joint_limit_weights"], dtype=float))
+                            f"({', '.join(robot.base.pose_names) or 'none: the base is fixed'}), got {thaw(fixed)!r}")
+    task.set_target(np.concatenate([trajectory.start, trajectory.orientation]))
+    potential = JointLimitPotential(robot, weights=np.asarray(spec.solver.joint_limit_weights, dtype=float))
     try:
         result = initial_configuration(robot, task, potential, q_given, fixed_base=fixed)
     except (SolverInputError, NameNotFound) as exc:
@@ -161,7 +161,7 @@ def initial_q(robot: Robot, task: FrameTask | None, scenario: dict) -> tuple[np.
     return result.q, result.residual
 
 
-def initial_arm(robot: Robot, arm: list | dict) -> np.ndarray | None:
+def initial_arm(robot: Robot, arm: tuple | dict) -> np.ndarray | None:
     """initial.arm as arm joint values (n_arm,) [rad or m]: the list as given, or a table {joint = value} with the
     joints left out at 0 (their neutral value); None when empty.
 
@@ -171,7 +171,7 @@ def initial_arm(robot: Robot, arm: list | dict) -> np.ndarray | None:
     """
     if not arm:
         return None
-    if isinstance(arm, list):
+    if isinstance(arm, (list, tuple)):
         return np.array(arm, dtype=float)
     names = robot.arm_joint_names
     values = np.zeros(robot.n_arm)
@@ -185,7 +185,7 @@ def initial_arm(robot: Robot, arm: list | dict) -> np.ndarray | None:
 
 
 def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
-                          scenario: dict) -> tuple[Plant, GJMController, ScenarioInequalities | None]:
+                          spec: ScenarioSpec) -> tuple[Plant, GJMController, ScenarioInequalities | None]:
     """The plant, the GJM controller (amundsen2018 eq. 4-8) on solver.method and the [[inequalities]] of a
     dynamic [plant] (passive vehicle): the solver built with free_floating on the levels [inequalities (when it
     enforces them, else monitored), task].
@@ -194,31 +194,31 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
         ScenarioError: free_floating off (the vehicle has no actuators), a [vehicle] task, a method of fixed
             levels, solver.alpha or enforce_limits, a gain that is not K on the position error, a bad control_dt.
     """
-    section, solver = scenario["plant"], scenario["solver"]
+    section, solver = spec.plant, spec.solver
     cls = solver_class(solver)
-    passive = f"plant.type = {section['type']!r} without thrusters leaves the vehicle passive (no actuators)"
-    if not solver["free_floating"]:
+    passive = f"plant.type = {section.type!r} without thrusters leaves the vehicle passive (no actuators)"
+    if not solver.free_floating:
         raise ScenarioError(f"{passive}: the solver cannot command its velocity; set solver.free_floating = true "
                             f"(the joints through the generalized Jacobian, plant.gjm), plant.thrusters = true "
                             f"(an actuated vehicle) or plant.type = 'kinematic'")
-    if changed_keys(scenario, "vehicle", ("velocities", "heading", "depth")):
+    if spec.vehicle.changed(("velocities", "heading", "depth")):
         raise ScenarioError(f"{passive}: a [vehicle] task cannot be followed; remove it (solver.method = "
-                            f"{solver['method']!r} then prioritizes the task alone) or set plant.thrusters = true")
-    if solver["alpha"] or solver["enforce_limits"]:
+                            f"{solver.method!r} then prioritizes the task alone) or set plant.thrusters = true")
+    if solver.alpha or solver.enforce_limits:
         raise ScenarioError("solver.alpha and solver.enforce_limits are not supported with a dynamic plant; keep the "
                             "joints inside their limits with an [[inequalities]] table of type 'joint_limits' and "
                             "solver.method = 'set_based' or 'hqp'")
     plant = make_plant(robot, section)
-    gain = np.asarray(solver["gain"], dtype=float)
+    gain = np.asarray(solver.gain, dtype=float)
     if gain.shape not in ((), (3,)):
         raise ScenarioError(f"solver.gain with a dynamic plant is K on the position error: one number or 3 "
-                            f"(x, y, z) [1/s], got {solver['gain']!r}")
-    control_dt, dt = float(section["control_dt"]), float(scenario["simulation"]["dt"])
+                            f"(x, y, z) [1/s], got {thaw(solver.gain)!r}")
+    control_dt, dt = float(section.control_dt), float(spec.simulation.dt)
     ratio = control_dt / dt
     if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
         raise ScenarioError(f"plant.control_dt must be 0 (continuous controller) or a multiple of simulation.dt = "
                             f"{dt:g} s, got {control_dt:g}")
-    inequalities = (build_inequalities(robot, scenario["inequalities"], cls) if scenario["inequalities"] else None)
+    inequalities = (build_inequalities(robot, spec.inequalities, cls) if spec.inequalities else None)
     taken = solver_options(robot, solver, cls, control_dt or dt)  # the step: the controller's period
     options = {key: value for key, value in taken.items() if key in ("dt", "priority", "eta", "regularization")}
     if cls is CLIKSolver:
@@ -226,26 +226,26 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
     try:
         controller = GJMController(robot, trajectory, frame=task.frame, axes=task.axes, gain=gain,
                                    damping=solver_damping(solver), weights=solver_weights(robot, solver, True),
-                                   gjm=section["gjm"], hydro=plant.hydro if plant.links else None,
-                                   motor_feedforward=plant.motor_time_constant if section["motor_feedforward"] else 0.0,
+                                   gjm=section.gjm, hydro=plant.hydro if plant.links else None,
+                                   motor_feedforward=plant.motor_time_constant if section.motor_feedforward else 0.0,
                                    solver=cls, levels=inequalities.levels if inequalities and inequalities.enforced
                                    else (), options=options)
     except UVMSError as exc:
-        raise ScenarioError(f"plant/solver ({solver['method']}): {exc}") from None
+        raise ScenarioError(f"plant/solver ({solver.method}): {exc}") from None
     return plant, controller, inequalities
 
 
-def solver_class(solver: dict) -> type[Solver]:
+def solver_class(solver: SolverSpec) -> type[Solver]:
     """The class of solver.method, every [solver] key the user set checked against what it takes.
 
     Raises:
         ScenarioError: a key set (not at its default) that the method's constructor does not take; the
             message lists the keys it takes.
     """
-    method = solver["method"]
+    method = solver.method
     cls = SOLVERS[method]
     taken = cls.options()
-    refused = [key for key in changed_keys({"solver": solver}, "solver", tuple(SOLVER_KEYWORDS))
+    refused = [key for key in solver.changed(tuple(SOLVER_KEYWORDS))
                if SOLVER_KEYWORDS[key] not in taken]
     if refused:
         keys = ", ".join(f"solver.{key}" for key, keyword in SOLVER_KEYWORDS.items() if keyword in taken)
@@ -258,30 +258,30 @@ def solver_class(solver: dict) -> type[Solver]:
     return cls
 
 
-def solver_damping(solver: dict) -> float | VariableDamping:
+def solver_damping(solver: SolverSpec) -> float | VariableDamping:
     """solver.damping, or the variable damping of amundsen2018 eq. 6 when solver.damping_epsilon > 0."""
-    if solver["damping_epsilon"] > 0:
-        return VariableDamping(solver["damping_epsilon"], solver["damping_max"])
-    return solver["damping"]
+    if solver.damping_epsilon > 0:
+        return VariableDamping(solver.damping_epsilon, solver.damping_max)
+    return solver.damping
 
 
-def solver_options(robot: Robot, solver: dict, cls: type[Solver], dt: float) -> dict[str, Any]:
+def solver_options(robot: Robot, solver: SolverSpec, cls: type[Solver], dt: float) -> dict[str, Any]:
     """The constructor keywords of ``cls`` from the [solver] section (those it takes), with the step dt [s]."""
-    offered = {"gain": np.asarray(solver["gain"], dtype=float), "damping": solver_damping(solver),
-               "alpha": solver["alpha"], "free_floating": solver["free_floating"], "dt": dt,
-               "enforce_limits": solver["enforce_limits"], "priority": solver["priority"], "eta": solver["eta"],
-               "regularization": solver["regularization"]}
+    offered = {"gain": np.asarray(solver.gain, dtype=float), "damping": solver_damping(solver),
+               "alpha": solver.alpha, "free_floating": solver.free_floating, "dt": dt,
+               "enforce_limits": solver.enforce_limits, "priority": solver.priority, "eta": solver.eta,
+               "regularization": solver.regularization}
     taken = cls.options()
     options = {keyword: value for keyword, value in offered.items() if keyword in taken}
     if "weights" in taken:
-        options["weights"] = solver_weights(robot, solver, free_floating=solver["free_floating"])
+        options["weights"] = solver_weights(robot, solver, free_floating=solver.free_floating)
     if "potential" in taken:
-        options["potential"] = JointLimitPotential(robot, weights=np.asarray(solver["joint_limit_weights"],
+        options["potential"] = JointLimitPotential(robot, weights=np.asarray(solver.joint_limit_weights,
                                                                              dtype=float))
     return options
 
 
-def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarray | None:
+def solver_weights(robot: Robot, solver: SolverSpec, free_floating: bool) -> np.ndarray | None:
     """``solver.weights`` as the diagonal W of the solved columns, checked against the model (None: not given).
 
     The solved columns are v's nv (the vehicle, then the arm), or the n_arm arm joints for free-floating
@@ -290,9 +290,9 @@ def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarra
     Raises:
         ScenarioError: the wrong count (the message says what the entries are), or an entry <= 0.
     """
-    if not solver["weights"]:
+    if not solver.weights:
         return None
-    weights = np.asarray(solver["weights"], dtype=float)
+    weights = np.asarray(solver.weights, dtype=float)
     if free_floating:
         size, covered = robot.n_arm, (f"free-floating (generalized-Jacobian) weights cover the arm joints only "
                                       f"({', '.join(robot.arm_joint_names)}); the vehicle is not commanded, it "
@@ -304,11 +304,11 @@ def solver_weights(robot: Robot, solver: dict, free_floating: bool) -> np.ndarra
         raise ScenarioError(f"solver.weights has {weights.size} numbers, {robot.name} needs {size}: {covered}")
     if np.any(weights <= 0):
         raise ScenarioError(f"solver.weights must all be > 0 (the diagonal of a positive definite W), "
-                            f"got {solver['weights']}")
+                            f"got {thaw(solver.weights)}")
     return weights
 
 
-def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, scenario: dict,
+def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, spec: ScenarioSpec,
                     inequalities: ScenarioInequalities | None = None) -> TrackingController:
     """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method, following ``samples`` (the trajectory).
 
@@ -316,42 +316,42 @@ def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, scena
     when it enforces them (else the recorder monitors them), then the task, and the ``[vehicle]`` task at the
     level the solver puts it (:attr:`~uvms.solvers.base.Solver.vehicle_level`) when it uses one.
     """
-    solver, vehicle = scenario["solver"], scenario["vehicle"]
+    solver, vehicle = spec.solver, spec.vehicle
     cls = solver_class(solver)
-    options = solver_options(robot, solver, cls, scenario["simulation"]["dt"])
+    options = solver_options(robot, solver, cls, spec.simulation.dt)
     levels: list = [*(inequalities.levels if inequalities is not None and cls.enforces_inequalities else []), task]
     if cls.vehicle_level is not None:
-        if not vehicle["velocities"] and vehicle["heading"] is None and vehicle["depth"] is None:
-            raise ScenarioError(f"solver.method = {solver['method']!r} needs a [vehicle] task (velocities, heading or "
+        if not vehicle.velocities and vehicle.heading is None and vehicle.depth is None:
+            raise ScenarioError(f"solver.method = {solver.method!r} needs a [vehicle] task (velocities, heading or "
                                 f"depth)")
-        levels.insert(cls.vehicle_level, VehicleTask(robot, velocities=vehicle["velocities"],
-                                                     heading=vehicle["heading"], depth=vehicle["depth"]))
+        levels.insert(cls.vehicle_level, VehicleTask(robot, velocities=vehicle.velocities,
+                                                     heading=vehicle.heading, depth=vehicle.depth))
         gains: list = [options["gain"]] * (len(levels) - 1)
-        gains.insert(cls.vehicle_level, vehicle["gain"])
+        gains.insert(cls.vehicle_level, vehicle.gain)
         options["gain"] = gains
     try:
         built = cls(robot, levels, **options)  # its inputs checked here, not at every evaluation
     except UVMSError as exc:
-        raise ScenarioError(f"solver ({solver['method']}): {exc}") from None
+        raise ScenarioError(f"solver ({solver.method}): {exc}") from None
     return TrackingController(robot, task, samples, built)
 
 
-def check_step_count(scenario: dict, duration: float) -> int:
+def check_step_count(spec: ScenarioSpec, duration: float) -> int:
     """The number of steps of a run, checked before it starts (:func:`uvms.numerics.integrate.step_count`)."""
-    if scenario["simulation"]["duration"]:
+    if spec.simulation.duration:
         duration_name = "simulation.duration"
     else:
-        duration_name = "the phases' durations" if scenario["phases"] else "trajectory.duration"
-    return step_count(duration, float(scenario["simulation"]["dt"]), dt_name="simulation.dt",
+        duration_name = "the phases' durations" if spec.phases else "trajectory.duration"
+    return step_count(duration, float(spec.simulation.dt), dt_name="simulation.dt",
                       duration_name=duration_name)
 
 
-def scenario_duration(scenario: dict) -> float:
+def scenario_duration(spec: ScenarioSpec) -> float:
     """The simulated time [s] a checked scenario asks for, from its tables alone (nothing built):
     ``simulation.duration``, else the sum of the phases' durations, else ``trajectory.duration`` (every trajectory
     type lasts that long)."""
-    if scenario["simulation"]["duration"]:
-        return float(scenario["simulation"]["duration"])
-    if scenario["phases"]:
-        return float(sum(phase["duration"] for phase in scenario["phases"]))
-    return float(scenario["trajectory"]["duration"])
+    if spec.simulation.duration:
+        return float(spec.simulation.duration)
+    if spec.phases:
+        return float(sum(phase.duration for phase in spec.phases))
+    return float(spec.trajectory.duration)

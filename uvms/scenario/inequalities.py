@@ -31,29 +31,14 @@ from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, Solver
 from ..solvers.saturation import speed_maximum
-from ..tasks.objectives import Inequality, Objective, VelocityLimit, check_table, inequalities_from_table
+from ..tasks.objectives import Inequality, Objective, VelocityLimit, inequalities_from_table
 from ..tasks.objectives.collision import NearestPairs
+from .spec import InequalitySpec
 
 #: An objective whose value is outside its valid set by more than this [its unit] is reported on the terminal:
 #: the activation keeps it inside up to the step's discretization (a tilt limit can be passed by a fraction
 #: of a degree between two solver calls), which is a result, not rounding.
 VIOLATION_SLACK = 1e-6
-
-
-def check_tables(tables: object, origin: str) -> list[dict]:
-    """The ``[[inequalities]]`` tables of a scenario file, their types and keys checked (no model needed).
-
-    Raises:
-        ScenarioError: not an array of tables, or an unknown type or key (the message lists the valid ones).
-    """
-    if not isinstance(tables, list) or not all(isinstance(table, dict) for table in tables):
-        raise ScenarioError(f"{origin}: inequalities must be an array of tables ([[inequalities]])")
-    for index, table in enumerate(tables):
-        try:
-            check_table(table, where=f"inequalities[{index}]")
-        except UVMSError as exc:
-            raise ScenarioError(f"{origin}: {exc}") from None
-    return [dict(table) for table in tables]
 
 
 @dataclass
@@ -88,7 +73,7 @@ class ScenarioInequalities:
         return self.types[self.level_of(name)]
 
 
-def build_inequalities(robot: Robot, tables: Sequence[dict], solver: type[Solver]) -> ScenarioInequalities:
+def build_inequalities(robot: Robot, tables: Sequence[InequalitySpec], solver: type[Solver]) -> ScenarioInequalities:
     """The objectives of the scenario's tables on ``robot``, enforced if the ``solver`` class enforces them.
 
     Raises:
@@ -97,10 +82,10 @@ def build_inequalities(robot: Robot, tables: Sequence[dict], solver: type[Solver
     levels, types = [], []
     for index, table in enumerate(tables):
         try:
-            levels.append(inequalities_from_table(robot, table))
+            levels.append(inequalities_from_table(robot, table.table))
         except UVMSError as exc:
-            raise ScenarioError(f"inequalities[{index}] ({table.get('type')}): {exc}") from None
-        types.append(str(table["type"]))
+            raise ScenarioError(f"inequalities[{index}] ({table.type}): {exc}") from None
+        types.append(table.type)
     names = [item.name for level in levels for item in level]
     repeated = sorted({name for name in names if names.count(name) > 1})
     if repeated:

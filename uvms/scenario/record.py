@@ -27,7 +27,6 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -35,6 +34,7 @@ from ..errors import RunRecordError, UVMSError
 from ..model import resources
 from ..model.loader import load
 from ..robot.robot import Robot
+from .spec import ModelSpec, ScenarioSpec
 
 RECORD_KEY = "model"
 BASES = ("floating", "planar", "fixed")
@@ -47,20 +47,20 @@ def urdf_digest(robot: Robot) -> str | None:
     return hashlib.sha256(robot.urdf.encode("utf-8")).hexdigest() if robot.urdf else None
 
 
-def model_record(scenario: dict, robot: Robot) -> dict:
+def model_record(spec: ScenarioSpec, robot: Robot) -> dict:
     """The ``"model"`` entry of a run's ``metrics.json``: the model as given (a shipped name, or the file's absolute
     path), its xacro args, the base type and end effectors of the robot built, and the scenario name."""
-    given = str(scenario["model"]["path"])
+    given = str(spec.model.path)
     path = Path(given).expanduser()
     source = str(path.resolve()) if path.is_file() else given
     return {
         "source": source,
-        "args": dict(scenario["model"]["args"]),
+        "args": dict(spec.model.args),
         "base": robot.base_type,
         "ee": list(robot.ee_frames),
-        "package_path": list(scenario["model"]["package_path"]),
-        "arm_joints": scenario["model"]["arm_joints"],
-        "scenario": scenario["scenario"]["name"],
+        "package_path": list(spec.model.package_path),
+        "arm_joints": None if spec.model.arm_joints is None else list(spec.model.arm_joints),
+        "scenario": spec.scenario.name,
         "robot": robot.name,
         "nq": robot.nq,
         "nv": robot.nv,
@@ -186,15 +186,15 @@ def check_given_model(record: RunRecord, recorded: Robot, given: Robot, given_te
 
 
 
-def scenario_model(section: Mapping[str, Any], args: Mapping[str, object] | None = None, base: str | None = None,
+def scenario_model(section: ModelSpec, args: Mapping[str, object] | None = None, base: str | None = None,
                    package_path: Sequence[str | os.PathLike] = (), ee: Sequence[str] | None = None,
                    arm_joints: Sequence[str] | None = None) -> Robot:
     """The robot of a scenario's checked ``[model]`` section (the one way a scenario loads its model), with
     ``args`` over its xacro args, ``base``, ``ee`` and ``arm_joints`` (None: the section's) over its own and the
     folders of ``package_path`` first."""
-    return load(section["path"], base=base or section["base"] or None, args={**section["args"], **(args or {})} or None,
-                ee=ee or section["ee"] or None, package_path=[*package_path, *section["package_path"]],
-                arm_joints=section["arm_joints"] if arm_joints is None else arm_joints)
+    return load(section.path, base=base or section.base or None, args={**section.args, **(args or {})} or None,
+                ee=ee or section.ee or None, package_path=[*package_path, *section.package_path],
+                arm_joints=section.arm_joints if arm_joints is None else arm_joints)
 
 
 def named_model(model: str, args: Mapping[str, object] | None = None, base: str | None = None,
@@ -207,7 +207,7 @@ def named_model(model: str, args: Mapping[str, object] | None = None, base: str 
     if str(model).endswith(".toml"):
         from .schema import read_scenario
 
-        return scenario_model(read_scenario(model)["model"], args, base, package_path, ee, arm_joints)
+        return scenario_model(read_scenario(model).model, args, base, package_path, ee, arm_joints)
     return load(model, base=base, args=args, package_path=package_path, ee=ee or None, arm_joints=arm_joints)
 
 

@@ -22,7 +22,8 @@ from .build import Setup, build, check_step_count
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
 from .resources import resolve_scenario_path
-from .schema import named_files, read_scenario
+from .schema import read_scenario
+from .spec import ScenarioSpec
 from .verdict import run_verdict
 
 
@@ -30,7 +31,7 @@ from .verdict import run_verdict
 class RunResult:
     """A scenario run: its simulation, metrics and the files written."""
 
-    scenario: dict
+    scenario: ScenarioSpec
     setup: Setup
     simulation: SimulationResult
     metrics: dict
@@ -112,25 +113,25 @@ def run_scenario(
         NumericalError: the numerics overflowed; RunFolderBusy: another uvms process writes ``out``;
         RunFolderError: ``out`` holds an input or files uvms did not write.
     """
-    scenario = read_scenario(scenario_path, overrides)
-    name = scenario["scenario"]["name"]
+    spec = read_scenario(scenario_path, overrides)
+    name = spec.scenario.name
     out = Path(out) if out is not None else Path("out") / name
     started = time.perf_counter()
     with numerics_guard(name):
-        setup = build(scenario)
-    check_step_count(scenario, setup.duration)
-    inputs = run_inputs(resolve_scenario_path(scenario_path), [scenario["model"]["path"]], named_files(scenario))
+        setup = build(spec)
+    check_step_count(spec, setup.duration)
+    inputs = run_inputs(resolve_scenario_path(scenario_path), [spec.model.path], spec.named_files())
     with outputs.run_folder(out, lock=lock, inputs=inputs) as folder, numerics_guard(name):
-        result = execute(scenario, setup, folder, progress, started)
+        result = execute(spec, setup, folder, progress, started)
     result.files = [out / path.relative_to(folder) for path in result.files]
     return result
 
 
 def run_inputs(scenario_file: str | os.PathLike, models: Iterable[str], files: Iterable[str] = ()) -> list[Path]:
     """What a run reads, which its output folder must not hold: the scenario file, the files it names
-    (:func:`~uvms.scenario.schema.named_files`: e.g. an identified hydrodynamics YAML in a previous output folder),
-    and each model file (a path or a shipped name) with the files it includes and their folders (meshes, YAML
-    beside the model)."""
+    (:meth:`~uvms.scenario.spec.ScenarioSpec.named_files`: e.g. an identified hydrodynamics YAML in a previous
+    output folder), and each model file (a path or a shipped name) with the files it includes and their folders
+    (meshes, YAML beside the model)."""
     from .watch import WatchedFiles
 
     found = {Path(scenario_file).resolve(), *(Path(file).resolve() for file in files)}
@@ -163,13 +164,13 @@ def write_run_bag(folder: Path, setup: Setup, result: SimulationResult, metrics:
     return bag.path
 
 
-def run_figures(scenario: dict, setup: Setup, result: SimulationResult, plant_run: SimulationResult | None,
+def run_figures(spec: ScenarioSpec, setup: Setup, result: SimulationResult, plant_run: SimulationResult | None,
                 folder: Path, progress: bool | None) -> list[Path]:
     """The figures of a run in ``folder`` (``[outputs] figures``): the standard ones, and those of its plant,
     actuation, inequalities and phases."""
     from ..viz.plotting import scenario_figures  # matplotlib only when figures are asked for
 
-    title = scenario["scenario"]["name"]
+    title = spec.scenario.name
     files = scenario_figures(result, setup.trajectory, folder, title=title)
     if setup.actuation is not None:
         from ..viz.actuated import actuated_figures
@@ -178,7 +179,7 @@ def run_figures(scenario: dict, setup: Setup, result: SimulationResult, plant_ru
     if setup.inequalities is not None and setup.inequalities.objectives:
         from ..viz.objectives import inequality_figure
 
-        inequality_figure(result, setup.inequalities.objectives, title, label=scenario["solver"]["method"],
+        inequality_figure(result, setup.inequalities.objectives, title, label=spec.solver.method,
                           path=folder / "inequalities.png")
         files.append(folder / "inequalities.png")
     if plant_run is not None:
@@ -188,7 +189,7 @@ def run_figures(scenario: dict, setup: Setup, result: SimulationResult, plant_ru
     if setup.plan is not None:
         from ..viz.plotting import sequence_figures
 
-        files += sequence_figures(result, setup.plan, folder, title=title, animation=scenario["outputs"]["animation"],
+        files += sequence_figures(result, setup.plan, folder, title=title, animation=spec.outputs.animation,
                                   progress=progress)
     return files
 
@@ -209,48 +210,48 @@ def optional_output(name: str, failed: dict[str, str], write: Callable[[], list[
         return []
 
 
-def execute(scenario: dict, setup: Setup, folder: Path, progress: bool | None, started: float) -> RunResult:
+def execute(spec: ScenarioSpec, setup: Setup, folder: Path, progress: bool | None, started: float) -> RunResult:
     """Simulate a built scenario and write its files into ``folder``."""
-    simulation_section = scenario["simulation"]
+    simulation_section = spec.simulation
     plant_run: SimulationResult | None = None
     recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
     if setup.actuation is not None:
-        result = simulate_actuation(setup.actuation, setup.task, setup.trajectory, setup.q0, setup.duration, scenario,
-                                    progress)
+        result = simulate_actuation(setup.actuation, setup.task, setup.trajectory, setup.q0, setup.duration,
+                                    spec.simulation, progress)
     elif setup.plant is not None:
         controller = setup.controller
-        result = plant_run = simulate(setup.plant, controller, setup.q0, setup.duration, simulation_section["dt"],
-                                      control_dt=setup.control_dt, integrator=simulation_section["integrator"],
+        result = plant_run = simulate(setup.plant, controller, setup.q0, setup.duration, simulation_section.dt,
+                                      control_dt=setup.control_dt, integrator=simulation_section.integrator,
                                       task=setup.task,
                                       desired=None if setup.task is None else lambda t: controller.reference(t).pose,
                                       progress=progress, recorders=recorders)
     else:
         desired = setup.samples or setup.trajectory  # the controller's samples: the row's time is already there
-        result = simulate(setup.robot, setup.controller, setup.q0, setup.duration, simulation_section["dt"],
+        result = simulate(setup.robot, setup.controller, setup.q0, setup.duration, simulation_section.dt,
                           task=setup.task, desired=lambda t: desired(t).pose,
-                          integrator=simulation_section["integrator"], progress=progress, recorders=recorders)
+                          integrator=simulation_section.integrator, progress=progress, recorders=recorders)
     metrics = compute_metrics(result, setup, time.perf_counter() - started)
-    metrics["scenario"] = scenario["scenario"]["name"]
-    metrics["model"] = model_record(scenario, setup.robot)  # what `uvms view --result DIR` replays the run on
+    metrics["scenario"] = spec.scenario.name
+    metrics["model"] = model_record(spec, setup.robot)  # what `uvms view --result DIR` replays the run on
     if plant_run is not None:
-        metrics.update(plant=scenario["plant"]["type"], gjm=scenario["plant"]["gjm"],
-                       motor_feedforward=scenario["plant"]["motor_feedforward"], **plant_run.plant_metrics())
+        metrics.update(plant=spec.plant.type, gjm=spec.plant.gjm,
+                       motor_feedforward=spec.plant.motor_feedforward, **plant_run.plant_metrics())
     if setup.actuation is not None:
-        metrics.update(actuated_metrics(result, setup.actuation, scenario))
+        metrics.update(actuated_metrics(result, setup.actuation, spec))
     files = list(result.save(folder))  # with actuation.npz when the run is actuated
     if plant_run is not None:
         outputs.write_npz(folder / "plant.npz", **plant_run.plant_arrays())
         files.append(folder / "plant.npz")
     failed: dict[str, str] = {}  # the run's data are written: a figure or bag that fails does not lose them
-    if scenario["outputs"]["figures"]:
-        files += optional_output("figures", failed, lambda: run_figures(scenario, setup, result, plant_run, folder,
+    if spec.outputs.figures:
+        files += optional_output("figures", failed, lambda: run_figures(spec, setup, result, plant_run, folder,
                                                                          progress))
-    if scenario["outputs"]["bag"]:
+    if spec.outputs.bag:
         files += optional_output("bag", failed, lambda: [write_run_bag(folder, setup, result, metrics)])
     if failed:
         metrics["outputs_failed"] = failed
-    metrics["verdict"] = run_verdict(metrics, scenario["outputs"], inequality_warnings(metrics))
+    metrics["verdict"] = run_verdict(metrics, spec.outputs, inequality_warnings(metrics))
     outputs.write_json(folder / "metrics.json", metrics)
     files.append(folder / "metrics.json")
-    return RunResult(scenario=scenario, setup=setup, simulation=result, metrics=metrics, files=files,
+    return RunResult(scenario=spec, setup=setup, simulation=result, metrics=metrics, files=files,
                      plant_run=plant_run)

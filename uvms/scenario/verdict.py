@@ -9,26 +9,28 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from .spec import OutputsSpec
+
 #: Joint-limit violations up to this size [rad or m] are rounding of the integrator, not a violation (xiang2019's
 #: grip sequence ends 3.4e-11 rad past a limit it is steered onto).
 LIMIT_SLACK = 1e-9
 
 
-def run_verdict(metrics: dict, outputs: dict, objective_warnings: Sequence[str] = ()) -> dict:
+def run_verdict(metrics: dict, outputs: OutputsSpec, objective_warnings: Sequence[str] = ()) -> dict:
     """The verdict of a run from its metrics and the scenario's ``[outputs]`` tolerances.
 
     Args:
         metrics: at least ``max_joint_limit_violation`` [rad or m], ``max_position_error`` [m] and
             ``max_orientation_error`` [rad].
-        outputs: the validated ``[outputs]`` table (``position_tolerance`` [m], ``orientation_tolerance`` [rad]).
+        outputs: the scenario's ``[outputs]`` (``position_tolerance`` [m], ``orientation_tolerance`` [rad]).
         objective_warnings: sentences about ``[[inequalities]]`` left (:mod:`uvms.scenario.inequalities`).
 
     Returns:
         ``{"ok", "within_joint_limits", "within_tolerance", "position_tolerance", "orientation_tolerance",
         "joint_limit_slack", "warnings"}``: booleans, the tolerances used, and one sentence per problem.
     """
-    position_tolerance = float(outputs["position_tolerance"])
-    orientation_tolerance = float(outputs["orientation_tolerance"])
+    position_tolerance = float(outputs.position_tolerance)
+    orientation_tolerance = float(outputs.orientation_tolerance)
     violation = float(metrics["max_joint_limit_violation"])
     position, orientation = float(metrics["max_position_error"]), float(metrics["max_orientation_error"])
     warnings = []

@@ -64,12 +64,12 @@ def scenario_model(scenario: Path) -> str | None:
 
 
 def scenario_named_files(scenario: Path) -> list[str]:
-    """The files a scenario names besides its model (:func:`~uvms.scenario.schema.named_files`); none when it
-    cannot be read (the run reports why)."""
-    from .schema import named_files, read_scenario
+    """The files a scenario names besides its model (:meth:`~uvms.scenario.spec.ScenarioSpec.named_files`); none
+    when it cannot be read (the run reports why)."""
+    from .schema import read_scenario
 
     try:
-        return named_files(read_scenario(scenario))
+        return read_scenario(scenario).named_files()
     except UVMSError:
         return []
 

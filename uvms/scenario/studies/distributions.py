@@ -6,8 +6,8 @@ likely values: numbers, strings or booleans). The arguments are read as a TOML a
 any ``--set`` key (``solver.gain``, ``model.args.l1``, ``plant.current``...), or one element of a list-valued
 key, ``plant.current[0]``.
 
-Where the scenario schema bounds a key (:data:`uvms.scenario.schema.LOWER_BOUNDS`, and ``|x| <=``
-:data:`~uvms.scenario.schema.MAX_MAGNITUDE` for every key but ``model.args``), a normal distribution is truncated
+Where the scenario spec bounds a key (its :class:`~uvms.scenario.spec.keys.Bound`, and ``|x| <=``
+:data:`~uvms.scenario.spec.keys.MAX_MAGNITUDE` for every key but ``model.args``), a normal distribution is truncated
 to the bounds (``scipy.stats.truncnorm``: the normal conditioned on the interval), and a uniform or loguniform one
 must lie inside them.
 
@@ -27,7 +27,8 @@ from typing import Any
 import numpy as np
 
 from ...errors import StudyError
-from ..schema import LOWER_BOUNDS, MAX_MAGNITUDE, parse_value
+from ..schema import parse_value
+from ..spec import MAX_MAGNITUDE, key_of
 
 FORMS = ("normal(mu, sigma), normal(mu, sigma, low, high), uniform(a, b), loguniform(a, b) with 0 < a < b, "
          "choice([v1, v2, ...])")
@@ -90,8 +91,10 @@ def key_bounds(key: str) -> tuple[float, float, bool]:
     base = key.split("[")[0]
     if base.startswith("model.args."):
         return -math.inf, math.inf, False  # xacro args: the model checks them (a failed trial says so)
-    low, strict, _ = LOWER_BOUNDS.get(base, (-MAX_MAGNITUDE, False, ""))
-    return low, MAX_MAGNITUDE, strict
+    spec = key_of(base)
+    if spec is None or spec.bound is None:
+        return -MAX_MAGNITUDE, MAX_MAGNITUDE, False
+    return spec.bound.low, MAX_MAGNITUDE, spec.bound.strict
 
 
 def parse_sample(text: str) -> tuple[str, Distribution]:

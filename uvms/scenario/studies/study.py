@@ -31,7 +31,8 @@ from typing import Any
 from ...errors import StudyError
 from ...io import outputs
 from ..resources import resolve_scenario_path
-from ..schema import named_files, read_scenario, read_toml, scenario_from_raw
+from ..schema import read_scenario, read_toml, scenario_from_raw
+from ..spec import ScenarioSpec
 from .distributions import METHODS, Distribution, parse_samples, sample_table
 from .folder import (
     METRICS,
@@ -90,7 +91,7 @@ def study_spec(scenario: Path, samples: Sequence[tuple[str, Distribution]], n: i
             "overrides": list(overrides)}
 
 
-def assignments_of(scenario: dict, keys: Sequence[str], values: Sequence[Any]) -> list[str]:
+def assignments_of(spec: ScenarioSpec, keys: Sequence[str], values: Sequence[Any]) -> list[str]:
     """The ``--set`` strings of one trial; elements ``KEY[i]`` of a list key are merged into the scenario's list."""
     lists: dict[str, list] = {}
     plain = []
@@ -100,7 +101,7 @@ def assignments_of(scenario: dict, keys: Sequence[str], values: Sequence[Any]) -
             continue
         base, index = key[:-1].split("[")
         section, name = base.split(".", 1)
-        current = lists.setdefault(base, list(scenario.get(section, {}).get(name) or []))
+        current = lists.setdefault(base, list(getattr(getattr(spec, section, None), name, None) or []))
         if int(index) >= len(current):
             raise StudyError(f"--sample {key}: {base} = {current} has no element {index} (a list of {len(current)}); "
                              f"give the whole list in the scenario or sample {base}[0..{max(len(current) - 1, 0)}]")
@@ -121,7 +122,7 @@ def check_trials(scenario: Path, keys: Sequence[str], table: Sequence[Sequence[A
     if any(key.startswith("model.args.") for key in keys) and trials:  # xacro args: the model declares them
         from ..record import scenario_model
 
-        scenario_model(read_scenario(scenario, trials[0])["model"])
+        scenario_model(read_scenario(scenario, trials[0]).model)
     return trials
 
 
@@ -184,12 +185,12 @@ def study(
             ScenarioError: a key or value the scenario rejects, found before any trial runs.
     """
     scenario = resolve_scenario_path(scenario).resolve()
-    given = read_scenario(scenario, overrides)["study"]
-    overrides = [*given["set"], *overrides]
+    given = read_scenario(scenario, overrides).study
+    overrides = [*given.set, *overrides]
     table = read_scenario(scenario, overrides)
-    samples = parse_samples(given["samples"] if samples is None else samples)
-    n, seed = given["n"] if n is None else n, given["seed"] if seed is None else seed
-    method = given["method"] if method is None else method
+    samples = parse_samples(list(given.samples) if samples is None else samples)
+    n, seed = given.n if n is None else n, given.seed if seed is None else seed
+    method = given.method if method is None else method
     if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= MAX_TRIALS:
         raise StudyError(f"a study has 1 to {MAX_TRIALS:,} trials (--samples N or [study] n), got {n!r}")
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
@@ -202,14 +203,14 @@ def study(
     trials = check_trials(scenario, keys, values, overrides)
     from ..runs import run_inputs
 
-    inputs = run_inputs(scenario, [table["model"]["path"]], named_files(table))
+    inputs = run_inputs(scenario, [table.model.path], table.named_files())
     spec = study_spec(scenario, samples, n, seed, method, overrides, inputs)
-    folder = Path(out) if out is not None else Path("out") / f"{table['scenario']['name']}_study"
+    folder = Path(out) if out is not None else Path("out") / f"{table.name}_study"
     release = open_study_folder(folder, spec)
     try:
         rows, resumed = run_study(scenario, seeds, values, trials, folder / TRIALS, jobs=jobs, backend=backend,
                                   scheduler=scheduler, progress=progress, insecure_scheduler=insecure_scheduler)
-        return finish(folder, keys, rows, resumed, spec, table["scenario"]["name"])
+        return finish(folder, keys, rows, resumed, spec, table.name)
     finally:
         release()
 

@@ -26,13 +26,8 @@ from ...errors import SweepError
 from ...io import outputs
 from ..record import scenario_model
 from ..resources import resolve_scenario_path
-from ..schema import (
-    named_files,
-    parse_value,
-    read_scenario,
-    read_toml,
-    scenario_from_raw,
-)
+from ..schema import parse_value, read_scenario, read_toml, scenario_from_raw
+from ..spec import ScenarioSpec
 from .parallel import check_backend, run_tasks, use_thread_lock_for_progress_bars
 
 #: the metrics of each point in the table (from ``metrics.json`` of its run)
@@ -204,8 +199,8 @@ def sweep(
     assignments = [[*overrides, *(f"{key}={toml_literal(v)}" for key, v in zip(keys, point))] for point in points]
     checked, models, files = check_points(scenario, assignments, progress)
     if any(key.startswith("model.args.") for key in keys):  # xacro args: their names are checked by the model
-        scenario_model(read_scenario(scenario, assignments[0])["model"])
-    given = Path(out) if out is not None else Path("out") / f"{checked['scenario']['name']}_sweep"
+        scenario_model(read_scenario(scenario, assignments[0]).model)
+    given = Path(out) if out is not None else Path("out") / f"{checked.name}_sweep"
     out = given.resolve()
     width = len(str(len(points) - 1))
     from ..runs import run_inputs
@@ -222,32 +217,32 @@ def sweep(
             row["error"] = row["error"].replace(str(folder), str(out))  # the paths the user will find
         result = SweepResult(keys=keys, rows=rows)
         outputs.write_text(folder / "sweep.csv", result.csv())
-        save_sweep_figure(result, folder / "sweep.png", title=checked["scenario"]["name"])
+        save_sweep_figure(result, folder / "sweep.png", title=checked.name)
     result.files = [out / "sweep.csv", out / "sweep.png"]
     return result
 
 
 def check_points(scenario: str | os.PathLike, assignments: list[list[str]],
-                 progress: bool | None) -> tuple[dict, list[str], list[str]]:
+                 progress: bool | None) -> tuple[ScenarioSpec | None, list[str], list[str]]:
     """Check every point's keys and values in the parent, before any worker starts.
 
     The file is parsed once; a progress bar shows up if the checks take more than a second.
 
     Returns:
         The last point's scenario, the model paths of all points (``model.path`` may be a grid key) and the other
-        files they name (:func:`~uvms.scenario.schema.named_files`).
+        files they name (:meth:`~uvms.scenario.spec.ScenarioSpec.named_files`).
     """
     from ...io.progress import tqdm
 
     raw = read_toml(scenario)
-    checked: dict = {}
+    checked: ScenarioSpec | None = None
     models: dict[str, None] = {}
     files: dict[str, None] = {}
     for overrides in tqdm(assignments, desc="checking the grid", unit="point", disable=progress is False,
                           leave=False, delay=1.0):
         checked = scenario_from_raw(raw, scenario, overrides)
-        models[checked["model"]["path"]] = None
-        files.update(dict.fromkeys(named_files(checked)))
+        models[checked.model.path] = None
+        files.update(dict.fromkeys(checked.named_files()))
     return checked, list(models), list(files)
 
 

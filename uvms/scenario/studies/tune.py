@@ -171,7 +171,7 @@ def tune(
         parse_samples(samples)  # the distributions' errors before the first trial (the keys: by each study)
     for end in ("low", "high"):  # every key and both ends checked before the first trial
         read_scenario(scenario, [*overrides, *(f"{p.key}={toml_literal(getattr(p, end))}" for p in tuned)])
-    name = read_scenario(scenario, overrides)["scenario"]["name"]
+    name = read_scenario(scenario, overrides).name
     direction = "maximize" if objective == "pass_rate" else "minimize"
     optuna.logging.set_verbosity(optuna.logging.WARNING)
     sampler = optuna.samplers.TPESampler(seed=seed)
