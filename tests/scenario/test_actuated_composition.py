@@ -55,7 +55,7 @@ def test_each_refused_combination_now_runs(tmp_path, overrides):
 
 @pytest.mark.parametrize("overrides, message", [
     (["solver.free_floating=true"], "leaves the vehicle passive"),
-    (["solver.method=clik", "solver.enforce_limits=true"], "CLIK has no priorities"),
+    (["solver.method=clik", "solver.enforce_limits=true"], "'clik': it has no priorities"),
     (["solver.method=clik", "solver.alpha=0.5"], "For joint limits use"),
     (["vehicle.heading=0.1"], "remove \\[vehicle\\]"),
     (["solver.gain=[1.0, 1.0]"], "solver.gain is one number"),
