@@ -42,7 +42,12 @@ def test_the_command_line_and_a_quiet_run_load_what_they_use_only():
            "q0 = robot.configuration(base=[0.0, 0.0, 0.0], arm=[1.0, 0.5, 0.2])\n"
            "task.set_target(robot.fk(q0))\n"
            "solver = uvms.CLIKSolver(robot, task)\n"
-           "controller = lambda t, q, v=None: (lambda r: (r.v, r))(solver.velocity(uvms.Configuration(robot, q)))\n"
+           "class Law:\n"
+           "    def reset(self, state, t=0.0): pass\n"
+           "    def command(self, state, t):\n"
+           "        r = solver.velocity(uvms.Configuration(robot, state.q))\n"
+           "        return uvms.control.Command(velocity=r.v, info=r)\n"
+           "controller = Law()\n"
            "uvms.simulate(robot, controller, q0, 0.1, 0.01, progress=False)")
     modules = modules_after(run)
     assert "numba" in modules and "scipy.linalg" in modules  # the CLIK's kernels, LAPACK for the RK4 stages

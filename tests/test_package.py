@@ -170,7 +170,8 @@ def test_one_result_type_and_no_old_paths():
     from uvms.sim.result import SimulationResult
 
     robot = shipped("hoang2011")
-    result = uvms.simulate(uvms.Plant(robot), np.ones(robot.n_arm), robot.neutral(), 0.1, 0.01)
+    result = uvms.simulate(uvms.Plant(robot), uvms.control.OpenLoop(arm=np.ones(robot.n_arm)), robot.neutral(),
+                           0.1, 0.01)
     assert isinstance(result, SimulationResult) and result.plant.command.shape == (11, robot.n_arm)
     assert result.ee_position is None and result.arrays().keys() == {"t", "q", "v"}
     assert result.tracking is None and result.actuation is None

@@ -10,6 +10,7 @@ import uvms
 from uvms.control.coordination import CoordinatedControl, achieved_ratio, arm_rates_for_task, vehicle_rates_for_task
 from uvms.control.station import ActuatedKinematics
 from uvms.control.vehicle import VehiclePoseController
+from uvms.solvers.base import SolverFactory
 from uvms.tasks import FrameTask
 from uvms.tasks.objectives import JointLimits
 from uvms.trajectory import VelocityRamps
@@ -78,7 +79,7 @@ def test_the_re_solve_holds_the_measured_vehicle_velocity_and_keeps_the_joint_li
     limits = JointLimits(robot, margin=0.05, band=0.2, joints=["alpha_axis_e", "alpha_axis_d", "alpha_axis_c"])
     index = robot.arm_joint_names.index("alpha_axis_c")
     measured = np.zeros(6)
-    plain = kinematics(robot, target, None)
+    plain = kinematics(robot, target, SolverFactory(uvms.CLIKSolver, robot, {"damping": 0.01}))
     plain.arm_rates(0.0, q, measured)  # points the task at the target
     jacobian = plain.task.jacobian(plain._configuration)
     for direction in np.eye(6)[:3]:
@@ -88,7 +89,7 @@ def test_the_re_solve_holds_the_measured_vehicle_velocity_and_keeps_the_joint_li
                 measured = candidate
     assert np.any(measured), "no vehicle velocity drives alpha_axis_c down"
     free = arm_rates_for_task(jacobian, np.zeros(3), measured, 6, damping=0.01)
-    enforced = kinematics(robot, target, lambda levels: uvms.SetBasedSolver(robot, levels, damping=0.01),
+    enforced = kinematics(robot, target, SolverFactory(uvms.SetBasedSolver, robot, {"damping": 0.01}),
                           [[limits]])
     arm = enforced.arm_rates(0.0, q, measured)
     assert free[index] < -0.05 and arm[index] >= -1e-9, (free[index], arm[index])
@@ -103,7 +104,7 @@ def test_the_reference_puts_the_pose_objective_below_the_task(robot):
     station (the pose objective in the task's null space, the arm doing the work)."""
     station = robot.configuration(base=np.zeros(6), arm=ARM)
     target = robot.fk(station).translation + np.array([0.0, 0.04, 0.0])
-    k = kinematics(robot, target, lambda levels: uvms.SetBasedSolver(robot, levels, damping=0.0))
+    k = kinematics(robot, target, SolverFactory(uvms.SetBasedSolver, robot, {"damping": 0.0}))
     v, info = k.reference(0.0, station)
     np.testing.assert_allclose(k.task.jacobian(k._configuration) @ v, [0.0, 0.04, 0.0], atol=1e-9)
     np.testing.assert_allclose(info["nu_pose"], 0.0, atol=1e-12)

@@ -11,6 +11,7 @@ import uvms
 from uvms.control.gjm import GJMControlError, GJMController, VelocityRamps
 from uvms.scenario import ScenarioError, run_scenario
 from uvms.solvers import ConstraintSolver, SetBasedSolver
+from uvms.solvers.base import SolverFactory
 from uvms.tasks.objectives import JointLimits
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -127,11 +128,13 @@ def test_the_controller_refuses_levels_a_solver_would_not_use():
     with pytest.raises(GJMControlError, match="need a solver that enforces inequalities"):
         GJMController(robot, reference, axes=("x", "y"), levels=[JointLimits(robot)])
     with pytest.raises(GJMControlError, match="ConstraintSolver needs 2 levels"):
-        GJMController(robot, reference, axes=("x", "y"), solver=ConstraintSolver)
+        GJMController(robot, reference, axes=("x", "y"), solver=SolverFactory(ConstraintSolver, robot))
     with pytest.raises(GJMControlError, match="SetBasedSolver takes no 'regularization'"):
-        GJMController(robot, reference, axes=("x", "y"), solver=SetBasedSolver, options={"regularization": 1.0})
-    controller = GJMController(robot, reference, axes=("x", "y"), gain=1.0, solver=SetBasedSolver,
-                               levels=[JointLimits(robot, margin=0.1)], options={"dt": 0.01})
+        GJMController(robot, reference, axes=("x", "y"),
+                      solver=SolverFactory(SetBasedSolver, robot, {"regularization": 1.0}))
+    controller = GJMController(robot, reference, axes=("x", "y"), gain=1.0,
+                               solver=SolverFactory(SetBasedSolver, robot, {"dt": 0.01}),
+                               levels=[JointLimits(robot, margin=0.1)])
     q = robot.configuration(arm=np.array([2.0, 0.4, 0.4]))
     sample = controller.sample(q, 2.0)
     plain = GJMController(robot, reference, axes=("x", "y"), gain=1.0).sample(q, 2.0)

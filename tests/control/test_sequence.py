@@ -16,6 +16,7 @@ from uvms.robot.configuration import Configuration
 from uvms.scenario import ScenarioError, read_scenario, run_scenario
 from uvms.scenario.build import build
 from uvms.solvers import CLIKSolver, PrioritySolver
+from uvms.solvers.base import SolverFactory
 from uvms.tasks import DistanceTask, FrameTask, JointTask
 
 from conftest import SCENARIOS, shipped
@@ -67,7 +68,7 @@ def test_both_claws_reach_constant_targets_to_1e10():
              FrameTask(robot, "right_ee", axes=("x", "y", "z"), target=pin.SE3(np.eye(3), right + shift - [0, 0.1, 0])),
              JointTask(robot, {"left_claw": 0.6, "right_claw": 0.6})]
     plan = PhasePlan(robot, q, ["left_ee", "right_ee"], [Phase("hold", 1.0)])
-    controller = SequenceController(robot, plan, method="clik")
+    controller = SequenceController(robot, plan, SolverFactory(CLIKSolver, robot))
     solver = CLIKSolver(robot, [controller.vehicle_task, *tasks], gain=1.0)
     for _ in range(60):
         q = pin.integrate(robot.model, q, solver.velocity(Configuration(robot, q)).v * 0.5)
@@ -100,7 +101,7 @@ def test_distance_has_priority_over_inconsistent_claw_targets():
     robot = shipped("xiang2019")
     q = xiang_q0()
     plan = PhasePlan(robot, q, ["left_ee", "right_ee"], [Phase("grip", 1.0, distance=0.3)])
-    controller = SequenceController(robot, plan, method="task_priority", priority="classic")
+    controller = SequenceController(robot, plan, SolverFactory(PrioritySolver, robot, {"priority": "classic"}))
     controller.set_targets(1.0)
     target = controller.frame_tasks[0].target
     controller.frame_tasks[0].set_target(pin.SE3(np.eye(3), target.translation + [0, 0.05, 0]))

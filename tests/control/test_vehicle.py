@@ -16,6 +16,7 @@ from uvms.dynamics.plant.actuated import ActuatedPlant, vehicle_inverse_dynamics
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.thrusters import Thrusters, thrusters_of
 from uvms.sim import simulate
+from uvms.solvers.base import SolverFactory
 from uvms.tasks import FrameTask
 from uvms.trajectory import VelocityRamps
 
@@ -163,8 +164,8 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
         plant = Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
         task = FrameTask(robot, axes=("x", "y", "z"))
         controller = actuated_control(plant, thrusters, station, DT, task, hold, coordination=coordination,
-                                      solver=lambda levels: uvms.PrioritySolver(robot, levels, damping=0.01,
-                                                                                       priority="classic"))
+                                      solver=SolverFactory(uvms.PrioritySolver, robot,
+                                                           {"damping": 0.01, "priority": "classic"}))
         assert isinstance(controller, CoordinatedControl)
         result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)
         final[coordination] = result.actuation.controller["ee_point_error"][-1]

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 import uvms
+from uvms.control import OpenLoop
 from uvms.dynamics import Plant
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
-from uvms.dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
+from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.dynamics.thrusters.fins import DEFAULT_TIME_CONSTANT, fins_of
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import (
@@ -131,8 +132,7 @@ def test_the_actuated_plant_turns_each_fin_with_its_time_constant_and_applies_it
     fins = fins_of(torpedo)
     actuated = ActuatedPlant(plant, thrusters_of(torpedo), fins=fins)
 
-    def command(t, q, v, thrusts):
-        return ActuatedCommand(np.zeros(0), np.array([7.3]), {}, np.array([0.6, 0.0, -0.1, 0.0]))
+    command = OpenLoop(arm=np.zeros(0), thrust=np.array([7.3]), fins=np.array([0.6, 0.0, -0.1, 0.0]))
 
     v0 = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     result = simulate(actuated, command, torpedo.neutral(), 0.2, 0.002, v0=v0)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import uvms
+from uvms.control import OpenLoop
 from uvms.dynamics.hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of, parse_hydrodynamics
 from uvms.dynamics.plant.added_mass import generalized_jacobian_added_mass
 from uvms.dynamics.plant.plant import Plant
@@ -53,7 +54,7 @@ def hull(**kwargs) -> uvms.Robot:
 def swinging_command(n_arm, amplitude=0.5):
     """Smooth joint-velocity commands, a different frequency per joint [rad/s]."""
     rates = np.arange(1, n_arm + 1)
-    return lambda t, q, v: amplitude * np.sin(rates * t + 0.3)
+    return OpenLoop(arm=lambda t: amplitude * np.sin(rates * t + 0.3))
 
 
 # ------------------------------------------------------------- conservation
@@ -233,7 +234,7 @@ def test_the_joint_motors_are_first_order_lags():
     tau, step = 0.1, np.array([0.3, -0.2, 0.25, 0.4, 0.001])
     plant = Plant(robot, motor_time_constant=tau)
     q0 = robot.configuration(arm=[np.pi, 1.0, 1.5, 0.5, 0.005])
-    result = simulate(plant, step, q0, 5 * tau, tau / 20)
+    result = simulate(plant, OpenLoop(arm=step), q0, 5 * tau, tau / 20)
     at_tau = result.v[np.argmin(np.abs(result.t - tau)), 6:]
     assert np.allclose(at_tau / step, 1.0 - np.exp(-1.0), rtol=1e-7)  # 63.2 % at t = tau
     assert np.allclose(result.v[-1, 6:] / step, 1.0 - np.exp(-5.0), rtol=1e-7)
@@ -348,7 +349,7 @@ def test_plant_arguments_are_checked():
     with pytest.raises(UVMSError, match="motor_time_constant"):
         Plant(robot, motor_time_constant=0.0)
     with pytest.raises(UVMSError, match="5 finite joint velocities"):
-        simulate(Plant(robot), lambda t, q, v: np.zeros(3), robot.neutral(), 0.1, 0.01)
+        simulate(Plant(robot), OpenLoop(arm=np.zeros(3)), robot.neutral(), 0.1, 0.01)
     with pytest.raises(UVMSError, match="unknown integrator 'rk45'; valid: euler, rk4"):
         simulate(Plant(robot), None, robot.neutral(), 0.1, 0.01, integrator="rk45")
     with pytest.raises(UVMSError, match="no hydrodynamic parameters"):

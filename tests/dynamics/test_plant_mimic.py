@@ -15,6 +15,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from uvms.control import OpenLoop
 from uvms.dynamics.hydro.hydrodynamics import HydroParameters, LinkHydrodynamics
 from uvms.dynamics.plant.plant import Plant
 from uvms.scenario import run_scenario
@@ -170,7 +171,8 @@ def test_momentum_is_conserved_with_the_mimic_finger_swinging(robots):
         name: LinkHydrodynamics(added_mass=link.added_mass) for name, link in fluid.links.items()})
     plant = Plant(mimic, still, gravity=False, damping=False, added_mass=True)
     q0 = mimic.configuration(arm=[0.3, -0.4])
-    result = simulate(plant, lambda t, q, v: np.array([0.8 * np.sin(3 * t), 1.5 * np.cos(5 * t)]), q0, 1.0, 0.002)
+    result = simulate(plant, OpenLoop(arm=lambda t: np.array([0.8 * np.sin(3 * t), 1.5 * np.cos(5 * t)])), q0, 1.0,
+                      0.002)
     assert np.ptp(result.v[:, 7]) > 1.0  # the finger really swings
     assert np.max(result.plant.momentum_drift()) < 1e-9
 

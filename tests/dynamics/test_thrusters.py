@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 import uvms
+from uvms.control import OpenLoop
 from uvms.dynamics.hydro.hydrodynamics import HydroParameters
-from uvms.dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
+from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.thrusters import (
     allocation_matrix,
@@ -158,23 +159,16 @@ def test_models_without_thrusters_say_so():
 
 
 # ------------------------------------------------------------------ thruster dynamics in the plant
-class OpenLoop:
+def sinusoids(n_arm: int, n: int) -> OpenLoop:
     """Sinusoidal thrust and arm commands (some beyond the limits, to exercise the saturation)."""
-
-    def __init__(self, n_arm: int, n: int) -> None:
-        self.n_arm, self.n = n_arm, n
-
-    def __call__(self, t, q, v, thrusts):
-        phase = np.arange(self.n)
-        thrust = 60.0 * np.sin(2.0 * t + phase)  # beyond +50 / -40: clipped
-        arm = 0.3 * np.sin(1.5 * t + np.arange(self.n_arm))
-        return ActuatedCommand(arm, thrust, {})
+    return OpenLoop(thrust=lambda t: 60.0 * np.sin(2.0 * t + np.arange(n)),  # beyond +50 / -40: clipped
+                    arm=lambda t: 0.3 * np.sin(1.5 * t + np.arange(n_arm)))
 
 
 def test_first_order_response_and_saturation(box):
     plant = Plant(box, HydroParameters())
-    result = simulate(ActuatedPlant(plant, thrusters_of(box)), lambda t, q, v, f: ActuatedCommand(
-        np.zeros(0), np.full(8, 100.0), {}), box.neutral(), 0.4, 0.001)
+    result = simulate(ActuatedPlant(plant, thrusters_of(box)), OpenLoop(arm=np.zeros(0), thrust=np.full(8, 100.0)),
+                      box.neutral(), 0.4, 0.001)
     thrusts = result.actuation.thrusts
     expected = 50.0 * (1.0 - np.exp(-result.t[:, None] / np.array([0.1] * 4 + [0.2] * 4)))  # command clipped to 50
     np.testing.assert_allclose(thrusts, expected, atol=1e-9)
@@ -186,7 +180,7 @@ def test_energy_balance_with_thrusters_arm_damping_and_restoring(bluerov):
     """kinetic + potential energy change = thruster work + motor work + damping work (no current)."""
     plant = Plant(bluerov, gravity=True)
     q0 = bluerov.configuration(base=[0, 0, 0, 0.1, -0.05, 0.2], arm=[3.0, 1.8, 1.8, 1.0, 0.005])
-    result = simulate(ActuatedPlant(plant, thrusters_of(bluerov)), OpenLoop(bluerov.n_arm, 8), q0, 2.0, 0.002)
+    result = simulate(ActuatedPlant(plant, thrusters_of(bluerov)), sinusoids(bluerov.n_arm, 8), q0, 2.0, 0.002)
     a = result.actuation
     power = a.thrust_power + a.motor_power + a.damping_power
     work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * np.diff(result.t))])

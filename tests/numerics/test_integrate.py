@@ -65,9 +65,13 @@ def test_stage_times_are_every_time_a_run_asks_its_controller_for(integrator):
     robot = uvms.load("hoang2011")
     asked: list[float] = []
 
-    def controller(t, q, v=None):
-        asked.append(t)
-        return np.full(robot.nv, 0.01), uvms.solvers.SolverResult(np.zeros(robot.nv), 1.0, 0.0)
+    class Recorded(uvms.control.OpenLoop):
+        def command(self, state, t):
+            asked.append(t)
+            return super().command(state, t)
+
+    controller = Recorded(velocity=np.full(robot.nv, 0.01), info=uvms.solvers.SolverResult(np.zeros(robot.nv), 1.0,
+                                                                                            0.0))
 
     steps, dt = 40, 0.1
     assert misses(dt, steps) > 0

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from uvms.control import Command
 from uvms.errors import ScenarioError
 from uvms.robot.configuration import Configuration
 from uvms.scenario import run_scenario
@@ -54,7 +55,7 @@ def test_each_refused_combination_now_runs(tmp_path, overrides):
 
 @pytest.mark.parametrize("overrides, message", [
     (["solver.free_floating=true"], "leaves the vehicle passive"),
-    (["solver.method=clik", "solver.enforce_limits=true"], "CLIK has no priorities"),
+    (["solver.method=clik", "solver.enforce_limits=true"], "'clik': it has no priorities"),
     (["solver.method=clik", "solver.alpha=0.5"], "For joint limits use"),
     (["vehicle.heading=0.1"], "remove \\[vehicle\\]"),
     (["solver.gain=[1.0, 1.0]"], "solver.gain is one number"),
@@ -95,11 +96,16 @@ def test_the_kinematic_reference_holds_the_enforced_objectives_exactly():
     every enforced objective stays in its valid set."""
     setup = build(read_scenario(INTERVENTION))
     kinematic = setup.controller.kinematic
-    def reference(t: float, q: np.ndarray, v: np.ndarray | None = None) -> tuple:
-        velocity, info = kinematic.reference(t, q)
-        return velocity, info["solver"]
 
-    result = simulate(setup.robot, reference, setup.q0, 10.0, 0.01)
+    class Reference:
+        def reset(self, state, t=0.0):
+            kinematic.reset(state, t)
+
+        def command(self, state, t):
+            velocity, info = kinematic.reference(t, state.q)
+            return Command(velocity=velocity, info=info["solver"])
+
+    result = simulate(setup.robot, Reference(), setup.q0, 10.0, 0.01)
     for objective in setup.inequalities.objectives:
         values = np.array([objective.value(Configuration(setup.robot, q)) for q in result.q[::10]])
         outside = np.maximum(objective.lower - values, values - objective.upper)

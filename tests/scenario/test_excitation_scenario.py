@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from uvms.control import State
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.hydro.writer import hydrodynamics_yaml_text
 from uvms.dynamics.identification.identify import identify
@@ -72,7 +73,7 @@ def test_the_excitation_scenario_drives_the_thrusters_with_the_multisine(tmp_pat
     control = setup.actuation.controller
     wrench = multisine(np.array(scenario.excitation.wrench), components=8, seed=3)
     q, v = setup.q0, np.zeros(setup.robot.nv)
-    command = control(12.3, q, v, np.zeros(8))
+    command = control.command(State(q, v, np.zeros(8)), 12.3)
     # the commanded thrusts give the multi-sine's wrench through the allocation matrix (B B^+ = I: 8 thrusters)
     np.testing.assert_allclose(control.actuated.matrix @ command.thrust, wrench(12.3), atol=1e-9)
     omega = 2 * np.pi * (1 + 0.37 * np.arange(5)) / 20.0

@@ -63,8 +63,8 @@ def world_pose(frame: str, tf_static, tf_row) -> pin.SE3:
 def constant_rate_run(robot: uvms.Robot, rate: np.ndarray, q0: np.ndarray, goal: pin.SE3):
     """A short kinematic run at a constant velocity v (nv,), desired pose ``goal`` throughout."""
     info = types.SimpleNamespace(sigma_min=1.0, damping=0.0, limits_active=())
-    return simulate(robot, lambda t, q, v: (rate, info), q0, duration=1.0, dt=0.05, task=FrameTask(robot),
-                    desired=lambda t: goal)
+    return simulate(robot, uvms.control.OpenLoop(velocity=rate, info=info), q0, duration=1.0, dt=0.05,
+                    task=FrameTask(robot), desired=lambda t: goal)
 
 
 @pytest.fixture(scope="module")

@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from uvms.control import Command, OpenLoop, State
 from uvms.control.gjm import GJMController, VelocityRamps
 from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.errors import ConfigurationError, StepCountError, UVMSError
@@ -19,6 +20,16 @@ from uvms.sim import SimulationResult, simulate
 from conftest import shipped
 
 INFO = types.SimpleNamespace(sigma_min=1.0, damping=0.0, limits_active=())
+
+
+class Never:
+    """A controller that must not be asked (what is refused is refused before the run)."""
+
+    def reset(self, state: State, t: float = 0.0) -> None:
+        raise AssertionError("nothing may run")
+
+    def command(self, state: State, t: float) -> Command:
+        raise AssertionError("nothing may run")
 
 
 def hoang_run():
@@ -31,11 +42,15 @@ def hoang_run():
     def goal(t):
         return pin.SE3(start.rotation, start.translation + np.array([0.3 * np.sin(t), 0.2 * t, 0.0]))
 
-    def controller(t, q, v=None):
-        error = np.array([*(goal(t).translation - robot.fk(q).translation)[:2], 0.0])
-        return np.linalg.pinv(robot.jacobian(q)[[0, 1, 5]]) @ (2.0 * error), INFO
+    class Law:
+        def reset(self, state, t=0.0):
+            pass
 
-    return robot, simulate(robot, controller, q0, 2.0, 0.01, task=task, desired=goal)
+        def command(self, state, t):
+            error = np.array([*(goal(t).translation - robot.fk(state.q).translation)[:2], 0.0])
+            return Command(velocity=np.linalg.pinv(robot.jacobian(state.q)[[0, 1, 5]]) @ (2.0 * error), info=INFO)
+
+    return robot, simulate(robot, Law(), q0, 2.0, 0.01, task=task, desired=goal)
 
 
 def former(*hexes: str) -> np.ndarray:
@@ -108,13 +123,17 @@ def test_a_result_cannot_be_mutated():
         result.q = result.q[::-1]
     with pytest.raises(dataclasses.FrozenInstanceError):
         result.plant = None
-    plant_run = simulate(uvms.Plant(robot), np.ones(robot.n_arm), robot.neutral(), 0.1, 0.01)
+    plant_run = simulate(uvms.Plant(robot), OpenLoop(arm=np.ones(robot.n_arm)), robot.neutral(), 0.1, 0.01)
     with pytest.raises(dataclasses.FrozenInstanceError):
         plant_run.plant.command = np.zeros((11, robot.n_arm))
     blue = shipped("bluerov2_alpha5")
     actuated = ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue))
-    run = simulate(actuated, lambda t, q, v, f: uvms.dynamics.ActuatedCommand(
-        np.zeros(blue.n_arm), np.zeros(actuated.n), {"custom": t}), blue.neutral(), 0.02, 0.01)
+
+    class Custom(OpenLoop):
+        def command(self, state, t):
+            return Command(arm=np.zeros(blue.n_arm), thrust=np.zeros(actuated.n), info={"custom": t})
+
+    run = simulate(actuated, Custom(), blue.neutral(), 0.02, 0.01)
     with pytest.raises(TypeError):  # the controller's series are read-only
         run.actuation.controller["custom"] = np.zeros(3)
     np.testing.assert_array_equal(run.actuation.controller["custom"], [0.0, 0.01, 0.02])
@@ -126,9 +145,7 @@ def test_what_a_system_cannot_run_is_refused_before_it_runs():
     robot = shipped("hoang2011")
     task = uvms.FrameTask(robot, axes=("x", "y"))
 
-    def never(*args):
-        raise AssertionError("nothing may run")
-
+    never = Never()
     with pytest.raises(StepCountError, match="control_dt must be 0 for a kinematic run"):
         simulate(robot, never, robot.neutral(), 1.0, 0.1, control_dt=0.2)
     with pytest.raises(StepCountError, match="control_dt must be 0 .* or a positive multiple of dt = 0.1 s"):
@@ -144,5 +161,5 @@ def test_what_a_system_cannot_run_is_refused_before_it_runs():
         simulate(ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue)), never, blue.neutral(), 1.0, 0.1,
                  control_dt=0.2)
     with pytest.raises(UVMSError, match="recorded extra, which no series of SimulationResult holds"):
-        simulate(robot, lambda t, q, v: (np.zeros(robot.nv), INFO), robot.neutral(), 0.1, 0.1,
+        simulate(robot, OpenLoop(velocity=np.zeros(robot.nv), info=INFO), robot.neutral(), 0.1, 0.1,
                  recorders=[lambda t, q, x, sample: {"extra": 1.0}])

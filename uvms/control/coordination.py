@@ -22,7 +22,8 @@ from typing import Protocol
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.plant.actuated import ActuatedCommand, base_twist
+from ..dynamics.plant.actuated import base_twist
+from ..dynamics.plant.command import Command, State
 from ..dynamics.thrusters.fin_allocation import split_actuators
 from ..errors import SolverInputError
 from ..numerics.inverses import VariableDamping, damped_weighted_inverse
@@ -126,6 +127,8 @@ class KinematicLayer(Protocol):
 
     def errors(self, t: float, q: np.ndarray) -> dict: ...
 
+    def reset(self, state: State, t: float = 0.0) -> None: ...
+
 
 class CoordinatedControl:
     """The kinematic layer driving an actuated UVMS: the digital controller of an ``ActuatedPlant``
@@ -174,8 +177,16 @@ class CoordinatedControl:
         reachable = nu + self.ratio * (nu_pose - nu)
         return np.minimum(nu, reachable), np.maximum(nu, reachable)
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
-        """The arm and thrust commands for the step from (t, q, v); advances the velocity loop's integral."""
+    def reset(self, state: State, t: float = 0.0) -> None:
+        """Zero the velocity loop's integral and forget the last allocation's shortfall (a run from the start)."""
+        self.velocity.reset()
+        self.ratio = np.ones(6)
+        self.kinematic.reset(state, t)
+
+    def command(self, state: State, t: float) -> Command:
+        """The arm, thrust and fin commands for the step from the measured (q, v) at t [s]; advances the velocity
+        loop's integral."""
+        q, v = state.q, state.v
         nb, model = self.robot.n_vehicle, self.velocity.model
         bounds = None
         if self.saturation_feedback and np.any(self.ratio < 1.0):
@@ -194,7 +205,7 @@ class CoordinatedControl:
                 "attainable": allocation.attainable, "velocity_integral": self.velocity.integral.copy(),
                 "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
         thrusts, fins = split_actuators(self.velocity.allocator, allocation.thrusts)
-        return ActuatedCommand(arm, thrusts, info, fins)
+        return Command(arm=arm, thrust=thrusts, fins=fins, info=info)
 
 
 def achieved_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:

@@ -33,9 +33,10 @@ map, added-mass-augmented mass matrix, or a vehicle held still) gives the GJM by
 ``VariableDamping``). GJM^# applied to another twist x (the servo feedforward below) is the same CLIK in open
 loop (K = 0) with x as its feedforward.
 
-Any solver. ``solver`` is any class of :data:`uvms.solvers.SOLVERS`, built with ``free_floating=True`` on the
-levels ``[*levels, task]``: inequality objectives above the task (``levels``, e.g. joint limits, for a solver
-that enforces them, :attr:`~uvms.solvers.base.Solver.enforces_inequalities`: set_based, hqp), then the task.
+Any solver. ``solver`` (a :class:`uvms.solvers.base.SolverFactory`: any class of :data:`uvms.solvers.SOLVERS`
+with its options) is built with ``free_floating=True`` on the levels ``[*levels, task]``: inequality objectives
+above the task (``levels``, e.g. joint limits, for a solver that enforces them,
+:attr:`~uvms.solvers.base.Solver.enforces_inequalities`: set_based, hqp), then the task.
 Every solver solves the arm only; the vehicle, passive, follows momentum conservation through the chosen GJM.
 A solver that needs a level the passive vehicle cannot give (the kinematic constraint's first level, a
 vehicle task) is refused. With levels above the task the solution is no longer linear in nu_c: the
@@ -55,7 +56,7 @@ reference acceleration.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,12 +64,15 @@ import pinocchio as pin
 
 from ..dynamics.hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from ..dynamics.plant.added_mass import augmented_mass_matrix, resolve_links
+from ..dynamics.plant.command import Command, State
 from ..errors import GJMControlError, UVMSError
 from ..numerics.inverses import VariableDamping, weights_factor
 from ..robot.configuration import Configuration, MomentumRows
 from ..robot.kinematics import AXIS_NAMES, axis_rows, held_vehicle_split, mass_matrix_split
 from ..robot.robot import Robot
-from ..solvers import CLIKSolver, Solver, SolverResult
+from ..solvers.base import SolverFactory
+from ..solvers.clik import CLIKSolver
+from ..solvers.result import SolverResult
 from ..tasks.frame import FrameTask
 from ..trajectory.cartesian import PoseSample
 from ..trajectory.ramps import VelocityRamps
@@ -125,10 +129,10 @@ class GJMController:
         hydro: parameters of the added-mass GJM (None: the model's own).
         motor_feedforward: tau [s] of the joint servos to invert (u = w + tau dw/dt); 0: send w.
         difference_step: time step [s] of the forward difference of dGJM^#/dt.
-        solver: the solver class (any of :data:`uvms.solvers.SOLVERS`), built with ``free_floating=True``.
+        solver: the solver and its options (e.g. ``dt`` [s] for hqp, ``eta`` for set_based), built here with
+            ``free_floating=True``, the weights, damping and gain above (None: CLIK).
         levels: the levels above the task, highest first (each an objective or a list of them: inequality
             objectives, speed limits), for a solver that enforces them.
-        options: more keywords of ``solver`` (e.g. ``dt`` [s] for hqp, ``eta`` for set_based).
 
     Raises:
         GJMControlError: a fixed base, unknown axes or GJM kind, bad gain or tau; levels for a solver that does
@@ -153,9 +157,8 @@ class GJMController:
         hydro: HydroParameters | None = None,
         motor_feedforward: float = 0.0,
         difference_step: float = 1e-6,
-        solver: type[Solver] = CLIKSolver,
+        solver: SolverFactory | None = None,
         levels: Sequence = (),
-        options: Mapping[str, object] | None = None,
     ) -> None:
         if robot.base_type == "fixed":
             raise GJMControlError(f"{robot.name} has a fixed base: GJM control "
@@ -198,12 +201,13 @@ class GJMController:
             self.links = resolve_links(self.model, self.hydro)
         self._momentum = self._momentum_rows()
         self.levels = list(levels)
-        options = _solver_options(solver, self.levels, self.weights, damping, options or {})
+        solver = SolverFactory(CLIKSolver, robot) if solver is None else solver
+        options = _solver_options(solver, self.levels, self.weights, damping)
         # the law, built once: the solver on the generalized Jacobian (closed loop with K on the position rows),
         # and the same in open loop, whose feedforward is any twist x: GJM^# x (the servo feedforward)
-        self.solver = solver(robot, [*self.levels, self.task], gain=self.task_gain, **options)
+        self.solver = solver([*self.levels, self.task], gain=self.task_gain, **options)
         self._open_task = FrameTask(robot, self.frame, axes=self.axes, orientation="log")
-        self._open = solver(robot, [*self.levels, self._open_task], gain=0.0, **options)
+        self._open = solver([*self.levels, self._open_task], gain=0.0, **options)
 
     # ------------------------------------------------------------- Jacobians
     def _momentum_rows(self) -> MomentumRows | None:
@@ -269,11 +273,16 @@ class GJMController:
                 "ee_velocity": state.jacobian(self.frame_id)[:3] @ v, "desired_velocity": reference.twist[:3].copy(),
                 "rates": sample.rates, "sigma_min": sample.sigma_min, "damping": sample.damping}
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """The joint-velocity command u (n_arm,) at (t, q, v): w, plus tau dw/dt with the servo feedforward.
+    def reset(self, state: State, t: float = 0.0) -> None:
+        """Nothing to reset: the law depends on (q, v, t) only."""
 
-        The signature of a plant's joint command in :func:`uvms.sim.simulate`.
-        """
+    def command(self, state: State, t: float) -> Command:
+        """``Command(arm=u (n_arm,))`` at the measured (q, v) and t: w, plus tau dw/dt with the servo feedforward
+        (:class:`uvms.control.base.Controller`)."""
+        return Command(arm=self.joint_command(t, state.q, state.v))
+
+    def joint_command(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """The joint-velocity command u (n_arm,) at (t, q, v): w, plus tau dw/dt with the servo feedforward."""
         solution = self._solve(self.state(q), t)
         rates = solution.result.v[self.nb:]
         if self.motor_feedforward == 0.0:
@@ -317,29 +326,32 @@ def _task_gain(gain: np.ndarray, rows: list[int]) -> np.ndarray:
     return task_gain
 
 
-def _solver_options(solver: type[Solver], levels: list, weights: np.ndarray | None, damping: float | VariableDamping,
-                    options: Mapping[str, object]) -> dict:
-    """The keywords of ``solver`` (free floating, the weights and damping when given, ``options``), checked.
+def _solver_options(solver: SolverFactory, levels: list, weights: np.ndarray | None,
+                    damping: float | VariableDamping) -> dict:
+    """The keywords the controller adds to ``solver``'s (free floating, the weights and damping when given),
+    every one checked against what its class takes.
 
     Raises:
-        GJMControlError: not a solver class, levels for a solver that does not enforce inequalities, a solver
+        GJMControlError: not a SolverFactory, levels for a solver that does not enforce inequalities, a solver
             of a fixed number of levels, or a keyword it does not take.
     """
-    if not (isinstance(solver, type) and issubclass(solver, Solver)):
-        raise GJMControlError(f"solver must be a class of uvms.solvers.SOLVERS, got {solver!r}")
-    if levels and not solver.enforces_inequalities:
+    if not isinstance(solver, SolverFactory):
+        raise GJMControlError(f"solver must be a uvms.solvers.base.SolverFactory (a class of uvms.solvers.SOLVERS "
+                              f"and its options), got {solver!r}")
+    cls = solver.cls
+    if levels and not cls.enforces_inequalities:
         raise GJMControlError(f"levels above the task need a solver that enforces inequalities (set_based, hqp); "
-                              f"{solver.__name__} would not use them")
-    if solver.level_count is not None:
-        raise GJMControlError(f"{solver.__name__} needs {solver.level_count} levels, the first of them a constraint "
+                              f"{cls.__name__} would not use them")
+    if cls.level_count is not None:
+        raise GJMControlError(f"{cls.__name__} needs {cls.level_count} levels, the first of them a constraint "
                               f"such as a vehicle task, which a passive vehicle cannot follow (it has no actuators): "
                               f"use clik, task_priority, set_based or hqp, or a plant with thrusters")
-    given = dict(options, free_floating=True)
+    added: dict = {"free_floating": True}
     if weights is not None:
-        given["weights"] = weights
+        added["weights"] = weights
     if not (isinstance(damping, (int, float)) and damping == 0.0):
-        given["damping"] = damping
-    refused = [key for key in given if key not in solver.options()]
+        added["damping"] = damping
+    refused = [key for key in {**solver.options, **added} if key not in cls.options()]
     if refused:
-        raise GJMControlError(f"{solver.__name__} takes no {refused[0]!r} (it takes {', '.join(solver.options())})")
-    return given
+        raise GJMControlError(f"{cls.__name__} takes no {refused[0]!r} (it takes {', '.join(cls.options())})")
+    return added

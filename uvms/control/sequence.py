@@ -4,8 +4,8 @@ A sequence is a list of phases. Each phase moves some frames by a displacement
 [m], drives named joints (claws) to values and optionally the distance between
 the first two frames to a value, all along a quintic time law (rest to rest),
 while the vehicle holds its pose. The controller gives the levels — vehicle,
-then the relative distance, then frames and joints — to a solver of
-:data:`uvms.solvers.SOLVERS` (``clik`` stacks them, ``task_priority``
+then the relative distance, then frames and joints — to its solver, any
+that takes any number of levels (``clik`` stacks them, ``task_priority``
 prioritizes them). xiang2019's gripping sequence (open the arms, lower
 onto the target, grip) is ``scenarios/xiang2019_grip.toml``.
 """
@@ -18,10 +18,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..dynamics.plant.command import Command, State
 from ..errors import UVMSError
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
-from ..solvers import SOLVERS, Solver, SolverResult
+from ..solvers.base import Solver, SolverFactory
 from ..tasks import DistanceTask, FrameTask, JointTask, VehicleTask
 from ..tasks.vehicle import VELOCITY_NAMES
 from ..trajectory import PolynomialLaw, PoseSample
@@ -161,26 +162,25 @@ class PhasePlan:
 
 
 class SequenceController:
-    """(t, q, v=None) -> (v, diagnostics) driving the tasks of a PhasePlan (the order of every controller).
+    """The :class:`~uvms.control.base.Controller` of a PhasePlan's tasks on a kinematic plant:
+    ``Command(velocity=v, info=SolverResult)``.
 
     Args:
         robot: the model.
         plan: the targets.
-        method: a solver of :data:`uvms.solvers.SOLVERS` that takes any number of levels (e.g. "clik": all
-            tasks stacked; "task_priority": vehicle > distance > frames and joints).
+        solver: a solver that takes any number of levels (e.g. CLIK: all tasks stacked; task priority:
+            vehicle > distance > frames and joints), built once per level set.
         hold_vehicle: keep the vehicle at rest (a floating/planar base); False lets it move.
-        options: the solver's keywords (e.g. gain, damping, priority = "classic" or "robust").
 
     Raises:
-        UVMSError: an unknown method, or one that needs a fixed number of levels; the solver's own errors.
+        UVMSError: a solver that needs a fixed number of levels; the solver's own errors.
     """
 
-    def __init__(self, robot: Robot, plan: PhasePlan, *, method: str = "task_priority", hold_vehicle: bool = True,
-                 **options) -> None:
-        valid = [name for name, cls in SOLVERS.items() if cls.level_count is None]
-        if method not in valid:
-            raise UVMSError(f"unknown sequence solver {method!r}; valid: {', '.join(valid)}")
-        self.robot, self.plan, self.method = robot, plan, method
+    def __init__(self, robot: Robot, plan: PhasePlan, solver: SolverFactory, *, hold_vehicle: bool = True) -> None:
+        if solver.cls.level_count is not None:
+            raise UVMSError(f"a sequence needs a solver of any number of levels (vehicle, distance, frames and "
+                            f"joints); {solver.cls.__name__} needs {solver.cls.level_count}")
+        self.robot, self.plan = robot, plan
         self.frame_tasks = [FrameTask(robot, frame, axes=POSITION_AXES) for frame in plan.frames]
         start = plan(0.0).joints
         self.joint_task = JointTask(robot, {name: value for name, (value, _) in start.items()}) if start else None
@@ -189,8 +189,7 @@ class SequenceController:
         if hold_vehicle and robot.base_type != "fixed":
             self.vehicle_task = VehicleTask(robot, velocities={name: 0.0 for name in VELOCITY_NAMES[robot.base_type]})
         # one solver per level set, built once: without the distance task, and with it when a phase sets one
-        cls = SOLVERS[method]
-        self.solvers: dict[bool, Solver] = {with_distance: cls(robot, self.levels(with_distance), **options)
+        self.solvers: dict[bool, Solver] = {with_distance: solver(self.levels(with_distance))
                                             for with_distance in ((False, True) if plan.uses_distance else (False,))}
         self._configuration: Configuration | None = None  # moved to each q asked about
 
@@ -215,15 +214,18 @@ class SequenceController:
                   primary]
         return [level for level in levels if level]
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray | None = None) -> tuple[np.ndarray, SolverResult]:
-        """(v (nv,), the SolverResult) at (t, q)."""
+    def reset(self, state: State, t: float = 0.0) -> None:
+        """Nothing to reset: the targets depend on time only."""
+
+    def command(self, state: State, t: float) -> Command:
+        """``Command(velocity=v (nv,), info=the SolverResult)`` at (t, q)."""
         targets = self.set_targets(t)
         if self._configuration is None:
-            self._configuration = Configuration(self.robot, q, check=False)
+            self._configuration = Configuration(self.robot, state.q, check=False)
         else:
-            self._configuration.update(q, check=False)
+            self._configuration.update(state.q, check=False)
         result = self.solvers[targets.distance is not None].velocity(self._configuration)
-        return result.v, result
+        return Command(velocity=result.v, info=result)
 
 
 def frame_errors(robot: Robot, plan: PhasePlan, t: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:

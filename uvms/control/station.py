@@ -14,16 +14,18 @@ Per control step (period dt), from the measured (q, v):
    the levels ``[[VehicleTask(nu_measured)], inequalities..., task]`` (a vehicle level at the top fixes the
    vehicle columns for every priority method), so enforced inequalities keep holding for the arm.
 
-CLIK has no priorities: its levels would be stacked and traded off, not held. With CLIK the vehicle's given
-velocity nu is taken out of the task: qd_arm = J_a^# (K e + xdot_d - J_v nu) (DLS ``damping``): the same law
-as the priority methods' with the vehicle level on top, without inequalities. Where the vehicle's velocity is
-given to the task (CLIK, or a solver that puts the pose objective above the task), the vehicle's reference then
-adds the part of the task the arm cannot give: of r = K e + xdot_d - J v, the part r_v outside the range of
-the arm's columns, nu_ref = nu_pose + J_v^# r_v, translation first
+A solver that does not hold its levels by priority (:attr:`~uvms.solvers.base.Solver.holds_priorities` False:
+CLIK stacks them and trades them off) is given the vehicle's velocity nu as fixed columns instead: built free
+floating on a vehicle held still (momentum rows [I | 0], so its generalized Jacobian is the arm's columns J_a),
+on the task whose feedforward is less what the vehicle gives (:class:`GivenColumns`), it solves the arm alone,
+qd_arm = J_a^# (K e + xdot_d - J_v nu) for CLIK, and the vehicle's part is nu. Where the vehicle's velocity is
+given to the task (fixed columns, or a solver that puts the pose objective above the task), the vehicle's
+reference then adds the part of the task the arm cannot give: of r = K e + xdot_d - J v, the part r_v outside
+the range of the arm's columns, nu_ref = nu_pose + J_v^# r_v, translation first
 (:func:`uvms.control.coordination.vehicle_rates_for_task`). An able arm leaves none; a vehicle without an arm
 carries the whole task, the pose objective acting only in the task's null space.
 
-Station keeping (:func:`station_keeping`) is one case: a held end-effector point and the CLIK law.
+Station keeping (:func:`station_keeping`) is one case: a held end-effector point and CLIK.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
+from ..dynamics.plant.command import State
 from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
@@ -41,13 +44,16 @@ from ..dynamics.thrusters.fins import Fins
 from ..dynamics.thrusters.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError, ThrusterLayoutWarning
 from ..robot.configuration import Configuration
+from ..robot.kinematics import held_vehicle_split
 from ..robot.robot import Robot
-from ..solvers.base import Solver
+from ..solvers.base import SolverFactory
+from ..solvers.clik import CLIKSolver
 from ..solvers.stack import stacked_terms
 from ..tasks.frame import FrameTask
+from ..tasks.task import Task
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
-from .coordination import CoordinatedControl, arm_rates_for_task, vehicle_rates_for_task
+from .coordination import CoordinatedControl, vehicle_rates_for_task
 from .vehicle import (
     DEFAULT_BANDWIDTH,
     DEFAULT_DAMPING_RATIO,
@@ -58,8 +64,30 @@ from .vehicle import (
     velocity_gains,
 )
 
-#: levels -> a solver built on them (the scenario's class and options); None: the CLIK law (module docstring).
-SolverFactory = Callable[[list], Solver]
+
+class GivenColumns(Task):
+    """A task whose first columns' velocity is given: its terms with the feedforward less what they give,
+    xdot_d - J[:, :n] nu (the task the arm is left with when the vehicle's velocity nu is fixed).
+
+    Args:
+        task: the task; count: the given columns n (the vehicle's).
+
+    Attributes:
+        velocity: nu (n,) the given columns' velocity, set before each solve.
+    """
+
+    def __init__(self, task: Task, count: int) -> None:
+        self.task, self.dim, self.velocity = task, task.dim, np.zeros(count)
+
+    def error(self, state: Configuration) -> np.ndarray:
+        return self.task.error(state)
+
+    def jacobian(self, state: Configuration) -> np.ndarray:
+        return self.task.jacobian(state)
+
+    def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        jacobian, error, feedforward = self.task.terms(state)
+        return jacobian, error, feedforward - jacobian[:, :self.velocity.size] @ self.velocity
 
 
 class ActuatedKinematics:
@@ -72,17 +100,17 @@ class ActuatedKinematics:
         trajectory: t [s] -> a sample with ``pose`` (pin.SE3) and ``twist`` (6,) world [m/s, rad/s] the task
             follows, or None: no end-effector task, the arm held (zero joint rates).
         vehicle_target: world_M_base the vehicle's station [m, rad].
-        solver: levels -> Solver (built twice, once per level order), or None: the CLIK law.
+        solver: the solver, built per level set (twice with priorities: once per level order; once with fixed
+            columns). Where the vehicle's pose objective goes relative to the task is the solver's
+            :attr:`~uvms.solvers.base.Solver.vehicle_level`: 0 above it, 1 or None below. Below, the task takes
+            the vehicle too and the pose objective brings the vehicle back to its station in the task's null
+            space (the arm does the work while it can); above (and with fixed columns), the arm follows the task
+            with the vehicle's velocity given, and the vehicle adds what the arm cannot give (a vehicle without an
+            arm carries the whole task). The vehicle's added share is not bounded by saturation feedback (which
+            bounds the pose objective).
         inequalities: the levels of inequality objectives the solver enforces, highest first.
-        gain: K [1/s] of the CLIK law; damping: its DLS damping.
+        gain: K [1/s] and damping: the DLS damping of the vehicle's added share.
         base_placement: the base frame in the vehicle joint's frame (``Robot.base_placement``; None: identity).
-        vehicle_level: where the vehicle's pose objective goes relative to the task: 0 above it, 1 or None below
-            (the solver's :attr:`~uvms.solvers.base.Solver.vehicle_level`). Below, the task takes the vehicle too
-            and the pose objective brings the vehicle back to its station in the task's null space (the arm does
-            the work while it can); above (and with the CLIK law), the arm follows the task with the vehicle's
-            velocity given, and the vehicle adds what the arm cannot give (a vehicle without an arm carries the
-            whole task). The vehicle's added share is not bounded by saturation feedback (which bounds the pose
-            objective).
 
     Raises:
         SolverInputError: a non-floating base, a bad gain, or a solver that refuses the levels.
@@ -90,9 +118,8 @@ class ActuatedKinematics:
 
     def __init__(self, robot: Robot, pose: VehiclePoseController, task: FrameTask,
                  trajectory: Callable[[float], object] | None, *, vehicle_target: pin.SE3,
-                 solver: SolverFactory | None = None, inequalities: Sequence[Sequence] = (), gain: float = 1.0,
-                 damping: float = 0.01, base_placement: pin.SE3 | None = None,
-                 vehicle_level: int | None = None) -> None:
+                 solver: SolverFactory, inequalities: Sequence[Sequence] = (), gain: float = 1.0,
+                 damping: float = 0.01, base_placement: pin.SE3 | None = None) -> None:
         if robot.base_type != "floating":
             raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
         self.robot, self.pose, self.task, self.trajectory = robot, pose, task, trajectory
@@ -102,15 +129,27 @@ class ActuatedKinematics:
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
-        reference = [task]
-        reference.insert(len(reference) if vehicle_level is None else vehicle_level, [self._vehicle_reference])
-        self.reference_solver = None if solver is None else solver([*levels, *reference])
-        #: the vehicle's velocity is given to the task (the CLIK law, a pose objective above it): the vehicle then
+        nb, vehicle_level = robot.n_vehicle, solver.cls.vehicle_level
+        self._given: GivenColumns | None = None  # the task with the vehicle's columns given (fixed columns)
+        self._momentum = None  # the configuration's momentum rows: a vehicle held still with fixed columns
+        if solver.cls.holds_priorities:
+            reference = [task]
+            reference.insert(len(reference) if vehicle_level is None else vehicle_level, [self._vehicle_reference])
+            self.reference_solver = solver([*levels, *reference])
+            self.arm_solver = solver([[self._vehicle_measured], *levels, task])
+        else:  # the vehicle's velocity as fixed columns (module docstring): one solver for both
+            self._given = GivenColumns(task, nb)
+            self._momentum = lambda q: held_vehicle_split(nb, robot.n_arm)  # noqa: ARG005 - constant rows
+            self.reference_solver = self.arm_solver = solver([*levels, self._given], free_floating=True)
+        #: the vehicle's velocity is given to the task (fixed columns, a pose objective above it): the vehicle then
         #: adds the part of the task the arm cannot give (all of it without an arm)
-        self.vehicle_given = solver is None or vehicle_level == 0
-        self.arm_solver = None if solver is None else solver([[self._vehicle_measured], *levels, task])
+        self.vehicle_given = self._given is not None or vehicle_level == 0
         self._configuration: Configuration | None = None
         self._time: float | None = None
+
+    def reset(self, state: State, t: float = 0.0) -> None:
+        """Forget the trajectory's sample the task points at (nothing else is kept between steps)."""
+        self._time = None
 
     def _at(self, t: float, q: np.ndarray) -> Configuration:
         """The configuration at q (one kept, updated), the task pointed at the trajectory's sample of t."""
@@ -120,7 +159,7 @@ class ActuatedKinematics:
             self.task.set_target_velocity(sample.twist, check=False)
             self._time = t
         if self._configuration is None:
-            self._configuration = Configuration(self.robot, q, check=False)
+            self._configuration = Configuration(self.robot, q, check=False, momentum=self._momentum)
         else:
             self._configuration.update(q, check=False)
         return self._configuration
@@ -139,10 +178,10 @@ class ActuatedKinematics:
         nb = self.robot.n_vehicle
         if self.trajectory is None:
             return np.concatenate([vehicle, np.zeros(self.robot.n_arm)]), None
-        if self.reference_solver is None:  # the CLIK law
-            jacobian, error, feedforward = stacked_terms(configuration, [self.task])
-            arm = arm_rates_for_task(jacobian, self.gain * error + feedforward, vehicle, nb, damping=self.damping)
-            v, result = np.concatenate([vehicle, arm]), None
+        if self._given is not None:  # fixed columns: the arm solved with the vehicle's velocity given
+            self._given.velocity[:] = vehicle
+            result = self.reference_solver.velocity(configuration)
+            v = np.concatenate([vehicle, result.v[nb:]])
         else:
             level = self._vehicle_reference if reference else self._vehicle_measured
             level.velocity_values[:] = vehicle
@@ -198,7 +237,7 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                     arm_damping: float = 0.01, frame: str | None = None) -> CoordinatedControl:
     """The controller of ``plant`` holding the vehicle at its pose of q0 and the end-effector point at ``ee_target``
     (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held): :func:`actuated_control` with
-    a held point and the CLIK law. The default gains, scaled to the vehicle's inertia, hold the BlueROV2 + Alpha 5
+    a held point and CLIK. The default gains, scaled to the vehicle's inertia, hold the BlueROV2 + Alpha 5
     in a 0.3 m/s current to 5 cm and a 1.9 t RexROV-sized vehicle to 3 mm (tests/control/test_vehicle_gains.py).
 
     Args:
@@ -231,14 +270,15 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                      damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO,
                      pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                      priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
-                     vehicle_level: int | None = None, fins: Fins | None = None) -> CoordinatedControl:
+                     fins: Fins | None = None) -> CoordinatedControl:
     """The whole chain on ``plant``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
 
     Args:
         plant: the simulated plant; its robot and hydrodynamics are the controller's model, without the
             current unless ``knows_current``.
         thrusters: the vehicle's thrusters; q0: (nq,) the station; dt: control period [s].
-        task, trajectory, solver, inequalities, gain, damping, vehicle_level: as in :class:`ActuatedKinematics`.
+        task, trajectory, inequalities, gain, damping: as in :class:`ActuatedKinematics`.
+        solver: as in :class:`ActuatedKinematics`; None: CLIK with K = ``gain`` and the DLS ``damping``.
         coordination, saturation_feedback: as in :class:`uvms.control.coordination.CoordinatedControl`.
         kp [N s/m, N m s/rad], ki [N/m, N m/rad]: velocity PI gains (6,) or numbers; None (default): derived
             from ``bandwidth`` omega [rad/s] and ``damping_ratio`` zeta (6,) or numbers and the vehicle's inertia
@@ -252,6 +292,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
             alone.
     """
     robot = plant.robot
+    if solver is None:
+        solver = SolverFactory(CLIKSolver, robot, {"gain": gain, "damping": damping})
     model = Plant(robot, plant.hydro if knows_current else plant.hydro.with_current(np.zeros(3)),
                   gravity=plant.gravity, motor_time_constant=plant.motor_time_constant,
                   added_mass=plant.added_mass, damping=plant.damping)
@@ -268,7 +310,6 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
     pose = VehiclePoseController(velocity, pose_gains, max_speed)
     kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) *
                                    model.robot.base_placement, solver=solver, inequalities=inequalities, gain=gain,
-                                   damping=damping, base_placement=model.robot.base_placement,
-                                   vehicle_level=vehicle_level)
+                                   damping=damping, base_placement=model.robot.base_placement)
     return CoordinatedControl(robot, velocity, kinematic, dt, coordination=coordination and trajectory is not None,
                               saturation_feedback=saturation_feedback)

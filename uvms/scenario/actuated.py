@@ -28,7 +28,7 @@ from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
-from ..solvers import SOLVERS, CLIKSolver, Solver
+from ..solvers.base import Solver, SolverFactory
 from ..tasks.frame import FrameTask
 from .inequalities import ObjectiveRecorder, ScenarioInequalities, build_inequalities
 from .spec import ScenarioSpec, SimulationSpec
@@ -66,13 +66,6 @@ def check_actuated_scenario(robot: Robot, spec: ScenarioSpec) -> None:
     if isinstance(solver.gain, tuple):
         raise ScenarioError("plant.thrusters = true: solver.gain is one number (K [1/s] of every level; the levels "
                             "are the inequalities, the vehicle's pose objective and the task)")
-    if SOLVERS[solver.method] is CLIKSolver and (solver.alpha or solver.enforce_limits or solver.weights
-                                                   or solver.damping_epsilon):
-        raise ScenarioError("plant.thrusters = true with solver.method = 'clik': CLIK has no priorities to hold the "
-                            "vehicle's velocity above the task, so the arm is solved with the vehicle's given: "
-                            "J_a^# (K e + xdot_d - J_v nu) (solver.gain, a fixed solver.damping); solver.alpha, "
-                            "enforce_limits, weights and damping_epsilon are not used. For joint limits use "
-                            "solver.method = 'set_based' or 'hqp' with an [[inequalities]] joint_limits table")
     if spec.vehicle.changed():
         raise ScenarioError("plant.thrusters = true: the vehicle holds its station by the vehicle controller's pose "
                             "objective (vehicle_control.pose_gains, max_speed), not a [vehicle] task; remove "
@@ -114,23 +107,32 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
     """The thrusters of the model and the whole chain of the scenario (:func:`uvms.control.station.actuated_control`).
 
     Args:
-        solver: the scenario's solver class, built with ``options`` on the chain's levels (CLIK: the vehicle
-            given, no levels). The scenario's ``[[inequalities]]`` are levels above the task when the solver
-            enforces them, else monitored.
+        solver: the scenario's solver class, built with ``options`` on the chain's levels (a solver without
+            priorities, CLIK: the vehicle's velocity given as fixed columns). The scenario's ``[[inequalities]]``
+            are levels above the task when the solver enforces them, else monitored.
     """
     check_actuated_scenario(robot, spec)
+    section = spec.solver
+    if not solver.holds_priorities and (section.alpha or section.enforce_limits or section.weights
+                                        or section.damping_epsilon):
+        raise ScenarioError(f"plant.thrusters = true with solver.method = {section.method!r}: it has no priorities "
+                            "to hold the vehicle's velocity above the task, so the arm is solved with the vehicle's "
+                            "velocity given as fixed columns: J_a^# (K e + xdot_d - J_v nu) (solver.gain, a fixed "
+                            "solver.damping); solver.alpha, enforce_limits, weights and damping_epsilon are not "
+                            "supported there. For joint limits use solver.method = 'set_based' or 'hqp' with an "
+                            "[[inequalities]] joint_limits table")
     try:
         thrusters = thrusters_of(robot)
         fins = fins_of(robot)
     except UVMSError as exc:
         raise ScenarioError(f"plant.thrusters = true: {exc}") from None
-    control, section, tables = spec.vehicle_control, spec.solver, spec.inequalities
+    control, tables = spec.vehicle_control, spec.inequalities
     inequalities = build_inequalities(robot, tables, solver) if tables else None
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
         controller = actuated_control(
             plant, thrusters, q0, float(spec.simulation.dt), task, trajectory,
-            solver=None if solver is CLIKSolver else lambda levels: solver(robot, levels, **options),
+            solver=SolverFactory(solver, robot, options),
             inequalities=enforced, coordination=control.coordination,
             saturation_feedback=control.saturation_feedback, knows_current=control.knows_current,
             kp=optional_gain(control.kp), ki=optional_gain(control.ki),
@@ -139,8 +141,7 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
             pose_gains=np.asarray(control.pose_gains, dtype=float),
             max_speed=np.asarray(control.max_speed, dtype=float),
             priorities=allocation_priorities(control.priorities), arm_feedforward=control.arm_feedforward,
-            gain=float(section.gain), damping=float(section.damping), vehicle_level=solver.vehicle_level,
-            fins=fins)
+            gain=float(section.gain), damping=float(section.damping), fins=fins)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None
     return Actuation(plant, thrusters, controller, inequalities, fins)

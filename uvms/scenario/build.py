@@ -9,11 +9,13 @@ import numpy as np
 
 from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
+from ..control.tracking import TrackingController
 from ..dynamics.plant.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..numerics.integrate import stage_times, step_count
 from ..robot.robot import Robot
-from ..solvers import SOLVERS, CLIKSolver, Solver, VariableDamping, initial_configuration
+from ..solvers import SOLVERS, Solver, VariableDamping, initial_configuration
+from ..solvers.base import SolverFactory
 from ..tasks import FrameTask, JointLimitPotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
@@ -23,7 +25,6 @@ from .plant import check_kinematic_plant, make_plant
 from .record import scenario_model
 from .spec import NUMBER, ScenarioSpec, SolverSpec
 from .spec.keys import thaw
-from .tracking import TrackingController
 from .trajectories import make_trajectory
 
 #: [solver] keys -> the solver constructor's keyword they set (solver.method and solver.joint_limit_weights,
@@ -85,7 +86,7 @@ def build(spec: ScenarioSpec) -> Setup:
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(spec.plant.control_dt), inequalities=inequalities)
     check_kinematic_plant(spec.plant)
-    inequalities = (build_inequalities(robot, spec.inequalities, SOLVERS[spec.solver.method])
+    inequalities = (build_inequalities(robot, spec.inequalities, solver_class(spec.solver))
                     if spec.inequalities else None)
     dt, integrator = float(spec.simulation.dt), spec.simulation.integrator
     times = stage_times(check_step_count(spec, duration), dt, integrator)  # every time the run asks for
@@ -98,11 +99,7 @@ def build(spec: ScenarioSpec) -> Setup:
 def build_sequence(robot: Robot, spec: ScenarioSpec) -> Setup:
     """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.control.sequence)."""
     solver, frames = spec.solver, spec.task.frames or robot.ee_frames
-    if SOLVERS[solver.method].level_count is not None:
-        valid = [name for name, cls in SOLVERS.items() if cls.level_count is None]
-        raise ScenarioError(f"a sequence scenario needs solver.method in {', '.join(valid)} (a solver of any number "
-                            f"of levels: vehicle, distance, frames and joints), got {solver.method!r}")
-    solver_type = solver_class(solver)
+    solver_type = solver_class(solver, any_levels="a sequence scenario")  # levels: vehicle, distance, frames, joints
     if spec.initial.method != "given" or not isinstance(solver.gain, NUMBER):
         raise ScenarioError("a sequence scenario needs initial.method = 'given' and one number for solver.gain")
     q0, _ = initial_q(robot, None, spec)
@@ -112,8 +109,8 @@ def build_sequence(robot: Robot, spec: ScenarioSpec) -> Setup:
     plan = PhasePlan(robot, q0, frames, phases)
     options = solver_options(robot, solver, solver_type, float(spec.simulation.dt))
     try:
-        controller = SequenceController(robot, plan, method=solver.method, hold_vehicle=spec.vehicle.hold,
-                                        **options)
+        controller = SequenceController(robot, plan, SolverFactory(solver_type, robot, options),
+                                        hold_vehicle=spec.vehicle.hold)
     except UVMSError as exc:
         raise ScenarioError(f"solver: {exc}") from None
     return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller,
@@ -221,29 +218,36 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
     inequalities = (build_inequalities(robot, spec.inequalities, cls) if spec.inequalities else None)
     taken = solver_options(robot, solver, cls, control_dt or dt)  # the step: the controller's period
     options = {key: value for key, value in taken.items() if key in ("dt", "priority", "eta", "regularization")}
-    if cls is CLIKSolver:
-        options.pop("dt")  # CLIK steps nothing (no clamping)
     try:
         controller = GJMController(robot, trajectory, frame=task.frame, axes=task.axes, gain=gain,
                                    damping=solver_damping(solver), weights=solver_weights(robot, solver, True),
                                    gjm=section.gjm, hydro=plant.hydro if plant.links else None,
                                    motor_feedforward=plant.motor_time_constant if section.motor_feedforward else 0.0,
-                                   solver=cls, levels=inequalities.levels if inequalities and inequalities.enforced
-                                   else (), options=options)
+                                   solver=SolverFactory(cls, robot, options),
+                                   levels=inequalities.levels if inequalities and inequalities.enforced else ())
     except UVMSError as exc:
         raise ScenarioError(f"plant/solver ({solver.method}): {exc}") from None
     return plant, controller, inequalities
 
 
-def solver_class(solver: SolverSpec) -> type[Solver]:
-    """The class of solver.method, every [solver] key the user set checked against what it takes.
+def solver_class(solver: SolverSpec, any_levels: str = "") -> type[Solver]:
+    """The class of solver.method, every [solver] key the user set checked against what it takes: the one place
+    a scenario's method is looked up in :data:`uvms.solvers.SOLVERS` (controllers get a SolverFactory of it).
+
+    Args:
+        solver: the [solver] section; any_levels: what needs a solver of any number of levels (e.g. a sequence
+            scenario), refused a method of a fixed number (""; any method).
 
     Raises:
-        ScenarioError: a key set (not at its default) that the method's constructor does not take; the
-            message lists the keys it takes.
+        ScenarioError: a method of a fixed number of levels for ``any_levels``; a key set (not at its default)
+            that the method's constructor does not take; the message lists the keys it takes.
     """
     method = solver.method
     cls = SOLVERS[method]
+    if any_levels and cls.level_count is not None:
+        valid = [name for name, other in SOLVERS.items() if other.level_count is None]
+        raise ScenarioError(f"{any_levels} needs solver.method in {', '.join(valid)} (a solver of any number of "
+                            f"levels), got {method!r}")
     taken = cls.options()
     refused = [key for key in solver.changed(tuple(SOLVER_KEYWORDS))
                if SOLVER_KEYWORDS[key] not in taken]
@@ -310,9 +314,9 @@ def solver_weights(robot: Robot, solver: SolverSpec, free_floating: bool) -> np.
 
 def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, spec: ScenarioSpec,
                     inequalities: ScenarioInequalities | None = None) -> TrackingController:
-    """(t, q, v=None) -> (v, diagnostics) for the scenario's solver method, following ``samples`` (the trajectory).
+    """The tracking controller of the scenario's solver method, following ``samples`` (the trajectory).
 
-    The solver is ``SOLVERS[solver.method]``, built once. Its levels: the ``[[inequalities]]`` (highest first)
+    The solver is :func:`solver_class`'s, built once. Its levels: the ``[[inequalities]]`` (highest first)
     when it enforces them (else the recorder monitors them), then the task, and the ``[vehicle]`` task at the
     level the solver puts it (:attr:`~uvms.solvers.base.Solver.vehicle_level`) when it uses one.
     """
@@ -330,10 +334,9 @@ def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, spec:
         gains.insert(cls.vehicle_level, vehicle.gain)
         options["gain"] = gains
     try:
-        built = cls(robot, levels, **options)  # its inputs checked here, not at every evaluation
+        return TrackingController(robot, task, samples, SolverFactory(cls, robot, options), levels)
     except UVMSError as exc:
         raise ScenarioError(f"solver ({solver.method}): {exc}") from None
-    return TrackingController(robot, task, samples, built)
 
 
 def check_step_count(spec: ScenarioSpec, duration: float) -> int:

@@ -22,7 +22,8 @@ import pinocchio as pin
 
 from ..dynamics.hydro.parameters import HydroParameters
 from ..dynamics.identification.data import IdentificationLog
-from ..dynamics.plant.actuated import ActuatedCommand, ActuatedPlant
+from ..dynamics.plant.actuated import ActuatedPlant
+from ..dynamics.plant.command import Command, State
 from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.thrusters import thrusters_of
 from ..errors import IdentificationError, ScenarioError, UVMSError
@@ -119,8 +120,12 @@ class ExcitationControl:
         """B^+ tau(t) (n,) [N], before saturation."""
         return self.allocation @ self.wrench(t)
 
-    def __call__(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
-        return ActuatedCommand(self.arm(t), self.actuated.saturate(self.thrust(t)), {})
+    def reset(self, state: State, t: float = 0.0) -> None:
+        """Nothing to reset: the commands depend on time only."""
+
+    def command(self, state: State, t: float) -> Command:
+        """The arm's and the thrusters' commands at t [s] (:class:`uvms.control.base.Controller`)."""
+        return Command(arm=self.arm(t), thrust=self.actuated.saturate(self.thrust(t)), info={})
 
     def peak_ratio(self, duration: float, dt: float) -> float:
         """The largest |thrust command| over its limit on the run's steps (> 1: the excitation saturates)."""

@@ -14,11 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..control.base import Controller
+from ..dynamics.plant.command import State, refuse_fields
 from ..errors import ConfigurationError, StepCountError, UVMSError
 from ..robot import kinematics
 from ..robot.robot import Robot
 from ..tasks.frame import FrameTask
-from .system import Controller, StageRate
+from .system import StageRate
 
 EMPTY = np.zeros(0)
 
@@ -31,12 +33,16 @@ class KinematicSample:
     info: object
 
 
+#: What a kinematic plant applies of a Command.
+TAKEN = ("velocity",)
+
+
 class KinematicSystem:
-    """q' = v from a kinematic controller (t, q, None) -> (v, diagnostics); no vector state.
+    """q' = v from a controller's ``Command(velocity=v, info=diagnostics)``; no vector state.
 
     Args:
-        robot: the model; controller: (t, q, None) -> (v (nv,), diagnostics with sigma_min, damping,
-            limits_active), with an optional ``velocity(t, q) -> v`` (the same v without the diagnostics).
+        robot: the model; controller: a :class:`~uvms.control.base.Controller` whose command's ``info`` has
+            sigma_min, damping and limits_active (a SolverResult), asked at every integrator stage.
         control_dt: must be 0: a kinematic controller is evaluated at every integrator stage.
 
     Raises:
@@ -50,7 +56,7 @@ class KinematicSystem:
         self.robot, self.model, self.controller = robot, robot.model, controller
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """(q0 checked, empty).
+        """(q0 checked, empty); the controller reset there.
 
         Raises:
             ConfigurationError: a bad q0, or a v0 (a kinematic run has no velocity state).
@@ -58,27 +64,31 @@ class KinematicSystem:
         if v0 is not None:
             raise ConfigurationError("v0 is the initial velocity of a plant; a kinematic run has no velocity state "
                                      "(give a Plant to simulate, or leave v0 out)")
-        return self.robot.check_configuration(q0).copy(), EMPTY
+        q = self.robot.check_configuration(q0).copy()
+        self.controller.reset(State(q), 0.0)
+        return q, EMPTY
 
     def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> KinematicSample:
         """The velocity applied from q at t.
 
         Raises:
-            UVMSError: a non-finite velocity.
+            UVMSError: a command without a velocity, with a field a kinematic plant cannot apply, or a velocity
+                not nv finite numbers.
         """
-        v, info = self.controller(t, q, None)
+        command = self.controller.command(State(q), t)
+        refuse_fields(command, TAKEN, "a kinematic plant", t)
+        v = command.velocity
+        if v is None or np.shape(v) != (self.model.nv,):
+            raise UVMSError(f"the controller must send Command(velocity=...) of {self.model.nv} numbers (the robot's "
+                            f"nv) at t = {t:.6g} s, got {v!r}")
         if not all(map(math.isfinite, np.ravel(v).tolist())):  # one pass over Python floats: 0.4 us, not 2.4
             raise UVMSError(f"the controller returned a non-finite velocity at t = {t:.6g} s")
-        return KinematicSample((v, EMPTY), info)
+        return KinematicSample((v, EMPTY), command.info)
 
     def stage_rate(self, sample: KinematicSample) -> StageRate:
-        """(t, q, x) -> (controller velocity, empty) at the stages (the controller's ``velocity(t, q)`` when it
-        has one: the same v without the diagnostics no one reads there)."""
-        velocity = getattr(self.controller, "velocity", None)
-        if velocity is not None:
-            return lambda t, q, x: (velocity(t, q), EMPTY)
-        controller = self.controller
-        return lambda t, q, x: (controller(t, q, None)[0], EMPTY)
+        """(t, q, x) -> (the controller's velocity, empty) at the stages."""
+        command = self.controller.command
+        return lambda t, q, x: (command(State(q), t).velocity, EMPTY)
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: KinematicSample) -> dict:
         """v and the solver's diagnostics of a row."""

@@ -3,18 +3,21 @@
 The loop integrates a system (:class:`uvms.sim.system.System`) with one of the integrators of
 :mod:`uvms.numerics.integrate` (explicit Euler, RK4 Munthe-Kaas on the manifold) and records a row per step
 through the system and any number of recorders, into the one immutable :class:`uvms.sim.result.SimulationResult`.
-What is simulated decides the system:
+Every system drives its controller one way, the :class:`uvms.control.base.Controller` protocol: reset at the
+start, ``command(state, t) -> Command`` at each control step. What is simulated decides the system and the
+command's fields it applies:
 
-* a ``Robot``: q' = v from a kinematic controller (t, q, None) -> (v, diagnostics)
+* a ``Robot``: q' = ``Command.velocity`` (a tracking or sequence controller)
   (:class:`uvms.sim.kinematic.KinematicSystem`);
-* a ``Plant`` (rigid or hydrodynamic): the passive free-floating plant under a joint-velocity command — the GJM
-  controller, any (t, q, v) -> u, a constant u or None (:class:`uvms.dynamics.plant.plant.PlantSystem`);
-* an ``ActuatedPlant`` (plant + thrusters): under a digital vehicle controller such as station keeping
-  (:class:`uvms.dynamics.plant.actuated.ActuatedPlantSystem`).
+* a ``Plant`` (rigid or hydrodynamic): the passive free-floating plant under the joint-velocity command
+  ``Command.arm`` — the GJM controller, an :class:`uvms.control.base.OpenLoop` or None (zero)
+  (:class:`uvms.dynamics.plant.system.PlantSystem`);
+* an ``ActuatedPlant`` (plant + thrusters): ``Command.arm``, ``thrust`` and ``fins`` from a digital controller such
+  as the actuated chain (:class:`uvms.dynamics.plant.actuated.ActuatedPlantSystem`).
 
 ::
 
-    simulate(robot, clik, q0, 10.0, 0.01, task=task, desired=lambda t: trajectory(t).pose)
+    simulate(robot, tracking, q0, 10.0, 0.01, task=task, desired=lambda t: trajectory(t).pose)
     simulate(plant, gjm_controller, q0, 8.0, 0.01)
     simulate(ActuatedPlant(plant, thrusters), station_keeping(plant, thrusters, q0, 0.01), q0, 6.0, 0.01)
 """
@@ -27,6 +30,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
+from ..control.base import Controller
 from ..errors import UVMSError
 from ..io.progress import compile_notice, progress_bar
 from ..numerics.integrate import STEPS, check_integrator, step_count
@@ -34,7 +38,7 @@ from ..robot.robot import Robot
 from ..tasks.frame import FrameTask
 from .kinematic import KinematicSystem, TaskRecorder
 from .result import SimulationResult
-from .system import Controller, Recorder, Simulable, System
+from .system import Recorder, Simulable, System
 
 __all__ = ["run_loop", "simulate"]
 
@@ -81,7 +85,7 @@ def run_loop(system: System, q0: np.ndarray, x0: np.ndarray, *, steps: int, dt: 
 
 def simulate(
     system: Robot | Simulable,
-    controller: Controller,
+    controller: Controller | None,
     q0: np.ndarray,
     duration: float,
     dt: float,
@@ -99,9 +103,8 @@ def simulate(
     Args:
         system: a ``Robot`` (kinematic run), a ``Plant`` (passive free-floating) or an ``ActuatedPlant`` (module
             docstring); anything with ``system(controller, dt=, control_dt=) -> System``.
-        controller: what drives it: a kinematic controller (t, q, None) -> (v, diagnostics) for a Robot; a
-            joint-velocity command (t, q, v) -> u (n_arm,) (the GJM controller), a constant (n_arm,) or None
-            (zero) for a Plant; (t, q, v, thrusts) -> ActuatedCommand for an ActuatedPlant.
+        controller: what drives it, a :class:`uvms.control.base.Controller` (reset at the start, then
+            ``command(state, t)``), or None for a Plant: no joint command (zero).
         q0: initial configuration (nq,); v0: initial velocity (nv,) of a plant (None: rest).
         duration, dt: [s]; the number of steps is round(duration / dt), at least 1 and at most
             :data:`uvms.numerics.integrate.MAX_STEPS` (:func:`uvms.numerics.integrate.step_count`).
@@ -122,14 +125,21 @@ def simulate(
     Raises:
         StepCountError: no step or too many, a control_dt that is not a multiple of dt (checked before anything
             runs).
-        UVMSError: an unknown integrator, task without desired, bad q0 or v0, a controller returning non-finite
-            or wrongly sized values, a state that becomes non-finite (step too large).
+        UVMSError: an unknown integrator, task without desired, bad q0 or v0, a controller without
+            ``command``, one returning non-finite or wrongly sized values or a field the plant cannot apply, a
+            state that becomes non-finite (step too large).
     """
     integrator = check_integrator(integrator)
     steps = step_count(duration, dt)
     if (task is None) != (desired is None):
         raise UVMSError("task and desired go together: the task's frame and axes, and desired: t [s] -> the pose "
                         "(pin.SE3) the frame should have")
+    if controller is not None and not isinstance(controller, Controller):
+        raise UVMSError(f"the controller must have reset(state, t) and command(state, t) -> Command "
+                        f"(uvms.control.Controller; uvms.control.OpenLoop for commands of time alone), got "
+                        f"{type(controller).__name__}")
+    if controller is None and isinstance(system, Robot):
+        raise UVMSError("a kinematic run needs a controller (command(state, t) -> Command(velocity=...))")
     built = KinematicSystem(system, controller, control_dt) if isinstance(system, Robot) else \
         system.system(controller, dt=dt, control_dt=control_dt)
     q, x = built.initial_state(q0, v0)

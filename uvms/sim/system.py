@@ -21,17 +21,13 @@ from typing import Any, Protocol
 import numpy as np
 import pinocchio as pin
 
+from ..control.base import Controller
 from ..robot.robot import Robot
 
 #: The rate of a state at an integrator stage: (t [s], q (nq,), x (m,)) -> (w (nv,) tangent at q, xdot (m,)).
 StageRate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 #: A recorder maps (t [s], q (nq,), x (m,), sample) to more series of a row, name -> value.
 Recorder = Callable[[float, np.ndarray, np.ndarray, Any], dict]
-#: Every controller takes (t [s], q (nq,), v): v the plant's velocity (nv,), or None in a kinematic run. A kinematic
-#: controller returns (v (nv,) to integrate, diagnostics with sigma_min, damping, limits_active); a plant command
-#: returns the joint-velocity command u (n_arm,); an actuated plant's controller takes (t, q, v, thrusts) and
-#: returns an :class:`uvms.dynamics.plant.actuated.ActuatedCommand`.
-Controller = Callable[..., Any]
 
 
 class Sample(Protocol):
@@ -47,7 +43,8 @@ class System(Protocol):
     model: pin.Model  # the manifold q lives on (the robot's, or the plant's copy)
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """(q (nq,), x (m,)) at t = 0 from q0 and the initial velocity v0 (nv,) (None: rest), both checked.
+        """(q (nq,), x (m,)) at t = 0 from q0 and the initial velocity v0 (nv,) (None: rest), both checked; the
+        controller reset there (``controller.reset(state, 0.0)``).
 
         Raises:
             ConfigurationError: q0 or v0 of the wrong size, non-finite, or v0 given to a system without velocity.
@@ -77,9 +74,10 @@ class System(Protocol):
 class Simulable(Protocol):
     """A plant that builds the system :func:`uvms.sim.loop.simulate` integrates (``Plant``, ``ActuatedPlant``)."""
 
-    def system(self, controller: Controller, *, dt: float, control_dt: float = 0.0) -> System:
-        """The system of this plant driven by ``controller``, integrated with steps of dt [s]; control_dt [s]:
-        the controller's period (0: evaluated at every integrator stage).
+    def system(self, controller: Controller | None, *, dt: float, control_dt: float = 0.0) -> System:
+        """The system of this plant driven by ``controller`` (``command(state, t)``; None: nothing commanded),
+        integrated with steps of dt [s]; control_dt [s]: the controller's period (0: asked at every integrator
+        stage).
 
         Raises:
             StepCountError: a control_dt the plant cannot run its controller at.

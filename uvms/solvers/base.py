@@ -13,7 +13,13 @@ What the scenario builder reads from a class, never from its name:
 * :meth:`Solver.options`: the keywords its constructor takes (a solver key a method does not take is refused);
 * :attr:`Solver.enforces_inequalities`: the ``[[inequalities]]`` become levels above the task (else monitored);
 * :attr:`Solver.vehicle_level`: where a ``[vehicle]`` task goes among the levels (None: not used);
-* :attr:`Solver.level_count`: the number of levels it needs (None: any).
+* :attr:`Solver.level_count`: the number of levels it needs (None: any);
+* :attr:`Solver.holds_priorities`: its levels are held by priority (a lower one in the null space of the higher
+  ones); False: stacked and traded off (CLIK). A controller that gives some velocities (the actuated chain's
+  vehicle) puts them on a level at the top of a solver that holds priorities, else fixes their columns.
+
+A controller receives its solver in one form, a :class:`SolverFactory` (the class and its options, built per
+level set); it asks the class's attributes above, never the class itself.
 """
 
 from __future__ import annotations
@@ -21,8 +27,9 @@ from __future__ import annotations
 import inspect
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
-from typing import ClassVar
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -45,6 +52,7 @@ class Solver(ABC):
         enforces_inequalities: inequality objectives are levels it enforces (else a scenario monitors them).
         vehicle_level: the index a scenario's ``[vehicle]`` task takes in the levels (None: not used).
         level_count: the number of levels it needs (None: any number).
+        holds_priorities: its levels are held by priority (False: stacked and traded off, as CLIK does).
         robot: the model; free_floating: only the arm is solved, the vehicle follows momentum conservation.
     """
 
@@ -52,6 +60,7 @@ class Solver(ABC):
     enforces_inequalities: ClassVar[bool] = False
     vehicle_level: ClassVar[int | None] = None
     level_count: ClassVar[int | None] = None
+    holds_priorities: ClassVar[bool] = True
 
     robot: Robot
     free_floating: bool
@@ -91,6 +100,34 @@ class Solver(ABC):
                                    f"built for ({self.robot.name}), got {type(configuration).__name__}: build one with "
                                    f"Configuration(robot, q)")
         return configuration
+
+
+@dataclass(frozen=True)
+class SolverFactory:
+    """A solver class and its options, built on a level set: ``factory(levels, **keywords) -> Solver``.
+
+    The one form in which a controller receives its solver: it builds one per level set it needs (the actuated
+    chain's reference and coordination, a sequence's phases with and without a distance) and adds the keywords it
+    owns (e.g. the GJM controller's ``free_floating`` and gain), which win over ``options``. What the solver can
+    do is read from ``cls``'s attributes (:attr:`Solver.holds_priorities`, :attr:`Solver.enforces_inequalities`,
+    :attr:`Solver.vehicle_level`, :attr:`Solver.level_count`, :meth:`Solver.options`).
+
+    Attributes:
+        cls: the Solver class (e.g. of :data:`uvms.solvers.SOLVERS`); robot: the model it is built for;
+        options: its constructor's keywords.
+    """
+
+    cls: type[Solver]
+    robot: Robot
+    options: Mapping[str, Any] = field(default_factory=dict)
+
+    def __call__(self, levels: Sequence, **keywords: Any) -> Solver:
+        """The solver built on ``levels`` (highest first) with ``options`` and ``keywords``.
+
+        Raises:
+            SolverInputError: what the solver refuses (a bad level, option or value).
+        """
+        return self.cls(self.robot, levels, **{**self.options, **keywords})
 
 
 def checked_step(dt: float) -> float:

@@ -73,6 +73,7 @@ class CLIKSolver(Solver):
     """
 
     name = "clik"
+    holds_priorities = False  # levels are stacked: a given velocity is fixed columns, not a top level
 
     def __init__(
         self,

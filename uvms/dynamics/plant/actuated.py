@@ -14,8 +14,9 @@ and f moves towards it, f stays inside the bounds (delta likewise). A plant with
 :class:`uvms.dynamics.plant.plant.PlantSystem`. :class:`ActuatedPlant` (plant + thrusters) builds the system
 (:meth:`ActuatedPlant.system`).
 
-The controller is digital: called once per step at the step's start, its command held over the
-integrator's stages, as a vehicle computer at 1/dt does; its state (integrators) advances per call.
+The controller (:class:`uvms.control.base.Controller`) is digital: asked ``command(State(q, v, f, delta), t)``
+once per step at the step's start, its Command's ``arm``, ``thrust`` and ``fins`` held over the integrator's
+stages, as a vehicle computer at 1/dt does; its state (integrators) advances per call.
 
 Power terms for the energy balance (no current): d(kinetic + potential)/dt = thrust power (B f . nu_base,
 the sum of each thruster's f_i (B_i . nu)) + fin power (w_fins . nu_base, the drag's: <= 0 at rest angles)
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -33,28 +35,15 @@ import pinocchio as pin
 from ...errors import ConfigurationError, StepCountError, UVMSError
 from ..thrusters.fins import Fins
 from ..thrusters.thrusters import Thrusters, allocation_matrix
+from .command import Command, State, refuse_fields
 from .plant import Plant
 from .system import PlantDynamics, PlantSample, PlantSystem, check_finite_state
 
-#: The controller of an actuated plant: (t [s], q (nq,), v (nv,), f (n,) [N]) -> ActuatedCommand.
-ActuatedController = Callable[[float, np.ndarray, np.ndarray, np.ndarray], "ActuatedCommand"]
+if TYPE_CHECKING:  # the protocol lives with the controllers, above this layer
+    from ...control.base import Controller
 
-
-@dataclass(frozen=True)
-class ActuatedCommand:
-    """What the controller of an actuated plant sends for one step.
-
-    Attributes:
-        arm: joint-velocity command u (n_arm,) [rad/s or m/s].
-        thrust: thrust command f_cmd (n,) [N] (clipped to the bounds by the thrusters).
-        info: series to record for the row, name -> value (e.g. the wrench asked for).
-        fins: fin angle command delta_cmd (m,) [rad] (clipped to the fins' limits); empty without fins.
-    """
-
-    arm: np.ndarray
-    thrust: np.ndarray
-    info: dict
-    fins: np.ndarray = field(default_factory=lambda: np.zeros(0))
+#: What an actuated plant applies of a Command (no arm: zero; no fins: none).
+TAKEN = ("arm", "thrust", "fins")
 
 
 class ActuatedPlant:
@@ -111,8 +100,8 @@ class ActuatedPlant:
         """B f (6,) [N, N m], FLU at the base frame origin."""
         return self.matrix @ thrusts
 
-    def system(self, controller: ActuatedController, *, dt: float, control_dt: float = 0.0) -> ActuatedPlantSystem:
-        """This plant under ``controller`` (t, q, v, f) -> ActuatedCommand, called once per step of dt [s].
+    def system(self, controller: Controller, *, dt: float, control_dt: float = 0.0) -> ActuatedPlantSystem:
+        """This plant under ``controller`` (``command(state, t) -> Command``), asked once per step of dt [s].
 
         Raises:
             StepCountError: control_dt other than 0 or dt (the controller runs once per step).
@@ -174,13 +163,14 @@ class ActuatedSample:
     """The plant at the start of a step: the held commands and the dynamics they give.
 
     Attributes:
-        rate: (v (nv,), [v' (nv,), f' (n,), delta' (m,)]); command: the controller's ActuatedCommand;
+        rate: (v (nv,), [v' (nv,), f' (n,), delta' (m,)]); command: the controller's Command, checked (arm,
+            thrust and fins filled, info a dict);
         thrust_command: sat(f_cmd) (n,) [N]; dynamics: accelerations and motor torques;
         fin_command: sat(delta_cmd) (m,) [rad].
     """
 
     rate: tuple[np.ndarray, np.ndarray]
-    command: ActuatedCommand
+    command: Command
     thrust_command: np.ndarray
     dynamics: PlantDynamics
     fin_command: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -192,10 +182,11 @@ class ActuatedPlantSystem:
 
     Args:
         actuated: the ActuatedPlant.
-        controller: (t, q, v, f) -> ActuatedCommand, called once per step (see the module docstring).
+        controller: its ``command(state, t)`` asked once per step (see the module docstring); None: nothing
+            commanded (zero arm rates and thrusts).
     """
 
-    def __init__(self, actuated: ActuatedPlant, controller: ActuatedController) -> None:
+    def __init__(self, actuated: ActuatedPlant, controller: Controller | None) -> None:
         self.plant, self.thrusters, self.controller = actuated.plant, actuated, controller
         self.robot, self.model = actuated.robot, actuated.model
         self.nv, self.m = actuated.model.nv, actuated.m
@@ -208,18 +199,36 @@ class ActuatedPlantSystem:
             ConfigurationError: q0 or v0 of the wrong size or non-finite, a non-unit quaternion.
         """
         q, v = self._passive.initial_state(q0, v0)
-        return q, np.concatenate([v, self.thrusters.thrusts0, self.thrusters.fins.held])
+        x = np.concatenate([v, self.thrusters.thrusts0, self.thrusters.fins.held])
+        if self.controller is not None:
+            self.controller.reset(self._state(q, x), 0.0)
+        return q, x
 
-    def _command(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
-        command = self.controller(t, q, v, thrusts)
-        arm, thrust = np.asarray(command.arm, dtype=float), np.asarray(command.thrust, dtype=float)
-        fins = np.asarray(command.fins, dtype=float)
+    def _state(self, q: np.ndarray, x: np.ndarray) -> State:
+        """What the controller measures: (q, v, thrusts, fin angles)."""
+        v, thrusts, angles = self._split(x)
+        return State(q, v, thrusts, angles)
+
+    def _command(self, t: float, q: np.ndarray, x: np.ndarray) -> Command:
+        """The controller's Command at (t, q, x), its arm, thrust and fins filled (zero when not sent), checked.
+
+        Raises:
+            UVMSError: a field the plant cannot apply, or commands of the wrong size or non-finite.
+        """
+        if self.controller is None:
+            command = Command()
+        else:
+            command = self.controller.command(self._state(q, x), t)
+            refuse_fields(command, TAKEN, "an actuated plant (joint velocity servos, thrusters, fins)", t)
+        arm = np.zeros(self.plant.n_arm) if command.arm is None else np.asarray(command.arm, dtype=float)
+        thrust = np.zeros(self.thrusters.n) if command.thrust is None else np.asarray(command.thrust, dtype=float)
+        fins = self.thrusters.fins.held if command.fins is None else np.asarray(command.fins, dtype=float)
         if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
                 or not (np.all(np.isfinite(arm)) and np.all(np.isfinite(thrust)) and np.all(np.isfinite(fins))):
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")
-        return ActuatedCommand(arm, thrust, command.info, fins)
+        return Command(arm=arm, thrust=thrust, fins=fins, info={} if command.info is None else command.info)
 
     def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
               fin_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
@@ -238,8 +247,7 @@ class ActuatedPlantSystem:
 
     def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> ActuatedSample:
         """The controller's command at the step's start and the rate it gives."""
-        v, thrusts, _ = self._split(x)
-        command = self._command(t, q, v, thrusts)
+        command = self._command(t, q, x)
         saturated = self.thrusters.saturate(command.thrust)
         fins = self.thrusters.fins.saturate(command.fins)
         dynamics, rate = self._rate(q, x, command.arm, saturated, fins)

@@ -58,6 +58,8 @@ momentum live in :mod:`uvms.dynamics.plant.added_mass` (importable from here too
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import pinocchio as pin
 
@@ -66,7 +68,10 @@ from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_spl
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
-from .system import Command, PlantDynamics, PlantSystem
+from .system import PlantDynamics, PlantSystem
+
+if TYPE_CHECKING:  # the protocol lives with the controllers, above this layer
+    from ...control.base import Controller
 
 
 def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
@@ -144,11 +149,11 @@ class Plant:
         self._zero_velocity = np.zeros(self.model.nv)
         self._buoyant = self.gravity and self._stacked.buoyant
 
-    def system(self, controller: Command | np.ndarray | None, *, dt: float, control_dt: float = 0.0) -> PlantSystem:
+    def system(self, controller: Controller | None, *, dt: float, control_dt: float = 0.0) -> PlantSystem:
         """This plant under a joint-velocity command, the system :func:`uvms.sim.loop.simulate` integrates.
 
         Args:
-            controller: (t, q, v) -> u (n_arm,) (e.g. the GJM controller), a constant (n_arm,), or None (zero).
+            controller: a Controller sending ``Command(arm=u (n_arm,))`` (e.g. the GJM controller), or None (zero).
             dt: integration step [s]; control_dt: the command's period [s] (0: evaluated at every stage).
 
         Raises:

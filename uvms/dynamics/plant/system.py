@@ -1,22 +1,26 @@
 """The free-floating plant under a joint-velocity command, as a system of the one loop (:mod:`uvms.sim.system`).
 
-(q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)), the command continuous (evaluated at every
-integrator stage) or digital (sampled every control_dt and held). :meth:`uvms.dynamics.plant.plant.Plant.system` builds
-it.
+(q, v)' = (v, plant acceleration at (q, v) under u = ``controller.command(State(q, v), t).arm``), the controller
+continuous (asked at every integrator stage) or digital (asked every control_dt, its command held).
+:meth:`uvms.dynamics.plant.plant.Plant.system` builds it.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 from ...errors import StepCountError, UVMSError
+from .command import State, refuse_fields
 
-#: A joint-velocity command: (t [s], q (nq,), v (nv,)) -> u (n_arm,) [rad/s or m/s].
-Command = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+if TYPE_CHECKING:  # the protocol lives with the controllers, above this layer
+    from ...control.base import Controller
+
+#: What a passive plant applies of a Command.
+TAKEN = ("arm",)
 #: The rate at an integrator stage: (t [s], q (nq,), v (nv,)) -> (v (nv,), v' (nv,)).
 StageRate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
@@ -68,52 +72,54 @@ class PlantSample:
 class PlantSystem:
     """The plant under a joint-velocity command, as the state (q, v) of :func:`uvms.sim.loop.run_loop`.
 
-    (q, v)' = (v, plant acceleration at (q, v) under u = command(t, q, v)). A command with a
-    ``tracking(t, q, v) -> dict`` method (a tracking controller, e.g. the GJM controller, with its ``frame`` and
-    task ``rows``) has its series recorded with the plant's.
+    (q, v)' = (v, plant acceleration at (q, v) under u = ``controller.command(State(q, v), t).arm``). A controller
+    with a ``tracking(t, q, v) -> dict`` method (a tracking controller, e.g. the GJM controller, with its ``frame``
+    and task ``rows``) has its series recorded with the plant's.
 
     Args:
         plant: the Plant.
-        command: (t, q, v) -> u (n_arm,), a constant (n_arm,), or None (zero).
-        dt: the integration step [s]; control_dt: 0 (default): the command is evaluated at every integrator
-            stage; > 0, a multiple of dt: a digital controller, sampled every control_dt [s] and held in between.
+        controller: a :class:`uvms.control.base.Controller` sending ``Command(arm=u (n_arm,))``, or None (zero).
+        dt: the integration step [s]; control_dt: 0 (default): the controller is asked at every integrator
+            stage; > 0, a multiple of dt: a digital controller, asked every control_dt [s], held in between.
 
     Raises:
-        ConfigurationError: a constant command of the wrong size or non-finite.
         StepCountError: control_dt not 0 nor a positive multiple of dt.
     """
 
-    def __init__(self, plant: Plant, command: Command | np.ndarray | None, *, dt: float,
+    def __init__(self, plant: Plant, controller: Controller | None, *, dt: float,
                  control_dt: float = 0.0) -> None:
         self.plant, self.robot, self.model = plant, plant.robot, plant.model
-        self.controller = command
-        if command is None:
-            command = np.zeros(plant.n_arm)
-        if not callable(command):
-            value = plant.robot.check_velocity(command, plant.n_arm, "joint-velocity command")
-            command = lambda t, q, v: value  # noqa: E731
-        self.command = command
+        self.controller = controller
+        self._zero = np.zeros(plant.n_arm)
         self.dt, self.every = float(dt), control_steps(control_dt, dt)
         self.held: np.ndarray | None = None  # the digital controller's output, held between its samples
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """(q0, v0) checked (v0 None: rest).
+        """(q0, v0) checked (v0 None: rest); the controller reset there.
 
         Raises:
             ConfigurationError: q0 or v0 of the wrong size or non-finite, a non-unit quaternion.
         """
         robot = self.robot
         q = robot.check_configuration(q0).copy()
-        return q, np.zeros(self.model.nv) if v0 is None else robot.check_velocity(v0).copy()
+        v = np.zeros(self.model.nv) if v0 is None else robot.check_velocity(v0).copy()
+        if self.controller is not None:
+            self.controller.reset(State(q, v), 0.0)
+        return q, v
 
     def command_at(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """u (n_arm,) at (t, q, v), checked.
+        """u (n_arm,) at (t, q, v), checked (no controller: zero).
 
         Raises:
-            UVMSError: the command failed, or is not n_arm finite numbers.
+            UVMSError: a field the plant cannot apply (torques, thrusts), or an arm command that is not n_arm
+                finite numbers.
         """
+        if self.controller is None:
+            return self._zero
+        command = self.controller.command(State(q, v), t)
+        refuse_fields(command, TAKEN, "a plant without thrusters (joint velocity servos)", t)
         try:
-            u = np.asarray(self.command(t, q, v), dtype=float)
+            u = np.asarray(self._zero if command.arm is None else command.arm, dtype=float)
         except (TypeError, ValueError) as exc:
             raise UVMSError(f"the command failed at t = {t:.6g} s: {exc}") from None
         if u.shape != (self.plant.n_arm,) or not np.all(np.isfinite(u)):
