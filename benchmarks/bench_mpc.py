@@ -28,6 +28,7 @@ import numpy as np
 from uvms.control.mpc.controller import MPCController
 from uvms.control.mpc.settings import MPCSettings
 from uvms.dynamics.plant.actuated import ActuatedPlant
+from uvms.dynamics.plant.command import State
 from uvms.scenario.build import build
 from uvms.scenario.inequalities import vehicle_tilt
 from uvms.scenario.schema import read_scenario
@@ -73,10 +74,10 @@ def main() -> None:
     for label, settings in CONFIGURATIONS[:1] if args.quick else CONFIGURATIONS:
         mpc = MPCController(setup.plant, thrusters, lambda t: trajectory(t).pose.translation, frame=setup.task.frame,
                             settings=settings, floor=floor)
-        mpc.reset(setup.q0)
-        mpc.command(setup.q0, np.zeros(setup.robot.nv), 0.0)  # numba compiles/loads the derivative kernel
-        mpc.reset(setup.q0)
-        result = simulate(plant, mpc.actuated, setup.q0, args.duration, dt, task=setup.task, desired=desired,
+        mpc.reset(State(setup.q0))
+        mpc.command(State(setup.q0, np.zeros(setup.robot.nv)), 0.0)  # numba compiles/loads the derivative kernel
+        mpc.reset(State(setup.q0))
+        result = simulate(plant, mpc, setup.q0, args.duration, dt, task=setup.task, desired=desired,
                           progress=False)
         times = 1e3 * np.array(mpc.solve_times)
         rows.append((label, summary(result, thrusters), {

@@ -36,6 +36,6 @@ def test_a_model_name_names_the_default_folder_only_when_plain():
 
 
 def test_the_scenario_layer_uses_the_same_rule():
-    from uvms.scenario import schema
+    from uvms.scenario.spec import scenario
 
-    assert schema.is_plain_name is is_plain_name and schema.NAME_RULE is uvms.io.names.NAME_RULE
+    assert scenario.is_plain_name is is_plain_name and scenario.NAME_RULE is uvms.io.names.NAME_RULE

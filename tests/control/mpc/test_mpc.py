@@ -13,6 +13,7 @@ import pytest
 from uvms.control.mpc import require_crocoddyl
 from uvms.control.mpc.settings import MPCSettings
 from uvms.dynamics.plant.actuated import ActuatedPlant
+from uvms.dynamics.plant.command import State
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.thrusters import thrusters_of
 from uvms.errors import UVMSError
@@ -40,7 +41,7 @@ def controller(settings: MPCSettings, target=None, the_plant: Plant | None = Non
     start = robot.fk(q0).translation
     target = (lambda t: start) if target is None else target(start)
     mpc = MPCController(the_plant, thrusters_of(robot), target, settings=settings)
-    mpc.reset(q0)
+    mpc.reset(State(q0))
     return mpc, q0
 
 
@@ -114,7 +115,7 @@ def test_a_solve_from_rest_holds_the_thrusts_within_their_bounds():
     within the thrusters' and the joints' bounds at every node."""
     mpc, q0 = controller(MPCSettings(horizon=10, node_dt=0.1, iterations=5),
                          target=lambda start: (lambda t: start + np.array([0.0, 0.1, 0.0])))
-    command = mpc.command(q0, np.zeros(q0.size - 1), 0.0)
+    command = mpc.command(State(q0, np.zeros(q0.size - 1)), 0.0)
     thrusters = thrusters_of(shipped("bluerov2_alpha5"))
     assert np.all(np.isfinite(command.thrust)) and np.abs(command.thrust).max() > 1.0
     for u in mpc.solver.us:
@@ -130,7 +131,7 @@ def test_the_closed_loop_keeps_the_jaws_on_a_moving_target_in_an_unknown_current
                          target=lambda start: (lambda t: start + np.array([0.0, 0.05 * t, 0.0])))
     the_plant = plant()
     thrusters = thrusters_of(the_plant.robot)
-    result = simulate(ActuatedPlant(the_plant, thrusters), mpc.actuated, q0, 0.6, 0.01, progress=False)
+    result = simulate(ActuatedPlant(the_plant, thrusters), mpc, q0, 0.6, 0.01, progress=False)
     frame = the_plant.robot.frame_id()
     errors = []
     for t, q in zip(result.t, result.q):

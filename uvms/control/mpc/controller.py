@@ -1,8 +1,8 @@
 """The whole-body MPC controller: each control step, Box-FDDP on the plant's model from the measured state.
 
-Its surface is the controllers': ``reset(q, v, t)`` and ``command(q, v, t)`` -> the thrusts [N] and the arm's
-velocity commands (an :class:`uvms.dynamics.plant.actuated.ActuatedCommand`); :meth:`MPCController.actuated` is the
-(t, q, v, f) callable an :class:`~uvms.dynamics.plant.actuated.ActuatedPlant` runs. Every control_period it sets the
+It is a :class:`uvms.control.base.Controller`: ``reset(state, t)`` and ``command(state, t)`` -> a
+:class:`~uvms.dynamics.plant.command.Command` with the thrusts [N] and the arm's velocity commands, what an
+:class:`~uvms.dynamics.plant.actuated.ActuatedPlant` applies. Every control_period it sets the
 problem's initial state to the measurement and the nodes' targets to the trajectory over the horizon, shifts the
 previous solution by the time gone (the warm start) and runs a few Box-FDDP iterations; the first node's input is
 applied and held until the next solve.
@@ -16,7 +16,7 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from ...dynamics.plant.actuated import ActuatedCommand
+from ...dynamics.plant.command import Command, State
 from ...dynamics.plant.plant import Plant
 from ...dynamics.thrusters.thrusters import Thrusters, allocation_matrix
 from ...errors import UVMSError
@@ -83,7 +83,7 @@ class MPCController:
         self.lower, self.upper = lower, upper
         self.solve_times: list[float] = []  # [s] per solve
         self.iterations: list[int] = []
-        self._held: ActuatedCommand | None = None
+        self._held: Command | None = None
         self._solved_at: float | None = None
         self._last: tuple | None = None  # (q, v, t, thrusts) at the last solve: the estimate's
         self._xs: list[np.ndarray] = []
@@ -94,11 +94,11 @@ class MPCController:
         """The prediction horizon [s]."""
         return self.settings.duration
 
-    def reset(self, q: np.ndarray, v: np.ndarray | None = None, t: float = 0.0) -> None:
+    def reset(self, state: State, t: float = 0.0) -> None:
         """Start from the state (q (nq,), v (nv,); None: rest) at t [s]: the station is the vehicle's pose and the
         arm's joints there, level at the vehicle's heading; the first guess holds the state with zero input."""
-        q = self.robot.check_configuration(q)
-        v = np.zeros(self.robot.model.nv) if v is None else self.robot.check_velocity(v)
+        q = self.robot.check_configuration(state.q)
+        v = np.zeros(self.robot.model.nv) if state.v is None else self.robot.check_velocity(state.v)
         station = np.concatenate([q, np.zeros(self.robot.model.nv)])
         yaw = pin.rpy.matrixToRpy(pin.Quaternion(q[6], *q[3:6]).toRotationMatrix())[2]
         level = pin.rpy.rpyToMatrix(0.0, 0.0, yaw)
@@ -113,16 +113,17 @@ class MPCController:
         self.solve_times.clear()
         self.iterations.clear()
 
-    def command(self, q: np.ndarray, v: np.ndarray, t: float, thrusts: np.ndarray | None = None) -> ActuatedCommand:
-        """The thrusts (n,) [N] and arm velocity commands (n_arm,) for the measured (q, v) at t [s].
+    def command(self, state: State, t: float) -> Command:
+        """The thrusts (n,) [N] and arm velocity commands (n_arm,) for the measured state (q, v, thrusts) at t [s].
 
         Solves when a control period has passed since the last solve (or at the first call), else holds. With the
         measured thrusts (n,) [N] and ``settings.lag_compensation``, the thrust command is the one that brings the
         thrusters' first-order response to the planned thrust at the end of the control period (the lag the
         prediction leaves out), f_cmd = (f_plan - f e^(-h/tau)) / (1 - e^(-h/tau)), clipped to the bounds.
         """
+        q, v, thrusts = state.q, state.v, state.thrusts
         if not self._xs:
-            self.reset(q, v, t)
+            self.reset(state, t)
         period = self.settings.control_period
         if self._held is not None and t < self._solved_at + period - 1e-9:
             return self._held
@@ -134,12 +135,8 @@ class MPCController:
             planned = self._held.thrust
             thrust = np.clip((planned - decay * np.asarray(thrusts, dtype=float)) / (1.0 - decay),
                              self.lower[:self.n], self.upper[:self.n])
-            self._held = ActuatedCommand(self._held.arm, thrust, self._held.info)
+            self._held = Command(arm=self._held.arm, thrust=thrust, info=self._held.info)
         return self._held
-
-    def actuated(self, t: float, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray) -> ActuatedCommand:
-        """The controller of an ActuatedPlant: (t, q, v, thrusts) -> :meth:`command`."""
-        return self.command(q, v, t, thrusts)
 
     def _estimate(self, q: np.ndarray, v: np.ndarray, t: float, thrusts: np.ndarray) -> None:
         """Update the estimated wrench on the vehicle from the last period's mismatch (measured - predicted vehicle
@@ -156,7 +153,7 @@ class MPCController:
         prediction.disturbance = prediction.disturbance + gain * prediction.wrench_of(
             dynamics.mass_matrix[:nb, :nb] @ mismatch)
 
-    def _solve(self, x0: np.ndarray, t: float) -> ActuatedCommand:
+    def _solve(self, x0: np.ndarray, t: float) -> Command:
         settings = self.settings
         shift = 0 if self._solved_at is None else int(round((t - self._solved_at) / settings.node_dt))
         shift = min(max(shift, 0), settings.horizon)
@@ -177,6 +174,6 @@ class MPCController:
         self._solved_at = t
         first = np.clip(self._us[0], self.lower, self.upper)
         thrust, arm = self.prediction.split(first)
-        return ActuatedCommand(arm.copy(), thrust.copy(), {"mpc_solve_time": elapsed,
-                                                           "mpc_iterations": float(self.solver.iter),
-                                                           "mpc_cost": float(self.solver.cost)})
+        return Command(arm=arm.copy(), thrust=thrust.copy(), info={"mpc_solve_time": elapsed,
+                                                                   "mpc_iterations": float(self.solver.iter),
+                                                                   "mpc_cost": float(self.solver.cost)})
