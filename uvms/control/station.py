@@ -45,6 +45,7 @@ from ..robot.robot import Robot
 from ..solvers.base import Solver
 from ..solvers.stack import stacked_terms
 from ..tasks.frame import FrameTask
+from ..tasks.objectives import JointVelocityLimits
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, arm_rates_for_task, vehicle_rates_for_task
@@ -73,7 +74,8 @@ class ActuatedKinematics:
             follows, or None: no end-effector task, the arm held (zero joint rates).
         vehicle_target: world_M_base the vehicle's station [m, rad].
         solver: levels -> Solver (built twice, once per level order), or None: the CLIK law.
-        inequalities: the levels of inequality objectives the solver enforces, highest first.
+        inequalities: the levels of inequality objectives the solver enforces, highest first; with any, the arm's
+            speed limits (the model's) are a level above them (the solver scales the task first, never clips).
         gain: K [1/s] of the CLIK law; damping: its DLS damping.
         base_placement: the base frame in the vehicle joint's frame (``Robot.base_placement``; None: identity).
         vehicle_level: where the vehicle's pose objective goes relative to the task: 0 above it, 1 or None below
@@ -102,6 +104,8 @@ class ActuatedKinematics:
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
+        if levels:  # the arm's speed limits held by the hierarchy (the task scaled first), not clipped after it
+            levels.insert(0, [JointVelocityLimits(robot, name="arm_speed_limits")])
         reference = [task]
         reference.insert(len(reference) if vehicle_level is None else vehicle_level, [self._vehicle_reference])
         self.reference_solver = None if solver is None else solver([*levels, *reference])
@@ -231,7 +235,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                      damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO,
                      pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                      priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
-                     vehicle_level: int | None = None, fins: Fins | None = None) -> CoordinatedControl:
+                     vehicle_level: int | None = None, fins: Fins | None = None, acceleration_feedforward: bool = True,
+                     servo_compensation: bool = True) -> CoordinatedControl:
     """The whole chain on ``plant``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
 
     Args:
@@ -239,7 +244,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
             current unless ``knows_current``.
         thrusters: the vehicle's thrusters; q0: (nq,) the station; dt: control period [s].
         task, trajectory, solver, inequalities, gain, damping, vehicle_level: as in :class:`ActuatedKinematics`.
-        coordination, saturation_feedback: as in :class:`uvms.control.coordination.CoordinatedControl`.
+        coordination, saturation_feedback, acceleration_feedforward, servo_compensation: as in
+            :class:`uvms.control.coordination.CoordinatedControl`.
         kp [N s/m, N m s/rad], ki [N/m, N m/rad]: velocity PI gains (6,) or numbers; None (default): derived
             from ``bandwidth`` omega [rad/s] and ``damping_ratio`` zeta (6,) or numbers and the vehicle's inertia
             M_ii at q0, kp = 2 zeta omega M_ii, ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`); a
@@ -271,4 +277,5 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                                    damping=damping, base_placement=model.robot.base_placement,
                                    vehicle_level=vehicle_level)
     return CoordinatedControl(robot, velocity, kinematic, dt, coordination=coordination and trajectory is not None,
-                              saturation_feedback=saturation_feedback)
+                              saturation_feedback=saturation_feedback,
+                              acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation)

@@ -37,6 +37,8 @@ VEHICLE_CONTROL: dict[str, tuple] = {  # plant.thrusters: the vehicle loop, the 
     "priorities": (list, [], None),
     "coordination": (bool, True, None),
     "arm_feedforward": (bool, True, None),
+    "acceleration_feedforward": (bool, True, None),  # the reference's acceleration through the model's inertia
+    "servo_compensation": (bool, True, None),  # the arm's servo lag inverted over the step
     "knows_current": (bool, False, None),
     "saturation_feedback": (bool, False, None),  # the allocation's shortfall bounds the vehicle's reference
 }
