@@ -114,6 +114,9 @@ def test_saturation_feedback_lowers_the_end_effector_error(tmp_path):
     assert on["saturated_time_fraction"] > 0.5 and on["max_thrust_ratio"] <= 1.0  # measured 0.94
     assert on["max_position_error"] < off["max_position_error"] - 0.02  # measured 1.009 vs 1.041 m
     assert on["rms_position_error"] < off["rms_position_error"]  # measured 0.661 vs 0.671 m
+    # issue 48: the tilt kept (max 0.0873 rad) within 0.01 rad with it, not without: measured 0.097 vs 0.106 rad
+    assert on["max_vehicle_tilt"] < 0.0873 + 0.01 < off["max_vehicle_tilt"], (on["max_vehicle_tilt"],
+                                                                              off["max_vehicle_tilt"])
 
 
 def test_station_keeping_is_the_hold_case_of_the_chain(tmp_path):
