@@ -169,7 +169,8 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
         assert isinstance(controller, CoordinatedControl)
         result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)
         final[coordination] = result.actuation.controller["ee_point_error"][-1]
-    assert final[True] < 2e-3 and final[True] < 0.5 * final[False], final
+    # measured 1.10 vs 1.71 mm (the servo's lag compensated in both; 1.0 vs 2.1 mm before it was)
+    assert final[True] < 2e-3 and final[True] < 0.75 * final[False], final
 
 
 def test_station_keeping_says_which_directions_the_thrusters_cannot_hold():

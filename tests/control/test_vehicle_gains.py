@@ -91,7 +91,8 @@ def test_both_vehicles_recover_alike_with_the_default_gains(vehicles):
     for a, b in zip(bluerov, rexrov):
         assert np.abs(a - b).max() < 0.15 and a[-1] < 0.02 and b[-1] < 0.02
     position, attitude = _recovery(*vehicles["rexrov"], BLUEROV_SIZED)
-    assert np.abs(position - bluerov[0]).max() > 0.5 and attitude[-1] > 0.9  # measured 0.92, 1.03
+    # measured 0.87, 0.90 (0.92, 1.03 before the reference's acceleration was fed forward, issue 48)
+    assert np.abs(position - bluerov[0]).max() > 0.5 and attitude[-1] > 0.8
 
 
 def _station(vehicle, current: float, gains: dict) -> dict:
@@ -112,7 +113,8 @@ def _station(vehicle, current: float, gains: dict) -> dict:
 def test_both_vehicles_hold_station_in_a_current_with_the_default_gains(vehicles):
     """0.3 m/s from ahead. Measured (default gains): BlueROV2 vehicle 4.85 cm, end effector 2.06 cm, tilt 0.020 rad,
     thrust ratio 0.18; RexROV 0.30 cm, 0.14 cm, 0.0009 rad, 0.16 (limits of 1000 N assumed). With the BlueROV2-sized
-    gains the RexROV drifts 23 cm, tilts 0.096 rad and its end effector is 13 cm off."""
+    gains the RexROV drifts 7.7 cm, tilts 0.034 rad and its end effector is 1.4 cm off (23 cm, 0.096 rad and 13 cm
+    before the reference's acceleration was fed forward, issue 48)."""
     bluerov = _station(vehicles["bluerov2"], 0.3, {})
     rexrov = _station(vehicles["rexrov"], 0.3, {})
     assert bluerov["vehicle"] < 0.06 and bluerov["ee"] < 0.025 and bluerov["tilt"] < 0.03, bluerov
@@ -120,7 +122,8 @@ def test_both_vehicles_hold_station_in_a_current_with_the_default_gains(vehicles
     for numbers in (bluerov, rexrov):
         assert numbers["final"] < 2e-3 and numbers["saturated"] == 0.0 and numbers["thrust_ratio"] < 0.3, numbers
     small = _station(vehicles["rexrov"], 0.3, BLUEROV_SIZED)
-    assert small["vehicle"] > 0.15 and small["tilt"] > 0.05 and small["ee"] > 0.1, small
+    assert small["vehicle"] > 5 * rexrov["vehicle"] and small["tilt"] > 5 * rexrov["tilt"], small
+    assert small["ee"] > 2 * rexrov["ee"], small
 
 
 def test_given_gains_win_over_the_derived_ones(vehicles):

@@ -50,6 +50,7 @@ from ..solvers.base import SolverFactory
 from ..solvers.clik import CLIKSolver
 from ..solvers.stack import stacked_terms
 from ..tasks.frame import FrameTask
+from ..tasks.objectives import JointVelocityLimits
 from ..tasks.task import Task
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
@@ -108,7 +109,8 @@ class ActuatedKinematics:
             with the vehicle's velocity given, and the vehicle adds what the arm cannot give (a vehicle without an
             arm carries the whole task). The vehicle's added share is not bounded by saturation feedback (which
             bounds the pose objective).
-        inequalities: the levels of inequality objectives the solver enforces, highest first.
+        inequalities: the levels of inequality objectives the solver enforces, highest first; with any, the arm's
+            speed limits (the model's) are a level above them (the solver scales the task first, never clips).
         gain: K [1/s] and damping: the DLS damping of the vehicle's added share.
         base_placement: the base frame in the vehicle joint's frame (``Robot.base_placement``; None: identity).
 
@@ -129,6 +131,8 @@ class ActuatedKinematics:
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
+        if levels:  # the arm's speed limits held by the hierarchy (the task scaled first), not clipped after it
+            levels.insert(0, [JointVelocityLimits(robot, name="arm_speed_limits")])
         nb, vehicle_level = robot.n_vehicle, solver.cls.vehicle_level
         self._given: GivenColumns | None = None  # the task with the vehicle's columns given (fixed columns)
         self._momentum = None  # the configuration's momentum rows: a vehicle held still with fixed columns
@@ -270,7 +274,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                      damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO,
                      pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                      priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
-                     fins: Fins | None = None) -> CoordinatedControl:
+                     fins: Fins | None = None, acceleration_feedforward: bool = True,
+                     servo_compensation: bool = True) -> CoordinatedControl:
     """The whole chain on ``plant``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
 
     Args:
@@ -279,7 +284,8 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
         thrusters: the vehicle's thrusters; q0: (nq,) the station; dt: control period [s].
         task, trajectory, inequalities, gain, damping: as in :class:`ActuatedKinematics`.
         solver: as in :class:`ActuatedKinematics`; None: CLIK with K = ``gain`` and the DLS ``damping``.
-        coordination, saturation_feedback: as in :class:`uvms.control.coordination.CoordinatedControl`.
+        coordination, saturation_feedback, acceleration_feedforward, servo_compensation: as in
+            :class:`uvms.control.coordination.CoordinatedControl`.
         kp [N s/m, N m s/rad], ki [N/m, N m/rad]: velocity PI gains (6,) or numbers; None (default): derived
             from ``bandwidth`` omega [rad/s] and ``damping_ratio`` zeta (6,) or numbers and the vehicle's inertia
             M_ii at q0, kp = 2 zeta omega M_ii, ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`); a
@@ -312,4 +318,5 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                                    model.robot.base_placement, solver=solver, inequalities=inequalities, gain=gain,
                                    damping=damping, base_placement=model.robot.base_placement)
     return CoordinatedControl(robot, velocity, kinematic, dt, coordination=coordination and trajectory is not None,
-                              saturation_feedback=saturation_feedback)
+                              saturation_feedback=saturation_feedback,
+                              acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation)

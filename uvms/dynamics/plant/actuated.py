@@ -149,6 +149,22 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     return plant.robot.base_placement.actInv(pin.Force(generalized)).vector
 
 
+def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: float | np.ndarray) -> np.ndarray:
+    """The command u held over one step dt [s] that brings a first-order lag x' = (u - x) / tau from ``rate`` x to
+    ``wanted`` at the step's end: u = x + (wanted - x) / (1 - exp(-dt / tau)) (the lag inverted over the step).
+
+    The arm's servos (:meth:`uvms.dynamics.plant.plant.Plant._evaluate`: qdd = (u - qd) / tau) reach the solver's
+    joint rates one step after they were asked instead of tau later; between the two rates x moves monotonically,
+    so a wanted rate within the speed limits is never passed. Each entry of ``wanted`` is reached exactly when the
+    command is held over the step (the digital controller of :class:`ActuatedPlantSystem`).
+
+    Args:
+        rate: x (n,) now; wanted: (n,) at the step's end; dt: the step [s] > 0; time_constant: tau (n,) or a
+            number [s] > 0.
+    """
+    return rate + (wanted - rate) / -np.expm1(-dt / np.asarray(time_constant, dtype=float))
+
+
 def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> float:
     """Power [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water)."""
     if not plant.damping or not plant.links:

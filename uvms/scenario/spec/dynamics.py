@@ -68,6 +68,12 @@ class VehicleControlSpec(Section):
     coordination: bool = key(True, bool,
         doc="solve the arm again with the measured vehicle velocity, so it takes up the vehicle's lag and drift")
     arm_feedforward: bool = key(True, bool, doc="feed the arm's reaction into the vehicle loop's model feedforward")
+    acceleration_feedforward: bool = key(True, bool,
+        doc="feed the reference's acceleration (the rate of the vehicle's velocity reference, low-passed over "
+            "0.1 s) through the model's inertia into the vehicle loop")
+    servo_compensation: bool = key(True, bool,
+        doc="command the arm's servos so that they reach the asked rate by the end of the control step (their "
+            "first-order lag inverted over the step)")
     knows_current: bool = key(False, bool,
         doc="the controller's model includes `plant.current`; false: the integral learns it")
     saturation_feedback: bool = key(False, bool,
