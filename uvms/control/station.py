@@ -238,7 +238,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                     damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO, pose_gains: float | np.ndarray = 1.5,
                     max_speed: float | np.ndarray | None = 0.5,
                     priorities=None, arm_feedforward: bool = True, ee_gain: float = 1.0,
-                    arm_damping: float = 0.01, frame: str | None = None) -> CoordinatedControl:
+                    arm_damping: float = 0.01, frame: str | None = None, acceleration_feedforward: bool = True,
+                    servo_compensation: bool = True) -> CoordinatedControl:
     """The controller of ``plant`` holding the vehicle at its pose of q0 and the end-effector point at ``ee_target``
     (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held): :func:`actuated_control` with
     a held point and CLIK. The default gains, scaled to the vehicle's inertia, hold the BlueROV2 + Alpha 5
@@ -246,7 +247,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
 
     Args:
         plant, thrusters, q0, dt: as in :func:`actuated_control`; so are coordination, knows_current, kp, ki,
-            bandwidth, damping_ratio, pose_gains, max_speed, priorities and arm_feedforward.
+            bandwidth, damping_ratio, pose_gains, max_speed, priorities, arm_feedforward, acceleration_feedforward
+            and servo_compensation.
         ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse.
         frame: the end-effector frame held (default: the model's first end effector).
 
@@ -262,7 +264,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                             coordination=coordination and not hold_arm, knows_current=knows_current, kp=kp, ki=ki,
                             bandwidth=bandwidth, damping_ratio=damping_ratio, pose_gains=pose_gains,
                             max_speed=max_speed, priorities=priorities,
-                            arm_feedforward=arm_feedforward, gain=ee_gain, damping=arm_damping)
+                            arm_feedforward=arm_feedforward, gain=ee_gain, damping=arm_damping,
+                            acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation)
 
 
 def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: float, task: FrameTask,
