@@ -58,10 +58,11 @@ def test_inconsistent_constraint_refused():
 
 
 def test_constraint_beyond_the_speed_limits_refused():
-    """A free-floating arm whose imposed rows need arm speeds beyond the model's limits: refused, not clipped."""
+    """A free-floating arm whose imposed rows need arm speeds beyond the model's limits (a stepped solver, given dt):
+    refused, not clipped."""
     robot = uvms.load(SCENARIOS.parent / "models" / "bluerov2_alpha5" / "uvms.urdf.xacro")
     configuration = uvms.Configuration(robot, robot.neutral())
     fast = VehicleTask(robot, velocities={"wz": 5.0})  # 5 rad/s of yaw from the arm's reaction alone
-    solver = ConstraintSolver(robot, [fast, held_task(robot, configuration.q)], free_floating=True)
+    solver = ConstraintSolver(robot, [fast, held_task(robot, configuration.q)], free_floating=True, dt=0.02)
     with pytest.raises(SolverInputError, match="limit velocity"):
         solver.velocity(configuration)

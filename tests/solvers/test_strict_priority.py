@@ -9,13 +9,13 @@ wall (n . (p - p0) of the jaws' frame).
 from __future__ import annotations
 
 import json
-import tomllib
 import warnings
 
 import coal
 import numpy as np
 import pinocchio as pin
 import pytest
+import tomllib
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 

@@ -10,13 +10,14 @@ forms (only the arm is solved; the vehicle follows momentum conservation).
 
 Bounded command (the paper's method has none): away from singularities the solution above is kept as it is;
 where [C; J] loses rank (sigma_min below :data:`SINGULAR_DAMPING`'s epsilon) the task rows are inverted in the
-constraints' null space with the variable damping of amundsen2018 eq. 6, and the task's part of v is scaled
-into the model's joint speed limits (``<limit velocity>``) and, given the step dt, into the position-rate bounds
-of its joint limits (:mod:`uvms.solvers.saturation`): the arm slows and stops at its limits, the task error grows
-instead. Measured: the pipe scenario of the BlueROV2 + Alpha 5 with the vehicle velocities held at 0 diverged
-(arm joint speeds up to 3.2e3 rad/s, joints 24.8 rad past their limits); bounded, the arm keeps within both.
+constraints' null space with the variable damping of amundsen2018 eq. 6. Given the step dt (a run that integrates
+the command; without it :meth:`ConstraintSolver.velocity` keeps the paper's solution), the task's part of v is
+scaled into the model's joint speed limits (``<limit velocity>``) and the position-rate bounds of its joint limits
+(:mod:`uvms.solvers.saturation`): the arm slows and stops at its limits, the task error grows instead. Measured:
+the pipe scenario of the BlueROV2 + Alpha 5 with the vehicle velocities held at 0 diverged (arm joint speeds up to
+3.2e3 rad/s, joints 24.8 rad past their limits); bounded, its arm keeps within both (0.35 rad/s at most).
 Constraints that cannot be met raise :class:`~uvms.errors.SolverInputError` (never a velocity that leaves
-them): rows C v = d without a solution, or a solution beyond the model's speed or position limits.
+them): rows C v = d without a solution, or (given dt) one beyond the model's speed or position limits.
 """
 
 from __future__ import annotations
@@ -25,10 +26,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..numerics.checks import prepared_gain
 from ..errors import ObjectiveError
-from ..numerics.checks import check_scalar
-from ..numerics.inverses import RCOND, SolverInputError, VariableDamping, pinv, smallest_singular_value, svd_inverse
+from ..numerics.checks import check_scalar, prepared_gain
+from ..numerics.inverses import SolverInputError, VariableDamping, pinv, smallest_singular_value, svd_inverse
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot, check_robot
 from ..tasks.objectives import JointLimits, JointVelocityLimits
@@ -36,12 +36,12 @@ from ..tasks.task import Task, as_task_list
 from .base import Solver, check_free_floating, full_velocity, level_gains
 from .result import SolvedRows, SolverResult
 from .saturation import TOLERANCE, RateRows, speed_maximum
+from .stack import stacked_terms
 
 #: The damping of the task rows where [C; J] is near singular (amundsen2018 eq. 6): none while sigma_min >= 0.05.
 SINGULAR_DAMPING = VariableDamping(0.05, 0.1)
 #: Residual |C v - d| [units of d] beyond which constraint rows have no solution (relative to 1 + |d|).
 CONSTRAINT_TOLERANCE = 1e-6
-from .stack import stacked_terms
 
 
 class ConstraintSolver(Solver):
@@ -52,10 +52,12 @@ class ConstraintSolver(Solver):
         levels: [constraints, tasks]: the constraint task(s) C v = d, then the task(s) J v = xdot.
         gain: one K for both, or [K of the constraint rows, K of the task rows] [1/s].
         free_floating: solve the arm only (generalized Jacobians), the vehicle by momentum conservation.
-        dt: step [s]; when given, the model's joint limits become position-rate bounds (module docstring).
+        dt: step [s]; when given, the task's part of v is kept inside the model's joint speed limits and the
+            position-rate bounds of its joint limits, and constraints that need more are refused (module docstring).
 
     Raises:
-        SolverInputError: not two levels of tasks, a bad gain or dt, free_floating on a fixed base.
+        SolverInputError: not two levels of tasks, a bad gain or dt, free_floating on a fixed base; at
+            :meth:`velocity`, constraints without a solution or (given dt) beyond the model's limits.
     """
 
     name = "kinematic_constraint"
@@ -76,9 +78,10 @@ class ConstraintSolver(Solver):
         self._command = prepared_gain(task_gain, sum(task.dim for task in self.tasks))
         self.size = robot.n_arm if self.free_floating else robot.nv
         self.dt = None if dt is None else check_scalar(dt, "dt", positive=True)
-        self.maximum = speed_maximum(robot.nv, [JointVelocityLimits(robot)] if robot.n_arm else [])  # (nv,)
+        bounded = self.dt is not None and robot.n_arm > 0
+        self.maximum = speed_maximum(robot.nv, [JointVelocityLimits(robot)] if bounded else [])  # (nv,)
         try:
-            limits = [JointLimits(robot)] if self.dt is not None and robot.n_arm else []
+            limits = [JointLimits(robot)] if bounded else []
         except ObjectiveError:  # no arm joint with finite limits
             limits = []
         rows = RateRows.of(limits)
@@ -126,6 +129,8 @@ class ConstraintSolver(Solver):
         Raises:
             SolverInputError: the constraints' part alone leaves them.
         """
+        if self.dt is None:
+            return solved
         saturated_sum_into, *constants = self._box
         contributions = np.array([constrained, solved - constrained])  # (2, n)
         velocities = (np.array([full_velocity(state, c, True) for c in contributions]) if self.free_floating

@@ -44,7 +44,6 @@ from ...robot.robot import Robot
 from .base import Inequality, finite_number
 from .obstacles import obstacle_shape
 
-
 #: Rows per pair: its witness and the points of the features tying with it
 #: (:meth:`~uvms.model.distances.PairDistances.contact_points`).
 POINTS = 5
