@@ -19,9 +19,11 @@ from conftest import shipped
 DT = 0.05
 
 
-def problem(robot: uvms.Robot, cls: type[Solver], free_floating: bool = False) -> tuple[uvms.FrameTask, Solver]:
+def problem(robot: uvms.Robot, cls: type[Solver], free_floating: bool = False,
+            step: bool = True) -> tuple[uvms.FrameTask, Solver]:
     """A frame task 5 cm away (x, y, z), the levels the class takes (a vehicle task where it uses one, joint
-    limits above where it enforces inequalities), and the solver built on them."""
+    limits above where it enforces inequalities), and the solver built on them (given dt where it takes one and
+    ``step``)."""
     q = robot.neutral()
     task = uvms.FrameTask(robot, axes=("x", "y", "z"))
     target = robot.fk(q, task.frame)
@@ -34,7 +36,7 @@ def problem(robot: uvms.Robot, cls: type[Solver], free_floating: bool = False) -
         heading = uvms.VehicleTask(robot, heading=0.1)
         levels.insert(cls.vehicle_level, heading)
     options = {"free_floating": free_floating}
-    if "dt" in cls.options():
+    if "dt" in cls.options() and (step or cls.name == "hqp"):
         options["dt"] = DT
     return task, cls(robot, levels, **options)
 
@@ -106,9 +108,10 @@ def rebuilt(robot: uvms.Robot, solver: Solver, task: uvms.FrameTask) -> Solver:
 
 @pytest.mark.parametrize("method", sorted(SOLVERS))
 def test_free_floating_conserves_the_momentum_with_every_solver(method, rng):
-    """A v = 0 with the centroidal map A (6, nv) at the configuration: the vehicle follows the arm."""
+    """A v = 0 with the centroidal map A (6, nv) at the configuration: the vehicle follows the arm (the solvers
+    unbounded where they can be: the kinematic constraint's heading would need arm speeds beyond the Alpha 5's)."""
     robot = shipped("bluerov2_alpha5")
-    _, solver = problem(robot, SOLVERS[method], free_floating=True)
+    _, solver = problem(robot, SOLVERS[method], free_floating=True, step=False)
     for q in configurations(robot, rng, 3):
         configuration = Configuration(robot, q)
         result = solver.velocity(configuration)

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 import uvms
 from uvms.errors import SolverInputError
 from uvms.numerics.inverses import damped_weighted_inverse, dls, dls_solve, pinv, variable_damping, weighted_pinv
+from uvms.solvers.constraints import SINGULAR_DAMPING
 from uvms.solvers.priority import prioritized
 from uvms.solvers.screws import davies_solve, network_matrix
 
@@ -228,7 +229,8 @@ def test_classic_priority_and_robust_differ_only_below_the_first_level(rng):
 # --------------------------------------------------------- kinematic constraint
 def santos_constraint_cases(rng, count=20):
     """Random santos2006 configurations with the end-effector task, the vehicle constraint and their solution
-    (the vehicle constraint's rows come first in ``result.command``: ``constraint_rows`` of them)."""
+    (the vehicle constraint's rows come first in ``result.command``: ``constraint_rows`` of them); those where
+    [C; J] is near singular are damped, not yielded."""
     robot = shipped("santos2006")
     for _ in range(count):
         q = robot.random_configuration(rng)
@@ -236,6 +238,9 @@ def santos_constraint_cases(rng, count=20):
         ee.set_target_velocity([0.3, -0.2, 0, 0, 0, 0.1])
         constraint = uvms.VehicleTask(robot, velocities={"vx": 0.0, "vy": 0.0}, heading=0.78)
         result = uvms.ConstraintSolver(robot, [constraint, ee]).velocity(uvms.Configuration(robot, q))
+        if result.sigma_min < SINGULAR_DAMPING.epsilon:  # near singular: damped (test_constraints.py), not exact
+            assert result.damping > 0
+            continue
         yield robot, q, ee, result, uvms.Configuration(robot, q)
 
 

@@ -12,12 +12,14 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from tests.conftest import ROOT
 from uvms.errors import FrameNotFound, LinkNotFound, ObjectiveError
 from uvms.model.collision import candidate_pairs, collision_geometry
 from uvms.model.distances import PairDistances
 from uvms.robot.configuration import Configuration
 from uvms.solvers import CLIKSolver, HQPSolver, SetBasedSolver
 from uvms.tasks.objectives import Obstacle, SelfCollision, inequalities_from_table
+from uvms.tasks.objectives.collision import POINTS
 
 BOX_ARM = Path(__file__).parents[1] / "fixtures" / "collision" / "box_arm.urdf"
 #: The jaw's target under the vehicle's bow: the straight path from above the bow passes through the vehicle.
@@ -46,29 +48,31 @@ def random_state(robot, rng):
 
 def test_self_collision_rows_are_the_nearest_pairs_distances_and_jacobians(robot, every_pair, rng):
     objective = SelfCollision(robot, min=0.02, band=0.05, pairs="all", count=3)
-    assert objective.dim == 3 and objective.links == candidate_pairs(robot, collision_geometry(robot)).links
+    assert objective.dim == 3 * POINTS and objective.links == candidate_pairs(robot, collision_geometry(robot)).links
     for _ in range(20):
         state = random_state(robot, rng)
         everything = every_pair.evaluate(state)
         nearest = np.argsort(everything.distance)[:3]
         rows = objective.rows(state)
-        np.testing.assert_allclose(rows.value, everything.distance[nearest], rtol=0, atol=1e-12)
-        np.testing.assert_allclose(rows.jacobian, every_pair.jacobian(state, everything.take(nearest), nearest),
-                                   atol=1e-12)
+        witness = rows.value[::POINTS]  # each pair's block: its witness, then its contact points (>= it)
+        np.testing.assert_allclose(witness, everything.distance[nearest], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(rows.jacobian[::POINTS],
+                                   every_pair.jacobian(state, everything.take(nearest), nearest), atol=1e-12)
+        assert np.all(rows.value.reshape(3, POINTS) >= witness[:, None] - 1e-9)
         np.testing.assert_array_equal(rows.value, objective.value(state))
         np.testing.assert_array_equal(rows.jacobian, objective.jacobian(state))
         inside = np.clip((rows.value - 0.02) / 0.05, 0, 1)
         np.testing.assert_allclose(rows.activation, 0.5 * (1 + np.cos(np.pi * inside)), atol=1e-12)
-        assert [d for *_, d in objective.nearest_pairs(state)] == list(rows.value)
+        assert [d for *_, d in objective.nearest_pairs(state)] == list(witness)
 
 
 def test_fewer_pairs_than_count_give_one_row_per_pair_and_listed_pairs_check_only_those(robot, every_pair, rng):
-    assert SelfCollision(robot, pairs="all", count=50).dim == every_pair.count == 8
+    assert SelfCollision(robot, pairs="all", count=50).dim == every_pair.count * POINTS == 8 * POINTS
     listed = SelfCollision(robot, pairs=[["jaw", "base_link"], ["link1", "link3"]], count=5)
-    assert listed.dim == 2 and listed.links == [("base_link", "jaw"), ("link1", "link3")]
+    assert listed.dim == 2 * POINTS and listed.links == [("base_link", "jaw"), ("link1", "link3")]
     state = random_state(robot, rng)
     everything = every_pair.evaluate(state)
-    np.testing.assert_allclose(listed.value(state), np.sort(everything.distance[[2, 6]]), atol=1e-12)
+    np.testing.assert_allclose(listed.value(state)[::POINTS], np.sort(everything.distance[[2, 6]]), atol=1e-12)
 
 
 @pytest.mark.parametrize(("options", "error", "words"), [
@@ -89,7 +93,7 @@ def test_an_obstacle_keeps_a_frame_without_shapes_clear_as_a_point_with_its_clos
     centre = np.array([0.5, -0.2, 0.3])
     sphere = Obstacle(robot, "sphere", radius=0.1, position=centre, frames=["j3"], count=1)
     plane = Obstacle(robot, "plane", point=[0, 0, -1], normal=[0, 0, 2], frames=["j3", "jaw"])
-    assert sphere.links == [("obstacle(sphere)", "j3")] and plane.dim == 2
+    assert sphere.links == [("obstacle(sphere)", "j3")] and plane.dim == 2 * POINTS
     frame = robot.frame_id("j3")
     for _ in range(10):
         state = random_state(robot, rng)
@@ -99,7 +103,7 @@ def test_an_obstacle_keeps_a_frame_without_shapes_clear_as_a_point_with_its_clos
         np.testing.assert_allclose(sphere.jacobian(state)[0], gap / np.linalg.norm(gap) @ jacobian, atol=1e-9)
         jaw = state.pose(robot.frame_id("jaw"))
         jaw_low = jaw.translation[2] - 0.5 * np.array([0.06, 0.05, 0.03]) @ np.abs(jaw.rotation[2])
-        np.testing.assert_allclose(plane.value(state), np.sort([point[2] + 1, jaw_low + 1]), atol=1e-9)
+        np.testing.assert_allclose(plane.value(state)[::POINTS], np.sort([point[2] + 1, jaw_low + 1]), atol=1e-9)
 
 
 def cube_stl(path: Path, side: float) -> Path:
@@ -160,10 +164,10 @@ def test_a_refused_or_flat_mesh_obstacle_is_a_clear_error(robot, tmp_path):
 
 def test_tables_build_both_objectives(robot):
     built = inequalities_from_table(robot, {"type": "self_collision", "min": 0.02, "pairs": "all", "count": 2})
-    assert isinstance(built[0], SelfCollision) and built[0].dim == 2
+    assert isinstance(built[0], SelfCollision) and built[0].dim == 2 * POINTS
     built = inequalities_from_table(robot, {"type": "obstacle", "geometry": "plane", "point": [0, 0, -2],
                                             "normal": [0, 0, 1], "min": 0.3, "frames": ["jaw", "link3"]})
-    assert isinstance(built[0], Obstacle) and built[0].dim == 2 and built[0].min == 0.3
+    assert isinstance(built[0], Obstacle) and built[0].dim == 2 * POINTS and built[0].min == 0.3
 
 
 def recorded_run(robot, solver, q0, steps=400, dt=0.02):
@@ -205,3 +209,30 @@ def test_a_start_in_collision_moves_out_at_the_reference_rate(robot, every_pair)
     # the rate of a row outside its set: gain (min + band - d) at the start, 1 s^-1 here
     rate = (closest[1] - closest[0]) / 0.01
     assert rate == pytest.approx(0.02 + 0.05 - start, rel=0.1)
+
+
+def test_a_face_parallel_to_an_obstacle_gives_its_corners_as_rows():
+    """The jaws' box of the Alpha 5 turned so that a face lies parallel to a plane: its witness is one point of the
+    face, and the rows hold the features that tie with it (points on the face's edges and corners, each at the
+    face's distance), so no turn of the face can take one row out while another part of the face goes in (issue
+    48: the pipe without weights, 14 mm inside). Each row's Jacobian is the rate of its point along the normal."""
+    robot = uvms.load(ROOT / "models" / "bluerov2_alpha5" / "uvms.urdf.xacro")
+    q = robot.configuration(base=pin.SE3(np.eye(3), np.array([0.0, 0.0, -5.0])), arm=[3.0, 1.8, 1.8, 1.0, 0.0])
+    state = Configuration(robot, q)
+    jaw = robot.model.getFrameId("alpha_jaw_link")
+    pose = state.pose(jaw)
+    # a plane facing the jaw box's local -x face, 3 cm beyond it: the face parallel to the plane
+    normal = -pose.rotation[:, 0]
+    plane = Obstacle(robot, "plane", point=(pose.translation + 0.1 * normal).tolist(), normal=(-normal).tolist(),
+                     frames=["alpha_jaw_link"], min=0.0, band=1.0, count=1)
+    chosen, found = plane.nearest(state)
+    assert found.distance.size == POINTS
+    np.testing.assert_allclose(found.distance, found.distance[0], atol=1e-9)  # every feature of the face ties
+    local = np.array([pose.actInv(point) for point in found.point2])  # on the face, in the box's frame
+    assert np.ptp(local[:, 1]) > 0.02 and np.ptp(local[:, 2]) > 0.02  # spread over the face, not one point
+    rows = plane.rows(state)
+    step = 1e-6 * np.random.default_rng(3).standard_normal(robot.nv)
+    moved = Configuration(robot, pin.integrate(robot.model, q, step))
+    for point, row in zip(found.point2, rows.jacobian):  # each row: its body point's rate along the plane's normal
+        carried = moved.pose(jaw).act(pose.actInv(point))
+        assert abs((-normal) @ (carried - point) - row @ step) < 1e-10

@@ -12,6 +12,15 @@ origin and the angular velocity), so the Jacobian row of the pair is
 bounds its pair's distance, |c1 - c2| - r1 - r2 <= d <= |c1 - c2| + r1 + r2; the k-th smallest upper bound is a
 reach no k-nearest pair exceeds, so only the pairs whose lower bound is within it are queried (one batch).
 
+Contact points: the distance of two convex shapes is the smallest over their features (vertices, edges, faces) and
+its gradient jumps where two features tie: a box's face parallel to an obstacle has four corners as near as its
+witness, and the one row of the witness lets a solver turn the face so that the witness leaves while another
+corner goes in (measured: ``bluerov2_alpha5_pipe`` without weights, the jaws' box 14 mm inside the pipe, the
+witness switching edges every few steps). :meth:`PairDistances.contact_points` finds those features by turning the
+second shape a little about its witness point (the perturbation a contact manifold is built with): the witness
+points of the turned pair, the second turned back, are points of the features within reach, each a row
+n . (p2_j - p1_j) with the witness normal (>= d, = d where it ties), its Jacobian the same formula.
+
 A geometry on the world (joint 0: an obstacle, or a fixed base's root link) contributes nothing. The
 Jacobian is that of smooth convex shapes (the normal's own rotation is second order in the distance); checked
 against finite differences on the manifold in ``tests/model/test_distances.py``.
@@ -38,6 +47,10 @@ RETRY_TOLERANCE = 1e-6
 RETRY_AGREEMENT = 1e-5
 #: A distance beyond this [m] is a failed query, not a distance (checked, never passed on).
 LARGEST_DISTANCE = 1e6
+#: The turn [rad] of a pair's second shape that finds the features tying with its witness
+#: (:meth:`PairDistances.contact_points`): a feature whose gap to the witness is below tan(angle) times its lever
+#: from the witness point is found.
+CONTACT_ANGLE = 0.1
 
 
 @dataclass(frozen=True)
@@ -171,6 +184,43 @@ class PairDistances:
                                  f"they overlap deeply")
         agree = abs(result.min_distance - retry.min_distance) <= RETRY_AGREEMENT
         return result if agree else retry
+
+    def contact_points(self, state: Configuration, rows: np.ndarray, distances: Distances,
+                       angle: float = CONTACT_ANGLE) -> Distances:
+        """The points of the features of pairs ``rows`` (k,) that tie with their witness: (k, 4) contact rows
+        ``[k * 4 + j]`` as :class:`Distances`, each the pair's witness normal n with the witness points found after
+        turning the pair's second shape by ``angle`` [rad] about its witness point p2 around +-t1, +-t2 (t1, t2
+        orthogonal to n), the second point turned back with the shape (module docstring, "Contact points").
+
+        Their distances n . (p2_j - p1_j) are >= the pair's distance (p1, p2 extreme along n on their shapes) and
+        equal it for a tied feature; ``distances`` are those of ``rows`` at the same ``state`` (after
+        :meth:`nearest` or :meth:`evaluate`, whose placements are read).
+        """
+        import coal  # shipped with the pin wheel
+
+        objects, placements = self.geometry.geometryObjects, self._data.oMg
+        request = distance_request()
+        count = len(rows)
+        out = np.empty((4 * count,)), np.empty((4 * count, 3)), np.empty((4 * count, 3)), np.empty((4 * count, 3))
+        for position, pair in enumerate(np.asarray(rows, dtype=int).tolist()):
+            first, second = (int(i) for i in self.pairs[pair])
+            normal, p1, p2 = distances.normal[position], distances.point1[position], distances.point2[position]
+            tangent = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+            tangent /= np.linalg.norm(tangent)
+            shape1 = coal.Transform3s(placements[first].rotation, placements[first].translation)
+            held = placements[second]
+            for j, axis in enumerate((tangent, np.cross(normal, tangent), -tangent, -np.cross(normal, tangent))):
+                turn = pin.exp3(angle * axis)  # about p2: x -> p2 + turn (x - p2)
+                result = coal.DistanceResult()
+                coal.distance(objects[first].geometry, shape1, objects[second].geometry,
+                              coal.Transform3s(turn @ held.rotation, p2 + turn @ (held.translation - p2)), request,
+                              result)
+                row = 4 * position + j
+                point1, point2 = result.getNearestPoint1(), p2 + turn.T @ (result.getNearestPoint2() - p2)
+                if not abs(result.min_distance) <= LARGEST_DISTANCE:  # a failed query: the witness itself
+                    point1, point2 = p1, p2
+                out[0][row], out[1][row], out[2][row], out[3][row] = normal @ (point2 - point1), point1, point2, normal
+        return Distances(*out)
 
     def jacobian(self, state: Configuration, distances: Distances, rows: np.ndarray) -> np.ndarray:
         """The distance Jacobian (k, nv), d' = J v, of the pairs ``rows`` (k,) (indices into the pairs) from their

@@ -44,6 +44,10 @@ from ...robot.robot import Robot
 from .base import Inequality, finite_number
 from .obstacles import obstacle_shape
 
+#: Rows per pair: its witness and the points of the features tying with it
+#: (:meth:`~uvms.model.distances.PairDistances.contact_points`).
+POINTS = 5
+
 
 class NearestPairs(Inequality):
     """The ``count`` nearest of a set of geometry pairs as rows d_i >= min, nearest first (module docstring).
@@ -67,17 +71,34 @@ class NearestPairs(Inequality):
                                  f"got {count!r}")
         self.distances, self.links = PairDistances(robot.model, geometry, pairs), list(links)
         self.min = finite_number(min, f"{self.name}: min")
-        dim = int(np.minimum(count, len(pairs)))
+        self.pair_count = int(np.minimum(count, len(pairs)))
+        dim = self.pair_count * POINTS
         self._set_valid_set(np.full(dim, self.min), np.full(dim, np.inf),
                             finite_number(band, f"{self.name}: band", positive=True), gain, shape)
+        self._reach = self.min + float(self.band[0])  # beyond it a pair's rows are inactive: no contact points
 
     def nearest(self, state: Configuration) -> tuple[np.ndarray, Distances]:
-        """(the indices (dim,) of the nearest pairs, nearest first; their distances) at ``state``."""
-        return self.distances.nearest(state, self.dim)
+        """(the pair (dim,) of each row; the rows' distances) at ``state``: the ``count`` nearest pairs, nearest
+        first, each its witness then its :data:`POINTS` - 1 contact points (module docstring; the witness repeated
+        for a pair farther than ``min + band``, where no row is active)."""
+        chosen, found = self.distances.nearest(state, self.pair_count)
+        near = np.flatnonzero(found.distance < self._reach)
+        rows = np.repeat(np.arange(chosen.size), POINTS)  # each pair's witness, repeated
+        fields = [np.array(field)[rows] for field in (found.distance, found.point1, found.point2, found.normal)]
+        if near.size:
+            points = self.distances.contact_points(state, chosen[near], found.take(near))
+            for position, pair in enumerate(near.tolist()):
+                block = slice(pair * POINTS + 1, (pair + 1) * POINTS)
+                taken = slice(position * (POINTS - 1), (position + 1) * (POINTS - 1))
+                for field, point_field in zip(fields, (points.distance, points.point1, points.point2,
+                                                       points.normal)):
+                    field[block] = point_field[taken]
+        return chosen[rows], Distances(*fields)
 
     def nearest_pairs(self, state: Configuration) -> list[tuple[str, str, float]]:
-        """(link1, link2, distance [m]) of the rows at ``state``, nearest first (what to print or mark)."""
-        chosen, found = self.nearest(state)
+        """(link1, link2, distance [m]) of the ``count`` nearest pairs at ``state``, nearest first (what to print or
+        mark)."""
+        chosen, found = self.distances.nearest(state, self.pair_count)
         return [(*self.links[k], float(d)) for k, d in zip(chosen, found.distance)]
 
     def value(self, state: Configuration) -> np.ndarray:
