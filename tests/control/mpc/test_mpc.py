@@ -77,7 +77,7 @@ def test_one_rk4_node_is_the_plants_rk4_step_with_the_same_current(rng):
     wrench = mpc.prediction.matrix @ u[:8]
 
     def rate(t, q, x):
-        return x, the_plant._evaluate(q, x, u[8:], wrench).acceleration
+        return x, the_plant.dynamics(q, x, u[8:], wrench).acceleration
 
     q1, v1 = rk4_step(the_plant.model, rate, 0.0, q0, v, 0.01, rate(0.0, q0, v))
     np.testing.assert_allclose(data.xnext[:q0.size], q1, rtol=0, atol=1e-6)
@@ -86,7 +86,7 @@ def test_one_rk4_node_is_the_plants_rk4_step_with_the_same_current(rng):
     differential = mpc.nodes[0][1]
     ddata = differential.createData()
     differential.calc(ddata, np.concatenate([q0, v]), u)
-    np.testing.assert_allclose(ddata.xout, the_plant._evaluate(q0, v, u[8:], wrench).acceleration, atol=1e-12)
+    np.testing.assert_allclose(ddata.xout, the_plant.dynamics(q0, v, u[8:], wrench).acceleration, atol=1e-12)
 
 
 def test_the_nodes_derivatives_match_crocoddyls_finite_differences(rng):

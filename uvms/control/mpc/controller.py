@@ -67,7 +67,7 @@ class MPCController:
                                           allocation_matrix(robot, thrusters))
         model = self.prediction.model
         self.state = crocoddyl.StateMultibody(model)
-        frame_id, base_frame = robot.frame_id(frame), plant._base_frame
+        frame_id, base_frame = robot.frame_id(frame), plant.base_frame
         lower, upper = input_bounds(self.prediction, thrusters.lower, thrusters.upper)
         x_rest = np.concatenate([pin.neutral(model), np.zeros(model.nv)])
         self.nodes, running = [], []
