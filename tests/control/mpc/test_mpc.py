@@ -110,15 +110,15 @@ def test_the_nodes_derivatives_match_crocoddyls_finite_differences(rng):
 
 
 def test_a_solve_from_rest_holds_the_thrusts_within_their_bounds():
-    """A Box-FDDP solve runs (a broken Pinocchio/Crocoddyl pair crashes here) and its inputs are finite and
-    within the thrusters' and the joints' bounds at every node."""
+    """A CSQP solve runs (a broken Pinocchio/Crocoddyl pair crashes here) and its inputs are finite and within the
+    thrusters' and the joints' bounds at every node (to the ADMM's tolerance; the applied command exactly)."""
     mpc, q0 = controller(MPCSettings(horizon=10, node_dt=0.1, iterations=5),
                          target=lambda start: (lambda t: start + np.array([0.0, 0.1, 0.0])))
     command = mpc.command(q0, np.zeros(q0.size - 1), 0.0)
     thrusters = thrusters_of(shipped("bluerov2_alpha5"))
     assert np.all(np.isfinite(command.thrust)) and np.abs(command.thrust).max() > 1.0
-    for u in mpc.solver.us:
-        assert np.all(u >= mpc.lower - 1e-9) and np.all(u <= mpc.upper + 1e-9)
+    for u in [u.copy() for u in mpc.solver.us]:
+        assert np.all(u >= mpc.lower - 1e-3) and np.all(u <= mpc.upper + 1e-3)
     assert np.all(command.thrust >= thrusters.lower) and np.all(command.thrust <= thrusters.upper)
     assert mpc.iterations[0] >= 1 and np.isfinite(mpc.solver.cost)
 
