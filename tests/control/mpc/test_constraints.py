@@ -99,7 +99,7 @@ def test_a_violated_row_gets_its_bound_back_over_the_recovery_nodes():
 
 @pytest.mark.parametrize("current", ["[0.0,0.0,0.0]", "[-0.3,0.0,0.0]"], ids=["still", "current"])
 def test_the_jaws_stay_clear_of_the_pipe_on_the_actuated_plant(current):
-    """The pipe's line driven into it in 4 s (the scenario: 8 s) (the jaws 5.75 cm from it, the line's end 2.7 cm inside): on the
+    """The pipe's line driven into it in 4 s (scenario: 8 s; the jaws 5.75 cm from it, its end 2.7 cm inside): on the
     measured states the nearest shape stays >= 19 mm from the pipe (min 20; the chain: -2.7 mm over the whole
     scenario), the thrusts within their bounds, the current unknown to the MPC."""
     setup = setup_of("bluerov2_alpha5_pipe", "trajectory.duration=4.0", f"plant.current={current}")
