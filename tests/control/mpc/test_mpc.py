@@ -78,7 +78,7 @@ def test_one_rk4_node_is_the_plants_rk4_step_with_the_same_current(rng):
     wrench = mpc.prediction.matrix @ u[:8]
 
     def rate(t, q, x):
-        return x, the_plant._evaluate(q, x, u[8:], wrench).acceleration
+        return x, the_plant.dynamics(q, x, u[8:], wrench).acceleration
 
     q1, v1 = rk4_step(the_plant.model, rate, 0.0, q0, v, 0.01, rate(0.0, q0, v))
     np.testing.assert_allclose(data.xnext[:q0.size], q1, rtol=0, atol=1e-6)
@@ -87,7 +87,7 @@ def test_one_rk4_node_is_the_plants_rk4_step_with_the_same_current(rng):
     differential = mpc.nodes[0][1]
     ddata = differential.createData()
     differential.calc(ddata, np.concatenate([q0, v]), u)
-    np.testing.assert_allclose(ddata.xout, the_plant._evaluate(q0, v, u[8:], wrench).acceleration, atol=1e-12)
+    np.testing.assert_allclose(ddata.xout, the_plant.dynamics(q0, v, u[8:], wrench).acceleration, atol=1e-12)
 
 
 def test_the_nodes_derivatives_match_crocoddyls_finite_differences(rng):
@@ -111,15 +111,15 @@ def test_the_nodes_derivatives_match_crocoddyls_finite_differences(rng):
 
 
 def test_a_solve_from_rest_holds_the_thrusts_within_their_bounds():
-    """A Box-FDDP solve runs (a broken Pinocchio/Crocoddyl pair crashes here) and its inputs are finite and
-    within the thrusters' and the joints' bounds at every node."""
+    """A CSQP solve runs (a broken Pinocchio/Crocoddyl pair crashes here) and its inputs are finite and within the
+    thrusters' and the joints' bounds at every node (to the ADMM's tolerance; the applied command exactly)."""
     mpc, q0 = controller(MPCSettings(horizon=10, node_dt=0.1, iterations=5),
                          target=lambda start: (lambda t: start + np.array([0.0, 0.1, 0.0])))
     command = mpc.command(State(q0, np.zeros(q0.size - 1)), 0.0)
     thrusters = thrusters_of(shipped("bluerov2_alpha5"))
     assert np.all(np.isfinite(command.thrust)) and np.abs(command.thrust).max() > 1.0
-    for u in mpc.solver.us:
-        assert np.all(u >= mpc.lower - 1e-9) and np.all(u <= mpc.upper + 1e-9)
+    for u in [u.copy() for u in mpc.solver.us]:
+        assert np.all(u >= mpc.lower - 1e-3) and np.all(u <= mpc.upper + 1e-3)
     assert np.all(command.thrust >= thrusters.lower) and np.all(command.thrust <= thrusters.upper)
     assert mpc.iterations[0] >= 1 and np.isfinite(mpc.solver.cost)
 

@@ -42,9 +42,9 @@ def central(function, x0: np.ndarray, size: int, move) -> np.ndarray:
 def test_the_acceleration_is_the_plants_under_the_thrusters_wrench(rng):
     model = prediction()
     q, v, u = state(rng)
-    expected = model.plant._evaluate(q, v, u[8:], model.matrix @ u[:8]).acceleration
+    expected = model.plant.dynamics(q, v, u[8:], model.matrix @ u[:8]).acceleration
     np.testing.assert_allclose(model.acceleration(q, v, u), expected, rtol=0, atol=1e-12)
-    assert np.abs(model.acceleration(q, v, u) - model.plant._evaluate(q, v, u[8:]).acceleration).max() > 0.1
+    assert np.abs(model.acceleration(q, v, u) - model.plant.dynamics(q, v, u[8:]).acceleration).max() > 0.1
 
 
 def test_the_inverse_dynamics_with_the_links_wrenches_balances_the_thrusters(rng):
@@ -95,3 +95,33 @@ def test_a_constant_disturbance_on_the_vehicle_adds_to_the_thrusters_and_changes
     np.testing.assert_allclose(da_dq, numeric, rtol=0, atol=1e-6)
     generalized = model.thrust_map[:6] @ thrusts
     np.testing.assert_allclose(model.wrench_of(generalized), model.disturbance, atol=1e-9)
+
+
+def test_the_mpc_reads_only_the_plants_public_surface():
+    """No module of uvms.control.mpc reads a private member of the plant (its accessors: dynamics, base_frame,
+    stacked_links, current, buoyant)."""
+    import ast
+    from pathlib import Path
+
+    import uvms.control.mpc as package
+
+    private = []
+    for path in Path(package.__file__).parent.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__"):
+                owner = ast.unparse(node.value)
+                if owner.split(".")[-1] in ("plant", "the_plant"):
+                    private.append(f"{path.name}: {owner}.{node.attr}")
+    assert private == []
+
+
+def test_the_plants_accessors_are_what_it_computes_with(rng):
+    model = prediction()
+    plant = model.plant
+    assert plant.model.frames[plant.base_frame].name == plant.robot.root_link
+    np.testing.assert_allclose(plant.current, [-0.3, 0.2, 0.1])
+    plant.current[0] = 5.0  # a copy: the plant's current is not changed through it
+    np.testing.assert_allclose(plant.current, [-0.3, 0.2, 0.1])
+    assert plant.buoyant and plant.stacked_links.count == len(plant.links)
+    q, v, u = state(rng)
+    np.testing.assert_allclose(plant.dynamics(q, v, u[8:]).acceleration, plant.acceleration(q, v, u[8:]), atol=1e-12)

@@ -1,17 +1,18 @@
-"""The whole-body MPC controller: each control step, Box-FDDP on the plant's model from the measured state.
+"""The whole-body MPC controller: each control step, CSQP (or Box-FDDP) on the plant's model from the measured state.
 
 It is a :class:`uvms.control.base.Controller`: ``reset(state, t)`` and ``command(state, t)`` -> a
 :class:`~uvms.dynamics.plant.command.Command` with the thrusts [N] and the arm's velocity commands, what an
 :class:`~uvms.dynamics.plant.actuated.ActuatedPlant` applies. Every control_period it sets the
 problem's initial state to the measurement and the nodes' targets to the trajectory over the horizon, shifts the
-previous solution by the time gone (the warm start) and runs a few Box-FDDP iterations; the first node's input is
-applied and held until the next solve.
+previous solution by the time gone (the warm start) and runs a few solver iterations; the first node's input is
+applied and held until the next solve. The scenario's inequality objectives are the problem's constraints
+(:mod:`uvms.control.mpc.constraints`).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -20,6 +21,7 @@ from ...dynamics.plant.command import Command, State
 from ...dynamics.plant.plant import Plant
 from ...dynamics.thrusters.thrusters import Thrusters, allocation_matrix
 from ...errors import UVMSError
+from ...tasks.objectives.base import Inequality
 from .optional import require_crocoddyl
 from .prediction import PlantPrediction
 from .settings import MPCSettings
@@ -33,6 +35,19 @@ def prediction_plant(plant: Plant, knows_current: bool) -> Plant:
                  motor_time_constant=plant.motor_time_constant, added_mass=plant.added_mass, damping=plant.damping)
 
 
+def make_solver(problem: object, settings: MPCSettings) -> object:
+    """The solver of ``problem``: mim-solvers' CSQP (its QP to ``qp_iterations``, no printing) or Box-FDDP."""
+    if settings.solver == "box_fddp":
+        return require_crocoddyl().SolverBoxFDDP(problem)
+    from .optional import require_mim_solvers
+
+    solver = require_mim_solvers().SolverCSQP(problem)
+    solver.max_qp_iters = settings.qp_iterations
+    solver.with_callbacks = False
+    solver.termination_tolerance = 1e-4
+    return solver
+
+
 class MPCController:
     """Whole-body model-predictive control of the vehicle (its thrusters) and the arm (its joint servos).
 
@@ -42,17 +57,20 @@ class MPCController:
         thrusters: the vehicle's thrusters (their allocation geometry and thrust bounds).
         target: t [s] -> the end effector's position (3,) [m], world frame.
         frame: the end-effector frame (None: the robot's first).
-        settings: horizon, node step, iterations, weights (:class:`uvms.control.mpc.settings.MPCSettings`).
-        floor: the lowest world z [m] of the vehicle's origin (a barrier), or None.
+        settings: horizon, node step, solver, iterations, weights (:class:`uvms.control.mpc.settings.MPCSettings`).
+        constraints: the scenario's inequality objectives (``ScenarioInequalities.objectives``: joint limits, tilt,
+            clearance, obstacles, self-collision), built on ``plant.robot``: kept at every node after the first.
 
     Raises:
         UVMSError: Crocoddyl not installed (the ``mpc`` extra), a vehicle that is not floating, no thrusters.
     """
 
     def __init__(self, plant: Plant, thrusters: Thrusters, target: Callable[[float], np.ndarray], *,
-                 frame: str | None = None, settings: MPCSettings | None = None, floor: float | None = None) -> None:
+                 frame: str | None = None, settings: MPCSettings | None = None,
+                 constraints: Sequence[Inequality] = ()) -> None:
         crocoddyl = require_crocoddyl()
         from .action import NodeCosts, PlantActionModel, input_bounds, integrated
+        from .constraints import NodeConstraints
 
         robot = plant.robot
         if robot.base_type != "floating":
@@ -67,19 +85,27 @@ class MPCController:
                                           allocation_matrix(robot, thrusters))
         model = self.prediction.model
         self.state = crocoddyl.StateMultibody(model)
-        frame_id, base_frame = robot.frame_id(frame), plant._base_frame
+        frame_id = robot.frame_id(frame)
         lower, upper = input_bounds(self.prediction, thrusters.lower, thrusters.upper)
         x_rest = np.concatenate([pin.neutral(model), np.zeros(model.nv)])
+        constrained = settings.solver == "csqp"
+        penalty = 0.0 if constrained else settings.penalty
+        self.constraints = list(constraints)
         self.nodes, running = [], []
         for index in range(settings.horizon + 1):
             terminal = index == settings.horizon
-            costs = NodeCosts(self.state, self.prediction.nu, settings, frame_id, base_frame, x_rest, self.n,
-                              terminal=terminal, floor=floor)
-            action = PlantActionModel(self.prediction, self.state, costs.sum, lower, upper)
+            costs = NodeCosts(self.state, self.prediction.nu, settings, frame_id, x_rest, self.n, terminal=terminal)
+            rows = NodeConstraints(robot, self.constraints, None if terminal or not constrained else lower,
+                                   None if terminal or not constrained else upper, with_state=index > 0,
+                                   margin=settings.collision_margin,
+                                   scale=settings.constraint_scale if constrained else 1.0)
+            action = PlantActionModel(self.prediction, self.state, costs.sum, lower, upper, rows, penalty)
             self.nodes.append((costs, action))
             running.append(integrated(action, 0.0 if terminal else settings.node_dt, settings.integrator))
         self.problem = crocoddyl.ShootingProblem(x_rest, running[:-1], running[-1])
-        self.solver = crocoddyl.SolverBoxFDDP(self.problem)
+        self.solver = make_solver(self.problem, settings)
+        self._rows_at = self.nodes[-1][1].constraints  # the objectives' rows at the measured state (relaxation)
+        self._measured = self._rows_at.configuration()
         self.lower, self.upper = lower, upper
         self.solve_times: list[float] = []  # [s] per solve
         self.iterations: list[int] = []
@@ -96,14 +122,12 @@ class MPCController:
 
     def reset(self, state: State, t: float = 0.0) -> None:
         """Start from the state (q (nq,), v (nv,); None: rest) at t [s]: the station is the vehicle's pose and the
-        arm's joints there, level at the vehicle's heading; the first guess holds the state with zero input."""
+        arm's joints there; the first guess holds the state with zero input."""
         q = self.robot.check_configuration(state.q)
         v = np.zeros(self.robot.model.nv) if state.v is None else self.robot.check_velocity(state.v)
         station = np.concatenate([q, np.zeros(self.robot.model.nv)])
-        yaw = pin.rpy.matrixToRpy(pin.Quaternion(q[6], *q[3:6]).toRotationMatrix())[2]
-        level = pin.rpy.rpyToMatrix(0.0, 0.0, yaw)
         for costs, _ in self.nodes:
-            costs.move(np.zeros(3), station, level)
+            costs.move(np.zeros(3), station)
         x0 = np.concatenate([q, v])
         self._xs = [x0.copy() for _ in range(self.settings.horizon + 1)]
         self._us = [np.clip(np.zeros(self.prediction.nu), self.lower, self.upper)
@@ -153,6 +177,13 @@ class MPCController:
         prediction.disturbance = prediction.disturbance + gain * prediction.wrench_of(
             dynamics.mass_matrix[:nb, :nb] @ mismatch)
 
+    def _relax(self, x0: np.ndarray) -> None:
+        """The nodes' bounds from the measured state's rows (:meth:`NodeConstraints.relaxed`)."""
+        start, _ = self._rows_at.state_rows(self._measured, x0[:self.robot.model.nq])
+        recovery = self.settings.recovery_nodes
+        for index, (_, action) in enumerate(self.nodes[1:], start=1):
+            action.g_lb, action.g_ub = action.constraints.relaxed(start, min(1.0, index / recovery))
+
     def _solve(self, x0: np.ndarray, t: float) -> Command:
         settings = self.settings
         shift = 0 if self._solved_at is None else int(round((t - self._solved_at) / settings.node_dt))
@@ -164,9 +195,12 @@ class MPCController:
             costs.move(np.asarray(self.target(t + index * settings.node_dt), dtype=float))
         self.problem.x0 = x0
         started = time.perf_counter()
+        if settings.solver == "csqp" and self.constraints:
+            self._relax(x0)
         self.solver.solve(xs, us, settings.iterations, False)
         elapsed = time.perf_counter() - started
-        self._xs, self._us = list(self.solver.xs), list(self.solver.us)
+        # copies: CSQP's xs and us are views into a temporary list, garbage once it is gone
+        self._xs, self._us = [x.copy() for x in self.solver.xs], [u.copy() for u in self.solver.us]
         if not all(np.all(np.isfinite(u)) for u in self._us[:1]):
             raise UVMSError(f"the MPC's solution is not finite at t = {t:.6g} s; lower its weights or node_dt")
         self.solve_times.append(elapsed)
@@ -174,6 +208,5 @@ class MPCController:
         self._solved_at = t
         first = np.clip(self._us[0], self.lower, self.upper)
         thrust, arm = self.prediction.split(first)
-        return Command(arm=arm.copy(), thrust=thrust.copy(), info={"mpc_solve_time": elapsed,
-                                                                   "mpc_iterations": float(self.solver.iter),
-                                                                   "mpc_cost": float(self.solver.cost)})
+        return Command(arm=arm.copy(), thrust=thrust.copy(), info={
+            "mpc_solve_time": elapsed, "mpc_iterations": float(self.solver.iter), "mpc_cost": float(self.solver.cost)})

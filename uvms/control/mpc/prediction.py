@@ -4,7 +4,7 @@ their analytical derivatives.
 Inputs u = [f (n,), c (n_arm,)]: the thrusts f [N] act on the vehicle through the allocation matrix B (6, n) as the
 body wrench B f at the base frame; c [rad/s or m/s] are the arm's joint-velocity commands, which the servos follow
 with qdd_m = (c - qd_m) / tau (:class:`uvms.dynamics.plant.plant.Plant`). The acceleration is the plant's
-(:meth:`~uvms.dynamics.plant.plant.Plant._evaluate`: the same numbers, the hydrodynamics included), so a prediction
+(:meth:`~uvms.dynamics.plant.plant.Plant.dynamics`: the same numbers, the hydrodynamics included), so a prediction
 with the plant's integrator and the plant's current is the plant's step. The thrusters' first-order lag is not in
 the prediction (the commanded thrust is taken as the thrust; the controller inverts the lag over its period). An
 estimated constant wrench on the vehicle (``disturbance``: what an unknown current or a model error leaves) adds to
@@ -52,9 +52,12 @@ class PlantPrediction:
         data = self.model.createData()
         pin.computeJointJacobians(self.model, data, pin.neutral(self.model))
         # the thrusters' generalized forces J_base^T B (nv, n): a frame on the vehicle's joint, constant in q
-        base = pin.getFrameJacobian(self.model, data, plant._base_frame, LOCAL)
+        base = pin.getFrameJacobian(self.model, data, plant.base_frame, LOCAL)
         self.thrust_map = base.T @ self.matrix
         self._base_block = base[:, :self.nb]  # the base frame's twist from the vehicle joint's velocity (6, nb)
+        stacked = plant.stacked_links
+        self._current = plant.current
+        self._buoyancy = stacked.buoyancy if plant.buoyant else np.zeros(stacked.count)  # (L,) [N]
         #: an estimated constant wrench (6,) [N, N m] on the vehicle (base frame, FLU), added to the thrusters'
         self.disturbance = np.zeros(6)
 
@@ -69,7 +72,7 @@ class PlantPrediction:
     def evaluate(self, q: np.ndarray, v: np.ndarray, u: np.ndarray):
         """The plant's dynamics (:class:`uvms.dynamics.plant.system.PlantDynamics`) at (q, v) under u (nu,)."""
         thrusts, arm = self.split(u)
-        return self.plant._evaluate(q, v, arm, self.matrix @ thrusts + self.disturbance)
+        return self.plant.dynamics(q, v, arm, self.matrix @ thrusts + self.disturbance)
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, u: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under u (nu,)."""
@@ -82,7 +85,7 @@ class PlantPrediction:
         from .kernel import link_wrench_derivatives  # numba: loaded when a prediction is first differentiated
 
         model, plant, fk = self.model, self.plant, self._fk
-        stacked = plant._stacked
+        stacked = plant.stacked_links
         pin.computeForwardKinematicsDerivatives(model, fk, q, v, a)
         count = stacked.count
         velocity_dq, jacobians = np.empty((count, 6, self.nv)), np.empty((count, 6, self.nv))
@@ -97,8 +100,8 @@ class PlantPrediction:
         d_dq, d_dv = np.zeros((self.nv, self.nv)), np.zeros((self.nv, self.nv))
         link_wrench_derivatives(velocity_dq, jacobians, acceleration_dq, acceleration_dv, v, accelerations, rotations,
                                 stacked.added_mass, stacked.linear_damping, stacked.forward_damping,
-                                stacked.quadratic_damping, stacked.buoyancy if plant._buoyant else np.zeros(count),
-                                stacked.center_of_buoyancy, plant._current, plant.added_mass, plant.damping,
+                                stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy, self._current,
+                                plant.added_mass, plant.damping,
                                 wrenches, d_dq, d_dv)
         # the wrenches in their joints' frames, where rnea takes them (held there for its derivatives)
         fext = [pin.Force.Zero() for _ in range(model.njoints)]

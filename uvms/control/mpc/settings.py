@@ -11,6 +11,8 @@ import numpy as np
 
 from ...errors import UVMSError
 
+#: The solvers: mim-solvers' constrained SQP (the objectives as constraints) or Crocoddyl's Box-FDDP (as penalties).
+SOLVERS = ("csqp", "box_fddp")
 #: The integrators of the prediction: Crocoddyl's symplectic Euler (one evaluation per node) or its RK4 (four).
 INTEGRATORS = ("euler", "rk4")
 
@@ -22,7 +24,17 @@ class MPCSettings:
     Attributes:
         horizon: the number of nodes N (>= 1); the horizon is N * node_dt [s].
         node_dt: the step between nodes [s] (> 0).
-        iterations: Box-FDDP iterations per control step (>= 1), warm-started from the previous solution.
+        solver: "csqp" (mim-solvers' constrained SQP: the scenario's inequality objectives and the inputs' bounds
+            are constraints) or "box_fddp" (Crocoddyl's Box-FDDP: the objectives are exact quadratic penalties of
+            weight ``penalty``, the inputs' bounds its box).
+        iterations: solver iterations per control step (>= 1), warm-started from the previous solution.
+        qp_iterations: CSQP's most ADMM iterations per SQP iteration (>= 1).
+        recovery_nodes: CSQP: a row the measured state violates gets its bound back over this many nodes (>= 1;
+            1: at the next node), linearly from the measured value; the valid set as such beyond.
+        collision_margin: [m] added to the collision objectives' minimum distance at the nodes (what the plant
+            loses between two solves, the inputs held and the thrusters lagging).
+        constraint_scale: CSQP: the objectives' rows are scaled by it (a larger ADMM penalty on them; their
+            units m, rad: 1000 puts them in mm, mrad against costs weighted 1e4-1e5).
         control_period: [s] the MPC solves every control_period and holds its first input in between (0: at every
             call of ``command``).
         integrator: "euler" (Crocoddyl's symplectic Euler) or "rk4" (Crocoddyl's Runge-Kutta 4).
@@ -33,8 +45,7 @@ class MPCSettings:
         arm_posture: weight [1/rad^2] of the arm joints against their positions at reset.
         vehicle_velocity, arm_velocity: weights [s^2/m^2 or s^2/rad^2] of the velocities (damping of the plan).
         thrust: weight [1/N^2] of the thrusts (effort); arm_command: [s^2/rad^2] of the arm's velocity commands.
-        joint_limits: weight of the quadratic barrier on the arm joints outside their limits less joint_margin [rad].
-        tilt: weight of the quadratic barrier on the vehicle's roll and pitch beyond max_tilt [rad].
+        penalty: Box-FDDP's weight of the squared violation of the objectives' rows (units of the rows^-2).
         knows_current: the prediction uses the plant's current (True) or still water (False: the current unknown).
         lag_compensation: invert the thrusters' first-order lag over a control period from the measured thrusts.
         disturbance_time_constant: [s] the filter of the estimated wrench on the vehicle (the vehicle rows of the
@@ -43,7 +54,12 @@ class MPCSettings:
 
     horizon: int = 20
     node_dt: float = 0.05
+    solver: str = "csqp"
     iterations: int = 1
+    qp_iterations: int = 50
+    recovery_nodes: int = 3
+    collision_margin: float = 0.002
+    constraint_scale: float = 1000.0
     control_period: float = 0.05
     integrator: str = "euler"
     end_effector: float = 1.0e4
@@ -55,10 +71,7 @@ class MPCSettings:
     arm_velocity: float = 1.0
     thrust: float = 1.0e-3
     arm_command: float = 1.0
-    joint_limits: float = 1.0e5
-    joint_margin: float = 0.05
-    tilt: float = 1.0e5
-    max_tilt: float = 0.0873
+    penalty: float = 1.0e5
     knows_current: bool = False
     lag_compensation: bool = True
     disturbance_time_constant: float = 0.5
@@ -66,13 +79,18 @@ class MPCSettings:
     def __post_init__(self) -> None:
         if not (isinstance(self.horizon, int) and self.horizon >= 1):
             raise UVMSError(f"mpc horizon must be an integer >= 1 (nodes), got {self.horizon!r}")
-        if not (isinstance(self.iterations, int) and self.iterations >= 1):
-            raise UVMSError(f"mpc iterations must be an integer >= 1, got {self.iterations!r}")
+        for name in ("iterations", "qp_iterations", "recovery_nodes"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+                raise UVMSError(f"mpc {name} must be an integer >= 1, got {value!r}")
+        if self.solver not in SOLVERS:
+            raise UVMSError(f"mpc solver must be one of {', '.join(SOLVERS)}, got {self.solver!r}")
         if self.integrator not in INTEGRATORS:
             raise UVMSError(f"mpc integrator must be one of {', '.join(INTEGRATORS)}, got {self.integrator!r}")
         for item in fields(self):
             value = getattr(self, item.name)
-            if item.name in ("horizon", "iterations", "integrator", "knows_current", "lag_compensation"):
+            if item.name in ("horizon", "solver", "iterations", "qp_iterations", "recovery_nodes", "integrator",
+                             "knows_current", "lag_compensation"):
                 continue
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0.0):
                 raise UVMSError(f"mpc {item.name} must be a finite number >= 0, got {value!r}")

@@ -9,7 +9,7 @@ delta the fins' angles [rad] (none without fins); its rate is
 
 with B (6, n) the allocation matrix (:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`), w_fins the fins' lift
 and drag at the vehicle's velocity through the water nu_r (:class:`uvms.dynamics.thrusters.fins.Fins`), the wrench
-applied at the vehicle's base frame (:meth:`uvms.dynamics.plant.plant.Plant._evaluate`). Since the command is clipped
+applied at the vehicle's base frame (:meth:`uvms.dynamics.plant.plant.Plant.dynamics`). Since the command is clipped
 and f moves towards it, f stays inside the bounds (delta likewise). A plant without thrusters keeps its state (q, v):
 :class:`uvms.dynamics.plant.plant.PlantSystem`. :class:`ActuatedPlant` (plant + thrusters) builds the system
 (:meth:`ActuatedPlant.system`).
@@ -153,7 +153,7 @@ def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: 
     """The command u held over one step dt [s] that brings a first-order lag x' = (u - x) / tau from ``rate`` x to
     ``wanted`` at the step's end: u = x + (wanted - x) / (1 - exp(-dt / tau)) (the lag inverted over the step).
 
-    The arm's servos (:meth:`uvms.dynamics.plant.plant.Plant._evaluate`: qdd = (u - qd) / tau) reach the solver's
+    The arm's servos (:meth:`uvms.dynamics.plant.plant.Plant.dynamics`: qdd = (u - qd) / tau) reach the solver's
     joint rates one step after they were asked instead of tau later; between the two rates x moves monotonically,
     so a wanted rate within the speed limits is never passed. Each entry of ``wanted`` is reached exactly when the
     command is held over the step (the digital controller of :class:`ActuatedPlantSystem`).
@@ -250,7 +250,7 @@ class ActuatedPlantSystem:
               fin_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
         v, thrusts, angles = self._split(x)
         wrench = self.thrusters.wrench(thrusts) + self.thrusters.fin_wrench(q, v, angles)
-        dynamics = self.plant._evaluate(q, v, arm, wrench)
+        dynamics = self.plant.dynamics(q, v, arm, wrench)
         rates = [dynamics.acceleration, self.thrusters.rate(thrusts, thrust_command)]
         if self.m:
             rates.append(self.thrusters.fins.rate(angles, fin_command))

@@ -167,6 +167,26 @@ class Plant:
         """Number of actuated joint velocities."""
         return self.model.nv - self.nb
 
+    @property
+    def base_frame(self) -> int:
+        """The frame id of the vehicle's root link: where the thrusters' body wrench acts."""
+        return self._base_frame
+
+    @property
+    def stacked_links(self) -> StackedLinks:
+        """The hydrodynamic links' parameters stacked as arrays (what the compiled terms read; not to be changed)."""
+        return self._stacked
+
+    @property
+    def current(self) -> np.ndarray:
+        """The ocean current (3,) [m/s], world frame (a copy)."""
+        return self._current.copy()
+
+    @property
+    def buoyant(self) -> bool:
+        """Whether buoyancy acts (gravity on and a link with a volume)."""
+        return self._buoyant
+
     # -------------------------------------------------------------- dynamics
     def _link_states(self, q: np.ndarray, v: np.ndarray) -> LinkStates:
         """The hydrodynamic links' twists and poses at (q, v), every link at once (runs forwardKinematics)."""
@@ -195,19 +215,21 @@ class Plant:
             ConfigurationError: wrong sizes, non-finite values, a non-unit quaternion.
         """
         robot = self.robot
-        return self._evaluate(robot.check_configuration(q), robot.check_velocity(v),
+        return self.dynamics(robot.check_configuration(q), robot.check_velocity(v),
                               robot.check_velocity(command, self.n_arm, "joint-velocity command"))
 
-    def _evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
-                  body_wrench: np.ndarray | None = None) -> PlantDynamics:
-        """:meth:`evaluate` without the input checks (the integrator's inner loop); ``body_wrench`` (6,)
-        [N, N m]: an external wrench on the vehicle, FLU at the base frame origin (the thrusters')."""
+    def dynamics(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
+                 body_wrench: np.ndarray | None = None) -> PlantDynamics:
+        """:meth:`evaluate` without the input checks, for inner loops (an integrator, a prediction model) whose
+        inputs are already checked; ``body_wrench`` (6,) [N, N m]: an external wrench on the vehicle, FLU at the
+        base frame origin (:attr:`base_frame`: the thrusters')."""
         mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
         nb = self.nb
         arm_acceleration = (command - v[nb:]) / self.motor_time_constant
         base_acceleration = -np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:] @ arm_acceleration + bias_forces[:nb])
         torque = mass[nb:, :nb] @ base_acceleration + mass[nb:, nb:] @ arm_acceleration + bias_forces[nb:]
         return PlantDynamics(np.concatenate([base_acceleration, arm_acceleration]), torque, mass)
+
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:

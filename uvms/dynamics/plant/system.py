@@ -48,7 +48,8 @@ class Plant(Protocol):
     model: Any
     n_arm: int
 
-    def _evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> PlantDynamics: ...
+    def dynamics(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
+                 body_wrench: np.ndarray | None = None) -> PlantDynamics: ...
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]: ...
 
@@ -133,7 +134,7 @@ class PlantSystem:
         if self.every and (int(round(t / self.dt)) % self.every == 0 or self.held is None):
             self.held = self.command_at(t, q, v)
         u = self.held if self.every else self.command_at(t, q, v)
-        dynamics = self.plant._evaluate(q, v, u)
+        dynamics = self.plant.dynamics(q, v, u)
         return PlantSample((v, dynamics.acceleration), u, dynamics)
 
     def stage_rate(self, sample: PlantSample) -> StageRate:
@@ -141,8 +142,8 @@ class PlantSystem:
         plant = self.plant
         if self.every:
             held = sample.command
-            return lambda t, q, v: (v, plant._evaluate(q, v, held).acceleration)
-        return lambda t, q, v: (v, plant._evaluate(q, v, self.command_at(t, q, v)).acceleration)
+            return lambda t, q, v: (v, plant.dynamics(q, v, held).acceleration)
+        return lambda t, q, v: (v, plant.dynamics(q, v, self.command_at(t, q, v)).acceleration)
 
     def record(self, t: float, q: np.ndarray, v: np.ndarray, sample: PlantSample) -> dict:
         """The plant series of a row (v, the command, torques, energies, momentum) and a tracking controller's

@@ -1,0 +1,132 @@
+"""The scenario's inequality objectives as the MPC's constraints (uvms.control.mpc.constraints): the rows and their
+Jacobian against finite differences, the path back from a violated state, and short closed loops on the actuated
+BlueROV2 + Alpha 5 whose distances, tilt and thrusts are recomputed from the recorded states (coal)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from uvms.dynamics.plant.actuated import ActuatedPlant
+from uvms.dynamics.plant.command import State
+from uvms.robot.configuration import Configuration
+from uvms.scenario.build import build
+from uvms.scenario.schema import read_scenario
+from uvms.sim import simulate
+
+from conftest import ROOT
+
+pytest.importorskip("crocoddyl", reason="the mpc extra (Crocoddyl) is not installed")
+pytest.importorskip("mim_solvers", reason="the mpc extra (mim-solvers) is not installed")
+
+ACTUATED = ["plant.type=hydrodynamic", "plant.thrusters=true", "plant.gravity=true", "simulation.dt=0.01",
+            "simulation.integrator=rk4"]
+
+
+def setup_of(name: str, *overrides: str):
+    return build(read_scenario(ROOT / "scenarios" / f"{name}.toml", [*ACTUATED, *overrides]))
+
+
+def mpc_of(setup, **options):
+    from uvms.control.mpc.controller import MPCController
+    from uvms.control.mpc.settings import MPCSettings
+
+    trajectory = setup.trajectory
+    mpc = MPCController(setup.plant, setup.actuation.thrusters, lambda t: trajectory(t).pose.translation,
+                        frame=setup.task.frame, settings=MPCSettings(horizon=10, node_dt=0.1, **options),
+                        constraints=setup.inequalities.objectives)
+    mpc.reset(State(setup.q0))
+    return mpc
+
+
+def closed_loop(setup, mpc, duration: float):
+    return simulate(ActuatedPlant(setup.plant, setup.actuation.thrusters), mpc, setup.q0, duration, 0.01,
+                    progress=False)
+
+
+def smallest(setup, result, name: str) -> float:
+    """The smallest margin (value - lower, upper - value) of an objective over the recorded states, recomputed."""
+    item = next(objective for objective in setup.inequalities.objectives if objective.name == name)
+    state = Configuration(setup.robot, result.q[0])
+    margins = []
+    for q in result.q:
+        state.update(q)
+        value = item.value(state)
+        margins.append(np.min(np.minimum(value - item.lower, item.upper - value)))
+    return float(min(margins))
+
+
+def test_the_rows_and_their_jacobian_match_finite_differences(rng):
+    """Node 1 of the pipe: the input rows (g = u) and the objectives' (joint limits, the pipe's nearest distances,
+    scaled) with Gx, Gu against central differences on the state manifold."""
+    setup = setup_of("bluerov2_alpha5_pipe")
+    mpc = mpc_of(setup)
+    node, state = mpc.problem.runningModels[1], mpc.state
+    q = setup.robot.configuration(base=[0.05, 0.0, -5.0, 0.05, 0.1, 0.0], arm=[3.0, 1.6, 1.8, 1.0, 0.0])
+    x = np.concatenate([q, rng.normal(size=setup.robot.nv) * 0.1])
+    u = rng.normal(size=node.nu)
+    data = node.createData()
+    node.calc(data, x, u)
+    node.calcDiff(data, x, u)
+    assert node.ng == node.nu + 8  # 4 joints, the pipe's 4 nearest pairs
+    np.testing.assert_allclose(data.g[:node.nu], u)
+    np.testing.assert_allclose(data.Gu, np.eye(node.ng, node.nu), atol=1e-12)
+    numeric = np.zeros_like(data.Gx)
+    for index in range(state.ndx):
+        step = np.zeros(state.ndx)
+        step[index] = 1e-7
+        values = []
+        for sign in (1.0, -1.0):
+            other = node.createData()
+            node.calc(other, state.integrate(x, sign * step), u)
+            values.append(other.g.copy())
+        numeric[:, index] = (values[0] - values[1]) / 2e-7
+    assert np.abs(numeric[node.nu + 4:]).max() > 100.0  # the distances' rows, in mm
+    np.testing.assert_allclose(data.Gx, numeric, rtol=0, atol=1e-3 * np.abs(numeric).max())
+
+
+def test_a_violated_row_gets_its_bound_back_over_the_recovery_nodes():
+    from uvms.control.mpc.constraints import NodeConstraints
+
+    setup = setup_of("bluerov2_alpha5_pipe")
+    rows = NodeConstraints(setup.robot, setup.inequalities.objectives, None, None, with_state=True, margin=0.002,
+                           scale=1000.0)
+    start = np.array([3.0, 1.8, 1.8, 1.0, 12.0, 30.0, 100.0, 120.0]) * np.r_[np.full(4, 1000.0), np.ones(4)]
+    lower, upper = rows.relaxed(start, 1.0 / 3.0)
+    np.testing.assert_allclose(lower[4:], [12.0 + (22.0 - 12.0) / 3.0, 22.0, 22.0, 22.0])  # 20 mm + 2 mm margin
+    np.testing.assert_allclose(lower[:4], rows.bounds[0][:4])  # inside their limits: unchanged
+    np.testing.assert_allclose(rows.relaxed(start, 1.0)[0], rows.bounds[0])
+
+
+@pytest.mark.parametrize("current", ["[0.0,0.0,0.0]", "[-0.3,0.0,0.0]"], ids=["still", "current"])
+def test_the_jaws_stay_clear_of_the_pipe_on_the_actuated_plant(current):
+    """The pipe's line driven into it in 4 s (scenario: 8 s; the jaws 5.75 cm from it, its end 2.7 cm inside): on the
+    measured states the nearest shape stays >= 19 mm from the pipe (min 20; the chain: -2.7 mm over the whole
+    scenario), the thrusts within their bounds, the current unknown to the MPC."""
+    setup = setup_of("bluerov2_alpha5_pipe", "trajectory.duration=4.0", f"plant.current={current}")
+    mpc = mpc_of(setup)
+    result = closed_loop(setup, mpc, 4.5)
+    margin = smallest(setup, result, "pipe")
+    assert -0.001 <= margin < 0.005  # the constraint active, and kept to 1 mm
+    thrusters, thrusts = setup.actuation.thrusters, result.actuation.thrusts
+    assert np.all(thrusts >= thrusters.lower - 1e-9) and np.all(thrusts <= thrusters.upper + 1e-9)
+
+
+def test_the_stowed_jaws_stay_clear_of_the_vehicle():
+    """The stow's line in 2 s on the actuated plant: the self distance on the measured states >= 9.5 mm (min 10)."""
+    setup = setup_of("bluerov2_alpha5_stow", "trajectory.duration=2.0")
+    mpc = mpc_of(setup)
+    result = closed_loop(setup, mpc, 2.5)
+    assert smallest(setup, result, "self_collision") >= -0.0005
+    assert smallest(setup, result, "joint_limits") > 0.0
+
+
+def test_in_a_saturating_current_the_thrusts_stay_within_their_bounds():
+    """1.0 m/s from ahead (beyond the thrusters), 1 s: the thrusts within their bounds at every step, saturated.
+    (The tilt is not kept there: 0.39 rad over 4 s against max 0.0873; see benchmarks/README.md.)"""
+    setup = setup_of("bluerov2_alpha5_intervention_saturated_current")
+    mpc = mpc_of(setup)
+    result = closed_loop(setup, mpc, 1.0)
+    thrusters, thrusts = setup.actuation.thrusters, result.actuation.thrusts
+    assert np.all(thrusts >= thrusters.lower - 1e-9) and np.all(thrusts <= thrusters.upper + 1e-9)
+    assert np.abs(thrusts).max() > 0.9 * min(thrusters.upper.max(), -thrusters.lower.min())  # saturated
