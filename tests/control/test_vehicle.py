@@ -44,7 +44,7 @@ def test_feedforward_is_the_plant_inverse_dynamics(robot, rng):
     base_acceleration, command = rng.normal(size=6), rng.normal(size=robot.n_arm) * 0.2
     arm_acceleration = (command - v[6:]) / plant.motor_time_constant
     wrench = vehicle_inverse_dynamics(plant, q, v, base_acceleration, arm_acceleration)
-    dynamics = plant._evaluate(q, v, command, wrench)
+    dynamics = plant.dynamics(q, v, command, wrench)
     np.testing.assert_allclose(dynamics.acceleration[:6], base_acceleration, atol=1e-9)
     np.testing.assert_allclose(dynamics.acceleration[6:], arm_acceleration, atol=1e-12)
 

@@ -386,7 +386,7 @@ def fossen_terms_link_by_link(plant: Plant, q: np.ndarray, v: np.ndarray, body_w
         buoyancy = pose.rotation.T @ np.array([0.0, 0.0, hydro.fluid_density * hydro.gravity * params.volume])
         wrench += np.concatenate([buoyancy, np.cross(params.center_of_buoyancy, buoyancy)])
         fext[link.joint_id] += link.placement.act(pin.Force(wrench))
-    fext[1] += plant._base_placement.act(pin.Force(body_wrench))
+    fext[1] += plant.robot.base_placement.act(pin.Force(body_wrench))
     return mass, pin.rnea(model, model.createData(), q, v, np.zeros(model.nv), fext)
 
 
