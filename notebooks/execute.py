@@ -14,6 +14,7 @@ paths, object addresses, throughputs, the digits of numbers below 1e-9), so stal
 
 from __future__ import annotations
 
+import os
 import re
 import sys
 import time
@@ -123,6 +124,7 @@ def unexecuted(notebook: nbformat.NotebookNode) -> list[int]:
 
 def main(argv: list[str]) -> None:
     """Execute the named notebooks (all by default) and write them back with their outputs."""
+    os.environ.pop("MPLBACKEND", None)  # the kernel draws inline figures; a headless Agg would store none
     for path in notebook_paths(argv):
         started = time.perf_counter()
         notebook = execute(path)
