@@ -13,6 +13,7 @@ from ..control.tracking import TrackingController
 from ..dynamics.plant.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..numerics.integrate import stage_times, step_count
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, Solver, VariableDamping, initial_configuration
 from ..solvers.base import SolverFactory
@@ -68,7 +69,7 @@ def build(spec: ScenarioSpec) -> Setup:
     check_vehicle_control_used(spec)
     check_excitation_used(spec)
     task, q0, residual = scenario_start(robot, spec)
-    trajectory = make_trajectory(robot.fk(q0, task.frame), spec.trajectory)
+    trajectory = make_trajectory(Configuration(robot, q0).pose(task.frame_id).copy(), spec.trajectory)
     duration = scenario_duration(spec)
     if spec.plant.type != "kinematic":
         if spec.excitation.wrench and spec.plant.thrusters:
