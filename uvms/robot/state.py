@@ -34,14 +34,18 @@ class KinematicState:
         self.model = model  # read at every update and step
         self.data = model.createData()
         self.q: np.ndarray | None = None
+        self._placed: set[int] = set()  # frames placed by updateFramePlacement at q
+        self._jacobians: dict[int, np.ndarray] = {}
         self._joint_views: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # joint id -> views into data
 
     def update(self, q: np.ndarray) -> None:
         """Move to the configuration q (nq,), unchecked; what was computed at the previous one is forgotten."""
         self.q = q
         self._joints = False  # computeJointJacobians at q
-        self._placed: set[int] = set()  # frames placed by updateFramePlacement at q
-        self._jacobians: dict[int, np.ndarray] = {}
+        if self._placed:  # emptied, not made anew: an update is in every loop
+            self._placed.clear()
+        if self._jacobians:
+            self._jacobians.clear()  # the arrays handed out stay theirs: each is made anew at its q
 
     def _forward_joints(self) -> None:
         """Joint placements and Jacobians at q, once (``computeJointJacobians`` also runs the FK)."""
@@ -53,8 +57,9 @@ class KinematicState:
         """``transform_frame_to_world`` of a frame (a view into this state's data: copy to keep it past
         :meth:`update`)."""
         if frame_id not in self._placed:
-            self._forward_joints()
-            pin.updateFramePlacement(self.model, self.data, frame_id)
+            if not self._joints:
+                self._forward_joints()
+            pin.updateFramePlacement(self.model, self.data, frame_id)  # returns a copy: the view is read below
             self._placed.add(frame_id)
         return self.data.oMf[frame_id]
 
