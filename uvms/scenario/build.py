@@ -17,7 +17,7 @@ from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, Solver, VariableDamping, initial_configuration
 from ..solvers.base import SolverFactory
-from ..tasks import FrameTask, JointLimitPotential, VehicleTask
+from ..tasks import FrameTask, MidRangePotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .excitation import check_excitation_used, scenario_excitation
@@ -146,7 +146,7 @@ def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple
         raise ScenarioError(f"initial.fixed_base must be a list of vehicle coordinate names "
                             f"({', '.join(robot.base.pose_names) or 'none: the base is fixed'}), got {thaw(fixed)!r}")
     task.set_target(np.concatenate([trajectory.start, trajectory.orientation]))
-    potential = JointLimitPotential(robot, weights=np.asarray(spec.solver.joint_limit_weights, dtype=float))
+    potential = MidRangePotential(robot, weights=np.asarray(spec.solver.joint_limit_weights, dtype=float))
     try:
         result = initial_configuration(robot, task, potential, q_given, fixed_base=fixed)
     except (SolverInputError, NameNotFound) as exc:
@@ -281,7 +281,7 @@ def solver_options(robot: Robot, solver: SolverSpec, cls: type[Solver], dt: floa
     if "weights" in taken:
         options["weights"] = solver_weights(robot, solver, free_floating=solver.free_floating)
     if "potential" in taken:
-        options["potential"] = JointLimitPotential(robot, weights=np.asarray(solver.joint_limit_weights,
+        options["potential"] = MidRangePotential(robot, weights=np.asarray(solver.joint_limit_weights,
                                                                              dtype=float))
     return options
 

@@ -15,6 +15,7 @@ import numpy as np
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError, OutputFailedWarning, UVMSError
 from ..io import outputs
+from ..robot.limits import Limit
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
@@ -42,8 +43,7 @@ def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) ->
     """The numbers of ``metrics.json``."""
     robot = result.robot
     arm = result.arm()
-    lower, upper = robot.arm_limits
-    violation = np.maximum(np.maximum(lower - arm, arm - upper), 0.0)
+    violation = Limit.joint_positions(robot).excess(arm)  # (N, n_arm) [rad or m]
     metrics = {
         "max_position_error": float(result.position_error.max()),
         "max_orientation_error": float(result.orientation_error.max()),
