@@ -8,8 +8,8 @@ variable damping of amundsen2018 eq. 6), either with the ordinary Jacobian
 only the arm is commanded and the vehicle follows momentum conservation).
 
 One frame task on an actuated vehicle is the common case (a pose or a point to follow): :class:`FrameStep`
-solves it after Pinocchio's joint kinematics in one compiled call, in about the time of 12 to 25 forward
-kinematics (``benchmarks/bench_clik.py``).
+solves it after Pinocchio's joint kinematics in one compiled call (its speed is measured by
+``benchmarks/bench_clik.py``).
 """
 
 from __future__ import annotations
