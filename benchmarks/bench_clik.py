@@ -76,7 +76,7 @@ def clik_step_ratios(robot: uvms.Robot, repeat: int) -> dict[str, float]:
     rng = np.random.default_rng(0)
     q = robot.random_configuration(rng)
     target = robot.fk(robot.random_configuration(rng))
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     model, data = robot.model, robot.data
     task = uvms.FrameTask(robot, target=target)
     weights = np.linspace(1.0, 2.0, robot.nv)  # a diagonal W (the step has weights)

@@ -101,7 +101,7 @@ def test_a_model_name_or_none_where_a_robot_is_needed_says_how_to_get_one():
     """Every public entry that takes the model refuses what is not one (a UVMSError and a TypeError), by name."""
     robot = shipped("hoang2011")
     task = uvms.FrameTask(robot, axes=["x", "y", "yaw"], target=robot.fk(robot.neutral()))
-    calls = {"FrameTask": lambda r: uvms.FrameTask(r), "JointLimitPotential": uvms.tasks.JointLimitPotential,
+    calls = {"FrameTask": lambda r: uvms.FrameTask(r), "MidRangePotential": uvms.tasks.MidRangePotential,
              "VehicleTask": uvms.VehicleTask, "Plant": uvms.Plant, "CLIK": lambda r: uvms.CLIKSolver(r, task),
              "solve_ik": lambda r: uvms.solve_ik(r, [0, 0, 0, 0, 0, 0]), "Configuration": lambda r: uvms.Configuration(
                  r, robot.neutral()), "initial_configuration": lambda r: uvms.solvers.initial_configuration(r, task),

@@ -58,6 +58,20 @@ def test_run_puts_the_folders_given_before_the_scenario_s_own(scenario, capsys):
     assert (scenario.parent / "replay.png").stat().st_size > 0
 
 
+def test_run_reads_the_scenario_once(scenario, capsys, monkeypatch):
+    """``uvms run`` with --set and --package-path reads the scenario file once (it read it three times)."""
+    from uvms.scenario import schema
+
+    reads = []
+    read_toml = schema.read_toml
+    monkeypatch.setattr(schema, "read_toml", lambda path: reads.append(path) or read_toml(path))
+    assert main(["run", str(scenario), "--out", str(scenario.parent / "once"), "--quiet", "--set",
+                 "outputs.figures=false", "--package-path", str(ROS_WORKSPACE)]) == 0, capsys.readouterr().err
+    assert len(reads) == 1
+    assert read_run_record(scenario.parent / "once").package_path == [str(ROS_WORKSPACE),
+                                                                      str(scenario.parent / "arms")]
+
+
 def test_sweep_and_view_take_package_folders_too(scenario, capsys):
     out = scenario.parent / "sweep"
     assert main(["sweep", str(scenario), "--grid", "simulation.dt=[0.1, 0.2]", "--package-path",

@@ -9,9 +9,9 @@ from uvms.cli import main
 from conftest import SCENARIOS
 
 SCENARIO = str(SCENARIOS / "hoang2011_w1.toml")
-ARGS = ["--sample", "model.args.l1=uniform(0.35, 0.5)",
-        "--sample", "outputs.position_tolerance=loguniform(1e-10, 1e-9)",
-        "--samples", "4", "--seed", "5", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2",
+ARGS = ["--samples", "model.args.l1=uniform(0.35, 0.5)",
+        "--samples", "outputs.position_tolerance=loguniform(1e-10, 1e-9)",
+        "-n", "4", "--seed", "5", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2",
         "--quiet"]
 
 
@@ -31,13 +31,13 @@ def test_cli_study_prints_the_pass_rate_and_resumes(tmp_path, capsys):
 
 def test_cli_study_errors_are_one_line(tmp_path, capsys):
     out = tmp_path / "s"
-    assert main(["study", SCENARIO, "--sample", "solver.gain=normal(1)", "--samples", "3", "--out", str(out)]) == 2
+    assert main(["study", SCENARIO, "--samples", "solver.gain=normal(1)", "-n", "3", "--out", str(out)]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("uvms: error: --sample solver.gain=normal(1): normal takes 2 or 4 finite numbers; valid "
+    assert err.startswith("uvms: error: --samples solver.gain=normal(1): normal takes 2 or 4 finite numbers; valid "
                           "forms: normal(mu, sigma)") and len(err.splitlines()) == 1
-    assert main(["study", SCENARIO, "--samples", "3", "--out", str(out)]) == 2  # no --sample, no [study] table
-    assert "a study needs at least one --sample" in capsys.readouterr().err and not out.exists()
-    assert main(["study", SCENARIO, "--sample", "model.args.vehicle_mass=choice([120.0, -5.0])", "--samples", "4",
+    assert main(["study", SCENARIO, "-n", "3", "--out", str(out)]) == 2  # no --samples, no [study] table
+    assert "a study needs at least one --samples" in capsys.readouterr().err and not out.exists()
+    assert main(["study", SCENARIO, "--samples", "model.args.vehicle_mass=choice([120.0, -5.0])", "-n", "4",
                  "--seed", "1", "--set", "trajectory.duration=10", "--set", "trajectory.accel_time=2", "--out",
                  str(out), "--quiet"]) == 2
     err = capsys.readouterr().err.splitlines()
@@ -58,3 +58,12 @@ def test_cli_tune_prints_the_best_set_list(tmp_path, capsys):
     assert 0.2 <= best["parameters"]["solver.gain"] <= 2
     assert main(["tune", SCENARIO, "--param", "solver.gain=2:1", "--out", str(out)]) == 2
     assert capsys.readouterr().err.startswith("uvms: error: --param expects KEY=LOW:HIGH")
+
+
+def test_the_flags_are_named_as_the_study_keys_they_set(capsys, tmp_path):
+    """--samples is [study] samples (KEY=DIST), -n is [study] n: the number of the old --samples N gets a hint."""
+    out = tmp_path / "s"
+    assert main(["study", SCENARIO, "--samples", "4", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--samples expects KEY=DIST" in err and "the number of trials is -n N, [study] n" in err
+    assert not out.exists()

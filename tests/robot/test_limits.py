@@ -106,10 +106,10 @@ def test_every_user_reads_the_same_limit():
     """The potential, CLIK clamping and the initial configuration all take a Limit, e.g. one with a margin."""
     robot = shipped("hoang2011")
     inner = Limit.joint_positions(robot, margin=0.2)
-    potential = uvms.tasks.JointLimitPotential(robot, limit=inner)
+    potential = uvms.tasks.MidRangePotential(robot, limit=inner)
     assert potential.limit is inner
     assert potential.middle == pytest.approx(inner.middle) and potential.range == pytest.approx(inner.span)
-    assert uvms.tasks.JointLimitPotential(robot).limit.lower.tolist() == robot.arm_limits[0].tolist()
+    assert uvms.tasks.MidRangePotential(robot).limit.lower.tolist() == robot.arm_limits[0].tolist()
     task = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, 0, 0, 0, 0, 0])
     q = robot.configuration(arm=[0.3, 4.2, -4.2])  # inside the margin
     clamped_any = False
@@ -125,7 +125,7 @@ def test_every_user_reads_the_same_limit():
     with pytest.raises(LimitError, match="enforce_limits needs position limits of the 3 arm"):
         uvms.CLIKSolver(robot, task, dt=0.1, enforce_limits=True, limit=Limit([0.0], [1.0]))
     with pytest.raises(uvms.UVMSError, match="position limits of the 3 arm"):
-        uvms.tasks.JointLimitPotential(robot, limit=Limit.joint_velocities(robot))
+        uvms.tasks.MidRangePotential(robot, limit=Limit.joint_velocities(robot))
     # the initial configuration inside a box that excludes the paper's optimum q1 = 3 pi / 4
     box = Limit(robot.arm_limits[0], [0.5 * np.pi, 1.5 * np.pi, 1.5 * np.pi])
     target = uvms.FrameTask(robot, axes=("x", "y", "yaw"), orientation="euler", target=[0, -2, 0, 0, 0, 1.0])
@@ -147,7 +147,7 @@ def test_a_custom_limit_moves_the_potential_the_objective_and_the_clamping_alike
     robot = shipped("hoang2011")
     model = Limit.joint_positions(robot)
     custom = Limit([0.2, -2.0, -1.0], [2.0, 2.0, 1.5], model.names, model.q_index)
-    potential = uvms.tasks.JointLimitPotential(robot, limit=custom)
+    potential = uvms.tasks.MidRangePotential(robot, limit=custom)
     assert potential.middle == pytest.approx([1.1, 0.0, 0.25]) and potential.range == pytest.approx([1.8, 4.0, 2.5])
     assert potential.value(robot.configuration(arm=[2.0, 0.0, 0.25])) == pytest.approx(0.125)  # 1/2 (0.9 / 1.8)^2
     objective = JointLimits(robot, limit=custom, margin=0.1, band=0.2)
@@ -172,7 +172,7 @@ def test_a_custom_limit_moves_the_potential_the_objective_and_the_clamping_alike
         JointLimits(robot, margin={"q22": 0.3})
     with pytest.raises(LimitError, match="no room inside the limits of q1 \\[0.2, 2\\]"):
         JointLimits(robot, limit=custom, margin=0.95)
-    for build in (uvms.tasks.JointLimitPotential, JointLimits):
+    for build in (uvms.tasks.MidRangePotential, JointLimits):
         with pytest.raises(LimitError, match="needs position limits of the 3 arm coordinates, got 3 velocity"):
             build(robot, limit=Limit.joint_velocities(robot))
 
@@ -200,3 +200,27 @@ def test_the_velocity_objective_reads_a_velocity_limit():
         JointVelocityLimits(robot, limit=Limit([-0.1, -0.3, -0.4], [0.2, 0.3, 0.4], model.names, kind="velocity"))
     with pytest.raises(LimitError, match="needs velocity limits of the 3 arm coordinates, got 3 position"):
         JointVelocityLimits(robot, limit=Limit.joint_positions(robot))
+
+
+def test_the_model_limits_are_one_object_read_by_every_user():
+    """Limit built once from the model: the potential, CLIK's clamping, the objectives and the IK read that object;
+    CLIK clamps to its potential's box unless told otherwise, and refuses two different boxes."""
+    robot = shipped("hoang2011")
+    model = Limit.joint_positions(robot)
+    assert Limit.joint_positions(robot) is model and Limit.joint_velocities(robot) is Limit.joint_velocities(robot)
+    assert uvms.tasks.MidRangePotential(robot).limit is model and JointLimits(robot).limit.lower.tolist() == \
+        model.lower.tolist()
+    with pytest.raises(ValueError, match="read-only"):
+        model.lower[0] = 1.0  # shared: never changed in place
+    custom = Limit([0.2, -2.0, -1.0], [2.0, 2.0, 1.5], model.names, model.q_index)
+    task = uvms.JointTask(robot, {"q1": 3.0})
+    q = uvms.Configuration(robot, robot.configuration(arm=[1.9, 0.0, 0.0]))
+    potential = uvms.tasks.MidRangePotential(robot, limit=custom)
+    solver = uvms.CLIKSolver(robot, task, dt=0.1, enforce_limits=True, potential=potential, alpha=1e-9)
+    assert solver.limit is custom and solver.velocity(q).limits_active == ("q1",)  # held at the potential's 2.0
+    with pytest.raises(LimitError, match="read one Limit"):
+        uvms.CLIKSolver(robot, task, dt=0.1, enforce_limits=True, potential=potential, limit=model)
+    assert Limit.joint_positions(robot).excess(np.array([[-0.5, 0.0, 5.0]])).tolist() == \
+        [[0.5, 0.0, pytest.approx(5.0 - 1.5 * np.pi)]]
+    vehicle = uvms.tasks.VehicleVelocityLimits(robot, [0.5, 0.2])
+    assert vehicle.limit.upper.tolist() == [0.5, 0.5, 0.2] and vehicle.limit.names == robot.base.velocity_names

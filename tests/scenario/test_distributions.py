@@ -78,7 +78,7 @@ def test_a_latin_hypercube_puts_one_trial_in_each_stratum():
 def test_bad_distributions_name_the_key_and_the_valid_forms(text, words):
     with pytest.raises(StudyError, match=words) as caught:
         parse_sample(text)
-    assert ("expects KEY=DIST" in str(caught.value) or str(caught.value).startswith(f"--sample {text.split('=')[0]}="))
+    assert ("expects KEY=DIST" in str(caught.value) or str(caught.value).startswith(f"--samples {text.split('=')[0]}="))
     assert FORMS in str(caught.value)
 
 

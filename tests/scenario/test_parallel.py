@@ -41,7 +41,7 @@ def test_a_scheduler_that_is_not_tls_is_refused_unless_the_user_says_so(tmp_path
               out=tmp_path / "s")
     assert not list(tmp_path.iterdir())  # refused before anything ran or was written
     commands = [["sweep", str(SCENARIO), "--grid", GRID[0]],
-                ["study", str(SCENARIO), "--sample", "solver.gain=uniform(0.5, 1.5)", "--samples", "2"]]
+                ["study", str(SCENARIO), "--samples", "solver.gain=uniform(0.5, 1.5)", "-n", "2"]]
     if importlib.util.find_spec("optuna"):
         commands.append(["tune", str(SCENARIO), "--param", "solver.gain=0.5:1.5", "--trials", "1"])
     for command in commands:

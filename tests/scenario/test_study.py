@@ -121,7 +121,7 @@ def running(pid: int) -> bool:
 @pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="reads the process tree from /proc")
 def test_resume_after_a_sigkill_of_the_study_whose_workers_stop_with_it(reference, tmp_path):
     folder = tmp_path / "s"
-    command = uvms_command("study", str(SCENARIO), *[f"--sample={s}" for s in SAMPLES], "--samples", str(N),
+    command = uvms_command("study", str(SCENARIO), *[f"--samples={s}" for s in SAMPLES], "-n", str(N),
                            "--seed", str(SEED), *[f"--set={s}" for s in SHORT], "--jobs", "2", "--out", str(folder),
                            "--quiet")
     errors = tmp_path / "stderr.txt"
@@ -208,7 +208,7 @@ def test_bad_samples_keys_and_options_fail_before_any_trial(tmp_path):
         (StudyError, "1 to 100,000 trials", dict(samples=SAMPLES, n=0)),
         (StudyError, "method 'grid'", dict(samples=SAMPLES, method="grid")),
         (StudyError, "backend 'ray'", dict(samples=SAMPLES, backend="ray")),
-        (StudyError, "at least one --sample", dict(samples=None)),  # the scenario has no [study] table
+        (StudyError, "at least one --samples", dict(samples=None)),  # the scenario has no [study] table
     ]
     for error, words, options in cases:
         with pytest.raises(error, match=words):

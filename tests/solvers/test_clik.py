@@ -21,7 +21,7 @@ def hoang_setup():
 
 def test_a_solver_reused_over_configurations_and_targets_equals_a_fresh_one_bit_for_bit(rng):
     robot, task = hoang_setup()
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     options = dict(gain=1.0, weights=np.array([1.0, 1.0, 500.0, 1.0, 1.0, 1.0]), potential=potential, alpha=10.0)
     solver = CLIKSolver(robot, task, **options)
     for index in range(30):
@@ -40,7 +40,7 @@ def test_a_solver_reused_over_configurations_and_targets_equals_a_fresh_one_bit_
 def test_the_solver_path_is_the_clamping_solve_with_no_joint_held(rng):
     """The no-limit path and solve_with_held (joint clamping) are one computation: same bits, not only close."""
     robot, task = hoang_setup()
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     weights = rng.uniform(0.5, 50.0, robot.nv)
     for damping in (0.0, 0.05):
         solver = CLIKSolver(robot, task, gain=2.0, weights=weights, damping=damping, potential=potential, alpha=3.0)
@@ -84,7 +84,7 @@ def test_a_solver_built_after_a_potential_changed_in_place_reads_it(rng):
     """Regression (issue 30): after ``potential.weights[:] *= 50`` a solver built next returns the NEW velocity (a
     hidden cache of solvers used to return the old one until it was cleared)."""
     robot, task = hoang_setup()
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     q = robot.random_configuration(rng)
     before = CLIKSolver(robot, task, potential=potential, alpha=10.0).velocity(Configuration(robot, q))
     potential.weights[:] *= 50
@@ -101,7 +101,7 @@ def test_a_solver_built_after_a_potential_changed_in_place_reads_it(rng):
 
 def test_a_clik_loop_keeping_its_solver_equals_a_solver_built_at_every_step(rng):
     robot, task = hoang_setup()
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     options = dict(gain=1.0, weights=[1, 1, 1, 100, 100, 100], potential=potential, alpha=10.0)
     solver = CLIKSolver(robot, task, **options)
     q = robot.random_configuration(rng)
@@ -131,7 +131,7 @@ def test_pose_clik_is_clik_on_a_frame_task(rng):
     inverse of the 6-row world-aligned frame Jacobian and the log3 pose error. Its tests: one solver, its task's
     target moved, equals a solver built for that target; 300 steps reach a pose to 1e-10."""
     robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     for alpha, twist in ((0.0, None), (2.0, rng.normal(size=6))):
         task = uvms.FrameTask(robot, axes=uvms.robot.conventions.AXIS_NAMES, orientation="log")
         hot = CLIKSolver(robot, task, gain=1.5, damping=1e-3, potential=potential, alpha=alpha)
@@ -195,7 +195,7 @@ def test_the_prepared_frame_step_is_an_independent_numpy_clik(rng):
     """One log frame task (all axes, or some) with every kind of gain, W, damping and the null space: v is the
     numpy computation's to 1e-12 of |v|, sigma_min numpy's SVD of J L^-T, the residual |J v - c|."""
     robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     square = rng.normal(size=(robot.nv, robot.nv))
     cases = [(None, 1.0, 1e-3, 0.0, None), (rng.uniform(0.5, 2, robot.nv), 2.0, 0.0, 1.5, None),
              (square @ square.T + robot.nv * np.eye(robot.nv), rng.uniform(0.5, 2, 6), 0.05, 1.0, None),
@@ -239,7 +239,7 @@ def test_the_prepared_steps_diagnostics_are_computed_when_read_and_kept_with_the
 
 def test_a_prepared_step_is_its_velocity_then_pin_integrate_bit_for_bit(rng):
     robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     task = uvms.FrameTask(robot, target=robot.fk(robot.random_configuration(rng)))
     solver = CLIKSolver(robot, task, gain=2.0, weights=rng.uniform(1, 2, robot.nv), damping=1e-4,
                         potential=potential, alpha=1.0)

@@ -159,7 +159,7 @@ def test_clik_spatial_pose_task_and_free_floating_gjm(rng):
 def test_nullspace_term_leaves_the_task_velocity_unchanged(rng):
     robot = shipped("hoang2011")
     task = hoang_task(robot)
-    potential = uvms.tasks.JointLimitPotential(robot)
+    potential = uvms.tasks.MidRangePotential(robot)
     for weights in (None, [1, 1, 1, 100, 100, 100]):
         for _ in range(20):
             q = robot.random_configuration(rng)
@@ -172,7 +172,7 @@ def test_nullspace_term_leaves_the_task_velocity_unchanged(rng):
 
 def test_joint_limit_potential_gradient_matches_finite_differences(rng):
     robot = shipped("hoang2011")
-    potential = uvms.tasks.JointLimitPotential(robot, weights=[1.0, 2.0, 0.5])
+    potential = uvms.tasks.MidRangePotential(robot, weights=[1.0, 2.0, 0.5])
     q = robot.random_configuration(rng)
     gradient = potential.gradient(q)
     for index in range(robot.nv):
@@ -420,7 +420,7 @@ def test_solvers_never_return_nan(arm, xdot, singular, damping):
     task = hoang_task(robot, target=xdot)
     for free_floating in (False, True):
         result = clik_velocity(robot, q, task, damping=uvms.solvers.VariableDamping(0.1, 0.2) if damping else 0.0,
-                               free_floating=free_floating, potential=uvms.tasks.JointLimitPotential(robot), alpha=10.0)
+                               free_floating=free_floating, potential=uvms.tasks.MidRangePotential(robot), alpha=10.0)
         assert np.all(np.isfinite(result.v)) and np.isfinite(result.residual) and np.isfinite(result.sigma_min)
     state = uvms.Configuration(robot, q)
     jacobian = task.jacobian(state)[:, 3:]  # arm only: singular when stretched

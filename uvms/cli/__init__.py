@@ -129,11 +129,12 @@ def add_study_parser(commands) -> None:
     """``uvms study``: a Monte Carlo study of a scenario."""
     study = commands.add_parser("study", help="Monte Carlo study of a scenario: study.csv, summary.json, figures")
     study.add_argument("scenario", help="scenario file or shipped scenario name (its [study] table gives defaults)")
-    study.add_argument("--sample", action="append", metavar="KEY=DIST",
+    # each flag is named as the [study] key it sets: samples, n, seed, method, set
+    study.add_argument("--samples", action="append", metavar="KEY=DIST",
                        help="sample a scenario key: normal(mu, sigma), normal(mu, sigma, low, high), uniform(a, b), "
                             "loguniform(a, b), choice([...]); KEY[i] samples one element of a list key, e.g. "
                             "plant.current[1]=uniform(-0.3, 0.3) (repeatable; default: [study] samples)")
-    study.add_argument("--samples", type=int, metavar="N", help="number of trials (default: [study] n)")
+    study.add_argument("-n", "--n", type=int, metavar="N", help="number of trials (default: [study] n)")
     study.add_argument("--seed", type=int, help="the study's seed (default: [study] seed, else 0)")
     study.add_argument("--method", choices=["random", "lhs", "sobol"],
                        help="random (per-trial seeds), Latin hypercube or scrambled Sobol (default: [study] method)")
@@ -158,9 +159,10 @@ def add_tune_parser(commands) -> None:
                            "maximise (default max_position_error)")
     tune.add_argument("--trials", type=int, default=20, help="Optuna trials (default 20)")
     tune.add_argument("--seed", type=int, default=0, help="seed of the TPE sampler")
-    tune.add_argument("--sample", action="append", metavar="KEY=DIST",
+    tune.add_argument("--samples", action="append", metavar="KEY=DIST",
                       help="robust tuning: every trial is a study over these disturbances (as uvms study)")
-    tune.add_argument("--samples", type=int, default=8, help="trials of each study (with --sample; default 8)")
+    tune.add_argument("--study-n", type=int, default=8, metavar="M",
+                      help="trials of each study, its [study] n (with --samples; default 8)")
     tune.add_argument("--study-seed", type=int, default=0, help="seed of each study: the same disturbances each trial")
     tune.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a key in every run (repeatable)")
     add_parallel_options(tune)

@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from ..errors import UVMSError
 from ..model.resources import MAX_YAML_BYTES, read_text
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from .terminal import say
 
@@ -82,11 +83,11 @@ def describe(robot: Robot, hydrodynamics: str | None = None) -> str:
     ]
     body_frames = [f.name for f in robot.model.frames if f.type == pin.FrameType.BODY]
     lines.append(f"frames      {', '.join(body_frames)}")
-    q = robot.neutral()
+    neutral = Configuration(robot, robot.neutral())
     lines.append("end effectors at the neutral configuration (world frame, m / rad)")
     width = max([22, *map(len, robot.ee_frames)])
     for frame in robot.ee_frames:
-        pose = robot.fk(q, frame)
+        pose = neutral.pose(robot.frame_id(frame))
         rpy = pin.rpy.matrixToRpy(pose.rotation)
         lines.append(f"  {frame:<{width}} xyz {np.array2string(pose.translation, precision=4, suppress_small=True)}"
                      f"  rpy {np.array2string(rpy, precision=4, suppress_small=True)}")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -31,14 +32,13 @@ def command_run(options: argparse.Namespace) -> int:
 
     if options.watch:
         return watch_job(options, run_output_folder(options), scenario=scenario_file(options.scenario))
-    overrides = [*(options.set or ()), *(["outputs.bag=true"] if options.bag else []),
-                 *package_path_overrides(options)]
-    spec = read_scenario(options.scenario, overrides)  # a bad scenario is said here, before anything runs
+    spec = read_scenario(options.scenario, [*(options.set or ()), *(["outputs.bag=true"] if options.bag else [])])
+    spec = with_package_path(spec, options.package_path)  # read once: a bad scenario is said here, before any run
     out = Path(options.out) if options.out else Path("out") / spec.name
     if not options.quiet:  # the first line, within a second: what runs and where it goes (the loop shows a bar)
         say(start_line(spec, out), sys.stdout)
     replacing = holds_run(out)
-    result = run_scenario(options.scenario, out=out, overrides=overrides, progress=False if options.quiet else None)
+    result = run_scenario(spec, out=out, progress=False if options.quiet else None)
     folder = result.files[0].parent
     metrics = result.metrics
     if options.quiet:  # the one result line; warnings and notes still go to stderr
@@ -118,6 +118,16 @@ def command_sweep(options: argparse.Namespace) -> int:
         raise UVMSError(f"{len(result.failed)} of {len(result.rows)} sweep points failed (error column of "
                         f"{result.files[0]}); point {first['point']}: {first['error']}")
     return 0
+
+
+def with_package_path(spec: ScenarioSpec, folders: list[str] | None) -> ScenarioSpec:
+    """``spec`` with the folders of ``--package-path DIR ...`` (from the current folder) before its own
+    ``model.package_path``: what :func:`package_path_overrides` sets, on a scenario already read."""
+    if not folders:
+        return spec
+    given = tuple(str(Path(folder).resolve()) for folder in folders)
+    return dataclasses.replace(spec, model=dataclasses.replace(spec.model,
+                                                               package_path=given + tuple(spec.model.package_path)))
 
 
 def package_path_overrides(options: argparse.Namespace) -> list[str]:

@@ -11,10 +11,11 @@ from .terminal import say
 
 
 def command_study(options: argparse.Namespace) -> int:
-    """``uvms study SCENARIO --sample KEY=DIST ... --samples N --seed S``: study.csv, summary.json, figures."""
+    """``uvms study SCENARIO --samples KEY=DIST ... -n N --seed S``: study.csv, summary.json, figures (each flag
+    named as the ``[study]`` key it sets)."""
     from ..scenario.studies.study import study  # joblib, scipy, and dask only with --backend dask
 
-    result = study(options.scenario, options.sample or None, n=options.samples, seed=options.seed,
+    result = study(options.scenario, options.samples or None, n=options.n, seed=options.seed,
                    method=options.method, jobs=options.jobs, backend=options.backend, scheduler=options.scheduler,
                    out=options.out, progress=False if options.quiet else None,
                    overrides=[*(options.set or ()), *package_path_overrides(options)],
@@ -48,7 +49,7 @@ def command_tune(options: argparse.Namespace) -> int:
     from ..scenario.studies.tune import tune  # optuna
 
     result = tune(options.scenario, options.param or (), objective=options.objective, trials=options.trials,
-                  seed=options.seed, samples=options.sample or (), study_n=options.samples,
+                  seed=options.seed, samples=options.samples or (), study_n=options.study_n,
                   study_seed=options.study_seed, jobs=options.jobs, backend=options.backend,
                   scheduler=options.scheduler, out=options.out,
                   overrides=[*(options.set or ()), *package_path_overrides(options)],

@@ -20,7 +20,7 @@ import pinocchio as pin
 
 from ..dynamics.plant.command import Command, State
 from ..errors import UVMSError
-from ..robot.configuration import Configuration
+from ..robot.configuration import Configuration, configurations
 from ..robot.robot import Robot
 from ..solvers.base import Solver, SolverFactory
 from ..tasks import DistanceTask, FrameTask, JointTask, VehicleTask
@@ -79,8 +79,10 @@ class PhasePlan:
         if self.uses_distance and len(self.frames) < 2:
             raise UVMSError("a phase distance needs two frames in task.frames")
         self._check_names()
-        starts = {frame: robot.fk(q0, frame).translation.copy() for frame in self.frames}
-        self.rotations = {frame: robot.fk(q0, frame).rotation.copy() for frame in self.frames}
+        start = Configuration(robot, q0)
+        poses = {frame: start.pose(robot.frame_id(frame)) for frame in self.frames}
+        starts = {frame: pose.translation.copy() for frame, pose in poses.items()}
+        self.rotations = {frame: pose.rotation.copy() for frame, pose in poses.items()}
         joints = {name: float(q0[robot.joint(name).idx_q]) for name in self.joint_names}
         self.boundaries = [(dict(starts), dict(joints))]  # target values at the start of each phase, and the end
         for phase in self.phases:
@@ -228,19 +230,20 @@ class SequenceController:
         return Command(velocity=result.v, info=result)
 
 
-def frame_errors(robot: Robot, plan: PhasePlan, t: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
-    """Position error norm (N,) [m] of every plan frame along a run (t (N,), q (N, nq))."""
-    errors = {}
-    for frame in plan.frames:
-        errors[frame] = np.array([np.linalg.norm(plan(time_).positions[frame][0] - robot.fk(config, frame).translation)
-                                  for time_, config in zip(t, q)])
-    return errors
+def frame_positions(robot: Robot, frames: Sequence[str], q: np.ndarray) -> dict[str, np.ndarray]:
+    """Position (N, 3) [m] of each frame along a run (q (N, nq)): one Configuration moved to each row."""
+    ids = {frame: robot.frame_id(frame) for frame in frames}
+    positions = {frame: np.empty((len(q), 3)) for frame in frames}
+    for row, state in enumerate(configurations(robot, q)):
+        for frame, frame_id in ids.items():
+            positions[frame][row] = state.pose(frame_id).translation
+    return positions
 
 
-def frame_distance(robot: Robot, frames: Sequence[str], q: np.ndarray) -> np.ndarray:
-    """Distance (N,) [m] between two frames along a run."""
-    return np.array([np.linalg.norm(robot.fk(config, frames[1]).translation - robot.fk(config, frames[0]).translation)
-                     for config in q])
+def frame_errors(plan: PhasePlan, t: np.ndarray, positions: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Position error norm (N,) [m] of every plan frame along a run (t (N,), its :func:`frame_positions`)."""
+    return {frame: np.array([np.linalg.norm(plan(time_).positions[frame][0] - position)
+                             for time_, position in zip(t, positions[frame])]) for frame in plan.frames}
 
 
 def sequence_metrics(robot: Robot, plan: PhasePlan, t: np.ndarray, q: np.ndarray) -> dict:
@@ -249,7 +252,8 @@ def sequence_metrics(robot: Robot, plan: PhasePlan, t: np.ndarray, q: np.ndarray
     Args:
         robot: the model; plan: the targets; t: (N,) [s]; q: (N, nq).
     """
-    errors = frame_errors(robot, plan, t, q)
+    positions = frame_positions(robot, plan.frames, q)
+    errors = frame_errors(plan, t, positions)
     ends = [int(np.argmin(np.abs(t - end))) for end in plan.times[1:]]
     metrics = {
         "frames": {frame: {"max_position_error": float(error.max()), "final_position_error": float(error[-1])}
@@ -263,7 +267,8 @@ def sequence_metrics(robot: Robot, plan: PhasePlan, t: np.ndarray, q: np.ndarray
         final = {name: float(q[-1, robot.joint(name).idx_q]) for name in plan.joint_names}
         metrics["final_joints"] = final
     if len(plan.frames) >= 2:
-        distance = frame_distance(robot, plan.frames, q)
+        first, second = positions[plan.frames[0]], positions[plan.frames[1]]
+        distance = np.array([np.linalg.norm(b - a) for a, b in zip(first, second)])  # (N,) [m] between the two
         metrics["final_distance"] = float(distance[-1])
         final_target = plan(t[-1]).distance
         if final_target is not None:

@@ -222,7 +222,7 @@ class ActuatedKinematics:
         """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and its
         distance [m] from the trajectory's point."""
         pose = self.base_pose(q)
-        ee = self.robot.fk(q, self.task.frame).translation.copy()
+        ee = self._at(t, q).pose(self.task.frame_id).translation.copy()
         attitude_error = pin.log3(pose.rotation.T @ self.vehicle_target.rotation)  # body axes [rad]
         row = {"vehicle_position_error": float(np.linalg.norm(self.vehicle_target.translation - pose.translation)),
                "vehicle_attitude_error": float(np.linalg.norm(attitude_error)), "ee_position": ee}
@@ -257,7 +257,7 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
     """
     robot = plant.robot
     frame = frame or robot.ee_frames[0]
-    start = robot.fk(q0, frame)
+    start = Configuration(robot, q0).pose(robot.frame_id(frame)).copy()
     point = start.translation if ee_target is None else np.asarray(ee_target, dtype=float).reshape(3)
     hold = None if hold_arm else VelocityRamps.trapezoid(point, np.zeros(3), 1.0, 0.5, rotation=start.rotation)
     return actuated_control(plant, thrusters, q0, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold,

@@ -4,9 +4,9 @@ Every task, inequality objective and solver reads poses and Jacobians from a :cl
 solver step with several tasks runs Pinocchio's kinematics a single time. A configuration owns its
 ``pinocchio.Data``: two configurations never share state (building one never changes another's pose).
 
-Each quantity is computed at most once per q, when first asked for: the joint placements and Jacobians (one
-``computeJointJacobians``), the frame placements (one ``updateFramePlacements``, only for a frame's pose), each
-frame's world-aligned Jacobian, and the momentum rows the vehicle
+Each quantity is computed at most once per q, when first asked for (:class:`~uvms.robot.state.KinematicState`):
+the joint placements and Jacobians (one ``computeJointJacobians``), each frame's placement (one
+``updateFramePlacement``) and world-aligned Jacobian, and the momentum rows the vehicle
 conserves (by default the rigid centroidal map; a controller may pass those of the added-mass-augmented
 inertia or of a vehicle held still, :mod:`uvms.robot.kinematics`), from which the generalized Jacobian of
 every task follows by the one formula. :meth:`Configuration.update` and :meth:`Configuration.integrate`
@@ -15,20 +15,24 @@ move it to another q and forget what was computed.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 import pinocchio as pin
 
 from . import kinematics
 from .robot import Robot, check_robot
+from .state import KinematicState
 
 #: Momentum rows of a configuration: q (nq,) -> (A_b (r, n_vehicle), A_m (r, n_arm)).
 MomentumRows = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
-class Configuration:
+class Configuration(KinematicState):
     """A configuration q (nq,) of ``robot`` and what Pinocchio computes at it, in data of its own.
+
+    Library code that loops over configurations keeps one Configuration and :meth:`update` s it (one
+    ``pinocchio.Data``, no allocation per q).
 
     Args:
         robot: the model.
@@ -45,73 +49,19 @@ class Configuration:
     def __init__(self, robot: Robot, q: np.ndarray, *, check: bool = True,
                  momentum: MomentumRows | None = None) -> None:
         self.robot = check_robot(robot, type(self).__name__)
-        self.model = robot.model  # read at every update and step
-        self.data = robot.model.createData()
+        super().__init__(robot.model)
         self._momentum = momentum
-        self._joint_views: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # joint id -> views into data
         self.update(q, check=check)
 
     def update(self, q: np.ndarray, *, check: bool = True) -> None:
         """Move to the configuration q (nq,); what was computed at the previous one is forgotten."""
-        self.q = self.robot.check_configuration(q) if check else q
-        self._joints = False  # computeJointJacobians at q
-        self._frames = False  # updateFramePlacements at q
-        self._jacobians: dict[int, np.ndarray] = {}
+        super().update(self.robot.check_configuration(q) if check else q)
         self._centroidal: tuple[np.ndarray, np.ndarray] | None = None
 
     def integrate(self, v: np.ndarray, dt: float) -> None:
         """Move along the velocity v (nv,) for dt [s]: q <- pin.integrate(q, v dt) (on the manifold)."""
         step = v * dt if v.__class__ is np.ndarray and v.dtype == np.float64 else np.asarray(v, dtype=float) * dt
         self.update(pin.integrate(self.model, self.q, step), check=False)
-
-    def _forward_joints(self) -> None:
-        """Joint placements and Jacobians at q, once (``computeJointJacobians`` also runs the FK)."""
-        if not self._joints:
-            pin.computeJointJacobians(self.model, self.data, self.q)
-            self._joints = True
-
-    def _forward(self) -> None:
-        """Joint placements and Jacobians, then the frame placements at q, once."""
-        if not self._frames:
-            self._forward_joints()
-            pin.updateFramePlacements(self.model, self.data)
-            self._frames = True
-
-    def pose(self, frame_id: int) -> pin.SE3:
-        """``transform_frame_to_world`` of a frame (a view into this configuration's data: copy to keep it past
-        :meth:`update`)."""
-        self._forward()
-        return self.data.oMf[frame_id]
-
-    def joint_pose(self, joint_id: int) -> pin.SE3:
-        """``transform_joint_to_world`` of a joint (a view, as :meth:`pose`)."""
-        self._forward_joints()
-        return self.data.oMi[joint_id]
-
-    def joint_arrays(self, joint_id: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(J (6, nv), p (3,), R (3, 3)) at q: every joint's Jacobian in the world frame (Pinocchio's ``data.J``,
-        the spatial velocity at the world origin, columns in the order of v; a model without mimic joints) and the
-        placement ``transform_joint_to_world`` of joint ``joint_id``, computed once per q.
-
-        Views into this configuration's data, made once per joint: read them before the next :meth:`update` and
-        never write them (what a compiled step reads without a Python call per array).
-        """
-        if not self._joints:
-            self._forward_joints()
-        views = self._joint_views.get(joint_id)
-        if views is None:
-            placement = self.data.oMi[joint_id]
-            views = self._joint_views[joint_id] = (self.data.J, placement.translation, placement.rotation)
-        return views
-
-    def jacobian(self, frame_id: int) -> np.ndarray:
-        """World-aligned Jacobian of a frame (6, nv), computed once per configuration."""
-        if frame_id not in self._jacobians:
-            self._forward_joints()  # getFrameJacobian places the frame from its joint itself
-            model = self.model
-            self._jacobians[frame_id] = pin.getFrameJacobian(model, self.data, frame_id,
-                                                             kinematics.WORLD_ALIGNED).reshape(6, model.nv)
-        return self._jacobians[frame_id]
 
     def centroidal_split(self) -> tuple[np.ndarray, np.ndarray]:
         """Conserved momentum rows: A_b (k, n_vehicle), A_m (k, n_arm) (the centroidal map unless chosen).
@@ -121,12 +71,8 @@ class Configuration:
         """
         if self._centroidal is None:
             robot = self.robot
-            if self._momentum is not None:
-                self._centroidal = self._momentum(self.q)
-            else:
-                self._forward()  # ccrba overwrites the placements with the same ones: keep them computed first
-                self._centroidal = kinematics.centroidal_map_split(self.model, self.data, self.q, robot.base_type,
-                                                                   robot.n_vehicle)
+            self._centroidal = (self._momentum(self.q) if self._momentum is not None
+                                else self.centroidal_rows(robot.base_type, robot.n_vehicle))
         return self._centroidal
 
     def generalized(self, jacobian: np.ndarray) -> np.ndarray:
@@ -137,3 +83,19 @@ class Configuration:
         """
         a_base, a_arm = self.centroidal_split()
         return kinematics.generalized_jacobian_from_parts(jacobian, a_base, a_arm, self.robot.n_vehicle)
+
+
+def configurations(robot: Robot, qs: Iterable[np.ndarray], *, check: bool = True) -> Iterator[Configuration]:
+    """One Configuration moved to each configuration of ``qs`` (N, nq) in turn: the loop over a run's rows (one
+    ``pinocchio.Data`` for the whole series). Read what you need from each before taking the next.
+
+    Raises:
+        ConfigurationError: a row that is not a configuration of ``robot`` (when ``check``).
+    """
+    state = None
+    for q in qs:
+        if state is None:
+            state = Configuration(robot, q, check=check)
+        else:
+            state.update(q, check=check)
+        yield state

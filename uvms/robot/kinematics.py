@@ -60,18 +60,6 @@ def axis_rows(axes: Sequence[str]) -> list[int]:
     return rows
 
 
-def frame_pose(model: pin.Model, data: pin.Data, q: np.ndarray, frame_id: int) -> pin.SE3:
-    """Pose of a frame in the world, ``transform_frame_to_world``."""
-    pin.forwardKinematics(model, data, q)
-    return pin.updateFramePlacement(model, data, frame_id).copy()
-
-
-def frame_jacobian(model: pin.Model, data: pin.Data, q: np.ndarray, frame_id: int) -> np.ndarray:
-    """World-aligned Jacobian of a frame (6, nv): twist = J v."""
-    # reshape: Pinocchio's binding returns a one-column matrix as a (6,) vector when nv = 1
-    return pin.computeFrameJacobian(model, data, q, frame_id, WORLD_ALIGNED).reshape(6, model.nv)
-
-
 def centroidal_map_split(
     model: pin.Model, data: pin.Data, q: np.ndarray, base_type: str, n_vehicle: int
 ) -> tuple[np.ndarray, np.ndarray]:

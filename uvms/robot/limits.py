@@ -2,14 +2,15 @@
 
 A :class:`Limit` is a box ``lower <= x <= upper`` on coordinates of the robot
 (the arm's joint values or velocities, in the order of v), with margins
-(:meth:`Limit.shrink`). Every user of limits reads them here, through
-:meth:`Limit.arm` (the one given, checked, or the model's): the joint-limit
+(:meth:`Limit.shrink`). The model's are built once per robot (:meth:`Limit.joint_positions`,
+:meth:`Limit.joint_velocities`: the same read-only object at every call) and every user of
+limits reads them here, through :meth:`Limit.arm` (the one given, checked, or the model's): the mid-range
 potential S(q) of hoang2011 (its middle and range), the joint clamping of CLIK
 (which coordinates a step would push out and to which bound), the set-based
 objectives (``JointLimits``: the box of its rows and its valid set inside the
-margins; ``JointVelocityLimits``: the speed box), the projection of pose IK (q
-clipped into the box) and the bounds of the initial-configuration optimizer
-(scipy's ``(lo, hi)`` pairs).
+margins; ``JointVelocityLimits`` and ``VehicleVelocityLimits``: the speed box), the projection of pose IK (q
+clipped into the box), the bounds of the initial-configuration optimizer
+(scipy's ``(lo, hi)`` pairs) and a run's ``max_joint_limit_violation`` (:meth:`Limit.excess`).
 
 Coordinates without a finite bound (continuous joints, the vehicle) are
 unbounded (+-inf); a continuous joint keeps its (cos, sin) pair in q, which a
@@ -18,6 +19,7 @@ projection leaves alone.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -29,6 +31,8 @@ from .robot import Robot
 #: Slack [rad or m] within which a value on the wrong side of a bound still counts as inside.
 TOLERANCE = 1e-12
 KINDS = ("position", "velocity")
+#: The model's limits of each Robot ({kind: Limit}), built once and kept while the Robot lives.
+MODEL_LIMITS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True, eq=False)
@@ -67,6 +71,8 @@ class Limit:
             raise LimitError(f"limits must satisfy lower <= upper (+-inf for unbounded), got {lower} and {upper}")
         if self.kind not in KINDS:
             raise LimitError(f"unknown limit kind {self.kind!r}; valid: {', '.join(KINDS)}")
+        for array in (lower, upper, q_index):
+            array.flags.writeable = False  # a Limit is shared (the model's, by every user): never changed in place
         for name, value in (("lower", lower), ("upper", upper), ("names", names), ("q_index", q_index)):
             object.__setattr__(self, name, value)
 
@@ -80,15 +86,28 @@ class Limit:
             margin: distance kept from each finite bound [rad or m], >= 0.
 
         Raises:
-            SolverInputError: a negative margin, or one that leaves no room inside a joint's range.
+            LimitError: a negative margin, or one that leaves no room inside a joint's range.
         """
+        return cls._of_model(robot, "position").shrink(margin)
+
+    @classmethod
+    def _of_model(cls, robot: Robot, kind: str) -> Limit:
+        """The model's ``kind`` limits of the arm, built at the first call for ``robot`` and the same after."""
+        limits = MODEL_LIMITS.setdefault(robot, {})
+        if kind not in limits:
+            limits[kind] = cls._position_limits(robot) if kind == "position" else cls._velocity_limits(robot, None)
+        return limits[kind]
+
+    @classmethod
+    def _position_limits(cls, robot: Robot) -> Limit:
+        """The arm's position limits read from the model (``Robot.arm_limits``)."""
         lower, upper = robot.arm_limits
         names, q_index = [], []
         for joint in robot.arm_joints:
             names.extend([joint.name] * joint.nv)
             scalar = joint.nq == joint.nv
             q_index.extend(range(joint.idx_q, joint.idx_q + joint.nq) if scalar else [-1] * joint.nv)
-        return cls(lower, upper, tuple(names), np.array(q_index, dtype=int)).shrink(margin)
+        return cls(lower, upper, tuple(names), np.array(q_index, dtype=int))
 
     @classmethod
     def joint_velocities(cls, robot: Robot,
@@ -105,6 +124,11 @@ class Limit:
             LimitError: a value <= 0, NaN or not a number, or the wrong count.
             NameNotFound: a name in ``max`` that is not an arm joint (the message lists the close ones).
         """
+        return cls._of_model(robot, "velocity") if max is None else cls._velocity_limits(robot, max)
+
+    @classmethod
+    def _velocity_limits(cls, robot: Robot, max: float | Sequence[float] | Mapping[str, float] | None) -> Limit:  # noqa: A002
+        """The arm's velocity limits: the model's when ``max`` is None, else ``max`` checked."""
         names = tuple(joint.name for joint in robot.arm_joints for _ in range(joint.nv))
         if max is None:
             v_max = np.array(robot.model.velocityLimit[robot.n_vehicle:], dtype=float)
@@ -136,7 +160,7 @@ class Limit:
             robot: the model.
             limit: the box to use, or None for :meth:`joint_positions` / :meth:`joint_velocities` of the model.
             kind: "position" or "velocity".
-            user: who asks, for the message (e.g. "the joint-limit potential").
+            user: who asks, for the message (e.g. "the mid-range potential").
 
         Raises:
             LimitError: a box of another size or kind.
@@ -237,6 +261,10 @@ class Limit:
     def violated(self, values: np.ndarray, tolerance: float = TOLERANCE) -> np.ndarray:
         """(n,) bool: coordinates more than ``tolerance`` outside the box."""
         return (values < self.lower - tolerance) | (values > self.upper + tolerance)
+
+    def excess(self, values: np.ndarray) -> np.ndarray:
+        """How far each value is outside the box (..., n) [rad or m; rad/s or m/s], 0 inside; values may be rows."""
+        return np.maximum(np.maximum(self.lower - values, values - self.upper), 0.0)
 
     def contains(self, values: np.ndarray, tolerance: float = TOLERANCE) -> bool:
         """Whether every coordinate of ``values`` (n,) is inside the box, up to ``tolerance``."""

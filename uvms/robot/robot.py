@@ -17,6 +17,7 @@ from ..io import outputs
 from ..numerics.validate import finite_array
 from . import kinematics, urdf_export
 from .bases import BASE_TYPES, BaseType
+from .state import KinematicState
 from .structure import (
     EE_GIVEN,
     JointClass,
@@ -41,7 +42,7 @@ class Robot(VehicleAccessors):
 
     Attributes:
         model: the Pinocchio model.
-        data: its work data (reused by every call; a Robot is not thread-safe).
+        data: the work data of :meth:`fk`, :meth:`jacobian` and the like (shared by every call: not thread-safe).
         base: the kind of vehicle base and its facts (`uvms.robot.bases.BaseType`); base_type: its name,
             "floating", "planar" or "fixed".
         base_reason: why the base is what it is, one line (`uvms.load`'s rule), e.g. "floating (added: the
@@ -58,20 +59,13 @@ class Robot(VehicleAccessors):
             in it: :meth:`save_urdf` writes it. packages: the ROS packages its meshes resolve through, {name: folder}.
     """
 
-    def __init__(
-        self,
-        model: pin.Model,
-        *,
-        ee: str | Sequence[str] | None = None,
-        name: str | None = None,
-        source: str = "<model>",
-        urdf: str | None = None,
-        base_reason: str | None = None,
-        packages: Mapping[str, Path] | None = None,
-        joint_classes: Mapping[str, JointClass] | None = None,
-    ) -> None:
+    def __init__(self, model: pin.Model, *, ee: str | Sequence[str] | None = None, name: str | None = None,
+                 source: str = "<model>", urdf: str | None = None, base_reason: str | None = None,
+                 packages: Mapping[str, Path] | None = None,
+                 joint_classes: Mapping[str, JointClass] | None = None) -> None:
         self.model = model
-        self.data = model.createData()
+        self._state = KinematicState(model)  # what fk and jacobian read
+        self.data = self._state.data
         self.name = name or model.name
         self.source = source
         self.urdf = urdf
@@ -315,16 +309,19 @@ class Robot(VehicleAccessors):
         return np.array(values)
 
     # ------------------------------------------------------------ kinematics
+    # fk, jacobian and the like: conveniences by frame name over the robot's own KinematicState (its ``data``),
+    # one q per call; library code keeps a Configuration of its own and updates it
+    def _at(self, q: np.ndarray) -> KinematicState:
+        self._state.update(self.check_configuration(q))
+        return self._state
+
     def fk(self, q: np.ndarray, frame: str | None = None) -> pin.SE3:
-        """Pose of a frame in the world, ``transform_frame_to_world`` (default: first end effector)."""
-        return kinematics.frame_pose(self.model, self.data, self.check_configuration(q), self.frame_id(frame))
+        """Pose of a frame in the world, ``transform_frame_to_world`` (default: first end effector), a copy."""
+        return self._at(q).pose(self.frame_id(frame)).copy()
 
     def jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
-        """World-aligned Jacobian (6, nv): [v_origin; omega] in world axes = J v."""
-        return kinematics.frame_jacobian(self.model, self.data, self.check_configuration(q), self.frame_id(frame))
-
-    def _free_floating_parts(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return kinematics.centroidal_map_split(self.model, self.data, q, self.base_type, self.n_vehicle)
+        """World-aligned Jacobian (6, nv): [v_origin; omega] in world axes = J v, a copy."""
+        return self._at(q).jacobian(self.frame_id(frame)).copy()
 
     def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
         """Generalized Jacobian (6, n_arm) of a free-floating base at zero momentum.
@@ -335,10 +332,10 @@ class Robot(VehicleAccessors):
             NoVehicleError: a fixed base has no vehicle: use :meth:`jacobian`.
         """
         self._require_vehicle("generalized Jacobian (it needs a free-floating vehicle whose momentum is conserved)")
-        q = self.check_configuration(q)
-        jacobian = kinematics.frame_jacobian(self.model, self.data, q, self.frame_id(frame))
-        a_base, a_arm = self._free_floating_parts(q)
-        return kinematics.generalized_jacobian_from_parts(jacobian, a_base, a_arm, self.n_vehicle)
+        state = self._at(q)
+        a_base, a_arm = state.centroidal_rows(self.base_type, self.n_vehicle)
+        return kinematics.generalized_jacobian_from_parts(state.jacobian(self.frame_id(frame)), a_base, a_arm,
+                                                          self.n_vehicle)
 
     def base_velocity(self, q: np.ndarray, arm_velocity: np.ndarray, momentum: np.ndarray | None = None) -> np.ndarray:
         """Vehicle velocity implied by momentum conservation (n_vehicle,), local axes as in v.
@@ -353,12 +350,12 @@ class Robot(VehicleAccessors):
             NoVehicleError: a fixed base has no vehicle.
         """
         self._require_vehicle("vehicle velocity from momentum")
-        q = self.check_configuration(q)
+        state = self._at(q)
         arm_velocity = self.check_velocity(arm_velocity, self.n_arm, "arm velocity")
         if momentum is not None:
             momentum = self.check_velocity(momentum, len(kinematics.CONSERVED_MOMENTUM_ROWS[self.base_type]),
                                            "momentum")
-        a_base, a_arm = self._free_floating_parts(q)
+        a_base, a_arm = state.centroidal_rows(self.base_type, self.n_vehicle)
         return kinematics.base_velocity_from_momentum(a_base, a_arm, arm_velocity, momentum)
 
     def free_floating_velocity(self, q: np.ndarray, arm_velocity: np.ndarray,
@@ -371,8 +368,7 @@ class Robot(VehicleAccessors):
 
         ``axes`` defaults to all six for spatial bases and (x, y, yaw) for planar ones.
         """
-        rows = kinematics.axis_rows(axes or self.base.task_axes)
-        return kinematics.manipulability_of(self.jacobian(q, frame)[rows])
+        return kinematics.manipulability_of(self.jacobian(q, frame)[kinematics.axis_rows(axes or self.base.task_axes)])
 
     def generalized_manipulability(self, q: np.ndarray, frame: str | None = None,
                                    axes: Sequence[str] | None = None) -> float:

@@ -13,10 +13,11 @@ from ..control.tracking import TrackingController
 from ..dynamics.plant.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..numerics.integrate import stage_times, step_count
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS, Solver, VariableDamping, initial_configuration
 from ..solvers.base import SolverFactory
-from ..tasks import FrameTask, JointLimitPotential, VehicleTask
+from ..tasks import FrameTask, MidRangePotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
 from .actuated import Actuation, check_vehicle_control_used, make_actuation
 from .excitation import check_excitation_used, scenario_excitation
@@ -68,7 +69,7 @@ def build(spec: ScenarioSpec) -> Setup:
     check_vehicle_control_used(spec)
     check_excitation_used(spec)
     task, q0, residual = scenario_start(robot, spec)
-    trajectory = make_trajectory(robot.fk(q0, task.frame), spec.trajectory)
+    trajectory = make_trajectory(Configuration(robot, q0).pose(task.frame_id).copy(), spec.trajectory)
     duration = scenario_duration(spec)
     if spec.plant.type != "kinematic":
         if spec.excitation.wrench and spec.plant.thrusters:
@@ -145,7 +146,7 @@ def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple
         raise ScenarioError(f"initial.fixed_base must be a list of vehicle coordinate names "
                             f"({', '.join(robot.base.pose_names) or 'none: the base is fixed'}), got {thaw(fixed)!r}")
     task.set_target(np.concatenate([trajectory.start, trajectory.orientation]))
-    potential = JointLimitPotential(robot, weights=np.asarray(spec.solver.joint_limit_weights, dtype=float))
+    potential = MidRangePotential(robot, weights=np.asarray(spec.solver.joint_limit_weights, dtype=float))
     try:
         result = initial_configuration(robot, task, potential, q_given, fixed_base=fixed)
     except (SolverInputError, NameNotFound) as exc:
@@ -280,7 +281,7 @@ def solver_options(robot: Robot, solver: SolverSpec, cls: type[Solver], dt: floa
     if "weights" in taken:
         options["weights"] = solver_weights(robot, solver, free_floating=solver.free_floating)
     if "potential" in taken:
-        options["potential"] = JointLimitPotential(robot, weights=np.asarray(solver.joint_limit_weights,
+        options["potential"] = MidRangePotential(robot, weights=np.asarray(solver.joint_limit_weights,
                                                                              dtype=float))
     return options
 

@@ -15,13 +15,13 @@ import numpy as np
 from ..control.sequence import sequence_metrics
 from ..errors import NumericalError, OutputFailedWarning, UVMSError
 from ..io import outputs
+from ..robot.limits import Limit
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
 from .build import Setup, build, check_step_count
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
-from .resources import resolve_scenario_path
 from .schema import read_scenario
 from .spec import ScenarioSpec
 from .verdict import run_verdict
@@ -42,8 +42,7 @@ def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) ->
     """The numbers of ``metrics.json``."""
     robot = result.robot
     arm = result.arm()
-    lower, upper = robot.arm_limits
-    violation = np.maximum(np.maximum(lower - arm, arm - upper), 0.0)
+    violation = Limit.joint_positions(robot).excess(arm)  # (N, n_arm) [rad or m]
     metrics = {
         "max_position_error": float(result.position_error.max()),
         "max_orientation_error": float(result.orientation_error.max()),
@@ -77,7 +76,7 @@ def compute_metrics(result: SimulationResult, setup: Setup, wall_time: float) ->
 
 
 def run_scenario(
-    scenario_path: str | os.PathLike,
+    scenario_path: str | os.PathLike | ScenarioSpec,
     out: str | os.PathLike | None = None,
     overrides: Sequence[str] = (),
     progress: bool | None = None,
@@ -101,7 +100,8 @@ def run_scenario(
     ``out`` is refused if it holds the scenario or the model (:func:`run_inputs`), or files uvms did not write.
 
     Args:
-        scenario_path: the TOML file, or the name of a shipped scenario (``"hoang2011_w1"``).
+        scenario_path: the TOML file, the name of a shipped scenario (``"hoang2011_w1"``), or a scenario already
+            read (:func:`~uvms.scenario.schema.read_scenario`: not read again; ``overrides`` must then be empty).
         out: output folder (default ``out/<scenario name>``).
         overrides: ``SECTION.KEY=VALUE`` strings.
         progress: progress bar (None: on a terminal only).
@@ -113,14 +113,20 @@ def run_scenario(
         NumericalError: the numerics overflowed; RunFolderBusy: another uvms process writes ``out``;
         RunFolderError: ``out`` holds an input or files uvms did not write.
     """
-    spec = read_scenario(scenario_path, overrides)
+    if isinstance(scenario_path, ScenarioSpec):
+        if overrides:
+            raise UVMSError("run_scenario: a scenario already read takes no overrides; apply them when reading it "
+                            "(read_scenario(path, overrides))")
+        spec = scenario_path
+    else:
+        spec = read_scenario(scenario_path, overrides)
     name = spec.scenario.name
     out = Path(out) if out is not None else Path("out") / name
     started = time.perf_counter()
     with numerics_guard(name):
         setup = build(spec)
     check_step_count(spec, setup.duration)
-    inputs = run_inputs(resolve_scenario_path(scenario_path), [spec.model.path], spec.named_files())
+    inputs = run_inputs(spec.path, [spec.model.path], spec.named_files())
     with outputs.run_folder(out, lock=lock, inputs=inputs) as folder, numerics_guard(name):
         result = execute(spec, setup, folder, progress, started)
     result.files = [out / path.relative_to(folder) for path in result.files]

@@ -17,7 +17,7 @@ import pinocchio as pin
 from ..control.base import Controller
 from ..dynamics.plant.command import State, refuse_fields
 from ..errors import ConfigurationError, StepCountError, UVMSError
-from ..robot import kinematics
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..tasks.frame import FrameTask
 from .system import StageRate
@@ -107,7 +107,7 @@ class KinematicSystem:
 class TaskRecorder:
     """The task series of a row: end-effector pose, desired pose and the errors on the task axes.
 
-    The frame's pose is computed in the recorder's own Pinocchio data (never the robot's).
+    The frame's pose is computed in the recorder's own Configuration (never the robot's data).
 
     Args:
         robot: the model; task: the end-effector task (its frame, axes and orientation error).
@@ -116,7 +116,7 @@ class TaskRecorder:
 
     def __init__(self, robot: Robot, task: FrameTask, desired: Callable[[float], pin.SE3]) -> None:
         self.robot, self.task, self.desired = robot, task, desired
-        self.data = robot.model.createData()
+        self.state: Configuration | None = None  # one, moved to each row's q
         self.position_rows = [r for r in task.rows if r < 3]
         self.orientation_rows = [r for r in task.rows if r >= 3]
 
@@ -124,8 +124,12 @@ class TaskRecorder:
         """ee_position, ee_rpy, desired_position, desired_rpy (3,) each, task_error (k,), position_error and
         orientation_error at (t, q)."""
         task = self.task
-        # q comes from pin.integrate in the loop (checked once at its start): Robot.fk would check it at every row
-        pose = kinematics.frame_pose(self.robot.model, self.data, q, task.frame_id)
+        # q comes from pin.integrate in the loop (checked once at its start): not checked again at every row
+        if self.state is None:
+            self.state = Configuration(self.robot, q, check=False)
+        else:
+            self.state.update(q, check=False)
+        pose = self.state.pose(task.frame_id)
         target = self.desired(t)
         pose_rpy, target_rpy = pin.rpy.matrixToRpy(pose.rotation), pin.rpy.matrixToRpy(target.rotation)
         full_error = task.full_error_between(target, pose, target_rpy, pose_rpy)

@@ -22,6 +22,7 @@ import numpy as np
 
 from ..errors import UVMSError
 from ..io import outputs
+from ..robot.configuration import configurations
 from ..robot.robot import Robot
 from ..tasks.vehicle import VELOCITY_NAMES
 from .series import ACTUATION_FIELDS, PLANT_FIELDS, TRACKING_FIELDS, ActuationSeries, PlantSeries, TrackingSeries
@@ -202,11 +203,13 @@ class SimulationResult:
     # ------------------------------------------------------------------ plant series
     def frame_position(self, frame: str | None = None) -> np.ndarray:
         """Position (N, 3) [m] of any frame (default: the first end effector), world frame."""
-        return np.array([self.robot.fk(q, frame).translation for q in self.q])
+        frame_id = self.robot.frame_id(frame)
+        return np.array([state.pose(frame_id).translation.copy() for state in configurations(self.robot, self.q)])
 
     def ee_twist(self, frame: str | None = None) -> np.ndarray:
         """Twist (N, 6) [m/s, rad/s] of a frame (default: the first end effector), world-aligned (J v)."""
-        return np.array([self.robot.jacobian(q, frame) @ v for q, v in zip(self.q, self.v)])
+        frame_id = self.robot.frame_id(frame)
+        return np.array([state.jacobian(frame_id) @ v for state, v in zip(configurations(self.robot, self.q), self.v)])
 
     def joint_rates(self) -> np.ndarray:
         """Measured joint velocities (N, n_arm) [rad/s]."""

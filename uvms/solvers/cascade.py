@@ -2,8 +2,8 @@
 the QP solver chosen, and the level's QP over z = [x, w] solved.
 
 DAQP is called through its own Python API with the arrays qpsolvers' DAQP interface would pass it (bit for bit
-the same QP and solution, without qpsolvers' problem object and checks, which cost about three times the solve at
-these sizes); the other solvers (ProxQP) go through qpsolvers. The QP's arrays are written by one compiled call
+the same QP and solution, without building qpsolvers' problem object and running its checks at every level of every
+step); the other solvers (ProxQP) go through qpsolvers. The QP's arrays are written by one compiled call
 (:func:`uvms.numerics._kernels.qp.level_qp_into`).
 """
 
@@ -85,7 +85,7 @@ def solve_qp(cost: np.ndarray, linear: np.ndarray, rows: np.ndarray, upper: np.n
     box, the rest the rows'; a row's lower -1e30: one-sided); None when not found.
 
     DAQP is called through its own API with these arrays (what qpsolvers' DAQP interface passes it, without its
-    problem object and checks, which cost three times the solve at these sizes), every other solver through
+    problem object and checks), every other solver through
     qpsolvers (a row's upper bound as G z <= h).
     """
     size = linear.size

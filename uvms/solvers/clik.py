@@ -8,8 +8,8 @@ variable damping of amundsen2018 eq. 6), either with the ordinary Jacobian
 only the arm is commanded and the vehicle follows momentum conservation).
 
 One frame task on an actuated vehicle is the common case (a pose or a point to follow): :class:`FrameStep`
-solves it after Pinocchio's joint kinematics in one compiled call, in about the time of 12 to 25 forward
-kinematics (``benchmarks/bench_clik.py``).
+solves it after Pinocchio's joint kinematics in one compiled call (its speed is measured by
+``benchmarks/bench_clik.py``).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
-from ..errors import NumericalError
+from ..errors import LimitError, NumericalError
 from ..numerics.checks import check_damping, check_scalar, check_weights, free_floating_weights_note, prepared_gain
 from ..numerics.inverses import (
     RCOND,
@@ -35,7 +35,7 @@ from ..robot.kinematics import base_velocity_from_momentum
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
 from ..tasks.frame import FrameTask
-from ..tasks.joint_limits import JointLimitPotential, NullspaceTerms
+from ..tasks.potential import MidRangePotential, NullspaceTerms
 from ..tasks.task import Task, as_task_list
 from .base import Solver, check_free_floating, checked_step
 from .result import SolvedRows, SolverResult
@@ -57,19 +57,22 @@ class CLIKSolver(Solver):
         gain: K, scalar, diagonal (k,) or (k, k) [1/s].
         weights: W, (n,) diagonal or (n, n) SPD, n = nv (or n_arm when free floating).
         damping: fixed lambda >= 0, or a VariableDamping (amundsen2018 eq. 6).
-        potential: S(q) whose gradient gives the null-space motion z0 = -alpha grad S.
-        alpha: null-space gain alpha >= 0.
+        potential: S(q) (a :class:`~uvms.tasks.potential.MidRangePotential`) whose gradient gives the null-space
+            motion z0 = -alpha grad S.
+        alpha: null-space gain alpha >= 0 [-].
         free_floating: use the generalized Jacobian; the vehicle is passive (follows momentum conservation).
         dt: step [s], needed by ``enforce_limits``.
         enforce_limits: keep q + dt v inside the arm limits by holding joints at their limits and re-solving
             the task with the others (joint clamping).
-        limit: the arm position limits that ``enforce_limits`` keeps (n_arm,); default
-            ``Limit.joint_positions(robot)``, the model's.
+        limit: the arm position limits that ``enforce_limits`` keeps (n_arm,); default: the potential's when one
+            is given, else ``Limit.joint_positions(robot)``, the model's (one source of bounds: the potential and
+            the clamping read the same :class:`~uvms.robot.limits.Limit`).
 
     Raises:
         SolverInputError: a bad gain, weight, damping, alpha or dt, free_floating on a fixed base, or
             enforce_limits without dt.
-        LimitError: enforce_limits with limits of another size or kind than the arm's positions.
+        LimitError: enforce_limits with limits of another size or kind than the arm's positions, or other
+            bounds than those of the potential.
     """
 
     name = "clik"
@@ -83,7 +86,7 @@ class CLIKSolver(Solver):
         gain: float | np.ndarray = 1.0,
         weights: np.ndarray | None = None,
         damping: float | VariableDamping = 0.0,
-        potential: JointLimitPotential | None = None,
+        potential: MidRangePotential | None = None,
         alpha: float = 0.0,
         free_floating: bool = False,
         dt: float | None = None,
@@ -99,7 +102,12 @@ class CLIKSolver(Solver):
             if dt is None:
                 raise SolverInputError("enforce_limits needs the step dt > 0")
             self.dt = check_scalar(dt, "dt", positive=True)
-            limit = Limit.arm(robot, limit, "position", "enforce_limits")
+            limit = Limit.arm(robot, limit if limit is not None or potential is None else potential.limit,
+                              "position", "enforce_limits")
+            if potential is not None and not (np.array_equal(limit.lower, potential.limit.lower)
+                                              and np.array_equal(limit.upper, potential.limit.upper)):
+                raise LimitError("CLIK's joint clamping and its potential read one Limit: give it once (limit=, "
+                                 "or the potential's limit=), not two different boxes")
         self.limit = limit
         # the solved coordinates joint clamping keeps: the (unbounded) vehicle unless free floating, then the arm
         self.first = robot.n_vehicle if free_floating else 0  # the first solved column of v

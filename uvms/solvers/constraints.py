@@ -13,9 +13,8 @@ where [C; J] loses rank (sigma_min below :data:`SINGULAR_DAMPING`'s epsilon) the
 constraints' null space with the variable damping of amundsen2018 eq. 6. Given the step dt (a run that integrates
 the command; without it :meth:`ConstraintSolver.velocity` keeps the paper's solution), the task's part of v is
 scaled into the model's joint speed limits (``<limit velocity>``) and the position-rate bounds of its joint limits
-(:mod:`uvms.solvers.saturation`): the arm slows and stops at its limits, the task error grows instead. Measured:
-the pipe scenario of the BlueROV2 + Alpha 5 with the vehicle velocities held at 0 diverged (arm joint speeds up to
-3.2e3 rad/s, joints 24.8 rad past their limits); bounded, its arm keeps within both (0.35 rad/s at most).
+(:mod:`uvms.solvers.saturation`): the arm slows and stops at its limits, the task error grows instead
+(unbounded, the solution near a singularity asks unbounded joint speeds and carries the joints past their limits).
 Constraints that cannot be met raise :class:`~uvms.errors.SolverInputError` (never a velocity that leaves
 them): rows C v = d without a solution, or (given dt) one beyond the model's speed or position limits.
 """

@@ -21,7 +21,7 @@ from ..robot.configuration import Configuration
 from ..robot.conventions import pose_from_xyyaw, pose_from_xyzrpy
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
-from ..tasks.joint_limits import JointLimitPotential
+from ..tasks.potential import MidRangePotential
 from ..tasks.task import Task
 from .result import InitialConfigurationResult
 from .stack import as_task_list
@@ -64,7 +64,7 @@ def chart_tangent(robot: Robot, chart: np.ndarray) -> np.ndarray:
 def initial_configuration(
     robot: Robot,
     tasks: Task | Sequence[Task],
-    potential: JointLimitPotential | None = None,
+    potential: MidRangePotential | None = None,
     q_init: np.ndarray | None = None,
     *,
     tolerance: float = 1e-10,
@@ -77,7 +77,7 @@ def initial_configuration(
     Args:
         robot: the model.
         tasks: task(s) whose targets define x0 (e.g. a FrameTask with axes x, y, yaw).
-        potential: S(q); default JointLimitPotential(robot) with c_i = 1.
+        potential: S(q); default MidRangePotential(robot) with c_i = 1.
         q_init: starting guess (default: arm at mid-range, vehicle at the origin).
         tolerance: success when ``|e| <= tolerance``.
         max_iterations: SLSQP iterations.
@@ -95,7 +95,7 @@ def initial_configuration(
     task_list = as_task_list(tasks)
     check_scalar(tolerance, "tolerance", positive=True)
     check_count(max_iterations, "max_iterations", minimum=1)
-    potential = potential or JointLimitPotential(robot)
+    potential = potential or MidRangePotential(robot)
     limit = Limit.arm(robot, limit if limit is not None else potential.limit, "position", "initial_configuration")
     if q_init is None:
         q_init = robot.configuration(arm=limit.middle)

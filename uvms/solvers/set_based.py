@@ -24,14 +24,13 @@ the stack Z = [A^1/2 X; eta^1/2 D (I - Q)]. Adaptations, stated: the paper's sin
 regularization V^T P V is the damping lambda of that inverse (fixed, or amundsen2018 eq. 6 variable), put
 in (J Q)^{#,A,I} only; W_k uses the undamped inverse, so that with Q = I and A = I the step is
 J^# J J^+ xdot = J^# xdot exactly (J J^+ projects on the range of J, on which J^# acts). The eta term
-is the paper's eta |(I - Q) y|^2 with each coordinate weighed by its column in the level, D: the paper's term weighs a
-direction the same whatever the level's Jacobian does with it, so for a column the level barely moves
-(the jaw of the Alpha 5 in a free-floating tool-point task, a column ~1e-3 of the others) it takes over
-when the level above has released all but ~1e-3 of it: the level's use of that direction switched on within
-a sliver of the bell (an elbow-rate jump of 0.09 rad/s per step that stayed at dt
-0.01/0.005/0.0025). Weighed by D the penalty and X^T A X share their units and scale, the direction is handed
-over across the whole band, and the largest per-step rate change scales with dt (0.029 / 0.023 / 0.013 /
-0.007 rad/s at dt 0.01 / 0.005 / 0.0025 / 0.00125; it was 0.077 / 0.064 / 0.073 rad/s).
+is the paper's eta |(I - Q) y|^2 with each coordinate weighed by its column in the level, D. Why: the paper's term
+weighs a direction the same whatever the level's Jacobian does with it, so a column the level barely moves (the
+jaw of the Alpha 5 in a free-floating tool-point task, ~1e-3 of the others) would be taken up only when the level
+above has released all but ~1e-3 of it, within a sliver of the activation bell: a rate jump that does not shrink
+with dt. Weighed by D, the penalty and X^T A X share their units and scale, the direction is handed over across
+the whole band, and the largest change of a joint rate between two steps shrinks with dt
+(``tests/solvers/test_hierarchy_quality.py`` holds it).
 
 Hence with every inequality inactive (A = 0: rho and Q untouched) the result is CLIK,
 :class:`~uvms.solvers.clik.CLIKSolver` with the same gain, weights and damping, to rounding (that case

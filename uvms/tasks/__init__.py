@@ -6,7 +6,6 @@ instead of a target; the set-based and QP hierarchies of :mod:`uvms.solvers` pla
 """
 
 from .frame import FrameTask
-from .joint_limits import JointLimitPotential
 from .joints import JointTask
 from .objectives import (
                          FrameBox,
@@ -21,12 +20,17 @@ from .objectives import (
                          inequalities_from_table,
 )
 from .posture import PostureTask
+from .potential import MidRangePotential
 from .relative import DistanceTask
 from .task import Task
 from .vehicle import VehicleTask
 
+#: The old name of :class:`MidRangePotential` (it read like the ``JointLimits`` objective), kept while the
+#: README and users' code move to the new one.
+JointLimitPotential = MidRangePotential
+
 __all__ = [
-    "DistanceTask", "FrameBox", "FrameTask", "Inequality", "JointLimitPotential", "JointLimits", "JointTask",
+    "DistanceTask", "FrameBox", "FrameTask", "Inequality", "JointLimits", "JointTask", "MidRangePotential",
     "JointVelocityLimits", "Manipulability", "PlaneClearance", "PostureTask", "Task", "VehicleAttitude",
     "VehicleTask", "VehicleVelocityLimits", "VelocityLimit", "inequalities_from_table",
 ]

@@ -28,6 +28,8 @@ from matplotlib.ticker import MaxNLocator
 from ..errors import ConfigurationError, UVMSError
 from ..io import outputs
 from ..io.progress import tqdm
+from ..robot import configuration as states
+from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from .collision_drawing import CollisionOverlay
 from .labels import legend_below
@@ -96,24 +98,25 @@ def _triad(pose: pin.SE3, length: float) -> np.ndarray:
     return np.array([[pose.translation, pose.translation + length * pose.rotation[:, k]] for k in range(3)])
 
 
-def configuration_geometry(robot: Robot, q: np.ndarray, frames: Sequence[str] | None = None,
+def configuration_geometry(robot: Robot, q: np.ndarray | Configuration, frames: Sequence[str] | None = None,
                            triad_length: float | None = None,
                            shapes: np.ndarray | None = None) -> ConfigurationGeometry:
     """World geometry of configuration q (nq,); ``triad_length`` [m] defaults to 8 % of the robot's extent (its
     joints, frames, vehicle box, the points (m, 3) [m] of ``shapes`` drawn with it, and the vehicle's
-    :func:`body_size`), so the frames are seen on a vehicle of any size."""
-    q = robot.check_configuration(q)
-    model, data = robot.model, robot.data
+    :func:`body_size`), so the frames are seen on a vehicle of any size. ``q`` may be a Configuration of the robot
+    (the one a loop over configurations moves)."""
+    state = q if isinstance(q, Configuration) else Configuration(robot, q)
+    model = robot.model
     frame_ids = [robot.frame_id(name) for name in (robot.ee_frames if frames is None else frames)]
-    pin.forwardKinematics(model, data, q)
-    pin.updateFramePlacements(model, data)
-    origins = np.array([data.oMi[j].translation for j in range(model.njoints)])  # (njoints, 3), universe = 0
+    origins = np.array([state.joint_pose(j).translation for j in range(model.njoints)])  # (njoints, 3), universe = 0
+    frame_poses = {f: state.pose(f) for f in frame_ids}
     first_arm = 1 if robot.base_type == "fixed" else 2
     segments = np.reshape([[origins[model.parents[j]], origins[j]] for j in range(first_arm, model.njoints)],
                           (-1, 2, 3))
-    ee = np.reshape([[origins[model.frames[f].parentJoint], data.oMf[f].translation] for f in frame_ids], (-1, 2, 3))
+    ee = np.reshape([[origins[model.frames[f].parentJoint], frame_poses[f].translation] for f in frame_ids],
+                    (-1, 2, 3))
     box = vehicle_box(robot)
-    vehicle_pose = data.oMi[1] if robot.base_type != "fixed" else None  # the vehicle joint's frame
+    vehicle_pose = state.joint_pose(1) if robot.base_type != "fixed" else None  # the vehicle joint's frame
     corners = None
     if box is not None:
         placement = vehicle_pose * pin.SE3(box.rotation, box.centre)
@@ -123,7 +126,7 @@ def configuration_geometry(robot: Robot, q: np.ndarray, frames: Sequence[str] | 
         shown = np.concatenate([drawn, ee.reshape(-1, 3), np.reshape([] if corners is None else corners, (-1, 3)),
                                 np.reshape([] if shapes is None else shapes, (-1, 3))])
         triad_length = 0.08 * max(float(np.ptp(shown, axis=0).max()), body_size(robot), 0.1)
-    poses = [data.oMf[f] for f in frame_ids] + ([vehicle_pose] if vehicle_pose is not None and box is None else [])
+    poses = [frame_poses[f] for f in frame_ids] + ([vehicle_pose] if vehicle_pose is not None and box is None else [])
     triads = np.array([_triad(pose, triad_length * (2 if f >= len(frame_ids) else 1)) for f, pose in enumerate(poses)])
     return ConfigurationGeometry(list(model.names)[1:], origins[1:].copy(), segments, ee,
                                  triads.reshape(-1, 3, 2, 3), corners, float(triad_length))
@@ -362,8 +365,11 @@ def animate(robot: Robot, configurations, path: str | os.PathLike, *, fps: float
     if times is not None and np.shape(times) != (len(qs),):
         raise UVMSError(f"times must have shape ({len(qs)},) (one per configuration), got {np.shape(times)}")
     first = _first_geometry(robot, qs[0], frames, overlay)
-    geometries = [first] + [configuration_geometry(robot, q, frames, first.triad_length) for q in qs[1:]]
-    trail = np.array([robot.fk(q, trail_frame).translation for q in qs]) if trail_frame else np.empty((0, 3))
+    geometries = [first] + [configuration_geometry(robot, state, frames, first.triad_length)
+                            for state in states.configurations(robot, qs[1:])]
+    trail_id = robot.frame_id(trail_frame) if trail_frame else None
+    trail = (np.array([state.pose(trail_id).translation.copy() for state in states.configurations(robot, qs)])
+             if trail_frame else np.empty((0, 3)))
     figure = Figure(figsize=figsize)
     FigureCanvasAgg(figure)
     ax = _new_axes(figure, (1, 1, 1), plane, view)

@@ -263,10 +263,12 @@ def sequence_figures(result: SimulationResult, plan, folder: str | os.PathLike, 
         animation: file name of the animation (``.gif`` or ``.mp4``), "" for none.
         progress: progress bar of the animation (None: on a terminal only).
     """
+    from ..control.sequence import frame_positions
     from .drawing import animate, snapshot_figure  # 3-D drawing only when asked for
 
     folder, robot, t = Path(folder), result.robot, result.t
-    actual = np.column_stack([[robot.fk(q, frame).translation for q in result.q] for frame in plan.frames])
+    positions = frame_positions(robot, plan.frames, result.q)
+    actual = np.column_stack([positions[frame] for frame in plan.frames])
     desired = np.column_stack([[plan(time_).positions[frame][0] for time_ in t] for frame in plan.frames])
     labels = [f"{frame} {axis} [m]" for frame in plan.frames for axis in "xyz"]
     figure = stacked(t, actual, labels, f"{title}: frames (dashed: targets)", dashed=desired)

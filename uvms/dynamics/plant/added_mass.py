@@ -17,6 +17,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import UVMSError
+from ...robot.configuration import Configuration
 from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from ...robot.robot import Robot
 from ..hydro.hydrodynamics import HydroParameters, LinkHydrodynamics, hydrodynamics_of
@@ -166,8 +167,8 @@ def generalized_jacobian_added_mass(
     """
     if robot.base_type == "fixed":
         raise UVMSError(f"{robot.name} has a fixed base: there is no free-floating base to conserve momentum")
-    q = robot.check_configuration(q)
+    state = Configuration(robot, q)
     hydro = hydrodynamics_of(robot, required=False) if hydro is None else hydro
-    mass = augmented_mass_matrix(robot.model, robot.data, resolve_links(robot.model, hydro), q)
-    return generalized_jacobian_from_parts(robot.jacobian(q, frame), *mass_matrix_split(mass, robot.n_vehicle),
-                                           robot.n_vehicle)
+    jacobian = state.jacobian(robot.frame_id(frame))  # before crba overwrites the state's data (read once)
+    mass = augmented_mass_matrix(robot.model, state.data, resolve_links(robot.model, hydro), state.q)
+    return generalized_jacobian_from_parts(jacobian, *mass_matrix_split(mass, robot.n_vehicle), robot.n_vehicle)

@@ -64,6 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import UVMSError
+from ...robot.configuration import Configuration
 from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
@@ -281,9 +282,9 @@ class Plant:
 
     def generalized_jacobian(self, q: np.ndarray, frame: str | None = None) -> np.ndarray:
         """The GJM (6, n_arm) this plant conserves momentum with: added-mass-augmented when ``added_mass``."""
-        q = self.robot.check_configuration(q)
-        split = mass_matrix_split(self.mass_matrix(q), self.nb)
-        return generalized_jacobian_from_parts(self.robot.jacobian(q, frame), *split, self.nb)
+        state = Configuration(self.robot, q)
+        split = mass_matrix_split(self.mass_matrix(state.q), self.nb)
+        return generalized_jacobian_from_parts(state.jacobian(self.robot.frame_id(frame)), *split, self.nb)
 
     # ------------------------------------------------------- conserved things
     def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:

@@ -1,7 +1,7 @@
 """The CLIK's solution, its joint-limit null-space motion, and a frame task's whole step (``uvms.solvers.clik``).
 
 x = J_W^+ (c - J z0) + z0 of hoang2011 eq. 27 in one call, z0 = -alpha dS/dv of the joint-limit potential
-(hoang2011 eq. 20-21, ``uvms.tasks.joint_limits``), and the prepared step of one frame task: its rows, the
+(hoang2011 eq. 20-21, ``uvms.tasks.potential``), and the prepared step of one frame task: its rows, the
 command, z0 and the solution after Pinocchio's joint kinematics, in one call.
 
 The module imports numba, so it is loaded where a solver first uses it, not by ``import uvms``; its kernels
@@ -106,7 +106,7 @@ def joint_limit_motion_into(q: np.ndarray, q_index: np.ndarray, v_index: np.ndar
     """z0 = -alpha dS/dv of the joint-limit potential (hoang2011 eq. 20-21), written to ``z0`` (n,).
 
     z0[v_index] = -alpha c (q[q_index] - qbar) / range^2 (the operations of
-    ``JointLimitPotential.arm_gradient``), zero elsewhere; the arrays are a ``NullspaceTerms``'.
+    ``MidRangePotential.arm_gradient``), zero elsewhere; the arrays are a ``NullspaceTerms``'.
     """
     z0[:] = 0.0
     for entry in range(q_index.size):

@@ -3,8 +3,8 @@
 :meth:`uvms.dynamics.plant.plant.Plant._mass_and_bias`: Pinocchio gives the rigid mass matrix, h(q, v), the links'
 LOCAL Jacobians J_l, their joints' bias accelerations and rotations; here each link's Fossen wrench f_l (link
 frame) is formed and summed by virtual work, Mbar += sum_l J_l^T M_A,l J_l and nbar -= sum_l J_l^T f_l (the
-derivation is the docstring of :mod:`uvms.dynamics.plant.plant`). As numpy calls on arrays of a few rows this costs
-about thirty calls of 1-6 us each; compiled, about a microsecond.
+derivation is the docstring of :mod:`uvms.dynamics.plant.plant`). Compiled, because as numpy calls on arrays of a
+few rows it is about thirty calls, each dominated by the interpreter's overhead.
 
 The module imports numba, so it is loaded where a plant is first evaluated; its kernel compiles at its first call
 and is cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).

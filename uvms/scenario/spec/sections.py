@@ -215,7 +215,7 @@ class StudySpec(Section):
         doc='the sampled keys of `uvms study` (a Monte Carlo study of this scenario), each a string `"KEY=DIST"`:'
             " DIST is `normal(mu, sigma)`, `normal(mu, sigma, low, high)`, `uniform(a, b)`, `loguniform(a, b)` or"
             " `choice([...])` (see the Studies guide)")
-    n: int = key(0, int, doc="the number of trials of `uvms study` (`--samples` overrides it)")
+    n: int = key(0, int, doc="the number of trials of `uvms study` (`uvms study -n N` overrides it)")
     seed: int = key(0, int,
         doc="the study's seed: trial k gets `SeedSequence(seed).spawn(n)[k]`; the same seed gives the same table")
     set: tuple = key((), list,

@@ -106,15 +106,16 @@ def parse_sample(text: str) -> tuple[str, Distribution]:
     key, sep, spec = text.partition("=")
     key, spec = key.strip(), spec.strip()
     if not sep or not KEY_PATTERN.fullmatch(key) or not spec:
-        raise StudyError(f"--sample expects KEY=DIST with KEY a scenario key (e.g. model.args.l1 or plant.current[0]) "
-                         f"and DIST one of {FORMS}; got {text!r}")
+        count = " (the number of trials is -n N, [study] n)" if text.strip().isdigit() else ""
+        raise StudyError(f"--samples expects KEY=DIST with KEY a scenario key (e.g. model.args.l1 or "
+                         f"plant.current[0]) and DIST one of {FORMS}; got {text!r}{count}")
     return key, parse_distribution(key, spec)
 
 
 def parse_distribution(key: str, spec: str) -> Distribution:
     """The distribution ``spec`` of ``key``, truncated to or checked against the key's bounds (:func:`key_bounds`)."""
     def bad(why: str) -> StudyError:
-        return StudyError(f"--sample {key}={spec}: {why}; valid forms: {FORMS}")
+        return StudyError(f"--samples {key}={spec}: {why}; valid forms: {FORMS}")
 
     call = CALL_PATTERN.fullmatch(spec)
     if call is None or call.group(1) not in ("normal", "uniform", "loguniform", "choice"):
@@ -188,8 +189,8 @@ def parse_samples(texts: Sequence[str]) -> list[tuple[str, Distribution]]:
     wholes = {key for key in keys if "[" not in key}
     clash = [key for key in keys if "[" in key and key.split("[")[0] in wholes]
     if not samples or len(set(keys)) != len(keys) or clash:
-        raise StudyError(f"a study needs at least one --sample and each key once (a list and one of its elements "
-                         f"not both), got {keys}")
+        raise StudyError(f"a study needs at least one --samples KEY=DIST ([study] samples) and each key once (a "
+                         f"list and one of its elements not both), got {keys}")
     return samples
 
 

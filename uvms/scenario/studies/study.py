@@ -103,7 +103,7 @@ def assignments_of(spec: ScenarioSpec, keys: Sequence[str], values: Sequence[Any
         section, name = base.split(".", 1)
         current = lists.setdefault(base, list(getattr(getattr(spec, section, None), name, None) or []))
         if int(index) >= len(current):
-            raise StudyError(f"--sample {key}: {base} = {current} has no element {index} (a list of {len(current)}); "
+            raise StudyError(f"--samples {key}: {base} = {current} has no element {index} (a list of {len(current)}); "
                              f"give the whole list in the scenario or sample {base}[0..{max(len(current) - 1, 0)}]")
         current[int(index)] = value
     return plain + [f"{base}=[{', '.join(toml_literal(v) for v in items)}]" for base, items in lists.items()]
@@ -192,7 +192,7 @@ def study(
     n, seed = given.n if n is None else n, given.seed if seed is None else seed
     method = given.method if method is None else method
     if not isinstance(n, int) or isinstance(n, bool) or not 1 <= n <= MAX_TRIALS:
-        raise StudyError(f"a study has 1 to {MAX_TRIALS:,} trials (--samples N or [study] n), got {n!r}")
+        raise StudyError(f"a study has 1 to {MAX_TRIALS:,} trials (-n N or [study] n), got {n!r}")
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise StudyError(f"the seed of a study is an integer >= 0, got {seed!r}")
     if method not in METHODS:

@@ -17,15 +17,17 @@ from ...robot.robot import Robot
 
 
 class VelocityLimit:
-    """A box ``|v_i| <= maximum_i`` on the entries of v.
+    """A box ``|v_i| <= maximum_i`` on the entries of v, read from a velocity :class:`Limit`.
 
     Attributes:
         name: how results name it.
-        maximum: (nv,) [m/s, rad/s] > 0, +inf on the entries it does not limit (vehicle entries in the
-            vehicle's local axes, the order of v).
+        limit: the velocity :class:`Limit` of the entries it limits (the arm's, or the vehicle's).
+        maximum: (nv,) [m/s, rad/s] > 0: ``limit.upper`` on its entries, +inf on the others (vehicle entries
+            in the vehicle's local axes, the order of v): what the solvers read.
     """
 
     name: str
+    limit: Limit
     maximum: np.ndarray
 
     def _set_maximum(self, robot: Robot, entries: np.ndarray, values: np.ndarray) -> None:
@@ -94,6 +96,9 @@ class VehicleVelocityLimits(VelocityLimit):
         max: [linear m/s, angular rad/s] (two numbers), one per vehicle entry (``robot.base.velocity_names``:
             vx, vy, vz, wx, wy, wz or vx, vy, wz), or {entry name: value}.
         name: the name results report.
+
+    Attributes:
+        limit: the velocity :class:`Limit` of the vehicle's entries (n_vehicle,), named by velocity name.
     """
 
     def __init__(self, robot: Robot, max: Sequence[float] | Mapping[str, float],  # noqa: A002
@@ -112,6 +117,7 @@ class VehicleVelocityLimits(VelocityLimit):
                 raise ObjectiveError(f"{name}: max must be [linear m/s, angular rad/s] or {len(names)} numbers "
                                      f"({', '.join(names)}), got {max!r}")
         self._set_maximum(robot, np.arange(robot.n_vehicle), values)
+        self.limit = Limit(-values, values, tuple(names), kind="velocity")
 
 
 def velocity_limits(robot: Robot, max: float | Sequence[float] | Mapping[str, float] | None = None,  # noqa: A002

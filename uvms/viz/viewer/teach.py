@@ -16,6 +16,7 @@ import pinocchio as pin
 
 from ...errors import TeachUnavailable, UVMSError
 from ...robot.bases import BASE_TYPES
+from ...robot.configuration import Configuration
 from ...robot.robot import Robot
 from ..labels import joint_unit
 
@@ -117,7 +118,8 @@ def teach_state(robot: Robot, values: Mapping[str, float], q: np.ndarray | None 
                 q[joint.idx_q] = value
             else:
                 q[joint.idx_q: joint.idx_q + 2] = [np.cos(value), np.sin(value)]
-    return q, {frame: robot.fk(q, frame) for frame in robot.ee_frames}
+    state = Configuration(robot, q)
+    return q, {frame: state.pose(robot.frame_id(frame)).copy() for frame in robot.ee_frames}
 
 
 def format_poses(poses: Mapping[str, pin.SE3]) -> str:

@@ -1,5 +1,11 @@
-"""The joint-limit potential S(q) of hoang2011 eq. 21 and its gradient, over the limits of
-:class:`uvms.robot.limits.Limit`."""
+"""The mid-range potential S(q) of hoang2011 eq. 21 (its "joint-limit criterion") and its gradient, over the
+bounds of a :class:`uvms.robot.limits.Limit`.
+
+Not an objective: it keeps no bound, it pulls the joints toward the middle of their ranges in the null space of
+CLIK's task (``CLIKSolver(potential=..., alpha=...)``) and is what the initial configuration minimizes. The
+objective that keeps the joints inside their limits is :class:`uvms.tasks.objectives.joints.JointLimits`; both
+read the same :class:`~uvms.robot.limits.Limit` (the model's by default, built once per robot).
+"""
 
 from __future__ import annotations
 
@@ -34,7 +40,7 @@ class NullspaceTerms(NamedTuple):
         return cls(index, index, values, values, values, 0.0)
 
 
-class JointLimitPotential:
+class MidRangePotential:
     """S(q) = 1/2 sum_i c_i ((q_i - qbar_i) / (q_iM - q_im))^2 over the arm joints.
 
     Its negative gradient, z0 = -alpha dS/dq, projected in the null space of the
@@ -46,7 +52,8 @@ class JointLimitPotential:
         weights: c_i >= 0, a scalar or (n_arm,); default 1.
         limit: the joint position limits q_im, q_iM (n_arm,); default
             ``Limit.joint_positions(robot)``, the model's (pass one with a margin to aim inside them): the
-            same :class:`~uvms.robot.limits.Limit` CLIK's clamping and the ``JointLimits`` objective read.
+            same :class:`~uvms.robot.limits.Limit` CLIK's clamping (by default this one) and the ``JointLimits``
+            objective read.
 
     Raises:
         LimitError: a limit that is not the position limits of the arm.
@@ -60,8 +67,8 @@ class JointLimitPotential:
     """
 
     def __init__(self, robot: Robot, weights: float | np.ndarray = 1.0, limit: Limit | None = None) -> None:
-        check_robot(robot, "JointLimitPotential")
-        limit = Limit.arm(robot, limit, "position", "the joint-limit potential")
+        check_robot(robot, "MidRangePotential")
+        limit = Limit.arm(robot, limit, "position", "the mid-range potential")
         shape = limit.lower.shape
         weights = np.broadcast_to(np.asarray(weights, dtype=float), shape).copy() if np.ndim(weights) == 0 \
             else np.asarray(weights, dtype=float)
