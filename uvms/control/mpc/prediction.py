@@ -94,7 +94,9 @@ class PlantPrediction:
         self._parents = np.array([model.parents[owner[k]] for k in range(model.nv)], dtype=np.int64)
         self._descends = np.array([[owner[k] != owner[i] and self._support[owner[k], i] for i in range(model.nv)]
                                    for k in range(model.nv)], dtype=np.bool_)
-        self._zero = np.zeros(model.nv)
+        from . import kernel  # numba: loaded when a prediction is built, compiled (or read from the cache) at first use
+
+        self._kernel = kernel
         #: an estimated constant wrench (6,) [N, N m] on the vehicle (base frame, FLU), added to the thrusters'
         self.disturbance = np.zeros(6)
 
@@ -117,20 +119,18 @@ class PlantPrediction:
         """v' (nv,) into ``acceleration`` and Mbar (nv, nv) into ``mass`` at (q, v) under u (nu,); returns the
         motors' torques (n_arm,). The plant's numbers (:meth:`uvms.dynamics.plant.plant.Plant.dynamics`, to
         rounding)."""
-        from .kernel import dynamics_into  # numba: loaded when a prediction is first evaluated
-
         model, kinematics, dynamics, stacked = self.model, self._kinematics, self._dynamics, self.plant.stacked_links
         pin.computeJointJacobiansTimeVariation(model, kinematics, q, v)
         mass[:] = pin.crba(model, dynamics, q)
         bias = pin.nonLinearEffects(model, dynamics, q, v).copy()
         force = self.thrust_map @ u[:self.n] + self._base.T @ self.disturbance
         torque = np.empty(self.n_arm)
-        dynamics_into(kinematics.J, kinematics.dJ, self._read_placements(kinematics), self._slots, self._joints,
-                      self._support, stacked.rotations, stacked.translations, stacked.motion_to_link,
-                      stacked.added_mass, stacked.linear_damping, stacked.forward_damping,
-                      stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy, self._current,
-                      self._flags, v, u[self.n:], force, self.plant.motor_time_constant, self.nb, mass, bias,
-                      acceleration, torque)
+        self._kernel.dynamics_into(
+            kinematics.J, kinematics.dJ, self._read_placements(kinematics), self._slots, self._joints, self._support,
+            stacked.rotations, stacked.translations, stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
+            stacked.forward_damping, stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy,
+            self._current, self._flags, v, u[self.n:], force, self.plant.motor_time_constant, self.nb, mass, bias,
+            acceleration, torque)
         return torque
 
     def evaluate(self, q: np.ndarray, v: np.ndarray, u: np.ndarray) -> PlantDynamics:
@@ -147,17 +147,14 @@ class PlantPrediction:
                                      a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(ID (nv,), dID/dq (nv, nv), dID/dv (nv, nv)) of ID(q, v, a) = Mbar a + nbar, the hydrodynamics included
         (tangent-space derivatives in q, as ``pin.integrate`` moves it)."""
-        from .kernel import inverse_dynamics_derivatives_into
-
         model, data, plant, stacked = self.model, self._kinematics, self.plant, self.plant.stacked_links
         dtau_dq, dtau_dv, _ = pin.computeRNEADerivatives(model, data, q, v, a)  # fills J, dJ, oMi too
         did_dq, did_dv, torque = np.array(dtau_dq), np.array(dtau_dv), data.tau.copy()
-        inverse_dynamics_derivatives_into(data.J, data.dJ, self._read_placements(data), self._slots, self._joints,
-                                          self._support, self._parents, self._descends, stacked.rotations,
-                                          stacked.translations, stacked.added_mass, stacked.linear_damping,
-                                          stacked.forward_damping, stacked.quadratic_damping, self._buoyancy,
-                                          stacked.center_of_buoyancy, self._current, plant.added_mass, plant.damping,
-                                          v, a, torque, did_dq, did_dv)
+        self._kernel.inverse_dynamics_derivatives_into(
+            data.J, data.dJ, self._read_placements(data), self._slots, self._joints, self._support, self._parents,
+            self._descends, stacked.rotations, stacked.translations, stacked.added_mass, stacked.linear_damping,
+            stacked.forward_damping, stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy,
+            self._current, plant.added_mass, plant.damping, v, a, torque, did_dq, did_dv)
         return torque, did_dq, did_dv
 
     def derivatives(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, a: np.ndarray, mass: np.ndarray,
@@ -169,11 +166,9 @@ class PlantPrediction:
             q, v, u: the state and the input; a, mass: what :meth:`evaluate` gave there.
             out: arrays to write the three into (e.g. views of Crocoddyl's Fx and Fu); None: new ones.
         """
-        from .kernel import forward_derivatives_into
-
         _, did_dq, did_dv = self.inverse_dynamics_derivatives(q, v, a)
         if out is None:
             out = np.empty((self.nv, self.nv)), np.empty((self.nv, self.nv)), np.empty((self.nv, self.nu))
-        forward_derivatives_into(mass, did_dq, did_dv, self.thrust_map, self.plant.motor_time_constant, self.nb,
-                                 *out)
+        self._kernel.forward_derivatives_into(mass, did_dq, did_dv, self.thrust_map, self.plant.motor_time_constant,
+                                              self.nb, *out)
         return out
