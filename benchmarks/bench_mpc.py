@@ -84,7 +84,7 @@ def run(name: str, overrides: list[str], settings: MPCSettings, *, moving: bool 
     mpc.reset(State(setup.q0))
     mpc.command(State(setup.q0, np.zeros(setup.robot.nv)), 0.0)  # numba compiles/loads the derivative kernel
     mpc.reset(State(setup.q0))
-    duration = float(scenario["simulation"].get("duration") or setup.duration)
+    duration = float(scenario.simulation.duration or setup.duration)
     result = simulate(ActuatedPlant(setup.plant, thrusters), mpc, setup.q0, duration, 0.01, task=setup.task,
                       desired=lambda t: trajectory(t).pose, progress=False)
     state = Configuration(setup.robot, setup.q0)

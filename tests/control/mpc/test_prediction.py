@@ -125,3 +125,17 @@ def test_the_plants_accessors_are_what_it_computes_with(rng):
     assert plant.buoyant and plant.stacked_links.count == len(plant.links)
     q, v, u = state(rng)
     np.testing.assert_allclose(plant.dynamics(q, v, u[8:]).acceleration, plant.acceleration(q, v, u[8:]), atol=1e-12)
+
+
+def test_the_derivatives_are_written_into_the_given_arrays(rng):
+    """The action model hands Crocoddyl's arrays to the prediction (no copies): the same numbers as new arrays."""
+    model = prediction()
+    q, v, u = state(rng)
+    dynamics = model.evaluate(q, v, u)
+    fresh = model.derivatives(q, v, u, dynamics.acceleration, dynamics.mass_matrix)
+    given = np.full((model.nv, model.nv), np.nan), np.full((model.nv, model.nv), np.nan), np.full((model.nv, model.nu),
+                                                                                                    np.nan)
+    returned = model.derivatives(q, v, u, dynamics.acceleration, dynamics.mass_matrix, out=given)
+    for into, expected, back in zip(given, fresh, returned):
+        assert back is into
+        np.testing.assert_allclose(into, expected, rtol=0, atol=1e-12)

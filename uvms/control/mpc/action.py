@@ -37,6 +37,9 @@ class PlantActionData(crocoddyl.DifferentialActionDataAbstract):
         self.costs = model.costs.createData(self.multibody)
         self.costs.shareMemory(self)  # the costs' gradients and Hessians are this data's
         self.mass = np.eye(model.state.nv)
+        self.acceleration = np.zeros(model.state.nv)
+        nv = model.state.nv
+        self.derivatives = np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((nv, model.nu))
         self.configuration = model.constraints.configuration()
         self.rows, self.rows_jacobian = np.zeros(0), np.zeros((0, model.state.nv))
 
@@ -67,9 +70,8 @@ class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
             pin.framesForwardKinematics(self.state.pinocchio, data.pinocchio, q)
             self.costs.calc(data.costs, x)
         else:
-            dynamics = self.prediction.evaluate(q, v, u)
-            data.xout[:] = dynamics.acceleration
-            data.mass = dynamics.mass_matrix
+            self.prediction.evaluate_into(q, v, u, data.acceleration, data.mass)
+            data.xout[:] = data.acceleration
             pin.framesForwardKinematics(self.state.pinocchio, data.pinocchio, q)
             self.costs.calc(data.costs, x, u)
         data.cost = data.costs.cost
@@ -88,7 +90,8 @@ class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
         if u is None:
             self.costs.calcDiff(data.costs, x)
         else:
-            da_dq, da_dv, da_du = self.prediction.derivatives(q, v, u, data.xout, data.mass)
+            da_dq, da_dv, da_du = self.prediction.derivatives(q, v, u, data.acceleration, data.mass,
+                                                              out=data.derivatives)
             data.Fx[:, :self.nv] = da_dq
             data.Fx[:, self.nv:] = da_dv
             data.Fu[:] = da_du

@@ -24,6 +24,14 @@ f_l's change is formed from the links' velocity and acceleration derivatives (``
     c_l = R_l^T v_c,  e_l = R_l^T e_z,  nu_r = nu_l - [c_l; 0],  d c_l = [c_l]x J_l,w dq  (likewise e_l)
 
 with A_l = J_l a + Jdot_l v the link's spatial acceleration. No finite differences; tests check these against them.
+
+Speed. One Pinocchio call gives every joint's world Jacobian columns and their rate
+(``computeJointJacobiansTimeVariation`` for the acceleration, ``computeRNEADerivatives`` without fext for the
+derivatives, which fills the same arrays);
+the links' Jacobians, accelerations, their derivatives and the wrenches are formed from them in compiled passes
+(:mod:`uvms.control.mpc.kernel`; the acceleration through the plant's own hydrodynamic kernel), and the wrenches'
+part of dID/dq that rnea would add for an fext is formed there too. Arrays are preallocated per prediction: a
+prediction is not to be shared between threads.
 """
 
 from __future__ import annotations
@@ -33,6 +41,8 @@ import pinocchio as pin
 
 from ...dynamics.plant.added_mass import LOCAL
 from ...dynamics.plant.plant import Plant
+from ...dynamics.plant.system import PlantDynamics
+from ...errors import UVMSError
 
 
 class PlantPrediction:
@@ -41,23 +51,52 @@ class PlantPrediction:
     Args:
         plant: the plant (its model, hydrodynamics, current, gravity, servo time constant: its own choices).
         matrix: B (6, n) the thrusters' allocation matrix (:func:`uvms.dynamics.thrusters.thrusters.allocation_matrix`).
+
+    Raises:
+        UVMSError: a model with mimic joints (Pinocchio's derivatives refuse them).
     """
 
     def __init__(self, plant: Plant, matrix: np.ndarray) -> None:
         self.plant, self.model, self.matrix = plant, plant.model, np.asarray(matrix, dtype=float)
-        self.nb, self.nv, self.n_arm, self.n = plant.nb, plant.model.nv, plant.n_arm, self.matrix.shape[1]
+        model = self.model
+        if plant.robot.mimic_joint_names:
+            raise UVMSError(f"{plant.robot.name}: the MPC's prediction does not take mimic joints "
+                            f"({', '.join(plant.robot.mimic_joint_names)}); Pinocchio's derivatives refuse them")
+        self.nb, self.nv, self.n_arm, self.n = plant.nb, model.nv, plant.n_arm, self.matrix.shape[1]
         self.nu = self.n + self.n_arm
-        self._fk = self.model.createData()  # forward-kinematics derivatives
-        self._id = self.model.createData()  # inverse-dynamics derivatives
-        data = self.model.createData()
-        pin.computeJointJacobians(self.model, data, pin.neutral(self.model))
+        self._kinematics = model.createData()  # J, dJ, placements; rnea derivatives
+        self._dynamics = model.createData()  # crba, rnea
+        data = model.createData()
+        pin.computeJointJacobians(model, data, pin.neutral(model))
         # the thrusters' generalized forces J_base^T B (nv, n): a frame on the vehicle's joint, constant in q
-        base = pin.getFrameJacobian(self.model, data, plant.base_frame, LOCAL)
+        base = pin.getFrameJacobian(model, data, plant.base_frame, LOCAL)
         self.thrust_map = base.T @ self.matrix
         self._base_block = base[:, :self.nb]  # the base frame's twist from the vehicle joint's velocity (6, nb)
+        self._base = base
         stacked = plant.stacked_links
         self._current = plant.current
         self._buoyancy = stacked.buoyancy if plant.buoyant else np.zeros(stacked.count)  # (L,) [N]
+        self._flags = np.array([plant.added_mass, plant.damping, bool(np.any(self._current != 0.0)), plant.buoyant],
+                               dtype=np.int64)
+        # the links' joints, the joints' placements read once per evaluation (slots), the joints' columns
+        self._joints = np.array(stacked.joints, dtype=np.int64)
+        self._placed = sorted(set(stacked.joints))
+        self._slots = np.array([self._placed.index(joint) for joint in stacked.joints], dtype=np.int64)
+        self._placements = np.zeros((len(self._placed), 4, 4))
+        owner = [0] * model.nv  # the joint of each velocity column
+        for joint in range(1, model.njoints):
+            owner[model.idx_vs[joint]:model.idx_vs[joint] + model.nvs[joint]] = [joint] * model.nvs[joint]
+        self._support = np.zeros((model.njoints, model.nv), dtype=np.bool_)
+        for joint in range(1, model.njoints):
+            for ancestor in model.supports[joint]:
+                if ancestor > 0:
+                    self._support[joint, model.idx_vs[ancestor]:model.idx_vs[ancestor] + model.nvs[ancestor]] = True
+        self._parents = np.array([model.parents[owner[k]] for k in range(model.nv)], dtype=np.int64)
+        self._descends = np.array([[owner[k] != owner[i] and self._support[owner[k], i] for i in range(model.nv)]
+                                   for k in range(model.nv)], dtype=np.bool_)
+        from . import kernel  # numba: loaded when a prediction is built, compiled (or read from the cache) at first use
+
+        self._kernel = kernel
         #: an estimated constant wrench (6,) [N, N m] on the vehicle (base frame, FLU), added to the thrusters'
         self.disturbance = np.zeros(6)
 
@@ -69,10 +108,36 @@ class PlantPrediction:
         """(thrusts f (n,) [N], arm commands c (n_arm,)) of u (nu,)."""
         return u[:self.n], u[self.n:]
 
-    def evaluate(self, q: np.ndarray, v: np.ndarray, u: np.ndarray):
-        """The plant's dynamics (:class:`uvms.dynamics.plant.system.PlantDynamics`) at (q, v) under u (nu,)."""
-        thrusts, arm = self.split(u)
-        return self.plant.dynamics(q, v, arm, self.matrix @ thrusts + self.disturbance)
+    def _read_placements(self, data: pin.Data) -> np.ndarray:
+        placements, joints = self._placements, data.oMi
+        for slot, joint in enumerate(self._placed):
+            placements[slot] = joints[joint].homogeneous
+        return placements
+
+    def evaluate_into(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, acceleration: np.ndarray,
+                      mass: np.ndarray) -> np.ndarray:
+        """v' (nv,) into ``acceleration`` and Mbar (nv, nv) into ``mass`` at (q, v) under u (nu,); returns the
+        motors' torques (n_arm,). The plant's numbers (:meth:`uvms.dynamics.plant.plant.Plant.dynamics`, to
+        rounding)."""
+        model, kinematics, dynamics, stacked = self.model, self._kinematics, self._dynamics, self.plant.stacked_links
+        pin.computeJointJacobiansTimeVariation(model, kinematics, q, v)
+        mass[:] = pin.crba(model, dynamics, q)
+        bias = pin.nonLinearEffects(model, dynamics, q, v).copy()
+        force = self.thrust_map @ u[:self.n] + self._base.T @ self.disturbance
+        torque = np.empty(self.n_arm)
+        self._kernel.dynamics_into(
+            kinematics.J, kinematics.dJ, self._read_placements(kinematics), self._slots, self._joints, self._support,
+            stacked.rotations, stacked.translations, stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
+            stacked.forward_damping, stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy,
+            self._current, self._flags, v, u[self.n:], force, self.plant.motor_time_constant, self.nb, mass, bias,
+            acceleration, torque)
+        return torque
+
+    def evaluate(self, q: np.ndarray, v: np.ndarray, u: np.ndarray) -> PlantDynamics:
+        """The plant's dynamics at (q, v) under u (nu,): acceleration, motor torques, Mbar."""
+        acceleration, mass = np.empty(self.nv), np.empty((self.nv, self.nv))
+        torque = self.evaluate_into(q, v, u, acceleration, mass)
+        return PlantDynamics(acceleration, torque, mass)
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, u: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under u (nu,)."""
@@ -82,52 +147,28 @@ class PlantPrediction:
                                      a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(ID (nv,), dID/dq (nv, nv), dID/dv (nv, nv)) of ID(q, v, a) = Mbar a + nbar, the hydrodynamics included
         (tangent-space derivatives in q, as ``pin.integrate`` moves it)."""
-        from .kernel import link_wrench_derivatives  # numba: loaded when a prediction is first differentiated
+        model, data, plant, stacked = self.model, self._kinematics, self.plant, self.plant.stacked_links
+        dtau_dq, dtau_dv, _ = pin.computeRNEADerivatives(model, data, q, v, a)  # fills J, dJ, oMi too
+        did_dq, did_dv, torque = np.array(dtau_dq), np.array(dtau_dv), data.tau.copy()
+        self._kernel.inverse_dynamics_derivatives_into(
+            data.J, data.dJ, self._read_placements(data), self._slots, self._joints, self._support, self._parents,
+            self._descends, stacked.rotations, stacked.translations, stacked.added_mass, stacked.linear_damping,
+            stacked.forward_damping, stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy,
+            self._current, plant.added_mass, plant.damping, v, a, torque, did_dq, did_dv)
+        return torque, did_dq, did_dv
 
-        model, plant, fk = self.model, self.plant, self._fk
-        stacked = plant.stacked_links
-        pin.computeForwardKinematicsDerivatives(model, fk, q, v, a)
-        count = stacked.count
-        velocity_dq, jacobians = np.empty((count, 6, self.nv)), np.empty((count, 6, self.nv))
-        acceleration_dq, acceleration_dv = np.empty((count, 6, self.nv)), np.empty((count, 6, self.nv))
-        accelerations, rotations = np.empty((count, 6)), np.empty((count, 3, 3))
-        for index, frame in enumerate(stacked.frames):
-            velocity_dq[index], acceleration_dq[index], acceleration_dv[index], jacobians[index] = \
-                pin.getFrameAccelerationDerivatives(model, fk, frame, LOCAL)
-            accelerations[index] = pin.getFrameAcceleration(model, fk, frame, LOCAL).vector
-            rotations[index] = pin.updateFramePlacement(model, fk, frame).rotation
-        wrenches = np.empty((count, 6))
-        d_dq, d_dv = np.zeros((self.nv, self.nv)), np.zeros((self.nv, self.nv))
-        link_wrench_derivatives(velocity_dq, jacobians, acceleration_dq, acceleration_dv, v, accelerations, rotations,
-                                stacked.added_mass, stacked.linear_damping, stacked.forward_damping,
-                                stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy, self._current,
-                                plant.added_mass, plant.damping,
-                                wrenches, d_dq, d_dv)
-        # the wrenches in their joints' frames, where rnea takes them (held there for its derivatives)
-        fext = [pin.Force.Zero() for _ in range(model.njoints)]
-        for index, (frame, joint) in enumerate(zip(stacked.frames, stacked.joints)):
-            fext[joint] += model.frames[frame].placement.act(pin.Force(wrenches[index]))
-        dtau_dq, dtau_dv, _ = pin.computeRNEADerivatives(model, self._id, q, v, a, fext)
-        return self._id.tau.copy(), d_dq + dtau_dq, d_dv + dtau_dv
-
-    def derivatives(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, a: np.ndarray,
-                    mass: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def derivatives(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, a: np.ndarray, mass: np.ndarray,
+                    out: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(da/dq (nv, nv), da/dv (nv, nv), da/du (nv, nu)) at (q, v, u), a = its acceleration (nv,), mass = Mbar.
 
         Args:
             q, v, u: the state and the input; a, mass: what :meth:`evaluate` gave there.
+            out: arrays to write the three into (e.g. views of Crocoddyl's Fx and Fu); None: new ones.
         """
-        nb, tau = self.nb, self.plant.motor_time_constant
         _, did_dq, did_dv = self.inverse_dynamics_derivatives(q, v, a)
-        base, coupling = mass[:nb, :nb], mass[:nb, nb:]
-        da_dq, da_dv, da_du = np.zeros((self.nv, self.nv)), np.zeros((self.nv, self.nv)), np.zeros((self.nv, self.nu))
-        arm = np.eye(self.n_arm) / tau
-        da_dv[nb:, nb:] = -arm
-        da_du[nb:, self.n:] = arm
-        stacked = np.hstack([-did_dq[:nb], -(did_dv[:nb] + coupling @ da_dv[nb:]),
-                             self.thrust_map[:nb], -coupling @ arm])
-        solved = np.linalg.solve(base, stacked)
-        nv = self.nv
-        da_dq[:nb], da_dv[:nb] = solved[:, :nv], solved[:, nv:2 * nv]
-        da_du[:nb] = solved[:, 2 * nv:]
-        return da_dq, da_dv, da_du
+        if out is None:
+            out = np.empty((self.nv, self.nv)), np.empty((self.nv, self.nv)), np.empty((self.nv, self.nu))
+        self._kernel.forward_derivatives_into(mass, did_dq, did_dv, self.thrust_map, self.plant.motor_time_constant,
+                                              self.nb, *out)
+        return out
