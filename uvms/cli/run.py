@@ -55,6 +55,10 @@ def command_run(options: argparse.Namespace) -> int:
         shares = ", ".join(f"{name} {entry['active_fraction']:.0%}" for name, entry in metrics["inequalities"].items()
                            if "active_fraction" in entry)
         say(f"inequalities {enforced}; active: {shares or 'none with rows'}", sys.stdout)
+    if "mpc" in metrics and "solve_time_median" in metrics["mpc"]:
+        mpc = metrics["mpc"]
+        say(f"mpc         {mpc['solves']} solves: median {1e3 * mpc['solve_time_median']:.1f} ms, p99 "
+            f"{1e3 * mpc['solve_time_p99']:.1f} ms, {mpc['iterations_mean']:.2g} iterations", sys.stdout)
     say(f"verdict     {verdict_line(metrics['verdict'])}", sys.stdout)
     say(f"outputs     {folder}/ ({', '.join(path.name for path in result.files)})", sys.stdout)
     say_replaced(replacing, folder)
@@ -75,9 +79,10 @@ def start_line(spec: ScenarioSpec, out: Path) -> str:
     model = Path(spec.model.path)
     with contextlib.suppress(ValueError):  # a model below the current folder is shown from there
         model = model.relative_to(Path.cwd())
+    controller = (f"MPC ({spec.controller.solver}, {spec.controller.horizon} x {spec.controller.node_dt:g} s)"
+                  if spec.controller.type == "mpc" else f"solver {spec.solver.method}")
     return (f"run         {spec.name}: model {model}, {duration:g} s in {steps} "
-            f"steps of {spec.simulation.dt:g} s, solver {spec.solver.method}, {plant} plant "
-            f"-> {out}/")
+            f"steps of {spec.simulation.dt:g} s, {controller}, {plant} plant -> {out}/")
 
 
 def say_run_warnings(metrics: dict) -> None:

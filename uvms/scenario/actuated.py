@@ -18,6 +18,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from ..control.base import Controller
 from ..control.coordination import CoordinatedControl
 from ..control.station import actuated_control
 from ..dynamics.plant.actuated import ActuatedPlant
@@ -44,7 +45,7 @@ class Actuation:
 
     plant: Plant
     thrusters: Thrusters
-    controller: CoordinatedControl
+    controller: CoordinatedControl | Controller  # the chain, or the MPC (controller.type = "mpc")
     inequalities: ScenarioInequalities | None = None
     fins: Fins = field(default_factory=Fins)
 
@@ -172,9 +173,14 @@ def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np
 
 def actuated_metrics(result: SimulationResult, actuation: Actuation, spec: ScenarioSpec) -> dict:
     """``metrics.json``'s actuated entries: the thrusters' (:meth:`uvms.sim.result.SimulationResult.actuation_metrics`)
-    and what the run was (thruster count, coordination, current)."""
+    and what the run was (thruster count, current; the chain's coordination, or the MPC's solve times and iterations,
+    :func:`uvms.scenario.mpc.mpc_metrics`)."""
     fins = {"fins": actuation.fins.names} if len(actuation.fins) else {}
-    return {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names, **fins,
-            "coordination": bool(spec.vehicle_control.coordination),
-            "saturation_feedback": bool(spec.vehicle_control.saturation_feedback),
-            "current": list(spec.plant.current) or [0.0, 0.0, 0.0]}
+    common = {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names, **fins,
+              "current": list(spec.plant.current) or [0.0, 0.0, 0.0]}
+    if spec.controller.type == "mpc":
+        from .mpc import mpc_metrics
+
+        return {**common, **mpc_metrics(actuation.controller)}
+    return {**common, "coordination": bool(spec.vehicle_control.coordination),
+            "saturation_feedback": bool(spec.vehicle_control.saturation_feedback)}

@@ -50,7 +50,7 @@ class Setup:
     plant: Plant | None = None  # [plant] type rigid or hydrodynamic: the controller is a GJMController
     control_dt: float = 0.0  # [s] sampling period of that controller (0: continuous)
     inequalities: ScenarioInequalities | None = None  # [[inequalities]]: enforced (set_based, hqp) or monitored
-    actuation: Actuation | None = None  # plant.thrusters: the thrusters and the whole chain's controller
+    actuation: Actuation | None = None  # plant.thrusters: the thrusters and the chain's (or the MPC's) controller
     samples: RecentSamples | None = None  # the trajectory as the kinematic controller samples it (None: trajectory)
 
 
@@ -76,6 +76,12 @@ def build(spec: ScenarioSpec) -> Setup:
             actuation = scenario_excitation(robot, make_plant(robot, spec.plant), spec, duration)
             return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
                          actuation=actuation)
+        if spec.plant.thrusters and spec.controller.type == "mpc":
+            from .mpc import make_mpc_actuation
+
+            actuation = make_mpc_actuation(robot, make_plant(robot, spec.plant), task, trajectory, q0, spec)
+            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
+                         actuation=actuation, inequalities=actuation.inequalities)
         if spec.plant.thrusters:
             cls = solver_class(spec.solver)
             options = solver_options(robot, spec.solver, cls, spec.simulation.dt)

@@ -185,8 +185,8 @@ def run_figures(spec: ScenarioSpec, setup: Setup, result: SimulationResult, plan
     if setup.inequalities is not None and setup.inequalities.objectives:
         from ..viz.objectives import inequality_figure
 
-        inequality_figure(result, setup.inequalities.objectives, title, label=spec.solver.method,
-                          path=folder / "inequalities.png")
+        label = "mpc" if spec.controller.type == "mpc" else spec.solver.method
+        inequality_figure(result, setup.inequalities.objectives, title, label=label, path=folder / "inequalities.png")
         files.append(folder / "inequalities.png")
     if plant_run is not None:
         from ..viz.plotting import gjm_figures

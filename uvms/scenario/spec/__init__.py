@@ -1,10 +1,12 @@
 """The typed scenario spec: a scenario file read and checked once into frozen dataclasses, one per section.
 
 ``keys`` (a section's keys: type, default, allowed values, bound and meaning, the one source of the checks and of the
-docs' scenario reference), ``sections`` and ``dynamics`` (the section dataclasses), ``scenario`` (:class:`ScenarioSpec`
-and its check). :func:`uvms.scenario.read_scenario` reads a file into a :class:`ScenarioSpec`.
+docs' scenario reference), ``sections``, ``dynamics`` and ``controller`` (the section dataclasses; ``[controller]``'s
+MPC keys made from :class:`uvms.control.mpc.settings.MPCSettings`), ``scenario`` (:class:`ScenarioSpec` and its check).
+:func:`uvms.scenario.read_scenario` reads a file into a :class:`ScenarioSpec`.
 """
 
+from .controller import CONTROLLER_TYPES, ControllerSpec
 from .dynamics import PLANT_TYPES, ExcitationSpec, PlantSpec, VehicleControlSpec
 from .keys import MAX_MAGNITUDE, NUMBER, NUMBERS, REQUIRED, Bound, Key, Section
 from .scenario import ARRAYS, SECTIONS, InequalitySpec, ScenarioSpec, check_scenario, key_of
@@ -22,7 +24,7 @@ from .sections import (
     VehicleSpec,
 )
 
-__all__ = ["ARRAYS", "Bound", "ExcitationSpec", "InequalitySpec", "InitialSpec", "Key", "LabelSpec", "MAX_MAGNITUDE",
-           "ModelSpec", "NUMBER", "NUMBERS", "OutputsSpec", "PLANT_TYPES", "PhaseSpec", "PlantSpec", "REQUIRED",
-           "SECTIONS", "ScenarioSpec", "Section", "SimulationSpec", "SolverSpec", "StudySpec", "TaskSpec",
-           "TrajectorySpec", "VehicleControlSpec", "VehicleSpec", "check_scenario", "key_of"]
+__all__ = ["ARRAYS", "Bound", "CONTROLLER_TYPES", "ControllerSpec", "ExcitationSpec", "InequalitySpec", "InitialSpec",
+           "Key", "LabelSpec", "MAX_MAGNITUDE", "ModelSpec", "NUMBER", "NUMBERS", "OutputsSpec", "PLANT_TYPES",
+           "PhaseSpec", "PlantSpec", "REQUIRED", "SECTIONS", "ScenarioSpec", "Section", "SimulationSpec", "SolverSpec",
+           "StudySpec", "TaskSpec", "TrajectorySpec", "VehicleControlSpec", "VehicleSpec", "check_scenario", "key_of"]

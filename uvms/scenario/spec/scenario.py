@@ -10,6 +10,7 @@ from typing import Any
 from ...errors import ScenarioError, UVMSError
 from ...io.names import NAME_RULE, is_plain_name
 from ...tasks.objectives import check_table, file_keys
+from .controller import ControllerSpec, check_controller
 from .dynamics import ExcitationSpec, PlantSpec, VehicleControlSpec
 from .keys import Key, Section, check_range
 from .sections import (
@@ -31,7 +32,8 @@ from .sections import (
 SECTIONS: dict[str, type[Section]] = {
     "scenario": LabelSpec, "model": ModelSpec, "task": TaskSpec, "trajectory": TrajectorySpec, "solver": SolverSpec,
     "vehicle": VehicleSpec, "initial": InitialSpec, "simulation": SimulationSpec, "plant": PlantSpec,
-    "vehicle_control": VehicleControlSpec, "excitation": ExcitationSpec, "outputs": OutputsSpec, "study": StudySpec,
+    "vehicle_control": VehicleControlSpec, "controller": ControllerSpec, "excitation": ExcitationSpec,
+    "outputs": OutputsSpec, "study": StudySpec,
 }
 ARRAYS = ("phases", "inequalities")
 REQUIRED_SECTIONS = ("model", "trajectory", "simulation")
@@ -77,6 +79,7 @@ class ScenarioSpec:
     simulation: SimulationSpec
     plant: PlantSpec
     vehicle_control: VehicleControlSpec
+    controller: ControllerSpec
     excitation: ExcitationSpec
     outputs: OutputsSpec
     study: StudySpec
@@ -122,6 +125,7 @@ def check_scenario(raw: Mapping, path: Path) -> ScenarioSpec:
                                 for index, phase in enumerate(phases)),
                    inequalities=check_inequalities(raw.get("inequalities", []), origin))
     spec = ScenarioSpec(path=Path(path), **checked)
+    check_controller(spec, origin)
     if spec.scenario.name:
         check_name("scenario.name", spec.scenario.name, origin, "it names the default output folder out/<name>",
                    example="hoang2011_w1")
