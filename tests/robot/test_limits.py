@@ -203,13 +203,14 @@ def test_the_velocity_objective_reads_a_velocity_limit():
 
 
 def test_the_model_limits_are_one_object_read_by_every_user():
-    """Limit built once from the model: the potential, CLIK's clamping, the objectives and the IK read that object;
-    CLIK clamps to its potential's box unless told otherwise, and refuses two different boxes."""
+    """One source of the model's bounds (Limit.joint_positions/joint_velocities): the potential, CLIK's clamping, the
+    objectives and the IK read it; CLIK clamps to its potential's box unless told otherwise, and refuses two different
+    boxes."""
     robot = shipped("hoang2011")
     model = Limit.joint_positions(robot)
-    assert Limit.joint_positions(robot) is model and Limit.joint_velocities(robot) is Limit.joint_velocities(robot)
-    assert uvms.tasks.MidRangePotential(robot).limit is model and JointLimits(robot).limit.lower.tolist() == \
-        model.lower.tolist()
+    assert model.lower.tolist() == robot.arm_limits[0].tolist() and model.upper.tolist() == robot.arm_limits[1].tolist()
+    assert uvms.tasks.MidRangePotential(robot).limit.upper.tolist() == model.upper.tolist()
+    assert JointLimits(robot).limit.lower.tolist() == model.lower.tolist()
     with pytest.raises(ValueError, match="read-only"):
         model.lower[0] = 1.0  # shared: never changed in place
     custom = Limit([0.2, -2.0, -1.0], [2.0, 2.0, 1.5], model.names, model.q_index)

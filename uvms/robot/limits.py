@@ -19,7 +19,6 @@ projection leaves alone.
 
 from __future__ import annotations
 
-import weakref
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -31,8 +30,6 @@ from .robot import Robot
 #: Slack [rad or m] within which a value on the wrong side of a bound still counts as inside.
 TOLERANCE = 1e-12
 KINDS = ("position", "velocity")
-#: The model's limits of each Robot ({kind: Limit}), built once and kept while the Robot lives.
-MODEL_LIMITS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,11 +89,9 @@ class Limit:
 
     @classmethod
     def _of_model(cls, robot: Robot, kind: str) -> Limit:
-        """The model's ``kind`` limits of the arm, built at the first call for ``robot`` and the same after."""
-        limits = MODEL_LIMITS.setdefault(robot, {})
-        if kind not in limits:
-            limits[kind] = cls._position_limits(robot) if kind == "position" else cls._velocity_limits(robot, None)
-        return limits[kind]
+        """The model's ``kind`` limits of the arm, read from the model now (nothing kept: a model changed in place
+        gives its new limits)."""
+        return cls._position_limits(robot) if kind == "position" else cls._velocity_limits(robot, None)
 
     @classmethod
     def _position_limits(cls, robot: Robot) -> Limit:

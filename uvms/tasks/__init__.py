@@ -25,10 +25,6 @@ from .relative import DistanceTask
 from .task import Task
 from .vehicle import VehicleTask
 
-#: The old name of :class:`MidRangePotential` (it read like the ``JointLimits`` objective), kept while the
-#: README and users' code move to the new one.
-JointLimitPotential = MidRangePotential
-
 __all__ = [
     "DistanceTask", "FrameBox", "FrameTask", "Inequality", "JointLimits", "JointTask", "MidRangePotential",
     "JointVelocityLimits", "Manipulability", "PlaneClearance", "PostureTask", "Task", "VehicleAttitude",
