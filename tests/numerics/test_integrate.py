@@ -102,3 +102,15 @@ def test_one_step_per_scheme_serves_q_alone_and_q_with_x_exactly_on_the_manifold
         assert errors[1] <= 1e-12  # a constant body twist is the exponential map: exact for both
     with pytest.raises(uvms.UVMSError, match="unknown method 'rk45'; valid: euler, rk4"):
         check_integrator("rk45", "method")
+
+
+def test_numpy_solve_is_numpy_linalg_solve_and_refuses_a_singular_system():
+    """The plant's base solve: numpy's numbers bit for bit (the shipped runs stay bit-identical), a singular
+    system a NumericalError instead of NaN accelerations."""
+    from uvms.numerics.lapack import numpy_solve
+
+    rng = np.random.default_rng(3)
+    matrix, rhs = rng.normal(size=(6, 6)) + 6.0 * np.eye(6), rng.normal(size=6)
+    np.testing.assert_array_equal(numpy_solve(matrix, rhs), np.linalg.solve(matrix, rhs))
+    with np.errstate(invalid="ignore"), pytest.raises(NumericalError, match="singular"):
+        numpy_solve(np.zeros((6, 6)), rhs)

@@ -7,7 +7,12 @@ Importing ``scipy.linalg`` is about a third of ``import uvms``; the commands and
 
 from __future__ import annotations
 
+import math
 from types import ModuleType
+
+import numpy as np
+
+from ..errors import NumericalError
 
 _module: ModuleType | None = None
 
@@ -20,3 +25,27 @@ def lapack() -> ModuleType:
 
         _module = module
     return _module
+
+
+def numpy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """x (n,) with A x = b: the numbers of ``numpy.linalg.solve`` (its LAPACK gufunc, called directly), without
+    its wrapper's checks and error-state context (about 2 us of its 8 on a 6 x 6 system).
+
+    Raises:
+        NumericalError: a singular A (a non-finite solution).
+    """
+    solution = _solve1(matrix, rhs, signature="dd->d")  # a singular A: NaN (and numpy's RuntimeWarning)
+    if not math.isfinite(solution.dot(solution)):  # one product: np.isfinite(...).all() would double the cost
+        raise NumericalError(f"singular or overflowing {matrix.shape[0]}x{matrix.shape[0]} system")
+    return solution
+
+
+try:  # numpy's gufunc behind linalg.solve (numpy 1.x and 2.x)
+    from numpy.linalg._umath_linalg import solve1 as _solve1
+except ImportError:  # pragma: no cover - another numpy: its public function, the same numbers
+    def _solve1(matrix: np.ndarray, rhs: np.ndarray, signature: str) -> np.ndarray:  # noqa: ARG001
+        with np.errstate(all="ignore"):
+            try:
+                return np.linalg.solve(matrix, rhs)
+            except np.linalg.LinAlgError:
+                return np.full(len(rhs), np.nan)

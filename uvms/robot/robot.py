@@ -143,9 +143,10 @@ class Robot(VehicleAccessors):
         """
         return float(sum(inertia.mass for inertia in self.model.inertias))
 
-    @property
+    @functools.cached_property
     def root_link(self) -> str:
-        """The vehicle's link: the one its floating/planar joint carries; for a fixed base, the model's root link."""
+        """The vehicle's link: the one its floating/planar joint carries; for a fixed base, the model's root link
+        (found once: a search of every frame, which the actuated chain's step asked for several times)."""
         joint = 0 if self.base_type == "fixed" else 1
         bodies = [f.name for f in self.model.frames if f.type == pin.FrameType.BODY and f.parentJoint == joint]
         return bodies[0] if bodies else self.model.frames[0].name

@@ -85,10 +85,12 @@ def build(spec: ScenarioSpec) -> Setup:
         if spec.plant.thrusters:
             cls = solver_class(spec.solver)
             options = solver_options(robot, spec.solver, cls, spec.simulation.dt)
-            actuation = make_actuation(robot, make_plant(robot, spec.plant), task, RecentSamples(trajectory), q0,
-                                       spec, cls, options)
+            # the controller asks once per step, at k dt: the table of those times, shared with the recorder
+            times = stage_times(check_step_count(spec, duration), float(spec.simulation.dt), "euler")
+            samples = RecentSamples(TrajectoryTable(trajectory, times))
+            actuation = make_actuation(robot, make_plant(robot, spec.plant), task, samples, q0, spec, cls, options)
             return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
-                         actuation=actuation, inequalities=actuation.inequalities)
+                         actuation=actuation, inequalities=actuation.inequalities, samples=samples)
         plant, controller, inequalities = make_plant_controller(robot, task, trajectory, spec)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(spec.plant.control_dt), inequalities=inequalities)

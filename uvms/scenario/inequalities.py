@@ -108,9 +108,14 @@ class ObjectiveRecorder:
     def __init__(self, robot: Robot, inequalities: ScenarioInequalities) -> None:
         self.robot, self.objectives = robot, inequalities.objectives
         self.maximum = speed_maximum(robot.nv, inequalities.speed_limits)  # (nv,) [m/s, rad/s], inf: none
+        self._state: Configuration | None = None
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
-        state = Configuration(self.robot, q, check=False)
+        state = self._state
+        if state is None:  # one kinematic state, moved to each row's q (its pin.Data made once)
+            state = self._state = Configuration(self.robot, q, check=False)
+        else:
+            state.update(q, check=False)
         values, pairs = [], []
         for objective in self.objectives:
             if objective.collision:  # which pair each row is, for the metrics and the replay

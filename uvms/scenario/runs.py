@@ -222,8 +222,8 @@ def execute(spec: ScenarioSpec, setup: Setup, folder: Path, progress: bool | Non
     plant_run: SimulationResult | None = None
     recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
     if setup.actuation is not None:
-        result = simulate_actuation(setup.actuation, setup.task, setup.trajectory, setup.q0, setup.duration,
-                                    spec.simulation, progress)
+        result = simulate_actuation(setup.actuation, setup.task, setup.samples or setup.trajectory, setup.q0,
+                                    setup.duration, spec.simulation, progress)
     elif setup.plant is not None:
         controller = setup.controller
         result = plant_run = simulate(setup.plant, controller, setup.q0, setup.duration, simulation_section.dt,

@@ -121,7 +121,10 @@ class SimulationResult:
         if "joint_torque" in arrays:
             for name in ("command", "joint_torque"):  # no arm: (N, 0)
                 arrays[name] = arrays[name].reshape(count, -1)
-            plant = PlantSeries(**{name: arrays.pop(name) for name in PLANT_FIELDS})
+            given = {name: arrays.pop(name) for name in PLANT_FIELDS if name in arrays}
+            derive = info.get("plant_series")
+            states = (arrays["q"], arrays["v"])
+            plant = PlantSeries(**given, derive=None if derive is None else lambda: derive(*states))
         if "tracking" in info:
             frame, rows = info["tracking"]
             tracking = TrackingSeries(ee_position=arrays["ee_position"], desired_position=arrays["desired_position"],

@@ -7,7 +7,8 @@ amundsen2018), the actuation series of a plant with thrusters.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import functools
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
@@ -15,6 +16,8 @@ import numpy as np
 
 #: The series of :class:`PlantSeries`, by name.
 PLANT_FIELDS = ("command", "joint_torque", "kinetic_energy", "potential_energy", "momentum")
+#: Those of them a plant's loop records per row (the others are derived from the stored states when read).
+PLANT_RECORDED = ("command", "joint_torque")
 #: The series of :class:`TrackingSeries` recorded per row (ee_position and desired_position are the result's).
 TRACKING_FIELDS = ("rates", "ee_velocity", "desired_velocity")
 #: The series an actuated plant records itself (:class:`ActuationSeries`); its controller's go to ``controller``.
@@ -30,22 +33,59 @@ ACTUATION_SERIES = ("thrusts", "thrust_command", "body_wrench", "wrench_command"
                     "ee_point_error", *FIN_SERIES)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class PlantSeries:
     """The series of a free-floating plant run (:class:`uvms.dynamics.plant.plant.Plant`).
+
+    The energies and the momentum are functions of the stored states: a run computes them from its rows when
+    they are first read (``derive``), not inside its loop (an actuated run that never reads them never pays them).
 
     Attributes:
         command: (N, n_arm) joint-velocity commands u [rad/s or m/s].
         joint_torque: (N, n_arm) motor torques [N m or N].
         kinetic_energy, potential_energy: (N,) [J] (kinetic includes the added mass).
         momentum: (N, 6) [N s, N m s] world frame about the world origin, rigid + added mass.
+
+    Args:
+        command, joint_torque: as above; kinetic_energy, potential_energy, momentum: as above, or None with
+            ``derive``: () -> {"kinetic_energy": ..., "potential_energy": ..., "momentum": ...}, called once when one
+            of them is first read.
     """
 
     command: np.ndarray
     joint_torque: np.ndarray
-    kinetic_energy: np.ndarray
-    potential_energy: np.ndarray
-    momentum: np.ndarray
+
+    def __init__(self, command: np.ndarray, joint_torque: np.ndarray, kinetic_energy: np.ndarray | None = None,
+                 potential_energy: np.ndarray | None = None, momentum: np.ndarray | None = None, *,
+                 derive: Callable[[], dict[str, np.ndarray]] | None = None) -> None:
+        given = {"kinetic_energy": kinetic_energy, "potential_energy": potential_energy, "momentum": momentum}
+        if derive is None and any(value is None for value in given.values()):
+            raise ValueError("PlantSeries needs kinetic_energy, potential_energy and momentum, or derive")
+        object.__setattr__(self, "command", command)
+        object.__setattr__(self, "joint_torque", joint_torque)
+        object.__setattr__(self, "_derive", derive)
+        for name, value in given.items():
+            if value is not None:  # an instance value shadows the lazy property of that name
+                object.__setattr__(self, name, value)
+
+    def _derived(self, name: str) -> np.ndarray:
+        derived = self.__dict__.get("_derived_series")
+        if derived is None:
+            derived = self._derive()  # type: ignore[attr-defined]
+            object.__setattr__(self, "_derived_series", derived)
+        return derived[name]
+
+    @functools.cached_property
+    def kinetic_energy(self) -> np.ndarray:  # noqa: D102 - the class docstring's
+        return self._derived("kinetic_energy")
+
+    @functools.cached_property
+    def potential_energy(self) -> np.ndarray:  # noqa: D102
+        return self._derived("potential_energy")
+
+    @functools.cached_property
+    def momentum(self) -> np.ndarray:  # noqa: D102
+        return self._derived("momentum")
 
     @property
     def energy(self) -> np.ndarray:

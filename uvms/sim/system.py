@@ -68,7 +68,9 @@ class System(Protocol):
 
     def series_info(self) -> dict[str, Any]:
         """What the result's series groups need beside the rows: ``"tracking"`` (frame, position rows) of a
-        tracking controller, ``"thrust_bounds"`` (lower (n,), upper (n,) [N]) of thrusters; {} when none."""
+        tracking controller, ``"thrust_bounds"`` (lower (n,), upper (n,) [N]) of thrusters, ``"plant_series"``
+        ((q (N, nq), v (N, nv)) -> the plant's series derived from the stored states, computed when first read) of a
+        plant; {} when none."""
 
 
 class Simulable(Protocol):

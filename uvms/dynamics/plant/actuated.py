@@ -116,14 +116,14 @@ class ActuatedPlant:
 def base_twist(plant: Plant, v: np.ndarray) -> np.ndarray:
     """The vehicle's body twist (6,) [m/s, rad/s] in its base frame (FLU) from the velocity v (nv,)."""
     joint_twist = pin.Motion(v[:6]) if plant.nb == 6 else pin.Motion(np.array([v[0], v[1], 0.0, 0.0, 0.0, v[2]]))
-    return plant.robot.base_placement.actInv(joint_twist).vector
+    return plant._base_placement.actInv(joint_twist).vector
 
 
 def water_in_base(plant: Plant, q: np.ndarray) -> np.ndarray:
     """The plant's ocean current (3,) [m/s] in the vehicle's base frame at q."""
     if not np.any(plant._current):
         return np.zeros(3)
-    rotation = (plant.robot.base_pose(q) * plant.robot.base_placement).rotation
+    rotation = (plant.robot.base_pose(q) * plant._base_placement).rotation
     return rotation.T @ plant._current
 
 
@@ -146,7 +146,7 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     generalized = mass[:nb, :nb] @ base_acceleration + mass[:nb, nb:] @ arm_acceleration + bias[:nb]
     if nb == 3:  # planar: the joint's (fx, fy, mz) rows
         generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
-    return plant.robot.base_placement.actInv(pin.Force(generalized)).vector
+    return plant._base_placement.actInv(pin.Force(generalized)).vector
 
 
 def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: float | np.ndarray) -> np.ndarray:
@@ -298,5 +298,7 @@ class ActuatedPlantSystem:
         check_finite_state(t, q, x, dt)
 
     def series_info(self) -> dict:
-        """{"thrust_bounds": (lower (n,), upper (n,) [N])}."""
-        return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper)}
+        """{"thrust_bounds": (lower (n,), upper (n,) [N]), "plant_series": the energies and momentum of the stored
+        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`)}."""
+        return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper),
+                "plant_series": self._passive.derived_series}

@@ -64,6 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import UVMSError
+from ...numerics.lapack import numpy_solve
 from ...robot.configuration import Configuration
 from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from ...robot.robot import Robot, check_robot
@@ -149,6 +150,12 @@ class Plant:
         self._lower = np.tril_indices(self.model.nv, -1)
         self._zero_velocity = np.zeros(self.model.nv)
         self._buoyant = self.gravity and self._stacked.buoyant
+        stacked = self._stacked
+        # what one evaluation gathers from pin.Data: each joint once (several links may share one)
+        self._joints = tuple(dict.fromkeys(stacked.joints))
+        self._link_joint = np.array([self._joints.index(joint) for joint in stacked.joints], dtype=int)
+        self._packed: np.ndarray | None = None  # the links' constants for the compiled pass, made at its first call
+        self._no_links = (np.zeros((0, 6, self.model.nv)), np.zeros((0, 6)), np.zeros((0, 3, 3)))
 
     def system(self, controller: Controller | None, *, dt: float, control_dt: float = 0.0) -> PlantSystem:
         """This plant under a joint-velocity command, the system :func:`uvms.sim.loop.simulate` integrates.
@@ -227,10 +234,9 @@ class Plant:
         mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
         nb = self.nb
         arm_acceleration = (command - v[nb:]) / self.motor_time_constant
-        base_acceleration = -np.linalg.solve(mass[:nb, :nb], mass[:nb, nb:] @ arm_acceleration + bias_forces[:nb])
+        base_acceleration = -numpy_solve(mass[:nb, :nb], mass[:nb, nb:] @ arm_acceleration + bias_forces[:nb])
         torque = mass[nb:, :nb] @ base_acceleration + mass[nb:, nb:] @ arm_acceleration + bias_forces[nb:]
         return PlantDynamics(np.concatenate([base_acceleration, arm_acceleration]), torque, mass)
-
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -238,34 +244,47 @@ class Plant:
 
         Pinocchio gives M (crba), h (rnea, gravity included), the links' LOCAL Jacobians J_l and their joints'
         bias accelerations and poses; the links' wrenches f_l (their frames) are summed by virtual work in one
-        compiled pass (:func:`uvms.numerics._kernels.hydro.hydro_terms_into`): Mbar = M + sum_l J_l^T M_A,l J_l,
+        compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`): Mbar = M + sum_l J_l^T M_A,l J_l,
         nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea with the wrenches as external
         forces, to rounding).
         """
+        from ...numerics._kernels.hydro import pack_links, plant_terms_into  # numba: loaded when a plant first runs
+
         model, data, dynamics = self.model, self.data, self._dynamics_data
-        mass = pin.crba(model, dynamics, q).copy()
-        mass[self._lower] = mass.T[self._lower]  # crba fills the upper triangle
-        bias_forces = pin.rnea(model, dynamics, q, v, self._zero_velocity)  # h(q, v), gravity included
         stacked = self._stacked
-        if stacked.count or body_wrench is not None:
+        upper = pin.crba(model, dynamics, q)  # crba fills the upper triangle
+        h = pin.rnea(model, dynamics, q, v, self._zero_velocity)  # h(q, v), gravity included
+        wrench = body_wrench is not None
+        if stacked.count or wrench:
             pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
             pin.computeJointJacobians(model, data)
-        if stacked.count:
-            from ...numerics._kernels.hydro import hydro_terms_into  # numba: loaded when a plant first runs
-
-            joints = stacked.joints
-            hydro_terms_into(np.array([pin.getFrameJacobian(model, data, frame, LOCAL) for frame in stacked.frames]),
-                             v, np.array([data.a[joint].vector for joint in joints]) if self.added_mass
-                             else stacked.no_bias,
-                             np.array([data.oMi[joint].rotation for joint in joints]) @ stacked.rotations
-                             if self._moving_fluid or self._buoyant else stacked.no_rotations,
-                             stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
-                             stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy,
-                             stacked.center_of_buoyancy, self._current,
-                             self.added_mass, self.damping, self._moving_fluid, self._buoyant, mass, bias_forces)
-        if body_wrench is not None:  # the thrusters' wrench on the vehicle, at the base frame
+        if self._packed is None:
+            self._packed = pack_links(stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
+                                      stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy,
+                                      stacked.center_of_buoyancy)
+            self._flags = np.array([self.added_mass, self.damping, self._moving_fluid, self._buoyant], dtype=int)
+        jacobians, bias, rotations = self._link_terms() if stacked.count else self._no_links
+        nv = model.nv
+        mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
+        plant_terms_into(upper, h, jacobians, v, bias, rotations, self._packed, self._current, self._flags, mass,
+                         bias_forces)
+        if wrench:  # the thrusters' wrench on the vehicle, at the base frame
             bias_forces -= body_wrench @ pin.getFrameJacobian(model, data, self._base_frame, LOCAL)
         return mass, bias_forces
+
+    def _link_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The links' LOCAL Jacobians (L, 6, nv), their joints' bias accelerations (L, 6) and the links' rotations
+        (L, 3, 3) from ``self.data`` (forwardKinematics with zero acceleration and computeJointJacobians run);
+        zeros where no term reads them."""
+        model, data, stacked = self.model, self.data, self._stacked
+        jacobians = np.array([pin.getFrameJacobian(model, data, frame, LOCAL) for frame in stacked.frames])
+        joints, index = self._joints, self._link_joint
+        bias = np.array([data.a[joint].vector for joint in joints])[index] if self.added_mass else stacked.no_bias
+        if self._moving_fluid or self._buoyant:
+            rotations = np.array([data.oMi[joint].rotation for joint in joints])[index] @ stacked.rotations
+        else:
+            rotations = stacked.no_rotations
+        return jacobians, bias, rotations
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""

@@ -146,25 +146,32 @@ class PlantSystem:
         return lambda t, q, v: (v, plant.dynamics(q, v, self.command_at(t, q, v)).acceleration)
 
     def record(self, t: float, q: np.ndarray, v: np.ndarray, sample: PlantSample) -> dict:
-        """The plant series of a row (v, the command, torques, energies, momentum) and a tracking controller's
-        (with limits_active = 0: it holds no joint at a limit)."""
-        kinetic, potential = self.plant.energy(q, v)
-        row = {"v": v.copy(), "command": sample.command, "joint_torque": sample.dynamics.joint_torque,
-               "kinetic_energy": kinetic, "potential_energy": potential, "momentum": self.plant.momentum(q, v)}
+        """The plant series of a row (v, the command, torques; the energies and momentum come from the stored
+        states after the loop: :meth:`derived_series`) and a tracking controller's (with limits_active = 0: it
+        holds no joint at a limit)."""
+        row = {"v": v.copy(), "command": sample.command, "joint_torque": sample.dynamics.joint_torque}
         tracking = getattr(self.controller, "tracking", None)
         if tracking is not None:
             row.update(tracking(t, q, v), limits_active=0)
         return row
+
+    def derived_series(self, q: np.ndarray, v: np.ndarray) -> dict[str, np.ndarray]:
+        """The energies (N,) [J] and momentum (N, 6) [N s, N m s] of the stored states q (N, nq), v (N, nv)."""
+        plant = self.plant
+        energies = np.array([plant.energy(q_k, v_k) for q_k, v_k in zip(q, v)]).reshape(len(q), 2)
+        return {"kinetic_energy": energies[:, 0], "potential_energy": energies[:, 1],
+                "momentum": np.array([plant.momentum(q_k, v_k) for q_k, v_k in zip(q, v)]).reshape(len(q), 6)}
 
     def check(self, t: float, q: np.ndarray, v: np.ndarray, dt: float) -> None:
         """Raise UVMSError when the state reached at t [s] is not finite (the step dt was too large)."""
         check_finite_state(t, q, v, dt)
 
     def series_info(self) -> dict:
-        """{"tracking": (frame, task rows)} of a tracking controller, else {}."""
-        if getattr(self.controller, "tracking", None) is None:
-            return {}
-        return {"tracking": (self.controller.frame, tuple(self.controller.rows))}
+        """{"plant_series": :meth:`derived_series`} and {"tracking": (frame, task rows)} of a tracking controller."""
+        info: dict[str, Any] = {"plant_series": self.derived_series}
+        if getattr(self.controller, "tracking", None) is not None:
+            info["tracking"] = (self.controller.frame, tuple(self.controller.rows))
+        return info
 
 
 def control_steps(control_dt: float, dt: float) -> int:

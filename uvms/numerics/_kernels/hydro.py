@@ -15,7 +15,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["hydro_terms_into"]
+__all__ = ["hydro_terms_into", "pack_links", "plant_terms_into"]
+
+#: Columns of a link's row in :func:`pack_links`: motion_to_link (36), added mass (36), linear, forward, quadratic
+#: damping (6 each), buoyancy (1), centre of buoyancy (3).
+PACKED = 94
 
 
 @njit(cache=True)
@@ -129,3 +133,42 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
             for row in range(6):
                 total += jacobian[row, column] * wrench[row]
             bias_forces[column] -= total
+
+
+def pack_links(motion_to_link: np.ndarray, added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray,
+               quadratic: np.ndarray, buoyancy: np.ndarray, center_of_buoyancy: np.ndarray) -> np.ndarray:
+    """The links' constants as one (L, :data:`PACKED`) array: one argument of :func:`plant_terms_into` instead of
+    seven (numba's dispatch costs about a microsecond per array argument)."""
+    count = len(buoyancy)
+    return np.ascontiguousarray(np.concatenate(
+        [motion_to_link.reshape(count, 36), added_mass.reshape(count, 36), linear.reshape(count, 6),
+         forward.reshape(count, 6), quadratic.reshape(count, 6), buoyancy.reshape(count, 1),
+         center_of_buoyancy.reshape(count, 3)], axis=1), dtype=float)
+
+
+@njit(cache=True)
+def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarray,
+                     rotations: np.ndarray, packed: np.ndarray, current: np.ndarray, flags: np.ndarray,
+                     mass: np.ndarray, bias_forces: np.ndarray) -> None:
+    """Mbar and nbar of the plant's links in one call: :func:`hydro_terms_into` on Pinocchio's M (its upper
+    triangle, as crba fills it) and h.
+
+    Args:
+        upper: M (nv, nv), its upper triangle read; h: (nv,) rnea's bias forces.
+        jacobians, v, joint_bias, rotations, current: as for :func:`hydro_terms_into` (L may be 0).
+        packed: the links' constants (L, PACKED) (:func:`pack_links`).
+        flags: (4,) int: added mass, damping, current, buoyancy on.
+        mass: Mbar (nv, nv) out; bias_forces: nbar (nv,) out.
+    """
+    nv = h.shape[0]
+    for row in range(nv):
+        bias_forces[row] = h[row]
+        for column in range(nv):
+            mass[row, column] = upper[row, column] if column >= row else upper[column, row]
+    count = jacobians.shape[0]
+    if count:
+        hydro_terms_into(jacobians, v, joint_bias, rotations, packed[:, 0:36].copy().reshape(count, 6, 6),
+                         packed[:, 36:72].copy().reshape(count, 6, 6), packed[:, 72:78].copy(),
+                         packed[:, 78:84].copy(), packed[:, 84:90].copy(), packed[:, 90].copy(),
+                         packed[:, 91:94].copy(), current, flags[0] != 0, flags[1] != 0, flags[2] != 0,
+                         flags[3] != 0, mass, bias_forces)
