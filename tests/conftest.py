@@ -26,7 +26,7 @@ import uvms
 
 ROOT = Path(__file__).resolve().parent.parent  # the repository
 SCENARIOS = ROOT / "scenarios"
-THRUSTER_BOX = ROOT / "tests" / "dynamics" / "thruster_box.urdf"  # a box vehicle with eight thrusters
+THRUSTER_BOX = ROOT / "tests" / "dynamics" / "thrusters" / "thruster_box.urdf"  # a box vehicle with eight thrusters
 SHIPPED = sorted(uvms.model.shipped_models())
 NO_FIGURES = ["outputs.figures=false"]  # a scenario override for runs whose figures are not under test
 
@@ -309,3 +309,28 @@ def excitation(kind: str):
     run, _ = excitation_run(robot, multisine(np.array(amplitudes)), q0, duration, dt,
                             arm_amplitudes=None if arm is None else np.array(arm))
     return run, log_of_run(robot, run, f"excitation {kind}")
+
+
+#: Fresh water's density [kg/m^3] of the small hull models below.
+HULL_RHO = 1000.0
+
+
+def body_urdf(mass=10.0, volume=None, cob_z=0.0, added="", linear="", quadratic="", extra_link="", kind="fossen"):
+    """One floating hull (mass [kg], inertia diag(0.3, 0.4, 0.5)) with a uuv_simulator block in fresh water."""
+    volume = mass / HULL_RHO if volume is None else volume
+    def tag(name, text):
+        return f"<{name}>{text}</{name}>" if text else ""
+    return f"""<robot name="hull">
+      <link name="world"/>
+      <joint name="base_joint" type="floating"><parent link="world"/><child link="hull"/></joint>
+      <link name="hull"><inertial><mass value="{mass}"/>
+        <inertia ixx="0.3" iyy="0.4" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+      <gazebo><plugin name="uuv_plugin" filename="libuuv_underwater_object_ros_plugin.so">
+        <fluid_density>{HULL_RHO}</fluid_density>
+        <link name="hull">
+          <volume>{volume}</volume>
+          <center_of_buoyancy>0 0 {cob_z}</center_of_buoyancy>
+          <hydrodynamic_model><type>{kind}</type>{tag("added_mass", added)}{tag("linear_damping", linear)}
+            {tag("quadratic_damping", quadratic)}</hydrodynamic_model>
+        </link>{extra_link}
+      </plugin></gazebo></robot>"""

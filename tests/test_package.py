@@ -198,3 +198,14 @@ def test_ruff_is_clean():
     done = subprocess.run([sys.executable, "-m", "ruff", "check", "--no-cache", *RUFF_PATHS], cwd=ROOT,
                           capture_output=True, text=True, timeout=120, check=False)
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_the_tests_mirror_the_package():
+    """Every test folder is a folder of the package (the papers' checks and the fixtures aside), and a package folder
+    made only of sub-folders (dynamics/) has its tests in the same sub-folders."""
+    tests = PACKAGE.parent / "tests"
+    folders = [path for path in tests.rglob("*") if path.is_dir() and "fixtures" not in path.parts
+               and path.name != "__pycache__" and path.relative_to(tests).parts[0] != "papers"]
+    assert folders and [path for path in folders if not (PACKAGE / path.relative_to(tests)).is_dir()] == []
+    flat = [path.name for path in (tests / "dynamics").glob("test_*.py")]
+    assert list((PACKAGE / "dynamics").glob("[!_]*.py")) == [] and flat == []

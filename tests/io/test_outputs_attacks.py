@@ -3,7 +3,7 @@
 ``--out`` never deletes what a user made: a run folder is recognised by its manifest, nothing else in it is
 replaced, and never the input being run. A planted lock symlink is refused, its target untouched. A full disk
 says so. Sweep workers are capped, CSV formula cells neutralised, SIGTERM/SIGHUP clean up.
-(The Dask backend: tests/scenario/test_sweep.py; terminal escapes: tests/cli/test_info.py.)
+(The Dask backend: tests/scenario/studies/test_sweep.py; terminal escapes: tests/cli/test_info.py.)
 """
 
 from __future__ import annotations

@@ -174,13 +174,11 @@ def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np
 def actuated_metrics(result: SimulationResult, actuation: Actuation, spec: ScenarioSpec) -> dict:
     """``metrics.json``'s actuated entries: the thrusters' (:meth:`uvms.sim.result.SimulationResult.actuation_metrics`)
     and what the run was (thruster count, current; the chain's coordination, or the MPC's solve times and iterations,
-    :func:`uvms.scenario.mpc.mpc_metrics`)."""
+    its ``metrics()``)."""
     fins = {"fins": actuation.fins.names} if len(actuation.fins) else {}
     common = {**result.actuation_metrics(), "plant": "hydrodynamic", "thrusters": actuation.thrusters.names, **fins,
               "current": list(spec.plant.current) or [0.0, 0.0, 0.0]}
     if spec.controller.type == "mpc":
-        from .mpc import mpc_metrics
-
-        return {**common, **mpc_metrics(actuation.controller)}
+        return {**common, "controller": "mpc", "mpc": actuation.controller.metrics()}
     return {**common, "coordination": bool(spec.vehicle_control.coordination),
             "saturation_feedback": bool(spec.vehicle_control.saturation_feedback)}

@@ -4,7 +4,8 @@ On the actuated plant (``plant.type = "hydrodynamic"``, ``plant.thrusters = true
 (:class:`uvms.control.mpc.controller.MPCController`) replaces the whole set-based chain: it predicts with the plant
 (its current only with ``controller.knows_current``), follows the trajectory of ``task.frame``'s position, and keeps
 the scenario's ``[[inequalities]]`` as the problem's constraints (CSQP) or penalties (Box-FDDP); the thrusters are
-the model's, their bounds the inputs'. ``metrics.json`` gets its solve times and iterations (:func:`mpc_metrics`).
+the model's, their bounds the inputs'. ``metrics.json`` gets its solve times and iterations
+(:meth:`uvms.control.mpc.controller.MPCController.metrics`).
 """
 
 from __future__ import annotations
@@ -73,20 +74,3 @@ def make_mpc_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, 
     except UVMSError as exc:
         raise ScenarioError(f"{where}: {exc}") from None
     return Actuation(plant, thrusters, controller, inequalities, fins)
-
-
-def mpc_metrics(controller: object) -> dict:
-    """``metrics.json``'s ``"mpc"`` entry of an MPC run: solves, solve time per control step [s] (median, p99,
-    max) and the solver's iterations (mean, max); {} for another controller."""
-    times = getattr(controller, "solve_times", None)
-    if times is None:
-        return {}
-    times, iterations = np.asarray(times, dtype=float), np.asarray(controller.iterations, dtype=float)
-    settings = controller.settings
-    entry = {"solves": int(times.size), "solver": settings.solver, "horizon": float(settings.duration),
-             "nodes": int(settings.horizon), "control_period": float(settings.control_period)}
-    if times.size:
-        entry.update(solve_time_median=float(np.median(times)), solve_time_p99=float(np.percentile(times, 99)),
-                     solve_time_max=float(times.max()), iterations_mean=float(iterations.mean()),
-                     iterations_max=int(iterations.max()))
-    return {"controller": "mpc", "mpc": entry}

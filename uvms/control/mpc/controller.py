@@ -115,6 +115,19 @@ class MPCController:
         self._xs: list[np.ndarray] = []
         self._us: list[np.ndarray] = []
 
+    def metrics(self) -> dict:
+        """``metrics.json``'s ``"mpc"`` entry: solves, solve time per control step [s] (median, p99, max) and the
+        solver's iterations (mean, max)."""
+        times, iterations = np.asarray(self.solve_times, dtype=float), np.asarray(self.iterations, dtype=float)
+        settings = self.settings
+        entry = {"solves": int(times.size), "solver": settings.solver, "horizon": float(settings.duration),
+                 "nodes": int(settings.horizon), "control_period": float(settings.control_period)}
+        if times.size:
+            entry.update(solve_time_median=float(np.median(times)), solve_time_p99=float(np.percentile(times, 99)),
+                         solve_time_max=float(times.max()), iterations_mean=float(iterations.mean()),
+                         iterations_max=int(iterations.max()))
+        return entry
+
     @property
     def horizon(self) -> float:
         """The prediction horizon [s]."""

@@ -47,7 +47,7 @@ of that augmented momentum.
 Mimic joints (a gripper's second finger; ``pin.buildModelFromXML(..., mimic=True)``): q and v hold only the
 driving joints' coordinates, and Pinocchio's ``crba``, ``rnea`` (with ``fext``), Jacobians and centroidal map
 expand them through the mimic relation (q_mimic = scaling q_driver + offset): M = G^T M_full G and
-h = G^T h_full, G (nv_full, nv) the mimic's multiplier in its driver's column (tests/dynamics/test_plant_mimic.py
+h = G^T h_full, G (nv_full, nv) the mimic's multiplier in its driver's column (tests/dynamics/plant/test_plant_mimic.py
 checks both against the model without mimics). ``computePotentialEnergy``, ``computeKineticEnergy`` and ``aba``
 refuse mimic joints, so the plant calls none of them: the kinetic energy is 1/2 v^T M v, the weight's potential
 -m g . c from the centre of mass (:func:`weight_potential`).

@@ -22,7 +22,7 @@ from uvms.errors import (
 )
 from uvms.sim.loop import simulate
 
-AUV = Path(__file__).parents[1] / "fixtures" / "auv"
+AUV = Path(__file__).parents[2] / "fixtures" / "auv"
 TORPEDO = AUV / "torpedo.urdf"
 LRAUV = AUV / "gz_lrauv" / "lrauv_like.urdf"
 

@@ -17,7 +17,7 @@ from uvms.viz import viewer
 from uvms.viz.collision_shapes import geometry_meshes
 from uvms.viz.viewer.collision import COLLISION_COLOUR, viewer_collision_model
 
-FIXTURES = Path(__file__).parents[1] / "fixtures" / "collision"
+FIXTURES = Path(__file__).parents[2] / "fixtures" / "collision"
 PORT = 18280
 
 

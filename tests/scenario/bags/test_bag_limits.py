@@ -24,7 +24,7 @@ from uvms.scenario.bags import reader as bag_reader
 from uvms.scenario.bags.reader import read_bag
 from uvms.scenario.bags.writer import Messages
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 STORE = get_typestore(Stores.ROS2_HUMBLE)
 MAGIC = b"\x89MCAP0\r\n"
 

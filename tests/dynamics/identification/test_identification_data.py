@@ -112,7 +112,7 @@ def test_a_csv_log_that_is_a_fifo_is_refused_not_waited_on(tmp_path):
     code = (f"from uvms.dynamics.identification.data import read_log_csv\ntry:\n    read_log_csv({str(fifo)!r})\n"
             "except Exception as exc:\n    print(exc)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, check=False,
-                          env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[2])})
+                          env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[3])})
     assert "the CSV log file is a FIFO, not a regular file" in done.stdout, done.stderr[-2000:]
 
 

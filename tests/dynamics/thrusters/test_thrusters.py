@@ -26,7 +26,7 @@ from conftest import THRUSTER_BOX
 
 S = np.sqrt(0.5)
 
-#: B of tests/dynamics/thruster_box.urdf derived by hand: a horizontal thruster at (x, y, 0) pushing along
+#: B of tests/dynamics/thrusters/thruster_box.urdf derived by hand: a horizontal thruster at (x, y, 0) pushing along
 #: (cos t, sin t, 0) gives [cos t, sin t, 0, 0, 0, x sin t - y cos t]; a vertical one at (x, y, 0) pushing
 #: up gives [0, 0, 1, y, -x, 0].
 BOX_MATRIX = np.array([
@@ -213,7 +213,7 @@ def test_plugin_joint_axis_gives_the_thrust_direction(box):
 
 
 # ------------------------------------------------------------------ uuv_simulator's plugins, completed per thruster
-FOUR = Path(__file__).resolve().parents[1] / "fixtures" / "uuv" / "four_thrusters.urdf"
+FOUR = Path(__file__).resolve().parents[2] / "fixtures" / "uuv" / "four_thrusters.urdf"
 #: B of four_thrusters.urdf by hand: column [d; p x d] of a thruster at p pushing along d (base frame).
 FOUR_MATRIX = np.array([
     # +x at (0.5, 0.3, 0.1), +y at (0.5, -0.3, 0.1), +z at (-0.4, 0, 0.2), -x at (-0.4, 0.2, -0.1)

@@ -13,7 +13,7 @@ from uvms.dynamics.thrusters.fins import fins_of
 from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import BaseGuessWarning, PointMassWarning
 
-TORPEDO = Path(__file__).parents[1] / "fixtures" / "auv" / "torpedo.urdf"
+TORPEDO = Path(__file__).parents[2] / "fixtures" / "auv" / "torpedo.urdf"
 
 
 @pytest.fixture(scope="module")

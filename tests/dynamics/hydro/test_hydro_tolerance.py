@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_plant import body_urdf
 
 from uvms.dynamics.hydro.hydrodynamics import parse_hydrodynamics
 from uvms.dynamics.hydro.parameters import MATRIX_TOLERANCE, LinkHydrodynamics, flip_frd_flu
 from uvms.errors import AddedMassSymmetrizedWarning, ModelCheckError
+
+from conftest import body_urdf
 
 #: The RexROV's added mass as uuv_descriptions publishes it (SNAME axes, row-major).
 REXROV_ADDED_MASS = np.array([

@@ -16,31 +16,10 @@ from uvms.dynamics.plant.plant import Plant
 from uvms.errors import ModelCheckError, ModelParseError, SkippedLinkWarning, UVMSError
 from uvms.sim import simulate
 
-from conftest import shipped
+from conftest import body_urdf, shipped
 
 RHO = 1000.0
 G = 9.81
-
-
-def body_urdf(mass=10.0, volume=None, cob_z=0.0, added="", linear="", quadratic="", extra_link="", kind="fossen"):
-    """One floating hull (mass [kg], inertia diag(0.3, 0.4, 0.5)) with a uuv_simulator block in fresh water."""
-    volume = mass / RHO if volume is None else volume
-    def tag(name, text):
-        return f"<{name}>{text}</{name}>" if text else ""
-    return f"""<robot name="hull">
-      <link name="world"/>
-      <joint name="base_joint" type="floating"><parent link="world"/><child link="hull"/></joint>
-      <link name="hull"><inertial><mass value="{mass}"/>
-        <inertia ixx="0.3" iyy="0.4" izz="0.5" ixy="0" ixz="0" iyz="0"/></inertial></link>
-      <gazebo><plugin name="uuv_plugin" filename="libuuv_underwater_object_ros_plugin.so">
-        <fluid_density>{RHO}</fluid_density>
-        <link name="hull">
-          <volume>{volume}</volume>
-          <center_of_buoyancy>0 0 {cob_z}</center_of_buoyancy>
-          <hydrodynamic_model><type>{kind}</type>{tag("added_mass", added)}{tag("linear_damping", linear)}
-            {tag("quadratic_damping", quadratic)}</hydrodynamic_model>
-        </link>{extra_link}
-      </plugin></gazebo></robot>"""
 
 
 def diagonal_text(values):
