@@ -68,10 +68,11 @@ def test_coordination_solves_the_arm_with_the_measured_vehicle(robot, rng):
     np.testing.assert_allclose(jacobian[:, 6:] @ same, jacobian[:, 6:] @ reference[6:], atol=1e-10)
 
 
-def _run(robot, thrusters, current, coordination, *, start=None, hold_arm=False, duration=5.0):
+def _run(robot, thrusters, current, coordination, *, start=None, hold_arm=False, duration=5.0, priorities=None):
     plant = Plant(robot, gravity=True, current=current)
     station = robot.configuration(base=np.zeros(6), arm=ARM)
-    controller = station_keeping(plant, thrusters, station, DT, coordination=coordination, hold_arm=hold_arm)
+    controller = station_keeping(plant, thrusters, station, DT, coordination=coordination, hold_arm=hold_arm,
+                                 priorities=priorities)
     return simulate(ActuatedPlant(plant, thrusters), controller, station if start is None else start, duration, DT)
 
 
@@ -118,10 +119,14 @@ def test_station_keeping_in_a_current_and_coordination(robot, thrusters):
 
 
 def test_a_current_beyond_the_thrusters_saturates_without_windup(robot, thrusters):
-    """1.0 m/s: more drag than the horizontal thrusters give (about 130 N of surge). Surge degrades first:
-    the vehicle drifts downstream while its attitude holds; thrusts stay within their limits and the integral stops
-    growing once the allocation saturates (anti-windup)."""
-    result = _run(robot, thrusters, [1.0, 0.0, 0.0], True, duration=4.0)
+    """1.0 m/s: more drag than the horizontal thrusters give (about 130 N of surge). With the allocation's
+    priorities (attitude and depth first, as the shipped saturated scenarios) surge degrades first: the vehicle
+    drifts downstream while its attitude holds; thrusts stay within their limits and the integral stops growing once
+    the allocation saturates (anti-windup). Measured: attitude 0.036 rad, drift 0.51 m (0.044 rad, 0.66 m without
+    the disturbance observer). Without priorities the least-squares allocation trades the attitude for the surge
+    asked: 0.24 rad with the observer, 0.046 without (docs/guide/enforced.md)."""
+    result = _run(robot, thrusters, [1.0, 0.0, 0.0], True, duration=4.0,
+                  priorities=[["roll", "pitch", "yaw", "z"], ["x", "y"]])
     a = result.actuation
     metrics = result.actuation_metrics()
     assert 0.999 < metrics["max_thrust_ratio"] <= 1.0 + 1e-12 and metrics["saturated_time_fraction"] > 0.5
@@ -169,8 +174,9 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
         assert isinstance(controller, CoordinatedControl)
         result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)
         final[coordination] = result.actuation.controller["ee_point_error"][-1]
-    # measured 1.10 vs 1.71 mm (the servo's lag compensated in both; 1.0 vs 2.1 mm before it was)
-    assert final[True] < 2e-3 and final[True] < 0.75 * final[False], final
+    # measured 1.13 vs 1.43 mm with the disturbance observer (the vehicle follows better, coordination has less to
+    # take up); 1.10 vs 1.71 mm without it; 1.0 vs 2.1 mm before the servo's lag was compensated
+    assert final[True] < 2e-3 and final[True] < 0.85 * final[False], final
 
 
 def test_station_keeping_says_which_directions_the_thrusters_cannot_hold():

@@ -112,28 +112,30 @@ def test_the_kinematic_reference_holds_the_enforced_objectives_exactly():
         assert outside.max() < 1e-4, (objective.name, outside.max())
 
 
-def test_saturation_feedback_lowers_the_end_effector_error(tmp_path):
+def test_saturation_feedback_is_off_where_it_no_longer_helps(tmp_path):
+    """The saturated-current intervention ships with saturation feedback off (docs/guide/enforced.md): with the
+    disturbance observer the tilt is kept without it, and switching it on costs end-effector error. Measured: tilt
+    0.037 (off) and 0.035 rad (on) against the objective's 0.0873; max error 0.922 vs 0.946 m."""
     runs = {feedback: run_scenario(SATURATED, tmp_path / str(feedback), [
         *NO_FIGURES, f"vehicle_control.saturation_feedback={str(feedback).lower()}"], progress=False).metrics
         for feedback in (True, False)}
     on, off = runs[True], runs[False]
-    assert on["saturated_time_fraction"] > 0.5 and on["max_thrust_ratio"] <= 1.0  # measured 0.94
-    assert on["max_position_error"] < off["max_position_error"] - 0.02  # measured 1.009 vs 1.041 m
-    assert on["rms_position_error"] < off["rms_position_error"]  # measured 0.661 vs 0.671 m
-    # issue 48: the tilt kept (max 0.0873 rad) within 0.01 rad with it, not without: measured 0.097 vs 0.106 rad
-    assert on["max_vehicle_tilt"] < 0.0873 + 0.01 < off["max_vehicle_tilt"], (on["max_vehicle_tilt"],
-                                                                              off["max_vehicle_tilt"])
+    assert on["saturated_time_fraction"] > 0.5 and on["max_thrust_ratio"] <= 1.0  # measured 0.98
+    assert off["max_vehicle_tilt"] < 0.0873 - 0.04 and on["max_vehicle_tilt"] < 0.0873 - 0.04, (on, off)
+    assert on["max_position_error"] > off["max_position_error"] + 0.01
 
 
 def test_station_keeping_is_the_hold_case_of_the_chain(tmp_path):
     """bluerov2_alpha5_station_current through the chain: the numbers of the station-keeping pipeline it
     replaced, to 2 % (the arm is re-solved for the task's command K e, not J v_ref: 1.943 vs 1.963 cm), with the
-    servo's lag and the reference's acceleration compensated (issue 48) as they are by default: 1.22 cm."""
+    servo's lag and the reference's acceleration compensated and the disturbance observer (issue 48) as they are by
+    default: 0.127 cm (1.22 cm without the observer)."""
     metrics = run_scenario(STATION, tmp_path / "s", NO_FIGURES, progress=False).metrics
-    assert metrics["max_position_error"] == pytest.approx(0.012217, rel=0.02)
-    assert metrics["vehicle_position_error"] == pytest.approx(0.042805, rel=1e-3)
-    assert metrics["max_thrust_ratio"] == pytest.approx(0.174105, rel=1e-3)
+    assert metrics["max_position_error"] == pytest.approx(0.0012658, rel=0.02)
+    assert metrics["vehicle_position_error"] == pytest.approx(0.018362, rel=1e-3)
+    assert metrics["max_thrust_ratio"] == pytest.approx(0.19642, rel=1e-3)
     legacy = run_scenario(STATION, tmp_path / "l", [*NO_FIGURES, "vehicle_control.servo_compensation=false",
-                                                     "vehicle_control.acceleration_feedforward=false"],
+                                                     "vehicle_control.acceleration_feedforward=false",
+                                                     "vehicle_control.disturbance_time_constant=0"],
                           progress=False).metrics
     assert legacy["max_position_error"] == pytest.approx(0.019625, rel=0.02)

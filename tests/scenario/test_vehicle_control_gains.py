@@ -30,9 +30,10 @@ def test_the_rexrov_holds_station_with_the_default_gains_and_its_verdict_is_ok(t
 def test_bluerov_sized_gains_on_the_rexrov_fail_visibly(tmp_path):
     """The gains that were the defaults: the vehicle drifts 0.23 m and tilts 0.096 rad, the end effector is 0.13 m
     off (measured), and the verdict says so (without the reference's acceleration fed forward, which with these gains
-    keeps the drift to 7.7 cm)."""
+    keeps the drift to 7.7 cm, nor the disturbance observer)."""
     metrics = run_scenario(REXROV, tmp_path / "r", [*NO_FIGURES, *BLUEROV_SIZED,
-                                                    "vehicle_control.acceleration_feedforward=false"],
+                                                    "vehicle_control.acceleration_feedforward=false",
+                                                    "vehicle_control.disturbance_time_constant=0"],
                            progress=False).metrics
     assert metrics["vehicle_position_error"] > 0.15 and metrics["max_vehicle_tilt"] > 0.05
     assert not metrics["verdict"]["ok"] and not metrics["verdict"]["within_tolerance"]

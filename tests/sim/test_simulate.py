@@ -96,14 +96,14 @@ def test_an_actuated_run_equals_the_former_simulate_actuated():
     of the former ``simulate_actuated`` to 2e-6 relative (issue 31: the arm is re-solved for the task's command
     K e, not J v_ref; the numbers below are the chain's, to rounding), with the former default gains (the defaults now
     scale with the vehicle's inertia) and without what came after it (the reference's acceleration as feedforward,
-    the servo's lag compensated: issue 48)."""
+    the servo's lag compensated, the disturbance observer: issue 48)."""
     robot = shipped("bluerov2_alpha5")
     plant = uvms.Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
     thrusters = uvms.dynamics.thrusters_of(robot)
     station = robot.configuration(base=np.zeros(6), arm=[3.0, 1.8, 1.8, 1.0, 0.0])
     result = simulate(ActuatedPlant(plant, thrusters), uvms.control.station_keeping(
         plant, thrusters, station, 0.01, kp=[100, 100, 100, 10, 10, 10], ki=[150, 150, 150, 15, 15, 15],
-        acceleration_feedforward=False, servo_compensation=False), station,
+        acceleration_feedforward=False, servo_compensation=False, disturbance_time_constant=0.0), station,
                       0.5, 0.01)
     # to rounding: 50 steps of the chain (allocation, thruster lag, RK4) carry a last-place difference of the BLAS
     # to about 1e-12 relative in the position, more in the thrusts' sum (a difference of +/- forces of 10 N)

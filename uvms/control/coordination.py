@@ -148,6 +148,8 @@ class KinematicLayer(Protocol):
 
     def arm_rates(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray) -> np.ndarray: ...
 
+    def step_done(self) -> None: ...
+
     def errors(self, t: float, q: np.ndarray) -> dict: ...
 
     def reset(self, state: State, t: float = 0.0) -> None: ...
@@ -208,6 +210,7 @@ class CoordinatedControl:
         self.ratio = np.ones(6)  # achieved / asked wrench per axis at the last step (1: the allocation gave it)
         self._last_reference: np.ndarray | None = None  # nu_ref (6,) of the last step, base frame
         self._rate = np.zeros(6)  # nu_ref' (6,) filtered [m/s^2, rad/s^2]
+        self._achieved = np.zeros(6)  # the allocation's achieved wrench at the last step [N, N m]
         self.velocity.reset()
 
     def vehicle_bounds(self, nu: np.ndarray, nu_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -226,6 +229,10 @@ class CoordinatedControl:
         loop's integral."""
         q, v = state.q, state.v
         nb, model = self.robot.n_vehicle, self.velocity.model
+        if self.velocity.disturbance_time_constant > 0.0:  # the last step's mismatch, from what the actuators gave
+            applied = self._achieved if state.thrusts is None else \
+                self.velocity.applied_wrench(q, v, state.thrusts, state.fins)
+            self.velocity.observe(q, v, applied, self.dt)
         bounds = None
         if self.saturation_feedback and np.any(self.ratio < 1.0):
             nu = base_twist(model, v)
@@ -233,6 +240,7 @@ class CoordinatedControl:
         reference, _ = self.kinematic.reference(t, q, bounds)
         arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
         arm = np.clip(arm, -self.max_arm_rate, self.max_arm_rate)
+        self.kinematic.step_done()
         nu_ref = model.robot.base_placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
         rate = None
         if self.acceleration_feedforward and self._last_reference is not None:
@@ -245,10 +253,12 @@ class CoordinatedControl:
         arm_acceleration = (arm - v[nb:]) / model.motor_time_constant  # the servo the model knows
         control = self.velocity.control(q, v, nu_ref, self.dt, reference_rate=rate, arm_acceleration=arm_acceleration)
         allocation = control.allocation
+        self._achieved = allocation.achieved_wrench  # the observer's stand-in for a state without thrusts
         self.ratio = np.ones(6) if allocation.attainable else achieved_ratio(control.wrench,
                                                                                 allocation.achieved_wrench)
         info = {"wrench_command": control.wrench, "achieved_wrench": allocation.achieved_wrench,
                 "attainable": allocation.attainable, "velocity_integral": self.velocity.integral.copy(),
+                "disturbance_estimate": self.velocity.disturbance.copy(),
                 "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
         thrusts, fins = split_actuators(self.velocity.allocator, allocation.thrusts)
         return Command(arm=arm, thrust=thrusts, fins=fins, info=info)

@@ -55,9 +55,11 @@ from ..tasks.task import Task
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, vehicle_rates_for_task
+from .tightening import Tightening
 from .vehicle import (
     DEFAULT_BANDWIDTH,
     DEFAULT_DAMPING_RATIO,
+    DEFAULT_DISTURBANCE_TIME_CONSTANT,
     VehiclePoseController,
     VehicleVelocityController,
     gain_vector,
@@ -113,6 +115,8 @@ class ActuatedKinematics:
             speed limits (the model's) are a level above them (the solver scales the task first, never clips).
         gain: K [1/s] and damping: the DLS damping of the vehicle's added share.
         base_placement: the base frame in the vehicle joint's frame (``Robot.base_placement``; None: identity).
+        tighten: move the inequalities' bounds inward by their measured tracking error for each step's solves
+            (:mod:`uvms.control.tightening`).
 
     Raises:
         SolverInputError: a non-floating base, a bad gain, or a solver that refuses the levels.
@@ -121,7 +125,7 @@ class ActuatedKinematics:
     def __init__(self, robot: Robot, pose: VehiclePoseController, task: FrameTask,
                  trajectory: Callable[[float], object] | None, *, vehicle_target: pin.SE3,
                  solver: SolverFactory, inequalities: Sequence[Sequence] = (), gain: float = 1.0,
-                 damping: float = 0.01, base_placement: pin.SE3 | None = None) -> None:
+                 damping: float = 0.01, base_placement: pin.SE3 | None = None, tighten: bool = False) -> None:
         if robot.base_type != "floating":
             raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
         self.robot, self.pose, self.task, self.trajectory = robot, pose, task, trajectory
@@ -131,6 +135,8 @@ class ActuatedKinematics:
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
+        tightened = [objective for level in levels for objective in level if objective.collision]
+        self.tightening = Tightening(tightened) if tighten and tightened and trajectory is not None else None
         if levels:  # the arm's speed limits held by the hierarchy (the task scaled first), not clipped after it
             levels.insert(0, [JointVelocityLimits(robot, name="arm_speed_limits")])
         nb, vehicle_level = robot.n_vehicle, solver.cls.vehicle_level
@@ -152,8 +158,11 @@ class ActuatedKinematics:
         self._time: float | None = None
 
     def reset(self, state: State, t: float = 0.0) -> None:
-        """Forget the trajectory's sample the task points at (nothing else is kept between steps)."""
+        """Forget the trajectory's sample the task points at and the tightening's margins."""
         self._time = None
+        if self.tightening is not None:
+            self.tightening.restore()
+            self.tightening.reset()
 
     def _at(self, t: float, q: np.ndarray) -> Configuration:
         """The configuration at q (one kept, updated), the task pointed at the trajectory's sample of t."""
@@ -210,8 +219,18 @@ class ActuatedKinematics:
         SolverResult or None} at (t, q); ``bounds``: the vehicle velocities the thrusters can give (base frame)."""
         nu_pose = self.vehicle_objective(q, bounds)
         vehicle = self.base_placement.act(pin.Motion(nu_pose)).vector  # base frame -> vehicle joint axes
-        v, result = self._solve(self._at(t, q), vehicle, reference=True)
+        configuration = self._at(t, q)
+        if self.tightening is not None:  # the bounds moved for this step's solves, until :meth:`asked`
+            self.tightening.measure(t, configuration)
+        v, result = self._solve(configuration, vehicle, reference=True)
+        if self.tightening is not None:  # what the reference, which keeps the objectives, predicts for the next step
+            self.tightening.predict(t, v)
         return v, {"nu_pose": nu_pose, "solver": result}
+
+    def step_done(self) -> None:
+        """The step's solves are done: the objectives' nominal bounds back (recorders read them)."""
+        if self.tightening is not None:
+            self.tightening.restore()
 
     def arm_rates(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray) -> np.ndarray:
         """The arm rates (n_arm,) of the same solver with the vehicle velocity (n_vehicle,) (joint axes) held."""
@@ -239,7 +258,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                     max_speed: float | np.ndarray | None = 0.5,
                     priorities=None, arm_feedforward: bool = True, ee_gain: float = 1.0,
                     arm_damping: float = 0.01, frame: str | None = None, acceleration_feedforward: bool = True,
-                    servo_compensation: bool = True) -> CoordinatedControl:
+                    servo_compensation: bool = True,
+                    disturbance_time_constant: float = DEFAULT_DISTURBANCE_TIME_CONSTANT) -> CoordinatedControl:
     """The controller of ``plant`` holding the vehicle at its pose of q0 and the end-effector point at ``ee_target``
     (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held): :func:`actuated_control` with
     a held point and CLIK. The default gains, scaled to the vehicle's inertia, hold the BlueROV2 + Alpha 5
@@ -247,8 +267,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
 
     Args:
         plant, thrusters, q0, dt: as in :func:`actuated_control`; so are coordination, knows_current, kp, ki,
-            bandwidth, damping_ratio, pose_gains, max_speed, priorities, arm_feedforward, acceleration_feedforward
-            and servo_compensation.
+            bandwidth, damping_ratio, pose_gains, max_speed, priorities, arm_feedforward, acceleration_feedforward,
+            servo_compensation and disturbance_time_constant.
         ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse.
         frame: the end-effector frame held (default: the model's first end effector).
 
@@ -265,7 +285,8 @@ def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: floa
                             bandwidth=bandwidth, damping_ratio=damping_ratio, pose_gains=pose_gains,
                             max_speed=max_speed, priorities=priorities,
                             arm_feedforward=arm_feedforward, gain=ee_gain, damping=arm_damping,
-                            acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation)
+                            acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation,
+                            disturbance_time_constant=disturbance_time_constant)
 
 
 def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: float, task: FrameTask,
@@ -278,7 +299,9 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
                      pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
                      priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
                      fins: Fins | None = None, acceleration_feedforward: bool = True,
-                     servo_compensation: bool = True) -> CoordinatedControl:
+                     servo_compensation: bool = True,
+                     disturbance_time_constant: float = DEFAULT_DISTURBANCE_TIME_CONSTANT,
+                     tightening: bool = True) -> CoordinatedControl:
     """The whole chain on ``plant``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
 
     Args:
@@ -295,7 +318,10 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
             kp or ki given is used as it is. pose_gains [1/s];
         max_speed: [m/s, rad/s] bound of the pose objective; priorities: of the allocation
             (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`); arm_feedforward: as in
-            :class:`uvms.control.vehicle.VehicleVelocityController`.
+            :class:`uvms.control.vehicle.VehicleVelocityController`; so is disturbance_time_constant [s] (the
+            disturbance observer's T; 0: none).
+        tightening: the ``inequalities`` tightened by their measured tracking error (:class:`ActuatedKinematics`'s
+            ``tighten``).
         fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), allocated with the thrusters at each
             step's velocity (:class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`); None or empty: thrusters
             alone.
@@ -315,11 +341,12 @@ def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: flo
     if kp is None or ki is None:
         derived = velocity_gains(vehicle_inertia(model, q0), bandwidth, damping_ratio)
         kp, ki = derived[0] if kp is None else kp, derived[1] if ki is None else ki
-    velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=arm_feedforward)
+    velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=arm_feedforward,
+                                         disturbance_time_constant=disturbance_time_constant)
     pose = VehiclePoseController(velocity, pose_gains, max_speed)
     kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) *
                                    model.robot.base_placement, solver=solver, inequalities=inequalities, gain=gain,
-                                   damping=damping, base_placement=model.robot.base_placement)
+                                   damping=damping, base_placement=model.robot.base_placement, tighten=tightening)
     return CoordinatedControl(robot, velocity, kinematic, dt, coordination=coordination and trajectory is not None,
                               saturation_feedback=saturation_feedback,
                               acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation)

@@ -2,7 +2,7 @@
 
 Velocity loop (body FLU at the vehicle's base frame, nu = [v; w] [m/s, rad/s])::
 
-    tau = tau_model + Kp (nu_ref - nu) + Ki integral(nu_ref - nu)
+    tau = tau_model + Kp (nu_ref - nu) + Ki integral(nu_ref - nu) - d_hat
     tau_model = vehicle rows of Mbar [nu_ref'; a_m] + nbar(q, v)   (the plant's own model)
 
 tau_model is :func:`uvms.dynamics.plant.actuated.vehicle_inverse_dynamics` of a *model* plant (the controller's
@@ -12,6 +12,15 @@ so the arm's reaction wrench is compensated before it moves the vehicle; without
 at rest. tau goes through the thrust allocation; the integral is frozen on the axes where the allocation
 could not give the wrench and the error would push further into the limits (conditional integration,
 anti-windup).
+
+Disturbance observer (``disturbance_time_constant`` T > 0): d_hat estimates the wrench the model does not know (an
+unmodelled current's drag, which grows with the vehicle's speed through the water, a wrong added mass, a cable)
+from the last step's mismatch: the wrench the model needs for the measured accelerations (finite differences of
+the measured v over the step, at its mean velocity) less the wrench the actuators gave (their measured thrusts,
+the step's mean), low-passed over T (:meth:`VehicleVelocityController.observe`). The integral alone learns a
+constant disturbance in about 1 / (zeta omega) but trails one that changes as the vehicle speeds up; the
+observer follows it within T and leaves the integral the rest (it tends back to zero). The MPC's wrench estimate
+(:mod:`uvms.control.mpc.controller`) is the same idea on its prediction model.
 
 Pose loop: pose error -> body velocity reference, world-to-body rotation written out::
 
@@ -54,6 +63,8 @@ DEFAULT_BANDWIDTH = (2.75, 2.75, 2.75, 5.0, 5.0, 5.0)
 #: Default damping ratio zeta per body axis: near-critical in translation (the BlueROV2's surge loop: 0.92),
 #: overdamped in rotation (its roll loop: 1.7), so the attitude does not overshoot.
 DEFAULT_DAMPING_RATIO = (0.9, 0.9, 0.9, 1.5, 1.5, 1.5)
+#: Default time constant T [s] of the disturbance observer's low-pass: the thrusters' (0.1 s on the BlueROV2).
+DEFAULT_DISTURBANCE_TIME_CONSTANT = 0.1
 
 
 def gain_vector(value: float | np.ndarray, what: str, size: int = 6, *, positive: bool = False) -> np.ndarray:
@@ -143,25 +154,73 @@ class VehicleVelocityController:
         kp: (6,) or a number [N s/m, N m s/rad] proportional gains.
         ki: (6,) or a number [N/m, N m/rad] integral gains.
         arm_feedforward: feed the arm's reaction forward (module docstring).
+        disturbance_time_constant: T [s] of the disturbance observer's low-pass (module docstring); 0: no observer.
 
     Raises:
-        SolverInputError: bad gains; an allocator with another number of rows.
+        SolverInputError: bad gains or time constant; an allocator with another number of rows.
     """
 
     def __init__(self, model: Plant, allocator: ThrustAllocator | FinAllocator, kp: float | np.ndarray,
                  ki: float | np.ndarray,
-                 *, arm_feedforward: bool = True) -> None:
+                 *, arm_feedforward: bool = True, disturbance_time_constant: float = 0.0) -> None:
         if model.nb != 6:
             raise SolverInputError(f"vehicle control needs a floating base (6 body velocities), "
                                    f"{model.robot.name} has {model.nb}")
         self.model, self.allocator = model, allocator
         self.kp, self.ki = gain_vector(kp, "kp"), gain_vector(ki, "ki")
         self.arm_feedforward = bool(arm_feedforward)
-        self.integral = np.zeros(6)  # integral of the velocity error [m, rad]
+        self.disturbance_time_constant = float(gain_vector(disturbance_time_constant,
+                                                           "disturbance_time_constant [s]", 1)[0])
+        self.reset()
 
     def reset(self) -> None:
-        """Zero the integral."""
-        self.integral = np.zeros(6)
+        """Zero the integral and the disturbance estimate, forget the last measurement."""
+        self.integral = np.zeros(6)  # integral of the velocity error [m, rad]
+        self.disturbance = np.zeros(6)  # d_hat [N, N m] body FLU
+        self._last: tuple[np.ndarray, np.ndarray] | None = None  # (v (nv,), applied wrench (6,)) of the last call
+        self._short = np.zeros(6)  # the last allocation's residual where it fell short (asked - achieved) [N, N m]
+
+    def observe(self, q: np.ndarray, v: np.ndarray, applied: np.ndarray, dt: float) -> np.ndarray:
+        """Update d_hat (6,) [N, N m] from the step since the last call and return it.
+
+        d = tau_needed - (applied_last + applied) / 2 with tau_needed the model's wrench
+        (:func:`~uvms.dynamics.plant.actuated.vehicle_inverse_dynamics`, the arm's measured motion included) for the
+        measured acceleration (v - v_last) / dt at the step's mean velocity; d_hat += (1 - exp(-dt / T)) (d - d_hat),
+        except on the axes where the last allocation fell short by r = asked - achieved in the direction the change
+        would push the wrench: there d_hat += (1 - exp(-dt / T)) r (back-calculation), so the wrench asked comes
+        back to what the thrusters give instead of going beyond it (a saturated surge asked ever more would take,
+        in the allocation's least squares, the thrust of the other axes: the attitude).
+
+        Args:
+            q: (nq,) and v: (nv,) measured now; applied: the wrench (6,) [N, N m] the actuators give now (B f of the
+                measured thrusts, the fins' at their measured angles), base frame; dt: the time since the last call
+                [s].
+        """
+        last, self._last = self._last, (v.copy(), np.asarray(applied, dtype=float).copy())
+        if last is None or self.disturbance_time_constant <= 0.0:
+            return self.disturbance
+        v0, applied0 = last
+        acceleration = (v - v0) / dt
+        needed = vehicle_inverse_dynamics(self.model, q, 0.5 * (v0 + v), acceleration[:6], acceleration[6:])
+        mismatch = needed - 0.5 * (applied0 + self._last[1])
+        gain = -np.expm1(-dt / self.disturbance_time_constant)
+        update = gain * (mismatch - self.disturbance)
+        winding = self._short * -update > 0.0  # the wrench would grow where the allocation already fell short
+        self.disturbance = self.disturbance + np.where(winding, gain * self._short,
+                                                       np.where(self._short != 0.0, 0.0, update))
+        return self.disturbance
+
+    def applied_wrench(self, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray,
+                       fins: np.ndarray | None = None) -> np.ndarray:
+        """The wrench (6,) [N, N m] base frame the actuators give at the measured thrusts (n,) [N] and fin angles (m,)
+        [rad] (B f, plus the fins' lift and drag at the measured velocity through the water the model knows)."""
+        allocator = self.allocator
+        if not isinstance(allocator, FinAllocator):
+            return allocator.matrix @ thrusts
+        wrench = allocator.thrusters.matrix @ thrusts
+        if fins is not None and len(allocator.fins):
+            wrench = wrench + allocator.fins.wrench(base_twist(self.model, v), water_in_base(self.model, q), fins)
+        return wrench
 
     def feedforward(self, q: np.ndarray, v: np.ndarray, reference_rate: np.ndarray,
                     arm_acceleration: np.ndarray) -> np.ndarray:
@@ -175,7 +234,8 @@ class VehicleVelocityController:
 
     def control(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray, dt: float, *,
                 reference_rate: np.ndarray | None = None, arm_acceleration: np.ndarray | None = None) -> VehicleControl:
-        """The wrench and thrusts for one control period ``dt`` [s]; advances the integral.
+        """The wrench and thrusts for one control period ``dt`` [s]; advances the integral. The disturbance
+        estimate d_hat is the last :meth:`observe`'s (zero without the observer).
 
         Args:
             q: (nq,); v: (nv,) measured; reference: nu_ref (6,) body FLU [m/s, rad/s].
@@ -187,7 +247,7 @@ class VehicleVelocityController:
         rate = np.zeros(6) if reference_rate is None else reference_rate
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
         feedforward = self.feedforward(q, v, rate, arm)
-        wrench = feedforward + self.kp * error + self.ki * self.integral
+        wrench = feedforward + self.kp * error + self.ki * self.integral - self.disturbance
         allocation = self.allocator.allocate(wrench, nu, water_in_base(self.model, q))
         self._integrate(error, allocation, dt)
         return VehicleControl(wrench, feedforward, allocation, error)
@@ -195,11 +255,12 @@ class VehicleVelocityController:
     def _integrate(self, error: np.ndarray, allocation: AllocationResult, dt: float) -> None:
         """integral += dt e, except on the axes where the wrench fell short in the direction e pushes."""
         if allocation.attainable:
+            self._short = np.zeros(6)
             self.integral += dt * error
             return
         scale = max(1.0, float(np.max(np.abs(allocation.achieved_wrench))))
-        winding = (allocation.residual * error > 0) & (np.abs(allocation.residual) > 1e-6 * scale)
-        self.integral += dt * np.where(winding, 0.0, error)
+        self._short = np.where(np.abs(allocation.residual) > 1e-6 * scale, allocation.residual, 0.0)
+        self.integral += dt * np.where(self._short * error > 0, 0.0, error)
 
 
 class VehiclePoseController:

@@ -143,7 +143,8 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
             max_speed=np.asarray(control.max_speed, dtype=float),
             priorities=allocation_priorities(control.priorities), arm_feedforward=control.arm_feedforward,
             gain=float(section.gain), damping=float(section.damping), fins=fins,
-            acceleration_feedforward=control.acceleration_feedforward, servo_compensation=control.servo_compensation)
+            acceleration_feedforward=control.acceleration_feedforward, servo_compensation=control.servo_compensation,
+            disturbance_time_constant=float(control.disturbance_time_constant), tightening=control.tightening)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None
     return Actuation(plant, thrusters, controller, inequalities, fins)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from ...control.gjm import GJM_KINDS
-from ...control.vehicle import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO
+from ...control.vehicle import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, DEFAULT_DISTURBANCE_TIME_CONSTANT
 from .keys import NUMBER, NUMBERS, Section, key
 
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
@@ -74,6 +74,14 @@ class VehicleControlSpec(Section):
     servo_compensation: bool = key(True, bool,
         doc="command the arm's servos so that they reach the asked rate by the end of the control step (their "
             "first-order lag inverted over the step)")
+    disturbance_time_constant: float = key(DEFAULT_DISTURBANCE_TIME_CONSTANT, NUMBER,
+        doc="the disturbance observer's time constant T [s]: the wrench the model does not know (an unmodelled "
+            "current, a wrong added mass) estimated from the measured acceleration's mismatch, low-passed over T, "
+            "and fed forward; 0: none (the integral alone learns it)")
+    tightening: bool = key(True, bool,
+        doc="move each enforced `[[inequalities]]` bound inward, for the solver, by its measured tracking error: the"
+            " shortfall of the measured value against what the asked velocity predicted over each step, summed and "
+            "decaying at the objective's gain (at most its band); false: the nominal bounds")
     knows_current: bool = key(False, bool,
         doc="the controller's model includes `plant.current`; false: the integral learns it")
     saturation_feedback: bool = key(False, bool,
