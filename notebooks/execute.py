@@ -14,6 +14,7 @@ paths, object addresses, throughputs, the digits of numbers below 1e-9), so stal
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import sys
@@ -73,6 +74,13 @@ def notebook_paths(names: list[str] | None = None) -> list[Path]:
     return chosen
 
 
+def missing_requirements(path: Path) -> list[str]:
+    """The modules a notebook declares it needs (its metadata ``{"uvms": {"requires": [...]}}``, e.g. the mpc extra's
+    crocoddyl) that are not installed: the notebook is skipped, not failed, without them."""
+    requires = nbformat.read(path, as_version=4).metadata.get("uvms", {}).get("requires", [])
+    return [name for name in requires if importlib.util.find_spec(name) is None]
+
+
 def execute(path: Path) -> nbformat.NotebookNode:
     """A fresh execution of the notebook at ``path``, run from its folder (the file is not written)."""
     notebook = nbformat.read(path, as_version=4)
@@ -126,6 +134,10 @@ def main(argv: list[str]) -> None:
     """Execute the named notebooks (all by default) and write them back with their outputs."""
     os.environ.pop("MPLBACKEND", None)  # the kernel draws inline figures; a headless Agg would store none
     for path in notebook_paths(argv):
+        missing = missing_requirements(path)
+        if missing:
+            print(f"{path.name}: skipped, it needs {', '.join(missing)} (pip install 'uvms[mpc]')")
+            continue
         started = time.perf_counter()
         notebook = execute(path)
         nbformat.write(notebook, path)

@@ -21,11 +21,7 @@ spec.loader.exec_module(notebook_execute)
 NOTEBOOKS = notebook_execute.notebook_paths()
 
 
-def missing_requirements(path) -> list[str]:
-    """The modules a notebook declares it needs (its metadata ``{"uvms": {"requires": [...]}}``, e.g. the mpc extra's
-    crocoddyl) that are not installed: the notebook is skipped, not failed, without them."""
-    requires = notebook_execute.nbformat.read(path, as_version=4).metadata.get("uvms", {}).get("requires", [])
-    return [name for name in requires if importlib.util.find_spec(name) is None]
+missing_requirements = notebook_execute.missing_requirements
 
 
 @pytest.fixture(autouse=True)
