@@ -128,7 +128,7 @@ def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: 
     except UVMSError as exc:
         raise ScenarioError(f"plant.thrusters = true: {exc}") from None
     control, tables = spec.vehicle_control, spec.inequalities
-    inequalities = build_inequalities(robot, tables, solver) if tables else None
+    inequalities = build_inequalities(robot, tables, solver.enforces_inequalities) if tables else None
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
         controller = actuated_control(

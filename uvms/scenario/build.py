@@ -95,7 +95,7 @@ def build(spec: ScenarioSpec) -> Setup:
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(spec.plant.control_dt), inequalities=inequalities)
     check_kinematic_plant(spec.plant)
-    inequalities = (build_inequalities(robot, spec.inequalities, solver_class(spec.solver))
+    inequalities = (build_inequalities(robot, spec.inequalities, solver_class(spec.solver).enforces_inequalities)
                     if spec.inequalities else None)
     dt, integrator = float(spec.simulation.dt), spec.simulation.integrator
     times = stage_times(check_step_count(spec, duration), dt, integrator)  # every time the run asks for
@@ -224,7 +224,8 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
     if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
         raise ScenarioError(f"plant.control_dt must be 0 (continuous controller) or a multiple of simulation.dt = "
                             f"{dt:g} s, got {control_dt:g}")
-    inequalities = (build_inequalities(robot, spec.inequalities, cls) if spec.inequalities else None)
+    inequalities = (build_inequalities(robot, spec.inequalities, cls.enforces_inequalities) if spec.inequalities
+                    else None)
     taken = solver_options(robot, solver, cls, control_dt or dt)  # the step: the controller's period
     options = {key: value for key, value in taken.items() if key in ("dt", "priority", "eta", "regularization")}
     try:

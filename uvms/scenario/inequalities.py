@@ -29,7 +29,7 @@ import numpy as np
 from ..errors import ScenarioError, UVMSError
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
-from ..solvers import SOLVERS, Solver
+from ..solvers import SOLVERS
 from ..solvers.saturation import speed_maximum
 from ..tasks.objectives import Inequality, Objective, VelocityLimit, inequalities_from_table
 from ..tasks.objectives.collision import NearestPairs
@@ -73,8 +73,9 @@ class ScenarioInequalities:
         return self.types[self.level_of(name)]
 
 
-def build_inequalities(robot: Robot, tables: Sequence[InequalitySpec], solver: type[Solver]) -> ScenarioInequalities:
-    """The objectives of the scenario's tables on ``robot``, enforced if the ``solver`` class enforces them.
+def build_inequalities(robot: Robot, tables: Sequence[InequalitySpec], enforced: bool) -> ScenarioInequalities:
+    """The objectives of the scenario's tables on ``robot``, ``enforced`` (the controller holds them: a solver class's
+    ``enforces_inequalities``, the MPC's constraints) or monitored.
 
     Raises:
         ScenarioError: an invalid value or name (frame, joint) of a table, or two objectives with one name.
@@ -91,7 +92,7 @@ def build_inequalities(robot: Robot, tables: Sequence[InequalitySpec], solver: t
     if repeated:
         raise ScenarioError(f"inequalities: two objectives are called {repeated[0]!r}; give each its own "
                             f"name = '...' (results and metrics.json report them by name)")
-    return ScenarioInequalities(levels, types, enforced=solver.enforces_inequalities)
+    return ScenarioInequalities(levels, types, enforced=enforced)
 
 
 class ObjectiveRecorder:

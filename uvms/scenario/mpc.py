@@ -10,8 +10,6 @@ the model's, their bounds the inputs'. ``metrics.json`` gets its solve times and
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 
 from ..dynamics.plant.command import State
@@ -20,7 +18,6 @@ from ..dynamics.thrusters.fins import fins_of
 from ..dynamics.thrusters.thrusters import thrusters_of
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
-from ..solvers import SOLVERS
 from ..tasks.frame import FrameTask
 from .actuated import Actuation
 from .inequalities import build_inequalities
@@ -60,8 +57,7 @@ def make_mpc_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, 
                             f"command (it plans thrusts and arm commands); use controller.type = 'solver'")
     inequalities = None
     if spec.inequalities:  # the MPC's constraints: enforced, as CSQP's rows or Box-FDDP's penalties
-        built = build_inequalities(robot, spec.inequalities, SOLVERS[spec.solver.method])
-        inequalities = dataclasses.replace(built, enforced=True)
+        inequalities = build_inequalities(robot, spec.inequalities, enforced=True)
     from ..control.mpc.controller import MPCController
 
     try:
