@@ -28,12 +28,13 @@ from .spec import NUMBER, ScenarioSpec, SolverSpec
 from .spec.keys import thaw
 from .trajectories import make_trajectory
 
-#: [solver] keys -> the solver constructor's keyword they set (solver.method and solver.joint_limit_weights,
-#: which the initial configuration also reads, are not options of a solver).
-SOLVER_KEYWORDS = {"gain": "gain", "weights": "weights", "damping": "damping", "damping_epsilon": "damping",
-                   "damping_max": "damping", "alpha": "alpha", "free_floating": "free_floating",
-                   "enforce_limits": "enforce_limits", "priority": "priority", "eta": "eta",
-                   "regularization": "regularization"}
+#: [solver] keys that set a constructor keyword of another name (the variable damping's two set ``damping``).
+RENAMED_KEYWORDS = {"damping_epsilon": "damping", "damping_max": "damping"}
+#: [solver] keys -> the solver constructor's keyword they set: every key of the section (a new option is its
+#: SolverSpec key and the constructor's keyword of the same name), but solver.method and solver.joint_limit_weights,
+#: which the initial configuration also reads, and which are not options of a solver.
+SOLVER_KEYWORDS = {name: RENAMED_KEYWORDS.get(name, name) for name in SolverSpec.keys()
+                   if name not in ("method", "joint_limit_weights")}
 
 @dataclass
 class Setup:
@@ -281,10 +282,9 @@ def solver_damping(solver: SolverSpec) -> float | VariableDamping:
 
 def solver_options(robot: Robot, solver: SolverSpec, cls: type[Solver], dt: float) -> dict[str, Any]:
     """The constructor keywords of ``cls`` from the [solver] section (those it takes), with the step dt [s]."""
-    offered = {"gain": np.asarray(solver.gain, dtype=float), "damping": solver_damping(solver),
-               "alpha": solver.alpha, "free_floating": solver.free_floating, "dt": dt,
-               "enforce_limits": solver.enforce_limits, "priority": solver.priority, "eta": solver.eta,
-               "regularization": solver.regularization}
+    offered = {key: getattr(solver, key) for key, keyword in SOLVER_KEYWORDS.items() if key == keyword}
+    offered.update(gain=np.asarray(solver.gain, dtype=float), damping=solver_damping(solver), dt=dt)
+    offered.pop("weights")  # checked against the model below
     taken = cls.options()
     options = {keyword: value for keyword, value in offered.items() if keyword in taken}
     if "weights" in taken:
