@@ -112,6 +112,7 @@ class MPCController:
         self._held: Command | None = None
         self._solved_at: float | None = None
         self._last: tuple | None = None  # (q, v, t, thrusts) at the last solve: the estimate's
+        self._estimated = False
         self._xs: list[np.ndarray] = []
         self._us: list[np.ndarray] = []
 
@@ -146,6 +147,7 @@ class MPCController:
         self._us = [np.clip(np.zeros(self.prediction.nu), self.lower, self.upper)
                     for _ in range(self.settings.horizon)]
         self._held, self._solved_at, self._last = None, None, None
+        self._estimated = False
         self.prediction.disturbance = np.zeros(6)
         self.solve_times.clear()
         self.iterations.clear()
@@ -154,9 +156,12 @@ class MPCController:
         """The thrusts (n,) [N] and arm velocity commands (n_arm,) for the measured state (q, v, thrusts) at t [s].
 
         Solves when a control period has passed since the last solve (or at the first call), else holds. With the
-        measured thrusts (n,) [N] and ``settings.lag_compensation``, the thrust command is the one that brings the
-        thrusters' first-order response to the planned thrust at the end of the control period (the lag the
-        prediction leaves out), f_cmd = (f_plan - f e^(-h/tau)) / (1 - e^(-h/tau)), clipped to the bounds.
+        measured thrusts (n,) [N] and ``settings.lag_compensation``, the thrust command is the one whose
+        first-order response from the measured thrust f has the planned thrust as its mean over the control period h
+        (what the prediction applies over a node: the lag it leaves out),
+        f_cmd = f + (f_plan - f) / (1 - tau/h (1 - e^(-h/tau))), clipped to the bounds. (Aiming at f_plan at the end
+        of the period instead gives about half the impulse in a period that starts from rest: the intervention's
+        max end-effector error 0.66 cm against 0.30 cm.)
         """
         q, v, thrusts = state.q, state.v, state.thrusts
         if not self._xs:
@@ -168,10 +173,10 @@ class MPCController:
             self._estimate(q, v, float(t), np.asarray(thrusts, dtype=float))
         self._held = self._solve(np.concatenate([q, v]), float(t))
         if thrusts is not None and self.settings.lag_compensation and period > 0.0:
-            decay = np.exp(-period / self.time_constants)
-            planned = self._held.thrust
-            thrust = np.clip((planned - decay * np.asarray(thrusts, dtype=float)) / (1.0 - decay),
-                             self.lower[:self.n], self.upper[:self.n])
+            measured = np.asarray(thrusts, dtype=float)
+            share = 1.0 - self.time_constants / period * (1.0 - np.exp(-period / self.time_constants))
+            thrust = np.clip(measured + (self._held.thrust - measured) / share, self.lower[:self.n],
+                             self.upper[:self.n])
             self._held = Command(arm=self._held.arm, thrust=thrust, info=self._held.info)
         return self._held
 
@@ -186,7 +191,10 @@ class MPCController:
         prediction, nb = self.prediction, self.prediction.nb
         dynamics = prediction.evaluate(q0, v0, np.concatenate([0.5 * (f0 + thrusts), self._held.arm]))
         mismatch = (v[:nb] - v0[:nb]) / (t - t0) - dynamics.acceleration[:nb]
-        gain = 1.0 - np.exp(-(t - t0) / constant)
+        # the first mismatch is taken whole (there is no estimate to filter it against: the current acts from the
+        # start, and a filtered first estimate lets the vehicle drift for several periods)
+        gain = 1.0 - np.exp(-(t - t0) / constant) if self._estimated else 1.0
+        self._estimated = True
         prediction.disturbance = prediction.disturbance + gain * prediction.wrench_of(
             dynamics.mass_matrix[:nb, :nb] @ mismatch)
 

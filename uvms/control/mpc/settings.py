@@ -49,9 +49,11 @@ class MPCSettings:
         thrust: weight [1/N^2] of the thrusts (effort); arm_command: [s^2/rad^2] of the arm's velocity commands.
         penalty: Box-FDDP's weight of the squared violation of the objectives' rows (units of the rows^-2).
         knows_current: the prediction uses the plant's current (True) or still water (False: the current unknown).
-        lag_compensation: invert the thrusters' first-order lag over a control period from the measured thrusts.
+        lag_compensation: invert the thrusters' first-order lag over a control period from the measured thrusts (the
+            command whose response has the planned thrust as its mean over the period).
         disturbance_time_constant: [s] the filter of the estimated wrench on the vehicle (the vehicle rows of the
-            mismatch between the measured and the predicted acceleration over the last control period); 0: none.
+            mismatch between the measured and the predicted acceleration over the last control period; the first one
+            taken whole); 0: none.
     """
 
     horizon: int = 20
