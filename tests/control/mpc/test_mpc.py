@@ -131,13 +131,29 @@ def test_the_lag_compensation_gives_the_planned_thrust_as_the_mean_over_the_peri
     mpc, q0 = controller(settings, target=lambda start: (lambda t: start + np.array([0.0, 0.1, 0.0])))
     measured = np.full(8, 1.0)
     command = mpc.command(State(q0, np.zeros(q0.size - 1), measured), 0.0)
-    planned, tau, h = np.clip(mpc.solver.us[0][:8], mpc.lower[:8], mpc.upper[:8]), mpc.time_constants, 0.05
-    inside = (command.thrust > mpc.lower[:8] + 1e-9) & (command.thrust < mpc.upper[:8] - 1e-9)
+    planned, tau, h = mpc._us[0][:8], mpc.time_constants, 0.05  # the plan's first thrusts
+    inside = ((command.thrust > mpc.lower[:8] + 1e-9) & (command.thrust < mpc.upper[:8] - 1e-9)
+              & (planned > mpc.lower[:8]) & (planned < mpc.upper[:8]))
     assert inside.sum() >= 4 and np.abs(planned[inside] - measured[inside]).max() > 0.5
     t = np.linspace(0.0, h, 2001)[:, None]
     response = command.thrust + (measured - command.thrust) * np.exp(-t / tau)  # the thrusters' first-order lag
     mean = (response[:-1] + response[1:]).sum(axis=0) / 2 / (t.size - 1)  # trapezoid mean over the period
     np.testing.assert_allclose(mean[inside], planned[inside], atol=1e-4)
+
+
+def test_the_targets_out_of_reach_are_brought_within_reach_of_the_end_effector():
+    """A trajectory 1 m away: the nodes' targets are 5 cm from the measured end effector, towards the trajectory's
+    points; with end_effector_reach = 0 they are the trajectory's."""
+    far = lambda start: (lambda t: start + np.array([1.0, 0.1 * t, 0.0]))  # noqa: E731
+    mpc, q0 = controller(MPCSettings(horizon=4, node_dt=0.1), target=far)
+    x0 = np.concatenate([q0, np.zeros(q0.size - 1)])
+    here = mpc.robot.fk(q0).translation
+    for index, target in enumerate(mpc._targets(x0, 0.0)):
+        wanted = mpc.target(0.1 * index)
+        np.testing.assert_allclose(np.linalg.norm(target - here), 0.05)
+        np.testing.assert_allclose((target - here) / 0.05, (wanted - here) / np.linalg.norm(wanted - here))
+    mpc, q0 = controller(MPCSettings(horizon=4, node_dt=0.1, end_effector_reach=0.0), target=far)
+    np.testing.assert_allclose(mpc._targets(x0, 0.2)[1], mpc.target(0.3))
 
 
 def test_the_closed_loop_keeps_the_jaws_on_a_moving_target_in_an_unknown_current():

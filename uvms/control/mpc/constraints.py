@@ -23,9 +23,45 @@ import numpy as np
 from ...robot.configuration import Configuration
 from ...robot.robot import Robot
 from ...tasks.objectives.base import Inequality
+from ...tasks.objectives.frames import VehicleAttitude
 
 #: A bound CSQP treats as none (its ADMM takes finite numbers).
 UNBOUNDED = 1.0e6
+#: The directions (k, 2) of the tilt's rows: an octagon in the horizontal components of the vehicle's z axis.
+TILT_DIRECTIONS = np.array([[np.cos(angle), np.sin(angle)] for angle in np.arange(4) * np.pi / 4])
+
+
+class TiltRows:
+    """The vehicle's tilt <= max_tilt as 4 rows for the MPC: the horizontal components (z_x, z_y) of the vehicle's
+    z axis (world axes) along 4 directions d_k, |d_k . (z_x, z_y)| <= sin(max_tilt) cos(pi/8): the octagon inside
+    the cone, so the tilt stays <= max_tilt (and >= 0.92 of it is allowed in every direction).
+
+    The objective's own row, the tilt angle, has no gradient at level (its Jacobian there is taken as zero): a QP
+    linearized at a level plan does not see the bound, and one SQP step may tilt past it. These rows are smooth
+    there: d z_b/dt = omega x z_b.
+
+    Args:
+        objective: the scenario's vehicle-attitude objective (its frame, max_tilt and name).
+    """
+
+    collision = False
+
+    def __init__(self, objective: VehicleAttitude) -> None:
+        self.name, self.frame_id = objective.name, objective.frame_id
+        bound = np.sin(objective.max_tilt) * np.cos(np.pi / 8)
+        self.lower, self.upper = np.full(len(TILT_DIRECTIONS), -bound), np.full(len(TILT_DIRECTIONS), bound)
+
+    def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
+        """(rows (4,), their Jacobian (4, nv))."""
+        z = state.pose(self.frame_id).rotation[:, 2]
+        # d (z_x, z_y) / dt = (omega x z)[:2] = (z_z omega_y - z_y omega_z, z_x omega_z - z_z omega_x)
+        rate = np.array([[0.0, z[2], -z[1]], [-z[2], 0.0, z[0]]])
+        return TILT_DIRECTIONS @ z[:2], TILT_DIRECTIONS @ rate @ state.jacobian(self.frame_id)[3:]
+
+
+def node_rows(objective: Inequality) -> Inequality | TiltRows:
+    """An objective's rows in the MPC: the vehicle's attitude as :class:`TiltRows`, the others as they are."""
+    return TiltRows(objective) if isinstance(objective, VehicleAttitude) else objective
 
 
 class NodeConstraints:
@@ -48,7 +84,7 @@ class NodeConstraints:
                  upper: np.ndarray | None, *, with_state: bool, margin: float = 0.0,
                  scale: float = 1.0) -> None:
         self.robot, self.scale = robot, float(scale)
-        self.objectives = list(objectives) if with_state else []
+        self.objectives = [node_rows(item) for item in objectives] if with_state else []
         self.nu = 0 if lower is None else len(lower)
         state_lower = [(item.lower + (margin if item.collision else 0.0)) * self.scale for item in self.objectives]
         state_upper = [item.upper * self.scale for item in self.objectives]

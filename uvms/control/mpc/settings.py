@@ -42,6 +42,10 @@ class MPCSettings:
         integrator: "euler" (Crocoddyl's symplectic Euler) or "rk4" (Crocoddyl's Runge-Kutta 4).
         end_effector: weight [1/m^2] of the end effector's position error at each node.
         terminal_end_effector: the same at the last node.
+        end_effector_reach: [m] the nodes' end-effector targets are kept within this distance of the measured end
+            effector (moved towards it along the line to the trajectory's point; 0: the trajectory's points as they
+            are): when the trajectory is out of the thrusters' reach (a current beyond them), the task's pull on the
+            plan stays bounded and the constraints and the posture keep their weight.
         vehicle_position, vehicle_attitude: weights [1/m^2], [1/rad^2] of the vehicle's pose error against the
             station it was reset at (its posture; attitude = roll, pitch and yaw about the station).
         arm_posture: weight [1/rad^2] of the arm joints against their positions at reset.
@@ -68,6 +72,7 @@ class MPCSettings:
     integrator: str = "euler"
     end_effector: float = 1.0e4
     terminal_end_effector: float = 1.0e5
+    end_effector_reach: float = 0.05
     vehicle_position: float = 10.0
     vehicle_attitude: float = 1.0e3
     arm_posture: float = 1.0
