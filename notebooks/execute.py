@@ -25,6 +25,8 @@ from pathlib import Path
 import nbformat
 from nbclient import NotebookClient
 
+from uvms.io.progress import COMPILE_NOTICE
+
 FOLDER = Path(__file__).resolve().parent
 TIMEOUT = 900  # [s] per cell
 #: What changes between two executions of the same notebook without any number changing.
@@ -94,10 +96,13 @@ def cell_text(cell: nbformat.NotebookNode) -> str:
     parts = []
     for output in cell.get("outputs", []):
         if output["output_type"] == "stream":  # the kernel splits a stream into chunks as it pleases: join them
+            text = output["text"].replace(COMPILE_NOTICE + "\n", "")  # said when a first solve is slow: the load's
+            if not text:
+                continue
             if parts and parts[-1].startswith(f"[{output['name']}] "):
-                parts[-1] += output["text"]
+                parts[-1] += text
             else:
-                parts.append(f"[{output['name']}] {output['text']}")
+                parts.append(f"[{output['name']}] {text}")
         elif output["output_type"] == "error":
             parts.append(f"[error] {output['ename']}: {output['evalue']}")
         elif "text/plain" in output.get("data", {}) and "image/png" not in output["data"]:

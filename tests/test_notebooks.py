@@ -106,3 +106,14 @@ def test_the_tutorial_runs_when_copied_out_of_the_repository(tmp_path):
     copy.write_text((ROOT / "notebooks" / "tutorial.ipynb").read_text())
     assert "../" not in "".join("".join(cell.source) for cell in notebook_execute.nbformat.read(copy, 4).cells)
     notebook_execute.execute(copy)  # raises CellExecutionError if a cell fails
+
+
+def test_the_compile_notice_is_not_an_output():
+    """A first solve slower than 2 s (numba compiling, or a loaded machine) says so on stderr; the note is not what
+    the notebook shows, so it is not compared."""
+    from uvms.io.progress import COMPILE_NOTICE
+
+    cell = notebook_execute.nbformat.v4.new_code_cell("x = 1")
+    cell.outputs = [notebook_execute.nbformat.v4.new_output("stream", name="stderr", text=COMPILE_NOTICE + "\n"),
+                    notebook_execute.nbformat.v4.new_output("stream", name="stdout", text="1.5 m\n")]
+    assert notebook_execute.cell_text(cell) == "[stdout] 1.5 m\n"
