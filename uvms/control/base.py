@@ -6,9 +6,9 @@ drives every plant's controller this way and no other. The kinematic tracking
 (:class:`uvms.control.tracking.TrackingController`), the phase sequences
 (:class:`uvms.control.sequence.SequenceController`), the GJM controller of a passive vehicle
 (:class:`uvms.control.gjm.GJMController`) and the actuated chain (:class:`uvms.control.coordination.CoordinatedControl`:
-kinematic reference, vehicle loops, allocation, coordination) implement it, and so does :class:`OpenLoop`. A
-controller that outputs thrusts and joint torques (a model-predictive one) fills ``Command.thrust`` and
-``Command.arm_torque``.
+kinematic reference, vehicle loops, allocation, coordination) implement it, and so do :class:`OpenLoop` and the
+whole-body MPC (:class:`uvms.control.mpc.controller.MPCController`, which fills ``Command.thrust`` and the arm's
+servo commands; a torque-controlled arm would fill ``Command.arm_torque``).
 
 Each controller that solves receives its solver in one form, a :class:`uvms.solvers.base.SolverFactory` (built
 per level set), and asks it what it can do by the class's attributes
