@@ -18,25 +18,12 @@ per level set), and asks it what it can do by the class's attributes
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from ..dynamics.plant.command import Command, State
+from ..dynamics.plant.command import Command, Controller, State
 
 __all__ = ["Command", "Controller", "OpenLoop", "State"]
-
-
-@runtime_checkable
-class Controller(Protocol):
-    """What runs each control step of a run (module docstring)."""
-
-    def reset(self, state: State, t: float = 0.0) -> None:
-        """Start a run from ``state`` at t [s]: integrators, saturation feedback and warm starts back to their
-        initial values, so that a controller run twice gives the same run."""
-
-    def command(self, state: State, t: float) -> Command:
-        """The command applied from (state, t [s]) until the next control step."""
 
 
 #: A command signal: a constant array, or t [s] -> array.

@@ -8,16 +8,16 @@ instead of a target; the set-based and QP hierarchies of :mod:`uvms.solvers` pla
 from .frame import FrameTask
 from .joints import JointTask
 from .objectives import (
-                         FrameBox,
-                         Inequality,
-                         JointLimits,
-                         JointVelocityLimits,
-                         Manipulability,
-                         PlaneClearance,
-                         VehicleAttitude,
-                         VehicleVelocityLimits,
-                         VelocityLimit,
-                         inequalities_from_table,
+    FrameBox,
+    Inequality,
+    JointLimits,
+    JointVelocityLimits,
+    Manipulability,
+    PlaneClearance,
+    VehicleAttitude,
+    VehicleVelocityLimits,
+    VelocityLimit,
+    inequalities_from_table,
 )
 from .posture import PostureTask
 from .potential import MidRangePotential

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -35,12 +34,9 @@ import pinocchio as pin
 from ...errors import ConfigurationError, StepCountError, UVMSError
 from ..thrusters.fins import Fins
 from ..thrusters.thrusters import Thrusters, allocation_matrix
-from .command import Command, State, refuse_fields
+from .command import Command, Controller, State, refuse_fields
 from .plant import Plant
 from .system import PlantDynamics, PlantSample, PlantSystem, check_finite_state
-
-if TYPE_CHECKING:  # the protocol lives with the controllers, above this layer
-    from ...control.base import Controller
 
 #: What an actuated plant applies of a Command (no arm: zero; no fins: none).
 TAKEN = ("arm", "thrust", "fins")

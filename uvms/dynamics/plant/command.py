@@ -20,7 +20,7 @@ the plants that ship drive their joints through velocity servos and refuse it wi
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -80,3 +80,16 @@ def refuse_fields(command: Command, taken: tuple[str, ...], plant: str, t: float
         if name not in taken and getattr(command, name) is not None:
             raise UVMSError(f"the controller sent Command.{name} at t = {t:.6g} s, which {plant} cannot apply; it "
                             f"takes {', '.join(f'Command.{field}' for field in taken)}")
+
+
+@runtime_checkable
+class Controller(Protocol):
+    """What runs each control step of a run, whatever the plant (:mod:`uvms.control.base`: its implementations);
+    here beside State and Command, which the plants read too."""
+
+    def reset(self, state: State, t: float = 0.0) -> None:
+        """Start a run from ``state`` at t [s]: integrators, saturation feedback and warm starts back to their
+        initial values, so that a controller run twice gives the same run."""
+
+    def command(self, state: State, t: float) -> Command:
+        """The command applied from (state, t [s]) until the next control step."""

@@ -58,8 +58,6 @@ momentum live in :mod:`uvms.dynamics.plant.added_mass` (importable from here too
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import pinocchio as pin
 
@@ -70,10 +68,8 @@ from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_spl
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
+from .command import Controller
 from .system import PlantDynamics, PlantSystem
-
-if TYPE_CHECKING:  # the protocol lives with the controllers, above this layer
-    from ...control.base import Controller
 
 
 def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:

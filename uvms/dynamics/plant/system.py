@@ -9,15 +9,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
 import numpy as np
 
 from ...errors import StepCountError, UVMSError
-from .command import State, refuse_fields
-
-if TYPE_CHECKING:  # the protocol lives with the controllers, above this layer
-    from ...control.base import Controller
+from .command import Controller, State, refuse_fields
 
 #: What a passive plant applies of a Command.
 TAKEN = ("arm",)
