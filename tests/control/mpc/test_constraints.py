@@ -127,16 +127,22 @@ def test_the_stowed_jaws_stay_clear_of_the_vehicle():
     assert smallest(setup, result, "joint_limits") > 0.0
 
 
-def test_in_a_saturating_current_the_thrusts_stay_within_their_bounds():
-    """1.0 m/s from ahead (beyond the thrusters), 1 s: the thrusts within their bounds at every step, saturated.
-    (The tilt is not kept there at 20 Hz: 0.28 rad over the scenario's 10 s against max 0.0873; see
-    benchmarks/README.md.)"""
+def test_in_a_saturating_current_the_tilt_and_the_clearance_are_kept_and_the_task_gives_way():
+    """1.0 m/s from ahead (beyond the thrusters), 2 s at 20 Hz, the current unknown: recomputed from the recorded
+    states, the tilt within 0.01 rad of its bound and the seabed clearance within 5 mm of its minimum, the thrusts
+    within their bounds at every step and saturated. Holding still asks more than the thrusters' range, so the task's
+    weights are lowered. (Before: the plan rode the tilt bound and the closed loop overshot it, 0.28 rad in these
+    2 s; the 10 s of the scenario: benchmarks/bench_mpc.py.)"""
     setup = setup_of("bluerov2_alpha5_intervention_saturated_current")
     mpc = mpc_of(setup)
-    result = closed_loop(setup, mpc, 1.0)
+    result = closed_loop(setup, mpc, 2.0)
     thrusters, thrusts = setup.actuation.thrusters, result.actuation.thrusts
     assert np.all(thrusts >= thrusters.lower - 1e-9) and np.all(thrusts <= thrusters.upper + 1e-9)
     assert np.abs(thrusts).max() > 0.9 * min(thrusters.upper.max(), -thrusters.lower.min())  # saturated
+    tilts = [np.arccos(np.clip(setup.robot.base_pose(q).rotation[2, 2], -1.0, 1.0)) for q in result.q]
+    assert max(tilts) <= 0.0873 + 0.01  # measured: 0.024 rad
+    assert smallest(setup, result, "seabed_clearance") >= -0.005  # measured: +28 mm over these 2 s (before: -28 mm)
+    assert mpc.saturation > 1.0  # holding still asks 1.16 of the range: the task at 1e-3 of its weight
 
 
 def test_the_tilt_rows_are_smooth_at_level_and_inside_the_cone():

@@ -59,7 +59,9 @@ def test_without_crocoddyl_the_error_names_the_extra(monkeypatch):
 
 
 @pytest.mark.parametrize(("key", "value", "match"), [("horizon", 0, "horizon"), ("node_dt", 0.0, "node_dt"),
-                                                     ("integrator", "rk2", "euler, rk4"), ("thrust", -1.0, "thrust")])
+                                                     ("integrator", "rk2", "euler, rk4"), ("thrust", -1.0, "thrust"),
+                                                     ("saturation_onset", 1.0, r"saturation_onset .*\(0, 1\)"),
+                                                     ("saturated_task_share", 0.0, r"\(0, 1\]")])
 def test_settings_refuse_what_is_not_valid(key, value, match):
     with pytest.raises(UVMSError, match=match):
         MPCSettings(**{key: value})
@@ -177,3 +179,103 @@ def test_the_closed_loop_keeps_the_jaws_on_a_moving_target_in_an_unknown_current
     assert np.all(thrusts >= thrusters.lower - 1e-9) and np.all(thrusts <= thrusters.upper + 1e-9)
     assert len(mpc.solve_times) == 13  # every 0.05 s from 0 to 0.6 s (the period's default; the last row's too)
     assert mpc.prediction.disturbance[0] < -5.0  # the unknown current's drag from ahead, estimated: -16.3 N
+
+
+ABORTING = """
+import numpy as np
+from uvms import load
+from uvms.control.mpc.controller import MPCController
+from uvms.control.mpc.settings import MPCSettings
+from uvms.dynamics.plant.command import State
+from uvms.dynamics.plant.plant import Plant
+from uvms.dynamics.thrusters.thrusters import thrusters_of
+
+robot = load("models/bluerov2_alpha5/uvms.urdf.xacro")
+q0 = robot.configuration(base=[0.0, 0.0, -5.0, 0.0, 0.0, 0.0], arm=[3.0, 1.8, 1.8, 1.0, 0.0])
+start = robot.fk(q0).translation
+mpc = MPCController(Plant(robot, gravity=True, motor_time_constant=0.1), thrusters_of(robot), lambda t: start,
+                    settings=MPCSettings(horizon=3, node_dt=0.1))
+mpc.reset(State(q0))
+xs = [x.copy() for x in mpc._xs]
+xs[2][:3] = np.nan  # a node out of range, as a diverged QP step leaves a line-search trial
+mpc.problem.x0 = xs[0]
+mpc.solver.solve(xs, list(mpc._us), 1, False)
+print("returned", np.isfinite(mpc.solver.cost))
+"""
+
+
+def test_a_node_out_of_range_is_rejected_not_the_process_aborted():
+    """A warm start (or a line-search trial) with a non-finite state: the node reports a large finite cost, every
+    row violated and no acceleration. Before, the NaN it evaluated to threw inside CSQP's OpenMP loop (Crocoddyl's
+    check of a trial's cost, or a Python exception from the node), which no handler catches: the process aborted
+    (`terminate called after throwing ... crocoddyl::Exception`, `step_error`)."""
+    output = subprocess.run([sys.executable, "-c", ABORTING], capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert output.returncode == 0, output.stderr[-500:]
+    assert output.stdout.strip() == "returned True"
+
+
+def test_a_node_reports_a_point_out_of_range_as_rejected():
+    """calc at a state or input beyond UNBOUNDED (or NaN): REJECTED_COST (below Crocoddyl's 1e30), no acceleration,
+    every row violated; calcDiff there is flat. A point in range is evaluated as before."""
+    from uvms.control.mpc.action import REJECTED_COST
+    from uvms.control.mpc.constraints import UNBOUNDED
+
+    mpc, q0 = controller(MPCSettings(horizon=2, node_dt=0.1))
+    model = mpc.nodes[1][1]
+    data = model.createData()
+    x, u = np.concatenate([q0, np.zeros(q0.size - 1)]), np.zeros(mpc.prediction.nu)
+    for bad_x, bad_u in ((x, np.full_like(u, 2.0 * UNBOUNDED)), (np.where(np.arange(x.size) == 4, np.nan, x), u)):
+        model.calc(data, bad_x, bad_u)
+        assert data.rejected and data.cost == REJECTED_COST and not data.xout.any()
+        assert np.all(data.g >= model.g_ub + 0.5 * UNBOUNDED)
+        model.calcDiff(data, bad_x, bad_u)
+        assert not data.Fx.any() and not data.Lx.any()
+    model.calc(data, x, u)
+    assert not data.rejected and 0.0 < data.cost < 1e10 and np.abs(data.xout).max() > 0.1  # it sinks or floats
+
+
+def test_the_warm_start_is_the_last_plan_read_at_the_nodes_times():
+    """Half a node after a solve (20 Hz, 0.1 s nodes) the warm start's nodes lie midway between the plan's (the
+    inputs linearly, the states along the manifold); a whole node later they are the plan shifted by one, the last
+    node held. (A round(0.5) shift was 0 or 1 by floating point, from one solve to the next.)"""
+    mpc, q0 = controller(MPCSettings(horizon=4, node_dt=0.1))
+    rng = np.random.default_rng(3)
+    mpc._us = [rng.normal(size=mpc.prediction.nu) for _ in range(4)]
+    mpc._xs = [np.concatenate([pin.integrate(mpc.robot.model, q0, 0.1 * k * np.ones(q0.size - 1)),
+                               np.full(q0.size - 1, float(k))]) for k in range(5)]
+    mpc._solved_at = 1.0
+    xs, us = mpc._warm_start(1.05)
+    np.testing.assert_allclose(us[1], 0.5 * (mpc._us[1] + mpc._us[2]), atol=1e-12)
+    np.testing.assert_allclose(xs[2][q0.size:], 2.5, atol=1e-12)
+    np.testing.assert_allclose(mpc.state.diff(mpc._xs[1], xs[1])[:q0.size - 1], 0.05, atol=1e-9)
+    np.testing.assert_allclose(us[3], mpc._us[3])  # beyond the last input: held
+    xs, us = mpc._warm_start(1.1 + 1e-12)
+    np.testing.assert_allclose(us[0], mpc._us[1], atol=1e-9)
+    np.testing.assert_allclose(xs[3], mpc._xs[4], atol=1e-9)
+    np.testing.assert_allclose(xs[4], mpc._xs[4], atol=1e-9)
+
+
+def test_the_task_gives_way_when_holding_still_asks_more_than_the_thrusters_range():
+    """The end effector's weights: whole while holding still asks less than saturation_onset of the thrusters'
+    range (a 0.3 m/s current), saturated_task_share of them from the whole range on (1.0 m/s),
+    geometrically between; known currents and estimated wrenches count alike."""
+    from uvms.control.mpc.controller import MPCController
+
+    settings = MPCSettings(horizon=2, node_dt=0.1, knows_current=True)
+    mpc, q0 = controller(settings)
+    x0 = np.concatenate([q0, np.zeros(q0.size - 1)])
+    assert mpc._task_share(x0) == 1.0 and 0.05 < mpc.saturation < 0.8
+    strong = Plant(shipped("bluerov2_alpha5"), gravity=True, current=np.array([-1.0, 0.0, 0.0]),
+                   motor_time_constant=0.1)
+    mpc, q0 = controller(settings, the_plant=strong)
+    assert mpc._task_share(x0) == pytest.approx(1e-3) and mpc.saturation > 1.0
+    still = MPCController(plant(), thrusters_of(plant().robot), lambda t: np.zeros(3),
+                          settings=MPCSettings(horizon=2, node_dt=0.1))  # still water predicted
+    still.reset(State(q0))
+    still.prediction.disturbance = np.array([-100.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # an estimate of 100 N from ahead
+    share = still._task_share(x0)
+    assert 1e-3 < share < 1.0 and 0.8 < still.saturation < 1.0
+    np.testing.assert_allclose(share, 1e-3 ** ((still.saturation - 0.8) / 0.2))
+    for costs, _ in still.nodes:
+        costs.weigh_task(share)
+    assert still.nodes[0][0].end_effector.weight == pytest.approx(share * 1e4)

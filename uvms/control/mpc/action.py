@@ -25,6 +25,12 @@ from .constraints import UNBOUNDED, NodeConstraints
 from .prediction import PlantPrediction
 from .settings import MPCSettings
 
+#: A node's cost where its state or input is not finite or beyond :data:`UNBOUNDED` (a line-search trial along the
+#: step of a QP that diverged): large and finite. Crocoddyl's check of a trial's cost (NaN, inf or >= 1e30) throws
+#: inside CSQP's OpenMP loop, where no handler catches it: the process aborts. So the node reports this cost,
+#: every constraint row violated by UNBOUNDED and no acceleration; the line search then rejects the trial.
+REJECTED_COST = 1.0e20
+
 
 class PlantActionData(crocoddyl.DifferentialActionDataAbstract):
     """A node's data: Pinocchio's for the costs, the costs', the plant's mass matrix at the node, the constraints'
@@ -42,6 +48,7 @@ class PlantActionData(crocoddyl.DifferentialActionDataAbstract):
         self.derivatives = np.zeros((nv, nv)), np.zeros((nv, nv)), np.zeros((nv, model.nu))
         self.configuration = model.constraints.configuration()
         self.rows, self.rows_jacobian = np.zeros(0), np.zeros((0, model.state.nv))
+        self.rejected = False  # the last calc's point was out of range (REJECTED_COST)
 
 
 class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
@@ -65,6 +72,10 @@ class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
             self.g_lb, self.g_ub = constraints.lower, constraints.upper
 
     def calc(self, data: PlantActionData, x: np.ndarray, u: np.ndarray | None = None) -> None:
+        data.rejected = not (np.abs(x).max() < UNBOUNDED and (u is None or np.abs(u).max() < UNBOUNDED))
+        if data.rejected:
+            self._reject(data, u)
+            return
         q, v = x[:self.nq], x[self.nq:]
         if u is None:  # the terminal node: its costs only
             pin.framesForwardKinematics(self.state.pinocchio, data.pinocchio, q)
@@ -81,10 +92,29 @@ class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
         if self.penalty > 0.0:
             if constraints.objectives:
                 data.cost += constraints.penalty(data.rows, data.rows_jacobian, self.penalty)[0]
-        elif constraints.ng:
-            data.g[:] = data.rows if u is None else np.concatenate([u[:constraints.nu], data.rows])
+        elif constraints.ng:  # a running node evaluated without its input (Crocoddyl may) keeps its input rows
+            if u is not None:
+                data.g[:constraints.nu] = u[:constraints.nu]
+            data.g[constraints.nu:] = data.rows
+        if not (data.cost < REJECTED_COST and np.isfinite(data.xout).all()):  # a NaN cost fails the comparison
+            data.rejected = True
+            self._reject(data, u)
+
+    def _reject(self, data: PlantActionData, u: np.ndarray | None) -> None:
+        """The node at a point out of range: REJECTED_COST, every row violated by UNBOUNDED, no acceleration."""
+        data.cost = REJECTED_COST
+        if u is not None:
+            data.xout[:] = 0.0
+        if self.ng:
+            data.g[:] = self.g_ub + UNBOUNDED
 
     def calcDiff(self, data: PlantActionData, x: np.ndarray, u: np.ndarray | None = None) -> None:  # noqa: N802
+        if data.rejected:  # no derivatives out of range: a flat node (its inputs' rows kept)
+            for array in (data.Fx, data.Fu, data.Lx, data.Lu, data.Lxx, data.Lxu, data.Luu, data.Gx, data.Gu):
+                array[:] = 0.0
+            if u is not None and self.constraints.nu:
+                data.Gu[:self.constraints.nu] = np.eye(self.constraints.nu)
+            return
         q, v = x[:self.nq], x[self.nq:]
         pin.computeJointJacobians(self.state.pinocchio, data.pinocchio, q)
         if u is None:
@@ -103,8 +133,8 @@ class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
                 data.Lx[:nv] += gradient
                 data.Lxx[:nv, :nv] += hessian
         elif constraints.ng:
-            rows = 0 if u is None else constraints.nu
-            if rows:
+            rows = constraints.nu
+            if rows and u is not None:
                 data.Gu[:rows] = np.eye(rows)
             data.Gx[rows:, :nv] = data.rows_jacobian
 
@@ -121,8 +151,9 @@ class NodeCosts:
         nb = 6  # the free-flyer's velocity coordinates
         self.sum = crocoddyl.CostModelSum(state, nu)
         self.target = crocoddyl.ResidualModelFrameTranslation(state, frame, np.zeros(3), nu)
-        self.sum.addCost("end_effector", crocoddyl.CostModelResidual(state, self.target),
-                         s.terminal_end_effector if terminal else s.end_effector)
+        self.task_weight = s.terminal_end_effector if terminal else s.end_effector
+        self.sum.addCost("end_effector", crocoddyl.CostModelResidual(state, self.target), self.task_weight)
+        self.end_effector = self.sum.costs["end_effector"]
         weights = np.concatenate([np.full(3, s.vehicle_position), np.full(3, s.vehicle_attitude),
                                   np.full(nv - nb, s.arm_posture), np.full(nb, s.vehicle_velocity),
                                   np.full(nv - nb, s.arm_velocity)])
@@ -133,6 +164,10 @@ class NodeCosts:
             effort = np.concatenate([np.full(n_thrusters, s.thrust), np.full(nu - n_thrusters, s.arm_command)])
             self.sum.addCost("effort", crocoddyl.CostModelResidual(
                 state, crocoddyl.ActivationModelWeightedQuad(effort), crocoddyl.ResidualModelControl(state, nu)), 1.0)
+
+    def weigh_task(self, share: float) -> None:
+        """The end effector's weight at ``share`` (0, 1] of the settings' (the task giving way to the constraints)."""
+        self.end_effector.weight = share * self.task_weight
 
     def move(self, target: np.ndarray, x_station: np.ndarray | None = None) -> None:
         """Set the end effector's target (3,) [m], and the station (nx,) when given."""

@@ -116,6 +116,9 @@ class MPCController:
         self._estimated = False
         self._xs: list[np.ndarray] = []
         self._us: list[np.ndarray] = []
+        self._allocation_inverse = np.linalg.pinv(self.prediction.matrix)  # (n, 6): wrench -> min-norm thrusts
+        self.rejected = 0  # solves whose line search accepted no step (the last plan applied)
+        self.saturation = 0.0  # the largest share of their range that holding still asked of the thrusters
 
     def metrics(self) -> dict:
         """``metrics.json``'s ``"mpc"`` entry: solves, solve time per control step [s] (median, p99, max) and the
@@ -123,7 +126,8 @@ class MPCController:
         times, iterations = np.asarray(self.solve_times, dtype=float), np.asarray(self.iterations, dtype=float)
         settings = self.settings
         entry = {"solves": int(times.size), "solver": settings.solver, "horizon": float(settings.duration),
-                 "nodes": int(settings.horizon), "control_period": float(settings.control_period)}
+                 "nodes": int(settings.horizon), "control_period": float(settings.control_period),
+                 "rejected_steps": int(self.rejected), "max_thrust_saturation": float(self.saturation)}
         if times.size:
             entry.update(solve_time_median=float(np.median(times)), solve_time_p99=float(np.percentile(times, 99)),
                          solve_time_max=float(times.max()), iterations_mean=float(iterations.mean()),
@@ -152,6 +156,7 @@ class MPCController:
         self.prediction.disturbance = np.zeros(6)
         self.solve_times.clear()
         self.iterations.clear()
+        self.rejected, self.saturation = 0, 0.0
 
     def command(self, state: State, t: float) -> Command:
         """The thrusts (n,) [N] and arm velocity commands (n_arm,) for the measured state (q, v, thrusts) at t [s].
@@ -227,13 +232,61 @@ class MPCController:
                 targets[index] = here + (target - here) * (reach / distance)
         return targets
 
+    def _warm_start(self, t: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
+        """The last plan read at the nodes' times from t [s] on (the warm start): states along the manifold and
+        inputs linearly between its nodes, the last node held beyond it.
+
+        The plan's node k was at solved_at + k node_dt; a control period that is not a whole number of nodes
+        (20 Hz with 0.1 s nodes) would otherwise shift by round(0.5), which floating point makes 0 or 1 from one
+        solve to the next: half of the warm starts then sat a whole node off their time, and CSQP's line search cut
+        their step in half (the saturated current: tilt 0.278 rad with the shift, 0.164 rad read in time)."""
+        if self._solved_at is None:
+            return list(self._xs), list(self._us)
+        last, state = self.settings.horizon, self.state
+        ratio = max(0.0, (t - self._solved_at) / self.settings.node_dt)
+        xs, us = [], []
+        for index in range(last + 1):
+            position = min(index + ratio, float(last))
+            node = min(int(position + 1e-9), last)
+            share = position - node
+            if node == last or share <= 1e-9:
+                xs.append(self._xs[node].copy())
+            else:
+                xs.append(state.integrate(self._xs[node], share * state.diff(self._xs[node], self._xs[node + 1])))
+            if index < last:
+                node = min(node, last - 1)
+                share = 0.0 if node + 1 >= last else min(max(position - node, 0.0), 1.0)
+                us.append((1.0 - share) * self._us[node] + share * self._us[node + 1] if share > 1e-9
+                          else self._us[node].copy())
+        return xs, us
+
+    def _task_share(self, x0: np.ndarray) -> float:
+        """The task's weight share (0, 1] from the thrust that holding the vehicle still at the measured pose asks
+        (against the prediction's current, restoring wrench and estimated disturbance; the minimum-norm
+        allocation): 1 up to ``saturation_onset`` of the thrusters' range, ``saturated_task_share`` from the whole
+        range on, geometrically between (the constraints first: a task out of the thrusters' reach gives way)."""
+        settings, prediction = self.settings, self.prediction
+        if settings.saturated_task_share >= 1.0:
+            return 1.0
+        q, nb = x0[:self.robot.model.nq], prediction.nb
+        still = prediction.evaluate(q, np.zeros(prediction.nv), np.zeros(prediction.nu))
+        wrench = prediction.wrench_of(still.mass_matrix[:nb, :nb] @ still.acceleration[:nb])
+        holding = -self._allocation_inverse @ wrench  # (n,) [N]
+        bound = np.where(holding >= 0.0, self.upper[:self.n], -self.lower[:self.n])
+        ratio = float(np.max(np.abs(holding) / bound))
+        self.saturation = max(self.saturation, ratio)
+        onset = settings.saturation_onset
+        if ratio <= onset:
+            return 1.0
+        return float(settings.saturated_task_share ** min(1.0, (ratio - onset) / max(1.0 - onset, 1e-9)))
+
     def _solve(self, x0: np.ndarray, t: float) -> Command:
         settings = self.settings
-        shift = 0 if self._solved_at is None else int(round((t - self._solved_at) / settings.node_dt))
-        shift = min(max(shift, 0), settings.horizon)
-        xs = self._xs[shift:] + [self._xs[-1]] * shift
-        us = self._us[shift:] + [self._us[-1]] * shift
+        xs, us = self._warm_start(t)
         xs[0] = x0
+        share = self._task_share(x0)
+        for costs, _ in self.nodes:
+            costs.weigh_task(share)
         for costs, target in zip((costs for costs, _ in self.nodes), self._targets(x0, t)):
             costs.move(target)
         self.problem.x0 = x0
@@ -242,8 +295,12 @@ class MPCController:
             self._relax(x0)
         self.solver.solve(xs, us, settings.iterations, False)
         elapsed = time.perf_counter() - started
-        # copies: CSQP's xs and us are views into a temporary list, garbage once it is gone
+        # copies: CSQP's xs and us are views into a temporary list, garbage once it is gone. A solve whose line
+        # search accepted no step (iter 0) leaves them at the warm start: the last plan read in time is applied.
         self._xs, self._us = [x.copy() for x in self.solver.xs], [u.copy() for u in self.solver.us]
+        if not all(np.isfinite(x).all() for x in self._xs) or not all(np.isfinite(u).all() for u in self._us):
+            self._xs, self._us = xs, us  # a step into non-finite values (from a non-finite warm start): none
+        self.rejected += int(self.solver.iter) == 0 or self._xs is xs
         if not all(np.all(np.isfinite(u)) for u in self._us[:1]):
             raise UVMSError(f"the MPC's solution is not finite at t = {t:.6g} s; lower its weights or node_dt")
         self.solve_times.append(elapsed)

@@ -55,6 +55,12 @@ class MPCSettings:
         knows_current: the prediction uses the plant's current (True) or still water (False: the current unknown).
         lag_compensation: invert the thrusters' first-order lag over a control period from the measured thrusts (the
             command whose response has the planned thrust as its mean over the period).
+        saturation_onset: the share of the thrusters' range, asked by the estimated wrench on the vehicle (its
+            minimum-norm allocation), from which the task gives way (in (0, 1)).
+        saturated_task_share: the end effector's weights' share when the estimated wrench asks the thrusters' whole
+            range or more (geometrically from 1 at ``saturation_onset``); 1: the task never gives way. A current
+            beyond the thrusters pulls a full-weight plan onto the tilt bound, which the closed loop then overshoots
+            (1.0 m/s: 0.16-0.28 rad against 0.0873); at 1e-3 the constraints come first.
         disturbance_time_constant: [s] the filter of the estimated wrench on the vehicle (the vehicle rows of the
             mismatch between the measured and the predicted acceleration over the last control period; the first one
             taken whole); 0: none.
@@ -84,6 +90,8 @@ class MPCSettings:
     knows_current: bool = False
     lag_compensation: bool = True
     disturbance_time_constant: float = 0.5
+    saturation_onset: float = 0.8
+    saturated_task_share: float = 1.0e-3
 
     def __post_init__(self) -> None:
         if not (isinstance(self.horizon, int) and self.horizon >= 1):
@@ -103,6 +111,10 @@ class MPCSettings:
                 continue
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value >= 0.0):
                 raise UVMSError(f"mpc {item.name} must be a finite number >= 0, got {value!r}")
+        if not 0.0 < self.saturation_onset < 1.0:
+            raise UVMSError(f"mpc saturation_onset must be in (0, 1), got {self.saturation_onset!r}")
+        if not 0.0 < self.saturated_task_share <= 1.0:
+            raise UVMSError(f"mpc saturated_task_share must be in (0, 1], got {self.saturated_task_share!r}")
         if self.node_dt <= 0.0:
             raise UVMSError(f"mpc node_dt must be > 0 s, got {self.node_dt!r}")
 
