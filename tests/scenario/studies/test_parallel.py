@@ -105,3 +105,21 @@ def test_a_silent_or_foreign_scheduler_ends_the_command_in_one_line_within_the_t
     assert len(err) == 1 and err[0].startswith(f"uvms: error: the Dask scheduler {address} ")
     assert words in err[0]
     assert not (tmp_path / "s").exists()
+
+
+def test_a_worker_process_is_settled_once_after_its_first_task_and_the_uvms_process_never(monkeypatch):
+    calls = []
+    monkeypatch.setattr(parallel.gc, "collect", lambda: calls.append("collect"))
+    monkeypatch.setattr(parallel.gc, "freeze", lambda: calls.append("freeze"))
+    monkeypatch.setattr(parallel, "watch_parent", lambda parent: None)
+    monkeypatch.setattr(parallel, "_settled", False)
+    ours = parallel.process_identity(parallel.os.getpid())
+    assert parallel.in_worker(lambda x: {"x": x}, ours, 1) == {"x": 1}  # joblib's job in the uvms process itself
+    assert parallel.in_worker(lambda x: {"x": x}, None, 2) == {"x": 2}  # a remote cluster's worker: not ours
+    assert calls == []
+    uvms_process = (parallel.os.getpid() + 1, None)  # the task came from another process: this is its worker
+    assert parallel.in_worker(lambda x: {"x": x}, uvms_process, 3) == {"x": 3}
+    assert calls == ["collect", "freeze"]  # the first task's garbage collected, what survives frozen
+    with pytest.raises(ZeroDivisionError):
+        parallel.in_worker(lambda x: 1 / x, uvms_process, 0)
+    assert calls == ["collect", "freeze"]  # once per process
