@@ -30,11 +30,12 @@ def test_the_frame_jacobians_from_the_world_jacobian_are_pinocchios(source, rng)
         pin.computeJointJacobians(model, data, q)
         for frame_id in frames:
             frame = model.frames[frame_id]
-            out = np.full((6, model.nv), np.nan)
+            out, rotation = np.full((6, model.nv), np.nan), np.full((3, 3), np.nan)
             frame_jacobian_into(data.J, data.oMi[frame.parentJoint].homogeneous, frame.placement.rotation.copy(),
                                 frame.placement.translation.copy(),
-                                frame_jacobian_program(model, data, frame.parentJoint), out)
+                                frame_jacobian_program(model, data, frame.parentJoint), out, rotation)
             expected = pin.getFrameJacobian(model, data, frame_id, pin.LOCAL)
             np.testing.assert_allclose(out, expected, rtol=0.0, atol=1e-14)
+            np.testing.assert_allclose(rotation, (data.oMi[frame.parentJoint] * frame.placement).rotation, atol=1e-15)
             if frame.name == "link_b":  # on the mimic finger: it moves with its driver's coordinate (finger_a)
                 assert np.abs(out[:, model.idx_vs[model.getJointId("finger_a")]]).max() > 0.1

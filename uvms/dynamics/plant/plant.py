@@ -154,7 +154,7 @@ class Plant:
         self._link_joint = np.array([self._joints.index(joint) for joint in stacked.joints], dtype=np.int64)
         self._flags = np.array([self.added_mass, self.damping, self._moving_fluid, self._buoyant], dtype=np.int64)
         self._no_accelerations = np.zeros((len(self._joints), 6))
-        self._no_links = (np.zeros((0, 4, 4)), np.zeros((0, 6)), np.zeros((0, 3, 3)))
+        self._no_links = (np.zeros((0, 4, 4)), np.zeros((0, 6)))
         # the compiled pass and its constants (the links' walks over data.J among them), made at the first
         # evaluation: numba loads there
         self._terms: tuple[Callable[..., None], tuple[np.ndarray, ...]] | None = None
@@ -260,10 +260,10 @@ class Plant:
             pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
             pin.computeJointJacobians(model, data)
         terms, constants = self._terms if self._terms is not None else self._prepare_terms()
-        placements, accelerations, rotations = self._joint_states() if count else self._no_links
+        placements, accelerations = self._joint_states() if count else self._no_links
         nv = model.nv
         mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
-        terms(upper, h, data.J, placements, accelerations, rotations, v, mass, bias_forces, *constants)
+        terms(upper, h, data.J, placements, accelerations, v, mass, bias_forces, *constants)
         if wrench:  # the thrusters' wrench on the vehicle, at the base frame
             bias_forces -= body_wrench @ pin.getFrameJacobian(model, data, self._base_frame, LOCAL)
         return mass, bias_forces
@@ -283,10 +283,10 @@ class Plant:
             stacked.buoyancy, stacked.center_of_buoyancy, self._current, self._flags)
         return self._terms
 
-    def _joint_states(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The links' joints' placements (K, 4, 4) and bias accelerations (K, 6), the links' rotations (L, 3, 3)
-        from ``self.data`` (forwardKinematics with zero acceleration run); zeros where no term reads them."""
-        data, stacked = self.data, self._stacked
+    def _joint_states(self) -> tuple[np.ndarray, np.ndarray]:
+        """The links' joints' placements (K, 4, 4) and bias accelerations (K, 6) from ``self.data``
+        (forwardKinematics with zero acceleration run); zeros where no term reads them."""
+        data = self.data
         placed = data.oMi.tolist()  # one call for all joints; a getter per joint costs as much
         placements = np.array([placed[joint].homogeneous for joint in self._joints])
         if self.added_mass:
@@ -294,11 +294,7 @@ class Plant:
             accelerations = np.array([moving[joint].vector for joint in self._joints])
         else:
             accelerations = self._no_accelerations
-        if self._moving_fluid or self._buoyant:
-            rotations = placements[self._link_joint, :3, :3] @ stacked.rotations
-        else:
-            rotations = stacked.no_rotations
-        return placements, accelerations, rotations
+        return placements, accelerations
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""

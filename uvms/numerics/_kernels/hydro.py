@@ -151,18 +151,19 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
 
 @njit(cache=True)
 def frame_jacobian_into(jacobian: np.ndarray, placement: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
-                        program: np.ndarray, out: np.ndarray) -> None:
+                        program: np.ndarray, out: np.ndarray, frame_rotation: np.ndarray) -> None:
     """A frame's LOCAL Jacobian (6, nv) into ``out`` from Pinocchio's world Jacobian: ``pin.getFrameJacobian``'s
-    numbers (its operations in its order: oMf = oMi jMf, then each column Ad(oMf)^-1 J_k).
+    numbers (its operations in its order: oMf = oMi jMf, then each column Ad(oMf)^-1 J_k); the frame's rotation
+    in the world into ``frame_rotation`` (3, 3).
 
     Args:
         jacobian: data.J (6, nv_extended), world, after ``computeJointJacobians``.
         placement: (4, 4) oMi of the frame's joint; rotation (3, 3), translation (3,): the frame in its joint.
         program: (P, 3) int rows (column of data.J, column of v, 1 to add / 0 to set), Pinocchio's walk up the
             joint's support (:func:`frame_jacobian_program`).
-        out: (6, nv) written.
+        out: (6, nv), frame_rotation: (3, 3) written.
     """
-    r = np.empty((3, 3))
+    r = frame_rotation
     p = np.empty(3)
     for i in range(3):
         for j in range(3):
@@ -213,7 +214,7 @@ def frame_jacobian_program(model, data, joint: int) -> np.ndarray:
 
 @njit(cache=True)
 def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
-                     accelerations: np.ndarray, rotations: np.ndarray, v: np.ndarray, mass: np.ndarray,
+                     accelerations: np.ndarray, v: np.ndarray, mass: np.ndarray,
                      bias_forces: np.ndarray, slots: np.ndarray, programs: np.ndarray, starts: np.ndarray,
                      link_rotations: np.ndarray, link_translations: np.ndarray, motion_to_link: np.ndarray,
                      added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray, quadratic: np.ndarray,
@@ -226,8 +227,7 @@ def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, pla
     Args:
         upper: M (nv, nv), its upper triangle read; h: (nv,) rnea's bias forces.
         jacobian: data.J (6, nv_extended), world; placements: (K, 4, 4) the links' joints' oMi;
-        accelerations: (K, 6) their bias accelerations (data.a, a = 0; read with the added mass);
-        rotations: (L, 3, 3) the links' rotations in the world (read with a current or buoyancy).
+        accelerations: (K, 6) their bias accelerations (data.a, a = 0; read with the added mass).
         v: (nv,); mass: Mbar (nv, nv) out; bias_forces: nbar (nv,) out.
         slots ... flags: the plant's constants (one tuple, made once: a call passes it as ``*constants``):
             slots: (L,) each link's row of placements and accelerations; programs: (P, 3) the links' walks
@@ -245,12 +245,13 @@ def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, pla
     if count == 0:
         return
     jacobians = np.empty((count, 6, nv))
+    rotations = np.empty((count, 3, 3))  # the links' in the world
     joint_bias = np.zeros((count, 6))
     with_added_mass = flags[0] != 0
     for link in range(count):
         slot = slots[link]
         frame_jacobian_into(jacobian, placements[slot], link_rotations[link], link_translations[link],
-                            programs[starts[link]:starts[link + 1]], jacobians[link])
+                            programs[starts[link]:starts[link + 1]], jacobians[link], rotations[link])
         if with_added_mass:
             joint_bias[link] = accelerations[slot]
     hydro_terms_into(jacobians, v, joint_bias, rotations, motion_to_link, added_mass, linear, forward, quadratic,
