@@ -121,9 +121,7 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
                 for j in range(moved):
                     column = columns[j]
                     total = 0.0
-                    for i in range(6):
-                        if jacobian[i, row] == 0.0:
-                            continue
+                    for i in range(6):  # (a zero entry of J adds a signed zero: the sum is unchanged)
                         total += jacobian[i, row] * product[i, column]
                     mass[row, column] += total
         if with_damping:
