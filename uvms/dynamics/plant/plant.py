@@ -270,17 +270,18 @@ class Plant:
 
     def _prepare_terms(self) -> tuple[Callable[..., None], tuple[np.ndarray, ...]]:
         """The compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`, numba loaded here) and its
-        constants: the links' walks over data.J and their stacked parameters. Made once, at the first evaluation."""
-        from ...numerics._kernels.hydro import frame_jacobian_program, plant_terms_into
+        constants (ints, floats): the links' walks over data.J and their stacked parameters
+        (:func:`~uvms.numerics._kernels.hydro.pack_constants`). Made once, at the first evaluation."""
+        from ...numerics._kernels.hydro import frame_jacobian_program, pack_constants, plant_terms_into
 
         stacked = self._stacked
         walks = [frame_jacobian_program(self.model, self.data, joint) for joint in stacked.joints]
         starts = np.cumsum([0] + [len(walk) for walk in walks]).astype(np.int64)
         programs = np.concatenate(walks) if walks else np.zeros((0, 3), dtype=np.int64)
-        self._terms = plant_terms_into, (
-            self._link_joint, programs, starts, stacked.rotations, stacked.translations, stacked.motion_to_link,
-            stacked.added_mass, stacked.linear_damping, stacked.forward_damping, stacked.quadratic_damping,
-            stacked.buoyancy, stacked.center_of_buoyancy, self._current, self._flags)
+        self._terms = plant_terms_into, pack_constants(
+            self._link_joint, programs, starts, self._flags, stacked.rotations, stacked.translations,
+            stacked.motion_to_link, stacked.added_mass, stacked.linear_damping, stacked.forward_damping,
+            stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, self._current)
         return self._terms
 
     def _joint_states(self) -> tuple[np.ndarray, np.ndarray]:

@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["frame_jacobian_into", "frame_jacobian_program", "hydro_terms_into", "plant_terms_into"]
+__all__ = ["frame_jacobian_into", "frame_jacobian_program", "hydro_terms_into", "pack_constants",
+           "plant_terms_into"]
 
 
 @njit(cache=True)
@@ -210,14 +211,33 @@ def frame_jacobian_program(model, data, joint: int) -> np.ndarray:
     return np.array(rows, dtype=np.int64).reshape(-1, 3)
 
 
+def pack_constants(slots: np.ndarray, programs: np.ndarray, starts: np.ndarray, flags: np.ndarray,
+                   link_rotations: np.ndarray, link_translations: np.ndarray, motion_to_link: np.ndarray,
+                   added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray, quadratic: np.ndarray,
+                   buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray) -> tuple[np.ndarray,
+                                                                                                     np.ndarray]:
+    """The plant's constants for :func:`plant_terms_into` as two flat arrays (ints, floats): two arguments instead
+    of fourteen (numba's dispatch checks each argument's type at every call); the kernel reads them back as views.
+
+    Args:
+        slots: (L,) each link's row of the joints' arrays; programs: (P, 3) the links' walks
+            (:func:`frame_jacobian_program`), link l's rows starts[l]:starts[l + 1] (starts (L + 1,));
+        flags: (4,) added mass, damping, current, buoyancy on (1) or off (0);
+        link_rotations, link_translations: (L, 3, 3), (L, 3) the links in their joints; motion_to_link ...
+            center_of_buoyancy, current: the stacked link constants (:func:`hydro_terms_into`).
+    """
+    count = len(slots)
+    ints = np.concatenate([[count, len(programs)], slots, starts, np.ravel(programs), flags]).astype(np.int64)
+    floats = np.concatenate([np.ravel(x) for x in (link_rotations, link_translations, motion_to_link, added_mass,
+                                                    linear, forward, quadratic, buoyancy, center_of_buoyancy,
+                                                    current)]).astype(float)  # 106 L + 3 numbers
+    return ints, floats
+
+
 @njit(cache=True)
 def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
-                     accelerations: np.ndarray, v: np.ndarray, mass: np.ndarray,
-                     bias_forces: np.ndarray, slots: np.ndarray, programs: np.ndarray, starts: np.ndarray,
-                     link_rotations: np.ndarray, link_translations: np.ndarray, motion_to_link: np.ndarray,
-                     added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray, quadratic: np.ndarray,
-                     buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray,
-                     flags: np.ndarray) -> None:
+                     accelerations: np.ndarray, v: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray,
+                     ints: np.ndarray, floats: np.ndarray) -> None:
     """Mbar and nbar of the plant in one call: the links' LOCAL Jacobians from Pinocchio's world Jacobian
     (:func:`frame_jacobian_into`), then :func:`hydro_terms_into` on Pinocchio's M (its upper triangle, as crba
     fills it) and h.
@@ -227,21 +247,30 @@ def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, pla
         jacobian: data.J (6, nv_extended), world; placements: (K, 4, 4) the links' joints' oMi;
         accelerations: (K, 6) their bias accelerations (data.a, a = 0; read with the added mass).
         v: (nv,); mass: Mbar (nv, nv) out; bias_forces: nbar (nv,) out.
-        slots ... flags: the plant's constants (one tuple, made once: a call passes it as ``*constants``):
-            slots: (L,) each link's row of placements and accelerations; programs: (P, 3) the links' walks
-            (:func:`frame_jacobian_program`), link l's rows starts[l]:starts[l + 1]; link_rotations,
-            link_translations: (L, 3, 3), (L, 3) the links in their joints; motion_to_link ... center_of_buoyancy,
-            current: the stacked link constants (:func:`hydro_terms_into`); flags: (4,) int: added mass, damping,
-            current, buoyancy on.
+        ints, floats: the plant's constants (:func:`pack_constants`).
     """
     nv = h.shape[0]
     for row in range(nv):
         bias_forces[row] = h[row]
         for column in range(nv):
             mass[row, column] = upper[row, column] if column >= row else upper[column, row]
-    count = slots.shape[0]
+    count, steps = ints[0], ints[1]
     if count == 0:
         return
+    slots = ints[2:2 + count]
+    starts = ints[2 + count:3 + 2 * count]
+    programs = ints[3 + 2 * count:3 + 2 * count + 3 * steps].reshape(steps, 3)
+    flags = ints[3 + 2 * count + 3 * steps:]
+    link_rotations = floats[:9 * count].reshape(count, 3, 3)
+    link_translations = floats[9 * count:12 * count].reshape(count, 3)
+    motion_to_link = floats[12 * count:48 * count].reshape(count, 6, 6)
+    added_mass = floats[48 * count:84 * count].reshape(count, 6, 6)
+    linear = floats[84 * count:90 * count].reshape(count, 6)
+    forward = floats[90 * count:96 * count].reshape(count, 6)
+    quadratic = floats[96 * count:102 * count].reshape(count, 6)
+    buoyancy = floats[102 * count:103 * count]
+    center_of_buoyancy = floats[103 * count:106 * count].reshape(count, 3)
+    current = floats[106 * count:]
     jacobians = np.empty((count, 6, nv))
     rotations = np.empty((count, 3, 3))  # the links' in the world
     joint_bias = np.zeros((count, 6))
