@@ -1,9 +1,9 @@
 """The hydrodynamic plant's equations of motion per evaluation, as ratios to one ``pin.aba`` on the same model.
 
 ``Plant._mass_and_bias`` (Mbar = M + sum J^T M_A J and nbar = h - sum J^T f, every term on: added mass, damping,
-a 0.3 m/s current, buoyancy, a thrusters' wrench) and ``Plant.dynamics`` (the same, then the vehicle's
-accelerations and the motors' torques: what an RK4 stage calls) on the BlueROV2 + Alpha 5 (7 hydrodynamic links,
-nv = 11), the RexROV-sized fixture (tests/fixtures/rexrov_like: one hull link, a 4-DOF arm and a mimic gripper,
+a 0.3 m/s current, buoyancy; then with a thrusters' wrench too) and ``Plant.dynamics`` (with the wrench, then the
+vehicle's accelerations and the motors' torques: what an RK4 stage calls) on the BlueROV2 + Alpha 5 (7 hydrodynamic
+links, nv = 11), the RexROV-sized fixture (tests/fixtures/rexrov_like: one hull link, a 4-DOF arm and a mimic gripper,
 nv = 11) and amundsen2018's snake (9 links, nv = 14), beside Pinocchio's own ``aba``, ``crba`` and
 ``crba`` + ``nonLinearEffects``, each timed back to back with the reference in every round (benchmarks/timing.py).
 ``pin.aba`` refuses mimic joints: on the fixture it runs on the same model with its mimic finger locked (the same
@@ -56,7 +56,8 @@ def main() -> None:
         v_ref, zero = 0.3 * rng.normal(size=reference.nv), np.zeros(reference.nv)
         plant.dynamics(q, v, command, wrench)  # numba loads its kernel once
         calls = {
-            "plant Mbar, nbar (_mass_and_bias)": lambda: plant._mass_and_bias(q, v, wrench),
+            "plant Mbar, nbar (_mass_and_bias)": lambda: plant._mass_and_bias(q, v),
+            "plant Mbar, nbar + thrusters' wrench": lambda: plant._mass_and_bias(q, v, wrench),
             "plant dynamics (+ base solve, torques)": lambda: plant.dynamics(q, v, command, wrench),
             "pin.crba": lambda: pin.crba(model, data, q),
             "pin.crba + pin.nonLinearEffects": lambda: (pin.crba(model, data, q),
