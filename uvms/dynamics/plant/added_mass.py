@@ -89,16 +89,6 @@ class StackedLinks:
         linear = self.linear_damping + relative[:, :1] * self.forward_damping
         return -(linear + self.quadratic_damping * np.abs(relative)) * relative
 
-    @property
-    def no_bias(self) -> np.ndarray:
-        """(L, 6) zeros: the joints' bias accelerations where no term reads them."""
-        return np.zeros((self.count, 6))
-
-    @property
-    def no_rotations(self) -> np.ndarray:
-        """(L, 3, 3) zeros: the links' rotations where no term reads them."""
-        return np.zeros((self.count, 3, 3))
-
     @classmethod
     def of(cls, links: list[HydroLink], hydro: HydroParameters, gravity: bool) -> StackedLinks:
         """The arrays of ``links`` (their parameters from ``hydro``)."""

@@ -58,6 +58,8 @@ momentum live in :mod:`uvms.dynamics.plant.added_mass` (importable from here too
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pinocchio as pin
 
@@ -149,9 +151,13 @@ class Plant:
         stacked = self._stacked
         # what one evaluation gathers from pin.Data: each joint once (several links may share one)
         self._joints = tuple(dict.fromkeys(stacked.joints))
-        self._link_joint = np.array([self._joints.index(joint) for joint in stacked.joints], dtype=int)
-        self._packed: np.ndarray | None = None  # the links' constants for the compiled pass, made at its first call
-        self._no_links = (np.zeros((0, 6, self.model.nv)), np.zeros((0, 6)), np.zeros((0, 3, 3)))
+        self._link_joint = np.array([self._joints.index(joint) for joint in stacked.joints], dtype=np.int64)
+        self._flags = np.array([self.added_mass, self.damping, self._moving_fluid, self._buoyant], dtype=np.int64)
+        self._no_accelerations = np.zeros((len(self._joints), 6))
+        self._no_links = (np.zeros((0, 4, 4)), np.zeros((0, 6)))
+        # the compiled pass and its constants (the links' walks over data.J among them), made at the first
+        # evaluation: numba loads there
+        self._terms: tuple[Callable[..., None], tuple[np.ndarray, ...]] | None = None
 
     def system(self, controller: Controller | None, *, dt: float, control_dt: float = 0.0) -> PlantSystem:
         """This plant under a joint-velocity command, the system :func:`uvms.sim.loop.simulate` integrates.
@@ -238,49 +244,58 @@ class Plant:
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Mbar (nv, nv) and nbar (nv,) at (q, v): Mbar v' + nbar = [0; tau_m] (nbar = h - sum J^T f).
 
-        Pinocchio gives M (crba), h (rnea, gravity included), the links' LOCAL Jacobians J_l and their joints'
-        bias accelerations and poses; the links' wrenches f_l (their frames) are summed by virtual work in one
-        compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`): Mbar = M + sum_l J_l^T M_A,l J_l,
+        Pinocchio gives M (crba), h (rnea, gravity included), its world Jacobian data.J (one array), the links'
+        joints' placements and bias accelerations; the links' LOCAL Jacobians J_l (``getFrameJacobian``'s numbers)
+        and wrenches f_l (their frames) are formed and summed by virtual work in one compiled pass
+        (:func:`uvms.numerics._kernels.hydro.plant_terms_into`): Mbar = M + sum_l J_l^T M_A,l J_l,
         nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea with the wrenches as external
         forces, to rounding).
         """
-        from ...numerics._kernels.hydro import pack_links, plant_terms_into  # numba: loaded when a plant first runs
-
-        model, data, dynamics = self.model, self.data, self._dynamics_data
-        stacked = self._stacked
-        upper = pin.crba(model, dynamics, q)  # crba fills the upper triangle
-        h = pin.rnea(model, dynamics, q, v, self._zero_velocity)  # h(q, v), gravity included
+        model, data = self.model, self.data
+        count = self._stacked.count
+        upper = pin.crba(model, self._dynamics_data, q)  # crba fills the upper triangle
+        h = pin.rnea(model, self._dynamics_data, q, v, self._zero_velocity)  # h(q, v), gravity included
         wrench = body_wrench is not None
-        if stacked.count or wrench:
+        if count or wrench:
             pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
             pin.computeJointJacobians(model, data)
-        if self._packed is None:
-            self._packed = pack_links(stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
-                                      stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy,
-                                      stacked.center_of_buoyancy)
-            self._flags = np.array([self.added_mass, self.damping, self._moving_fluid, self._buoyant], dtype=int)
-        jacobians, bias, rotations = self._link_terms() if stacked.count else self._no_links
+        terms, constants = self._terms if self._terms is not None else self._prepare_terms()
+        placements, accelerations = self._joint_states() if count else self._no_links
         nv = model.nv
         mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
-        plant_terms_into(upper, h, jacobians, v, bias, rotations, self._packed, self._current, self._flags, mass,
-                         bias_forces)
+        terms(upper, h, data.J, placements, accelerations, v, mass, bias_forces, *constants)
         if wrench:  # the thrusters' wrench on the vehicle, at the base frame
             bias_forces -= body_wrench @ pin.getFrameJacobian(model, data, self._base_frame, LOCAL)
         return mass, bias_forces
 
-    def _link_terms(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The links' LOCAL Jacobians (L, 6, nv), their joints' bias accelerations (L, 6) and the links' rotations
-        (L, 3, 3) from ``self.data`` (forwardKinematics with zero acceleration and computeJointJacobians run);
-        zeros where no term reads them."""
-        model, data, stacked = self.model, self.data, self._stacked
-        jacobians = np.array([pin.getFrameJacobian(model, data, frame, LOCAL) for frame in stacked.frames])
-        joints, index = self._joints, self._link_joint
-        bias = np.array([data.a[joint].vector for joint in joints])[index] if self.added_mass else stacked.no_bias
-        if self._moving_fluid or self._buoyant:
-            rotations = np.array([data.oMi[joint].rotation for joint in joints])[index] @ stacked.rotations
+    def _prepare_terms(self) -> tuple[Callable[..., None], tuple[np.ndarray, ...]]:
+        """The compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`, numba loaded here) and its
+        constants (ints, floats): the links' walks over data.J and their stacked parameters
+        (:func:`~uvms.numerics._kernels.hydro.pack_constants`). Made once, at the first evaluation."""
+        from ...numerics._kernels.hydro import frame_jacobian_program, pack_constants, plant_terms_into
+
+        stacked = self._stacked
+        walks = [frame_jacobian_program(self.model, self.data, joint) for joint in stacked.joints]
+        starts = np.cumsum([0] + [len(walk) for walk in walks]).astype(np.int64)
+        programs = np.concatenate(walks) if walks else np.zeros((0, 3), dtype=np.int64)
+        self._terms = plant_terms_into, pack_constants(
+            self._link_joint, programs, starts, self._flags, stacked.rotations, stacked.translations,
+            stacked.motion_to_link, stacked.added_mass, stacked.linear_damping, stacked.forward_damping,
+            stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, self._current)
+        return self._terms
+
+    def _joint_states(self) -> tuple[np.ndarray, np.ndarray]:
+        """The links' joints' placements (K, 4, 4) and bias accelerations (K, 6) from ``self.data``
+        (forwardKinematics with zero acceleration run); zeros where no term reads them."""
+        data = self.data
+        placed = data.oMi.tolist()  # one call for all joints; a getter per joint costs as much
+        placements = np.array([placed[joint].homogeneous for joint in self._joints])
+        if self.added_mass:
+            moving = data.a.tolist()
+            accelerations = np.array([moving[joint].vector for joint in self._joints])
         else:
-            rotations = stacked.no_rotations
-        return jacobians, bias, rotations
+            accelerations = self._no_accelerations
+        return placements, accelerations
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""

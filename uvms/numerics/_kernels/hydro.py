@@ -1,10 +1,12 @@
 """The hydrodynamic terms of the plant's equations of motion, every link in one compiled pass.
 
-:meth:`uvms.dynamics.plant.plant.Plant._mass_and_bias`: Pinocchio gives the rigid mass matrix, h(q, v), the links'
-LOCAL Jacobians J_l, their joints' bias accelerations and rotations; here each link's Fossen wrench f_l (link
-frame) is formed and summed by virtual work, Mbar += sum_l J_l^T M_A,l J_l and nbar -= sum_l J_l^T f_l (the
-derivation is the docstring of :mod:`uvms.dynamics.plant.plant`). Compiled, because as numpy calls on arrays of a
-few rows it is about thirty calls, each dominated by the interpreter's overhead.
+:meth:`uvms.dynamics.plant.plant.Plant._mass_and_bias`: Pinocchio gives the rigid mass matrix, h(q, v), its world
+Jacobian (one array), the links' joints' placements and bias accelerations; here each link's LOCAL Jacobian J_l is
+formed from them (Pinocchio's ``getFrameJacobian``, its arithmetic in its order: the same bits), each link's
+Fossen wrench f_l (link frame) is formed and summed by virtual work, Mbar += sum_l J_l^T M_A,l J_l and
+nbar -= sum_l J_l^T f_l (the derivation is the docstring of :mod:`uvms.dynamics.plant.plant`). Compiled, because as
+numpy calls on arrays of a few rows it is about thirty calls, each dominated by the interpreter's overhead, and a
+Pinocchio getter per link costs more than the link's arithmetic.
 
 The module imports numba, so it is loaded where a plant is first evaluated; its kernel compiles at its first call
 and is cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
@@ -15,11 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["hydro_terms_into", "pack_links", "plant_terms_into"]
-
-#: Columns of a link's row in :func:`pack_links`: motion_to_link (36), added mass (36), linear, forward, quadratic
-#: damping (6 each), buoyancy (1), centre of buoyancy (3).
-PACKED = 94
+__all__ = ["frame_jacobian_into", "frame_jacobian_program", "hydro_terms_into", "pack_constants",
+           "plant_terms_into"]
 
 
 @njit(cache=True)
@@ -52,6 +51,9 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
     relative = np.empty(6)
     rate = np.zeros(6)  # Jdot_l v - nu_c'
     wrench = np.empty(6)
+    a = np.empty(6)  # M_A nu_r
+    product = np.empty((6, nv))  # M_A J
+    columns = np.empty(nv, dtype=np.int64)
     for link in range(count):
         jacobian = jacobians[link]
         for row in range(6):
@@ -82,7 +84,6 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
                 rate[1] += w1
                 rate[2] += w2
             inertia = added_mass[link]
-            a = np.empty(6)
             for row in range(6):
                 total = 0.0
                 accelerating = 0.0
@@ -101,16 +102,28 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
             wrench[3] -= y0 + z0
             wrench[4] -= y1 + z1
             wrench[5] -= y2 + z2
-            for row in range(nv):  # Mbar += J^T M_A J
-                for column in range(nv):
+            # Mbar += J^T (M_A J) over the columns J moves (its zero columns add nothing)
+            moved = 0
+            for column in range(nv):
+                for row in range(6):
+                    if jacobian[row, column] != 0.0:
+                        columns[moved] = column
+                        moved += 1
+                        break
+            for j in range(moved):
+                column = columns[j]
+                for i in range(6):
+                    inner = 0.0
+                    for k in range(6):
+                        inner += inertia[i, k] * jacobian[k, column]
+                    product[i, column] = inner
+            for i_row in range(moved):
+                row = columns[i_row]
+                for j in range(moved):
+                    column = columns[j]
                     total = 0.0
-                    for i in range(6):
-                        if jacobian[i, row] == 0.0:
-                            continue
-                        inner = 0.0
-                        for k in range(6):
-                            inner += inertia[i, k] * jacobian[k, column]
-                        total += jacobian[i, row] * inner
+                    for i in range(6):  # (a zero entry of J adds a signed zero: the sum is unchanged)
+                        total += jacobian[i, row] * product[i, column]
                     mass[row, column] += total
         if with_damping:
             surge = relative[0]
@@ -135,40 +148,139 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
             bias_forces[column] -= total
 
 
-def pack_links(motion_to_link: np.ndarray, added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray,
-               quadratic: np.ndarray, buoyancy: np.ndarray, center_of_buoyancy: np.ndarray) -> np.ndarray:
-    """The links' constants as one (L, :data:`PACKED`) array: one argument of :func:`plant_terms_into` instead of
-    seven (numba's dispatch costs about a microsecond per array argument)."""
-    count = len(buoyancy)
-    return np.ascontiguousarray(np.concatenate(
-        [motion_to_link.reshape(count, 36), added_mass.reshape(count, 36), linear.reshape(count, 6),
-         forward.reshape(count, 6), quadratic.reshape(count, 6), buoyancy.reshape(count, 1),
-         center_of_buoyancy.reshape(count, 3)], axis=1), dtype=float)
+@njit(cache=True)
+def frame_jacobian_into(jacobian: np.ndarray, placement: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
+                        program: np.ndarray, out: np.ndarray, frame_rotation: np.ndarray) -> None:
+    """A frame's LOCAL Jacobian (6, nv) into ``out`` from Pinocchio's world Jacobian: ``pin.getFrameJacobian``'s
+    numbers (its operations in its order: oMf = oMi jMf, then each column Ad(oMf)^-1 J_k); the frame's rotation
+    in the world into ``frame_rotation`` (3, 3).
+
+    Args:
+        jacobian: data.J (6, nv_extended), world, after ``computeJointJacobians``.
+        placement: (4, 4) oMi of the frame's joint; rotation (3, 3), translation (3,): the frame in its joint.
+        program: (P, 3) int rows (column of data.J, column of v, 1 to add / 0 to set), Pinocchio's walk up the
+            joint's support (:func:`frame_jacobian_program`).
+        out: (6, nv), frame_rotation: (3, 3) written.
+    """
+    r = frame_rotation
+    p = np.empty(3)
+    for i in range(3):
+        for j in range(3):
+            r[i, j] = placement[i, 0] * rotation[0, j] + placement[i, 1] * rotation[1, j] + \
+                placement[i, 2] * rotation[2, j]
+        p[i] = placement[i, 3] + (placement[i, 0] * translation[0] + placement[i, 1] * translation[1]
+                                  + placement[i, 2] * translation[2])
+    out[:, :] = 0.0
+    for step in range(program.shape[0]):
+        source, column, add = program[step, 0], program[step, 1], program[step, 2]
+        w0, w1, w2 = jacobian[3, source], jacobian[4, source], jacobian[5, source]
+        l0 = jacobian[0, source] - (p[1] * w2 - p[2] * w1)  # v - p x w
+        l1 = jacobian[1, source] - (p[2] * w0 - p[0] * w2)
+        l2 = jacobian[2, source] - (p[0] * w1 - p[1] * w0)
+        for i in range(3):
+            linear = r[0, i] * l0 + r[1, i] * l1 + r[2, i] * l2
+            angular = r[0, i] * w0 + r[1, i] * w1 + r[2, i] * w2
+            if add:
+                out[i, column] += linear
+                out[3 + i, column] += angular
+            else:
+                out[i, column] = linear
+                out[3 + i, column] = angular
+
+
+def frame_jacobian_program(model, data, joint: int) -> np.ndarray:
+    """The (P, 3) rows :func:`frame_jacobian_into` walks for a frame on ``joint``: Pinocchio's own walk (its
+    non-mimic columns set, then its mimic columns added: a mimic joint moves its driver's column of v).
+
+    Args:
+        model, data: the Pinocchio model and a data of it (its column tables).
+    """
+    first = model.idx_vExtendeds[joint]
+    last = first + model.nvExtendeds[joint] - 1
+    supports = model.mimic_joint_supports[joint]
+    mimic = len(supports) > 0 and supports[-1] == joint
+    rows = []
+    column = data.non_mimic_parents_fromRow[first] if mimic else last
+    while column >= 0:
+        rows.append((column, data.idx_vExtended_to_idx_v_fromRow[column], 0))
+        column = data.non_mimic_parents_fromRow[column]
+    column = last if mimic else data.mimic_parents_fromRow[first]
+    while column >= 0:
+        rows.append((column, data.idx_vExtended_to_idx_v_fromRow[column], 1))
+        column = data.mimic_parents_fromRow[column]
+    return np.array(rows, dtype=np.int64).reshape(-1, 3)
+
+
+def pack_constants(slots: np.ndarray, programs: np.ndarray, starts: np.ndarray, flags: np.ndarray,
+                   link_rotations: np.ndarray, link_translations: np.ndarray, motion_to_link: np.ndarray,
+                   added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray, quadratic: np.ndarray,
+                   buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray) -> tuple[np.ndarray,
+                                                                                                     np.ndarray]:
+    """The plant's constants for :func:`plant_terms_into` as two flat arrays (ints, floats): two arguments instead
+    of fourteen (numba's dispatch checks each argument's type at every call); the kernel reads them back as views.
+
+    Args:
+        slots: (L,) each link's row of the joints' arrays; programs: (P, 3) the links' walks
+            (:func:`frame_jacobian_program`), link l's rows starts[l]:starts[l + 1] (starts (L + 1,));
+        flags: (4,) added mass, damping, current, buoyancy on (1) or off (0);
+        link_rotations, link_translations: (L, 3, 3), (L, 3) the links in their joints; motion_to_link ...
+            center_of_buoyancy, current: the stacked link constants (:func:`hydro_terms_into`).
+    """
+    count = len(slots)
+    ints = np.concatenate([[count, len(programs)], slots, starts, np.ravel(programs), flags]).astype(np.int64)
+    floats = np.concatenate([np.ravel(x) for x in (link_rotations, link_translations, motion_to_link, added_mass,
+                                                    linear, forward, quadratic, buoyancy, center_of_buoyancy,
+                                                    current)]).astype(float)  # 106 L + 3 numbers
+    return ints, floats
 
 
 @njit(cache=True)
-def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarray,
-                     rotations: np.ndarray, packed: np.ndarray, current: np.ndarray, flags: np.ndarray,
-                     mass: np.ndarray, bias_forces: np.ndarray) -> None:
-    """Mbar and nbar of the plant's links in one call: :func:`hydro_terms_into` on Pinocchio's M (its upper
-    triangle, as crba fills it) and h.
+def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
+                     accelerations: np.ndarray, v: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray,
+                     ints: np.ndarray, floats: np.ndarray) -> None:
+    """Mbar and nbar of the plant in one call: the links' LOCAL Jacobians from Pinocchio's world Jacobian
+    (:func:`frame_jacobian_into`), then :func:`hydro_terms_into` on Pinocchio's M (its upper triangle, as crba
+    fills it) and h.
 
     Args:
         upper: M (nv, nv), its upper triangle read; h: (nv,) rnea's bias forces.
-        jacobians, v, joint_bias, rotations, current: as for :func:`hydro_terms_into` (L may be 0).
-        packed: the links' constants (L, PACKED) (:func:`pack_links`).
-        flags: (4,) int: added mass, damping, current, buoyancy on.
-        mass: Mbar (nv, nv) out; bias_forces: nbar (nv,) out.
+        jacobian: data.J (6, nv_extended), world; placements: (K, 4, 4) the links' joints' oMi;
+        accelerations: (K, 6) their bias accelerations (data.a, a = 0; read with the added mass).
+        v: (nv,); mass: Mbar (nv, nv) out; bias_forces: nbar (nv,) out.
+        ints, floats: the plant's constants (:func:`pack_constants`).
     """
     nv = h.shape[0]
     for row in range(nv):
         bias_forces[row] = h[row]
         for column in range(nv):
             mass[row, column] = upper[row, column] if column >= row else upper[column, row]
-    count = jacobians.shape[0]
-    if count:
-        hydro_terms_into(jacobians, v, joint_bias, rotations, packed[:, 0:36].copy().reshape(count, 6, 6),
-                         packed[:, 36:72].copy().reshape(count, 6, 6), packed[:, 72:78].copy(),
-                         packed[:, 78:84].copy(), packed[:, 84:90].copy(), packed[:, 90].copy(),
-                         packed[:, 91:94].copy(), current, flags[0] != 0, flags[1] != 0, flags[2] != 0,
-                         flags[3] != 0, mass, bias_forces)
+    count, steps = ints[0], ints[1]
+    if count == 0:
+        return
+    slots = ints[2:2 + count]
+    starts = ints[2 + count:3 + 2 * count]
+    programs = ints[3 + 2 * count:3 + 2 * count + 3 * steps].reshape(steps, 3)
+    flags = ints[3 + 2 * count + 3 * steps:]
+    link_rotations = floats[:9 * count].reshape(count, 3, 3)
+    link_translations = floats[9 * count:12 * count].reshape(count, 3)
+    motion_to_link = floats[12 * count:48 * count].reshape(count, 6, 6)
+    added_mass = floats[48 * count:84 * count].reshape(count, 6, 6)
+    linear = floats[84 * count:90 * count].reshape(count, 6)
+    forward = floats[90 * count:96 * count].reshape(count, 6)
+    quadratic = floats[96 * count:102 * count].reshape(count, 6)
+    buoyancy = floats[102 * count:103 * count]
+    center_of_buoyancy = floats[103 * count:106 * count].reshape(count, 3)
+    current = floats[106 * count:]
+    jacobians = np.empty((count, 6, nv))
+    rotations = np.empty((count, 3, 3))  # the links' in the world
+    joint_bias = np.zeros((count, 6))
+    with_added_mass = flags[0] != 0
+    for link in range(count):
+        slot = slots[link]
+        frame_jacobian_into(jacobian, placements[slot], link_rotations[link], link_translations[link],
+                            programs[starts[link]:starts[link + 1]], jacobians[link], rotations[link])
+        if with_added_mass:
+            joint_bias[link] = accelerations[slot]
+    hydro_terms_into(jacobians, v, joint_bias, rotations, motion_to_link, added_mass, linear, forward, quadratic,
+                     buoyancy, center_of_buoyancy, current, with_added_mass, flags[1] != 0, flags[2] != 0,
+                     flags[3] != 0, mass, bias_forces)
