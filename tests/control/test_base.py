@@ -38,7 +38,7 @@ def test_every_controller_is_a_controller(blue):
     tracking = build(read_scenario(ROOT / "scenarios" / "hoang2011_w1.toml")).controller
     sequence = build(read_scenario(ROOT / "scenarios" / "xiang2019_grip.toml")).controller
     gjm = build(read_scenario(ROOT / "scenarios" / "hoang2011_gjm.toml")).controller
-    chain = station_keeping(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue), blue.neutral(), 0.01)
+    chain = station_keeping(ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue)), blue.neutral(), 0.01)
     for controller in (tracking, sequence, gjm, chain, OpenLoop(arm=np.zeros(3))):
         assert isinstance(controller, Controller), type(controller).__name__
 
@@ -95,8 +95,9 @@ def test_a_controller_run_twice_gives_the_same_run(blue):
     plant = uvms.Plant(blue, gravity=True, current=[0.3, 0.0, 0.0])
     thrusters = uvms.dynamics.thrusters_of(blue)
     station = blue.configuration(base=np.zeros(6), arm=ARM)
-    controller = station_keeping(plant, thrusters, station, 0.01, hold_arm=True)
-    first, second = (simulate(ActuatedPlant(plant, thrusters), controller, station, 0.3, 0.01) for _ in range(2))
+    actuated = ActuatedPlant(plant, thrusters)
+    controller = station_keeping(actuated, station, 0.01, hold_arm=True)
+    first, second = (simulate(actuated, controller, station, 0.3, 0.01) for _ in range(2))
     assert np.abs(controller.velocity.integral).max() > 0.0
     np.testing.assert_allclose(second.q, first.q, rtol=0, atol=1e-14)
     np.testing.assert_allclose(second.actuation.thrusts, first.actuation.thrusts, rtol=0, atol=1e-12)

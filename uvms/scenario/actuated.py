@@ -13,7 +13,7 @@ plant simulates their first-order response. The thrusters are model data
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
@@ -29,25 +29,31 @@ from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
-from ..solvers.base import Solver, SolverFactory
+from ..solvers.base import SolverFactory
 from ..tasks.frame import FrameTask
 from .inequalities import ObjectiveRecorder, ScenarioInequalities, build_inequalities
 from .spec import ScenarioSpec, SimulationSpec
-from .spec.keys import thaw
-
-#: The wrench axes the allocation priorities name (body FLU: forces, then moments).
-WRENCH_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
 
 
 @dataclass
 class Actuation:
-    """The actuated part of a run: the plant, its thrusters (and fins) and the station-keeping controller."""
+    """The actuated part of a run: the plant with its thrusters (and fins), and the controller that drives them."""
 
-    plant: Plant
-    thrusters: Thrusters
-    controller: CoordinatedControl | Controller  # the chain, or the MPC (controller.type = "mpc")
+    actuated: ActuatedPlant
+    controller: CoordinatedControl | Controller  # the chain, the MPC (controller.type = "mpc") or an excitation
     inequalities: ScenarioInequalities | None = None
-    fins: Fins = field(default_factory=Fins)
+
+    @property
+    def plant(self) -> Plant:
+        return self.actuated.plant
+
+    @property
+    def thrusters(self) -> Thrusters:
+        return self.actuated.thrusters
+
+    @property
+    def fins(self) -> Fins:
+        return self.actuated.fins
 
 
 def check_actuated_scenario(robot: Robot, spec: ScenarioSpec) -> None:
@@ -86,68 +92,46 @@ def check_vehicle_control_used(spec: ScenarioSpec) -> None:
                             f"thrusters the vehicle moves by momentum conservation or as commanded")
 
 
-def allocation_priorities(value: tuple, origin: str = "vehicle_control.priorities") -> list[tuple[str, ...]] | None:
-    """``[["yaw", "z", "roll", "pitch"], ["x", "y"]]`` -> groups of wrench axes, highest first (None: one group)."""
-    if not value:
-        return None
-    if not all(isinstance(group, (list, tuple)) and group and all(axis in WRENCH_AXES for axis in group)
-               for group in value):
-        raise ScenarioError(f"{origin} must be a list of groups of wrench axes among {', '.join(WRENCH_AXES)}, "
-                            f"highest priority first, e.g. [['yaw', 'z', 'roll', 'pitch'], ['x', 'y']]; "
-                            f"got {thaw(value)!r}")
-    return [tuple(group) for group in value]
+def actuated_plant(plant: Plant, fins: bool = True) -> ActuatedPlant:
+    """The plant with the model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`) and, with
+    ``fins``, its fins.
+
+    Raises:
+        ScenarioError: a model without thrusters (the message says where they go), a thruster on an arm link.
+    """
+    try:
+        return ActuatedPlant(plant, thrusters_of(plant.robot), fins=fins_of(plant.robot) if fins else None)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
 
 
-def optional_gain(value: float | list | None) -> np.ndarray | None:
-    """A [vehicle_control] kp or ki as an array, or None (derived from the bandwidth and damping ratio)."""
-    return None if value is None else np.asarray(value, dtype=float)
-
-
-def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray, spec: ScenarioSpec,
-                   solver: type[Solver], options: dict) -> Actuation:
-    """The thrusters of the model and the whole chain of the scenario (:func:`uvms.control.station.actuated_control`).
+def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.ndarray, spec: ScenarioSpec,
+                   solver: SolverFactory) -> Actuation:
+    """The whole chain of the scenario on ``actuated`` (:func:`uvms.control.station.actuated_control`).
 
     Args:
-        solver: the scenario's solver class, built with ``options`` on the chain's levels (a solver without
-            priorities, CLIK: the vehicle's velocity given as fixed columns). The scenario's ``[[inequalities]]``
-            are levels above the task when the solver enforces them, else monitored.
+        solver: the scenario's solver, built on the chain's levels (a solver without priorities, CLIK: the
+            vehicle's velocity given as fixed columns). The scenario's ``[[inequalities]]`` are levels above the task
+            when the solver enforces them, else monitored.
     """
-    check_actuated_scenario(robot, spec)
-    section = spec.solver
-    if not solver.holds_priorities and (section.alpha or section.enforce_limits or section.weights
-                                        or section.damping_epsilon):
+    section, cls = spec.solver, solver.cls
+    if not cls.holds_priorities and (section.alpha or section.enforce_limits or section.weights
+                                     or section.damping_epsilon):
         raise ScenarioError(f"plant.thrusters = true with solver.method = {section.method!r}: it has no priorities "
                             "to hold the vehicle's velocity above the task, so the arm is solved with the vehicle's "
                             "velocity given as fixed columns: J_a^# (K e + xdot_d - J_v nu) (solver.gain, a fixed "
                             "solver.damping); solver.alpha, enforce_limits, weights and damping_epsilon are not "
                             "supported there. For joint limits use solver.method = 'set_based' or 'hqp' with an "
                             "[[inequalities]] joint_limits table")
-    try:
-        thrusters = thrusters_of(robot)
-        fins = fins_of(robot)
-    except UVMSError as exc:
-        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
-    control, tables = spec.vehicle_control, spec.inequalities
-    inequalities = build_inequalities(robot, tables, solver.enforces_inequalities) if tables else None
+    tables = spec.inequalities
+    inequalities = build_inequalities(actuated.robot, tables, cls.enforces_inequalities) if tables else None
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
-        controller = actuated_control(
-            plant, thrusters, q0, float(spec.simulation.dt), task, trajectory,
-            solver=SolverFactory(solver, robot, options),
-            inequalities=enforced, coordination=control.coordination,
-            saturation_feedback=control.saturation_feedback, knows_current=control.knows_current,
-            kp=optional_gain(control.kp), ki=optional_gain(control.ki),
-            bandwidth=np.asarray(control.bandwidth, dtype=float),
-            damping_ratio=np.asarray(control.damping_ratio, dtype=float),
-            pose_gains=np.asarray(control.pose_gains, dtype=float),
-            max_speed=np.asarray(control.max_speed, dtype=float),
-            priorities=allocation_priorities(control.priorities), arm_feedforward=control.arm_feedforward,
-            gain=float(section.gain), damping=float(section.damping), fins=fins,
-            acceleration_feedforward=control.acceleration_feedforward, servo_compensation=control.servo_compensation,
-            disturbance_time_constant=float(control.disturbance_time_constant), tightening=control.tightening)
+        controller = actuated_control(actuated, q0, float(spec.simulation.dt), task, trajectory, solver,
+                                      spec.vehicle_control.settings, inequalities=enforced)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None
-    return Actuation(plant, thrusters, controller, inequalities, fins)
+    return Actuation(actuated, controller, inequalities)
 
 
 class ActuatedObjectives:
@@ -167,9 +151,9 @@ def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np
     """The run, with the task series (the end effector against the held point) recorded."""
     recorders = [] if actuation.inequalities is None else [ActuatedObjectives(actuation.plant.robot,
                                                                                   actuation.inequalities)]
-    return simulate(ActuatedPlant(actuation.plant, actuation.thrusters, fins=actuation.fins), actuation.controller,
-                    q0, duration, float(simulation.dt), integrator=simulation.integrator,
-                    task=task, desired=lambda t: trajectory(t).pose, progress=progress, recorders=recorders)
+    return simulate(actuation.actuated, actuation.controller, q0, duration, float(simulation.dt),
+                    integrator=simulation.integrator, task=task, desired=lambda t: trajectory(t).pose,
+                    progress=progress, recorders=recorders)
 
 
 def actuated_metrics(result: SimulationResult, actuation: Actuation, spec: ScenarioSpec) -> dict:

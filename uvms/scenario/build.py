@@ -19,7 +19,7 @@ from ..solvers import SOLVERS, Solver, VariableDamping, initial_configuration
 from ..solvers.base import SolverFactory
 from ..tasks import FrameTask, MidRangePotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
-from .actuated import Actuation, check_vehicle_control_used, make_actuation
+from .actuated import Actuation, actuated_plant, check_actuated_scenario, check_vehicle_control_used, make_actuation
 from .excitation import check_excitation_used, scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
 from .plant import check_kinematic_plant, make_plant
@@ -72,26 +72,29 @@ def build(spec: ScenarioSpec) -> Setup:
     task, q0, residual = scenario_start(robot, spec)
     trajectory = make_trajectory(Configuration(robot, q0).pose(task.frame_id).copy(), spec.trajectory)
     duration = scenario_duration(spec)
-    if spec.plant.type != "kinematic":
-        if spec.excitation.wrench and spec.plant.thrusters:
-            actuation = scenario_excitation(robot, make_plant(robot, spec.plant), spec, duration)
-            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
+    if spec.plant.type != "kinematic" and spec.plant.thrusters:
+        if spec.controller.type != "mpc":  # the MPC checks its own
+            check_actuated_scenario(robot, spec)
+        plant = make_plant(robot, spec.plant)
+        if spec.excitation.wrench:  # open loop: the thrusters alone, as identification's logs have them
+            actuation = scenario_excitation(actuated_plant(plant, fins=False), spec, duration)
+            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=plant,
                          actuation=actuation)
-        if spec.plant.thrusters and spec.controller.type == "mpc":
+        if spec.controller.type == "mpc":
             from .mpc import make_mpc_actuation
 
-            actuation = make_mpc_actuation(robot, make_plant(robot, spec.plant), task, trajectory, q0, spec)
-            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
+            actuation = make_mpc_actuation(actuated_plant(plant), task, trajectory, q0, spec)
+            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=plant,
                          actuation=actuation, inequalities=actuation.inequalities)
-        if spec.plant.thrusters:
-            cls = solver_class(spec.solver)
-            options = solver_options(robot, spec.solver, cls, spec.simulation.dt)
-            # the controller asks once per step, at k dt: the table of those times, shared with the recorder
-            times = stage_times(check_step_count(spec, duration), float(spec.simulation.dt), "euler")
-            samples = RecentSamples(TrajectoryTable(trajectory, times))
-            actuation = make_actuation(robot, make_plant(robot, spec.plant), task, samples, q0, spec, cls, options)
-            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
-                         actuation=actuation, inequalities=actuation.inequalities, samples=samples)
+        cls = solver_class(spec.solver)
+        solver = SolverFactory(cls, robot, solver_options(robot, spec.solver, cls, spec.simulation.dt))
+        # the controller asks once per step, at k dt: the table of those times, shared with the recorder
+        times = stage_times(check_step_count(spec, duration), float(spec.simulation.dt), "euler")
+        samples = RecentSamples(TrajectoryTable(trajectory, times))
+        actuation = make_actuation(actuated_plant(plant), task, samples, q0, spec, solver)
+        return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=plant,
+                     actuation=actuation, inequalities=actuation.inequalities, samples=samples)
+    if spec.plant.type != "kinematic":
         plant, controller, inequalities = make_plant_controller(robot, task, trajectory, spec)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(spec.plant.control_dt), inequalities=inequalities)

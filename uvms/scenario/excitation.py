@@ -30,7 +30,7 @@ from ..errors import IdentificationError, ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
-from .actuated import Actuation, check_actuated_scenario
+from .actuated import Actuation
 from .bags.tf_tree import vehicle_root_link
 from .spec import ScenarioSpec
 
@@ -188,7 +188,7 @@ def check_excitation_used(spec: ScenarioSpec) -> None:
                             f"vehicle's thrusters")
 
 
-def scenario_excitation(robot: Robot, plant: Plant, spec: ScenarioSpec, duration: float) -> Actuation:
+def scenario_excitation(actuated: ActuatedPlant, spec: ScenarioSpec, duration: float) -> Actuation:
     """The actuated part of an excitation scenario (``[excitation]`` with plant.thrusters): the model's thrusters
     driven open loop by the multi-sine, the arm held or moving; ``uvms run --bag`` then writes the log that
     ``uvms identify`` reads.
@@ -198,7 +198,7 @@ def scenario_excitation(robot: Robot, plant: Plant, spec: ScenarioSpec, duration
             [[inequalities]] given (no closed loop here), bad excitation values, or thrust commands beyond the
             thrusters' limits (the message gives the factor to scale excitation.wrench by).
     """
-    check_actuated_scenario(robot, spec)
+    robot, thrusters = actuated.robot, actuated.thrusters
     unused = spec.vehicle_control.changed()
     if unused or spec.inequalities:
         what = f"vehicle_control.{unused[0]}" if unused else "[[inequalities]]"
@@ -211,12 +211,10 @@ def scenario_excitation(robot: Robot, plant: Plant, spec: ScenarioSpec, duration
     if not section.arm_period > 0:
         raise ScenarioError(f"excitation.arm_period must be > 0 s, got {section.arm_period:g}")
     try:
-        thrusters = thrusters_of(robot)
         wrench = multisine(np.array(section.wrench), highest=float(section.highest),
                            components=int(section.components), seed=int(section.seed))
     except UVMSError as exc:
         raise ScenarioError(f"excitation: {' '.join(str(exc).split())}") from None
-    actuated = ActuatedPlant(plant, thrusters)
     controller = ExcitationControl(actuated, wrench, np.array(section.arm) if section.arm else None,
                                    float(section.arm_period))
     ratio = controller.peak_ratio(duration, dt)
@@ -224,4 +222,4 @@ def scenario_excitation(robot: Robot, plant: Plant, spec: ScenarioSpec, duration
         raise ScenarioError(f"excitation.wrench asks up to {ratio:.3g} times the thrusters' limits "
                             f"({thrusters.source}); scale it by {1.0 / ratio:.3g} or less so that the log's wrench is "
                             f"what was commanded")
-    return Actuation(plant, thrusters, controller)
+    return Actuation(actuated, controller)

@@ -4,11 +4,15 @@ dataclasses whose fields are :func:`~uvms.scenario.spec.keys.key` (as :mod:`uvms
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from ...control.gjm import GJM_KINDS
-from ...control.vehicle import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, DEFAULT_DISTURBANCE_TIME_CONSTANT
+from ...control.settings import ActuatedSettings
+from ...errors import ScenarioError, UVMSError
 from .keys import NUMBER, NUMBERS, Section, key
+
+#: The actuated chain's defaults: [vehicle_control]'s (its keys are ActuatedSettings' fields).
+CHAIN = ActuatedSettings()
 
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
 #: free-floating dynamics of uvms.dynamics.plant.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
@@ -55,37 +59,62 @@ class VehicleControlSpec(Section):
     ki: float | tuple[float, ...] | None = key(None, (int, float, list),
         doc="integral gains [N/m, N m/rad], one or 6; absent: ki = ω² M_ii. The integral stops on an axis the "
             "thrusters cannot give (anti-windup)")
-    bandwidth: float | tuple[float, ...] = key(DEFAULT_BANDWIDTH, (int, float, list),
+    bandwidth: float | tuple[float, ...] = key(CHAIN.bandwidth, (int, float, list),
         doc="closed-loop bandwidth ω of the velocity loop per body axis [rad/s], one or 6")
-    damping_ratio: float | tuple[float, ...] = key(DEFAULT_DAMPING_RATIO, (int, float, list),
+    damping_ratio: float | tuple[float, ...] = key(CHAIN.damping_ratio, (int, float, list),
         doc="damping ratio ζ of the velocity loop per body axis, one or 6")
-    pose_gains: float | tuple[float, ...] = key(1.5, (int, float, list), doc="pose loop gains [1/s], one or 6")
-    max_speed: float | tuple[float, ...] = key(0.5, (int, float, list),
+    pose_gains: float | tuple[float, ...] = key(CHAIN.pose_gains, (int, float, list),
+        doc="pose loop gains [1/s], one or 6")
+    max_speed: float | tuple[float, ...] = key(CHAIN.max_speed, (int, float, list),
         doc="bound of the pose loop's velocity reference [m/s, rad/s], one or 6")
     priorities: tuple = key((), list,
         doc='allocation priority, highest group first, e.g. `[["roll", "pitch", "yaw", "z"], ["x", "y"]]`; `[]`: '
             "one group of all six axes")
-    coordination: bool = key(True, bool,
+    coordination: bool = key(CHAIN.coordination, bool,
         doc="solve the arm again with the measured vehicle velocity, so it takes up the vehicle's lag and drift")
-    arm_feedforward: bool = key(True, bool, doc="feed the arm's reaction into the vehicle loop's model feedforward")
-    acceleration_feedforward: bool = key(True, bool,
+    arm_feedforward: bool = key(CHAIN.arm_feedforward, bool,
+        doc="feed the arm's reaction into the vehicle loop's model feedforward")
+    acceleration_feedforward: bool = key(CHAIN.acceleration_feedforward, bool,
         doc="feed the reference's acceleration (the rate of the vehicle's velocity reference, low-passed over "
             "0.1 s) through the model's inertia into the vehicle loop")
-    servo_compensation: bool = key(True, bool,
+    servo_compensation: bool = key(CHAIN.servo_compensation, bool,
         doc="command the arm's servos so that they reach the asked rate by the end of the control step (their "
             "first-order lag inverted over the step)")
-    disturbance_time_constant: float = key(DEFAULT_DISTURBANCE_TIME_CONSTANT, NUMBER,
+    disturbance_time_constant: float = key(CHAIN.disturbance_time_constant, NUMBER,
         doc="the disturbance observer's time constant T [s]: the wrench the model does not know (an unmodelled "
             "current, a wrong added mass) estimated from the measured acceleration's mismatch, low-passed over T, "
             "and fed forward; 0: none (the integral alone learns it)")
-    tightening: bool = key(True, bool,
+    tightening: bool = key(CHAIN.tightening, bool,
         doc="move each enforced `[[inequalities]]` bound inward, for the solver, by its measured tracking error: the"
             " shortfall of the measured value against what the asked velocity predicted over each step, summed and "
             "decaying at the objective's gain (at most its band); false: the nominal bounds")
-    knows_current: bool = key(False, bool,
+    knows_current: bool = key(CHAIN.knows_current, bool,
         doc="the controller's model includes `plant.current`; false: the integral learns it")
-    saturation_feedback: bool = key(False, bool,
+    saturation_feedback: bool = key(CHAIN.saturation_feedback, bool,
         doc="bound the vehicle's part of the next reference by what the allocation achieved")
+
+    @classmethod
+    def from_table(cls, given: Any, name: str, origin: str) -> Section:
+        """The section (:meth:`Section.from_table`), its settings made once (:attr:`settings`) so that what they
+        refuse is said where the file is read."""
+        section = super().from_table(given, name, origin)
+        try:
+            section.settings  # noqa: B018 - ActuatedSettings checks the priorities
+        except UVMSError as exc:
+            raise ScenarioError(f"{origin}: {name}.{exc}") from None
+        return section
+
+    @property
+    def settings(self) -> ActuatedSettings:
+        """The actuated chain's settings of this section (:func:`uvms.control.station.actuated_control`): the one
+        place a scenario's [vehicle_control] becomes them (numbers as floats, lists as tuples).
+
+        Raises:
+            SolverInputError: priorities that are not groups of wrench axes.
+        """
+        values = {name: getattr(self, name) for name in ActuatedSettings.names()}
+        values["disturbance_time_constant"] = float(values["disturbance_time_constant"])
+        return ActuatedSettings(**values)
 
 
 @dataclass(frozen=True, kw_only=True)
