@@ -56,49 +56,18 @@ class Actuation:
         return self.actuated.fins
 
 
-def check_actuated_scenario(robot: Robot, spec: ScenarioSpec) -> None:
-    """Refuse only what is meaningless on an actuated vehicle (a message per case: why, and what works)."""
-    plant, solver = spec.plant, spec.solver
-    if plant.type != "hydrodynamic":
-        raise ScenarioError(f"plant.thrusters = true needs plant.type = 'hydrodynamic' (thrusters push against "
-                            f"water), got {plant.type!r}")
-    if robot.base_type != "floating":
-        raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
-                            f"base")
-    if solver.free_floating:
-        raise ScenarioError("solver.free_floating = true leaves the vehicle passive (momentum conservation), but "
-                            "plant.thrusters = true actuates it: the solver's vehicle part is the vehicle "
-                            "controller's setpoint; remove solver.free_floating (or plant.thrusters for a passive "
-                            "vehicle)")
-    if isinstance(solver.gain, tuple):
-        raise ScenarioError("plant.thrusters = true: solver.gain is one number (K [1/s] of every level; the levels "
-                            "are the inequalities, the vehicle's pose objective and the task)")
-    if spec.vehicle.changed():
-        raise ScenarioError("plant.thrusters = true: the vehicle holds its station by the vehicle controller's pose "
-                            "objective (vehicle_control.pose_gains, max_speed), not a [vehicle] task; remove "
-                            "[vehicle]")
-    if plant.motor_feedforward or plant.control_dt:
-        raise ScenarioError("plant.motor_feedforward and plant.control_dt are the GJM controller's; the actuated "
-                            "chain runs its controller once per simulation.dt")
-
-
-def check_vehicle_control_used(spec: ScenarioSpec) -> None:
-    """A [vehicle_control] key set without plant.thrusters = true is refused (it would do nothing)."""
-    if spec.plant.thrusters:
-        return
-    given = spec.vehicle_control.changed()
-    if given:
-        raise ScenarioError(f"vehicle_control.{given[0]} needs plant.thrusters = true (an actuated vehicle); without "
-                            f"thrusters the vehicle moves by momentum conservation or as commanded")
-
-
 def actuated_plant(plant: Plant, fins: bool = True) -> ActuatedPlant:
     """The plant with the model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`) and, with
     ``fins``, its fins.
 
     Raises:
-        ScenarioError: a model without thrusters (the message says where they go), a thruster on an arm link.
+        ScenarioError: a vehicle that is not floating, a model without thrusters (the message says where they go), a
+            thruster on an arm link.
     """
+    robot = plant.robot
+    if robot.base_type != "floating":
+        raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
+                            f"base")
     try:
         return ActuatedPlant(plant, thrusters_of(plant.robot), fins=fins_of(plant.robot) if fins else None)
     except UVMSError as exc:

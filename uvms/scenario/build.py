@@ -19,10 +19,10 @@ from ..solvers import SOLVERS, Solver, VariableDamping, initial_configuration
 from ..solvers.base import SolverFactory
 from ..tasks import FrameTask, MidRangePotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
-from .actuated import Actuation, actuated_plant, check_actuated_scenario, check_vehicle_control_used, make_actuation
-from .excitation import check_excitation_used, scenario_excitation
+from .actuated import Actuation, actuated_plant, make_actuation
+from .excitation import scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
-from .plant import check_kinematic_plant, make_plant
+from .plant import make_plant
 from .record import scenario_model
 from .spec import NUMBER, ScenarioSpec, SolverSpec
 from .spec.keys import thaw
@@ -57,24 +57,13 @@ class Setup:
 
 def build(spec: ScenarioSpec) -> Setup:
     """Model, task, initial configuration, trajectory and controller of a scenario."""
-    model = spec.model
-    robot = scenario_model(model)
+    robot = scenario_model(spec.model)
     if spec.phases:
-        if spec.inequalities:
-            raise ScenarioError("[[inequalities]] need a [task] and a [trajectory]; a sequence scenario ([[phases]]) "
-                                "has neither")
-        if spec.plant.type != "kinematic":
-            raise ScenarioError("a sequence scenario ([[phases]]) runs on the kinematic plant only; "
-                                "remove [plant] or set plant.type = 'kinematic'")
         return build_sequence(robot, spec)
-    check_vehicle_control_used(spec)
-    check_excitation_used(spec)
     task, q0, residual = scenario_start(robot, spec)
     trajectory = make_trajectory(Configuration(robot, q0).pose(task.frame_id).copy(), spec.trajectory)
     duration = scenario_duration(spec)
     if spec.plant.type != "kinematic" and spec.plant.thrusters:
-        if spec.controller.type != "mpc":  # the MPC checks its own
-            check_actuated_scenario(robot, spec)
         plant = make_plant(robot, spec.plant)
         if spec.excitation.wrench:  # open loop: the thrusters alone, as identification's logs have them
             actuation = scenario_excitation(actuated_plant(plant, fins=False), spec, duration)
@@ -98,7 +87,6 @@ def build(spec: ScenarioSpec) -> Setup:
         plant, controller, inequalities = make_plant_controller(robot, task, trajectory, spec)
         return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
                      control_dt=float(spec.plant.control_dt), inequalities=inequalities)
-    check_kinematic_plant(spec.plant)
     inequalities = (build_inequalities(robot, spec.inequalities, solver_class(spec.solver).enforces_inequalities)
                     if spec.inequalities else None)
     dt, integrator = float(spec.simulation.dt), spec.simulation.integrator
@@ -201,33 +189,14 @@ def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
     enforces them, else monitored), task].
 
     Raises:
-        ScenarioError: free_floating off (the vehicle has no actuators), a [vehicle] task, a method of fixed
-            levels, solver.alpha or enforce_limits, a gain that is not K on the position error, a bad control_dt.
+        ScenarioError: a method of fixed levels, what the GJM controller refuses (the scenario's checks are the
+            spec's: :func:`uvms.scenario.spec.dynamics.check_passive`).
     """
     section, solver = spec.plant, spec.solver
     cls = solver_class(solver)
-    passive = f"plant.type = {section.type!r} without thrusters leaves the vehicle passive (no actuators)"
-    if not solver.free_floating:
-        raise ScenarioError(f"{passive}: the solver cannot command its velocity; set solver.free_floating = true "
-                            f"(the joints through the generalized Jacobian, plant.gjm), plant.thrusters = true "
-                            f"(an actuated vehicle) or plant.type = 'kinematic'")
-    if spec.vehicle.changed(("velocities", "heading", "depth")):
-        raise ScenarioError(f"{passive}: a [vehicle] task cannot be followed; remove it (solver.method = "
-                            f"{solver.method!r} then prioritizes the task alone) or set plant.thrusters = true")
-    if solver.alpha or solver.enforce_limits:
-        raise ScenarioError("solver.alpha and solver.enforce_limits are not supported with a dynamic plant; keep the "
-                            "joints inside their limits with an [[inequalities]] table of type 'joint_limits' and "
-                            "solver.method = 'set_based' or 'hqp'")
     plant = make_plant(robot, section)
     gain = np.asarray(solver.gain, dtype=float)
-    if gain.shape not in ((), (3,)):
-        raise ScenarioError(f"solver.gain with a dynamic plant is K on the position error: one number or 3 "
-                            f"(x, y, z) [1/s], got {thaw(solver.gain)!r}")
     control_dt, dt = float(section.control_dt), float(spec.simulation.dt)
-    ratio = control_dt / dt
-    if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
-        raise ScenarioError(f"plant.control_dt must be 0 (continuous controller) or a multiple of simulation.dt = "
-                            f"{dt:g} s, got {control_dt:g}")
     inequalities = (build_inequalities(robot, spec.inequalities, cls.enforces_inequalities) if spec.inequalities
                     else None)
     taken = solver_options(robot, solver, cls, control_dt or dt)  # the step: the controller's period
