@@ -117,12 +117,12 @@ def test_a_plant_refuses_what_it_cannot_apply_and_a_callable_is_not_a_controller
 
 def test_a_solver_reaches_control_in_one_form_and_is_never_compared_by_class():
     """The closing numbers of the interface: no ``is CLIKSolver`` anywhere, SOLVERS[...] looked up once (the
-    scenario's solver_class), never in control/."""
+    scenario's solver_class, uvms.scenario.solver), never in control/."""
     package = ROOT / "uvms"
     sources = {path: path.read_text() for path in package.rglob("*.py")}
     assert [path for path, text in sources.items() if re.search(r"is (not )?CLIKSolver", text)] == []
     lookups = [(path.relative_to(package).as_posix(), text.count("SOLVERS[")) for path, text in sources.items()
                if "SOLVERS[" in text]
-    assert lookups == [("scenario/build.py", 1)], lookups
+    assert lookups == [("scenario/solver.py", 1)], lookups
     assert not any(re.search(r"import .*\bSOLVERS\b", text) for path, text in sources.items()
                    if path.parent.name == "control")

@@ -31,7 +31,7 @@ from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from ..solvers.base import SolverFactory
 from ..tasks.frame import FrameTask
-from .inequalities import ObjectiveRecorder, ScenarioInequalities, build_inequalities
+from .inequalities import ObjectiveRecorder, ScenarioInequalities
 from .spec import ScenarioSpec, SimulationSpec
 
 
@@ -75,13 +75,13 @@ def actuated_plant(plant: Plant, fins: bool = True) -> ActuatedPlant:
 
 
 def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.ndarray, spec: ScenarioSpec,
-                   solver: SolverFactory) -> Actuation:
+                   solver: SolverFactory, inequalities: ScenarioInequalities | None) -> Actuation:
     """The whole chain of the scenario on ``actuated`` (:func:`uvms.control.station.actuated_control`).
 
     Args:
         solver: the scenario's solver, built on the chain's levels (a solver without priorities, CLIK: the
-            vehicle's velocity given as fixed columns). The scenario's ``[[inequalities]]`` are levels above the task
-            when the solver enforces them, else monitored.
+            vehicle's velocity given as fixed columns). inequalities: the scenario's, levels above the task when
+            the solver enforces them, else monitored.
     """
     section, cls = spec.solver, solver.cls
     if not cls.holds_priorities and (section.alpha or section.enforce_limits or section.weights
@@ -92,8 +92,6 @@ def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.
                             "solver.damping); solver.alpha, enforce_limits, weights and damping_epsilon are not "
                             "supported there. For joint limits use solver.method = 'set_based' or 'hqp' with an "
                             "[[inequalities]] joint_limits table")
-    tables = spec.inequalities
-    inequalities = build_inequalities(actuated.robot, tables, cls.enforces_inequalities) if tables else None
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
         controller = actuated_control(actuated, q0, float(spec.simulation.dt), task, trajectory, solver,
