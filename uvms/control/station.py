@@ -248,7 +248,8 @@ def station_keeping(actuated: ActuatedPlant, q0: np.ndarray, dt: float,
                     frame: str | None = None) -> CoordinatedControl:
     """The controller of ``actuated`` holding the vehicle at its pose of q0 and the end-effector point at
     ``ee_target`` (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held):
-    :func:`actuated_control` with a held point and CLIK (:class:`ActuatedSettings`' defaults: see there).
+    :func:`actuated_control` with a held point and CLIK (the settings' defaults:
+    :class:`~uvms.control.settings.ActuatedSettings`).
 
     Args:
         actuated, q0, dt, settings: as in :func:`actuated_control`.
@@ -282,9 +283,10 @@ def actuated_control(actuated: ActuatedPlant, q0: np.ndarray, dt: float, task: F
         task, trajectory, inequalities: as in :class:`ActuatedKinematics`.
         solver: as in :class:`ActuatedKinematics`; its ``gain`` K [1/s] and ``damping`` (0 when it has none) are
             those of the vehicle's added share.
-        settings: the loops, the allocation's priorities and the coordination (:class:`ActuatedSettings`): kp, ki
-            given are used as they are, else derived from the bandwidth, the damping ratio and the vehicle's inertia
-            M_ii at q0, kp = 2 zeta omega M_ii, ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`).
+        settings: the loops, the allocation's priorities and the coordination
+            (:class:`~uvms.control.settings.ActuatedSettings`): kp, ki given are used as they are, else derived from
+            the bandwidth, the damping ratio and the vehicle's inertia M_ii at q0, kp = 2 zeta omega M_ii,
+            ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`).
     """
     plant, robot = actuated.plant, actuated.robot
     model = plant.copy(current=None if settings.knows_current else np.zeros(3))
