@@ -38,7 +38,7 @@ def test_every_controller_is_a_controller(blue):
     tracking = build(read_scenario(ROOT / "scenarios" / "hoang2011_w1.toml")).controller
     sequence = build(read_scenario(ROOT / "scenarios" / "xiang2019_grip.toml")).controller
     gjm = build(read_scenario(ROOT / "scenarios" / "hoang2011_gjm.toml")).controller
-    chain = station_keeping(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue), blue.neutral(), 0.01)
+    chain = station_keeping(ActuatedPlant(uvms.Plant(blue), uvms.dynamics.thrusters_of(blue)), blue.neutral(), 0.01)
     for controller in (tracking, sequence, gjm, chain, OpenLoop(arm=np.zeros(3))):
         assert isinstance(controller, Controller), type(controller).__name__
 
@@ -95,8 +95,9 @@ def test_a_controller_run_twice_gives_the_same_run(blue):
     plant = uvms.Plant(blue, gravity=True, current=[0.3, 0.0, 0.0])
     thrusters = uvms.dynamics.thrusters_of(blue)
     station = blue.configuration(base=np.zeros(6), arm=ARM)
-    controller = station_keeping(plant, thrusters, station, 0.01, hold_arm=True)
-    first, second = (simulate(ActuatedPlant(plant, thrusters), controller, station, 0.3, 0.01) for _ in range(2))
+    actuated = ActuatedPlant(plant, thrusters)
+    controller = station_keeping(actuated, station, 0.01, hold_arm=True)
+    first, second = (simulate(actuated, controller, station, 0.3, 0.01) for _ in range(2))
     assert np.abs(controller.velocity.integral).max() > 0.0
     np.testing.assert_allclose(second.q, first.q, rtol=0, atol=1e-14)
     np.testing.assert_allclose(second.actuation.thrusts, first.actuation.thrusts, rtol=0, atol=1e-12)
@@ -116,12 +117,12 @@ def test_a_plant_refuses_what_it_cannot_apply_and_a_callable_is_not_a_controller
 
 def test_a_solver_reaches_control_in_one_form_and_is_never_compared_by_class():
     """The closing numbers of the interface: no ``is CLIKSolver`` anywhere, SOLVERS[...] looked up once (the
-    scenario's solver_class), never in control/."""
+    scenario's solver_class, uvms.scenario.solver), never in control/."""
     package = ROOT / "uvms"
     sources = {path: path.read_text() for path in package.rglob("*.py")}
     assert [path for path, text in sources.items() if re.search(r"is (not )?CLIKSolver", text)] == []
     lookups = [(path.relative_to(package).as_posix(), text.count("SOLVERS[")) for path, text in sources.items()
                if "SOLVERS[" in text]
-    assert lookups == [("scenario/build.py", 1)], lookups
+    assert lookups == [("scenario/solver.py", 1)], lookups
     assert not any(re.search(r"import .*\bSOLVERS\b", text) for path, text in sources.items()
                    if path.parent.name == "control")

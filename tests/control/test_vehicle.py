@@ -10,6 +10,7 @@ import pytest
 
 import uvms
 from uvms.control.coordination import CoordinatedControl, coordinated_arm_rates
+from uvms.control.settings import ActuatedSettings
 from uvms.control.station import actuated_control, station_keeping
 from uvms.control.vehicle import pose_velocity_reference
 from uvms.dynamics.plant.actuated import ActuatedPlant, vehicle_inverse_dynamics
@@ -71,9 +72,10 @@ def test_coordination_solves_the_arm_with_the_measured_vehicle(robot, rng):
 def _run(robot, thrusters, current, coordination, *, start=None, hold_arm=False, duration=5.0, priorities=None):
     plant = Plant(robot, gravity=True, current=current)
     station = robot.configuration(base=np.zeros(6), arm=ARM)
-    controller = station_keeping(plant, thrusters, station, DT, coordination=coordination, hold_arm=hold_arm,
-                                 priorities=priorities)
-    return simulate(ActuatedPlant(plant, thrusters), controller, station if start is None else start, duration, DT)
+    actuated = ActuatedPlant(plant, thrusters)
+    settings = ActuatedSettings(coordination=coordination, priorities=priorities or ())
+    controller = station_keeping(actuated, station, DT, settings, hold_arm=hold_arm)
+    return simulate(actuated, controller, station if start is None else start, duration, DT)
 
 
 def test_station_keeping_in_still_water_converges(robot, thrusters):
@@ -147,10 +149,10 @@ def test_arm_reaction_feedforward_keeps_the_vehicle_still(robot, thrusters):
     target = robot.fk(station).translation + np.array([0.08, 0.05, -0.05])
     errors = {}
     for feedforward in (False, True):
-        plant = Plant(robot, gravity=True)
-        controller = station_keeping(plant, fast, station, 0.005, ee_target=target, arm_feedforward=feedforward,
-                                     ee_gain=3.0)
-        result = simulate(ActuatedPlant(plant, fast), controller, station, 2.0, 0.005)
+        actuated = ActuatedPlant(Plant(robot, gravity=True), fast)
+        controller = station_keeping(actuated, station, 0.005, ActuatedSettings(arm_feedforward=feedforward),
+                                     ee_target=target, ee_gain=3.0)
+        result = simulate(actuated, controller, station, 2.0, 0.005)
         assert np.abs(result.v[:, 6:]).max() > 0.49  # the arm does move fast
         errors[feedforward] = (result.actuation.controller["vehicle_position_error"].max(),
                                result.actuation.controller["vehicle_attitude_error"].max())
@@ -166,13 +168,13 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
     hold = VelocityRamps.trapezoid(target, np.zeros(3), 1.0, 0.5)
     final = {}
     for coordination in (False, True):
-        plant = Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
+        actuated = ActuatedPlant(Plant(robot, gravity=True, current=[0.3, 0.0, 0.0]), thrusters)
         task = FrameTask(robot, axes=("x", "y", "z"))
-        controller = actuated_control(plant, thrusters, station, DT, task, hold, coordination=coordination,
-                                      solver=SolverFactory(uvms.PrioritySolver, robot,
-                                                           {"damping": 0.01, "priority": "classic"}))
+        solver = SolverFactory(uvms.PrioritySolver, robot, {"damping": 0.01, "priority": "classic"})
+        controller = actuated_control(actuated, station, DT, task, hold, solver,
+                                      ActuatedSettings(coordination=coordination))
         assert isinstance(controller, CoordinatedControl)
-        result = simulate(ActuatedPlant(plant, thrusters), controller, station, 4.0, DT)
+        result = simulate(actuated, controller, station, 4.0, DT)
         final[coordination] = result.actuation.controller["ee_point_error"][-1]
     # measured 1.13 vs 1.43 mm with the disturbance observer (the vehicle follows better, coordination has less to
     # take up); 1.10 vs 1.71 mm without it; 1.0 vs 2.1 mm before the servo's lag was compensated
@@ -191,4 +193,4 @@ def test_station_keeping_says_which_directions_the_thrusters_cannot_hold():
         robot = uvms.load(ROOT / "tests" / "fixtures" / "uuv" / "four_thrusters.urdf")
         thrusters = uvms.dynamics.thrusters_of(robot)
     with pytest.warns(ThrusterLayoutWarning, match="produce 4 of the 6 body-wrench directions; missing: a roll moment"):
-        uvms.control.station_keeping(uvms.Plant(robot), thrusters, robot.neutral(), 0.01)
+        uvms.control.station_keeping(ActuatedPlant(uvms.Plant(robot), thrusters), robot.neutral(), 0.01)

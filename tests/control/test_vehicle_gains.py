@@ -9,8 +9,9 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from uvms.control.settings import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, ActuatedSettings
 from uvms.control.station import station_keeping
-from uvms.control.vehicle import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, vehicle_inertia, velocity_gains
+from uvms.control.vehicle import vehicle_inertia, velocity_gains
 from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.thrusters import thrusters_of
@@ -77,8 +78,9 @@ def _recovery(robot, thrusters, arm, gains) -> tuple[np.ndarray, np.ndarray]:
     plant = Plant(robot, gravity=True)
     station = robot.configuration(base=[0.0, 0.0, -5.0, 0.0, 0.0, 0.0], arm=arm)
     start = robot.configuration(base=[0.1, 0.0, -5.0, 0.0, 0.0, 0.05], arm=arm)
-    controller = station_keeping(plant, thrusters, station, DT, hold_arm=True, **gains)
-    series = simulate(ActuatedPlant(plant, thrusters), controller, start, 4.0, DT).actuation.controller
+    actuated = ActuatedPlant(plant, thrusters)
+    controller = station_keeping(actuated, station, DT, ActuatedSettings(**gains), hold_arm=True)
+    series = simulate(actuated, controller, start, 4.0, DT).actuation.controller
     return series["vehicle_position_error"] / 0.1, series["vehicle_attitude_error"] / 0.05
 
 
@@ -100,8 +102,8 @@ def _station(vehicle, current: float, gains: dict) -> dict:
     robot, thrusters, arm = vehicle
     plant = Plant(robot, gravity=True, current=[-current, 0.0, 0.0])
     station = robot.configuration(base=[0.0, 0.0, -5.0, 0.0, 0.0, 0.0], arm=arm)
-    result = simulate(ActuatedPlant(plant, thrusters), station_keeping(plant, thrusters, station, DT, **gains),
-                      station, 6.0, DT)
+    actuated = ActuatedPlant(plant, thrusters)
+    result = simulate(actuated, station_keeping(actuated, station, DT, ActuatedSettings(**gains)), station, 6.0, DT)
     series, metrics = result.actuation.controller, result.actuation_metrics()
     up = [pin.Quaternion(q[6], q[3], q[4], q[5]).toRotationMatrix()[2, 2] for q in result.q]  # body z . world z
     tilt = float(np.max(np.arccos(np.clip(up, -1.0, 1.0))))
@@ -130,11 +132,12 @@ def test_given_gains_win_over_the_derived_ones(vehicles):
     robot, thrusters, arm = vehicles["rexrov"]
     plant = Plant(robot, gravity=True)
     station = robot.configuration(base=[0.0, 0.0, -5.0, 0.0, 0.0, 0.0], arm=arm)
-    derived = station_keeping(plant, thrusters, station, DT).velocity
+    derived = station_keeping(ActuatedPlant(plant, thrusters), station, DT).velocity
     kp, ki = velocity_gains(vehicle_inertia(plant, station), DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO)
     np.testing.assert_allclose(derived.kp, kp)
     np.testing.assert_allclose(derived.ki, ki)
     assert 50.0 < (derived.kp / np.array(BLUEROV_SIZED["kp"])).min()  # a 1.9 t vehicle: 100 times the BlueROV2's
-    given = station_keeping(plant, thrusters, station, DT, kp=BLUEROV_SIZED["kp"], bandwidth=1.0).velocity
+    given = station_keeping(ActuatedPlant(plant, thrusters), station, DT,
+                            ActuatedSettings(kp=BLUEROV_SIZED["kp"], bandwidth=1.0)).velocity
     np.testing.assert_array_equal(given.kp, BLUEROV_SIZED["kp"])  # kp as given, ki from omega = 1 rad/s
     np.testing.assert_allclose(given.ki, velocity_gains(vehicle_inertia(plant, station), 1.0)[1])

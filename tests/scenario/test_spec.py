@@ -13,16 +13,31 @@ from uvms.scenario.spec import PhaseSpec, PlantSpec, SolverSpec, key_of
 
 
 def test_a_scenario_reads_into_frozen_sections_with_defaults_and_overrides():
-    spec = read_scenario("hoang2011_w1", ["solver.gain=2", "plant.current=[0.1, 0, 0]"])
+    spec = read_scenario("hoang2011_w1", ["solver.gain=2", "trajectory.normal=[0, 1, 0]"])
     assert isinstance(spec, ScenarioSpec) and spec.name == "hoang2011_w1" and spec.path.name == "hoang2011_w1.toml"
     assert isinstance(spec.solver, SolverSpec) and spec.solver.gain == 2 and spec.solver.method == "clik"
     assert spec.solver.weights == (1.0, 1.0, 1.0, 1.0, 1.0, 1.0)  # lists become tuples: nothing is shared or mutable
-    assert spec.plant.current == (0.1, 0.0, 0.0) and spec.plant.type == "kinematic"  # a default filled
+    assert spec.trajectory.normal == (0.0, 1.0, 0.0) and spec.plant.type == "kinematic"  # a default filled
     assert spec.trajectory.duration == 190 and spec.phases == () and spec.inequalities == ()
     with pytest.raises(dataclasses.FrozenInstanceError):
         spec.solver.gain = 3.0
     with pytest.raises(dataclasses.FrozenInstanceError):
         spec.solver = spec.solver
+
+
+@pytest.mark.parametrize("overrides, message", [
+    (["plant.current=[0.1, 0, 0]"], "plant.current needs a dynamic plant"),
+    (["plant.type=rigid", "solver.free_floating=true", "plant.gravity=true"], "plant.gravity, current and "
+                                                                                "hydrodynamics need"),
+    (["plant.type=rigid"], "plant.type = 'rigid' without thrusters leaves the vehicle passive"),
+    (["vehicle_control.kp=50"], "vehicle_control.kp needs plant.thrusters = true"),
+    (["excitation.seed=3"], "excitation.seed needs excitation.wrench"),
+])
+def test_sections_that_do_not_go_together_are_refused_where_the_file_is_read(overrides, message):
+    """The plant's checks that need no model are the spec's (before, ``build`` found them after loading the
+    model): reading the scenario refuses them, naming the file."""
+    with pytest.raises(ScenarioError, match=f"hoang2011_w1.toml: {message}"):
+        read_scenario("hoang2011_w1", overrides)
 
 
 def test_a_sequence_scenario_has_phases_and_no_trajectory():

@@ -101,10 +101,11 @@ def test_an_actuated_run_equals_the_former_simulate_actuated():
     plant = uvms.Plant(robot, gravity=True, current=[0.3, 0.0, 0.0])
     thrusters = uvms.dynamics.thrusters_of(robot)
     station = robot.configuration(base=np.zeros(6), arm=[3.0, 1.8, 1.8, 1.0, 0.0])
-    result = simulate(ActuatedPlant(plant, thrusters), uvms.control.station_keeping(
-        plant, thrusters, station, 0.01, kp=[100, 100, 100, 10, 10, 10], ki=[150, 150, 150, 15, 15, 15],
-        acceleration_feedforward=False, servo_compensation=False, disturbance_time_constant=0.0), station,
-                      0.5, 0.01)
+    actuated = ActuatedPlant(plant, thrusters)
+    settings = uvms.control.ActuatedSettings(kp=(100, 100, 100, 10, 10, 10), ki=(150, 150, 150, 15, 15, 15),
+                                             acceleration_feedforward=False, servo_compensation=False,
+                                             disturbance_time_constant=0.0)
+    result = simulate(actuated, uvms.control.station_keeping(actuated, station, 0.01, settings), station, 0.5, 0.01)
     # to rounding: 50 steps of the chain (allocation, thruster lag, RK4) carry a last-place difference of the BLAS
     # to about 1e-12 relative in the position, more in the thrusts' sum (a difference of +/- forces of 10 N)
     np.testing.assert_allclose(result.q[-1, :3], former("0x1.36e4baa29f06ap-5", "0x1.b09ab0391adebp-14",

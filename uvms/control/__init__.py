@@ -10,11 +10,12 @@ from .base import Command, Controller, OpenLoop, State
 from .coordination import CoordinatedControl, coordinated_arm_rates
 from .gjm import GJMControlError, GJMController, VelocityRamps
 from .sequence import Phase, PhasePlan, SequenceController
+from .settings import ActuatedSettings
 from .station import ActuatedKinematics, actuated_control, station_keeping
 from .tracking import TrackingController
 from .vehicle import VehiclePoseController, VehicleVelocityController, pose_velocity_reference
 
-__all__ = ["ActuatedKinematics", "Command", "Controller", "CoordinatedControl", "GJMControlError", "GJMController",
-           "OpenLoop", "Phase", "PhasePlan", "SequenceController", "State", "TrackingController",
-           "VehiclePoseController", "VehicleVelocityController", "VelocityRamps", "actuated_control",
-           "coordinated_arm_rates", "pose_velocity_reference", "station_keeping"]
+__all__ = ["ActuatedKinematics", "ActuatedSettings", "Command", "Controller", "CoordinatedControl",
+           "GJMControlError", "GJMController", "OpenLoop", "Phase", "PhasePlan", "SequenceController", "State",
+           "TrackingController", "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
+           "actuated_control", "coordinated_arm_rates", "pose_velocity_reference", "station_keeping"]

@@ -92,7 +92,7 @@ ARM_RANK_TOLERANCE = 1e-6
 
 
 def vehicle_rates_for_task(jacobian: np.ndarray, residual: np.ndarray, n_vehicle: int, *,
-                           damping: float = 0.0) -> np.ndarray:
+                           damping: float | VariableDamping = 0.0) -> np.ndarray:
     """dnu (n_vehicle,) [m/s, rad/s] the vehicle adds to give the part of a task velocity the arm cannot.
 
     The residual's part outside the range of the arm's columns J_a (judged at :data:`ARM_RANK_TOLERANCE`), r_v, is
@@ -105,7 +105,7 @@ def vehicle_rates_for_task(jacobian: np.ndarray, residual: np.ndarray, n_vehicle
         jacobian: J (k, nv) of the task, columns in the order of v (the vehicle joint's local twist [v; w] first).
         residual: r (k,) the task velocity still wanted [m/s, rad/s].
         n_vehicle: velocity entries of the vehicle (6).
-        damping: DLS damping of the vehicle's inverses.
+        damping: DLS damping of the vehicle's inverses (fixed or variable).
     """
     residual = outside_range(jacobian[:, n_vehicle:]) @ residual  # what the arm cannot give
     translation, rotation = jacobian[:, :3], jacobian[:, 3:n_vehicle]

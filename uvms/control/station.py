@@ -36,13 +36,12 @@ from collections.abc import Callable, Sequence
 import numpy as np
 import pinocchio as pin
 
+from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.command import State
-from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
-from ..dynamics.thrusters.fins import Fins
-from ..dynamics.thrusters.thrusters import Thrusters, allocation_matrix
 from ..errors import SolverInputError, ThrusterLayoutWarning
+from ..numerics.inverses import VariableDamping
 from ..robot.configuration import Configuration
 from ..robot.kinematics import held_vehicle_split
 from ..robot.robot import Robot
@@ -55,17 +54,9 @@ from ..tasks.task import Task
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, vehicle_rates_for_task
+from .settings import ActuatedSettings
 from .tightening import Tightening
-from .vehicle import (
-    DEFAULT_BANDWIDTH,
-    DEFAULT_DAMPING_RATIO,
-    DEFAULT_DISTURBANCE_TIME_CONSTANT,
-    VehiclePoseController,
-    VehicleVelocityController,
-    gain_vector,
-    vehicle_inertia,
-    velocity_gains,
-)
+from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector, vehicle_inertia, velocity_gains
 
 
 class GivenColumns(Task):
@@ -113,7 +104,7 @@ class ActuatedKinematics:
             bounds the pose objective).
         inequalities: the levels of inequality objectives the solver enforces, highest first; with any, the arm's
             speed limits (the model's) are a level above them (the solver scales the task first, never clips).
-        gain: K [1/s] and damping: the DLS damping of the vehicle's added share.
+        gain: K [1/s] and damping: the DLS damping (fixed or variable) of the vehicle's added share.
         base_placement: the base frame in the vehicle joint's frame (``Robot.base_placement``; None: identity).
         tighten: move the inequalities' bounds inward by their measured tracking error for each step's solves
             (:mod:`uvms.control.tightening`).
@@ -125,13 +116,14 @@ class ActuatedKinematics:
     def __init__(self, robot: Robot, pose: VehiclePoseController, task: FrameTask,
                  trajectory: Callable[[float], object] | None, *, vehicle_target: pin.SE3,
                  solver: SolverFactory, inequalities: Sequence[Sequence] = (), gain: float = 1.0,
-                 damping: float = 0.01, base_placement: pin.SE3 | None = None, tighten: bool = False) -> None:
+                 damping: float | VariableDamping = 0.01, base_placement: pin.SE3 | None = None,
+                 tighten: bool = False) -> None:
         if robot.base_type != "floating":
             raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
         self.robot, self.pose, self.task, self.trajectory = robot, pose, task, trajectory
         self.vehicle_target = vehicle_target.copy()
         self.gain = float(gain_vector(gain, "gain", 1)[0])
-        self.damping = float(damping)
+        self.damping = damping if isinstance(damping, VariableDamping) else float(damping)
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
@@ -250,103 +242,74 @@ class ActuatedKinematics:
         return row
 
 
-def station_keeping(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: float, *,
-                    ee_target: np.ndarray | None = None, hold_arm: bool = False, coordination: bool = True,
-                    knows_current: bool = False, kp: float | np.ndarray | None = None,
-                    ki: float | np.ndarray | None = None, bandwidth: float | np.ndarray = DEFAULT_BANDWIDTH,
-                    damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO, pose_gains: float | np.ndarray = 1.5,
-                    max_speed: float | np.ndarray | None = 0.5,
-                    priorities=None, arm_feedforward: bool = True, ee_gain: float = 1.0,
-                    arm_damping: float = 0.01, frame: str | None = None, acceleration_feedforward: bool = True,
-                    servo_compensation: bool = True,
-                    disturbance_time_constant: float = DEFAULT_DISTURBANCE_TIME_CONSTANT) -> CoordinatedControl:
-    """The controller of ``plant`` holding the vehicle at its pose of q0 and the end-effector point at ``ee_target``
-    (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held): :func:`actuated_control` with
-    a held point and CLIK. The default gains, scaled to the vehicle's inertia, hold the BlueROV2 + Alpha 5
-    in a 0.3 m/s current to 5 cm and a 1.9 t RexROV-sized vehicle to 3 mm (tests/control/test_vehicle_gains.py).
+def station_keeping(actuated: ActuatedPlant, q0: np.ndarray, dt: float,
+                    settings: ActuatedSettings = ActuatedSettings(), *, ee_target: np.ndarray | None = None,
+                    hold_arm: bool = False, ee_gain: float = 1.0, arm_damping: float = 0.01,
+                    frame: str | None = None) -> CoordinatedControl:
+    """The controller of ``actuated`` holding the vehicle at its pose of q0 and the end-effector point at
+    ``ee_target`` (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held):
+    :func:`actuated_control` with a held point and CLIK (the settings' defaults:
+    :class:`~uvms.control.settings.ActuatedSettings`).
 
     Args:
-        plant, thrusters, q0, dt: as in :func:`actuated_control`; so are coordination, knows_current, kp, ki,
-            bandwidth, damping_ratio, pose_gains, max_speed, priorities, arm_feedforward, acceleration_feedforward,
-            servo_compensation and disturbance_time_constant.
-        ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse.
+        actuated, q0, dt, settings: as in :func:`actuated_control`.
+        ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse (CLIK's).
         frame: the end-effector frame held (default: the model's first end effector).
 
     Returns:
         A CoordinatedControl whose ``kinematic`` is the ActuatedKinematics of the held point.
     """
-    robot = plant.robot
+    robot = actuated.robot
     frame = frame or robot.ee_frames[0]
     start = Configuration(robot, q0).pose(robot.frame_id(frame)).copy()
     point = start.translation if ee_target is None else np.asarray(ee_target, dtype=float).reshape(3)
     hold = None if hold_arm else VelocityRamps.trapezoid(point, np.zeros(3), 1.0, 0.5, rotation=start.rotation)
-    return actuated_control(plant, thrusters, q0, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold,
-                            coordination=coordination and not hold_arm, knows_current=knows_current, kp=kp, ki=ki,
-                            bandwidth=bandwidth, damping_ratio=damping_ratio, pose_gains=pose_gains,
-                            max_speed=max_speed, priorities=priorities,
-                            arm_feedforward=arm_feedforward, gain=ee_gain, damping=arm_damping,
-                            acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation,
-                            disturbance_time_constant=disturbance_time_constant)
+    solver = SolverFactory(CLIKSolver, robot, {"gain": ee_gain, "damping": arm_damping})
+    return actuated_control(actuated, q0, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold, solver, settings)
 
 
-def actuated_control(plant: Plant, thrusters: Thrusters, q0: np.ndarray, dt: float, task: FrameTask,
-                     trajectory: Callable[[float], object] | None, *, solver: SolverFactory | None = None,
-                     inequalities: Sequence[Sequence] = (), coordination: bool = True,
-                     saturation_feedback: bool = False, knows_current: bool = False,
-                     kp: float | np.ndarray | None = None, ki: float | np.ndarray | None = None,
-                     bandwidth: float | np.ndarray = DEFAULT_BANDWIDTH,
-                     damping_ratio: float | np.ndarray = DEFAULT_DAMPING_RATIO,
-                     pose_gains: float | np.ndarray = 1.5, max_speed: float | np.ndarray | None = 0.5,
-                     priorities=None, arm_feedforward: bool = True, gain: float = 1.0, damping: float = 0.01,
-                     fins: Fins | None = None, acceleration_feedforward: bool = True,
-                     servo_compensation: bool = True,
-                     disturbance_time_constant: float = DEFAULT_DISTURBANCE_TIME_CONSTANT,
-                     tightening: bool = True) -> CoordinatedControl:
-    """The whole chain on ``plant``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
+def actuated_control(actuated: ActuatedPlant, q0: np.ndarray, dt: float, task: FrameTask,
+                     trajectory: Callable[[float], object] | None, solver: SolverFactory,
+                     settings: ActuatedSettings = ActuatedSettings(), *,
+                     inequalities: Sequence[Sequence] = ()) -> CoordinatedControl:
+    """The whole chain on ``actuated``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
 
     Args:
-        plant: the simulated plant; its robot and hydrodynamics are the controller's model, without the
-            current unless ``knows_current``.
-        thrusters: the vehicle's thrusters; q0: (nq,) the station; dt: control period [s].
-        task, trajectory, inequalities, gain, damping: as in :class:`ActuatedKinematics`.
-        solver: as in :class:`ActuatedKinematics`; None: CLIK with K = ``gain`` and the DLS ``damping``.
-        coordination, saturation_feedback, acceleration_feedforward, servo_compensation: as in
-            :class:`uvms.control.coordination.CoordinatedControl`.
-        kp [N s/m, N m s/rad], ki [N/m, N m/rad]: velocity PI gains (6,) or numbers; None (default): derived
-            from ``bandwidth`` omega [rad/s] and ``damping_ratio`` zeta (6,) or numbers and the vehicle's inertia
-            M_ii at q0, kp = 2 zeta omega M_ii, ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`); a
-            kp or ki given is used as it is. pose_gains [1/s];
-        max_speed: [m/s, rad/s] bound of the pose objective; priorities: of the allocation
-            (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`); arm_feedforward: as in
-            :class:`uvms.control.vehicle.VehicleVelocityController`; so is disturbance_time_constant [s] (the
-            disturbance observer's T; 0: none).
-        tightening: the ``inequalities`` tightened by their measured tracking error (:class:`ActuatedKinematics`'s
-            ``tighten``).
-        fins: the vehicle's fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), allocated with the thrusters at each
-            step's velocity (:class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`); None or empty: thrusters
-            alone.
+        actuated: the simulated plant with its thrusters (and fins); its robot and hydrodynamics are the controller's
+            model, without the current unless ``settings.knows_current``; its allocation matrix and thrust bounds the
+            allocation's (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`; with fins, allocated with the
+            thrusters at each step's velocity: :class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`).
+        q0: (nq,) the station; dt: control period [s] (the simulation step).
+        task, trajectory, inequalities: as in :class:`ActuatedKinematics`.
+        solver: as in :class:`ActuatedKinematics`; its ``gain`` K [1/s] and ``damping`` (0 when it has none) are
+            those of the vehicle's added share.
+        settings: the loops, the allocation's priorities and the coordination
+            (:class:`~uvms.control.settings.ActuatedSettings`): kp, ki given are used as they are, else derived from
+            the bandwidth, the damping ratio and the vehicle's inertia M_ii at q0, kp = 2 zeta omega M_ii,
+            ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`).
     """
-    robot = plant.robot
-    if solver is None:
-        solver = SolverFactory(CLIKSolver, robot, {"gain": gain, "damping": damping})
-    model = Plant(robot, plant.hydro if knows_current else plant.hydro.with_current(np.zeros(3)),
-                  gravity=plant.gravity, motor_time_constant=plant.motor_time_constant,
-                  added_mass=plant.added_mass, damping=plant.damping)
-    matrix = allocation_matrix(robot, thrusters)
-    allocator = FinAllocator(matrix, thrusters.lower, thrusters.upper, fins, priorities=priorities) if fins \
-        else ThrustAllocator(matrix, thrusters.lower, thrusters.upper, priorities=priorities)
-    note = allocator.reach_note(thrusters.names)
+    plant, robot = actuated.plant, actuated.robot
+    model = plant.copy(current=None if settings.knows_current else np.zeros(3))
+    priorities = settings.priorities or None
+    allocator = FinAllocator(actuated.matrix, actuated.lower, actuated.upper, actuated.fins, priorities=priorities) \
+        if actuated.fins else ThrustAllocator(actuated.matrix, actuated.lower, actuated.upper, priorities=priorities)
+    note = allocator.reach_note(actuated.thrusters.names)
     if note:  # a vehicle that cannot hold every degree of freedom is told so, once
         warnings.warn(note, ThrusterLayoutWarning, stacklevel=2)
+    kp, ki = settings.kp, settings.ki
     if kp is None or ki is None:
-        derived = velocity_gains(vehicle_inertia(model, q0), bandwidth, damping_ratio)
+        derived = velocity_gains(vehicle_inertia(model, q0), settings.bandwidth, settings.damping_ratio)
         kp, ki = derived[0] if kp is None else kp, derived[1] if ki is None else ki
-    velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=arm_feedforward,
-                                         disturbance_time_constant=disturbance_time_constant)
-    pose = VehiclePoseController(velocity, pose_gains, max_speed)
-    kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) *
-                                   model.robot.base_placement, solver=solver, inequalities=inequalities, gain=gain,
-                                   damping=damping, base_placement=model.robot.base_placement, tighten=tightening)
-    return CoordinatedControl(robot, velocity, kinematic, dt, coordination=coordination and trajectory is not None,
-                              saturation_feedback=saturation_feedback,
-                              acceleration_feedforward=acceleration_feedforward, servo_compensation=servo_compensation)
+    velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=settings.arm_feedforward,
+                                         disturbance_time_constant=settings.disturbance_time_constant)
+    pose = VehiclePoseController(velocity, settings.pose_gains, settings.max_speed)
+    base_placement = model.robot.base_placement
+    kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) * base_placement,
+                                   solver=solver, inequalities=inequalities, gain=solver.options.get("gain", 1.0),
+                                   damping=solver.options.get("damping", 0.0), base_placement=base_placement,
+                                   tighten=settings.tightening)
+    return CoordinatedControl(robot, velocity, kinematic, dt,
+                              coordination=settings.coordination and trajectory is not None,
+                              saturation_feedback=settings.saturation_feedback,
+                              acceleration_feedforward=settings.acceleration_feedforward,
+                              servo_compensation=settings.servo_compensation)

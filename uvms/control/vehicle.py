@@ -54,17 +54,7 @@ from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import AllocationResult, ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
 from ..errors import SolverInputError
-
-#: Default natural frequency omega [rad/s] of the velocity loop per body axis (surge, sway, heave, roll, pitch,
-#: yaw): the BlueROV2's hand-tuned surge loop (2.75 rad/s) and roll loop (5.0 rad/s); below the thrusters' 1/tau
-#: (10 rad/s for tau = 0.1 s), above the pose loop's 1.5 1/s. Faster translation (3 rad/s) costs the BlueROV2 its
-#: attitude when the thrusters saturate without allocation priorities (0.15 instead of 0.05 rad in a 1 m/s current).
-DEFAULT_BANDWIDTH = (2.75, 2.75, 2.75, 5.0, 5.0, 5.0)
-#: Default damping ratio zeta per body axis: near-critical in translation (the BlueROV2's surge loop: 0.92),
-#: overdamped in rotation (its roll loop: 1.7), so the attitude does not overshoot.
-DEFAULT_DAMPING_RATIO = (0.9, 0.9, 0.9, 1.5, 1.5, 1.5)
-#: Default time constant T [s] of the disturbance observer's low-pass: the thrusters' (0.1 s on the BlueROV2).
-DEFAULT_DISTURBANCE_TIME_CONSTANT = 0.1
+from .settings import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO
 
 
 def gain_vector(value: float | np.ndarray, what: str, size: int = 6, *, positive: bool = False) -> np.ndarray:

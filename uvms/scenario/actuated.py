@@ -13,7 +13,7 @@ plant simulates their first-order response. The thrusters are model data
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from types import SimpleNamespace
 
 import numpy as np
@@ -29,125 +29,76 @@ from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
-from ..solvers.base import Solver, SolverFactory
+from ..solvers.base import SolverFactory
 from ..tasks.frame import FrameTask
-from .inequalities import ObjectiveRecorder, ScenarioInequalities, build_inequalities
+from .inequalities import ObjectiveRecorder, ScenarioInequalities
 from .spec import ScenarioSpec, SimulationSpec
-from .spec.keys import thaw
-
-#: The wrench axes the allocation priorities name (body FLU: forces, then moments).
-WRENCH_AXES = ("x", "y", "z", "roll", "pitch", "yaw")
 
 
 @dataclass
 class Actuation:
-    """The actuated part of a run: the plant, its thrusters (and fins) and the station-keeping controller."""
+    """The actuated part of a run: the plant with its thrusters (and fins), and the controller that drives them."""
 
-    plant: Plant
-    thrusters: Thrusters
-    controller: CoordinatedControl | Controller  # the chain, or the MPC (controller.type = "mpc")
+    actuated: ActuatedPlant
+    controller: CoordinatedControl | Controller  # the chain, the MPC (controller.type = "mpc") or an excitation
     inequalities: ScenarioInequalities | None = None
-    fins: Fins = field(default_factory=Fins)
+
+    @property
+    def plant(self) -> Plant:
+        return self.actuated.plant
+
+    @property
+    def thrusters(self) -> Thrusters:
+        return self.actuated.thrusters
+
+    @property
+    def fins(self) -> Fins:
+        return self.actuated.fins
 
 
-def check_actuated_scenario(robot: Robot, spec: ScenarioSpec) -> None:
-    """Refuse only what is meaningless on an actuated vehicle (a message per case: why, and what works)."""
-    plant, solver = spec.plant, spec.solver
-    if plant.type != "hydrodynamic":
-        raise ScenarioError(f"plant.thrusters = true needs plant.type = 'hydrodynamic' (thrusters push against "
-                            f"water), got {plant.type!r}")
+def actuated_plant(plant: Plant, fins: bool = True) -> ActuatedPlant:
+    """The plant with the model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`) and, with
+    ``fins``, its fins.
+
+    Raises:
+        ScenarioError: a vehicle that is not floating, a model without thrusters (the message says where they go), a
+            thruster on an arm link.
+    """
+    robot = plant.robot
     if robot.base_type != "floating":
         raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
                             f"base")
-    if solver.free_floating:
-        raise ScenarioError("solver.free_floating = true leaves the vehicle passive (momentum conservation), but "
-                            "plant.thrusters = true actuates it: the solver's vehicle part is the vehicle "
-                            "controller's setpoint; remove solver.free_floating (or plant.thrusters for a passive "
-                            "vehicle)")
-    if isinstance(solver.gain, tuple):
-        raise ScenarioError("plant.thrusters = true: solver.gain is one number (K [1/s] of every level; the levels "
-                            "are the inequalities, the vehicle's pose objective and the task)")
-    if spec.vehicle.changed():
-        raise ScenarioError("plant.thrusters = true: the vehicle holds its station by the vehicle controller's pose "
-                            "objective (vehicle_control.pose_gains, max_speed), not a [vehicle] task; remove "
-                            "[vehicle]")
-    if plant.motor_feedforward or plant.control_dt:
-        raise ScenarioError("plant.motor_feedforward and plant.control_dt are the GJM controller's; the actuated "
-                            "chain runs its controller once per simulation.dt")
+    try:
+        return ActuatedPlant(plant, thrusters_of(plant.robot), fins=fins_of(plant.robot) if fins else None)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
 
 
-def check_vehicle_control_used(spec: ScenarioSpec) -> None:
-    """A [vehicle_control] key set without plant.thrusters = true is refused (it would do nothing)."""
-    if spec.plant.thrusters:
-        return
-    given = spec.vehicle_control.changed()
-    if given:
-        raise ScenarioError(f"vehicle_control.{given[0]} needs plant.thrusters = true (an actuated vehicle); without "
-                            f"thrusters the vehicle moves by momentum conservation or as commanded")
-
-
-def allocation_priorities(value: tuple, origin: str = "vehicle_control.priorities") -> list[tuple[str, ...]] | None:
-    """``[["yaw", "z", "roll", "pitch"], ["x", "y"]]`` -> groups of wrench axes, highest first (None: one group)."""
-    if not value:
-        return None
-    if not all(isinstance(group, (list, tuple)) and group and all(axis in WRENCH_AXES for axis in group)
-               for group in value):
-        raise ScenarioError(f"{origin} must be a list of groups of wrench axes among {', '.join(WRENCH_AXES)}, "
-                            f"highest priority first, e.g. [['yaw', 'z', 'roll', 'pitch'], ['x', 'y']]; "
-                            f"got {thaw(value)!r}")
-    return [tuple(group) for group in value]
-
-
-def optional_gain(value: float | list | None) -> np.ndarray | None:
-    """A [vehicle_control] kp or ki as an array, or None (derived from the bandwidth and damping ratio)."""
-    return None if value is None else np.asarray(value, dtype=float)
-
-
-def make_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray, spec: ScenarioSpec,
-                   solver: type[Solver], options: dict) -> Actuation:
-    """The thrusters of the model and the whole chain of the scenario (:func:`uvms.control.station.actuated_control`).
+def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.ndarray, spec: ScenarioSpec,
+                   solver: SolverFactory, inequalities: ScenarioInequalities | None) -> Actuation:
+    """The whole chain of the scenario on ``actuated`` (:func:`uvms.control.station.actuated_control`).
 
     Args:
-        solver: the scenario's solver class, built with ``options`` on the chain's levels (a solver without
-            priorities, CLIK: the vehicle's velocity given as fixed columns). The scenario's ``[[inequalities]]``
-            are levels above the task when the solver enforces them, else monitored.
+        solver: the scenario's solver, built on the chain's levels (a solver without priorities, CLIK: the
+            vehicle's velocity given as fixed columns). inequalities: the scenario's, levels above the task when
+            the solver enforces them, else monitored.
     """
-    check_actuated_scenario(robot, spec)
-    section = spec.solver
-    if not solver.holds_priorities and (section.alpha or section.enforce_limits or section.weights
-                                        or section.damping_epsilon):
+    section, cls = spec.solver, solver.cls
+    if not cls.holds_priorities and (section.alpha or section.enforce_limits or section.weights
+                                     or section.damping_epsilon):
         raise ScenarioError(f"plant.thrusters = true with solver.method = {section.method!r}: it has no priorities "
                             "to hold the vehicle's velocity above the task, so the arm is solved with the vehicle's "
                             "velocity given as fixed columns: J_a^# (K e + xdot_d - J_v nu) (solver.gain, a fixed "
                             "solver.damping); solver.alpha, enforce_limits, weights and damping_epsilon are not "
                             "supported there. For joint limits use solver.method = 'set_based' or 'hqp' with an "
                             "[[inequalities]] joint_limits table")
-    try:
-        thrusters = thrusters_of(robot)
-        fins = fins_of(robot)
-    except UVMSError as exc:
-        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
-    control, tables = spec.vehicle_control, spec.inequalities
-    inequalities = build_inequalities(robot, tables, solver.enforces_inequalities) if tables else None
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
-        controller = actuated_control(
-            plant, thrusters, q0, float(spec.simulation.dt), task, trajectory,
-            solver=SolverFactory(solver, robot, options),
-            inequalities=enforced, coordination=control.coordination,
-            saturation_feedback=control.saturation_feedback, knows_current=control.knows_current,
-            kp=optional_gain(control.kp), ki=optional_gain(control.ki),
-            bandwidth=np.asarray(control.bandwidth, dtype=float),
-            damping_ratio=np.asarray(control.damping_ratio, dtype=float),
-            pose_gains=np.asarray(control.pose_gains, dtype=float),
-            max_speed=np.asarray(control.max_speed, dtype=float),
-            priorities=allocation_priorities(control.priorities), arm_feedforward=control.arm_feedforward,
-            gain=float(section.gain), damping=float(section.damping), fins=fins,
-            acceleration_feedforward=control.acceleration_feedforward, servo_compensation=control.servo_compensation,
-            disturbance_time_constant=float(control.disturbance_time_constant), tightening=control.tightening)
+        controller = actuated_control(actuated, q0, float(spec.simulation.dt), task, trajectory, solver,
+                                      spec.vehicle_control.settings, inequalities=enforced)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None
-    return Actuation(plant, thrusters, controller, inequalities, fins)
+    return Actuation(actuated, controller, inequalities)
 
 
 class ActuatedObjectives:
@@ -167,9 +118,9 @@ def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np
     """The run, with the task series (the end effector against the held point) recorded."""
     recorders = [] if actuation.inequalities is None else [ActuatedObjectives(actuation.plant.robot,
                                                                                   actuation.inequalities)]
-    return simulate(ActuatedPlant(actuation.plant, actuation.thrusters, fins=actuation.fins), actuation.controller,
-                    q0, duration, float(simulation.dt), integrator=simulation.integrator,
-                    task=task, desired=lambda t: trajectory(t).pose, progress=progress, recorders=recorders)
+    return simulate(actuation.actuated, actuation.controller, q0, duration, float(simulation.dt),
+                    integrator=simulation.integrator, task=task, desired=lambda t: trajectory(t).pose,
+                    progress=progress, recorders=recorders)
 
 
 def actuated_metrics(result: SimulationResult, actuation: Actuation, spec: ScenarioSpec) -> dict:

@@ -15,26 +15,20 @@ from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..numerics.integrate import stage_times, step_count
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
-from ..solvers import SOLVERS, Solver, VariableDamping, initial_configuration
+from ..solvers import initial_configuration
 from ..solvers.base import SolverFactory
 from ..tasks import FrameTask, MidRangePotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
-from .actuated import Actuation, check_vehicle_control_used, make_actuation
-from .excitation import check_excitation_used, scenario_excitation
+from .actuated import Actuation, actuated_plant, make_actuation
+from .excitation import scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
-from .plant import check_kinematic_plant, make_plant
+from .plant import make_plant
 from .record import scenario_model
-from .spec import NUMBER, ScenarioSpec, SolverSpec
+from .solver import scenario_solver, solver_damping, solver_weights
+from .spec import NUMBER, ScenarioSpec
 from .spec.keys import thaw
 from .trajectories import make_trajectory
 
-#: [solver] keys that set a constructor keyword of another name (the variable damping's two set ``damping``).
-RENAMED_KEYWORDS = {"damping_epsilon": "damping", "damping_max": "damping"}
-#: [solver] keys -> the solver constructor's keyword they set: every key of the section (a new option is its
-#: SolverSpec key and the constructor's keyword of the same name), but solver.method and solver.joint_limit_weights,
-#: which the initial configuration also reads, and which are not options of a solver.
-SOLVER_KEYWORDS = {name: RENAMED_KEYWORDS.get(name, name) for name in SolverSpec.keys()
-                   if name not in ("method", "joint_limit_weights")}
 
 @dataclass
 class Setup:
@@ -56,60 +50,52 @@ class Setup:
 
 
 def build(spec: ScenarioSpec) -> Setup:
-    """Model, task, initial configuration, trajectory and controller of a scenario."""
-    model = spec.model
-    robot = scenario_model(model)
+    """Model, step count, task, initial configuration, trajectory, plant (with its thrusters), solver and
+    inequalities of a scenario, each made once and in that order, then the controller its plant needs: an open-loop
+    excitation, the MPC, the actuated chain, the GJM controller of a passive vehicle or kinematic tracking."""
+    robot = scenario_model(spec.model)
+    duration = scenario_duration(spec)
+    steps = check_step_count(spec, duration)  # a run of no step, or of too many, fails before anything is built
     if spec.phases:
-        if spec.inequalities:
-            raise ScenarioError("[[inequalities]] need a [task] and a [trajectory]; a sequence scenario ([[phases]]) "
-                                "has neither")
-        if spec.plant.type != "kinematic":
-            raise ScenarioError("a sequence scenario ([[phases]]) runs on the kinematic plant only; "
-                                "remove [plant] or set plant.type = 'kinematic'")
-        return build_sequence(robot, spec)
-    check_vehicle_control_used(spec)
-    check_excitation_used(spec)
+        return build_sequence(robot, spec, duration)
     task, q0, residual = scenario_start(robot, spec)
     trajectory = make_trajectory(Configuration(robot, q0).pose(task.frame_id).copy(), spec.trajectory)
-    duration = scenario_duration(spec)
-    if spec.plant.type != "kinematic":
-        if spec.excitation.wrench and spec.plant.thrusters:
-            actuation = scenario_excitation(robot, make_plant(robot, spec.plant), spec, duration)
-            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
-                         actuation=actuation)
-        if spec.plant.thrusters and spec.controller.type == "mpc":
-            from .mpc import make_mpc_actuation
+    section, dt = spec.plant, spec.simulation.dt
+    open_loop = section.thrusters and bool(spec.excitation.wrench)
+    plant = None if section.type == "kinematic" else make_plant(robot, section)
+    actuated = actuated_plant(plant, fins=not open_loop) if section.thrusters else None
+    passive = plant is not None and actuated is None
+    actuation = samples = inequalities = None
+    if open_loop:  # the thrusters alone, as identification's logs have them
+        actuation = scenario_excitation(actuated, spec, duration)
+    elif actuated is not None and spec.controller.type == "mpc":
+        from .mpc import make_mpc_actuation
 
-            actuation = make_mpc_actuation(robot, make_plant(robot, spec.plant), task, trajectory, q0, spec)
-            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
-                         actuation=actuation, inequalities=actuation.inequalities)
-        if spec.plant.thrusters:
-            cls = solver_class(spec.solver)
-            options = solver_options(robot, spec.solver, cls, spec.simulation.dt)
-            # the controller asks once per step, at k dt: the table of those times, shared with the recorder
-            times = stage_times(check_step_count(spec, duration), float(spec.simulation.dt), "euler")
+        actuation = make_mpc_actuation(actuated, task, trajectory, q0, spec)
+        inequalities = actuation.inequalities
+    else:  # the scenario's solver: on the GJM controller's period, or the step
+        solver = scenario_solver(robot, spec.solver, (float(section.control_dt) or float(dt)) if passive else dt)
+        inequalities = (build_inequalities(robot, spec.inequalities, solver.cls.enforces_inequalities)
+                        if spec.inequalities else None)
+        if passive:
+            controller = make_plant_controller(plant, task, trajectory, spec, solver, inequalities)
+        else:  # the times the controller asks (once per step with thrusters), shared with the recorder
+            times = stage_times(steps, float(dt), "euler" if actuated is not None else spec.simulation.integrator)
             samples = RecentSamples(TrajectoryTable(trajectory, times))
-            actuation = make_actuation(robot, make_plant(robot, spec.plant), task, samples, q0, spec, cls, options)
-            return Setup(robot, task, trajectory, q0, actuation.controller, duration, residual, plant=actuation.plant,
-                         actuation=actuation, inequalities=actuation.inequalities, samples=samples)
-        plant, controller, inequalities = make_plant_controller(robot, task, trajectory, spec)
-        return Setup(robot, task, trajectory, q0, controller, duration, residual, plant=plant,
-                     control_dt=float(spec.plant.control_dt), inequalities=inequalities)
-    check_kinematic_plant(spec.plant)
-    inequalities = (build_inequalities(robot, spec.inequalities, solver_class(spec.solver).enforces_inequalities)
-                    if spec.inequalities else None)
-    dt, integrator = float(spec.simulation.dt), spec.simulation.integrator
-    times = stage_times(check_step_count(spec, duration), dt, integrator)  # every time the run asks for
-    samples = RecentSamples(TrajectoryTable(trajectory, times))  # the controller's stages and the recorder share it
-    controller = make_controller(robot, task, samples, spec, inequalities)
-    return Setup(robot, task, trajectory, q0, controller, duration, residual, inequalities=inequalities,
-                 samples=samples)
+            if actuated is not None:
+                actuation = make_actuation(actuated, task, samples, q0, spec, solver, inequalities)
+            else:
+                controller = make_controller(task, samples, spec, solver, inequalities)
+    return Setup(robot, task, trajectory, q0, controller if actuation is None else actuation.controller, duration,
+                 residual, plant=plant, control_dt=float(section.control_dt) if passive else 0.0,
+                 inequalities=inequalities, actuation=actuation, samples=samples)
 
 
-def build_sequence(robot: Robot, spec: ScenarioSpec) -> Setup:
+def build_sequence(robot: Robot, spec: ScenarioSpec, duration: float) -> Setup:
     """A [[phases]] scenario: several frames, claws and a claw distance, the vehicle held (uvms.control.sequence)."""
     solver, frames = spec.solver, spec.task.frames or robot.ee_frames
-    solver_type = solver_class(solver, any_levels="a sequence scenario")  # levels: vehicle, distance, frames, joints
+    # levels: vehicle, distance, frames, joints
+    factory = scenario_solver(robot, solver, float(spec.simulation.dt), any_levels="a sequence scenario")
     if spec.initial.method != "given" or not isinstance(solver.gain, NUMBER):
         raise ScenarioError("a sequence scenario needs initial.method = 'given' and one number for solver.gain")
     q0, _ = initial_q(robot, None, spec)
@@ -117,14 +103,12 @@ def build_sequence(robot: Robot, spec: ScenarioSpec) -> Setup:
                     offsets=phase.offsets, joints=phase.joints, distance=phase.distance)
               for index, phase in enumerate(spec.phases)]
     plan = PhasePlan(robot, q0, frames, phases)
-    options = solver_options(robot, solver, solver_type, float(spec.simulation.dt))
     try:
-        controller = SequenceController(robot, plan, SolverFactory(solver_type, robot, options),
-                                        hold_vehicle=spec.vehicle.hold)
+        controller = SequenceController(robot, plan, factory, hold_vehicle=spec.vehicle.hold)
     except UVMSError as exc:
         raise ScenarioError(f"solver: {exc}") from None
-    return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller,
-                 scenario_duration(spec), 0.0, plan)
+    return Setup(robot, controller.frame_tasks[0], plan.frame_trajectory(frames[0]), q0, controller, duration, 0.0,
+                 plan)
 
 
 def scenario_start(robot: Robot, spec: ScenarioSpec) -> tuple[FrameTask | None, np.ndarray, float]:
@@ -191,153 +175,44 @@ def initial_arm(robot: Robot, arm: tuple | dict) -> np.ndarray | None:
     return values
 
 
-def make_plant_controller(robot: Robot, task: FrameTask, trajectory,
-                          spec: ScenarioSpec) -> tuple[Plant, GJMController, ScenarioInequalities | None]:
-    """The plant, the GJM controller (amundsen2018 eq. 4-8) on solver.method and the [[inequalities]] of a
-    dynamic [plant] (passive vehicle): the solver built with free_floating on the levels [inequalities (when it
-    enforces them, else monitored), task].
+def make_plant_controller(plant: Plant, task: FrameTask, trajectory, spec: ScenarioSpec, solver: SolverFactory,
+                          inequalities: ScenarioInequalities | None) -> GJMController:
+    """The GJM controller (amundsen2018 eq. 4-8) of a dynamic [plant] without thrusters (a passive vehicle) on the
+    scenario's solver (built with free_floating on the levels [inequalities (when it enforces them, else monitored),
+    task]); the scenario's checks are the spec's (:func:`uvms.scenario.spec.dynamics.check_passive`).
 
     Raises:
-        ScenarioError: free_floating off (the vehicle has no actuators), a [vehicle] task, a method of fixed
-            levels, solver.alpha or enforce_limits, a gain that is not K on the position error, a bad control_dt.
+        ScenarioError: what the GJM controller refuses.
     """
-    section, solver = spec.plant, spec.solver
-    cls = solver_class(solver)
-    passive = f"plant.type = {section.type!r} without thrusters leaves the vehicle passive (no actuators)"
-    if not solver.free_floating:
-        raise ScenarioError(f"{passive}: the solver cannot command its velocity; set solver.free_floating = true "
-                            f"(the joints through the generalized Jacobian, plant.gjm), plant.thrusters = true "
-                            f"(an actuated vehicle) or plant.type = 'kinematic'")
-    if spec.vehicle.changed(("velocities", "heading", "depth")):
-        raise ScenarioError(f"{passive}: a [vehicle] task cannot be followed; remove it (solver.method = "
-                            f"{solver.method!r} then prioritizes the task alone) or set plant.thrusters = true")
-    if solver.alpha or solver.enforce_limits:
-        raise ScenarioError("solver.alpha and solver.enforce_limits are not supported with a dynamic plant; keep the "
-                            "joints inside their limits with an [[inequalities]] table of type 'joint_limits' and "
-                            "solver.method = 'set_based' or 'hqp'")
-    plant = make_plant(robot, section)
-    gain = np.asarray(solver.gain, dtype=float)
-    if gain.shape not in ((), (3,)):
-        raise ScenarioError(f"solver.gain with a dynamic plant is K on the position error: one number or 3 "
-                            f"(x, y, z) [1/s], got {thaw(solver.gain)!r}")
-    control_dt, dt = float(section.control_dt), float(spec.simulation.dt)
-    ratio = control_dt / dt
-    if control_dt < 0 or (control_dt > 0 and (ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6)):
-        raise ScenarioError(f"plant.control_dt must be 0 (continuous controller) or a multiple of simulation.dt = "
-                            f"{dt:g} s, got {control_dt:g}")
-    inequalities = (build_inequalities(robot, spec.inequalities, cls.enforces_inequalities) if spec.inequalities
-                    else None)
-    taken = solver_options(robot, solver, cls, control_dt or dt)  # the step: the controller's period
-    options = {key: value for key, value in taken.items() if key in ("dt", "priority", "eta", "regularization")}
+    section, robot = spec.plant, plant.robot
+    taken = ("dt", "priority", "eta", "regularization")  # the rest the controller sets itself
+    options = {key: value for key, value in solver.options.items() if key in taken}
     try:
-        controller = GJMController(robot, trajectory, frame=task.frame, axes=task.axes, gain=gain,
-                                   damping=solver_damping(solver), weights=solver_weights(robot, solver, True),
-                                   gjm=section.gjm, hydro=plant.hydro if plant.links else None,
-                                   motor_feedforward=plant.motor_time_constant if section.motor_feedforward else 0.0,
-                                   solver=SolverFactory(cls, robot, options),
-                                   levels=inequalities.levels if inequalities and inequalities.enforced else ())
+        return GJMController(robot, trajectory, frame=task.frame, axes=task.axes,
+                             gain=np.asarray(spec.solver.gain, dtype=float), damping=solver_damping(spec.solver),
+                             weights=solver_weights(robot, spec.solver, True), gjm=section.gjm,
+                             hydro=plant.hydro if plant.links else None,
+                             motor_feedforward=plant.motor_time_constant if section.motor_feedforward else 0.0,
+                             solver=SolverFactory(solver.cls, robot, options),
+                             levels=inequalities.levels if inequalities and inequalities.enforced else ())
     except UVMSError as exc:
-        raise ScenarioError(f"plant/solver ({solver.method}): {exc}") from None
-    return plant, controller, inequalities
+        raise ScenarioError(f"plant/solver ({spec.solver.method}): {exc}") from None
 
 
-def solver_class(solver: SolverSpec, any_levels: str = "") -> type[Solver]:
-    """The class of solver.method, every [solver] key the user set checked against what it takes: the one place
-    a scenario's method is looked up in :data:`uvms.solvers.SOLVERS` (controllers get a SolverFactory of it).
-
-    Args:
-        solver: the [solver] section; any_levels: what needs a solver of any number of levels (e.g. a sequence
-            scenario), refused a method of a fixed number (""; any method).
-
-    Raises:
-        ScenarioError: a method of a fixed number of levels for ``any_levels``; a key set (not at its default)
-            that the method's constructor does not take; the message lists the keys it takes.
-    """
-    method = solver.method
-    cls = SOLVERS[method]
-    if any_levels and cls.level_count is not None:
-        valid = [name for name, other in SOLVERS.items() if other.level_count is None]
-        raise ScenarioError(f"{any_levels} needs solver.method in {', '.join(valid)} (a solver of any number of "
-                            f"levels), got {method!r}")
-    taken = cls.options()
-    refused = [key for key in solver.changed(tuple(SOLVER_KEYWORDS))
-               if SOLVER_KEYWORDS[key] not in taken]
-    if refused:
-        keys = ", ".join(f"solver.{key}" for key, keyword in SOLVER_KEYWORDS.items() if keyword in taken)
-        hint = ""
-        if cls.enforces_inequalities and refused[0] in ("alpha", "enforce_limits"):
-            hint = ("; joint limits are an [[inequalities]] table of type 'joint_limits' (margin, band [rad]), "
-                    "which it enforces")
-        raise ScenarioError(f"solver.{refused[0]} is not used by solver.method = {method!r}, which takes {keys}: "
-                            f"remove it or choose another method{hint}")
-    return cls
-
-
-def solver_damping(solver: SolverSpec) -> float | VariableDamping:
-    """solver.damping, or the variable damping of amundsen2018 eq. 6 when solver.damping_epsilon > 0."""
-    if solver.damping_epsilon > 0:
-        return VariableDamping(solver.damping_epsilon, solver.damping_max)
-    return solver.damping
-
-
-def solver_options(robot: Robot, solver: SolverSpec, cls: type[Solver], dt: float) -> dict[str, Any]:
-    """The constructor keywords of ``cls`` from the [solver] section (those it takes), with the step dt [s]."""
-    offered = {key: getattr(solver, key) for key, keyword in SOLVER_KEYWORDS.items() if key == keyword}
-    offered.update(gain=np.asarray(solver.gain, dtype=float), damping=solver_damping(solver), dt=dt)
-    offered.pop("weights")  # checked against the model below
-    taken = cls.options()
-    options = {keyword: value for keyword, value in offered.items() if keyword in taken}
-    if "weights" in taken:
-        options["weights"] = solver_weights(robot, solver, free_floating=solver.free_floating)
-    if "potential" in taken:
-        options["potential"] = MidRangePotential(robot, weights=np.asarray(solver.joint_limit_weights,
-                                                                             dtype=float))
-    return options
-
-
-def solver_weights(robot: Robot, solver: SolverSpec, free_floating: bool) -> np.ndarray | None:
-    """``solver.weights`` as the diagonal W of the solved columns, checked against the model (None: not given).
-
-    The solved columns are v's nv (the vehicle, then the arm), or the n_arm arm joints for free-floating
-    (generalized-Jacobian) control, where the vehicle is not commanded.
-
-    Raises:
-        ScenarioError: the wrong count (the message says what the entries are), or an entry <= 0.
-    """
-    if not solver.weights:
-        return None
-    weights = np.asarray(solver.weights, dtype=float)
-    if free_floating:
-        size, covered = robot.n_arm, (f"free-floating (generalized-Jacobian) weights cover the arm joints only "
-                                      f"({', '.join(robot.arm_joint_names)}); the vehicle is not commanded, it "
-                                      f"moves by momentum conservation")
-    else:
-        vehicle = f"the vehicle ({', '.join(robot.base.pose_names)}) then " if robot.n_vehicle else ""
-        size, covered = robot.nv, f"one per velocity coordinate: {vehicle}the arm ({', '.join(robot.arm_joint_names)})"
-    if weights.shape != (size,):
-        raise ScenarioError(f"solver.weights has {weights.size} numbers, {robot.name} needs {size}: {covered}")
-    if np.any(weights <= 0):
-        raise ScenarioError(f"solver.weights must all be > 0 (the diagonal of a positive definite W), "
-                            f"got {thaw(solver.weights)}")
-    return weights
-
-
-def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, spec: ScenarioSpec,
+def make_controller(task: FrameTask, samples: RecentSamples, spec: ScenarioSpec, solver: SolverFactory,
                     inequalities: ScenarioInequalities | None = None) -> TrackingController:
-    """The tracking controller of the scenario's solver method, following ``samples`` (the trajectory).
-
-    The solver is :func:`solver_class`'s, built once. Its levels: the ``[[inequalities]]`` (highest first)
+    """The tracking controller of the scenario's solver (:func:`~uvms.scenario.solver.scenario_solver`), following
+    ``samples`` (the trajectory), built once. Its levels: the ``[[inequalities]]`` (highest first)
     when it enforces them (else the recorder monitors them), then the task, and the ``[vehicle]`` task at the
     level the solver puts it (:attr:`~uvms.solvers.base.Solver.vehicle_level`) when it uses one.
     """
-    solver, vehicle = spec.solver, spec.vehicle
-    cls = solver_class(solver)
-    options = solver_options(robot, solver, cls, spec.simulation.dt)
+    robot, vehicle, cls = solver.robot, spec.vehicle, solver.cls
+    options = dict(solver.options)
     levels: list = [*(inequalities.levels if inequalities is not None and cls.enforces_inequalities else []), task]
     if cls.vehicle_level is not None:
         if not vehicle.velocities and vehicle.heading is None and vehicle.depth is None:
-            raise ScenarioError(f"solver.method = {solver.method!r} needs a [vehicle] task (velocities, heading or "
-                                f"depth)")
+            raise ScenarioError(f"solver.method = {spec.solver.method!r} needs a [vehicle] task (velocities, "
+                                f"heading or depth)")
         levels.insert(cls.vehicle_level, VehicleTask(robot, velocities=vehicle.velocities,
                                                      heading=vehicle.heading, depth=vehicle.depth))
         gains: list = [options["gain"]] * (len(levels) - 1)
@@ -346,7 +221,7 @@ def make_controller(robot: Robot, task: FrameTask, samples: RecentSamples, spec:
     try:
         return TrackingController(robot, task, samples, SolverFactory(cls, robot, options), levels)
     except UVMSError as exc:
-        raise ScenarioError(f"solver ({solver.method}): {exc}") from None
+        raise ScenarioError(f"solver ({spec.solver.method}): {exc}") from None
 
 
 def check_step_count(spec: ScenarioSpec, duration: float) -> int:

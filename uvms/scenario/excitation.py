@@ -30,7 +30,7 @@ from ..errors import IdentificationError, ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
-from .actuated import Actuation, check_actuated_scenario
+from .actuated import Actuation
 from .bags.tf_tree import vehicle_root_link
 from .spec import ScenarioSpec
 
@@ -176,47 +176,26 @@ def with_odometry_noise(log: IdentificationLog, *, position: float = 0.0, attitu
                              f"{log.source} + odometry noise")
 
 
-def check_excitation_used(spec: ScenarioSpec) -> None:
-    """[excitation] keys set without excitation.wrench and plant.thrusters = true are refused (they would do
-    nothing)."""
-    given = spec.excitation.changed()
-    needs = (("excitation.wrench (6 RMS values [N, N m])", spec.excitation.wrench),
-             ("plant.thrusters = true", spec.plant.thrusters))
-    missing = [need for need, present in needs if not present]
-    if given and missing:
-        raise ScenarioError(f"excitation.{given[0]} needs {' and '.join(missing)}: the excitation drives the "
-                            f"vehicle's thrusters")
-
-
-def scenario_excitation(robot: Robot, plant: Plant, spec: ScenarioSpec, duration: float) -> Actuation:
+def scenario_excitation(actuated: ActuatedPlant, spec: ScenarioSpec, duration: float) -> Actuation:
     """The actuated part of an excitation scenario (``[excitation]`` with plant.thrusters): the model's thrusters
     driven open loop by the multi-sine, the arm held or moving; ``uvms run --bag`` then writes the log that
     ``uvms identify`` reads.
 
     Raises:
-        ScenarioError: what :func:`~uvms.scenario.actuated.check_actuated_scenario` refuses, [vehicle_control] or
-            [[inequalities]] given (no closed loop here), bad excitation values, or thrust commands beyond the
-            thrusters' limits (the message gives the factor to scale excitation.wrench by).
+        ScenarioError: excitation.arm not one amplitude per arm joint, bad excitation values, or thrust commands
+            beyond the thrusters' limits (the message gives the factor to scale excitation.wrench by); the rest is
+            checked where the scenario is read (:func:`uvms.scenario.spec.dynamics.check_excitation`).
     """
-    check_actuated_scenario(robot, spec)
-    unused = spec.vehicle_control.changed()
-    if unused or spec.inequalities:
-        what = f"vehicle_control.{unused[0]}" if unused else "[[inequalities]]"
-        raise ScenarioError(f"{what} is not used by an excitation ([excitation] wrench): the vehicle is driven open "
-                            f"loop; remove it, or remove excitation.wrench for the closed-loop chain")
+    robot, thrusters = actuated.robot, actuated.thrusters
     section, dt = spec.excitation, float(spec.simulation.dt)
     if section.arm and len(section.arm) != robot.n_arm:
         raise ScenarioError(f"excitation.arm needs {robot.n_arm} amplitudes [rad or m] "
                             f"({', '.join(robot.arm_joint_names)}), got {len(section.arm)}; [] holds the arm")
-    if not section.arm_period > 0:
-        raise ScenarioError(f"excitation.arm_period must be > 0 s, got {section.arm_period:g}")
     try:
-        thrusters = thrusters_of(robot)
         wrench = multisine(np.array(section.wrench), highest=float(section.highest),
                            components=int(section.components), seed=int(section.seed))
     except UVMSError as exc:
         raise ScenarioError(f"excitation: {' '.join(str(exc).split())}") from None
-    actuated = ActuatedPlant(plant, thrusters)
     controller = ExcitationControl(actuated, wrench, np.array(section.arm) if section.arm else None,
                                    float(section.arm_period))
     ratio = controller.peak_ratio(duration, dt)
@@ -224,4 +203,4 @@ def scenario_excitation(robot: Robot, plant: Plant, spec: ScenarioSpec, duration
         raise ScenarioError(f"excitation.wrench asks up to {ratio:.3g} times the thrusters' limits "
                             f"({thrusters.source}); scale it by {1.0 / ratio:.3g} or less so that the log's wrench is "
                             f"what was commanded")
-    return Actuation(plant, thrusters, controller)
+    return Actuation(actuated, controller)

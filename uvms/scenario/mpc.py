@@ -12,19 +12,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.command import State
-from ..dynamics.plant.plant import Plant
-from ..dynamics.thrusters.fins import fins_of
-from ..dynamics.thrusters.thrusters import thrusters_of
 from ..errors import ScenarioError, UVMSError
-from ..robot.robot import Robot
 from ..tasks.frame import FrameTask
 from .actuated import Actuation
 from .inequalities import build_inequalities
 from .spec import ScenarioSpec
 
 
-def make_mpc_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, q0: np.ndarray,
+def make_mpc_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.ndarray,
                        spec: ScenarioSpec) -> Actuation:
     """The thrusters of the model and the MPC of the scenario, compiled and warmed up at q0 (its first solve loads
     the derivative kernels, which is not a control step's time), then reset.
@@ -35,7 +32,7 @@ def make_mpc_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, 
     """
     from ..control.mpc.optional import require_crocoddyl, require_mim_solvers
 
-    where = "controller.type = 'mpc'"
+    where, robot, thrusters, fins = "controller.type = 'mpc'", actuated.robot, actuated.thrusters, actuated.fins
     try:
         require_crocoddyl() if spec.controller.solver == "box_fddp" else require_mim_solvers()
     except UVMSError as exc:
@@ -48,10 +45,6 @@ def make_mpc_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, 
     if spec.plant.motor_feedforward or spec.plant.control_dt:
         raise ScenarioError(f"{where}: plant.motor_feedforward and plant.control_dt are the GJM controller's; the "
                             f"MPC's period is controller.control_period")
-    try:
-        thrusters, fins = thrusters_of(robot), fins_of(robot)
-    except UVMSError as exc:
-        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
     if len(fins):
         raise ScenarioError(f"{where}: {robot.name} has fins ({', '.join(fins.names)}), which the MPC does not "
                             f"command (it plans thrusts and arm commands); use controller.type = 'solver'")
@@ -61,7 +54,8 @@ def make_mpc_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, 
     from ..control.mpc.controller import MPCController
 
     try:
-        controller = MPCController(plant, thrusters, lambda t: trajectory(t).pose.translation, frame=task.frame,
+        controller = MPCController(actuated.plant, thrusters, lambda t: trajectory(t).pose.translation,
+                                   frame=task.frame,
                                    settings=spec.controller.settings,
                                    constraints=inequalities.objectives if inequalities is not None else ())
         controller.reset(State(q0))
@@ -69,4 +63,4 @@ def make_mpc_actuation(robot: Robot, plant: Plant, task: FrameTask, trajectory, 
         controller.reset(State(q0))
     except UVMSError as exc:
         raise ScenarioError(f"{where}: {exc}") from None
-    return Actuation(plant, thrusters, controller, inequalities, fins)
+    return Actuation(actuated, controller, inequalities)

@@ -19,7 +19,8 @@ command's fields it applies:
 
     simulate(robot, tracking, q0, 10.0, 0.01, task=task, desired=lambda t: trajectory(t).pose)
     simulate(plant, gjm_controller, q0, 8.0, 0.01)
-    simulate(ActuatedPlant(plant, thrusters), station_keeping(plant, thrusters, q0, 0.01), q0, 6.0, 0.01)
+    actuated = ActuatedPlant(plant, thrusters)
+    simulate(actuated, station_keeping(actuated, q0, 0.01), q0, 6.0, 0.01)
 """
 
 from __future__ import annotations

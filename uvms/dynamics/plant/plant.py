@@ -159,6 +159,13 @@ class Plant:
         # evaluation: numba loads there
         self._terms: tuple[Callable[..., None], tuple[np.ndarray, ...]] | None = None
 
+    def copy(self, *, current: np.ndarray | None = None) -> Plant:
+        """A plant of the same robot, hydrodynamics and choices with buffers of its own (e.g. a controller's model),
+        in ``current`` (3,) [m/s] world when given, else in this plant's."""
+        return Plant(self.robot, self.hydro if current is None else self.hydro.with_current(current),
+                     gravity=self.gravity, motor_time_constant=self.motor_time_constant, added_mass=self.added_mass,
+                     damping=self.damping)
+
     def system(self, controller: Controller | None, *, dt: float, control_dt: float = 0.0) -> PlantSystem:
         """This plant under a joint-velocity command, the system :func:`uvms.sim.loop.simulate` integrates.
 

@@ -11,7 +11,7 @@ from ...errors import ScenarioError, UVMSError
 from ...io.names import NAME_RULE, is_plain_name
 from ...tasks.objectives import check_table, file_keys
 from .controller import ControllerSpec, check_controller
-from .dynamics import ExcitationSpec, PlantSpec, VehicleControlSpec
+from .dynamics import ExcitationSpec, PlantSpec, VehicleControlSpec, check_plant
 from .keys import Key, Section, check_range
 from .sections import (
     InitialSpec,
@@ -126,6 +126,7 @@ def check_scenario(raw: Mapping, path: Path) -> ScenarioSpec:
                    inequalities=check_inequalities(raw.get("inequalities", []), origin))
     spec = ScenarioSpec(path=Path(path), **checked)
     check_controller(spec, origin)
+    check_plant(spec, origin)
     if spec.scenario.name:
         check_name("scenario.name", spec.scenario.name, origin, "it names the default output folder out/<name>",
                    example="hoang2011_w1")
