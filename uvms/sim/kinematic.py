@@ -146,6 +146,6 @@ class TaskSeries:
         position, orientation = errors[:, self.position_rows], errors[:, self.orientation_rows]
         # sqrt of each row's own dot product: the numbers of one row at a time
         return {"ee_position": positions, "desired_position": targets, "ee_rpy": pose_rpy, "desired_rpy": target_rpy,
-                "task_error": errors[:, task.rows],
+                "task_error": np.ascontiguousarray(errors[:, task.rows]),  # row-major, as the rows stacked
                 "position_error": np.array([math.sqrt(p.dot(p)) for p in position]),
                 "orientation_error": np.array([math.sqrt(o.dot(o)) for o in orientation])}
