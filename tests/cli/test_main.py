@@ -20,3 +20,26 @@ def test_the_program_freezes_its_objects_before_exit_and_a_call_with_argv_never(
     assert main() == 2  # an error too
     assert frozen == [True, True]
     assert "uvms: error" in capsys.readouterr().err
+
+
+def test_uvms_run_as_the_program_builds_without_collections_then_freezes_and_a_call_never(monkeypatch, tmp_path):
+    import uvms.scenario.runs as runs
+
+    calls = []
+    for name in ("disable", "enable", "freeze"):
+        monkeypatch.setattr(runs.gc, name, lambda name=name: calls.append(name))
+    monkeypatch.setattr(runs.gc, "isenabled", lambda: True)
+    built = runs.build
+
+    def build(spec):  # what the run's build sees of the collector
+        calls.append("build")
+        return built(spec)
+
+    monkeypatch.setattr(runs, "build", build)
+    arguments = ["run", "hoang2011_w1", "--quiet", "--set", "trajectory.duration=0.2",
+                 "--set", "trajectory.accel_time=0.1", "--set", "outputs.figures=false"]
+    assert main([*arguments, "--out", str(tmp_path / "call")]) == 0
+    assert calls == ["build"]  # a test, a notebook: the collector untouched
+    monkeypatch.setattr(sys, "argv", ["uvms", *arguments, "--out", str(tmp_path / "program")])
+    assert main() == 0  # the build's objects frozen, the loop collected as always, all frozen again before exit
+    assert calls == ["build", "disable", "build", "freeze", "enable", "freeze"]

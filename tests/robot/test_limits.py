@@ -225,3 +225,13 @@ def test_the_model_limits_are_one_object_read_by_every_user():
         [[0.5, 0.0, pytest.approx(5.0 - 1.5 * np.pi)]]
     vehicle = uvms.tasks.VehicleVelocityLimits(robot, [0.5, 0.2])
     assert vehicle.limit.upper.tolist() == [0.5, 0.5, 0.2] and vehicle.limit.names == robot.base.velocity_names
+
+
+@pytest.mark.parametrize("model", ["hoang2011", "continuous"])
+def test_arm_values_of_rows_are_those_of_each_row(model, rng):
+    """A run's rows (N, nq) at once: the values of one q at a time (continuous joints: their angles)."""
+    robot = shipped(model) if model != "continuous" else uvms.load(CONTINUOUS_ARM)
+    rows = np.array([robot.configuration(arm=rng.uniform(-1.0, 1.0, robot.n_arm)) for _ in range(5)])
+    values = robot.arm_values(rows)
+    assert values.shape == (5, robot.n_arm)
+    assert np.array_equal(values, np.array([robot.arm_values(q) for q in rows]))

@@ -74,6 +74,25 @@ def test_a_kinematic_run_equals_the_former_simulate_to_rounding():
     assert result.plant is None and result.tracking is None and result.actuation is None
 
 
+def test_the_task_series_derived_after_the_loop_are_each_rows_own_numbers():
+    """The task series from the stored rows: row k's end effector, target and errors as one row at a time computes
+    them (FrameTask.full_error_between, log orientation error), as row-major arrays (what trajectory.npz stores)."""
+    robot, result = hoang_run()
+    task = uvms.FrameTask(robot, axes=("x", "y", "yaw"))
+    start = robot.fk(result.q[0])
+    for k in (0, 57, 200):
+        t, pose = result.t[k], robot.fk(result.q[k])
+        goal = pin.SE3(start.rotation, start.translation + np.array([0.3 * np.sin(t), 0.2 * t, 0.0]))
+        error = task.full_error_between(goal, pose)
+        assert np.array_equal(result.ee_position[k], pose.translation)
+        assert np.array_equal(result.desired_rpy[k], pin.rpy.matrixToRpy(goal.rotation))
+        assert np.array_equal(result.task_error[k], error[[0, 1, 5]])
+        assert result.position_error[k] == np.sqrt(error[:2].dot(error[:2]))
+        assert result.orientation_error[k] == abs(error[5])
+    for name in ("ee_position", "desired_position", "ee_rpy", "desired_rpy", "task_error"):
+        assert getattr(result, name).flags.c_contiguous, name
+
+
 def test_a_free_floating_rigid_run_conserves_momentum():
     """The GJM controller on the rigid plant, from rest: the momentum stays zero to 1e-9 [N s, N m s]."""
     robot = shipped("hoang2011")

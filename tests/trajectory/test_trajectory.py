@@ -45,6 +45,19 @@ def test_trapezoid_of_hoang2011():
     assert law(5.0).s == pytest.approx(1.25)
 
 
+@pytest.mark.parametrize("law", LAWS)
+def test_a_law_at_many_times_is_its_samples_one_by_one_bit_for_bit(law):
+    """``at`` (the trapezoid's masks over 20,000 times and its phase boundaries) against one call per time."""
+    rng = np.random.default_rng(4)
+    ends = [0.0, law.duration, getattr(law, "accel_time", 0.0), law.duration - getattr(law, "accel_time", 0.0)]
+    times = np.concatenate([rng.uniform(-1.0, law.duration + 1.0, 20000), ends, np.nextafter(ends, 1e9)])
+    values = law.at(times)
+    for name, column in zip(("s", "ds", "dds"), values):
+        expected = np.array([getattr(law(t), name) for t in times.tolist()])
+        assert np.array_equal(column, expected), name
+    assert np.array_equal(law.at(times[:3])[0], values[0][:3])  # a few times: one call each, the same numbers
+
+
 def test_quintic_and_cubic_boundary_conditions():
     cubic, quintic = LAWS[2], LAWS[3]
     assert cubic(1e-12).ds == pytest.approx(0.0, abs=1e-9) and cubic(10 - 1e-12).ds == pytest.approx(0.0, abs=1e-9)

@@ -290,6 +290,7 @@ def _main(argv: Sequence[str] | None) -> int:
     """:func:`main` itself: parse, run the command, turn an error into one line and an exit status."""
     options = build_parser().parse_args(argv)
     options.argv = list(sys.argv[1:] if argv is None else argv)
+    options.program = argv is None  # the process ends with the command
     with stop_signals_interrupt() as received:
         try:
             with warnings.catch_warnings(record=True) as caught:

@@ -38,7 +38,8 @@ def command_run(options: argparse.Namespace) -> int:
     if not options.quiet:  # the first line, within a second: what runs and where it goes (the loop shows a bar)
         say(start_line(spec, out), sys.stdout)
     replacing = holds_run(out)
-    result = run_scenario(spec, out=out, progress=False if options.quiet else None)
+    result = run_scenario(spec, out=out, progress=False if options.quiet else None,
+                          settle=getattr(options, "program", False))  # one run, then the process ends
     folder = result.files[0].parent
     metrics = result.metrics
     if options.quiet:  # the one result line; warnings and notes still go to stderr

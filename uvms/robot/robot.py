@@ -300,9 +300,12 @@ class Robot(VehicleAccessors):
         return self.arm_values(self.check_configuration(q))
 
     def arm_values(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`arm_configuration` of a q already checked (e.g. from ``pin.integrate``): no validation."""
+        """:meth:`arm_configuration` of a q already checked (e.g. from ``pin.integrate``): no validation; q (nq,) ->
+        (n_arm,), or rows (N, nq) -> (N, n_arm)."""
         if self._arm_q_index is not None:
-            return q[self._arm_q_index]
+            return q[..., self._arm_q_index]
+        if np.ndim(q) == 2:
+            return np.array([self.arm_values(row) for row in q]).reshape(len(q), self.n_arm)
         values = []
         for joint in self.arm_joints:
             part = q[joint.idx_q: joint.idx_q + joint.nq]

@@ -1,8 +1,8 @@
-"""The kinematic system (q' = v from a kinematic controller) and the task recorder of a run.
+"""The kinematic system (q' = v from a kinematic controller) and the task series of a run.
 
 :class:`KinematicSystem` is what :func:`uvms.sim.loop.simulate` integrates when it is given a ``Robot``;
-:class:`TaskRecorder` records the end effector against its desired pose (``simulate(..., task=, desired=)``),
-for every kind of run.
+:class:`TaskSeries` derives the end effector against its desired pose (``simulate(..., task=, desired=)``) from the
+stored rows after the loop, for every kind of run.
 """
 
 from __future__ import annotations
@@ -17,9 +17,10 @@ import pinocchio as pin
 from ..control.base import Controller
 from ..dynamics.plant.command import State, refuse_fields
 from ..errors import ConfigurationError, StepCountError, UVMSError
-from ..robot.configuration import Configuration
+from ..robot.configuration import configurations
+from ..robot.conventions import wrap_angles
 from ..robot.robot import Robot
-from ..tasks.frame import FrameTask
+from ..tasks.frame import FrameTask, matrixToRpy
 from .system import StageRate
 
 EMPTY = np.zeros(0)
@@ -104,10 +105,13 @@ class KinematicSystem:
         return {}
 
 
-class TaskRecorder:
-    """The task series of a row: end-effector pose, desired pose and the errors on the task axes.
+class TaskSeries:
+    """The task series of a run: end-effector pose, desired pose and the errors on the task axes, derived after
+    the loop from the stored rows (t, q) in one pass (the loop stores the states only; a row's end effector and
+    target are functions of its t and q, never of the controller's state).
 
-    The frame's pose is computed in the recorder's own Configuration (never the robot's data).
+    The frame's pose comes from one Configuration of its own moved along the rows (never the robot's data); the
+    errors are those of :meth:`~uvms.tasks.frame.FrameTask.full_error_between`, entry by entry.
 
     Args:
         robot: the model; task: the end-effector task (its frame, axes and orientation error).
@@ -116,27 +120,32 @@ class TaskRecorder:
 
     def __init__(self, robot: Robot, task: FrameTask, desired: Callable[[float], pin.SE3]) -> None:
         self.robot, self.task, self.desired = robot, task, desired
-        self.state: Configuration | None = None  # one, moved to each row's q
         self.position_rows = [r for r in task.rows if r < 3]
         self.orientation_rows = [r for r in task.rows if r >= 3]
 
-    def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
-        """ee_position, ee_rpy, desired_position, desired_rpy (3,) each, task_error (k,), position_error and
-        orientation_error at (t, q)."""
-        task = self.task
-        # q comes from pin.integrate in the loop (checked once at its start): not checked again at every row
-        if self.state is None:
-            self.state = Configuration(self.robot, q, check=False)
-        else:
-            self.state.update(q, check=False)
-        pose = self.state.pose(task.frame_id)
-        target = self.desired(t)
-        pose_rpy, target_rpy = pin.rpy.matrixToRpy(pose.rotation), pin.rpy.matrixToRpy(target.rotation)
-        full_error = task.full_error_between(target, pose, target_rpy, pose_rpy)
-        position, orientation = full_error[self.position_rows], full_error[self.orientation_rows]
-        return {"ee_position": pose.translation.copy(), "desired_position": target.translation.copy(),
-                "ee_rpy": pose_rpy, "desired_rpy": target_rpy,
-                "task_error": full_error[task.rows],
-                # numpy's norm of a vector in its own operations (sqrt of x.dot(x)) without its 1 us of dispatch
-                "position_error": math.sqrt(position.dot(position)),
-                "orientation_error": math.sqrt(orientation.dot(orientation))}
+    def __call__(self, t: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+        """ee_position, ee_rpy, desired_position, desired_rpy (N, 3) each, task_error (N, k), position_error and
+        orientation_error (N,) of the rows t (N,) [s], q (N, nq) (from pin.integrate in the loop: not checked
+        again)."""
+        task, desired, frame_id = self.task, self.desired, self.task.frame_id
+        count = len(t)
+        positions, targets = np.empty((count, 3)), np.empty((count, 3))
+        pose_rpy, target_rpy = np.empty((count, 3)), np.empty((count, 3))
+        errors = np.empty((count, 6))
+        log = task.orientation == "log"
+        for row, (time_, state) in enumerate(zip(t.tolist(), configurations(self.robot, q, check=False))):
+            pose, target = state.pose(frame_id), desired(time_)
+            rotation, target_rotation = pose.rotation, target.rotation
+            positions[row], targets[row] = pose.translation, target.translation
+            pose_rpy[row], target_rpy[row] = matrixToRpy(rotation), matrixToRpy(target_rotation)
+            if log:  # the numbers of log_pose_error: log3(R_d R^T)
+                errors[row, 3:] = pin.log3(target_rotation.dot(rotation.T))
+        errors[:, :3] = targets - positions
+        if not log:  # the numbers of euler_pose_error, all rows at once
+            errors[:, 3:] = wrap_angles(target_rpy - pose_rpy)
+        position, orientation = errors[:, self.position_rows], errors[:, self.orientation_rows]
+        # sqrt of each row's own dot product: the numbers of one row at a time
+        return {"ee_position": positions, "desired_position": targets, "ee_rpy": pose_rpy, "desired_rpy": target_rpy,
+                "task_error": np.ascontiguousarray(errors[:, task.rows]),  # row-major, as the rows stacked
+                "position_error": np.array([math.sqrt(p.dot(p)) for p in position]),
+                "orientation_error": np.array([math.sqrt(o.dot(o)) for o in orientation])}

@@ -37,7 +37,7 @@ from ..io.progress import compile_notice, progress_bar
 from ..numerics.integrate import STEPS, check_integrator, step_count
 from ..robot.robot import Robot
 from ..tasks.frame import FrameTask
-from .kinematic import KinematicSystem, TaskRecorder
+from .kinematic import KinematicSystem, TaskSeries
 from .result import SimulationResult
 from .system import Recorder, Simulable, System
 
@@ -113,10 +113,10 @@ def simulate(
         control_dt: the controller's period [s], a multiple of dt, its command held in between (a digital
             controller); 0: a continuous one, evaluated at every integrator stage (an actuated plant's controller
             always runs once per step).
-        task, desired: record the task series (end effector against ``desired``: t -> pose, errors on the task's
-            axes) with :class:`uvms.sim.kinematic.TaskRecorder`; both or neither.
-        recorders: more series per row, (t, q, x, sample) -> {name: value}, after the task's; their names must be
-            series of :class:`SimulationResult` (:data:`uvms.sim.result.SERIES`).
+        task, desired: the task series (end effector against ``desired``: t -> pose, errors on the task's axes),
+            derived from the stored rows after the loop by :class:`uvms.sim.kinematic.TaskSeries`; both or neither.
+        recorders: more series per row, (t, q, x, sample) -> {name: value}; their names must be series of
+            :class:`SimulationResult` (:data:`uvms.sim.result.SERIES`) other than the task's.
         progress: show a progress bar (None: only on a terminal).
 
     Returns:
@@ -144,9 +144,10 @@ def simulate(
     built = KinematicSystem(system, controller, control_dt) if isinstance(system, Robot) else \
         system.system(controller, dt=dt, control_dt=control_dt)
     q, x = built.initial_state(q0, v0)
-    every = [TaskRecorder(built.robot, task, desired)] if task is not None else []
-    arrays, wall_time = run_loop(built, q, x, steps=steps, dt=dt, integrator=integrator,
-                                 recorders=[*every, *recorders], progress=progress, desc="simulate")
+    arrays, wall_time = run_loop(built, q, x, steps=steps, dt=dt, integrator=integrator, recorders=recorders,
+                                 progress=progress, desc="simulate")
+    if task is not None:  # from the stored rows, in one pass: they replace a system's own end-effector series
+        arrays.update(TaskSeries(built.robot, task, desired)(arrays["t"], arrays["q"]))
     return SimulationResult.from_rows(arrays, built.series_info(), robot=built.robot,
                                       axes=task.axes if task is not None else (), integrator=integrator, dt=dt,
                                       wall_time=wall_time)

@@ -156,8 +156,7 @@ class SimulationResult:
 
     def arm(self) -> np.ndarray:
         """Arm joint values per row (N, n_arm)."""
-        robot = self.robot
-        return np.array([robot.arm_values(q) for q in self.q]).reshape(len(self.q), robot.n_arm)
+        return self.robot.arm_values(self.q)
 
     def csv_text(self) -> str:
         """The time series as CSV: t, vehicle pose, arm joints, v, end effector, errors, diagnostics (as recorded)."""

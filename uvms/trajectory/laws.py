@@ -35,6 +35,14 @@ class TimeLaw:
     def inside(self, t: float) -> LawSample:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    def at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(s, s', s'') (N,) each at the times (N,) [s]: the numbers of one call per time (a law may compute them
+        all at once in the same operations)."""
+        samples = [self(t) for t in times.tolist()]
+        return (np.array([sample.s for sample in samples], dtype=float),
+                np.array([sample.ds for sample in samples], dtype=float),
+                np.array([sample.dds for sample in samples], dtype=float))
+
 
 def check_positive(value: float, what: str, allow_zero: bool = False) -> float:
     """A finite float > 0 (or >= 0)."""
@@ -82,6 +90,30 @@ class TrapezoidLaw(TimeLaw):
             remaining = tf - t
             return LawSample(self.distance - 0.5 * a * remaining**2, a * remaining, -a)
         return LawSample(v * (t - 0.5 * ta), v, 0.0)
+
+    def at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(s, s', s'') (N,) each at the times (N,) [s], each phase's entries in the operations of
+        :meth:`__call__` (a run's table of a few 10,000 times: one pass, not a call per time)."""
+        times = np.asarray(times, dtype=float)
+        if times.size < 8:  # a sample or a few: a call each costs less than the masks
+            return super().at(times)
+        v, ta, tf = self.speed, self.accel_time, self.duration
+        s, ds, dds = np.zeros(times.shape), np.zeros(times.shape), np.zeros(times.shape)
+        after, inside = times >= tf, (times > 0.0) & (times < tf)
+        s[after] = self.distance
+        accelerating = inside & (times < ta) if ta > 0 else np.zeros(times.shape, dtype=bool)
+        decelerating = inside & ~accelerating & (times > tf - ta) if ta > 0 else accelerating
+        cruising = inside & ~accelerating & ~decelerating
+        if ta > 0:
+            a = v / ta
+            t = times[accelerating]
+            s[accelerating], ds[accelerating], dds[accelerating] = 0.5 * a * t * t, a * t, a
+            remaining = tf - times[decelerating]
+            # Python's power of each float, as __call__ (pow(x, 2) and x * x differ in the last bit now and then)
+            squared = np.array([value**2 for value in remaining.tolist()], dtype=float)
+            s[decelerating], ds[decelerating], dds[decelerating] = self.distance - 0.5 * a * squared, a * remaining, -a
+        s[cruising], ds[cruising] = v * (times[cruising] - 0.5 * ta), v
+        return s, ds, dds
 
 
 @dataclass(frozen=True)
