@@ -81,7 +81,8 @@ class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
             pin.framesForwardKinematics(self.state.pinocchio, data.pinocchio, q)
             self.costs.calc(data.costs, x)
         else:
-            self.prediction.evaluate_into(q, v, u, data.acceleration, data.mass)
+            dynamics = self.prediction.evaluate(q, v, u)
+            data.acceleration, data.mass = dynamics.acceleration, dynamics.mass_matrix
             data.xout[:] = data.acceleration
             pin.framesForwardKinematics(self.state.pinocchio, data.pinocchio, q)
             self.costs.calc(data.costs, x, u)
