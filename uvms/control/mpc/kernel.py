@@ -86,7 +86,8 @@ def inverse_dynamics_derivatives_into(jacobian: np.ndarray, d_jacobian: np.ndarr
     Args:
         jacobian, d_jacobian: Pinocchio's data.J, data.dJ (6, nv) at (q, v, a); placements: (K, 4, 4) the links'
             joints' oMi (``slots`` (L,): a link's row in it); programs: (P, 3) the links' walks over data.J
-            (:func:`uvms.numerics._kernels.hydro.frame_jacobian_program`), link l's rows starts[l]:starts[l + 1];
+            (:func:`uvms.numerics._kernels.hydro.frame_jacobian_program`: from the joint's last column up to the
+            root; no mimic joint, so each column once), link l's rows starts[l]:starts[l + 1];
         descends: (nv, nv) whether column k's joint is a strict descendant of column i's ([k, i]);
         link_rotations, link_translations: (L, 3, 3), (L, 3) the links in their joints;
         added_mass ... current: the plant's stacked link constants (buoyancy 0 where none);
@@ -100,8 +101,9 @@ def inverse_dynamics_derivatives_into(jacobian: np.ndarray, d_jacobian: np.ndarr
     current_local, momentum, up, force = np.empty(3), np.empty(6), np.empty(3), np.empty(3)
     rate = np.empty((6, 6))  # d(wrench)/d(nu_r), the added mass's acceleration term aside
     no_inertia = np.zeros((6, 6))
-    # per column k: nu_p, A_p, nu_p - nu, dnu/dq_k, dA/dq_k, dA/dv_k, d(R^T v_c)/dq_k, d(wrench)/dq_k, /dv_k
-    parent_velocity, parent_acceleration, relative_motion = np.empty(6), np.empty(6), np.empty(6)
+    # per column k: nu_p - nu, dnu/dq_k, dA/dq_k, dA/dv_k, d(R^T v_c)/dq_k, d(wrench)/dq_k, /dv_k
+    parent_velocity, parent_acceleration = np.zeros((nv, 6)), np.zeros((nv, 6))  # nu_p, A_p of column k
+    sums_above, rates_above, relative_motion = np.zeros(6), np.zeros(6), np.empty(6)
     velocity_dq, acceleration_dq, acceleration_dv = np.empty(6), np.empty(6), np.empty(6)
     current_dq, df_dq, df_dv, out = np.empty(3), np.empty(6), np.empty(6), np.empty(6)
     for link in range(count):
@@ -114,13 +116,23 @@ def inverse_dynamics_derivatives_into(jacobian: np.ndarray, d_jacobian: np.ndarr
         moved = program.shape[0]  # (no mimic joint: each column once)
         for step in range(moved):
             columns[step] = program[step, 1]
+        # down the chain (the walk reversed: from the root), the sums of the columns above each column's joint
         nu[:] = 0.0
         acceleration[:] = 0.0
-        for step in range(moved):
+        sums_above[:] = 0.0
+        rates_above[:] = 0.0
+        above = -1
+        for step in range(moved - 1, -1, -1):
             k = columns[step]
+            if above >= 0 and descends[k, above]:  # a joint further down: the ones above are its ancestors
+                sums_above[:] = nu
+                rates_above[:] = acceleration
+            parent_velocity[k] = sums_above
+            parent_acceleration[k] = rates_above
             for r in range(6):
                 nu[r] += local[r, k] * v[k]
                 acceleration[r] += local[r, k] * a[k] + local_rate[r, k] * v[k]
+            above = k
         for i in range(3):  # c = R^T v_c
             current_local[i] = rotation[0, i] * current[0] + rotation[1, i] * current[1] + rotation[2, i] * current[2]
         relative[:] = nu
@@ -167,21 +179,13 @@ def inverse_dynamics_derivatives_into(jacobian: np.ndarray, d_jacobian: np.ndarr
         for step in range(moved):
             k = columns[step]
             column = local[:, k]
-            parent_velocity[:] = 0.0
-            parent_acceleration[:] = 0.0
-            for inner in range(moved):
-                m = columns[inner]
-                if descends[k, m]:
-                    for r in range(6):
-                        parent_velocity[r] += local[r, m] * v[m]
-                        parent_acceleration[r] += local[r, m] * a[m] + local_rate[r, m] * v[m]
             for r in range(6):
-                relative_motion[r] = parent_velocity[r] - nu[r]
+                relative_motion[r] = parent_velocity[k, r] - nu[r]
             _motion_cross(relative_motion, column, acceleration_dv)
             for r in range(6):
                 acceleration_dv[r] += local_rate[r, k]
-            _motion_cross(parent_velocity, column, velocity_dq)  # zero when the parent is the universe
-            _motion_cross(parent_acceleration, column, acceleration_dq)
+            _motion_cross(parent_velocity[k], column, velocity_dq)  # zero when the parent is the universe
+            _motion_cross(parent_acceleration[k], column, acceleration_dq)
             _motion_cross(relative_motion, velocity_dq, out)
             for r in range(6):
                 acceleration_dq[r] += out[r]
