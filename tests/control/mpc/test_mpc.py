@@ -234,6 +234,26 @@ def test_a_node_reports_a_point_out_of_range_as_rejected():
     assert not data.rejected and 0.0 < data.cost < 1e10 and np.abs(data.xout).max() > 0.1  # it sinks or floats
 
 
+def test_a_node_whose_plant_solve_fails_is_rejected_not_raised(monkeypatch):
+    """The acceleration is the plant's call, whose vehicle solve raises NumericalError on a non-finite solution: at
+    such a trial point the node is rejected (as a non-finite acceleration was), no exception leaves calc (it would
+    abort the process inside CSQP's OpenMP loop)."""
+    from uvms.control.mpc.action import REJECTED_COST
+    from uvms.errors import NumericalError
+
+    mpc, q0 = controller(MPCSettings(horizon=2, node_dt=0.1))
+    model = mpc.nodes[1][1]
+    data = model.createData()
+    x, u = np.concatenate([q0, np.zeros(q0.size - 1)]), np.zeros(mpc.prediction.nu)
+
+    def singular(*_):
+        raise NumericalError("singular or overflowing 6x6 system")
+
+    monkeypatch.setattr(mpc.prediction, "evaluate", singular)
+    model.calc(data, x, u)
+    assert data.rejected and data.cost == REJECTED_COST and not data.xout.any()
+
+
 def test_the_warm_start_is_the_last_plan_read_at_the_nodes_times():
     """Half a node after a solve (20 Hz, 0.1 s nodes) the warm start's nodes lie midway between the plan's (the
     inputs linearly, the states along the manifold); a whole node later they are the plan shifted by one, the last

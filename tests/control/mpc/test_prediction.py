@@ -42,8 +42,12 @@ def central(function, x0: np.ndarray, size: int, move) -> np.ndarray:
 def test_the_acceleration_is_the_plants_under_the_thrusters_wrench(rng):
     model = prediction()
     q, v, u = state(rng)
-    expected = model.plant.dynamics(q, v, u[8:], model.matrix @ u[:8]).acceleration
-    np.testing.assert_allclose(model.acceleration(q, v, u), expected, rtol=0, atol=1e-12)
+    expected = model.plant.dynamics(q, v, u[8:], model.matrix @ u[:8])
+    dynamics = model.evaluate(q, v, u)
+    # the plant's own call: the same bits (acceleration, motor torques, Mbar)
+    np.testing.assert_array_equal(dynamics.acceleration, expected.acceleration)
+    np.testing.assert_array_equal(dynamics.joint_torque, expected.joint_torque)
+    np.testing.assert_array_equal(dynamics.mass_matrix, expected.mass_matrix)
     assert np.abs(model.acceleration(q, v, u) - model.plant.dynamics(q, v, u[8:]).acceleration).max() > 0.1
 
 

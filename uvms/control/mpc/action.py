@@ -21,6 +21,7 @@ import crocoddyl
 import numpy as np
 import pinocchio as pin
 
+from ...errors import NumericalError
 from .constraints import UNBOUNDED, NodeConstraints
 from .prediction import PlantPrediction
 from .settings import MPCSettings
@@ -81,7 +82,13 @@ class PlantActionModel(crocoddyl.DifferentialActionModelAbstract):
             pin.framesForwardKinematics(self.state.pinocchio, data.pinocchio, q)
             self.costs.calc(data.costs, x)
         else:
-            self.prediction.evaluate_into(q, v, u, data.acceleration, data.mass)
+            try:
+                dynamics = self.prediction.evaluate(q, v, u)
+            except NumericalError:  # a trial point where the vehicle's block does not solve: as a non-finite one
+                data.rejected = True
+                self._reject(data, u)
+                return
+            data.acceleration, data.mass = dynamics.acceleration, dynamics.mass_matrix
             data.xout[:] = data.acceleration
             pin.framesForwardKinematics(self.state.pinocchio, data.pinocchio, q)
             self.costs.calc(data.costs, x, u)

@@ -4,7 +4,8 @@ their analytical derivatives.
 Inputs u = [f (n,), c (n_arm,)]: the thrusts f [N] act on the vehicle through the allocation matrix B (6, n) as the
 body wrench B f at the base frame; c [rad/s or m/s] are the arm's joint-velocity commands, which the servos follow
 with qdd_m = (c - qd_m) / tau (:class:`uvms.dynamics.plant.plant.Plant`). The acceleration is the plant's
-(:meth:`~uvms.dynamics.plant.plant.Plant.dynamics`: the same numbers, the hydrodynamics included), so a prediction
+(:meth:`~uvms.dynamics.plant.plant.Plant.dynamics` with the body wrench B f: the same bits, the hydrodynamics
+included), so a prediction
 with the plant's integrator and the plant's current is the plant's step. The thrusters' first-order lag is not in
 the prediction (the commanded thrust is taken as the thrust; the controller inverts the lag over its period). An
 estimated constant wrench on the vehicle (``disturbance``: what an unknown current or a model error leaves) adds to
@@ -25,12 +26,12 @@ f_l's change is formed from the links' velocity and acceleration derivatives (``
 
 with A_l = J_l a + Jdot_l v the link's spatial acceleration. No finite differences; tests check these against them.
 
-Speed. One Pinocchio call gives every joint's world Jacobian columns and their rate
-(``computeJointJacobiansTimeVariation`` for the acceleration, ``computeRNEADerivatives`` without fext for the
-derivatives, which fills the same arrays);
-the links' Jacobians, accelerations, their derivatives and the wrenches are formed from them in compiled passes
-(:mod:`uvms.control.mpc.kernel`; the acceleration through the plant's own hydrodynamic kernel), and the wrenches'
-part of dID/dq that rnea would add for an fext is formed there too. Arrays are preallocated per prediction: a
+Speed. The acceleration is the plant's call itself (its one compiled pass over the links: no second copy of the
+plant's arithmetic here). For the derivatives, one Pinocchio call (``computeRNEADerivatives`` without fext) gives
+every joint's world Jacobian columns and their rate; the links' Jacobians (the plant's own pass over them,
+:func:`uvms.numerics._kernels.hydro.frame_jacobian_into`), accelerations, their derivatives and the wrenches are
+formed from them in one compiled pass (:mod:`uvms.control.mpc.kernel`), the wrenches' part of dID/dq that rnea would
+add for an fext among them. Arrays are preallocated per prediction, and the plant's own pin.Data are used: a
 prediction is not to be shared between threads.
 """
 
@@ -64,38 +65,31 @@ class PlantPrediction:
                             f"({', '.join(plant.robot.mimic_joint_names)}); Pinocchio's derivatives refuse them")
         self.nb, self.nv, self.n_arm, self.n = plant.nb, model.nv, plant.n_arm, self.matrix.shape[1]
         self.nu = self.n + self.n_arm
-        self._kinematics = model.createData()  # J, dJ, placements; rnea derivatives
-        self._dynamics = model.createData()  # crba, rnea
+        self._kinematics = model.createData()  # rnea derivatives: J, dJ, placements
         data = model.createData()
         pin.computeJointJacobians(model, data, pin.neutral(model))
         # the thrusters' generalized forces J_base^T B (nv, n): a frame on the vehicle's joint, constant in q
         base = pin.getFrameJacobian(model, data, plant.base_frame, LOCAL)
         self.thrust_map = base.T @ self.matrix
         self._base_block = base[:, :self.nb]  # the base frame's twist from the vehicle joint's velocity (6, nb)
-        self._base = base
         stacked = plant.stacked_links
         self._current = plant.current
         self._buoyancy = stacked.buoyancy if plant.buoyant else np.zeros(stacked.count)  # (L,) [N]
-        self._flags = np.array([plant.added_mass, plant.damping, bool(np.any(self._current != 0.0)), plant.buoyant],
-                               dtype=np.int64)
-        # the links' joints, the joints' placements read once per evaluation (slots), the joints' columns
-        self._joints = np.array(stacked.joints, dtype=np.int64)
+        # the links' joints' placements read once per evaluation (slots), the links' walks over data.J (the plant's)
         self._placed = sorted(set(stacked.joints))
         self._slots = np.array([self._placed.index(joint) for joint in stacked.joints], dtype=np.int64)
         self._placements = np.zeros((len(self._placed), 4, 4))
+        from ...numerics._kernels.hydro import frame_jacobian_program  # numba: loaded when a prediction is built
+        from . import kernel  # compiled (or read from the cache) at first use
+
+        walks = [frame_jacobian_program(model, data, joint) for joint in stacked.joints]
+        self._starts = np.cumsum([0] + [len(walk) for walk in walks]).astype(np.int64)
+        self._programs = np.concatenate(walks) if walks else np.zeros((0, 3), dtype=np.int64)
         owner = [0] * model.nv  # the joint of each velocity column
         for joint in range(1, model.njoints):
             owner[model.idx_vs[joint]:model.idx_vs[joint] + model.nvs[joint]] = [joint] * model.nvs[joint]
-        self._support = np.zeros((model.njoints, model.nv), dtype=np.bool_)
-        for joint in range(1, model.njoints):
-            for ancestor in model.supports[joint]:
-                if ancestor > 0:
-                    self._support[joint, model.idx_vs[ancestor]:model.idx_vs[ancestor] + model.nvs[ancestor]] = True
-        self._parents = np.array([model.parents[owner[k]] for k in range(model.nv)], dtype=np.int64)
-        self._descends = np.array([[owner[k] != owner[i] and self._support[owner[k], i] for i in range(model.nv)]
-                                   for k in range(model.nv)], dtype=np.bool_)
-        from . import kernel  # numba: loaded when a prediction is built, compiled (or read from the cache) at first use
-
+        self._descends = np.array([[owner[k] != owner[i] and owner[i] in model.supports[owner[k]]
+                                    for i in range(model.nv)] for k in range(model.nv)], dtype=np.bool_)
         self._kernel = kernel
         #: an estimated constant wrench (6,) [N, N m] on the vehicle (base frame, FLU), added to the thrusters'
         self.disturbance = np.zeros(6)
@@ -114,30 +108,10 @@ class PlantPrediction:
             placements[slot] = joints[joint].homogeneous
         return placements
 
-    def evaluate_into(self, q: np.ndarray, v: np.ndarray, u: np.ndarray, acceleration: np.ndarray,
-                      mass: np.ndarray) -> np.ndarray:
-        """v' (nv,) into ``acceleration`` and Mbar (nv, nv) into ``mass`` at (q, v) under u (nu,); returns the
-        motors' torques (n_arm,). The plant's numbers (:meth:`uvms.dynamics.plant.plant.Plant.dynamics`, to
-        rounding)."""
-        model, kinematics, dynamics, stacked = self.model, self._kinematics, self._dynamics, self.plant.stacked_links
-        pin.computeJointJacobiansTimeVariation(model, kinematics, q, v)
-        mass[:] = pin.crba(model, dynamics, q)
-        bias = pin.nonLinearEffects(model, dynamics, q, v).copy()
-        force = self.thrust_map @ u[:self.n] + self._base.T @ self.disturbance
-        torque = np.empty(self.n_arm)
-        self._kernel.dynamics_into(
-            kinematics.J, kinematics.dJ, self._read_placements(kinematics), self._slots, self._joints, self._support,
-            stacked.rotations, stacked.translations, stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
-            stacked.forward_damping, stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy,
-            self._current, self._flags, v, u[self.n:], force, self.plant.motor_time_constant, self.nb, mass, bias,
-            acceleration, torque)
-        return torque
-
     def evaluate(self, q: np.ndarray, v: np.ndarray, u: np.ndarray) -> PlantDynamics:
-        """The plant's dynamics at (q, v) under u (nu,): acceleration, motor torques, Mbar."""
-        acceleration, mass = np.empty(self.nv), np.empty((self.nv, self.nv))
-        torque = self.evaluate_into(q, v, u, acceleration, mass)
-        return PlantDynamics(acceleration, torque, mass)
+        """The plant's dynamics at (q, v) under u (nu,): acceleration, motor torques, Mbar: the plant's own call
+        (:meth:`uvms.dynamics.plant.plant.Plant.dynamics`) with the thrusters' and the disturbance's body wrench."""
+        return self.plant.dynamics(q, v, u[self.n:], self.matrix @ u[:self.n] + self.disturbance)
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, u: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under u (nu,)."""
@@ -151,8 +125,8 @@ class PlantPrediction:
         dtau_dq, dtau_dv, _ = pin.computeRNEADerivatives(model, data, q, v, a)  # fills J, dJ, oMi too
         did_dq, did_dv, torque = np.array(dtau_dq), np.array(dtau_dv), data.tau.copy()
         self._kernel.inverse_dynamics_derivatives_into(
-            data.J, data.dJ, self._read_placements(data), self._slots, self._joints, self._support, self._parents,
-            self._descends, stacked.rotations, stacked.translations, stacked.added_mass, stacked.linear_damping,
+            data.J, data.dJ, self._read_placements(data), self._slots, self._programs, self._starts, self._descends,
+            stacked.rotations, stacked.translations, stacked.added_mass, stacked.linear_damping,
             stacked.forward_damping, stacked.quadratic_damping, self._buoyancy, stacked.center_of_buoyancy,
             self._current, plant.added_mass, plant.damping, v, a, torque, did_dq, did_dv)
         return torque, did_dq, did_dv
