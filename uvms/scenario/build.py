@@ -83,7 +83,7 @@ def build(spec: ScenarioSpec) -> Setup:
             times = stage_times(steps, float(dt), "euler" if actuated is not None else spec.simulation.integrator)
             samples = RecentSamples(TrajectoryTable(trajectory, times))
             if actuated is not None:
-                actuation = make_actuation(actuated, task, samples, q0, spec, solver, inequalities)
+                actuation = make_actuation(actuated, task, samples, spec, solver, inequalities)
             else:
                 controller = make_controller(task, samples, spec, solver, inequalities)
     return Setup(robot, task, trajectory, q0, controller if actuation is None else actuation.controller, duration,
