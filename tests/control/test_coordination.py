@@ -7,6 +7,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from uvms.control.base import State
 from uvms.control.coordination import CoordinatedControl, achieved_ratio, arm_rates_for_task, vehicle_rates_for_task
 from uvms.control.station import ActuatedKinematics
 from uvms.control.vehicle import VehiclePoseController
@@ -65,9 +66,10 @@ def test_vehicle_bounds_lie_between_the_measured_velocity_and_what_the_thrusters
 def kinematics(robot, target, solver, inequalities=()):
     pose = VehiclePoseController(None, 1.5, 0.5)
     hold = VelocityRamps.trapezoid(target, np.zeros(3), 1.0, 0.5)
-    return ActuatedKinematics(robot, pose, FrameTask(robot, axes=("x", "y", "z")), hold,
-                              vehicle_target=robot.base_pose(robot.configuration(base=np.zeros(6), arm=ARM)),
-                              solver=solver, inequalities=inequalities, damping=0.01)
+    kinematics = ActuatedKinematics(robot, pose, FrameTask(robot, axes=("x", "y", "z")), hold, solver=solver,
+                                    inequalities=inequalities, damping=0.01)
+    kinematics.reset(State(robot.configuration(base=np.zeros(6), arm=ARM)))  # the station
+    return kinematics
 
 
 def test_the_re_solve_holds_the_measured_vehicle_velocity_and_keeps_the_joint_limits(robot):

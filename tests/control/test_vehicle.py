@@ -171,7 +171,7 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
         actuated = ActuatedPlant(Plant(robot, gravity=True, current=[0.3, 0.0, 0.0]), thrusters)
         task = FrameTask(robot, axes=("x", "y", "z"))
         solver = SolverFactory(uvms.PrioritySolver, robot, {"damping": 0.01, "priority": "classic"})
-        controller = actuated_control(actuated, station, DT, task, hold, solver,
+        controller = actuated_control(actuated, DT, task, hold, solver,
                                       ActuatedSettings(coordination=coordination))
         assert isinstance(controller, CoordinatedControl)
         result = simulate(actuated, controller, station, 4.0, DT)
@@ -194,3 +194,20 @@ def test_station_keeping_says_which_directions_the_thrusters_cannot_hold():
         thrusters = uvms.dynamics.thrusters_of(robot)
     with pytest.warns(ThrusterLayoutWarning, match="produce 4 of the 6 body-wrench directions; missing: a roll moment"):
         uvms.control.station_keeping(ActuatedPlant(uvms.Plant(robot), thrusters), robot.neutral(), 0.01)
+
+
+def test_the_chain_is_built_without_a_configuration_and_holds_the_vehicle_where_each_run_starts(robot, thrusters):
+    """actuated_control takes no q0: one controller run from two starts holds each (its station and its derived
+    gains are the run's start's, set at reset), as the MPC holds its start."""
+    actuated = ActuatedPlant(Plant(robot, gravity=True), thrusters)
+    solver = SolverFactory(uvms.CLIKSolver, robot, {"gain": 1.0, "damping": 0.01})
+    controller = actuated_control(actuated, DT, FrameTask(robot, axes=("x", "y", "z")), None, solver)
+    assert controller.velocity.kp is None and controller.kinematic.vehicle_target is None
+    for start in (robot.configuration(base=[0.0, 0.0, -1.0, 0.0, 0.0, 0.0], arm=ARM),
+                  robot.configuration(base=[2.0, -1.0, -3.0, 0.0, 0.0, 0.8], arm=ARM)):
+        errors = simulate(actuated, controller, start, 0.05, DT).actuation.controller
+        assert errors["vehicle_position_error"][0] == 0.0 and errors["vehicle_attitude_error"][0] < 1e-12
+        assert errors["vehicle_position_error"].max() < 1e-3, errors["vehicle_position_error"]
+        station = robot.base_pose(start) * robot.base_placement
+        np.testing.assert_allclose(controller.kinematic.vehicle_target.homogeneous, station.homogeneous, atol=1e-12)
+    assert controller.velocity.kp.shape == (6,) and np.all(controller.velocity.kp > 0)

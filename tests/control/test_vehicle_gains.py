@@ -133,11 +133,14 @@ def test_given_gains_win_over_the_derived_ones(vehicles):
     plant = Plant(robot, gravity=True)
     station = robot.configuration(base=[0.0, 0.0, -5.0, 0.0, 0.0, 0.0], arm=arm)
     derived = station_keeping(ActuatedPlant(plant, thrusters), station, DT).velocity
+    assert derived.kp is None  # derived where the run starts
+    derived.reset(station)
     kp, ki = velocity_gains(vehicle_inertia(plant, station), DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO)
     np.testing.assert_allclose(derived.kp, kp)
     np.testing.assert_allclose(derived.ki, ki)
     assert 50.0 < (derived.kp / np.array(BLUEROV_SIZED["kp"])).min()  # a 1.9 t vehicle: 100 times the BlueROV2's
     given = station_keeping(ActuatedPlant(plant, thrusters), station, DT,
                             ActuatedSettings(kp=BLUEROV_SIZED["kp"], bandwidth=1.0)).velocity
+    given.reset(station)
     np.testing.assert_array_equal(given.kp, BLUEROV_SIZED["kp"])  # kp as given, ki from omega = 1 rad/s
     np.testing.assert_allclose(given.ki, velocity_gains(vehicle_inertia(plant, station), 1.0)[1])

@@ -314,10 +314,11 @@ def test_watch_watches_the_files_a_model_uses_never_a_tree(tmp_path, monkeypatch
 
 
 def test_laps_and_speed_together_are_refused(tmp_path, capsys):
-    with pytest.raises(ScenarioError, match="trajectory.speed and trajectory.laps are both set.*keep laps"):
-        build(read_scenario("santos2006_task_priority", ["trajectory.speed=0.5"]))
+    # refused where the file is read (the trajectory's settings check themselves), nothing built
+    with pytest.raises(ScenarioError, match="trajectory.speed and laps are both set.*keep laps"):
+        read_scenario("santos2006_task_priority", ["trajectory.speed=0.5"])
     with pytest.raises(ScenarioError, match="trajectory.speed is the cruise speed of the trapezoid law"):
-        build(read_scenario("hoang2011_w1", ["trajectory.law=quintic"]))
+        read_scenario("hoang2011_w1", ["trajectory.law=quintic"])
     err = one_line(capsys, ["run", "santos2006_task_priority", "--set", "trajectory.speed=0.5", "--out",
                             str(tmp_path / "out"), "--quiet"])
     assert "not both" in err

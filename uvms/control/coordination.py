@@ -206,12 +206,11 @@ class CoordinatedControl:
         self._forget()
 
     def _forget(self) -> None:
-        """Forget the last step (the allocation's ratio, the last reference) and zero the velocity loop's integral."""
+        """Forget the last step: the allocation's ratio, the last reference."""
         self.ratio = np.ones(6)  # achieved / asked wrench per axis at the last step (1: the allocation gave it)
         self._last_reference: np.ndarray | None = None  # nu_ref (6,) of the last step, base frame
         self._rate = np.zeros(6)  # nu_ref' (6,) filtered [m/s^2, rad/s^2]
         self._achieved = np.zeros(6)  # the allocation's achieved wrench at the last step [N, N m]
-        self.velocity.reset()
 
     def vehicle_bounds(self, nu: np.ndarray, nu_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) (6,) [m/s, rad/s] base frame: between the measured nu and nu + r (nu_pose - nu)."""
@@ -219,9 +218,10 @@ class CoordinatedControl:
         return np.minimum(nu, reachable), np.maximum(nu, reachable)
 
     def reset(self, state: State, t: float = 0.0) -> None:
-        """Zero the velocity loop's integral, forget the last allocation's shortfall and reference (a run from the
-        start)."""
+        """A run from ``state``, the station (the vehicle held at its pose there): the velocity loop's integral
+        zeroed and its gains not given derived there, the last allocation's shortfall and reference forgotten."""
         self._forget()
+        self.velocity.reset(state.q)
         self.kinematic.reset(state, t)
 
     def command(self, state: State, t: float) -> Command:

@@ -56,7 +56,7 @@ from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, vehicle_rates_for_task
 from .settings import ActuatedSettings
 from .tightening import Tightening
-from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector, vehicle_inertia, velocity_gains
+from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector
 
 
 class GivenColumns(Task):
@@ -93,7 +93,6 @@ class ActuatedKinematics:
         task: the end-effector task (any axes).
         trajectory: t [s] -> a sample with ``pose`` (pin.SE3) and ``twist`` (6,) world [m/s, rad/s] the task
             follows, or None: no end-effector task, the arm held (zero joint rates).
-        vehicle_target: world_M_base the vehicle's station [m, rad].
         solver: the solver, built per level set (twice with priorities: once per level order; once with fixed
             columns). Where the vehicle's pose objective goes relative to the task is the solver's
             :attr:`~uvms.solvers.base.Solver.vehicle_level`: 0 above it, 1 or None below. Below, the task takes
@@ -114,14 +113,13 @@ class ActuatedKinematics:
     """
 
     def __init__(self, robot: Robot, pose: VehiclePoseController, task: FrameTask,
-                 trajectory: Callable[[float], object] | None, *, vehicle_target: pin.SE3,
-                 solver: SolverFactory, inequalities: Sequence[Sequence] = (), gain: float = 1.0,
+                 trajectory: Callable[[float], object] | None, *, solver: SolverFactory,
+                 inequalities: Sequence[Sequence] = (), gain: float = 1.0,
                  damping: float | VariableDamping = 0.01, base_placement: pin.SE3 | None = None,
                  tighten: bool = False) -> None:
         if robot.base_type != "floating":
             raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
         self.robot, self.pose, self.task, self.trajectory = robot, pose, task, trajectory
-        self.vehicle_target = vehicle_target.copy()
         self.gain = float(gain_vector(gain, "gain", 1)[0])
         self.damping = damping if isinstance(damping, VariableDamping) else float(damping)
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
@@ -148,9 +146,14 @@ class ActuatedKinematics:
         self.vehicle_given = self._given is not None or vehicle_level == 0
         self._configuration: Configuration | None = None
         self._time: float | None = None
+        #: world_M_base [m, rad] where the vehicle is held, or None: its base frame's pose where the run starts
+        self.station: pin.SE3 | None = None
+        self.vehicle_target: pin.SE3 | None = None  # the station of the run (:meth:`reset`)
 
     def reset(self, state: State, t: float = 0.0) -> None:
-        """Forget the trajectory's sample the task points at and the tightening's margins."""
+        """A run from ``state``: the vehicle held at :attr:`station`, else at its base frame's pose there; the
+        trajectory's sample the task points at and the tightening's margins forgotten."""
+        self.vehicle_target = self.base_pose(state.q) if self.station is None else self.station.copy()
         self._time = None
         if self.tightening is not None:
             self.tightening.restore()
@@ -246,13 +249,15 @@ def station_keeping(actuated: ActuatedPlant, q0: np.ndarray, dt: float,
                     settings: ActuatedSettings = ActuatedSettings(), *, ee_target: np.ndarray | None = None,
                     hold_arm: bool = False, ee_gain: float = 1.0, arm_damping: float = 0.01,
                     frame: str | None = None) -> CoordinatedControl:
-    """The controller of ``actuated`` holding the vehicle at its pose of q0 and the end-effector point at
-    ``ee_target`` (default: where it is at q0; ``hold_arm``: no end-effector task, the arm held):
+    """The controller of ``actuated`` holding the vehicle at its pose of q0 (its station: the run may start elsewhere)
+    and the end-effector point at ``ee_target`` (default: where it is at q0; ``hold_arm``: no end-effector task, the
+    arm held):
     :func:`actuated_control` with a held point and CLIK (the settings' defaults:
     :class:`~uvms.control.settings.ActuatedSettings`).
 
     Args:
-        actuated, q0, dt, settings: as in :func:`actuated_control`.
+        actuated, dt, settings: as in :func:`actuated_control`.
+        q0: (nq,) the station: the vehicle's pose held, the end-effector point's default.
         ee_gain: K_ee [1/s] of the point task; arm_damping: DLS damping of the arm inverse (CLIK's).
         frame: the end-effector frame held (default: the model's first end effector).
 
@@ -265,27 +270,30 @@ def station_keeping(actuated: ActuatedPlant, q0: np.ndarray, dt: float,
     point = start.translation if ee_target is None else np.asarray(ee_target, dtype=float).reshape(3)
     hold = None if hold_arm else VelocityRamps.trapezoid(point, np.zeros(3), 1.0, 0.5, rotation=start.rotation)
     solver = SolverFactory(CLIKSolver, robot, {"gain": ee_gain, "damping": arm_damping})
-    return actuated_control(actuated, q0, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold, solver, settings)
+    controller = actuated_control(actuated, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold, solver, settings)
+    controller.kinematic.station = controller.kinematic.base_pose(q0)
+    return controller
 
 
-def actuated_control(actuated: ActuatedPlant, q0: np.ndarray, dt: float, task: FrameTask,
-                     trajectory: Callable[[float], object] | None, solver: SolverFactory,
-                     settings: ActuatedSettings = ActuatedSettings(), *,
+def actuated_control(actuated: ActuatedPlant, dt: float, task: FrameTask, trajectory: Callable[[float], object] | None,
+                     solver: SolverFactory, settings: ActuatedSettings = ActuatedSettings(), *,
                      inequalities: Sequence[Sequence] = ()) -> CoordinatedControl:
-    """The whole chain on ``actuated``: the vehicle held at its pose of q0, ``task`` following ``trajectory``.
+    """The whole chain on ``actuated``: the vehicle held at its station, its pose where the run starts
+    (:meth:`CoordinatedControl.reset <uvms.control.coordination.CoordinatedControl.reset>`), ``task`` following
+    ``trajectory``.
 
     Args:
         actuated: the simulated plant with its thrusters (and fins); its robot and hydrodynamics are the controller's
             model, without the current unless ``settings.knows_current``; its allocation matrix and thrust bounds the
             allocation's (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`; with fins, allocated with the
             thrusters at each step's velocity: :class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`).
-        q0: (nq,) the station; dt: control period [s] (the simulation step).
+        dt: control period [s] (the simulation step).
         task, trajectory, inequalities: as in :class:`ActuatedKinematics`.
         solver: as in :class:`ActuatedKinematics`; its ``gain`` K [1/s] and ``damping`` (0 when it has none) are
             those of the vehicle's added share.
         settings: the loops, the allocation's priorities and the coordination
             (:class:`~uvms.control.settings.ActuatedSettings`): kp, ki given are used as they are, else derived from
-            the bandwidth, the damping ratio and the vehicle's inertia M_ii at q0, kp = 2 zeta omega M_ii,
+            the bandwidth, the damping ratio and the vehicle's inertia M_ii at the station, kp = 2 zeta omega M_ii,
             ki = omega^2 M_ii (:func:`uvms.control.vehicle.velocity_gains`).
     """
     plant, robot = actuated.plant, actuated.robot
@@ -296,18 +304,11 @@ def actuated_control(actuated: ActuatedPlant, q0: np.ndarray, dt: float, task: F
     note = allocator.reach_note(actuated.thrusters.names)
     if note:  # a vehicle that cannot hold every degree of freedom is told so, once
         warnings.warn(note, ThrusterLayoutWarning, stacklevel=2)
-    kp, ki = settings.kp, settings.ki
-    if kp is None or ki is None:
-        derived = velocity_gains(vehicle_inertia(model, q0), settings.bandwidth, settings.damping_ratio)
-        kp, ki = derived[0] if kp is None else kp, derived[1] if ki is None else ki
-    velocity = VehicleVelocityController(model, allocator, kp, ki, arm_feedforward=settings.arm_feedforward,
-                                         disturbance_time_constant=settings.disturbance_time_constant)
+    velocity = VehicleVelocityController(model, allocator, settings)
     pose = VehiclePoseController(velocity, settings.pose_gains, settings.max_speed)
-    base_placement = model.robot.base_placement
-    kinematic = ActuatedKinematics(robot, pose, task, trajectory, vehicle_target=robot.base_pose(q0) * base_placement,
-                                   solver=solver, inequalities=inequalities, gain=solver.options.get("gain", 1.0),
-                                   damping=solver.options.get("damping", 0.0), base_placement=base_placement,
-                                   tighten=settings.tightening)
+    kinematic = ActuatedKinematics(robot, pose, task, trajectory, solver=solver, inequalities=inequalities,
+                                   gain=solver.options.get("gain", 1.0), damping=solver.options.get("damping", 0.0),
+                                   base_placement=model.robot.base_placement, tighten=settings.tightening)
     return CoordinatedControl(robot, velocity, kinematic, dt,
                               coordination=settings.coordination and trajectory is not None,
                               saturation_feedback=settings.saturation_feedback,

@@ -54,7 +54,7 @@ from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import AllocationResult, ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
 from ..errors import SolverInputError
-from .settings import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO
+from .settings import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, ActuatedSettings
 
 
 def gain_vector(value: float | np.ndarray, what: str, size: int = 6, *, positive: bool = False) -> np.ndarray:
@@ -141,30 +141,39 @@ class VehicleVelocityController:
         model: the controller's model of the UVMS (a Plant; e.g. the true one without the current).
         allocator: the thrust allocation (a FinAllocator: thrusters and fins, linearized at the measured velocity
             through the water the model knows).
-        kp: (6,) or a number [N s/m, N m s/rad] proportional gains.
-        ki: (6,) or a number [N/m, N m/rad] integral gains.
-        arm_feedforward: feed the arm's reaction forward (module docstring).
-        disturbance_time_constant: T [s] of the disturbance observer's low-pass (module docstring); 0: no observer.
+        settings: its part of the chain's settings (:class:`~uvms.control.settings.ActuatedSettings`): ``kp``,
+            ``ki`` (used as given; None: derived at the station, :meth:`reset`, from ``bandwidth`` and
+            ``damping_ratio``), ``arm_feedforward``, ``disturbance_time_constant`` (module docstring).
 
     Raises:
-        SolverInputError: bad gains or time constant; an allocator with another number of rows.
+        SolverInputError: bad gains, bandwidth, damping ratio or time constant; an allocator with another number of
+            rows.
     """
 
-    def __init__(self, model: Plant, allocator: ThrustAllocator | FinAllocator, kp: float | np.ndarray,
-                 ki: float | np.ndarray,
-                 *, arm_feedforward: bool = True, disturbance_time_constant: float = 0.0) -> None:
+    def __init__(self, model: Plant, allocator: ThrustAllocator | FinAllocator,
+                 settings: ActuatedSettings = ActuatedSettings()) -> None:
         if model.nb != 6:
             raise SolverInputError(f"vehicle control needs a floating base (6 body velocities), "
                                    f"{model.robot.name} has {model.nb}")
         self.model, self.allocator = model, allocator
-        self.kp, self.ki = gain_vector(kp, "kp"), gain_vector(ki, "ki")
-        self.arm_feedforward = bool(arm_feedforward)
-        self.disturbance_time_constant = float(gain_vector(disturbance_time_constant,
+        self.bandwidth = gain_vector(settings.bandwidth, "bandwidth", positive=True)
+        self.damping_ratio = gain_vector(settings.damping_ratio, "damping_ratio", positive=True)
+        #: the gains given [N s/m, N m s/rad], [N/m, N m/rad] (None: derived at the station)
+        self.given = tuple(None if value is None else gain_vector(value, name)
+                           for name, value in (("kp", settings.kp), ("ki", settings.ki)))
+        self.kp, self.ki = self.given
+        self.arm_feedforward = bool(settings.arm_feedforward)
+        self.disturbance_time_constant = float(gain_vector(settings.disturbance_time_constant,
                                                            "disturbance_time_constant [s]", 1)[0])
         self.reset()
 
-    def reset(self) -> None:
-        """Zero the integral and the disturbance estimate, forget the last measurement."""
+    def reset(self, station: np.ndarray | None = None) -> None:
+        """Zero the integral and the disturbance estimate, forget the last measurement; at ``station`` (nq,), where
+        a run starts, the gains not given are derived from the vehicle's inertia M_ii there
+        (:func:`velocity_gains`)."""
+        if station is not None and any(value is None for value in self.given):
+            derived = velocity_gains(vehicle_inertia(self.model, station), self.bandwidth, self.damping_ratio)
+            self.kp, self.ki = (derived[index] if value is None else value for index, value in enumerate(self.given))
         self.integral = np.zeros(6)  # integral of the velocity error [m, rad]
         self.disturbance = np.zeros(6)  # d_hat [N, N m] body FLU
         self._last: tuple[np.ndarray, np.ndarray] | None = None  # (v (nv,), applied wrench (6,)) of the last call

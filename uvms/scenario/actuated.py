@@ -74,8 +74,8 @@ def actuated_plant(plant: Plant, fins: bool = True) -> ActuatedPlant:
         raise ScenarioError(f"plant.thrusters = true: {exc}") from None
 
 
-def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.ndarray, spec: ScenarioSpec,
-                   solver: SolverFactory, inequalities: ScenarioInequalities | None) -> Actuation:
+def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, spec: ScenarioSpec, solver: SolverFactory,
+                   inequalities: ScenarioInequalities | None) -> Actuation:
     """The whole chain of the scenario on ``actuated`` (:func:`uvms.control.station.actuated_control`).
 
     Args:
@@ -94,7 +94,7 @@ def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.
                             "[[inequalities]] joint_limits table")
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
-        controller = actuated_control(actuated, q0, float(spec.simulation.dt), task, trajectory, solver,
+        controller = actuated_control(actuated, float(spec.simulation.dt), task, trajectory, solver,
                                       spec.vehicle_control.settings, inequalities=enforced)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None

@@ -27,7 +27,6 @@ from .record import scenario_model
 from .solver import scenario_solver, solver_damping, solver_weights
 from .spec import NUMBER, ScenarioSpec
 from .spec.keys import thaw
-from .trajectories import make_trajectory
 
 
 @dataclass
@@ -59,7 +58,7 @@ def build(spec: ScenarioSpec) -> Setup:
     if spec.phases:
         return build_sequence(robot, spec, duration)
     task, q0, residual = scenario_start(robot, spec)
-    trajectory = make_trajectory(Configuration(robot, q0).pose(task.frame_id).copy(), spec.trajectory)
+    trajectory = spec.trajectory.settings.trajectory(Configuration(robot, q0).pose(task.frame_id).copy())
     section, dt = spec.plant, spec.simulation.dt
     open_loop = section.thrusters and bool(spec.excitation.wrench)
     plant = None if section.type == "kinematic" else make_plant(robot, section)
@@ -83,7 +82,7 @@ def build(spec: ScenarioSpec) -> Setup:
             times = stage_times(steps, float(dt), "euler" if actuated is not None else spec.simulation.integrator)
             samples = RecentSamples(TrajectoryTable(trajectory, times))
             if actuated is not None:
-                actuation = make_actuation(actuated, task, samples, q0, spec, solver, inequalities)
+                actuation = make_actuation(actuated, task, samples, spec, solver, inequalities)
             else:
                 controller = make_controller(task, samples, spec, solver, inequalities)
     return Setup(robot, task, trajectory, q0, controller if actuation is None else actuation.controller, duration,

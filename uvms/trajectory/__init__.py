@@ -4,6 +4,7 @@
 - ``cartesian``: paths (circle, line) and pose trajectories (constant orientation, SE(3) interpolation).
 - ``recent``: a trajectory that returns its last samples again (integrator stages share times).
 - ``table``: a trajectory evaluated once at every time of a fixed-step run.
+- ``settings``: a motion described by numbers (a scenario's ``[trajectory]``), built from the start pose.
 - ``joint``: joint-space interpolation through via points (cubic, quintic), ``jtraj`` and ``ctraj``.
 """
 
@@ -23,6 +24,7 @@ from .joint import CartesianSamples, JointSamples, ViaPointTrajectory, ctraj, jt
 from .laws import LawSample, PolynomialLaw, TimeLaw, TrapezoidLaw, check_positive
 from .ramps import VelocityRamps
 from .recent import RecentSamples
+from .settings import TrajectorySettings
 from .table import TrajectoryTable
 
 __all__ = [
@@ -41,6 +43,7 @@ __all__ = [
     "RecentSamples",
     "SE3Trajectory",
     "TimeLaw",
+    "TrajectorySettings",
     "TrajectoryTable",
     "TrapezoidLaw",
     "VelocityRamps",

@@ -8,8 +8,8 @@ from typing import Any, ClassVar
 
 from ...control.gjm import GJM_KINDS
 from ...control.settings import ActuatedSettings
-from ...errors import ScenarioError, UVMSError
-from .keys import NUMBER, NUMBERS, Section, key
+from ...errors import ScenarioError
+from .keys import NUMBER, NUMBERS, Section, SettingsSection, key
 
 #: The actuated chain's defaults: [vehicle_control]'s (its keys are ActuatedSettings' fields).
 CHAIN = ActuatedSettings()
@@ -47,8 +47,11 @@ class PlantSpec(Section):
 
 
 @dataclass(frozen=True, kw_only=True)
-class VehicleControlSpec(Section):
-    """The ``[vehicle_control]`` section of a scenario, checked."""
+class VehicleControlSpec(SettingsSection):
+    """The ``[vehicle_control]`` section of a scenario, checked: the actuated chain's
+    :class:`~uvms.control.settings.ActuatedSettings`."""
+
+    SETTINGS: ClassVar[type] = ActuatedSettings
 
     ABOUT: ClassVar[str] = (
         "The actuated vehicle (`plant.thrusters = true`): velocity and pose loops, thrust allocation, arm "
@@ -93,28 +96,12 @@ class VehicleControlSpec(Section):
     saturation_feedback: bool = key(CHAIN.saturation_feedback, bool,
         doc="bound the vehicle's part of the next reference by what the allocation achieved")
 
-    @classmethod
-    def from_table(cls, given: Any, name: str, origin: str) -> Section:
-        """The section (:meth:`Section.from_table`), its settings made once (:attr:`settings`) so that what they
-        refuse is said where the file is read."""
-        section = super().from_table(given, name, origin)
-        try:
-            section.settings  # noqa: B018 - ActuatedSettings checks the priorities
-        except UVMSError as exc:
-            raise ScenarioError(f"{origin}: {name}.{exc}") from None
-        return section
-
-    @property
-    def settings(self) -> ActuatedSettings:
-        """The actuated chain's settings of this section (:func:`uvms.control.station.actuated_control`): the one
-        place a scenario's [vehicle_control] becomes them (numbers as floats, lists as tuples).
-
-        Raises:
-            SolverInputError: priorities that are not groups of wrench axes.
-        """
-        values = {name: getattr(self, name) for name in ActuatedSettings.names()}
+    def settings_values(self) -> dict[str, Any]:
+        """The actuated chain's settings (:func:`uvms.control.station.actuated_control`): numbers as floats, lists
+        as tuples; ActuatedSettings checks the priorities."""
+        values = super().settings_values()
         values["disturbance_time_constant"] = float(values["disturbance_time_constant"])
-        return ActuatedSettings(**values)
+        return values
 
 
 @dataclass(frozen=True, kw_only=True)

@@ -13,7 +13,7 @@ from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import Any, ClassVar
 
-from ...errors import ScenarioError
+from ...errors import ScenarioError, UVMSError
 
 NUMBER = (int, float)
 NUMBERS = "numbers"  # a list of numbers
@@ -112,6 +112,34 @@ class Section:
         """The keys (all, or those of ``keys``) whose value differs from their default, in the section's order."""
         return [item for item, spec in self.keys().items()
                 if (keys is None or item in keys) and getattr(self, item) != spec.default]
+
+
+class SettingsSection(Section):
+    """A section that writes a layer's settings object in the file (:attr:`SETTINGS`: its keys are the object's
+    fields, by their names): the object is made once when the file is read, so that what it refuses is said there
+    with the key's path, and the layer takes it whole (:attr:`settings`)."""
+
+    SETTINGS: ClassVar[type]
+
+    @classmethod
+    def from_table(cls, given: Any, name: str, origin: str) -> Section:
+        """The section (:meth:`Section.from_table`), its settings made once (each refusal of the layer begins with
+        the field it is about)."""
+        section = super().from_table(given, name, origin)
+        try:
+            section.settings  # noqa: B018 - the layer's settings check themselves
+        except UVMSError as exc:
+            raise ScenarioError(f"{origin}: {name}.{exc}") from None
+        return section
+
+    @property
+    def settings(self) -> Any:
+        """The layer's settings of this section: the one place the section becomes them."""
+        return self.SETTINGS(**self.settings_values())
+
+    def settings_values(self) -> dict[str, Any]:
+        """The settings' fields from the section's keys of the same names."""
+        return {name: getattr(self, name) for name in self.SETTINGS.names()}
 
 
 def check_value(name: str, value: Any, spec: Key, origin: str) -> Any:

@@ -4,11 +4,12 @@ meaning: the one source of the reader's checks and of the docs' scenario referen
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import MISSING, dataclass, fields
 from typing import Any, ClassVar
 
 from ...solvers import SOLVERS
-from .keys import NUMBER, NUMBERS, REQUIRED, Bound, Section, key
+from ...trajectory.settings import LAWS, TRAJECTORY_TYPES, TrajectorySettings
+from .keys import NUMBER, NUMBERS, REQUIRED, Bound, Section, SettingsSection, key
 
 #: Defaults of [outputs] position_tolerance [m] and orientation_tolerance [rad]: a run whose task error exceeds
 #: them is reported as not meeting its task (a terminal warning, metrics.json "verdict"). 1 cm and 1 degree: far
@@ -18,6 +19,8 @@ DEFAULT_ORIENTATION_TOLERANCE = 0.0175
 #: solver.method values: the solvers registered in uvms.solvers.SOLVERS (a live view: a method registered later is
 #: valid).
 SOLVER_METHODS = SOLVERS.keys()
+#: [trajectory]'s defaults: the trajectory settings' (its keys are TrajectorySettings' fields).
+TRAJECTORY = {item.name: item.default for item in fields(TrajectorySettings) if item.default is not MISSING}
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -72,37 +75,45 @@ class TaskSpec(Section):
 
 
 @dataclass(frozen=True, kw_only=True)
-class TrajectorySpec(Section):
-    """The ``[trajectory]`` section of a scenario, checked."""
+class TrajectorySpec(SettingsSection):
+    """The ``[trajectory]`` section of a scenario, checked: the trajectory layer's
+    :class:`~uvms.trajectory.settings.TrajectorySettings`."""
+
+    SETTINGS: ClassVar[type] = TrajectorySettings
 
     ABOUT: ClassVar[str] = (
         "The desired motion of `task.frame`, in world axes (ENU). Required unless the scenario has `[[phases]]`.")
-    type: str = key('circle', str, allowed=('circle', 'line', 'pose', 'ramps', 'hold'),
+    type: str = key(TRAJECTORY['type'], str, allowed=TRAJECTORY_TYPES,
         doc="`circle`; `line`; `pose` (a line and the SO(3) geodesic between two orientations); `ramps` "
             "(piecewise-linear velocity: rest → `velocity` in `accel_time`, cruise, back to rest at `duration`); "
             "`hold` (the frame kept where it starts: station keeping)")
-    start: tuple[float, ...] = key((), NUMBERS,
+    start: tuple[float, ...] = key(TRAJECTORY['start'], NUMBERS,
         doc="start point [m]; `[]`: where the frame is at the initial configuration")
-    center: tuple[float, ...] = key((), NUMBERS, doc="circle centre [m], absolute")
-    center_offset: tuple[float, ...] = key((), NUMBERS, doc="circle centre [m] relative to `start`")
-    normal: tuple[float, ...] = key((0.0, 0.0, 1.0), NUMBERS, doc="the normal of the circle's plane")
-    end: tuple[float, ...] = key((), NUMBERS, doc="line or pose end point [m], absolute")
-    end_offset: tuple[float, ...] = key((), NUMBERS, doc="line or pose end point [m] relative to `start`")
-    orientation: tuple[float, ...] = key((), NUMBERS,
+    center: tuple[float, ...] = key(TRAJECTORY['center'], NUMBERS, doc="circle centre [m], absolute")
+    center_offset: tuple[float, ...] = key(TRAJECTORY['center_offset'], NUMBERS,
+        doc="circle centre [m] relative to `start`")
+    normal: tuple[float, ...] = key(TRAJECTORY['normal'], NUMBERS, doc="the normal of the circle's plane")
+    end: tuple[float, ...] = key(TRAJECTORY['end'], NUMBERS, doc="line or pose end point [m], absolute")
+    end_offset: tuple[float, ...] = key(TRAJECTORY['end_offset'], NUMBERS,
+        doc="line or pose end point [m] relative to `start`")
+    orientation: tuple[float, ...] = key(TRAJECTORY['orientation'], NUMBERS,
         doc="constant orientation, roll-pitch-yaw [rad]; `[]`: the frame's initial orientation")
-    end_orientation: tuple[float, ...] = key((), NUMBERS,
+    end_orientation: tuple[float, ...] = key(TRAJECTORY['end_orientation'], NUMBERS,
         doc="`pose`: the orientation at the end, roll-pitch-yaw [rad]")
-    law: str = key('trapezoid', str, allowed=('trapezoid', 'cubic', 'quintic'), doc="the time law along the path")
-    speed: float = key(0.0, NUMBER,
+    law: str = key(TRAJECTORY['law'], str, allowed=LAWS, doc="the time law along the path")
+    speed: float = key(TRAJECTORY['speed'], NUMBER,
         doc="trapezoid law: cruise speed [m/s] (the distance is then speed × duration); 0: the path (or its "
             "`laps`) covered in `duration`")
-    laps: float = key(0.0, NUMBER, bound=Bound(0.0, strict=False, what="laps of the circle; 0: one pass"),
+    laps: float = key(TRAJECTORY['laps'], NUMBER,
+        bound=Bound(0.0, strict=False, what="laps of the circle; 0: one pass"),
         doc="circle: laps in `duration` (not with `speed`); 0: one pass")
     duration: float = key(REQUIRED, NUMBER, bound=Bound(0.0, strict=True, what="the trajectory's length [s]"),
         doc="length of the motion [s]")
-    accel_time: float = key(0.0, NUMBER, bound=Bound(0.0, strict=False, what="the acceleration time [s]"),
+    accel_time: float = key(TRAJECTORY['accel_time'], NUMBER,
+        bound=Bound(0.0, strict=False, what="the acceleration time [s]"),
         doc="acceleration (and deceleration) time of the trapezoid or of `ramps` [s]")
-    velocity: tuple[float, ...] = key((), NUMBERS, doc="`ramps`: the cruise velocity [m/s, world]")
+    velocity: tuple[float, ...] = key(TRAJECTORY['velocity'], NUMBERS,
+        doc="`ramps`: the cruise velocity [m/s, world]")
 
 
 @dataclass(frozen=True, kw_only=True)
