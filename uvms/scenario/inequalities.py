@@ -127,7 +127,7 @@ class ObjectiveRecorder:
                 values.append(objective.value(state))
         activations = [objective.activation(value) for objective, value in zip(self.objectives, values)]
         reported = {status.name: status.active for status in getattr(getattr(sample, "info", None), "objectives", ())}
-        active = [reported.get(objective.name, bool(np.any(activation > 0)))
+        active = [reported.get(objective.name, bool((activation > 0).any()))
                   for objective, activation in zip(self.objectives, activations)]
         limited = np.isfinite(self.maximum)
         v = sample.rate[0]
