@@ -116,6 +116,8 @@ class ThrustAllocator:
             raise SolverInputError(f"weights must be 6 numbers > 0, got {weights!r}")
         self.groups = _priority_groups(priorities)
         self.tolerance = float(tolerance)
+        # the bounds B^+ tau may touch within the slack (the attainable case's test, prepared once)
+        self._inside = (self.lower - self.tolerance, self.upper + self.tolerance)
         self.reachable, self.unreachable = _reachable(self.matrix)  # B on its reachable directions (6, n)
         self.inverse = pinv(self.reachable)  # (n, 6), computed once: the attainable case is one product
         self._rows = sorted(row for group in self.groups for row in group)
@@ -172,7 +174,8 @@ class ThrustAllocator:
             # them); within the bounds it is the answer, exact unless tau has an unreachable part
             thrusts = self.inverse @ wrench
             slack = self.tolerance
-            if (thrusts >= self.lower - slack).all() and (thrusts <= self.upper + slack).all():
+            low, high = self._inside
+            if (thrusts >= low).all() and (thrusts <= high).all():
                 thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # the slack, never beyond
                 achieved = self.matrix @ thrusts
                 residual = wrench - achieved
