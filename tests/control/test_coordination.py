@@ -111,3 +111,47 @@ def test_the_reference_puts_the_pose_objective_below_the_task(robot):
     np.testing.assert_allclose(k.task.jacobian(k._configuration) @ v, [0.0, 0.04, 0.0], atol=1e-9)
     np.testing.assert_allclose(info["nu_pose"], 0.0, atol=1e-12)
     assert np.linalg.norm(v[:6]) < 1e-6 < np.linalg.norm(v[6:])
+
+
+def test_the_coordination_re_solve_evaluates_the_objectives_and_the_task_once_per_step(tmp_path):
+    """The intervention's chain (set-based, three objectives above the jaws): the re-solve at the measured q reads the
+    rows the reference's solve evaluated (each objective and the task once a step, not twice) and gives the arm rates
+    of a re-solve that evaluates them itself, bit for bit."""
+    from pathlib import Path
+
+    from uvms.dynamics.plant.command import State
+    from uvms.scenario.build import build
+    from uvms.scenario.schema import read_scenario
+
+    scenario = Path(__file__).resolve().parents[2] / "scenarios" / "bluerov2_alpha5_intervention.toml"
+    setup = build(read_scenario(scenario, ["outputs.figures=false"]))
+    controller = setup.actuation.controller
+    kinematic = controller.kinematic
+    objectives = [item for level in kinematic.arm_solver.plan.levels for item in level.inequalities]
+    assert len(objectives) == 3
+    counts = dict.fromkeys([objective.name for objective in objectives] + ["task"], 0)
+    for item, name in [*((objective, objective.name) for objective in objectives), (kinematic.task, "task")]:
+        attribute = "terms" if name == "task" else "rows"
+        original = getattr(item, attribute)
+
+        def counted(state, original=original, name=name):
+            counts[name] += 1
+            return original(state)
+
+        setattr(item, attribute, counted)
+    rng = np.random.default_rng(3)
+    nv = setup.robot.nv
+    q, v = setup.q0, np.zeros(nv)
+    controller.reset(State(q, v, np.zeros(8), np.zeros(0)), 0.0)
+    for step in range(3):
+        t = 0.5 + 0.01 * step
+        q = pin.integrate(setup.robot.model, setup.q0, 0.02 * rng.normal(size=nv))
+        v = 0.05 * rng.normal(size=nv)
+        controller.command(State(q, v, np.zeros(8), np.zeros(0)), t)
+        assert set(counts.values()) == {step + 1}, counts  # once a step for both solves
+        kinematic.reference(t, q)
+        shared = kinematic.arm_rates(t, q, v[:6])
+        kinematic._rows.clear()
+        alone = kinematic.arm_solver.velocity(kinematic._at(t, q)).v[6:]  # without the reference's rows
+        assert np.array_equal(shared, alone)
+        counts.update(dict.fromkeys(counts, step + 1))

@@ -185,3 +185,17 @@ def test_what_a_system_cannot_run_is_refused_before_it_runs():
     with pytest.raises(UVMSError, match="recorded extra, which no series of SimulationResult holds"):
         simulate(robot, OpenLoop(velocity=np.zeros(robot.nv), info=INFO), robot.neutral(), 0.1, 0.1,
                  recorders=[lambda t, q, x, sample: {"extra": 1.0}])
+
+
+def test_the_rows_are_gathered_by_name_in_order_including_a_name_some_rows_lack():
+    """run_loop keeps the rows as they come and gathers them after the loop: each series in row order, the names in
+    the order they first came, a name missing from some rows gathered from the rows that have it."""
+    from uvms.sim.loop import gathered
+
+    rows = [{"t": 0.0, "q": np.zeros(2)}, {"t": 0.1, "q": np.ones(2)}]
+    series = gathered(rows)
+    assert list(series) == ["t", "q"] and series["t"].tolist() == [0.0, 0.1]
+    assert series["q"].tolist() == [[0.0, 0.0], [1.0, 1.0]]
+    uneven = gathered([{"t": 0.0}, {"t": 0.1, "extra": 3.0}, {"extra": 4.0, "t": 0.2}])
+    assert list(uneven) == ["t", "extra"] and uneven["extra"].tolist() == [3.0, 4.0]
+    assert uneven["t"].tolist() == [0.0, 0.1, 0.2] and gathered([]) == {}

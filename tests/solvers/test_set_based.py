@@ -182,3 +182,61 @@ def test_the_levels_are_added_in_order_as_numpy_sums_them(rng):
             assert np.array_equal(total, np.sum(vectors, axis=0)) and scales == (1.0,) * count
         total, scales, _ = saturated(vectors, -np.full(11, 1e30), np.full(11, 1e30), check_inside=False)
         assert np.array_equal(total, np.sum(vectors, axis=0)) and scales == (1.0,) * count
+
+
+@pytest.mark.parametrize("method", ["set_based", "hqp"])
+def test_a_second_hierarchy_at_the_same_q_reads_the_shared_rows_and_gives_the_numbers_of_its_own(rng, method):
+    """The actuated chain's two solves at one q (the vehicle's level below the task, then on top): with an ItemRows
+    the second evaluates only its own vehicle level, and both give the numbers of solves that evaluate everything
+    themselves, bit for bit; at another q the rows are evaluated again."""
+    from uvms.solvers import SOLVERS
+    from uvms.solvers.hierarchy import ItemRows
+    from uvms.tasks.vehicle import VehicleTask
+
+    robot = uvms.load("bluerov2_alpha5")
+    q, target = alpha5_start(robot, rng)
+    *objectives, task = [level for level in alpha5_levels(robot, target) if "Velocity" not in type(level).__name__]
+    below, above = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
+    below.velocity_values[:] = rng.normal(size=6)
+    above.velocity_values[:] = rng.normal(size=6)
+    cls = SOLVERS[method]
+    assert cls.shares_rows
+    options = {"dt": 0.05} if method == "hqp" else {}
+    reference, arm = cls(robot, [*objectives, task, [below]], **options), cls(robot, [[above], *objectives, task],
+                                                                               **options)
+    calls = {"objectives": 0, "task": 0}
+
+    def counted(item, key):
+        method_name = "rows" if key == "objectives" else "terms"
+        original = getattr(item, method_name)
+
+        def wrapper(state):
+            calls[key] += 1
+            return original(state)
+
+        setattr(item, method_name, wrapper)
+
+    for objective in objectives:
+        counted(objective, "objectives")
+    counted(task, "task")
+    shared = ItemRows()
+    for _ in range(3):
+        q, target = alpha5_start(robot, rng)
+        task.set_target(target)
+        shared.clear()  # the target moved
+        state = Configuration(robot, q)
+        first, second = reference.velocity(state, shared=shared), arm.velocity(state, shared=shared)
+        assert calls == {"objectives": len(objectives), "task": 1}  # once each for both solves
+        assert np.array_equal(first.v, reference.velocity(Configuration(robot, q)).v)
+        assert np.array_equal(second.v, arm.velocity(Configuration(robot, q)).v)
+        calls.update(objectives=0, task=0)
+    moved = Configuration(robot, pin_moved(robot, q))
+    arm.velocity(moved, shared=shared)  # another q: evaluated again, not read
+    assert calls == {"objectives": len(objectives), "task": 1}
+
+
+def pin_moved(robot, q):
+    """q moved a little along every velocity coordinate."""
+    import pinocchio as pin
+
+    return pin.integrate(robot.model, q, np.full(robot.nv, 1e-3))

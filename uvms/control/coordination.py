@@ -211,6 +211,7 @@ class CoordinatedControl:
         self._last_reference: np.ndarray | None = None  # nu_ref (6,) of the last step, base frame
         self._rate = np.zeros(6)  # nu_ref' (6,) filtered [m/s^2, rad/s^2]
         self._achieved = np.zeros(6)  # the allocation's achieved wrench at the last step [N, N m]
+        self._placement = self.velocity.model.robot.base_placement  # joint_M_base (the property copies it per read)
 
     def vehicle_bounds(self, nu: np.ndarray, nu_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) (6,) [m/s, rad/s] base frame: between the measured nu and nu + r (nu_pose - nu)."""
@@ -234,14 +235,14 @@ class CoordinatedControl:
                 self.velocity.applied_wrench(q, v, state.thrusts, state.fins)
             self.velocity.observe(q, v, applied, self.dt)
         bounds = None
-        if self.saturation_feedback and np.any(self.ratio < 1.0):
+        if self.saturation_feedback and (self.ratio < 1.0).any():
             nu = base_twist(model, v)
             bounds = self.vehicle_bounds(nu, self.kinematic.vehicle_objective(q))
         reference, _ = self.kinematic.reference(t, q, bounds)
         arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
-        arm = np.clip(arm, -self.max_arm_rate, self.max_arm_rate)
+        arm = np.minimum(np.maximum(arm, -self.max_arm_rate), self.max_arm_rate)  # np.clip's numbers, not its dispatch
         self.kinematic.step_done()
-        nu_ref = model.robot.base_placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
+        nu_ref = self._placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
         rate = None
         if self.acceleration_feedforward and self._last_reference is not None:
             step = (nu_ref - self._last_reference) / self.dt  # the reference's rate over the last step

@@ -30,6 +30,7 @@ Station keeping (:func:`station_keeping`) is one case: a held end-effector point
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Sequence
 
@@ -47,6 +48,7 @@ from ..robot.kinematics import held_vehicle_split
 from ..robot.robot import Robot
 from ..solvers.base import SolverFactory
 from ..solvers.clik import CLIKSolver
+from ..solvers.hierarchy import ItemRows
 from ..solvers.stack import stacked_terms
 from ..tasks.frame import FrameTask
 from ..tasks.objectives import JointVelocityLimits
@@ -155,21 +157,26 @@ class ActuatedKinematics:
         trajectory's sample the task points at and the tightening's margins forgotten."""
         self.vehicle_target = self.base_pose(state.q) if self.station is None else self.station.copy()
         self._time = None
+        if self._configuration is not None:
+            self._rows.clear()
         if self.tightening is not None:
             self.tightening.restore()
             self.tightening.reset()
 
     def _at(self, t: float, q: np.ndarray) -> Configuration:
         """The configuration at q (one kept, updated), the task pointed at the trajectory's sample of t."""
+        if self._configuration is None:
+            self._configuration = Configuration(self.robot, q, check=False, momentum=self._momentum)
+            # the items' rows at the step's q: the reference's solve evaluates them, the coordination's reads them
+            self._rows = ItemRows()
+        else:
+            self._configuration.update(q, check=False)
         if self.trajectory is not None and t != self._time:
             sample = self.trajectory(t)
             self.task.set_target(sample.pose)
             self.task.set_target_velocity(sample.twist, check=False)
             self._time = t
-        if self._configuration is None:
-            self._configuration = Configuration(self.robot, q, check=False, momentum=self._momentum)
-        else:
-            self._configuration.update(q, check=False)
+            self._rows.clear()
         return self._configuration
 
     def base_pose(self, q: np.ndarray) -> pin.SE3:
@@ -193,7 +200,10 @@ class ActuatedKinematics:
         else:
             level = self._vehicle_reference if reference else self._vehicle_measured
             level.velocity_values[:] = vehicle
-            result = (self.reference_solver if reference else self.arm_solver).velocity(configuration)
+            solver = self.reference_solver if reference else self.arm_solver
+            # both solves share the objectives and the task (not the vehicle levels): evaluated once per step
+            result = (solver.velocity(configuration, shared=self._rows) if getattr(solver, "shares_rows", False)
+                      else solver.velocity(configuration))
             v = result.v
         if reference and self.vehicle_given:
             v = v.copy()
@@ -217,6 +227,7 @@ class ActuatedKinematics:
         configuration = self._at(t, q)
         if self.tightening is not None:  # the bounds moved for this step's solves, until :meth:`asked`
             self.tightening.measure(t, configuration)
+        self._rows.clear()  # this step's rows, with this step's bounds
         v, result = self._solve(configuration, vehicle, reference=True)
         if self.tightening is not None:  # what the reference, which keeps the objectives, predicts for the next step
             self.tightening.predict(t, v)
@@ -224,6 +235,8 @@ class ActuatedKinematics:
 
     def step_done(self) -> None:
         """The step's solves are done: the objectives' nominal bounds back (recorders read them)."""
+        if self._configuration is not None:
+            self._rows.clear()
         if self.tightening is not None:
             self.tightening.restore()
 
@@ -235,13 +248,16 @@ class ActuatedKinematics:
     def errors(self, t: float, q: np.ndarray) -> dict:
         """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and its
         distance [m] from the trajectory's point."""
-        pose = self.base_pose(q)
+        pose = self.robot.base_pose(q, check=False) * self.base_placement  # q: the step's, checked by its reference
         ee = self._at(t, q).pose(self.task.frame_id).translation.copy()
         attitude_error = pin.log3(pose.rotation.T @ self.vehicle_target.rotation)  # body axes [rad]
-        row = {"vehicle_position_error": float(np.linalg.norm(self.vehicle_target.translation - pose.translation)),
-               "vehicle_attitude_error": float(np.linalg.norm(attitude_error)), "ee_position": ee}
+        offset = self.vehicle_target.translation - pose.translation
+        # the norms as numpy's norm of a vector computes them (sqrt of x.dot(x)), without its dispatch per call
+        row = {"vehicle_position_error": math.sqrt(offset.dot(offset)),
+               "vehicle_attitude_error": math.sqrt(attitude_error.dot(attitude_error)), "ee_position": ee}
         if self.trajectory is not None:
-            row["ee_point_error"] = float(np.linalg.norm(self.trajectory(t).pose.translation - ee))
+            miss = self.trajectory(t).pose.translation - ee
+            row["ee_point_error"] = math.sqrt(miss.dot(miss))
         return row
 
 

@@ -279,4 +279,6 @@ class VehiclePoseController:
     def reference(self, pose: pin.SE3, target: pin.SE3) -> np.ndarray:
         """nu_ref (6,) [m/s, rad/s] towards ``target`` (bounded by ``max_speed``)."""
         reference = pose_velocity_reference(pose, target, self.gains)
-        return reference if self.max_speed is None else np.clip(reference, -self.max_speed, self.max_speed)
+        if self.max_speed is None:
+            return reference
+        return np.minimum(np.maximum(reference, -self.max_speed), self.max_speed)  # np.clip's numbers, no dispatch

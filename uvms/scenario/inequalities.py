@@ -109,6 +109,8 @@ class ObjectiveRecorder:
     def __init__(self, robot: Robot, inequalities: ScenarioInequalities) -> None:
         self.robot, self.objectives = robot, inequalities.objectives
         self.maximum = speed_maximum(robot.nv, inequalities.speed_limits)  # (nv,) [m/s, rad/s], inf: none
+        self._limited = np.flatnonzero(np.isfinite(self.maximum))  # the velocities with a limit, and their limits
+        self._limits = self.maximum[self._limited]
         self._state: Configuration | None = None
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
@@ -127,15 +129,14 @@ class ObjectiveRecorder:
                 values.append(objective.value(state))
         activations = [objective.activation(value) for objective, value in zip(self.objectives, values)]
         reported = {status.name: status.active for status in getattr(getattr(sample, "info", None), "objectives", ())}
-        active = [reported.get(objective.name, bool(np.any(activation > 0)))
+        active = [reported.get(objective.name, bool((activation > 0).any()))
                   for objective, activation in zip(self.objectives, activations)]
-        limited = np.isfinite(self.maximum)
         v = sample.rate[0]
         return {"objective_value": np.concatenate(values) if values else np.zeros(0),
                 "objective_activation": np.concatenate(activations) if activations else np.zeros(0),
                 "objective_active": np.array(active, dtype=bool),
                 "objective_pair": np.concatenate(pairs).astype(int) if pairs else np.zeros(0, dtype=int),
-                "speed_ratio": float(np.max(np.abs(v[limited]) / self.maximum[limited], initial=0.0))}
+                "speed_ratio": float((np.abs(v[self._limited]) / self._limits).max(initial=0.0))}
 
 
 def vehicle_tilt(vehicle_pose: np.ndarray) -> np.ndarray:

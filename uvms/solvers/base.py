@@ -17,6 +17,9 @@ What the scenario builder reads from a class, never from its name:
 * :attr:`Solver.holds_priorities`: its levels are held by priority (a lower one in the null space of the higher
   ones); False: stacked and traded off (CLIK). A controller that gives some velocities (the actuated chain's
   vehicle) puts them on a level at the top of a solver that holds priorities, else fixes their columns.
+* :attr:`Solver.shares_rows`: :meth:`Solver.velocity` takes ``shared=`` an
+  :class:`~uvms.solvers.hierarchy.ItemRows`, the rows of its tasks and objectives another solver over some of the
+  same items already evaluated at the configuration (the actuated chain's two solves at one q evaluate them once).
 
 A controller receives its solver in one form, a :class:`SolverFactory` (the class and its options, built per
 level set); it asks the class's attributes above, never the class itself.
@@ -53,6 +56,8 @@ class Solver(ABC):
         vehicle_level: the index a scenario's ``[vehicle]`` task takes in the levels (None: not used).
         level_count: the number of levels it needs (None: any number).
         holds_priorities: its levels are held by priority (False: stacked and traded off, as CLIK does).
+        shares_rows: :meth:`velocity` also takes ``shared`` (an ItemRows: the items' rows at the configuration, read
+            where another solver evaluated them and filled with the others).
         robot: the model; free_floating: only the arm is solved, the vehicle follows momentum conservation.
     """
 
@@ -61,6 +66,7 @@ class Solver(ABC):
     vehicle_level: ClassVar[int | None] = None
     level_count: ClassVar[int | None] = None
     holds_priorities: ClassVar[bool] = True
+    shares_rows: ClassVar[bool] = False
 
     robot: Robot
     free_floating: bool

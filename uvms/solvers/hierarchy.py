@@ -6,7 +6,8 @@ Both hierarchical solvers read their levels from here: the set-based (iCAT) prio
 * :class:`HierarchyPlan` splits and checks the levels once (what each level holds, the speed limits, the
   joint-limit objectives, the task gains), where a solver is built;
 * :meth:`HierarchyPlan.evaluate` stacks every level's rows at one configuration (a :class:`Hierarchy`),
-  the kinematics computed once for all of them;
+  the kinematics computed once for all of them; with an :class:`ItemRows` it reads the items another hierarchy
+  already evaluated at that configuration (the actuated chain's coordination re-solve);
 * what both solvers report (the rows a result keeps, the speed ratio).
 """
 
@@ -132,6 +133,54 @@ def split_levels(levels: Levels) -> tuple[list[tuple[int, list[Task | Inequality
     return rows, limits
 
 
+class ItemRows:
+    """The rows of tasks and objectives evaluated at one configuration, by item, for a second hierarchy over some of
+    the same items at the same configuration: the actuated chain re-solves the arm at the q of its reference through
+    levels that share the reference's objectives and task (:meth:`HierarchyPlan.evaluate` fills it at the first
+    solve and reads it at the second), so each is evaluated once per step.
+
+    Its owner says what it holds: the rows stay valid while the tasks' targets and the objectives' bounds are those
+    of the first evaluation, and the owner calls :meth:`clear` before one of them changes. An evaluation at another
+    configuration (another state, or q changed by value) empties it itself.
+    """
+
+    def __init__(self) -> None:
+        self.state: Configuration | None = None
+        self.q = np.zeros(0)  # a copy of the q the rows were evaluated at
+        self._objectives: dict[int, tuple[Inequality, InequalityRows]] = {}  # id -> (objective kept alive, rows)
+        self._tasks: dict[tuple[int, ...], tuple[tuple[Task, ...], tuple]] = {}  # ids -> (tasks, stacked terms)
+
+    def clear(self) -> None:
+        """Forget every row (a target or a bound is about to change)."""
+        self.state = None
+        self._objectives.clear()
+        self._tasks.clear()
+
+    def at(self, state: Configuration) -> ItemRows:
+        """These rows for ``state``: emptied first when they were evaluated at another state or q."""
+        q = state.q
+        if state is not self.state or q.shape != self.q.shape or not (q == self.q).all():
+            self.clear()
+            self.state, self.q = state, q.copy()
+        return self
+
+    def objective(self, item: Inequality) -> InequalityRows:
+        """The objective's rows at the state (evaluated at the first call)."""
+        kept = self._objectives.get(id(item))
+        if kept is None:
+            kept = self._objectives[id(item)] = (item, item.rows(self.state))
+        return kept[1]
+
+    def tasks(self, tasks: tuple[Task, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tasks' stacked (Jacobian, error, feedforward) at the state (:func:`~uvms.solvers.stack.stacked_terms`,
+        evaluated at the first call; never written by a solver)."""
+        key = tuple(map(id, tasks))
+        kept = self._tasks.get(key)
+        if kept is None:
+            kept = self._tasks[key] = (tasks, stacked_terms(self.state, tasks))
+        return kept[1]
+
+
 @dataclass(frozen=True)
 class PlannedLevel:
     """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities."""
@@ -183,9 +232,11 @@ class HierarchyPlan:
         self.offsets = np.array([0, *itertools.accumulate(sizes)], dtype=np.int64)  # (L + 1,) each level's first row
         self.equality = np.array([bool(level.tasks) and not level.inequalities for level in self.levels])  # (L,)
 
-    def evaluate(self, state: Configuration) -> Hierarchy:
-        """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v."""
-        rows = [self._level_rows(state, level) for level in self.levels]
+    def evaluate(self, state: Configuration, shared: ItemRows | None = None) -> Hierarchy:
+        """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v;
+        ``shared``: the items' rows another hierarchy evaluated at ``state`` (read, and filled with the others)."""
+        items = shared.at(state) if shared is not None else None
+        rows = [self._level_rows(state, level, items) for level in self.levels]
         vehicle_map = None
         if self.free_floating:
             a_base, a_arm = state.centroidal_split()
@@ -193,12 +244,15 @@ class HierarchyPlan:
         return Hierarchy(state=state, levels=rows, speed_limits=self.speed_limits, joint_limits=self.joint_limits,
                          free_floating=self.free_floating, vehicle_map=vehicle_map)
 
-    def _level_rows(self, state: Configuration, level: PlannedLevel) -> LevelRows:
-        """One level's rows at ``state``: equality tasks first, then the inequalities in their order."""
-        inequalities = [item.rows(state) for item in level.inequalities]
+    def _level_rows(self, state: Configuration, level: PlannedLevel, shared: ItemRows | None) -> LevelRows:
+        """One level's rows at ``state``: equality tasks first, then the inequalities in their order (``shared``:
+        where already evaluated items are read)."""
+        inequalities = ([item.rows(state) for item in level.inequalities] if shared is None
+                        else [shared.objective(item) for item in level.inequalities])
         task_jacobian = task_error = task_command = None
         if level.tasks:
-            task_jacobian, task_error, feedforward = stacked_terms(state, level.tasks)
+            task_jacobian, task_error, feedforward = (stacked_terms(state, level.tasks) if shared is None
+                                                      else shared.tasks(level.tasks))
             task_command = level.command(task_error, feedforward)
             if not inequalities:  # the common equality level: its own arrays, nothing to stack
                 solved = state.generalized(task_jacobian) if self.free_floating else task_jacobian

@@ -42,7 +42,7 @@ from ..robot.robot import Robot
 from ..tasks.objectives import VelocityLimit
 from .base import Solver
 from .cascade import PREFERRED_SOLVERS, Cascade, installed_solvers, level_attempts, qp_solver, solve_level
-from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, solved_rows, speed_ratio
+from .hierarchy import Hierarchy, HierarchyPlan, ItemRows, LevelRows, Levels, solved_rows, speed_ratio
 from .result import SolverResult
 from .saturation import RateRows, speed_maximum, velocity_box
 
@@ -105,6 +105,7 @@ class HQPSolver(Solver):
 
     name = "hqp"
     enforces_inequalities = True
+    shares_rows = True
 
     def __init__(
         self,
@@ -142,10 +143,11 @@ class HQPSolver(Solver):
         self._rate_rows = RateRows.of(self.plan.joint_limits, valid_set=True)  # the valid sets' rows, stacked once
         self._unbounded = np.full(robot.nv, -np.inf), np.full(robot.nv, np.inf)
 
-    def velocity(self, configuration: Configuration) -> SolverResult:
+    def velocity(self, configuration: Configuration, shared: ItemRows | None = None) -> SolverResult:
         """The velocity of the QP hierarchy at ``configuration``: the objectives active when a constraint binds
-        or is relaxed; ``extras`` has ``solver_status`` and ``slacks`` per level and the ``solver`` used."""
-        hierarchy = self.plan.evaluate(self._checked(configuration))
+        or is relaxed; ``extras`` has ``solver_status`` and ``slacks`` per level and the ``solver`` used;
+        ``shared``: the items' rows already evaluated at ``configuration`` (:meth:`HierarchyPlan.evaluate`)."""
+        hierarchy = self.plan.evaluate(self._checked(configuration), shared)
         maximum = self.maximum
         rate_lower, rate_upper = (self._rate_rows.bounds(hierarchy.state.q, self.robot.nv, self.dt, self.fraction)
                                   if self.plan.joint_limits else self._unbounded)

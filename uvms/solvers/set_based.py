@@ -59,7 +59,7 @@ from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..tasks.objectives import VelocityLimit
 from .base import Solver
-from .hierarchy import Hierarchy, HierarchyPlan, Levels, last_task_sigma, solved_rows, speed_ratio
+from .hierarchy import Hierarchy, HierarchyPlan, ItemRows, Levels, last_task_sigma, solved_rows, speed_ratio
 from .result import SolverResult
 from .saturation import TOLERANCE, RateRows, speed_maximum
 
@@ -166,6 +166,7 @@ class SetBasedSolver(Solver):
 
     name = "set_based"
     enforces_inequalities = True
+    shares_rows = True
 
     def __init__(
         self,
@@ -197,12 +198,13 @@ class SetBasedSolver(Solver):
                                self.fraction,
                                self.maximum, not free_floating, TOLERANCE)
 
-    def velocity(self, configuration: Configuration) -> SolverResult:
+    def velocity(self, configuration: Configuration, shared: ItemRows | None = None) -> SolverResult:
         """The set-based velocity at ``configuration`` and its diagnostics (sigma_min, the residuals and the
-        objectives' statuses computed when read); ``sigma_min`` that of the last level holding equality tasks."""
+        objectives' statuses computed when read); ``sigma_min`` that of the last level holding equality tasks;
+        ``shared``: the items' rows already evaluated at ``configuration`` (:meth:`HierarchyPlan.evaluate`)."""
         state = self._checked(configuration)
         plan = self.plan
-        hierarchy = plan.evaluate(state)
+        hierarchy = plan.evaluate(state, shared)
         contributions, sigmas, used = self.icat.solve(hierarchy, plan.offsets, plan.equality)
         solved, scales, ratio = saturate(hierarchy, contributions, state.q, self._box_constants)
         v = hierarchy.velocity(solved)

@@ -63,6 +63,9 @@ class VehicleTask(Task):
         self.dim = len(self.velocity_indices) + (heading is not None) + (depth is not None)
         if self.dim == 0:
             raise UVMSError("a vehicle task needs at least one velocity, a heading or a depth")
+        # the imposed velocities' rows (k, nv), constant: a task of velocities alone reads no pose
+        self._velocity_rows = np.zeros((len(self.velocity_indices), robot.nv))
+        self._velocity_rows[np.arange(len(self.velocity_indices)), self.velocity_indices] = 1.0
 
     @classmethod
     def at_rest(cls, robot: Robot) -> VehicleTask:
@@ -100,6 +103,13 @@ class VehicleTask(Task):
         if self.depth is not None:
             jacobian[row, 0:3] = rotation[2]  # world zdot = [R v_local]_z
         return jacobian
+
+    def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(jacobian (k, nv), error (k,), feedforward (k,)); velocities alone (no heading, no depth): the constant
+        rows, no error and the imposed velocities, without reading the vehicle's pose."""
+        if self.heading is None and self.depth is None:
+            return self._velocity_rows.copy(), np.zeros(self.dim), self.velocity_values.copy()
+        return self.jacobian(state), self.error(state), self.feedforward(state)
 
     def feedforward(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - constant
         feedforward = np.zeros(self.dim)

@@ -171,3 +171,30 @@ def test_a_full_layout_reaches_every_direction_and_says_nothing(vehicle):
     allocator = ThrustAllocator(*vehicle)
     assert allocator.rank == 6 and allocator.unreachable == () and allocator.reach_note(["t"] * allocator.n) == ""
     np.testing.assert_allclose(allocator.reachable, vehicle[0], atol=1e-12)
+
+
+def test_the_bounded_stages_give_the_thrusts_of_qpsolvers_daqp_bit_for_bit(vehicle):
+    """The QP stages call DAQP's own API with the arrays qpsolvers' DAQP interface builds: the thrusts of
+    ``qpsolvers.solve_qp(..., solver="daqp")`` on the same stages, bit for bit (saturated, prioritized wrenches)."""
+    from qpsolvers import solve_qp
+
+    from uvms.dynamics.thrusters import allocation
+
+    matrix, lower, upper = vehicle
+    allocator = ThrustAllocator(matrix, lower, upper, priorities=[("yaw", "z", "roll", "pitch"), ("x", "y")])
+
+    class ThroughQPSolvers(ThrustAllocator):
+        def _solve_qp(self, p, q, a, b, start):
+            a, b = allocation._independent_rows(a, b)
+            solution = solve_qp(p, q, A=a, b=b, lb=self.lower, ub=self.upper, solver="daqp", eps_prox=1e-6)
+            return start if solution is None or not np.all(np.isfinite(solution)) else solution
+
+    reference = ThroughQPSolvers(matrix, lower, upper, priorities=[("yaw", "z", "roll", "pitch"), ("x", "y")])
+    rng = np.random.default_rng(7)
+    bounded = 0
+    for _ in range(30):
+        wrench = rng.normal(size=6) * np.array([300.0, 300.0, 300.0, 30.0, 30.0, 30.0])
+        result, expected = allocator.allocate(wrench), reference.allocate(wrench)
+        assert np.array_equal(result.thrusts, expected.thrusts)
+        bounded += result.solver == "bounded"
+    assert bounded > 20  # the QP stages ran

@@ -25,6 +25,7 @@ to produce a newton of it, and no least-norm step runs (the matrix looks square 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from ctypes import c_int
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,6 +117,8 @@ class ThrustAllocator:
             raise SolverInputError(f"weights must be 6 numbers > 0, got {weights!r}")
         self.groups = _priority_groups(priorities)
         self.tolerance = float(tolerance)
+        # the bounds B^+ tau may touch within the slack (the attainable case's test, prepared once)
+        self._inside = (self.lower - self.tolerance, self.upper + self.tolerance)
         self.reachable, self.unreachable = _reachable(self.matrix)  # B on its reachable directions (6, n)
         self.inverse = pinv(self.reachable)  # (n, 6), computed once: the attainable case is one product
         self._rows = sorted(row for group in self.groups for row in group)
@@ -172,7 +175,8 @@ class ThrustAllocator:
             # them); within the bounds it is the answer, exact unless tau has an unreachable part
             thrusts = self.inverse @ wrench
             slack = self.tolerance
-            if (thrusts >= self.lower - slack).all() and (thrusts <= self.upper + slack).all():
+            low, high = self._inside
+            if (thrusts >= low).all() and (thrusts <= high).all():
                 thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # the slack, never beyond
                 achieved = self.matrix @ thrusts
                 residual = wrench - achieved
@@ -212,14 +216,24 @@ class ThrustAllocator:
                        self.upper)
 
     def _solve_qp(self, p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray, start: np.ndarray) -> np.ndarray:
-        """min 1/2 x^T P x + q^T x s.t. A x = b, bounds, by DAQP; ``start`` is feasible, and kept if DAQP fails."""
-        from qpsolvers import solve_qp
+        """min 1/2 x^T P x + q^T x s.t. A x = b, bounds, by DAQP; ``start`` is feasible, and kept if DAQP fails.
+
+        DAQP's own API, given the arrays ``qpsolvers.solve_qp(..., solver="daqp")`` builds for it (the bounds, then
+        the equality rows with sense 5): the same numbers without its problem object and checks at every call.
+        """
+        import daqp  # a compiled module (a dependency), loaded when the allocation first saturates
 
         # P is only semi-definite (fewer wrench rows than thrusters): DAQP's proximal-point iterations
         # (eps_prox > 0) solve such a QP exactly, where a regularization of P would move the optimum
         a, b = _independent_rows(a, b)
-        solution = solve_qp(p, q, A=a, b=b, lb=self.lower, ub=self.upper, solver="daqp", eps_prox=1e-6)
-        if solution is None or not np.all(np.isfinite(solution)):
+        n, equalities = self.n, a.shape[0]
+        upper, lower = np.empty(n + equalities), np.full(n + equalities, -1e30)
+        upper[:n], lower[:n], upper[n:] = self.upper, self.lower, b
+        sense = np.zeros(n + equalities, dtype=c_int)
+        sense[n:] = 5  # equality rows
+        rows = a if equalities else np.zeros((0, n))
+        solution, _, exitflag, _ = daqp.solve(p, q, rows, upper, lower, sense, primal_start=None, eps_prox=1e-6)
+        if exitflag <= 0 or not np.all(np.isfinite(solution)):
             return start  # the previous stage's thrusts satisfy every constraint
         return solution
 

@@ -58,7 +58,8 @@ class VehicleAttitude(Inequality):
         self._set_valid_set([-np.inf], [max_tilt], band, gain, shape)
 
     def value(self, state: Configuration) -> np.ndarray:
-        return self.value_jacobian(state)[0]
+        """The tilt (1,) [rad] alone (a recorder reads it at every row: no Jacobian)."""
+        return _tilt(state.pose(self.frame_id).rotation[:, 2])
 
     def jacobian(self, state: Configuration) -> np.ndarray:
         return self.value_jacobian(state)[1]
@@ -66,12 +67,17 @@ class VehicleAttitude(Inequality):
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
         """(tilt (1,), its Jacobian (1, nv)) from one read of the vehicle's pose."""
         z_axis = state.pose(self.frame_id).rotation[:, 2]  # the body z axis in world axes
-        tilt = np.array([np.arccos(min(max(float(z_axis[2]), -1.0), 1.0))])
+        tilt = _tilt(z_axis)
         axis = np.array([z_axis[1], -z_axis[0], 0.0])  # z_b x e_z, |axis| = sin(tilt)
         length = math.sqrt(axis.dot(axis))  # np.linalg.norm's numbers
         if length < LEVEL_TILT:
             return tilt, np.zeros((1, state.robot.nv))
         return tilt, -((axis / length) @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
+
+
+def _tilt(z_axis: np.ndarray) -> np.ndarray:
+    """The angle (1,) [rad] between a body z axis (3,) in world axes and the world's z."""
+    return np.array([np.arccos(min(max(float(z_axis[2]), -1.0), 1.0))])
 
 
 class PlaneClearance(Inequality):
