@@ -30,6 +30,8 @@ import pinocchio as pin
 from ..errors import NumericalError, StepCountError, UVMSError
 from .lapack import lapack
 
+#: The argument dIntegrate differentiates: the tangent vector (read once, not at every stage).
+ARG1 = pin.ArgumentPosition.ARG1
 #: The rate of a state: (t [s], q (nq,), x (m,)) -> (w (nv,) tangent at q, xdot (m,)).
 Rate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 #: The schemes, by the name scenarios (``simulation.integrator``) and the front-ends use.
@@ -111,22 +113,25 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
     Returns:
         (q+ (nq,), x+ (m,)) at t + dt.
     """
+    half = 0.5 * dt
 
     def stage(xi: np.ndarray, x_stage: np.ndarray, time_: float) -> tuple[np.ndarray, np.ndarray]:
         velocity, x_rate = rate(time_, pin.integrate(model, q, xi), x_stage)
         # xi' = dexp^-1(w): the tangent-space rate that moves the stage configuration with velocity w
-        return solve_square(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), x_rate
-
-    def moved(scale: float, x_rate: np.ndarray) -> np.ndarray:
-        # a kinematic run has no vector state: its sums over empty arrays would cost about 5 us a step
-        return x + scale * x_rate if x.size else x
+        return solve_square(pin.dIntegrate(model, q, xi, ARG1), velocity), x_rate
 
     k1q, k1x = first
-    k2q, k2x = stage(0.5 * dt * k1q, moved(0.5 * dt, k1x), t + 0.5 * dt)
-    k3q, k3x = stage(0.5 * dt * k2q, moved(0.5 * dt, k2x), t + 0.5 * dt)
-    k4q, k4x = stage(dt * k3q, moved(dt, k3x), t + dt)
-    q_next = pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q))
-    return q_next, moved(dt / 6.0, k1x + 2.0 * k2x + 2.0 * k3x + k4x) if x.size else x
+    if x.size:  # a kinematic run has no vector state: its sums over empty arrays would cost about 5 us a step
+        k2q, k2x = stage(half * k1q, x + half * k1x, t + half)
+        k3q, k3x = stage(half * k2q, x + half * k2x, t + half)
+        k4q, k4x = stage(dt * k3q, x + dt * k3x, t + dt)
+        x_next = x + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x)
+    else:
+        k2q = stage(half * k1q, x, t + half)[0]
+        k3q = stage(half * k2q, x, t + half)[0]
+        k4q = stage(dt * k3q, x, t + dt)[0]
+        x_next = x
+    return pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q)), x_next
 
 
 def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:

@@ -182,9 +182,10 @@ class SimulationResult:
         buffer = io.StringIO()
         writer = csv.writer(buffer, lineterminator="\n")
         writer.writerow(header)
-        # one %-format of a whole row: the strings of f"{value:.17g}" (the same C formatting), not a call per value
+        # one %-format of every row at once: the strings of f"{value:.17g}" (the same C formatting), not a call per
+        # value, and no list or tuple per row (thousands of them would set off the collector's full passes)
         row_format = ",".join(["%.17g"] * table.shape[1]) + "\n"
-        buffer.writelines([row_format % row for row in map(tuple, table.tolist())])
+        buffer.write((row_format * table.shape[0]) % tuple(table.ravel().tolist()))
         return buffer.getvalue()
 
     def save(self, folder: str | os.PathLike) -> tuple[Path, ...]:
