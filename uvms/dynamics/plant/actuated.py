@@ -161,12 +161,34 @@ def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: 
     return rate + (wanted - rate) / -np.expm1(-dt / np.asarray(time_constant, dtype=float))
 
 
-def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> float:
-    """Power [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water)."""
+def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Power (N,) [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water), at the
+    stored states q (N, nq), v (N, nv): derived after the loop, not recorded per row.
+
+    Per row only Pinocchio's forward kinematics and the links' joints' twists (and rotations in a current) are
+    gathered; the links' twists and wrenches are then formed for all rows at once, each row's numbers those of
+    :meth:`uvms.dynamics.plant.plant.Plant._link_states` (the same operations per row).
+    """
+    rows = len(q)
     if not plant.damping or not plant.links:
-        return 0.0
-    links = plant._link_states(q, v)
-    return float((plant._stacked.damping_wrenches(links.relative) * links.twists).sum())
+        return np.zeros(rows)
+    model, data, stacked = plant.model, plant.data, plant._stacked
+    joints = plant._joints  # each joint once; the links' rows of it: plant._link_joint
+    velocities = np.empty((rows, len(joints), 6))
+    moving = bool(np.any(plant._current != 0.0))
+    rotations = np.empty((rows, len(joints), 3, 3)) if moving else None
+    for row, (q_k, v_k) in enumerate(zip(q, v)):
+        pin.forwardKinematics(model, data, q_k, v_k)
+        velocities[row] = [data.v[joint].vector for joint in joints]
+        if rotations is not None:
+            rotations[row] = [data.oMi[joint].rotation for joint in joints]
+    slots = plant._link_joint
+    twists = (stacked.motion_to_link @ velocities[:, slots, :, None])[..., 0]  # (N, L, 6)
+    relative = twists
+    if rotations is not None:  # nu_r = nu - [R^T v_c; 0]
+        relative = twists.copy()
+        relative[..., :3] -= plant._current @ (rotations[:, slots] @ stacked.rotations)
+    return (stacked.damping_wrenches(relative) * twists).reshape(rows, -1).sum(axis=1)
 
 
 # ------------------------------------------------------------------ the system of the one loop
@@ -271,7 +293,8 @@ class ActuatedPlantSystem:
         return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command)[1]
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
-        """The plant series (v, command, torques, energies, momentum) and the thrusters' and controller's."""
+        """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the
+        stored states after the loop: :meth:`series_info`) and the thrusters' and controller's."""
         v, thrusts, angles = self._split(x)
         passive = PlantSample(sample.rate, sample.command.arm, sample.dynamics)
         row = self._passive.record(t, q, v, passive)
@@ -285,8 +308,7 @@ class ActuatedPlantSystem:
         powers = thrusts * (self.thrusters.matrix.T @ nu)
         row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
                    thrust_power=float(np.sum(powers)), thruster_power_abs=float(np.sum(np.abs(powers))),
-                   motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]),
-                   damping_power=damping_power(self.plant, q, v), **sample.command.info)
+                   motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]), **sample.command.info)
         return row
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
@@ -295,6 +317,11 @@ class ActuatedPlantSystem:
 
     def series_info(self) -> dict:
         """{"thrust_bounds": (lower (n,), upper (n,) [N]), "plant_series": the energies and momentum of the stored
-        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`)}."""
+        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`), "actuation_series": the damping
+        power of the stored states (:meth:`derived_series`)}."""
         return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper),
-                "plant_series": self._passive.derived_series}
+                "plant_series": self._passive.derived_series, "actuation_series": self.derived_series}
+
+    def derived_series(self, q: np.ndarray, v: np.ndarray) -> dict[str, np.ndarray]:
+        """{"damping_power": (N,) [W]} of the stored states q (N, nq), v (N, nv) (:func:`damping_power`)."""
+        return {"damping_power": damping_power(self.plant, q, v)}
