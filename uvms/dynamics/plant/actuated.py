@@ -258,7 +258,7 @@ class ActuatedPlantSystem:
         thrust = np.zeros(self.thrusters.n) if command.thrust is None else np.asarray(command.thrust, dtype=float)
         fins = self.thrusters.fins.held if command.fins is None else np.asarray(command.fins, dtype=float)
         if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
-                or not (np.all(np.isfinite(arm)) and np.all(np.isfinite(thrust)) and np.all(np.isfinite(fins))):
+                or not (np.isfinite(arm).all() and np.isfinite(thrust).all() and np.isfinite(fins).all()):
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")
@@ -267,7 +267,9 @@ class ActuatedPlantSystem:
     def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
               fin_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
         v, thrusts, angles = self._split(x)
-        wrench = self.thrusters.wrench(thrusts) + self.thrusters.fin_wrench(q, v, angles)
+        wrench = self.thrusters.wrench(thrusts)
+        if self.m:  # (without fins their wrench is zero: not added)
+            wrench = wrench + self.thrusters.fin_wrench(q, v, angles)
         dynamics = self.plant.dynamics(q, v, arm, wrench)
         rates = [dynamics.acceleration, self.thrusters.rate(thrusts, thrust_command)]
         if self.m:
@@ -307,7 +309,7 @@ class ActuatedPlantSystem:
         # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu)
         powers = thrusts * (self.thrusters.matrix.T @ nu)
         row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
-                   thrust_power=float(np.sum(powers)), thruster_power_abs=float(np.sum(np.abs(powers))),
+                   thrust_power=float(powers.sum()), thruster_power_abs=float(np.abs(powers).sum()),
                    motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]), **sample.command.info)
         return row
 
