@@ -174,20 +174,21 @@ def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return np.zeros(rows)
     model, data, stacked = plant.model, plant.data, plant._stacked
     joints = plant._joints  # each joint once; the links' rows of it: plant._link_joint
-    velocities = np.empty((rows, len(joints), 6))
     moving = bool(np.any(plant._current != 0.0))
-    rotations = np.empty((rows, len(joints), 3, 3)) if moving else None
-    for row, (q_k, v_k) in enumerate(zip(q, v)):
+    velocities, rotations = [], []  # per row (K, 6) and (K, 3, 3): the joints' twists (local) and rotations
+    for q_k, v_k in zip(q, v):
         pin.forwardKinematics(model, data, q_k, v_k)
-        velocities[row] = [data.v[joint].vector for joint in joints]
-        if rotations is not None:
-            rotations[row] = [data.oMi[joint].rotation for joint in joints]
+        twists = data.v.tolist()  # one call for all joints (views of data: copied at once by np.array)
+        velocities.append(np.array([twists[joint].vector for joint in joints]))
+        if moving:
+            placed = data.oMi.tolist()
+            rotations.append(np.array([placed[joint].rotation for joint in joints]))
     slots = plant._link_joint
-    twists = (stacked.motion_to_link @ velocities[:, slots, :, None])[..., 0]  # (N, L, 6)
+    twists = (stacked.motion_to_link @ np.array(velocities)[:, slots, :, None])[..., 0]  # (N, L, 6)
     relative = twists
-    if rotations is not None:  # nu_r = nu - [R^T v_c; 0]
+    if moving:  # nu_r = nu - [R^T v_c; 0]
         relative = twists.copy()
-        relative[..., :3] -= plant._current @ (rotations[:, slots] @ stacked.rotations)
+        relative[..., :3] -= plant._current @ (np.array(rotations)[:, slots] @ stacked.rotations)
     return (stacked.damping_wrenches(relative) * twists).reshape(rows, -1).sum(axis=1)
 
 
