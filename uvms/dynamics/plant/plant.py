@@ -190,6 +190,12 @@ class Plant:
         return self._base_frame
 
     @property
+    def base_placement(self) -> pin.SE3:
+        """joint_M_base: the vehicle's root link frame in its vehicle joint's frame, the plant's own (not to be
+        changed; ``robot.base_placement`` looks it up and copies it at every read)."""
+        return self._base_placement
+
+    @property
     def stacked_links(self) -> StackedLinks:
         """The hydrodynamic links' parameters stacked as arrays (what the compiled terms read; not to be changed)."""
         return self._stacked
