@@ -204,6 +204,9 @@ class VehicleVelocityController:
         mismatch = needed - 0.5 * (applied0 + self._last[1])
         gain = -np.expm1(-dt / self.disturbance_time_constant)
         update = gain * (mismatch - self.disturbance)
+        if not self._short.any():  # the last allocation gave what was asked: the update on every axis
+            self.disturbance = self.disturbance + update
+            return self.disturbance
         winding = self._short * -update > 0.0  # the wrench would grow where the allocation already fell short
         self.disturbance = self.disturbance + np.where(winding, gain * self._short,
                                                        np.where(self._short != 0.0, 0.0, update))
@@ -225,7 +228,7 @@ class VehicleVelocityController:
                     arm_acceleration: np.ndarray) -> np.ndarray:
         """tau_model (6,) [N, N m]: the model's wrench for the vehicle rate ``reference_rate`` (6,), body FLU."""
         model = self.model
-        base_rate = model.robot.base_placement.act(pin.Motion(reference_rate)).vector  # base frame -> vehicle joint
+        base_rate = model.base_placement.act(pin.Motion(reference_rate)).vector  # base frame -> vehicle joint
         if not self.arm_feedforward:
             v = np.concatenate([v[:6], np.zeros(model.n_arm)])
             arm_acceleration = np.zeros(model.n_arm)

@@ -133,7 +133,10 @@ class SimulationResult:
             arrays.setdefault("position_error", tracking.position_error)
         if "thrust_bounds" in info:
             lower, upper = info["thrust_bounds"]
-            own = {name: arrays.pop(name) for name in ACTUATION_FIELDS}
+            own = {name: arrays.pop(name) for name in ACTUATION_FIELDS if name in arrays}
+            derive_actuation = info.get("actuation_series")  # the series of the stored states (damping power)
+            if derive_actuation is not None:
+                own.update(derive_actuation(arrays["q"], arrays["v"]))
             others = {name: arrays.pop(name) for name in list(arrays) if name not in SERIES}
             actuation = ActuationSeries(**own, lower=lower, upper=upper, controller=others)
         unknown = sorted(set(arrays) - set(SERIES))

@@ -20,7 +20,8 @@ PLANT_FIELDS = ("command", "joint_torque", "kinetic_energy", "potential_energy",
 PLANT_RECORDED = ("command", "joint_torque")
 #: The series of :class:`TrackingSeries` recorded per row (ee_position and desired_position are the result's).
 TRACKING_FIELDS = ("rates", "ee_velocity", "desired_velocity")
-#: The series an actuated plant records itself (:class:`ActuationSeries`); its controller's go to ``controller``.
+#: The series an actuated plant gives (:class:`ActuationSeries`: per row, damping_power derived from the stored states
+#: after the loop); its controller's go to ``controller``.
 ACTUATION_FIELDS = ("thrusts", "thrust_command", "body_wrench", "thrust_power", "thruster_power_abs", "motor_power",
                     "damping_power")
 #: The series of a plant with fins (:class:`uvms.dynamics.plant.actuated.ActuatedPlant`): their angles and command

@@ -390,3 +390,16 @@ def test_the_compiled_hydrodynamic_terms_are_the_link_by_link_rnea_with_external
         np.testing.assert_allclose(mass, expected_mass, rtol=1e-12, atol=1e-12 * np.abs(expected_mass).max())
         np.testing.assert_allclose(bias, expected_bias, rtol=1e-11, atol=1e-11 * np.abs(expected_bias).max())
         assert np.abs(bias - pin.rnea(robot.model, robot.model.createData(), q, v, np.zeros(robot.nv))).max() > 1.0
+
+
+def test_the_plant_keeps_its_robots_base_placement_once(monkeypatch):
+    """Plant.base_placement (the vehicle's root link in its joint's frame, read by the velocity loop's feedforward
+    every step) is the robot's, kept once: not looked up and copied per read as Robot.base_placement is."""
+    import pinocchio as pin
+
+    robot = shipped("bluerov2_alpha5")
+    placement = pin.SE3(pin.rpy.rpyToMatrix(0.1, -0.2, 0.3), np.array([0.4, -0.1, 0.2]))
+    monkeypatch.setattr(type(robot), "base_placement", property(lambda self: placement.copy()))
+    plant = Plant(robot)
+    assert plant.base_placement.isApprox(placement, 1e-15)
+    assert plant.base_placement is plant.base_placement

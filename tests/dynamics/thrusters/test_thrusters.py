@@ -5,12 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import uvms
 from uvms.control import OpenLoop
 from uvms.dynamics.hydro.hydrodynamics import HydroParameters
-from uvms.dynamics.plant.actuated import ActuatedPlant
+from uvms.dynamics.plant.actuated import ActuatedPlant, damping_power
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.thrusters import (
     allocation_matrix,
@@ -333,3 +334,26 @@ def test_thruster_rows_give_the_base_frame_placements_and_limits(tmp_path):
     np.testing.assert_allclose([row["direction"] for row in rows], FOUR_MATRIX[:3].T, atol=1e-12)
     assert [(row["max_forward"], row["max_reverse"], row["time_constant"]) for row in rows] == [
         (150, 120, 0.1), (150, 120, 0.2), (150, 120, 0.4), (300, 120, 0.05)]
+
+
+def test_damping_power_is_derived_from_the_stored_states_link_by_link(bluerov):
+    """The run's damping power, derived after the loop from the stored (q, v) of every row at once, is per row
+    sum_l f_D,l(nu_r,l) . nu_l with each link's twist from Pinocchio's frame velocity (in a current: nu_r != nu)."""
+    plant = Plant(bluerov, current=[0.3, -0.2, 0.1])
+    q0 = bluerov.configuration(base=[0, 0, 0, 0.1, -0.05, 0.2], arm=[3.0, 1.8, 1.8, 1.0, 0.005])
+    result = simulate(ActuatedPlant(plant, thrusters_of(bluerov)), sinusoids(bluerov.n_arm, 8), q0, 0.06, 0.01)
+    model, data = plant.model, plant.model.createData()
+    expected = []
+    for q, v in zip(result.q, result.v):
+        pin.forwardKinematics(model, data, q, v)
+        total = 0.0
+        for link in plant.links:
+            pin.updateFramePlacement(model, data, link.frame_id)
+            twist = pin.getFrameVelocity(model, data, link.frame_id, pin.LOCAL).vector
+            relative = twist - np.concatenate([data.oMf[link.frame_id].rotation.T @ plant.current, np.zeros(3)])
+            total += float(link.params.damping_wrench(relative) @ twist)
+        expected.append(total)
+    derived = damping_power(plant, result.q, result.v)  # (N,): every stored row at once
+    assert derived.shape == (len(result.t),) and np.abs(derived).max() > 1e-3
+    np.testing.assert_allclose(derived, expected, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(result.actuation.damping_power, derived)

@@ -161,12 +161,35 @@ def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: 
     return rate + (wanted - rate) / -np.expm1(-dt / np.asarray(time_constant, dtype=float))
 
 
-def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> float:
-    """Power [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water)."""
+def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Power (N,) [W] of the links' damping wrenches on the links, sum_l f_D,l . nu_l (<= 0 in still water), at the
+    stored states q (N, nq), v (N, nv): derived after the loop, not recorded per row.
+
+    Per row only Pinocchio's forward kinematics and the links' joints' twists (and rotations in a current) are
+    gathered; the links' twists and wrenches are then formed for all rows at once, each row's numbers those of
+    :meth:`uvms.dynamics.plant.plant.Plant._link_states` (the same operations per row).
+    """
+    rows = len(q)
     if not plant.damping or not plant.links:
-        return 0.0
-    links = plant._link_states(q, v)
-    return float((plant._stacked.damping_wrenches(links.relative) * links.twists).sum())
+        return np.zeros(rows)
+    model, data, stacked = plant.model, plant.data, plant._stacked
+    joints = plant._joints  # each joint once; the links' rows of it: plant._link_joint
+    moving = bool(np.any(plant._current != 0.0))
+    velocities, rotations = [], []  # per row (K, 6) and (K, 3, 3): the joints' twists (local) and rotations
+    for q_k, v_k in zip(q, v):
+        pin.forwardKinematics(model, data, q_k, v_k)
+        twists = data.v.tolist()  # one call for all joints (views of data: copied at once by np.array)
+        velocities.append(np.array([twists[joint].vector for joint in joints]))
+        if moving:
+            placed = data.oMi.tolist()
+            rotations.append(np.array([placed[joint].rotation for joint in joints]))
+    slots = plant._link_joint
+    twists = (stacked.motion_to_link @ np.array(velocities)[:, slots, :, None])[..., 0]  # (N, L, 6)
+    relative = twists
+    if moving:  # nu_r = nu - [R^T v_c; 0]
+        relative = twists.copy()
+        relative[..., :3] -= plant._current @ (np.array(rotations)[:, slots] @ stacked.rotations)
+    return (stacked.damping_wrenches(relative) * twists).reshape(rows, -1).sum(axis=1)
 
 
 # ------------------------------------------------------------------ the system of the one loop
@@ -236,7 +259,7 @@ class ActuatedPlantSystem:
         thrust = np.zeros(self.thrusters.n) if command.thrust is None else np.asarray(command.thrust, dtype=float)
         fins = self.thrusters.fins.held if command.fins is None else np.asarray(command.fins, dtype=float)
         if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
-                or not (np.all(np.isfinite(arm)) and np.all(np.isfinite(thrust)) and np.all(np.isfinite(fins))):
+                or not (np.isfinite(arm).all() and np.isfinite(thrust).all() and np.isfinite(fins).all()):
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")
@@ -245,7 +268,9 @@ class ActuatedPlantSystem:
     def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
               fin_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
         v, thrusts, angles = self._split(x)
-        wrench = self.thrusters.wrench(thrusts) + self.thrusters.fin_wrench(q, v, angles)
+        wrench = self.thrusters.wrench(thrusts)
+        if self.m:  # (without fins their wrench is zero: not added)
+            wrench = wrench + self.thrusters.fin_wrench(q, v, angles)
         dynamics = self.plant.dynamics(q, v, arm, wrench)
         rates = [dynamics.acceleration, self.thrusters.rate(thrusts, thrust_command)]
         if self.m:
@@ -271,7 +296,8 @@ class ActuatedPlantSystem:
         return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command)[1]
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
-        """The plant series (v, command, torques, energies, momentum) and the thrusters' and controller's."""
+        """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the
+        stored states after the loop: :meth:`series_info`) and the thrusters' and controller's."""
         v, thrusts, angles = self._split(x)
         passive = PlantSample(sample.rate, sample.command.arm, sample.dynamics)
         row = self._passive.record(t, q, v, passive)
@@ -284,9 +310,8 @@ class ActuatedPlantSystem:
         # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu)
         powers = thrusts * (self.thrusters.matrix.T @ nu)
         row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
-                   thrust_power=float(np.sum(powers)), thruster_power_abs=float(np.sum(np.abs(powers))),
-                   motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]),
-                   damping_power=damping_power(self.plant, q, v), **sample.command.info)
+                   thrust_power=float(powers.sum()), thruster_power_abs=float(np.abs(powers).sum()),
+                   motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]), **sample.command.info)
         return row
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
@@ -295,6 +320,11 @@ class ActuatedPlantSystem:
 
     def series_info(self) -> dict:
         """{"thrust_bounds": (lower (n,), upper (n,) [N]), "plant_series": the energies and momentum of the stored
-        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`)}."""
+        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`), "actuation_series": the damping
+        power of the stored states (:meth:`derived_series`)}."""
         return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper),
-                "plant_series": self._passive.derived_series}
+                "plant_series": self._passive.derived_series, "actuation_series": self.derived_series}
+
+    def derived_series(self, q: np.ndarray, v: np.ndarray) -> dict[str, np.ndarray]:
+        """{"damping_power": (N,) [W]} of the stored states q (N, nq), v (N, nv) (:func:`damping_power`)."""
+        return {"damping_power": damping_power(self.plant, q, v)}

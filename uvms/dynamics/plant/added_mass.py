@@ -84,9 +84,10 @@ class StackedLinks:
         return len(self.frames)
 
     def damping_wrenches(self, relative: np.ndarray) -> np.ndarray:
-        """The links' damping wrenches (L, 6) [N, N m] at their relative twists nu_r (L, 6): the stacked form of
+        """The links' damping wrenches (..., L, 6) [N, N m] at their relative twists nu_r (..., L, 6) (L links, any
+        leading axes: rows of a run): the stacked form of
         :meth:`uvms.dynamics.hydro.parameters.LinkHydrodynamics.damping_wrench`."""
-        linear = self.linear_damping + relative[:, :1] * self.forward_damping
+        linear = self.linear_damping + relative[..., :1] * self.forward_damping
         return -(linear + self.quadratic_damping * np.abs(relative)) * relative
 
     @classmethod

@@ -190,6 +190,12 @@ class Plant:
         return self._base_frame
 
     @property
+    def base_placement(self) -> pin.SE3:
+        """joint_M_base: the vehicle's root link frame in its vehicle joint's frame, the plant's own (not to be
+        changed; ``robot.base_placement`` looks it up and copies it at every read)."""
+        return self._base_placement
+
+    @property
     def stacked_links(self) -> StackedLinks:
         """The hydrodynamic links' parameters stacked as arrays (what the compiled terms read; not to be changed)."""
         return self._stacked
@@ -242,10 +248,17 @@ class Plant:
         base frame origin (:attr:`base_frame`: the thrusters')."""
         mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
         nb = self.nb
-        arm_acceleration = (command - v[nb:]) / self.motor_time_constant
-        base_acceleration = -numpy_solve(mass[:nb, :nb], mass[:nb, nb:] @ arm_acceleration + bias_forces[:nb])
-        torque = mass[nb:, :nb] @ base_acceleration + mass[nb:, nb:] @ arm_acceleration + bias_forces[nb:]
-        return PlantDynamics(np.concatenate([base_acceleration, arm_acceleration]), torque, mass)
+        acceleration = np.empty(len(v))  # [base; arm], filled in place (no concatenation)
+        base_acceleration, arm_acceleration = acceleration[:nb], acceleration[nb:]
+        np.subtract(command, v[nb:], arm_acceleration)
+        arm_acceleration /= self.motor_time_constant
+        rhs = mass[:nb, nb:] @ arm_acceleration
+        rhs += bias_forces[:nb]
+        np.negative(numpy_solve(mass[:nb, :nb], rhs), base_acceleration)
+        torque = mass[nb:, :nb] @ base_acceleration  # (M_mb a_b + M_mm a_m) + nbar_m, summed in this order
+        torque += mass[nb:, nb:] @ arm_acceleration
+        torque += bias_forces[nb:]
+        return PlantDynamics(acceleration, torque, mass)
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
