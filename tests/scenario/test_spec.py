@@ -27,8 +27,8 @@ def test_a_scenario_reads_into_frozen_sections_with_defaults_and_overrides():
 
 @pytest.mark.parametrize("overrides, message", [
     (["plant.current=[0.1, 0, 0]"], "plant.current needs a dynamic plant"),
-    (["plant.type=rigid", "solver.free_floating=true", "plant.gravity=true"], "plant.gravity, current and "
-                                                                                "hydrodynamics need"),
+    (["plant.type=rigid", "solver.free_floating=true", "plant.gravity=true"], "plant.gravity needs type = "
+                                                                                "'hydrodynamic'"),
     (["plant.type=rigid"], "plant.type = 'rigid' without thrusters leaves the vehicle passive"),
     (["vehicle_control.kp=50"], "vehicle_control.kp needs plant.thrusters = true"),
     (["excitation.seed=3"], "excitation.seed needs excitation.wrench"),

@@ -22,10 +22,9 @@ from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, Trajector
 from .actuated import Actuation, actuated_plant, make_actuation
 from .excitation import scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
-from .plant import make_plant
 from .record import scenario_model
 from .solver import scenario_solver, solver_damping, solver_weights
-from .spec import NUMBER, ScenarioSpec
+from .spec import NUMBER, PlantSpec, ScenarioSpec
 from .spec.keys import thaw
 
 
@@ -61,7 +60,7 @@ def build(spec: ScenarioSpec) -> Setup:
     trajectory = spec.trajectory.settings.trajectory(Configuration(robot, q0).pose(task.frame_id).copy())
     section, dt = spec.plant, spec.simulation.dt
     open_loop = section.thrusters and bool(spec.excitation.wrench)
-    plant = None if section.type == "kinematic" else make_plant(robot, section)
+    plant = None if section.settings is None else scenario_plant(robot, section)
     actuated = actuated_plant(plant, fins=not open_loop) if section.thrusters else None
     passive = plant is not None and actuated is None
     actuation = samples = inequalities = None
@@ -88,6 +87,19 @@ def build(spec: ScenarioSpec) -> Setup:
     return Setup(robot, task, trajectory, q0, controller if actuation is None else actuation.controller, duration,
                  residual, plant=plant, control_dt=float(section.control_dt) if passive else 0.0,
                  inequalities=inequalities, actuation=actuation, samples=samples)
+
+
+def scenario_plant(robot: Robot, section: PlantSpec) -> Plant:
+    """The free-floating plant of a dynamic ``[plant]`` (:meth:`uvms.dynamics.plant.plant.Plant.from_settings`).
+
+    Raises:
+        ScenarioError: what the plant refuses of the model, with the key's path (a fixed base, a hydrodynamics file
+            not of this model, a hydrodynamic plant of a model without hydrodynamic parameters).
+    """
+    try:
+        return Plant.from_settings(robot, section.settings)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant.{exc}") from None
 
 
 def build_sequence(robot: Robot, spec: ScenarioSpec, duration: float) -> Setup:
