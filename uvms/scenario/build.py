@@ -10,6 +10,7 @@ import numpy as np
 from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
 from ..control.tracking import TrackingController
+from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..numerics.integrate import stage_times, step_count
@@ -19,7 +20,7 @@ from ..solvers import initial_configuration
 from ..solvers.base import SolverFactory
 from ..tasks import FrameTask, MidRangePotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
-from .actuated import Actuation, actuated_plant, make_actuation
+from .actuated import Actuation, make_actuation
 from .excitation import scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
 from .record import scenario_model
@@ -60,8 +61,7 @@ def build(spec: ScenarioSpec) -> Setup:
     trajectory = spec.trajectory.settings.trajectory(Configuration(robot, q0).pose(task.frame_id).copy())
     section, dt = spec.plant, spec.simulation.dt
     open_loop = section.thrusters and bool(spec.excitation.wrench)
-    plant = None if section.settings is None else scenario_plant(robot, section)
-    actuated = actuated_plant(plant, fins=not open_loop) if section.thrusters else None
+    plant, actuated = scenario_plant(robot, section, fins=not open_loop)
     passive = plant is not None and actuated is None
     actuation = samples = inequalities = None
     if open_loop:  # the thrusters alone, as identification's logs have them
@@ -89,17 +89,31 @@ def build(spec: ScenarioSpec) -> Setup:
                  inequalities=inequalities, actuation=actuation, samples=samples)
 
 
-def scenario_plant(robot: Robot, section: PlantSpec) -> Plant:
-    """The free-floating plant of a dynamic ``[plant]`` (:meth:`uvms.dynamics.plant.plant.Plant.from_settings`).
+def scenario_plant(robot: Robot, section: PlantSpec, *, fins: bool) -> tuple[Plant | None, ActuatedPlant | None]:
+    """The free-floating plant of a dynamic ``[plant]`` (:meth:`uvms.dynamics.plant.plant.Plant.from_settings`) and,
+    with plant.thrusters, the plant with the model's thrusters (and with ``fins`` its fins:
+    :meth:`uvms.dynamics.plant.actuated.ActuatedPlant.of`); None on the kinematic plant.
 
     Raises:
-        ScenarioError: what the plant refuses of the model, with the key's path (a fixed base, a hydrodynamics file
-            not of this model, a hydrodynamic plant of a model without hydrodynamic parameters).
+        ScenarioError: what they refuse of the model, with the key's path (a fixed base, a hydrodynamics file not of
+            this model, a hydrodynamic plant of a model without hydrodynamic parameters; thrusters on a vehicle
+            that is not floating, a model without thrusters, a thruster on an arm link).
     """
+    if section.settings is None:
+        return None, None
     try:
-        return Plant.from_settings(robot, section.settings)
+        plant = Plant.from_settings(robot, section.settings)
     except UVMSError as exc:
         raise ScenarioError(f"plant.{exc}") from None
+    if not section.thrusters:
+        return plant, None
+    if robot.base_type != "floating":  # the actuated chain holds six degrees of freedom
+        raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
+                            f"base")
+    try:
+        return plant, ActuatedPlant.of(plant, fins=fins)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
 
 
 def build_sequence(robot: Robot, spec: ScenarioSpec, duration: float) -> Setup:
