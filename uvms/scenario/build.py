@@ -26,7 +26,6 @@ from .inequalities import ScenarioInequalities, build_inequalities
 from .record import scenario_model
 from .solver import scenario_solver, solver_damping, solver_weights
 from .spec import NUMBER, PlantSpec, ScenarioSpec
-from .spec.keys import thaw
 
 
 @dataclass
@@ -144,27 +143,19 @@ def scenario_start(robot: Robot, spec: ScenarioSpec) -> tuple[FrameTask | None, 
 
 
 def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple[np.ndarray, float]:
-    """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start."""
+    """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start (what the sections
+    need of each other is checked where the file is read: :func:`uvms.scenario.spec.scenario.check_initial`)."""
     initial = spec.initial
-    base = initial.base or None
     try:
-        q_given = robot.configuration(base=np.array(base) if base else None, arm=initial_arm(robot, initial.arm))
+        q_given = robot.configuration(base=np.array(initial.base) if initial.base else None,
+                                      arm=initial.arm or None)
     except UVMSError as exc:
         raise ScenarioError(f"initial.base/initial.arm: {exc}") from None
-    fixed = initial.fixed_base
     if initial.method == "given":
-        if fixed:
-            raise ScenarioError("initial.fixed_base holds vehicle coordinates during the optimization of q0: it needs "
-                                "initial.method = 'optimize' (with 'given', initial.base is used as it is)")
         return q_given, 0.0
-    trajectory = spec.trajectory
-    if not trajectory.start or not trajectory.orientation:
-        raise ScenarioError("initial.method = 'optimize' needs trajectory.start and trajectory.orientation")
-    if not all(isinstance(name, str) for name in fixed):
-        raise ScenarioError(f"initial.fixed_base must be a list of vehicle coordinate names "
-                            f"({', '.join(robot.base.pose_names) or 'none: the base is fixed'}), got {thaw(fixed)!r}")
-    task.set_target(np.concatenate([trajectory.start, trajectory.orientation]))
+    task.set_target(np.concatenate([spec.trajectory.start, spec.trajectory.orientation]))
     potential = MidRangePotential(robot, weights=np.asarray(spec.solver.joint_limit_weights, dtype=float))
+    fixed = initial.fixed_base
     try:
         result = initial_configuration(robot, task, potential, q_given, fixed_base=fixed)
     except (SolverInputError, NameNotFound) as exc:
@@ -175,29 +166,6 @@ def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple
         raise ScenarioError(f"no initial configuration reaches the trajectory start{held} "
                             f"(residual {result.residual:.3g})")
     return result.q, result.residual
-
-
-def initial_arm(robot: Robot, arm: tuple | dict) -> np.ndarray | None:
-    """initial.arm as arm joint values (n_arm,) [rad or m]: the list as given, or a table {joint = value} with the
-    joints left out at 0 (their neutral value); None when empty.
-
-    Raises:
-        ScenarioError: a table naming a joint that is not an arm joint (the valid ones listed), or a value that is
-            not a number.
-    """
-    if not arm:
-        return None
-    if isinstance(arm, (list, tuple)):
-        return np.array(arm, dtype=float)
-    names = robot.arm_joint_names
-    values = np.zeros(robot.n_arm)
-    for joint, value in arm.items():
-        if joint not in names:
-            raise ScenarioError(f"initial.arm names {joint!r}, which is not an arm joint; valid: {', '.join(names)}")
-        if isinstance(value, bool) or not isinstance(value, NUMBER):
-            raise ScenarioError(f"initial.arm.{joint} must be a number [rad or m], got {value!r}")
-        values[names.index(joint)] = value
-    return values
 
 
 def make_plant_controller(plant: Plant, task: FrameTask, trajectory, spec: ScenarioSpec, solver: SolverFactory,
