@@ -179,7 +179,7 @@ def test_cli_runs_a_plant_scenario(tmp_path):
         ("amundsen2018_hydro_open_loop", ["solver.free_floating=false"], "solver.free_floating = true"),
         ("amundsen2018_hydro_open_loop", ["solver.alpha=1.0"], "alpha and solver.enforce_limits are not supported"),
         ("amundsen2018_hydro_open_loop", ["solver.gain=[1, 2]"], "one number or 3"),
-        ("amundsen2018_rigid_open_loop", ["plant.gravity=true"], "need plant.type = 'hydrodynamic'"),
+        ("amundsen2018_rigid_open_loop", ["plant.gravity=true"], "plant.gravity needs type = 'hydrodynamic'"),
         ("amundsen2018_rigid_open_loop", ["plant.damping=true"], "a rigid plant has no fluid"),
         ("amundsen2018_rigid_open_loop", ["plant.type=kinematic"], "plant.gjm|plant.motor_feedforward.*dynamic plant"),
         ("hoang2011_gjm", ["plant.type=hydrodynamic"], "needs hydrodynamic parameters"),

@@ -71,3 +71,15 @@ def test_base_placement_puts_the_root_link_where_the_kinematics_does(rng):
         np.testing.assert_allclose((robot.base_pose(q) * placement).homogeneous, expected.homogeneous, atol=1e-12)
         placement.translation = np.full(3, 5.0)  # a copy: the model is not changed
         np.testing.assert_allclose(robot.fk(q, robot.root_link).homogeneous, expected.homogeneous, atol=1e-12)
+
+
+def test_configuration_takes_the_arm_as_a_table_of_joints_the_others_at_zero():
+    robot = uvms.load("hoang2011")
+    names = robot.arm_joint_names
+    q = robot.configuration(base=np.array([1.0, 2.0, 0.3]), arm={names[2]: -0.4, names[0]: 0.7})
+    np.testing.assert_array_equal(robot.arm_configuration(q), [0.7, 0.0, -0.4])
+    np.testing.assert_array_equal(q, robot.configuration(base=np.array([1.0, 2.0, 0.3]), arm=[0.7, 0.0, -0.4]))
+    with pytest.raises(uvms.errors.NameNotFound, match="unknown arm joint 'elbow'; valid names: q1, q2, q3"):
+        robot.configuration(arm={"elbow": 0.1})
+    with pytest.raises(uvms.errors.ConfigurationError, match="arm joint values must be a vector of 3 numbers"):
+        robot.configuration(arm={names[1]: "up"})

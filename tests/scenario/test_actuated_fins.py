@@ -57,7 +57,7 @@ def test_without_its_fins_the_torpedo_tilts_forty_times_more(tmp_path, monkeypat
     """The same run with the fins' plugins ignored: the propeller alone cannot hold the pitch that the tail's
     point masses and the hull's Munk moment give (0.04 rad against 2e-4 with the fins)."""
     with_fins = tilt(run_torpedo(tmp_path / "fins", NO_FIGURES))
-    monkeypatch.setattr(uvms.scenario.actuated, "fins_of", lambda robot: Fins())
+    monkeypatch.setattr(uvms.dynamics.plant.actuated, "fins_of", lambda robot: Fins())
     without = tilt(run_torpedo(tmp_path / "none", NO_FIGURES))
     assert with_fins < 1e-3 and without > 0.02, (with_fins, without)
 

@@ -88,7 +88,8 @@ def test_the_scenario_gives_the_mpc_its_settings():
      r"controller.type = 'mpc' commands the thrusters.*needs plant.type = 'hydrodynamic' and plant.thrusters = true, "
      r"got plant.type = 'kinematic' and plant.thrusters = false"),
     ("bluerov2_alpha5_intervention_mpc", ["plant.thrusters=false"], r"plant.thrusters = false"),
-    ("bluerov2_alpha5_intervention_mpc", ["plant.type=rigid"], r"got plant.type = 'rigid'"),
+    ("bluerov2_alpha5_intervention_mpc", ["plant.type=rigid", "plant.gravity=false", "plant.current=[]"],
+     r"got plant.type = 'rigid'"),
     ("bluerov2_alpha5_intervention", ["controller.horizon=5"],
      r"controller.horizon is a setting of the MPC; it needs controller.type = 'mpc' \(got 'solver'\)"),
     ("bluerov2_alpha5_intervention_mpc", ["controller.horizon=0"], r"horizon must be an integer >= 1"),

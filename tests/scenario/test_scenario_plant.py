@@ -1,4 +1,4 @@
-"""A scenario's dynamic plant (uvms.scenario.plant): plant.hydrodynamics loads a hydrodynamics YAML from the
+"""A scenario's dynamic plant (Plant.from_settings of [plant]): plant.hydrodynamics loads a hydrodynamics YAML from the
 scenario's folder (e.g. what uvms identify wrote) in place of the model's own."""
 
 from __future__ import annotations
@@ -56,7 +56,7 @@ def test_a_bad_plant_hydrodynamics_is_refused(tmp_path, value, message):
         build(read_scenario(scenario, [f"plant.hydrodynamics={value}"]))
 
 
-@pytest.mark.parametrize("plant, message", [("rigid", "plant.gravity, current and hydrodynamics need plant.type"),
+@pytest.mark.parametrize("plant, message", [("rigid", "plant.hydrodynamics needs type = 'hydrodynamic'"),
                                             ("kinematic", "plant.hydrodynamics needs a dynamic plant")])
 def test_plant_hydrodynamics_needs_the_hydrodynamic_plant(tmp_path, plant, message):
     scenario = tmp_path / "closed_loop.toml"

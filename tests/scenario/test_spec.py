@@ -27,11 +27,12 @@ def test_a_scenario_reads_into_frozen_sections_with_defaults_and_overrides():
 
 @pytest.mark.parametrize("overrides, message", [
     (["plant.current=[0.1, 0, 0]"], "plant.current needs a dynamic plant"),
-    (["plant.type=rigid", "solver.free_floating=true", "plant.gravity=true"], "plant.gravity, current and "
-                                                                                "hydrodynamics need"),
+    (["plant.type=rigid", "solver.free_floating=true", "plant.gravity=true"], "plant.gravity needs type = "
+                                                                                "'hydrodynamic'"),
     (["plant.type=rigid"], "plant.type = 'rigid' without thrusters leaves the vehicle passive"),
     (["vehicle_control.kp=50"], "vehicle_control.kp needs plant.thrusters = true"),
     (["excitation.seed=3"], "excitation.seed needs excitation.wrench"),
+    (["trajectory.orientation=[]"], "initial.method = 'optimize' needs trajectory.start and trajectory.orientation"),
 ])
 def test_sections_that_do_not_go_together_are_refused_where_the_file_is_read(overrides, message):
     """The plant's checks that need no model are the spec's (before, ``build`` found them after loading the

@@ -3,8 +3,6 @@ still reaches the target; its names are checked."""
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -16,7 +14,7 @@ from uvms.scenario.build import build
 from conftest import shipped
 
 
-def level_vehicle_scenario(fixed: list[str]) -> dict:
+def level_vehicle_scenario(fixed: list, method: str = "optimize") -> dict:
     """bluerov2_alpha5: q0 optimized to put the end effector on a pose reached with roll 0.05, pitch -0.03."""
     robot = shipped("bluerov2_alpha5")
     target = robot.fk(robot.configuration(base=np.array([0.2, 0.1, -0.1, 0.05, -0.03, 0.4]),
@@ -25,7 +23,7 @@ def level_vehicle_scenario(fixed: list[str]) -> dict:
            "trajectory": {"type": "line", "start": target.translation.tolist(),
                           "orientation": pin.rpy.matrixToRpy(target.rotation).tolist(),
                           "end_offset": [0.0, 0.0, 0.05], "duration": 1.0},
-           "initial": {"method": "optimize", "base": [0.0, 0.0, 0.0, 0.05, -0.03, 0.0], "fixed_base": fixed},
+           "initial": {"method": method, "base": [0.0, 0.0, 0.0, 0.05, -0.03, 0.0], "fixed_base": fixed},
            "simulation": {"dt": 0.05}}
     return scenario_from_raw(raw, "level.toml")
 
@@ -46,10 +44,11 @@ def test_initial_fixed_base_keeps_roll_and_pitch_and_still_reaches_the_target():
 def test_initial_fixed_base_names_are_checked():
     with pytest.raises(ScenarioError, match="unknown vehicle coordinate 'rol'; close names: roll"):
         build(level_vehicle_scenario(["rol"]))
-    scenario = level_vehicle_scenario(["roll"])
-    given = dataclasses.replace(scenario, initial=dataclasses.replace(scenario.initial, method="given"))
-    with pytest.raises(ScenarioError, match="initial.fixed_base .* needs initial.method = 'optimize'"):
-        build(given)
+    with pytest.raises(ScenarioError, match="level.toml: initial.fixed_base .* needs initial.method = 'optimize'"):
+        level_vehicle_scenario(["roll"], method="given")  # refused where the file is read
+    with pytest.raises(ScenarioError, match=r"level.toml: initial.fixed_base must be a list of vehicle coordinate "
+                                            r"names \(e.g. \['roll', 'pitch'\]\), got \[1\]"):
+        level_vehicle_scenario([1])
 
 
 def test_the_initial_configuration_does_not_depend_on_the_blas_threads():

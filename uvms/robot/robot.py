@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ConfigurationError, FrameNotFound, JointNotFound, NotARobot, UVMSError
+from ..errors import ConfigurationError, FrameNotFound, JointNotFound, NameNotFound, NotARobot, UVMSError
 from ..io import outputs
 from ..numerics.validate import finite_array
 from . import kinematics, urdf_export
@@ -237,10 +237,8 @@ class Robot(VehicleAccessors):
 
     @staticmethod
     def _refuse_rotation_part(what: str, joint_name: str, norm: float) -> None:
-        raise ConfigurationError(
-            f"{what}: the rotation part of joint {joint_name!r} has norm {norm:.6g}; it must be a "
-            f"unit quaternion / (cos, sin) pair — build q with robot.configuration()"
-        )
+        raise ConfigurationError(f"{what}: the rotation part of joint {joint_name!r} has norm {norm:.6g}; it must be a "
+                                 f"unit quaternion / (cos, sin) pair — build q with robot.configuration()")
 
     def neutral(self) -> np.ndarray:
         """The neutral configuration (vehicle at the origin, arm joints at zero)."""
@@ -248,13 +246,9 @@ class Robot(VehicleAccessors):
 
     def random_configuration(self, rng: np.random.Generator | int | None = None,
                              position_range: float = 1.0) -> np.ndarray:
-        """A configuration with arm joints uniform inside their limits.
-
-        Args:
-            rng: a numpy Generator or seed.
-            position_range: vehicle position uniform in [-r, r] per axis [m];
-                the vehicle attitude is uniform on SO(3) (floating) or in yaw (planar).
-        """
+        """A configuration with arm joints uniform inside their limits; ``rng``: a numpy Generator or seed; the
+        vehicle's position uniform in [-position_range, position_range] per axis [m], its attitude on SO(3)
+        (floating) or in yaw (planar)."""
         rng = np.random.default_rng(rng)
         lower, upper = self.arm_limits
         lower = np.where(np.isfinite(lower), lower, -np.pi)
@@ -270,21 +264,27 @@ class Robot(VehicleAccessors):
             base = None
         return self.configuration(base=base, arm=arm)
 
-    def configuration(self, base: np.ndarray | pin.SE3 | None = None, arm: np.ndarray | None = None) -> np.ndarray:
-        """Build q from a vehicle pose and arm joint values.
+    def configuration(self, base: np.ndarray | pin.SE3 | None = None,
+                      arm: np.ndarray | Mapping[str, float] | None = None) -> np.ndarray:
+        """q (nq,) from a vehicle pose and arm joint values.
 
         Args:
-            base: pose of the vehicle body in the world: [x, y, psi] (planar),
-                [x, y, z, roll, pitch, yaw] with R = Rz(yaw) Ry(pitch) Rx(roll)
-                (floating) [m, rad], or a ``pin.SE3``. None: at the origin.
-            arm: arm joint values (n_arm,) [rad or m]; None: zeros.
+            base: pose of the vehicle body in the world [m, rad]: [x, y, psi] (planar), [x, y, z, roll, pitch, yaw]
+                with R = Rz(yaw) Ry(pitch) Rx(roll) (floating), or a ``pin.SE3``; None: at the origin.
+            arm: arm joint values (n_arm,) [rad or m], or a table {arm joint: value} whose joints left out are at
+                0; None: zeros.
 
-        Returns:
-            q (nq,).
+        Raises:
+            NameNotFound: a table naming a joint that is not an arm joint; ConfigurationError: bad values.
         """
         q = self.neutral()
         if base is not None:
             q[: self.nq_vehicle] = self._vehicle_q(base)
+        if isinstance(arm, Mapping):
+            unknown = [joint for joint in arm if joint not in self.arm_joint_names]
+            if unknown:
+                raise NameNotFound("arm joint", str(unknown[0]), self.arm_joint_names)
+            arm = [arm.get(joint, 0.0) for joint in self.arm_joint_names]
         if arm is not None:
             arm = self.check_velocity(arm, self.n_arm, "arm joint values")
             for joint in self.arm_joints:

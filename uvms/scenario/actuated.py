@@ -23,8 +23,8 @@ from ..control.coordination import CoordinatedControl
 from ..control.station import actuated_control
 from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.plant import Plant
-from ..dynamics.thrusters.fins import Fins, fins_of
-from ..dynamics.thrusters.thrusters import Thrusters, thrusters_of
+from ..dynamics.thrusters.fins import Fins
+from ..dynamics.thrusters.thrusters import Thrusters
 from ..errors import ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
@@ -54,24 +54,6 @@ class Actuation:
     @property
     def fins(self) -> Fins:
         return self.actuated.fins
-
-
-def actuated_plant(plant: Plant, fins: bool = True) -> ActuatedPlant:
-    """The plant with the model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`) and, with
-    ``fins``, its fins.
-
-    Raises:
-        ScenarioError: a vehicle that is not floating, a model without thrusters (the message says where they go), a
-            thruster on an arm link.
-    """
-    robot = plant.robot
-    if robot.base_type != "floating":
-        raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
-                            f"base")
-    try:
-        return ActuatedPlant(plant, thrusters_of(plant.robot), fins=fins_of(plant.robot) if fins else None)
-    except UVMSError as exc:
-        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
 
 
 def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, spec: ScenarioSpec, solver: SolverFactory,

@@ -10,6 +10,7 @@ import numpy as np
 from ..control.gjm import GJMController
 from ..control.sequence import Phase, PhasePlan, SequenceController
 from ..control.tracking import TrackingController
+from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
 from ..numerics.integrate import stage_times, step_count
@@ -19,14 +20,12 @@ from ..solvers import initial_configuration
 from ..solvers.base import SolverFactory
 from ..tasks import FrameTask, MidRangePotential, VehicleTask
 from ..trajectory import PathTrajectory, RecentSamples, SE3Trajectory, TrajectoryTable
-from .actuated import Actuation, actuated_plant, make_actuation
+from .actuated import Actuation, make_actuation
 from .excitation import scenario_excitation
 from .inequalities import ScenarioInequalities, build_inequalities
-from .plant import make_plant
 from .record import scenario_model
 from .solver import scenario_solver, solver_damping, solver_weights
-from .spec import NUMBER, ScenarioSpec
-from .spec.keys import thaw
+from .spec import NUMBER, PlantSpec, ScenarioSpec
 
 
 @dataclass
@@ -61,8 +60,7 @@ def build(spec: ScenarioSpec) -> Setup:
     trajectory = spec.trajectory.settings.trajectory(Configuration(robot, q0).pose(task.frame_id).copy())
     section, dt = spec.plant, spec.simulation.dt
     open_loop = section.thrusters and bool(spec.excitation.wrench)
-    plant = None if section.type == "kinematic" else make_plant(robot, section)
-    actuated = actuated_plant(plant, fins=not open_loop) if section.thrusters else None
+    plant, actuated = scenario_plant(robot, section, fins=not open_loop)
     passive = plant is not None and actuated is None
     actuation = samples = inequalities = None
     if open_loop:  # the thrusters alone, as identification's logs have them
@@ -88,6 +86,33 @@ def build(spec: ScenarioSpec) -> Setup:
     return Setup(robot, task, trajectory, q0, controller if actuation is None else actuation.controller, duration,
                  residual, plant=plant, control_dt=float(section.control_dt) if passive else 0.0,
                  inequalities=inequalities, actuation=actuation, samples=samples)
+
+
+def scenario_plant(robot: Robot, section: PlantSpec, *, fins: bool) -> tuple[Plant | None, ActuatedPlant | None]:
+    """The free-floating plant of a dynamic ``[plant]`` (:meth:`uvms.dynamics.plant.plant.Plant.from_settings`) and,
+    with plant.thrusters, the plant with the model's thrusters (and with ``fins`` its fins:
+    :meth:`uvms.dynamics.plant.actuated.ActuatedPlant.of`); None on the kinematic plant.
+
+    Raises:
+        ScenarioError: what they refuse of the model, with the key's path (a fixed base, a hydrodynamics file not of
+            this model, a hydrodynamic plant of a model without hydrodynamic parameters; thrusters on a vehicle
+            that is not floating, a model without thrusters, a thruster on an arm link).
+    """
+    if section.settings is None:
+        return None, None
+    try:
+        plant = Plant.from_settings(robot, section.settings)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant.{exc}") from None
+    if not section.thrusters:
+        return plant, None
+    if robot.base_type != "floating":  # the actuated chain holds six degrees of freedom
+        raise ScenarioError(f"plant.thrusters = true needs a floating vehicle; {robot.name} has a {robot.base_type} "
+                            f"base")
+    try:
+        return plant, ActuatedPlant.of(plant, fins=fins)
+    except UVMSError as exc:
+        raise ScenarioError(f"plant.thrusters = true: {exc}") from None
 
 
 def build_sequence(robot: Robot, spec: ScenarioSpec, duration: float) -> Setup:
@@ -118,27 +143,19 @@ def scenario_start(robot: Robot, spec: ScenarioSpec) -> tuple[FrameTask | None, 
 
 
 def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple[np.ndarray, float]:
-    """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start."""
+    """q0 as given, or optimized (hoang2011 sec. 2.3) to put the frame at the trajectory start (what the sections
+    need of each other is checked where the file is read: :func:`uvms.scenario.spec.scenario.check_initial`)."""
     initial = spec.initial
-    base = initial.base or None
     try:
-        q_given = robot.configuration(base=np.array(base) if base else None, arm=initial_arm(robot, initial.arm))
+        q_given = robot.configuration(base=np.array(initial.base) if initial.base else None,
+                                      arm=initial.arm or None)
     except UVMSError as exc:
         raise ScenarioError(f"initial.base/initial.arm: {exc}") from None
-    fixed = initial.fixed_base
     if initial.method == "given":
-        if fixed:
-            raise ScenarioError("initial.fixed_base holds vehicle coordinates during the optimization of q0: it needs "
-                                "initial.method = 'optimize' (with 'given', initial.base is used as it is)")
         return q_given, 0.0
-    trajectory = spec.trajectory
-    if not trajectory.start or not trajectory.orientation:
-        raise ScenarioError("initial.method = 'optimize' needs trajectory.start and trajectory.orientation")
-    if not all(isinstance(name, str) for name in fixed):
-        raise ScenarioError(f"initial.fixed_base must be a list of vehicle coordinate names "
-                            f"({', '.join(robot.base.pose_names) or 'none: the base is fixed'}), got {thaw(fixed)!r}")
-    task.set_target(np.concatenate([trajectory.start, trajectory.orientation]))
+    task.set_target(np.concatenate([spec.trajectory.start, spec.trajectory.orientation]))
     potential = MidRangePotential(robot, weights=np.asarray(spec.solver.joint_limit_weights, dtype=float))
+    fixed = initial.fixed_base
     try:
         result = initial_configuration(robot, task, potential, q_given, fixed_base=fixed)
     except (SolverInputError, NameNotFound) as exc:
@@ -149,29 +166,6 @@ def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple
         raise ScenarioError(f"no initial configuration reaches the trajectory start{held} "
                             f"(residual {result.residual:.3g})")
     return result.q, result.residual
-
-
-def initial_arm(robot: Robot, arm: tuple | dict) -> np.ndarray | None:
-    """initial.arm as arm joint values (n_arm,) [rad or m]: the list as given, or a table {joint = value} with the
-    joints left out at 0 (their neutral value); None when empty.
-
-    Raises:
-        ScenarioError: a table naming a joint that is not an arm joint (the valid ones listed), or a value that is
-            not a number.
-    """
-    if not arm:
-        return None
-    if isinstance(arm, (list, tuple)):
-        return np.array(arm, dtype=float)
-    names = robot.arm_joint_names
-    values = np.zeros(robot.n_arm)
-    for joint, value in arm.items():
-        if joint not in names:
-            raise ScenarioError(f"initial.arm names {joint!r}, which is not an arm joint; valid: {', '.join(names)}")
-        if isinstance(value, bool) or not isinstance(value, NUMBER):
-            raise ScenarioError(f"initial.arm.{joint} must be a number [rad or m], got {value!r}")
-        values[names.index(joint)] = value
-    return values
 
 
 def make_plant_controller(plant: Plant, task: FrameTask, trajectory, spec: ScenarioSpec, solver: SolverFactory,

@@ -25,7 +25,6 @@ from ..dynamics.identification.data import IdentificationLog
 from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.command import Command, State
 from ..dynamics.plant.plant import Plant
-from ..dynamics.thrusters.thrusters import thrusters_of
 from ..errors import IdentificationError, ScenarioError, UVMSError
 from ..robot.robot import Robot
 from ..sim.loop import simulate
@@ -96,7 +95,7 @@ def excitation_run(robot: Robot, wrench: Multisine, q0: np.ndarray, duration: fl
         The run (with ``actuation.body_wrench``) and the actuated plant (its thrust bounds, to check saturation).
     """
     plant = Plant(robot, hydro, gravity=True, current=current)
-    actuated = ActuatedPlant(plant, thrusters_of(robot))
+    actuated = ActuatedPlant.of(plant, fins=False)
     controller = ExcitationControl(actuated, wrench, arm_amplitudes)
     return simulate(actuated, controller, q0, duration, dt, progress=False), actuated
 

@@ -32,8 +32,8 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import ConfigurationError, StepCountError, UVMSError
-from ..thrusters.fins import Fins
-from ..thrusters.thrusters import Thrusters, allocation_matrix
+from ..thrusters.fins import Fins, fins_of
+from ..thrusters.thrusters import Thrusters, allocation_matrix, thrusters_of
 from .command import Command, Controller, State, refuse_fields
 from .plant import Plant
 from .system import PlantDynamics, PlantSample, PlantSystem, check_finite_state
@@ -77,6 +77,17 @@ class ActuatedPlant:
         self.thrusts0 = f
         self.fins = Fins() if fins is None else fins
         self.m = len(self.fins)
+
+    @classmethod
+    def of(cls, plant: Plant, *, fins: bool = True) -> ActuatedPlant:
+        """``plant`` with its model's thrusters (:func:`uvms.dynamics.thrusters.thrusters.thrusters_of`) and, with
+        ``fins``, its fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), at rest at t = 0.
+
+        Raises:
+            ModelCheckError: a thruster on an arm link. UVMSError: a model without thrusters (the message says where
+                they go).
+        """
+        return cls(plant, thrusters_of(plant.robot), fins=fins_of(plant.robot) if fins else None)
 
     def fin_wrench(self, q: np.ndarray, v: np.ndarray, angles: np.ndarray) -> np.ndarray:
         """The fins' lift and drag (6,) [N, N m] at the base frame at the velocity v (nv,) and angles (m,) [rad]."""

@@ -71,6 +71,7 @@ from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
 from .command import Controller
+from .settings import PlantSettings
 from .system import PlantDynamics, PlantSystem
 
 
@@ -158,6 +159,36 @@ class Plant:
         # the compiled pass and its constants (the links' walks over data.J among them), made at the first
         # evaluation: numba loads there
         self._terms: tuple[Callable[..., None], tuple[np.ndarray, ...]] | None = None
+
+    @classmethod
+    def from_settings(cls, robot: Robot, settings: PlantSettings) -> Plant:
+        """The plant of ``robot`` that ``settings`` describe: a rigid one in vacuum, a hydrodynamic one with the
+        hydrodynamics of ``settings.hydrodynamics`` (a YAML file checked against the links) or else the model's own.
+
+        Raises:
+            UVMSError: a fixed base; a hydrodynamics file not of this model; a hydrodynamic plant of a model without
+                hydrodynamic parameters (each message begins with the setting it is about).
+        """
+        check_robot(robot, "Plant.from_settings")
+        if robot.base_type == "fixed":
+            raise UVMSError(f"type = {settings.type!r} needs a floating or planar vehicle; {robot.name} has a fixed "
+                            f"base (load it with a floating or planar base)")
+        tau = float(settings.motor_time_constant)
+        if settings.type == "rigid":
+            return cls(robot, HydroParameters(source="rigid plant (no fluid)"), gravity=False, motor_time_constant=tau,
+                       added_mass=False, damping=False)
+        try:
+            hydro = hydrodynamics_of(robot, settings.hydrodynamics) if settings.hydrodynamics else None
+        except UVMSError as exc:
+            raise UVMSError(f"hydrodynamics: {' '.join(str(exc).split())}") from None
+        plant = cls(robot, hydro, gravity=settings.gravity, motor_time_constant=tau,
+                    current=np.array(settings.current, dtype=float) if settings.current else None,
+                    added_mass=settings.added_mass is not False, damping=settings.damping is not False)
+        if not plant.links:
+            raise UVMSError(f"type = 'hydrodynamic' needs hydrodynamic parameters, and {robot.source} has none; add "
+                            f"a uuv_simulator block or hydrodynamics.yaml (see uvms.dynamics.hydro.hydrodynamics), "
+                            f"or use type = 'rigid'")
+        return plant
 
     def copy(self, *, current: np.ndarray | None = None) -> Plant:
         """A plant of the same robot, hydrodynamics and choices with buffers of its own (e.g. a controller's model),

@@ -8,20 +8,27 @@ from typing import Any, ClassVar
 
 from ...control.gjm import GJM_KINDS
 from ...control.settings import ActuatedSettings
+from ...dynamics.plant.settings import PLANT_KINDS, PlantSettings
 from ...errors import ScenarioError
 from .keys import NUMBER, NUMBERS, Section, SettingsSection, key
 
 #: The actuated chain's defaults: [vehicle_control]'s (its keys are ActuatedSettings' fields).
 CHAIN = ActuatedSettings()
+#: The free-floating plant's defaults: [plant]'s of the same names (PlantSettings' fields).
+PLANT = PlantSettings()
 
 #: [plant] types: the kinematic simulation (the vehicle follows momentum exactly, or is actuated), or the
 #: free-floating dynamics of uvms.dynamics.plant.plant without (rigid) or with (hydrodynamic) the model's hydrodynamics.
-PLANT_TYPES = ("kinematic", "rigid", "hydrodynamic")
+PLANT_TYPES = ("kinematic", *PLANT_KINDS)
 
 
 @dataclass(frozen=True, kw_only=True)
-class PlantSpec(Section):
-    """The ``[plant]`` section of a scenario, checked."""
+class PlantSpec(SettingsSection):
+    """The ``[plant]`` section of a scenario, checked: the free-floating plant's
+    :class:`~uvms.dynamics.plant.settings.PlantSettings` (none on the kinematic plant), and the keys of what drives
+    it (``gjm``, ``motor_feedforward`` and ``control_dt``: the GJM controller's; ``thrusters``)."""
+
+    SETTINGS: ClassVar[type] = PlantSettings
 
     ABOUT: ClassVar[str] = "What is integrated: kinematics (the default), or the free-floating dynamics."
     type: str = key('kinematic', str, allowed=PLANT_TYPES,
@@ -30,20 +37,28 @@ class PlantSpec(Section):
     gjm: str = key('rigid', str, allowed=GJM_KINDS,
         doc="the Jacobian the GJM controller inverts: `rigid` (generalized Jacobian), `added_mass` (with added-"
             "mass-augmented inertias) or `fixed_base` (the arm Jacobian, vehicle assumed still)")
-    motor_time_constant: float = key(0.1, NUMBER, doc="the joint servos' first-order time constant τ [s]")
+    motor_time_constant: float = key(PLANT.motor_time_constant, NUMBER,
+        doc="the joint servos' first-order time constant τ [s]")
     motor_feedforward: bool = key(False, bool, doc="invert the servo model (u = w + τ ẇ)")
     control_dt: float = key(0.0, NUMBER,
         doc="controller period [s], a multiple of `simulation.dt`; 0: evaluated at every integrator stage")
-    gravity: bool = key(False, bool, doc="`hydrodynamic`: weight and buoyancy")
-    added_mass: bool | None = key(None, bool, doc="`hydrodynamic`: added mass and its Coriolis term; absent: on")
-    damping: bool | None = key(None, bool, doc="`hydrodynamic`: linear and quadratic drag; absent: on")
-    current: tuple[float, ...] = key((), NUMBERS, doc="constant ocean current [m/s, world ENU]; `[]`: none")
+    gravity: bool = key(PLANT.gravity, bool, doc="`hydrodynamic`: weight and buoyancy")
+    added_mass: bool | None = key(PLANT.added_mass, bool,
+        doc="`hydrodynamic`: added mass and its Coriolis term; absent: on")
+    damping: bool | None = key(PLANT.damping, bool, doc="`hydrodynamic`: linear and quadratic drag; absent: on")
+    current: tuple[float, ...] = key(PLANT.current, NUMBERS,
+        doc="constant ocean current [m/s, world ENU]; `[]`: none")
     thrusters: bool = key(False, bool,
         doc="the vehicle is actuated by its thrusters and held by `[vehicle_control]` (needs `type = "
             '"hydrodynamic"` and a floating base)')
-    hydrodynamics: str = key('', str,
+    hydrodynamics: str = key(PLANT.hydrodynamics, str,
         doc="a hydrodynamics YAML (e.g. the one `uvms identify` writes) used instead of the model's own, a path "
             'inside the scenario\'s folder; `""`: the model\'s')
+
+    @property
+    def settings(self) -> PlantSettings | None:
+        """The free-floating plant's settings; None on the kinematic plant (no equations of motion)."""
+        return None if self.type == "kinematic" else super().settings
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -138,7 +153,7 @@ def check_plant(spec: Any, origin: str) -> None:
     Raises:
         ScenarioError: a sequence scenario with inequalities or a dynamic plant; a dynamic plant's key on the
             kinematic one; ``[vehicle_control]`` without thrusters, ``[excitation]`` without its wrench and thrusters;
-            a bad plant value; what the plant's controller cannot do (:func:`check_actuated`, :func:`check_passive`).
+            what the plant's controller cannot do (:func:`check_actuated`, :func:`check_passive`).
     """
     plant = spec.plant
     try:
@@ -163,7 +178,6 @@ def check_plant(spec: Any, origin: str) -> None:
             return
         if plant.thrusters and spec.controller.type != "mpc":  # the MPC checks its own (check_controller)
             check_actuated(spec)
-        check_plant_values(plant)
         if not plant.thrusters:
             check_passive(spec)
     except ScenarioError as exc:
@@ -212,22 +226,6 @@ def check_actuated(spec: Any) -> None:
     if plant.motor_feedforward or plant.control_dt:
         raise ScenarioError("plant.motor_feedforward and plant.control_dt are the GJM controller's; the actuated "
                             "chain runs its controller once per simulation.dt")
-
-
-def check_plant_values(plant: PlantSpec) -> None:
-    """A dynamic plant's values: the servos' time constant, the current, a rigid plant without fluid."""
-    if not plant.motor_time_constant > 0:
-        raise ScenarioError(f"plant.motor_time_constant must be > 0 s (the joint servos' time constant), got "
-                            f"{plant.motor_time_constant:g}")
-    if plant.current and len(plant.current) != 3:
-        raise ScenarioError(f"plant.current must have 3 numbers (world ENU [m/s]), got {len(plant.current)}")
-    if plant.type == "rigid":
-        for key in ("added_mass", "damping"):
-            if getattr(plant, key):
-                raise ScenarioError(f"plant.{key} = true needs plant.type = 'hydrodynamic'; a rigid plant has no fluid")
-        if plant.gravity or plant.current or plant.hydrodynamics:
-            raise ScenarioError("plant.gravity, current and hydrodynamics need plant.type = 'hydrodynamic' (buoyancy, "
-                                "fluid); a rigid plant floats weightless in vacuum")
 
 
 def check_passive(spec: Any) -> None:

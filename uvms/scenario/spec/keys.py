@@ -155,6 +155,10 @@ def check_value(name: str, value: Any, spec: Key, origin: str) -> Any:
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)}, got {value!r}")
     if isinstance(value, list) and kinds != (list,) and not all(is_number(v) for v in value):
         raise ScenarioError(f"{origin}: {name} must be {type_names(kinds)} of numbers, got {value!r}")
+    if isinstance(value, dict) and list in kinds:  # a table in place of a list of numbers: {name = number}
+        for item, entry in value.items():
+            if not is_number(entry):
+                raise ScenarioError(f"{origin}: {name}.{item} must be a number, got {entry!r}")
     if name != "model.args":  # xacro args are checked by the model (uvms.model.checks)
         check_range(name, value, origin, spec.bound)
     if allowed is not None and value not in allowed:

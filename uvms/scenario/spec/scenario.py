@@ -12,7 +12,7 @@ from ...io.names import NAME_RULE, is_plain_name
 from ...tasks.objectives import check_table, file_keys
 from .controller import ControllerSpec, check_controller
 from .dynamics import ExcitationSpec, PlantSpec, VehicleControlSpec, check_plant
-from .keys import Key, Section, check_range
+from .keys import Key, Section, check_range, thaw
 from .sections import (
     InitialSpec,
     LabelSpec,
@@ -127,6 +127,7 @@ def check_scenario(raw: Mapping, path: Path) -> ScenarioSpec:
     spec = ScenarioSpec(path=Path(path), **checked)
     check_controller(spec, origin)
     check_plant(spec, origin)
+    check_initial(spec, origin)
     if spec.scenario.name:
         check_name("scenario.name", spec.scenario.name, origin, "it names the default output folder out/<name>",
                    example="hoang2011_w1")
@@ -134,6 +135,25 @@ def check_scenario(raw: Mapping, path: Path) -> ScenarioSpec:
         check_name("outputs.animation", spec.outputs.animation, origin, "it names a file inside the output folder",
                    ANIMATION_SUFFIXES, example="grip.gif")
     return spec
+
+
+def check_initial(spec: ScenarioSpec, origin: str) -> None:
+    """``[initial]`` with what it needs of the other sections: ``fixed_base`` (a list of names) only to optimize q0,
+    which needs the trajectory's start and orientation (a sequence scenario's build refuses 'optimize' itself).
+
+    Raises:
+        ScenarioError: what does not go together, naming the file.
+    """
+    initial, trajectory = spec.initial, spec.trajectory
+    fixed = initial.fixed_base
+    if initial.method == "given" and fixed:
+        raise ScenarioError(f"{origin}: initial.fixed_base holds vehicle coordinates during the optimization of q0: it "
+                            f"needs initial.method = 'optimize' (with 'given', initial.base is used as it is)")
+    if not all(isinstance(name, str) for name in fixed):
+        raise ScenarioError(f"{origin}: initial.fixed_base must be a list of vehicle coordinate names (e.g. "
+                            f"['roll', 'pitch']), got {thaw(fixed)!r}")
+    if initial.method == "optimize" and not spec.phases and not (trajectory.start and trajectory.orientation):
+        raise ScenarioError(f"{origin}: initial.method = 'optimize' needs trajectory.start and trajectory.orientation")
 
 
 def check_inequalities(tables: object, origin: str) -> tuple[InequalitySpec, ...]:
