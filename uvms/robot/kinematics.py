@@ -164,3 +164,13 @@ def manipulability_of(jacobian: np.ndarray) -> float:
     """Yoshikawa's manipulability sqrt(det(J J^T)), computed as the product of singular values."""
     singular_values = np.linalg.svd(jacobian, compute_uv=False)
     return float(np.prod(singular_values[: min(jacobian.shape)]))
+
+
+def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
+    """Potential energy [J] of the weight of every body, -m g . c (m the total mass [kg], c (3,) its centre [m]).
+
+    ``pin.computePotentialEnergy`` sums the same -m_i g . c_i per body but refuses mimic joints;
+    ``pin.centerOfMass`` places the mimic bodies by their mimic relation.
+    """
+    center = pin.centerOfMass(model, data, q)
+    return -float(data.mass[0]) * float(model.gravity.linear @ center)

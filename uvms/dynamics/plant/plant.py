@@ -37,12 +37,10 @@ Pinocchio's link inertias for ABA. With M_A in Mbar the base rows give
 
 a solve of the vehicle's 6 x 6 (3 x 3 planar) block.
 
-Conserved quantities. With no current, damping or gravity, the base rows of
-Mbar v are the total momentum (rigid + added mass) expressed in the base frame,
-and the joints exert only internal wrenches, so the *added-mass-augmented* momentum
-sum_l X_l^* (I_l + M_A,l) nu_l is conserved; with M_A = 0 it is the rigid momentum
-behind the generalized Jacobian. :func:`generalized_jacobian_added_mass` is the GJM
-of that augmented momentum.
+Conserved quantities. With no current, damping or gravity, the base rows of Mbar v are the total momentum (rigid +
+added mass) expressed in the base frame, and the joints exert only internal wrenches, so the *added-mass-augmented*
+momentum sum_l X_l^* (I_l + M_A,l) nu_l is conserved; with M_A = 0 it is the rigid momentum behind the generalized
+Jacobian. :func:`generalized_jacobian_added_mass` is the GJM of that augmented momentum.
 
 Mimic joints (a gripper's second finger; ``pin.buildModelFromXML(..., mimic=True)``): q and v hold only the
 driving joints' coordinates, and Pinocchio's ``crba``, ``rnea`` (with ``fext``), Jacobians and centroidal map
@@ -50,10 +48,10 @@ expand them through the mimic relation (q_mimic = scaling q_driver + offset): M 
 h = G^T h_full, G (nv_full, nv) the mimic's multiplier in its driver's column (tests/dynamics/plant/test_plant_mimic.py
 checks both against the model without mimics). ``computePotentialEnergy``, ``computeKineticEnergy`` and ``aba``
 refuse mimic joints, so the plant calls none of them: the kinetic energy is 1/2 v^T M v, the weight's potential
--m g . c from the centre of mass (:func:`weight_potential`).
+-m g . c from the centre of mass (:func:`uvms.robot.kinematics.weight_potential`).
 
-The links on the model, M_A in the mass matrix, C_A and the GJM of the augmented
-momentum live in :mod:`uvms.dynamics.plant.added_mass` (importable from here too).
+The links on the model, M_A in the mass matrix, C_A and the GJM of the augmented momentum live in
+:mod:`uvms.dynamics.plant.added_mass` (importable from here too).
 """
 
 from __future__ import annotations
@@ -66,23 +64,13 @@ import pinocchio as pin
 from ...errors import UVMSError
 from ...numerics.lapack import numpy_solve
 from ...robot.configuration import Configuration
-from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
+from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split, weight_potential
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
 from .command import Controller
 from .settings import PlantSettings
 from .system import PlantDynamics, PlantSystem
-
-
-def weight_potential(model: pin.Model, data: pin.Data, q: np.ndarray) -> float:
-    """Potential energy [J] of the weight of every body, -m g . c (m the total mass [kg], c (3,) its centre [m]).
-
-    ``pin.computePotentialEnergy`` sums the same -m_i g . c_i per body but refuses mimic joints;
-    ``pin.centerOfMass`` places the mimic bodies by their mimic relation.
-    """
-    center = pin.centerOfMass(model, data, q)
-    return -float(data.mass[0]) * float(model.gravity.linear @ center)
 
 
 class Plant:
