@@ -36,3 +36,18 @@ def test_priorities_that_are_not_wrench_axes_are_refused_where_the_file_is_read(
         read_scenario("bluerov2_alpha5_station_saturated", ['vehicle_control.priorities=[["surge"]]'])
     assert ActuatedSettings(priorities=[["x", "y"], ["yaw"]]).priorities == (("x", "y"), ("yaw",))
     assert np.isclose(ActuatedSettings(bandwidth=[1, 2, 3, 4, 5, 6]).bandwidth[2], 3.0)
+
+
+@pytest.mark.parametrize(("override", "message"), [
+    ("vehicle_control.kp=-1", r"vehicle_control.kp must be a number or 6 numbers >= 0"),
+    ("vehicle_control.ki=[1, 2, 3]", r"vehicle_control.ki must be a number or 6 numbers >= 0"),
+    ("vehicle_control.bandwidth=0", r"vehicle_control.bandwidth must be a number or 6 numbers > 0"),
+    ("vehicle_control.damping_ratio=[1, 1, 1, 1, 1, -1]", r"vehicle_control.damping_ratio must be .* > 0"),
+    ("vehicle_control.pose_gains=-0.5", r"vehicle_control.pose_gains must be .* >= 0"),
+    ("vehicle_control.max_speed=-1", r"vehicle_control.max_speed must be .* >= 0"),
+])
+def test_gains_out_of_their_range_are_refused_where_the_file_is_read(override, message):
+    """A gain is checked when the settings are made: the scenario names the key before any model is loaded."""
+    with pytest.raises(ScenarioError, match=rf"station_saturated.toml: {message}"):
+        read_scenario("bluerov2_alpha5_station_saturated", [override])
+    assert ActuatedSettings(kp=0.0, max_speed=None).kp == 0.0  # zero gains and no speed bound are valid

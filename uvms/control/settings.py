@@ -8,6 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields
 
+import numpy as np
+
 from ..errors import SolverInputError
 from ..robot.conventions import AXIS_NAMES
 
@@ -25,13 +27,27 @@ DEFAULT_DISTURBANCE_TIME_CONSTANT = 0.1
 Gain = float | tuple[float, ...]
 
 
+def gain_vector(value: float | np.ndarray, what: str, size: int = 6, *, positive: bool = False) -> np.ndarray:
+    """A diagonal gain (size,) >= 0 (``positive``: > 0, e.g. a bandwidth) from a number or ``size`` numbers.
+
+    Raises:
+        SolverInputError: not finite, negative (``positive``: not > 0) or of the wrong size.
+    """
+    array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy() if np.ndim(value) == 0 \
+        else np.asarray(value, dtype=float)
+    if array.shape != (size,) or not np.all(np.isfinite(array)) or np.any(array <= 0 if positive else array < 0):
+        raise SolverInputError(f"{what} must be a number or {size} numbers {'> 0' if positive else '>= 0'} (a "
+                               f"diagonal gain, one per axis), got {value!r}")
+    return array
+
+
 @dataclass(frozen=True, kw_only=True)
 class ActuatedSettings:
     """How the actuated chain holds the vehicle and coordinates the arm (the defaults hold the BlueROV2 + Alpha 5 in
     a 0.3 m/s current to 5 cm and a 1.9 t RexROV-sized vehicle to 3 mm: tests/control/test_vehicle_gains.py).
 
-    A gain is one number (every axis) or 6, one per body axis (FLU: x, y, z, roll, pitch, yaw); the values are
-    checked where they are used (:mod:`uvms.control.vehicle`), the priorities here.
+    A gain is one number (every axis) or 6, one per body axis (FLU: x, y, z, roll, pitch, yaw). Every value is
+    checked here, when the settings are made (a scenario's ``[vehicle_control]``: when the file is read).
 
     Attributes:
         kp: velocity loop's proportional gains [N s/m, N m s/rad]; None: kp = 2 zeta omega M_ii from
@@ -76,6 +92,12 @@ class ActuatedSettings:
         for name in ("kp", "ki", "bandwidth", "damping_ratio", "pose_gains", "max_speed"):
             if isinstance(getattr(self, name), list):  # frozen: a list given is kept as a tuple
                 object.__setattr__(self, name, tuple(getattr(self, name)))
+        for name in ("kp", "ki", "pose_gains", "max_speed"):  # >= 0 (None: derived, or no bound)
+            if getattr(self, name) is not None:
+                gain_vector(getattr(self, name), name)
+        for name in ("bandwidth", "damping_ratio"):
+            gain_vector(getattr(self, name), name, positive=True)
+        gain_vector(self.disturbance_time_constant, "disturbance_time_constant", 1)
         groups = self.priorities
         if not all(isinstance(group, (list, tuple)) and group and all(axis in AXIS_NAMES for axis in group)
                    for group in groups):

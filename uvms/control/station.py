@@ -56,9 +56,9 @@ from ..tasks.task import Task
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, vehicle_rates_for_task
-from .settings import ActuatedSettings
+from .settings import ActuatedSettings, gain_vector
 from .tightening import Tightening
-from .vehicle import VehiclePoseController, VehicleVelocityController, gain_vector
+from .vehicle import VehiclePoseController, VehicleVelocityController
 
 
 class GivenColumns(Task):

@@ -54,21 +54,7 @@ from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import AllocationResult, ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
 from ..errors import SolverInputError
-from .settings import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, ActuatedSettings
-
-
-def gain_vector(value: float | np.ndarray, what: str, size: int = 6, *, positive: bool = False) -> np.ndarray:
-    """A diagonal gain (size,) >= 0 (``positive``: > 0, e.g. a bandwidth) from a number or ``size`` numbers.
-
-    Raises:
-        SolverInputError: not finite, negative (``positive``: not > 0) or of the wrong size.
-    """
-    array = np.broadcast_to(np.asarray(value, dtype=float), (size,)).copy() if np.ndim(value) == 0 \
-        else np.asarray(value, dtype=float)
-    if array.shape != (size,) or not np.all(np.isfinite(array)) or np.any(array <= 0 if positive else array < 0):
-        raise SolverInputError(f"{what} must be a number or {size} numbers {'> 0' if positive else '>= 0'} (a "
-                               f"diagonal gain, one per axis), got {value!r}")
-    return array
+from .settings import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, ActuatedSettings, gain_vector
 
 
 def vehicle_inertia(model: Plant, q: np.ndarray) -> np.ndarray:
