@@ -43,3 +43,28 @@ def test_the_euler_feedforward_is_the_rate_of_the_target_rpy(rng):
         assert np.array_equal(feedforward[:3], twist[:3])
         assert np.allclose(feedforward[3:], (later - earlier) / (2 * h), atol=1e-8)
         assert np.any(feedforward[3:] != 0.0) == np.any(omega != 0.0)
+
+
+def test_a_task_following_a_trajectorys_arrays_has_the_terms_of_its_pose_and_keeps_no_view_of_a_set_pose(rng):
+    """``follow`` takes the arrays as they are (the rpy given, not recomputed); ``set_target`` copies the pose."""
+    import pinocchio as pin
+
+    robot = uvms.load("bluerov2_alpha5")
+    for orientation in ("euler", "log"):
+        by_pose, by_arrays = (uvms.FrameTask(robot, orientation=orientation) for _ in range(2))
+        pose, twist = robot.fk(robot.random_configuration(rng)), rng.normal(size=6)
+        by_pose.set_target(pose)
+        by_pose.set_target_velocity(twist)
+        rotation = np.asfortranarray(pose.rotation)
+        by_arrays.follow(pose.translation.copy(), rotation, twist, pin.rpy.matrixToRpy(rotation))
+        state = Configuration(robot, robot.random_configuration(rng))
+        for ours, theirs in zip(by_arrays.terms(state), by_pose.terms(state)):
+            assert np.array_equal(ours, theirs)
+        assert np.array_equal(by_arrays.target.homogeneous, pose.homogeneous)
+        assert by_arrays.target_terms()[1] is rotation  # taken as it is, not copied
+        before = pose.translation.copy()
+        pose.translation[0] += 1.0  # the caller's pose changes: the task's target does not
+        assert np.array_equal(by_pose.target.translation, before)
+    task = uvms.FrameTask(robot, orientation="euler")
+    task.follow(np.zeros(3), np.eye(3), np.zeros(6), np.array([0.1, 0.2, 0.3]))  # a given rpy is the one used
+    assert np.array_equal(task.target_terms()[2], [0.1, 0.2, 0.3])

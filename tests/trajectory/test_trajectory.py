@@ -244,3 +244,29 @@ def test_a_trajectory_table_gives_the_trajectorys_samples_and_evaluates_other_ti
             sample, expected = table(t), trajectory(t)
             assert np.array_equal(sample.pose.homogeneous, expected.pose.homogeneous)
             assert np.array_equal(sample.twist, expected.twist)
+
+
+def test_a_trajectory_tables_targets_are_its_samples_arrays_with_their_rpy_in_a_poses_layout():
+    from uvms.trajectory import RecentSamples, TrajectoryTable
+
+    circle = PathTrajectory(CirclePath([0.0, 2.0, 0.0], [0.0, -2.0, 0.0]), LAWS[0], orientation=[0.3, -0.2, 1.0])
+    se3 = SE3Trajectory([0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.5, 0.3, -0.2, 1.0], LAWS[2])  # without `at`
+    times = [k * 0.02 for k in range(200)]
+    samples = circle.at(np.array(times))
+    assert np.array_equal(samples.rpy, np.tile(pin.rpy.matrixToRpy(circle.rotation), (200, 1)))
+    for trajectory in (circle, se3):
+        table = TrajectoryTable(trajectory, times)
+        for t in (times[0], times[77], 0.0123):  # two in the table (of the circle), one outside it
+            expected = trajectory(t)
+            for source, tabled in ((table, True), (RecentSamples(table), True), (RecentSamples(trajectory), False)):
+                translation, rotation, twist, rpy = source.target(t)
+                assert np.array_equal(translation, expected.pose.translation)
+                assert np.array_equal(rotation, expected.pose.rotation)
+                assert np.array_equal(twist, expected.twist)
+                if not (tabled and trajectory is circle and t != 0.0123):
+                    assert rpy is None  # the task computes it
+                    continue
+                assert np.array_equal(rpy, pin.rpy.matrixToRpy(expected.pose.rotation))
+                # a pose's layout (what a compiled step was built for), writeable: a row of the table's own arrays
+                assert rotation.flags.f_contiguous and translation.flags.c_contiguous and twist.flags.writeable
+                assert not np.shares_memory(translation, samples.translations)

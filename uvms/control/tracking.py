@@ -31,20 +31,19 @@ class TrackingController:
                  levels: Sequence) -> None:
         self.robot, self.task, self.samples = robot, task, samples
         self.solver = solver(levels)  # its inputs checked here, not at every evaluation
-        self._current = None  # the sample the task points at
+        self._time: float | None = None  # the time of the target the task points at
         self._configuration: Configuration | None = None  # built at the first call
 
     def reset(self, state: State, t: float = 0.0) -> None:
-        """Forget the sample the task points at (the configuration kept is moved at every call)."""
-        self._current = None
+        """Forget the target the task points at (the configuration kept is moved at every call)."""
+        self._time = None
 
     def follow(self, t: float) -> None:
-        """Point the task at the trajectory's pose and twist of time t [s]."""
-        sample = self.samples(t)
-        if sample is not self._current:
-            self.task.set_target(sample.pose)
-            self.task.set_target_velocity(sample.twist, check=False)  # a trajectory's sample: finite, (6,)
-            self._current = sample
+        """Point the task at the trajectory's pose and twist of time t [s] (a trajectory is a function of time:
+        the same t, the same target; a table's rows are taken without building a sample)."""
+        if t != self._time:
+            self.task.follow(*self.samples.target(t))
+            self._time = t
 
     def command(self, state: State, t: float) -> Command:
         """``Command(velocity=v (nv,), info=the SolverResult: sigma_min, damping, limits_active, ...)`` at (t, q);

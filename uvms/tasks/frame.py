@@ -59,24 +59,45 @@ class FrameTask(Task):
         self._all_rows = bool(np.array_equal(self.rows, np.arange(6)))
         self.dim = len(self.rows)
         self.orientation = orientation
-        self.target: pin.SE3 | None = None
+        self._translation: np.ndarray | None = None  # the target pose's arrays (3,) [m], (3, 3)
+        self._rotation: np.ndarray | None = None
+        self._target_rpy: np.ndarray | None = None  # its rpy [rad] when the setter knew them
         self.target_twist = np.zeros(6)
         self._target_parts: tuple | None = None  # what terms() reads of the target, once per set_target
         if target is not None:
             self.set_target(target)
 
+    @property
+    def target(self) -> pin.SE3 | None:
+        """The target pose (a new ``pin.SE3`` at each read), None before one is set."""
+        return None if self._rotation is None else pin.SE3(self._rotation, self._translation)
+
     def set_target(self, target: pin.SE3 | Sequence[float]) -> None:
         """Set the target pose (``pin.SE3`` or [x, y, z, roll, pitch, yaw])."""
+        if not isinstance(target, pin.SE3):
+            try:
+                values = finite_array(target, "a target pose", (6,))
+            except UVMSError:  # the message of a pose: what the six numbers are, and that a pin.SE3 serves
+                raise UVMSError(f"a target pose must be a pin.SE3 or 6 finite numbers [x, y, z, roll, pitch, yaw], "
+                                f"got {target!r}") from None
+            target = pose_from_xyzrpy(values)
+        # copies (a pose's arrays are views of it), the rotation in its layout (column-major)
+        self._translation, self._rotation = target.translation.copy(), target.rotation.copy(order="K")
+        self._target_rpy = None
         self._target_parts = None
-        if isinstance(target, pin.SE3):
-            self.target = target.copy()
-            return
-        try:
-            values = finite_array(target, "a target pose", (6,))
-        except UVMSError:  # the message of a pose: what the six numbers are, and that a pin.SE3 serves
-            raise UVMSError(f"a target pose must be a pin.SE3 or 6 finite numbers [x, y, z, roll, pitch, yaw], "
-                            f"got {target!r}") from None
-        self.target = pose_from_xyzrpy(values)
+
+    def follow(self, translation: np.ndarray, rotation: np.ndarray, twist: np.ndarray,
+               rpy: np.ndarray | None = None) -> None:
+        """Set the target pose and twist from a trajectory's arrays, taken as they are (neither copied nor checked:
+        a trajectory table's rows, which no one writes; the one loop refuses any non-finite velocity).
+
+        Args:
+            translation: p_d (3,) [m]; rotation: R_d (3, 3); twist: [v; omega] (6,) in world axes [m/s, rad/s].
+            rpy: the roll-pitch-yaw of R_d (3,) [rad] when the caller has them (else computed when needed).
+        """
+        self._translation, self._rotation, self._target_rpy = translation, rotation, rpy
+        self.target_twist = twist
+        self._target_parts = None
 
     def set_target_velocity(self, twist: Sequence[float], *, check: bool = True) -> None:
         """Set the target twist [v; omega] (6,) in world axes (feedforward).
@@ -96,9 +117,9 @@ class FrameTask(Task):
         self._target_parts = None
 
     def _target(self) -> pin.SE3:
-        if self.target is None:
+        if self._rotation is None:
             raise UVMSError(f"frame task on {self.frame!r} has no target: call set_target() first")
-        return self.target
+        return self.target  # type: ignore[return-value]
 
     def full_error(self, state: Configuration) -> np.ndarray:
         """All six error rows (6,): position then orientation."""
@@ -154,13 +175,14 @@ class FrameTask(Task):
             UVMSError: no target set.
         """
         if self._target_parts is None:
-            target = self._target()
-            rotation = target.rotation
+            translation, rotation = self._translation, self._rotation
+            if rotation is None:
+                self._target()  # raises: no target
             if self.orientation == "log":
-                self._target_parts = (target.translation, rotation, None, self.target_twist[self.rows])
+                self._target_parts = (translation, rotation, None, self.target_twist[self.rows])
             else:
-                target_rpy = matrixToRpy(rotation)
-                self._target_parts = (target.translation, rotation, target_rpy,
+                target_rpy = matrixToRpy(rotation) if self._target_rpy is None else self._target_rpy
+                self._target_parts = (translation, rotation, target_rpy,
                                       self._euler_feedforward(target_rpy)[self.rows])
         return self._target_parts
 

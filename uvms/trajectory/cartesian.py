@@ -136,15 +136,20 @@ class PoseSample:
 @dataclass(frozen=True)
 class PoseSamples:
     """A pose trajectory at N times: positions (N, 3) [m], rotations (N, 3, 3), twists [v; omega] (N, 6) and
-    accelerations (N, 6) in world axes (read-only arrays: a sample's arrays are views of them)."""
+    accelerations (N, 6) in world axes, and the roll-pitch-yaw of each rotation (N, 3) [rad] (given by a producer
+    that knows them, else ``matrixToRpy`` of each row) (read-only arrays: a sample's arrays are views of them)."""
 
     translations: np.ndarray
     rotations: np.ndarray
     twists: np.ndarray
     accelerations: np.ndarray
+    rpy: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        for array in (self.translations, self.rotations, self.twists, self.accelerations):
+        if self.rpy is None:
+            rpy = np.array([pin.rpy.matrixToRpy(rotation) for rotation in self.rotations]).reshape(-1, 3)
+            object.__setattr__(self, "rpy", rpy)
+        for array in (self.translations, self.rotations, self.twists, self.accelerations, self.rpy):
             array.flags.writeable = False
 
     def __len__(self) -> int:
@@ -184,7 +189,8 @@ class PathTrajectory:
         twists, accelerations = np.zeros((count, 6)), np.zeros((count, 6))  # constant orientation: no angular parts
         twists[:, :3] = path.tangents * ds[:, None]
         accelerations[:, :3] = path.tangents * dds[:, None] + path.curvatures * ds_squared[:, None]
-        return PoseSamples(path.points, np.broadcast_to(self.rotation, (count, 3, 3)), twists, accelerations)
+        return PoseSamples(path.points, np.broadcast_to(self.rotation, (count, 3, 3)), twists, accelerations,
+                           np.broadcast_to(pin.rpy.matrixToRpy(self.rotation), (count, 3)))  # one orientation
 
 
 class SE3Trajectory:

@@ -5,6 +5,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Generic, TypeVar
 
+from .table import Target, sample_target
+
 Sample = TypeVar("Sample")
 
 
@@ -22,6 +24,7 @@ class RecentSamples(Generic[Sample]):
     def __init__(self, trajectory: Callable[[float], Sample], size: int = 3) -> None:
         self.trajectory, self.size = trajectory, size
         self._samples: dict[float, Sample] = {}
+        self._target = getattr(trajectory, "target", None)  # a TrajectoryTable's rows
 
     def __call__(self, t: float) -> Sample:
         sample = self._samples.get(t)
@@ -30,3 +33,11 @@ class RecentSamples(Generic[Sample]):
                 del self._samples[next(iter(self._samples))]  # the oldest
             sample = self._samples[t] = self.trajectory(t)
         return sample
+
+    def target(self, t: float) -> Target:
+        """The arrays of the pose sample's target at t [s]: the trajectory's own ``target`` when it has one (a
+        :class:`~uvms.trajectory.table.TrajectoryTable`: no sample built), else read from :meth:`__call__`'s
+        sample."""
+        if self._target is not None:
+            return self._target(t)
+        return sample_target(self(t))  # type: ignore[arg-type]

@@ -8,13 +8,24 @@ import numpy as np
 
 from .cartesian import PoseSample
 
+#: A target as a task takes it: translation (3,) [m], rotation (3, 3), twist (6,) [m/s, rad/s], rpy (3,) [rad]
+#: or None (not known: the task computes it).
+Target = tuple[np.ndarray, np.ndarray, np.ndarray, "np.ndarray | None"]
+
+
+def sample_target(sample: PoseSample) -> Target:
+    """The arrays of a sample's target (its pose read once; rpy left to the task)."""
+    pose = sample.pose
+    return pose.translation, pose.rotation, sample.twist, None
+
 
 class TrajectoryTable:
     """t -> the trajectory's sample, the times of a run (its integrator's stages) evaluated in one call.
 
     A trajectory with ``at(times) -> PoseSamples`` (:class:`~uvms.trajectory.cartesian.PathTrajectory`) is
     evaluated over all the times at once, its numbers those of one call per time; a time not in the table, or a
-    trajectory without ``at``, is evaluated when asked for.
+    trajectory without ``at``, is evaluated when asked for. :meth:`target` gives a row's arrays without building
+    a sample or a ``pin.SE3`` (what a controller's task follows at every integrator stage).
 
     Args:
         trajectory: t [s] -> PoseSample, with ``duration`` [s].
@@ -27,9 +38,25 @@ class TrajectoryTable:
         self.duration = trajectory.duration  # type: ignore[attr-defined]
         at = getattr(trajectory, "at", None)
         times = list(dict.fromkeys(times)) if at is not None else []
-        self._samples = at(np.array(times, dtype=float)) if times else None
+        self._samples = samples = at(np.array(times, dtype=float)) if times else None
         self._rows = {t: row for row, t in enumerate(times)}
+        if samples is not None:  # the table's own copies, in a pose's layout: what a compiled step takes of a target
+            def copy(array: np.ndarray) -> np.ndarray:  # writeable and row-major, whatever the input's strides
+                return np.array(array, order="C")
+
+            self._translations, self._twists, self._rpy = (copy(samples.translations), copy(samples.twists),
+                                                           copy(samples.rpy))
+            self._rotations = copy(samples.rotations.transpose(0, 2, 1)).transpose(0, 2, 1)  # rows F-ordered
 
     def __call__(self, t: float) -> PoseSample:
         row = self._rows.get(t)
         return self.trajectory(t) if row is None else self._samples.sample(row)  # type: ignore[union-attr]
+
+    def target(self, t: float) -> Target:
+        """(translation (3,) [m], rotation (3, 3), twist (6,), rpy (3,) [rad]) at t [s]: a row's views of the
+        table's own arrays (never to be written), or read from the trajectory's sample at a time not tabled
+        (rpy None)."""
+        row = self._rows.get(t)
+        if row is None:
+            return sample_target(self.trajectory(t))
+        return self._translations[row], self._rotations[row], self._twists[row], self._rpy[row]
