@@ -240,3 +240,49 @@ def pin_moved(robot, q):
     import pinocchio as pin
 
     return pin.integrate(robot.model, q, np.full(robot.nv, 1e-3))
+
+
+def test_shared_rows_follow_the_value_of_q_in_one_state():
+    """An ItemRows read through one state moved in place: kept when q comes back equal (a copy), evaluated again when
+    one entry moves by 1e-12 or is NaN."""
+    from uvms.solvers.hierarchy import ItemRows
+
+    robot = uvms.load("bluerov2_alpha5")
+    q = robot.configuration(base=[0, 0, -5, 0.02, -0.01, 0.3], arm=[3.0, 1.8, 1.8, 1.0, 0.0])
+    state, shared = Configuration(robot, q), ItemRows()
+    objective = alpha5_levels(robot, robot.fk(q))[1]  # the vehicle attitude
+    first = shared.at(state).objective(objective)
+    state.update(q.copy())
+    assert shared.at(state).objective(objective) is first
+    moved = q.copy()
+    moved[0] += 1e-12
+    state.update(moved)
+    assert shared.at(state).objective(objective) is not first
+    kept = shared.objective(objective)
+    moved[0] = np.nan  # NaN is never equal to itself: the rows are dropped
+    state.update(moved, check=False)
+    assert shared.at(state)._objectives == {} and kept is not None
+
+
+def test_an_objectives_rows_are_its_value_jacobian_activation_and_reference(rng):
+    """Inequality.rows (one call per step) gives what value, jacobian, activation and reference give one by one, for
+    the tilt (tilted and level: a zero row) and the plane clearance (the vehicle, a tool point)."""
+    from uvms.tasks.objectives import JointLimits, PlaneClearance, VehicleAttitude
+
+    robot = uvms.load("bluerov2_alpha5")
+    objectives = [JointLimits(robot, band=0.2), VehicleAttitude(robot, np.radians(5.0), band=np.radians(4.0)),
+                  PlaneClearance(robot, "vehicle", [0, 0, -5.5], [0, 0, 1], min=0.3, band=0.3),
+                  PlaneClearance(robot, robot.ee_frames[0], [1, 0, -5], [0.3, -0.2, 1], min=0.1, band=0.5)]
+    level = robot.configuration(base=[0, 0, -5, 0, 0, 0.4], arm=[3.0, 1.8, 1.8, 1.0, 0.0])
+    for q in [level, *(alpha5_start(robot, rng)[0] for _ in range(3))]:
+        state = Configuration(robot, q)
+        for objective in objectives:
+            rows = objective.rows(state)
+            value = objective.value(state)
+            np.testing.assert_allclose(rows.value, value, rtol=0, atol=1e-15)
+            np.testing.assert_allclose(rows.jacobian, objective.jacobian(state), rtol=0, atol=1e-15)
+            np.testing.assert_allclose(rows.activation, objective.activation(value), rtol=0, atol=1e-15)
+            np.testing.assert_allclose(rows.reference, objective.reference(value), rtol=0, atol=1e-15)
+    tilt = objectives[1].rows(Configuration(robot, level))
+    assert tilt.value[0] < 1e-12 and not tilt.jacobian.any()  # level: the tilt's gradient taken as 0
+    assert tilt.activation[0] == 0.0  # deep inside the valid set

@@ -185,7 +185,11 @@ class ActuatedKinematics:
 
     def vehicle_objective(self, q: np.ndarray, bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """nu_pose (6,) [m/s, rad/s] in the base frame, within ``bounds`` (lower, upper) (6,) when given."""
-        nu = self.pose.reference(self.base_pose(q), self.vehicle_target)
+        return self._vehicle_objective(self.base_pose(q), bounds)
+
+    def _vehicle_objective(self, pose: pin.SE3, bounds: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
+        """nu_pose (6,) of the base frame at ``pose`` (world_M_base), within ``bounds`` when given."""
+        nu = self.pose.reference(pose, self.vehicle_target)
         return nu if bounds is None else np.clip(nu, *bounds)
 
     def _solve(self, configuration: Configuration, vehicle: np.ndarray, reference: bool) -> tuple[np.ndarray, object]:
@@ -222,9 +226,11 @@ class ActuatedKinematics:
                   bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]:
         """v_ref (nv,) (vehicle part in the vehicle joint's axes) and {"nu_pose": (6,) base frame, "solver": the
         SolverResult or None} at (t, q); ``bounds``: the vehicle velocities the thrusters can give (base frame)."""
-        nu_pose = self.vehicle_objective(q, bounds)
-        vehicle = self.base_placement.act(pin.Motion(nu_pose)).vector  # base frame -> vehicle joint axes
+        self.robot.check_configuration(q)  # the step's q, checked once (the configuration takes it unchecked)
         configuration = self._at(t, q)
+        # the base frame's pose from the step's kinematics (the vehicle joint's placement: base_pose's numbers)
+        nu_pose = self._vehicle_objective(configuration.joint_pose(1) * self.base_placement, bounds)
+        vehicle = self.base_placement.act(pin.Motion(nu_pose)).vector  # base frame -> vehicle joint axes
         if self.tightening is not None:  # the bounds moved for this step's solves, until :meth:`asked`
             self.tightening.measure(t, configuration)
         self._rows.clear()  # this step's rows, with this step's bounds
@@ -248,8 +254,9 @@ class ActuatedKinematics:
     def errors(self, t: float, q: np.ndarray) -> dict:
         """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and its
         distance [m] from the trajectory's point."""
-        pose = self.robot.base_pose(q, check=False) * self.base_placement  # q: the step's, checked by its reference
-        ee = self._at(t, q).pose(self.task.frame_id).translation.copy()
+        configuration = self._at(t, q)  # q: the step's, checked by its reference
+        pose = configuration.joint_pose(1) * self.base_placement  # base_pose's numbers, from the step's kinematics
+        ee = configuration.pose(self.task.frame_id).translation.copy()
         attitude_error = pin.log3(pose.rotation.T @ self.vehicle_target.rotation)  # body axes [rad]
         offset = self.vehicle_target.translation - pose.translation
         # the norms as numpy's norm of a vector computes them (sqrt of x.dot(x)), without its dispatch per call

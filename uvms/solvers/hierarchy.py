@@ -35,7 +35,7 @@ Levels = Sequence[LevelItem | Sequence[LevelItem]]
 
 
 # ----------------------------------------------------------------- the hierarchy at one configuration
-@dataclass
+@dataclass(slots=True)
 class LevelRows:
     """One level evaluated at a configuration.
 
@@ -54,7 +54,7 @@ class LevelRows:
     reference: np.ndarray
     activation: np.ndarray
     objectives: list[InequalityRows] = field(default_factory=list)
-    inequalities: list[Inequality] = field(default_factory=list)
+    inequalities: Sequence[Inequality] = ()
     task_jacobian: np.ndarray | None = None
     task_error: np.ndarray | None = None
     task_command: np.ndarray | None = None
@@ -146,7 +146,7 @@ class ItemRows:
 
     def __init__(self) -> None:
         self.state: Configuration | None = None
-        self.q = np.zeros(0)  # a copy of the q the rows were evaluated at
+        self.q: list[float] = []  # the q the rows were evaluated at, as floats (compared by value at each read)
         self._objectives: dict[int, tuple[Inequality, InequalityRows]] = {}  # id -> (objective kept alive, rows)
         self._tasks: dict[tuple[int, ...], tuple[tuple[Task, ...], tuple]] = {}  # ids -> (tasks, stacked terms)
 
@@ -158,10 +158,10 @@ class ItemRows:
 
     def at(self, state: Configuration) -> ItemRows:
         """These rows for ``state``: emptied first when they were evaluated at another state or q."""
-        q = state.q
-        if state is not self.state or q.shape != self.q.shape or not (q == self.q).all():
+        q = state.q.tolist()  # one read; list equality is numpy's elementwise == over every entry (NaN unequal)
+        if state is not self.state or q != self.q:
             self.clear()
-            self.state, self.q = state, q.copy()
+            self.state, self.q = state, q
         return self
 
     def objective(self, item: Inequality) -> InequalityRows:
@@ -183,13 +183,15 @@ class ItemRows:
 
 @dataclass(frozen=True)
 class PlannedLevel:
-    """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities."""
+    """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities;
+    ``single``: the level's one objective when it holds nothing else (its rows are the level's, nothing stacked)."""
 
     index: int
     tasks: tuple[Task, ...]
     inequalities: tuple[Inequality, ...]
     command: object  # (error (k,), feedforward (k,)) -> xdot_d + K e (k,), the task gain prepared
     ones: np.ndarray  # (k,) the equality rows' activations, shared by every evaluation (read, never written)
+    single: Inequality | None = None
 
 
 class HierarchyPlan:
@@ -223,8 +225,9 @@ class HierarchyPlan:
             tasks = tuple(item for item in level if isinstance(item, Task))
             dim = sum(task.dim for task in tasks)
             command = prepared_gain(gain, dim) if tasks else None
-            self.levels.append(PlannedLevel(index, tasks, tuple(i for i in level if isinstance(i, Inequality)),
-                                            command, np.ones(dim)))
+            inequalities = tuple(item for item in level if isinstance(item, Inequality))
+            single = inequalities[0] if not tasks and len(inequalities) == 1 else None
+            self.levels.append(PlannedLevel(index, tasks, inequalities, command, np.ones(dim), single))
         self.joint_limits = [item for level in self.levels for item in level.inequalities
                              if item.bounds_joint_positions]
         self.size = robot.n_arm if free_floating else robot.nv
@@ -247,6 +250,12 @@ class HierarchyPlan:
     def _level_rows(self, state: Configuration, level: PlannedLevel, shared: ItemRows | None) -> LevelRows:
         """One level's rows at ``state``: equality tasks first, then the inequalities in their order (``shared``:
         where already evaluated items are read)."""
+        single = level.single
+        if single is not None:  # the common inequality level: one objective's own arrays
+            rows = single.rows(state) if shared is None else shared.objective(single)
+            jacobian = rows.jacobian
+            return LevelRows(level.index, jacobian, state.generalized(jacobian) if self.free_floating else jacobian,
+                             rows.reference, rows.activation, [rows], level.inequalities)
         inequalities = ([item.rows(state) for item in level.inequalities] if shared is None
                         else [shared.objective(item) for item in level.inequalities])
         task_jacobian = task_error = task_command = None
@@ -256,20 +265,15 @@ class HierarchyPlan:
             task_command = level.command(task_error, feedforward)
             if not inequalities:  # the common equality level: its own arrays, nothing to stack
                 solved = state.generalized(task_jacobian) if self.free_floating else task_jacobian
-                return LevelRows(level.index, task_jacobian, solved, task_command, level.ones,
-                                 task_jacobian=task_jacobian, task_error=task_error, task_command=task_command,
-                                 equality=True)
-        if task_jacobian is None and len(inequalities) == 1:  # one objective: its own arrays
-            rows = inequalities[0]
-            jacobian, reference, activation = rows.jacobian, rows.reference, rows.activation
-        else:
-            head = [(task_jacobian, task_command, level.ones)] if task_jacobian is not None else []
-            blocks = head + [(rows.jacobian, rows.reference, rows.activation) for rows in inequalities]
-            jacobian = np.vstack([block[0] for block in blocks])
-            reference = np.concatenate([block[1] for block in blocks])
-            activation = np.concatenate([block[2] for block in blocks])
+                return LevelRows(level.index, task_jacobian, solved, task_command, level.ones, [], (), task_jacobian,
+                                 task_error, task_command, True)
+        head = [(task_jacobian, task_command, level.ones)] if task_jacobian is not None else []
+        blocks = head + [(rows.jacobian, rows.reference, rows.activation) for rows in inequalities]
+        jacobian = np.vstack([block[0] for block in blocks])
+        reference = np.concatenate([block[1] for block in blocks])
+        activation = np.concatenate([block[2] for block in blocks])
         solved = state.generalized(jacobian) if self.free_floating else jacobian
-        return LevelRows(level.index, jacobian, solved, reference, activation, inequalities, list(level.inequalities),
+        return LevelRows(level.index, jacobian, solved, reference, activation, inequalities, level.inequalities,
                          task_jacobian, task_error, task_command)
 
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:

@@ -208,11 +208,13 @@ class Inequality(ABC):
         return self.value(state), self.jacobian(state)
 
     def rows(self, state: Configuration) -> InequalityRows:
-        """Everything a solver reads, at ``state``."""
+        """Everything a solver reads, at ``state`` (the activation and reference as :meth:`_activation_reference`
+        computes them, inline: the solvers call this for every objective at every step)."""
         value, jacobian = self.value_jacobian(state)
-        activation, reference = self._activation_reference(value)
-        return InequalityRows(name=self.name, value=value, jacobian=jacobian, lower=self.lower,
-                              upper=self.upper, activation=activation, reference=reference, gain=self.gain)
+        value = np.ascontiguousarray(value, dtype=float)
+        out = np.empty((2, self.dim))  # activation, reference: the rows keep them
+        (_ACTIVATION_KERNEL or _activation_kernel())(value, self._bounds, self.gain, self._step, out)
+        return InequalityRows(self.name, value, jacobian, self.lower, self.upper, out[0], out[1], self.gain)
 
     def shown(self, value: np.ndarray) -> np.ndarray:
         """A value (..., k) in the units figures draw it in (:attr:`unit`): its own, unless a kind says otherwise."""

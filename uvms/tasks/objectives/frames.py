@@ -66,13 +66,14 @@ class VehicleAttitude(Inequality):
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
         """(tilt (1,), its Jacobian (1, nv)) from one read of the vehicle's pose."""
-        z_axis = state.pose(self.frame_id).rotation[:, 2]  # the body z axis in world axes
-        tilt = _tilt(z_axis)
-        axis = np.array([z_axis[1], -z_axis[0], 0.0])  # z_b x e_z, |axis| = sin(tilt)
+        x, y, z = state.pose(self.frame_id).rotation[:, 2].tolist()  # the body z axis in world axes
+        tilt = np.array([np.arccos(min(max(z, -1.0), 1.0))])  # _tilt's numbers, from the floats read once
+        axis = np.array([y, -x, 0.0])  # z_b x e_z, |axis| = sin(tilt)
         length = math.sqrt(axis.dot(axis))  # np.linalg.norm's numbers
         if length < LEVEL_TILT:
             return tilt, np.zeros((1, state.robot.nv))
-        return tilt, -((axis / length) @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
+        axis /= length
+        return tilt, -(axis @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
 
 
 def _tilt(z_axis: np.ndarray) -> np.ndarray:
@@ -125,6 +126,12 @@ class PlaneClearance(Inequality):
 
     def jacobian(self, state: Configuration) -> np.ndarray:
         return (self.normal @ state.jacobian(self.frame_id)[:3])[None, :]
+
+    def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
+        """(n . (p - p0) (1,), n^T J_p (1, nv)): :meth:`value` and :meth:`jacobian` in one call (a solver's step)."""
+        normal, frame_id = self.normal, self.frame_id
+        return (np.array([normal @ (state.pose(frame_id).translation - self.point)]),
+                (normal @ state.jacobian(frame_id)[:3])[None, :])
 
 
 class FrameBox(Inequality):
