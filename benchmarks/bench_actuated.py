@@ -90,16 +90,16 @@ def run_wall(scenario: str, repeat: int) -> tuple[str, str]:
 
 
 def study_row(trials: int, jobs: int) -> tuple[str, str]:
-    """``uvms study bluerov2_alpha5_intervention --samples N --jobs J`` in a fresh process: trials per second."""
+    """``uvms study bluerov2_alpha5_intervention -n N --jobs J`` in a fresh process: trials per second."""
     out = Path(tempfile.mkdtemp(prefix="uvms_bench_study_"))
-    command = [sys.executable, "-m", "uvms.cli", "study", str(SCENARIO), "--samples", str(trials), "--jobs",
+    command = [sys.executable, "-m", "uvms.cli", "study", str(SCENARIO), "-n", str(trials), "--jobs",
                str(jobs), "--out", str(out / "study"), "--quiet"]
     started = time.perf_counter()
     subprocess.run(command, cwd=ROOT, capture_output=True, check=True)
     wall = time.perf_counter() - started
     summary = json.loads((out / "study" / "summary.json").read_text())
     shutil.rmtree(out, ignore_errors=True)
-    return (f"`uvms study bluerov2_alpha5_intervention --samples {trials} --jobs {jobs}`",
+    return (f"`uvms study bluerov2_alpha5_intervention -n {trials} --jobs {jobs}`",
             f"{trials / wall:.2f} trials/s ({wall:.1f} s wall; trials' own time {summary['wall_time']:.1f} s)")
 
 
