@@ -58,7 +58,7 @@ def test_bandwidth_and_damping_ratio_set_the_gains_a_given_kp_or_ki_wins(tmp_pat
     ("vehicle_control.damping_ratio=[1, 1]", "damping_ratio must be a number or 6 numbers > 0"),
 ])
 def test_a_bandwidth_or_damping_ratio_that_is_not_positive_is_refused(tmp_path, override, message):
-    with pytest.raises(ScenarioError, match=f"vehicle_control/solver: {message}"):
+    with pytest.raises(ScenarioError, match=f"vehicle_control.{message}"):
         run_scenario(REXROV, tmp_path / "o", [*NO_FIGURES, override], progress=False)
     assert not (tmp_path / "o").exists()
 
