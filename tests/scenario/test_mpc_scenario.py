@@ -17,7 +17,8 @@ from uvms.errors import ScenarioError
 from uvms.robot.configuration import Configuration
 from uvms.scenario import read_scenario
 from uvms.scenario.build import build
-from uvms.scenario.spec import SECTIONS, ControllerSpec
+from uvms.scenario.controllers import CONTROLLERS
+from uvms.scenario.spec import SECTIONS, ControllerSpec, controller_types
 from uvms.scenario.spec.controller import settings_docs
 
 from conftest import SCENARIOS, one_line
@@ -42,7 +43,7 @@ def test_the_keys_are_the_mpc_settings_fields_with_their_defaults_and_meanings()
     for item in fields:
         assert keys[item.name].default == item.default, item.name
         assert keys[item.name].doc.startswith("`mpc`: ") and len(keys[item.name].doc) > 20, item.name
-    assert keys["type"].default == "solver" and keys["type"].allowed == ("solver", "mpc")
+    assert keys["type"].default == "solver" and controller_types(CONTROLLERS) == ("solver", "mpc")
     assert keys["solver"].allowed == SOLVERS and keys["integrator"].allowed == INTEGRATORS
     assert keys["horizon"].kinds is int and keys["knows_current"].kinds is bool and float in keys["node_dt"].kinds
     assert ControllerSpec.from_table({}, "controller", "x").settings == MPCSettings()

@@ -20,7 +20,8 @@ from ..robot.limits import Limit
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
-from .build import Setup, build, check_step_count
+from .build import build, check_step_count
+from .controllers import Setup
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
 from .schema import read_scenario

@@ -24,6 +24,7 @@ from ..errors import ScenarioError
 from ..io.names import plain_file_name
 from ..model.resources import MAX_TOML_BYTES, read_text
 from ..tasks.objectives import file_keys
+from .controllers import CONTROLLERS
 from .resources import resolve_scenario_path, scenario_file, scenario_folders
 from .spec import MAX_MAGNITUDE, ScenarioSpec, check_scenario
 
@@ -82,7 +83,7 @@ def scenario_from_raw(raw: Mapping, path: str | os.PathLike, overrides: Sequence
     raw = copy.deepcopy(dict(raw))
     for override in overrides:
         apply_override(raw, override)
-    spec = check_scenario(raw, path)
+    spec = check_scenario(raw, path, CONTROLLERS)
     model_path = spec.model.path
     if not Path(model_path).is_absolute() and (path.parent / model_path).exists():
         model_path = str((path.parent / model_path).resolve())

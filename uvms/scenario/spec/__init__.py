@@ -6,7 +6,7 @@ MPC keys made from :class:`uvms.control.mpc.settings.MPCSettings`), ``scenario``
 :func:`uvms.scenario.read_scenario` reads a file into a :class:`ScenarioSpec`.
 """
 
-from .controller import CONTROLLER_TYPES, ControllerSpec
+from .controller import CHOSEN_CONTROLLERS, ControllerSpec, controller_types
 from .dynamics import PLANT_TYPES, ExcitationSpec, PlantSpec, VehicleControlSpec
 from .keys import MAX_MAGNITUDE, NUMBER, NUMBERS, REQUIRED, Bound, Key, Section
 from .scenario import ARRAYS, SECTIONS, InequalitySpec, ScenarioSpec, check_scenario, key_of
@@ -24,7 +24,8 @@ from .sections import (
     VehicleSpec,
 )
 
-__all__ = ["ARRAYS", "Bound", "CONTROLLER_TYPES", "ControllerSpec", "ExcitationSpec", "InequalitySpec", "InitialSpec",
+__all__ = ["ARRAYS", "Bound", "CHOSEN_CONTROLLERS", "ControllerSpec", "ExcitationSpec", "InequalitySpec", "InitialSpec",
            "Key", "LabelSpec", "MAX_MAGNITUDE", "ModelSpec", "NUMBER", "NUMBERS", "OutputsSpec", "PLANT_TYPES",
            "PhaseSpec", "PlantSpec", "REQUIRED", "SECTIONS", "ScenarioSpec", "Section", "SimulationSpec", "SolverSpec",
-           "StudySpec", "TaskSpec", "TrajectorySpec", "VehicleControlSpec", "VehicleSpec", "check_scenario", "key_of"]
+           "StudySpec", "TaskSpec", "TrajectorySpec", "VehicleControlSpec", "VehicleSpec", "check_scenario",
+           "controller_types", "key_of"]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import re
 import typing
+from collections.abc import Collection
 from dataclasses import fields, make_dataclass
 from typing import Any, ClassVar
 
@@ -19,8 +20,11 @@ from ...control.mpc.settings import MPCSettings
 from ...errors import ScenarioError, UVMSError
 from .keys import NUMBER, Section, key
 
-#: controller.type values: the [solver]'s method in the controller the plant needs, or the whole-body MPC.
-CONTROLLER_TYPES = ("solver", "mpc")
+#: The controllers ``controller.type = "solver"`` leaves to the scenario (:attr:`ScenarioSpec.controller_kind
+#: <uvms.scenario.spec.ScenarioSpec.controller_kind>`): kinematic tracking, the GJM controller of a passive vehicle, the
+#: actuated chain, an open-loop excitation, a [[phases]] sequence. Every other controller of the registry
+#: (:data:`uvms.scenario.controllers.CONTROLLERS`: the MPC, one registered later) is a ``controller.type`` value.
+CHOSEN_CONTROLLERS = ("tracking", "gjm", "actuated", "excitation", "sequence")
 #: The scenario's kinds of an MPCSettings field's type.
 KINDS = {int: int, float: NUMBER, str: str, bool: bool}
 #: The allowed values of the MPC's string settings.
@@ -94,14 +98,9 @@ class ControllerSection(Section):
 
     @classmethod
     def from_table(cls, given: Any, name: str, origin: str) -> Section:
-        """The section (:meth:`Section.from_table`), the MPC's keys checked by :class:`MPCSettings` and refused
-        with ``type = "solver"``."""
+        """The section (:meth:`Section.from_table`), the MPC's values checked by :class:`MPCSettings` (what the
+        type needs of them: :func:`check_controller`)."""
         section = super().from_table(given, name, origin)
-        if section.type != "mpc":
-            given_keys = section.changed(MPC_KEYS)
-            if given_keys:
-                raise ScenarioError(f"{origin}: {name}.{given_keys[0]} is a setting of the MPC; it needs "
-                                    f"{name}.type = 'mpc' (got {section.type!r})")
         try:
             section.settings  # noqa: B018 - MPCSettings checks the values
         except UVMSError as exc:
@@ -118,26 +117,43 @@ class ControllerSection(Section):
 
 ControllerSpec = make_dataclass(
     "ControllerSpec",
-    [("type", str, key("solver", str, allowed=CONTROLLER_TYPES,
+    [("type", str, key("solver", str,
                        doc="`solver`: the `[solver]`'s method in the controller the plant needs (kinematic tracking; "
                            "the GJM controller of a passive vehicle; the actuated chain with thrusters); `mpc`: the "
-                           "whole-body MPC (the keys below)")),
+                           "whole-body MPC (the keys below); or the name of a controller registered in "
+                           "`uvms.scenario.controllers.CONTROLLERS`")),
      *mpc_fields()],
     bases=(ControllerSection,), frozen=True, kw_only=True)
 ControllerSpec.__module__ = __name__
 ControllerSpec.__doc__ = "The ``[controller]`` section of a scenario, checked (fields: ``type`` and MPCSettings')."
 
 
-def check_controller(spec: Any, origin: str) -> None:
-    """Refuse an MPC on a run it cannot drive (one line each: why, and what works).
+def controller_types(controllers: Collection[str]) -> tuple[str, ...]:
+    """The values of controller.type given the registry's ``controllers``: ``solver`` (the one the scenario
+    chooses), then every other controller of the registry."""
+    return ("solver", *(name for name in controllers if name not in CHOSEN_CONTROLLERS))
+
+
+def check_controller(spec: Any, origin: str, controllers: Collection[str]) -> None:
+    """Refuse a controller.type that is not one of ``controllers`` (:func:`controller_types`), the MPC's keys on
+    another controller, and an MPC on a run it cannot drive (one line each: why, and what works).
 
     Raises:
-        ScenarioError: ``controller.type = "mpc"`` without the actuated hydrodynamic plant, with an open-loop
-            excitation, task axes other than the position, or a control period that is not a multiple of
+        ScenarioError: an unknown ``controller.type`` (the message lists the valid ones); an MPC key without
+            ``controller.type = "mpc"``; ``controller.type = "mpc"`` without the actuated hydrodynamic plant, with an
+            open-loop excitation, task axes other than the position, or a control period that is not a multiple of
             ``simulation.dt``.
     """
     controller, plant = spec.controller, spec.plant
+    valid = controller_types(controllers)
+    if controller.type not in valid:
+        raise ScenarioError(f"{origin}: controller.type = {controller.type!r} is not valid; valid: "
+                            f"{', '.join(map(repr, valid))}")
     if controller.type != "mpc":
+        given_keys = controller.changed(MPC_KEYS)
+        if given_keys:
+            raise ScenarioError(f"{origin}: controller.{given_keys[0]} is a setting of the MPC; it needs "
+                                f"controller.type = 'mpc' (got {controller.type!r})")
         return
     if plant.type != "hydrodynamic" or not plant.thrusters:
         raise ScenarioError(f"{origin}: controller.type = 'mpc' commands the thrusters and the arm's servos: it needs "
@@ -157,4 +173,4 @@ def check_controller(spec: Any, origin: str) -> None:
                             f"simulation.dt = {dt:g} s, got {period:g}")
 
 
-__all__ = ["CONTROLLER_TYPES", "ControllerSpec", "MPC_KEYS", "check_controller", "settings_docs"]
+__all__ = ["CHOSEN_CONTROLLERS", "ControllerSpec", "MPC_KEYS", "check_controller", "controller_types", "settings_docs"]

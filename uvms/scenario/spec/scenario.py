@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -12,7 +12,7 @@ from ...io.names import NAME_RULE, is_plain_name
 from ...tasks.objectives import check_table, file_keys
 from .controller import ControllerSpec, check_controller
 from .dynamics import ExcitationSpec, PlantSpec, VehicleControlSpec, check_plant
-from .keys import Key, Section, check_range, thaw
+from .keys import NUMBER, Key, Section, check_range, thaw
 from .sections import (
     InitialSpec,
     LabelSpec,
@@ -87,6 +87,21 @@ class ScenarioSpec:
     inequalities: tuple[InequalitySpec, ...] = field(default=())
 
     @property
+    def controller_kind(self) -> str:
+        """The controller that drives the run, from the file alone: a key of
+        :data:`uvms.scenario.controllers.CONTROLLERS`. ``controller.type`` when it names one (``mpc``, or one
+        registered); for ``solver`` the one the scenario needs: ``sequence`` ([[phases]]), ``excitation`` (thrusters
+        driven open loop by excitation.wrench), ``actuated`` (plant.thrusters: the chain), ``gjm`` (a dynamic plant
+        without thrusters: a passive vehicle) or ``tracking`` (the kinematic plant)."""
+        if self.controller.type != "solver":
+            return self.controller.type
+        if self.phases:
+            return "sequence"
+        if self.plant.thrusters:
+            return "excitation" if self.excitation.wrench else "actuated"
+        return "tracking" if self.plant.type == "kinematic" else "gjm"
+
+    @property
     def name(self) -> str:
         """``scenario.name`` (the file's stem when not given)."""
         return self.scenario.name
@@ -99,9 +114,10 @@ class ScenarioSpec:
         return files + [name for table in self.inequalities for name in table.files]
 
 
-def check_scenario(raw: Mapping, path: Path) -> ScenarioSpec:
+def check_scenario(raw: Mapping, path: Path, controllers: Collection[str]) -> ScenarioSpec:
     """The spec of a raw scenario table (``path`` names it in messages): sections, keys, types and values checked,
-    the defaults filled; paths as written.
+    the defaults filled; paths as written. ``controllers``: the names of the registered controllers
+    (:data:`uvms.scenario.controllers.CONTROLLERS`, built above the spec), which ``controller.type`` may name.
 
     Raises:
         ScenarioError: an unknown or missing section, an unknown key, a wrong type, an impossible value.
@@ -125,7 +141,7 @@ def check_scenario(raw: Mapping, path: Path) -> ScenarioSpec:
                                 for index, phase in enumerate(phases)),
                    inequalities=check_inequalities(raw.get("inequalities", []), origin))
     spec = ScenarioSpec(path=Path(path), **checked)
-    check_controller(spec, origin)
+    check_controller(spec, origin, controllers)
     check_plant(spec, origin)
     check_initial(spec, origin)
     if spec.scenario.name:
@@ -139,13 +155,17 @@ def check_scenario(raw: Mapping, path: Path) -> ScenarioSpec:
 
 def check_initial(spec: ScenarioSpec, origin: str) -> None:
     """``[initial]`` with what it needs of the other sections: ``fixed_base`` (a list of names) only to optimize q0,
-    which needs the trajectory's start and orientation (a sequence scenario's build refuses 'optimize' itself).
+    which needs the trajectory's start and orientation; a sequence scenario starts from the q0 given (its phases
+    offset its frames from there) and takes one gain.
 
     Raises:
         ScenarioError: what does not go together, naming the file.
     """
     initial, trajectory = spec.initial, spec.trajectory
     fixed = initial.fixed_base
+    if spec.phases and (initial.method != "given" or not isinstance(spec.solver.gain, NUMBER)):
+        raise ScenarioError(f"{origin}: a sequence scenario needs initial.method = 'given' and one number for "
+                            f"solver.gain")
     if initial.method == "given" and fixed:
         raise ScenarioError(f"{origin}: initial.fixed_base holds vehicle coordinates during the optimization of q0: it "
                             f"needs initial.method = 'optimize' (with 'given', initial.base is used as it is)")

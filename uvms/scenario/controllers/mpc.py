@@ -12,13 +12,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics.plant.actuated import ActuatedPlant
-from ..dynamics.plant.command import State
-from ..errors import ScenarioError, UVMSError
-from ..tasks.frame import FrameTask
-from .actuated import Actuation
-from .inequalities import build_inequalities
-from .spec import ScenarioSpec
+from ...dynamics.plant.actuated import ActuatedPlant
+from ...dynamics.plant.command import State
+from ...errors import ScenarioError, UVMSError
+from ...tasks.frame import FrameTask
+from ..actuated import Actuation
+from ..inequalities import build_inequalities
+from ..spec import ScenarioSpec
+from .parts import Parts, Setup
+
+
+def build_mpc(spec: ScenarioSpec, parts: Parts) -> Setup:
+    """The MPC on the actuated plant (:func:`make_mpc_actuation`), its inequalities the problem's."""
+    actuation = make_mpc_actuation(parts.actuated, parts.task, parts.trajectory, parts.q0, spec)
+    return parts.setup(actuation.controller, inequalities=actuation.inequalities, actuation=actuation)
 
 
 def make_mpc_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0: np.ndarray,
@@ -30,7 +37,7 @@ def make_mpc_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0:
         ScenarioError: Crocoddyl missing (the message names ``pip install 'uvms[mpc]'``), a vehicle that is not
             floating, a ``[vehicle]`` task, the GJM controller's plant keys, fins; an objective or the MPC refusing.
     """
-    from ..control.mpc.optional import require_crocoddyl, require_mim_solvers
+    from ...control.mpc.optional import require_crocoddyl, require_mim_solvers
 
     where, robot, thrusters, fins = "controller.type = 'mpc'", actuated.robot, actuated.thrusters, actuated.fins
     try:
@@ -51,7 +58,7 @@ def make_mpc_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, q0:
     inequalities = None
     if spec.inequalities:  # the MPC's constraints: enforced, as CSQP's rows or Box-FDDP's penalties
         inequalities = build_inequalities(robot, spec.inequalities, enforced=True)
-    from ..control.mpc.controller import MPCController
+    from ...control.mpc.controller import MPCController
 
     try:
         controller = MPCController(actuated.plant, thrusters, lambda t: trajectory(t).pose.translation,
