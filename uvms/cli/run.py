@@ -72,10 +72,8 @@ def command_run(options: argparse.Namespace) -> int:
 
 def start_line(spec: ScenarioSpec, out: Path) -> str:
     """The first line of ``uvms run``: scenario, model, simulated time and steps, solver, plant, output folder."""
-    from ..scenario.build import check_step_count, scenario_duration
-
-    duration = scenario_duration(spec)
-    steps = check_step_count(spec, duration)  # a step count out of range is refused here, before the build
+    duration = spec.duration
+    steps = spec.step_count()  # a step count out of range is refused here, before the build
     plant = spec.plant.type + (" with thrusters" if spec.plant.thrusters else "")
     model = Path(spec.model.path)
     with contextlib.suppress(ValueError):  # a model below the current folder is shown from there

@@ -1,4 +1,4 @@
-"""Building a run from a checked scenario: model, step count, start, plant, then the controller's builder."""
+"""Building a run from a checked scenario: step count, model, start, plant, then the controller's builder."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import numpy as np
 from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.plant import Plant
 from ..errors import NameNotFound, ScenarioError, SolverInputError, UVMSError
-from ..numerics.integrate import step_count
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import initial_configuration
@@ -19,7 +18,7 @@ from .spec import PlantSpec, ScenarioSpec
 
 
 def build(spec: ScenarioSpec) -> Setup:
-    """The run of a checked scenario: its model, step count, start (task, initial configuration, trajectory) and
+    """The run of a checked scenario: its step count, model, start (task, initial configuration, trajectory) and
     plant (with its thrusters), each made once and in that order, then the controller of
     :attr:`~uvms.scenario.spec.ScenarioSpec.controller_kind` built on them by its builder in
     :data:`uvms.scenario.controllers.CONTROLLERS`.
@@ -28,14 +27,13 @@ def build(spec: ScenarioSpec) -> Setup:
         ScenarioError: what the model, the start, the plant or the controller refuse, with the key's path;
         StepCountError: a run of no step or of too many (before anything is built).
     """
+    steps = spec.step_count()  # a run of no step, or of too many, fails before anything is built
     robot = scenario_model(spec.model)
-    duration = scenario_duration(spec)
-    steps = check_step_count(spec, duration)  # a run of no step, or of too many, fails before anything is built
-    task, q0, residual = scenario_start(robot, spec)
-    trajectory = scenario_trajectory(robot, spec, task, q0)
+    task, q0, residual, trajectory = scenario_start(robot, spec)
     kind = spec.controller_kind
     plant, actuated = scenario_plant(robot, spec.plant, fins=kind != "excitation")  # an excitation: thrusters alone
-    return CONTROLLERS[kind](spec, Parts(robot, duration, steps, task, q0, residual, trajectory, plant, actuated))
+    return CONTROLLERS[kind](spec, Parts(robot, spec.duration, steps, task, q0, residual, trajectory, plant,
+                                         actuated))
 
 
 def scenario_plant(robot: Robot, section: PlantSpec, *, fins: bool) -> tuple[Plant | None, ActuatedPlant | None]:
@@ -65,20 +63,17 @@ def scenario_plant(robot: Robot, section: PlantSpec, *, fins: bool) -> tuple[Pla
         raise ScenarioError(f"plant.thrusters = true: {exc}") from None
 
 
-def scenario_start(robot: Robot, spec: ScenarioSpec) -> tuple[FrameTask | None, np.ndarray, float]:
-    """(task (None with [[phases]]), q0 (nq,), its residual) of a checked scenario; ``uvms view SCENARIO`` draws q0."""
-    task = None if spec.phases else FrameTask(robot, spec.task.frame or None,
-                     axes=spec.task.axes or None, orientation=spec.task.orientation_error)
-    return (task, *initial_q(robot, task, spec))
-
-
-def scenario_trajectory(robot: Robot, spec: ScenarioSpec, task: FrameTask | None,
-                        q0: np.ndarray) -> PathTrajectory | SE3Trajectory | None:
-    """What the task follows: the ``[trajectory]`` from the pose of the task's frame at q0 (None for a sequence
-    scenario, whose phases make their own)."""
+def scenario_start(robot: Robot, spec: ScenarioSpec) -> tuple[FrameTask | None, np.ndarray, float,
+                                                         PathTrajectory | SE3Trajectory | None]:
+    """Where a run starts and what it follows: the task (None with [[phases]]), q0 (nq,) and its residual
+    (:func:`initial_q`; ``uvms view SCENARIO`` draws q0), and the ``[trajectory]`` from the pose of the task's frame
+    at q0 (None with [[phases]], whose plan makes its own)."""
     if spec.phases:
-        return None
-    return spec.trajectory.settings.trajectory(Configuration(robot, q0).pose(task.frame_id).copy())
+        return (None, *initial_q(robot, None, spec), None)
+    task = FrameTask(robot, spec.task.frame or None, axes=spec.task.axes or None,
+                     orientation=spec.task.orientation_error)
+    q0, residual = initial_q(robot, task, spec)
+    return task, q0, residual, spec.trajectory.settings.trajectory(Configuration(robot, q0).pose(task.frame_id).copy())
 
 
 def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple[np.ndarray, float]:
@@ -106,24 +101,3 @@ def initial_q(robot: Robot, task: FrameTask | None, spec: ScenarioSpec) -> tuple
         raise ScenarioError(f"no initial configuration reaches the trajectory start{held} "
                             f"(residual {result.residual:.3g})")
     return result.q, result.residual
-
-
-def check_step_count(spec: ScenarioSpec, duration: float) -> int:
-    """The number of steps of a run, checked before it starts (:func:`uvms.numerics.integrate.step_count`)."""
-    if spec.simulation.duration:
-        duration_name = "simulation.duration"
-    else:
-        duration_name = "the phases' durations" if spec.phases else "trajectory.duration"
-    return step_count(duration, float(spec.simulation.dt), dt_name="simulation.dt",
-                      duration_name=duration_name)
-
-
-def scenario_duration(spec: ScenarioSpec) -> float:
-    """The simulated time [s] a checked scenario asks for, from its tables alone (nothing built):
-    ``simulation.duration``, else the sum of the phases' durations, else ``trajectory.duration`` (every trajectory
-    type lasts that long)."""
-    if spec.simulation.duration:
-        return float(spec.simulation.duration)
-    if spec.phases:
-        return float(sum(phase.duration for phase in spec.phases))
-    return float(spec.trajectory.duration)

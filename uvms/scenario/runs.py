@@ -20,7 +20,7 @@ from ..robot.limits import Limit
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from .actuated import actuated_metrics, simulate_actuation
-from .build import build, check_step_count
+from .build import build
 from .controllers import Setup
 from .inequalities import ObjectiveRecorder, inequality_metrics, inequality_warnings, vehicle_tilt
 from .record import model_record
@@ -131,7 +131,6 @@ def run_scenario(
     started = time.perf_counter()
     with numerics_guard(name), settled_build(settle):
         setup = build(spec)
-    check_step_count(spec, setup.duration)
     inputs = run_inputs(spec.path, [spec.model.path], spec.named_files())
     with outputs.run_folder(out, lock=lock, inputs=inputs) as folder, numerics_guard(name):
         result = execute(spec, setup, folder, progress, started)

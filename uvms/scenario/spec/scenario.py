@@ -9,6 +9,7 @@ from typing import Any
 
 from ...errors import ScenarioError, UVMSError
 from ...io.names import NAME_RULE, is_plain_name
+from ...numerics.integrate import step_count
 from ...tasks.objectives import check_table, file_keys
 from .controller import ControllerSpec, check_controller
 from .dynamics import ExcitationSpec, PlantSpec, VehicleControlSpec, check_plant
@@ -100,6 +101,30 @@ class ScenarioSpec:
         if self.plant.thrusters:
             return "excitation" if self.excitation.wrench else "actuated"
         return "tracking" if self.plant.type == "kinematic" else "gjm"
+
+    @property
+    def duration(self) -> float:
+        """The simulated time [s] the scenario asks for, from its tables alone: ``simulation.duration``, else the sum
+        of the phases' durations, else ``trajectory.duration`` (every trajectory type lasts that long)."""
+        if self.simulation.duration:
+            return float(self.simulation.duration)
+        if self.phases:
+            return float(sum(phase.duration for phase in self.phases))
+        return float(self.trajectory.duration)
+
+    def step_count(self) -> int:
+        """The steps of simulation.dt over :attr:`duration`, checked before a run starts
+        (:func:`uvms.numerics.integrate.step_count`).
+
+        Raises:
+            StepCountError: no step, or too many; the message names the keys.
+        """
+        if self.simulation.duration:
+            duration_name = "simulation.duration"
+        else:
+            duration_name = "the phases' durations" if self.phases else "trajectory.duration"
+        return step_count(self.duration, float(self.simulation.dt), dt_name="simulation.dt",
+                          duration_name=duration_name)
 
     @property
     def name(self) -> str:
