@@ -2,8 +2,9 @@
 
 ``resources`` (scenario files and the shipped scenarios by name), ``spec`` (the typed scenario: one frozen
 dataclass per section, each key's type, default, allowed values, bound and meaning), ``schema`` (reading a file into
-its spec, ``--set`` overrides), ``build`` (model, task, initial configuration, trajectory, controller,
-plant), ``runs`` (the one simulation of :mod:`uvms.sim.loop`, metrics, the files of the run folder),
+its spec, ``--set`` overrides), ``build`` (step count, model, start, plant, then the controller),
+``controllers/`` (one builder module per kind of controller and ``CONTROLLERS``, their registry), ``runs`` (the
+one simulation of :mod:`uvms.sim.loop`, metrics, the files of the run folder),
 ``verdict`` (joint limits kept, task error within tolerance), ``record`` (the model a run folder records, read
 back by ``uvms view --result``); ``studies/`` (many runs: ``sweep``, grids of overrides; ``study``, Monte Carlo studies
 with ``distributions``, ``sensitivity`` and their ``folder``; ``tune``, Optuna over scenario keys; all run by
