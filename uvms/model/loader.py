@@ -102,8 +102,9 @@ def load(
             model values, base mismatch, unknown end-effector frame, a mimic cycle or a mimic of a missing
             joint, an ``arm_joints`` entry that is not a joint that can move (the message lists the valid ones).
     """
-    packages = package_index(package_path, resources.model_file(source))
-    xml, origin, base_dir = read_model_text(source, args, trusted, packages)
+    path = resources.model_file(source)
+    packages = package_index(package_path, path)
+    xml, origin, base_dir = model_text(source, path, args, trusted, packages)
     robot_element = checks.parse_urdf(xml, origin)
     try:
         tree = checks.check_urdf(robot_element, origin)
@@ -139,6 +140,15 @@ def read_model_text(
         (URDF text, origin for messages, folder of the file or None for a string).
     """
     path = resources.model_file(source)
+    if packages is None and path is not None and path.name.endswith(".xacro"):
+        packages = package_index(model=path)
+    return model_text(source, path, args, trusted, packages)
+
+
+def model_text(source: str | os.PathLike, path: Path | None, args: Mapping[str, object] | None,
+               trusted: bool | None, packages: Mapping[str, Path] | None) -> tuple[str, str, Path | None]:
+    """:func:`read_model_text` of a source whose file is known: ``path`` (None: ``source`` is URDF text);
+    ``packages``: the package index (a xacro file's ``$(find)`` needs one)."""
     if path is None:
         if args:
             raise UVMSError("xacro args were given with a URDF string; args apply to .xacro files only")
@@ -147,7 +157,6 @@ def read_model_text(
     if path.name.endswith(".xacro"):
         if trusted is None:
             trusted = path.resolve().is_relative_to(resources.MODELS_DIR)
-        packages = package_index(model=path) if packages is None else packages
         return expand_xacro(path, args or {}, trusted, packages), origin, path.parent
     if args:
         raise UVMSError(f"{origin}: xacro args were given but the file is not a .xacro")
