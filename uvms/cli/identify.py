@@ -4,7 +4,7 @@ LOG is a rosbag2 folder (MCAP or sqlite3: :mod:`uvms.scenario.bags.reader`) or a
 (:data:`uvms.dynamics.identification.data.CSV_COLUMNS`). Writes into the output folder (replaced as a whole):
 
 - ``hydrodynamics.yaml``: the model's hydrodynamics with the vehicle's identified, in the form
-  :func:`uvms.dynamics.hydro.hydrodynamics.load_hydrodynamics_yaml` reads (``uvms.dynamics.hydrodynamics_of(robot,
+  :func:`uvms.dynamics.hydro.uuv.load_hydrodynamics_yaml` reads (``uvms.dynamics.hydrodynamics_of(robot,
   PATH)``);
 - ``identification.json``: every parameter with its prior, value, standard error and 95 % interval, what was
   held by its prior (a soft constraint, :mod:`uvms.dynamics.identification.fit`) and why, fit metrics and the options;

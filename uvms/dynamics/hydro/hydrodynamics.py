@@ -29,8 +29,8 @@ of ``fossen``, as uuv_simulator does (:mod:`uvms.dynamics.hydro.shapes`). Volume
 ``neutrally_buoyant`` are read for every type.
 
 Or a YAML file beside the model (``hydrodynamics.yaml``, same keys and the same conventions; see
-:func:`load_hydrodynamics_yaml`, README.md "Hydrodynamics of your vehicle" and the complete example
-``models/example_hydrodynamics.yaml``).
+:func:`~uvms.dynamics.hydro.uuv.load_hydrodynamics_yaml`, README.md "Hydrodynamics of your vehicle" and the complete
+example ``models/example_hydrodynamics.yaml``).
 
 Conventions of the file (those of uuv_simulator's ``HMFossen``)
 --------------------------------------------------------------
@@ -54,15 +54,14 @@ from __future__ import annotations
 
 import os
 import xml.etree.ElementTree as ET
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from ...errors import ModelCheckError, ModelParseError, UVMSError
-from ...model.resources import read_yaml
+from ...errors import ModelParseError, UVMSError
 from ..plugins.readers import read_hydro_plugins
-from .parameters import GRAVITY, SEA_WATER_DENSITY, HydroParameters, LinkHydrodynamics, check_link_names
-from .uuv import MODEL_KEYS, MODEL_TYPES, _numbers, link_from_uuv, urdf_link_masses
+from .parameters import HydroParameters, LinkHydrodynamics
+from .uuv import MODEL_KEYS, MODEL_TYPES, link_from_uuv, load_hydrodynamics_yaml, urdf_link_masses
 
 __all__ = ["MODEL_KEYS", "MODEL_TYPES", "HydroParameters", "LinkHydrodynamics", "hydrodynamics_of",
            "link_from_uuv", "load_hydrodynamics_yaml", "parse_hydrodynamics", "urdf_link_masses"]
@@ -102,82 +101,6 @@ def parse_hydrodynamics(
     except ET.ParseError as exc:
         raise ModelParseError(f"{origin}: malformed XML ({exc})") from None
     return read_hydro_plugins(root, origin, link_names, moving)
-
-
-# ---------------------------------------------------------------------- YAML
-def load_hydrodynamics_yaml(
-    path: str | os.PathLike,
-    link_masses: Mapping[str, float] | None = None,
-    link_names: Iterable[str] | None = None,
-) -> HydroParameters:
-    """Hydrodynamic parameters from a YAML file, in the conventions of the uuv_simulator block.
-
-    README.md ("Hydrodynamics of your vehicle") documents every key, and
-    ``models/example_hydrodynamics.yaml`` is a complete file.
-
-    The file::
-
-        fluid_density: 1028.0          # optional [kg/m^3]
-        gravity: 9.81                  # optional [m/s^2]
-        current: [0.0, 0.0, 0.0]       # optional, world ENU [m/s]
-        links:
-          base_link:
-            volume: 0.0134                       # [m^3]
-            neutrally_buoyant: false             # optional: volume = link mass / density
-            center_of_buoyancy: [0.0, 0.0, 0.01] # [m], link frame
-            hydrodynamic_model:
-              type: fossen
-              added_mass: [36 numbers or 6 rows of 6]   # SNAME axes
-              linear_damping: [6 numbers <= 0]
-              quadratic_damping: [6 numbers <= 0]
-
-    Args:
-        path: the YAML file.
-        link_masses: {link: mass [kg]}, needed only by ``neutrally_buoyant``.
-        link_names: the model's links, checked before any value (None: not checked here).
-
-    Raises:
-        ModelFileNotFound: the file cannot be read.
-        ModelParseError: not YAML, or not of the form above.
-        NameNotFound: a link the model does not have (naming the file and the close names).
-        ModelCheckError: an invalid value.
-    """
-    path = Path(path)
-    document = read_yaml(path, "hydrodynamics")
-    origin = str(path)
-    top_keys = ("fluid_density", "gravity", "current", "links")
-    if not isinstance(document, Mapping) or not isinstance(document.get("links"), Mapping):
-        raise ModelParseError(f"{origin}: expected a mapping with a 'links' mapping (keys: {', '.join(top_keys)})")
-    _check_keys(document, top_keys, origin)
-    check_link_names((str(name) for name in document["links"]), link_names, origin)
-    density = float(_numbers(document.get("fluid_density", SEA_WATER_DENSITY), "fluid_density", 1)[0])
-    links = {}
-    for name, values in document["links"].items():
-        where = f"{origin}: hydrodynamics of link {name!r}"
-        if not isinstance(values, Mapping):
-            raise ModelParseError(f"{where}: expected a mapping")
-        _check_keys(values, ("volume", "neutrally_buoyant", "center_of_buoyancy", "hydrodynamic_model", "box"), where)
-        model = values.get("hydrodynamic_model") or {}
-        if isinstance(model, Mapping):
-            _check_keys(model, MODEL_KEYS, where + " hydrodynamic_model")
-        mass = None if link_masses is None else link_masses.get(str(name))
-        links[str(name)] = link_from_uuv(values, fluid_density=density, link_mass=mass, where=where)
-    try:
-        return HydroParameters(
-            fluid_density=density,
-            gravity=float(_numbers(document.get("gravity", GRAVITY), "gravity", 1)[0]),
-            current=_numbers(document.get("current", [0.0, 0.0, 0.0]), "current", 3),
-            links=links,
-            source=origin,
-        )
-    except ModelCheckError as exc:
-        raise ModelCheckError(f"{origin}: {exc}") from None
-
-
-def _check_keys(mapping: Mapping, valid: tuple[str, ...], where: str) -> None:
-    unknown = sorted(str(key) for key in mapping if key not in valid)
-    if unknown:
-        raise ModelParseError(f"{where}: unknown key(s) {', '.join(unknown)}; valid: {', '.join(valid)}")
 
 
 # ------------------------------------------------------------- for a robot

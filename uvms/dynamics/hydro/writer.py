@@ -1,5 +1,5 @@
 """Hydrodynamic parameters written as the YAML file that
-:func:`uvms.dynamics.hydro.hydrodynamics.load_hydrodynamics_yaml` reads: the inverse of that reader, in the file's
+:func:`uvms.dynamics.hydro.uuv.load_hydrodynamics_yaml` reads: the inverse of that reader, in the file's
 uuv_simulator conventions (SNAME axes for the added mass and damping, Fossen's negative derivatives, the centre of
 buoyancy in the link frame).
 
