@@ -171,3 +171,29 @@ def test_a_run_folder_has_the_inequality_figure(tmp_path):
     assert (tmp_path / "f" / "inequalities.png").stat().st_size > 20_000
     assert json.loads((tmp_path / "f" / "metrics.json").read_text())["inequalities"]["vehicle_attitude"]["level"] == 2
     assert tmp_path / "f" / "inequalities.png" in result.files
+
+
+def test_the_recorder_takes_the_solvers_activity_and_measures_the_rest_itself():
+    """ObjectiveRecorder: an objective is active as the solver's result says (its ``activity``: e.g. a QP row binding
+    inside the band-free damper), else as its own activation at the row's q; values and activations are its own."""
+    from types import SimpleNamespace
+
+    from uvms.scenario.inequalities import ObjectiveRecorder, ScenarioInequalities
+    from uvms.tasks.objectives import PlaneClearance, VehicleAttitude
+
+    from conftest import shipped
+
+    robot = shipped("bluerov2_alpha5")
+    q = robot.configuration(base=[0, 0, -5, 0.15, 0.0, 0.3], arm=[3.0, 1.5, 3.4, 3.0, 0.007])  # tilted 0.15 rad
+    tilt, floor = VehicleAttitude(robot, 0.1), PlaneClearance(robot, "vehicle", [0, 0, -9], [0, 0, 1], min=0.5)
+    recorder = ObjectiveRecorder(robot, ScenarioInequalities([[tilt], [floor]], ["vehicle_attitude", "plane_clearance"],
+                                                             enforced=True))
+    rate = (np.zeros(robot.nv),)
+    alone = recorder(0.0, q, None, SimpleNamespace(rate=rate, info=None))
+    assert alone["objective_active"].tolist() == [True, False]  # the tilt is past its 0.1 rad, the floor 4 m away
+    assert alone["objective_value"] == pytest.approx([0.15, 4.0], abs=1e-9)
+    solver = SimpleNamespace(activity={floor.name: True, tilt.name: False})  # what a solver reported
+    told = recorder(0.0, q, None, SimpleNamespace(rate=rate, info=solver))
+    assert told["objective_active"].tolist() == [False, True]
+    assert told["objective_value"].tolist() == alone["objective_value"].tolist()
+    assert told["objective_activation"].tolist() == alone["objective_activation"].tolist() == [1.0, 0.0]

@@ -253,6 +253,23 @@ def test_an_equality_task_feasible_with_the_active_inequalities_is_met():
     assert hqp.residual <= 1e-7 and hqp.status("vehicle_attitude").active  # measured ~1e-10
 
 
+
+def test_a_results_activity_is_its_objectives_active_flags():
+    """SolverResult.activity (what a recorder reads at every row) names each objective with its statuses' ``active``:
+    set-based from the activations (two active, one not), the QP hierarchy from its binding rows."""
+    robot = shipped("bluerov2_alpha5")
+    q = robot.configuration(base=[0, 0, -5, 0.15, 0.0, 0.3], arm=[3.0, 1.5, 3.4, 3.0, 0.007])  # tilted, elbow in band
+    clearance = PlaneClearance(robot, "vehicle", [0.0, 0.0, -9.0], [0.0, 0.0, 1.0], min=0.5, band=0.1)  # far: idle
+    levels = [JointLimits(robot, margin={"alpha_axis_c": 0.05}, band=0.2), VehicleAttitude(robot, 0.1), clearance,
+              FrameTask(robot, target=robot.fk(q) * pin.SE3(np.eye(3), np.array([0.1, 0.0, 0.05])))]
+    set_based = solve_once(SetBasedSolver, robot, q, levels, gain=1.0)
+    assert set_based.activity == {"joint_limits": True, "vehicle_attitude": True, clearance.name: False}
+    assert list(set_based.activity.items()) == [(status.name, status.active) for status in set_based.objectives]
+    hqp = solve_once(HQPSolver, robot, q, levels, dt=DT, gain=1.0)
+    assert hqp.activity == {status.name: status.active for status in hqp.objectives}
+    assert hqp.activity["vehicle_attitude"] and not hqp.activity[clearance.name]
+
+
 # ------------------------------------------------------------------------------------ continuity
 def max_velocity_jump(shape: str, dt: float) -> tuple[float, float]:
     """(max |v_{k+1} - v_k| over a reach that activates the elbow's limit, its activation after the run)."""

@@ -286,3 +286,39 @@ def test_an_objectives_rows_are_its_value_jacobian_activation_and_reference(rng)
     tilt = objectives[1].rows(Configuration(robot, level))
     assert tilt.value[0] < 1e-12 and not tilt.jacobian.any()  # level: the tilt's gradient taken as 0
     assert tilt.activation[0] == 0.0  # deep inside the valid set
+
+
+def test_the_fused_icat_and_box_call_is_the_two_calls_in_turn(rng):
+    """icat_saturated_into (the set-based step's one compiled call) gives the numbers of icat_into then
+    saturated_sum_into: the solved columns, the scales, the speed ratio, the sigma_min and the damping, with the box
+    binding (the lowest level scaled) and not."""
+    from uvms.numerics._kernels.boxes import saturated_sum_into
+    from uvms.numerics._kernels.icat import icat_into, icat_saturated_into
+    from uvms.numerics.inverses import RCOND, WeightedInverse
+
+    size = 6
+    kernel_weights = WeightedInverse(rng.uniform(0.5, 2.0, size), size).kernel_weights
+    activations = [np.array([0.0, 0.4, 1.0]), np.ones(3), np.array([0.7, 0.2])]
+    jacobians = np.concatenate([rng.normal(size=(a.size, size)) for a in activations])
+    references, stacked = rng.normal(size=8), np.concatenate(activations)
+    offsets, equality = np.array([0, 3, 6, 8], dtype=np.int64), np.array([False, True, False])
+    q, rows = rng.normal(size=size), np.array([1, 4], dtype=np.int64)  # two rate rows: joints 1 and 4
+    low, high = q[rows] - 0.02, q[rows] + 0.03
+    scaled_any = False
+    for maximum in (np.full(size, np.inf), np.full(size, 0.05)):  # no speed limit; one that binds
+        constants = (jacobians, references, stacked, offsets, equality, *kernel_weights, 0.02, 0.0, 0.0, RCOND, 0.5)
+        contributions, sigmas = np.empty((3, size)), np.empty(3)
+        converged, largest = icat_into(*constants, contributions, sigmas)
+        total, scales = np.empty(size), np.empty(3)
+        ratio = saturated_sum_into(contributions, contributions, q, rows, rows, low, high, 0.1, 1.0, maximum, True,
+                                   1e-12, total, scales)
+        fused = np.empty((3, size)), np.empty(3), np.empty(size), np.empty(3)
+        converged_fused, largest_fused, ratio_fused = icat_saturated_into(*constants, q, rows, rows, low, high, 0.1,
+                                                                          1.0, maximum, 1e-12, *fused)
+        assert converged and converged_fused and largest_fused == pytest.approx(largest, rel=1e-15)
+        assert ratio_fused == pytest.approx(ratio, rel=1e-15, abs=1e-300)
+        for got, expected in zip(fused, (contributions, sigmas, total, scales)):
+            np.testing.assert_allclose(got, expected, rtol=1e-15, atol=1e-300)
+        scaled_any = scaled_any or bool(np.any(scales < 1.0))
+    assert scaled_any and ratio > 0.5  # the box bound the sum in a case (measured scales < 1 and a ratio of ~1)
+

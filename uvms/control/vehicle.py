@@ -236,7 +236,9 @@ class VehicleVelocityController:
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
         feedforward = self.feedforward(q, v, rate, arm)
         wrench = feedforward + self.kp * error + self.ki * self.integral - self.disturbance
-        allocation = self.allocator.allocate(wrench, nu, water_in_base(self.model, q))
+        # the water's velocity moves the fins' lift alone: a thrusters-only allocation does not read it
+        current = water_in_base(self.model, q) if isinstance(self.allocator, FinAllocator) else None
+        allocation = self.allocator.allocate(wrench, nu, current)
         self._integrate(error, allocation, dt)
         return VehicleControl(wrench, feedforward, allocation, error)
 

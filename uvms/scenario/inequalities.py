@@ -119,18 +119,20 @@ class ObjectiveRecorder:
             state = self._state = Configuration(self.robot, q, check=False)
         else:
             state.update(q, check=False)
-        values, pairs = [], []
+        # the solver's own report of which objectives are active (its activity, not its statuses' violations)
+        reported = getattr(getattr(sample, "info", None), "activity", None) or {}
+        values, activations, active, pairs = [], [], [], []
         for objective in self.objectives:
             if objective.collision:  # which pair each row is, for the metrics and the replay
                 chosen, found = objective.nearest(state)
-                values.append(found.distance)
+                value = found.distance
                 pairs.append(chosen)
             else:
-                values.append(objective.value(state))
-        activations = [objective.activation(value) for objective, value in zip(self.objectives, values)]
-        reported = {status.name: status.active for status in getattr(getattr(sample, "info", None), "objectives", ())}
-        active = [reported.get(objective.name, bool((activation > 0).any()))
-                  for objective, activation in zip(self.objectives, activations)]
+                value = objective.value(state)
+            activation = objective.activation(value)
+            values.append(value)
+            activations.append(activation)
+            active.append(reported.get(objective.name, bool((activation > 0).any())))
         v = sample.rate[0]
         return {"objective_value": np.concatenate(values) if values else np.zeros(0),
                 "objective_activation": np.concatenate(activations) if activations else np.zeros(0),

@@ -206,16 +206,21 @@ class SolverResult:
         return tuple(level.residual(self.v) for level in self.levels)
 
     @cached_property
+    def activity(self) -> Mapping[str, bool]:
+        """Per objective name, in priority order, whether it is active (:attr:`objectives`' ``active`` alone: what a
+        recorder reads at every row, without the statuses' violations)."""
+        return {rows.name: self._active(rows) for level in self.levels for rows in level.objectives}
+
+    def _active(self, rows: InequalityRows) -> bool:
+        """Whether the objective of ``rows`` is active: some activation > 0, or (QP hierarchy) binding."""
+        return bool((rows.activation > 0).any()) if self.binding is None else self.binding.get(rows.name, False)
+
+    @cached_property
     def objectives(self) -> tuple[ObjectiveStatus, ...]:
         """The inequality objectives, in priority order: value, activation, whether active, violation."""
-        statuses = []
-        for level in self.levels:
-            for rows in level.objectives:
-                active = (bool(np.any(rows.activation > 0)) if self.binding is None
-                          else self.binding.get(rows.name, False))
-                statuses.append(ObjectiveStatus(name=rows.name, level=level.index, value=rows.value,
-                                                activation=rows.activation, active=active, violation=rows.violation))
-        return tuple(statuses)
+        return tuple(ObjectiveStatus(name=rows.name, level=level.index, value=rows.value, activation=rows.activation,
+                                     active=self._active(rows), violation=rows.violation)
+                     for level in self.levels for rows in level.objectives)
 
     @property
     def active(self) -> tuple[str, ...]:

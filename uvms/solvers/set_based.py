@@ -84,9 +84,10 @@ class ICAT:
         self.damping = damping if isinstance(damping, VariableDamping) else check_damping(damping)
         self._root_eta = np.sqrt(self.eta)
         self._kernel_constants = (*self.inverse.kernel_weights, *damping_parameters(self.damping), RCOND, self.eta)
-        from ..numerics._kernels.icat import icat_into  # numba: loaded where a solver is built, not by ``import uvms``
+        # numba: loaded where a solver is built, not by ``import uvms``
+        from ..numerics._kernels.icat import icat_into, icat_saturated_into
 
-        self._icat_into = icat_into
+        self._icat_into, self._icat_saturated_into = icat_into, icat_saturated_into
 
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
@@ -118,23 +119,48 @@ class ICAT:
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
-        levels = hierarchy.levels
-        count = len(levels)
+        count = len(hierarchy.levels)
         contributions, sigmas = np.empty((count, self.size)), np.empty(count)
         if not count:
             return contributions, sigmas, 0.0
-        if count > 1:
-            jacobians = np.concatenate([level.solved for level in levels])
-            references = np.concatenate([level.reference for level in levels])
-            activations = np.concatenate([level.activation for level in levels])
-        else:
-            jacobians = np.ascontiguousarray(levels[0].solved, dtype=float)
-            references, activations = levels[0].reference, levels[0].activation
+        jacobians, references, activations = stacked_levels(hierarchy)
         converged, largest = self._icat_into(jacobians, references, activations, offsets, equality,
                                              *self._kernel_constants, contributions, sigmas)
         if not converged:
             converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
         return contributions, sigmas, largest
+
+    def solve_saturated(self, hierarchy: Hierarchy, offsets: np.ndarray, equality: np.ndarray, q: np.ndarray,
+                        box: tuple) -> tuple[np.ndarray, np.ndarray, float, tuple[float, ...], float]:
+        """:meth:`solve`, then the levels' sum inside the velocity box at q, in one compiled call
+        (:func:`~uvms.numerics._kernels.icat.icat_saturated_into`; ``box``: its arguments from q_index to the
+        tolerance): the solved columns (n,), the sigma_min (L,), the largest damping used, the scales and the
+        speed ratio of the sum. For a hierarchy with levels whose solved columns are v (not free floating).
+
+        Raises:
+            NumericalError: an inverse did not converge (a non-finite level).
+        """
+        count = len(hierarchy.levels)
+        contributions, sigmas = np.empty((count, self.size)), np.empty(count)
+        total, scales = np.empty(self.size), np.empty(count)
+        jacobians, references, activations = stacked_levels(hierarchy)
+        converged, largest, ratio = self._icat_saturated_into(jacobians, references, activations, offsets, equality,
+                                                              *self._kernel_constants, q, *box, contributions, sigmas,
+                                                              total, scales)
+        if not converged:
+            converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
+        return total, sigmas, largest, tuple(scales.tolist()), ratio
+
+
+def stacked_levels(hierarchy: Hierarchy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The levels' solved rows (M, n), references (M,) and activations (M,) stacked, as the compiled iCAT reads them
+    (one level: its own arrays)."""
+    levels = hierarchy.levels
+    if len(levels) > 1:
+        return (np.concatenate([level.solved for level in levels]),
+                np.concatenate([level.reference for level in levels]),
+                np.concatenate([level.activation for level in levels]))
+    return np.ascontiguousarray(levels[0].solved, dtype=float), levels[0].reference, levels[0].activation
 
 
 # ------------------------------------------------------------------------------- the solver
@@ -197,6 +223,8 @@ class SetBasedSolver(Solver):
         self._box_constants = (saturated_sum_into, rows.q_index, rows.v_index, rows.low, rows.high, self.dt or 1.0,
                                self.fraction,
                                self.maximum, not free_floating, TOLERANCE)
+        self._box = (rows.q_index, rows.v_index, rows.low, rows.high, self.dt or 1.0, self.fraction, self.maximum,
+                     TOLERANCE)  # the same box, as the fused call takes it (ICAT.solve_saturated)
 
     def velocity(self, configuration: Configuration, shared: ItemRows | None = None) -> SolverResult:
         """The set-based velocity at ``configuration`` and its diagnostics (sigma_min, the residuals and the
@@ -205,8 +233,12 @@ class SetBasedSolver(Solver):
         state = self._checked(configuration)
         plan = self.plan
         hierarchy = plan.evaluate(state, shared)
-        contributions, sigmas, used = self.icat.solve(hierarchy, plan.offsets, plan.equality)
-        solved, scales, ratio = saturate(hierarchy, contributions, state.q, self._box_constants)
+        if hierarchy.levels and not self.free_floating:  # the recursion and the box in one compiled call
+            solved, sigmas, used, scales, ratio = self.icat.solve_saturated(hierarchy, plan.offsets, plan.equality,
+                                                                            state.q, self._box)
+        else:
+            contributions, sigmas, used = self.icat.solve(hierarchy, plan.offsets, plan.equality)
+            solved, scales, ratio = saturate(hierarchy, contributions, state.q, self._box_constants)
         v = hierarchy.velocity(solved)
         return SolverResult(v, lambda: last_task_sigma(hierarchy, sigmas), used, lambda: solved_rows(hierarchy),
                             free_floating=self.free_floating, scales=scales,

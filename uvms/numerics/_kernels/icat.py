@@ -12,12 +12,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .boxes import saturated_sum_into
 from .dense import apply, copy_into, product, scale_matrix, subtract_in_place
 from .qr import gram_rows
 from .svd import EPSILON
 from .weighted import weighted_inverse_into, weighted_norm
 
-__all__ = ["eta_rows", "icat_into", "level_inverse_into"]
+__all__ = ["eta_rows", "icat_into", "icat_saturated_into", "level_inverse_into"]
 
 
 @njit(cache=True)
@@ -201,3 +202,31 @@ def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.nda
         sigmas[level] = sigma_min
         largest = max(largest, used)
     return True, largest
+
+
+@njit(cache=True)
+def icat_saturated_into(jacobians: np.ndarray, references: np.ndarray, activations: np.ndarray, offsets: np.ndarray,
+                        equality: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float,
+                        epsilon: float, lambda_max: float, rcond: float, eta: float, q: np.ndarray,
+                        q_index: np.ndarray, v_index: np.ndarray, low: np.ndarray, high: np.ndarray, dt: float,
+                        fraction: float, maximum: np.ndarray, tolerance: float, contributions: np.ndarray,
+                        sigmas: np.ndarray, total: np.ndarray, scales: np.ndarray) -> tuple[bool, float, float]:
+    """:func:`icat_into`, then the levels' sum inside the velocity box
+    (:func:`~.boxes.saturated_sum_into` with the contributions in v: every column solved, none free floating), in
+    one call: the set-based solver's step after its rows are stacked.
+
+    Args:
+        jacobians ... sigmas: as :func:`icat_into`; q, q_index ... tolerance: as :func:`~.boxes.saturated_sum_into`
+            (``check_inside`` True); total: (n,) written with the sum; scales: (L,) written.
+
+    Returns:
+        (converged (False: a non-finite level; total and scales not written), the largest damping used, the speed
+        ratio of the sum).
+    """
+    converged, largest = icat_into(jacobians, references, activations, offsets, equality, inverse_sqrt, transform,
+                                   damping, epsilon, lambda_max, rcond, eta, contributions, sigmas)
+    if not converged:
+        return False, largest, 0.0
+    ratio = saturated_sum_into(contributions, contributions, q, q_index, v_index, low, high, dt, fraction, maximum,
+                               True, tolerance, total, scales)
+    return True, largest, ratio
