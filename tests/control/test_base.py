@@ -12,6 +12,7 @@ import uvms
 from uvms.control import Controller, OpenLoop, station_keeping
 from uvms.control.base import State
 from uvms.control.coordination import arm_rates_for_task
+from uvms.control.reference import TaskReference
 from uvms.control.station import ActuatedKinematics
 from uvms.control.vehicle import VehiclePoseController
 from uvms.dynamics.plant.actuated import ActuatedPlant
@@ -50,8 +51,8 @@ def chain_kinematics(robot, solver):
     target = robot.fk(q).translation + np.array([0.0, 0.04, 0.01])
     hold = VelocityRamps.trapezoid(target, np.zeros(3), 1.0, 0.5)
     task = FrameTask(robot, axes=("x", "y", "z"))
-    kinematics = ActuatedKinematics(robot, VehiclePoseController(None, 1.5, 0.5), task, hold, solver=solver,
-                                    gain=1.0, damping=0.01)
+    kinematics = ActuatedKinematics(robot, VehiclePoseController(None, 1.5, 0.5), TaskReference(task, hold),
+                                    solver=solver, gain=1.0, damping=0.01)
     kinematics.reset(State(q))  # the station
     return kinematics, q
 

@@ -9,6 +9,7 @@ import pytest
 import uvms
 from uvms.control.base import State
 from uvms.control.coordination import CoordinatedControl, achieved_ratio, arm_rates_for_task, vehicle_rates_for_task
+from uvms.control.reference import TaskReference
 from uvms.control.station import ActuatedKinematics
 from uvms.control.vehicle import VehiclePoseController
 from uvms.solvers.base import SolverFactory
@@ -66,8 +67,8 @@ def test_vehicle_bounds_lie_between_the_measured_velocity_and_what_the_thrusters
 def kinematics(robot, target, solver, inequalities=()):
     pose = VehiclePoseController(None, 1.5, 0.5)
     hold = VelocityRamps.trapezoid(target, np.zeros(3), 1.0, 0.5)
-    kinematics = ActuatedKinematics(robot, pose, FrameTask(robot, axes=("x", "y", "z")), hold, solver=solver,
-                                    inequalities=inequalities, damping=0.01)
+    reference = TaskReference(FrameTask(robot, axes=("x", "y", "z")), hold)
+    kinematics = ActuatedKinematics(robot, pose, reference, solver=solver, inequalities=inequalities, damping=0.01)
     kinematics.reset(State(robot.configuration(base=np.zeros(6), arm=ARM)))  # the station
     return kinematics
 

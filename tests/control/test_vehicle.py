@@ -10,6 +10,7 @@ import pytest
 
 import uvms
 from uvms.control.coordination import CoordinatedControl, coordinated_arm_rates
+from uvms.control.reference import TaskReference
 from uvms.control.settings import ActuatedSettings
 from uvms.control.station import actuated_control, station_keeping
 from uvms.control.vehicle import pose_velocity_reference
@@ -171,7 +172,7 @@ def test_any_kinematic_controller_drives_the_actuated_plant(robot, thrusters):
         actuated = ActuatedPlant(Plant(robot, gravity=True, current=[0.3, 0.0, 0.0]), thrusters)
         task = FrameTask(robot, axes=("x", "y", "z"))
         solver = SolverFactory(uvms.PrioritySolver, robot, {"damping": 0.01, "priority": "classic"})
-        controller = actuated_control(actuated, DT, task, hold, solver,
+        controller = actuated_control(actuated, DT, TaskReference(task, hold), solver,
                                       ActuatedSettings(coordination=coordination))
         assert isinstance(controller, CoordinatedControl)
         result = simulate(actuated, controller, station, 4.0, DT)
@@ -201,7 +202,7 @@ def test_the_chain_is_built_without_a_configuration_and_holds_the_vehicle_where_
     gains are the run's start's, set at reset), as the MPC holds its start."""
     actuated = ActuatedPlant(Plant(robot, gravity=True), thrusters)
     solver = SolverFactory(uvms.CLIKSolver, robot, {"gain": 1.0, "damping": 0.01})
-    controller = actuated_control(actuated, DT, FrameTask(robot, axes=("x", "y", "z")), None, solver)
+    controller = actuated_control(actuated, DT, TaskReference(FrameTask(robot, axes=("x", "y", "z")), None), solver)
     assert controller.velocity.kp is None and controller.kinematic.vehicle_target is None
     for start in (robot.configuration(base=[0.0, 0.0, -1.0, 0.0, 0.0, 0.0], arm=ARM),
                   robot.configuration(base=[2.0, -1.0, -3.0, 0.0, 0.0, 0.8], arm=ARM)):

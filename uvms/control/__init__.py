@@ -9,6 +9,7 @@ vehicle), the actuated chain (vehicle loops, allocation, arm-vehicle coordinatio
 from .base import Command, Controller, OpenLoop, State
 from .coordination import CoordinatedControl, coordinated_arm_rates
 from .gjm import GJMControlError, GJMController, VelocityRamps
+from .reference import TaskReference
 from .sequence import Phase, PhasePlan, SequenceController
 from .settings import ActuatedSettings
 from .station import ActuatedKinematics, actuated_control, station_keeping
@@ -17,5 +18,5 @@ from .vehicle import VehiclePoseController, VehicleVelocityController, pose_velo
 
 __all__ = ["ActuatedKinematics", "ActuatedSettings", "Command", "Controller", "CoordinatedControl",
            "GJMControlError", "GJMController", "OpenLoop", "Phase", "PhasePlan", "SequenceController", "State",
-           "TrackingController", "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
+           "TaskReference", "TrackingController", "VehiclePoseController", "VehicleVelocityController", "VelocityRamps",
            "actuated_control", "coordinated_arm_rates", "pose_velocity_reference", "station_keeping"]

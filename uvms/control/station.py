@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -56,6 +56,7 @@ from ..tasks.task import Task
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, vehicle_rates_for_task
+from .reference import TaskReference
 from .settings import ActuatedSettings, gain_vector
 from .tightening import Tightening
 from .vehicle import VehiclePoseController, VehicleVelocityController
@@ -92,9 +93,9 @@ class ActuatedKinematics:
     Args:
         robot: a floating-base Robot.
         pose: the vehicle pose controller (the pose objective's gains and speed bound).
-        task: the end-effector task (any axes).
-        trajectory: t [s] -> a sample with ``pose`` (pin.SE3) and ``twist`` (6,) world [m/s, rad/s] the task
-            follows, or None: no end-effector task, the arm held (zero joint rates).
+        reference: the end-effector task (any axes) and the trajectory it follows
+            (:class:`~uvms.control.reference.TaskReference`); without a trajectory no end-effector task, the arm
+            held (zero joint rates).
         solver: the solver, built per level set (twice with priorities: once per level order; once with fixed
             columns). Where the vehicle's pose objective goes relative to the task is the solver's
             :attr:`~uvms.solvers.base.Solver.vehicle_level`: 0 above it, 1 or None below. Below, the task takes
@@ -114,30 +115,31 @@ class ActuatedKinematics:
         SolverInputError: a non-floating base, a bad gain, or a solver that refuses the levels.
     """
 
-    def __init__(self, robot: Robot, pose: VehiclePoseController, task: FrameTask,
-                 trajectory: Callable[[float], object] | None, *, solver: SolverFactory,
+    def __init__(self, robot: Robot, pose: VehiclePoseController, reference: TaskReference, *, solver: SolverFactory,
                  inequalities: Sequence[Sequence] = (), gain: float = 1.0,
                  damping: float | VariableDamping = 0.01, base_placement: pin.SE3 | None = None,
                  tighten: bool = False) -> None:
         if robot.base_type != "floating":
             raise SolverInputError(f"an actuated UVMS needs a floating base, {robot.name} is {robot.base_type}")
-        self.robot, self.pose, self.task, self.trajectory = robot, pose, task, trajectory
+        self.robot, self.pose, self.task_reference, self.task = robot, pose, reference, reference.task
+        task = self.task
         self.gain = float(gain_vector(gain, "gain", 1)[0])
         self.damping = damping if isinstance(damping, VariableDamping) else float(damping)
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
         tightened = [objective for level in levels for objective in level if objective.collision]
-        self.tightening = Tightening(tightened) if tighten and tightened and trajectory is not None else None
+        self.tightening = Tightening(tightened) if tighten and tightened and reference.moving else None
         if levels:  # the arm's speed limits held by the hierarchy (the task scaled first), not clipped after it
             levels.insert(0, [JointVelocityLimits(robot, name="arm_speed_limits")])
         nb, vehicle_level = robot.n_vehicle, solver.cls.vehicle_level
         self._given: GivenColumns | None = None  # the task with the vehicle's columns given (fixed columns)
         self._momentum = None  # the configuration's momentum rows: a vehicle held still with fixed columns
         if solver.cls.holds_priorities:
-            reference = [task]
-            reference.insert(len(reference) if vehicle_level is None else vehicle_level, [self._vehicle_reference])
-            self.reference_solver = solver([*levels, *reference])
+            reference_levels = [task]
+            reference_levels.insert(len(reference_levels) if vehicle_level is None else vehicle_level,
+                                    [self._vehicle_reference])
+            self.reference_solver = solver([*levels, *reference_levels])
             self.arm_solver = solver([[self._vehicle_measured], *levels, task])
         else:  # the vehicle's velocity as fixed columns (module docstring): one solver for both
             self._given = GivenColumns(task, nb)
@@ -147,7 +149,6 @@ class ActuatedKinematics:
         #: adds the part of the task the arm cannot give (all of it without an arm)
         self.vehicle_given = self._given is not None or vehicle_level == 0
         self._configuration: Configuration | None = None
-        self._time: float | None = None
         #: world_M_base [m, rad] where the vehicle is held, or None: its base frame's pose where the run starts
         self.station: pin.SE3 | None = None
         self.vehicle_target: pin.SE3 | None = None  # the station of the run (:meth:`reset`)
@@ -156,7 +157,7 @@ class ActuatedKinematics:
         """A run from ``state``: the vehicle held at :attr:`station`, else at its base frame's pose there; the
         trajectory's sample the task points at and the tightening's margins forgotten."""
         self.vehicle_target = self.base_pose(state.q) if self.station is None else self.station.copy()
-        self._time = None
+        self.task_reference.forget()
         if self._configuration is not None:
             self._rows.clear()
         if self.tightening is not None:
@@ -171,11 +172,7 @@ class ActuatedKinematics:
             self._rows = ItemRows()
         else:
             self._configuration.update(q, check=False)
-        if self.trajectory is not None and t != self._time:
-            sample = self.trajectory(t)
-            self.task.set_target(sample.pose)
-            self.task.set_target_velocity(sample.twist, check=False)
-            self._time = t
+        if self.task_reference.follow(t):
             self._rows.clear()
         return self._configuration
 
@@ -195,7 +192,7 @@ class ActuatedKinematics:
     def _solve(self, configuration: Configuration, vehicle: np.ndarray, reference: bool) -> tuple[np.ndarray, object]:
         """v (nv,) with the vehicle's velocity (joint axes) given: above the task (reference) or on top."""
         nb = self.robot.n_vehicle
-        if self.trajectory is None:
+        if not self.task_reference.moving:
             return np.concatenate([vehicle, np.zeros(self.robot.n_arm)]), None
         if self._given is not None:  # fixed columns: the arm solved with the vehicle's velocity given
             self._given.velocity[:] = vehicle
@@ -262,8 +259,8 @@ class ActuatedKinematics:
         # the norms as numpy's norm of a vector computes them (sqrt of x.dot(x)), without its dispatch per call
         row = {"vehicle_position_error": math.sqrt(offset.dot(offset)),
                "vehicle_attitude_error": math.sqrt(attitude_error.dot(attitude_error)), "ee_position": ee}
-        if self.trajectory is not None:
-            miss = self.trajectory(t).pose.translation - ee
+        if self.task_reference.moving:
+            miss = self.task_reference.samples(t).pose.translation - ee
             row["ee_point_error"] = math.sqrt(miss.dot(miss))
         return row
 
@@ -293,17 +290,18 @@ def station_keeping(actuated: ActuatedPlant, q0: np.ndarray, dt: float,
     point = start.translation if ee_target is None else np.asarray(ee_target, dtype=float).reshape(3)
     hold = None if hold_arm else VelocityRamps.trapezoid(point, np.zeros(3), 1.0, 0.5, rotation=start.rotation)
     solver = SolverFactory(CLIKSolver, robot, {"gain": ee_gain, "damping": arm_damping})
-    controller = actuated_control(actuated, dt, FrameTask(robot, frame, axes=("x", "y", "z")), hold, solver, settings)
+    reference = TaskReference(FrameTask(robot, frame, axes=("x", "y", "z")), hold)
+    controller = actuated_control(actuated, dt, reference, solver, settings)
     controller.kinematic.station = controller.kinematic.base_pose(q0)
     return controller
 
 
-def actuated_control(actuated: ActuatedPlant, dt: float, task: FrameTask, trajectory: Callable[[float], object] | None,
-                     solver: SolverFactory, settings: ActuatedSettings = ActuatedSettings(), *,
+def actuated_control(actuated: ActuatedPlant, dt: float, reference: TaskReference, solver: SolverFactory,
+                     settings: ActuatedSettings = ActuatedSettings(), *,
                      inequalities: Sequence[Sequence] = ()) -> CoordinatedControl:
     """The whole chain on ``actuated``: the vehicle held at its station, its pose where the run starts
-    (:meth:`CoordinatedControl.reset <uvms.control.coordination.CoordinatedControl.reset>`), ``task`` following
-    ``trajectory``.
+    (:meth:`CoordinatedControl.reset <uvms.control.coordination.CoordinatedControl.reset>`), the reference's task
+    following its trajectory.
 
     Args:
         actuated: the simulated plant with its thrusters (and fins); its robot and hydrodynamics are the controller's
@@ -311,7 +309,7 @@ def actuated_control(actuated: ActuatedPlant, dt: float, task: FrameTask, trajec
             allocation's (:class:`uvms.dynamics.thrusters.allocation.ThrustAllocator`; with fins, allocated with the
             thrusters at each step's velocity: :class:`uvms.dynamics.thrusters.fin_allocation.FinAllocator`).
         dt: control period [s] (the simulation step).
-        task, trajectory, inequalities: as in :class:`ActuatedKinematics`.
+        reference, inequalities: as in :class:`ActuatedKinematics`.
         solver: as in :class:`ActuatedKinematics`; its ``gain`` K [1/s] and ``damping`` (0 when it has none) are
             those of the vehicle's added share.
         settings: the loops, the allocation's priorities and the coordination
@@ -329,11 +327,11 @@ def actuated_control(actuated: ActuatedPlant, dt: float, task: FrameTask, trajec
         warnings.warn(note, ThrusterLayoutWarning, stacklevel=2)
     velocity = VehicleVelocityController(model, allocator, settings)
     pose = VehiclePoseController(velocity, settings.pose_gains, settings.max_speed)
-    kinematic = ActuatedKinematics(robot, pose, task, trajectory, solver=solver, inequalities=inequalities,
+    kinematic = ActuatedKinematics(robot, pose, reference, solver=solver, inequalities=inequalities,
                                    gain=solver.options.get("gain", 1.0), damping=solver.options.get("damping", 0.0),
                                    base_placement=model.robot.base_placement, tighten=settings.tightening)
     return CoordinatedControl(robot, velocity, kinematic, dt,
-                              coordination=settings.coordination and trajectory is not None,
+                              coordination=settings.coordination and reference.moving,
                               saturation_feedback=settings.saturation_feedback,
                               acceleration_feedforward=settings.acceleration_feedforward,
                               servo_compensation=settings.servo_compensation)

@@ -13,11 +13,11 @@ plant simulates their first-order response. The thrusters are model data
 
 from __future__ import annotations
 
+from ...control.reference import TaskReference
 from ...control.station import actuated_control
 from ...dynamics.plant.actuated import ActuatedPlant
 from ...errors import ScenarioError, UVMSError
 from ...solvers.base import SolverFactory
-from ...tasks.frame import FrameTask
 from ..actuated import Actuation
 from ..inequalities import ScenarioInequalities
 from ..spec import ScenarioSpec
@@ -30,11 +30,11 @@ def build_actuated(spec: ScenarioSpec, parts: Parts) -> Setup:
     dt = float(spec.simulation.dt)
     solver, inequalities = scenario_levels(spec, parts.robot, dt)
     samples = parts.samples(dt, "euler")
-    actuation = make_actuation(parts.actuated, parts.task, samples, spec, solver, inequalities)
+    actuation = make_actuation(parts.actuated, TaskReference(parts.task, samples), spec, solver, inequalities)
     return parts.setup(actuation.controller, inequalities=inequalities, actuation=actuation, samples=samples)
 
 
-def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, spec: ScenarioSpec, solver: SolverFactory,
+def make_actuation(actuated: ActuatedPlant, reference: TaskReference, spec: ScenarioSpec, solver: SolverFactory,
                    inequalities: ScenarioInequalities | None) -> Actuation:
     """The whole chain of the scenario on ``actuated`` (:func:`uvms.control.station.actuated_control`).
 
@@ -54,7 +54,7 @@ def make_actuation(actuated: ActuatedPlant, task: FrameTask, trajectory, spec: S
                             "[[inequalities]] joint_limits table")
     enforced = inequalities.levels if inequalities is not None and inequalities.enforced else ()
     try:
-        controller = actuated_control(actuated, float(spec.simulation.dt), task, trajectory, solver,
+        controller = actuated_control(actuated, float(spec.simulation.dt), reference, solver,
                                       spec.vehicle_control.settings, inequalities=enforced)
     except UVMSError as exc:
         raise ScenarioError(f"vehicle_control/solver: {exc}") from None

@@ -3,11 +3,11 @@
 
 from __future__ import annotations
 
+from ...control.reference import TaskReference
 from ...control.tracking import TrackingController
 from ...errors import ScenarioError, UVMSError
 from ...solvers.base import SolverFactory
-from ...tasks import FrameTask, VehicleTask
-from ...trajectory import RecentSamples
+from ...tasks import VehicleTask
 from ..inequalities import ScenarioInequalities
 from ..spec import ScenarioSpec
 from .parts import Parts, Setup, scenario_levels
@@ -19,19 +19,20 @@ def build_tracking(spec: ScenarioSpec, parts: Parts) -> Setup:
     dt = float(spec.simulation.dt)
     solver, inequalities = scenario_levels(spec, parts.robot, dt)
     samples = parts.samples(dt, spec.simulation.integrator)
-    controller = tracking_controller(parts.task, samples, spec, solver, inequalities)
+    controller = tracking_controller(TaskReference(parts.task, samples), spec, solver, inequalities)
     return parts.setup(controller, inequalities=inequalities, samples=samples)
 
 
-def tracking_controller(task: FrameTask, samples: RecentSamples, spec: ScenarioSpec, solver: SolverFactory,
+def tracking_controller(reference: TaskReference, spec: ScenarioSpec, solver: SolverFactory,
                         inequalities: ScenarioInequalities | None = None) -> TrackingController:
-    """The tracking controller of the scenario's solver (:func:`~uvms.scenario.solver.scenario_solver`), following
-    ``samples`` (the trajectory), built once. Its levels: the ``[[inequalities]]`` (highest first)
+    """The tracking controller of the scenario's solver (:func:`~uvms.scenario.solver.scenario_solver`), its task
+    following the reference's trajectory, built once. Its levels: the ``[[inequalities]]`` (highest first)
     when it enforces them (else the recorder monitors them), then the task, and the ``[vehicle]`` task at the
     level the solver puts it (:attr:`~uvms.solvers.base.Solver.vehicle_level`) when it uses one.
     """
     robot, vehicle, cls = solver.robot, spec.vehicle, solver.cls
     options = dict(solver.options)
+    task = reference.task
     levels: list = [*(inequalities.levels if inequalities is not None and cls.enforces_inequalities else []), task]
     if cls.vehicle_level is not None:
         if not vehicle.velocities and vehicle.heading is None and vehicle.depth is None:
@@ -43,6 +44,6 @@ def tracking_controller(task: FrameTask, samples: RecentSamples, spec: ScenarioS
         gains.insert(cls.vehicle_level, vehicle.gain)
         options["gain"] = gains
     try:
-        return TrackingController(robot, task, samples, SolverFactory(cls, robot, options), levels)
+        return TrackingController(robot, reference, SolverFactory(cls, robot, options), levels)
     except UVMSError as exc:
         raise ScenarioError(f"solver ({spec.solver.method}): {exc}") from None
