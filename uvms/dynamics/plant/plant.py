@@ -261,14 +261,15 @@ class Plant:
         return self.dynamics(robot.check_configuration(q), robot.check_velocity(v),
                               robot.check_velocity(command, self.n_arm, "joint-velocity command"))
 
-    def dynamics(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
-                 body_wrench: np.ndarray | None = None) -> PlantDynamics:
+    def dynamics(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None = None,
+                 out: np.ndarray | None = None) -> PlantDynamics:
         """:meth:`evaluate` without the input checks, for inner loops (an integrator, a prediction model) whose
         inputs are already checked; ``body_wrench`` (6,) [N, N m]: an external wrench on the vehicle, FLU at the
-        base frame origin (:attr:`base_frame`: the thrusters')."""
+        base frame origin (:attr:`base_frame`: the thrusters'); ``out`` (nv,): where to write the accelerations
+        (a part of the caller's state rate; None: a new array)."""
         mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
         nb = self.nb
-        acceleration = np.empty(len(v))  # [base; arm], filled in place (no concatenation)
+        acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
         base_acceleration, arm_acceleration = acceleration[:nb], acceleration[nb:]
         np.subtract(command, v[nb:], arm_acceleration)
         arm_acceleration /= self.motor_time_constant
@@ -287,9 +288,9 @@ class Plant:
         Pinocchio gives M (crba), h (rnea, gravity included), its world Jacobian data.J (one array), the joints'
         placements and bias accelerations (views of its data: :class:`~uvms.dynamics.plant.data_views.JointArrays`);
         the links' LOCAL Jacobians J_l (``getFrameJacobian``'s numbers) and wrenches f_l (their frames) are formed
-        and summed by virtual work in one compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`): Mbar = M + sum_l J_l^T M_A,l J_l,
-        nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea with the wrenches as external
-        forces, to rounding).
+        and summed by virtual work in one compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`):
+        Mbar = M + sum_l J_l^T M_A,l J_l, nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea
+        with the wrenches as external forces, to rounding).
         """
         model, data = self.model, self.data
         count = self._stacked.count

