@@ -47,7 +47,8 @@ def test_of_gives_the_fins_when_asked():
 @pytest.mark.parametrize("fins", [False, True])
 def test_the_state_rate_is_written_in_place_with_the_numbers_of_its_parts(fins, rng):
     """The actuated rate [v', f', delta'] (written part by part into one array) and the sample's wrench are those of
-    the plant's dynamics, the thrusters' lag and the fins' computed on their own, bit for bit."""
+    the plant's dynamics, the thrusters' lag and the fins' computed on their own, bit for bit; an integrator's stage
+    (no motor torques) gives the same rate."""
     if fins:
         with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
             robot = uvms.load(TORPEDO)
@@ -72,6 +73,13 @@ def test_the_state_rate_is_written_in_place_with_the_numbers_of_its_parts(fins, 
                                                         actuated.fins.rate(angles, fin_command)]))
     np.testing.assert_array_equal(dynamics.joint_torque, expected.joint_torque)
     assert velocity is not None and np.shares_memory(dynamics.acceleration, rate)  # v' is the rate's first part
+    # an integrator's stage: the same rate without the motor torques (Plant.stage_acceleration)
+    none, (_, stage), stage_wrench = system._rate(q, x, arm, command, fin_command, False)
+    assert none is None
+    np.testing.assert_array_equal(stage, rate)
+    np.testing.assert_array_equal(stage_wrench, wrench)
+    np.testing.assert_array_equal(plant.stage_acceleration(q, v, arm, wrench), expected.acceleration)
+    np.testing.assert_array_equal(plant.stage_acceleration(q, v, arm), plant.dynamics(q, v, arm).acceleration)
 
 
 def test_a_state_is_refused_only_when_an_entry_is_not_finite():

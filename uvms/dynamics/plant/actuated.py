@@ -282,8 +282,10 @@ class ActuatedPlantSystem:
         return Command(arm=arm, thrust=thrust, fins=fins, info={} if command.info is None else command.info)
 
     def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
-              fin_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray], np.ndarray]:
-        """(the dynamics, the state's rate (v, [v', f', delta']), the actuators' wrench (6,)) at (q, x)."""
+              fin_command: np.ndarray, torques: bool = True) -> tuple[PlantDynamics | None,
+                                                                      tuple[np.ndarray, np.ndarray], np.ndarray]:
+        """(the dynamics (None without ``torques``: an integrator's stage), the state's rate (v, [v', f', delta']),
+        the actuators' wrench (6,)) at (q, x)."""
         nv, n = self.nv, self._n
         v, thrusts, angles = x[:nv], x[nv:n], x[n:]
         thrusters = self.thrusters
@@ -291,7 +293,11 @@ class ActuatedPlantSystem:
         if self.m:  # (without fins their wrench is zero: not added)
             wrench = wrench + thrusters.fin_wrench(q, v, angles)
         rates = np.empty(len(x))  # [v', f', delta'], each part written in place (no concatenation)
-        dynamics = self.plant.dynamics(q, v, arm, wrench, rates[:nv])
+        if torques:
+            dynamics = self.plant.dynamics(q, v, arm, wrench, rates[:nv])
+        else:
+            dynamics = None
+            self.plant.stage_acceleration(q, v, arm, wrench, rates[:nv])
         thrusters.rate(thrusts, thrust_command, rates[nv:n])
         if self.m:
             rates[n:] = thrusters.fins.rate(angles, fin_command)
@@ -313,7 +319,7 @@ class ActuatedPlantSystem:
     def stage_rate(self, sample: ActuatedSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
         """(t, q, x) -> (v, [v', f']) with the step's commands held."""
         arm, thrust_command, fin_command = sample.command.arm, sample.thrust_command, sample.fin_command
-        return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command)[1]
+        return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command, False)[1]
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
         """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the

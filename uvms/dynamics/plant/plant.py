@@ -263,10 +263,23 @@ class Plant:
 
     def dynamics(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None = None,
                  out: np.ndarray | None = None) -> PlantDynamics:
-        """:meth:`evaluate` without the input checks, for inner loops (an integrator, a prediction model) whose
-        inputs are already checked; ``body_wrench`` (6,) [N, N m]: an external wrench on the vehicle, FLU at the
-        base frame origin (:attr:`base_frame`: the thrusters'); ``out`` (nv,): where to write the accelerations
-        (a part of the caller's state rate; None: a new array)."""
+        """:meth:`evaluate` unchecked, for inner loops whose inputs are checked; ``body_wrench`` (6,) [N, N m]: a wrench
+        on the vehicle, FLU at :attr:`base_frame` (the thrusters'); ``out`` (nv,): where v' goes (None: a new array)."""
+        acceleration, mass, bias_forces = self._accelerations(q, v, command, body_wrench, out)
+        nb = self.nb
+        torque = mass[nb:, :nb] @ acceleration[:nb]  # (M_mb a_b + M_mm a_m) + nbar_m, summed in this order
+        torque += mass[nb:, nb:] @ acceleration[nb:]
+        torque += bias_forces[nb:]
+        return PlantDynamics(acceleration, torque, mass)
+
+    def stage_acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
+                           body_wrench: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
+        """v' (nv,) of :meth:`dynamics` alone (the same numbers), without the motor torques: an integrator's stage."""
+        return self._accelerations(q, v, command, body_wrench, out)[0]
+
+    def _accelerations(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
+                       out: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(v' (nv,) into ``out`` when given, Mbar, nbar): the motors' a_m, then the vehicle's 6 x 6 solve."""
         mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
         nb = self.nb
         acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
@@ -276,10 +289,7 @@ class Plant:
         rhs = mass[:nb, nb:] @ arm_acceleration
         rhs += bias_forces[:nb]
         np.negative(numpy_solve(mass[:nb, :nb], rhs), base_acceleration)
-        torque = mass[nb:, :nb] @ base_acceleration  # (M_mb a_b + M_mm a_m) + nbar_m, summed in this order
-        torque += mass[nb:, nb:] @ arm_acceleration
-        torque += bias_forces[nb:]
-        return PlantDynamics(acceleration, torque, mass)
+        return acceleration, mass, bias_forces
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
