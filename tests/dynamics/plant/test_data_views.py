@@ -56,3 +56,21 @@ def test_the_plants_terms_are_the_same_through_views_and_through_the_getters(rng
         owned = plant._mass_and_bias(q, v, wrench)
         np.testing.assert_array_equal(viewed[0], owned[0])
         np.testing.assert_array_equal(viewed[1], owned[1])
+
+
+def test_a_copy_views_its_own_copy_of_the_data(rng):
+    """Copied or pickled with its Data, JointArrays views the copy's memory (never a stale copy of the numbers)."""
+    import copy
+    import pickle
+
+    robot = shipped("bluerov2_alpha5")
+    model = robot.model
+    data = model.createData()
+    for make in (copy.deepcopy, lambda pair: pickle.loads(pickle.dumps(pair))):
+        copied_data, copied = make((data, JointArrays(data)))
+        assert copied.viewed and copied_data is not data
+        pin.forwardKinematics(model, copied_data, pin.integrate(model, robot.neutral(), rng.normal(size=model.nv)),
+                              rng.normal(size=model.nv), rng.normal(size=model.nv))
+        expected = getters(copied_data)
+        np.testing.assert_array_equal(copied.read()[0], expected[0])
+        np.testing.assert_array_equal(copied.read()[1], expected[1])

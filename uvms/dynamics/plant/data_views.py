@@ -52,6 +52,10 @@ class JointArrays:
         else:
             self._arrays = np.empty((count, PLACEMENT_SIZE)), np.empty((count, MOTION_SIZE))
 
+    def __reduce__(self) -> tuple:
+        """A copy (pickle, deepcopy) views its own copy of the Data: views are never carried as copies of numbers."""
+        return _joint_arrays, (self._data, self.viewed)
+
     def read(self) -> tuple[np.ndarray, np.ndarray]:
         """(placements (njoints, 12), motions (njoints, 6)) as the Data holds them now (views: no copy)."""
         if self.viewed:
@@ -62,6 +66,11 @@ class JointArrays:
             placements[joint, 9:] = placement.translation
             motions[joint] = motion.vector
         return self._arrays
+
+
+def _joint_arrays(data: pin.Data, view: bool) -> JointArrays:
+    """JointArrays(data, view=view) (what a copy is made by)."""
+    return JointArrays(data, view=view)
 
 
 def _viewed(data: pin.Data) -> np.ndarray | None:
