@@ -114,3 +114,42 @@ def test_numpy_solve_is_numpy_linalg_solve_and_refuses_a_singular_system():
     np.testing.assert_array_equal(numpy_solve(matrix, rhs), np.linalg.solve(matrix, rhs))
     with np.errstate(invalid="ignore"), pytest.raises(NumericalError, match="singular"):
         numpy_solve(np.zeros((6, 6)), rhs)
+
+
+def test_the_compiled_rk4_arithmetic_gives_numpys_numbers_bit_for_bit(rng):
+    """With a vector state the stages' arguments and the weighted sums are compiled
+    (uvms.numerics._kernels.runge_kutta): the step equals the same step written as numpy expressions, bit for bit,
+    and passes each stage its own arrays."""
+    robot = uvms.load("bluerov2_alpha5")
+    model = robot.model
+    matrix = rng.normal(size=(19, 11 + 19))  # a rate that mixes q and x nonlinearly
+
+    def rate(t, q, x):
+        z = np.tanh(matrix @ np.concatenate([pin.difference(model, robot.neutral(), q), x]) + t)
+        return z[:11] * 3.0, z * 7.0
+
+    def numpy_step(q, x, dt, first):  # the step as numpy expressions (what rk4_step computed before its kernels)
+        half = 0.5 * dt
+
+        def stage(xi, x_stage, time_):
+            velocity, x_rate = rate(time_, pin.integrate(model, q, xi), x_stage)
+            return solve_square(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), x_rate
+
+        k1q, k1x = first
+        k2q, k2x = stage(half * k1q, x + half * k1x, half)
+        k3q, k3x = stage(half * k2q, x + half * k2x, half)
+        k4q, k4x = stage(dt * k3q, x + dt * k3x, dt)
+        return (pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q)),
+                x + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x))
+
+    seen = []
+    for _ in range(3):
+        q = pin.integrate(model, robot.neutral(), rng.normal(size=11))
+        x, dt = rng.normal(size=19), rng.uniform(0.001, 0.05)
+        first = rate(0.0, q, x)
+        expected = numpy_step(q, x, dt, first)
+        got = rk4_step(model, lambda t, q_, x_: (seen.append(x_), rate(t, q_, x_))[1], 0.0, q, x, dt, first)
+        np.testing.assert_array_equal(got[0], expected[0])
+        np.testing.assert_array_equal(got[1], expected[1])
+        assert not np.array_equal(got[1], x)
+    assert len({id(x_) for x_ in seen}) == len(seen) == 9  # a new array at every stage

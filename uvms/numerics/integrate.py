@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from types import ModuleType
 
 import numpy as np
 import pinocchio as pin
@@ -121,17 +122,38 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
         return solve_square(pin.dIntegrate(model, q, xi, ARG1), velocity), x_rate
 
     k1q, k1x = first
-    if x.size:  # a kinematic run has no vector state: its sums over empty arrays would cost about 5 us a step
-        k2q, k2x = stage(half * k1q, x + half * k1x, t + half)
-        k3q, k3x = stage(half * k2q, x + half * k2x, t + half)
-        k4q, k4x = stage(dt * k3q, x + dt * k3x, t + dt)
-        x_next = x + dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x)
-    else:
+    if not x.size:  # a kinematic run has no vector state: its sums over empty arrays would cost about 5 us a step
         k2q = stage(half * k1q, x, t + half)[0]
         k3q = stage(half * k2q, x, t + half)[0]
         k4q = stage(dt * k3q, x, t + dt)[0]
-        x_next = x
-    return pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q)), x_next
+        return pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q)), x
+    # the stages' arguments (h k_q, x + h k_x) and the weighted sums in compiled calls: numpy's numbers, about twenty
+    # numpy calls fewer
+    kernels = _runge_kutta()
+    nv, m = len(k1q), len(x)
+    k = [(k1q, k1x)]
+    for h, time_ in ((half, t + half), (half, t + half), (dt, t + dt)):
+        xi, x_stage = np.empty(nv), np.empty(m)  # new at every stage: a stage's rate may keep views of them
+        kernels.stage_inputs_into(h, k[-1][0], x, k[-1][1], xi, x_stage)
+        k.append(stage(xi, x_stage, time_))
+    tangent, x_next = np.empty(nv), np.empty(m)
+    kernels.weighted_sum_into(dt / 6.0, k[0][0], k[1][0], k[2][0], k[3][0], None, tangent)
+    kernels.weighted_sum_into(dt / 6.0, k[0][1], k[1][1], k[2][1], k[3][1], x, x_next)
+    return pin.integrate(model, q, tangent), x_next
+
+
+def _runge_kutta() -> ModuleType:
+    """The compiled arithmetic of a step with a vector state (:mod:`uvms.numerics._kernels.runge_kutta`), imported
+    at the first such step: a kinematic run never loads numba for it."""
+    global _kernels
+    if _kernels is None:
+        from ._kernels import runge_kutta
+
+        _kernels = runge_kutta
+    return _kernels
+
+
+_kernels: ModuleType | None = None
 
 
 def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:

@@ -42,3 +42,58 @@ def test_of_gives_the_fins_when_asked():
     plant = Plant(torpedo, hydrodynamics_of(torpedo))
     assert ActuatedPlant.of(plant).fins.names == fins_of(torpedo).names and ActuatedPlant.of(plant).m == 4
     assert ActuatedPlant.of(plant, fins=False).m == 0 and ActuatedPlant.of(plant, fins=False).n == 1
+
+
+@pytest.mark.parametrize("fins", [False, True])
+def test_the_state_rate_is_written_in_place_with_the_numbers_of_its_parts(fins, rng):
+    """The actuated rate [v', f', delta'] (written part by part into one array) and the sample's wrench are those of
+    the plant's dynamics, the thrusters' lag and the fins' computed on their own, bit for bit; an integrator's stage
+    (no motor torques) gives the same rate."""
+    if fins:
+        with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
+            robot = uvms.load(TORPEDO)
+        actuated = ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot)))
+    else:
+        actuated = ActuatedPlant.of(Plant(shipped("bluerov2_alpha5")))
+    plant, system = actuated.plant, actuated.system(None, dt=0.01)
+    assert (actuated.m > 0) == fins
+    q = plant.robot.neutral()
+    x = np.concatenate([rng.normal(size=plant.model.nv), rng.uniform(actuated.lower, actuated.upper),
+                        0.1 * rng.normal(size=actuated.m)])
+    v, thrusts, angles = system._split(x)
+    arm, command = rng.normal(size=plant.n_arm), rng.uniform(actuated.lower, actuated.upper)
+    fin_command = 0.1 * rng.normal(size=actuated.m)
+    dynamics, (velocity, rate), wrench = system._rate(q, x, arm, command, fin_command)
+    expected_wrench = actuated.matrix @ thrusts + (actuated.fin_wrench(q, v, angles) if fins else 0.0)
+    expected = plant.dynamics(q, v, arm, actuated.matrix @ thrusts + actuated.fin_wrench(q, v, angles) if fins
+                              else actuated.matrix @ thrusts)
+    np.testing.assert_array_equal(wrench, expected_wrench)
+    lag = (command - thrusts) / actuated.time_constants
+    np.testing.assert_array_equal(rate, np.concatenate([expected.acceleration, lag,
+                                                        actuated.fins.rate(angles, fin_command)]))
+    np.testing.assert_array_equal(dynamics.joint_torque, expected.joint_torque)
+    assert velocity is not None and np.shares_memory(dynamics.acceleration, rate)  # v' is the rate's first part
+    # an integrator's stage: the same rate without the motor torques (Plant.stage_acceleration)
+    none, (_, stage), stage_wrench = system._rate(q, x, arm, command, fin_command, False)
+    assert none is None
+    np.testing.assert_array_equal(stage, rate)
+    np.testing.assert_array_equal(stage_wrench, wrench)
+    np.testing.assert_array_equal(plant.stage_acceleration(q, v, arm, wrench), expected.acceleration)
+    np.testing.assert_array_equal(plant.stage_acceleration(q, v, arm), plant.dynamics(q, v, arm).acceleration)
+
+
+def test_a_state_is_refused_only_when_an_entry_is_not_finite():
+    """check_finite_state: a state of finite entries is kept (however large), a NaN or an infinity anywhere is
+    refused."""
+    from uvms.dynamics.plant.system import check_finite_state
+
+    q, x = np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]), np.zeros(14)
+    check_finite_state(0.1, q, x, 0.01)
+    check_finite_state(0.1, q, np.full(14, 1e300), 0.01)  # every entry finite
+    check_finite_state(0.1, q, np.zeros(0), 0.01)  # no vector part
+    for bad in (np.nan, np.inf, -np.inf):
+        for where in ("q", "x"):
+            q_bad, x_bad = q.copy(), x.copy()
+            (q_bad if where == "q" else x_bad)[3] = bad
+            with pytest.raises(UVMSError, match=r"non-finite at t = 0\.1 s; reduce dt \(now 0\.01 s\)"):
+                check_finite_state(0.1, q_bad, x_bad, 0.01)

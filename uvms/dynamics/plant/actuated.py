@@ -99,9 +99,11 @@ class ActuatedPlant:
         """The command (n,) clipped to [lower, upper] [N]."""
         return np.clip(command, self.lower, self.upper)
 
-    def rate(self, thrusts: np.ndarray, saturated_command: np.ndarray) -> np.ndarray:
-        """f' (n,) [N/s] = (sat(f_cmd) - f) / tau."""
-        return (saturated_command - thrusts) / self.time_constants
+    def rate(self, thrusts: np.ndarray, saturated_command: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """f' (n,) [N/s] = (sat(f_cmd) - f) / tau, into ``out`` (n,) when given."""
+        rate = np.subtract(saturated_command, thrusts, out)
+        rate /= self.time_constants
+        return rate
 
     def wrench(self, thrusts: np.ndarray) -> np.ndarray:
         """B f (6,) [N, N m], FLU at the base frame origin."""
@@ -212,7 +214,8 @@ class ActuatedSample:
         rate: (v (nv,), [v' (nv,), f' (n,), delta' (m,)]); command: the controller's Command, checked (arm,
             thrust and fins filled, info a dict);
         thrust_command: sat(f_cmd) (n,) [N]; dynamics: accelerations and motor torques;
-        fin_command: sat(delta_cmd) (m,) [rad].
+        fin_command: sat(delta_cmd) (m,) [rad]; wrench: the actuators' wrench (6,) [N, N m] on the vehicle at the
+        step's start, base frame (B f plus the fins'; None: not kept).
     """
 
     rate: tuple[np.ndarray, np.ndarray]
@@ -220,6 +223,7 @@ class ActuatedSample:
     thrust_command: np.ndarray
     dynamics: PlantDynamics
     fin_command: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    wrench: np.ndarray | None = None
 
 
 class ActuatedPlantSystem:
@@ -236,6 +240,7 @@ class ActuatedPlantSystem:
         self.plant, self.thrusters, self.controller = actuated.plant, actuated, controller
         self.robot, self.model = actuated.robot, actuated.model
         self.nv, self.m = actuated.model.nv, actuated.m
+        self._n = self.nv + actuated.n  # where the fin angles start in the state
         self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its record: energies, momentum, torques
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -277,20 +282,30 @@ class ActuatedPlantSystem:
         return Command(arm=arm, thrust=thrust, fins=fins, info={} if command.info is None else command.info)
 
     def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
-              fin_command: np.ndarray) -> tuple[PlantDynamics, tuple[np.ndarray, np.ndarray]]:
-        v, thrusts, angles = self._split(x)
-        wrench = self.thrusters.wrench(thrusts)
+              fin_command: np.ndarray, torques: bool = True) -> tuple[PlantDynamics | None,
+                                                                      tuple[np.ndarray, np.ndarray], np.ndarray]:
+        """(the dynamics (None without ``torques``: an integrator's stage), the state's rate (v, [v', f', delta']),
+        the actuators' wrench (6,)) at (q, x)."""
+        nv, n = self.nv, self._n
+        v, thrusts, angles = x[:nv], x[nv:n], x[n:]
+        thrusters = self.thrusters
+        wrench = thrusters.matrix @ thrusts  # B f
         if self.m:  # (without fins their wrench is zero: not added)
-            wrench = wrench + self.thrusters.fin_wrench(q, v, angles)
-        dynamics = self.plant.dynamics(q, v, arm, wrench)
-        rates = [dynamics.acceleration, self.thrusters.rate(thrusts, thrust_command)]
+            wrench = wrench + thrusters.fin_wrench(q, v, angles)
+        rates = np.empty(len(x))  # [v', f', delta'], each part written in place (no concatenation)
+        if torques:
+            dynamics = self.plant.dynamics(q, v, arm, wrench, rates[:nv])
+        else:
+            dynamics = None
+            self.plant.stage_acceleration(q, v, arm, wrench, rates[:nv])
+        thrusters.rate(thrusts, thrust_command, rates[nv:n])
         if self.m:
-            rates.append(self.thrusters.fins.rate(angles, fin_command))
-        return dynamics, (v, np.concatenate(rates))
+            rates[n:] = thrusters.fins.rate(angles, fin_command)
+        return dynamics, (v, rates), wrench
 
     def _split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(v (nv,), thrusts (n,), fin angles (m,)) of the state x."""
-        n = self.nv + self.thrusters.n
+        n = self._n
         return x[:self.nv], x[self.nv:n], x[n:]
 
     def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> ActuatedSample:
@@ -298,13 +313,13 @@ class ActuatedPlantSystem:
         command = self._command(t, q, x)
         saturated = self.thrusters.saturate(command.thrust)
         fins = self.thrusters.fins.saturate(command.fins)
-        dynamics, rate = self._rate(q, x, command.arm, saturated, fins)
-        return ActuatedSample(rate, command, saturated, dynamics, fins)
+        dynamics, rate, wrench = self._rate(q, x, command.arm, saturated, fins)
+        return ActuatedSample(rate, command, saturated, dynamics, fins, wrench)
 
     def stage_rate(self, sample: ActuatedSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
         """(t, q, x) -> (v, [v', f']) with the step's commands held."""
         arm, thrust_command, fin_command = sample.command.arm, sample.thrust_command, sample.fin_command
-        return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command)[1]
+        return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command, False)[1]
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
         """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the
@@ -314,7 +329,8 @@ class ActuatedPlantSystem:
         row = self._passive.record(t, q, v, passive)
         nu = base_twist(self.plant, v)
         fin_wrench = self.thrusters.fin_wrench(q, v, angles)
-        wrench = self.thrusters.wrench(thrusts) + fin_wrench
+        # B f + the fins' (+ 0.0 without fins: the sum as recorded before, signed zeros included)
+        wrench = (self.thrusters.wrench(thrusts) if sample.wrench is None or self.m else sample.wrench) + fin_wrench
         if self.m:  # the fins' angles and what they give (their power: the drag's, <= 0 at rest angles)
             row.update(fin_angles=angles.copy(), fin_command=sample.fin_command, fin_wrench=fin_wrench,
                        fin_power=float(fin_wrench @ nu))

@@ -69,6 +69,7 @@ from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
 from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
 from .command import Controller
+from .data_views import JointArrays
 from .settings import PlantSettings
 from .system import PlantDynamics, PlantSystem
 
@@ -138,12 +139,12 @@ class Plant:
         self._zero_velocity = np.zeros(self.model.nv)
         self._buoyant = self.gravity and self._stacked.buoyant
         stacked = self._stacked
-        # what one evaluation gathers from pin.Data: each joint once (several links may share one)
+        # the links' joints, each once (several links may share one), and each link's of them (damping_power's)
         self._joints = tuple(dict.fromkeys(stacked.joints))
         self._link_joint = np.array([self._joints.index(joint) for joint in stacked.joints], dtype=np.int64)
         self._flags = np.array([self.added_mass, self.damping, self._moving_fluid, self._buoyant], dtype=np.int64)
-        self._no_accelerations = np.zeros((len(self._joints), 6))
-        self._no_links = (np.zeros((0, 4, 4)), np.zeros((0, 6)))
+        # every joint's placement and bias acceleration in self.data, as the compiled pass reads them (views)
+        self._joint_arrays = JointArrays(self.data)
         # the compiled pass and its constants (the links' walks over data.J among them), made at the first
         # evaluation: numba loads there
         self._terms: tuple[Callable[..., None], tuple[np.ndarray, ...]] | None = None
@@ -260,35 +261,46 @@ class Plant:
         return self.dynamics(robot.check_configuration(q), robot.check_velocity(v),
                               robot.check_velocity(command, self.n_arm, "joint-velocity command"))
 
-    def dynamics(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
-                 body_wrench: np.ndarray | None = None) -> PlantDynamics:
-        """:meth:`evaluate` without the input checks, for inner loops (an integrator, a prediction model) whose
-        inputs are already checked; ``body_wrench`` (6,) [N, N m]: an external wrench on the vehicle, FLU at the
-        base frame origin (:attr:`base_frame`: the thrusters')."""
+    def dynamics(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None = None,
+                 out: np.ndarray | None = None) -> PlantDynamics:
+        """:meth:`evaluate` unchecked, for inner loops whose inputs are checked; ``body_wrench`` (6,) [N, N m]: a wrench
+        on the vehicle, FLU at :attr:`base_frame` (the thrusters'); ``out`` (nv,): where v' goes (None: a new array)."""
+        acceleration, mass, bias_forces = self._accelerations(q, v, command, body_wrench, out)
+        nb = self.nb
+        torque = mass[nb:, :nb] @ acceleration[:nb]  # (M_mb a_b + M_mm a_m) + nbar_m, summed in this order
+        torque += mass[nb:, nb:] @ acceleration[nb:]
+        torque += bias_forces[nb:]
+        return PlantDynamics(acceleration, torque, mass)
+
+    def stage_acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
+                           body_wrench: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
+        """v' (nv,) of :meth:`dynamics` alone (the same numbers), without the motor torques: an integrator's stage."""
+        return self._accelerations(q, v, command, body_wrench, out)[0]
+
+    def _accelerations(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
+                       out: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(v' (nv,) into ``out`` when given, Mbar, nbar): the motors' a_m, then the vehicle's 6 x 6 solve."""
         mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
         nb = self.nb
-        acceleration = np.empty(len(v))  # [base; arm], filled in place (no concatenation)
+        acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
         base_acceleration, arm_acceleration = acceleration[:nb], acceleration[nb:]
         np.subtract(command, v[nb:], arm_acceleration)
         arm_acceleration /= self.motor_time_constant
         rhs = mass[:nb, nb:] @ arm_acceleration
         rhs += bias_forces[:nb]
         np.negative(numpy_solve(mass[:nb, :nb], rhs), base_acceleration)
-        torque = mass[nb:, :nb] @ base_acceleration  # (M_mb a_b + M_mm a_m) + nbar_m, summed in this order
-        torque += mass[nb:, nb:] @ arm_acceleration
-        torque += bias_forces[nb:]
-        return PlantDynamics(acceleration, torque, mass)
+        return acceleration, mass, bias_forces
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Mbar (nv, nv) and nbar (nv,) at (q, v): Mbar v' + nbar = [0; tau_m] (nbar = h - sum J^T f).
 
-        Pinocchio gives M (crba), h (rnea, gravity included), its world Jacobian data.J (one array), the links'
-        joints' placements and bias accelerations; the links' LOCAL Jacobians J_l (``getFrameJacobian``'s numbers)
-        and wrenches f_l (their frames) are formed and summed by virtual work in one compiled pass
-        (:func:`uvms.numerics._kernels.hydro.plant_terms_into`): Mbar = M + sum_l J_l^T M_A,l J_l,
-        nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea with the wrenches as external
-        forces, to rounding).
+        Pinocchio gives M (crba), h (rnea, gravity included), its world Jacobian data.J (one array), the joints'
+        placements and bias accelerations (views of its data: :class:`~uvms.dynamics.plant.data_views.JointArrays`);
+        the links' LOCAL Jacobians J_l (``getFrameJacobian``'s numbers) and wrenches f_l (their frames) are formed
+        and summed by virtual work in one compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`):
+        Mbar = M + sum_l J_l^T M_A,l J_l, nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea
+        with the wrenches as external forces, to rounding).
         """
         model, data = self.model, self.data
         count = self._stacked.count
@@ -299,7 +311,7 @@ class Plant:
             pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
             pin.computeJointJacobians(model, data)
         terms, constants = self._terms if self._terms is not None else self._prepare_terms()
-        placements, accelerations = self._joint_states() if count else self._no_links
+        placements, accelerations = self._joint_arrays.read()  # views of data.oMi, data.a: no copy
         nv = model.nv
         mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
         terms(upper, h, data.J, placements, accelerations, v, mass, bias_forces, *constants)
@@ -318,23 +330,11 @@ class Plant:
         starts = np.cumsum([0] + [len(walk) for walk in walks]).astype(np.int64)
         programs = np.concatenate(walks) if walks else np.zeros((0, 3), dtype=np.int64)
         self._terms = plant_terms_into, pack_constants(
-            self._link_joint, programs, starts, self._flags, stacked.rotations, stacked.translations,
-            stacked.motion_to_link, stacked.added_mass, stacked.linear_damping, stacked.forward_damping,
-            stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, self._current)
+            np.array(stacked.joints, dtype=np.int64), programs, starts, self._flags, stacked.rotations,
+            stacked.translations, stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
+            stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy,
+            self._current)
         return self._terms
-
-    def _joint_states(self) -> tuple[np.ndarray, np.ndarray]:
-        """The links' joints' placements (K, 4, 4) and bias accelerations (K, 6) from ``self.data``
-        (forwardKinematics with zero acceleration run); zeros where no term reads them."""
-        data = self.data
-        placed = data.oMi.tolist()  # one call for all joints; a getter per joint costs as much
-        placements = np.array([placed[joint].homogeneous for joint in self._joints])
-        if self.added_mass:
-            moving = data.a.tolist()
-            accelerations = np.array([moving[joint].vector for joint in self._joints])
-        else:
-            accelerations = self._no_accelerations
-        return placements, accelerations
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""

@@ -220,7 +220,7 @@ def pack_constants(slots: np.ndarray, programs: np.ndarray, starts: np.ndarray, 
     of fourteen (numba's dispatch checks each argument's type at every call); the kernel reads them back as views.
 
     Args:
-        slots: (L,) each link's row of the joints' arrays; programs: (P, 3) the links' walks
+        slots: (L,) each link's joint (its row of the joints' arrays); programs: (P, 3) the links' walks
             (:func:`frame_jacobian_program`), link l's rows starts[l]:starts[l + 1] (starts (L + 1,));
         flags: (4,) added mass, damping, current, buoyancy on (1) or off (0);
         link_rotations, link_translations: (L, 3, 3), (L, 3) the links in their joints; motion_to_link ...
@@ -244,8 +244,10 @@ def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, pla
 
     Args:
         upper: M (nv, nv), its upper triangle read; h: (nv,) rnea's bias forces.
-        jacobian: data.J (6, nv_extended), world; placements: (K, 4, 4) the links' joints' oMi;
-        accelerations: (K, 6) their bias accelerations (data.a, a = 0; read with the added mass).
+        jacobian: data.J (6, nv_extended), world; placements: (njoints, 12) every joint's oMi, its rotation
+            column-major then its translation; accelerations: (njoints, 6) their bias accelerations (data.a, a = 0;
+            read with the added mass) (:class:`uvms.dynamics.plant.data_views.JointArrays`: views of Pinocchio's
+            data).
         v: (nv,); mass: Mbar (nv, nv) out; bias_forces: nbar (nv,) out.
         ints, floats: the plant's constants (:func:`pack_constants`).
     """
@@ -274,10 +276,15 @@ def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, pla
     jacobians = np.empty((count, 6, nv))
     rotations = np.empty((count, 3, 3))  # the links' in the world
     joint_bias = np.zeros((count, 6))
+    placement = np.zeros((4, 4))  # the joint's oMi as frame_jacobian_into reads it (its last row unread)
     with_added_mass = flags[0] != 0
     for link in range(count):
         slot = slots[link]
-        frame_jacobian_into(jacobian, placements[slot], link_rotations[link], link_translations[link],
+        for i in range(3):
+            placement[i, 3] = placements[slot, 9 + i]
+            for k in range(3):
+                placement[i, k] = placements[slot, i + 3 * k]
+        frame_jacobian_into(jacobian, placement, link_rotations[link], link_translations[link],
                             programs[starts[link]:starts[link + 1]], jacobians[link], rotations[link])
         if with_added_mass:
             joint_bias[link] = accelerations[slot]
