@@ -74,3 +74,23 @@ def test_a_copy_views_its_own_copy_of_the_data(rng):
         expected = getters(copied_data)
         np.testing.assert_array_equal(copied.read()[0], expected[0])
         np.testing.assert_array_equal(copied.read()[1], expected[1])
+
+
+def test_a_view_keeps_its_data_alive(rng):
+    """The arrays outlive every other reference to the Data and the JointArrays: they still read its numbers (the
+    Data is not freed under them)."""
+    import gc
+
+    robot = shipped("bluerov2_alpha5")
+    model = robot.model
+    data = model.createData()
+    q = pin.integrate(model, robot.neutral(), rng.normal(size=model.nv))
+    pin.forwardKinematics(model, data, q, rng.normal(size=model.nv), rng.normal(size=model.nv))
+    expected = getters(data)
+    placements, motions = JointArrays(data).read()
+    del data
+    gc.collect()
+    for _ in range(50):  # memory freed and reused would show other numbers here
+        model.createData()
+    np.testing.assert_array_equal(placements, expected[0])
+    np.testing.assert_array_equal(motions, expected[1])

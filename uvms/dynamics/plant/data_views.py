@@ -83,7 +83,7 @@ def _viewed(data: pin.Data) -> np.ndarray | None:
         if rotation.ctypes.data != origin or rotation.strides != (DOUBLE, 3 * DOUBLE) or \
                 translation.ctypes.data != origin + 9 * DOUBLE or translation.strides != (DOUBLE,):
             return None
-    return _array_at(start, (len(placed), PLACEMENT_SIZE))
+    return _array_at(start, (len(placed), PLACEMENT_SIZE), data)
 
 
 def _motion_view(data: pin.Data) -> np.ndarray | None:
@@ -96,10 +96,12 @@ def _motion_view(data: pin.Data) -> np.ndarray | None:
         if linear.ctypes.data != origin or angular.ctypes.data != origin + 3 * DOUBLE or \
                 linear.strides != (DOUBLE,) or angular.strides != (DOUBLE,):
             return None
-    return _array_at(start, (len(moving), MOTION_SIZE))
+    return _array_at(start, (len(moving), MOTION_SIZE), data)
 
 
-def _array_at(address: int, shape: tuple[int, int]) -> np.ndarray:
-    """A C-ordered float array of ``shape`` over the memory at ``address`` (owned by someone else)."""
+def _array_at(address: int, shape: tuple[int, int], owner: pin.Data) -> np.ndarray:
+    """A C-ordered float array of ``shape`` over the memory at ``address``, which ``owner`` holds: the array keeps
+    ``owner`` alive (its base's base holds it), so a view never outlives the Data it reads."""
     buffer = (ctypes.c_double * (shape[0] * shape[1])).from_address(address)
+    buffer.owner = owner
     return np.frombuffer(buffer, dtype=float).reshape(shape)
