@@ -59,6 +59,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from ...errors import ModelParseError, UVMSError
+from ...robot.robot import check_robot
 from ..plugins.readers import read_hydro_plugins
 from .parameters import HydroParameters, LinkHydrodynamics
 from .uuv import MODEL_KEYS, MODEL_TYPES, link_from_uuv, load_hydrodynamics_yaml, urdf_link_masses
@@ -123,11 +124,9 @@ def hydrodynamics_of(robot: Robot, path: str | os.PathLike | None = None, *, req
         NameNotFound: a link that the model does not have (the message lists close names).
         ModelCheckError, ModelParseError: invalid parameters.
     """
-    from ...robot.robot import check_robot  # at call time: robot.py imports this package
-
     check_robot(robot, "hydrodynamics_of")
-    masses = urdf_link_masses(robot.urdf_root) if robot.urdf_root is not None else {}
     names = body_frame_names(robot.model)
+    masses = urdf_link_masses(robot.urdf_root) if robot.urdf_root is not None else {}
     if path is not None:
         hydro = load_hydrodynamics_yaml(path, masses, names)
     else:
