@@ -73,30 +73,34 @@ def _joint_arrays(data: pin.Data, view: bool) -> JointArrays:
     return JointArrays(data, view=view)
 
 
+#: Where each part of an item sits in its run of doubles: (getter, offset [doubles], numpy strides [bytes]).
+PLACEMENT_PARTS = (("rotation", 0, (DOUBLE, 3 * DOUBLE)), ("translation", 9, (DOUBLE,)))  # column-major R, then p
+MOTION_PARTS = (("linear", 0, (DOUBLE,)), ("angular", 3, (DOUBLE,)))
+
+
 def _viewed(data: pin.Data) -> np.ndarray | None:
     """data.oMi as one (njoints, 12) view, or None where Pinocchio's layout is not the one assumed."""
-    placed = data.oMi
-    start = placed[0].rotation.ctypes.data
-    for joint in range(len(placed)):
-        rotation, translation = placed[joint].rotation, placed[joint].translation
-        origin = start + joint * PLACEMENT_SIZE * DOUBLE
-        if rotation.ctypes.data != origin or rotation.strides != (DOUBLE, 3 * DOUBLE) or \
-                translation.ctypes.data != origin + 9 * DOUBLE or translation.strides != (DOUBLE,):
-            return None
-    return _array_at(start, (len(placed), PLACEMENT_SIZE), data)
+    return _contiguous(data.oMi, PLACEMENT_PARTS, PLACEMENT_SIZE, data)
 
 
 def _motion_view(data: pin.Data) -> np.ndarray | None:
     """data.a as one (njoints, 6) view, or None where Pinocchio's layout is not the one assumed."""
-    moving = data.a
-    start = moving[0].linear.ctypes.data
-    for joint in range(len(moving)):
-        linear, angular = moving[joint].linear, moving[joint].angular
-        origin = start + joint * MOTION_SIZE * DOUBLE
-        if linear.ctypes.data != origin or angular.ctypes.data != origin + 3 * DOUBLE or \
-                linear.strides != (DOUBLE,) or angular.strides != (DOUBLE,):
-            return None
-    return _array_at(start, (len(moving), MOTION_SIZE), data)
+    return _contiguous(data.a, MOTION_PARTS, MOTION_SIZE, data)
+
+
+def _contiguous(items, parts: tuple[tuple[str, int, tuple[int, ...]], ...], size: int,
+                owner: pin.Data) -> np.ndarray | None:
+    """The items of a Pinocchio vector as one (len(items), size) view of ``owner``'s memory when every item's parts
+    are where ``parts`` says in one run of ``size`` doubles per item (checked on the getters' own addresses), else
+    None."""
+    start = getattr(items[0], parts[0][0]).ctypes.data
+    for index in range(len(items)):
+        item, origin = items[index], start + index * size * DOUBLE
+        for name, offset, strides in parts:
+            array = getattr(item, name)
+            if array.ctypes.data != origin + offset * DOUBLE or array.strides != strides:
+                return None
+    return _array_at(start, (len(items), size), owner)
 
 
 def _array_at(address: int, shape: tuple[int, int], owner: pin.Data) -> np.ndarray:
