@@ -12,11 +12,12 @@ are *monitored*: recorded and reported exactly the same way, not enforced (``met
 ``"inequalities_enforced": false``), so the same scenario run with ``--set solver.method=clik`` shows what the
 inequalities change.
 
-The recorder evaluates every objective at every row from the configuration itself (not from the solver), so
-the series are comparable between methods and between plants; "active" is the solver's own report when it
-gives one (a QP row binding for hqp, an activation > 0 for set_based) in a kinematic run, else (a monitored
-method, or a dynamic [plant] run, whose row is the plant's) an activation > 0. On a dynamic plant the speed
-ratio is that of the measured velocity v.
+The recorder evaluates every objective at every row from the configuration itself (not from the solver's
+bounds), so the series are comparable between methods and between plants (the rows an actuated chain's solves
+evaluated at the row's q with the nominal bounds are read instead: the same numbers, not computed twice);
+"active" is the solver's own report when it gives one (a QP row binding for hqp, an activation > 0 for set_based)
+in a kinematic run, else (a monitored method, or a dynamic [plant] run, whose row is the plant's)
+an activation > 0. On a dynamic plant the speed ratio is that of the measured velocity v.
 """
 
 from __future__ import annotations
