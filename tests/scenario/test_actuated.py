@@ -7,6 +7,8 @@ bluerov2_alpha5_station_saturated (1.0 m/s: the thrusters saturate).
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 
@@ -124,3 +126,46 @@ def test_a_vehicle_without_an_arm_carries_its_task(tmp_path, method):
     assert 0.95 < metrics["vehicle_travel"] < 1.05 and metrics["arm_travel"] == 0.0
     assert metrics["final_position_error"] < 0.01 and metrics["max_position_error"] < 0.02
     assert metrics["max_vehicle_tilt"] < 0.01 and metrics["verdict"]["ok"]
+
+
+def test_the_recorder_reads_the_chains_rows_at_the_measured_q():
+    """The intervention's chain (set-based, three objectives above the jaws): after a step's command the objectives'
+    rows the solves evaluated at the measured q are the recorder's values and activations, bit for bit, read
+    without evaluating an objective again; at another q, or with no step yet, there are none and the recorder
+    evaluates them itself."""
+    import pinocchio as pin
+
+    from uvms.dynamics.plant.command import State
+    from uvms.scenario.actuated import ActuatedObjectives
+    from uvms.scenario.build import build
+    from uvms.scenario.schema import read_scenario
+
+    setup = build(read_scenario(SCENARIOS / "bluerov2_alpha5_intervention.toml", ["outputs.figures=false"]))
+    actuation, robot = setup.actuation, setup.robot
+    kinematic = actuation.controller.kinematic
+    reading = ActuatedObjectives(robot, actuation.inequalities, kinematic)
+    evaluating = ActuatedObjectives(robot, actuation.inequalities)
+    rng = np.random.default_rng(5)
+    q = pin.integrate(robot.model, setup.q0, 0.1 * rng.normal(size=robot.nv))
+    v = 0.05 * rng.normal(size=robot.nv)
+    state = State(q, v, np.zeros(8), np.zeros(0))
+    assert kinematic.objective_rows(q) is None  # no step yet
+    actuation.controller.reset(state, 0.0)
+    command = actuation.controller.command(state, 0.5)
+    rows = kinematic.objective_rows(q)
+    assert rows is not None and kinematic.objective_rows(pin.integrate(robot.model, q, 1e-9 * v)) is None
+    evaluated = []
+    for objective in actuation.inequalities.objectives:  # an objective evaluated again would be counted
+        objective.value = lambda state, objective=objective: evaluated.append(objective.name) or \
+            type(objective).value(objective, state)
+    sample = SimpleNamespace(rate=(v, None), command=command)
+    read = reading(0.5, q, None, sample)
+    assert evaluated == []
+    alone = evaluating(0.5, q, None, sample)
+    assert len(evaluated) == 3
+    for name in ("objective_value", "objective_activation", "objective_active", "objective_pair"):
+        assert read[name].dtype == alone[name].dtype and read[name].tobytes() == alone[name].tobytes(), name
+    # the tilt past its limit, the seabed clearance in its band: activations 1 and between 0 and 1
+    assert alone["objective_active"].tolist() == [False, True, True]
+    assert alone["objective_activation"][4] == 1.0 and 0.5 < alone["objective_activation"][5] < 1.0
+    assert read["speed_ratio"] == alone["speed_ratio"] == 0.0  # no speed limit

@@ -197,3 +197,25 @@ def test_the_recorder_takes_the_solvers_activity_and_measures_the_rest_itself():
     assert told["objective_active"].tolist() == [False, True]
     assert told["objective_value"].tolist() == alone["objective_value"].tolist()
     assert told["objective_activation"].tolist() == alone["objective_activation"].tolist() == [1.0, 0.0]
+
+
+def test_the_recorders_speed_ratio_is_the_fastest_joint_over_its_limit_and_zero_without_limits():
+    """ObjectiveRecorder.row: speed_ratio = max_i |v_i| / max_i over the limited velocities (the vehicle's free),
+    0 without a speed limit; an objective is active when an activation of its rows is > 0."""
+    from uvms.scenario.inequalities import ObjectiveRecorder, ScenarioInequalities
+    from uvms.tasks.objectives import JointVelocityLimits, VehicleAttitude
+
+    from conftest import shipped
+
+    robot = shipped("bluerov2_alpha5")
+    q = robot.configuration(base=[0, 0, -5, 0.15, 0.0, 0.3], arm=[3.0, 1.5, 3.4, 3.0, 0.007])  # tilted 0.15 rad
+    tilt = VehicleAttitude(robot, 0.1)
+    v = np.zeros(robot.nv)
+    v[0], v[7] = 5.0, -0.9  # the vehicle fast (not limited), the second arm joint at 0.9 rad/s
+    limited = ObjectiveRecorder(robot, ScenarioInequalities([[tilt], [JointVelocityLimits(robot, max=0.5)]],
+                                                            ["vehicle_attitude", "joint_velocity"], enforced=False))
+    row = limited.row(q, v)
+    assert row["speed_ratio"] == pytest.approx(1.8, rel=1e-12)
+    assert row["objective_active"].tolist() == [True] and row["objective_activation"].tolist() == [1.0]
+    unlimited = ObjectiveRecorder(robot, ScenarioInequalities([[tilt]], ["vehicle_attitude"], enforced=False))
+    assert unlimited.row(q, v)["speed_ratio"] == 0.0

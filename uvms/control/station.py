@@ -237,11 +237,22 @@ class ActuatedKinematics:
         return v, {"nu_pose": nu_pose, "solver": result}
 
     def step_done(self) -> None:
-        """The step's solves are done: the objectives' nominal bounds back (recorders read them)."""
-        if self._configuration is not None:
-            self._rows.clear()
+        """The step's solves are done: the objectives' nominal bounds back (recorders read them). Rows evaluated
+        with nominal bounds are kept for :meth:`objective_rows` (the next step's reference clears them)."""
         if self.tightening is not None:
+            if self._configuration is not None:
+                self._rows.clear()
             self.tightening.restore()
+
+    def objective_rows(self, q: np.ndarray) -> ItemRows | None:
+        """The objectives' rows this step's solves evaluated at ``q`` (nq,) with their nominal bounds, for a recorder
+        to read instead of evaluating them again (an objective not evaluated yet is evaluated there at its first
+        read); None when there are none: no shared solve at q (a solver that does not share rows, the arm held),
+        or the bounds were tightened."""
+        if self._configuration is None or self.tightening is not None:  # no step yet (its rows made there)
+            return None
+        rows = self._rows
+        return None if rows.state is None or rows.q != q.tolist() else rows
 
     def arm_rates(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray) -> np.ndarray:
         """The arm rates (n_arm,) of the same solver with the vehicle velocity (n_vehicle,) (joint axes) held."""

@@ -5,12 +5,12 @@ drives them: built by :mod:`uvms.scenario.controllers`), its simulation and its 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from types import SimpleNamespace
 
 import numpy as np
 
 from ..control.base import Controller
 from ..control.coordination import CoordinatedControl
+from ..control.station import ActuatedKinematics
 from ..dynamics.plant.actuated import ActuatedPlant
 from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.fins import Fins
@@ -46,21 +46,32 @@ class Actuation:
 
 class ActuatedObjectives:
     """The inequality series of an actuated row (:class:`uvms.scenario.inequalities.ObjectiveRecorder` on the
-    measured state, the solver's activity from the kinematic reference)."""
+    measured state, the solver's activity from the kinematic reference).
 
-    def __init__(self, robot: Robot, inequalities: ScenarioInequalities) -> None:
+    Args:
+        robot, inequalities: as the recorder's.
+        kinematic: the chain's reference (:class:`uvms.control.station.ActuatedKinematics`), whose step's rows at
+            the measured q are read rather than evaluated again; None (another controller): evaluated here.
+    """
+
+    def __init__(self, robot: Robot, inequalities: ScenarioInequalities,
+                 kinematic: ActuatedKinematics | None = None) -> None:
         self.recorder = ObjectiveRecorder(robot, inequalities)
+        self.kinematic = kinematic
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
-        view = SimpleNamespace(rate=sample.rate, info=sample.command.info.get("solver"))
-        return self.recorder(t, q, x, view)
+        info = sample.command.info.get("solver")
+        rows = None if self.kinematic is None else self.kinematic.objective_rows(q)
+        return self.recorder.row(q, sample.rate[0], getattr(info, "activity", None), rows)
 
 
 def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np.ndarray, duration: float,
                        simulation: SimulationSpec, progress: bool | None) -> SimulationResult:
     """The run, with the task series (the end effector against the held point) recorded."""
+    controller = actuation.controller
+    kinematic = controller.kinematic if isinstance(controller, CoordinatedControl) else None
     recorders = [] if actuation.inequalities is None else [ActuatedObjectives(actuation.plant.robot,
-                                                                                  actuation.inequalities)]
+                                                                                  actuation.inequalities, kinematic)]
     return simulate(actuation.actuated, actuation.controller, q0, duration, float(simulation.dt),
                     integrator=simulation.integrator, task=task, desired=lambda t: trajectory(t).pose,
                     progress=progress, recorders=recorders)

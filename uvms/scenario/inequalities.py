@@ -12,11 +12,12 @@ are *monitored*: recorded and reported exactly the same way, not enforced (``met
 ``"inequalities_enforced": false``), so the same scenario run with ``--set solver.method=clik`` shows what the
 inequalities change.
 
-The recorder evaluates every objective at every row from the configuration itself (not from the solver), so
-the series are comparable between methods and between plants; "active" is the solver's own report when it
-gives one (a QP row binding for hqp, an activation > 0 for set_based) in a kinematic run, else (a monitored
-method, or a dynamic [plant] run, whose row is the plant's) an activation > 0. On a dynamic plant the speed
-ratio is that of the measured velocity v.
+The recorder evaluates every objective at every row from the configuration itself (not from the solver's
+bounds), so the series are comparable between methods and between plants (the rows an actuated chain's solves
+evaluated at the row's q with the nominal bounds are read instead: the same numbers, not computed twice);
+"active" is the solver's own report when it gives one (a QP row binding for hqp, an activation > 0 for set_based)
+in a kinematic run, else (a monitored method, or a dynamic [plant] run, whose row is the plant's)
+an activation > 0. On a dynamic plant the speed ratio is that of the measured velocity v.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from ..errors import ScenarioError, UVMSError
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS
+from ..solvers.hierarchy import ItemRows
 from ..solvers.saturation import speed_maximum
 from ..tasks.objectives import Inequality, Objective, VelocityLimit, inequalities_from_table
 from ..tasks.objectives.collision import NearestPairs
@@ -114,31 +116,56 @@ class ObjectiveRecorder:
         self._state: Configuration | None = None
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
-        state = self._state
-        if state is None:  # one kinematic state, moved to each row's q (its pin.Data made once)
-            state = self._state = Configuration(self.robot, q, check=False)
-        else:
-            state.update(q, check=False)
         # the solver's own report of which objectives are active (its activity, not its statuses' violations)
-        reported = getattr(getattr(sample, "info", None), "activity", None) or {}
+        return self.row(q, sample.rate[0], getattr(getattr(sample, "info", None), "activity", None))
+
+    def row(self, q: np.ndarray, v: np.ndarray, reported: dict | None = None, rows: ItemRows | None = None) -> dict:
+        """The series of the row at q (nq,) and velocity v (nv,).
+
+        Args:
+            reported: which objectives are active by name, the solver's report (None or a name missing: an
+                activation > 0).
+            rows: the objectives' rows a solve evaluated at this q with their nominal bounds
+                (:meth:`uvms.control.station.ActuatedKinematics.objective_rows`): their values and activations
+                read, not evaluated again (the same numbers); a collision objective is always evaluated here, for
+                its pairs.
+        """
+        reported = reported or {}
+        state = None  # moved to q only when an objective is evaluated here
         values, activations, active, pairs = [], [], [], []
         for objective in self.objectives:
-            if objective.collision:  # which pair each row is, for the metrics and the replay
-                chosen, found = objective.nearest(state)
-                value = found.distance
-                pairs.append(chosen)
+            if rows is not None and not objective.collision:
+                evaluated = rows.objective(objective)
+                value, activation = evaluated.value, evaluated.activation
             else:
-                value = objective.value(state)
-            activation = objective.activation(value)
+                if state is None:
+                    state = self._at(q)
+                if objective.collision:  # which pair each row is, for the metrics and the replay
+                    chosen, found = objective.nearest(state)
+                    value = found.distance
+                    pairs.append(chosen)
+                else:
+                    value = objective.value(state)
+                activation = objective.activation(value)
             values.append(value)
             activations.append(activation)
-            active.append(reported.get(objective.name, bool((activation > 0).any())))
-        v = sample.rate[0]
+            is_active = reported.get(objective.name)
+            # an activation is in [0, 1]: its largest > 0 is (activation > 0).any(), without numpy's dispatch
+            active.append(max(activation.tolist(), default=0.0) > 0.0 if is_active is None else is_active)
+        ratio = float((np.abs(v[self._limited]) / self._limits).max(initial=0.0)) if self._limited.size else 0.0
         return {"objective_value": np.concatenate(values) if values else np.zeros(0),
                 "objective_activation": np.concatenate(activations) if activations else np.zeros(0),
                 "objective_active": np.array(active, dtype=bool),
                 "objective_pair": np.concatenate(pairs).astype(int) if pairs else np.zeros(0, dtype=int),
-                "speed_ratio": float((np.abs(v[self._limited]) / self._limits).max(initial=0.0))}
+                "speed_ratio": ratio}
+
+    def _at(self, q: np.ndarray) -> Configuration:
+        """The recorder's kinematic state moved to q (one, its pin.Data made once)."""
+        if self._state is None:
+            self._state = Configuration(self.robot, q, check=False)
+        else:
+            self._state.update(q, check=False)
+        return self._state
 
 
 def vehicle_tilt(vehicle_pose: np.ndarray) -> np.ndarray:
