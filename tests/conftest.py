@@ -154,6 +154,20 @@ def finite_difference_jacobian(robot: uvms.Robot, q: np.ndarray, frame: str, ste
     return np.array(columns).T
 
 
+def run_beside_clik(folder: Path, *selected: str) -> tuple[dict, dict]:
+    """metrics.json of ``hoang2011_w1`` run by CLIK and by what ``selected`` (``--set`` values) chooses, both without
+    CLIK's null-space term and with W = I (then CLIK is J+ (xdot_d + K e): the law a registered test method or
+    controller implements), 20 s, figures off."""
+    from uvms.cli import main
+
+    common = ["--set", "outputs.figures=false", "--set", "simulation.duration=20", "--set", "solver.alpha=0",
+              "--set", "solver.weights=[]", "--quiet"]
+    chosen = [part for value in selected for part in ("--set", value)]
+    assert main(["run", "hoang2011_w1", "--out", str(folder / "clik"), *common]) == 0
+    assert main(["run", "hoang2011_w1", "--out", str(folder / "new"), *chosen, *common]) == 0
+    return tuple(json.loads((folder / name / "metrics.json").read_text()) for name in ("clik", "new"))
+
+
 def xiang_eq6(theta: np.ndarray) -> pin.SE3:
     """0T5 of xiang2019 eq. 6, lengths converted from mm to m."""
     t1, t2, t3, t4 = theta

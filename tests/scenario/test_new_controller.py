@@ -10,7 +10,6 @@ null-space term).
 
 from __future__ import annotations
 
-import json
 from types import SimpleNamespace
 
 import numpy as np
@@ -24,7 +23,7 @@ from uvms.scenario import read_scenario
 from uvms.scenario.controllers import CONTROLLERS, Parts, Setup
 from uvms.scenario.spec import ScenarioSpec
 
-from conftest import SCENARIOS
+from conftest import SCENARIOS, run_beside_clik
 
 
 class PseudoInverseTracking:
@@ -56,18 +55,8 @@ def registered(monkeypatch):
     monkeypatch.setitem(CONTROLLERS, "pinv_tracking", build_pinv_tracking)
 
 
-def metrics(folder) -> dict:
-    return json.loads((folder / "metrics.json").read_text())
-
-
 def test_a_registered_controller_runs_a_scenario_like_clik(registered, tmp_path):
-    # CLIK without the null-space term and with W = I (the default) is the same law
-    common = ["--set", "outputs.figures=false", "--set", "simulation.duration=20", "--set", "solver.alpha=0",
-              "--set", "solver.weights=[]", "--quiet"]
-    assert main(["run", "hoang2011_w1", "--out", str(tmp_path / "clik"), *common]) == 0
-    assert main(["run", "hoang2011_w1", "--out", str(tmp_path / "new"), "--set", "controller.type=pinv_tracking",
-                 *common]) == 0
-    clik, new = metrics(tmp_path / "clik"), metrics(tmp_path / "new")
+    clik, new = run_beside_clik(tmp_path, "controller.type=pinv_tracking")  # CLIK without its null-space term
     assert new["max_position_error"] < 1e-9  # the circle is tracked (CLIK here: 1.8e-10 m)
     assert new["max_position_error"] == pytest.approx(clik["max_position_error"], rel=0, abs=1e-12)
     assert new["arm_travel"] == pytest.approx(clik["arm_travel"], rel=1e-9)

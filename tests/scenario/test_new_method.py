@@ -8,8 +8,6 @@ it does not take, and tracks the hoang2011 circle as CLIK does (the same law: W 
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
@@ -19,6 +17,8 @@ from uvms.solvers import SOLVERS, Solver, SolverResult
 from uvms.solvers.clik import stacked_tasks
 from uvms.solvers.result import SolvedRows
 from uvms.solvers.stack import stacked_terms
+
+from conftest import run_beside_clik
 
 
 class PseudoInverseCLIK(Solver):
@@ -42,18 +42,8 @@ def registered(monkeypatch):
     monkeypatch.setitem(SOLVERS, PseudoInverseCLIK.name, PseudoInverseCLIK)
 
 
-def metrics(folder) -> dict:
-    return json.loads((folder / "metrics.json").read_text())
-
-
 def test_a_registered_method_runs_a_scenario_like_clik(registered, tmp_path):
-    # CLIK without the null-space term and with W = I (the default) is the same law
-    common = ["--set", "outputs.figures=false", "--set", "simulation.duration=20", "--set", "solver.alpha=0",
-              "--set", "solver.weights=[]", "--quiet"]
-    assert main(["run", "hoang2011_w1", "--out", str(tmp_path / "clik"), *common]) == 0
-    assert main(["run", "hoang2011_w1", "--out", str(tmp_path / "new"), "--set", "solver.method=pinv_clik",
-                 *common]) == 0
-    clik, new = metrics(tmp_path / "clik"), metrics(tmp_path / "new")
+    clik, new = run_beside_clik(tmp_path, "solver.method=pinv_clik")  # CLIK without its null-space term
     assert new["max_position_error"] < 1e-9  # the circle is tracked (CLIK here: 1.8e-10 m)
     assert new["max_position_error"] == pytest.approx(clik["max_position_error"], rel=0, abs=1e-14)
     assert new["arm_travel"] == pytest.approx(clik["arm_travel"], rel=1e-12)
