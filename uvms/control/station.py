@@ -271,7 +271,7 @@ class ActuatedKinematics:
         row = {"vehicle_position_error": math.sqrt(offset.dot(offset)),
                "vehicle_attitude_error": math.sqrt(attitude_error.dot(attitude_error)), "ee_position": ee}
         if self.task_reference.moving:
-            miss = self.task_reference.samples(t).pose.translation - ee
+            miss = self.task_reference.samples.target(t)[0] - ee  # the target's translation (no sample built)
             row["ee_point_error"] = math.sqrt(miss.dot(miss))
         return row
 
