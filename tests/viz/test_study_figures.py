@@ -48,3 +48,28 @@ def test_strings_from_a_scenario_are_drawn_as_plain_text(tmp_path):
     save_tune_history(rows, ["model.args.l1"], "max_position_error", "minimize", tmp_path / "tune.png", title=text)
     assert png_size(tmp_path / "tune.png") == (7 * 110, round((2 * 2.4 + 0.4) * 110))
     assert plain_text(text) == "\\$\\undefinedcmd{\\$" and plain_text("no dollar") == "no dollar"
+
+
+def test_a_histograms_tick_labels_do_not_run_into_each_other(tmp_path, rng, monkeypatch):
+    """A metric on a narrow range of small numbers (0.00045-0.00125, long labels) gets at most five x ticks whose
+    labels do not overlap, and the trial counts integer ticks."""
+    import numpy as np
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    import uvms.viz.study as study
+
+    drawn = []
+    monkeypatch.setattr(study.outputs, "save_figure", lambda figure, path: drawn.append(figure))
+    values = rng.uniform(0.00045, 0.00125, 100)
+    table = [{"trial": k, "m": float(v), "pass": True, "error": ""} for k, v in enumerate(values)]
+    study.histograms(table, ["m"], "t", tmp_path / "h.png")
+    figure = drawn[0]
+    renderer = FigureCanvasAgg(figure).get_renderer()
+    figure.draw(renderer)
+    axis = figure.axes[0]
+    boxes = [label.get_window_extent(renderer) for label in axis.get_xticklabels()
+             if label.get_text() and axis.get_xlim()[0] <= label.get_position()[0] <= axis.get_xlim()[1]]
+    assert 2 <= len(boxes) <= 6
+    assert all(left.x1 < right.x0 for left, right in zip(boxes, boxes[1:]))  # each label ends before the next
+    counts = [tick for tick in axis.get_yticks() if axis.get_ylim()[0] <= tick <= axis.get_ylim()[1]]
+    np.testing.assert_array_equal(counts, np.round(counts))

@@ -43,6 +43,7 @@ def save_study_figures(table: Sequence[dict], keys: Sequence[str], metrics: Sequ
 def histograms(table: Sequence[dict], metrics: Sequence[str], head: str, path: Path) -> None:
     """One histogram per metric, passed and not passed trials stacked."""
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
 
     columns = min(3, len(metrics))
     lines = math.ceil(len(metrics) / columns)
@@ -57,6 +58,8 @@ def histograms(table: Sequence[dict], metrics: Sequence[str], head: str, path: P
         axis.set_xlabel(metric.replace("_", " "), fontsize=8)
         axis.set_ylabel("trials", fontsize=8)
         axis.tick_params(labelsize=7)
+        axis.xaxis.set_major_locator(MaxNLocator(5))  # a narrow range's long labels would run into each other
+        axis.yaxis.set_major_locator(MaxNLocator(integer=True))  # counts of trials
     axes[0].legend(fontsize=7)
     for axis in axes[len(metrics):]:
         axis.set_visible(False)
