@@ -28,12 +28,14 @@ against finite differences on the manifold in ``tests/model/test_distances.py``.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelCheckError, NumericalError
+from ..numerics.vectors import cross3
 from ..robot.configuration import Configuration
 
 #: GJK/EPA tolerance of the distance queries [m]: far below any clearance, and fine enough that the distance is
@@ -51,6 +53,8 @@ LARGEST_DISTANCE = 1e6
 #: (:meth:`PairDistances.contact_points`): a feature whose gap to the witness is below tan(angle) times its lever
 #: from the witness point is found.
 CONTACT_ANGLE = 0.1
+
+_X_AXIS, _Y_AXIS = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])  # a tangent's seed, away from the normal
 
 
 @dataclass(frozen=True)
@@ -205,11 +209,12 @@ class PairDistances:
         for position, pair in enumerate(np.asarray(rows, dtype=int).tolist()):
             first, second = (int(i) for i in self.pairs[pair])
             normal, p1, p2 = distances.normal[position], distances.point1[position], distances.point2[position]
-            tangent = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
-            tangent /= np.linalg.norm(tangent)
+            tangent = cross3(normal, _X_AXIS if abs(normal[0]) < 0.9 else _Y_AXIS)
+            tangent /= math.sqrt(tangent.dot(tangent))  # numpy's norm: the square root of the dot product
+            other = cross3(normal, tangent)
             shape1 = coal.Transform3s(placements[first].rotation, placements[first].translation)
             held = placements[second]
-            for j, axis in enumerate((tangent, np.cross(normal, tangent), -tangent, -np.cross(normal, tangent))):
+            for j, axis in enumerate((tangent, other, -tangent, -other)):
                 turn = pin.exp3(angle * axis)  # about p2: x -> p2 + turn (x - p2)
                 result = coal.DistanceResult()
                 coal.distance(objects[first].geometry, shape1, objects[second].geometry,
