@@ -251,8 +251,7 @@ class ActuatedKinematics:
         or the bounds were tightened."""
         if self._configuration is None or self.tightening is not None:  # no step yet (its rows made there)
             return None
-        rows = self._rows
-        return None if rows.state is None or rows.q != q.tolist() else rows
+        return self._rows.evaluated_at(q)
 
     def arm_rates(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray) -> np.ndarray:
         """The arm rates (n_arm,) of the same solver with the vehicle velocity (n_vehicle,) (joint axes) held."""

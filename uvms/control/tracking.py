@@ -4,10 +4,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+import numpy as np
+
 from ..dynamics.plant.command import Command, State
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers.base import SolverFactory
+from ..solvers.hierarchy import ItemRows
 from .reference import TaskReference
 
 
@@ -30,6 +33,8 @@ class TrackingController:
         self.robot, self.task_reference, self.task = robot, reference, reference.task
         self.solver = solver(levels)  # its inputs checked here, not at every evaluation
         self._configuration: Configuration | None = None  # built at the first call
+        # the objectives' rows of the last solve, for the run's recorder (a solver that shares rows fills them)
+        self._rows = ItemRows() if getattr(self.solver, "shares_rows", False) else None
 
     def reset(self, state: State, t: float = 0.0) -> None:
         """Forget the target the task points at (the configuration kept is moved at every call)."""
@@ -38,11 +43,20 @@ class TrackingController:
     def command(self, state: State, t: float) -> Command:
         """``Command(velocity=v (nv,), info=the SolverResult: sigma_min, damping, limits_active, ...)`` at (t, q);
         the diagnostics are computed when read."""
-        self.task_reference.follow(t)
+        rows = self._rows
+        if self.task_reference.follow(t) and rows is not None:
+            rows.clear()  # the task's rows are those of its last target
         q = state.q  # from pin.integrate in the one loop (checked once at its start): not validated at every call
         if self._configuration is None:
             self._configuration = Configuration(self.robot, q, check=False)
         else:
             self._configuration.update(q, check=False)
-        result = self.solver.velocity(self._configuration)
+        result = self.solver.velocity(self._configuration) if rows is None else \
+            self.solver.velocity(self._configuration, shared=rows)
         return Command(velocity=result.v, info=result)
+
+    def objective_rows(self, q: np.ndarray) -> ItemRows | None:
+        """The objectives' rows the last solve evaluated at ``q`` (nq,) (a recorder reads them instead of evaluating
+        them again; an objective that solve did not evaluate is evaluated there at its first read), or None: a
+        solver that does not share rows, or the last solve was at another q."""
+        return None if self._rows is None else self._rows.evaluated_at(q)

@@ -56,13 +56,13 @@ class ActuatedObjectives:
 
     def __init__(self, robot: Robot, inequalities: ScenarioInequalities,
                  kinematic: ActuatedKinematics | None = None) -> None:
-        self.recorder = ObjectiveRecorder(robot, inequalities)
-        self.kinematic = kinematic
+        self.recorder = ObjectiveRecorder(robot, inequalities, None if kinematic is None else kinematic.objective_rows)
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
         info = sample.command.info.get("solver")
-        rows = None if self.kinematic is None else self.kinematic.objective_rows(q)
-        return self.recorder.row(q, sample.rate[0], getattr(info, "activity", None), rows)
+        recorder = self.recorder
+        return recorder.row(q, sample.rate[0], getattr(info, "activity", None),
+                            None if recorder.evaluated is None else recorder.evaluated(q))
 
 
 def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np.ndarray, duration: float,

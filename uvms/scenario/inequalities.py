@@ -22,7 +22,7 @@ an activation > 0. On a dynamic plant the speed ratio is that of the measured ve
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,14 +102,17 @@ class ObjectiveRecorder:
 
     Args:
         robot: the model; inequalities: the scenario's.
+        evaluated: q (nq,) -> the objectives' rows a solve evaluated at q, or None (a controller's
+            ``objective_rows``): read instead of evaluated again; None: every row evaluated here.
 
     Called with a row's (t, q, x, sample) of any run: the sample's ``rate[0]`` is the velocity (nv,) (the
     kinematic controller's, or a plant's measured v); a kinematic sample's ``info`` (a SolverResult) says which
     objectives are active.
     """
 
-    def __init__(self, robot: Robot, inequalities: ScenarioInequalities) -> None:
-        self.robot, self.objectives = robot, inequalities.objectives
+    def __init__(self, robot: Robot, inequalities: ScenarioInequalities,
+                 evaluated: Callable[[np.ndarray], ItemRows | None] | None = None) -> None:
+        self.robot, self.objectives, self.evaluated = robot, inequalities.objectives, evaluated
         self.maximum = speed_maximum(robot.nv, inequalities.speed_limits)  # (nv,) [m/s, rad/s], inf: none
         self._limited = np.flatnonzero(np.isfinite(self.maximum))  # the velocities with a limit, and their limits
         self._limits = self.maximum[self._limited]
@@ -117,7 +120,8 @@ class ObjectiveRecorder:
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
         # the solver's own report of which objectives are active (its activity, not its statuses' violations)
-        return self.row(q, sample.rate[0], getattr(getattr(sample, "info", None), "activity", None))
+        return self.row(q, sample.rate[0], getattr(getattr(sample, "info", None), "activity", None),
+                        None if self.evaluated is None else self.evaluated(q))
 
     def row(self, q: np.ndarray, v: np.ndarray, reported: dict | None = None, rows: ItemRows | None = None) -> dict:
         """The series of the row at q (nq,) and velocity v (nv,).
@@ -126,17 +130,19 @@ class ObjectiveRecorder:
             reported: which objectives are active by name, the solver's report (None or a name missing: an
                 activation > 0).
             rows: the objectives' rows a solve evaluated at this q with their nominal bounds
-                (:meth:`uvms.control.station.ActuatedKinematics.objective_rows`): their values and activations
-                read, not evaluated again (the same numbers); a collision objective is always evaluated here, for
-                its pairs.
+                (:meth:`uvms.control.station.ActuatedKinematics.objective_rows`,
+                :meth:`uvms.control.tracking.TrackingController.objective_rows`): their values, activations and
+                a collision objective's pairs read, not evaluated again (the same numbers).
         """
         reported = reported or {}
         state = None  # moved to q only when an objective is evaluated here
         values, activations, active, pairs = [], [], [], []
         for objective in self.objectives:
-            if rows is not None and not objective.collision:
+            if rows is not None:
                 evaluated = rows.objective(objective)
                 value, activation = evaluated.value, evaluated.activation
+                if objective.collision:  # which pair each row is, for the metrics and the replay
+                    pairs.append(evaluated.pairs)
             else:
                 if state is None:
                     state = self._at(q)

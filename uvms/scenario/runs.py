@@ -244,7 +244,9 @@ def execute(spec: ScenarioSpec, setup: Setup, folder: Path, progress: bool | Non
     """Simulate a built scenario and write its files into ``folder``."""
     simulation_section = spec.simulation
     plant_run: SimulationResult | None = None
-    recorders = [ObjectiveRecorder(setup.robot, setup.inequalities)] if setup.inequalities is not None else []
+    # the objectives' rows the controller's solve evaluated at a row's q are read, not evaluated again
+    recorders = [] if setup.inequalities is None else \
+        [ObjectiveRecorder(setup.robot, setup.inequalities, getattr(setup.controller, "objective_rows", None))]
     if setup.actuation is not None:
         result = simulate_actuation(setup.actuation, setup.task, setup.samples or setup.trajectory, setup.q0,
                                     setup.duration, spec.simulation, progress)

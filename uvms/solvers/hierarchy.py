@@ -137,7 +137,8 @@ class ItemRows:
     """The rows of tasks and objectives evaluated at one configuration, by item, for a second hierarchy over some of
     the same items at the same configuration: the actuated chain re-solves the arm at the q of its reference through
     levels that share the reference's objectives and task (:meth:`HierarchyPlan.evaluate` fills it at the first
-    solve and reads it at the second), so each is evaluated once per step.
+    solve and reads it at the second), so each is evaluated once per step; a run's recorder reads the objectives'
+    rows of the step's q from it (:meth:`evaluated_at`).
 
     Its owner says what it holds: the rows stay valid while the tasks' targets and the objectives' bounds are those
     of the first evaluation, and the owner calls :meth:`clear` before one of them changes. An evaluation at another
@@ -155,6 +156,11 @@ class ItemRows:
         self.state = None
         self._objectives.clear()
         self._tasks.clear()
+
+    def evaluated_at(self, q: np.ndarray) -> ItemRows | None:
+        """These rows when they were evaluated at q (nq,) (compared by value), else None: what a recorder of the
+        row at q reads instead of evaluating the objectives again."""
+        return self if self.state is not None and q.tolist() == self.q else None
 
     def at(self, state: Configuration) -> ItemRows:
         """These rows for ``state``: emptied first when they were evaluated at another state or q."""

@@ -82,6 +82,7 @@ class InequalityRows:
         activation: (k,) in [0, 1].
         reference: reference rate xdot_ref (k,) [units of x per s].
         gain: the reference gain [1/s].
+        pairs: a collision objective's pair of each row (k,) (indices into its pairs), else None.
     """
 
     name: str
@@ -92,6 +93,7 @@ class InequalityRows:
     activation: np.ndarray
     reference: np.ndarray
     gain: float
+    pairs: np.ndarray | None = None
 
     @property
     def violation(self) -> float:
@@ -210,11 +212,14 @@ class Inequality(ABC):
     def rows(self, state: Configuration) -> InequalityRows:
         """Everything a solver reads, at ``state`` (the activation and reference as :meth:`_activation_reference`
         computes them, inline: the solvers call this for every objective at every step)."""
-        value, jacobian = self.value_jacobian(state)
+        return self._rows(*self.value_jacobian(state))
+
+    def _rows(self, value: np.ndarray, jacobian: np.ndarray, pairs: np.ndarray | None = None) -> InequalityRows:
+        """The rows of x = ``value`` (k,) and J = ``jacobian`` (k, nv) (``pairs``: a collision objective's)."""
         value = np.ascontiguousarray(value, dtype=float)
         out = np.empty((2, self.dim))  # activation, reference: the rows keep them
         (_ACTIVATION_KERNEL or _activation_kernel())(value, self._bounds, self.gain, self._step, out)
-        return InequalityRows(self.name, value, jacobian, self.lower, self.upper, out[0], out[1], self.gain)
+        return InequalityRows(self.name, value, jacobian, self.lower, self.upper, out[0], out[1], self.gain, pairs)
 
     def shown(self, value: np.ndarray) -> np.ndarray:
         """A value (..., k) in the units figures draw it in (:attr:`unit`): its own, unless a kind says otherwise."""

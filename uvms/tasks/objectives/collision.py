@@ -41,7 +41,7 @@ from ...model.collision import (
 from ...model.distances import Distances, PairDistances
 from ...robot.configuration import Configuration
 from ...robot.robot import Robot
-from .base import Inequality, finite_number
+from .base import Inequality, InequalityRows, finite_number
 from .obstacles import obstacle_shape
 
 #: Rows per pair: its witness and the points of the features tying with it
@@ -110,6 +110,11 @@ class NearestPairs(Inequality):
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
         chosen, found = self.nearest(state)  # one distance query per pair for both
         return found.distance, self.distances.jacobian(state, found, chosen)
+
+    def rows(self, state: Configuration) -> InequalityRows:
+        """:meth:`Inequality.rows` with the pair of each row (what a recorder reports), from one query."""
+        chosen, found = self.nearest(state)
+        return self._rows(found.distance, self.distances.jacobian(state, found, chosen), chosen)
 
 
 class SelfCollision(NearestPairs):
