@@ -147,7 +147,10 @@ class PairDistances:
         self._data.setActiveCollisionPairs(self.geometry, active)
         pin.updateGeometryPlacements(self.model, state.data, self.geometry, self._data)
         pin.computeDistances(self.geometry, self._data)
-        found = np.array([self._checked(k).min_distance for k in queried.tolist()])
+        indices, results = queried.tolist(), self._results
+        # each distance read once; one outside [0, LARGEST_DISTANCE] (a penetration, a failed query) is checked
+        found = np.array([value if 0.0 <= value <= LARGEST_DISTANCE else self._checked(k).min_distance
+                          for k, value in zip(indices, [results[k].min_distance for k in indices])])
         chosen = queried[np.argsort(found, kind="stable")[:count]]
         return chosen, self._read(chosen.tolist())
 
