@@ -28,24 +28,33 @@ def lapack() -> ModuleType:
 
 
 def numpy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """x (n,) with A x = b: the numbers of ``numpy.linalg.solve`` (its LAPACK gufunc, called directly), without
-    its wrapper's checks and error-state context (about 2 us of its 8 on a 6 x 6 system).
+    """x (n,) with A x = b, or X (n, k) with A X = B: the numbers of ``numpy.linalg.solve`` (its LAPACK gufunc,
+    called directly), without its wrapper's checks and error-state context (about 2 us of its 8 on a 6 x 6 system).
 
     Raises:
         NumericalError: a singular A (a non-finite solution).
     """
-    solution = _solve1(matrix, rhs, signature="dd->d")  # a singular A: NaN (and numpy's RuntimeWarning)
-    if not math.isfinite(solution.dot(solution)):  # one product: np.isfinite(...).all() would double the cost
+    if rhs.ndim == 1:
+        solution = _solve(matrix, rhs, signature="dd->d", vector=True)  # a singular A: NaN (numpy's RuntimeWarning)
+        finite = math.isfinite(solution.dot(solution))  # one product: np.isfinite(...).all() would double the cost
+    else:
+        solution = _solve(matrix, rhs, signature="dd->d", vector=False)
+        finite = bool(np.isfinite(solution).all())
+    if not finite:
         raise NumericalError(f"singular or overflowing {matrix.shape[0]}x{matrix.shape[0]} system")
     return solution
 
 
-try:  # numpy's gufunc behind linalg.solve (numpy 1.x and 2.x)
-    from numpy.linalg._umath_linalg import solve1 as _solve1
+try:  # numpy's gufuncs behind linalg.solve (numpy 1.x and 2.x): one for a vector b, one for a matrix B
+    from numpy.linalg._umath_linalg import solve as _solve_matrix
+    from numpy.linalg._umath_linalg import solve1 as _solve_vector
+
+    def _solve(matrix: np.ndarray, rhs: np.ndarray, signature: str, vector: bool) -> np.ndarray:
+        return (_solve_vector if vector else _solve_matrix)(matrix, rhs, signature=signature)
 except ImportError:  # pragma: no cover - another numpy: its public function, the same numbers
-    def _solve1(matrix: np.ndarray, rhs: np.ndarray, signature: str) -> np.ndarray:  # noqa: ARG001
+    def _solve(matrix: np.ndarray, rhs: np.ndarray, signature: str, vector: bool) -> np.ndarray:  # noqa: ARG001
         with np.errstate(all="ignore"):
             try:
                 return np.linalg.solve(matrix, rhs)
             except np.linalg.LinAlgError:
-                return np.full(len(rhs), np.nan)
+                return np.full(rhs.shape, np.nan)

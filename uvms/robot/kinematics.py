@@ -33,6 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import ModelCheckError, NoVehicleError, NumericalError, UVMSError
+from ..numerics.lapack import numpy_solve
 from .conventions import AXIS_NAMES
 
 WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -145,19 +146,19 @@ def solve_base_block(a_base: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         ModelCheckError: A_b is singular: the model has no mass (or no inertia) for the vehicle's
             motion to move, so a free-floating vehicle velocity is undefined.
     """
-    if not (np.all(np.isfinite(a_base)) and np.all(np.isfinite(rhs))) or np.abs(a_base).max() > DIVERGED:
+    # the arrays' own .all(): np.all's dispatch costs more than the pass on these small blocks
+    if not (np.isfinite(a_base).all() and np.isfinite(rhs).all()) or np.abs(a_base).max() > DIVERGED:
         raise NumericalError("the momentum map has non-finite or enormous entries: the configuration or the velocities "
                              "diverged (near a singularity without damping?)")
     try:
-        solution = np.linalg.solve(a_base, rhs)
-    except np.linalg.LinAlgError:
-        solution = None
-    if solution is None or not np.all(np.isfinite(solution)):
+        with np.errstate(invalid="ignore"):  # a singular block gives NaN, refused here (not numpy's RuntimeWarning)
+            return numpy_solve(a_base, rhs)  # np.linalg.solve's numbers
+    except NumericalError:
         raise ModelCheckError(
             "the vehicle block of the centroidal momentum map is singular: the model has no mass or inertia "
             "that a free-floating vehicle could exchange momentum with (all links massless?); the generalized "
-            "Jacobian and the free-floating vehicle velocity need an <inertial> on the vehicle or the arm links")
-    return solution
+            "Jacobian and the free-floating vehicle velocity need an <inertial> on the vehicle or the arm links"
+        ) from None
 
 
 def manipulability_of(jacobian: np.ndarray) -> float:
