@@ -35,10 +35,10 @@ def numpy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         NumericalError: a singular A (a non-finite solution).
     """
     if rhs.ndim == 1:
-        solution = _solve(matrix, rhs, signature="dd->d", vector=True)  # a singular A: NaN (numpy's RuntimeWarning)
+        solution = _solve_vector(matrix, rhs, signature="dd->d")  # a singular A: NaN (numpy's RuntimeWarning)
         finite = math.isfinite(solution.dot(solution))  # one product: np.isfinite(...).all() would double the cost
     else:
-        solution = _solve(matrix, rhs, signature="dd->d", vector=False)
+        solution = _solve_matrix(matrix, rhs, signature="dd->d")
         finite = bool(np.isfinite(solution).all())
     if not finite:
         raise NumericalError(f"singular or overflowing {matrix.shape[0]}x{matrix.shape[0]} system")
@@ -48,13 +48,12 @@ def numpy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
 try:  # numpy's gufuncs behind linalg.solve (numpy 1.x and 2.x): one for a vector b, one for a matrix B
     from numpy.linalg._umath_linalg import solve as _solve_matrix
     from numpy.linalg._umath_linalg import solve1 as _solve_vector
-
-    def _solve(matrix: np.ndarray, rhs: np.ndarray, signature: str, vector: bool) -> np.ndarray:
-        return (_solve_vector if vector else _solve_matrix)(matrix, rhs, signature=signature)
 except ImportError:  # pragma: no cover - another numpy: its public function, the same numbers
-    def _solve(matrix: np.ndarray, rhs: np.ndarray, signature: str, vector: bool) -> np.ndarray:  # noqa: ARG001
+    def _solve_vector(matrix: np.ndarray, rhs: np.ndarray, signature: str) -> np.ndarray:  # noqa: ARG001
         with np.errstate(all="ignore"):
             try:
                 return np.linalg.solve(matrix, rhs)
             except np.linalg.LinAlgError:
                 return np.full(rhs.shape, np.nan)
+
+    _solve_matrix = _solve_vector
