@@ -286,21 +286,20 @@ class ActuatedPlantSystem:
                                                                       tuple[np.ndarray, np.ndarray], np.ndarray]:
         """(the dynamics (None without ``torques``: an integrator's stage), the state's rate (v, [v', f', delta']),
         the actuators' wrench (6,)) at (q, x)."""
-        nv, n = self.nv, self._n
-        v, thrusts, angles = x[:nv], x[nv:n], x[n:]
-        thrusters = self.thrusters
-        wrench = thrusters.matrix @ thrusts  # B f
-        if self.m:  # (without fins their wrench is zero: not added)
-            wrench = wrench + thrusters.fin_wrench(q, v, angles)
-        rates = np.empty(len(x))  # [v', f', delta'], each part written in place (no concatenation)
-        if torques:
-            dynamics = self.plant.dynamics(q, v, arm, wrench, rates[:nv])
-        else:
-            dynamics = None
-            self.plant.stage_acceleration(q, v, arm, wrench, rates[:nv])
-        thrusters.rate(thrusts, thrust_command, rates[nv:n])
+        plant, thrusters, nv, n = self.plant, self.thrusters, self.nv, self._n
+        v = x[:nv]
+        # the fins' wrench (without fins none: not added)
+        extra = thrusters.fin_wrench(q, v, x[n:]) if self.m else plant._no_wrench
+        kernels, inputs = plant._kernel_inputs(q, v, True)
+        rates, wrench = np.empty(len(x)), np.empty(6)  # [v', f', delta'], each part written in place
+        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else plant._scratch  # returned: new
+        # B f (+ the fins'), the lag's f' = (sat(f_cmd) - f) / tau and the plant's terms in one compiled call
+        kernels.actuated_rate_into(*inputs, x, arm, thrust_command, thrusters.matrix, thrusters.time_constants, extra,
+                                   wrench, mass, bias_forces, rates, plant._block, plant._rhs)
+        plant._base_acceleration_into(rates)
+        dynamics = plant._torques(rates[:nv], mass, bias_forces) if torques else None
         if self.m:
-            rates[n:] = thrusters.fins.rate(angles, fin_command)
+            rates[n:] = thrusters.fins.rate(x[n:], fin_command)
         return dynamics, (v, rates), wrench
 
     def _split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
