@@ -91,3 +91,55 @@ def test_the_actuated_rate_is_numpys(rng):
         np.testing.assert_array_equal(rate, np.concatenate([acceleration, lag]))
         np.testing.assert_array_equal(dynamics.joint_torque, torque)
         np.testing.assert_array_equal(system._rate(q, x, arm, command, np.zeros(0), False)[1][1], rate)
+
+
+def test_numpys_pairwise_sum_is_replicated(rng):
+    """numpy's ``sum`` (a loop below 8 entries, eight partial sums up to 128, halves beyond): the same bits at every
+    length, the halving's stack included; a plain left-to-right loop differs."""
+    from uvms.numerics._kernels.plant_stage import _numpy_sum
+
+    plain_differs = 0
+    for count in [*range(0, 140), 255, 256, 257, 1000, 5000]:
+        values = rng.normal(size=count) * 10.0 ** rng.uniform(-6, 6, count)
+        assert _numpy_sum(values) == float(values.sum())
+        plain_differs += sum(values.tolist()) != float(values.sum())
+    assert plain_differs > 10
+
+
+@pytest.mark.parametrize("fins", [False, True])
+def test_the_actuated_record_is_numpys(fins, rng):
+    """A row's body wrench, thrust powers and motor power are the numpy expressions' (B f plus the fins' wrench, or
+    plus 0.0 without fins; f * (B^T nu) summed; tau_m . qd_m), bit for bit: the torpedo's one thruster (a product of
+    one row) and fins, the BlueROV2's eight thrusters."""
+    from pathlib import Path
+
+    from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
+    from uvms.dynamics.plant.actuated import base_twist
+    from uvms.errors import BaseGuessWarning, PointMassWarning
+
+    if fins:
+        with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
+            robot = uvms.load(Path(__file__).parents[1] / "fixtures" / "auv" / "torpedo.urdf")
+        actuated = ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot)))
+    else:
+        actuated = ActuatedPlant.of(plant_of("bluerov2_alpha5"))
+    plant, system = actuated.plant, actuated.system(None, dt=0.01)
+    nv, nb = plant.model.nv, plant.nb
+    for trial in range(20):
+        q = pin.integrate(plant.model, plant.robot.neutral(), rng.normal(size=nv))
+        x = np.concatenate([rng.normal(size=nv), rng.uniform(actuated.lower, actuated.upper),
+                            0.1 * rng.normal(size=actuated.m)])
+        if trial == 0:  # thrusts of negative zero: zero powers, signed zeros as numpy's sums leave them
+            x[nv:nv + actuated.n] = -0.0
+        sample = system.sample(0.0, q, x)
+        row = system.record(0.0, q, x, sample)
+        v, thrusts, angles = system._split(x)
+        nu = base_twist(plant, v)
+        fin_wrench = actuated.fin_wrench(q, v, angles)
+        wrench = (actuated.matrix @ thrusts if fins else sample.wrench) + fin_wrench
+        powers = thrusts * (actuated.matrix.T @ nu)
+        assert row["body_wrench"].tobytes() == wrench.tobytes()
+        assert row["thrust_power"] == float(powers.sum())
+        assert row["thruster_power_abs"] == float(np.abs(powers).sum())
+        assert row["motor_power"] == float(sample.dynamics.joint_torque @ v[nb:])
+        assert abs(row["thrust_power"]) > 1e-3 or trial == 0

@@ -36,7 +36,7 @@ from ..thrusters.fins import Fins, fins_of
 from ..thrusters.thrusters import Thrusters, allocation_matrix, thrusters_of
 from .command import Command, Controller, State, refuse_fields
 from .plant import Plant
-from .system import PlantDynamics, PlantSample, PlantSystem, check_finite_state
+from .system import PlantDynamics, PlantSystem, check_finite_state, plant_row
 
 #: What an actuated plant applies of a Command (no arm: zero; no fins: none).
 TAKEN = ("arm", "thrust", "fins")
@@ -241,7 +241,10 @@ class ActuatedPlantSystem:
         self.robot, self.model = actuated.robot, actuated.model
         self.nv, self.m = actuated.model.nv, actuated.m
         self._n = self.nv + actuated.n  # where the fin angles start in the state
-        self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its record: energies, momentum, torques
+        self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its derived series: energies, momentum
+        from ...numerics._kernels.plant_stage import actuated_record  # numba: loaded where a plant is integrated
+
+        self._record_kernel = actuated_record
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """(q0, [v0, thrusts0, fin angles at rest]) checked (v0 None: rest; thrusts0 the ActuatedPlant's).
@@ -324,20 +327,23 @@ class ActuatedPlantSystem:
         """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the
         stored states after the loop: :meth:`series_info`) and the thrusters' and controller's."""
         v, thrusts, angles = self._split(x)
-        passive = PlantSample(sample.rate, sample.command.arm, sample.dynamics)
-        row = self._passive.record(t, q, v, passive)
+        thrusters, nb = self.thrusters, self.plant.nb
+        row = plant_row(v, sample.command.arm, sample.dynamics.joint_torque)  # (a passive plant's, no controller)
         nu = base_twist(self.plant, v)
-        fin_wrench = self.thrusters.fin_wrench(q, v, angles)
-        # B f + the fins' (+ 0.0 without fins: the sum as recorded before, signed zeros included)
-        wrench = (self.thrusters.wrench(thrusts) if sample.wrench is None or self.m else sample.wrench) + fin_wrench
-        if self.m:  # the fins' angles and what they give (their power: the drag's, <= 0 at rest angles)
+        if self.m:  # B f + the fins' wrench, their angles and what they give (the drag's power, <= 0 at rest)
+            fin_wrench = thrusters.fin_wrench(q, v, angles)
+            wrench = thrusters.wrench(thrusts)
             row.update(fin_angles=angles.copy(), fin_command=sample.fin_command, fin_wrench=fin_wrench,
                        fin_power=float(fin_wrench @ nu))
-        # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu)
-        powers = thrusts * (self.thrusters.matrix.T @ nu)
+        else:  # the sample's B f (+ 0.0 in the kernel: the sum with the fins' zero wrench, as recorded before)
+            fin_wrench = self.plant._no_wrench
+            wrench = thrusters.wrench(thrusts) if sample.wrench is None else sample.wrench
+        # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu); the motors' tau_m . qd_m
+        wrench, thrust_power, thruster_power_abs, motor_power = self._record_kernel(
+            thrusters.matrix, thrusts, nu, wrench, fin_wrench, sample.dynamics.joint_torque, v[nb:])
         row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
-                   thrust_power=float(powers.sum()), thruster_power_abs=float(np.abs(powers).sum()),
-                   motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]), **sample.command.info)
+                   thrust_power=thrust_power, thruster_power_abs=thruster_power_abs, motor_power=motor_power,
+                   **sample.command.info)
         return row
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:

@@ -148,7 +148,7 @@ class PlantSystem:
         """The plant series of a row (v, the command, torques; the energies and momentum come from the stored
         states after the loop: :meth:`derived_series`) and a tracking controller's (with limits_active = 0: it
         holds no joint at a limit)."""
-        row = {"v": v.copy(), "command": sample.command, "joint_torque": sample.dynamics.joint_torque}
+        row = plant_row(v, sample.command, sample.dynamics.joint_torque)
         tracking = getattr(self.controller, "tracking", None)
         if tracking is not None:
             row.update(tracking(t, q, v), limits_active=0)
@@ -171,6 +171,11 @@ class PlantSystem:
         if getattr(self.controller, "tracking", None) is not None:
             info["tracking"] = (self.controller.frame, tuple(self.controller.rows))
         return info
+
+
+def plant_row(v: np.ndarray, command: np.ndarray, joint_torque: np.ndarray) -> dict[str, np.ndarray]:
+    """The plant's own series of a row: v (nv,) (copied), the joint command u (n_arm,), the motor torques (n_arm,)."""
+    return {"v": v.copy(), "command": command, "joint_torque": joint_torque}
 
 
 def control_steps(control_dt: float, dt: float) -> int:

@@ -22,8 +22,8 @@ from numba import njit
 
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
 
-__all__ = ["accelerations_into", "actuated_rate_into", "motor_torques_into", "plant_constants", "terms_into",
-           "thrusters_into"]
+__all__ = ["accelerations_into", "actuated_rate_into", "actuated_record", "motor_torques_into", "plant_constants",
+           "terms_into", "thrusters_into"]
 
 
 @njit(cache=True)
@@ -156,6 +156,85 @@ def thrusters_into(matrix: np.ndarray, thrusts: np.ndarray, command: np.ndarray,
     _product_into(matrix, thrusts, wrench)
     for i in range(thrusts.shape[0]):
         rate[i] = (command[i] - thrusts[i]) / time_constants[i]
+
+
+@njit(cache=True)
+def _block_sum(values: np.ndarray, start: int, count: int) -> float:
+    """numpy's pairwise sum of values[start:start + count], count <= 128: a plain loop below 8 entries, else eight
+    partial sums."""
+    if count < 8:
+        total = 0.0
+        for i in range(start, start + count):
+            total += values[i]
+        return total
+    partial = values[start:start + 8].copy()
+    i = 8
+    while i < count - count % 8:
+        for j in range(8):
+            partial[j] += values[start + i + j]
+        i += 8
+    total = ((partial[0] + partial[1]) + (partial[2] + partial[3])) + \
+        ((partial[4] + partial[5]) + (partial[6] + partial[7]))
+    for k in range(i, count):
+        total += values[start + k]
+    return total
+
+
+@njit(cache=True)
+def _numpy_sum(values: np.ndarray) -> float:
+    """numpy's ``values.sum()`` (its pairwise summation: blocks of at most 128 entries, longer runs halved at a
+    multiple of 8 and the halves' sums added), the same bits; the halving walked with a stack (numba's on-disk cache
+    does not take a recursive kernel)."""
+    if values.shape[0] <= 128:
+        return _block_sum(values, 0, values.shape[0])
+    starts, counts = np.empty(128, dtype=np.int64), np.empty(128, dtype=np.int64)
+    stages, sums = np.zeros(128, dtype=np.int64), np.empty(128)
+    starts[0], counts[0], top, done = 0, values.shape[0], 0, 0
+    while top >= 0:
+        half = counts[top] // 2
+        half -= half % 8
+        if counts[top] <= 128:  # a block: its sum onto the stack of sums
+            sums[done] = _block_sum(values, starts[top], counts[top])
+            done, top = done + 1, top - 1
+        elif stages[top] == 0:  # the first half next
+            stages[top] = 1
+            starts[top + 1], counts[top + 1], stages[top + 1] = starts[top], half, 0
+            top += 1
+        elif stages[top] == 1:  # then the second
+            stages[top] = 2
+            starts[top + 1], counts[top + 1], stages[top + 1] = starts[top] + half, counts[top] - half, 0
+            top += 1
+        else:  # both halves summed: first + second
+            sums[done - 2] = sums[done - 2] + sums[done - 1]
+            done, top = done - 1, top - 1
+    return sums[0]
+
+
+@njit(cache=True)
+def actuated_record(matrix: np.ndarray, thrusts: np.ndarray, twist: np.ndarray, wrench: np.ndarray,
+                    fins: np.ndarray, joint_torque: np.ndarray,
+                    arm_rates: np.ndarray) -> tuple[np.ndarray, float, float, float]:
+    """What a row of an actuated run records of the thrusters and motors, as numpy computed it: (the body wrench
+    ``wrench + fins`` (6,) (without fins ``wrench + 0.0``, numpy's sum with their zero wrench: signed zeros made
+    positive), the thrust power sum_i f_i (B_i . nu) [W], its absolute sum [W], the motor power tau_m . qd_m [W]).
+
+    Args:
+        matrix: B (6, n) column-major (B^T row-major); thrusts: f (n,) [N]; twist: nu (6,) the body twist [m/s,
+            rad/s]; wrench: B f (6,) [N, N m]; fins: their wrench (6,), or (0,) without fins; joint_torque: tau_m
+            (n_arm,); arm_rates: qd_m (n_arm,).
+    """
+    count = thrusts.shape[0]
+    speeds = np.empty(count)
+    _product_into(matrix.T, twist, speeds)  # numpy's B.T @ nu
+    powers, magnitudes = np.empty(count), np.empty(count)
+    for i in range(count):
+        powers[i] = thrusts[i] * speeds[i]
+        magnitudes[i] = abs(powers[i])
+    recorded = np.empty(6)
+    for i in range(6):
+        recorded[i] = wrench[i] + (fins[i] if fins.size else 0.0)
+    motor = np.dot(joint_torque, arm_rates) if joint_torque.shape[0] else 0.0
+    return recorded, _numpy_sum(powers), _numpy_sum(magnitudes), motor
 
 
 def plant_constants(model, data, stacked, flags: np.ndarray, current: np.ndarray, nb: int, base_frame,
