@@ -195,6 +195,15 @@ def control_steps(control_dt: float, dt: float) -> int:
 
 
 def check_finite_state(t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
-    """Raise UVMSError when the state (q, x) reached at t [s] is not finite (the step dt [s] was too large)."""
-    if not (np.isfinite(q).all() and np.isfinite(x).all()):  # the arrays' own reduction: np.all's dispatch costs 4x
+    """Raise UVMSError when the state (q, x) reached at t [s] is not finite (the step dt [s] was too large).
+
+    One compiled call (:func:`uvms.numerics._kernels.plant_stage.all_finite`; numpy's four calls cost 1.7 us a step).
+    """
+    global _all_finite
+    if _all_finite is None:  # numba: loaded where a plant is integrated (its first evaluation loaded it already)
+        from ...numerics._kernels.plant_stage import all_finite as _all_finite
+    if not _all_finite(q, x):
         raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")
+
+
+_all_finite: Callable[[np.ndarray, np.ndarray], bool] | None = None

@@ -22,8 +22,8 @@ from numba import njit
 
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
 
-__all__ = ["accelerations_into", "actuated_rate_into", "actuated_record", "motor_torques_into", "plant_constants",
-           "terms_into", "thrusters_into"]
+__all__ = ["accelerations_into", "actuated_rate_into", "actuated_record", "all_finite", "motor_torques_into",
+           "plant_constants", "terms_into", "thrusters_into"]
 
 
 @njit(cache=True)
@@ -156,6 +156,18 @@ def thrusters_into(matrix: np.ndarray, thrusts: np.ndarray, command: np.ndarray,
     _product_into(matrix, thrusts, wrench)
     for i in range(thrusts.shape[0]):
         rate[i] = (command[i] - thrusts[i]) / time_constants[i]
+
+
+@njit(cache=True)
+def all_finite(q: np.ndarray, x: np.ndarray) -> bool:
+    """Whether every entry of q and x is finite (numpy's ``isfinite(q).all() and isfinite(x).all()``)."""
+    for value in q:
+        if not np.isfinite(value):
+            return False
+    for value in x:
+        if not np.isfinite(value):
+            return False
+    return True
 
 
 @njit(cache=True)
