@@ -143,3 +143,15 @@ def test_the_actuated_record_is_numpys(fins, rng):
         assert row["thruster_power_abs"] == float(np.abs(powers).sum())
         assert row["motor_power"] == float(sample.dynamics.joint_torque @ v[nb:])
         assert abs(row["thrust_power"]) > 1e-3 or trial == 0
+
+
+def test_the_thrust_saturation_is_numpys_clip(rng):
+    """ActuatedPlant.saturate (compiled) gives np.clip's bytes: values inside, beyond and at the bounds, signed zeros
+    at a bound of zero (np.clip returns the bound there), a NaN kept."""
+    actuated = ActuatedPlant.of(plant_of("bluerov2_alpha5"))
+    lower, upper = actuated.lower.copy(), actuated.upper.copy()
+    special = np.array([0.0, -0.0, np.nan, np.inf, -np.inf, *lower[:2], *upper[:2]])
+    for trial in range(200):
+        actuated.lower, actuated.upper = (lower, upper) if trial % 2 else (np.full(8, -0.0), np.full(8, 0.0))
+        command = np.where(rng.random(8) < 0.5, rng.choice(special, 8), rng.normal(size=8) * 60.0)
+        assert actuated.saturate(command).tobytes() == np.clip(command, actuated.lower, actuated.upper).tobytes()

@@ -36,7 +36,7 @@ from ..thrusters.fins import Fins, fins_of
 from ..thrusters.thrusters import Thrusters, allocation_matrix, thrusters_of
 from .command import Command, Controller, State, refuse_fields
 from .plant import Plant
-from .system import PlantDynamics, PlantSystem, check_finite_state, plant_row
+from .system import PlantDynamics, PlantSystem, check_finite, check_finite_state, plant_row
 
 #: What an actuated plant applies of a Command (no arm: zero; no fins: none).
 TAKEN = ("arm", "thrust", "fins")
@@ -96,8 +96,12 @@ class ActuatedPlant:
         return self.fins.wrench(base_twist(self.plant, v), water_in_base(self.plant, q), angles)
 
     def saturate(self, command: np.ndarray) -> np.ndarray:
-        """The command (n,) clipped to [lower, upper] [N]."""
-        return np.clip(command, self.lower, self.upper)
+        """The command (n,) clipped to [lower, upper] [N] (``np.clip``'s numbers in one compiled call:
+        :func:`uvms.numerics._kernels.plant_stage.clipped`)."""
+        global _clipped
+        if _clipped is None:  # numba: loaded where a plant is integrated
+            from ...numerics._kernels.plant_stage import clipped as _clipped
+        return _clipped(np.asarray(command, dtype=float), self.lower, self.upper)
 
     def rate(self, thrusts: np.ndarray, saturated_command: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
         """f' (n,) [N/s] = (sat(f_cmd) - f) / tau, into ``out`` (n,) when given."""
@@ -119,6 +123,9 @@ class ActuatedPlant:
             raise StepCountError(f"an actuated plant's controller runs once per step: control_dt must be 0 or dt = "
                                  f"{dt:g} s, got {control_dt!r}")
         return ActuatedPlantSystem(self, controller)
+
+
+_clipped: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None
 
 
 # ------------------------------------------------------------------ model terms used by controllers and records
@@ -245,6 +252,7 @@ class ActuatedPlantSystem:
         from ...numerics._kernels.plant_stage import actuated_record  # numba: loaded where a plant is integrated
 
         self._record_kernel = actuated_record
+        self._no_fins = np.zeros(0)
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """(q0, [v0, thrusts0, fin angles at rest]) checked (v0 None: rest; thrusts0 the ActuatedPlant's).
@@ -273,12 +281,16 @@ class ActuatedPlantSystem:
             command = Command()
         else:
             command = self.controller.command(self._state(q, x), t)
-            refuse_fields(command, TAKEN, "an actuated plant (joint velocity servos, thrusters, fins)", t)
+            if command.velocity is not None or command.arm_torque is not None:  # (the fields it does not take)
+                refuse_fields(command, TAKEN, "an actuated plant (joint velocity servos, thrusters, fins)", t)
         arm = np.zeros(self.plant.n_arm) if command.arm is None else np.asarray(command.arm, dtype=float)
         thrust = np.zeros(self.thrusters.n) if command.thrust is None else np.asarray(command.thrust, dtype=float)
-        fins = self.thrusters.fins.held if command.fins is None else np.asarray(command.fins, dtype=float)
+        if command.fins is not None:
+            fins = np.asarray(command.fins, dtype=float)
+        else:  # at rest (none: one empty array)
+            fins = self.thrusters.fins.held if self.m else self._no_fins
         if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
-                or not (np.isfinite(arm).all() and np.isfinite(thrust).all() and np.isfinite(fins).all()):
+                or not (check_finite(arm, thrust) and check_finite(fins, fins)):
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")
@@ -314,7 +326,7 @@ class ActuatedPlantSystem:
         """The controller's command at the step's start and the rate it gives."""
         command = self._command(t, q, x)
         saturated = self.thrusters.saturate(command.thrust)
-        fins = self.thrusters.fins.saturate(command.fins)
+        fins = self.thrusters.fins.saturate(command.fins) if self.m else command.fins  # (none: clipped, the same)
         dynamics, rate, wrench = self._rate(q, x, command.arm, saturated, fins)
         return ActuatedSample(rate, command, saturated, dynamics, fins, wrench)
 

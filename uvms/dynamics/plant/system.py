@@ -199,11 +199,18 @@ def check_finite_state(t: float, q: np.ndarray, x: np.ndarray, dt: float) -> Non
 
     One compiled call (:func:`uvms.numerics._kernels.plant_stage.all_finite`; numpy's four calls cost 1.7 us a step).
     """
-    global _all_finite
-    if _all_finite is None:  # numba: loaded where a plant is integrated (its first evaluation loaded it already)
-        from ...numerics._kernels.plant_stage import all_finite as _all_finite
-    if not _all_finite(q, x):
+    if not check_finite(q, x):
         raise UVMSError(f"the state became non-finite at t = {t:.6g} s; reduce dt (now {dt:g} s)")
+
+
+def check_finite(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether every entry of the float arrays a and b is finite, in one compiled call
+    (:func:`uvms.numerics._kernels.plant_stage.all_finite`, loaded at the first call: numba, which a plant's first
+    evaluation loads anyway)."""
+    global _all_finite
+    if _all_finite is None:
+        from ...numerics._kernels.plant_stage import all_finite as _all_finite
+    return _all_finite(a, b)
 
 
 _all_finite: Callable[[np.ndarray, np.ndarray], bool] | None = None

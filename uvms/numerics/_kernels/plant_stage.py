@@ -22,8 +22,8 @@ from numba import njit
 
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
 
-__all__ = ["accelerations_into", "actuated_rate_into", "actuated_record", "all_finite", "motor_torques_into",
-           "plant_constants", "terms_into", "thrusters_into"]
+__all__ = ["accelerations_into", "actuated_rate_into", "actuated_record", "all_finite", "clipped",
+           "motor_torques_into", "plant_constants", "terms_into", "thrusters_into"]
 
 
 @njit(cache=True)
@@ -168,6 +168,18 @@ def all_finite(q: np.ndarray, x: np.ndarray) -> bool:
         if not np.isfinite(value):
             return False
     return True
+
+
+@njit(cache=True)
+def clipped(values: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """``np.clip(values, lower, upper)`` (n,): numpy's max-then-min per entry, its comparisons (a NaN kept; an entry
+    equal to a bound, a signed zero among them, gives the bound), the same bits."""
+    out = np.empty(values.shape[0])
+    for i in range(values.shape[0]):
+        value = values[i]
+        low = value if np.isnan(value) or value > lower[i] else lower[i]
+        out[i] = low if np.isnan(low) or low < upper[i] else upper[i]
+    return out
 
 
 @njit(cache=True)
