@@ -107,42 +107,41 @@ def test_numpys_pairwise_sum_is_replicated(rng):
 
 
 @pytest.mark.parametrize("fins", [False, True])
-def test_the_actuated_record_is_numpys(fins, rng):
-    """A row's body wrench, thrust powers and motor power are the numpy expressions' (B f plus the fins' wrench, or
-    plus 0.0 without fins; f * (B^T nu) summed; tau_m . qd_m), bit for bit: the torpedo's one thruster (a product of
-    one row) and fins, the BlueROV2's eight thrusters."""
+def test_the_actuation_series_derived_after_the_loop_are_the_per_row_numpy_expressions(fins):
+    """The body wrench, thrust powers and motor power a run derives from its stored rows after the loop are what the
+    record computed per row with numpy (B f plus the fins' wrench, or plus 0.0 without; f * (B^T nu) summed, nu from
+    Pinocchio's actInv; tau_m . qd_m), bit for bit: the torpedo's one thruster (a product of one row) and four fins,
+    the BlueROV2 + Alpha 5's eight thrusters and arm."""
     from pathlib import Path
 
+    from uvms.control import OpenLoop
     from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
     from uvms.dynamics.plant.actuated import base_twist
     from uvms.errors import BaseGuessWarning, PointMassWarning
+    from uvms.sim import simulate
 
     if fins:
         with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
             robot = uvms.load(Path(__file__).parents[1] / "fixtures" / "auv" / "torpedo.urdf")
-        actuated = ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot)))
+        actuated = ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot), current=[0.2, 0.1, 0.0]))
+        controller = OpenLoop(thrust=lambda t: [40.0 * np.sin(3.0 * t)], fins=lambda t: 0.3 * np.sin(t + np.arange(4)))
     else:
         actuated = ActuatedPlant.of(plant_of("bluerov2_alpha5"))
-    plant, system = actuated.plant, actuated.system(None, dt=0.01)
-    nv, nb = plant.model.nv, plant.nb
-    for trial in range(20):
-        q = pin.integrate(plant.model, plant.robot.neutral(), rng.normal(size=nv))
-        x = np.concatenate([rng.normal(size=nv), rng.uniform(actuated.lower, actuated.upper),
-                            0.1 * rng.normal(size=actuated.m)])
-        if trial == 0:  # thrusts of negative zero: zero powers, signed zeros as numpy's sums leave them
-            x[nv:nv + actuated.n] = -0.0
-        sample = system.sample(0.0, q, x)
-        row = system.record(0.0, q, x, sample)
-        v, thrusts, angles = system._split(x)
-        nu = base_twist(plant, v)
-        fin_wrench = actuated.fin_wrench(q, v, angles)
-        wrench = (actuated.matrix @ thrusts if fins else sample.wrench) + fin_wrench
-        powers = thrusts * (actuated.matrix.T @ nu)
-        assert row["body_wrench"].tobytes() == wrench.tobytes()
-        assert row["thrust_power"] == float(powers.sum())
-        assert row["thruster_power_abs"] == float(np.abs(powers).sum())
-        assert row["motor_power"] == float(sample.dynamics.joint_torque @ v[nb:])
-        assert abs(row["thrust_power"]) > 1e-3 or trial == 0
+        controller = OpenLoop(arm=lambda t: 0.2 * np.cos(t + np.arange(actuated.plant.n_arm)),
+                              thrust=lambda t: 60.0 * np.sin(2.0 * t + np.arange(8)))
+    plant = actuated.plant
+    result = simulate(actuated, controller, plant.robot.neutral(), 0.5, 0.01)
+    series, nb = result.actuation, plant.nb
+    v, torques = result.v, result.plant.joint_torque
+    for k in range(len(result.t)):
+        thrusts = series.thrusts[k]
+        fin_wrench = series.controller["fin_wrench"][k] if fins else np.zeros(6)
+        powers = thrusts * (actuated.matrix.T @ base_twist(plant, v[k]))
+        assert series.body_wrench[k].tobytes() == (actuated.matrix @ thrusts + fin_wrench).tobytes()
+        assert series.thrust_power[k] == float(powers.sum())
+        assert series.thruster_power_abs[k] == float(np.abs(powers).sum())
+        assert series.motor_power[k] == float(torques[k] @ v[k, nb:])
+    assert np.abs(series.thrust_power).max() > 1.0 and (fins or np.abs(series.motor_power).max() > 1e-3)
 
 
 def test_the_thrust_saturation_is_numpys_clip(rng):

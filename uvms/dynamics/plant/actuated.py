@@ -249,9 +249,9 @@ class ActuatedPlantSystem:
         self.nv, self.m = actuated.model.nv, actuated.m
         self._n = self.nv + actuated.n  # where the fin angles start in the state
         self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its derived series: energies, momentum
-        from ...numerics._kernels.plant_stage import actuated_record  # numba: loaded where a plant is integrated
+        from ...numerics._kernels.plant_stage import actuation_rows  # numba: loaded where a plant is integrated
 
-        self._record_kernel = actuated_record
+        self._rows_kernel = actuation_rows
         self._no_fins = np.zeros(0)
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -339,23 +339,12 @@ class ActuatedPlantSystem:
         """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the
         stored states after the loop: :meth:`series_info`) and the thrusters' and controller's."""
         v, thrusts, angles = self._split(x)
-        thrusters, nb = self.thrusters, self.plant.nb
         row = plant_row(v, sample.command.arm, sample.dynamics.joint_torque)  # (a passive plant's, no controller)
-        nu = base_twist(self.plant, v)
-        if self.m:  # B f + the fins' wrench, their angles and what they give (the drag's power, <= 0 at rest)
-            fin_wrench = thrusters.fin_wrench(q, v, angles)
-            wrench = thrusters.wrench(thrusts)
+        if self.m:  # the fins' angles and what they give (their power: the drag's, <= 0 at rest angles)
+            fin_wrench = self.thrusters.fin_wrench(q, v, angles)
             row.update(fin_angles=angles.copy(), fin_command=sample.fin_command, fin_wrench=fin_wrench,
-                       fin_power=float(fin_wrench @ nu))
-        else:  # the sample's B f (+ 0.0 in the kernel: the sum with the fins' zero wrench, as recorded before)
-            fin_wrench = self.plant._no_wrench
-            wrench = thrusters.wrench(thrusts) if sample.wrench is None else sample.wrench
-        # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu); the motors' tau_m . qd_m
-        wrench, thrust_power, thruster_power_abs, motor_power = self._record_kernel(
-            thrusters.matrix, thrusts, nu, wrench, fin_wrench, sample.dynamics.joint_torque, v[nb:])
-        row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
-                   thrust_power=thrust_power, thruster_power_abs=thruster_power_abs, motor_power=motor_power,
-                   **sample.command.info)
+                       fin_power=float(fin_wrench @ base_twist(self.plant, v)))
+        row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, **sample.command.info)
         return row
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
@@ -364,11 +353,23 @@ class ActuatedPlantSystem:
 
     def series_info(self) -> dict:
         """{"thrust_bounds": (lower (n,), upper (n,) [N]), "plant_series": the energies and momentum of the stored
-        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`), "actuation_series": the damping
-        power of the stored states (:meth:`derived_series`)}."""
+        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`), "actuation_series": the wrench and
+        powers of the stored rows (:meth:`derived_series`)}."""
         return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper),
                 "plant_series": self._passive.derived_series, "actuation_series": self.derived_series}
 
-    def derived_series(self, q: np.ndarray, v: np.ndarray) -> dict[str, np.ndarray]:
-        """{"damping_power": (N,) [W]} of the stored states q (N, nq), v (N, nv) (:func:`damping_power`)."""
-        return {"damping_power": damping_power(self.plant, q, v)}
+    def derived_series(self, q: np.ndarray, v: np.ndarray, recorded: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The actuation series derived after the loop from the stored rows q (N, nq), v (N, nv) and ``recorded``
+        ("thrusts" (N, n), "joint_torque" (N, n_arm), with fins "fin_wrench" (N, 6)), each row's numbers those the
+        record computed per row before: "body_wrench" (N, 6) [N, N m] B f + the fins', "thrust_power" (N,) [W]
+        sum_i f_i (B_i . nu) (thruster i's power on the hull: f_i d_i . (v + w x p_i)), "thruster_power_abs" (N,)
+        [W], "motor_power" (N,) [W] tau_m . qd_m (:func:`uvms.numerics._kernels.plant_stage.actuation_rows`, one
+        compiled pass), "damping_power" (N,) [W] (:func:`damping_power`)."""
+        placement = self.plant.base_placement
+        fins = recorded["fin_wrench"] if self.m else np.zeros((0, 6))
+        wrench, thrust_power, absolute, motor = self._rows_kernel(
+            self.thrusters.matrix, np.ascontiguousarray(recorded["thrusts"], dtype=float), np.ascontiguousarray(v),
+            np.ascontiguousarray(recorded["joint_torque"], dtype=float), np.ascontiguousarray(fins, dtype=float),
+            self.plant.nb, placement.rotation.copy(), placement.translation.copy())
+        return {"body_wrench": wrench, "thrust_power": thrust_power, "thruster_power_abs": absolute,
+                "motor_power": motor, "damping_power": damping_power(self.plant, q, v)}

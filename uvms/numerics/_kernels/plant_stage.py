@@ -22,7 +22,7 @@ from numba import njit
 
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
 
-__all__ = ["accelerations_into", "actuated_rate_into", "actuated_record", "all_finite", "clipped",
+__all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
            "motor_torques_into", "plant_constants", "terms_into", "thrusters_into"]
 
 
@@ -235,30 +235,61 @@ def _numpy_sum(values: np.ndarray) -> float:
 
 
 @njit(cache=True)
-def actuated_record(matrix: np.ndarray, thrusts: np.ndarray, twist: np.ndarray, wrench: np.ndarray,
-                    fins: np.ndarray, joint_torque: np.ndarray,
-                    arm_rates: np.ndarray) -> tuple[np.ndarray, float, float, float]:
-    """What a row of an actuated run records of the thrusters and motors, as numpy computed it: (the body wrench
-    ``wrench + fins`` (6,) (without fins ``wrench + 0.0``, numpy's sum with their zero wrench: signed zeros made
-    positive), the thrust power sum_i f_i (B_i . nu) [W], its absolute sum [W], the motor power tau_m . qd_m [W]).
+def _base_twist_into(v: np.ndarray, nb: int, rotation: np.ndarray, translation: np.ndarray,
+                     twist: np.ndarray) -> None:
+    """The vehicle's body twist (6,) in its base frame from the velocity v (nv,) into ``twist``:
+    ``base_placement.actInv(pin.Motion(...))`` as Pinocchio computes it (R^T (v - p x w), R^T w, each entry
+    (R0i a0 + R1i a1) + R2i a2), the same bits; a planar vehicle's (vx, vy, wz) as the motion (vx, vy, 0, 0, 0, wz).
 
     Args:
-        matrix: B (6, n) column-major (B^T row-major); thrusts: f (n,) [N]; twist: nu (6,) the body twist [m/s,
-            rad/s]; wrench: B f (6,) [N, N m]; fins: their wrench (6,), or (0,) without fins; joint_torque: tau_m
-            (n_arm,); arm_rates: qd_m (n_arm,).
+        rotation (3, 3), translation (3,) [m]: the base frame in the vehicle joint's frame (joint_M_base).
     """
-    count = thrusts.shape[0]
-    speeds = np.empty(count)
-    _product_into(matrix.T, twist, speeds)  # numpy's B.T @ nu
-    powers, magnitudes = np.empty(count), np.empty(count)
-    for i in range(count):
-        powers[i] = thrusts[i] * speeds[i]
-        magnitudes[i] = abs(powers[i])
-    recorded = np.empty(6)
-    for i in range(6):
-        recorded[i] = wrench[i] + (fins[i] if fins.size else 0.0)
-    motor = np.dot(joint_torque, arm_rates) if joint_torque.shape[0] else 0.0
-    return recorded, _numpy_sum(powers), _numpy_sum(magnitudes), motor
+    if nb == 6:
+        l0, l1, l2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
+    else:
+        l0, l1, l2, w0, w1, w2 = v[0], v[1], 0.0, 0.0, 0.0, v[2]
+    p0, p1, p2 = translation[0], translation[1], translation[2]
+    d0 = l0 - (p1 * w2 - p2 * w1)
+    d1 = l1 - (p2 * w0 - p0 * w2)
+    d2 = l2 - (p0 * w1 - p1 * w0)
+    for i in range(3):
+        twist[i] = (rotation[0, i] * d0 + rotation[1, i] * d1) + rotation[2, i] * d2
+        twist[3 + i] = (rotation[0, i] * w0 + rotation[1, i] * w1) + rotation[2, i] * w2
+
+
+@njit(cache=True)
+def actuation_rows(matrix: np.ndarray, thrusts: np.ndarray, v: np.ndarray, joint_torque: np.ndarray,
+                   fins: np.ndarray, nb: int, rotation: np.ndarray,
+                   translation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What an actuated run's rows hold of the thrusters and motors, from the stored rows, each row's numbers those
+    the numpy expressions gave per row: (body wrench (N, 6) B f + the fins' wrench, or B f + 0.0 without fins
+    (numpy's sum with their zero wrench: signed zeros made positive); thrust power (N,) sum_i f_i (B_i . nu) [W] and
+    its absolute sum (N,) [W] (numpy's pairwise sums), nu the body twist; motor power (N,) tau_m . qd_m [W]).
+
+    Args:
+        matrix: B (6, n) column-major (B^T row-major); thrusts: f (N, n) [N]; v: (N, nv); joint_torque: tau_m
+            (N, n_arm); fins: their wrench (N, 6), or (0, 6) without fins; nb: 6 (3 planar); rotation (3, 3),
+            translation (3,): the base frame in the vehicle joint's frame.
+    """
+    rows, count = thrusts.shape
+    wrench, thrust_power = np.empty((rows, 6)), np.empty(rows)
+    absolute, motor = np.empty(rows), np.empty(rows)
+    thrust, twist, pushed = np.empty(count), np.empty(6), np.empty(6)
+    speeds, powers, magnitudes = np.empty(count), np.empty(count), np.empty(count)
+    for k in range(rows):
+        thrust[:] = thrusts[k]
+        _product_into(matrix, thrust, pushed)  # numpy's B @ f
+        for i in range(6):
+            wrench[k, i] = pushed[i] + (fins[k, i] if fins.shape[0] else 0.0)
+        _base_twist_into(v[k], nb, rotation, translation, twist)
+        _product_into(matrix.T, twist, speeds)  # numpy's B.T @ nu
+        for i in range(count):
+            powers[i] = thrust[i] * speeds[i]
+            magnitudes[i] = abs(powers[i])
+        thrust_power[k], absolute[k] = _numpy_sum(powers), _numpy_sum(magnitudes)
+        arm = joint_torque.shape[1]
+        motor[k] = np.dot(joint_torque[k].copy(), v[k, nb:].copy()) if arm else 0.0
+    return wrench, thrust_power, absolute, motor
 
 
 def plant_constants(model, data, stacked, flags: np.ndarray, current: np.ndarray, nb: int, base_frame,
