@@ -103,12 +103,6 @@ class ActuatedPlant:
             from ...numerics._kernels.plant_stage import clipped as _clipped
         return _clipped(np.asarray(command, dtype=float), self.lower, self.upper)
 
-    def rate(self, thrusts: np.ndarray, saturated_command: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """f' (n,) [N/s] = (sat(f_cmd) - f) / tau, into ``out`` (n,) when given."""
-        rate = np.subtract(saturated_command, thrusts, out)
-        rate /= self.time_constants
-        return rate
-
     def wrench(self, thrusts: np.ndarray) -> np.ndarray:
         """B f (6,) [N, N m], FLU at the base frame origin."""
         return self.matrix @ thrusts
