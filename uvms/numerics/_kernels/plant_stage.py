@@ -1,15 +1,19 @@
-"""The plant's equations of motion around the hydrodynamic pass, in the same compiled call: a body wrench's
-generalized force, the motors' accelerations, the vehicle's right-hand side, the motor torques, the thrusters' lag.
+"""The plant's equations of motion around the hydrodynamic pass, in the same compiled call, and the actuated plant's
+per-step numbers: a body wrench's generalized force, the motors' accelerations, the vehicle's right-hand side, the
+motor torques, the thrusters' wrench, lag and saturation, the state's finiteness, the rows' powers.
 
-:meth:`uvms.dynamics.plant.terms.PlantTerms.accelerations`: after Pinocchio's algorithms, one call here forms Mbar and
-nbar (:func:`uvms.numerics._kernels.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle (the
-base frame's LOCAL Jacobian formed from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m) /
-tau and the vehicle's right-hand side Mbar_bm a_m + nbar_b; only the 6 x 6 (3 x 3 planar) solve stays with numpy's
-LAPACK (numba's solve is not bit-identical to it). As numpy calls this tail was about a dozen calls of 0.3-1 us each.
+:meth:`uvms.dynamics.plant.plant.Plant.stage_acceleration` and
+:meth:`uvms.dynamics.plant.actuated.ActuatedPlantSystem._rate`: after Pinocchio's algorithms one call here forms Mbar
+and nbar (:func:`uvms.numerics._kernels.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle
+(the base frame's LOCAL Jacobian formed from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m)
+/ tau and the vehicle's right-hand side Mbar_bm a_m + nbar_b; only the 6 x 6 (3 x 3 planar) solve stays with numpy's
+LAPACK (numba's solve calls SciPy's, whose numbers differ). As numpy calls this tail was about fifteen calls of
+0.3-1 us each. :func:`actuation_rows` derives a run's body wrench and powers from its stored rows after the loop.
 
 Every number is the one the numpy expressions it replaces gave, bit for bit: elementwise arithmetic in their order
-(numba contracts nothing without ``fastmath``), products through ``np.dot`` on C-contiguous arrays, which calls the
-same BLAS routine numpy's ``@`` calls (a product with a single output entry as numpy computes it: a dot product).
+(numba contracts nothing without ``fastmath``), products through ``np.dot`` on arrays in the layout numpy held them
+(C- or column-major), which calls the BLAS routine numpy's ``@`` calls (a product with a single output entry as numpy
+computes it: a dot product), numpy's pairwise sums and clip written out.
 
 The module imports numba, so it is loaded where a plant is first evaluated; its kernels compile at their first call
 and are cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
