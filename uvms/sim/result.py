@@ -118,10 +118,12 @@ class SimulationResult:
         arrays = dict(arrays)
         count = len(arrays["t"])
         plant = tracking = actuation = None
+        recorded: dict[str, np.ndarray] = {}  # the plant's own rows, which an actuation's derived series read
         if "joint_torque" in arrays:
             for name in ("command", "joint_torque"):  # no arm: (N, 0)
                 arrays[name] = arrays[name].reshape(count, -1)
             given = {name: arrays.pop(name) for name in PLANT_FIELDS if name in arrays}
+            recorded.update(given)
             derive = info.get("plant_series")
             states = (arrays["q"], arrays["v"])
             plant = PlantSeries(**given, derive=None if derive is None else lambda: derive(*states))
@@ -134,9 +136,10 @@ class SimulationResult:
         if "thrust_bounds" in info:
             lower, upper = info["thrust_bounds"]
             own = {name: arrays.pop(name) for name in ACTUATION_FIELDS if name in arrays}
-            derive_actuation = info.get("actuation_series")  # the series of the stored states (damping power)
+            derive_actuation = info.get("actuation_series")  # the series of the stored rows (wrench, powers)
             if derive_actuation is not None:
-                own.update(derive_actuation(arrays["q"], arrays["v"]))
+                rows = {**recorded, **own, **{name: arrays[name] for name in ("fin_wrench",) if name in arrays}}
+                own.update(derive_actuation(arrays["q"], arrays["v"], rows))
             others = {name: arrays.pop(name) for name in list(arrays) if name not in SERIES}
             actuation = ActuationSeries(**own, lower=lower, upper=upper, controller=others)
         unknown = sorted(set(arrays) - set(SERIES))

@@ -70,8 +70,8 @@ class System(Protocol):
         """What the result's series groups need beside the rows: ``"tracking"`` (frame, position rows) of a
         tracking controller, ``"thrust_bounds"`` (lower (n,), upper (n,) [N]) of thrusters, ``"plant_series"``
         ((q (N, nq), v (N, nv)) -> the plant's series derived from the stored states, computed when first read) of a
-        plant, ``"actuation_series"`` (the same signature: the actuation series not recorded per row, the damping
-        power) of thrusters; {} when none."""
+        plant, ``"actuation_series"`` ((q, v, the rows recorded by name) -> the actuation series not recorded per
+        row: the body wrench, the powers) of thrusters; {} when none."""
 
 
 class Simulable(Protocol):

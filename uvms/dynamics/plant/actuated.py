@@ -36,7 +36,7 @@ from ..thrusters.fins import Fins, fins_of
 from ..thrusters.thrusters import Thrusters, allocation_matrix, thrusters_of
 from .command import Command, Controller, State, refuse_fields
 from .plant import Plant
-from .system import PlantDynamics, PlantSample, PlantSystem, check_finite_state
+from .system import PlantDynamics, PlantSystem, check_finite, check_finite_state, plant_row
 
 #: What an actuated plant applies of a Command (no arm: zero; no fins: none).
 TAKEN = ("arm", "thrust", "fins")
@@ -96,14 +96,12 @@ class ActuatedPlant:
         return self.fins.wrench(base_twist(self.plant, v), water_in_base(self.plant, q), angles)
 
     def saturate(self, command: np.ndarray) -> np.ndarray:
-        """The command (n,) clipped to [lower, upper] [N]."""
-        return np.clip(command, self.lower, self.upper)
-
-    def rate(self, thrusts: np.ndarray, saturated_command: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """f' (n,) [N/s] = (sat(f_cmd) - f) / tau, into ``out`` (n,) when given."""
-        rate = np.subtract(saturated_command, thrusts, out)
-        rate /= self.time_constants
-        return rate
+        """The command (n,) clipped to [lower, upper] [N] (``np.clip``'s numbers in one compiled call:
+        :func:`uvms.numerics._kernels.plant_stage.clipped`)."""
+        global _clipped
+        if _clipped is None:  # numba: loaded where a plant is integrated
+            from ...numerics._kernels.plant_stage import clipped as _clipped
+        return _clipped(np.asarray(command, dtype=float), self.lower, self.upper)
 
     def wrench(self, thrusts: np.ndarray) -> np.ndarray:
         """B f (6,) [N, N m], FLU at the base frame origin."""
@@ -119,6 +117,9 @@ class ActuatedPlant:
             raise StepCountError(f"an actuated plant's controller runs once per step: control_dt must be 0 or dt = "
                                  f"{dt:g} s, got {control_dt!r}")
         return ActuatedPlantSystem(self, controller)
+
+
+_clipped: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None
 
 
 # ------------------------------------------------------------------ model terms used by controllers and records
@@ -241,7 +242,11 @@ class ActuatedPlantSystem:
         self.robot, self.model = actuated.robot, actuated.model
         self.nv, self.m = actuated.model.nv, actuated.m
         self._n = self.nv + actuated.n  # where the fin angles start in the state
-        self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its record: energies, momentum, torques
+        self._passive = PlantSystem(actuated.plant, None, dt=1.0)  # its derived series: energies, momentum
+        from ...numerics._kernels.plant_stage import actuation_rows  # numba: loaded where a plant is integrated
+
+        self._rows_kernel = actuation_rows
+        self._no_fins = np.zeros(0)
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """(q0, [v0, thrusts0, fin angles at rest]) checked (v0 None: rest; thrusts0 the ActuatedPlant's).
@@ -270,12 +275,16 @@ class ActuatedPlantSystem:
             command = Command()
         else:
             command = self.controller.command(self._state(q, x), t)
-            refuse_fields(command, TAKEN, "an actuated plant (joint velocity servos, thrusters, fins)", t)
+            if command.velocity is not None or command.arm_torque is not None:  # (the fields it does not take)
+                refuse_fields(command, TAKEN, "an actuated plant (joint velocity servos, thrusters, fins)", t)
         arm = np.zeros(self.plant.n_arm) if command.arm is None else np.asarray(command.arm, dtype=float)
         thrust = np.zeros(self.thrusters.n) if command.thrust is None else np.asarray(command.thrust, dtype=float)
-        fins = self.thrusters.fins.held if command.fins is None else np.asarray(command.fins, dtype=float)
+        if command.fins is not None:
+            fins = np.asarray(command.fins, dtype=float)
+        else:  # at rest (none: one empty array)
+            fins = self.thrusters.fins.held if self.m else self._no_fins
         if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
-                or not (np.isfinite(arm).all() and np.isfinite(thrust).all() and np.isfinite(fins).all()):
+                or not (check_finite(arm, thrust) and check_finite(fins, fins)):
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")
@@ -286,21 +295,20 @@ class ActuatedPlantSystem:
                                                                       tuple[np.ndarray, np.ndarray], np.ndarray]:
         """(the dynamics (None without ``torques``: an integrator's stage), the state's rate (v, [v', f', delta']),
         the actuators' wrench (6,)) at (q, x)."""
-        nv, n = self.nv, self._n
-        v, thrusts, angles = x[:nv], x[nv:n], x[n:]
-        thrusters = self.thrusters
-        wrench = thrusters.matrix @ thrusts  # B f
-        if self.m:  # (without fins their wrench is zero: not added)
-            wrench = wrench + thrusters.fin_wrench(q, v, angles)
-        rates = np.empty(len(x))  # [v', f', delta'], each part written in place (no concatenation)
-        if torques:
-            dynamics = self.plant.dynamics(q, v, arm, wrench, rates[:nv])
-        else:
-            dynamics = None
-            self.plant.stage_acceleration(q, v, arm, wrench, rates[:nv])
-        thrusters.rate(thrusts, thrust_command, rates[nv:n])
+        plant, thrusters, nv, n = self.plant, self.thrusters, self.nv, self._n
+        v = x[:nv]
+        # the fins' wrench (without fins none: not added)
+        extra = thrusters.fin_wrench(q, v, x[n:]) if self.m else plant._no_wrench
+        kernels, inputs = plant._kernel_inputs(q, v, True)
+        rates, wrench = np.empty(len(x)), np.empty(6)  # [v', f', delta'], each part written in place
+        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else plant._scratch  # returned: new
+        # B f (+ the fins'), the lag's f' = (sat(f_cmd) - f) / tau and the plant's terms in one compiled call
+        kernels.actuated_rate_into(*inputs, x, arm, thrust_command, thrusters.matrix, thrusters.time_constants, extra,
+                                   wrench, mass, bias_forces, rates, plant._block, plant._rhs)
+        plant._base_acceleration_into(rates)
+        dynamics = plant._torques(rates[:nv], mass, bias_forces) if torques else None
         if self.m:
-            rates[n:] = thrusters.fins.rate(angles, fin_command)
+            rates[n:] = thrusters.fins.rate(x[n:], fin_command)
         return dynamics, (v, rates), wrench
 
     def _split(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -312,7 +320,7 @@ class ActuatedPlantSystem:
         """The controller's command at the step's start and the rate it gives."""
         command = self._command(t, q, x)
         saturated = self.thrusters.saturate(command.thrust)
-        fins = self.thrusters.fins.saturate(command.fins)
+        fins = self.thrusters.fins.saturate(command.fins) if self.m else command.fins  # (none: clipped, the same)
         dynamics, rate, wrench = self._rate(q, x, command.arm, saturated, fins)
         return ActuatedSample(rate, command, saturated, dynamics, fins, wrench)
 
@@ -325,20 +333,12 @@ class ActuatedPlantSystem:
         """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the
         stored states after the loop: :meth:`series_info`) and the thrusters' and controller's."""
         v, thrusts, angles = self._split(x)
-        passive = PlantSample(sample.rate, sample.command.arm, sample.dynamics)
-        row = self._passive.record(t, q, v, passive)
-        nu = base_twist(self.plant, v)
-        fin_wrench = self.thrusters.fin_wrench(q, v, angles)
-        # B f + the fins' (+ 0.0 without fins: the sum as recorded before, signed zeros included)
-        wrench = (self.thrusters.wrench(thrusts) if sample.wrench is None or self.m else sample.wrench) + fin_wrench
+        row = plant_row(v, sample.command.arm, sample.dynamics.joint_torque)  # (a passive plant's, no controller)
         if self.m:  # the fins' angles and what they give (their power: the drag's, <= 0 at rest angles)
+            fin_wrench = self.thrusters.fin_wrench(q, v, angles)
             row.update(fin_angles=angles.copy(), fin_command=sample.fin_command, fin_wrench=fin_wrench,
-                       fin_power=float(fin_wrench @ nu))
-        # thruster i's power on the hull: f_i d_i . (v + w x p_i) = f_i (B_i . nu)
-        powers = thrusts * (self.thrusters.matrix.T @ nu)
-        row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, body_wrench=wrench,
-                   thrust_power=float(powers.sum()), thruster_power_abs=float(np.abs(powers).sum()),
-                   motor_power=float(sample.dynamics.joint_torque @ v[self.plant.nb:]), **sample.command.info)
+                       fin_power=float(fin_wrench @ base_twist(self.plant, v)))
+        row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, **sample.command.info)
         return row
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
@@ -347,11 +347,23 @@ class ActuatedPlantSystem:
 
     def series_info(self) -> dict:
         """{"thrust_bounds": (lower (n,), upper (n,) [N]), "plant_series": the energies and momentum of the stored
-        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`), "actuation_series": the damping
-        power of the stored states (:meth:`derived_series`)}."""
+        states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`), "actuation_series": the wrench and
+        powers of the stored rows (:meth:`derived_series`)}."""
         return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper),
                 "plant_series": self._passive.derived_series, "actuation_series": self.derived_series}
 
-    def derived_series(self, q: np.ndarray, v: np.ndarray) -> dict[str, np.ndarray]:
-        """{"damping_power": (N,) [W]} of the stored states q (N, nq), v (N, nv) (:func:`damping_power`)."""
-        return {"damping_power": damping_power(self.plant, q, v)}
+    def derived_series(self, q: np.ndarray, v: np.ndarray, recorded: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The actuation series derived after the loop from the stored rows q (N, nq), v (N, nv) and ``recorded``
+        ("thrusts" (N, n), "joint_torque" (N, n_arm), with fins "fin_wrench" (N, 6)), each row's numbers those the
+        record computed per row before: "body_wrench" (N, 6) [N, N m] B f + the fins', "thrust_power" (N,) [W]
+        sum_i f_i (B_i . nu) (thruster i's power on the hull: f_i d_i . (v + w x p_i)), "thruster_power_abs" (N,)
+        [W], "motor_power" (N,) [W] tau_m . qd_m (:func:`uvms.numerics._kernels.plant_stage.actuation_rows`, one
+        compiled pass), "damping_power" (N,) [W] (:func:`damping_power`)."""
+        placement = self.plant.base_placement
+        fins = recorded["fin_wrench"] if self.m else np.zeros((0, 6))
+        wrench, thrust_power, absolute, motor = self._rows_kernel(
+            self.thrusters.matrix, np.ascontiguousarray(recorded["thrusts"], dtype=float), np.ascontiguousarray(v),
+            np.ascontiguousarray(recorded["joint_torque"], dtype=float), np.ascontiguousarray(fins, dtype=float),
+            self.plant.nb, placement.rotation.copy(), placement.translation.copy())
+        return {"body_wrench": wrench, "thrust_power": thrust_power, "thruster_power_abs": absolute,
+                "motor_power": motor, "damping_power": damping_power(self.plant, q, v)}

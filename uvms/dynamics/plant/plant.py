@@ -56,7 +56,7 @@ The links on the model, M_A in the mass matrix, C_A and the GJM of the augmented
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from types import ModuleType
 
 import numpy as np
 import pinocchio as pin
@@ -64,10 +64,11 @@ import pinocchio as pin
 from ...errors import UVMSError
 from ...numerics.lapack import numpy_solve
 from ...robot.configuration import Configuration
-from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split, weight_potential
+from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
-from .added_mass import LOCAL, LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
+from . import conserved
+from .added_mass import LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
 from .command import Controller
 from .data_views import JointArrays
 from .settings import PlantSettings
@@ -145,9 +146,13 @@ class Plant:
         self._flags = np.array([self.added_mass, self.damping, self._moving_fluid, self._buoyant], dtype=np.int64)
         # every joint's placement and bias acceleration in self.data, as the compiled pass reads them (views)
         self._joint_arrays = JointArrays(self.data)
-        # the compiled pass and its constants (the links' walks over data.J among them), made at the first
+        # the compiled kernels and their constants (the links' walks over data.J among them), made at the first
         # evaluation: numba loads there
-        self._terms: tuple[Callable[..., None], tuple[np.ndarray, ...]] | None = None
+        self._terms: tuple[ModuleType, np.ndarray, np.ndarray] | None = None
+        nv = self.model.nv
+        self._scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
+        # the vehicle's block Mbar_bb (C-ordered) and right-hand side, solved after the compiled call
+        self._block, self._rhs, self._no_wrench = np.empty((self.nb, self.nb)), np.empty(self.nb), np.zeros(0)
 
     @classmethod
     def from_settings(cls, robot: Robot, settings: PlantSettings) -> Plant:
@@ -265,31 +270,42 @@ class Plant:
                  out: np.ndarray | None = None) -> PlantDynamics:
         """:meth:`evaluate` unchecked, for inner loops whose inputs are checked; ``body_wrench`` (6,) [N, N m]: a wrench
         on the vehicle, FLU at :attr:`base_frame` (the thrusters'); ``out`` (nv,): where v' goes (None: a new array)."""
-        acceleration, mass, bias_forces = self._accelerations(q, v, command, body_wrench, out)
-        nb = self.nb
-        torque = mass[nb:, :nb] @ acceleration[:nb]  # (M_mb a_b + M_mm a_m) + nbar_m, summed in this order
-        torque += mass[nb:, nb:] @ acceleration[nb:]
-        torque += bias_forces[nb:]
-        return PlantDynamics(acceleration, torque, mass)
+        nv = self.model.nv
+        mass, bias_forces = np.empty((nv, nv)), np.empty(nv)  # returned: new arrays
+        return self._torques(self._accelerations(q, v, command, body_wrench, out, mass, bias_forces), mass,
+                             bias_forces)
 
     def stage_acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
                            body_wrench: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
-        """v' (nv,) of :meth:`dynamics` alone (the same numbers), without the motor torques: an integrator's stage."""
-        return self._accelerations(q, v, command, body_wrench, out)[0]
+        """v' (nv,) of :meth:`dynamics` alone (the same numbers), without the motor torques: an integrator's stage
+        (Mbar and nbar in the plant's own buffers, overwritten at every call)."""
+        return self._accelerations(q, v, command, body_wrench, out, *self._scratch)
 
     def _accelerations(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
-                       out: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(v' (nv,) into ``out`` when given, Mbar, nbar): the motors' a_m, then the vehicle's 6 x 6 solve."""
-        mass, bias_forces = self._mass_and_bias(q, v, body_wrench)
-        nb = self.nb
+                       out: np.ndarray | None, mass: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
+        """v' (nv,) into ``out`` when given, Mbar into ``mass`` (nv, nv), nbar into ``bias_forces`` (nv,):
+        Pinocchio's algorithms and one compiled call (Mbar, nbar, the motors' a_m = (u - qd_m) / tau, the vehicle's
+        block Mbar_bb and right-hand side Mbar_bm a_m + nbar_b:
+        :func:`uvms.numerics._kernels.plant_stage.accelerations_into`), then the vehicle's a_b
+        (:meth:`_base_acceleration_into`)."""
+        kernels, inputs = self._kernel_inputs(q, v, body_wrench is not None)
         acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
-        base_acceleration, arm_acceleration = acceleration[:nb], acceleration[nb:]
-        np.subtract(command, v[nb:], arm_acceleration)
-        arm_acceleration /= self.motor_time_constant
-        rhs = mass[:nb, nb:] @ arm_acceleration
-        rhs += bias_forces[:nb]
-        np.negative(numpy_solve(mass[:nb, :nb], rhs), base_acceleration)
-        return acceleration, mass, bias_forces
+        kernels.accelerations_into(*inputs, v, command, self._no_wrench if body_wrench is None else body_wrench,
+                                   mass, bias_forces, acceleration, self._block, self._rhs)
+        self._base_acceleration_into(acceleration)
+        return acceleration
+
+    def _base_acceleration_into(self, acceleration: np.ndarray) -> None:
+        """a_b = -solve(Mbar_bb, Mbar_bm a_m + nbar_b) into ``acceleration[:nb]`` with numpy's LAPACK, from the block
+        and right-hand side the last compiled call left in the plant's buffers."""
+        np.negative(numpy_solve(self._block, self._rhs), acceleration[:self.nb])
+
+    def _torques(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
+        """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m
+        (:func:`uvms.numerics._kernels.plant_stage.motor_torques_into`)."""
+        torque = np.empty(self.n_arm)
+        self._terms[0].motor_torques_into(mass, acceleration, bias_forces, self.nb, torque)
+        return PlantDynamics(acceleration, torque, mass)
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -300,40 +316,38 @@ class Plant:
         the links' LOCAL Jacobians J_l (``getFrameJacobian``'s numbers) and wrenches f_l (their frames) are formed
         and summed by virtual work in one compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`):
         Mbar = M + sum_l J_l^T M_A,l J_l, nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea
-        with the wrenches as external forces, to rounding).
+        with the wrenches as external forces, to rounding; J_base formed as ``getFrameJacobian`` forms it).
         """
-        model, data = self.model, self.data
-        count = self._stacked.count
-        upper = pin.crba(model, self._dynamics_data, q)  # crba fills the upper triangle
-        h = pin.rnea(model, self._dynamics_data, q, v, self._zero_velocity)  # h(q, v), gravity included
-        wrench = body_wrench is not None
-        if count or wrench:
-            pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
-            pin.computeJointJacobians(model, data)
-        terms, constants = self._terms if self._terms is not None else self._prepare_terms()
-        placements, accelerations = self._joint_arrays.read()  # views of data.oMi, data.a: no copy
-        nv = model.nv
+        kernels, inputs = self._kernel_inputs(q, v, body_wrench is not None)
+        nv = self.model.nv
         mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
-        terms(upper, h, data.J, placements, accelerations, v, mass, bias_forces, *constants)
-        if wrench:  # the thrusters' wrench on the vehicle, at the base frame
-            bias_forces -= body_wrench @ pin.getFrameJacobian(model, data, self._base_frame, LOCAL)
+        kernels.terms_into(*inputs, v, self._no_wrench if body_wrench is None else body_wrench, mass, bias_forces)
         return mass, bias_forces
 
-    def _prepare_terms(self) -> tuple[Callable[..., None], tuple[np.ndarray, ...]]:
-        """The compiled pass (:func:`uvms.numerics._kernels.hydro.plant_terms_into`, numba loaded here) and its
-        constants (ints, floats): the links' walks over data.J and their stacked parameters
-        (:func:`~uvms.numerics._kernels.hydro.pack_constants`). Made once, at the first evaluation."""
-        from ...numerics._kernels.hydro import frame_jacobian_program, pack_constants, plant_terms_into
+    def _kernel_inputs(self, q: np.ndarray, v: np.ndarray, wrench: bool) -> tuple[ModuleType, tuple]:
+        """Pinocchio's part of an evaluation at (q, v) and what the compiled kernels read of it: (the kernels'
+        module, (M's upper triangle (crba fills it), h(q, v) with gravity (rnea), data.J, the joints' placements and
+        bias accelerations (views), the constants ints, floats)). The kinematics run when links or a ``wrench``
+        read them."""
+        kernels, ints, floats = self._terms if self._terms is not None else self._prepare_terms()
+        model, data, dynamics_data = self.model, self.data, self._dynamics_data
+        upper = pin.crba(model, dynamics_data, q)
+        h = pin.rnea(model, dynamics_data, q, v, self._zero_velocity)
+        if wrench or self._stacked.count:
+            pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
+            pin.computeJointJacobians(model, data)
+        placements, accelerations = self._joint_arrays.read()  # views of data.oMi, data.a: no copy
+        return kernels, (upper, h, data.J, placements, accelerations, ints, floats)
 
-        stacked = self._stacked
-        walks = [frame_jacobian_program(self.model, self.data, joint) for joint in stacked.joints]
-        starts = np.cumsum([0] + [len(walk) for walk in walks]).astype(np.int64)
-        programs = np.concatenate(walks) if walks else np.zeros((0, 3), dtype=np.int64)
-        self._terms = plant_terms_into, pack_constants(
-            np.array(stacked.joints, dtype=np.int64), programs, starts, self._flags, stacked.rotations,
-            stacked.translations, stacked.motion_to_link, stacked.added_mass, stacked.linear_damping,
-            stacked.forward_damping, stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy,
-            self._current)
+    def _prepare_terms(self) -> tuple[ModuleType, np.ndarray, np.ndarray]:
+        """The compiled kernels (:mod:`uvms.numerics._kernels.plant_stage`, numba loaded here) and the plant's
+        constants (ints, floats: :func:`~uvms.numerics._kernels.plant_stage.plant_constants`). Made once, at the
+        first evaluation."""
+        from ...numerics._kernels import plant_stage
+
+        self._terms = plant_stage, *plant_stage.plant_constants(
+            self.model, self.data, self._stacked, self._flags, self._current, self.nb,
+            self.model.frames[self._base_frame], self.motor_time_constant)
         return self._terms
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
@@ -357,44 +371,10 @@ class Plant:
 
     # ------------------------------------------------------- conserved things
     def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
-        """(kinetic, potential) energy [J].
-
-        Kinetic: 1/2 v^T M v + sum_l 1/2 nu_r^T M_A nu_r (the fluid's share, when
-        ``added_mass``). Potential (``gravity`` on): sum m g z_com - rho g V z_cob.
-        """
-        mass = pin.crba(self.model, self._dynamics_data, q).copy()
-        mass[self._lower] = mass.T[self._lower]  # crba fills the upper triangle
-        kinetic = 0.5 * float(v @ mass @ v)
-        potential = weight_potential(self.model, self._dynamics_data, q) if self.gravity else 0.0
-        stacked = self._stacked
-        if stacked.count and (self.added_mass or self.gravity):
-            links = self._link_states(q, v)
-            if self.added_mass:
-                relative = links.relative[:, :, None]
-                kinetic += 0.5 * float((relative.transpose(0, 2, 1) @ stacked.added_mass @ relative).sum())
-            if self.gravity:  # the centres of buoyancy's heights [m]
-                heights = links.positions[:, 2] + (links.rotations[:, 2, :] * stacked.center_of_buoyancy).sum(axis=1)
-                potential -= float(stacked.buoyancy @ heights)
-        return kinetic, potential
+        """(kinetic, potential) energy [J] (:func:`uvms.dynamics.plant.conserved.energy`)."""
+        return conserved.energy(self, q, v)
 
     def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Spatial momentum (6,) of the whole system, world frame, about the world origin [N s, N m s].
-
-        [linear; angular] = sum_i X_i^* I_i v_i (rigid bodies) + sum_l X_l^* M_A,l nu_r,l
-        (the fluid impulse, when ``added_mass``).
-        """
-        model, data = self.model, self.data
-        links = self._link_states(q, v) if self.added_mass and self._stacked.count else None  # forwardKinematics
-        if links is None:
-            pin.forwardKinematics(model, data, q, v)
-        total = pin.Force.Zero()
-        for joint in range(1, model.njoints):
-            total += data.oMi[joint].act(model.inertias[joint] * data.v[joint])
-        momentum = total.vector.copy()
-        if links is not None:  # the fluid impulse M_A nu_r of each link, its frame to the world origin
-            impulse = (self._stacked.added_mass @ links.relative[:, :, None])[:, :, 0]
-            linear = (links.rotations @ impulse[:, :3, None])[:, :, 0]
-            momentum[:3] += linear.sum(axis=0)
-            momentum[3:] += ((links.rotations @ impulse[:, 3:, None])[:, :, 0]
-                             + np.cross(links.positions, linear)).sum(axis=0)
-        return momentum
+        """Spatial momentum (6,) of the whole system, world frame, about the world origin [N s, N m s]
+        (:func:`uvms.dynamics.plant.conserved.momentum`)."""
+        return conserved.momentum(self, q, v)

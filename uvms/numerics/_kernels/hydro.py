@@ -52,7 +52,7 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
     rate = np.zeros(6)  # Jdot_l v - nu_c'
     wrench = np.empty(6)
     a = np.empty(6)  # M_A nu_r
-    product = np.empty((6, nv))  # M_A J
+    product = np.empty((nv, 6))  # (M_A J)^T over the moved columns, row j: moved column j
     columns = np.empty(nv, dtype=np.int64)
     for link in range(count):
         jacobian = jacobians[link]
@@ -102,7 +102,9 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
             wrench[3] -= y0 + z0
             wrench[4] -= y1 + z1
             wrench[5] -= y2 + z2
-            # Mbar += J^T (M_A J) over the columns J moves (its zero columns add nothing)
+            # Mbar += J^T (M_A J) over the columns J moves (its zero columns add nothing); each sum in its order
+            # (from 0.0, k or i ascending; a zero entry of J adds a signed zero: the sum is unchanged), written out
+            # with the column's entries in registers: independent sums the processor overlaps
             moved = 0
             for column in range(nv):
                 for row in range(6):
@@ -112,19 +114,19 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
                         break
             for j in range(moved):
                 column = columns[j]
+                j0, j1, j2 = jacobian[0, column], jacobian[1, column], jacobian[2, column]
+                j3, j4, j5 = jacobian[3, column], jacobian[4, column], jacobian[5, column]
                 for i in range(6):
-                    inner = 0.0
-                    for k in range(6):
-                        inner += inertia[i, k] * jacobian[k, column]
-                    product[i, column] = inner
+                    product[j, i] = (((((0.0 + inertia[i, 0] * j0) + inertia[i, 1] * j1) + inertia[i, 2] * j2)
+                                      + inertia[i, 3] * j3) + inertia[i, 4] * j4) + inertia[i, 5] * j5
             for i_row in range(moved):
                 row = columns[i_row]
+                j0, j1, j2 = jacobian[0, row], jacobian[1, row], jacobian[2, row]
+                j3, j4, j5 = jacobian[3, row], jacobian[4, row], jacobian[5, row]
                 for j in range(moved):
-                    column = columns[j]
-                    total = 0.0
-                    for i in range(6):  # (a zero entry of J adds a signed zero: the sum is unchanged)
-                        total += jacobian[i, row] * product[i, column]
-                    mass[row, column] += total
+                    mass[row, columns[j]] += (((((0.0 + j0 * product[j, 0]) + j1 * product[j, 1])
+                                                + j2 * product[j, 2]) + j3 * product[j, 3]) + j4 * product[j, 4]) \
+                        + j5 * product[j, 5]
         if with_damping:
             surge = relative[0]
             for row in range(6):
@@ -162,30 +164,46 @@ def frame_jacobian_into(jacobian: np.ndarray, placement: np.ndarray, rotation: n
             joint's support (:func:`frame_jacobian_program`).
         out: (6, nv), frame_rotation: (3, 3) written.
     """
-    r = frame_rotation
-    p = np.empty(3)
+    r = frame_rotation  # read back into registers below: the writes to out need not reload it
     for i in range(3):
         for j in range(3):
             r[i, j] = placement[i, 0] * rotation[0, j] + placement[i, 1] * rotation[1, j] + \
                 placement[i, 2] * rotation[2, j]
-        p[i] = placement[i, 3] + (placement[i, 0] * translation[0] + placement[i, 1] * translation[1]
-                                  + placement[i, 2] * translation[2])
+    p0 = placement[0, 3] + (placement[0, 0] * translation[0] + placement[0, 1] * translation[1]
+                            + placement[0, 2] * translation[2])
+    p1 = placement[1, 3] + (placement[1, 0] * translation[0] + placement[1, 1] * translation[1]
+                            + placement[1, 2] * translation[2])
+    p2 = placement[2, 3] + (placement[2, 0] * translation[0] + placement[2, 1] * translation[1]
+                            + placement[2, 2] * translation[2])
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = r[0, 0], r[0, 1], r[0, 2], r[1, 0], r[1, 1], r[1, 2], r[2, 0], \
+        r[2, 1], r[2, 2]
     out[:, :] = 0.0
     for step in range(program.shape[0]):
         source, column, add = program[step, 0], program[step, 1], program[step, 2]
         w0, w1, w2 = jacobian[3, source], jacobian[4, source], jacobian[5, source]
-        l0 = jacobian[0, source] - (p[1] * w2 - p[2] * w1)  # v - p x w
-        l1 = jacobian[1, source] - (p[2] * w0 - p[0] * w2)
-        l2 = jacobian[2, source] - (p[0] * w1 - p[1] * w0)
-        for i in range(3):
-            linear = r[0, i] * l0 + r[1, i] * l1 + r[2, i] * l2
-            angular = r[0, i] * w0 + r[1, i] * w1 + r[2, i] * w2
-            if add:
-                out[i, column] += linear
-                out[3 + i, column] += angular
-            else:
-                out[i, column] = linear
-                out[3 + i, column] = angular
+        l0 = jacobian[0, source] - (p1 * w2 - p2 * w1)  # v - p x w
+        l1 = jacobian[1, source] - (p2 * w0 - p0 * w2)
+        l2 = jacobian[2, source] - (p0 * w1 - p1 * w0)
+        x0 = r00 * l0 + r10 * l1 + r20 * l2
+        x1 = r01 * l0 + r11 * l1 + r21 * l2
+        x2 = r02 * l0 + r12 * l1 + r22 * l2
+        y0 = r00 * w0 + r10 * w1 + r20 * w2
+        y1 = r01 * w0 + r11 * w1 + r21 * w2
+        y2 = r02 * w0 + r12 * w1 + r22 * w2
+        if add:
+            out[0, column] += x0
+            out[1, column] += x1
+            out[2, column] += x2
+            out[3, column] += y0
+            out[4, column] += y1
+            out[5, column] += y2
+        else:
+            out[0, column] = x0
+            out[1, column] = x1
+            out[2, column] = x2
+            out[3, column] = y0
+            out[4, column] = y1
+            out[5, column] = y2
 
 
 def frame_jacobian_program(model, data, joint: int) -> np.ndarray:

@@ -1,0 +1,330 @@
+"""The plant's equations of motion around the hydrodynamic pass, in the same compiled call, and the actuated plant's
+per-step numbers: a body wrench's generalized force, the motors' accelerations, the vehicle's right-hand side, the
+motor torques, the thrusters' wrench, lag and saturation, the state's finiteness, the rows' powers.
+
+:meth:`uvms.dynamics.plant.plant.Plant.stage_acceleration` and
+:meth:`uvms.dynamics.plant.actuated.ActuatedPlantSystem._rate`: after Pinocchio's algorithms one call here forms Mbar
+and nbar (:func:`uvms.numerics._kernels.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle
+(the base frame's LOCAL Jacobian formed from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m)
+/ tau and the vehicle's right-hand side Mbar_bm a_m + nbar_b; only the 6 x 6 (3 x 3 planar) solve stays with numpy's
+LAPACK (numba's solve calls SciPy's, whose numbers differ). As numpy calls this tail was about fifteen calls of
+0.3-1 us each. :func:`actuation_rows` derives a run's body wrench and powers from its stored rows after the loop.
+
+Every number is the one the numpy expressions it replaces gave, bit for bit: elementwise arithmetic in their order
+(numba contracts nothing without ``fastmath``), products through ``np.dot`` on arrays in the layout numpy held them
+(C- or column-major), which calls the BLAS routine numpy's ``@`` calls (a product with a single output entry as numpy
+computes it: a dot product), numpy's pairwise sums and clip written out.
+
+The module imports numba, so it is loaded where a plant is first evaluated; its kernels compile at their first call
+and are cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
+
+__all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
+           "motor_torques_into", "plant_constants", "terms_into", "thrusters_into"]
+
+
+@njit(cache=True)
+def _product_into(matrix: np.ndarray, vector: np.ndarray, out: np.ndarray) -> None:
+    """out = matrix @ vector (matrix (r, c) C- or F-contiguous, as numpy held it) as numpy's ``@`` gives it:
+    BLAS's gemv on that layout, or its dot product for a single row (what numpy calls there)."""
+    if matrix.shape[0] == 1:
+        out[0] = np.dot(np.ascontiguousarray(matrix[0]), vector)
+    elif matrix.shape[0] > 0:
+        np.dot(matrix, vector, out)
+
+
+@njit(cache=True)
+def terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
+               accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray, wrench: np.ndarray,
+               mass: np.ndarray, bias_forces: np.ndarray) -> None:
+    """Mbar (nv, nv) and nbar (nv,) into ``mass`` and ``bias_forces``: :func:`plant_terms_into`, then nbar -=
+    J_base^T w for a wrench w (6,) [N, N m] on the vehicle, FLU at its base frame (none: w of size 0).
+
+    Args:
+        upper, h, jacobian, placements, accelerations: Pinocchio's, as :func:`plant_terms_into` reads them;
+        ints, floats: the plant's constants, the hydrodynamic pass's (:func:`.hydro.pack_constants`) followed by
+            this module's (:func:`plant_constants`); v: (nv,); wrench: (6,) or (0,).
+    """
+    hydro_ints, hydro_floats = _hydro_sizes(ints)
+    plant_terms_into(upper, h, jacobian, placements, accelerations, v, mass, bias_forces, ints[:hydro_ints],
+                     floats[:hydro_floats])
+    if wrench.size:
+        stage_ints, stage_floats = ints[hydro_ints:], floats[hydro_floats:]
+        steps, slot = stage_ints[1], stage_ints[2]
+        placement = np.zeros((4, 4))
+        for i in range(3):
+            placement[i, 3] = placements[slot, 9 + i]
+            for k in range(3):
+                placement[i, k] = placements[slot, i + 3 * k]
+        # row-major, as getFrameJacobian returns it (a C-ordered copy): numpy's w @ J called BLAS on that layout
+        base = np.empty((6, h.shape[0]))
+        rotation = np.empty((3, 3))
+        frame_jacobian_into(jacobian, placement, stage_floats[1:10].copy().reshape(3, 3), stage_floats[10:13],
+                            stage_ints[3:3 + 3 * steps].copy().reshape(steps, 3), base, rotation)
+        product = np.dot(wrench, base)  # numpy's w @ J (nv > 1 columns: BLAS's gemv)
+        for i in range(h.shape[0]):
+            bias_forces[i] -= product[i]
+
+
+@njit(cache=True)
+def accelerations_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
+                       accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
+                       command: np.ndarray, wrench: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray,
+                       acceleration: np.ndarray, block: np.ndarray, rhs: np.ndarray) -> None:
+    """:func:`terms_into`, then the motors' accelerations into ``acceleration[nb:]``, the vehicle's block Mbar_bb
+    into ``block`` and its right-hand side into ``rhs``: the base acceleration is then -solve(block, rhs).
+
+    a_m = (u - qd_m) / tau (numpy's ``np.subtract(u, v[nb:]); /= tau``), rhs = Mbar_bm a_m + nbar_b (``mass[:nb,
+    nb:] @ a_m; += nbar[:nb]``).
+
+    Args:
+        upper ... wrench, mass, bias_forces: as :func:`terms_into`; command: u (n_arm,) [rad/s or m/s].
+        acceleration: v' (nv,), its arm part written; block: (nb, nb) C-ordered, rhs: (nb,) written.
+    """
+    terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, wrench, mass, bias_forces)
+    hydro_ints, hydro_floats = _hydro_sizes(ints)
+    nb, tau = ints[hydro_ints], floats[hydro_floats]
+    nv = v.shape[0]
+    arm = np.empty(nv - nb)
+    for i in range(nv - nb):
+        arm[i] = (command[i] - v[nb + i]) / tau
+        acceleration[nb + i] = arm[i]
+    if nv > nb:
+        _product_into(np.ascontiguousarray(mass[:nb, nb:]), arm, rhs)
+    else:  # numpy's product over no column: zeros
+        rhs[:] = 0.0
+    for i in range(nb):
+        rhs[i] += bias_forces[i]
+        for k in range(nb):
+            block[i, k] = mass[i, k]
+
+
+@njit(cache=True)
+def actuated_rate_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
+                       accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, x: np.ndarray,
+                       command: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
+                       time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray, mass: np.ndarray,
+                       bias_forces: np.ndarray, rate: np.ndarray, block: np.ndarray, rhs: np.ndarray) -> None:
+    """An actuated plant's rate at its state x = [v (nv,), f (n,), ...] but the base acceleration: the thrusters'
+    wrench and lag (:func:`thrusters_into`), plus ``extra`` (the fins' wrench, or size 0), then
+    :func:`accelerations_into` under that wrench.
+
+    Args:
+        upper ... floats: as :func:`terms_into`; x: the state's vector part; command: u (n_arm,);
+        thrust_command: sat(f_cmd) (n,) [N]; matrix: B (6, n); time_constants: (n,) [s]; extra: (6,) or (0,).
+        wrench: (6,) written: B f (+ extra); mass, bias_forces: Mbar, nbar written; rate: (len(x),), its v' arm part
+            and f' written (v'_b: -solve(block, rhs) after the call; the rest: the caller's); block, rhs: written.
+    """
+    nv, n = h.shape[0], h.shape[0] + matrix.shape[1]
+    thrusters_into(matrix, x[nv:n], thrust_command, time_constants, wrench, rate[nv:n])
+    if extra.size:
+        for i in range(6):
+            wrench[i] += extra[i]
+    accelerations_into(upper, h, jacobian, placements, accelerations, ints, floats, x[:nv], command, wrench, mass,
+                       bias_forces, rate[:nv], block, rhs)
+
+
+@njit(cache=True)
+def motor_torques_into(mass: np.ndarray, acceleration: np.ndarray, bias_forces: np.ndarray, nb: int,
+                       torque: np.ndarray) -> None:
+    """tau_m (n_arm,) [N m or N] = (Mbar_mb a_b + Mbar_mm a_m) + nbar_m into ``torque``, summed in this order
+    (numpy's ``mass[nb:, :nb] @ a[:nb]; += mass[nb:, nb:] @ a[nb:]; += nbar[nb:]``)."""
+    nv = acceleration.shape[0]
+    if nv == nb:
+        return
+    _product_into(np.ascontiguousarray(mass[nb:, :nb]), acceleration[:nb].copy(), torque)
+    arm = np.empty(nv - nb)
+    _product_into(np.ascontiguousarray(mass[nb:, nb:]), acceleration[nb:].copy(), arm)
+    for i in range(nv - nb):
+        torque[i] += arm[i]
+        torque[i] += bias_forces[nb + i]
+
+
+@njit(cache=True)
+def thrusters_into(matrix: np.ndarray, thrusts: np.ndarray, command: np.ndarray, time_constants: np.ndarray,
+                   wrench: np.ndarray, rate: np.ndarray) -> None:
+    """The thrusters' wrench B f (6,) [N, N m] into ``wrench`` (numpy's ``B @ f``) and their lag's rate
+    f' = (sat(f_cmd) - f) / tau (n,) [N/s] into ``rate``.
+
+    Args:
+        matrix: B (6, n) C- or F-contiguous; thrusts: f (n,) [N]; command: sat(f_cmd) (n,) [N];
+        time_constants: (n,) [s].
+    """
+    _product_into(matrix, thrusts, wrench)
+    for i in range(thrusts.shape[0]):
+        rate[i] = (command[i] - thrusts[i]) / time_constants[i]
+
+
+@njit(cache=True)
+def all_finite(q: np.ndarray, x: np.ndarray) -> bool:
+    """Whether every entry of q and x is finite (numpy's ``isfinite(q).all() and isfinite(x).all()``)."""
+    for value in q:
+        if not np.isfinite(value):
+            return False
+    for value in x:
+        if not np.isfinite(value):
+            return False
+    return True
+
+
+@njit(cache=True)
+def clipped(values: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """``np.clip(values, lower, upper)`` (n,): numpy's max-then-min per entry, its comparisons (a NaN kept; an entry
+    equal to a bound, a signed zero among them, gives the bound), the same bits."""
+    out = np.empty(values.shape[0])
+    for i in range(values.shape[0]):
+        value = values[i]
+        low = value if np.isnan(value) or value > lower[i] else lower[i]
+        out[i] = low if np.isnan(low) or low < upper[i] else upper[i]
+    return out
+
+
+@njit(cache=True)
+def _block_sum(values: np.ndarray, start: int, count: int) -> float:
+    """numpy's pairwise sum of values[start:start + count], count <= 128: a plain loop below 8 entries, else eight
+    partial sums."""
+    if count < 8:
+        total = 0.0
+        for i in range(start, start + count):
+            total += values[i]
+        return total
+    partial = values[start:start + 8].copy()
+    i = 8
+    while i < count - count % 8:
+        for j in range(8):
+            partial[j] += values[start + i + j]
+        i += 8
+    total = ((partial[0] + partial[1]) + (partial[2] + partial[3])) + \
+        ((partial[4] + partial[5]) + (partial[6] + partial[7]))
+    for k in range(i, count):
+        total += values[start + k]
+    return total
+
+
+@njit(cache=True)
+def _numpy_sum(values: np.ndarray) -> float:
+    """numpy's ``values.sum()`` (its pairwise summation: blocks of at most 128 entries, longer runs halved at a
+    multiple of 8 and the halves' sums added), the same bits; the halving walked with a stack (numba's on-disk cache
+    does not take a recursive kernel)."""
+    if values.shape[0] <= 128:
+        return _block_sum(values, 0, values.shape[0])
+    starts, counts = np.empty(128, dtype=np.int64), np.empty(128, dtype=np.int64)
+    stages, sums = np.zeros(128, dtype=np.int64), np.empty(128)
+    starts[0], counts[0], top, done = 0, values.shape[0], 0, 0
+    while top >= 0:
+        half = counts[top] // 2
+        half -= half % 8
+        if counts[top] <= 128:  # a block: its sum onto the stack of sums
+            sums[done] = _block_sum(values, starts[top], counts[top])
+            done, top = done + 1, top - 1
+        elif stages[top] == 0:  # the first half next
+            stages[top] = 1
+            starts[top + 1], counts[top + 1], stages[top + 1] = starts[top], half, 0
+            top += 1
+        elif stages[top] == 1:  # then the second
+            stages[top] = 2
+            starts[top + 1], counts[top + 1], stages[top + 1] = starts[top] + half, counts[top] - half, 0
+            top += 1
+        else:  # both halves summed: first + second
+            sums[done - 2] = sums[done - 2] + sums[done - 1]
+            done, top = done - 1, top - 1
+    return sums[0]
+
+
+@njit(cache=True)
+def _base_twist_into(v: np.ndarray, nb: int, rotation: np.ndarray, translation: np.ndarray,
+                     twist: np.ndarray) -> None:
+    """The vehicle's body twist (6,) in its base frame from the velocity v (nv,) into ``twist``:
+    ``base_placement.actInv(pin.Motion(...))`` as Pinocchio computes it (R^T (v - p x w), R^T w, each entry
+    (R0i a0 + R1i a1) + R2i a2), the same bits; a planar vehicle's (vx, vy, wz) as the motion (vx, vy, 0, 0, 0, wz).
+
+    Args:
+        rotation (3, 3), translation (3,) [m]: the base frame in the vehicle joint's frame (joint_M_base).
+    """
+    if nb == 6:
+        l0, l1, l2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
+    else:
+        l0, l1, l2, w0, w1, w2 = v[0], v[1], 0.0, 0.0, 0.0, v[2]
+    p0, p1, p2 = translation[0], translation[1], translation[2]
+    d0 = l0 - (p1 * w2 - p2 * w1)
+    d1 = l1 - (p2 * w0 - p0 * w2)
+    d2 = l2 - (p0 * w1 - p1 * w0)
+    for i in range(3):
+        twist[i] = (rotation[0, i] * d0 + rotation[1, i] * d1) + rotation[2, i] * d2
+        twist[3 + i] = (rotation[0, i] * w0 + rotation[1, i] * w1) + rotation[2, i] * w2
+
+
+@njit(cache=True)
+def actuation_rows(matrix: np.ndarray, thrusts: np.ndarray, v: np.ndarray, joint_torque: np.ndarray,
+                   fins: np.ndarray, nb: int, rotation: np.ndarray,
+                   translation: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What an actuated run's rows hold of the thrusters and motors, from the stored rows, each row's numbers those
+    the numpy expressions gave per row: (body wrench (N, 6) B f + the fins' wrench, or B f + 0.0 without fins
+    (numpy's sum with their zero wrench: signed zeros made positive); thrust power (N,) sum_i f_i (B_i . nu) [W] and
+    its absolute sum (N,) [W] (numpy's pairwise sums), nu the body twist; motor power (N,) tau_m . qd_m [W]).
+
+    Args:
+        matrix: B (6, n) column-major (B^T row-major); thrusts: f (N, n) [N]; v: (N, nv); joint_torque: tau_m
+            (N, n_arm); fins: their wrench (N, 6), or (0, 6) without fins; nb: 6 (3 planar); rotation (3, 3),
+            translation (3,): the base frame in the vehicle joint's frame.
+    """
+    rows, count = thrusts.shape
+    wrench, thrust_power = np.empty((rows, 6)), np.empty(rows)
+    absolute, motor = np.empty(rows), np.empty(rows)
+    thrust, twist, pushed = np.empty(count), np.empty(6), np.empty(6)
+    speeds, powers, magnitudes = np.empty(count), np.empty(count), np.empty(count)
+    for k in range(rows):
+        thrust[:] = thrusts[k]
+        _product_into(matrix, thrust, pushed)  # numpy's B @ f
+        for i in range(6):
+            wrench[k, i] = pushed[i] + (fins[k, i] if fins.shape[0] else 0.0)
+        _base_twist_into(v[k], nb, rotation, translation, twist)
+        _product_into(matrix.T, twist, speeds)  # numpy's B.T @ nu
+        for i in range(count):
+            powers[i] = thrust[i] * speeds[i]
+            magnitudes[i] = abs(powers[i])
+        thrust_power[k], absolute[k] = _numpy_sum(powers), _numpy_sum(magnitudes)
+        arm = joint_torque.shape[1]
+        motor[k] = np.dot(joint_torque[k].copy(), v[k, nb:].copy()) if arm else 0.0
+    return wrench, thrust_power, absolute, motor
+
+
+def plant_constants(model, data, stacked, flags: np.ndarray, current: np.ndarray, nb: int, base_frame,
+                    motor_time_constant: float) -> tuple[np.ndarray, np.ndarray]:
+    """A plant's constants (ints, floats) for this module's kernels: the hydrodynamic pass's
+    (:func:`.hydro.pack_constants`: the links' walks over data.J and their stacked parameters), then the vehicle's
+    velocity size, the base frame's joint and walk, the motors' time constant and the base frame in its joint.
+
+    Args:
+        model, data: the plant's Pinocchio model and kinematic data; stacked: its
+            :class:`~uvms.dynamics.plant.added_mass.StackedLinks`; flags: (4,) added mass, damping, current, buoyancy
+            on (1) or off (0); current: (3,) [m/s] world; nb: 6 (3 planar); base_frame: the vehicle's root link's
+            ``pin.Frame``; motor_time_constant: tau [s].
+    """
+    walks = [frame_jacobian_program(model, data, joint) for joint in stacked.joints]
+    starts = np.cumsum([0] + [len(walk) for walk in walks]).astype(np.int64)
+    programs = np.concatenate(walks) if walks else np.zeros((0, 3), dtype=np.int64)
+    ints, floats = pack_constants(
+        np.array(stacked.joints, dtype=np.int64), programs, starts, flags, stacked.rotations, stacked.translations,
+        stacked.motion_to_link, stacked.added_mass, stacked.linear_damping, stacked.forward_damping,
+        stacked.quadratic_damping, stacked.buoyancy, stacked.center_of_buoyancy, current)
+    joint = base_frame.parentJoint
+    base = frame_jacobian_program(model, data, joint)
+    stage_ints = np.concatenate([[nb, len(base), joint], np.ravel(base)]).astype(np.int64)
+    stage_floats = np.concatenate([[motor_time_constant], np.ravel(base_frame.placement.rotation),
+                                   np.ravel(base_frame.placement.translation)]).astype(float)
+    return np.concatenate([ints, stage_ints]), np.concatenate([floats, stage_floats])
+
+
+@njit(cache=True)
+def _hydro_sizes(ints: np.ndarray) -> tuple[int, int]:
+    """How many ints and floats the hydrodynamic pass's constants take (the layout of :func:`.hydro.pack_constants`)."""
+    count, steps = ints[0], ints[1]
+    return 3 + 2 * count + 3 * steps + 4, 106 * count + 3
