@@ -246,6 +246,7 @@ class ActuatedPlantSystem:
         from ...numerics._kernels.plant_stage import actuation_rows  # numba: loaded where a plant is integrated
 
         self._rows_kernel = actuation_rows
+        self._lag = (self.thrusters.matrix, self.thrusters.time_constants)  # B (6, n), tau (n,): the stage's thrusters
         self._no_fins = np.zeros(0)
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
@@ -295,18 +296,13 @@ class ActuatedPlantSystem:
                                                                       tuple[np.ndarray, np.ndarray], np.ndarray]:
         """(the dynamics (None without ``torques``: an integrator's stage), the state's rate (v, [v', f', delta']),
         the actuators' wrench (6,)) at (q, x)."""
-        plant, thrusters, nv, n = self.plant, self.thrusters, self.nv, self._n
+        thrusters, nv, n = self.thrusters, self.nv, self._n
         v = x[:nv]
-        # the fins' wrench (without fins none: not added)
-        extra = thrusters.fin_wrench(q, v, x[n:]) if self.m else plant._no_wrench
-        kernels, inputs = plant._kernel_inputs(q, v, True)
+        fin_wrench = thrusters.fin_wrench(q, v, x[n:]) if self.m else None  # (without fins none: not added)
         rates, wrench = np.empty(len(x)), np.empty(6)  # [v', f', delta'], each part written in place
-        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else plant._scratch  # returned: new
         # B f (+ the fins'), the lag's f' = (sat(f_cmd) - f) / tau and the plant's terms in one compiled call
-        kernels.actuated_rate_into(*inputs, x, arm, thrust_command, thrusters.matrix, thrusters.time_constants, extra,
-                                   wrench, mass, bias_forces, rates, plant._block, plant._rhs)
-        plant._base_acceleration_into(rates)
-        dynamics = plant._torques(rates[:nv], mass, bias_forces) if torques else None
+        dynamics = self.plant.actuated_rate_into(q, x, arm, thrust_command, self._lag, fin_wrench, wrench, rates,
+                                                 torques)
         if self.m:
             rates[n:] = thrusters.fins.rate(x[n:], fin_command)
         return dynamics, (v, rates), wrench

@@ -295,6 +295,23 @@ class Plant:
         self._base_acceleration_into(acceleration)
         return acceleration
 
+    def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
+                           thrusters: tuple[np.ndarray, np.ndarray], fin_wrench: np.ndarray | None,
+                           wrench: np.ndarray, rates: np.ndarray, torques: bool) -> PlantDynamics | None:
+        """An actuated plant's rate at (q, x = [v; f; ...]): [v'; f'] into ``rates`` (the fins' part left), the
+        actuators' wrench B f (+ ``fin_wrench``) into ``wrench`` (6,), in one compiled call with the thrusters'
+        (B (6, n), tau (n,)) and their lag f' = (f_cmd - f) / tau
+        (:func:`uvms.numerics._kernels.plant_stage.actuated_rate_into`); the PlantDynamics with ``torques``, else
+        None (an integrator's stage: Mbar and nbar in the plant's own buffers)."""
+        nv = self.model.nv
+        kernels, inputs = self._kernel_inputs(q, x[:nv], True)
+        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else self._scratch  # returned: new
+        kernels.actuated_rate_into(*inputs, x, arm, thrust_command, *thrusters,
+                                   self._no_wrench if fin_wrench is None else fin_wrench, wrench, mass, bias_forces,
+                                   rates, self._block, self._rhs)
+        self._base_acceleration_into(rates)
+        return self._torques(rates[:nv], mass, bias_forces) if torques else None
+
     def _base_acceleration_into(self, acceleration: np.ndarray) -> None:
         """a_b = -solve(Mbar_bb, Mbar_bm a_m + nbar_b) into ``acceleration[:nb]`` with numpy's LAPACK, from the block
         and right-hand side the last compiled call left in the plant's buffers."""
