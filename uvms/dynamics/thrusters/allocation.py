@@ -24,7 +24,7 @@ to produce a newton of it, and no least-norm step runs (the matrix looks square 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from ctypes import c_int
 from dataclasses import dataclass
 
@@ -124,6 +124,15 @@ class ThrustAllocator:
         self._rows = sorted(row for group in self.groups for row in group)
         self._all_rows = len(self._rows) == 6
         self._plain = len(self.groups) == 1 and bool(np.all(self.weights == self.weights[0]))
+        self._kernel: Callable[..., tuple] | None = None  # the compiled pseudo-inverse step, loaded at first use
+
+    def _load_kernel(self) -> Callable[..., tuple]:
+        """The compiled pseudo-inverse step (:func:`uvms.numerics._kernels.allocation.pseudo_inverse_thrusts`;
+        numba loaded here, at the first allocation)."""
+        from ...numerics._kernels.allocation import pseudo_inverse_thrusts
+
+        self._kernel = pseudo_inverse_thrusts
+        return pseudo_inverse_thrusts
 
     @property
     def n(self) -> int:
@@ -169,23 +178,24 @@ class ThrustAllocator:
             SolverInputError: a wrench that is not 6 finite numbers.
             UVMSError: the QP solver failed (it should not: every stage is feasible by construction).
         """
-        wrench = _wrench(wrench)
         if self._all_rows:
             # the least-squares optimum of least norm on the reachable directions (B_r B_r^+ is the projection on
-            # them); within the bounds it is the answer, exact unless tau has an unreachable part
-            thrusts = self.inverse @ wrench
-            slack = self.tolerance
-            low, high = self._inside
-            if (thrusts >= low).all() and (thrusts <= high).all():
-                thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # the slack, never beyond
-                achieved = self.matrix @ thrusts
-                residual = wrench - achieved
-                exact = np.abs(residual).max() <= 10 * slack * max(1.0, np.abs(wrench).max())
-                # short of tau (an unreachable part), the plain least squares is the answer only when no priority
-                # or weight orders the axes; else the lexicographic stages trade the part off by them
-                if exact or self._plain:
-                    return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact),
-                                            "pinv")
+            # them); within the bounds it is the answer, exact unless tau has an unreachable part. One compiled
+            # call (:func:`uvms.numerics._kernels.allocation.pseudo_inverse_thrusts`: numpy's numbers)
+            if not (wrench.__class__ is np.ndarray and wrench.shape == (6,) and wrench.dtype == float
+                    and wrench.flags.c_contiguous):
+                wrench = np.ascontiguousarray(_wrench(wrench))
+            kernel = self._kernel if self._kernel is not None else self._load_kernel()
+            finite, within, exact, thrusts, achieved, residual = kernel(
+                self.inverse, self.matrix, wrench, *self._inside, self.lower, self.upper, self.tolerance)
+            if not finite:
+                _wrench(wrench)  # raises: a wrench entry is not finite
+            # short of tau (an unreachable part), the plain least squares is the answer only when no priority
+            # or weight orders the axes; else the lexicographic stages trade the part off by them
+            if within and (exact or self._plain):
+                return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact), "pinv")
+        else:
+            wrench = _wrench(wrench)
         return self._result(self._least_norm(self._lexicographic(wrench)), wrench, "bounded")
 
     # ------------------------------------------------------------------ the bounded stages
