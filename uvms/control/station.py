@@ -261,8 +261,15 @@ class ActuatedKinematics:
 
     def errors(self, t: float, q: np.ndarray) -> dict:
         """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and its
-        distance [m] from the trajectory's point."""
-        configuration = self._at(t, q)  # q: the step's, checked by its reference
+        distance [m] from the trajectory's point.
+
+        At the q (nq,) this step's :meth:`reference` or :meth:`arm_rates` was given (the same array) the kept
+        configuration's kinematics are read as they are (a configuration holds its q unchanged: the same forward
+        kinematics again would give the same numbers); at another q, computed there.
+        """
+        configuration = self._configuration
+        if configuration is None or configuration.q is not q:
+            configuration = self._at(t, q)  # q: the step's, checked by its reference
         pose = configuration.joint_pose(1) * self.base_placement  # base_pose's numbers, from the step's kinematics
         ee = configuration.pose(self.task.frame_id).translation.copy()
         attitude_error = pin.log3(pose.rotation.T @ self.vehicle_target.rotation)  # body axes [rad]
