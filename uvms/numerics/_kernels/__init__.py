@@ -12,7 +12,8 @@ Cholesky/DLS solve), :mod:`.weighted` (the weighted inverse), :mod:`.icat` (the 
 solution and joint-limit motion), :mod:`.pose` (pose errors, the pose DLS step), :mod:`.activation` (objectives'
 bells), :mod:`.boxes` (position and velocity boxes, saturation scaling), :mod:`.distance` (the distance Jacobian
 of collision pairs), :mod:`.hydro` (the plant's hydrodynamic terms, every link in one pass), :mod:`.runge_kutta` (an
-RK4 step's vector arithmetic).
+RK4 step's vector arithmetic), :mod:`.allocation` (the thrust allocation's pseudo-inverse step), :mod:`.vehicle` (the
+vehicle loops' vector arithmetic).
 
 Import a kernel from its module; this package imports nothing, so ``import uvms`` never loads numba.
 

@@ -1,0 +1,81 @@
+"""The vector arithmetic of the vehicle's velocity loop and disturbance observer
+(:class:`uvms.control.vehicle.VehicleVelocityController`) and of the reference's rate
+(:class:`uvms.control.coordination.CoordinatedControl`).
+
+Each step of the loops combines vectors of 6-11 numbers in a handful of numpy operations, each dominated by its
+dispatch; here each group is one compiled call. Every entry is computed with the operations of the numpy expressions
+they replace, in their order (no fused multiply-add: numba contracts nothing without ``fastmath``), so the numbers
+are the same bit for bit.
+
+The module imports numba, so it is loaded where a vehicle loop first runs (an actuated run, whose plant loads it
+anyway); its kernels compile at their first call and are cached on disk (``cache=True``, see
+:mod:`uvms.numerics._kernels`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["disturbance_update", "observer_inputs", "reference_rate_into", "velocity_wrench"]
+
+
+@njit(cache=True)
+def observer_inputs(v: np.ndarray, v0: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """(the measured acceleration (nv,) [m/s^2, rad/s^2], the step's mean velocity (nv,) [m/s, rad/s]) of the
+    velocities v0, v (nv,) dt [s] apart: numpy's ``(v - v0) / dt`` and ``0.5 * (v0 + v)``."""
+    acceleration, mean = np.empty(v.size), np.empty(v.size)
+    for i in range(v.size):
+        acceleration[i] = (v[i] - v0[i]) / dt
+        mean[i] = 0.5 * (v0[i] + v[i])
+    return acceleration, mean
+
+
+@njit(cache=True)
+def disturbance_update(needed: np.ndarray, applied0: np.ndarray, applied: np.ndarray, disturbance: np.ndarray,
+                       gain: float, short: np.ndarray, falls_short: bool) -> np.ndarray:
+    """The disturbance estimate d_hat (6,) [N, N m] after one step of the observer.
+
+    d = needed - (applied0 + applied) / 2, update = gain (d - d_hat); without ``falls_short`` d_hat + update, else per
+    axis d_hat + gain r where r (``short``, the last allocation's asked - achieved) and -update have the same sign,
+    d_hat where r != 0, d_hat + update elsewhere (numpy's ``np.where`` of
+    :meth:`uvms.control.vehicle.VehicleVelocityController.observe`).
+
+    Args:
+        needed: the model's wrench (6,) for the measured motion; applied0, applied: the actuators' wrench (6,) at the
+            step's start and end; disturbance: d_hat (6,) now; gain: 1 - exp(-dt / T); short: r (6,);
+            falls_short: r has a non-zero entry.
+    """
+    out = np.empty(6)
+    for i in range(6):
+        update = gain * ((needed[i] - 0.5 * (applied0[i] + applied[i])) - disturbance[i])
+        if falls_short:
+            if short[i] * -update > 0.0:  # the wrench would grow where the allocation already fell short
+                update = gain * short[i]
+            elif short[i] != 0.0:
+                update = 0.0
+        out[i] = disturbance[i] + update
+    return out
+
+
+@njit(cache=True)
+def velocity_wrench(reference: np.ndarray, nu: np.ndarray, feedforward: np.ndarray, kp: np.ndarray, ki: np.ndarray,
+                    integral: np.ndarray, disturbance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(e = nu_ref - nu, tau = tau_model + Kp e + Ki integral - d_hat), each (6,) [m/s, rad/s] and [N, N m]: the PI
+    law with feedforward of :meth:`uvms.control.vehicle.VehicleVelocityController.control` (numpy's
+    ``feedforward + kp * error + ki * integral - disturbance``, its sums left to right)."""
+    error, wrench = np.empty(6), np.empty(6)
+    for i in range(6):
+        error[i] = reference[i] - nu[i]
+        wrench[i] = ((feedforward[i] + kp[i] * error[i]) + ki[i] * integral[i]) - disturbance[i]
+    return error, wrench
+
+
+@njit(cache=True)
+def reference_rate_into(reference: np.ndarray, last: np.ndarray, rate: np.ndarray, dt: float,
+                        time_constant: float) -> None:
+    """rate (6,) [m/s^2, rad/s^2] += ((reference - last) / dt - rate) dt / (T + dt): one step of the first-order filter
+    on the reference's rate (numpy's ``rate += (step - rate) * dt / (T + dt)`` with ``step = (reference - last) /
+    dt``), reference and last (6,) [m/s, rad/s] one step dt [s] apart, T [s] the filter's time constant."""
+    for i in range(rate.size):
+        rate[i] += ((reference[i] - last[i]) / dt - rate[i]) * dt / (time_constant + dt)
