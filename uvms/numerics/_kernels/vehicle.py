@@ -17,7 +17,34 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["disturbance_update", "observer_inputs", "reference_rate_into", "velocity_wrench"]
+__all__ = ["disturbance_update", "observer_inputs", "reference_rate_into", "vehicle_wrench", "velocity_wrench"]
+
+
+@njit(cache=True)
+def vehicle_wrench(mass: np.ndarray, bias: np.ndarray, base_acceleration: np.ndarray, arm_acceleration: np.ndarray,
+                   rotation: np.ndarray, translation: np.ndarray) -> np.ndarray:
+    """The body wrench (6,) [N, N m] at the base frame of the vehicle rows of the equations of motion:
+    :func:`uvms.dynamics.plant.actuated.vehicle_inverse_dynamics`'s ``Mbar_bb a_b + Mbar_bm a_m + nbar_b`` (BLAS's
+    products, as numpy's ``@`` on the same slices) mapped from the vehicle joint to the base frame as Pinocchio's
+    ``SE3.actInv(Force)`` computes it: f' = R^T f, n' = R^T (n - p x f), each entry's sums in Eigen's order (its
+    numbers, signed zeros included).
+
+    Args:
+        mass: Mbar (nv, nv); bias: nbar (nv,); base_acceleration: (6,) the vehicle joint's twist rate;
+        arm_acceleration: (n_arm,); rotation: R (3, 3) and translation: p (3,) of joint_M_base.
+    """
+    # BLAS reads the slices as contiguous copies (what numba's np.dot does with a strided view, said here)
+    vehicle, coupling = np.ascontiguousarray(mass[:6, :6]), np.ascontiguousarray(mass[:6, 6:])
+    joint = np.dot(vehicle, base_acceleration) + np.dot(coupling, arm_acceleration) + bias[:6]
+    moment = np.empty(3)  # n - p x f
+    moment[0] = joint[3] - (translation[1] * joint[2] - translation[2] * joint[1])
+    moment[1] = joint[4] - (translation[2] * joint[0] - translation[0] * joint[2])
+    moment[2] = joint[5] - (translation[0] * joint[1] - translation[1] * joint[0])
+    wrench = np.empty(6)
+    for i in range(3):
+        wrench[i] = (rotation[0, i] * joint[0] + rotation[1, i] * joint[1]) + rotation[2, i] * joint[2]
+        wrench[3 + i] = (rotation[0, i] * moment[0] + rotation[1, i] * moment[1]) + rotation[2, i] * moment[2]
+    return wrench
 
 
 @njit(cache=True)
