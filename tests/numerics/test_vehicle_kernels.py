@@ -8,9 +8,9 @@ import pinocchio as pin
 import pytest
 
 from uvms.numerics._kernels.vehicle import (
+    base_reference,
     disturbance_update,
     observer_inputs,
-    reference_rate_into,
     vehicle_wrench,
     velocity_wrench,
 )
@@ -57,36 +57,50 @@ def test_the_disturbance_update_is_numpys_with_and_without_a_shortfall(rng):
     assert winding > 100  # the back-calculation's branch was taken
 
 
-def test_the_velocity_law_is_numpys(rng):
-    for _ in range(1000):
-        reference, nu, feedforward, kp, ki, integral, disturbance = (vectors(rng, 6) for _ in range(7))
-        error, wrench = velocity_wrench(reference, nu, feedforward, kp, ki, integral, disturbance)
-        old_error = reference - nu
-        assert same(error, old_error)
+def placements(rng: np.random.Generator, count: int):
+    """Random placements, every other one the identity (the shipped vehicles' base frame)."""
+    for trial in range(count):
+        placement = pin.SE3.Random() if trial % 2 else pin.SE3.Identity()
+        yield trial, placement, placement.rotation.copy(), placement.translation.copy()
+
+
+def test_the_velocity_law_is_pinocchios_and_numpys(rng):
+    """nu as base_twist computes it (Pinocchio's SE3.actInv of v's vehicle part), then numpy's PI law."""
+    for _, placement, rotation, translation in placements(rng, 3000):
+        reference, feedforward, kp, ki, integral, disturbance = (vectors(rng, 6) for _ in range(6))
+        v = vectors(rng, 11)
+        nu, error, wrench = velocity_wrench(reference, v, rotation, translation, feedforward, kp, ki, integral,
+                                            disturbance)
+        old_nu = placement.actInv(pin.Motion(v[:6])).vector
+        old_error = reference - old_nu
+        assert same(nu, old_nu) and same(error, old_error)
         assert same(wrench, feedforward + kp * old_error + ki * integral - disturbance)
 
 
-def test_the_reference_rate_filter_is_numpys_in_place(rng):
-    rate, old = vectors(rng, 6), None
+def test_the_base_reference_and_its_rate_are_pinocchios_and_numpys_in_place(rng):
+    rate = vectors(rng, 6)
     old = rate.copy()
-    for _ in range(500):
-        reference, last, dt = vectors(rng, 6), vectors(rng, 6), float(10.0 ** rng.uniform(-3, -1))
-        step = (reference - last) / dt
-        old += (step - old) * dt / (0.1 + dt)
-        reference_rate_into(reference, last, rate, dt, 0.1)
+    for trial, placement, rotation, translation in placements(rng, 2000):
+        reference, last, dt = vectors(rng, 11), vectors(rng, 6), float(10.0 ** rng.uniform(-3, -1))
+        filtered = trial % 3 != 0
+        nu_ref = base_reference(reference, rotation, translation, last, rate, dt, 0.1, filtered)
+        old_nu_ref = placement.actInv(pin.Motion(reference[:6])).vector
+        assert same(nu_ref, old_nu_ref)
+        if filtered:
+            step = (old_nu_ref - last) / dt
+            old += (step - old) * dt / (0.1 + dt)
         assert same(rate, old)
 
 
 def test_the_vehicle_rows_are_numpys_and_pinocchios(rng):
     """vehicle_inverse_dynamics's tail: numpy's products of Mbar's slices, then Pinocchio's SE3.actInv of the joint's
     force (any placement, the identity of the shipped vehicles included; arms of 0 to 6 joints)."""
-    for trial in range(4000):
+    for trial, placement, rotation, translation in placements(rng, 4000):
         n_arm = trial % 7
         mass, bias = rng.standard_normal((6 + n_arm, 6 + n_arm)) * 50.0, vectors(rng, 6 + n_arm)
         base, arm = vectors(rng, 6), vectors(rng, n_arm)
-        placement = pin.SE3.Random() if trial % 2 else pin.SE3.Identity()
         joint = mass[:6, :6] @ base + mass[:6, 6:] @ arm + bias[:6]
         old = placement.actInv(pin.Force(joint)).vector
-        assert same(vehicle_wrench(mass, bias, base, arm, placement.rotation, placement.translation), old)
+        assert same(vehicle_wrench(mass, bias, base, arm, rotation, translation), old)
     with pytest.raises(ValueError):
-        vehicle_wrench(mass, bias, base[:3], arm, placement.rotation, placement.translation)
+        vehicle_wrench(mass, bias, base[:3], arm, rotation, translation)

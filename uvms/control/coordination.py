@@ -36,7 +36,6 @@ from __future__ import annotations
 from typing import Protocol
 
 import numpy as np
-import pinocchio as pin
 
 from ..dynamics.plant.actuated import base_twist, lag_command
 from ..dynamics.plant.command import Command, State
@@ -207,9 +206,9 @@ class CoordinatedControl:
             else np.full(robot.n_arm, float(max_arm_rate))
         self.acceleration_feedforward = bool(acceleration_feedforward)
         self.servo_compensation = bool(servo_compensation)
-        from ..numerics._kernels.vehicle import reference_rate_into  # numba: loaded with the controller
+        from ..numerics._kernels.vehicle import base_reference  # numba: loaded with the controller
 
-        self._reference_rate_into = reference_rate_into
+        self._base_reference = base_reference
         self._forget()
 
     def _forget(self) -> None:
@@ -218,7 +217,8 @@ class CoordinatedControl:
         self._last_reference: np.ndarray | None = None  # nu_ref (6,) of the last step, base frame
         self._rate = np.zeros(6)  # nu_ref' (6,) filtered [m/s^2, rad/s^2]
         self._achieved = np.zeros(6)  # the allocation's achieved wrench at the last step [N, N m]
-        self._placement = self.velocity.model.robot.base_placement  # joint_M_base (the property copies it per read)
+        placement = self.velocity.model.robot.base_placement  # joint_M_base (the property copies it per read)
+        self._placement = (placement.rotation.copy(), placement.translation.copy())  # read as arrays
 
     def vehicle_bounds(self, nu: np.ndarray, nu_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) (6,) [m/s, rad/s] base frame: between the measured nu and nu + r (nu_pose - nu)."""
@@ -249,12 +249,12 @@ class CoordinatedControl:
         arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
         arm = np.minimum(np.maximum(arm, -self.max_arm_rate), self.max_arm_rate)  # np.clip's numbers, not its dispatch
         self.kinematic.step_done()
-        nu_ref = self._placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
-        rate = None
-        if self.acceleration_feedforward and self._last_reference is not None:
-            # the reference's rate over the last step, filtered (in place; numpy's numbers, compiled)
-            self._reference_rate_into(nu_ref, self._last_reference, self._rate, self.dt, REFERENCE_RATE_FILTER)
-            rate = self._rate
+        # nu_ref (vehicle joint -> base frame) and the reference's rate over the last step, filtered (in place), in
+        # one compiled call (Pinocchio's and numpy's numbers)
+        filtered = self.acceleration_feedforward and self._last_reference is not None
+        nu_ref = self._base_reference(reference, *self._placement, self._last_reference if filtered else self._rate,
+                                      self._rate, self.dt, REFERENCE_RATE_FILTER, filtered)
+        rate = self._rate if filtered else None
         self._last_reference = nu_ref
         if self.servo_compensation:
             arm = lag_command(v[nb:], arm, self.dt, model.motor_time_constant)

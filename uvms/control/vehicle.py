@@ -156,6 +156,8 @@ class VehicleVelocityController:
 
         self._observer_inputs, self._disturbance_update = observer_inputs, disturbance_update
         self._velocity_wrench = velocity_wrench
+        placement = model.base_placement  # joint_M_base, read by the compiled law as arrays
+        self._placement = (placement.rotation.copy(), placement.translation.copy())
         self._gain: tuple[tuple[float, float] | None, float] = (None, 0.0)  # ((dt, T), the observer's gain there)
         self.reset()
 
@@ -240,12 +242,12 @@ class VehicleVelocityController:
         reference = np.asarray(reference, dtype=float)
         if reference.shape != (6,):
             raise SolverInputError(f"the velocity reference nu_ref must be 6 numbers [m/s, rad/s], got {reference!r}")
-        nu = base_twist(self.model, v)
         rate = np.zeros(6) if reference_rate is None else reference_rate
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
         feedforward = self.feedforward(q, v, rate, arm)
-        error, wrench = self._velocity_wrench(reference, nu, feedforward, self.kp, self.ki, self.integral,
-                                              self.disturbance)
+        # nu (base_twist's numbers), the velocity error and the wrench in one compiled call
+        nu, error, wrench = self._velocity_wrench(reference, v, *self._placement, feedforward, self.kp, self.ki,
+                                                  self.integral, self.disturbance)
         # the water's velocity moves the fins' lift alone: a thrusters-only allocation does not read it
         current = water_in_base(self.model, q) if isinstance(self.allocator, FinAllocator) else None
         allocation = self.allocator.allocate(wrench, nu, current)

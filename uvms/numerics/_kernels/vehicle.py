@@ -17,7 +17,26 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["disturbance_update", "observer_inputs", "reference_rate_into", "vehicle_wrench", "velocity_wrench"]
+__all__ = ["base_reference", "disturbance_update", "observer_inputs", "vehicle_wrench", "velocity_wrench"]
+
+
+@njit(cache=True)
+def inverse_action_into(rotation: np.ndarray, translation: np.ndarray, first: np.ndarray, second: np.ndarray,
+                        out: np.ndarray, at_first: int, at_second: int) -> None:
+    """out[at_first:+3] = R^T (first - p x second), out[at_second:+3] = R^T second: Pinocchio's ``SE3.actInv`` of a
+    motion (first = v, second = w: at 0 and 3) or a force (first = n, second = f: at 3 and 0), each entry's sums in
+    Eigen's order (its numbers, signed zeros included).
+
+    Args:
+        rotation: R (3, 3) and translation: p (3,) of the placement; first, second: (3,) each; out: (6,).
+    """
+    cross0 = translation[1] * second[2] - translation[2] * second[1]
+    cross1 = translation[2] * second[0] - translation[0] * second[2]
+    cross2 = translation[0] * second[1] - translation[1] * second[0]
+    d0, d1, d2 = first[0] - cross0, first[1] - cross1, first[2] - cross2
+    for i in range(3):
+        out[at_first + i] = (rotation[0, i] * d0 + rotation[1, i] * d1) + rotation[2, i] * d2
+        out[at_second + i] = (rotation[0, i] * second[0] + rotation[1, i] * second[1]) + rotation[2, i] * second[2]
 
 
 @njit(cache=True)
@@ -36,14 +55,8 @@ def vehicle_wrench(mass: np.ndarray, bias: np.ndarray, base_acceleration: np.nda
     # BLAS reads the slices as contiguous copies (what numba's np.dot does with a strided view, said here)
     vehicle, coupling = np.ascontiguousarray(mass[:6, :6]), np.ascontiguousarray(mass[:6, 6:])
     joint = np.dot(vehicle, base_acceleration) + np.dot(coupling, arm_acceleration) + bias[:6]
-    moment = np.empty(3)  # n - p x f
-    moment[0] = joint[3] - (translation[1] * joint[2] - translation[2] * joint[1])
-    moment[1] = joint[4] - (translation[2] * joint[0] - translation[0] * joint[2])
-    moment[2] = joint[5] - (translation[0] * joint[1] - translation[1] * joint[0])
     wrench = np.empty(6)
-    for i in range(3):
-        wrench[i] = (rotation[0, i] * joint[0] + rotation[1, i] * joint[1]) + rotation[2, i] * joint[2]
-        wrench[3 + i] = (rotation[0, i] * moment[0] + rotation[1, i] * moment[1]) + rotation[2, i] * moment[2]
+    inverse_action_into(rotation, translation, joint[3:], joint[:3], wrench, 3, 0)
     return wrench
 
 
@@ -86,23 +99,43 @@ def disturbance_update(needed: np.ndarray, applied0: np.ndarray, applied: np.nda
 
 
 @njit(cache=True)
-def velocity_wrench(reference: np.ndarray, nu: np.ndarray, feedforward: np.ndarray, kp: np.ndarray, ki: np.ndarray,
-                    integral: np.ndarray, disturbance: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(e = nu_ref - nu, tau = tau_model + Kp e + Ki integral - d_hat), each (6,) [m/s, rad/s] and [N, N m]: the PI
-    law with feedforward of :meth:`uvms.control.vehicle.VehicleVelocityController.control` (numpy's
-    ``feedforward + kp * error + ki * integral - disturbance``, its sums left to right)."""
-    error, wrench = np.empty(6), np.empty(6)
+def velocity_wrench(reference: np.ndarray, v: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
+                    feedforward: np.ndarray, kp: np.ndarray, ki: np.ndarray, integral: np.ndarray,
+                    disturbance: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(nu, e = nu_ref - nu, tau = tau_model + Kp e + Ki integral - d_hat), each (6,) [m/s, rad/s] and [N, N m]: the
+    PI law with feedforward of :meth:`uvms.control.vehicle.VehicleVelocityController.control` (numpy's
+    ``feedforward + kp * error + ki * integral - disturbance``, its sums left to right), nu the vehicle's body twist
+    in its base frame (:func:`uvms.dynamics.plant.actuated.base_twist`: Pinocchio's ``SE3.actInv`` of v's vehicle
+    part, :func:`inverse_action_into`).
+
+    Args:
+        reference: nu_ref (6,); v: (nv,) the measured velocity, its vehicle part first (the joint's axes);
+        rotation, translation: joint_M_base; feedforward: tau_model (6,); kp, ki: (6,); integral: (6,);
+        disturbance: d_hat (6,).
+    """
+    nu, error, wrench = np.empty(6), np.empty(6), np.empty(6)
+    inverse_action_into(rotation, translation, v[:3], v[3:6], nu, 0, 3)
     for i in range(6):
         error[i] = reference[i] - nu[i]
         wrench[i] = ((feedforward[i] + kp[i] * error[i]) + ki[i] * integral[i]) - disturbance[i]
-    return error, wrench
+    return nu, error, wrench
 
 
 @njit(cache=True)
-def reference_rate_into(reference: np.ndarray, last: np.ndarray, rate: np.ndarray, dt: float,
-                        time_constant: float) -> None:
-    """rate (6,) [m/s^2, rad/s^2] += ((reference - last) / dt - rate) dt / (T + dt): one step of the first-order filter
-    on the reference's rate (numpy's ``rate += (step - rate) * dt / (T + dt)`` with ``step = (reference - last) /
-    dt``), reference and last (6,) [m/s, rad/s] one step dt [s] apart, T [s] the filter's time constant."""
-    for i in range(rate.size):
-        rate[i] += ((reference[i] - last[i]) / dt - rate[i]) * dt / (time_constant + dt)
+def base_reference(reference: np.ndarray, rotation: np.ndarray, translation: np.ndarray, last: np.ndarray,
+                   rate: np.ndarray, dt: float, time_constant: float, filtered: bool) -> np.ndarray:
+    """nu_ref (6,) [m/s, rad/s]: the vehicle part of the kinematic reference (the joint's axes) in the base frame
+    (Pinocchio's ``SE3.actInv`` of the motion, :func:`inverse_action_into`); with ``filtered`` the reference's rate
+    (6,) [m/s^2, rad/s^2] is updated in place by one step of its first-order filter: rate += ((nu_ref - last) / dt -
+    rate) dt / (T + dt) (numpy's ``rate += (step - rate) * dt / (T + dt)`` with ``step = (nu_ref - last) / dt``).
+
+    Args:
+        reference: v_ref (nv,), its vehicle part first; rotation, translation: joint_M_base; last: nu_ref (6,) of the
+            last step; rate: (6,); dt: the step [s]; time_constant: T [s] of the filter; filtered: update the rate.
+    """
+    nu_ref = np.empty(6)
+    inverse_action_into(rotation, translation, reference[:3], reference[3:6], nu_ref, 0, 3)
+    if filtered:
+        for i in range(6):
+            rate[i] += ((nu_ref[i] - last[i]) / dt - rate[i]) * dt / (time_constant + dt)
+    return nu_ref
