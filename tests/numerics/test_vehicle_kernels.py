@@ -11,6 +11,7 @@ from uvms.numerics._kernels.vehicle import (
     base_reference,
     disturbance_update,
     observer_inputs,
+    station_errors,
     vehicle_wrench,
     velocity_wrench,
 )
@@ -104,3 +105,15 @@ def test_the_vehicle_rows_are_numpys_and_pinocchios(rng):
         assert same(vehicle_wrench(mass, bias, base, arm, rotation, translation), old)
     with pytest.raises(ValueError):
         vehicle_wrench(mass, bias, base[:3], arm, rotation, translation)
+
+
+def test_the_station_errors_are_numpys(rng):
+    """ActuatedKinematics.errors' R^T R_d (Pinocchio's rotations, F-ordered, as the errors read them) and |p_d - p|
+    (numpy's sqrt of x.dot(x))."""
+    for _ in range(3000):
+        pose, target = pin.SE3.Random(), pin.SE3.Random()
+        pose.translation, target.translation = vectors(rng, 3), vectors(rng, 3)
+        relative, distance = station_errors(pose.rotation, pose.translation, target.rotation, target.translation)
+        offset = target.translation - pose.translation
+        assert same(relative, pose.rotation.T @ target.rotation)
+        assert distance == np.sqrt(offset.dot(offset)) and type(distance) is float

@@ -17,7 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["base_reference", "disturbance_update", "observer_inputs", "vehicle_wrench", "velocity_wrench"]
+__all__ = ["base_reference", "disturbance_update", "observer_inputs", "station_errors", "vehicle_wrench",
+           "velocity_wrench"]
 
 
 @njit(cache=True)
@@ -139,3 +140,14 @@ def base_reference(reference: np.ndarray, rotation: np.ndarray, translation: np.
         for i in range(6):
             rate[i] += ((nu_ref[i] - last[i]) / dt - rate[i]) * dt / (time_constant + dt)
     return nu_ref
+
+
+@njit(cache=True)
+def station_errors(rotation: np.ndarray, translation: np.ndarray, target_rotation: np.ndarray,
+                   target_translation: np.ndarray) -> tuple[np.ndarray, float]:
+    """(R^T R_d (3, 3), |p_d - p| [m]): the vehicle's attitude error as a rotation (its log is the error in body
+    axes) and its distance from the station, of the pose (R (3, 3), p (3,)) and the station's (R_d, p_d):
+    :meth:`uvms.control.station.ActuatedKinematics.errors`' numpy expressions (BLAS's products, as ``@`` and
+    ``dot``; ``sqrt``)."""
+    offset = target_translation - translation
+    return np.dot(rotation.T, target_rotation), np.sqrt(np.dot(offset, offset))
