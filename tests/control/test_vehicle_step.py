@@ -91,3 +91,28 @@ def test_the_observer_gain_follows_its_step_and_time_constant(setup):
             assert gain == -np.expm1(-dt / time_constant) and type(gain) is np.float64
     finally:
         velocity.disturbance_time_constant = original
+
+
+def test_the_compiled_loops_refuse_what_they_cannot_read(setup):
+    """The loops' compiled calls read fixed sizes: a reference, wrench or velocity of another size, or gains not
+    derived yet, are refused with what is valid (never read past an array's end)."""
+    from uvms.control.settings import ActuatedSettings
+    from uvms.control.vehicle import VehicleVelocityController
+    from uvms.errors import SolverInputError
+
+    velocity = setup.actuation.controller.velocity
+    state = states(setup, 1)[0]
+    q, v = state.q, state.v
+    velocity.reset(q)
+    with pytest.raises(SolverInputError, match="nu_ref as 6 numbers"):
+        velocity.control(q, v, np.zeros(3), 0.01)
+    velocity.observe(q, v, np.zeros(6), 0.01)
+    with pytest.raises(SolverInputError, match="applied wrench as 6 numbers"):
+        velocity.observe(q, v, np.zeros(3), 0.01)
+    with pytest.raises(SolverInputError, match="v of the last call's size"):
+        velocity.observe(q, v[:8], np.zeros(6), 0.01)
+    underived = VehicleVelocityController(velocity.model, velocity.allocator, ActuatedSettings())
+    with pytest.raises(SolverInputError, match="derived at the station"):
+        underived.control(q, v, np.zeros(6), 0.01)
+    underived.reset(q)
+    assert underived.control(q, v, np.zeros(6), 0.01).wrench.shape == (6,)

@@ -190,7 +190,11 @@ class VehicleVelocityController:
                 measured thrusts, the fins' at their measured angles), base frame; dt: the time since the last call
                 [s].
         """
-        last, self._last = self._last, (v.copy(), np.asarray(applied, dtype=float).copy())
+        applied, last = np.asarray(applied, dtype=float), self._last
+        if applied.shape != (6,) or (last is not None and last[0].shape != v.shape):
+            raise SolverInputError(f"observe needs the applied wrench as 6 numbers and v of the last call's size "
+                                   f"({len(last[0]) if last else len(v)}), got {applied.shape} and {v.shape}")
+        self._last = (v.copy(), applied.copy())
         if last is None or self.disturbance_time_constant <= 0.0:
             return self.disturbance
         v0, applied0 = last
@@ -240,8 +244,10 @@ class VehicleVelocityController:
                 acceleration (None: 0), used with ``arm_feedforward``.
         """
         reference = np.asarray(reference, dtype=float)
-        if reference.shape != (6,):
-            raise SolverInputError(f"the velocity reference nu_ref must be 6 numbers [m/s, rad/s], got {reference!r}")
+        if reference.shape != (6,) or v.shape[0] < 6 or self.kp is None or self.ki is None:
+            raise SolverInputError(f"control needs nu_ref as 6 numbers [m/s, rad/s] (got {reference!r}), v of the "
+                                   f"UVMS (got {v.shape}) and the gains (derived at the station by reset(q0) when "
+                                   f"not given)")
         rate = np.zeros(6) if reference_rate is None else reference_rate
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
         feedforward = self.feedforward(q, v, rate, arm)
