@@ -155,7 +155,8 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     placement = plant._base_placement
     if nb == 6:  # one compiled call, these expressions' numbers (:func:`uvms.numerics._kernels.vehicle.vehicle_wrench`)
         kernel = _VEHICLE_WRENCH if _VEHICLE_WRENCH is not None else _vehicle_wrench()
-        return kernel(mass, bias, base_acceleration, arm_acceleration, placement.rotation, placement.translation)
+        return kernel(mass, bias, np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float),
+                      placement.rotation, placement.translation)
     generalized = mass[:nb, :nb] @ base_acceleration + mass[:nb, nb:] @ arm_acceleration + bias[:nb]
     if nb == 3:  # planar: the joint's (fx, fy, mz) rows
         generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
