@@ -36,7 +36,6 @@ from __future__ import annotations
 from typing import Protocol
 
 import numpy as np
-import pinocchio as pin
 
 from ..dynamics.plant.actuated import base_twist, lag_command
 from ..dynamics.plant.command import Command, State
@@ -129,6 +128,10 @@ def outside_range(matrix: np.ndarray) -> np.ndarray:
     return complement @ complement.T
 
 
+#: The ratio of an allocation that gave what was asked (1 on every axis; read-only: shared by every step).
+FULL_RATIO = np.ones(6)
+FULL_RATIO.flags.writeable = False
+
 #: Time constant [s] of the first-order filter on the reference's rate fed forward: the thrusters' (0.1 s on the
 #: BlueROV2), so a step of the reference computed from the measured state (a saturation bound moving, an objective
 #: activating) is not fed forward as a one-step spike (measured: unfiltered, the saturated-current intervention with
@@ -203,15 +206,19 @@ class CoordinatedControl:
             else np.full(robot.n_arm, float(max_arm_rate))
         self.acceleration_feedforward = bool(acceleration_feedforward)
         self.servo_compensation = bool(servo_compensation)
+        from ..numerics._kernels.vehicle import base_reference  # numba: loaded with the controller
+
+        self._base_reference = base_reference
         self._forget()
 
     def _forget(self) -> None:
         """Forget the last step: the allocation's ratio, the last reference."""
-        self.ratio = np.ones(6)  # achieved / asked wrench per axis at the last step (1: the allocation gave it)
+        self.ratio = FULL_RATIO  # achieved / asked wrench per axis at the last step (1: the allocation gave it)
         self._last_reference: np.ndarray | None = None  # nu_ref (6,) of the last step, base frame
         self._rate = np.zeros(6)  # nu_ref' (6,) filtered [m/s^2, rad/s^2]
         self._achieved = np.zeros(6)  # the allocation's achieved wrench at the last step [N, N m]
-        self._placement = self.velocity.model.robot.base_placement  # joint_M_base (the property copies it per read)
+        placement = self.velocity.model.robot.base_placement  # joint_M_base (the property copies it per read)
+        self._placement = (placement.rotation.copy(), placement.translation.copy())  # read as arrays
 
     def vehicle_bounds(self, nu: np.ndarray, nu_pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) (6,) [m/s, rad/s] base frame: between the measured nu and nu + r (nu_pose - nu)."""
@@ -242,12 +249,12 @@ class CoordinatedControl:
         arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
         arm = np.minimum(np.maximum(arm, -self.max_arm_rate), self.max_arm_rate)  # np.clip's numbers, not its dispatch
         self.kinematic.step_done()
-        nu_ref = self._placement.actInv(pin.Motion(reference[:nb])).vector  # vehicle joint -> base frame
-        rate = None
-        if self.acceleration_feedforward and self._last_reference is not None:
-            step = (nu_ref - self._last_reference) / self.dt  # the reference's rate over the last step
-            self._rate += (step - self._rate) * self.dt / (REFERENCE_RATE_FILTER + self.dt)
-            rate = self._rate
+        # nu_ref (vehicle joint -> base frame) and the reference's rate over the last step, filtered (in place), in
+        # one compiled call (Pinocchio's and numpy's numbers)
+        filtered = self.acceleration_feedforward and self._last_reference is not None
+        nu_ref = self._base_reference(reference, *self._placement, self._last_reference if filtered else self._rate,
+                                      self._rate, self.dt, REFERENCE_RATE_FILTER, filtered)
+        rate = self._rate if filtered else None
         self._last_reference = nu_ref
         if self.servo_compensation:
             arm = lag_command(v[nb:], arm, self.dt, model.motor_time_constant)
@@ -255,11 +262,12 @@ class CoordinatedControl:
         control = self.velocity.control(q, v, nu_ref, self.dt, reference_rate=rate, arm_acceleration=arm_acceleration)
         allocation = control.allocation
         self._achieved = allocation.achieved_wrench  # the observer's stand-in for a state without thrusts
-        self.ratio = np.ones(6) if allocation.attainable else achieved_ratio(control.wrench,
+        self.ratio = FULL_RATIO if allocation.attainable else achieved_ratio(control.wrench,
                                                                                 allocation.achieved_wrench)
+        # the integral and the estimate are new arrays at every step (never changed in place): kept as they are
         info = {"wrench_command": control.wrench, "achieved_wrench": allocation.achieved_wrench,
-                "attainable": allocation.attainable, "velocity_integral": self.velocity.integral.copy(),
-                "disturbance_estimate": self.velocity.disturbance.copy(),
+                "attainable": allocation.attainable, "velocity_integral": self.velocity.integral,
+                "disturbance_estimate": self.velocity.disturbance,
                 "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
         thrusts, fins = split_actuators(self.velocity.allocator, allocation.thrusts)
         return Command(arm=arm, thrust=thrusts, fins=fins, info=info)

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -260,14 +260,24 @@ class ActuatedKinematics:
 
     def errors(self, t: float, q: np.ndarray) -> dict:
         """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and its
-        distance [m] from the trajectory's point."""
-        configuration = self._at(t, q)  # q: the step's, checked by its reference
+        distance [m] from the trajectory's point.
+
+        At the q (nq,) this step's :meth:`reference` or :meth:`arm_rates` was given (the same array) the kept
+        configuration's kinematics are read as they are (a configuration holds its q unchanged: the same forward
+        kinematics again would give the same numbers); at another q, computed there.
+        """
+        configuration = self._configuration
+        if configuration is None or configuration.q is not q:
+            configuration = self._at(t, q)  # q: the step's, checked by its reference
         pose = configuration.joint_pose(1) * self.base_placement  # base_pose's numbers, from the step's kinematics
         ee = configuration.pose(self.task.frame_id).translation.copy()
-        attitude_error = pin.log3(pose.rotation.T @ self.vehicle_target.rotation)  # body axes [rad]
-        offset = self.vehicle_target.translation - pose.translation
-        # the norms as numpy's norm of a vector computes them (sqrt of x.dot(x)), without its dispatch per call
-        row = {"vehicle_position_error": math.sqrt(offset.dot(offset)),
+        target = self.vehicle_target
+        # R^T R_d and |p_d - p| in one compiled call (numpy's numbers); the norms as numpy's norm of a vector
+        # computes them (sqrt of x.dot(x)), without its dispatch per call
+        kernel = _STATION_ERRORS if _STATION_ERRORS is not None else _station_errors()
+        relative, distance = kernel(pose.rotation, pose.translation, target.rotation, target.translation)
+        attitude_error = pin.log3(relative)  # body axes [rad]
+        row = {"vehicle_position_error": distance,
                "vehicle_attitude_error": math.sqrt(attitude_error.dot(attitude_error)), "ee_position": ee}
         if self.task_reference.moving:
             miss = self.task_reference.samples.target(t)[0] - ee  # the target's translation (no sample built)
@@ -345,3 +355,16 @@ def actuated_control(actuated: ActuatedPlant, dt: float, reference: TaskReferenc
                               saturation_feedback=settings.saturation_feedback,
                               acceleration_feedforward=settings.acceleration_feedforward,
                               servo_compensation=settings.servo_compensation)
+
+
+#: The compiled station errors of :meth:`ActuatedKinematics.errors`, bound at the first call (:func:`_station_errors`).
+_STATION_ERRORS = None
+
+
+def _station_errors() -> Callable[..., tuple]:
+    """Bind :func:`uvms.numerics._kernels.vehicle.station_errors` (numba: loaded at the first row, not by
+    ``import uvms``; later rows skip the import)."""
+    global _STATION_ERRORS
+    from ..numerics._kernels.vehicle import station_errors
+    _STATION_ERRORS = station_errors
+    return station_errors

@@ -151,6 +151,14 @@ class VehicleVelocityController:
         self.arm_feedforward = bool(settings.arm_feedforward)
         self.disturbance_time_constant = float(gain_vector(settings.disturbance_time_constant,
                                                            "disturbance_time_constant [s]", 1)[0])
+        # the loops' vector arithmetic, compiled (numpy's numbers; numba: loaded with the controller)
+        from ..numerics._kernels.vehicle import disturbance_update, observer_inputs, velocity_wrench
+
+        self._observer_inputs, self._disturbance_update = observer_inputs, disturbance_update
+        self._velocity_wrench = velocity_wrench
+        placement = model.base_placement  # joint_M_base, read by the compiled law as arrays
+        self._placement = (placement.rotation.copy(), placement.translation.copy())
+        self._gain: tuple[tuple[float, float] | None, float] = (None, 0.0)  # ((dt, T), the observer's gain there)
         self.reset()
 
     def reset(self, station: np.ndarray | None = None) -> None:
@@ -164,6 +172,7 @@ class VehicleVelocityController:
         self.disturbance = np.zeros(6)  # d_hat [N, N m] body FLU
         self._last: tuple[np.ndarray, np.ndarray] | None = None  # (v (nv,), applied wrench (6,)) of the last call
         self._short = np.zeros(6)  # the last allocation's residual where it fell short (asked - achieved) [N, N m]
+        self._falls_short = False  # any entry of _short is not zero
 
     def observe(self, q: np.ndarray, v: np.ndarray, applied: np.ndarray, dt: float) -> np.ndarray:
         """Update d_hat (6,) [N, N m] from the step since the last call and return it.
@@ -181,22 +190,26 @@ class VehicleVelocityController:
                 measured thrusts, the fins' at their measured angles), base frame; dt: the time since the last call
                 [s].
         """
-        last, self._last = self._last, (v.copy(), np.asarray(applied, dtype=float).copy())
+        applied, last = np.asarray(applied, dtype=float), self._last
+        if applied.shape != (6,) or (last is not None and last[0].shape != v.shape):
+            raise SolverInputError(f"observe needs the applied wrench as 6 numbers and v of the last call's size "
+                                   f"({len(last[0]) if last else len(v)}), got {applied.shape} and {v.shape}")
+        self._last = (v.copy(), applied.copy())
         if last is None or self.disturbance_time_constant <= 0.0:
             return self.disturbance
         v0, applied0 = last
-        acceleration = (v - v0) / dt
-        needed = vehicle_inverse_dynamics(self.model, q, 0.5 * (v0 + v), acceleration[:6], acceleration[6:])
-        mismatch = needed - 0.5 * (applied0 + self._last[1])
-        gain = -np.expm1(-dt / self.disturbance_time_constant)
-        update = gain * (mismatch - self.disturbance)
-        if not self._short.any():  # the last allocation gave what was asked: the update on every axis
-            self.disturbance = self.disturbance + update
-            return self.disturbance
-        winding = self._short * -update > 0.0  # the wrench would grow where the allocation already fell short
-        self.disturbance = self.disturbance + np.where(winding, gain * self._short,
-                                                       np.where(self._short != 0.0, 0.0, update))
+        acceleration, mean = self._observer_inputs(v, v0, dt)
+        needed = vehicle_inverse_dynamics(self.model, q, mean, acceleration[:6], acceleration[6:])
+        self.disturbance = self._disturbance_update(needed, applied0, self._last[1], self.disturbance,
+                                                    self._observer_gain(dt), self._short, self._falls_short)
         return self.disturbance
+
+    def _observer_gain(self, dt: float) -> float:
+        """1 - exp(-dt / T) of the step dt [s] (numpy's expm1), computed again only when dt or T changed."""
+        key = (dt, self.disturbance_time_constant)
+        if self._gain[0] != key:
+            self._gain = key, -np.expm1(-dt / self.disturbance_time_constant)
+        return self._gain[1]
 
     def applied_wrench(self, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray,
                        fins: np.ndarray | None = None) -> np.ndarray:
@@ -230,12 +243,17 @@ class VehicleVelocityController:
             reference_rate: nu_ref' (6,) (None: 0); arm_acceleration: (n_arm,) the arm's commanded
                 acceleration (None: 0), used with ``arm_feedforward``.
         """
-        nu = base_twist(self.model, v)
-        error = reference - nu
+        reference = np.asarray(reference, dtype=float)
+        if reference.shape != (6,) or v.shape[0] < 6 or self.kp is None or self.ki is None:
+            raise SolverInputError(f"control needs nu_ref as 6 numbers [m/s, rad/s] (got {reference!r}), v of the "
+                                   f"UVMS (got {v.shape}) and the gains (derived at the station by reset(q0) when "
+                                   f"not given)")
         rate = np.zeros(6) if reference_rate is None else reference_rate
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
         feedforward = self.feedforward(q, v, rate, arm)
-        wrench = feedforward + self.kp * error + self.ki * self.integral - self.disturbance
+        # nu (base_twist's numbers), the velocity error and the wrench in one compiled call
+        nu, error, wrench = self._velocity_wrench(reference, v, *self._placement, feedforward, self.kp, self.ki,
+                                                  self.integral, self.disturbance)
         # the water's velocity moves the fins' lift alone: a thrusters-only allocation does not read it
         current = water_in_base(self.model, q) if isinstance(self.allocator, FinAllocator) else None
         allocation = self.allocator.allocate(wrench, nu, current)
@@ -243,14 +261,17 @@ class VehicleVelocityController:
         return VehicleControl(wrench, feedforward, allocation, error)
 
     def _integrate(self, error: np.ndarray, allocation: AllocationResult, dt: float) -> None:
-        """integral += dt e, except on the axes where the wrench fell short in the direction e pushes."""
+        """integral += dt e, except on the axes where the wrench fell short in the direction e pushes. The integral
+        is a new array at every step (a row that holds the last one keeps its numbers)."""
         if allocation.attainable:
-            self._short = np.zeros(6)
-            self.integral += dt * error
+            if self._falls_short:
+                self._short, self._falls_short = np.zeros(6), False
+            self.integral = self.integral + dt * error
             return
         scale = max(1.0, float(np.max(np.abs(allocation.achieved_wrench))))
         self._short = np.where(np.abs(allocation.residual) > 1e-6 * scale, allocation.residual, 0.0)
-        self.integral += dt * np.where(self._short * error > 0, 0.0, error)
+        self._falls_short = bool(self._short.any())
+        self.integral = self.integral + dt * np.where(self._short * error > 0, 0.0, error)
 
 
 class VehiclePoseController:

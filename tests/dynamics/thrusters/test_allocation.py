@@ -3,6 +3,8 @@ when not."""
 
 from __future__ import annotations
 
+from ctypes import c_int
+
 import numpy as np
 import pytest
 from scipy.optimize import lsq_linear, minimize
@@ -178,16 +180,14 @@ def test_the_bounded_stages_give_the_thrusts_of_qpsolvers_daqp_bit_for_bit(vehic
     ``qpsolvers.solve_qp(..., solver="daqp")`` on the same stages, bit for bit (saturated, prioritized wrenches)."""
     from qpsolvers import solve_qp
 
-    from uvms.dynamics.thrusters import allocation
-
     matrix, lower, upper = vehicle
     allocator = ThrustAllocator(matrix, lower, upper, priorities=[("yaw", "z", "roll", "pitch"), ("x", "y")])
 
     class ThroughQPSolvers(ThrustAllocator):
-        def _solve_qp(self, p, q, a, b, start):
-            a, b = allocation._independent_rows(a, b)
+        def _solve_qp(self, p, q, rows, thrusts):
+            a, b = independent_rows(rows.matrix, rows.matrix @ thrusts)
             solution = solve_qp(p, q, A=a, b=b, lb=self.lower, ub=self.upper, solver="daqp", eps_prox=1e-6)
-            return start if solution is None or not np.all(np.isfinite(solution)) else solution
+            return thrusts if solution is None or not np.all(np.isfinite(solution)) else solution
 
     reference = ThroughQPSolvers(matrix, lower, upper, priorities=[("yaw", "z", "roll", "pitch"), ("x", "y")])
     rng = np.random.default_rng(7)
@@ -198,3 +198,87 @@ def test_the_bounded_stages_give_the_thrusts_of_qpsolvers_daqp_bit_for_bit(vehic
         assert np.array_equal(result.thrusts, expected.thrusts)
         bounded += result.solver == "bounded"
     assert bounded > 20  # the QP stages ran
+
+
+def independent_rows(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A x = b reduced to its independent rows, computed at every call (the allocation before its rows were
+    prepared once)."""
+    u, singular, vt = np.linalg.svd(a, full_matrices=False)
+    rank = int(np.sum(singular > 1e-10 * max(1.0, singular[0] if singular.size else 0.0)))
+    return vt[:rank], (u[:, :rank].T @ b) / singular[:rank]
+
+
+class PerCall(ThrustAllocator):
+    """The bounded stages as they were before their fixed arrays were prepared once: every array, rank and SVD
+    computed at each call, scipy's lsq_linear called for the first group."""
+
+    def _lexicographic(self, wrench):
+        from scipy.optimize import lsq_linear
+
+        kept, thrusts = [], None
+        for group in self.groups:
+            weights = self.weights[group][:, None]
+            a, b = weights * self.reachable[group], self.weights[group] * wrench[group]
+            if not kept:
+                thrusts = lsq_linear(a, b, bounds=(self.lower, self.upper), method="bvls", tol=1e-12).x
+            else:
+                thrusts = self._qp(a.T @ a, -a.T @ b, self.reachable[kept], self.reachable[kept] @ thrusts, thrusts)
+            thrusts = np.clip(thrusts, self.lower, self.upper)
+            kept += list(group)
+        return thrusts
+
+    def _least_norm(self, thrusts):
+        rows = self.reachable[self._rows]
+        singular = np.linalg.svd(rows, compute_uv=False)
+        if self.n <= int(np.sum(singular > 1e-6 * singular[0])):
+            return thrusts
+        return np.clip(self._qp(np.eye(self.n), np.zeros(self.n), rows, rows @ thrusts, thrusts), self.lower,
+                       self.upper)
+
+    def _qp(self, p, q, a, b, start):
+        import daqp
+
+        a, b = independent_rows(a, b)
+        n, equalities = self.n, a.shape[0]
+        upper, lower = np.empty(n + equalities), np.full(n + equalities, -1e30)
+        upper[:n], lower[:n], upper[n:] = self.upper, self.lower, b
+        sense = np.zeros(n + equalities, dtype=c_int)
+        sense[n:] = 5
+        solution, _, exitflag, _ = daqp.solve(p, q, a if equalities else np.zeros((0, n)), upper, lower, sense,
+                                              primal_start=None, eps_prox=1e-6)
+        return start if exitflag <= 0 or not np.all(np.isfinite(solution)) else solution
+
+
+@pytest.mark.parametrize("priorities, weights", [(None, None), ([("z", "roll", "pitch", "yaw"), ("x", "y")], None),
+                                                 ([("x", "y", "z"), ("roll", "pitch", "yaw")], [1, 2, 1, 5, 5, 3])])
+def test_the_prepared_bounded_stages_give_the_per_call_numbers_bit_for_bit(vehicle, priorities, weights):
+    """The bounded stages read arrays prepared at their first call (each group's weighted rows and QP, the kept rows'
+    independent form, DAQP's bounds) and take lsq_linear's unbounded step when it lies within the bounds: every
+    result equals the one of those computed at each call, the first group in and out of the bounds."""
+    matrix, lower, upper = vehicle
+    options = dict(priorities=priorities, weights=None if weights is None else np.array(weights, dtype=float))
+    prepared, per_call = ThrustAllocator(matrix, lower, upper, **options), PerCall(matrix, lower, upper, **options)
+    rng = np.random.default_rng(11)
+    bounded, first_outside = 0, 0
+    for trial in range(60):
+        wrench = rng.normal(size=6) * np.array([300.0, 300.0, 300.0, 30.0, 30.0, 30.0]) * (1 + trial % 4)
+        result, expected = prepared.allocate(wrench), per_call.allocate(wrench)
+        for name in ("thrusts", "achieved_wrench", "residual", "saturated"):
+            assert getattr(result, name).tobytes() == getattr(expected, name).tobytes(), name
+        assert (result.attainable, result.solver) == (expected.attainable, expected.solver)
+        bounded += result.solver == "bounded"
+        stage = prepared._bounded.stages[0] if prepared._bounded is not None else None
+        if stage is not None and result.solver == "bounded":
+            unbounded = np.linalg.lstsq(stage.matrix, stage.weights * wrench[stage.group], rcond=-1)[0]
+            first_outside += not np.all((unbounded >= lower) & (unbounded <= upper))
+    assert bounded > 20 and first_outside > 5
+    problem = prepared._bounded  # DAQP and the stages left the prepared arrays as they were made
+    again = ThrustAllocator(matrix, lower, upper, **options)._prepare()
+    for mine, fresh in zip(problem.stages, again.stages):
+        for name in ("weights", "matrix", "hessian", "negated"):
+            assert np.array_equal(getattr(mine, name), getattr(fresh, name)) or getattr(mine, name) is None
+    for rows in [problem.rows] + [stage.kept for stage in problem.stages]:
+        if rows is not None:
+            assert np.array_equal(rows.upper[:len(lower)], upper) and np.array_equal(rows.lower[:len(lower)], lower)
+            assert np.all(rows.sense[len(lower):] == 5) and np.all(rows.sense[:len(lower)] == 0)
+    assert np.array_equal(problem.identity, np.eye(len(lower))) and not problem.zeros.any()

@@ -153,10 +153,28 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     """
     mass, bias = plant._mass_and_bias(q, v)
     nb = plant.nb
+    placement = plant._base_placement
+    if nb == 6:  # one compiled call, these expressions' numbers (:func:`uvms.numerics._kernels.vehicle.vehicle_wrench`)
+        kernel = _VEHICLE_WRENCH if _VEHICLE_WRENCH is not None else _vehicle_wrench()
+        return kernel(mass, bias, np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float),
+                      placement.rotation, placement.translation)
     generalized = mass[:nb, :nb] @ base_acceleration + mass[:nb, nb:] @ arm_acceleration + bias[:nb]
     if nb == 3:  # planar: the joint's (fx, fy, mz) rows
         generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
-    return plant._base_placement.actInv(pin.Force(generalized)).vector
+    return placement.actInv(pin.Force(generalized)).vector
+
+
+#: The compiled vehicle rows, bound at the first call (:func:`_vehicle_wrench`).
+_VEHICLE_WRENCH = None
+
+
+def _vehicle_wrench() -> Callable[..., np.ndarray]:
+    """Bind :func:`uvms.numerics._kernels.vehicle.vehicle_wrench` (numba: loaded at the first call, not by
+    ``import uvms``; later calls skip the import)."""
+    global _VEHICLE_WRENCH
+    from ...numerics._kernels.vehicle import vehicle_wrench
+    _VEHICLE_WRENCH = vehicle_wrench
+    return vehicle_wrench
 
 
 def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: float | np.ndarray) -> np.ndarray:

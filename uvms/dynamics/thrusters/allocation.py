@@ -24,7 +24,7 @@ to produce a newton of it, and no least-norm step runs (the matrix looks square 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from ctypes import c_int
 from dataclasses import dataclass
 
@@ -124,6 +124,16 @@ class ThrustAllocator:
         self._rows = sorted(row for group in self.groups for row in group)
         self._all_rows = len(self._rows) == 6
         self._plain = len(self.groups) == 1 and bool(np.all(self.weights == self.weights[0]))
+        self._kernel: Callable[..., tuple] | None = None  # the compiled pseudo-inverse step, loaded at first use
+        self._bounded: BoundedProblem | None = None  # the bounded stages' fixed arrays, made at their first use
+
+    def _load_kernel(self) -> Callable[..., tuple]:
+        """The compiled pseudo-inverse step (:func:`uvms.numerics._kernels.allocation.pseudo_inverse_thrusts`;
+        numba loaded here, at the first allocation)."""
+        from ...numerics._kernels.allocation import pseudo_inverse_thrusts
+
+        self._kernel = pseudo_inverse_thrusts
+        return pseudo_inverse_thrusts
 
     @property
     def n(self) -> int:
@@ -169,54 +179,63 @@ class ThrustAllocator:
             SolverInputError: a wrench that is not 6 finite numbers.
             UVMSError: the QP solver failed (it should not: every stage is feasible by construction).
         """
-        wrench = _wrench(wrench)
         if self._all_rows:
             # the least-squares optimum of least norm on the reachable directions (B_r B_r^+ is the projection on
-            # them); within the bounds it is the answer, exact unless tau has an unreachable part
-            thrusts = self.inverse @ wrench
-            slack = self.tolerance
-            low, high = self._inside
-            if (thrusts >= low).all() and (thrusts <= high).all():
-                thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # the slack, never beyond
-                achieved = self.matrix @ thrusts
-                residual = wrench - achieved
-                exact = np.abs(residual).max() <= 10 * slack * max(1.0, np.abs(wrench).max())
-                # short of tau (an unreachable part), the plain least squares is the answer only when no priority
-                # or weight orders the axes; else the lexicographic stages trade the part off by them
-                if exact or self._plain:
-                    return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact),
-                                            "pinv")
+            # them); within the bounds it is the answer, exact unless tau has an unreachable part. One compiled
+            # call (:func:`uvms.numerics._kernels.allocation.pseudo_inverse_thrusts`: numpy's numbers)
+            if not (wrench.__class__ is np.ndarray and wrench.shape == (6,) and wrench.dtype == float
+                    and wrench.flags.c_contiguous):
+                wrench = np.ascontiguousarray(_wrench(wrench))
+            kernel = self._kernel if self._kernel is not None else self._load_kernel()
+            finite, within, exact, thrusts, achieved, residual = kernel(
+                self.inverse, self.matrix, wrench, *self._inside, self.lower, self.upper, self.tolerance)
+            if not finite:
+                _wrench(wrench)  # raises: a wrench entry is not finite
+            # short of tau (an unreachable part), the plain least squares is the answer only when no priority
+            # or weight orders the axes; else the lexicographic stages trade the part off by them
+            if within and (exact or self._plain):
+                return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact), "pinv")
+        else:
+            wrench = _wrench(wrench)
         return self._result(self._least_norm(self._lexicographic(wrench)), wrench, "bounded")
 
     # ------------------------------------------------------------------ the bounded stages
     def _lexicographic(self, wrench: np.ndarray) -> np.ndarray:
         """Thrusts minimizing each priority group's weighted residual in turn, keeping the groups above."""
-        kept: list[int] = []
+        problem = self._bounded if self._bounded is not None else self._prepare()
         thrusts = None
-        for group in self.groups:
-            weights = self.weights[group][:, None]
-            a, b = weights * self.reachable[group], self.weights[group] * wrench[group]
-            if not kept:
-                from scipy.optimize import lsq_linear  # when first saturated: scipy.optimize costs 0.2 s to import
-
-                thrusts = lsq_linear(a, b, bounds=(self.lower, self.upper), method="bvls", tol=1e-12).x
-            else:
-                thrusts = self._solve_qp(a.T @ a, -a.T @ b, self.reachable[kept], self.reachable[kept] @ thrusts,
-                                         thrusts)
-            thrusts = np.clip(thrusts, self.lower, self.upper)
-            kept += list(group)
+        for stage in problem.stages:
+            b = stage.weights * wrench[stage.group]
+            if stage.kept is None:  # the first group: bounded least squares
+                thrusts = self._least_squares(stage.matrix, b, problem.ordered)
+            else:  # keep the groups above: B_kept f = B_kept f*
+                thrusts = self._solve_qp(stage.hessian, stage.negated @ b, stage.kept, thrusts)
+            thrusts = np.minimum(np.maximum(thrusts, self.lower), self.upper)  # np.clip's numbers, not its dispatch
         return thrusts
+
+    def _least_squares(self, a: np.ndarray, b: np.ndarray, ordered: bool) -> np.ndarray:
+        """argmin |a f - b| over lower <= f <= upper (scipy's ``lsq_linear``, BVLS). Its first step, the unbounded
+        least squares (``np.linalg.lstsq``), is its answer when within the bounds: taken here without its checks
+        (when the bounds are ordered, which it would refuse otherwise), the same numbers."""
+        if ordered:
+            thrusts = np.linalg.lstsq(a, b, rcond=-1)[0]
+            if np.all((thrusts >= self.lower) & (thrusts <= self.upper)):
+                return thrusts
+        from scipy.optimize import lsq_linear  # when first saturated: scipy.optimize costs 0.2 s to import
+
+        return lsq_linear(a, b, bounds=(self.lower, self.upper), method="bvls", tol=1e-12).x
 
     def _least_norm(self, thrusts: np.ndarray) -> np.ndarray:
         """The thrusts of least norm within bounds giving the same allocated wrench rows as ``thrusts``."""
-        rows = self.reachable[self._rows]
-        if self.n <= _rank(rows):
+        problem = self._bounded if self._bounded is not None else self._prepare()
+        if problem.rows is None:
             return thrusts  # no freedom left: the wrench fixes the thrusts
-        return np.clip(self._solve_qp(np.eye(self.n), np.zeros(self.n), rows, rows @ thrusts, thrusts), self.lower,
-                       self.upper)
+        return np.minimum(np.maximum(self._solve_qp(problem.identity, problem.zeros, problem.rows, thrusts),
+                                     self.lower), self.upper)
 
-    def _solve_qp(self, p: np.ndarray, q: np.ndarray, a: np.ndarray, b: np.ndarray, start: np.ndarray) -> np.ndarray:
-        """min 1/2 x^T P x + q^T x s.t. A x = b, bounds, by DAQP; ``start`` is feasible, and kept if DAQP fails.
+    def _solve_qp(self, p: np.ndarray, q: np.ndarray, rows: Equalities, thrusts: np.ndarray) -> np.ndarray:
+        """min 1/2 x^T P x + q^T x s.t. A x = A f (``rows``, f = ``thrusts``), bounds, by DAQP; f is feasible, and
+        kept if DAQP fails.
 
         DAQP's own API, given the arrays ``qpsolvers.solve_qp(..., solver="daqp")`` builds for it (the bounds, then
         the equality rows with sense 5): the same numbers without its problem object and checks at every call.
@@ -225,17 +244,31 @@ class ThrustAllocator:
 
         # P is only semi-definite (fewer wrench rows than thrusters): DAQP's proximal-point iterations
         # (eps_prox > 0) solve such a QP exactly, where a regularization of P would move the optimum
-        a, b = _independent_rows(a, b)
-        n, equalities = self.n, a.shape[0]
-        upper, lower = np.empty(n + equalities), np.full(n + equalities, -1e30)
-        upper[:n], lower[:n], upper[n:] = self.upper, self.lower, b
-        sense = np.zeros(n + equalities, dtype=c_int)
-        sense[n:] = 5  # equality rows
-        rows = a if equalities else np.zeros((0, n))
-        solution, _, exitflag, _ = daqp.solve(p, q, rows, upper, lower, sense, primal_start=None, eps_prox=1e-6)
+        upper = rows.upper.copy()
+        upper[self.n:] = (rows.left @ (rows.matrix @ thrusts)) / rows.singular  # A x = b on the independent rows
+        solution, _, exitflag, _ = daqp.solve(p, q, rows.independent, upper, rows.lower, rows.sense, primal_start=None,
+                                              eps_prox=1e-6)
         if exitflag <= 0 or not np.all(np.isfinite(solution)):
-            return start  # the previous stage's thrusts satisfy every constraint
+            return thrusts  # the previous stage's thrusts satisfy every constraint
         return solution
+
+    def _prepare(self) -> BoundedProblem:
+        """The bounded stages' arrays that do not change from call to call (B, the bounds, priorities and weights
+        are fixed), made at the first bounded allocation."""
+        stages, kept = [], []
+        for group in self.groups:
+            weights = self.weights[group]
+            a = weights[:, None] * self.reachable[group]
+            if not kept:
+                stages.append(Stage(group, weights, a, None, None, None))
+            else:
+                stages.append(Stage(group, weights, a, a.T @ a, -a.T, Equalities.of(self.reachable[kept], self)))
+            kept += list(group)
+        rows = self.reachable[self._rows]
+        least_norm = None if self.n <= _rank(rows) else Equalities.of(rows, self)
+        self._bounded = BoundedProblem(tuple(stages), least_norm, np.eye(self.n), np.zeros(self.n),
+                                       not bool(np.any(self.lower >= self.upper)))
+        return self._bounded
 
     def _result(self, thrusts: np.ndarray, wrench: np.ndarray, solver: str) -> AllocationResult:
         achieved = self.matrix @ thrusts
@@ -305,9 +338,61 @@ def _reachable(matrix: np.ndarray) -> tuple[np.ndarray, tuple[UnreachableDirecti
     return reachable, tuple(unreachable)
 
 
-def _independent_rows(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Equality rows A x = b reduced to an independent set (DAQP refuses dependent equalities)."""
-    u, singular, vt = np.linalg.svd(a, full_matrices=False)
-    rank = int(np.sum(singular > 1e-10 * max(1.0, singular[0] if singular.size else 0.0)))
-    # A = U S V^T, so A x = b (consistent) <=> V_r^T x = S_r^-1 U_r^T b on the rank rows
-    return vt[:rank], (u[:, :rank].T @ b) / singular[:rank]
+@dataclass(frozen=True)
+class Equalities:
+    """Equality rows A x = A f of a bounded stage, A (m, n) fixed, prepared once for DAQP (which refuses dependent
+    rows): A = U S V^T, so A x = b (consistent) <=> V_r^T x = S_r^-1 U_r^T b on the rank rows (singular values above
+    1e-10 of the largest, at least 1), and DAQP's bound arrays with the equality rows after the thrusts' bounds.
+
+    Attributes:
+        matrix: A (m, n); independent: V_r^T (r, n) (an empty (0, n) when r = 0); left: U_r^T (r, m);
+        singular: S_r (r,); upper, lower: (n + r,) the thrusts' bounds [N], then the rows' places (the upper ones
+        filled per call, the lower ones -1e30); sense: (n + r,) DAQP's senses (5: an equality row).
+    """
+
+    matrix: np.ndarray
+    independent: np.ndarray
+    left: np.ndarray
+    singular: np.ndarray
+    upper: np.ndarray
+    lower: np.ndarray
+    sense: np.ndarray
+
+    @classmethod
+    def of(cls, matrix: np.ndarray, allocator: ThrustAllocator) -> Equalities:
+        u, singular, vt = np.linalg.svd(matrix, full_matrices=False)
+        rank = int(np.sum(singular > 1e-10 * max(1.0, singular[0] if singular.size else 0.0)))
+        n = allocator.n
+        upper, lower = np.empty(n + rank), np.full(n + rank, -1e30)
+        upper[:n], lower[:n] = allocator.upper, allocator.lower
+        sense = np.zeros(n + rank, dtype=c_int)
+        sense[n:] = 5  # equality rows
+        return cls(matrix, vt[:rank] if rank else np.zeros((0, n)), u[:, :rank].T, singular[:rank], upper, lower,
+                   sense)
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One priority group's least squares |W_g (B_g f - tau_g)|, its arrays fixed: the wrench rows, W_g (k,),
+    W_g B_g (k, n); its QP's P = (W_g B_g)^T W_g B_g (n, n), -(W_g B_g)^T (n, k) and the groups above it kept
+    (:class:`Equalities`), the three None for the first group (a bounded least squares)."""
+
+    group: list[int]
+    weights: np.ndarray
+    matrix: np.ndarray
+    hessian: np.ndarray | None
+    negated: np.ndarray | None
+    kept: Equalities | None
+
+
+@dataclass(frozen=True)
+class BoundedProblem:
+    """What the bounded stages of one ThrustAllocator read at every call: its :class:`Stage` s, the least-norm
+    stage's rows (None: no freedom left), its P = I (n, n) and q = 0 (n,), and whether lower < upper everywhere
+    (``lsq_linear`` refuses otherwise)."""
+
+    stages: tuple[Stage, ...]
+    rows: Equalities | None
+    identity: np.ndarray
+    zeros: np.ndarray
+    ordered: bool
