@@ -11,10 +11,10 @@ Cholesky/DLS solve), :mod:`.weighted` (the weighted inverse), :mod:`.icat` (the 
 :mod:`.qr` (the pivoted QR triangle, the few rows with a matrix's Gram matrix), :mod:`.clik` (the CLIK's
 solution and joint-limit motion), :mod:`.pose` (pose errors, the pose DLS step), :mod:`.activation` (objectives'
 bells), :mod:`.boxes` (position and velocity boxes, saturation scaling), :mod:`.distance` (the distance Jacobian
-of collision pairs), :mod:`.hydro` (the plant's hydrodynamic terms, every link in one pass), :mod:`.plant_stage` (a plant
-evaluation's terms, accelerations, the thrusters' wrench and lag, and the actuation series after the loop),
-:mod:`.runge_kutta` (an RK4 step's vector arithmetic), :mod:`.allocation` (the thrust allocation's pseudo-inverse
-step), :mod:`.vehicle` (the vehicle loops' vector arithmetic).
+of collision pairs), :mod:`.hydro` (the plant's hydrodynamic terms, every link in one pass), :mod:`.plant_stage`
+(a plant evaluation's terms, accelerations, the thrusters' wrench and lag, and the actuation series after the
+loop), :mod:`.runge_kutta` (an RK4 step's vector arithmetic), :mod:`.allocation` (the thrust allocation's
+pseudo-inverse step), :mod:`.vehicle` (the vehicle loops' vector arithmetic).
 
 Import a kernel from its module; this package imports nothing, so ``import uvms`` never loads numba.
 
