@@ -67,15 +67,15 @@ from ...robot.configuration import Configuration
 from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
-from . import conserved
 from .added_mass import LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
 from .command import Controller
+from .conserved import ConservedQuantities
 from .data_views import JointArrays
 from .settings import PlantSettings
 from .system import PlantDynamics, PlantSystem
 
 
-class Plant:
+class Plant(ConservedQuantities):
     """Free-floating UVMS dynamics with Fossen hydrodynamics and first-order joint motors.
 
     Args:
@@ -385,13 +385,3 @@ class Plant:
         state = Configuration(self.robot, q)
         split = mass_matrix_split(self.mass_matrix(state.q), self.nb)
         return generalized_jacobian_from_parts(state.jacobian(self.robot.frame_id(frame)), *split, self.nb)
-
-    # ------------------------------------------------------- conserved things
-    def energy(self, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:
-        """(kinetic, potential) energy [J] (:func:`uvms.dynamics.plant.conserved.energy`)."""
-        return conserved.energy(self, q, v)
-
-    def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Spatial momentum (6,) of the whole system, world frame, about the world origin [N s, N m s]
-        (:func:`uvms.dynamics.plant.conserved.momentum`)."""
-        return conserved.momentum(self, q, v)
