@@ -25,6 +25,7 @@ import numpy as np
 from numba import njit
 
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
+from .pose import inverse_action_into
 
 __all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
            "motor_torques_into", "plant_constants", "terms_into", "thrusters_into"]
@@ -242,23 +243,17 @@ def _numpy_sum(values: np.ndarray) -> float:
 def _base_twist_into(v: np.ndarray, nb: int, rotation: np.ndarray, translation: np.ndarray,
                      twist: np.ndarray) -> None:
     """The vehicle's body twist (6,) in its base frame from the velocity v (nv,) into ``twist``:
-    ``base_placement.actInv(pin.Motion(...))`` as Pinocchio computes it (R^T (v - p x w), R^T w, each entry
-    (R0i a0 + R1i a1) + R2i a2), the same bits; a planar vehicle's (vx, vy, wz) as the motion (vx, vy, 0, 0, 0, wz).
+    ``base_placement.actInv(pin.Motion(...))`` as Pinocchio computes it (:func:`~.pose.inverse_action_into`), the
+    same bits; a planar vehicle's (vx, vy, wz) as the motion (vx, vy, 0, 0, 0, wz).
 
     Args:
         rotation (3, 3), translation (3,) [m]: the base frame in the vehicle joint's frame (joint_M_base).
     """
     if nb == 6:
-        l0, l1, l2, w0, w1, w2 = v[0], v[1], v[2], v[3], v[4], v[5]
-    else:
-        l0, l1, l2, w0, w1, w2 = v[0], v[1], 0.0, 0.0, 0.0, v[2]
-    p0, p1, p2 = translation[0], translation[1], translation[2]
-    d0 = l0 - (p1 * w2 - p2 * w1)
-    d1 = l1 - (p2 * w0 - p0 * w2)
-    d2 = l2 - (p0 * w1 - p1 * w0)
-    for i in range(3):
-        twist[i] = (rotation[0, i] * d0 + rotation[1, i] * d1) + rotation[2, i] * d2
-        twist[3 + i] = (rotation[0, i] * w0 + rotation[1, i] * w1) + rotation[2, i] * w2
+        inverse_action_into(rotation, translation, v[:3], v[3:6], twist, 0, 3)
+    else:  # the planar motion (vx, vy, 0; 0, 0, wz)
+        inverse_action_into(rotation, translation, np.array([v[0], v[1], 0.0]), np.array([0.0, 0.0, v[2]]), twist,
+                            0, 3)
 
 
 @njit(cache=True)

@@ -1,7 +1,7 @@
 """Pose errors of a frame task: the Newton steps of ``uvms.solvers.ik`` and the rows of a prepared CLIK step.
 
 The rotation R_d R^T whose log3 is the orientation error, the norm of the pose error e = [p_d - p; log3(R_d R^T)],
-Pinocchio's log3 and matrixToRpy themselves (ports, operation by operation) and a frame task's rows (its
+Pinocchio's log3, matrixToRpy and SE3.actInv themselves (ports, operation by operation) and a frame task's rows (its
 Jacobian and its error, log or Euler) from the joint kinematics Pinocchio computed (``uvms.solvers.clik``).
 
 The module imports numba, so it is loaded where a solver first uses it, not by ``import uvms``; its kernels
@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["frame_rows_into", "log3_into", "matrix_to_rpy", "pose_error_norm", "rotation_to_target"]
+__all__ = ["frame_rows_into", "inverse_action_into", "log3_into", "matrix_to_rpy", "pose_error_norm",
+           "rotation_to_target"]
 
 EPSILON = np.finfo(np.float64).eps
 #: Pinocchio's TaylorSeriesExpansion<double>::precision<2>(): eps^(1/3), where log3 switches to its expansions.
@@ -211,3 +212,22 @@ def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
                 jacobian[index, col] = (rate[0] * wx + rate[1] * wy) + rate[2] * wz
             else:
                 jacobian[index, col] = joint_jacobians[row, col]
+
+
+@njit(cache=True)
+def inverse_action_into(rotation: np.ndarray, translation: np.ndarray, first: np.ndarray, second: np.ndarray,
+                        out: np.ndarray, at_first: int, at_second: int) -> None:
+    """out[at_first:+3] = R^T (first - p x second), out[at_second:+3] = R^T second: Pinocchio's ``SE3.actInv`` of a
+    motion (first = v, second = w: at 0 and 3) or a force (first = n, second = f: at 3 and 0), each entry's sums in
+    Eigen's order (its numbers, signed zeros included).
+
+    Args:
+        rotation: R (3, 3) and translation: p (3,) of the placement; first, second: (3,) each; out: (6,).
+    """
+    cross0 = translation[1] * second[2] - translation[2] * second[1]
+    cross1 = translation[2] * second[0] - translation[0] * second[2]
+    cross2 = translation[0] * second[1] - translation[1] * second[0]
+    d0, d1, d2 = first[0] - cross0, first[1] - cross1, first[2] - cross2
+    for i in range(3):
+        out[at_first + i] = (rotation[0, i] * d0 + rotation[1, i] * d1) + rotation[2, i] * d2
+        out[at_second + i] = (rotation[0, i] * second[0] + rotation[1, i] * second[1]) + rotation[2, i] * second[2]

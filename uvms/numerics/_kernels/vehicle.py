@@ -17,27 +17,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .pose import inverse_action_into
+
 __all__ = ["base_reference", "disturbance_update", "observer_inputs", "station_errors", "vehicle_wrench",
            "velocity_wrench"]
-
-
-@njit(cache=True)
-def inverse_action_into(rotation: np.ndarray, translation: np.ndarray, first: np.ndarray, second: np.ndarray,
-                        out: np.ndarray, at_first: int, at_second: int) -> None:
-    """out[at_first:+3] = R^T (first - p x second), out[at_second:+3] = R^T second: Pinocchio's ``SE3.actInv`` of a
-    motion (first = v, second = w: at 0 and 3) or a force (first = n, second = f: at 3 and 0), each entry's sums in
-    Eigen's order (its numbers, signed zeros included).
-
-    Args:
-        rotation: R (3, 3) and translation: p (3,) of the placement; first, second: (3,) each; out: (6,).
-    """
-    cross0 = translation[1] * second[2] - translation[2] * second[1]
-    cross1 = translation[2] * second[0] - translation[0] * second[2]
-    cross2 = translation[0] * second[1] - translation[1] * second[0]
-    d0, d1, d2 = first[0] - cross0, first[1] - cross1, first[2] - cross2
-    for i in range(3):
-        out[at_first + i] = (rotation[0, i] * d0 + rotation[1, i] * d1) + rotation[2, i] * d2
-        out[at_second + i] = (rotation[0, i] * second[0] + rotation[1, i] * second[1]) + rotation[2, i] * second[2]
 
 
 @njit(cache=True)
