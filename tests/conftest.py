@@ -168,6 +168,15 @@ def run_beside_clik(folder: Path, *selected: str) -> tuple[dict, dict]:
     return tuple(json.loads((folder / name / "metrics.json").read_text()) for name in ("clik", "new"))
 
 
+def assert_tracks_like_clik(new: dict, clik: dict, *, error: float, rel: float, also: tuple[str, ...] = ()) -> None:
+    """The metrics of :func:`run_beside_clik`: the circle tracked (CLIK here: 1.8e-10 m), the largest error CLIK's
+    within ``error`` [m], the travels (and the metrics ``also``) CLIK's within ``rel``."""
+    assert new["max_position_error"] < 1e-9
+    assert new["max_position_error"] == pytest.approx(clik["max_position_error"], rel=0, abs=error)
+    for name in ("arm_travel", "vehicle_travel", *also):
+        assert new[name] == pytest.approx(clik[name], rel=rel), name
+
+
 def xiang_eq6(theta: np.ndarray) -> pin.SE3:
     """0T5 of xiang2019 eq. 6, lengths converted from mm to m."""
     t1, t2, t3, t4 = theta

@@ -23,7 +23,7 @@ from uvms.scenario import read_scenario
 from uvms.scenario.controllers import CONTROLLERS, Parts, Setup
 from uvms.scenario.spec import ScenarioSpec
 
-from conftest import SCENARIOS, run_beside_clik
+from conftest import SCENARIOS, assert_tracks_like_clik, run_beside_clik
 
 
 class PseudoInverseTracking:
@@ -57,11 +57,7 @@ def registered(monkeypatch):
 
 def test_a_registered_controller_runs_a_scenario_like_clik(registered, tmp_path):
     clik, new = run_beside_clik(tmp_path, "controller.type=pinv_tracking")  # CLIK without its null-space term
-    assert new["max_position_error"] < 1e-9  # the circle is tracked (CLIK here: 1.8e-10 m)
-    assert new["max_position_error"] == pytest.approx(clik["max_position_error"], rel=0, abs=1e-12)
-    assert new["arm_travel"] == pytest.approx(clik["arm_travel"], rel=1e-9)
-    assert new["vehicle_travel"] == pytest.approx(clik["vehicle_travel"], rel=1e-9)
-    assert new["min_sigma_min"] == pytest.approx(clik["min_sigma_min"], rel=1e-9)
+    assert_tracks_like_clik(new, clik, error=1e-12, rel=1e-9, also=("min_sigma_min",))
 
 
 def test_an_unregistered_controller_is_refused_with_the_valid_types(tmp_path, capsys):

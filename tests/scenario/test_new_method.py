@@ -18,7 +18,7 @@ from uvms.solvers.clik import stacked_tasks
 from uvms.solvers.result import SolvedRows
 from uvms.solvers.stack import stacked_terms
 
-from conftest import run_beside_clik
+from conftest import assert_tracks_like_clik, run_beside_clik
 
 
 class PseudoInverseCLIK(Solver):
@@ -44,10 +44,7 @@ def registered(monkeypatch):
 
 def test_a_registered_method_runs_a_scenario_like_clik(registered, tmp_path):
     clik, new = run_beside_clik(tmp_path, "solver.method=pinv_clik")  # CLIK without its null-space term
-    assert new["max_position_error"] < 1e-9  # the circle is tracked (CLIK here: 1.8e-10 m)
-    assert new["max_position_error"] == pytest.approx(clik["max_position_error"], rel=0, abs=1e-14)
-    assert new["arm_travel"] == pytest.approx(clik["arm_travel"], rel=1e-12)
-    assert new["vehicle_travel"] == pytest.approx(clik["vehicle_travel"], rel=1e-12)
+    assert_tracks_like_clik(new, clik, error=1e-14, rel=1e-12)
 
 
 def test_a_key_the_new_method_does_not_take_is_refused_with_what_it_takes(registered, tmp_path, capsys):
