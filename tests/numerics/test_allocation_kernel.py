@@ -27,9 +27,10 @@ def numpy_step(allocator: ThrustAllocator, wrench: np.ndarray) -> tuple | None:
 
 
 def kernel_step(allocator: ThrustAllocator, wrench: np.ndarray) -> tuple | None:
-    finite, within, exact, thrusts, achieved, residual = allocator._load_kernel()(
+    thrusts, achieved, residual = np.empty(allocator.n), np.empty(6), np.empty(6)
+    finite, within, exact = allocator._load_kernel()(
         allocator.inverse, allocator.matrix, wrench, *allocator._inside, allocator.lower, allocator.upper,
-        allocator.tolerance)
+        allocator.tolerance, thrusts, achieved, residual)
     assert finite
     return (thrusts, achieved, residual, exact) if within else None
 
@@ -72,9 +73,9 @@ def test_allocate_refuses_a_wrench_that_is_not_finite_as_before():
     robot = uvms.load("bluerov2_alpha5")
     thrusters = thrusters_of(robot)
     allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper)
-    finite, _, _, _, _, _ = allocator._load_kernel()(
+    finite, _, _ = allocator._load_kernel()(
         allocator.inverse, allocator.matrix, np.array([0.0, np.nan, 0, 0, 0, 0]), *allocator._inside,
-        allocator.lower, allocator.upper, allocator.tolerance)
+        allocator.lower, allocator.upper, allocator.tolerance, np.empty(allocator.n), np.empty(6), np.empty(6))
     assert not finite
     for bad in (np.array([0.0, np.inf, 0, 0, 0, 0]), [0.0, 0.0, np.nan, 0.0, 0.0, 0.0], [1.0, 2.0]):
         with pytest.raises(SolverInputError, match="wrench"):
@@ -83,3 +84,19 @@ def test_allocate_refuses_a_wrench_that_is_not_finite_as_before():
     wide = np.zeros(12)
     wide[::2] = allocation_matrix(robot, thrusters) @ np.full(8, 1.0)
     np.testing.assert_array_equal(allocator.allocate(wide[::2]).thrusts, allocator.allocate(wide[::2].copy()).thrusts)
+
+
+def test_each_allocation_returns_arrays_of_its_own():
+    """The kernel writes into arrays allocate makes per call: a result kept (a record's row) keeps its numbers when
+    the next allocation runs; nothing saturated (read-only, shared) on the pseudo-inverse path."""
+    robot = uvms.load("bluerov2_alpha5")
+    thrusters = thrusters_of(robot)
+    allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper)
+    first = allocator.allocate(allocator.matrix @ np.full(8, 1.0))
+    kept = [first.thrusts.copy(), first.achieved_wrench.copy(), first.residual.copy()]
+    second = allocator.allocate(allocator.matrix @ np.full(8, -2.0))
+    assert first.solver == second.solver == "pinv"
+    for before, after in zip(kept, (first.thrusts, first.achieved_wrench, first.residual)):
+        assert before.tobytes() == after.tobytes()
+    np.testing.assert_allclose(second.achieved_wrench, allocator.matrix @ np.full(8, -2.0), atol=1e-9)
+    assert not first.saturated.any() and not first.saturated.flags.writeable

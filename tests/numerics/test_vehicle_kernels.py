@@ -8,15 +8,18 @@ import pinocchio as pin
 import pytest
 
 import uvms
-from uvms.dynamics.plant.actuated import vehicle_inverse_dynamics
+from uvms.control.vehicle import pose_velocity_reference
+from uvms.dynamics.plant.actuated import lag_command, vehicle_inverse_dynamics
 from uvms.dynamics.plant.plant import Plant
 from uvms.numerics._kernels.vehicle import (
-    base_reference,
-    disturbance_update,
-    observer_inputs,
+    arm_command_into,
+    base_reference_into,
+    disturbance_update_into,
+    observer_inputs_into,
+    pose_reference_into,
     station_errors,
-    vehicle_wrench,
-    velocity_wrench,
+    vehicle_wrench_into,
+    velocity_law_into,
 )
 
 
@@ -35,7 +38,8 @@ def vectors(rng: np.random.Generator, size: int) -> np.ndarray:
 def test_the_observer_inputs_are_numpys(rng):
     for _ in range(500):
         v, v0, dt = vectors(rng, 11), vectors(rng, 11), float(10.0 ** rng.uniform(-4, -1))
-        acceleration, mean = observer_inputs(v, v0, dt)
+        acceleration, mean = np.empty(11), np.empty(11)
+        observer_inputs_into(v, v0, dt, acceleration, mean)
         assert same(acceleration, (v - v0) / dt) and same(mean, 0.5 * (v0 + v))
 
 
@@ -55,8 +59,9 @@ def test_the_disturbance_update_is_numpys_with_and_without_a_shortfall(rng):
         needed, applied0, applied, disturbance = (vectors(rng, 6) for _ in range(4))
         gain = -np.expm1(-0.01 / float(rng.uniform(0.05, 1.0)))
         short = np.zeros(6) if trial % 2 else np.where(rng.random(6) < 0.5, vectors(rng, 6), 0.0)
-        old = numpy_disturbance(needed, applied0, applied, disturbance, gain, short)
-        assert same(disturbance_update(needed, applied0, applied, disturbance, gain, short, bool(short.any())), old)
+        old, new = numpy_disturbance(needed, applied0, applied, disturbance, gain, short), np.empty(6)
+        disturbance_update_into(needed, applied0, applied, disturbance, gain, short, bool(short.any()), new)
+        assert same(new, old)
         winding += int(np.sum(short * -gain * (needed - 0.5 * (applied0 + applied) - disturbance) > 0))
     assert winding > 100  # the back-calculation's branch was taken
 
@@ -69,16 +74,19 @@ def placements(rng: np.random.Generator, count: int):
 
 
 def test_the_velocity_law_is_pinocchios_and_numpys(rng):
-    """nu as base_twist computes it (Pinocchio's SE3.actInv of v's vehicle part), then numpy's PI law."""
+    """nu as base_twist computes it (Pinocchio's SE3.actInv of v's vehicle part), then numpy's PI law and the
+    integral's step."""
     for _, placement, rotation, translation in placements(rng, 3000):
         reference, feedforward, kp, ki, integral, disturbance = (vectors(rng, 6) for _ in range(6))
-        v = vectors(rng, 11)
-        nu, error, wrench = velocity_wrench(reference, v, rotation, translation, feedforward, kp, ki, integral,
-                                            disturbance)
+        v, dt = vectors(rng, 11), float(10.0 ** rng.uniform(-3, -1))
+        nu, error, wrench, integral_next = (np.empty(6) for _ in range(4))
+        velocity_law_into(reference, v, rotation, translation, feedforward, kp, ki, integral, disturbance, dt, nu,
+                          error, wrench, integral_next)
         old_nu = placement.actInv(pin.Motion(v[:6])).vector
         old_error = reference - old_nu
         assert same(nu, old_nu) and same(error, old_error)
         assert same(wrench, feedforward + kp * old_error + ki * integral - disturbance)
+        assert same(integral_next, integral + dt * old_error)
 
 
 def test_the_base_reference_and_its_rate_are_pinocchios_and_numpys_in_place(rng):
@@ -86,8 +94,8 @@ def test_the_base_reference_and_its_rate_are_pinocchios_and_numpys_in_place(rng)
     old = rate.copy()
     for trial, placement, rotation, translation in placements(rng, 2000):
         reference, last, dt = vectors(rng, 11), vectors(rng, 6), float(10.0 ** rng.uniform(-3, -1))
-        filtered = trial % 3 != 0
-        nu_ref = base_reference(reference, rotation, translation, last, rate, dt, 0.1, filtered)
+        filtered, nu_ref = trial % 3 != 0, np.empty(6)
+        base_reference_into(reference, rotation, translation, last, rate, dt, 0.1, filtered, nu_ref)
         old_nu_ref = placement.actInv(pin.Motion(reference[:6])).vector
         assert same(nu_ref, old_nu_ref)
         if filtered:
@@ -98,28 +106,84 @@ def test_the_base_reference_and_its_rate_are_pinocchios_and_numpys_in_place(rng)
 
 def test_the_vehicle_rows_are_numpys_and_pinocchios(rng):
     """vehicle_inverse_dynamics's tail: numpy's products of Mbar's slices, then Pinocchio's SE3.actInv of the joint's
-    force (any placement, the identity of the shipped vehicles included; arms of 0 to 6 joints)."""
+    force (any placement, the identity of the shipped vehicles included; arms of 0 to 6 joints); a base frame's rate
+    mapped to the joint first as the feedforward did, base_placement.act(pin.Motion(rate))."""
+    wrench = np.empty(6)
     for trial, placement, rotation, translation in placements(rng, 4000):
         n_arm = trial % 7
         mass, bias = rng.standard_normal((6 + n_arm, 6 + n_arm)) * 50.0, vectors(rng, 6 + n_arm)
         base, arm = vectors(rng, 6), vectors(rng, n_arm)
-        joint = mass[:6, :6] @ base + mass[:6, 6:] @ arm + bias[:6]
+        base_frame = trial % 4 == 1
+        joint_rate = placement.act(pin.Motion(base)).vector if base_frame else base
+        joint = mass[:6, :6] @ joint_rate + mass[:6, 6:] @ arm + bias[:6]
         old = placement.actInv(pin.Force(joint)).vector
-        assert same(vehicle_wrench(mass, bias, base, arm, rotation, translation), old)
+        vehicle_wrench_into(mass, bias, base, arm, rotation, translation, base_frame, wrench)
+        assert same(wrench, old)
     with pytest.raises(ValueError):
-        vehicle_wrench(mass, bias, base[:3], arm, rotation, translation)
+        vehicle_wrench_into(mass, bias, base[:3], arm, rotation, translation, False, wrench)
 
 
-def test_the_station_errors_are_numpys(rng):
-    """ActuatedKinematics.errors' R^T R_d (Pinocchio's rotations, F-ordered, as the errors read them) and |p_d - p|
-    (numpy's sqrt of x.dot(x))."""
-    for _ in range(3000):
-        pose, target = pin.SE3.Random(), pin.SE3.Random()
-        pose.translation, target.translation = vectors(rng, 3), vectors(rng, 3)
-        relative, distance = station_errors(pose.rotation, pose.translation, target.rotation, target.translation)
-        offset = target.translation - pose.translation
-        assert same(relative, pose.rotation.T @ target.rotation)
+def test_the_station_errors_are_pinocchios_and_numpys(rng):
+    """ActuatedKinematics.errors' numbers before the kernel: the base frame's pose oMi * joint_M_base (Pinocchio's
+    product), |p_d - p| (numpy's sqrt of x.dot(x)) and the norm of Pinocchio's log3 of R^T R_d (numpy's @ of its
+    column-major rotations)."""
+    for trial, placement, _, _ in placements(rng, 3000):
+        joint, target = pin.SE3.Random(), pin.SE3.Random()
+        joint.translation, target.translation = vectors(rng, 3), vectors(rng, 3)
+        if trial % 5 == 0:  # at the station: the attitude error exactly zero
+            target = joint * placement
+        pose = joint * placement
+        distance, attitude = station_errors(joint.rotation, joint.translation, placement.rotation,
+                                            placement.translation, target.rotation, target.translation)
+        offset, log = target.translation - pose.translation, pin.log3(pose.rotation.T @ target.rotation)
         assert distance == np.sqrt(offset.dot(offset)) and type(distance) is float
+        assert attitude == np.sqrt(log.dot(log)) and type(attitude) is float
+
+
+def test_the_pose_reference_is_pinocchios_and_numpys(rng):
+    """VehiclePoseController.reference before the kernel: pose_velocity_reference (numpy's products of Pinocchio's
+    rotations, pin.log3, the gains), then np.minimum(np.maximum(nu, -max_speed), max_speed) (signed zeros and
+    bounds hit exactly included)."""
+    bounded_hits = 0
+    for trial in range(3000):
+        pose, target = pin.SE3.Random(), pin.SE3.Random()
+        pose.translation = vectors(rng, 3)
+        target.translation = pose.translation.copy() if trial % 7 == 0 else vectors(rng, 3)
+        if trial % 5 == 0:
+            target.rotation = pose.rotation  # no attitude error: zeros
+        gains, max_speed, out = np.abs(vectors(rng, 6)), np.abs(vectors(rng, 6)), np.empty(6)
+        old = pose_velocity_reference(pose, target, gains)
+        if trial % 2:
+            max_speed[trial % 6] = abs(old[trial % 6])  # the bound met exactly
+            pose_reference_into(pose.rotation, pose.translation, target.rotation, target.translation, gains,
+                                max_speed, True, out)
+            old = np.minimum(np.maximum(old, -max_speed), max_speed)
+            bounded_hits += int(np.any(np.abs(old) == max_speed))
+        else:
+            pose_reference_into(pose.rotation, pose.translation, target.rotation, target.translation, gains, gains,
+                                False, out)
+        assert same(out, old)
+    assert bounded_hits > 1000
+
+
+def test_the_arm_command_is_numpys_clip_lag_and_acceleration(rng):
+    """CoordinatedControl.command's arm before the kernel: np.minimum(np.maximum(arm, -limit), limit), lag_command
+    with the servo compensation, (command - rate) / tau; a NaN stays NaN (the plant refuses it), never a bound."""
+    tau, dt = 0.1, 0.01
+    lag = float(-np.expm1(-dt / np.asarray(tau)))
+    for trial in range(3000):
+        arm, rate = vectors(rng, 5), vectors(rng, 5)
+        limit = np.abs(vectors(rng, 5)) + 1e-3
+        arm[trial % 5] = -limit[trial % 5] if trial % 2 else limit[trial % 5]  # at the bound exactly
+        compensate = trial % 3 != 0
+        clipped = np.minimum(np.maximum(arm, -limit), limit)
+        old = lag_command(rate, clipped, dt, tau) if compensate else clipped
+        command, acceleration = np.empty(5), np.empty(5)
+        arm_command_into(arm, limit, rate, lag, compensate, tau, command, acceleration)
+        assert same(command, old) and same(acceleration, (old - rate) / tau)
+    arm[1] = np.nan
+    arm_command_into(arm, limit, rate, lag, False, tau, command, acceleration)
+    assert np.isnan(command[1]) and np.isnan(acceleration[1])
 
 
 def test_vehicle_inverse_dynamics_gives_its_numpy_and_pinocchio_numbers_for_arrays_and_lists(rng):
@@ -135,3 +199,5 @@ def test_vehicle_inverse_dynamics_gives_its_numpy_and_pinocchio_numbers_for_arra
         old = plant.base_placement.actInv(pin.Force(mass[:6, :6] @ base + mass[:6, 6:] @ arm + bias[:6])).vector
         assert same(vehicle_inverse_dynamics(plant, q, v, base, arm), old)
         assert same(vehicle_inverse_dynamics(plant, q, v, base.tolist(), arm.tolist()), old)
+        out = np.empty(6)
+        assert vehicle_inverse_dynamics(plant, q, v, base, arm, out=out) is out and same(out, old)

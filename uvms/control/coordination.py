@@ -37,9 +37,9 @@ from typing import Protocol
 
 import numpy as np
 
-from ..dynamics.plant.actuated import base_twist, lag_command
+from ..dynamics.plant.actuated import base_twist, lag_factor
 from ..dynamics.plant.command import Command, State
-from ..dynamics.thrusters.fin_allocation import split_actuators
+from ..dynamics.thrusters.fin_allocation import thruster_count
 from ..errors import SolverInputError
 from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from ..robot.limits import Limit
@@ -206,9 +206,12 @@ class CoordinatedControl:
             else np.full(robot.n_arm, float(max_arm_rate))
         self.acceleration_feedforward = bool(acceleration_feedforward)
         self.servo_compensation = bool(servo_compensation)
-        from ..numerics._kernels.vehicle import base_reference  # numba: loaded with the controller
+        from ..numerics._kernels.vehicle import arm_command_into, base_reference_into  # numba: with the controller
 
-        self._base_reference = base_reference
+        self._base_reference, self._arm_command = base_reference_into, arm_command_into
+        self._arm_acceleration = np.empty(robot.n_arm)  # read within a step only (by the velocity loop)
+        self._lag: tuple[tuple[float, float] | None, float] = (None, 1.0)  # ((dt, tau), lag_factor there)
+        self._thrusters = thruster_count(velocity.allocator)  # an allocation's variables: thrusts, then fin angles
         self._forget()
 
     def _forget(self) -> None:
@@ -247,19 +250,23 @@ class CoordinatedControl:
             bounds = self.vehicle_bounds(nu, self.kinematic.vehicle_objective(q))
         reference, _ = self.kinematic.reference(t, q, bounds)
         arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
-        arm = np.minimum(np.maximum(arm, -self.max_arm_rate), self.max_arm_rate)  # np.clip's numbers, not its dispatch
         self.kinematic.step_done()
+        # the rates clipped to the arm's speed limits, the servos' lag inverted over the step
+        # (:func:`~uvms.dynamics.plant.actuated.lag_command`) and the acceleration the servo the model knows gives
+        # (its feedforward) in one compiled call, numpy's numbers
+        command, tau = np.empty(self.robot.n_arm), model.motor_time_constant
+        self._arm_command(arm, self.max_arm_rate, v[nb:], self._lag_factor(tau), self.servo_compensation, tau,
+                          command, self._arm_acceleration)
         # nu_ref (vehicle joint -> base frame) and the reference's rate over the last step, filtered (in place), in
-        # one compiled call (Pinocchio's and numpy's numbers)
+        # one compiled call (Pinocchio's and numpy's numbers); nu_ref a new array (the row and the next step keep it)
         filtered = self.acceleration_feedforward and self._last_reference is not None
-        nu_ref = self._base_reference(reference, *self._placement, self._last_reference if filtered else self._rate,
-                                      self._rate, self.dt, REFERENCE_RATE_FILTER, filtered)
+        nu_ref = np.empty(6)
+        self._base_reference(reference, *self._placement, self._last_reference if filtered else self._rate,
+                             self._rate, self.dt, REFERENCE_RATE_FILTER, filtered, nu_ref)
         rate = self._rate if filtered else None
         self._last_reference = nu_ref
-        if self.servo_compensation:
-            arm = lag_command(v[nb:], arm, self.dt, model.motor_time_constant)
-        arm_acceleration = (arm - v[nb:]) / model.motor_time_constant  # the servo the model knows
-        control = self.velocity.control(q, v, nu_ref, self.dt, reference_rate=rate, arm_acceleration=arm_acceleration)
+        control = self.velocity.control(q, v, nu_ref, self.dt, reference_rate=rate,
+                                        arm_acceleration=self._arm_acceleration)
         allocation = control.allocation
         self._achieved = allocation.achieved_wrench  # the observer's stand-in for a state without thrusts
         self.ratio = FULL_RATIO if allocation.attainable else achieved_ratio(control.wrench,
@@ -269,8 +276,16 @@ class CoordinatedControl:
                 "attainable": allocation.attainable, "velocity_integral": self.velocity.integral,
                 "disturbance_estimate": self.velocity.disturbance,
                 "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
-        thrusts, fins = split_actuators(self.velocity.allocator, allocation.thrusts)
-        return Command(arm=arm, thrust=thrusts, fins=fins, info=info)
+        actuators, n = allocation.thrusts, self._thrusters
+        return Command(arm=command, thrust=actuators[:n], fins=actuators[n:], info=info)
+
+    def _lag_factor(self, time_constant: float) -> float:
+        """:func:`~uvms.dynamics.plant.actuated.lag_factor` of the control period and the servos' time constant
+        [s], computed again only when one changed."""
+        key = (self.dt, time_constant)
+        if self._lag[0] != key:
+            self._lag = key, float(lag_factor(self.dt, time_constant))
+        return self._lag[1]
 
 
 def achieved_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:

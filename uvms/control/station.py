@@ -269,16 +269,15 @@ class ActuatedKinematics:
         configuration = self._configuration
         if configuration is None or configuration.q is not q:
             configuration = self._at(t, q)  # q: the step's, checked by its reference
-        pose = configuration.joint_pose(1) * self.base_placement  # base_pose's numbers, from the step's kinematics
+        _, translation, rotation = configuration.joint_arrays(1)  # the vehicle joint's placement at the step's q
         ee = configuration.pose(self.task.frame_id).translation.copy()
-        target = self.vehicle_target
-        # R^T R_d and |p_d - p| in one compiled call (numpy's numbers); the norms as numpy's norm of a vector
-        # computes them (sqrt of x.dot(x)), without its dispatch per call
+        target, placement = self.vehicle_target, self.base_placement
+        # the base frame's pose (base_pose's numbers), |p_d - p| and |log3(R^T R_d)| in one compiled call (Pinocchio's
+        # and numpy's numbers; the norms as numpy's norm of a vector computes them, sqrt of x.dot(x))
         kernel = _STATION_ERRORS if _STATION_ERRORS is not None else _station_errors()
-        relative, distance = kernel(pose.rotation, pose.translation, target.rotation, target.translation)
-        attitude_error = pin.log3(relative)  # body axes [rad]
-        row = {"vehicle_position_error": distance,
-               "vehicle_attitude_error": math.sqrt(attitude_error.dot(attitude_error)), "ee_position": ee}
+        distance, attitude = kernel(rotation, translation, placement.rotation, placement.translation, target.rotation,
+                                    target.translation)
+        row = {"vehicle_position_error": distance, "vehicle_attitude_error": attitude, "ee_position": ee}
         if self.task_reference.moving:
             miss = self.task_reference.samples.target(t)[0] - ee  # the target's translation (no sample built)
             row["ee_point_error"] = math.sqrt(miss.dot(miss))

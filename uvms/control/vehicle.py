@@ -152,13 +152,17 @@ class VehicleVelocityController:
         self.disturbance_time_constant = float(gain_vector(settings.disturbance_time_constant,
                                                            "disturbance_time_constant [s]", 1)[0])
         # the loops' vector arithmetic, compiled (numpy's numbers; numba: loaded with the controller)
-        from ..numerics._kernels.vehicle import disturbance_update, observer_inputs, velocity_wrench
+        from ..numerics._kernels.vehicle import disturbance_update_into, observer_inputs_into, velocity_law_into
 
-        self._observer_inputs, self._disturbance_update = observer_inputs, disturbance_update
-        self._velocity_wrench = velocity_wrench
+        self._observer_inputs, self._disturbance_update = observer_inputs_into, disturbance_update_into
+        self._velocity_law = velocity_law_into
         placement = model.base_placement  # joint_M_base, read by the compiled law as arrays
         self._placement = (placement.rotation.copy(), placement.translation.copy())
         self._gain: tuple[tuple[float, float] | None, float] = (None, 0.0)  # ((dt, T), the observer's gain there)
+        # buffers read within one call only (what a record keeps is a new array at every step)
+        self._acceleration, self._mean = np.empty(model.model.nv), np.empty(model.model.nv)  # the observer's inputs
+        self._needed, self._nu = np.empty(6), np.empty(6)  # the model's wrench for them; nu of the last control
+        self._rest = np.zeros(6)  # nu_ref' when none is given (read only)
         self.reset()
 
     def reset(self, station: np.ndarray | None = None) -> None:
@@ -198,11 +202,14 @@ class VehicleVelocityController:
         if last is None or self.disturbance_time_constant <= 0.0:
             return self.disturbance
         v0, applied0 = last
-        acceleration, mean = self._observer_inputs(v, v0, dt)
-        needed = vehicle_inverse_dynamics(self.model, q, mean, acceleration[:6], acceleration[6:])
-        self.disturbance = self._disturbance_update(needed, applied0, self._last[1], self.disturbance,
-                                                    self._observer_gain(dt), self._short, self._falls_short)
-        return self.disturbance
+        acceleration, mean = self._acceleration, self._mean
+        self._observer_inputs(v, v0, dt, acceleration, mean)
+        needed = vehicle_inverse_dynamics(self.model, q, mean, acceleration[:6], acceleration[6:], out=self._needed)
+        disturbance = np.empty(6)  # a new array at every step (a row keeps the last one)
+        self._disturbance_update(needed, applied0, self._last[1], self.disturbance, self._observer_gain(dt),
+                                 self._short, self._falls_short, disturbance)
+        self.disturbance = disturbance
+        return disturbance
 
     def _observer_gain(self, dt: float) -> float:
         """1 - exp(-dt / T) of the step dt [s] (numpy's expm1), computed again only when dt or T changed."""
@@ -225,13 +232,13 @@ class VehicleVelocityController:
 
     def feedforward(self, q: np.ndarray, v: np.ndarray, reference_rate: np.ndarray,
                     arm_acceleration: np.ndarray) -> np.ndarray:
-        """tau_model (6,) [N, N m]: the model's wrench for the vehicle rate ``reference_rate`` (6,), body FLU."""
+        """tau_model (6,) [N, N m]: the model's wrench for the vehicle rate ``reference_rate`` (6,), body FLU (mapped
+        to the vehicle joint's axes in the compiled rows)."""
         model = self.model
-        base_rate = model.base_placement.act(pin.Motion(reference_rate)).vector  # base frame -> vehicle joint
         if not self.arm_feedforward:
             v = np.concatenate([v[:6], np.zeros(model.n_arm)])
             arm_acceleration = np.zeros(model.n_arm)
-        return vehicle_inverse_dynamics(model, q, v, base_rate, arm_acceleration)
+        return vehicle_inverse_dynamics(model, q, v, reference_rate, arm_acceleration, base_frame=True)
 
     def control(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray, dt: float, *,
                 reference_rate: np.ndarray | None = None, arm_acceleration: np.ndarray | None = None) -> VehicleControl:
@@ -248,25 +255,28 @@ class VehicleVelocityController:
             raise SolverInputError(f"control needs nu_ref as 6 numbers [m/s, rad/s] (got {reference!r}), v of the "
                                    f"UVMS (got {v.shape}) and the gains (derived at the station by reset(q0) when "
                                    f"not given)")
-        rate = np.zeros(6) if reference_rate is None else reference_rate
+        rate = self._rest if reference_rate is None else reference_rate
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
         feedforward = self.feedforward(q, v, rate, arm)
-        # nu (base_twist's numbers), the velocity error and the wrench in one compiled call
-        nu, error, wrench = self._velocity_wrench(reference, v, *self._placement, feedforward, self.kp, self.ki,
-                                                  self.integral, self.disturbance)
+        # nu (base_twist's numbers), the velocity error, the wrench and the integral after the step in one compiled
+        # call; what the step returns and a row keeps is new (nu is read by the allocation alone)
+        nu, error, wrench, integral = self._nu, np.empty(6), np.empty(6), np.empty(6)
+        self._velocity_law(reference, v, *self._placement, feedforward, self.kp, self.ki, self.integral,
+                           self.disturbance, dt, nu, error, wrench, integral)
         # the water's velocity moves the fins' lift alone: a thrusters-only allocation does not read it
         current = water_in_base(self.model, q) if isinstance(self.allocator, FinAllocator) else None
         allocation = self.allocator.allocate(wrench, nu, current)
-        self._integrate(error, allocation, dt)
+        self._integrate(error, allocation, dt, integral)
         return VehicleControl(wrench, feedforward, allocation, error)
 
-    def _integrate(self, error: np.ndarray, allocation: AllocationResult, dt: float) -> None:
-        """integral += dt e, except on the axes where the wrench fell short in the direction e pushes. The integral
-        is a new array at every step (a row that holds the last one keeps its numbers)."""
+    def _integrate(self, error: np.ndarray, allocation: AllocationResult, dt: float, integral: np.ndarray) -> None:
+        """integral += dt e (``integral``: the law's integral + dt e), except on the axes where the wrench fell short
+        in the direction e pushes. The integral is a new array at every step (a row that holds the last one keeps its
+        numbers)."""
         if allocation.attainable:
             if self._falls_short:
                 self._short, self._falls_short = np.zeros(6), False
-            self.integral = self.integral + dt * error
+            self.integral = integral
             return
         scale = max(1.0, float(np.max(np.abs(allocation.achieved_wrench))))
         self._short = np.where(np.abs(allocation.residual) > 1e-6 * scale, allocation.residual, 0.0)
@@ -287,10 +297,15 @@ class VehiclePoseController:
         self.velocity = velocity
         self.gains = gain_vector(gains, "pose gains")
         self.max_speed = None if max_speed is None else gain_vector(max_speed, "max_speed")
+        from ..numerics._kernels.vehicle import pose_reference_into  # numba: loaded with the controller
+
+        self._kernel = pose_reference_into
 
     def reference(self, pose: pin.SE3, target: pin.SE3) -> np.ndarray:
-        """nu_ref (6,) [m/s, rad/s] towards ``target`` (bounded by ``max_speed``)."""
-        reference = pose_velocity_reference(pose, target, self.gains)
-        if self.max_speed is None:
-            return reference
-        return np.minimum(np.maximum(reference, -self.max_speed), self.max_speed)  # np.clip's numbers, no dispatch
+        """nu_ref (6,) [m/s, rad/s] towards ``target`` (bounded by ``max_speed``): :func:`pose_velocity_reference`
+        and the bound (``np.minimum(np.maximum(nu, -max_speed), max_speed)``) in one compiled call, their numbers
+        (:func:`uvms.numerics._kernels.vehicle.pose_reference_into`); a new array at every call."""
+        reference, limit = np.empty(6), self.max_speed
+        self._kernel(pose.rotation, pose.translation, target.rotation, target.translation, self.gains,
+                     self.gains if limit is None else limit, limit is not None, reference)
+        return reference

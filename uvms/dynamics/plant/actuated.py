@@ -138,7 +138,8 @@ def water_in_base(plant: Plant, q: np.ndarray) -> np.ndarray:
 
 
 def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
-                             arm_acceleration: np.ndarray) -> np.ndarray:
+                             arm_acceleration: np.ndarray, *, base_frame: bool = False,
+                             out: np.ndarray | None = None) -> np.ndarray:
     """The body wrench (6,) [N, N m] at the base frame that gives the vehicle ``base_acceleration``.
 
     The vehicle rows of the plant's own equations of motion (rigid-body + added-mass inertia, Coriolis,
@@ -149,32 +150,41 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     Args:
         plant: the model (its current, damping, gravity choices apply).
         q: (nq,); v: (nv,) [m/s, rad/s] (vehicle part in the vehicle joint's local axes, as in the plant).
-        base_acceleration: (nb,) vehicle twist rate, same axes as v; arm_acceleration: (n_arm,).
+        base_acceleration: (nb,) vehicle twist rate, same axes as v, or with ``base_frame`` the base frame's (6,)
+            (body FLU at its origin: mapped to the joint's axes as ``base_placement.act(pin.Motion(...))``);
+        arm_acceleration: (n_arm,).
+        out: (6,) written and returned (None: a new array).
     """
     mass, bias = plant._mass_and_bias(q, v)
     nb = plant.nb
     placement = plant._base_placement
-    if nb == 6:  # one compiled call, these expressions' numbers (:func:`uvms.numerics._kernels.vehicle.vehicle_wrench`)
+    wrench = np.empty(6) if out is None else out
+    if nb == 6:  # one compiled call, these expressions' numbers (:func:`~.vehicle.vehicle_wrench_into` of _kernels)
         kernel = _VEHICLE_WRENCH if _VEHICLE_WRENCH is not None else _vehicle_wrench()
-        return kernel(mass, bias, np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float),
-                      placement.rotation, placement.translation)
+        kernel(mass, bias, np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float),
+               placement.rotation, placement.translation, base_frame, wrench)
+        return wrench
+    if base_frame:
+        base_acceleration = placement.act(pin.Motion(np.asarray(base_acceleration, dtype=float))).vector
+        base_acceleration = base_acceleration[[0, 1, 5]] if nb == 3 else base_acceleration
     generalized = mass[:nb, :nb] @ base_acceleration + mass[:nb, nb:] @ arm_acceleration + bias[:nb]
     if nb == 3:  # planar: the joint's (fx, fy, mz) rows
         generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
-    return placement.actInv(pin.Force(generalized)).vector
+    wrench[:] = placement.actInv(pin.Force(generalized)).vector
+    return wrench
 
 
 #: The compiled vehicle rows, bound at the first call (:func:`_vehicle_wrench`).
 _VEHICLE_WRENCH = None
 
 
-def _vehicle_wrench() -> Callable[..., np.ndarray]:
-    """Bind :func:`uvms.numerics._kernels.vehicle.vehicle_wrench` (numba: loaded at the first call, not by
+def _vehicle_wrench() -> Callable[..., None]:
+    """Bind :func:`uvms.numerics._kernels.vehicle.vehicle_wrench_into` (numba: loaded at the first call, not by
     ``import uvms``; later calls skip the import)."""
     global _VEHICLE_WRENCH
-    from ...numerics._kernels.vehicle import vehicle_wrench
-    _VEHICLE_WRENCH = vehicle_wrench
-    return vehicle_wrench
+    from ...numerics._kernels.vehicle import vehicle_wrench_into
+    _VEHICLE_WRENCH = vehicle_wrench_into
+    return vehicle_wrench_into
 
 
 def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: float | np.ndarray) -> np.ndarray:
@@ -190,7 +200,13 @@ def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: 
         rate: x (n,) now; wanted: (n,) at the step's end; dt: the step [s] > 0; time_constant: tau (n,) or a
             number [s] > 0.
     """
-    return rate + (wanted - rate) / -np.expm1(-dt / np.asarray(time_constant, dtype=float))
+    return rate + (wanted - rate) / lag_factor(dt, time_constant)
+
+
+def lag_factor(dt: float, time_constant: float | np.ndarray) -> np.ndarray:
+    """1 - exp(-dt / tau) (numpy's expm1; a number or (n,)): the part of the way to its command a first-order lag
+    x' = (u - x) / tau goes over one step dt [s] (:func:`lag_command` divides by it)."""
+    return -np.expm1(-dt / np.asarray(time_constant, dtype=float))
 
 
 def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> np.ndarray:

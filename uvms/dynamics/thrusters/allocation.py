@@ -125,13 +125,14 @@ class ThrustAllocator:
         self._all_rows = len(self._rows) == 6
         self._plain = len(self.groups) == 1 and bool(np.all(self.weights == self.weights[0]))
         self._kernel: Callable[..., tuple] | None = None  # the compiled pseudo-inverse step, loaded at first use
+        self._none_saturated = np.zeros(n, dtype=bool)  # the pseudo-inverse step's saturated (shared: read only)
+        self._none_saturated.flags.writeable = False
         self._bounded: BoundedProblem | None = None  # the bounded stages' fixed arrays, made at their first use
 
     def _load_kernel(self) -> Callable[..., tuple]:
         """The compiled pseudo-inverse step (:func:`uvms.numerics._kernels.allocation.pseudo_inverse_thrusts`;
         numba loaded here, at the first allocation)."""
         from ...numerics._kernels.allocation import pseudo_inverse_thrusts
-
         self._kernel = pseudo_inverse_thrusts
         return pseudo_inverse_thrusts
 
@@ -187,14 +188,15 @@ class ThrustAllocator:
                     and wrench.flags.c_contiguous):
                 wrench = np.ascontiguousarray(_wrench(wrench))
             kernel = self._kernel if self._kernel is not None else self._load_kernel()
-            finite, within, exact, thrusts, achieved, residual = kernel(
-                self.inverse, self.matrix, wrench, *self._inside, self.lower, self.upper, self.tolerance)
+            thrusts, achieved, residual = np.empty(self.n), np.empty(6), np.empty(6)  # new: a result keeps them
+            finite, within, exact = kernel(self.inverse, self.matrix, wrench, *self._inside, self.lower, self.upper,
+                                           self.tolerance, thrusts, achieved, residual)
             if not finite:
                 _wrench(wrench)  # raises: a wrench entry is not finite
             # short of tau (an unreachable part), the plain least squares is the answer only when no priority
             # or weight orders the axes; else the lexicographic stages trade the part off by them
             if within and (exact or self._plain):
-                return AllocationResult(thrusts, np.zeros(self.n, dtype=bool), achieved, residual, bool(exact), "pinv")
+                return AllocationResult(thrusts, self._none_saturated, achieved, residual, exact, "pinv")
         else:
             wrench = _wrench(wrench)
         return self._result(self._least_norm(self._lexicographic(wrench)), wrench, "bounded")

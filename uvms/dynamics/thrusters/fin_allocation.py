@@ -118,7 +118,7 @@ class FinAllocator:
                 f"rest): {at_speed}")
 
 
-def split_actuators(allocator: ThrustAllocator | FinAllocator, actuators: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(thrusts (n,) [N], fin angles (m,) [rad]) of an allocation's ``thrusts`` (a ThrustAllocator's: no fins)."""
-    n = allocator.thrusters.n if isinstance(allocator, FinAllocator) else allocator.n
-    return actuators[:n], actuators[n:]
+def thruster_count(allocator: ThrustAllocator | FinAllocator) -> int:
+    """The thrusters among an allocation's variables (:attr:`AllocationResult.thrusts`: the thrusts [N] first, then a
+    FinAllocator's fin angles [rad])."""
+    return allocator.thrusters.n if isinstance(allocator, FinAllocator) else allocator.n

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["frame_rows_into", "inverse_action_into", "log3_into", "matrix_to_rpy", "pose_error_norm",
-           "rotation_to_target"]
+__all__ = ["action_into", "compose_into", "frame_rows_into", "inverse_action_into", "log3_into", "matrix_to_rpy",
+           "pose_error_norm", "rotation_to_target", "row_product"]
 
 EPSILON = np.finfo(np.float64).eps
 #: Pinocchio's TaylorSeriesExpansion<double>::precision<2>(): eps^(1/3), where log3 switches to its expansions.
@@ -231,3 +231,51 @@ def inverse_action_into(rotation: np.ndarray, translation: np.ndarray, first: np
     for i in range(3):
         out[at_first + i] = (rotation[0, i] * d0 + rotation[1, i] * d1) + rotation[2, i] * d2
         out[at_second + i] = (rotation[0, i] * second[0] + rotation[1, i] * second[1]) + rotation[2, i] * second[2]
+
+
+
+@njit(cache=True)
+def row_product(matrix: np.ndarray, row: int, x: float, y: float, z: float) -> float:
+    """Row ``row`` of M (3, 3) times [x, y, z] as Eigen's fixed-size product M v sums it (Pinocchio's SE3
+    arithmetic): rows 0 and 1 (one SIMD packet) as (m0 x + m1 y) + m2 z, row 2 (the remainder) as
+    m0 x + (m1 y + m2 z)."""
+    if row < 2:
+        return (matrix[row, 0] * x + matrix[row, 1] * y) + matrix[row, 2] * z
+    return matrix[row, 0] * x + (matrix[row, 1] * y + matrix[row, 2] * z)
+
+
+@njit(cache=True)
+def compose_into(rotation: np.ndarray, translation: np.ndarray, placement_rotation: np.ndarray,
+                 placement_translation: np.ndarray, out_rotation: np.ndarray, out_translation: np.ndarray) -> None:
+    """The pose (R R_p (3, 3), p + R p_p (3,) [m]) of a frame placed at (R_p, p_p) in a frame at (R, p): Pinocchio's
+    SE3 product ``M * M_p``, each entry summed in Eigen's order (:func:`row_product`: its numbers, signed zeros
+    included).
+
+    Args:
+        rotation, translation: R (3, 3) and p (3,); placement_rotation, placement_translation: R_p (3, 3) and
+        p_p (3,); out_rotation: (3, 3) written; out_translation: (3,) written (neither one of the inputs).
+    """
+    for row in range(3):
+        out_translation[row] = translation[row] + row_product(rotation, row, placement_translation[0],
+                                                              placement_translation[1], placement_translation[2])
+        for col in range(3):
+            out_rotation[row, col] = row_product(rotation, row, placement_rotation[0, col],
+                                                 placement_rotation[1, col], placement_rotation[2, col])
+
+
+@njit(cache=True)
+def action_into(rotation: np.ndarray, translation: np.ndarray, linear: np.ndarray, angular: np.ndarray,
+                out: np.ndarray) -> None:
+    """out = [R v + p x (R w); R w] (6,): Pinocchio's ``SE3.act`` of a motion [v; w] (R w, R v, then the cross
+    product added; the products summed in Eigen's order, :func:`row_product`: its numbers, signed zeros included).
+
+    Args:
+        rotation: R (3, 3) and translation: p (3,) of the placement; linear: v (3,); angular: w (3,); out: (6,)
+            written (not one of the inputs).
+    """
+    for i in range(3):
+        out[3 + i] = row_product(rotation, i, angular[0], angular[1], angular[2])
+        out[i] = row_product(rotation, i, linear[0], linear[1], linear[2])
+    out[0] += translation[1] * out[5] - translation[2] * out[4]
+    out[1] += translation[2] * out[3] - translation[0] * out[5]
+    out[2] += translation[0] * out[4] - translation[1] * out[3]
