@@ -199,5 +199,9 @@ def test_vehicle_inverse_dynamics_gives_its_numpy_and_pinocchio_numbers_for_arra
         old = plant.base_placement.actInv(pin.Force(mass[:6, :6] @ base + mass[:6, 6:] @ arm + bias[:6])).vector
         assert same(vehicle_inverse_dynamics(plant, q, v, base, arm), old)
         assert same(vehicle_inverse_dynamics(plant, q, v, base.tolist(), arm.tolist()), old)
-        out = np.empty(6)
+        out, placement = np.empty(6), plant.base_placement
         assert vehicle_inverse_dynamics(plant, q, v, base, arm, out=out) is out and same(out, old)
+        kept = (placement.rotation.copy(), placement.translation.copy())  # C-ordered copies, as the controller keeps
+        assert same(vehicle_inverse_dynamics(plant, q, v, base, arm, placement=kept), old)
+        rate = placement.actInv(pin.Motion(base)).vector  # the base frame's rate whose joint rate is base
+        assert np.allclose(vehicle_inverse_dynamics(plant, q, v, rate, arm, base_frame=True), old, atol=1e-9)

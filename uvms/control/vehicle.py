@@ -204,7 +204,8 @@ class VehicleVelocityController:
         v0, applied0 = last
         acceleration, mean = self._acceleration, self._mean
         self._observer_inputs(v, v0, dt, acceleration, mean)
-        needed = vehicle_inverse_dynamics(self.model, q, mean, acceleration[:6], acceleration[6:], out=self._needed)
+        needed = vehicle_inverse_dynamics(self.model, q, mean, acceleration[:6], acceleration[6:], out=self._needed,
+                                          placement=self._placement)
         disturbance = np.empty(6)  # a new array at every step (a row keeps the last one)
         self._disturbance_update(needed, applied0, self._last[1], self.disturbance, self._observer_gain(dt),
                                  self._short, self._falls_short, disturbance)
@@ -238,7 +239,8 @@ class VehicleVelocityController:
         if not self.arm_feedforward:
             v = np.concatenate([v[:6], np.zeros(model.n_arm)])
             arm_acceleration = np.zeros(model.n_arm)
-        return vehicle_inverse_dynamics(model, q, v, reference_rate, arm_acceleration, base_frame=True)
+        return vehicle_inverse_dynamics(model, q, v, reference_rate, arm_acceleration, base_frame=True,
+                                        placement=self._placement)
 
     def control(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray, dt: float, *,
                 reference_rate: np.ndarray | None = None, arm_acceleration: np.ndarray | None = None) -> VehicleControl:

@@ -138,8 +138,8 @@ def water_in_base(plant: Plant, q: np.ndarray) -> np.ndarray:
 
 
 def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
-                             arm_acceleration: np.ndarray, *, base_frame: bool = False,
-                             out: np.ndarray | None = None) -> np.ndarray:
+                             arm_acceleration: np.ndarray, *, base_frame: bool = False, out: np.ndarray | None = None,
+                             placement: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The body wrench (6,) [N, N m] at the base frame that gives the vehicle ``base_acceleration``.
 
     The vehicle rows of the plant's own equations of motion (rigid-body + added-mass inertia, Coriolis,
@@ -154,16 +154,20 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
             (body FLU at its origin: mapped to the joint's axes as ``base_placement.act(pin.Motion(...))``);
         arm_acceleration: (n_arm,).
         out: (6,) written and returned (None: a new array).
+        placement: the plant's joint_M_base as arrays (rotation (3, 3), translation (3,)), kept by a caller that
+            asks at every step (None: read from the plant).
     """
     mass, bias = plant._mass_and_bias(q, v)
     nb = plant.nb
-    placement = plant._base_placement
     wrench = np.empty(6) if out is None else out
     if nb == 6:  # one compiled call, these expressions' numbers (:func:`~.vehicle.vehicle_wrench_into` of _kernels)
         kernel = _VEHICLE_WRENCH if _VEHICLE_WRENCH is not None else _vehicle_wrench()
+        if placement is None:
+            placement = plant._base_placement.rotation, plant._base_placement.translation
         kernel(mass, bias, np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float),
-               placement.rotation, placement.translation, base_frame, wrench)
+               *placement, base_frame, wrench)
         return wrench
+    placement = plant._base_placement
     if base_frame:
         base_acceleration = placement.act(pin.Motion(np.asarray(base_acceleration, dtype=float))).vector
         base_acceleration = base_acceleration[[0, 1, 5]] if nb == 3 else base_acceleration
