@@ -104,9 +104,10 @@ def pose_velocity_reference(pose: pin.SE3, target: pin.SE3, gains: np.ndarray) -
     return gains * np.concatenate([position_error, attitude_error])
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class VehicleControl:
-    """One output of the vehicle controller.
+    """One output of the vehicle controller (built at every step: plain attribute writes; read it, it is never
+    changed after it is built).
 
     Attributes:
         wrench: tau (6,) [N, N m] asked of the thrusters (body FLU at the base frame).

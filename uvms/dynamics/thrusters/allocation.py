@@ -64,9 +64,9 @@ class UnreachableDirection:
     ratio: float
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class AllocationResult:
-    """What one allocation gives.
+    """What one allocation gives (built at every step: plain attribute writes; read it, it is never changed).
 
     Attributes:
         thrusts: f (n,) [N], within [lower, upper].
