@@ -140,10 +140,17 @@ def test_the_station_errors_are_pinocchios_and_numpys(rng):
         assert attitude == np.sqrt(log.dot(log)) and type(attitude) is float
 
 
+def numpy_pose_reference(pose: pin.SE3, target: pin.SE3, gains: np.ndarray) -> np.ndarray:
+    """pose_velocity_reference before the kernel."""
+    world_to_body = pose.rotation.T
+    position_error = world_to_body @ (target.translation - pose.translation)
+    return gains * np.concatenate([position_error, pin.log3(world_to_body @ target.rotation)])
+
+
 def test_the_pose_reference_is_pinocchios_and_numpys(rng):
-    """VehiclePoseController.reference before the kernel: pose_velocity_reference (numpy's products of Pinocchio's
-    rotations, pin.log3, the gains), then np.minimum(np.maximum(nu, -max_speed), max_speed) (signed zeros and
-    bounds hit exactly included)."""
+    """pose_velocity_reference (and VehiclePoseController.reference through it) before the kernel: numpy's products of
+    Pinocchio's rotations, pin.log3, the gains, then np.minimum(np.maximum(nu, -max_speed), max_speed) (signed zeros
+    and bounds hit exactly included); a number broadcast as before."""
     bounded_hits = 0
     for trial in range(3000):
         pose, target = pin.SE3.Random(), pin.SE3.Random()
@@ -152,18 +159,22 @@ def test_the_pose_reference_is_pinocchios_and_numpys(rng):
         if trial % 5 == 0:
             target.rotation = pose.rotation  # no attitude error: zeros
         gains, max_speed, out = np.abs(vectors(rng, 6)), np.abs(vectors(rng, 6)), np.empty(6)
-        old = pose_velocity_reference(pose, target, gains)
+        old = numpy_pose_reference(pose, target, gains)
         if trial % 2:
             max_speed[trial % 6] = abs(old[trial % 6])  # the bound met exactly
             pose_reference_into(pose.rotation, pose.translation, target.rotation, target.translation, gains,
                                 max_speed, True, out)
+            new = pose_velocity_reference(pose, target, gains, max_speed)
             old = np.minimum(np.maximum(old, -max_speed), max_speed)
             bounded_hits += int(np.any(np.abs(old) == max_speed))
         else:
             pose_reference_into(pose.rotation, pose.translation, target.rotation, target.translation, gains, gains,
                                 False, out)
-        assert same(out, old)
+            new = pose_velocity_reference(pose, target, gains)
+        assert same(out, old) and same(new, old)
     assert bounded_hits > 1000
+    assert same(pose_velocity_reference(pose, target, 0.5, 0.1),
+                np.minimum(np.maximum(numpy_pose_reference(pose, target, 0.5), -0.1), 0.1))
 
 
 def test_the_arm_command_is_numpys_clip_lag_and_acceleration(rng):

@@ -44,6 +44,7 @@ in yaw and +60 % in heave (its larger added mass), and a 1.9 t vehicle gains 100
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -88,20 +89,48 @@ def velocity_gains(inertia: np.ndarray, bandwidth: float | np.ndarray = DEFAULT_
     return 2.0 * zeta * omega * inertia, omega**2 * inertia
 
 
-def pose_velocity_reference(pose: pin.SE3, target: pin.SE3, gains: np.ndarray) -> np.ndarray:
+def pose_velocity_reference(pose: pin.SE3, target: pin.SE3, gains: float | np.ndarray,
+                            max_speed: float | np.ndarray | None = None) -> np.ndarray:
     """Body velocity reference nu_ref (6,) [m/s, rad/s] that moves the base frame ``pose`` to ``target``.
 
     Args:
-        pose: world_M_body now; target: world_M_body wanted; gains: (6,) [1/s] diagonal K_pose.
+        pose: world_M_body now; target: world_M_body wanted; gains: (6,) or a number [1/s], diagonal K_pose;
+        max_speed: (6,) or a number [m/s, rad/s] bound on ``|nu_ref|`` per axis (None: none).
 
     Returns:
-        K_pose [R^T (p_d - p); log3(R^T R_d)]: the position error rotated from world to body axes, the
-        attitude error as a body rotation vector.
+        K_pose [R^T (p_d - p); log3(R^T R_d)]: the position error rotated from world to body axes, the attitude
+        error as a body rotation vector, clipped to +-max_speed (a new array). One compiled call
+        (:func:`uvms.numerics._kernels.vehicle.pose_reference_into`) with the numbers of numpy's
+        ``gains * np.concatenate([R.T @ (p_d - p), pin.log3(R.T @ R_d)])`` and
+        ``np.minimum(np.maximum(nu, -max_speed), max_speed)``.
     """
-    world_to_body = pose.rotation.T
-    position_error = world_to_body @ (target.translation - pose.translation)  # body axes
-    attitude_error = pin.log3(world_to_body @ target.rotation)  # body axes
-    return gains * np.concatenate([position_error, attitude_error])
+    gains = _six(gains)
+    limit = gains if max_speed is None else _six(max_speed)
+    kernel = _POSE_REFERENCE if _POSE_REFERENCE is not None else _pose_reference()
+    reference = np.empty(6)
+    kernel(pose.rotation, pose.translation, target.rotation, target.translation, gains, limit, max_speed is not None,
+           reference)
+    return reference
+
+
+def _six(value: float | np.ndarray) -> np.ndarray:
+    """value as 6 floats (a number broadcast; the controller's own (6,) arrays as they are)."""
+    if value.__class__ is np.ndarray and value.shape == (6,) and value.dtype == float:
+        return value
+    return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), (6,)))
+
+
+#: The compiled pose reference, bound at the first call (:func:`_pose_reference`).
+_POSE_REFERENCE = None
+
+
+def _pose_reference() -> Callable[..., None]:
+    """Bind :func:`uvms.numerics._kernels.vehicle.pose_reference_into` (numba: loaded at the first call, not by
+    ``import uvms``)."""
+    global _POSE_REFERENCE
+    from ..numerics._kernels.vehicle import pose_reference_into
+    _POSE_REFERENCE = pose_reference_into
+    return pose_reference_into
 
 
 @dataclass(slots=True)
@@ -300,15 +329,7 @@ class VehiclePoseController:
         self.velocity = velocity
         self.gains = gain_vector(gains, "pose gains")
         self.max_speed = None if max_speed is None else gain_vector(max_speed, "max_speed")
-        from ..numerics._kernels.vehicle import pose_reference_into  # numba: loaded with the controller
-
-        self._kernel = pose_reference_into
 
     def reference(self, pose: pin.SE3, target: pin.SE3) -> np.ndarray:
-        """nu_ref (6,) [m/s, rad/s] towards ``target`` (bounded by ``max_speed``): :func:`pose_velocity_reference`
-        and the bound (``np.minimum(np.maximum(nu, -max_speed), max_speed)``) in one compiled call, their numbers
-        (:func:`uvms.numerics._kernels.vehicle.pose_reference_into`); a new array at every call."""
-        reference, limit = np.empty(6), self.max_speed
-        self._kernel(pose.rotation, pose.translation, target.rotation, target.translation, self.gains,
-                     self.gains if limit is None else limit, limit is not None, reference)
-        return reference
+        """nu_ref (6,) [m/s, rad/s] towards ``target``, bounded by ``max_speed`` (:func:`pose_velocity_reference`)."""
+        return pose_velocity_reference(pose, target, self.gains, self.max_speed)
