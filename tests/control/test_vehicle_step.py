@@ -55,22 +55,27 @@ def test_the_errors_read_the_steps_kinematics_at_its_q_and_compute_them_at_anoth
         assert np.array_equal(kept[name], kinematic.errors(0.5, first.q.copy())[name]), name
 
 
-def test_each_rows_integral_and_estimate_keep_their_numbers_after_later_steps(setup):
-    """The rows hold the velocity loop's integral and disturbance estimate without a copy: later steps make new
-    arrays, so a row's numbers are those of its step."""
+KEPT = ("velocity_integral", "disturbance_estimate", "wrench_command", "achieved_wrench", "nu_ref", "ee_position")
+
+
+def test_each_rows_arrays_keep_their_numbers_after_later_steps(setup):
+    """The rows and commands hold the loops' arrays without a copy (the integral, the estimate, the wrenches, nu_ref,
+    the arm's and thrusters' commands): the compiled calls write later steps into new arrays, never into a kept one
+    (the buffers they reuse are read within a step only), so a row's numbers are those of its step."""
     controller = setup.actuation.controller
     measured = states(setup, 4, seed=9)
     controller.reset(measured[0], 0.0)
     rows, snapshots = [], []
     for step, state in enumerate(measured):
-        info = controller.command(state, 0.5 + 0.01 * step).info
-        rows.append(info)
-        snapshots.append({name: info[name].copy() for name in ("velocity_integral", "disturbance_estimate")})
-    assert not np.array_equal(snapshots[1]["velocity_integral"], snapshots[-1]["velocity_integral"])
-    assert not np.array_equal(snapshots[2]["disturbance_estimate"], snapshots[-1]["disturbance_estimate"])
-    for info, snapshot in zip(rows, snapshots):
+        command = controller.command(state, 0.5 + 0.01 * step)
+        kept = {**{name: command.info[name] for name in KEPT}, "arm": command.arm, "thrust": command.thrust}
+        rows.append(kept)
+        snapshots.append({name: value.copy() for name, value in kept.items()})
+    for name in snapshots[0]:
+        assert not np.array_equal(snapshots[1][name], snapshots[-1][name]), name  # each moved between the steps
+    for kept, snapshot in zip(rows, snapshots):
         for name, value in snapshot.items():
-            assert np.array_equal(info[name], value), name
+            assert np.array_equal(kept[name], value), name
 
 
 def test_the_full_ratio_is_shared_read_only(setup):
