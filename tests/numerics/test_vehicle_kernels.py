@@ -8,6 +8,7 @@ import pinocchio as pin
 import pytest
 
 import uvms
+from uvms.control.coordination import achieved_ratio
 from uvms.control.vehicle import pose_velocity_reference
 from uvms.dynamics.plant.actuated import lag_command, vehicle_inverse_dynamics
 from uvms.dynamics.plant.plant import Plant
@@ -216,3 +217,24 @@ def test_vehicle_inverse_dynamics_gives_its_numpy_and_pinocchio_numbers_for_arra
         assert same(vehicle_inverse_dynamics(plant, q, v, base, arm, placement=kept), old)
         rate = placement.actInv(pin.Motion(base)).vector  # the base frame's rate whose joint rate is base
         assert np.allclose(vehicle_inverse_dynamics(plant, q, v, rate, arm, base_frame=True), old, atol=1e-9)
+
+
+def numpy_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:
+    """achieved_ratio before the kernel."""
+    scale = max(1.0, float(np.max(np.abs(asked))))
+    short = np.abs(asked - achieved) > tolerance * scale
+    ratio = np.ones(6)
+    ratio[short] = np.clip(achieved[short] / np.where(asked[short] == 0.0, 1.0, asked[short]), 0.0, 1.0)
+    return ratio
+
+
+def test_the_achieved_ratio_is_numpys(rng):
+    """Shortfalls of every sign, a zero asked, achieved exactly 0 or -0 or the asked value (the clip's ties), axes
+    within the tolerance."""
+    for trial in range(3000):
+        asked, achieved = vectors(rng, 6), vectors(rng, 6)
+        achieved[trial % 6] = asked[trial % 6] * (1.0 - 1e-12)  # within the tolerance: 1
+        achieved[(trial + 1) % 6] = -0.0 if trial % 2 else 0.0
+        asked[(trial + 2) % 6] = 0.0
+        assert same(achieved_ratio(asked, achieved), numpy_ratio(asked, achieved))
+        assert same(achieved_ratio(asked, achieved, 1e-3), numpy_ratio(asked, achieved, 1e-3))

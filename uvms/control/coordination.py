@@ -289,9 +289,15 @@ class CoordinatedControl:
 
 
 def achieved_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:
-    """r (6,) = clip(achieved / asked, 0, 1) per wrench axis, 1 where the allocation gave what was asked."""
-    scale = max(1.0, float(np.max(np.abs(asked))))
-    short = np.abs(asked - achieved) > tolerance * scale
-    ratio = np.ones(6)
-    ratio[short] = np.clip(achieved[short] / np.where(asked[short] == 0.0, 1.0, asked[short]), 0.0, 1.0)
+    """r (6,) = clip(achieved / asked, 0, 1) per wrench axis [N, N m], 1 where the allocation gave what was asked
+    (within ``tolerance`` of max(1, |asked|_inf)); a new array, one compiled call
+    (:func:`uvms.numerics._kernels.vehicle.achieved_ratio_into`)."""
+    global _ACHIEVED_RATIO
+    if _ACHIEVED_RATIO is None:  # numba: loaded at the first shortfall
+        from ..numerics._kernels.vehicle import achieved_ratio_into as _ACHIEVED_RATIO
+    ratio = np.empty(6)
+    _ACHIEVED_RATIO(np.asarray(asked, dtype=float), np.asarray(achieved, dtype=float), float(tolerance), ratio)
     return ratio
+
+
+_ACHIEVED_RATIO = None

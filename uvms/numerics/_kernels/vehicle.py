@@ -22,8 +22,8 @@ from numba import njit
 
 from .pose import action_into, compose_into, inverse_action_into, log3_into
 
-__all__ = ["arm_command_into", "base_reference_into", "disturbance_update_into", "observer_inputs_into",
-           "pose_reference_into", "station_errors", "vehicle_wrench_into", "velocity_law_into"]
+__all__ = ["achieved_ratio_into", "arm_command_into", "base_reference_into", "disturbance_update_into",
+           "observer_inputs_into", "pose_reference_into", "station_errors", "vehicle_wrench_into", "velocity_law_into"]
 
 
 @njit(cache=True)
@@ -204,3 +204,25 @@ def station_errors(joint_rotation: np.ndarray, joint_translation: np.ndarray, pl
     attitude = np.empty(3)
     log3_into(np.dot(rotation.T, target_rotation), attitude)
     return np.sqrt(np.dot(offset, offset)), np.sqrt(np.dot(attitude, attitude))
+
+
+@njit(cache=True)
+def achieved_ratio_into(asked: np.ndarray, achieved: np.ndarray, tolerance: float, out: np.ndarray) -> None:
+    """r (6,) = clip(achieved / asked, 0, 1) on the axes where |asked - achieved| > tolerance max(1, |asked|_inf), 1
+    elsewhere, into ``out``: :func:`uvms.control.coordination.achieved_ratio`'s numpy expressions (a zero asked read
+    as 1; ``np.clip`` keeps its argument between equal numbers, unlike ``np.maximum``; NaN kept).
+
+    Args:
+        asked, achieved: the wrenches (6,) [N, N m]; tolerance: relative; out: (6,) written.
+    """
+    largest = 0.0
+    for i in range(6):
+        largest = max(largest, abs(asked[i]))
+    scale = max(1.0, largest)
+    for i in range(6):
+        value = 1.0
+        if abs(asked[i] - achieved[i]) > tolerance * scale:
+            value = achieved[i] / (1.0 if asked[i] == 0.0 else asked[i])
+            value = value if value >= 0.0 or value != value else 0.0  # np.clip keeps its argument between equals
+            value = value if value <= 1.0 or value != value else 1.0  # (a -0 stays -0), NaN kept
+        out[i] = value
