@@ -238,3 +238,15 @@ def test_the_achieved_ratio_is_numpys(rng):
         asked[(trial + 2) % 6] = 0.0
         assert same(achieved_ratio(asked, achieved), numpy_ratio(asked, achieved))
         assert same(achieved_ratio(asked, achieved, 1e-3), numpy_ratio(asked, achieved, 1e-3))
+
+
+def test_a_planar_vehicles_rows_take_a_base_frame_rate_as_its_joint_rate():
+    """A planar base (no compiled rows): the base frame's rate (6,) mapped to the joint's (vx, vy, wz) first."""
+    robot = uvms.load("hoang2011")
+    plant = Plant(robot)
+    q, v = robot.neutral(), np.linspace(0.1, 0.5, robot.nv)
+    rate, arm = np.array([0.3, -0.2, 0.0, 0.0, 0.0, 0.7]), np.ones(robot.n_arm)
+    joint = plant.base_placement.act(pin.Motion(rate)).vector[[0, 1, 5]]
+    wrench = vehicle_inverse_dynamics(plant, q, v, rate, arm, base_frame=True)
+    assert same(wrench, vehicle_inverse_dynamics(plant, q, v, joint, arm))
+    assert wrench[2] == wrench[3] == wrench[4] == 0.0 and abs(wrench[5]) > 1.0

@@ -152,10 +152,8 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
         q: (nq,); v: (nv,) [m/s, rad/s] (vehicle part in the vehicle joint's local axes, as in the plant).
         base_acceleration: (nb,) vehicle twist rate, same axes as v, or with ``base_frame`` the base frame's (6,)
             (body FLU at its origin: mapped to the joint's axes as ``base_placement.act(pin.Motion(...))``);
-        arm_acceleration: (n_arm,).
-        out: (6,) written and returned (None: a new array).
-        placement: the plant's joint_M_base as arrays (rotation (3, 3), translation (3,)), kept by a caller that
-            asks at every step (None: read from the plant).
+        arm_acceleration: (n_arm,); out: (6,) written and returned (None: a new array).
+        placement: the plant's joint_M_base as arrays (R (3, 3), p (3,)) a caller keeps (None: read from the plant).
     """
     mass, bias = plant._mass_and_bias(q, v)
     nb = plant.nb
@@ -168,9 +166,8 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
                *placement, base_frame, wrench)
         return wrench
     placement = plant._base_placement
-    if base_frame:
-        base_acceleration = placement.act(pin.Motion(np.asarray(base_acceleration, dtype=float))).vector
-        base_acceleration = base_acceleration[[0, 1, 5]] if nb == 3 else base_acceleration
+    if base_frame:  # the joint's rate; a planar joint's (vx, vy, wz) of it
+        base_acceleration = placement.act(pin.Motion(np.asarray(base_acceleration, dtype=float))).vector[[0, 1, 5]]
     generalized = mass[:nb, :nb] @ base_acceleration + mass[:nb, nb:] @ arm_acceleration + bias[:nb]
     if nb == 3:  # planar: the joint's (fx, fy, mz) rows
         generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
