@@ -9,7 +9,7 @@ import pytest
 
 import uvms
 from uvms.control.coordination import achieved_ratio
-from uvms.control.vehicle import pose_velocity_reference
+from uvms.control.vehicle import VehiclePoseController, pose_velocity_reference
 from uvms.dynamics.plant.actuated import lag_command, vehicle_inverse_dynamics
 from uvms.dynamics.plant.plant import Plant
 from uvms.numerics._kernels.vehicle import (
@@ -174,8 +174,10 @@ def test_the_pose_reference_is_pinocchios_and_numpys(rng):
             new = pose_velocity_reference(pose, target, gains)
         assert same(out, old) and same(new, old)
     assert bounded_hits > 1000
-    assert same(pose_velocity_reference(pose, target, 0.5, 0.1),
-                np.minimum(np.maximum(numpy_pose_reference(pose, target, 0.5), -0.1), 0.1))
+    expected = np.minimum(np.maximum(numpy_pose_reference(pose, target, 0.5), -0.1), 0.1)
+    assert same(pose_velocity_reference(pose, target, 0.5, 0.1), expected)
+    assert same(VehiclePoseController(None, 0.5, 0.1).reference(pose, target), expected)
+    assert same(VehiclePoseController(None, gains).reference(pose, target), numpy_pose_reference(pose, target, gains))
 
 
 def test_the_arm_command_is_numpys_clip_lag_and_acceleration(rng):

@@ -104,12 +104,15 @@ def pose_velocity_reference(pose: pin.SE3, target: pin.SE3, gains: float | np.nd
         ``gains * np.concatenate([R.T @ (p_d - p), pin.log3(R.T @ R_d)])`` and
         ``np.minimum(np.maximum(nu, -max_speed), max_speed)``.
     """
-    gains = _six(gains)
-    limit = gains if max_speed is None else _six(max_speed)
+    return _pose_reference_of(pose, target, _six(gains), None if max_speed is None else _six(max_speed))
+
+
+def _pose_reference_of(pose: pin.SE3, target: pin.SE3, gains: np.ndarray, max_speed: np.ndarray | None) -> np.ndarray:
+    """:func:`pose_velocity_reference` of gains and max_speed (None: none) given as (6,) float arrays."""
     kernel = _POSE_REFERENCE if _POSE_REFERENCE is not None else _pose_reference()
     reference = np.empty(6)
-    kernel(pose.rotation, pose.translation, target.rotation, target.translation, gains, limit, max_speed is not None,
-           reference)
+    kernel(pose.rotation, pose.translation, target.rotation, target.translation, gains,
+           gains if max_speed is None else max_speed, max_speed is not None, reference)
     return reference
 
 
@@ -332,4 +335,4 @@ class VehiclePoseController:
 
     def reference(self, pose: pin.SE3, target: pin.SE3) -> np.ndarray:
         """nu_ref (6,) [m/s, rad/s] towards ``target``, bounded by ``max_speed`` (:func:`pose_velocity_reference`)."""
-        return pose_velocity_reference(pose, target, self.gains, self.max_speed)
+        return _pose_reference_of(pose, target, self.gains, self.max_speed)  # its gains checked as 6 floats
