@@ -209,6 +209,7 @@ class CoordinatedControl:
         from ..numerics._kernels.vehicle import arm_command_into, base_reference_into  # numba: with the controller
 
         self._base_reference, self._arm_command = base_reference_into, arm_command_into
+        self._sizes = robot.n_vehicle, robot.n_arm  # the model's (its properties cost a call each)
         self._arm_acceleration = np.empty(robot.n_arm)  # read within a step only (by the velocity loop)
         self._lag: tuple[tuple[float, float] | None, float] = (None, 1.0)  # ((dt, tau), lag_factor there)
         self._thrusters = thruster_count(velocity.allocator)  # an allocation's variables: thrusts, then fin angles
@@ -239,7 +240,7 @@ class CoordinatedControl:
         """The arm, thrust and fin commands for the step from the measured (q, v) at t [s]; advances the velocity
         loop's integral."""
         q, v = state.q, state.v
-        nb, model = self.robot.n_vehicle, self.velocity.model
+        (nb, n_arm), model = self._sizes, self.velocity.model
         if self.velocity.disturbance_time_constant > 0.0:  # the last step's mismatch, from what the actuators gave
             applied = self._achieved if state.thrusts is None else \
                 self.velocity.applied_wrench(q, v, state.thrusts, state.fins)
@@ -254,7 +255,7 @@ class CoordinatedControl:
         # the rates clipped to the arm's speed limits, the servos' lag inverted over the step
         # (:func:`~uvms.dynamics.plant.actuated.lag_command`) and the acceleration the servo the model knows gives
         # (its feedforward) in one compiled call, numpy's numbers
-        command, tau = np.empty(self.robot.n_arm), model.motor_time_constant
+        command, tau = np.empty(n_arm), model.motor_time_constant
         self._arm_command(arm, self.max_arm_rate, v[nb:], self._lag_factor(tau), self.servo_compensation, tau,
                           command, self._arm_acceleration)
         # nu_ref (vehicle joint -> base frame) and the reference's rate over the last step, filtered (in place), in
