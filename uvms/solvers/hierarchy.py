@@ -16,6 +16,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -24,7 +25,7 @@ from ..numerics.inverses import SolverInputError
 from ..robot.configuration import Configuration
 from ..robot.kinematics import base_velocity_from_momentum, solve_base_block
 from ..robot.robot import Robot, check_robot
-from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
+from ..tasks.objectives import Inequality, InequalityRows, VelocityLimit
 from ..tasks.task import Task
 from .result import SolvedRows
 from .stack import stacked_terms
@@ -65,25 +66,47 @@ class LevelRows:
         return self.task_error is not None and self.task_error.size > 0
 
 
-@dataclass
 class Hierarchy:
-    """The levels of a problem at one configuration, and how solved columns map to v.
+    """The levels of a problem at one configuration, stacked as the solvers read them, and how solved columns map
+    to v.
+
+    Every level's rows are written into three stacks (:meth:`HierarchyPlan.evaluate`), level after level at the
+    plan's offsets; what one level holds (:attr:`levels`) is read from them as views when first asked for (the
+    diagnostics of a result, the QP hierarchy).
 
     Attributes:
         state: the kinematic state.
-        levels: the levels with rows (levels holding only speed limits are left out).
+        jacobians: (M, nv) every level's world-aligned rows; solved: (M, n) the columns solved (``jacobians`` itself
+            unless free floating: the generalized rows); references: (M,); activations: (M,) in [0, 1].
         speed_limits: the speed limits found in the levels or given.
         joint_limits: the joint-limit objectives (their limits become position-rate bounds).
         free_floating: only the arm is solved.
         vehicle_map: free floating: T_b (n_vehicle, n_arm) with v_vehicle = T_b qdot_arm; else None.
     """
 
-    state: Configuration
-    levels: list[LevelRows]
-    speed_limits: list[VelocityLimit]
-    joint_limits: list[JointLimits]
-    free_floating: bool
-    vehicle_map: np.ndarray | None
+    def __init__(self, state: Configuration, plan: HierarchyPlan, stacks: tuple[np.ndarray, ...],
+                 parts: list[tuple[np.ndarray | None, list[InequalityRows]]], vehicle_map: np.ndarray | None) -> None:
+        self.state, self._plan, self._parts, self.vehicle_map = state, plan, parts, vehicle_map
+        self.jacobians, self.solved, self.references, self.activations = stacks
+        self.speed_limits, self.joint_limits = plan.speed_limits, plan.joint_limits
+        self.free_floating = plan.free_floating
+
+    @cached_property
+    def levels(self) -> list[LevelRows]:
+        """The levels with rows (levels holding only speed limits are left out), views of the stacks."""
+        rows = []
+        offsets = self._plan.offsets.tolist()
+        for number, (level, (task_error, objectives)) in enumerate(zip(self._plan.levels, self._parts)):
+            span = slice(offsets[number], offsets[number + 1])
+            jacobian, reference = self.jacobians[span], self.references[span]
+            task_jacobian = task_command = None
+            if task_error is not None:
+                tasks = slice(offsets[number], offsets[number] + task_error.size)
+                task_jacobian, task_command = self.jacobians[tasks], self.references[tasks]
+            rows.append(LevelRows(level.index, jacobian, self.solved[span], reference, self.activations[span],
+                                  objectives, level.inequalities, task_jacobian, task_error, task_command,
+                                  bool(self._plan.equality[number])))
+        return rows
 
     @property
     def size(self) -> int:
@@ -177,6 +200,21 @@ class ItemRows:
             kept = self._objectives[id(item)] = (item, item.rows(self.state))
         return kept[1]
 
+    def objective_into(self, item: Inequality, jacobian: np.ndarray, activation: np.ndarray,
+                       reference: np.ndarray) -> InequalityRows:
+        """The objective's rows at the state written into a solver's stacked rows (:meth:`Inequality.rows_into
+        <uvms.tasks.objectives.base.Inequality.rows_into>` at the first call, copied from the rows kept after)."""
+        kept = self._objectives.get(id(item))
+        if kept is None:
+            rows = item.rows_into(self.state, jacobian, activation, reference)
+            self._objectives[id(item)] = (item, rows)
+            return rows
+        rows = kept[1]
+        jacobian[:] = rows.jacobian
+        activation[:] = rows.activation
+        reference[:] = rows.reference
+        return rows
+
     def tasks(self, tasks: tuple[Task, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The tasks' stacked (Jacobian, error, feedforward) at the state (:func:`~uvms.solvers.stack.stacked_terms`,
         evaluated at the first call; never written by a solver)."""
@@ -189,15 +227,13 @@ class ItemRows:
 
 @dataclass(frozen=True)
 class PlannedLevel:
-    """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities;
-    ``single``: the level's one objective when it holds nothing else (its rows are the level's, nothing stacked)."""
+    """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities."""
 
     index: int
     tasks: tuple[Task, ...]
     inequalities: tuple[Inequality, ...]
     command: object  # (error (k,), feedforward (k,)) -> xdot_d + K e (k,), the task gain prepared
-    ones: np.ndarray  # (k,) the equality rows' activations, shared by every evaluation (read, never written)
-    single: Inequality | None = None
+    ones: np.ndarray  # (k,) the equality rows' activations
 
 
 class HierarchyPlan:
@@ -232,55 +268,65 @@ class HierarchyPlan:
             dim = sum(task.dim for task in tasks)
             command = prepared_gain(gain, dim) if tasks else None
             inequalities = tuple(item for item in level if isinstance(item, Inequality))
-            single = inequalities[0] if not tasks and len(inequalities) == 1 else None
-            self.levels.append(PlannedLevel(index, tasks, inequalities, command, np.ones(dim), single))
+            self.levels.append(PlannedLevel(index, tasks, inequalities, command, np.ones(dim)))
         self.joint_limits = [item for level in self.levels for item in level.inequalities
                              if item.bounds_joint_positions]
         self.size = robot.n_arm if free_floating else robot.nv
         sizes = [sum(item.dim for item in (*level.tasks, *level.inequalities)) for level in self.levels]
         self.offsets = np.array([0, *itertools.accumulate(sizes)], dtype=np.int64)  # (L + 1,) each level's first row
         self.equality = np.array([bool(level.tasks) and not level.inequalities for level in self.levels])  # (L,)
+        # the stacks' layout, read at every evaluation: rows M, each level's first row and span
+        starts = self.offsets.tolist()
+        self._count, self._starts, self._spans = starts[-1], starts[:-1], list(itertools.pairwise(starts))
+        self._activations = np.zeros(self._count)  # (M,) the equality tasks' rows weigh 1
+        for level, start in zip(self.levels, self._starts):
+            self._activations[start:start + level.ones.size] = 1.0
 
     def evaluate(self, state: Configuration, shared: ItemRows | None = None) -> Hierarchy:
-        """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v;
-        ``shared``: the items' rows another hierarchy evaluated at ``state`` (read, and filled with the others)."""
+        """Every level's rows at ``state`` (its kinematics computed once) written into the stacks, and the map of
+        solved columns to v; ``shared``: the items' rows another hierarchy evaluated at ``state`` (read, and filled
+        with the others).
+
+        The stacks are new at each evaluation (a result's diagnostics keep views of them); each level writes its
+        rows at its offset (no per-level stack, no second concatenation)."""
         items = shared.at(state) if shared is not None else None
-        rows = [self._level_rows(state, level, items) for level in self.levels]
-        vehicle_map = None
+        count = self._count
+        jacobians, references = np.empty((count, self.robot.nv)), np.empty(count)
+        activations = self._activations.copy()  # the equality rows' 1 in place, the objectives' written
+        parts = [self._level_rows(state, level, start, items, jacobians, references, activations)
+                 for level, start in zip(self.levels, self._starts)]
+        vehicle_map, solved = None, jacobians
         if self.free_floating:
+            solved = (np.concatenate([state.generalized(jacobians[start:end]) for start, end in self._spans])
+                      if self.levels else np.zeros((0, self.size)))
             a_base, a_arm = state.centroidal_split()
             vehicle_map = -solve_base_block(a_base, a_arm)  # (n_vehicle, n_arm)
-        return Hierarchy(state=state, levels=rows, speed_limits=self.speed_limits, joint_limits=self.joint_limits,
-                         free_floating=self.free_floating, vehicle_map=vehicle_map)
+        return Hierarchy(state, self, (jacobians, solved, references, activations), parts, vehicle_map)
 
-    def _level_rows(self, state: Configuration, level: PlannedLevel, shared: ItemRows | None) -> LevelRows:
-        """One level's rows at ``state``: equality tasks first, then the inequalities in their order (``shared``:
-        where already evaluated items are read)."""
-        single = level.single
-        if single is not None:  # the common inequality level: one objective's own arrays
-            rows = single.rows(state) if shared is None else shared.objective(single)
-            jacobian = rows.jacobian
-            return LevelRows(level.index, jacobian, state.generalized(jacobian) if self.free_floating else jacobian,
-                             rows.reference, rows.activation, [rows], level.inequalities)
-        inequalities = ([item.rows(state) for item in level.inequalities] if shared is None
-                        else [shared.objective(item) for item in level.inequalities])
-        task_jacobian = task_error = task_command = None
+    @staticmethod
+    def _level_rows(state: Configuration, level: PlannedLevel, row: int, shared: ItemRows | None,
+                    jacobians: np.ndarray, references: np.ndarray,
+                    activations: np.ndarray) -> tuple[np.ndarray | None, list[InequalityRows]]:
+        """One level's rows at ``state`` written from ``row`` on: equality tasks first (their command
+        xdot_d + K e), then the inequalities in their order (``shared``: where already evaluated items are read);
+        the tasks' error (None without tasks) and the objectives' rows."""
+        task_error = None
         if level.tasks:
             task_jacobian, task_error, feedforward = (stacked_terms(state, level.tasks) if shared is None
                                                       else shared.tasks(level.tasks))
-            task_command = level.command(task_error, feedforward)
-            if not inequalities:  # the common equality level: its own arrays, nothing to stack
-                solved = state.generalized(task_jacobian) if self.free_floating else task_jacobian
-                return LevelRows(level.index, task_jacobian, solved, task_command, level.ones, [], (), task_jacobian,
-                                 task_error, task_command, True)
-        head = [(task_jacobian, task_command, level.ones)] if task_jacobian is not None else []
-        blocks = head + [(rows.jacobian, rows.reference, rows.activation) for rows in inequalities]
-        jacobian = np.vstack([block[0] for block in blocks])
-        reference = np.concatenate([block[1] for block in blocks])
-        activation = np.concatenate([block[2] for block in blocks])
-        solved = state.generalized(jacobian) if self.free_floating else jacobian
-        return LevelRows(level.index, jacobian, solved, reference, activation, inequalities, level.inequalities,
-                         task_jacobian, task_error, task_command)
+            end = row + task_error.size
+            jacobians[row:end] = task_jacobian
+            references[row:end] = level.command(task_error, feedforward)
+            row = end
+        objectives = []
+        for item in level.inequalities:
+            end = row + item.dim
+            objectives.append(item.rows_into(state, jacobians[row:end], activations[row:end], references[row:end])
+                              if shared is None else
+                              shared.objective_into(item, jacobians[row:end], activations[row:end],
+                                                    references[row:end]))
+            row = end
+        return task_error, objectives
 
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""
