@@ -322,3 +322,20 @@ def test_the_fused_icat_and_box_call_is_the_two_calls_in_turn(rng):
         scaled_any = scaled_any or bool(np.any(scales < 1.0))
     assert scaled_any and ratio > 0.5  # the box bound the sum in a case (measured scales < 1 and a ratio of ~1)
 
+
+
+def test_activity_is_read_from_the_objectives_rows_without_forming_the_levels(rng):
+    """A set-based result's activity (what a recorder reads at every row) comes from the objectives' rows it was
+    given, in priority order, without forming its levels; the same answer as the levels' objectives give."""
+    from uvms.solvers import SetBasedSolver
+
+    robot = uvms.load("bluerov2_alpha5")
+    for _ in range(5):
+        q, target = alpha5_start(robot, rng)
+        result = SetBasedSolver(robot, alpha5_levels(robot, target), dt=0.05).velocity(Configuration(robot, q))
+        activity = result.activity
+        assert "levels" not in vars(result)  # the levels not formed for it
+        assert list(activity) == ["joint_limits", "vehicle_attitude"]
+        assert activity == {status.name: status.active for status in result.objectives}
+        assert activity == {rows.name: bool(np.any(rows.activation > 0))
+                            for level in result.levels for rows in level.objectives}

@@ -108,6 +108,10 @@ class Hierarchy:
                                   bool(self._plan.equality[number])))
         return rows
 
+    def objective_rows(self) -> list[InequalityRows]:
+        """The inequality objectives' rows, in priority order (those of :attr:`levels`, without forming them)."""
+        return [rows for _, objectives in self._parts for rows in objectives]
+
     @property
     def size(self) -> int:
         """Number of solved columns n (nv, or n_arm when free floating)."""

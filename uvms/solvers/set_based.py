@@ -231,7 +231,8 @@ class SetBasedSolver(Solver):
         v = hierarchy.velocity(solved)
         return SolverResult(v, lambda: last_task_sigma(hierarchy, sigmas), used, lambda: solved_rows(hierarchy),
                             free_floating=self.free_floating, scales=scales,
-                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio)
+                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio,
+                            objectives=hierarchy.objective_rows)
 
 
 def saturate(hierarchy: Hierarchy, contributions: np.ndarray, q: np.ndarray,
