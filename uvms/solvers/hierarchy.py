@@ -85,8 +85,8 @@ class Hierarchy:
     """
 
     def __init__(self, state: Configuration, plan: HierarchyPlan, stacks: tuple[np.ndarray, ...],
-                 parts: list[tuple[np.ndarray | None, list[InequalityRows]]], vehicle_map: np.ndarray | None) -> None:
-        self.state, self._plan, self._parts, self.vehicle_map = state, plan, parts, vehicle_map
+                 values: list, vehicle_map: np.ndarray | None) -> None:
+        self.state, self._plan, self._values, self.vehicle_map = state, plan, values, vehicle_map
         self.jacobians, self.solved, self.references, self.activations = stacks
         self.speed_limits, self.joint_limits = plan.speed_limits, plan.joint_limits
         self.free_floating = plan.free_floating
@@ -94,23 +94,32 @@ class Hierarchy:
     @cached_property
     def levels(self) -> list[LevelRows]:
         """The levels with rows (levels holding only speed limits are left out), views of the stacks."""
+        plan = self._plan
+        errors: list[np.ndarray | None] = [None] * len(plan.levels)
+        objectives: list[list[InequalityRows]] = [[] for _ in plan.levels]
+        for (number, _, _, command, _), value in zip(plan._blocks, self._values):
+            if command is not None:
+                errors[number] = value
+            else:
+                objectives[number].append(value)
         rows = []
-        offsets = self._plan.offsets.tolist()
-        for number, (level, (task_error, objectives)) in enumerate(zip(self._plan.levels, self._parts)):
+        offsets = plan.offsets.tolist()
+        for number, level in enumerate(plan.levels):
             span = slice(offsets[number], offsets[number + 1])
-            jacobian, reference = self.jacobians[span], self.references[span]
+            task_error = errors[number]
             task_jacobian = task_command = None
             if task_error is not None:
                 tasks = slice(offsets[number], offsets[number] + task_error.size)
                 task_jacobian, task_command = self.jacobians[tasks], self.references[tasks]
-            rows.append(LevelRows(level.index, jacobian, self.solved[span], reference, self.activations[span],
-                                  objectives, level.inequalities, task_jacobian, task_error, task_command,
-                                  bool(self._plan.equality[number])))
+            rows.append(LevelRows(level.index, self.jacobians[span], self.solved[span], self.references[span],
+                                  self.activations[span], objectives[number], level.inequalities, task_jacobian,
+                                  task_error, task_command, bool(plan.equality[number])))
         return rows
 
     def objective_rows(self) -> list[InequalityRows]:
         """The inequality objectives' rows, in priority order (those of :attr:`levels`, without forming them)."""
-        return [rows for _, objectives in self._parts for rows in objectives]
+        values = self._values
+        return [values[index] for index in self._plan._objective_blocks]
 
     @property
     def size(self) -> int:
@@ -219,10 +228,11 @@ class ItemRows:
         reference[:] = rows.reference
         return rows
 
-    def tasks(self, tasks: tuple[Task, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def tasks(self, tasks: tuple[Task, ...],
+              key: tuple[int, ...] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The tasks' stacked (Jacobian, error, feedforward) at the state (:func:`~uvms.solvers.stack.stacked_terms`,
-        evaluated at the first call; never written by a solver)."""
-        key = tuple(map(id, tasks))
+        evaluated at the first call; never written by a solver); ``key``: the tasks' ids when the caller has them."""
+        key = tuple(map(id, tasks)) if key is None else key
         kept = self._tasks.get(key)
         if kept is None:
             kept = self._tasks[key] = (tasks, stacked_terms(self.state, tasks))
@@ -283,8 +293,19 @@ class HierarchyPlan:
         starts = self.offsets.tolist()
         self._count, self._starts, self._spans = starts[-1], starts[:-1], list(itertools.pairwise(starts))
         self._activations = np.zeros(self._count)  # (M,) the equality tasks' rows weigh 1
-        for level, start in zip(self.levels, self._starts):
-            self._activations[start:start + level.ones.size] = 1.0
+        # the rows' blocks, level after level: (level, tasks, their key in an ItemRows, command, rows) for a level's
+        # equality tasks, (level, objective, None, None, rows) for each objective
+        self._blocks: list[tuple[int, object, tuple | None, object, slice]] = []
+        for number, (level, row) in enumerate(zip(self.levels, self._starts)):
+            if level.tasks:
+                self._activations[row:row + level.ones.size] = 1.0
+                self._blocks.append((number, level.tasks, tuple(map(id, level.tasks)), level.command,
+                                     slice(row, row + level.ones.size)))
+                row += level.ones.size
+            for item in level.inequalities:
+                self._blocks.append((number, item, None, None, slice(row, row + item.dim)))
+                row += item.dim
+        self._objective_blocks = [index for index, block in enumerate(self._blocks) if block[3] is None]
 
     def evaluate(self, state: Configuration, shared: ItemRows | None = None) -> Hierarchy:
         """Every level's rows at ``state`` (its kinematics computed once) written into the stacks, and the map of
@@ -297,40 +318,25 @@ class HierarchyPlan:
         count = self._count
         jacobians, references = np.empty((count, self.robot.nv)), np.empty(count)
         activations = self._activations.copy()  # the equality rows' 1 in place, the objectives' written
-        parts = [self._level_rows(state, level, start, items, jacobians, references, activations)
-                 for level, start in zip(self.levels, self._starts)]
+        values = []  # per block: the tasks' error, or the objective's rows
+        for _, item, key, command, rows in self._blocks:  # one loop over the plan's blocks, level after level
+            if command is not None:  # a level's equality tasks: their rows and command xdot_d + K e
+                task_jacobian, task_error, feedforward = (stacked_terms(state, item) if items is None
+                                                          else items.tasks(item, key))
+                jacobians[rows] = task_jacobian
+                references[rows] = command(task_error, feedforward)
+                values.append(task_error)
+            else:  # an objective's rows written in place (read where another hierarchy evaluated them)
+                values.append(item.rows_into(state, jacobians[rows], activations[rows], references[rows])
+                              if items is None else
+                              items.objective_into(item, jacobians[rows], activations[rows], references[rows]))
         vehicle_map, solved = None, jacobians
         if self.free_floating:
             solved = (np.concatenate([state.generalized(jacobians[start:end]) for start, end in self._spans])
                       if self.levels else np.zeros((0, self.size)))
             a_base, a_arm = state.centroidal_split()
             vehicle_map = -solve_base_block(a_base, a_arm)  # (n_vehicle, n_arm)
-        return Hierarchy(state, self, (jacobians, solved, references, activations), parts, vehicle_map)
-
-    @staticmethod
-    def _level_rows(state: Configuration, level: PlannedLevel, row: int, shared: ItemRows | None,
-                    jacobians: np.ndarray, references: np.ndarray,
-                    activations: np.ndarray) -> tuple[np.ndarray | None, list[InequalityRows]]:
-        """One level's rows at ``state`` written from ``row`` on: equality tasks first (their command
-        xdot_d + K e), then the inequalities in their order (``shared``: where already evaluated items are read);
-        the tasks' error (None without tasks) and the objectives' rows."""
-        task_error = None
-        if level.tasks:
-            task_jacobian, task_error, feedforward = (stacked_terms(state, level.tasks) if shared is None
-                                                      else shared.tasks(level.tasks))
-            end = row + task_error.size
-            jacobians[row:end] = task_jacobian
-            references[row:end] = level.command(task_error, feedforward)
-            row = end
-        objectives = []
-        for item in level.inequalities:
-            end = row + item.dim
-            objectives.append(item.rows_into(state, jacobians[row:end], activations[row:end], references[row:end])
-                              if shared is None else
-                              shared.objective_into(item, jacobians[row:end], activations[row:end],
-                                                    references[row:end]))
-            row = end
-        return task_error, objectives
+        return Hierarchy(state, self, (jacobians, solved, references, activations), values, vehicle_map)
 
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""
