@@ -339,3 +339,39 @@ def test_activity_is_read_from_the_objectives_rows_without_forming_the_levels(rn
         assert activity == {status.name: status.active for status in result.objectives}
         assert activity == {rows.name: bool(np.any(rows.activation > 0))
                             for level in result.levels for rows in level.objectives}
+
+
+def test_a_second_hierarchy_copies_the_objectives_rows_of_the_first_run_by_run(rng):
+    """The coordination's arm hierarchy at the reference's q copies the objectives' rows the reference's evaluation
+    wrote, the three consecutive objectives as one run of rows (not evaluated, not copied one by one), its own
+    vehicle level and task evaluated; its stacks are those of an evaluation of its own."""
+    from uvms.solvers import SetBasedSolver
+    from uvms.solvers.item_rows import ItemRows
+    from uvms.tasks.objectives import PlaneClearance
+    from uvms.tasks.vehicle import VehicleTask
+
+    robot = uvms.load("bluerov2_alpha5")
+    q, target = alpha5_start(robot, rng)
+    *objectives, task = [level for level in alpha5_levels(robot, target) if "Velocity" not in type(level).__name__]
+    objectives.append(PlaneClearance(robot, "vehicle", [0, 0, -5.55], [0, 0, 1], min=0.5, band=0.1))
+    below, above = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
+    above.velocity_values[:] = rng.normal(size=6)
+    reference = SetBasedSolver(robot, [*objectives, task, [below]], dt=0.05)
+    arm = SetBasedSolver(robot, [[above], *objectives, task], dt=0.05)
+    state, shared = Configuration(robot, q), ItemRows()
+    reference.velocity(state, shared=shared)
+    assert shared.source[0] is reference.plan
+    calls = []
+    for objective in objectives:
+        original = objective.rows_into
+        objective.rows_into = lambda *a, original=original: calls.append(1) or original(*a)
+    copied = arm.plan.evaluate(state, shared)
+    assert not calls  # read from the reference's stacks
+    alone = arm.plan.evaluate(Configuration(robot, q))
+    runs, taken, evaluated = arm.plan._gathering(reference.plan)
+    rows = sum(objective.dim for objective in objectives)
+    assert runs == [(slice(6, 6 + rows), slice(0, rows))] and len(taken) == 3 and len(evaluated) == 2
+    for name in ("jacobians", "references", "activations"):
+        np.testing.assert_allclose(getattr(copied, name), getattr(alone, name), rtol=1e-15, atol=1e-300)
+    assert [rows.name for rows in copied.objective_rows()] == [objective.name for objective in objectives]
+    assert np.array_equal(arm.velocity(state, shared=shared).v, arm.velocity(Configuration(robot, q)).v)

@@ -27,6 +27,7 @@ from ..robot.kinematics import base_velocity_from_momentum, solve_base_block
 from ..robot.robot import Robot, check_robot
 from ..tasks.objectives import Inequality, InequalityRows, VelocityLimit
 from ..tasks.task import Task
+from .item_rows import ItemRows
 from .result import SolvedRows
 from .stack import stacked_terms
 
@@ -169,76 +170,6 @@ def split_levels(levels: Levels) -> tuple[list[tuple[int, list[Task | Inequality
     return rows, limits
 
 
-class ItemRows:
-    """The rows of tasks and objectives evaluated at one configuration, by item, for a second hierarchy over some of
-    the same items at the same configuration: the actuated chain re-solves the arm at the q of its reference through
-    levels that share the reference's objectives and task (:meth:`HierarchyPlan.evaluate` fills it at the first
-    solve and reads it at the second), so each is evaluated once per step; a run's recorder reads the objectives'
-    rows of the step's q from it (:meth:`evaluated_at`).
-
-    Its owner says what it holds: the rows stay valid while the tasks' targets and the objectives' bounds are those
-    of the first evaluation, and the owner calls :meth:`clear` before one of them changes. An evaluation at another
-    configuration (another state, or q changed by value) empties it itself.
-    """
-
-    def __init__(self) -> None:
-        self.state: Configuration | None = None
-        self.q: list[float] = []  # the q the rows were evaluated at, as floats (compared by value at each read)
-        self._objectives: dict[int, tuple[Inequality, InequalityRows]] = {}  # id -> (objective kept alive, rows)
-        self._tasks: dict[tuple[int, ...], tuple[tuple[Task, ...], tuple]] = {}  # ids -> (tasks, stacked terms)
-
-    def clear(self) -> None:
-        """Forget every row (a target or a bound is about to change)."""
-        self.state = None
-        self._objectives.clear()
-        self._tasks.clear()
-
-    def evaluated_at(self, q: np.ndarray) -> ItemRows | None:
-        """These rows when they were evaluated at q (nq,) (compared by value), else None: what a recorder of the
-        row at q reads instead of evaluating the objectives again."""
-        return self if self.state is not None and q.tolist() == self.q else None
-
-    def at(self, state: Configuration) -> ItemRows:
-        """These rows for ``state``: emptied first when they were evaluated at another state or q."""
-        q = state.q.tolist()  # one read; list equality is numpy's elementwise == over every entry (NaN unequal)
-        if state is not self.state or q != self.q:
-            self.clear()
-            self.state, self.q = state, q
-        return self
-
-    def objective(self, item: Inequality) -> InequalityRows:
-        """The objective's rows at the state (evaluated at the first call)."""
-        kept = self._objectives.get(id(item))
-        if kept is None:
-            kept = self._objectives[id(item)] = (item, item.rows(self.state))
-        return kept[1]
-
-    def objective_into(self, item: Inequality, jacobian: np.ndarray, activation: np.ndarray,
-                       reference: np.ndarray) -> InequalityRows:
-        """The objective's rows at the state written into a solver's stacked rows (:meth:`Inequality.rows_into
-        <uvms.tasks.objectives.base.Inequality.rows_into>` at the first call, copied from the rows kept after)."""
-        kept = self._objectives.get(id(item))
-        if kept is None:
-            rows = item.rows_into(self.state, jacobian, activation, reference)
-            self._objectives[id(item)] = (item, rows)
-            return rows
-        rows = kept[1]
-        jacobian[:] = rows.jacobian
-        activation[:] = rows.activation
-        reference[:] = rows.reference
-        return rows
-
-    def tasks(self, tasks: tuple[Task, ...],
-              key: tuple[int, ...] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The tasks' stacked (Jacobian, error, feedforward) at the state (:func:`~uvms.solvers.stack.stacked_terms`,
-        evaluated at the first call; never written by a solver); ``key``: the tasks' ids when the caller has them."""
-        key = tuple(map(id, tasks)) if key is None else key
-        kept = self._tasks.get(key)
-        if kept is None:
-            kept = self._tasks[key] = (tasks, stacked_terms(self.state, tasks))
-        return kept[1]
-
-
 @dataclass(frozen=True)
 class PlannedLevel:
     """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities."""
@@ -306,6 +237,34 @@ class HierarchyPlan:
                 self._blocks.append((number, item, None, None, slice(row, row + item.dim)))
                 row += item.dim
         self._objective_blocks = [index for index, block in enumerate(self._blocks) if block[3] is None]
+        # what an evaluation reads: (runs copied, blocks taken, blocks evaluated), all evaluated without a source
+        self._all = ([], [], [(index, *block[1:]) for index, block in enumerate(self._blocks)])
+        self._gatherings: dict[HierarchyPlan, tuple[list, list, list]] = {}  # per source plan, made once
+
+    def _gathering(self, source: HierarchyPlan) -> tuple[list[tuple[slice, slice]], list[tuple[int, int]], list]:
+        """How an evaluation reads the objectives ``source``'s evaluation wrote (once per source plan): runs of rows
+        (this plan's rows, the source's) copied at once, (block, source block) whose rows those are, and the blocks
+        evaluated here (the tasks, whose command is this plan's, and objectives the source does not hold)."""
+        found = self._gatherings.get(source)
+        if found is None:
+            where: dict[int, int] = {}  # id of an objective -> its first block in the source
+            for index, block in enumerate(source._blocks):
+                if block[3] is None:
+                    where.setdefault(id(block[1]), index)
+            runs, taken, blocks = [], [], []
+            for index, block in enumerate(self._blocks):
+                origin = where.get(id(block[1])) if block[3] is None else None
+                if origin is None:
+                    blocks.append((index, *block[1:]))
+                    continue
+                taken.append((index, origin))
+                target, rows = block[4], source._blocks[origin][4]
+                if runs and runs[-1][0].stop == target.start and runs[-1][1].stop == rows.start:  # one run
+                    runs[-1] = (slice(runs[-1][0].start, target.stop), slice(runs[-1][1].start, rows.stop))
+                else:
+                    runs.append((target, rows))
+            found = self._gatherings[source] = (runs, taken, blocks)
+        return found
 
     def evaluate(self, state: Configuration, shared: ItemRows | None = None) -> Hierarchy:
         """Every level's rows at ``state`` (its kinematics computed once) written into the stacks, and the map of
@@ -318,18 +277,33 @@ class HierarchyPlan:
         count = self._count
         jacobians, references = np.empty((count, self.robot.nv)), np.empty(count)
         activations = self._activations.copy()  # the equality rows' 1 in place, the objectives' written
-        values = []  # per block: the tasks' error, or the objective's rows
-        for _, item, key, command, rows in self._blocks:  # one loop over the plan's blocks, level after level
+        values = [None] * len(self._blocks)  # per block: the tasks' error, or the objective's rows
+        runs, taken, blocks = self._all
+        source = None if items is None else items.source
+        if source is not None and source[0] is not self:  # objectives another hierarchy wrote: copied run by run
+            runs, taken, blocks = self._gathering(source[0])
+            source_jacobians, source_references, source_activations = source[1]
+            for target, origin in runs:
+                jacobians[target] = source_jacobians[origin]
+                references[target] = source_references[origin]
+                activations[target] = source_activations[origin]
+            source_values = source[2]
+            for index, origin in taken:
+                values[index] = source_values[origin]
+        first = items is not None and items.empty
+        for index, item, key, command, rows in blocks:  # one loop over the plan's blocks, level after level
             if command is not None:  # a level's equality tasks: their rows and command xdot_d + K e
                 task_jacobian, task_error, feedforward = (stacked_terms(state, item) if items is None
                                                           else items.tasks(item, key))
                 jacobians[rows] = task_jacobian
                 references[rows] = command(task_error, feedforward)
-                values.append(task_error)
+                values[index] = task_error
             else:  # an objective's rows written in place (read where another hierarchy evaluated them)
-                values.append(item.rows_into(state, jacobians[rows], activations[rows], references[rows])
-                              if items is None else
-                              items.objective_into(item, jacobians[rows], activations[rows], references[rows]))
+                values[index] = (item.rows_into(state, jacobians[rows], activations[rows], references[rows])
+                                 if items is None else
+                                 items.objective_into(item, jacobians[rows], activations[rows], references[rows]))
+        if first:  # every objective evaluated here: the next hierarchy at this state copies them from these stacks
+            items.source = (self, (jacobians, references, activations), values)
         vehicle_map, solved = None, jacobians
         if self.free_floating:
             solved = (np.concatenate([state.generalized(jacobians[start:end]) for start, end in self._spans])

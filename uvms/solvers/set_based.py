@@ -59,7 +59,8 @@ from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..tasks.objectives import VelocityLimit
 from .base import Solver
-from .hierarchy import Hierarchy, HierarchyPlan, ItemRows, Levels, last_task_sigma, solved_rows, speed_ratio
+from .hierarchy import Hierarchy, HierarchyPlan, Levels, last_task_sigma, solved_rows, speed_ratio
+from .item_rows import ItemRows
 from .result import SolverResult
 from .saturation import TOLERANCE, RateRows, speed_maximum
 
