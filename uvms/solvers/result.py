@@ -221,7 +221,10 @@ class SolverResult:
 
     def _active(self, rows: InequalityRows) -> bool:
         """Whether the objective of ``rows`` is active: some activation > 0, or (QP hierarchy) binding."""
-        return bool((rows.activation > 0).any()) if self.binding is None else self.binding.get(rows.name, False)
+        if self.binding is not None:
+            return self.binding.get(rows.name, False)
+        # (activation > 0).any() over the few rows as floats, without numpy's dispatch (NaN > 0 is False in both)
+        return any(value > 0.0 for value in rows.activation.tolist())
 
     @cached_property
     def objectives(self) -> tuple[ObjectiveStatus, ...]:
