@@ -36,6 +36,19 @@ LevelItem = Task | Inequality | VelocityLimit
 Levels = Sequence[LevelItem | Sequence[LevelItem]]
 
 
+#: The compiled command of an equality level, bound at the first evaluation (:func:`_command_into`).
+_COMMAND_INTO = None
+
+
+def _command_into():
+    """Bind :func:`uvms.numerics._kernels.command.command_into` (numba: loaded at the first evaluation, not by
+    ``import uvms``; later evaluations skip the import)."""
+    global _COMMAND_INTO
+    from ..numerics._kernels.command import command_into
+    _COMMAND_INTO = command_into
+    return command_into
+
+
 # ----------------------------------------------------------------- the hierarchy at one configuration
 @dataclass(slots=True)
 class LevelRows:
@@ -227,11 +240,13 @@ class HierarchyPlan:
         # the rows' blocks, level after level: (level, tasks, their key in an ItemRows, command, rows) for a level's
         # equality tasks, (level, objective, None, None, rows) for each objective
         self._blocks: list[tuple[int, object, tuple | None, object, slice]] = []
+        # a scalar K (checked by prepared_gain): the command written by one compiled call, prepared_gain's numbers
+        scalar = float(gain) if np.ndim(gain) == 0 else None
         for number, (level, row) in enumerate(zip(self.levels, self._starts)):
             if level.tasks:
                 self._activations[row:row + level.ones.size] = 1.0
-                self._blocks.append((number, level.tasks, tuple(map(id, level.tasks)), level.command,
-                                     slice(row, row + level.ones.size)))
+                self._blocks.append((number, level.tasks, tuple(map(id, level.tasks)),
+                                     level.command if scalar is None else scalar, slice(row, row + level.ones.size)))
                 row += level.ones.size
             for item in level.inequalities:
                 self._blocks.append((number, item, None, None, slice(row, row + item.dim)))
@@ -291,12 +306,16 @@ class HierarchyPlan:
             for index, origin in taken:
                 values[index] = source_values[origin]
         first = items is not None and items.empty
+        command_into = _COMMAND_INTO or _command_into()
         for index, item, key, command, rows in blocks:  # one loop over the plan's blocks, level after level
             if command is not None:  # a level's equality tasks: their rows and command xdot_d + K e
                 task_jacobian, task_error, feedforward = (stacked_terms(state, item) if items is None
                                                           else items.tasks(item, key))
                 jacobians[rows] = task_jacobian
-                references[rows] = command(task_error, feedforward)
+                if command.__class__ is float:  # a scalar K
+                    command_into(task_error, feedforward, command, references[rows])
+                else:
+                    references[rows] = command(task_error, feedforward)
                 values[index] = task_error
             else:  # an objective's rows written in place (read where another hierarchy evaluated them)
                 values[index] = (item.rows_into(state, jacobians[rows], activations[rows], references[rows])
