@@ -1,4 +1,4 @@
-"""The compiled command of an equality level (uvms.numerics._kernels.command): prepared_gain's numbers for a scalar K."""
+"""The compiled command of an equality level (uvms.numerics._kernels.command): prepared_gain's numbers, scalar K."""
 
 from __future__ import annotations
 
