@@ -238,7 +238,8 @@ class HierarchyPlan:
         self._count, self._starts, self._spans = starts[-1], starts[:-1], list(itertools.pairwise(starts))
         self._activations = np.zeros(self._count)  # (M,) the equality tasks' rows weigh 1
         # the rows' blocks, level after level: (level, tasks, their key in an ItemRows, command, rows) for a level's
-        # equality tasks, (level, objective, None, None, rows) for each objective
+        # equality tasks (command: the scalar K, or prepared_gain's function), (level, objective, None, None, rows)
+        # for each objective
         self._blocks: list[tuple[int, object, tuple | None, object, slice]] = []
         # a scalar K (checked by prepared_gain): the command written by one compiled call, prepared_gain's numbers
         scalar = float(gain) if np.ndim(gain) == 0 else None
