@@ -132,12 +132,12 @@ def test_the_coordination_re_solve_evaluates_the_objectives_and_the_task_once_pe
     assert len(objectives) == 3
     counts = dict.fromkeys([objective.name for objective in objectives] + ["task"], 0)
     for item, name in [*((objective, objective.name) for objective in objectives), (kinematic.task, "task")]:
-        attribute = "terms" if name == "task" else "rows"
+        attribute = "terms" if name == "task" else "rows_into"  # what a hierarchy's evaluation calls
         original = getattr(item, attribute)
 
-        def counted(state, original=original, name=name):
+        def counted(state, *out, original=original, name=name):
             counts[name] += 1
-            return original(state)
+            return original(state, *out)
 
         setattr(item, attribute, counted)
     rng = np.random.default_rng(3)

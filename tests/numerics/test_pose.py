@@ -10,7 +10,7 @@ import pytest
 import uvms
 from uvms.numerics._kernels.pose import action_into, compose_into, frame_rows_into, log3_into, matrix_to_rpy
 from uvms.robot.configuration import Configuration
-from uvms.solvers.clik import support_columns
+from uvms.robot.kinematics import support_columns
 
 from conftest import shipped
 

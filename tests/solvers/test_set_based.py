@@ -207,12 +207,12 @@ def test_a_second_hierarchy_at_the_same_q_reads_the_shared_rows_and_gives_the_nu
     calls = {"objectives": 0, "task": 0}
 
     def counted(item, key):
-        method_name = "rows" if key == "objectives" else "terms"
+        method_name = "rows_into" if key == "objectives" else "terms"  # what a hierarchy's evaluation calls
         original = getattr(item, method_name)
 
-        def wrapper(state):
+        def wrapper(state, *out):
             calls[key] += 1
-            return original(state)
+            return original(state, *out)
 
         setattr(item, method_name, wrapper)
 
@@ -322,3 +322,56 @@ def test_the_fused_icat_and_box_call_is_the_two_calls_in_turn(rng):
         scaled_any = scaled_any or bool(np.any(scales < 1.0))
     assert scaled_any and ratio > 0.5  # the box bound the sum in a case (measured scales < 1 and a ratio of ~1)
 
+
+
+def test_activity_is_read_from_the_objectives_rows_without_forming_the_levels(rng):
+    """A set-based result's activity (what a recorder reads at every row) comes from the objectives' rows it was
+    given, in priority order, without forming its levels; the same answer as the levels' objectives give."""
+    from uvms.solvers import SetBasedSolver
+
+    robot = uvms.load("bluerov2_alpha5")
+    for _ in range(5):
+        q, target = alpha5_start(robot, rng)
+        result = SetBasedSolver(robot, alpha5_levels(robot, target), dt=0.05).velocity(Configuration(robot, q))
+        activity = result.activity
+        assert "levels" not in vars(result)  # the levels not formed for it
+        assert list(activity) == ["joint_limits", "vehicle_attitude"]
+        assert activity == {status.name: status.active for status in result.objectives}
+        assert activity == {rows.name: bool(np.any(rows.activation > 0))
+                            for level in result.levels for rows in level.objectives}
+
+
+def test_a_second_hierarchy_copies_the_objectives_rows_of_the_first_run_by_run(rng):
+    """The coordination's arm hierarchy at the reference's q copies the objectives' rows the reference's evaluation
+    wrote, the three consecutive objectives as one run of rows (not evaluated, not copied one by one), its own
+    vehicle level and task evaluated; its stacks are those of an evaluation of its own."""
+    from uvms.solvers import SetBasedSolver
+    from uvms.solvers.item_rows import ItemRows
+    from uvms.tasks.objectives import PlaneClearance
+    from uvms.tasks.vehicle import VehicleTask
+
+    robot = uvms.load("bluerov2_alpha5")
+    q, target = alpha5_start(robot, rng)
+    *objectives, task = [level for level in alpha5_levels(robot, target) if "Velocity" not in type(level).__name__]
+    objectives.append(PlaneClearance(robot, "vehicle", [0, 0, -5.55], [0, 0, 1], min=0.5, band=0.1))
+    below, above = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
+    above.velocity_values[:] = rng.normal(size=6)
+    reference = SetBasedSolver(robot, [*objectives, task, [below]], dt=0.05)
+    arm = SetBasedSolver(robot, [[above], *objectives, task], dt=0.05)
+    state, shared = Configuration(robot, q), ItemRows()
+    reference.velocity(state, shared=shared)
+    assert shared.source[0] is reference.plan
+    calls = []
+    for objective in objectives:
+        original = objective.rows_into
+        objective.rows_into = lambda *a, original=original: calls.append(1) or original(*a)
+    copied = arm.plan.evaluate(state, shared)
+    assert not calls  # read from the reference's stacks
+    alone = arm.plan.evaluate(Configuration(robot, q))
+    runs, taken, evaluated = arm.plan._gathering(reference.plan)
+    rows = sum(objective.dim for objective in objectives)
+    assert runs == [(slice(6, 6 + rows), slice(0, rows))] and len(taken) == 3 and len(evaluated) == 2
+    for name in ("jacobians", "references", "activations"):
+        np.testing.assert_allclose(getattr(copied, name), getattr(alone, name), rtol=1e-15, atol=1e-300)
+    assert [rows.name for rows in copied.objective_rows()] == [objective.name for objective in objectives]
+    assert np.array_equal(arm.velocity(state, shared=shared).v, arm.velocity(Configuration(robot, q)).v)

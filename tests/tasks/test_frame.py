@@ -68,3 +68,29 @@ def test_a_task_following_a_trajectorys_arrays_has_the_terms_of_its_pose_and_kee
     task = uvms.FrameTask(robot, orientation="euler")
     task.follow(np.zeros(3), np.eye(3), np.zeros(6), np.array([0.1, 0.2, 0.3]))  # a given rpy is the one used
     assert np.array_equal(task.target_terms()[2], [0.1, 0.2, 0.3])
+
+
+def test_position_rows_come_from_the_joint_kinematics_with_the_numbers_of_the_frame_jacobian_and_pose():
+    """A task of position rows forms them from the joint kinematics in one compiled call, without placing its frame:
+    the rows of getFrameJacobian (world-aligned) and p_d - p of the frame's placement; a task with orientation rows
+    still reads them from the frame (Pinocchio's log3)."""
+    from uvms.tasks.frame import log_pose_error
+
+    robot = uvms.load("bluerov2_alpha5")
+    rng = np.random.default_rng(5)
+    for axes in (("x", "y", "z"), ("z", "x"), None):
+        task = uvms.FrameTask(robot, axes=axes)
+        for _ in range(20):
+            q = robot.random_configuration(rng)
+            target = robot.fk(robot.random_configuration(rng))
+            task.set_target(target)
+            task.set_target_velocity(rng.normal(size=6))
+            state = Configuration(robot, q)
+            jacobian, error, feedforward = task.terms(state)
+            assert (task.frame_id in state._placed) == (axes is None)  # position rows: the frame never placed
+            expected = Configuration(robot, q)
+            np.testing.assert_allclose(jacobian, expected.jacobian(task.frame_id)[task.rows], rtol=1e-15, atol=1e-300)
+            np.testing.assert_allclose(error, log_pose_error(target.translation, target.rotation,
+                                                             expected.pose(task.frame_id))[task.rows],
+                                       rtol=1e-15, atol=1e-300)
+            np.testing.assert_allclose(feedforward, task.target_twist[task.rows], rtol=0, atol=0)

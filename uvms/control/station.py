@@ -48,7 +48,7 @@ from ..robot.kinematics import held_vehicle_split
 from ..robot.robot import Robot
 from ..solvers.base import SolverFactory
 from ..solvers.clik import CLIKSolver
-from ..solvers.hierarchy import ItemRows
+from ..solvers.item_rows import ItemRows
 from ..solvers.stack import stacked_terms
 from ..tasks.frame import FrameTask
 from ..tasks.objectives import JointVelocityLimits

@@ -61,6 +61,18 @@ def axis_rows(axes: Sequence[str]) -> list[int]:
     return rows
 
 
+def support_columns(model: pin.Model, joint: int) -> np.ndarray:
+    """The columns of v (m,) of the joints from ``joint`` up to the root: those that move it (a model without mimic
+    joints, whose every joint has its own columns)."""
+    parents, starts, sizes = model.parents, model.idx_vs, model.nvs  # each read copies Pinocchio's vector: once
+    columns = []
+    while joint > 0:  # joint 0 is the universe
+        start = starts[joint]
+        columns.extend(range(start, start + sizes[joint]))
+        joint = parents[joint]
+    return np.array(sorted(columns), dtype=np.int64)
+
+
 def centroidal_map_split(
     model: pin.Model, data: pin.Data, q: np.ndarray, base_type: str, n_vehicle: int
 ) -> tuple[np.ndarray, np.ndarray]:

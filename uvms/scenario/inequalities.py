@@ -31,7 +31,7 @@ from ..errors import ScenarioError, UVMSError
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS
-from ..solvers.hierarchy import ItemRows
+from ..solvers.item_rows import ItemRows
 from ..solvers.saturation import speed_maximum
 from ..tasks.objectives import Inequality, Objective, VelocityLimit, inequalities_from_table
 from ..tasks.objectives.collision import NearestPairs

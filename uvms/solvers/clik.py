@@ -31,7 +31,7 @@ from ..numerics.inverses import (
     weights_subset,
 )
 from ..robot.configuration import Configuration
-from ..robot.kinematics import base_velocity_from_momentum
+from ..robot.kinematics import base_velocity_from_momentum, support_columns
 from ..robot.limits import Limit
 from ..robot.robot import Robot, check_robot
 from ..tasks.frame import FrameTask
@@ -309,18 +309,6 @@ class FrameStep:
         """The one level of a step's record: the task's rows, command and error."""
         size = self.count * self.nv
         return (SolvedRows(0, self.jacobian(record), record[size + self.count:], record[size:size + self.count]),)
-
-
-def support_columns(model: pin.Model, joint: int) -> np.ndarray:
-    """The columns of v (m,) of the joints from ``joint`` up to the root: those that move it (a model without mimic
-    joints, whose every joint has its own columns)."""
-    parents, starts, sizes = model.parents, model.idx_vs, model.nvs  # each read copies Pinocchio's vector: once
-    columns = []
-    while joint > 0:  # joint 0 is the universe
-        start = starts[joint]
-        columns.extend(range(start, start + sizes[joint]))
-        joint = parents[joint]
-    return np.array(sorted(columns), dtype=np.int64)
 
 
 def frame_constants(solver: CLIKSolver, frame: pin.Frame, gain: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:

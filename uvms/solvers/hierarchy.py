@@ -16,6 +16,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -24,14 +25,28 @@ from ..numerics.inverses import SolverInputError
 from ..robot.configuration import Configuration
 from ..robot.kinematics import base_velocity_from_momentum, solve_base_block
 from ..robot.robot import Robot, check_robot
-from ..tasks.objectives import Inequality, InequalityRows, JointLimits, VelocityLimit
+from ..tasks.objectives import Inequality, InequalityRows, VelocityLimit
 from ..tasks.task import Task
+from .item_rows import ItemRows
 from .result import SolvedRows
 from .stack import stacked_terms
 
 #: What a level may hold.
 LevelItem = Task | Inequality | VelocityLimit
 Levels = Sequence[LevelItem | Sequence[LevelItem]]
+
+
+#: The compiled command of an equality level, bound at the first evaluation (:func:`_command_into`).
+_COMMAND_INTO = None
+
+
+def _command_into():
+    """Bind :func:`uvms.numerics._kernels.command.command_into` (numba: loaded at the first evaluation, not by
+    ``import uvms``; later evaluations skip the import)."""
+    global _COMMAND_INTO
+    from ..numerics._kernels.command import command_into
+    _COMMAND_INTO = command_into
+    return command_into
 
 
 # ----------------------------------------------------------------- the hierarchy at one configuration
@@ -65,25 +80,60 @@ class LevelRows:
         return self.task_error is not None and self.task_error.size > 0
 
 
-@dataclass
 class Hierarchy:
-    """The levels of a problem at one configuration, and how solved columns map to v.
+    """The levels of a problem at one configuration, stacked as the solvers read them, and how solved columns map
+    to v.
+
+    Every level's rows are written into three stacks (:meth:`HierarchyPlan.evaluate`), level after level at the
+    plan's offsets; what one level holds (:attr:`levels`) is read from them as views when first asked for (the
+    diagnostics of a result, the QP hierarchy).
 
     Attributes:
         state: the kinematic state.
-        levels: the levels with rows (levels holding only speed limits are left out).
+        jacobians: (M, nv) every level's world-aligned rows; solved: (M, n) the columns solved (``jacobians`` itself
+            unless free floating: the generalized rows); references: (M,); activations: (M,) in [0, 1].
         speed_limits: the speed limits found in the levels or given.
         joint_limits: the joint-limit objectives (their limits become position-rate bounds).
         free_floating: only the arm is solved.
         vehicle_map: free floating: T_b (n_vehicle, n_arm) with v_vehicle = T_b qdot_arm; else None.
     """
 
-    state: Configuration
-    levels: list[LevelRows]
-    speed_limits: list[VelocityLimit]
-    joint_limits: list[JointLimits]
-    free_floating: bool
-    vehicle_map: np.ndarray | None
+    def __init__(self, state: Configuration, plan: HierarchyPlan, stacks: tuple[np.ndarray, ...],
+                 values: list, vehicle_map: np.ndarray | None) -> None:
+        self.state, self._plan, self._values, self.vehicle_map = state, plan, values, vehicle_map
+        self.jacobians, self.solved, self.references, self.activations = stacks
+        self.speed_limits, self.joint_limits = plan.speed_limits, plan.joint_limits
+        self.free_floating = plan.free_floating
+
+    @cached_property
+    def levels(self) -> list[LevelRows]:
+        """The levels with rows (levels holding only speed limits are left out), views of the stacks."""
+        plan = self._plan
+        errors: list[np.ndarray | None] = [None] * len(plan.levels)
+        objectives: list[list[InequalityRows]] = [[] for _ in plan.levels]
+        for (number, _, _, command, _), value in zip(plan._blocks, self._values):
+            if command is not None:
+                errors[number] = value
+            else:
+                objectives[number].append(value)
+        rows = []
+        offsets = plan.offsets.tolist()
+        for number, level in enumerate(plan.levels):
+            span = slice(offsets[number], offsets[number + 1])
+            task_error = errors[number]
+            task_jacobian = task_command = None
+            if task_error is not None:
+                tasks = slice(offsets[number], offsets[number] + task_error.size)
+                task_jacobian, task_command = self.jacobians[tasks], self.references[tasks]
+            rows.append(LevelRows(level.index, self.jacobians[span], self.solved[span], self.references[span],
+                                  self.activations[span], objectives[number], level.inequalities, task_jacobian,
+                                  task_error, task_command, bool(plan.equality[number])))
+        return rows
+
+    def objective_rows(self) -> list[InequalityRows]:
+        """The inequality objectives' rows, in priority order (those of :attr:`levels`, without forming them)."""
+        values = self._values
+        return [values[index] for index in self._plan._objective_blocks]
 
     @property
     def size(self) -> int:
@@ -133,71 +183,15 @@ def split_levels(levels: Levels) -> tuple[list[tuple[int, list[Task | Inequality
     return rows, limits
 
 
-class ItemRows:
-    """The rows of tasks and objectives evaluated at one configuration, by item, for a second hierarchy over some of
-    the same items at the same configuration: the actuated chain re-solves the arm at the q of its reference through
-    levels that share the reference's objectives and task (:meth:`HierarchyPlan.evaluate` fills it at the first
-    solve and reads it at the second), so each is evaluated once per step; a run's recorder reads the objectives'
-    rows of the step's q from it (:meth:`evaluated_at`).
-
-    Its owner says what it holds: the rows stay valid while the tasks' targets and the objectives' bounds are those
-    of the first evaluation, and the owner calls :meth:`clear` before one of them changes. An evaluation at another
-    configuration (another state, or q changed by value) empties it itself.
-    """
-
-    def __init__(self) -> None:
-        self.state: Configuration | None = None
-        self.q: list[float] = []  # the q the rows were evaluated at, as floats (compared by value at each read)
-        self._objectives: dict[int, tuple[Inequality, InequalityRows]] = {}  # id -> (objective kept alive, rows)
-        self._tasks: dict[tuple[int, ...], tuple[tuple[Task, ...], tuple]] = {}  # ids -> (tasks, stacked terms)
-
-    def clear(self) -> None:
-        """Forget every row (a target or a bound is about to change)."""
-        self.state = None
-        self._objectives.clear()
-        self._tasks.clear()
-
-    def evaluated_at(self, q: np.ndarray) -> ItemRows | None:
-        """These rows when they were evaluated at q (nq,) (compared by value), else None: what a recorder of the
-        row at q reads instead of evaluating the objectives again."""
-        return self if self.state is not None and q.tolist() == self.q else None
-
-    def at(self, state: Configuration) -> ItemRows:
-        """These rows for ``state``: emptied first when they were evaluated at another state or q."""
-        q = state.q.tolist()  # one read; list equality is numpy's elementwise == over every entry (NaN unequal)
-        if state is not self.state or q != self.q:
-            self.clear()
-            self.state, self.q = state, q
-        return self
-
-    def objective(self, item: Inequality) -> InequalityRows:
-        """The objective's rows at the state (evaluated at the first call)."""
-        kept = self._objectives.get(id(item))
-        if kept is None:
-            kept = self._objectives[id(item)] = (item, item.rows(self.state))
-        return kept[1]
-
-    def tasks(self, tasks: tuple[Task, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The tasks' stacked (Jacobian, error, feedforward) at the state (:func:`~uvms.solvers.stack.stacked_terms`,
-        evaluated at the first call; never written by a solver)."""
-        key = tuple(map(id, tasks))
-        kept = self._tasks.get(key)
-        if kept is None:
-            kept = self._tasks[key] = (tasks, stacked_terms(self.state, tasks))
-        return kept[1]
-
-
 @dataclass(frozen=True)
 class PlannedLevel:
-    """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities;
-    ``single``: the level's one objective when it holds nothing else (its rows are the level's, nothing stacked)."""
+    """One level's items, sorted once: equality tasks (stacked in order, then K applied), then inequalities."""
 
     index: int
     tasks: tuple[Task, ...]
     inequalities: tuple[Inequality, ...]
     command: object  # (error (k,), feedforward (k,)) -> xdot_d + K e (k,), the task gain prepared
-    ones: np.ndarray  # (k,) the equality rows' activations, shared by every evaluation (read, never written)
-    single: Inequality | None = None
+    ones: np.ndarray  # (k,) the equality rows' activations
 
 
 class HierarchyPlan:
@@ -232,55 +226,111 @@ class HierarchyPlan:
             dim = sum(task.dim for task in tasks)
             command = prepared_gain(gain, dim) if tasks else None
             inequalities = tuple(item for item in level if isinstance(item, Inequality))
-            single = inequalities[0] if not tasks and len(inequalities) == 1 else None
-            self.levels.append(PlannedLevel(index, tasks, inequalities, command, np.ones(dim), single))
+            self.levels.append(PlannedLevel(index, tasks, inequalities, command, np.ones(dim)))
         self.joint_limits = [item for level in self.levels for item in level.inequalities
                              if item.bounds_joint_positions]
         self.size = robot.n_arm if free_floating else robot.nv
         sizes = [sum(item.dim for item in (*level.tasks, *level.inequalities)) for level in self.levels]
         self.offsets = np.array([0, *itertools.accumulate(sizes)], dtype=np.int64)  # (L + 1,) each level's first row
         self.equality = np.array([bool(level.tasks) and not level.inequalities for level in self.levels])  # (L,)
+        # the stacks' layout, read at every evaluation: rows M, each level's first row and span
+        starts = self.offsets.tolist()
+        self._count, self._starts, self._spans = starts[-1], starts[:-1], list(itertools.pairwise(starts))
+        self._activations = np.zeros(self._count)  # (M,) the equality tasks' rows weigh 1
+        # the rows' blocks, level after level: (level, tasks, their key in an ItemRows, command, rows) for a level's
+        # equality tasks (command: the scalar K, or prepared_gain's function), (level, objective, None, None, rows)
+        # for each objective
+        self._blocks: list[tuple[int, object, tuple | None, object, slice]] = []
+        # a scalar K (checked by prepared_gain): the command written by one compiled call, prepared_gain's numbers
+        scalar = float(gain) if np.ndim(gain) == 0 else None
+        for number, (level, row) in enumerate(zip(self.levels, self._starts)):
+            if level.tasks:
+                self._activations[row:row + level.ones.size] = 1.0
+                self._blocks.append((number, level.tasks, tuple(map(id, level.tasks)),
+                                     level.command if scalar is None else scalar, slice(row, row + level.ones.size)))
+                row += level.ones.size
+            for item in level.inequalities:
+                self._blocks.append((number, item, None, None, slice(row, row + item.dim)))
+                row += item.dim
+        self._objective_blocks = [index for index, block in enumerate(self._blocks) if block[3] is None]
+        # what an evaluation reads: (runs copied, blocks taken, blocks evaluated), all evaluated without a source
+        self._all = ([], [], [(index, *block[1:]) for index, block in enumerate(self._blocks)])
+        self._gatherings: dict[HierarchyPlan, tuple[list, list, list]] = {}  # per source plan, made once
+
+    def _gathering(self, source: HierarchyPlan) -> tuple[list[tuple[slice, slice]], list[tuple[int, int]], list]:
+        """How an evaluation reads the objectives ``source``'s evaluation wrote (once per source plan): runs of rows
+        (this plan's rows, the source's) copied at once, (block, source block) whose rows those are, and the blocks
+        evaluated here (the tasks, whose command is this plan's, and objectives the source does not hold)."""
+        found = self._gatherings.get(source)
+        if found is None:
+            where: dict[int, int] = {}  # id of an objective -> its first block in the source
+            for index, block in enumerate(source._blocks):
+                if block[3] is None:
+                    where.setdefault(id(block[1]), index)
+            runs, taken, blocks = [], [], []
+            for index, block in enumerate(self._blocks):
+                origin = where.get(id(block[1])) if block[3] is None else None
+                if origin is None:
+                    blocks.append((index, *block[1:]))
+                    continue
+                taken.append((index, origin))
+                target, rows = block[4], source._blocks[origin][4]
+                if runs and runs[-1][0].stop == target.start and runs[-1][1].stop == rows.start:  # one run
+                    runs[-1] = (slice(runs[-1][0].start, target.stop), slice(runs[-1][1].start, rows.stop))
+                else:
+                    runs.append((target, rows))
+            found = self._gatherings[source] = (runs, taken, blocks)
+        return found
 
     def evaluate(self, state: Configuration, shared: ItemRows | None = None) -> Hierarchy:
-        """Every level's rows at ``state`` (its kinematics computed once), and the map of solved columns to v;
-        ``shared``: the items' rows another hierarchy evaluated at ``state`` (read, and filled with the others)."""
+        """Every level's rows at ``state`` (its kinematics computed once) written into the stacks, and the map of
+        solved columns to v; ``shared``: the items' rows another hierarchy evaluated at ``state`` (read, and filled
+        with the others).
+
+        The stacks are new at each evaluation (a result's diagnostics keep views of them); each level writes its
+        rows at its offset (no per-level stack, no second concatenation)."""
         items = shared.at(state) if shared is not None else None
-        rows = [self._level_rows(state, level, items) for level in self.levels]
-        vehicle_map = None
+        count = self._count
+        jacobians, references = np.empty((count, self.robot.nv)), np.empty(count)
+        activations = self._activations.copy()  # the equality rows' 1 in place, the objectives' written
+        values = [None] * len(self._blocks)  # per block: the tasks' error, or the objective's rows
+        runs, taken, blocks = self._all
+        source = None if items is None else items.source
+        if source is not None and source[0] is not self:  # objectives another hierarchy wrote: copied run by run
+            runs, taken, blocks = self._gathering(source[0])
+            source_jacobians, source_references, source_activations = source[1]
+            for target, origin in runs:
+                jacobians[target] = source_jacobians[origin]
+                references[target] = source_references[origin]
+                activations[target] = source_activations[origin]
+            source_values = source[2]
+            for index, origin in taken:
+                values[index] = source_values[origin]
+        first = items is not None and items.empty
+        command_into = _COMMAND_INTO or _command_into()
+        for index, item, key, command, rows in blocks:  # one loop over the plan's blocks, level after level
+            if command is not None:  # a level's equality tasks: their rows and command xdot_d + K e
+                task_jacobian, task_error, feedforward = (stacked_terms(state, item) if items is None
+                                                          else items.tasks(item, key))
+                jacobians[rows] = task_jacobian
+                if command.__class__ is float:  # a scalar K
+                    command_into(task_error, feedforward, command, references[rows])
+                else:
+                    references[rows] = command(task_error, feedforward)
+                values[index] = task_error
+            else:  # an objective's rows written in place (read where another hierarchy evaluated them)
+                values[index] = (item.rows_into(state, jacobians[rows], activations[rows], references[rows])
+                                 if items is None else
+                                 items.objective_into(item, jacobians[rows], activations[rows], references[rows]))
+        if first:  # every objective evaluated here: the next hierarchy at this state copies them from these stacks
+            items.source = (self, (jacobians, references, activations), values)
+        vehicle_map, solved = None, jacobians
         if self.free_floating:
+            solved = (np.concatenate([state.generalized(jacobians[start:end]) for start, end in self._spans])
+                      if self.levels else np.zeros((0, self.size)))
             a_base, a_arm = state.centroidal_split()
             vehicle_map = -solve_base_block(a_base, a_arm)  # (n_vehicle, n_arm)
-        return Hierarchy(state=state, levels=rows, speed_limits=self.speed_limits, joint_limits=self.joint_limits,
-                         free_floating=self.free_floating, vehicle_map=vehicle_map)
-
-    def _level_rows(self, state: Configuration, level: PlannedLevel, shared: ItemRows | None) -> LevelRows:
-        """One level's rows at ``state``: equality tasks first, then the inequalities in their order (``shared``:
-        where already evaluated items are read)."""
-        single = level.single
-        if single is not None:  # the common inequality level: one objective's own arrays
-            rows = single.rows(state) if shared is None else shared.objective(single)
-            jacobian = rows.jacobian
-            return LevelRows(level.index, jacobian, state.generalized(jacobian) if self.free_floating else jacobian,
-                             rows.reference, rows.activation, [rows], level.inequalities)
-        inequalities = ([item.rows(state) for item in level.inequalities] if shared is None
-                        else [shared.objective(item) for item in level.inequalities])
-        task_jacobian = task_error = task_command = None
-        if level.tasks:
-            task_jacobian, task_error, feedforward = (stacked_terms(state, level.tasks) if shared is None
-                                                      else shared.tasks(level.tasks))
-            task_command = level.command(task_error, feedforward)
-            if not inequalities:  # the common equality level: its own arrays, nothing to stack
-                solved = state.generalized(task_jacobian) if self.free_floating else task_jacobian
-                return LevelRows(level.index, task_jacobian, solved, task_command, level.ones, [], (), task_jacobian,
-                                 task_error, task_command, True)
-        head = [(task_jacobian, task_command, level.ones)] if task_jacobian is not None else []
-        blocks = head + [(rows.jacobian, rows.reference, rows.activation) for rows in inequalities]
-        jacobian = np.vstack([block[0] for block in blocks])
-        reference = np.concatenate([block[1] for block in blocks])
-        activation = np.concatenate([block[2] for block in blocks])
-        solved = state.generalized(jacobian) if self.free_floating else jacobian
-        return LevelRows(level.index, jacobian, solved, reference, activation, inequalities, level.inequalities,
-                         task_jacobian, task_error, task_command)
+        return Hierarchy(state, self, (jacobians, solved, references, activations), values, vehicle_map)
 
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""

@@ -42,7 +42,8 @@ from ..robot.robot import Robot
 from ..tasks.objectives import VelocityLimit
 from .base import Solver
 from .cascade import PREFERRED_SOLVERS, Cascade, installed_solvers, level_attempts, qp_solver, solve_level
-from .hierarchy import Hierarchy, HierarchyPlan, ItemRows, LevelRows, Levels, solved_rows, speed_ratio
+from .hierarchy import Hierarchy, HierarchyPlan, LevelRows, Levels, solved_rows, speed_ratio
+from .item_rows import ItemRows
 from .result import SolverResult
 from .saturation import RateRows, speed_maximum, velocity_box
 

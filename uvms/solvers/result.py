@@ -9,7 +9,7 @@ sigma_min and the rows a solver gives as functions (a prepared CLIK step compute
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
@@ -134,14 +134,19 @@ class SolverResult:
         extras: what one method alone reports (read-only): ``method`` (task priority: "classic" or
             "robust"), ``level_sigma_min`` (task priority: one per level), ``solver_status``, ``slacks`` and
             ``solver`` (QP hierarchy).
+
+    ``objectives`` (by name): a function giving the inequality objectives' rows in priority order, those of
+    :attr:`levels`, from which :attr:`activity` is read without forming the levels.
     """
 
     def __init__(self, v: np.ndarray, sigma_min: float | Callable[[], float], damping: float,
                  levels: tuple[SolvedRows, ...] | Callable[[], tuple[SolvedRows, ...]] = (), *,
                  free_floating: bool = False, limits_active: tuple[str, ...] = (), scales: tuple[float, ...] = (),
                  speed_ratio: float = 0.0, extras: Mapping[str, object] | None = None,
-                 binding: Mapping[str, bool] | Callable[[], Mapping[str, bool]] | None = None) -> None:
+                 binding: Mapping[str, bool] | Callable[[], Mapping[str, bool]] | None = None,
+                 objectives: Callable[[], Sequence[InequalityRows]] | None = None) -> None:
         self.v = v
+        self._objective_rows = objectives
         self.damping = damping
         self.free_floating = free_floating
         self.limits_active = limits_active
@@ -208,12 +213,18 @@ class SolverResult:
     @cached_property
     def activity(self) -> Mapping[str, bool]:
         """Per objective name, in priority order, whether it is active (:attr:`objectives`' ``active`` alone: what a
-        recorder reads at every row, without the statuses' violations)."""
-        return {rows.name: self._active(rows) for level in self.levels for rows in level.objectives}
+        recorder reads at every row, without the statuses' violations; from the objectives' rows when the solver
+        gave them, without forming its levels)."""
+        rows = (self._objective_rows() if self._objective_rows is not None
+                else [rows for level in self.levels for rows in level.objectives])
+        return {objective.name: self._active(objective) for objective in rows}
 
     def _active(self, rows: InequalityRows) -> bool:
         """Whether the objective of ``rows`` is active: some activation > 0, or (QP hierarchy) binding."""
-        return bool((rows.activation > 0).any()) if self.binding is None else self.binding.get(rows.name, False)
+        if self.binding is not None:
+            return self.binding.get(rows.name, False)
+        # (activation > 0).any() over the few rows as floats, without numpy's dispatch (NaN > 0 is False in both)
+        return any(value > 0.0 for value in rows.activation.tolist())
 
     @cached_property
     def objectives(self) -> tuple[ObjectiveStatus, ...]:

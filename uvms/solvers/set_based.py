@@ -59,7 +59,8 @@ from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..tasks.objectives import VelocityLimit
 from .base import Solver
-from .hierarchy import Hierarchy, HierarchyPlan, ItemRows, Levels, last_task_sigma, solved_rows, speed_ratio
+from .hierarchy import Hierarchy, HierarchyPlan, Levels, last_task_sigma, solved_rows, speed_ratio
+from .item_rows import ItemRows
 from .result import SolverResult
 from .saturation import TOLERANCE, RateRows, speed_maximum
 
@@ -119,12 +120,12 @@ class ICAT:
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
-        count = len(hierarchy.levels)
+        count = equality.size
         contributions, sigmas = np.empty((count, self.size)), np.empty(count)
         if not count:
             return contributions, sigmas, 0.0
-        jacobians, references, activations = stacked_levels(hierarchy)
-        converged, largest = self._icat_into(jacobians, references, activations, offsets, equality,
+        jacobians = hierarchy.solved
+        converged, largest = self._icat_into(jacobians, hierarchy.references, hierarchy.activations, offsets, equality,
                                              *self._kernel_constants, contributions, sigmas)
         if not converged:
             converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
@@ -140,27 +141,16 @@ class ICAT:
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
-        count = len(hierarchy.levels)
+        count = equality.size
         contributions, sigmas = np.empty((count, self.size)), np.empty(count)
         total, scales = np.empty(self.size), np.empty(count)
-        jacobians, references, activations = stacked_levels(hierarchy)
-        converged, largest, ratio = self._icat_saturated_into(jacobians, references, activations, offsets, equality,
-                                                              *self._kernel_constants, q, *box, contributions, sigmas,
-                                                              total, scales)
+        jacobians = hierarchy.solved
+        converged, largest, ratio = self._icat_saturated_into(jacobians, hierarchy.references, hierarchy.activations,
+                                                              offsets, equality, *self._kernel_constants, q, *box,
+                                                              contributions, sigmas, total, scales)
         if not converged:
             converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
         return total, sigmas, largest, tuple(scales.tolist()), ratio
-
-
-def stacked_levels(hierarchy: Hierarchy) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The levels' solved rows (M, n), references (M,) and activations (M,) stacked, as the compiled iCAT reads them
-    (one level: its own arrays)."""
-    levels = hierarchy.levels
-    if len(levels) > 1:
-        return (np.concatenate([level.solved for level in levels]),
-                np.concatenate([level.reference for level in levels]),
-                np.concatenate([level.activation for level in levels]))
-    return np.ascontiguousarray(levels[0].solved, dtype=float), levels[0].reference, levels[0].activation
 
 
 # ------------------------------------------------------------------------------- the solver
@@ -233,7 +223,7 @@ class SetBasedSolver(Solver):
         state = self._checked(configuration)
         plan = self.plan
         hierarchy = plan.evaluate(state, shared)
-        if hierarchy.levels and not self.free_floating:  # the recursion and the box in one compiled call
+        if plan.levels and not self.free_floating:  # the recursion and the box in one compiled call
             solved, sigmas, used, scales, ratio = self.icat.solve_saturated(hierarchy, plan.offsets, plan.equality,
                                                                             state.q, self._box)
         else:
@@ -242,7 +232,8 @@ class SetBasedSolver(Solver):
         v = hierarchy.velocity(solved)
         return SolverResult(v, lambda: last_task_sigma(hierarchy, sigmas), used, lambda: solved_rows(hierarchy),
                             free_floating=self.free_floating, scales=scales,
-                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio)
+                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio,
+                            objectives=hierarchy.objective_rows)
 
 
 def saturate(hierarchy: Hierarchy, contributions: np.ndarray, q: np.ndarray,

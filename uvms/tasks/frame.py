@@ -11,12 +11,25 @@ from ..errors import UVMSError
 from ..numerics.validate import finite_array
 from ..robot.configuration import Configuration
 from ..robot.conventions import pose_from_xyzrpy, wrap_angles
-from ..robot.kinematics import axis_rows
+from ..robot.kinematics import axis_rows, support_columns
 from ..robot.robot import Robot, check_robot
 from .task import Task
 
 ORIENTATION_ERRORS = ("log", "euler")
 matrixToRpy = pin.rpy.matrixToRpy
+
+#: The compiled rows of a frame task, bound at the first evaluation (:func:`_frame_rows`); no rpy: the log error.
+_FRAME_ROWS = None
+_NO_RPY = np.zeros(0)
+
+
+def _frame_rows():
+    """Bind :func:`uvms.numerics._kernels.pose.frame_rows_into` (numba: loaded where a task is first evaluated, not
+    by ``import uvms``; later evaluations skip the import)."""
+    global _FRAME_ROWS
+    from ..numerics._kernels.pose import frame_rows_into
+    _FRAME_ROWS = frame_rows_into
+    return frame_rows_into
 
 
 class FrameTask(Task):
@@ -64,6 +77,14 @@ class FrameTask(Task):
         self._target_rpy: np.ndarray | None = None  # its rpy [rad] when the setter knew them
         self.target_twist = np.zeros(6)
         self._target_parts: tuple | None = None  # what terms() reads of the target, once per set_target
+        # position rows only, no mimic joint: terms() forms them from the joint kinematics in one compiled call
+        # (getFrameJacobian's and the frame placement's numbers; an orientation row keeps Pinocchio's log3)
+        self._position_rows = not np.any(self.rows >= 3) and not robot.mimic_joint_names
+        if self._position_rows:
+            frame_data = robot.model.frames[self.frame_id]
+            self._joint = int(frame_data.parentJoint)
+            self._placement = np.ascontiguousarray(frame_data.placement.homogeneous)  # (4, 4)
+            self._columns = support_columns(robot.model, self._joint)
         if target is not None:
             self.set_target(target)
 
@@ -189,6 +210,11 @@ class FrameTask(Task):
     def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(jacobian (k, nv), error (k,), feedforward (k,)) at once: each rotation read and each rpy computed once."""
         translation, rotation, target_rpy, feedforward = self.target_terms()
+        if self._position_rows:  # (:func:`~uvms.numerics._kernels.pose.frame_rows_into`)
+            jacobian, error = np.empty((self.dim, state.model.nv)), np.empty(self.dim)
+            (_FRAME_ROWS or _frame_rows())(*state.joint_arrays(self._joint), self._placement, self._columns, self.rows,
+                                           translation, rotation, _NO_RPY, jacobian, error)
+            return jacobian, error, feedforward.copy()
         pose = state.pose(self.frame_id)
         jacobian = state.jacobian(self.frame_id)
         if self.orientation == "log":

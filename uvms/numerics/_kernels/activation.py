@@ -36,8 +36,8 @@ def bell_into(depth: np.ndarray, band: np.ndarray, step: bool, out: np.ndarray) 
 
 
 @njit(cache=True)
-def activation_reference_into(value: np.ndarray, bounds: np.ndarray, gain: float, step: bool,
-                              out: np.ndarray) -> None:
+def activation_reference_into(value: np.ndarray, bounds: np.ndarray, gain: float, step: bool, activation: np.ndarray,
+                              reference: np.ndarray) -> None:
     """The activation and the reference rate (k,) of an inequality objective at x = ``value`` (k,).
 
     Each row answers to its nearer bound (the only one when the other is infinite): activation the bell of
@@ -45,11 +45,12 @@ def activation_reference_into(value: np.ndarray, bounds: np.ndarray, gain: float
 
     Args:
         value: x (k,); bounds: (5, k) lower, upper, band, lower + band, upper - band; gain: [1/s];
-        step: the hard switch instead of the cosine bell; out: (2, k) written with the activation, the reference.
+        step: the hard switch instead of the cosine bell; activation, reference: (k,) written (views of a
+            solver's stacked rows, or an objective's own arrays).
     """
     for row in range(value.size):
         lower, upper = bounds[0, row], bounds[1, row]
         near_lower = (value[row] - lower) <= (upper - value[row])
         depth = value[row] - lower if near_lower else upper - value[row]
-        out[0, row] = bell_value(depth, bounds[2, row], step)
-        out[1, row] = gain * ((bounds[3, row] if near_lower else bounds[4, row]) - value[row])
+        activation[row] = bell_value(depth, bounds[2, row], step)
+        reference[row] = gain * ((bounds[3, row] if near_lower else bounds[4, row]) - value[row])

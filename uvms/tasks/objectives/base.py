@@ -200,10 +200,10 @@ class Inequality(ABC):
     def _activation_reference(self, value: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(activation (k,), reference (k,)) at x = ``value`` in one compiled call
         (:func:`uvms.numerics._kernels.activation.activation_reference_into`)."""
-        kernel = _ACTIVATION_KERNEL or _activation_kernel()
-        out = np.empty((2, self.dim))  # activation, reference
-        kernel(np.ascontiguousarray(value, dtype=float), self._bounds, self.gain, self._step, out)
-        return out[0], out[1]
+        activation, reference = np.empty(self.dim), np.empty(self.dim)
+        (_ACTIVATION_KERNEL or _activation_kernel())(np.ascontiguousarray(value, dtype=float), self._bounds, self.gain,
+                                                     self._step, activation, reference)
+        return activation, reference
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
         """(x(q) (k,), J (k, nv)) at ``state``; an objective whose two share one computation gives both at once."""
@@ -214,12 +214,31 @@ class Inequality(ABC):
         computes them, inline: the solvers call this for every objective at every step)."""
         return self._rows(*self.value_jacobian(state))
 
+    def rows_into(self, state: Configuration, jacobian: np.ndarray, activation: np.ndarray,
+                  reference: np.ndarray) -> InequalityRows:
+        """:meth:`rows` written into a solver's stacked rows: J into ``jacobian`` (k, nv), the activation and the
+        reference into ``activation`` and ``reference`` (k,) (views the rows returned keep: the same numbers as
+        :meth:`rows`). A kind whose rows a kernel writes in place overrides it; any other is evaluated by
+        :meth:`rows` and copied."""
+        rows = self.rows(state)
+        jacobian[:] = rows.jacobian
+        activation[:] = rows.activation
+        reference[:] = rows.reference
+        return InequalityRows(self.name, rows.value, jacobian, self.lower, self.upper, activation, reference, self.gain,
+                              rows.pairs)
+
     def _rows(self, value: np.ndarray, jacobian: np.ndarray, pairs: np.ndarray | None = None) -> InequalityRows:
         """The rows of x = ``value`` (k,) and J = ``jacobian`` (k, nv) (``pairs``: a collision objective's)."""
-        value = np.ascontiguousarray(value, dtype=float)
-        out = np.empty((2, self.dim))  # activation, reference: the rows keep them
-        (_ACTIVATION_KERNEL or _activation_kernel())(value, self._bounds, self.gain, self._step, out)
-        return InequalityRows(self.name, value, jacobian, self.lower, self.upper, out[0], out[1], self.gain, pairs)
+        activation, reference = np.empty(self.dim), np.empty(self.dim)  # the rows keep them
+        return self._rows_of(np.ascontiguousarray(value, dtype=float), jacobian, activation, reference, pairs)
+
+    def _rows_of(self, value: np.ndarray, jacobian: np.ndarray, activation: np.ndarray, reference: np.ndarray,
+                 pairs: np.ndarray | None = None) -> InequalityRows:
+        """The rows of x = ``value`` (k,) (float, contiguous) and J = ``jacobian`` (k, nv), the activation and the
+        reference written into ``activation`` and ``reference`` (k,)."""
+        (_ACTIVATION_KERNEL or _activation_kernel())(value, self._bounds, self.gain, self._step, activation, reference)
+        return InequalityRows(self.name, value, jacobian, self.lower, self.upper, activation, reference, self.gain,
+                              pairs)
 
     def shown(self, value: np.ndarray) -> np.ndarray:
         """A value (..., k) in the units figures draw it in (:attr:`unit`): its own, unless a kind says otherwise."""

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -11,10 +10,23 @@ from ...errors import FrameNotFound, ObjectiveError
 from ...numerics.validate import finite_array
 from ...robot.configuration import Configuration
 from ...robot.robot import Robot
-from .base import Inequality, finite_number, vehicle_frame_id
+from .base import Inequality, InequalityRows, finite_number, vehicle_frame_id
 
 #: Below this tilt [rad] the tilt's gradient is undefined (a cone's apex); the Jacobian row is taken as 0.
 LEVEL_TILT = 1e-9
+
+
+#: The compiled rows of the tilt and of a plane clearance, bound at the first evaluation (:func:`_kernels`).
+_KERNELS = None
+
+
+def _kernels() -> tuple:
+    """Bind :func:`uvms.numerics._kernels.objectives.tilt_rows_into` and ``clearance_rows_into`` (numba: loaded where
+    an objective is first evaluated, not by ``import uvms``; later evaluations skip the import)."""
+    global _KERNELS
+    from ...numerics._kernels.objectives import clearance_rows_into, tilt_rows_into
+    _KERNELS = (tilt_rows_into, clearance_rows_into)
+    return _KERNELS
 
 
 class VehicleAttitude(Inequality):
@@ -66,14 +78,25 @@ class VehicleAttitude(Inequality):
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
         """(tilt (1,), its Jacobian (1, nv)) from one read of the vehicle's pose."""
+        jacobian = np.empty((1, state.robot.nv))
+        tilt = self._tilt_rows(state, jacobian[0], np.empty(1), np.empty(1))
+        return tilt, jacobian
+
+    def rows_into(self, state: Configuration, jacobian: np.ndarray, activation: np.ndarray,
+                  reference: np.ndarray) -> InequalityRows:
+        """:meth:`rows` written into a solver's stacked rows (one compiled call)."""
+        return InequalityRows(self.name, self._tilt_rows(state, jacobian[0], activation, reference), jacobian,
+                              self.lower, self.upper, activation, reference, self.gain)
+
+    def _tilt_rows(self, state: Configuration, row: np.ndarray, activation: np.ndarray,
+                   reference: np.ndarray) -> np.ndarray:
+        """The tilt (1,) [rad]; its row d tilt / dt (nv,), activation and reference (1,) written
+        (:func:`~uvms.numerics._kernels.objectives.tilt_rows_into`)."""
         x, y, z = state.pose(self.frame_id).rotation[:, 2].tolist()  # the body z axis in world axes
         tilt = np.array([np.arccos(min(max(z, -1.0), 1.0))])  # _tilt's numbers, from the floats read once
-        axis = np.array([y, -x, 0.0])  # z_b x e_z, |axis| = sin(tilt)
-        length = math.sqrt(axis.dot(axis))  # np.linalg.norm's numbers
-        if length < LEVEL_TILT:
-            return tilt, np.zeros((1, state.robot.nv))
-        axis /= length
-        return tilt, -(axis @ state.jacobian(self.frame_id)[3:])[None, :]  # (1, nv)
+        (_KERNELS or _kernels())[0](x, y, tilt, state.jacobian(self.frame_id), LEVEL_TILT, self._bounds, self.gain,
+                                    self._step, row, activation, reference)
+        return tilt
 
 
 def _tilt(z_axis: np.ndarray) -> np.ndarray:
@@ -129,9 +152,25 @@ class PlaneClearance(Inequality):
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
         """(n . (p - p0) (1,), n^T J_p (1, nv)): :meth:`value` and :meth:`jacobian` in one call (a solver's step)."""
-        normal, frame_id = self.normal, self.frame_id
-        return (np.array([normal @ (state.pose(frame_id).translation - self.point)]),
-                (normal @ state.jacobian(frame_id)[:3])[None, :])
+        value, jacobian = np.empty(1), np.empty((1, state.robot.nv))
+        self._clearance_rows(state, value, jacobian[0], np.empty(1), np.empty(1))
+        return value, jacobian
+
+    def rows_into(self, state: Configuration, jacobian: np.ndarray, activation: np.ndarray,
+                  reference: np.ndarray) -> InequalityRows:
+        """:meth:`rows` written into a solver's stacked rows (one compiled call)."""
+        value = np.empty(1)
+        self._clearance_rows(state, value, jacobian[0], activation, reference)
+        return InequalityRows(self.name, value, jacobian, self.lower, self.upper, activation, reference, self.gain)
+
+    def _clearance_rows(self, state: Configuration, value: np.ndarray, row: np.ndarray, activation: np.ndarray,
+                        reference: np.ndarray) -> None:
+        """n . (p - p0) into ``value`` (1,), n^T J_p into ``row`` (nv,), the activation and reference (1,)
+        (:func:`~uvms.numerics._kernels.objectives.clearance_rows_into`)."""
+        frame_id = self.frame_id
+        (_KERNELS or _kernels())[1](self.normal, state.pose(frame_id).translation, self.point,
+                                    state.jacobian(frame_id), self._bounds, self.gain, self._step, value, row,
+                                    activation, reference)
 
 
 class FrameBox(Inequality):

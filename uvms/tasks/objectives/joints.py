@@ -10,7 +10,7 @@ from ...errors import ObjectiveError
 from ...robot.configuration import Configuration
 from ...robot.limits import Limit
 from ...robot.robot import Robot
-from .base import Inequality, finite_number
+from .base import Inequality, InequalityRows, finite_number
 
 #: The band is capped at this fraction of each joint's valid range (a narrow jaw next to wide joints).
 BAND_FRACTION_CAP = 0.25
@@ -104,3 +104,9 @@ class JointLimits(Inequality):
 
     def jacobian(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - constant
         return self._jacobian
+
+    def rows_into(self, state: Configuration, jacobian: np.ndarray, activation: np.ndarray,
+                  reference: np.ndarray) -> InequalityRows:
+        """:meth:`rows` written into a solver's stacked rows: the constant unit rows, x = q_i."""
+        jacobian[:] = self._jacobian
+        return self._rows_of(state.q[self.q_index], jacobian, activation, reference)
