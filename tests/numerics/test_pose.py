@@ -129,3 +129,28 @@ def test_the_se3_product_and_action_are_pinocchios_bit_for_bit(rng):
         action_into(placement.rotation, placement.translation, motion[:3], motion[3:], twist)
         assert twist.tobytes() == placement.act(pin.Motion(motion)).vector.tobytes()
     assert row_two > 300  # the order matters: a port summing every row alike would fail
+
+
+def test_a_frame_tasks_rows_at_a_frame_placed_at_any_angle_are_pinocchios(rng):
+    """A frame fixed to a joint at a generic placement (not the axis-aligned ones of the shipped models): its pose is
+    Pinocchio's SE3 product oMi * placement in Eigen's order of sums (a row's sums differ from left-to-right in
+    about two thirds of random products), so the rows equal getFrameJacobian's and the error oMf's bit for bit."""
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
+    model = robot.model.copy()
+    joint = model.njoints - 1
+    placement = pin.SE3(pin.rpy.rpyToMatrix(*rng.uniform(-3, 3, 3)), rng.uniform(-0.3, 0.3, 3))
+    frame_id = model.addFrame(pin.Frame("tilted_tool", joint, 0, placement, pin.FrameType.OP_FRAME))
+    data, columns, rows = model.createData(), support_columns(model, joint), np.arange(6)
+    for _ in range(50):
+        q = pin.randomConfiguration(model, -np.ones(model.nq), np.ones(model.nq))
+        target = pin.SE3.Random()
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacements(model, data)
+        pose = data.oMf[frame_id]
+        jacobian, got = np.empty((6, model.nv)), np.empty(6)
+        frame_rows_into(data.J, data.oMi[joint].translation, data.oMi[joint].rotation,
+                        np.ascontiguousarray(placement.homogeneous), columns, rows, target.translation,
+                        target.rotation, np.zeros(0), jacobian, got)
+        assert np.array_equal(jacobian, pin.getFrameJacobian(model, data, frame_id, pin.LOCAL_WORLD_ALIGNED))
+        assert np.array_equal(got[:3], target.translation - pose.translation)
+        assert np.array_equal(got[3:], pin.log3(product_in_order(target.rotation, pose.rotation.T)))

@@ -190,7 +190,7 @@ def test_a_second_hierarchy_at_the_same_q_reads_the_shared_rows_and_gives_the_nu
     the second evaluates only its own vehicle level, and both give the numbers of solves that evaluate everything
     themselves, bit for bit; at another q the rows are evaluated again."""
     from uvms.solvers import SOLVERS
-    from uvms.solvers.hierarchy import ItemRows
+    from uvms.solvers.item_rows import ItemRows
     from uvms.tasks.vehicle import VehicleTask
 
     robot = uvms.load("bluerov2_alpha5")
@@ -245,7 +245,7 @@ def pin_moved(robot, q):
 def test_shared_rows_follow_the_value_of_q_in_one_state():
     """An ItemRows read through one state moved in place: kept when q comes back equal (a copy), evaluated again when
     one entry moves by 1e-12 or is NaN."""
-    from uvms.solvers.hierarchy import ItemRows
+    from uvms.solvers.item_rows import ItemRows
 
     robot = uvms.load("bluerov2_alpha5")
     q = robot.configuration(base=[0, 0, -5, 0.02, -0.01, 0.3], arm=[3.0, 1.8, 1.8, 1.0, 0.0])

@@ -10,7 +10,7 @@ from ..dynamics.plant.command import Command, State
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers.base import SolverFactory
-from ..solvers.hierarchy import ItemRows
+from ..solvers.item_rows import ItemRows
 from .reference import TaskReference
 
 

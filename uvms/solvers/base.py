@@ -18,7 +18,7 @@ What the scenario builder reads from a class, never from its name:
   ones); False: stacked and traded off (CLIK). A controller that gives some velocities (the actuated chain's
   vehicle) puts them on a level at the top of a solver that holds priorities, else fixes their columns.
 * :attr:`Solver.shares_rows`: :meth:`Solver.velocity` takes ``shared=`` an
-  :class:`~uvms.solvers.hierarchy.ItemRows`, the rows of its tasks and objectives another solver over some of the
+  :class:`~uvms.solvers.item_rows.ItemRows`, the rows of its tasks and objectives another solver over some of the
   same items already evaluated at the configuration (the actuated chain's two solves at one q evaluate them once).
 
 A controller receives its solver in one form, a :class:`SolverFactory` (the class and its options, built per

@@ -161,14 +161,7 @@ def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
     """
     rotation = np.empty((3, 3))
     translation = np.empty(3)
-    for row in range(3):
-        translation[row] = joint_translation[row] + (joint_rotation[row, 0] * placement[0, 3]
-                                                     + joint_rotation[row, 1] * placement[1, 3]
-                                                     + joint_rotation[row, 2] * placement[2, 3])
-        for col in range(3):
-            rotation[row, col] = (joint_rotation[row, 0] * placement[0, col]
-                                  + joint_rotation[row, 1] * placement[1, col]
-                                  + joint_rotation[row, 2] * placement[2, col])
+    compose_into(joint_rotation, joint_translation, placement[:3, :3], placement[:3, 3], rotation, translation)
     full = np.empty(6)
     for axis in range(3):
         full[axis] = target_translation[axis] - translation[axis]
