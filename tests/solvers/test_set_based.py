@@ -242,28 +242,6 @@ def pin_moved(robot, q):
     return pin.integrate(robot.model, q, np.full(robot.nv, 1e-3))
 
 
-def test_shared_rows_follow_the_value_of_q_in_one_state():
-    """An ItemRows read through one state moved in place: kept when q comes back equal (a copy), evaluated again when
-    one entry moves by 1e-12 or is NaN."""
-    from uvms.solvers.item_rows import ItemRows
-
-    robot = uvms.load("bluerov2_alpha5")
-    q = robot.configuration(base=[0, 0, -5, 0.02, -0.01, 0.3], arm=[3.0, 1.8, 1.8, 1.0, 0.0])
-    state, shared = Configuration(robot, q), ItemRows()
-    objective = alpha5_levels(robot, robot.fk(q))[1]  # the vehicle attitude
-    first = shared.at(state).objective(objective)
-    state.update(q.copy())
-    assert shared.at(state).objective(objective) is first
-    moved = q.copy()
-    moved[0] += 1e-12
-    state.update(moved)
-    assert shared.at(state).objective(objective) is not first
-    kept = shared.objective(objective)
-    moved[0] = np.nan  # NaN is never equal to itself: the rows are dropped
-    state.update(moved, check=False)
-    assert shared.at(state)._objectives == {} and kept is not None
-
-
 def test_an_objectives_rows_are_its_value_jacobian_activation_and_reference(rng):
     """Inequality.rows (one call per step) gives what value, jacobian, activation and reference give one by one, for
     the tilt (tilted and level: a zero row) and the plane clearance (the vehicle, a tool point)."""
