@@ -136,6 +136,16 @@ def one_line(capsys) -> str:
     return err
 
 
+# ------------------------------------------------------------------ numbers
+def signed_numbers(rng: np.random.Generator, size: int) -> np.ndarray:
+    """(size,) numbers over many scales, some exactly zero of either sign: what a kernel written to give numpy's or
+    Pinocchio's bits is checked on (signed zeros included)."""
+    values = rng.standard_normal(size) * 10.0 ** rng.uniform(-6, 3, size)
+    values[rng.random(size) < 0.15] = 0.0
+    values[rng.random(size) < 0.1] = -0.0
+    return values
+
+
 # ------------------------------------------------------------------ kinematics
 def finite_difference_jacobian(robot: uvms.Robot, q: np.ndarray, frame: str, step: float = 1e-6) -> np.ndarray:
     """Central differences of fk along each velocity direction, on the manifold (pin.integrate).

@@ -12,7 +12,7 @@ from uvms.numerics._kernels.pose import action_into, compose_into, frame_rows_in
 from uvms.robot.configuration import Configuration
 from uvms.robot.kinematics import support_columns
 
-from conftest import shipped
+from conftest import shipped, signed_numbers
 
 
 def test_the_ported_log3_is_pinocchios_bit_for_bit(rng):
@@ -99,33 +99,26 @@ def test_a_frame_tasks_euler_rows_are_the_tasks_terms_bit_for_bit(name, rng):
         assert np.array_equal(jacobian, expected_jacobian) and np.array_equal(error, expected_error)
 
 
-def signed(rng: np.random.Generator, size: int) -> np.ndarray:
-    """Numbers over many scales, some exactly zero of either sign."""
-    values = rng.standard_normal(size) * 10.0 ** rng.uniform(-6, 3, size)
-    values[rng.random(size) < 0.15] = 0.0
-    values[rng.random(size) < 0.1] = -0.0
-    return values
-
 
 def test_the_se3_product_and_action_are_pinocchios_bit_for_bit(rng):
     """M * M_p and M.act(Motion) as Pinocchio computes them (Eigen sums rows 0-1 and row 2 of a 3x3 product in
-    different orders: one order for all three rows, the frame task's, differs on row 2 in about a third of the
-    products), signed zeros included; the identity (the shipped vehicles' base placement) among them."""
+    different orders: one order for all three rows differs on row 2 in about a third of the products), signed
+    zeros included; the identity (the shipped vehicles' base placement) among them."""
     rotation, translation, twist = np.empty((3, 3)), np.empty(3), np.empty(6)
     row_two = 0
     for trial in range(4000):
         placement = pin.SE3.Random() if trial % 3 else pin.SE3.Identity()
         if trial % 4 == 0:
-            placement.translation = signed(rng, 3)
+            placement.translation = signed_numbers(rng, 3)
         pose = pin.SE3.Random()
-        pose.translation = signed(rng, 3)
+        pose.translation = signed_numbers(rng, 3)
         composed = pose * placement
         compose_into(pose.rotation, pose.translation, placement.rotation, placement.translation, rotation, translation)
         assert composed.rotation.tobytes() == np.asfortranarray(rotation).tobytes()
         assert composed.translation.tobytes() == translation.tobytes()
         in_order = product_in_order(pose.rotation, placement.rotation)
         row_two += not np.array_equal(in_order[2], rotation[2])
-        motion = signed(rng, 6)
+        motion = signed_numbers(rng, 6)
         action_into(placement.rotation, placement.translation, motion[:3], motion[3:], twist)
         assert twist.tobytes() == placement.act(pin.Motion(motion)).vector.tobytes()
     assert row_two > 300  # the order matters: a port summing every row alike would fail

@@ -23,22 +23,17 @@ from uvms.numerics._kernels.vehicle import (
     velocity_law_into,
 )
 
+from conftest import signed_numbers
+
 
 def same(a: np.ndarray, b: np.ndarray) -> bool:
     return a.shape == b.shape and a.tobytes() == b.tobytes()
 
 
-def vectors(rng: np.random.Generator, size: int) -> np.ndarray:
-    """Numbers over many scales, some exactly zero of either sign."""
-    values = rng.standard_normal(size) * 10.0 ** rng.uniform(-6, 3, size)
-    values[rng.random(size) < 0.15] = 0.0
-    values[rng.random(size) < 0.1] = -0.0
-    return values
-
 
 def test_the_observer_inputs_are_numpys(rng):
     for _ in range(500):
-        v, v0, dt = vectors(rng, 11), vectors(rng, 11), float(10.0 ** rng.uniform(-4, -1))
+        v, v0, dt = signed_numbers(rng, 11), signed_numbers(rng, 11), float(10.0 ** rng.uniform(-4, -1))
         acceleration, mean = np.empty(11), np.empty(11)
         observer_inputs_into(v, v0, dt, acceleration, mean)
         assert same(acceleration, (v - v0) / dt) and same(mean, 0.5 * (v0 + v))
@@ -57,9 +52,9 @@ def numpy_disturbance(needed, applied0, applied, disturbance, gain, short):
 def test_the_disturbance_update_is_numpys_with_and_without_a_shortfall(rng):
     winding = 0
     for trial in range(2000):
-        needed, applied0, applied, disturbance = (vectors(rng, 6) for _ in range(4))
+        needed, applied0, applied, disturbance = (signed_numbers(rng, 6) for _ in range(4))
         gain = -np.expm1(-0.01 / float(rng.uniform(0.05, 1.0)))
-        short = np.zeros(6) if trial % 2 else np.where(rng.random(6) < 0.5, vectors(rng, 6), 0.0)
+        short = np.zeros(6) if trial % 2 else np.where(rng.random(6) < 0.5, signed_numbers(rng, 6), 0.0)
         old, new = numpy_disturbance(needed, applied0, applied, disturbance, gain, short), np.empty(6)
         disturbance_update_into(needed, applied0, applied, disturbance, gain, short, bool(short.any()), new)
         assert same(new, old)
@@ -78,8 +73,8 @@ def test_the_velocity_law_is_pinocchios_and_numpys(rng):
     """nu as base_twist computes it (Pinocchio's SE3.actInv of v's vehicle part), then numpy's PI law and the
     integral's step."""
     for _, placement, rotation, translation in placements(rng, 3000):
-        reference, feedforward, kp, ki, integral, disturbance = (vectors(rng, 6) for _ in range(6))
-        v, dt = vectors(rng, 11), float(10.0 ** rng.uniform(-3, -1))
+        reference, feedforward, kp, ki, integral, disturbance = (signed_numbers(rng, 6) for _ in range(6))
+        v, dt = signed_numbers(rng, 11), float(10.0 ** rng.uniform(-3, -1))
         nu, error, wrench, integral_next = (np.empty(6) for _ in range(4))
         velocity_law_into(reference, v, rotation, translation, feedforward, kp, ki, integral, disturbance, dt, nu,
                           error, wrench, integral_next)
@@ -91,10 +86,10 @@ def test_the_velocity_law_is_pinocchios_and_numpys(rng):
 
 
 def test_the_base_reference_and_its_rate_are_pinocchios_and_numpys_in_place(rng):
-    rate = vectors(rng, 6)
+    rate = signed_numbers(rng, 6)
     old = rate.copy()
     for trial, placement, rotation, translation in placements(rng, 2000):
-        reference, last, dt = vectors(rng, 11), vectors(rng, 6), float(10.0 ** rng.uniform(-3, -1))
+        reference, last, dt = signed_numbers(rng, 11), signed_numbers(rng, 6), float(10.0 ** rng.uniform(-3, -1))
         filtered, nu_ref = trial % 3 != 0, np.empty(6)
         base_reference_into(reference, rotation, translation, last, rate, dt, 0.1, filtered, nu_ref)
         old_nu_ref = placement.actInv(pin.Motion(reference[:6])).vector
@@ -112,8 +107,8 @@ def test_the_vehicle_rows_are_numpys_and_pinocchios(rng):
     wrench = np.empty(6)
     for trial, placement, rotation, translation in placements(rng, 4000):
         n_arm = trial % 7
-        mass, bias = rng.standard_normal((6 + n_arm, 6 + n_arm)) * 50.0, vectors(rng, 6 + n_arm)
-        base, arm = vectors(rng, 6), vectors(rng, n_arm)
+        mass, bias = rng.standard_normal((6 + n_arm, 6 + n_arm)) * 50.0, signed_numbers(rng, 6 + n_arm)
+        base, arm = signed_numbers(rng, 6), signed_numbers(rng, n_arm)
         base_frame = trial % 4 == 1
         joint_rate = placement.act(pin.Motion(base)).vector if base_frame else base
         joint = mass[:6, :6] @ joint_rate + mass[:6, 6:] @ arm + bias[:6]
@@ -130,7 +125,7 @@ def test_the_station_errors_are_pinocchios_and_numpys(rng):
     column-major rotations)."""
     for trial, placement, _, _ in placements(rng, 3000):
         joint, target = pin.SE3.Random(), pin.SE3.Random()
-        joint.translation, target.translation = vectors(rng, 3), vectors(rng, 3)
+        joint.translation, target.translation = signed_numbers(rng, 3), signed_numbers(rng, 3)
         if trial % 5 == 0:  # at the station: the attitude error exactly zero
             target = joint * placement
         pose = joint * placement
@@ -155,11 +150,11 @@ def test_the_pose_reference_is_pinocchios_and_numpys(rng):
     bounded_hits = 0
     for trial in range(3000):
         pose, target = pin.SE3.Random(), pin.SE3.Random()
-        pose.translation = vectors(rng, 3)
-        target.translation = pose.translation.copy() if trial % 7 == 0 else vectors(rng, 3)
+        pose.translation = signed_numbers(rng, 3)
+        target.translation = pose.translation.copy() if trial % 7 == 0 else signed_numbers(rng, 3)
         if trial % 5 == 0:
             target.rotation = pose.rotation  # no attitude error: zeros
-        gains, max_speed, out = np.abs(vectors(rng, 6)), np.abs(vectors(rng, 6)), np.empty(6)
+        gains, max_speed, out = np.abs(signed_numbers(rng, 6)), np.abs(signed_numbers(rng, 6)), np.empty(6)
         old = numpy_pose_reference(pose, target, gains)
         if trial % 2:
             max_speed[trial % 6] = abs(old[trial % 6])  # the bound met exactly
@@ -186,8 +181,8 @@ def test_the_arm_command_is_numpys_clip_lag_and_acceleration(rng):
     tau, dt = 0.1, 0.01
     lag = float(-np.expm1(-dt / np.asarray(tau)))
     for trial in range(3000):
-        arm, rate = vectors(rng, 5), vectors(rng, 5)
-        limit = np.abs(vectors(rng, 5)) + 1e-3
+        arm, rate = signed_numbers(rng, 5), signed_numbers(rng, 5)
+        limit = np.abs(signed_numbers(rng, 5)) + 1e-3
         arm[trial % 5] = -limit[trial % 5] if trial % 2 else limit[trial % 5]  # at the bound exactly
         compensate = trial % 3 != 0
         clipped = np.minimum(np.maximum(arm, -limit), limit)
@@ -234,7 +229,7 @@ def test_the_achieved_ratio_is_numpys(rng):
     """Shortfalls of every sign, a zero asked, achieved exactly 0 or -0 or the asked value (the clip's ties), axes
     within the tolerance."""
     for trial in range(3000):
-        asked, achieved = vectors(rng, 6), vectors(rng, 6)
+        asked, achieved = signed_numbers(rng, 6), signed_numbers(rng, 6)
         achieved[trial % 6] = asked[trial % 6] * (1.0 - 1e-12)  # within the tolerance: 1
         achieved[(trial + 1) % 6] = -0.0 if trial % 2 else 0.0
         asked[(trial + 2) % 6] = 0.0
