@@ -41,6 +41,7 @@ from ..dynamics.plant.actuated import base_twist, lag_factor
 from ..dynamics.plant.command import Command, State
 from ..dynamics.thrusters.fin_allocation import thruster_count
 from ..errors import SolverInputError
+from ..numerics._kernels import Kernel
 from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from ..robot.limits import Limit
 from ..robot.robot import Robot
@@ -293,12 +294,11 @@ def achieved_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1
     """r (6,) = clip(achieved / asked, 0, 1) per wrench axis [N, N m], 1 where the allocation gave what was asked
     (within ``tolerance`` of max(1, |asked|_inf)); a new array, one compiled call
     (:func:`uvms.numerics._kernels.vehicle.achieved_ratio_into`)."""
-    global _ACHIEVED_RATIO
-    if _ACHIEVED_RATIO is None:  # numba: loaded at the first shortfall
-        from ..numerics._kernels.vehicle import achieved_ratio_into as _ACHIEVED_RATIO
     ratio = np.empty(6)
-    _ACHIEVED_RATIO(np.asarray(asked, dtype=float), np.asarray(achieved, dtype=float), float(tolerance), ratio)
+    (_ACHIEVED_RATIO.function or _ACHIEVED_RATIO.load())(np.asarray(asked, dtype=float),
+                                                         np.asarray(achieved, dtype=float), float(tolerance), ratio)
     return ratio
 
 
-_ACHIEVED_RATIO = None
+#: numba loaded at the first shortfall.
+_ACHIEVED_RATIO = Kernel("vehicle", "achieved_ratio_into")

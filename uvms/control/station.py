@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -42,6 +42,7 @@ from ..dynamics.plant.command import State
 from ..dynamics.thrusters.allocation import ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
 from ..errors import SolverInputError, ThrusterLayoutWarning
+from ..numerics._kernels import Kernel
 from ..numerics.inverses import VariableDamping
 from ..robot.configuration import Configuration
 from ..robot.kinematics import held_vehicle_split
@@ -274,7 +275,7 @@ class ActuatedKinematics:
         target, placement = self.vehicle_target, self.base_placement
         # the base frame's pose (base_pose's numbers), |p_d - p| and |log3(R^T R_d)| in one compiled call (Pinocchio's
         # and numpy's numbers; the norms as numpy's norm of a vector computes them, sqrt of x.dot(x))
-        kernel = _STATION_ERRORS if _STATION_ERRORS is not None else _station_errors()
+        kernel = _STATION_ERRORS.function or _STATION_ERRORS.load()
         distance, attitude = kernel(rotation, translation, placement.rotation, placement.translation, target.rotation,
                                     target.translation)
         row = {"vehicle_position_error": distance, "vehicle_attitude_error": attitude, "ee_position": ee}
@@ -356,14 +357,5 @@ def actuated_control(actuated: ActuatedPlant, dt: float, reference: TaskReferenc
                               servo_compensation=settings.servo_compensation)
 
 
-#: The compiled station errors of :meth:`ActuatedKinematics.errors`, bound at the first call (:func:`_station_errors`).
-_STATION_ERRORS = None
-
-
-def _station_errors() -> Callable[..., tuple]:
-    """Bind :func:`uvms.numerics._kernels.vehicle.station_errors` (numba: loaded at the first row, not by
-    ``import uvms``; later rows skip the import)."""
-    global _STATION_ERRORS
-    from ..numerics._kernels.vehicle import station_errors
-    _STATION_ERRORS = station_errors
-    return station_errors
+#: The compiled station errors of :meth:`ActuatedKinematics.errors` (numba loaded at the first row).
+_STATION_ERRORS = Kernel("vehicle", "station_errors")

@@ -44,7 +44,6 @@ in yaw and +60 % in heave (its larger added mass), and a 1.9 t vehicle gains 100
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,6 +54,7 @@ from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import AllocationResult, ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
 from ..errors import SolverInputError
+from ..numerics._kernels import Kernel
 from .settings import DEFAULT_BANDWIDTH, DEFAULT_DAMPING_RATIO, ActuatedSettings, gain_vector
 
 
@@ -109,7 +109,7 @@ def pose_velocity_reference(pose: pin.SE3, target: pin.SE3, gains: float | np.nd
 
 def _pose_reference_of(pose: pin.SE3, target: pin.SE3, gains: np.ndarray, max_speed: np.ndarray | None) -> np.ndarray:
     """:func:`pose_velocity_reference` of gains and max_speed (None: none) given as (6,) float arrays."""
-    kernel = _POSE_REFERENCE if _POSE_REFERENCE is not None else _pose_reference()
+    kernel = _POSE_REFERENCE.function or _POSE_REFERENCE.load()
     reference = np.empty(6)
     kernel(pose.rotation, pose.translation, target.rotation, target.translation, gains,
            gains if max_speed is None else max_speed, max_speed is not None, reference)
@@ -123,17 +123,9 @@ def _six(value: float | np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(np.broadcast_to(np.asarray(value, dtype=float), (6,)))
 
 
-#: The compiled pose reference, bound at the first call (:func:`_pose_reference`).
-_POSE_REFERENCE = None
-
-
-def _pose_reference() -> Callable[..., None]:
-    """Bind :func:`uvms.numerics._kernels.vehicle.pose_reference_into` (numba: loaded at the first call, not by
-    ``import uvms``)."""
-    global _POSE_REFERENCE
-    from ..numerics._kernels.vehicle import pose_reference_into
-    _POSE_REFERENCE = pose_reference_into
-    return pose_reference_into
+#: The compiled pose reference (:func:`uvms.numerics._kernels.vehicle.pose_reference_into`, numba loaded at the
+#: first call).
+_POSE_REFERENCE = Kernel("vehicle", "pose_reference_into")
 
 
 @dataclass(slots=True)

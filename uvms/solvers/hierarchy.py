@@ -20,6 +20,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..numerics._kernels import Kernel
 from ..numerics.checks import prepared_gain
 from ..numerics.inverses import SolverInputError
 from ..robot.configuration import Configuration
@@ -36,17 +37,9 @@ LevelItem = Task | Inequality | VelocityLimit
 Levels = Sequence[LevelItem | Sequence[LevelItem]]
 
 
-#: The compiled command of an equality level, bound at the first evaluation (:func:`_command_into`).
-_COMMAND_INTO = None
-
-
-def _command_into():
-    """Bind :func:`uvms.numerics._kernels.command.command_into` (numba: loaded at the first evaluation, not by
-    ``import uvms``; later evaluations skip the import)."""
-    global _COMMAND_INTO
-    from ..numerics._kernels.command import command_into
-    _COMMAND_INTO = command_into
-    return command_into
+#: The compiled command of an equality level (:func:`uvms.numerics._kernels.command.command_into`, numba loaded at
+#: the first evaluation).
+_COMMAND_INTO = Kernel("command", "command_into")
 
 
 # ----------------------------------------------------------------- the hierarchy at one configuration
@@ -307,7 +300,7 @@ class HierarchyPlan:
             for index, origin in taken:
                 values[index] = source_values[origin]
         first = items is not None and items.empty
-        command_into = _COMMAND_INTO or _command_into()
+        command_into = _COMMAND_INTO.function or _COMMAND_INTO.load()
         for index, item, key, command, rows in blocks:  # one loop over the plan's blocks, level after level
             if command is not None:  # a level's equality tasks: their rows and command xdot_d + K e
                 task_jacobian, task_error, feedforward = (stacked_terms(state, item) if items is None

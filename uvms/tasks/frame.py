@@ -8,6 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import UVMSError
+from ..numerics._kernels import Kernel
 from ..numerics.validate import finite_array
 from ..robot.configuration import Configuration
 from ..robot.conventions import pose_from_xyzrpy, wrap_angles
@@ -18,18 +19,10 @@ from .task import Task
 ORIENTATION_ERRORS = ("log", "euler")
 matrixToRpy = pin.rpy.matrixToRpy
 
-#: The compiled rows of a frame task, bound at the first evaluation (:func:`_frame_rows`); no rpy: the log error.
-_FRAME_ROWS = None
+#: The compiled rows of a frame task (:func:`uvms.numerics._kernels.pose.frame_rows_into`, numba loaded where a task
+#: is first evaluated); no rpy: the log error.
+_FRAME_ROWS = Kernel("pose", "frame_rows_into")
 _NO_RPY = np.zeros(0)
-
-
-def _frame_rows():
-    """Bind :func:`uvms.numerics._kernels.pose.frame_rows_into` (numba: loaded where a task is first evaluated, not
-    by ``import uvms``; later evaluations skip the import)."""
-    global _FRAME_ROWS
-    from ..numerics._kernels.pose import frame_rows_into
-    _FRAME_ROWS = frame_rows_into
-    return frame_rows_into
 
 
 class FrameTask(Task):
@@ -212,8 +205,9 @@ class FrameTask(Task):
         translation, rotation, target_rpy, feedforward = self.target_terms()
         if self._position_rows:  # (:func:`~uvms.numerics._kernels.pose.frame_rows_into`)
             jacobian, error = np.empty((self.dim, state.model.nv)), np.empty(self.dim)
-            (_FRAME_ROWS or _frame_rows())(*state.joint_arrays(self._joint), self._placement, self._columns, self.rows,
-                                           translation, rotation, _NO_RPY, jacobian, error)
+            kernel = _FRAME_ROWS.function or _FRAME_ROWS.load()
+            kernel(*state.joint_arrays(self._joint), self._placement, self._columns, self.rows, translation, rotation,
+                   _NO_RPY, jacobian, error)
             return jacobian, error, feedforward.copy()
         pose = state.pose(self.frame_id)
         jacobian = state.jacobian(self.frame_id)

@@ -32,6 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import ConfigurationError, StepCountError, UVMSError
+from ...numerics._kernels import Kernel
 from ..thrusters.fins import Fins, fins_of
 from ..thrusters.thrusters import Thrusters, allocation_matrix, thrusters_of
 from .command import Command, Controller, State, refuse_fields
@@ -98,10 +99,7 @@ class ActuatedPlant:
     def saturate(self, command: np.ndarray) -> np.ndarray:
         """The command (n,) clipped to [lower, upper] [N] (``np.clip``'s numbers in one compiled call:
         :func:`uvms.numerics._kernels.plant_stage.clipped`)."""
-        global _clipped
-        if _clipped is None:  # numba: loaded where a plant is integrated
-            from ...numerics._kernels.plant_stage import clipped as _clipped
-        return _clipped(np.asarray(command, dtype=float), self.lower, self.upper)
+        return (_CLIPPED.function or _CLIPPED.load())(np.asarray(command, dtype=float), self.lower, self.upper)
 
     def wrench(self, thrusts: np.ndarray) -> np.ndarray:
         """B f (6,) [N, N m], FLU at the base frame origin."""
@@ -119,7 +117,8 @@ class ActuatedPlant:
         return ActuatedPlantSystem(self, controller)
 
 
-_clipped: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None = None
+#: The thrust saturation (:func:`uvms.numerics._kernels.plant_stage.clipped`, numba loaded where a plant is integrated).
+_CLIPPED = Kernel("plant_stage", "clipped")
 
 
 # ------------------------------------------------------------------ model terms used by controllers and records
@@ -159,7 +158,7 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     nb = plant.nb
     wrench = np.empty(6) if out is None else out
     if nb == 6:  # one compiled call, these expressions' numbers (:func:`~.vehicle.vehicle_wrench_into` of _kernels)
-        kernel = _VEHICLE_WRENCH if _VEHICLE_WRENCH is not None else _vehicle_wrench()
+        kernel = _VEHICLE_WRENCH.function or _VEHICLE_WRENCH.load()
         if placement is None:
             placement = plant._base_placement.rotation, plant._base_placement.translation
         kernel(mass, bias, np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float),
@@ -175,17 +174,9 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
     return wrench
 
 
-#: The compiled vehicle rows, bound at the first call (:func:`_vehicle_wrench`).
-_VEHICLE_WRENCH = None
-
-
-def _vehicle_wrench() -> Callable[..., None]:
-    """Bind :func:`uvms.numerics._kernels.vehicle.vehicle_wrench_into` (numba: loaded at the first call, not by
-    ``import uvms``; later calls skip the import)."""
-    global _VEHICLE_WRENCH
-    from ...numerics._kernels.vehicle import vehicle_wrench_into
-    _VEHICLE_WRENCH = vehicle_wrench_into
-    return vehicle_wrench_into
+#: The compiled vehicle rows (:func:`uvms.numerics._kernels.vehicle.vehicle_wrench_into`, numba loaded at the first
+#: call).
+_VEHICLE_WRENCH = Kernel("vehicle", "vehicle_wrench_into")
 
 
 def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: float | np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ...errors import StepCountError, UVMSError
+from ...numerics._kernels import Kernel
 from .command import Controller, State, refuse_fields
 
 #: What a passive plant applies of a Command.
@@ -207,10 +208,7 @@ def check_finite(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether every entry of the float arrays a and b is finite, in one compiled call
     (:func:`uvms.numerics._kernels.plant_stage.all_finite`, loaded at the first call: numba, which a plant's first
     evaluation loads anyway)."""
-    global _all_finite
-    if _all_finite is None:
-        from ...numerics._kernels.plant_stage import all_finite as _all_finite
-    return _all_finite(a, b)
+    return (_ALL_FINITE.function or _ALL_FINITE.load())(a, b)
 
 
-_all_finite: Callable[[np.ndarray, np.ndarray], bool] | None = None
+_ALL_FINITE = Kernel("plant_stage", "all_finite")

@@ -16,7 +16,9 @@ of collision pairs), :mod:`.hydro` (the plant's hydrodynamic terms, every link i
 loop), :mod:`.runge_kutta` (an RK4 step's vector arithmetic), :mod:`.allocation` (the thrust allocation's
 pseudo-inverse step), :mod:`.vehicle` (the vehicle loops' vector arithmetic).
 
-Import a kernel from its module; this package imports nothing, so ``import uvms`` never loads numba.
+Import a kernel from its module; this package imports no numba, so ``import uvms`` never loads it. Code that
+must not load numba before it computes (``import uvms``, a kinematic run) names a kernel by a :class:`Kernel`,
+imported at its first use.
 
 Each module imports numba, so it is loaded where a solver first uses it. The kernels compile at their
 first call and are cached on disk in this package's ``__pycache__`` (or in numba's user cache when the
@@ -26,3 +28,30 @@ package folder is read-only): the first solve after an install or an edit compil
 after editing a module, delete this package's ``__pycache__`` so that the kernels of other modules that call
 into it are compiled again.
 """
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from importlib import import_module
+
+
+class Kernel:
+    """A compiled kernel named by its module of this package and its name, imported at the first use: numba loads
+    there, not with the module that names it. Call it as ``(KERNEL.function or KERNEL.load())(...)``: after the
+    first use one attribute read, no call.
+
+    Args:
+        module: the module's name in this package (e.g. "vehicle"); name: the kernel's name in it.
+    """
+
+    __slots__ = ("module", "name", "function")
+
+    def __init__(self, module: str, name: str) -> None:
+        self.module, self.name = module, name
+        self.function: Callable | None = None  # bound by :meth:`load`
+
+    def load(self) -> Callable:
+        """The kernel (its module imported at the first call; numba compiles or loads it at its own first call)."""
+        if self.function is None:
+            self.function = getattr(import_module(f"{__name__}.{self.module}"), self.name)
+        return self.function

@@ -35,6 +35,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...errors import ObjectiveError
+from ...numerics._kernels import Kernel
 from ...robot.configuration import Configuration
 from ...robot.robot import Robot
 
@@ -42,17 +43,9 @@ from ...robot.robot import Robot
 ACTIVATION_SHAPES = ("cosine", "step")
 
 
-#: The compiled activation and reference, bound at the first evaluation (:func:`_activation_kernel`).
-_ACTIVATION_KERNEL = None
-
-
-def _activation_kernel():
-    """Bind :func:`uvms.numerics._kernels.activation.activation_reference_into` (numba: loaded where an objective
-    is first evaluated, not by ``import uvms``; later evaluations skip the import)."""
-    global _ACTIVATION_KERNEL
-    from ...numerics._kernels.activation import activation_reference_into
-    _ACTIVATION_KERNEL = activation_reference_into
-    return activation_reference_into
+#: The compiled activation and reference (:func:`uvms.numerics._kernels.activation.activation_reference_into`,
+#: numba loaded where an objective is first evaluated).
+_ACTIVATION_KERNEL = Kernel("activation", "activation_reference_into")
 
 
 def bell(depth: np.ndarray, band: np.ndarray, shape: str = "cosine") -> np.ndarray:
@@ -201,8 +194,8 @@ class Inequality(ABC):
         """(activation (k,), reference (k,)) at x = ``value`` in one compiled call
         (:func:`uvms.numerics._kernels.activation.activation_reference_into`)."""
         activation, reference = np.empty(self.dim), np.empty(self.dim)
-        (_ACTIVATION_KERNEL or _activation_kernel())(np.ascontiguousarray(value, dtype=float), self._bounds, self.gain,
-                                                     self._step, activation, reference)
+        kernel = _ACTIVATION_KERNEL.function or _ACTIVATION_KERNEL.load()
+        kernel(np.ascontiguousarray(value, dtype=float), self._bounds, self.gain, self._step, activation, reference)
         return activation, reference
 
     def value_jacobian(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
@@ -236,7 +229,8 @@ class Inequality(ABC):
                  pairs: np.ndarray | None = None) -> InequalityRows:
         """The rows of x = ``value`` (k,) (float, contiguous) and J = ``jacobian`` (k, nv), the activation and the
         reference written into ``activation`` and ``reference`` (k,)."""
-        (_ACTIVATION_KERNEL or _activation_kernel())(value, self._bounds, self.gain, self._step, activation, reference)
+        kernel = _ACTIVATION_KERNEL.function or _ACTIVATION_KERNEL.load()
+        kernel(value, self._bounds, self.gain, self._step, activation, reference)
         return InequalityRows(self.name, value, jacobian, self.lower, self.upper, activation, reference, self.gain,
                               pairs)
 

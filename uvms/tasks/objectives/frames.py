@@ -7,6 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ...errors import FrameNotFound, ObjectiveError
+from ...numerics._kernels import Kernel
 from ...numerics.validate import finite_array
 from ...robot.configuration import Configuration
 from ...robot.robot import Robot
@@ -16,17 +17,10 @@ from .base import Inequality, InequalityRows, finite_number, vehicle_frame_id
 LEVEL_TILT = 1e-9
 
 
-#: The compiled rows of the tilt and of a plane clearance, bound at the first evaluation (:func:`_kernels`).
-_KERNELS = None
-
-
-def _kernels() -> tuple:
-    """Bind :func:`uvms.numerics._kernels.objectives.tilt_rows_into` and ``clearance_rows_into`` (numba: loaded where
-    an objective is first evaluated, not by ``import uvms``; later evaluations skip the import)."""
-    global _KERNELS
-    from ...numerics._kernels.objectives import clearance_rows_into, tilt_rows_into
-    _KERNELS = (tilt_rows_into, clearance_rows_into)
-    return _KERNELS
+#: The compiled rows of the tilt and of a plane clearance (:mod:`uvms.numerics._kernels.objectives`, numba loaded
+#: where an objective is first evaluated).
+_TILT_ROWS = Kernel("objectives", "tilt_rows_into")
+_CLEARANCE_ROWS = Kernel("objectives", "clearance_rows_into")
 
 
 class VehicleAttitude(Inequality):
@@ -94,8 +88,9 @@ class VehicleAttitude(Inequality):
         (:func:`~uvms.numerics._kernels.objectives.tilt_rows_into`)."""
         x, y, z = state.pose(self.frame_id).rotation[:, 2].tolist()  # the body z axis in world axes
         tilt = np.array([np.arccos(min(max(z, -1.0), 1.0))])  # _tilt's numbers, from the floats read once
-        (_KERNELS or _kernels())[0](x, y, tilt, state.jacobian(self.frame_id), LEVEL_TILT, self._bounds, self.gain,
-                                    self._step, row, activation, reference)
+        kernel = _TILT_ROWS.function or _TILT_ROWS.load()
+        kernel(x, y, tilt, state.jacobian(self.frame_id), LEVEL_TILT, self._bounds, self.gain, self._step, row,
+               activation, reference)
         return tilt
 
 
@@ -168,9 +163,9 @@ class PlaneClearance(Inequality):
         """n . (p - p0) into ``value`` (1,), n^T J_p into ``row`` (nv,), the activation and reference (1,)
         (:func:`~uvms.numerics._kernels.objectives.clearance_rows_into`)."""
         frame_id = self.frame_id
-        (_KERNELS or _kernels())[1](self.normal, state.pose(frame_id).translation, self.point,
-                                    state.jacobian(frame_id), self._bounds, self.gain, self._step, value, row,
-                                    activation, reference)
+        kernel = _CLEARANCE_ROWS.function or _CLEARANCE_ROWS.load()
+        kernel(self.normal, state.pose(frame_id).translation, self.point, state.jacobian(frame_id), self._bounds,
+               self.gain, self._step, value, row, activation, reference)
 
 
 class FrameBox(Inequality):
