@@ -209,3 +209,42 @@ def test_a_penetration_where_epa_stops_at_a_wrong_face_is_the_converged_depth():
     coal.distance(second.geometry, place[second.name], first.geometry, place[first.name], request, result)
     assert found.distance[0] == pytest.approx(result.min_distance, abs=1e-6)  # the swapped query
     assert -0.0060 < found.distance[0] < -0.0055
+
+
+# A process's Box queries after uvms built its distances: a user's query first (a box turned so that its first
+# support direction has no zero component), or none, then one penetrating pair of boxes; printed as float.hex.
+BOX_HISTORY = """
+import sys
+import coal, numpy as np, pinocchio as pin
+from uvms.model.distances import PairDistances
+
+model = pin.Model()
+geometry = pin.GeometryModel()
+for name in ("a", "b"):
+    geometry.addGeometryObject(pin.GeometryObject(name, 0, 0, pin.SE3.Identity(), coal.Sphere(0.1)))
+PairDistances(model, geometry, [[0, 1]])
+turned = coal.Transform3s(pin.rpy.rpyToMatrix(0.3, -0.4, 0.5), np.array([3.0, 2.0, 1.0]))
+if sys.argv[1] == "turned box first":
+    coal.distance(coal.Capsule(0.1, 0.3), coal.Transform3s(), coal.Box(1.0, 1.0, 1.0), turned,
+                  coal.DistanceRequest(), coal.DistanceResult())
+request, result = coal.DistanceRequest(), coal.DistanceResult()
+request.enable_signed_distance = True
+rotation = np.array([[0.36, 0.48, -0.8], [-0.8, 0.6, 0.0], [0.48, 0.64, 0.6]])
+coal.distance(coal.Box(0.3, 0.2, 0.1), coal.Transform3s(), coal.Box(0.05, 0.1, 0.4),
+              coal.Transform3s(rotation, np.array([0.1, 0.05, -0.02])), request, result)
+print(result.min_distance.hex(), *(float(x).hex() for x in result.getNearestPoint1()))
+"""
+
+
+def test_box_distances_do_not_depend_on_the_process_s_earlier_box_queries():
+    """coal keeps the inflation of its Box support in a static set by the process's first Box query (1 + 1e-10 or
+    1: ~1e-11 m on a distance); uvms's distances fix it before their first query, so the same pair gives the same
+    bits whichever query came next (unfixed: they differ in the 11th digit)."""
+    import subprocess
+    import sys
+
+    outputs = [subprocess.run([sys.executable, "-c", BOX_HISTORY, order], capture_output=True, text=True, timeout=60,
+                              check=True).stdout.split() for order in ("turned box first", "pair first")]
+    distance = float.fromhex(outputs[0][0])
+    assert -0.2 < distance < -0.05  # the boxes overlap (EPA's depth, ~0.1 m)
+    assert outputs[0] == outputs[1]

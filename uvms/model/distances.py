@@ -87,6 +87,25 @@ def distance_request(tolerance: float = DISTANCE_TOLERANCE) -> object:
     return request
 
 
+def pin_box_support() -> None:
+    """Fix coal's box support inflation for the process: one query of an axis-aligned box along (1, 0, 0).
+
+    coal's support function of a Box scales its negative half-sides by a factor kept in a function-local static,
+    set by the process's FIRST Box support query: 1 + 1e-10 when that query's direction has a zero component, 1
+    otherwise (coal 3.0, ``src/narrowphase/support_functions.cpp``, ``getShapeSupport(const Box*, ...)``: ``static
+    const CoalScalar inflate = (dir.array() == 0).any() ? 1 + 1e-10 : 1.``). A process's signed distances to boxes
+    then depend on which pair it queried first (~1e-11 m), and a solve on a box's tied corners turns that into
+    centimetres within a few steps. This query comes first wherever uvms makes the process's first Box query, so
+    every run, trial and test sees the same box (1 + 1e-10, the factor a run whose first query lies along an axis
+    had before); once the static is set the query changes nothing (a few microseconds).
+    """
+    import coal  # shipped with the pin wheel
+
+    coal.distance(coal.Box(1.0, 1.0, 1.0), coal.Transform3s(), coal.Capsule(0.1, 0.3),
+                  coal.Transform3s(np.eye(3), np.array([3.0, 0.0, 0.0])), coal.DistanceRequest(),
+                  coal.DistanceResult())
+
+
 class PairDistances:
     """Signed distances and Jacobians of chosen pairs of a geometry model.
 
@@ -114,6 +133,7 @@ class PairDistances:
         self._entries = np.array([[self._moved.index(j) if j else -1 for j in pair] for pair in self.joints],
                                  dtype=np.int64).reshape(-1, 2)  # (m, 2): each side's joint in the table, -1: world
         self._data = pin.GeometryData(self.geometry)
+        pin_box_support()  # before this object's first query (the process's first, where uvms queries first)
         for k in range(len(self.pairs)):  # Pinocchio's requests carry GJK's last guess between calls: fresh ones
             self._data.distanceRequests[k] = distance_request()
         # views of the results (a pass over the vector costs 1 us/pair)
