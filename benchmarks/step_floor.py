@@ -1,0 +1,158 @@
+"""The compiled floor of the intervention step (issue 46): what a step costs with no Python between its calls.
+
+One step of ``scenarios/bluerov2_alpha5_intervention.toml`` (its 500th: the run warm, the arm moving) is recorded:
+every numba kernel, every Pinocchio function and every LAPACK call it makes, each with a copy of its arguments.
+They are then replayed back to back, in the step's order, from a list: the same compiled arithmetic on the same
+inputs, each call's own boundary crossing (numba's dispatch, Boost.Python's conversions) kept, the controller's and
+the integrator's Python between them gone. The replay's time, as a ratio to one ``pin.aba`` on the same model
+timed beside it, is what the step would cost if all of its glue were compiled away with its numerics unchanged
+(bit for bit); per call, what each kernel costs.
+
+The recording replaces numba's dispatcher call and ``pinocchio``'s module functions in this process only (the
+script's own process: nothing else imports them patched); it reads numba's ``Dispatcher`` type, so it follows the
+numba of this environment.
+
+    python benchmarks/step_floor.py [--rounds 3] [--step 500]
+"""
+
+from __future__ import annotations
+
+import argparse
+import timeit
+from collections import Counter
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+from numba import _dispatcher
+from numba.core import dispatcher
+
+import uvms
+
+ROOT = Path(uvms.__file__).resolve().parent.parent  # the checkout imported (PYTHONPATH=OLD_TREE: before/after)
+SCENARIO = ROOT / "scenarios" / "bluerov2_alpha5_intervention.toml"
+
+Call = tuple[str, Callable, tuple]  # (kind:name, the original callable, copies of its arguments)
+
+
+class Recorder:
+    """The compiled calls of one step: wraps numba's dispatch, Pinocchio's functions and the LAPACK entry points
+    uvms calls, and keeps (name, callable, copied arguments) while :attr:`on`."""
+
+    def __init__(self) -> None:
+        self.on, self.calls = False, []
+        self.aba = pin.aba  # the reference, unwrapped
+
+    def keep(self, name: str, function: Callable, args: tuple) -> None:
+        if self.on:
+            self.calls.append((name, function, tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args)))
+
+    def install(self) -> None:
+        """Wrap the three kinds of compiled call (before uvms binds any of them)."""
+        call = _dispatcher.Dispatcher.__call__
+        recorder = self
+
+        def numba_call(kernel, *args, **keywords):
+            recorder.keep(f"numba:{kernel.py_func.__name__}", lambda *a, _k=kernel: call(_k, *a), args)
+            return call(kernel, *args, **keywords)
+
+        dispatcher.Dispatcher.__call__ = numba_call
+        for name in dir(pin):
+            function = getattr(pin, name)
+            if type(function).__name__ == "function" and not name.startswith("_"):  # Boost.Python's functions
+                setattr(pin, name, self._wrapped(f"pin:{name}", function))
+        from uvms.numerics import lapack
+
+        for name in ("_solve_vector", "_solve_matrix"):  # numpy's LAPACK gufuncs behind numpy_solve
+            setattr(lapack, name, self._wrapped(f"numpy:{name}", getattr(lapack, name), signature="dd->d"))
+        lapack._module = _Lapack(lapack.lapack(), self)
+
+    def _wrapped(self, name: str, function: Callable, **fixed) -> Callable:
+        def wrapper(*args, **keywords):
+            self.keep(name, (lambda *a: function(*a, **fixed)) if fixed else function, args)
+            return function(*args, **keywords)
+
+        return wrapper
+
+
+class _Lapack:
+    """scipy.linalg.lapack with each function's calls kept by the recorder."""
+
+    def __init__(self, module, recorder: Recorder) -> None:
+        self._module, self._recorder = module, recorder
+
+    def __getattr__(self, name: str) -> Callable:
+        return self._recorder._wrapped(f"lapack:{name}", getattr(self._module, name))
+
+
+def record_step(step: int) -> tuple[list[Call], pin.Model, Callable]:
+    """The calls of the run's step ``step`` (counted by the plant's samples), the model and pin.aba unwrapped."""
+    recorder = Recorder()
+    recorder.install()
+    import uvms.dynamics.plant.actuated as actuated
+    from uvms.scenario.actuated import simulate_actuation
+    from uvms.scenario.build import build
+    from uvms.scenario.schema import read_scenario
+
+    spec = read_scenario(SCENARIO, ["outputs.figures=false"])
+    setup = build(spec)
+    samples = getattr(setup, "samples", None) or setup.trajectory
+    sample, count = actuated.ActuatedPlantSystem.sample, [0]
+
+    def counted(system, *args):
+        count[0] += 1
+        recorder.on = count[0] == step  # from this step's sample to the next one's
+        return sample(system, *args)
+
+    actuated.ActuatedPlantSystem.sample = counted
+    simulate_actuation(setup.actuation, setup.task, samples, setup.q0, setup.duration, spec.simulation, False)
+    actuated.ActuatedPlantSystem.sample = sample
+    if not recorder.calls:
+        raise SystemExit(f"the run has fewer than {step} steps")
+    return recorder.calls, setup.robot.model, recorder.aba
+
+
+def aba_time(model: pin.Model, aba: Callable, number: int = 5000) -> float:
+    """One pin.aba [s] on the model at a random state, best of 5."""
+    data, rng = model.createData(), np.random.default_rng(0)
+    q = pin.integrate(model, pin.neutral(model), 0.3 * rng.normal(size=model.nv))
+    v, tau = 0.3 * rng.normal(size=model.nv), np.zeros(model.nv)
+    return min(timeit.repeat(lambda: aba(model, data, q, v, tau), number=number, repeat=5)) / number
+
+
+def replay(calls: list[Call]) -> None:
+    for _, function, args in calls:
+        function(*args)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rounds", type=int, default=3, help="replays timed (each against its own pin.aba)")
+    parser.add_argument("--step", type=int, default=500, help="the step recorded")
+    options = parser.parse_args()
+    calls, model, aba = record_step(options.step)
+    kinds = Counter(name.split(":")[0] for name, _, _ in calls)
+    print(f"checkout {ROOT}: step {options.step}, {len(calls)} compiled calls ({dict(kinds)})")
+    replay(calls)
+    ratios = []
+    for _ in range(options.rounds):
+        reference = aba_time(model, aba)
+        step = min(timeit.repeat(lambda: replay(calls), number=200, repeat=5)) / 200
+        ratios.append(step / reference)
+        print(f"| the step's compiled calls replayed (pin.aba {1e6 * reference:.2f} us) | {1e6 * step:.1f} us = "
+              f"**{step / reference:.0f}x aba** |")
+    reference = aba_time(model, aba)
+    totals: dict[str, list] = {}
+    for name, function, args in calls:
+        each = min(timeit.repeat(lambda: function(*args), number=500, repeat=3)) / 500
+        totals.setdefault(name, [0, 0.0])
+        totals[name][0] += 1
+        totals[name][1] += each
+    print(f"median {np.median(ratios):.0f}x aba; per call (the sum of its calls in the step, x aba):")
+    for name, (number, total) in sorted(totals.items(), key=lambda item: -item[1][1]):
+        print(f"| {name} | x{number} | {1e6 * total:.2f} us | {total / reference:.1f}x |")
+
+
+if __name__ == "__main__":
+    main()
