@@ -87,7 +87,7 @@ def distance_request(tolerance: float = DISTANCE_TOLERANCE) -> object:
     return request
 
 
-def pin_box_support() -> None:
+def fix_box_inflation() -> None:
     """Fix coal's box support inflation for the process: one query of an axis-aligned box along (1, 0, 0).
 
     coal's support function of a Box scales its negative half-sides by a factor kept in a function-local static,
@@ -133,7 +133,7 @@ class PairDistances:
         self._entries = np.array([[self._moved.index(j) if j else -1 for j in pair] for pair in self.joints],
                                  dtype=np.int64).reshape(-1, 2)  # (m, 2): each side's joint in the table, -1: world
         self._data = pin.GeometryData(self.geometry)
-        pin_box_support()  # before this object's first query (the process's first, where uvms queries first)
+        fix_box_inflation()  # before this object's first query (the process's first, where uvms queries first)
         for k in range(len(self.pairs)):  # Pinocchio's requests carry GJK's last guess between calls: fresh ones
             self._data.distanceRequests[k] = distance_request()
         # views of the results (a pass over the vector costs 1 us/pair)
