@@ -49,7 +49,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..dynamics.plant.actuated import base_twist, vehicle_inverse_dynamics, water_in_base
+from ..dynamics.plant.actuated import base_twist, lag_factor, vehicle_inverse_dynamics, water_in_base
 from ..dynamics.plant.plant import Plant
 from ..dynamics.thrusters.allocation import AllocationResult, ThrustAllocator
 from ..dynamics.thrusters.fin_allocation import FinAllocator
@@ -238,10 +238,11 @@ class VehicleVelocityController:
         return disturbance
 
     def _observer_gain(self, dt: float) -> float:
-        """1 - exp(-dt / T) of the step dt [s] (numpy's expm1), computed again only when dt or T changed."""
+        """1 - exp(-dt / T) of the step dt [s] (the first-order filter's :func:`lag_factor`), computed again only when
+        dt or T changed."""
         key = (dt, self.disturbance_time_constant)
         if self._gain[0] != key:
-            self._gain = key, -np.expm1(-dt / self.disturbance_time_constant)
+            self._gain = key, lag_factor(dt, self.disturbance_time_constant)
         return self._gain[1]
 
     def applied_wrench(self, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray,
