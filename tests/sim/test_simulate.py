@@ -17,7 +17,7 @@ from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.errors import ConfigurationError, StepCountError, UVMSError
 from uvms.sim import SimulationResult, simulate
 
-from conftest import shipped
+from conftest import SCENARIOS, shipped
 
 INFO = types.SimpleNamespace(sigma_min=1.0, damping=0.0, limits_active=())
 
@@ -199,3 +199,26 @@ def test_the_rows_are_gathered_by_name_in_order_including_a_name_some_rows_lack(
     uneven = gathered([{"t": 0.0}, {"t": 0.1, "extra": 3.0}, {"extra": 4.0, "t": 0.2}])
     assert list(uneven) == ["t", "extra"] and uneven["extra"].tolist() == [3.0, 4.0]
     assert uneven["t"].tolist() == [0.0, 0.1, 0.2] and gathered([]) == {}
+
+
+def test_a_controller_s_stage_velocity_gives_the_rows_of_its_command_bit_for_bit():
+    """The kinematic run asks a controller with ``stage_velocity`` for v alone at the RK4 stages (no command, no
+    diagnostics): the run's rows equal those of the same controller asked only through ``command``; the CLIK's
+    prepared frame step (hoang2011_w1) and the set-based solver, whose rows the recorder shares, through command."""
+    from uvms.scenario.build import build
+    from uvms.scenario.schema import read_scenario
+
+    class CommandOnly:
+        """The controller as one without stage_velocity."""
+
+        def __init__(self, controller):
+            self.reset, self.command = controller.reset, controller.command
+
+    for path in ("hoang2011_w1.toml", "hoang2011_w1_set_based.toml"):
+        setup = build(read_scenario(SCENARIOS / path, []))
+        runs = [simulate(setup.robot, controller, setup.q0, 3.0, 0.02, progress=False)
+                for controller in (setup.controller, CommandOnly(setup.controller))]
+        assert hasattr(setup.controller, "stage_velocity") and not hasattr(CommandOnly, "stage_velocity")
+        for name in ("q", "v", "sigma_min", "damping"):
+            assert np.array_equal(getattr(runs[0], name), getattr(runs[1], name)), (path, name)
+        assert np.ptp(runs[0].q[:, 0]) > 1e-3  # the vehicle moved

@@ -289,3 +289,30 @@ MIMIC_URDF = """<robot name="mimic_probe">
   <joint name="tip_b_joint" type="fixed"><parent link="link_b"/><child link="tip_b"/><origin xyz="0.15 0 0"/></joint>
   <link name="tip_b"/>
 </robot>"""
+
+
+@pytest.mark.parametrize("damping", [0.0, 1e-3])
+def test_the_stage_velocity_is_the_velocity_of_a_result_bit_for_bit(rng, damping):
+    """What an integrator's stage reads (v alone, no result built) on the prepared frame step and on the general
+    path (two tasks), over configurations and targets; a stage in between leaves the next result's lazy diagnostics
+    those of its own configuration."""
+    robot = uvms.load(uvms.model.example_robot_urdf("ur5"), base="floating")
+    task = uvms.FrameTask(robot, target=robot.fk(robot.random_configuration(rng)))
+    posture = uvms.tasks.PostureTask(robot, robot.random_configuration(rng))
+    prepared = CLIKSolver(robot, task, gain=2.0, damping=damping)
+    general = CLIKSolver(robot, [task, posture], gain=2.0, damping=damping)
+    assert prepared._frame_step is not None and general._frame_step is None
+    for _ in range(5):
+        q = robot.random_configuration(rng)
+        task.set_target(robot.fk(robot.random_configuration(rng)))
+        task.set_target_velocity(rng.normal(size=6))
+        for solver in (prepared, general):
+            result = solver.velocity(Configuration(robot, q))
+            other = Configuration(robot, robot.random_configuration(rng))
+            staged = solver.stage_velocity(other)  # another configuration between the result and its reads
+            assert np.array_equal(staged, solver.velocity(Configuration(robot, other.q)).v)
+            assert np.array_equal(solver.stage_velocity(Configuration(robot, q)), result.v)
+            fresh = CLIKSolver(robot, solver.tasks, gain=2.0, damping=damping).velocity(Configuration(robot, q))
+            assert result.sigma_min == fresh.sigma_min and np.array_equal(result.error, fresh.error)
+    with pytest.raises(uvms.errors.SolverInputError, match="Configuration"):
+        prepared.stage_velocity(q)

@@ -55,6 +55,16 @@ class TrackingController:
             self.solver.velocity(self._configuration, shared=rows)
         return Command(velocity=result.v, info=result)
 
+    def stage_velocity(self, q: np.ndarray, t: float) -> np.ndarray:
+        """v (nv,) of :meth:`command`'s velocity at (t, q), the same numbers, without the command and its diagnostics
+        (an integrator's stage: :meth:`uvms.sim.kinematic.KinematicSystem.stage_rate`). A solver sharing its rows with
+        the recorder is asked through :meth:`command`, which keeps them."""
+        if self._rows is not None or self._configuration is None:
+            return self.command(State(q), t).velocity
+        self.task_reference.follow(t)
+        self._configuration.update(q, check=False)
+        return self.solver.stage_velocity(self._configuration)
+
     def objective_rows(self, q: np.ndarray) -> ItemRows | None:
         """The objectives' rows the last solve evaluated at ``q`` (nq,) (a recorder reads them instead of evaluating
         them again; an objective that solve did not evaluate is evaluated there at its first read), or None: a

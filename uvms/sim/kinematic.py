@@ -87,7 +87,12 @@ class KinematicSystem:
         return KinematicSample((v, EMPTY), command.info)
 
     def stage_rate(self, sample: KinematicSample) -> StageRate:
-        """(t, q, x) -> (the controller's velocity, empty) at the stages."""
+        """(t, q, x) -> (the controller's velocity, empty) at the stages: its ``stage_velocity(q, t)`` where it has one
+        (the velocity alone, the same numbers: :meth:`uvms.control.tracking.TrackingController.stage_velocity`),
+        else its command's."""
+        velocity = getattr(self.controller, "stage_velocity", None)
+        if velocity is not None:
+            return lambda t, q, x: (velocity(q, t), EMPTY)
         command = self.controller.command
         return lambda t, q, x: (command(State(q), t).velocity, EMPTY)
 

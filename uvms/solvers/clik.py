@@ -197,6 +197,12 @@ class CLIKSolver(Solver):
         configuration.update(pin.integrate(configuration.model, configuration.q, frame_step.displacement), check=False)
         return result
 
+    def stage_velocity(self, configuration: Configuration) -> np.ndarray:
+        """v (nv,) of :meth:`velocity` alone (the prepared frame step's kernel without a result to build)."""
+        if self._frame_step is not None:
+            return self._frame_step.velocity(self._checked(configuration))
+        return self.velocity(configuration).v
+
     def velocity(self, configuration: Configuration) -> SolverResult:
         """The CLIK velocity at ``configuration`` and its diagnostics (the residuals per task, when read)."""
         if self._frame_step is not None:
@@ -272,6 +278,7 @@ class FrameStep:
         self.indices, self.constants = frame_constants(solver, frame, gain)
         self.record_size = self.count * (self.nv + 2)  # the task's rows (k, nv), error (k,), command (k,)
         self.displacement = np.empty(self.nv)  # v dt of a step, read by pin.integrate at once (never kept)
+        self._scratch = np.empty(self.record_size)  # the record of :meth:`velocity`, written and never read
 
     @staticmethod
     def serves(solver: CLIKSolver) -> bool:
@@ -289,17 +296,33 @@ class FrameStep:
             UVMSError: the task has no target.
             NumericalError: a non-finite Jacobian (the SVD did not converge).
         """
+        v, record = np.empty(self.nv), np.empty(self.record_size)
+        sigma_min, used = self._into(configuration, dt, v, record)
+        return SolverResult(v, (lambda: self._sigma_min(record, self.count, self.nv, *self._weights))
+                            if sigma_min < 0.0 else sigma_min, used, lambda: self.levels(record))
+
+    def velocity(self, configuration: Configuration) -> np.ndarray:
+        """v (nv,) of :meth:`solve` at dt = 0 alone (an integrator's stage: no result, the rows in a scratch record
+        no one reads).
+
+        Raises:
+            UVMSError, NumericalError: as :meth:`solve`.
+        """
+        v = np.empty(self.nv)
+        self._into(configuration, 0.0, v, self._scratch)
+        return v
+
+    def _into(self, configuration: Configuration, dt: float, v: np.ndarray, record: np.ndarray) -> tuple[float, float]:
+        """The kernel's call: v and the step's record written, (sigma_min (< 0: computed when read), l used)."""
         joint_jacobians, translation, rotation = configuration.joint_arrays(self.joint)
         target_translation, target_rotation, target_rpy, feedforward = self.task.target_terms()
-        v, record = np.empty(self.nv), np.empty(self.record_size)
         converged, sigma_min, used = self._kernel(joint_jacobians, translation, rotation, configuration.q,
                                                   target_translation, target_rotation,
                                                   NO_ANGLES if target_rpy is None else target_rpy, feedforward,
                                                   self.indices, self.constants, v, record, dt, self.displacement)
         if not converged:
             raise NumericalError(f"the SVD of the {self.count}x{self.nv} task Jacobian did not converge: is it finite?")
-        return SolverResult(v, (lambda: self._sigma_min(record, self.count, self.nv, *self._weights))
-                            if sigma_min < 0.0 else sigma_min, used, lambda: self.levels(record))
+        return sigma_min, used
 
     def jacobian(self, record: np.ndarray) -> np.ndarray:
         """The task's rows (k, nv) in a step's record."""
