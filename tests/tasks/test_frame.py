@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pinocchio as pin
 
 import uvms
 from uvms.robot.configuration import Configuration
@@ -94,3 +95,26 @@ def test_position_rows_come_from_the_joint_kinematics_with_the_numbers_of_the_fr
                                                              expected.pose(task.frame_id))[task.rows],
                                        rtol=1e-15, atol=1e-300)
             np.testing.assert_allclose(feedforward, task.target_twist[task.rows], rtol=0, atol=0)
+
+
+
+def test_euler_rows_come_from_the_joint_kinematics_with_pinocchio_s_numbers_bit_for_bit():
+    """A task with Euler orientation rows forms its rows in the same compiled call as position rows: rpy of the
+    frame (matrixToRpy), the wrapped rpy error and the rows E(rpy)^-1 J_w (computeRpyJacobianInverse) equal the
+    task's own jacobian() and error() bit for bit, pitch near +-pi/2 (matrixToRpy's branch) included."""
+    robot = uvms.load("bluerov2_alpha5")
+    rng = np.random.default_rng(6)
+    for axes in (("x", "y", "yaw"), ("roll", "pitch", "yaw"), None):
+        task = uvms.FrameTask(robot, axes=axes, orientation="euler")
+        for index in range(60):
+            q = robot.random_configuration(rng)
+            if index % 2:  # the vehicle pitched to within 1e-12..1e-1 rad of +-pi/2
+                pitch = np.pi / 2 * (1 - 10.0 ** rng.uniform(-12, -1)) * rng.choice([-1, 1])
+                q[3:7] = pin.Quaternion(pin.rpy.rpyToMatrix(rng.normal(), pitch, rng.normal())).coeffs()
+            task.set_target(robot.fk(robot.random_configuration(rng)))
+            state = Configuration(robot, q)
+            jacobian, error, _ = task.terms(state)
+            assert task.frame_id not in state._placed  # formed from the joint kinematics
+            expected = Configuration(robot, q)
+            assert np.array_equal(jacobian, task.jacobian(expected)) and np.array_equal(error, task.error(expected))
+            assert np.abs(error[task.rows >= 3]).max() <= np.pi

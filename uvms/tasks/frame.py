@@ -70,10 +70,11 @@ class FrameTask(Task):
         self._target_rpy: np.ndarray | None = None  # its rpy [rad] when the setter knew them
         self.target_twist = np.zeros(6)
         self._target_parts: tuple | None = None  # what terms() reads of the target, once per set_target
-        # position rows only, no mimic joint: terms() forms them from the joint kinematics in one compiled call
-        # (getFrameJacobian's and the frame placement's numbers; an orientation row keeps Pinocchio's log3)
-        self._position_rows = not np.any(self.rows >= 3) and not robot.mimic_joint_names
-        if self._position_rows:
+        # position rows, or Euler orientation rows, and no mimic joint: terms() forms them from the joint kinematics
+        # in one compiled call (getFrameJacobian's, the frame placement's, matrixToRpy's and
+        # computeRpyJacobianInverse's numbers); a log orientation row keeps Pinocchio's log3
+        self._compiled_rows = (not np.any(self.rows >= 3) or orientation == "euler") and not robot.mimic_joint_names
+        if self._compiled_rows:
             frame_data = robot.model.frames[self.frame_id]
             self._joint = int(frame_data.parentJoint)
             self._placement = np.ascontiguousarray(frame_data.placement.homogeneous)  # (4, 4)
@@ -203,11 +204,11 @@ class FrameTask(Task):
     def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(jacobian (k, nv), error (k,), feedforward (k,)) at once: each rotation read and each rpy computed once."""
         translation, rotation, target_rpy, feedforward = self.target_terms()
-        if self._position_rows:  # (:func:`~uvms.numerics._kernels.pose.frame_rows_into`)
+        if self._compiled_rows:  # (:func:`~uvms.numerics._kernels.pose.frame_rows_into`)
             jacobian, error = np.empty((self.dim, state.model.nv)), np.empty(self.dim)
             kernel = _FRAME_ROWS.function or _FRAME_ROWS.load()
             kernel(*state.joint_arrays(self._joint), self._placement, self._columns, self.rows, translation, rotation,
-                   _NO_RPY, jacobian, error)
+                   target_rpy if self._euler_rows else _NO_RPY, jacobian, error)
             return jacobian, error, feedforward.copy()
         pose = state.pose(self.frame_id)
         jacobian = state.jacobian(self.frame_id)
