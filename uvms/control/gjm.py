@@ -208,6 +208,8 @@ class GJMController:
         self.solver = solver([*self.levels, self.task], gain=self.task_gain, **options)
         self._open_task = FrameTask(robot, self.frame, axes=self.axes, orientation="log")
         self._open = solver([*self.levels, self._open_task], gain=0.0, **options)
+        # the states a command works in, at the measured q and a difference step ahead: built once, then moved
+        self._kept: list[Configuration | None] = [None, None]
 
     # ------------------------------------------------------------- Jacobians
     def _momentum_rows(self) -> MomentumRows | None:
@@ -222,6 +224,16 @@ class GJMController:
     def state(self, q: np.ndarray, check: bool = False) -> Configuration:
         """The controller's state at q: its own data, the chosen momentum rows."""
         return Configuration(self.robot, q, check=check, momentum=self._momentum)
+
+    def _moved(self, slot: int, q: np.ndarray) -> Configuration:
+        """The kept state ``slot`` (0: at the measured q, 1: a difference step ahead) moved to q (nq,), unchecked
+        (the loop's q); each is built at its first use (a ``pin.Data`` costs tens of microseconds), then updated."""
+        state = self._kept[slot]
+        if state is None:
+            state = self._kept[slot] = self.state(q)
+        else:
+            state.update(q, check=False)
+        return state
 
     def generalized_jacobian(self, q: np.ndarray) -> np.ndarray:
         """The GJM (6, n_arm) this controller inverts (all six rows, world-aligned)."""
@@ -265,7 +277,7 @@ class GJMController:
         """The tracking series of a run's row at (t, q, v): pose and velocity of the frame and of the reference,
         the joint rates w and the inverse's sigma_min and damping (what :func:`uvms.sim.simulate` records of a plant
         run)."""
-        state = self.state(q)
+        state = self._moved(0, q)
         sample = self._sample(state, t)
         reference = self.reference(t)
         return {"ee_position": state.pose(self.frame_id).translation.copy(),
@@ -283,7 +295,7 @@ class GJMController:
 
     def joint_command(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """The joint-velocity command u (n_arm,) at (t, q, v): w, plus tau dw/dt with the servo feedforward."""
-        solution = self._solve(self.state(q), t)
+        solution = self._solve(self._moved(0, q), t)
         rates = solution.result.v[self.nb:]
         if self.motor_feedforward == 0.0:
             return rates
@@ -291,7 +303,7 @@ class GJMController:
         reference = solution.reference
         command = np.zeros(6)
         command[self.rows] = solution.result.command  # nu_c (k,) as a twist (6,) on the task rows
-        ahead = self._inverse_times(self.state(pin.integrate(self.model, q, v * h)), command, reference.pose)
+        ahead = self._inverse_times(self._moved(1, pin.integrate(self.model, q, v * h)), command, reference.pose)
         jacobian = solution.state.jacobian(self.frame_id)
         command_rate = reference.acceleration.copy()  # d nu_c / dt = a_d + K (v_d - p')
         command_rate[:3] += self.gain @ (reference.twist[:3] - jacobian[:3] @ v)
