@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import types
 from pathlib import Path
 
 import numpy as np
@@ -10,6 +11,7 @@ import pytest
 import uvms
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.plant.actuated import ActuatedPlant
+from uvms.dynamics.plant.command import Command
 from uvms.dynamics.plant.plant import Plant
 from uvms.dynamics.thrusters.fins import fins_of
 from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
@@ -80,6 +82,13 @@ def test_the_state_rate_is_written_in_place_with_the_numbers_of_its_parts(fins, 
     np.testing.assert_array_equal(stage_wrench, wrench)
     np.testing.assert_array_equal(plant.stage_acceleration(q, v, arm, wrench), expected.acceleration)
     np.testing.assert_array_equal(plant.stage_acceleration(q, v, arm), plant.dynamics(q, v, arm).acceleration)
+    # the stage the integrator calls (the plant's prepared stage without fins): the same (v, rate), new arrays
+    held = types.SimpleNamespace(command=Command(arm=arm), thrust_command=command, fin_command=fin_command)
+    stage_rate = system.stage_rate(held)
+    velocity_stage, rate_stage = stage_rate(0.0, q, x)
+    np.testing.assert_array_equal(velocity_stage, v)
+    np.testing.assert_array_equal(rate_stage, rate)
+    assert rate_stage is not stage_rate(0.0, q, x)[1]  # a stage's rate is its own: RK4 keeps all four
 
 
 def test_a_state_is_refused_only_when_an_entry_is_not_finite():

@@ -207,7 +207,7 @@ def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> np.ndarray:
 
     Per row only Pinocchio's forward kinematics and the links' joints' twists (and rotations in a current) are
     gathered; the links' twists and wrenches are then formed for all rows at once, each row's numbers those of
-    :meth:`uvms.dynamics.plant.plant.Plant._link_states` (the same operations per row).
+    :meth:`uvms.dynamics.plant.conserved.ConservedQuantities._link_states` (the same operations per row).
     """
     rows = len(q)
     if not plant.damping or not plant.links:
@@ -347,9 +347,13 @@ class ActuatedPlantSystem:
         return ActuatedSample(rate, command, saturated, dynamics, fins, wrench)
 
     def stage_rate(self, sample: ActuatedSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
-        """(t, q, x) -> (v, [v', f']) with the step's commands held."""
+        """(t, q, x) -> (v, [v', f']) with the step's commands held; without fins the plant's prepared stage
+        (:meth:`uvms.dynamics.plant.plant.Plant.actuated_stage`: the same numbers, its arguments bound once)."""
         arm, thrust_command, fin_command = sample.command.arm, sample.thrust_command, sample.fin_command
-        return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command, False)[1]
+        if self.m:  # the fins' wrench and rate at each stage
+            return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command, False)[1]
+        stage, nv = self.plant.actuated_stage(arm, thrust_command, self._lag), self.nv
+        return lambda t, q, x: (x[:nv], stage(q, x))
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
         """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the

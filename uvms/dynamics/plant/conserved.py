@@ -9,6 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...robot.kinematics import weight_potential
+from .added_mass import LinkStates
 
 
 class ConservedQuantities:
@@ -58,3 +59,19 @@ class ConservedQuantities:
             momentum[3:] += ((links.rotations @ impulse[:, 3:, None])[:, :, 0]
                              + np.cross(links.positions, linear)).sum(axis=0)
         return momentum
+
+    def _link_states(self, q: np.ndarray, v: np.ndarray) -> LinkStates:
+        """The hydrodynamic links' twists and poses at (q, v), every link at once (runs forwardKinematics)."""
+        model, data, stacked = self.model, self.data, self._stacked
+        pin.forwardKinematics(model, data, q, v)
+        joints = stacked.joints
+        twists = (stacked.motion_to_link @ np.array([data.v[joint].vector for joint in joints])[:, :, None])[:, :, 0]
+        joint_rotations = np.array([data.oMi[joint].rotation for joint in joints])
+        rotations = joint_rotations @ stacked.rotations  # (L, 3, 3) link to world
+        positions = np.array([data.oMi[joint].translation for joint in joints]) + \
+            (joint_rotations @ stacked.translations[:, :, None])[:, :, 0]
+        relative = twists
+        if self._moving_fluid:  # nu_r = nu - [R^T v_c; 0]
+            relative = twists.copy()
+            relative[:, :3] -= self._current @ rotations
+        return LinkStates(twists, relative, rotations, positions)

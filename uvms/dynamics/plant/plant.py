@@ -56,19 +56,19 @@ The links on the model, M_A in the mass matrix, C_A and the GJM of the augmented
 
 from __future__ import annotations
 
-from types import ModuleType
+from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 
 from ...errors import UVMSError
-from ...numerics.lapack import numpy_solve
 from ...robot.configuration import Configuration
 from ...robot.kinematics import generalized_jacobian_from_parts, mass_matrix_split
 from ...robot.robot import Robot, check_robot
 from ..hydro.hydrodynamics import HydroParameters, hydrodynamics_of
-from .added_mass import LinkStates, StackedLinks, augmented_mass_matrix, resolve_links
+from .added_mass import StackedLinks, augmented_mass_matrix, resolve_links
 from .command import Controller
+from .compiled import CompiledPass
 from .conserved import ConservedQuantities
 from .data_views import JointArrays
 from .settings import PlantSettings
@@ -146,13 +146,9 @@ class Plant(ConservedQuantities):
         self._flags = np.array([self.added_mass, self.damping, self._moving_fluid, self._buoyant], dtype=np.int64)
         # every joint's placement and bias acceleration in self.data, as the compiled pass reads them (views)
         self._joint_arrays = JointArrays(self.data)
-        # the compiled kernels and their constants (the links' walks over data.J among them), made at the first
-        # evaluation: numba loads there
-        self._terms: tuple[ModuleType, np.ndarray, np.ndarray] | None = None
-        nv = self.model.nv
-        self._scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
-        # the vehicle's block Mbar_bb (C-ordered) and right-hand side, solved after the compiled call
-        self._block, self._rhs, self._no_wrench = np.empty((self.nb, self.nb)), np.empty(self.nb), np.zeros(0)
+        # Pinocchio's algorithms and the compiled kernels with the plant's constants, made at the first evaluation:
+        # numba loads there
+        self._pass: CompiledPass | None = None
 
     @classmethod
     def from_settings(cls, robot: Robot, settings: PlantSettings) -> Plant:
@@ -236,22 +232,6 @@ class Plant(ConservedQuantities):
         return self._buoyant
 
     # -------------------------------------------------------------- dynamics
-    def _link_states(self, q: np.ndarray, v: np.ndarray) -> LinkStates:
-        """The hydrodynamic links' twists and poses at (q, v), every link at once (runs forwardKinematics)."""
-        model, data, stacked = self.model, self.data, self._stacked
-        pin.forwardKinematics(model, data, q, v)
-        joints = stacked.joints
-        twists = (stacked.motion_to_link @ np.array([data.v[joint].vector for joint in joints])[:, :, None])[:, :, 0]
-        joint_rotations = np.array([data.oMi[joint].rotation for joint in joints])
-        rotations = joint_rotations @ stacked.rotations  # (L, 3, 3) link to world
-        positions = np.array([data.oMi[joint].translation for joint in joints]) + \
-            (joint_rotations @ stacked.translations[:, :, None])[:, :, 0]
-        relative = twists
-        if self._moving_fluid:  # nu_r = nu - [R^T v_c; 0]
-            relative = twists.copy()
-            relative[:, :3] -= self._current @ rotations
-        return LinkStates(twists, relative, rotations, positions)
-
     def evaluate(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> PlantDynamics:
         """Accelerations and motor torques at (q, v) under a joint-velocity command.
 
@@ -270,30 +250,17 @@ class Plant(ConservedQuantities):
                  out: np.ndarray | None = None) -> PlantDynamics:
         """:meth:`evaluate` unchecked, for inner loops whose inputs are checked; ``body_wrench`` (6,) [N, N m]: a wrench
         on the vehicle, FLU at :attr:`base_frame` (the thrusters'); ``out`` (nv,): where v' goes (None: a new array)."""
-        nv = self.model.nv
+        compiled, nv = self._compiled(), self.model.nv
         mass, bias_forces = np.empty((nv, nv)), np.empty(nv)  # returned: new arrays
-        return self._torques(self._accelerations(q, v, command, body_wrench, out, mass, bias_forces), mass,
-                             bias_forces)
+        return compiled.dynamics(compiled.accelerations_into(q, v, command, body_wrench, out, mass, bias_forces), mass,
+                                 bias_forces)
 
     def stage_acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
                            body_wrench: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
         """v' (nv,) of :meth:`dynamics` alone (the same numbers), without the motor torques: an integrator's stage
-        (Mbar and nbar in the plant's own buffers, overwritten at every call)."""
-        return self._accelerations(q, v, command, body_wrench, out, *self._scratch)
-
-    def _accelerations(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
-                       out: np.ndarray | None, mass: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
-        """v' (nv,) into ``out`` when given, Mbar into ``mass`` (nv, nv), nbar into ``bias_forces`` (nv,):
-        Pinocchio's algorithms and one compiled call (Mbar, nbar, the motors' a_m = (u - qd_m) / tau, the vehicle's
-        block Mbar_bb and right-hand side Mbar_bm a_m + nbar_b:
-        :func:`uvms.numerics._kernels.plant_stage.accelerations_into`), then the vehicle's a_b
-        (:meth:`_base_acceleration_into`)."""
-        kernels, inputs = self._kernel_inputs(q, v, body_wrench is not None)
-        acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
-        kernels.accelerations_into(*inputs, v, command, self._no_wrench if body_wrench is None else body_wrench,
-                                   mass, bias_forces, acceleration, self._block, self._rhs)
-        self._base_acceleration_into(acceleration)
-        return acceleration
+        (Mbar and nbar in the pass's own buffers, overwritten at every call)."""
+        compiled = self._compiled()
+        return compiled.accelerations_into(q, v, command, body_wrench, out, *compiled.scratch)
 
     def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
                            thrusters: tuple[np.ndarray, np.ndarray], fin_wrench: np.ndarray | None,
@@ -301,28 +268,21 @@ class Plant(ConservedQuantities):
         """An actuated plant's rate at (q, x = [v; f; ...]): [v'; f'] into ``rates`` (the fins' part left), the
         actuators' wrench B f (+ ``fin_wrench``) into ``wrench`` (6,), in one compiled call with the thrusters'
         (B (6, n), tau (n,)) and their lag f' = (f_cmd - f) / tau
-        (:func:`uvms.numerics._kernels.plant_stage.actuated_rate_into`); the PlantDynamics with ``torques``, else
-        None (an integrator's stage: Mbar and nbar in the plant's own buffers)."""
-        nv = self.model.nv
-        kernels, inputs = self._kernel_inputs(q, x[:nv], True)
-        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else self._scratch  # returned: new
-        kernels.actuated_rate_into(*inputs, x, arm, thrust_command, *thrusters,
-                                   self._no_wrench if fin_wrench is None else fin_wrench, wrench, mass, bias_forces,
-                                   rates, self._block, self._rhs)
-        self._base_acceleration_into(rates)
-        return self._torques(rates[:nv], mass, bias_forces) if torques else None
+        (:meth:`~uvms.dynamics.plant.compiled.CompiledPass.actuated_rate_into`); the PlantDynamics with ``torques``,
+        else None (an integrator's stage: Mbar and nbar in the pass's own buffers)."""
+        compiled, nv = self._compiled(), self.model.nv
+        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else compiled.scratch  # returned: new
+        compiled.actuated_rate_into(q, x, arm, thrust_command, *thrusters,
+                                    compiled.no_wrench if fin_wrench is None else fin_wrench, wrench, mass, bias_forces,
+                                    rates)
+        return compiled.dynamics(rates[:nv], mass, bias_forces) if torques else None
 
-    def _base_acceleration_into(self, acceleration: np.ndarray) -> None:
-        """a_b = -solve(Mbar_bb, Mbar_bm a_m + nbar_b) into ``acceleration[:nb]`` with numpy's LAPACK, from the block
-        and right-hand side the last compiled call left in the plant's buffers."""
-        np.negative(numpy_solve(self._block, self._rhs), acceleration[:self.nb])
-
-    def _torques(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
-        """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m
-        (:func:`uvms.numerics._kernels.plant_stage.motor_torques_into`)."""
-        torque = np.empty(self.n_arm)
-        self._terms[0].motor_torques_into(mass, acceleration, bias_forces, self.nb, torque)
-        return PlantDynamics(acceleration, torque, mass)
+    def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray,
+                       thrusters: tuple[np.ndarray, np.ndarray]) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """(q, x) -> [v'; f'] (a new array) of :meth:`actuated_rate_into` without fins or torques, the same numbers,
+        with the step's commands held and the thrusters' (B, tau) bound once: an integrator's stage
+        (:meth:`~uvms.dynamics.plant.compiled.CompiledPass.actuated_stage`)."""
+        return self._compiled().actuated_stage(arm, thrust_command, *thrusters)
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -335,37 +295,16 @@ class Plant(ConservedQuantities):
         Mbar = M + sum_l J_l^T M_A,l J_l, nbar = h - sum_l J_l^T f_l - J_base^T body_wrench (the numbers of rnea
         with the wrenches as external forces, to rounding; J_base formed as ``getFrameJacobian`` forms it).
         """
-        kernels, inputs = self._kernel_inputs(q, v, body_wrench is not None)
-        nv = self.model.nv
-        mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
-        kernels.terms_into(*inputs, v, self._no_wrench if body_wrench is None else body_wrench, mass, bias_forces)
-        return mass, bias_forces
+        return self._compiled().terms(q, v, body_wrench)
 
-    def _kernel_inputs(self, q: np.ndarray, v: np.ndarray, wrench: bool) -> tuple[ModuleType, tuple]:
-        """Pinocchio's part of an evaluation at (q, v) and what the compiled kernels read of it: (the kernels'
-        module, (M's upper triangle (crba fills it), h(q, v) with gravity (rnea), data.J, the joints' placements and
-        bias accelerations (views), the constants ints, floats)). The kinematics run when links or a ``wrench``
-        read them."""
-        kernels, ints, floats = self._terms if self._terms is not None else self._prepare_terms()
-        model, data, dynamics_data = self.model, self.data, self._dynamics_data
-        upper = pin.crba(model, dynamics_data, q)
-        h = pin.rnea(model, dynamics_data, q, v, self._zero_velocity)
-        if wrench or self._stacked.count:
-            pin.forwardKinematics(model, data, q, v, self._zero_velocity)  # data.a = the bias accelerations Jdot v
-            pin.computeJointJacobians(model, data)
-        placements, accelerations = self._joint_arrays.read()  # views of data.oMi, data.a: no copy
-        return kernels, (upper, h, data.J, placements, accelerations, ints, floats)
-
-    def _prepare_terms(self) -> tuple[ModuleType, np.ndarray, np.ndarray]:
-        """The compiled kernels (:mod:`uvms.numerics._kernels.plant_stage`, numba loaded here) and the plant's
-        constants (ints, floats: :func:`~uvms.numerics._kernels.plant_stage.plant_constants`). Made once, at the
-        first evaluation."""
-        from ...numerics._kernels import plant_stage
-
-        self._terms = plant_stage, *plant_stage.plant_constants(
-            self.model, self.data, self._stacked, self._flags, self._current, self.nb,
-            self.model.frames[self._base_frame], self.motor_time_constant)
-        return self._terms
+    def _compiled(self) -> CompiledPass:
+        """The plant's compiled pass (:class:`~uvms.dynamics.plant.compiled.CompiledPass`), made at the first
+        evaluation (numba loads there)."""
+        if self._pass is None:
+            self._pass = CompiledPass(self.model, self.data, self._dynamics_data, self._joint_arrays, self._stacked,
+                                      self._flags, self._current, self.nb, self.model.frames[self._base_frame],
+                                      self.motor_time_constant)
+        return self._pass
 
     def acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray) -> np.ndarray:
         """v' (nv,) at (q, v) under the joint-velocity command u (n_arm,)."""

@@ -1,0 +1,129 @@
+"""A plant's evaluation: Pinocchio's algorithms at (q, v), then one compiled call over what they leave in its data.
+
+Every evaluation of :class:`uvms.dynamics.plant.plant.Plant` runs ``crba`` (M's upper triangle), ``rnea`` (h(q, v) with
+gravity) and, where the links or a wrench read the kinematics, ``forwardKinematics`` (the bias accelerations Jdot v)
+and ``computeJointJacobians``; one kernel of :mod:`uvms.numerics._kernels.plant_stage` reads them in place (data.J,
+the joints' placements and bias accelerations as views: :class:`~uvms.dynamics.plant.data_views.JointArrays`) with the
+plant's constants, and the vehicle's block is solved after it with numpy's LAPACK
+(:func:`~uvms.numerics.lapack.numpy_solve`: numpy's numbers).
+
+What an integrator's stage calls is a closure over the plant's arrays and Pinocchio's functions, bound once
+(:meth:`CompiledPass.actuated_stage`): a stage is Pinocchio, the kernel and the solve with about a microsecond of
+Python around them, where methods reading the same attributes at every call cost about four.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import pinocchio as pin
+
+from ...numerics.lapack import numpy_solve
+from .added_mass import StackedLinks
+from .data_views import JointArrays
+from .system import PlantDynamics
+
+#: (q (nq,), v (nv,), kinematics) -> what a kernel of plant_stage reads first: (M's upper triangle (nv, nv), h (nv,),
+#: data.J (6, nv), the joints' placements (njoints, 12), their bias accelerations (njoints, 6), ints, floats).
+Inputs = Callable[[np.ndarray, np.ndarray, bool], tuple]
+
+
+class CompiledPass:
+    """The compiled evaluation of one plant (made at its first evaluation: numba loads here).
+
+    Args:
+        model, data, dynamics_data: the plant's model and its two Data (kinematics; crba and rnea), which the pass
+            writes.
+        joint_arrays: the views of ``data`` the kernels read.
+        stacked, flags, current, nb, base_frame, motor_time_constant: the plant's links, its flags (added mass,
+            damping, moving fluid, buoyancy), the current (3,) [m/s], the vehicle's velocity entries, its root link's
+            frame (where a body wrench acts) and tau [s] (:func:`~uvms.numerics._kernels.plant_stage.plant_constants`).
+    """
+
+    def __init__(self, model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arrays: JointArrays,
+                 stacked: StackedLinks, flags: np.ndarray, current: np.ndarray, nb: int, base_frame: pin.Frame,
+                 motor_time_constant: float) -> None:
+        from ...numerics._kernels import plant_stage  # numba: loaded with the plant's first evaluation
+
+        self.kernels, self.nb, self.nv = plant_stage, nb, model.nv
+        ints, floats = plant_stage.plant_constants(model, data, stacked, flags, current, nb, base_frame,
+                                                   motor_time_constant)
+        nv = model.nv
+        self.scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
+        # the vehicle's block Mbar_bb (C-ordered) and right-hand side, solved after the compiled call
+        self.block, self.rhs, self.no_wrench = np.empty((nb, nb)), np.empty(nb), np.zeros(0)
+        self.inputs = _inputs(model, data, dynamics_data, joint_arrays, ints, floats, bool(stacked.count))
+
+    def accelerations_into(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
+                           out: np.ndarray | None, mass: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
+        """v' (nv,) into ``out`` when given (else a new array), Mbar into ``mass``, nbar into ``bias_forces``
+        (:func:`uvms.numerics._kernels.plant_stage.accelerations_into`, then the vehicle's a_b)."""
+        acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
+        self.kernels.accelerations_into(*self.inputs(q, v, body_wrench is not None), v, command,
+                                        self.no_wrench if body_wrench is None else body_wrench, mass, bias_forces,
+                                        acceleration, self.block, self.rhs)
+        np.negative(numpy_solve(self.block, self.rhs), acceleration[:self.nb])
+        return acceleration
+
+    def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
+                           matrix: np.ndarray, time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray,
+                           mass: np.ndarray, bias_forces: np.ndarray, rates: np.ndarray) -> None:
+        """[v'; f'] into ``rates`` at (q, x = [v; f; ...]) (the fins' part left), B f + ``extra`` into ``wrench``,
+        Mbar and nbar into ``mass`` and ``bias_forces`` (:func:`uvms.numerics._kernels.plant_stage.actuated_rate_into`,
+        then the vehicle's a_b)."""
+        self.kernels.actuated_rate_into(*self.inputs(q, x[:self.nv], True), x, arm, thrust_command, matrix,
+                                        time_constants, extra, wrench, mass, bias_forces, rates, self.block, self.rhs)
+        np.negative(numpy_solve(self.block, self.rhs), rates[:self.nb])
+
+    def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
+                       time_constants: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        """(q, x) -> [v'; f'] (len(x),) (a new array) of :meth:`actuated_rate_into` without fins, the commands
+        u (n_arm,) and sat(f_cmd) (n,) [N] held and B (6, n), tau (n,) [s] bound: an integrator's stage (Mbar and
+        nbar in the pass's own buffers)."""
+        kernel, inputs, no_wrench, (mass, bias_forces) = (self.kernels.actuated_rate_into, self.inputs, self.no_wrench,
+                                                         self.scratch)
+        block, rhs, nb, nv, empty, negative = self.block, self.rhs, self.nb, self.nv, np.empty, np.negative
+
+        def stage(q: np.ndarray, x: np.ndarray) -> np.ndarray:
+            rates = empty(len(x))
+            kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, empty(6), mass,
+                   bias_forces, rates, block, rhs)
+            negative(numpy_solve(block, rhs), rates[:nb])
+            return rates
+
+        return stage
+
+    def terms(self, q: np.ndarray, v: np.ndarray, body_wrench: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """(Mbar (nv, nv), nbar (nv,)) at (q, v), new arrays (:func:`uvms.numerics._kernels.plant_stage.terms_into`)."""
+        nv = len(v)
+        mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
+        self.kernels.terms_into(*self.inputs(q, v, body_wrench is not None), v,
+                                self.no_wrench if body_wrench is None else body_wrench, mass, bias_forces)
+        return mass, bias_forces
+
+    def dynamics(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
+        """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m
+        (:func:`uvms.numerics._kernels.plant_stage.motor_torques_into`)."""
+        torque = np.empty(len(acceleration) - self.nb)
+        self.kernels.motor_torques_into(mass, acceleration, bias_forces, self.nb, torque)
+        return PlantDynamics(acceleration, torque, mass)
+
+
+def _inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arrays: JointArrays, ints: np.ndarray,
+            floats: np.ndarray, links: bool) -> Inputs:
+    """The Pinocchio part of an evaluation (:data:`Inputs`) bound to the plant's model and data: the kinematics run
+    when links or a wrench read them (``kinematics``)."""
+    crba, rnea, forward, jacobians = pin.crba, pin.rnea, pin.forwardKinematics, pin.computeJointJacobians
+    zero, read, joint_jacobians = np.zeros(model.nv), joint_arrays.read, data.J  # data.J: a view, never reallocated
+
+    def inputs(q: np.ndarray, v: np.ndarray, kinematics: bool) -> tuple:
+        upper = crba(model, dynamics_data, q)
+        h = rnea(model, dynamics_data, q, v, zero)
+        if kinematics or links:
+            forward(model, data, q, v, zero)  # data.a = the bias accelerations Jdot v
+            jacobians(model, data)
+        placements, accelerations = read()  # views of data.oMi, data.a: no copy
+        return upper, h, joint_jacobians, placements, accelerations, ints, floats
+
+    return inputs
