@@ -73,3 +73,33 @@ def test_a_histograms_tick_labels_do_not_run_into_each_other(tmp_path, rng, monk
     assert all(left.x1 < right.x0 for left, right in zip(boxes, boxes[1:]))  # each label ends before the next
     counts = [tick for tick in axis.get_yticks() if axis.get_ylim()[0] <= tick <= axis.get_ylim()[1]]
     np.testing.assert_array_equal(counts, np.round(counts))
+
+
+def test_the_scatter_reads_each_metric_on_one_axis_per_row_and_each_key_on_one_per_column(tmp_path, rng,
+                                                                                            monkeypatch):
+    """A metric's panels share its y axis across the keys (its tick labels on the first column only), a key's share
+    its x axis (labels on the last row only), and a panel carries at most six ticks a side."""
+    import numpy as np
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    import uvms.viz.study as study
+
+    drawn = []
+    monkeypatch.setattr(study.outputs, "save_figure", lambda figure, path: drawn.append(figure))
+    keys, metrics = ["a", "b", "c"], ["m1", "m2"]
+    table = [{"trial": k, "a": float(a), "b": float(10 * a + 1), "c": ["x", "y"][k % 2], "m1": float(a ** 2),
+              "m2": float(1e-4 * a), "pass": bool(a > 0.3), "error": ""} for k, a in enumerate(rng.uniform(0, 1, 30))]
+    study.scatter(table, keys, metrics, "t", tmp_path / "s.png")
+    figure = drawn[0]
+    figure.draw(FigureCanvasAgg(figure).get_renderer())
+    axes = np.array(figure.axes).reshape(len(metrics), len(keys))
+    for i in range(len(metrics)):
+        assert all(axes[i, 0].get_shared_y_axes().joined(axes[i, 0], axes[i, j]) for j in range(len(keys)))
+        assert not axes[i, 0].get_shared_y_axes().joined(axes[0, 0], axes[1, 0]) or i == 0  # metrics apart
+        for j in range(len(keys)):
+            shown = [label for label in axes[i, j].get_yticklabels() if label.get_visible() and label.get_text()]
+            assert bool(shown) == (j == 0), (i, j)
+            inside = [tick for tick in axes[i, j].get_yticks() if axes[i, j].get_ylim()[0] <= tick
+                      <= axes[i, j].get_ylim()[1]]
+            assert 2 <= len(inside) <= 6, (i, j, inside)
+    assert [label.get_text() for label in axes[-1, 2].get_xticklabels()] == ["x", "y"]  # a text key's values

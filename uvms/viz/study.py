@@ -73,7 +73,7 @@ def scatter(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str], 
     from matplotlib.figure import Figure
 
     figure = Figure(figsize=(2.8 * len(keys) + 0.8, 2.0 * len(metrics) + 0.6))
-    axes = figure.subplots(len(metrics), len(keys), squeeze=False, sharex="col")
+    axes = figure.subplots(len(metrics), len(keys), squeeze=False, sharex="col", sharey="row")
     for j, key in enumerate(keys):
         labels = list(dict.fromkeys(plain_text(row[key]) for row in table))
         numeric = all(isinstance(row[key], (int, float)) for row in table)
@@ -88,6 +88,7 @@ def scatter(table: Sequence[dict], keys: Sequence[str], metrics: Sequence[str], 
                 axis.set_ylabel(metric.replace("_", " "), fontsize=7)
             axis.tick_params(labelsize=6)
             axis.grid(True, alpha=0.3)
+            axis.locator_params(nbins=4)  # a small panel reads 4-5 ticks (matplotlib makes each tick's artists)
         if not numeric:
             axes[-1, j].set_xticks(range(len(labels)), labels, fontsize=6)
         axes[-1, j].set_xlabel(plain_text(key), fontsize=7)
