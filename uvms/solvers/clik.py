@@ -201,7 +201,7 @@ class CLIKSolver(Solver):
         """v (nv,) of :meth:`velocity` alone (the prepared frame step's kernel without a result to build)."""
         if self._frame_step is not None:
             return self._frame_step.velocity(self._checked(configuration))
-        return self.velocity(configuration).v
+        return super().stage_velocity(configuration)
 
     def velocity(self, configuration: Configuration) -> SolverResult:
         """The CLIK velocity at ``configuration`` and its diagnostics (the residuals per task, when read)."""

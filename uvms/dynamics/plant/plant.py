@@ -137,7 +137,6 @@ class Plant(ConservedQuantities):
         self._base_placement = robot.base_placement
         self._stacked = StackedLinks.of(self.links, hydro, gravity)
         self._lower = np.tril_indices(self.model.nv, -1)
-        self._zero_velocity = np.zeros(self.model.nv)
         self._buoyant = self.gravity and self._stacked.buoyant
         stacked = self._stacked
         # the links' joints, each once (several links may share one), and each link's of them (damping_power's)
