@@ -3,7 +3,8 @@ per-step numbers: a body wrench's generalized force, the motors' accelerations, 
 motor torques, the thrusters' wrench, lag and saturation, the state's finiteness, the rows' powers.
 
 :meth:`uvms.dynamics.plant.plant.Plant.stage_acceleration` and
-:meth:`uvms.dynamics.plant.actuated.ActuatedPlantSystem._rate`: after Pinocchio's algorithms one call here forms Mbar
+:meth:`uvms.dynamics.plant.actuated.ActuatedPlantSystem._rate` (through the plant's
+:class:`~uvms.dynamics.plant.compiled.CompiledPass`): after Pinocchio's algorithms one call here forms Mbar
 and nbar (:func:`uvms.numerics._kernels.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle
 (the base frame's LOCAL Jacobian formed from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m)
 / tau and the vehicle's right-hand side Mbar_bm a_m + nbar_b; only the 6 x 6 (3 x 3 planar) solve stays with numpy's
