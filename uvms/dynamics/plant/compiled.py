@@ -8,8 +8,9 @@ plant's constants, and the vehicle's block is solved after it with numpy's LAPAC
 (:func:`~uvms.numerics.lapack.numpy_solve`: numpy's numbers).
 
 What an integrator's stage calls is a closure over the plant's arrays and Pinocchio's functions, bound once
-(:meth:`CompiledPass.actuated_stage`): a stage is Pinocchio, the kernel and the solve with about a microsecond of
-Python around them, where methods reading the same attributes at every call cost about four.
+(:meth:`CompiledPass.actuated_stage`): a stage is Pinocchio, the kernel and the solve with a few Python calls around
+them (as methods reading the same attributes at every call, a stage of the BlueROV2 + Alpha 5 took about 3 us more
+of its ~20).
 """
 
 from __future__ import annotations
