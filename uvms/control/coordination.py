@@ -37,7 +37,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ..dynamics.plant.actuated import base_twist, lag_factor
+from ..dynamics.plant.actuated import base_twist
 from ..dynamics.plant.command import Command, State
 from ..dynamics.thrusters.fin_allocation import thruster_count
 from ..errors import SolverInputError
@@ -45,7 +45,7 @@ from ..numerics._kernels import Kernel
 from ..numerics.inverses import VariableDamping, damped_weighted_inverse
 from ..robot.limits import Limit
 from ..robot.robot import Robot
-from .vehicle import VehicleVelocityController
+from .vehicle import LagFactor, VehicleVelocityController
 
 
 def coordinated_arm_rates(
@@ -212,7 +212,7 @@ class CoordinatedControl:
         self._base_reference, self._arm_command = base_reference_into, arm_command_into
         self._sizes = robot.n_vehicle, robot.n_arm  # the model's (its properties cost a call each)
         self._arm_acceleration = np.empty(robot.n_arm)  # read within a step only (by the velocity loop)
-        self._lag: tuple[tuple[float, float] | None, float] = (None, 1.0)  # ((dt, tau), lag_factor there)
+        self._lag = LagFactor()  # the servos' lag over the control period
         self._thrusters = thruster_count(velocity.allocator)  # an allocation's variables: thrusts, then fin angles
         self._forget()
 
@@ -257,7 +257,7 @@ class CoordinatedControl:
         # (:func:`~uvms.dynamics.plant.actuated.lag_command`) and the acceleration the servo the model knows gives
         # (its feedforward) in one compiled call, numpy's numbers
         command, tau = np.empty(n_arm), model.motor_time_constant
-        self._arm_command(arm, self.max_arm_rate, v[nb:], self._lag_factor(tau), self.servo_compensation, tau,
+        self._arm_command(arm, self.max_arm_rate, v[nb:], self._lag(self.dt, tau), self.servo_compensation, tau,
                           command, self._arm_acceleration)
         # nu_ref (vehicle joint -> base frame) and the reference's rate over the last step, filtered (in place), in
         # one compiled call (Pinocchio's and numpy's numbers); nu_ref a new array (the row and the next step keep it)
@@ -280,14 +280,6 @@ class CoordinatedControl:
                 "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
         actuators, n = allocation.thrusts, self._thrusters
         return Command(arm=command, thrust=actuators[:n], fins=actuators[n:], info=info)
-
-    def _lag_factor(self, time_constant: float) -> float:
-        """:func:`~uvms.dynamics.plant.actuated.lag_factor` of the control period and the servos' time constant
-        [s], computed again only when one changed."""
-        key = (self.dt, time_constant)
-        if self._lag[0] != key:
-            self._lag = key, float(lag_factor(self.dt, time_constant))
-        return self._lag[1]
 
 
 def achieved_ratio(asked: np.ndarray, achieved: np.ndarray, tolerance: float = 1e-6) -> np.ndarray:

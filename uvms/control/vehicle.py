@@ -128,6 +128,24 @@ def _six(value: float | np.ndarray) -> np.ndarray:
 _POSE_REFERENCE = Kernel("vehicle", "pose_reference_into")
 
 
+class LagFactor:
+    """:func:`~uvms.dynamics.plant.actuated.lag_factor` of the last (dt, tau) asked, computed again only when one of
+    them changed: a controller asks it at every step with the same pair (the servos' lag, the observer's filter)."""
+
+    __slots__ = ("_key", "_value")
+
+    def __init__(self) -> None:
+        self._key: tuple[float, float] | None = None
+        self._value = np.float64(0.0)
+
+    def __call__(self, dt: float, time_constant: float) -> np.float64:
+        """1 - exp(-dt / tau) of dt and tau [s] (numpy's expm1, a numpy float)."""
+        key = (dt, time_constant)
+        if self._key != key:
+            self._key, self._value = key, lag_factor(dt, time_constant)
+        return self._value
+
+
 @dataclass(slots=True)
 class VehicleControl:
     """One output of the vehicle controller (built at every step: plain attribute writes; read it, it is never
@@ -183,7 +201,7 @@ class VehicleVelocityController:
         self._velocity_law = velocity_law_into
         placement = model.base_placement  # joint_M_base, read by the compiled law as arrays
         self._placement = (placement.rotation.copy(), placement.translation.copy())
-        self._gain: tuple[tuple[float, float] | None, float] = (None, 0.0)  # ((dt, T), the observer's gain there)
+        self._gain = LagFactor()  # the observer's gain of (dt, T)
         # buffers read within one call only (what a record keeps is a new array at every step)
         self._acceleration, self._mean = np.empty(model.model.nv), np.empty(model.model.nv)  # the observer's inputs
         self._needed, self._nu = np.empty(6), np.empty(6)  # the model's wrench for them; nu of the last control
@@ -238,12 +256,8 @@ class VehicleVelocityController:
         return disturbance
 
     def _observer_gain(self, dt: float) -> float:
-        """1 - exp(-dt / T) of the step dt [s] (the first-order filter's :func:`lag_factor`), computed again only when
-        dt or T changed."""
-        key = (dt, self.disturbance_time_constant)
-        if self._gain[0] != key:
-            self._gain = key, lag_factor(dt, self.disturbance_time_constant)
-        return self._gain[1]
+        """1 - exp(-dt / T) of the step dt [s] (the first-order filter's :class:`LagFactor`)."""
+        return self._gain(dt, self.disturbance_time_constant)
 
     def applied_wrench(self, q: np.ndarray, v: np.ndarray, thrusts: np.ndarray,
                        fins: np.ndarray | None = None) -> np.ndarray:
