@@ -10,6 +10,7 @@ import uvms
 from uvms.dynamics.thrusters.allocation import ThrustAllocator
 from uvms.dynamics.thrusters.thrusters import allocation_matrix, thrusters_of
 from uvms.errors import SolverInputError
+from uvms.numerics._kernels.allocation import pseudo_inverse_thrusts
 
 
 def numpy_step(allocator: ThrustAllocator, wrench: np.ndarray) -> tuple | None:
@@ -28,7 +29,7 @@ def numpy_step(allocator: ThrustAllocator, wrench: np.ndarray) -> tuple | None:
 
 def kernel_step(allocator: ThrustAllocator, wrench: np.ndarray) -> tuple | None:
     thrusts, achieved, residual = np.empty(allocator.n), np.empty(6), np.empty(6)
-    finite, within, exact = allocator._load_kernel()(
+    finite, within, exact = pseudo_inverse_thrusts(
         allocator.inverse, allocator.matrix, wrench, *allocator._inside, allocator.lower, allocator.upper,
         allocator.tolerance, thrusts, achieved, residual)
     assert finite
@@ -73,7 +74,7 @@ def test_allocate_refuses_a_wrench_that_is_not_finite_as_before():
     robot = uvms.load("bluerov2_alpha5")
     thrusters = thrusters_of(robot)
     allocator = ThrustAllocator(allocation_matrix(robot, thrusters), thrusters.lower, thrusters.upper)
-    finite, _, _ = allocator._load_kernel()(
+    finite, _, _ = pseudo_inverse_thrusts(
         allocator.inverse, allocator.matrix, np.array([0.0, np.nan, 0, 0, 0, 0]), *allocator._inside,
         allocator.lower, allocator.upper, allocator.tolerance, np.empty(allocator.n), np.empty(6), np.empty(6))
     assert not finite

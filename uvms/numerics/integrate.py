@@ -23,12 +23,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from types import ModuleType
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import NumericalError, StepCountError, UVMSError
+from ._kernels import Kernel
 from .lapack import lapack
 
 #: The argument dIntegrate differentiates: the tangent vector (read once, not at every stage).
@@ -129,31 +129,24 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
         return pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q)), x
     # the stages' arguments (h k_q, x + h k_x) and the weighted sums in compiled calls: numpy's numbers, about twenty
     # numpy calls fewer
-    kernels = _runge_kutta()
+    stage_inputs_into = _STAGE_INPUTS.function or _STAGE_INPUTS.load()
+    weighted_sum_into = _WEIGHTED_SUM.function or _WEIGHTED_SUM.load()
     nv, m = len(k1q), len(x)
     k = [(k1q, k1x)]
     for h, time_ in ((half, t + half), (half, t + half), (dt, t + dt)):
         xi, x_stage = np.empty(nv), np.empty(m)  # new at every stage: a stage's rate may keep views of them
-        kernels.stage_inputs_into(h, k[-1][0], x, k[-1][1], xi, x_stage)
+        stage_inputs_into(h, k[-1][0], x, k[-1][1], xi, x_stage)
         k.append(stage(xi, x_stage, time_))
     tangent, x_next = np.empty(nv), np.empty(m)
-    kernels.weighted_sum_into(dt / 6.0, k[0][0], k[1][0], k[2][0], k[3][0], None, tangent)
-    kernels.weighted_sum_into(dt / 6.0, k[0][1], k[1][1], k[2][1], k[3][1], x, x_next)
+    weighted_sum_into(dt / 6.0, k[0][0], k[1][0], k[2][0], k[3][0], None, tangent)
+    weighted_sum_into(dt / 6.0, k[0][1], k[1][1], k[2][1], k[3][1], x, x_next)
     return pin.integrate(model, q, tangent), x_next
 
 
-def _runge_kutta() -> ModuleType:
-    """The compiled arithmetic of a step with a vector state (:mod:`uvms.numerics._kernels.runge_kutta`), imported
-    at the first such step: a kinematic run never loads numba for it."""
-    global _kernels
-    if _kernels is None:
-        from ._kernels import runge_kutta
-
-        _kernels = runge_kutta
-    return _kernels
-
-
-_kernels: ModuleType | None = None
+#: The compiled arithmetic of a step with a vector state (:mod:`uvms.numerics._kernels.runge_kutta`), imported at the
+#: first such step: a kinematic run never loads numba for it.
+_STAGE_INPUTS = Kernel("runge_kutta", "stage_inputs_into")
+_WEIGHTED_SUM = Kernel("runge_kutta", "weighted_sum_into")
 
 
 def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:

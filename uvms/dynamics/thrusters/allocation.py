@@ -24,13 +24,14 @@ to produce a newton of it, and no least-norm step runs (the matrix looks square 
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from ctypes import c_int
 from dataclasses import dataclass
 
 import numpy as np
 
 from ...errors import SolverInputError, UVMSError
+from ...numerics._kernels import Kernel
 from ...numerics.inverses import pinv
 from ...robot.conventions import AXIS_NAMES
 from ...robot.kinematics import axis_rows
@@ -124,17 +125,9 @@ class ThrustAllocator:
         self._rows = sorted(row for group in self.groups for row in group)
         self._all_rows = len(self._rows) == 6
         self._plain = len(self.groups) == 1 and bool(np.all(self.weights == self.weights[0]))
-        self._kernel: Callable[..., tuple] | None = None  # the compiled pseudo-inverse step, loaded at first use
         self._none_saturated = np.zeros(n, dtype=bool)  # the pseudo-inverse step's saturated (shared: read only)
         self._none_saturated.flags.writeable = False
         self._bounded: BoundedProblem | None = None  # the bounded stages' fixed arrays, made at their first use
-
-    def _load_kernel(self) -> Callable[..., tuple]:
-        """The compiled pseudo-inverse step (:func:`uvms.numerics._kernels.allocation.pseudo_inverse_thrusts`;
-        numba loaded here, at the first allocation)."""
-        from ...numerics._kernels.allocation import pseudo_inverse_thrusts
-        self._kernel = pseudo_inverse_thrusts
-        return pseudo_inverse_thrusts
 
     @property
     def n(self) -> int:
@@ -187,7 +180,7 @@ class ThrustAllocator:
             if not (wrench.__class__ is np.ndarray and wrench.shape == (6,) and wrench.dtype == float
                     and wrench.flags.c_contiguous):
                 wrench = np.ascontiguousarray(_wrench(wrench))
-            kernel = self._kernel if self._kernel is not None else self._load_kernel()
+            kernel = _PSEUDO_INVERSE.function or _PSEUDO_INVERSE.load()
             thrusts, achieved, residual = np.empty(self.n), np.empty(6), np.empty(6)  # new: a result keeps them
             finite, within, exact = kernel(self.inverse, self.matrix, wrench, *self._inside, self.lower, self.upper,
                                            self.tolerance, thrusts, achieved, residual)
@@ -398,3 +391,8 @@ class BoundedProblem:
     identity: np.ndarray
     zeros: np.ndarray
     ordered: bool
+
+
+#: The compiled pseudo-inverse step (:func:`uvms.numerics._kernels.allocation.pseudo_inverse_thrusts`, numba loaded at
+#: the first allocation).
+_PSEUDO_INVERSE = Kernel("allocation", "pseudo_inverse_thrusts")
