@@ -18,6 +18,7 @@ numba of this environment.
 from __future__ import annotations
 
 import argparse
+import json
 import timeit
 from collections import Counter
 from collections.abc import Callable
@@ -126,20 +127,32 @@ def replay(calls: list[Call]) -> None:
         function(*args)
 
 
+def replay_times(calls: list[Call], model: pin.Model, aba: Callable, rounds: int) -> list[tuple[float, float]]:
+    """(the step's calls replayed, one pin.aba beside it) [s] per round, each the best of 5 x 200 replays."""
+    replay(calls)
+    times = []
+    for _ in range(rounds):
+        reference = aba_time(model, aba)
+        times.append((min(timeit.repeat(lambda: replay(calls), number=200, repeat=5)) / 200, reference))
+    return times
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3, help="replays timed (each against its own pin.aba)")
     parser.add_argument("--step", type=int, default=500, help="the step recorded")
+    parser.add_argument("--json", action="store_true",
+                        help="print only the replays' times as JSON ({\"step\": [s], \"aba\": [s]}), for "
+                             "bench_actuated.py's table")
     options = parser.parse_args()
     calls, model, aba = record_step(options.step)
+    times = replay_times(calls, model, aba, options.rounds)
+    if options.json:
+        print(json.dumps({"step": [step for step, _ in times], "aba": [reference for _, reference in times]}))
+        return
     kinds = Counter(name.split(":")[0] for name, _, _ in calls)
     print(f"checkout {ROOT}: step {options.step}, {len(calls)} compiled calls ({dict(kinds)})")
-    replay(calls)
-    ratios = []
-    for _ in range(options.rounds):
-        reference = aba_time(model, aba)
-        step = min(timeit.repeat(lambda: replay(calls), number=200, repeat=5)) / 200
-        ratios.append(step / reference)
+    for step, reference in times:
         print(f"| the step's compiled calls replayed (pin.aba {1e6 * reference:.2f} us) | {1e6 * step:.1f} us = "
               f"**{step / reference:.0f}x aba** |")
     reference = aba_time(model, aba)
@@ -149,7 +162,8 @@ def main() -> None:
         totals.setdefault(name, [0, 0.0])
         totals[name][0] += 1
         totals[name][1] += each
-    print(f"median {np.median(ratios):.0f}x aba; per call (the sum of its calls in the step, x aba):")
+    print(f"median {np.median([step / ref for step, ref in times]):.0f}x aba; per call (the sum of its calls in the "
+          f"step, x aba):")
     for name, (number, total) in sorted(totals.items(), key=lambda item: -item[1][1]):
         print(f"| {name} | x{number} | {1e6 * total:.2f} us | {total / reference:.1f}x |")
 

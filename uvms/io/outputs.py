@@ -21,7 +21,6 @@ import errno
 import json
 import os
 import re
-import secrets
 import shutil
 import stat
 import sys
@@ -378,7 +377,7 @@ def run_folder(path: str | os.PathLike, *, lock: bool = True, inputs: Iterable[s
                 raise _os_failure(_disk_full(exc), parent, kept) from exc
             raise
         try:
-            previous = _swap_in(temporary, final, parent / f"{prefix}old-{secrets.token_hex(4)}")
+            previous = _swap_in(temporary, final, parent / f"{prefix}old-{os.urandom(4).hex()}")
         except OSError as exc:
             _remove(temporary)
             if _disk_full(exc) is not None:

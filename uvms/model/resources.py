@@ -13,7 +13,6 @@ import json
 import os
 import stat
 from collections.abc import Mapping
-from importlib import metadata
 from pathlib import Path
 
 from ..errors import ModelFileNotFound, ModelParseError, UVMSError
@@ -90,6 +89,8 @@ def example_robot_data_dir() -> Path:
     Raises:
         ModelFileNotFound: the package is not installed.
     """
+    from importlib import metadata  # here, not at import: ~15 ms (email, zipfile) that models of files never need
+
     try:
         dist = metadata.distribution("example-robot-data")
     except metadata.PackageNotFoundError as exc:
