@@ -103,3 +103,33 @@ def test_the_scatter_reads_each_metric_on_one_axis_per_row_and_each_key_on_one_p
                       <= axes[i, j].get_ylim()[1]]
             assert 2 <= len(inside) <= 6, (i, j, inside)
     assert [label.get_text() for label in axes[-1, 2].get_xticklabels()] == ["x", "y"]  # a text key's values
+
+
+def test_a_rankings_labels_never_run_over_their_bars(tmp_path, rng, monkeypatch):
+    """Each key's rho label lies after its bar, or inside the bar's end in white when the bar is long (eta^2 near
+    1): drawn, no label's box crosses its bar's end, and every label stays inside the panel."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    import uvms.viz.study as study
+
+    drawn = []
+    monkeypatch.setattr(study.outputs, "save_figure", lambda figure, path: drawn.append(figure))
+    sensitivity = {"m": [{"key": key, "eta2": eta2, "rho": 0.5, "p_value": 1e-193}
+                         for key, eta2 in [("a", 0.97), ("b", 0.75), ("c", 0.61), ("d", 0.6), ("e", 0.3),
+                                           ("f", 0.0)]]}
+    study.ranking(sensitivity, ["m"], "t", tmp_path / "r.png")
+    figure = drawn[0]
+    renderer = FigureCanvasAgg(figure).get_renderer()
+    figure.draw(renderer)
+    axis = figure.axes[0]
+    panel = axis.get_window_extent(renderer)
+    bars = {round(bar.get_y() + 0.5 * bar.get_height()): bar.get_window_extent(renderer) for bar in axis.patches}
+    texts = [text for text in axis.texts if text.get_text()]
+    assert len(texts) == 6
+    for text in texts:
+        box, bar = text.get_window_extent(renderer), bars[round(text.get_position()[1])]
+        inside = text.get_color() == "white"
+        assert (bar.x0 <= box.x0 and box.x1 <= bar.x1) if inside else box.x0 >= bar.x1, text.get_text()
+        assert panel.x0 <= box.x0 and box.x1 <= panel.x1, text.get_text()
+    white = [text.get_color() == "white" for text in texts]  # bottom up: f, e, d, c, b, a
+    assert white == [False, False, False, True, True, True]

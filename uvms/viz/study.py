@@ -113,7 +113,9 @@ def ranking(sensitivity: dict, metrics: Sequence[str], head: str, path: Path) ->
         axis.set_yticks(range(len(entries)), [plain_text(e["key"]) for e in entries], fontsize=7)
         for y, entry in enumerate(entries):
             rho = "" if entry["rho"] is None else f"rho {entry['rho']:+.2f} (p {entry['p_value']:.1g})"
-            axis.text(0.98, y, "const." if entry["eta2"] is None else rho, va="center", ha="right", fontsize=6)
+            x, align, color = rho_place(entry["eta2"] or 0.0)
+            axis.text(x, y, "const." if entry["eta2"] is None else rho, va="center", ha=align, color=color,
+                      fontsize=6)
         axis.set_xlim(0, 1)
         axis.set_title(outcome.replace("_", " "), fontsize=8)
         axis.tick_params(axis="x", labelsize=7)
@@ -124,6 +126,12 @@ def ranking(sensitivity: dict, metrics: Sequence[str], head: str, path: Path) ->
     figure.suptitle(head, fontsize=9)
     figure.tight_layout()
     outputs.save_figure(figure, path)
+
+
+def rho_place(eta2: float) -> tuple[float, str, str]:
+    """(x, ha, color) of a ranking bar's label: after the bar's end when it fits there (a label at 6 pt is a third of
+    the panel's width at most), else inside the bar's end in white, so that it never runs over the bar."""
+    return (eta2 + 0.02, "left", "black") if eta2 <= 0.6 else (eta2 - 0.02, "right", "white")
 
 
 def save_tune_history(rows: Sequence[dict], keys: Sequence[str], objective: str, direction: str, path: Path,
