@@ -246,6 +246,24 @@ def test_a_trajectory_table_gives_the_trajectorys_samples_and_evaluates_other_ti
             assert np.array_equal(sample.twist, expected.twist)
 
 
+def test_twists_at_many_times_are_the_trajectorys_one_by_one():
+    """``twists_at`` (a run's desired speed, drawn) gives each time's twist bit for bit, through ``at`` where the
+    trajectory has it and one call per time where it does not; an empty time list gives (0, 6)."""
+    from uvms.trajectory.table import twists_at
+
+    circle = PathTrajectory(CirclePath([0.0, 2.0, 0.0], [0.0, -2.0, 0.0]), LAWS[0], orientation=[0.0, 0.0, 1.0])
+    se3 = SE3Trajectory([0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.5, 0.3, -0.2, 1.0], LAWS[2])  # without `at`
+    times = np.array([k * 0.02 for k in range(9501)])
+    for trajectory in (circle, se3):
+        twists = twists_at(trajectory, times)
+        assert twists.shape == (len(times), 6)
+        for index in (0, 1, 250, 4750, 9500):
+            assert np.array_equal(twists[index], trajectory(times[index]).twist)
+        assert twists_at(trajectory, np.zeros(0)).shape == (0, 6)
+    speed = np.linalg.norm(twists_at(circle, times)[:, :3], axis=1)
+    assert speed.max() == pytest.approx(0.5, rel=1e-12) and speed[0] == 0.0  # hoang2011's 0.5 m/s, from rest
+
+
 def test_a_trajectory_tables_targets_are_its_samples_arrays_with_their_rpy_in_a_poses_layout():
     from uvms.trajectory import RecentSamples, TrajectoryTable
 

@@ -19,6 +19,15 @@ def sample_target(sample: PoseSample) -> Target:
     return pose.translation, pose.rotation, sample.twist, None
 
 
+def twists_at(trajectory: Callable[[float], PoseSample], times: np.ndarray) -> np.ndarray:
+    """The trajectory's twists [v; omega] (N, 6) [m/s, rad/s] at the times (N,) [s]: in one call over all of them
+    where it has ``at(times) -> PoseSamples`` (the numbers of one call per time), else one call per time."""
+    at = getattr(trajectory, "at", None)
+    if at is not None:
+        return at(np.asarray(times, dtype=float)).twists
+    return np.array([trajectory(float(t)).twist for t in times]).reshape(-1, 6)
+
+
 class TrajectoryTable:
     """t -> the trajectory's sample, the times of a run (its integrator's stages) evaluated in one call.
 

@@ -20,6 +20,7 @@ from ..errors import UVMSError
 from ..io import outputs
 from ..robot.conventions import AXIS_NAMES
 from ..sim.result import SimulationResult
+from ..trajectory.table import twists_at
 from .labels import arm_joint_labels, legend_below
 from .paths import path_figure
 
@@ -60,7 +61,7 @@ def motion_axes(axes: Sequence[str]) -> list[str]:
 def desired_motion_figure(result: SimulationResult, trajectory, title: str = "") -> Figure:
     """Desired speed and every controlled axis of the task against time (x_d, y_d, z_d [m], roll_d ... [rad])."""
     t = result.t
-    speed = np.array([np.linalg.norm(trajectory(time_).twist[:3]) for time_ in t])
+    speed = np.linalg.norm(twists_at(trajectory, t)[:, :3], axis=1)  # the path's samples in one call where it can
     columns, labels = [speed], ["speed [m/s]"]
     for axis in motion_axes(result.axes or result.robot.base.task_axes):
         index = AXIS_NAMES.index(axis)
