@@ -6,7 +6,9 @@ They are then replayed back to back, in the step's order, from a list: the same 
 inputs, each call's own boundary crossing (numba's dispatch, Boost.Python's conversions) kept, the controller's and
 the integrator's Python between them gone. The replay's time, as a ratio to one ``pin.aba`` on the same model
 timed beside it, is what the step would cost if all of its glue were compiled away with its numerics unchanged
-(bit for bit); per call, what each kernel costs.
+(bit for bit) and its calls kept apart; per call, what each kernel costs. Numba's crossing of each kernel call
+(reading its arguments: a no-op kernel called with the same arguments) is measured apart: what fusing the step's
+kernels into fewer calls would take off the floor.
 
 The recording replaces numba's dispatcher call and ``pinocchio``'s module functions in this process only (the
 script's own process: nothing else imports them patched); it reads numba's ``Dispatcher`` type, so it follows the
@@ -137,6 +139,26 @@ def replay_times(calls: list[Call], model: pin.Model, aba: Callable, rounds: int
     return times
 
 
+def numba_crossing(calls: list[Call]) -> float:
+    """The numba calls' crossing [s]: each called as a no-op kernel of as many arguments with its own arguments
+    (numba's dispatch and unboxing, no arithmetic), best of 5 x 2,000, summed over the step."""
+    from numba import njit
+
+    noops: dict[int, Callable] = {}
+    total = 0.0
+    for name, _, args in calls:
+        if name.startswith("numba:"):
+            if len(args) not in noops:
+                names = ", ".join(f"a{index}" for index in range(len(args)))
+                namespace: dict = {}
+                exec(f"def noop({names}):\n    return 0\n", namespace)  # the script's own source, no input
+                noops[len(args)] = njit(cache=False)(namespace["noop"])
+            noop = noops[len(args)]
+            noop(*args)
+            total += min(timeit.repeat(lambda: noop(*args), number=2000, repeat=5)) / 2000  # noqa: B023
+    return total
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3, help="replays timed (each against its own pin.aba)")
@@ -162,8 +184,10 @@ def main() -> None:
         totals.setdefault(name, [0, 0.0])
         totals[name][0] += 1
         totals[name][1] += each
-    print(f"median {np.median([step / ref for step, ref in times]):.0f}x aba; per call (the sum of its calls in the "
-          f"step, x aba):")
+    crossing = numba_crossing(calls)
+    print(f"median {np.median([step / ref for step, ref in times]):.0f}x aba, of which numba's crossing of its "
+          f"{kinds['numba']} kernel calls {1e6 * crossing:.1f} us = {crossing / reference:.1f}x aba (no-op kernels "
+          f"with the same arguments); per call (the sum of its calls in the step, x aba):")
     for name, (number, total) in sorted(totals.items(), key=lambda item: -item[1][1]):
         print(f"| {name} | x{number} | {1e6 * total:.2f} us | {total / reference:.1f}x |")
 
