@@ -105,7 +105,7 @@ def test_the_scatter_reads_each_metric_on_one_axis_per_row_and_each_key_on_one_p
     assert [label.get_text() for label in axes[-1, 2].get_xticklabels()] == ["x", "y"]  # a text key's values
 
 
-def test_a_rankings_labels_never_run_over_their_bars(tmp_path, rng, monkeypatch):
+def test_a_rankings_labels_never_run_over_their_bars(tmp_path, monkeypatch):
     """Each key's rho label lies after its bar, or inside the bar's end in white when the bar is long (eta^2 near
     1): drawn, no label's box crosses its bar's end, and every label stays inside the panel."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
