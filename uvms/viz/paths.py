@@ -104,7 +104,7 @@ def path_figure(result: SimulationResult, title: str = "") -> Figure:
     axis = figure.add_subplot(projection="3d") if three_d else figure.subplots()
     travelled = [(result.ee_position[:, shown], "C0", "end effector")]
     if robot.base_type != "fixed":
-        vehicle = np.array([robot.base_pose(q).translation for q in result.q])  # (N, 3) [m] world
+        vehicle = np.array([robot.base_pose(q, check=False).translation for q in result.q])  # (N, 3) [m] world
         travelled.append((vehicle[:, shown], "C2", "vehicle"))
     desired = result.desired_position[:, shown]
     everything = np.vstack([desired, *(points for points, _, _ in travelled)])
