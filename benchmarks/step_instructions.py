@@ -1,0 +1,142 @@
+"""The intervention step in instructions (issue 46): what a step executes, by who executes it, as a ratio to pin.aba.
+
+Wall-clock ratios on this machine move by 30-60 % within an hour (shared cores); the instructions a step executes do
+not. Under valgrind's callgrind, one process runs the intervention (``scenarios/bluerov2_alpha5_intervention.toml``,
+built once, its kernels loaded by a short first run) for ``LOW`` steps and another for ``LOW + --steps`` steps; their
+difference over ``--steps`` is one step (its share of the run's after-loop series included). Two more processes
+time ``pin.aba`` on the same model the same way. Each count is split by the shared object its instructions ran in:
+
+* compiled work: numba's kernels (JIT code, no object), BLAS and LAPACK, Pinocchio's library, coal;
+* calling it from Python: the interpreter, numpy's C API (arrays made and indexed, ufuncs on small vectors), the C
+  library (malloc, free, memcpy), numba's dispatch and runtime, Pinocchio's bindings (Boost.Python, eigenpy).
+
+OpenBLAS runs on one thread here (``OPENBLAS_NUM_THREADS=1``): its idle workers spin, and callgrind would count the
+spinning. A ratio in instructions is not one in time: a step runs its instructions at about half the rate aba runs
+its own (an interpreter's branches and a step's memory against one tight compiled loop), so its time ratio
+(``bench_actuated.py``) is about twice its instruction ratio.
+
+The numba cache is keyed by the CPU numba sees, and valgrind's is another: the first run under valgrind compiles
+every kernel once (minutes); later runs load them.
+
+    python benchmarks/step_instructions.py [--steps 200]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+from collections import Counter
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIO = ROOT / "scenarios" / "bluerov2_alpha5_intervention.toml"
+LOW = 10  # steps of the shorter run: its fixed costs (imports, the build, the first run) cancel in the difference
+
+#: (substring of a shared object's file name, component), the first match wins; JIT code has no object ("???")
+COMPONENTS = (
+    ("???", "numba's kernels (JIT code)"),
+    ("openblas", "BLAS and LAPACK"), ("_flapack", "BLAS and LAPACK"), ("_fblas", "BLAS and LAPACK"),
+    ("cython_blas", "BLAS and LAPACK"), ("cython_lapack", "BLAS and LAPACK"),
+    ("libpinocchio", "Pinocchio's library"), ("libcoal", "coal"),
+    ("libpython", "the interpreter"), ("_multiarray_umath", "numpy's C API"), ("_umath_linalg", "numpy's C API"),
+    ("libc.so", "the C library (malloc, free, memcpy)"), ("libm.so", "the C library (malloc, free, memcpy)"),
+    ("_dispatcher", "numba's dispatch and runtime"), ("_nrt_python", "numba's dispatch and runtime"),
+    ("_helperlib", "numba's dispatch and runtime"),
+    ("pinocchio_pywrap", "Pinocchio's bindings"), ("boost_python", "Pinocchio's bindings"),
+    ("eigenpy", "Pinocchio's bindings"),
+)
+COMPILED = ("numba's kernels (JIT code)", "BLAS and LAPACK", "Pinocchio's library", "coal")
+
+CHILD = """
+import sys
+import numpy as np
+import pinocchio as pin
+from uvms.scenario.actuated import simulate_actuation
+from uvms.scenario.build import build
+from uvms.scenario.schema import read_scenario
+
+kind, count, scenario = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+spec = read_scenario(scenario, ["outputs.figures=false"])
+setup = build(spec)
+if kind == "step":
+    samples = getattr(setup, "samples", None) or setup.trajectory
+    dt = float(spec.simulation.dt)
+    simulate_actuation(setup.actuation, setup.task, samples, setup.q0, 5 * dt, spec.simulation, False)  # kernels in
+    simulate_actuation(setup.actuation, setup.task, samples, setup.q0, count * dt, spec.simulation, False)
+else:
+    model = setup.actuation.actuated.plant.model
+    data, rng = model.createData(), np.random.default_rng(0)
+    q = pin.integrate(model, pin.neutral(model), 0.3 * rng.normal(size=model.nv))
+    v, tau = 0.3 * rng.normal(size=model.nv), np.zeros(model.nv)
+    for _ in range(count):
+        pin.aba(model, data, q, v, tau)
+"""
+
+
+def counted_run(kind: str, count: int, folder: Path) -> Counter:
+    """Instructions by shared object of one child process (``kind`` "step" or "aba", ``count`` of them) under
+    callgrind."""
+    out = folder / f"{kind}_{count}.callgrind"
+    environment = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, "-c", CHILD, kind,
+                    str(count), str(SCENARIO)], cwd=ROOT, env=environment, check=True, capture_output=True)
+    listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", str(out)], check=True,
+                             capture_output=True, text=True).stdout
+    by_object: Counter = Counter()
+    for line in listing.splitlines():
+        found = re.match(r"\s*([\d,]+)\s+(?:\([^)]*\)\s+)?\S.*\[(.*)\]\s*$", line)
+        if found and "PROGRAM TOTALS" not in line:
+            by_object[found.group(2).rsplit("/", 1)[-1]] += int(found.group(1).replace(",", ""))
+    return by_object
+
+
+def by_component(by_object: Counter) -> Counter:
+    """Instructions by component (:data:`COMPONENTS`; "other" for an object none names)."""
+    components: Counter = Counter()
+    for name, count in by_object.items():
+        components[next((label for key, label in COMPONENTS if key in name), "other")] += count
+    return components
+
+
+def per_call(kind: str, low: int, high: int, folder: Path) -> Counter:
+    """Instructions by component of one step or one aba: the difference of two runs over their count."""
+    with ThreadPoolExecutor(2) as pool:  # the two runs in parallel (instructions do not depend on the load)
+        short, long = pool.map(lambda count: by_component(counted_run(kind, count, folder)), (low, high))
+    return Counter({name: (long[name] - short[name]) / (high - low) for name in long | short})
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=200, help="steps of the intervention counted")
+    parser.add_argument("--abas", type=int, default=20000, help="pin.aba calls counted")
+    options = parser.parse_args()
+    if shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None:
+        sys.exit("step_instructions: valgrind is not installed (Debian: apt-get install valgrind)")
+    print(f"checkout {ROOT}: {options.steps} steps of {SCENARIO.name} and {options.abas} pin.aba under callgrind",
+          flush=True)
+    with tempfile.TemporaryDirectory(prefix="uvms_step_instructions_") as name:
+        folder = Path(name)
+        step = per_call("step", LOW, LOW + options.steps, folder)
+        aba = sum(per_call("aba", 0, options.abas, folder).values())
+    total = sum(step.values())
+    print(f"| per step | instructions | x pin.aba ({aba / 1e3:.1f} k instructions) | share |")
+    print("|---|---|---|---|")
+    for group, labels in (("compiled work", COMPILED),
+                          ("calling it from Python", [name for name in step if name not in COMPILED])):
+        part = sum(step[label] for label in labels)
+        print(f"| **{group}** | **{part / 1e3:.0f} k** | **{part / aba:.1f}x** | {100 * part / total:.0f} % |")
+        for label in sorted(labels, key=lambda label: -step[label]):
+            if step[label] > 0:
+                print(f"| {label} | {step[label] / 1e3:.0f} k | {step[label] / aba:.1f}x | "
+                      f"{100 * step[label] / total:.0f} % |")
+    print(f"| **the step** | **{total / 1e3:.0f} k** | **{total / aba:.0f}x** | 100 % |")
+
+
+if __name__ == "__main__":
+    main()
