@@ -139,13 +139,13 @@ def replay_times(calls: list[Call], model: pin.Model, aba: Callable, rounds: int
     return times
 
 
-def numba_crossing(calls: list[Call]) -> float:
-    """The numba calls' crossing [s]: each called as a no-op kernel of as many arguments with its own arguments
-    (numba's dispatch and unboxing, no arithmetic), best of 5 x 2,000, summed over the step."""
+def noop_calls(calls: list[Call]) -> list[tuple[Callable, tuple]]:
+    """The step's numba calls as no-op kernels of as many arguments, each with its call's own arguments (numba's
+    dispatch and unboxing, no arithmetic), compiled here (called once each)."""
     from numba import njit
 
     noops: dict[int, Callable] = {}
-    total = 0.0
+    replayed = []
     for name, _, args in calls:
         if name.startswith("numba:"):
             if len(args) not in noops:
@@ -153,10 +153,15 @@ def numba_crossing(calls: list[Call]) -> float:
                 namespace: dict = {}
                 exec(f"def noop({names}):\n    return 0\n", namespace)  # the script's own source, no input
                 noops[len(args)] = njit(cache=False)(namespace["noop"])
-            noop = noops[len(args)]
-            noop(*args)
-            total += min(timeit.repeat(lambda: noop(*args), number=2000, repeat=5)) / 2000  # noqa: B023
-    return total
+            noops[len(args)](*args)
+            replayed.append((noops[len(args)], args))
+    return replayed
+
+
+def numba_crossing(calls: list[Call]) -> float:
+    """The numba calls' crossing [s]: :func:`noop_calls`, each best of 5 x 2,000, summed over the step."""
+    return sum(min(timeit.repeat(lambda: noop(*args), number=2000, repeat=5)) / 2000  # noqa: B023
+               for noop, args in noop_calls(calls))
 
 
 def main() -> None:

@@ -4,21 +4,28 @@ Wall-clock ratios on this machine move by 30-60 % within an hour (shared cores);
 not. Under valgrind's callgrind, one process runs the intervention (``scenarios/bluerov2_alpha5_intervention.toml``,
 built once, its kernels loaded by a short first run) for ``LOW`` steps and another for ``LOW + --steps`` steps; their
 difference over ``--steps`` is one step (its share of the run's after-loop series included). Two more processes
-time ``pin.aba`` on the same model the same way. Each count is split by the shared object its instructions ran in:
+count ``pin.aba`` on the same model the same way. Each count is split by the shared object its instructions ran in:
 
 * compiled work: numba's kernels (JIT code, no object), BLAS and LAPACK, Pinocchio's library, coal;
 * calling it from Python: the interpreter, numpy's C API (arrays made and indexed, ufuncs on small vectors), the C
   library (malloc, free, memcpy), numba's dispatch and runtime, Pinocchio's bindings (Boost.Python, eigenpy).
 
 OpenBLAS runs on one thread here (``OPENBLAS_NUM_THREADS=1``): its idle workers spin, and callgrind would count the
-spinning. A ratio in instructions is not one in time: a step runs its instructions at about half the rate aba runs
+spinning.
+
+The step's floor (``step_floor.py``: its 79 compiled calls replayed back to back from a list, no Python between them)
+is counted the same way, and taken apart: numba's crossing of its kernel calls (no-op kernels with the same
+arguments, :func:`step_floor.noop_calls`), Pinocchio's and LAPACK's calls with their bindings, and the kernels' own
+work (the rest); the step less its floor is the Python between the calls.
+
+A ratio in instructions is not one in time: a step runs its instructions at about half the rate aba runs
 its own (an interpreter's branches and a step's memory against one tight compiled loop), so its time ratio
 (``bench_actuated.py``) is about twice its instruction ratio.
 
 The numba cache is keyed by the CPU numba sees, and valgrind's is another: the first run under valgrind compiles
 every kernel once (minutes); later runs load them.
 
-    python benchmarks/step_instructions.py [--steps 200]
+    python benchmarks/step_instructions.py [--steps 200] [--no-floor]
 """
 
 from __future__ import annotations
@@ -62,6 +69,18 @@ from uvms.scenario.build import build
 from uvms.scenario.schema import read_scenario
 
 kind, count, scenario = sys.argv[1], int(sys.argv[2]), sys.argv[3]
+if kind in ("floor", "crossing", "pinocchio"):  # step_floor.py's recorded step, replayed
+    sys.path.insert(0, sys.argv[4])
+    import step_floor
+
+    calls = step_floor.record_step(500)[0]
+    replayed = (step_floor.noop_calls(calls) if kind == "crossing" else
+                [(function, args) for name, function, args in calls
+                 if kind == "floor" or not name.startswith("numba:")])
+    for _ in range(count + 1):  # the first replay warms
+        for function, args in replayed:
+            function(*args)
+    sys.exit()
 spec = read_scenario(scenario, ["outputs.figures=false"])
 setup = build(spec)
 if kind == "step":
@@ -80,12 +99,13 @@ else:
 
 
 def counted_run(kind: str, count: int, folder: Path) -> Counter:
-    """Instructions by shared object of one child process (``kind`` "step" or "aba", ``count`` of them) under
-    callgrind."""
+    """Instructions by shared object of one child process under callgrind: ``count`` steps, pin.aba calls or
+    replays of the step's floor (``kind`` "step", "aba", "floor", "crossing" or "pinocchio")."""
     out = folder / f"{kind}_{count}.callgrind"
     environment = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, "-c", CHILD, kind,
-                    str(count), str(SCENARIO)], cwd=ROOT, env=environment, check=True, capture_output=True)
+                    str(count), str(SCENARIO), str(ROOT / "benchmarks")], cwd=ROOT, env=environment, check=True,
+                   capture_output=True)
     listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", str(out)], check=True,
                              capture_output=True, text=True).stdout
     by_object: Counter = Counter()
@@ -115,6 +135,8 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=200, help="steps of the intervention counted")
     parser.add_argument("--abas", type=int, default=20000, help="pin.aba calls counted")
+    parser.add_argument("--replays", type=int, default=200, help="replays of the step's floor counted")
+    parser.add_argument("--no-floor", action="store_true", help="leave the floor's rows out")
     options = parser.parse_args()
     if shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None:
         sys.exit("step_instructions: valgrind is not installed (Debian: apt-get install valgrind)")
@@ -124,18 +146,36 @@ def main() -> None:
         folder = Path(name)
         step = per_call("step", LOW, LOW + options.steps, folder)
         aba = sum(per_call("aba", 0, options.abas, folder).values())
+        floor = {} if options.no_floor else {kind: sum(per_call(kind, 0, options.replays, folder).values())
+                                              for kind in ("floor", "crossing", "pinocchio")}
     total = sum(step.values())
     print(f"| per step | instructions | x pin.aba ({aba / 1e3:.1f} k instructions) | share |")
     print("|---|---|---|---|")
     for group, labels in (("compiled work", COMPILED),
                           ("calling it from Python", [name for name in step if name not in COMPILED])):
         part = sum(step[label] for label in labels)
-        print(f"| **{group}** | **{part / 1e3:.0f} k** | **{part / aba:.1f}x** | {100 * part / total:.0f} % |")
+        print(row(f"**{group}**", part, aba, total, bold=True))
         for label in sorted(labels, key=lambda label: -step[label]):
-            if step[label] > 0:
-                print(f"| {label} | {step[label] / 1e3:.0f} k | {step[label] / aba:.1f}x | "
-                      f"{100 * step[label] / total:.0f} % |")
-    print(f"| **the step** | **{total / 1e3:.0f} k** | **{total / aba:.0f}x** | 100 % |")
+            if step[label] >= 500:  # (coal: no query in this scenario's step)
+                print(row(label, step[label], aba, total))
+    print(row("**the step**", total, aba, total, bold=True))
+    if floor:
+        print(row("the step's floor: its compiled calls replayed, no Python between them (`step_floor.py`)",
+                  floor["floor"], aba, total))
+        print(row("... numba's crossing of its kernel calls (no-op kernels, the same arguments)", floor["crossing"],
+                  aba, total))
+        print(row("... Pinocchio's and LAPACK's calls, with their bindings", floor["pinocchio"], aba, total))
+        print(row("... the kernels' own work (the rest)", floor["floor"] - floor["crossing"] - floor["pinocchio"],
+                  aba, total))
+        print(row("the step's Python between its calls (the step less its floor)", total - floor["floor"], aba,
+                  total))
+
+
+def row(label: str, count: float, aba: float, total: float, bold: bool = False) -> str:
+    """A table row: instructions [k], x pin.aba's and the share of the step."""
+    mark = "**" if bold else ""
+    share = 100 * count / total
+    return f"| {label} | {mark}{count / 1e3:.0f} k{mark} | {mark}{count / aba:.1f}x{mark} | {share:.0f} % |"
 
 
 if __name__ == "__main__":
