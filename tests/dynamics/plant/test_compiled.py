@@ -29,3 +29,24 @@ def test_the_bound_inputs_are_pinocchio_s_at_each_call(rng):
         assert np.array_equal(placements[last, 9:], data.oMi[last].translation)
         pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
         assert np.array_equal(accelerations[last], data.a[last].vector)
+
+
+def test_the_vehicle_wrench_in_one_call_is_the_terms_then_the_wrench_kernel(rng):
+    """CompiledPass.vehicle_wrench_into (one compiled call after Pinocchio's) writes the numbers of Mbar and nbar
+    (``terms``) followed by the vehicle rows' kernel, bit for bit, for a joint's or a base frame's rate, and leaves
+    the stage's numbers of a later evaluation unchanged (its Mbar and nbar are the pass's scratch)."""
+    from uvms.numerics._kernels.vehicle import vehicle_wrench_into
+
+    plant = Plant(shipped("bluerov2_alpha5"), gravity=True, current=[0.1, 0.0, -0.05])
+    compiled = plant._compiled()
+    placement = (plant.base_placement.rotation.copy(), plant.base_placement.translation.copy())
+    for base_frame in (False, True, False, True):
+        q, v = plant.robot.random_configuration(rng), rng.normal(size=plant.model.nv)
+        base, arm = rng.normal(size=6), rng.normal(size=plant.model.nv - 6)
+        mass, bias = compiled.terms(q, v, None)
+        expected = np.empty(6)
+        vehicle_wrench_into(mass, bias, base, arm, *placement, base_frame, expected)
+        wrench = np.full(6, np.nan)
+        compiled.vehicle_wrench_into(q, v, base, arm, placement, base_frame, wrench)
+        assert np.array_equal(wrench, expected)
+        assert np.array_equal(compiled.terms(q, v, None)[0], mass)

@@ -154,16 +154,15 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
         arm_acceleration: (n_arm,); out: (6,) written and returned (None: a new array).
         placement: the plant's joint_M_base as arrays (R (3, 3), p (3,)) a caller keeps (None: read from the plant).
     """
-    mass, bias = plant._mass_and_bias(q, v)
     nb = plant.nb
     wrench = np.empty(6) if out is None else out
-    if nb == 6:  # one compiled call, these expressions' numbers (:func:`~.vehicle.vehicle_wrench_into` of _kernels)
-        kernel = _VEHICLE_WRENCH.function or _VEHICLE_WRENCH.load()
+    if nb == 6:  # Pinocchio's calls, then the plant's terms and these expressions' numbers in one compiled call
         if placement is None:
             placement = plant._base_placement.rotation, plant._base_placement.translation
-        kernel(mass, bias, np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float),
-               *placement, base_frame, wrench)
+        plant._compiled().vehicle_wrench_into(q, v, np.asarray(base_acceleration, dtype=float),
+                                              np.asarray(arm_acceleration, dtype=float), placement, base_frame, wrench)
         return wrench
+    mass, bias = plant._mass_and_bias(q, v)
     placement = plant._base_placement
     if base_frame:  # the joint's rate; a planar joint's (vx, vy, wz) of it
         base_acceleration = placement.act(pin.Motion(np.asarray(base_acceleration, dtype=float))).vector[[0, 1, 5]]
@@ -172,11 +171,6 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
         generalized = np.array([generalized[0], generalized[1], 0.0, 0.0, 0.0, generalized[2]])
     wrench[:] = placement.actInv(pin.Force(generalized)).vector
     return wrench
-
-
-#: The compiled vehicle rows (:func:`uvms.numerics._kernels.vehicle.vehicle_wrench_into`, numba loaded at the first
-#: call).
-_VEHICLE_WRENCH = Kernel("vehicle", "vehicle_wrench_into")
 
 
 def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: float | np.ndarray) -> np.ndarray:

@@ -103,6 +103,16 @@ class CompiledPass:
                                 self.no_wrench if body_wrench is None else body_wrench, mass, bias_forces)
         return mass, bias_forces
 
+    def vehicle_wrench_into(self, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
+                            arm_acceleration: np.ndarray, placement: tuple[np.ndarray, np.ndarray], base_frame: bool,
+                            out: np.ndarray) -> None:
+        """A floating vehicle's inverse dynamics at (q, v) into ``out`` (6,): Mbar and nbar (in the pass's own
+        buffers), then the vehicle rows' body wrench at the base frame, in one compiled call after Pinocchio's
+        (:func:`uvms.numerics._kernels.plant_stage.vehicle_terms_wrench_into`; ``placement``: joint_M_base as
+        (R, p))."""
+        self.kernels.vehicle_terms_wrench_into(*self.inputs(q, v, False), v, *self.scratch, base_acceleration,
+                                               arm_acceleration, *placement, base_frame, out)
+
     def dynamics(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
         """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m
         (:func:`uvms.numerics._kernels.plant_stage.motor_torques_into`)."""

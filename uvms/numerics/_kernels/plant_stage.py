@@ -27,9 +27,10 @@ from numba import njit
 
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
 from .pose import inverse_action_into
+from .vehicle import vehicle_wrench_into
 
 __all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
-           "motor_torques_into", "plant_constants", "terms_into", "thrusters_into"]
+           "motor_torques_into", "plant_constants", "terms_into", "thrusters_into", "vehicle_terms_wrench_into"]
 
 
 @njit(cache=True)
@@ -73,6 +74,23 @@ def terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placement
         product = np.dot(wrench, base)  # numpy's w @ J (nv > 1 columns: BLAS's gemv)
         for i in range(h.shape[0]):
             bias_forces[i] -= product[i]
+
+
+@njit(cache=True)
+def vehicle_terms_wrench_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
+                              accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
+                              mass: np.ndarray, bias_forces: np.ndarray, base_acceleration: np.ndarray,
+                              arm_acceleration: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
+                              base_frame: bool, out: np.ndarray) -> None:
+    """:func:`terms_into` (no wrench on the vehicle), then the vehicle rows' body wrench at the base frame
+    (:func:`.vehicle.vehicle_wrench_into`) into ``out`` (6,): a floating vehicle's inverse dynamics in one call.
+
+    Args:
+        upper ... v, mass, bias_forces: as :func:`terms_into`; base_acceleration ... out: as
+            :func:`.vehicle.vehicle_wrench_into`.
+    """
+    terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, np.zeros(0), mass, bias_forces)
+    vehicle_wrench_into(mass, bias_forces, base_acceleration, arm_acceleration, rotation, translation, base_frame, out)
 
 
 @njit(cache=True)
