@@ -22,8 +22,10 @@ A ratio in instructions is not one in time: a step runs its instructions at abou
 its own (an interpreter's branches and a step's memory against one tight compiled loop), so its time ratio
 (``bench_actuated.py``) is about twice its instruction ratio.
 
-The numba cache is keyed by the CPU numba sees, and valgrind's is another: the first run under valgrind compiles
-every kernel once (minutes); later runs load them.
+The numba cache is keyed by the CPU numba sees, and valgrind's is another: after a kernel's source changes (or on a
+first run) valgrind's kernels are compiled again, which the two counted runs would each do, in unequal counts.
+One uncounted run under valgrind first compiles them into the cache; the counted runs load them
+(``PYTHONHASHSEED=0`` in every run).
 
     python benchmarks/step_instructions.py [--steps 200] [--no-floor]
 """
@@ -102,7 +104,7 @@ def counted_run(kind: str, count: int, folder: Path) -> Counter:
     """Instructions by shared object of one child process under callgrind: ``count`` steps, pin.aba calls or
     replays of the step's floor (``kind`` "step", "aba", "floor", "crossing" or "pinocchio")."""
     out = folder / f"{kind}_{count}.callgrind"
-    environment = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    environment = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONHASHSEED": "0"}
     subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, "-c", CHILD, kind,
                     str(count), str(SCENARIO), str(ROOT / "benchmarks")], cwd=ROOT, env=environment, check=True,
                    capture_output=True)
@@ -144,6 +146,7 @@ def main() -> None:
           flush=True)
     with tempfile.TemporaryDirectory(prefix="uvms_step_instructions_") as name:
         folder = Path(name)
+        counted_run("step", 1, folder)  # valgrind's kernels into numba's cache (compiled here after a change)
         step = per_call("step", LOW, LOW + options.steps, folder)
         aba = sum(per_call("aba", 0, options.abas, folder).values())
         floor = {} if options.no_floor else {kind: sum(per_call(kind, 0, options.replays, folder).values())
