@@ -33,8 +33,8 @@ def test_the_bound_inputs_are_pinocchio_s_at_each_call(rng):
 
 def test_the_vehicle_wrench_in_one_call_is_the_terms_then_the_wrench_kernel(rng):
     """CompiledPass.vehicle_wrench_into (one compiled call after Pinocchio's) writes the numbers of Mbar and nbar
-    (``terms``) followed by the vehicle rows' kernel, bit for bit, for a joint's or a base frame's rate, and leaves
-    the stage's numbers of a later evaluation unchanged (its Mbar and nbar are the pass's scratch)."""
+    (``terms``) followed by the vehicle rows' kernel, bit for bit, for a joint's or a base frame's rate; a later
+    ``terms`` at the same (q, v) still gives its Mbar (the call's Mbar and nbar went to the pass's scratch)."""
     from uvms.numerics._kernels.vehicle import vehicle_wrench_into
 
     plant = Plant(shipped("bluerov2_alpha5"), gravity=True, current=[0.1, 0.0, -0.05])

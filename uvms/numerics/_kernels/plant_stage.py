@@ -9,7 +9,9 @@ and nbar (:func:`uvms.numerics._kernels.hydro.plant_terms_into`), subtracts J_ba
 (the base frame's LOCAL Jacobian formed from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m)
 / tau and the vehicle's right-hand side Mbar_bm a_m + nbar_b; only the 6 x 6 (3 x 3 planar) solve stays with numpy's
 LAPACK (numba's solve calls SciPy's, whose numbers differ). As numpy calls this tail was about fifteen calls of
-0.3-1 us each. :func:`actuation_rows` derives a run's body wrench and powers from its stored rows after the loop.
+0.3-1 us each. :func:`vehicle_terms_wrench_into` is a floating vehicle's inverse dynamics (the controller's observer
+and feedforward) in the same way: the terms, then the vehicle rows' wrench. :func:`actuation_rows` derives a run's
+body wrench and powers from its stored rows after the loop.
 
 Every number is the one the numpy expressions it replaces gave, bit for bit: elementwise arithmetic in their order
 (numba contracts nothing without ``fastmath``), products through ``np.dot`` on arrays in the layout numpy held them
