@@ -1,4 +1,4 @@
-"""The actuated chain's vehicle side per step (uvms.control.coordination, uvms.control.vehicle, the errors of
+"""The actuated chain's vehicle side per step (uvms.control.coordination, uvms.control.vehicle; the error series of
 uvms.control.station): what it keeps or reads instead of computing again gives what computing again gives."""
 
 from __future__ import annotations
@@ -11,7 +11,6 @@ import pytest
 
 from uvms.control.coordination import FULL_RATIO
 from uvms.dynamics.plant.command import State
-from uvms.robot.configuration import Configuration
 from uvms.scenario.build import build
 from uvms.scenario.schema import read_scenario
 
@@ -31,31 +30,36 @@ def states(setup, count: int, seed: int = 5) -> list[State]:
                   np.zeros(8), np.zeros(0)) for _ in range(count)]
 
 
-def test_the_errors_read_the_steps_kinematics_at_its_q_and_compute_them_at_another(setup, monkeypatch):
+def test_the_error_series_are_the_stations_and_the_trajectorys_errors_at_each_stored_row(setup):
+    """The chain's errors, derived after the loop from the stored rows (t, q), against Pinocchio's poses computed
+    apart: the base frame's distance and log3 angle from the station, the end effector's position and distance
+    from the trajectory's point; the solver's own configuration is left where its last step put it."""
     controller = setup.actuation.controller
-    kinematic = controller.kinematic
-    first, second = states(setup, 2)
-    controller.reset(first, 0.0)
-    kinematic.reference(0.5, first.q)
-    updates = []
-    original = Configuration.update
-    monkeypatch.setattr(Configuration, "update", lambda self, q, **k: (updates.append(q), original(self, q, **k)))
-    kept = kinematic.errors(0.5, first.q)
-    assert updates == []  # the reference's kinematics, not computed again
-    fresh = build(read_scenario(SCENARIO, ["outputs.figures=false"])).actuation.controller
-    fresh.reset(first, 0.0)
-    for q in (first.q.copy(), second.q):  # another array (the same numbers, then others): computed there
-        row = kinematic.errors(0.5, q)
-        assert updates[-1] is q
-        expected = fresh.kinematic.errors(0.5, q)  # computed at q: its configuration was never at this array
-        assert row.keys() == expected.keys()
-        for name in row:
-            assert np.array_equal(row[name], expected[name]), name
-    for name in kept:  # the kept kinematics gave the numbers computing them again gives
-        assert np.array_equal(kept[name], kinematic.errors(0.5, first.q.copy())[name]), name
+    kinematic, robot = controller.kinematic, setup.robot
+    measured = states(setup, 5, seed=3)
+    controller.reset(measured[0], 0.0)
+    kinematic.reference(0.5, measured[0].q)
+    kept = kinematic._configuration.q
+    t = np.array([0.0, 0.5, 1.25, 2.0, 3.0])
+    q = np.array([state.q for state in measured])
+    series = controller.derived_series(t, q)
+    assert kinematic._configuration.q is kept
+    station, frame = kinematic.vehicle_target, robot.model.frames[kinematic.task.frame_id].name
+    for row in range(len(t)):
+        base = robot.base_pose(q[row]) * robot.base_placement
+        ee = robot.fk(q[row], frame).translation
+        point = kinematic.task_reference.samples.target(float(t[row]))[0]
+        assert series["vehicle_position_error"][row] == pytest.approx(
+            np.linalg.norm(station.translation - base.translation), abs=1e-12)
+        assert series["vehicle_attitude_error"][row] == pytest.approx(
+            np.linalg.norm(pin.log3(base.rotation.T @ station.rotation)), abs=1e-12)
+        np.testing.assert_allclose(series["ee_position"][row], ee, rtol=0.0, atol=1e-12)
+        assert series["ee_point_error"][row] == pytest.approx(np.linalg.norm(point - ee), abs=1e-12)
+    assert series["vehicle_position_error"][0] == 0.0  # the station: the first state's base frame
+    assert series["vehicle_position_error"][1:].min() > 1e-3 and series["ee_point_error"].min() > 1e-3
 
 
-KEPT = ("velocity_integral", "disturbance_estimate", "wrench_command", "achieved_wrench", "nu_ref", "ee_position")
+KEPT = ("velocity_integral", "disturbance_estimate", "wrench_command", "achieved_wrench", "nu_ref")
 
 
 def test_each_rows_arrays_keep_their_numbers_after_later_steps(setup):

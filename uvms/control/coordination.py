@@ -154,7 +154,7 @@ class KinematicLayer(Protocol):
 
     def step_done(self) -> None: ...
 
-    def errors(self, t: float, q: np.ndarray) -> dict: ...
+    def error_series(self, t: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]: ...
 
     def reset(self, state: State, t: float = 0.0) -> None: ...
 
@@ -178,7 +178,7 @@ class CoordinatedControl:
     Args:
         robot: a floating-base Robot (the controller's kinematics).
         velocity: the vehicle velocity controller (its model and allocation).
-        kinematic: the kinematic layer (an ActuatedKinematics: ``reference``, ``arm_rates``, ``errors``).
+        kinematic: the kinematic layer (an ActuatedKinematics: ``reference``, ``arm_rates``, ``error_series``).
         dt: control period [s] (the simulation step).
         coordination: re-solve the arm with the measured vehicle velocity.
         saturation_feedback: bound the vehicle's part of the reference by what the allocation achieved.
@@ -237,6 +237,11 @@ class CoordinatedControl:
         self.velocity.reset(state.q)
         self.kinematic.reset(state, t)
 
+    def derived_series(self, t: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+        """The series of the run derived after the loop from its stored rows t (N,) [s] and q (N, nq), not per step:
+        the vehicle's and the end effector's errors (:meth:`uvms.control.station.ActuatedKinematics.error_series`)."""
+        return self.kinematic.error_series(t, q)
+
     def command(self, state: State, t: float) -> Command:
         """The arm, thrust and fin commands for the step from the measured (q, v) at t [s]; advances the velocity
         loop's integral."""
@@ -277,7 +282,7 @@ class CoordinatedControl:
         info = {"wrench_command": control.wrench, "achieved_wrench": allocation.achieved_wrench,
                 "attainable": allocation.attainable, "velocity_integral": self.velocity.integral,
                 "disturbance_estimate": self.velocity.disturbance,
-                "nu_ref": nu_ref, **self.kinematic.errors(t, q)}
+                "nu_ref": nu_ref}
         actuators, n = allocation.thrusts, self._thrusters
         return Command(arm=command, thrust=actuators[:n], fins=actuators[n:], info=info)
 

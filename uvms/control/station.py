@@ -44,7 +44,7 @@ from ..dynamics.thrusters.fin_allocation import FinAllocator
 from ..errors import SolverInputError, ThrusterLayoutWarning
 from ..numerics._kernels import Kernel
 from ..numerics.inverses import VariableDamping
-from ..robot.configuration import Configuration
+from ..robot.configuration import Configuration, configurations
 from ..robot.kinematics import held_vehicle_split
 from ..robot.robot import Robot
 from ..solvers.base import SolverFactory
@@ -259,30 +259,33 @@ class ActuatedKinematics:
         v, _ = self._solve(self._at(t, q), vehicle_velocity, reference=False)
         return v[self.robot.n_vehicle:]
 
-    def errors(self, t: float, q: np.ndarray) -> dict:
-        """The series of a row: vehicle position [m] and attitude [rad] errors, end-effector position and its
-        distance [m] from the trajectory's point.
+    def error_series(self, t: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+        """The run's error series, derived after the loop from its stored rows t (N,) [s] and q (N, nq): the vehicle's
+        position [m] and attitude [rad] errors from its station (the base frame's), "vehicle_position_error" and
+        "vehicle_attitude_error" (N,); the end effector's position "ee_position" (N, 3) [m] world and, following a
+        trajectory, its distance [m] from the trajectory's point, "ee_point_error" (N,).
 
-        At the q (nq,) this step's :meth:`reference` or :meth:`arm_rates` was given (the same array) the kept
-        configuration's kinematics are read as they are (a configuration holds its q unchanged: the same forward
-        kinematics again would give the same numbers); at another q, computed there.
+        Each row's numbers are those of the kinematics at its q, from a configuration of its own moved along the rows
+        (the solver's is left as it is): the station's errors in one compiled call (Pinocchio's and numpy's numbers;
+        the norms as numpy's norm of a vector computes them, sqrt of x.dot(x)).
         """
-        configuration = self._configuration
-        if configuration is None or configuration.q is not q:
-            configuration = self._at(t, q)  # q: the step's, checked by its reference
-        _, translation, rotation = configuration.joint_arrays(1)  # the vehicle joint's placement at the step's q
-        ee = configuration.pose(self.task.frame_id).translation.copy()
-        target, placement = self.vehicle_target, self.base_placement
-        # the base frame's pose (base_pose's numbers), |p_d - p| and |log3(R^T R_d)| in one compiled call (Pinocchio's
-        # and numpy's numbers; the norms as numpy's norm of a vector computes them, sqrt of x.dot(x))
+        count, frame_id = len(q), self.task.frame_id
+        position, attitude, ee = np.empty(count), np.empty(count), np.empty((count, 3))
         kernel = _STATION_ERRORS.function or _STATION_ERRORS.load()
-        distance, attitude = kernel(rotation, translation, placement.rotation, placement.translation, target.rotation,
-                                    target.translation)
-        row = {"vehicle_position_error": distance, "vehicle_attitude_error": attitude, "ee_position": ee}
+        target, placement = self.vehicle_target, self.base_placement
+        station = (placement.rotation, placement.translation, target.rotation, target.translation)
+        for row, state in enumerate(configurations(self.robot, q, check=False)):  # q: the run's, checked at its steps
+            _, translation, rotation = state.joint_arrays(1)  # the vehicle joint's placement
+            position[row], attitude[row] = kernel(rotation, translation, *station)
+            ee[row] = state.pose(frame_id).translation
+        series = {"vehicle_position_error": position, "vehicle_attitude_error": attitude, "ee_position": ee}
         if self.task_reference.moving:
-            miss = self.task_reference.samples.target(t)[0] - ee  # the target's translation (no sample built)
-            row["ee_point_error"] = math.sqrt(miss.dot(miss))
-        return row
+            samples, point = self.task_reference.samples, np.empty(count)
+            for row, time in enumerate(np.asarray(t, dtype=float).tolist()):
+                miss = samples.target(time)[0] - ee[row]  # the target's translation (no sample built)
+                point[row] = math.sqrt(miss.dot(miss))
+            series["ee_point_error"] = point
+        return series
 
 
 def station_keeping(actuated: ActuatedPlant, q0: np.ndarray, dt: float,
@@ -357,5 +360,5 @@ def actuated_control(actuated: ActuatedPlant, dt: float, reference: TaskReferenc
                               servo_compensation=settings.servo_compensation)
 
 
-#: The compiled station errors of :meth:`ActuatedKinematics.errors` (numba loaded at the first row).
+#: The compiled station errors of :meth:`ActuatedKinematics.error_series` (numba loaded at its first call).
 _STATION_ERRORS = Kernel("vehicle", "station_errors")

@@ -140,6 +140,10 @@ class SimulationResult:
             if derive_actuation is not None:
                 rows = {**recorded, **own, **{name: arrays[name] for name in ("fin_wrench",) if name in arrays}}
                 own.update(derive_actuation(arrays["q"], arrays["v"], rows))
+            derive_controller = info.get("controller_series")  # the controller's, of the stored rows
+            if derive_controller is not None:
+                for name, values in derive_controller(arrays["t"], arrays["q"]).items():
+                    arrays.setdefault(name, values)  # a series the run derived already (a task's) is kept
             others = {name: arrays.pop(name) for name in list(arrays) if name not in SERIES}
             actuation = ActuationSeries(**own, lower=lower, upper=upper, controller=others)
         unknown = sorted(set(arrays) - set(SERIES))

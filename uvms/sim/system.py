@@ -71,7 +71,8 @@ class System(Protocol):
         tracking controller, ``"thrust_bounds"`` (lower (n,), upper (n,) [N]) of thrusters, ``"plant_series"``
         ((q (N, nq), v (N, nv)) -> the plant's series derived from the stored states, computed when first read) of a
         plant, ``"actuation_series"`` ((q, v, the rows recorded by name) -> the actuation series not recorded per
-        row: the body wrench, the powers) of thrusters; {} when none."""
+        row: the body wrench, the powers) of thrusters, ``"controller_series"`` ((t (N,), q (N, nq)) -> series of the
+        controller derived from the stored rows: the actuated chain's errors); {} when none."""
 
 
 class Simulable(Protocol):

@@ -368,9 +368,15 @@ class ActuatedPlantSystem:
     def series_info(self) -> dict:
         """{"thrust_bounds": (lower (n,), upper (n,) [N]), "plant_series": the energies and momentum of the stored
         states (:meth:`uvms.dynamics.plant.system.PlantSystem.derived_series`), "actuation_series": the wrench and
-        powers of the stored rows (:meth:`derived_series`)}."""
-        return {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper),
+        powers of the stored rows (:meth:`derived_series`), and "controller_series" when the controller derives
+        series of its own from the stored rows (its ``derived_series(t (N,), q (N, nq))``: the actuated chain's
+        errors)}."""
+        info = {"thrust_bounds": (self.thrusters.lower, self.thrusters.upper),
                 "plant_series": self._passive.derived_series, "actuation_series": self.derived_series}
+        controller_series = getattr(self.controller, "derived_series", None)
+        if controller_series is not None:
+            info["controller_series"] = controller_series
+        return info
 
     def derived_series(self, q: np.ndarray, v: np.ndarray, recorded: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """The actuation series derived after the loop from the stored rows q (N, nq), v (N, nv) and ``recorded``

@@ -191,8 +191,8 @@ def station_errors(joint_rotation: np.ndarray, joint_translation: np.ndarray, pl
                    target_translation: np.ndarray) -> tuple[float, float]:
     """(|p_d - p| [m], |log3(R^T R_d)| [rad]): the vehicle's distance from its station and its attitude error, of the
     base frame's pose (R, p) = oMi * joint_M_base (Pinocchio's SE3 product, :func:`compose_into`) and the station's
-    (R_d, p_d): :meth:`uvms.control.station.ActuatedKinematics.errors`' expressions (BLAS's products as numpy's on the
-    same layouts, Pinocchio's log3, numpy's sqrt of x.dot(x)).
+    (R_d, p_d): the expressions of :meth:`uvms.control.station.ActuatedKinematics.error_series` (BLAS's products as
+    numpy's on the same layouts, Pinocchio's log3, numpy's sqrt of x.dot(x)).
 
     Args:
         joint_rotation, joint_translation: the vehicle joint's placement oMi (3, 3), (3,); placement_rotation,
