@@ -19,15 +19,17 @@ arguments, :func:`step_floor.noop_calls`), Pinocchio's and LAPACK's calls with t
 work (the rest); the step less its floor is the Python between the calls.
 
 A ratio in instructions is not one in time: a step runs its instructions at about half the rate aba runs
-its own (an interpreter's branches and a step's memory against one tight compiled loop), so its time ratio
-(``bench_actuated.py``) is about twice its instruction ratio.
+its own, so its time ratio (``bench_actuated.py``) is about twice its instruction ratio. ``--cache`` says why: with
+callgrind's cache simulation (a 64 KiB L1 instruction cache, 48 KiB L1 data, a 2 MiB L2 as the last level: this
+machine's, ``--caches`` to model another) it adds each run's misses per step and per aba: a step's code does not
+fit the L1 instruction cache, aba's does.
 
 The numba cache is keyed by the CPU numba sees, and valgrind's is another: after a kernel's source changes (or on a
 first run) valgrind's kernels are compiled again, which the two counted runs would each do, in unequal counts.
 One uncounted run under valgrind first compiles them into the cache; the counted runs load them
 (``PYTHONHASHSEED=0`` in every run).
 
-    python benchmarks/step_instructions.py [--steps 200] [--no-floor]
+    python benchmarks/step_instructions.py [--steps 200] [--no-floor] [--cache]
 """
 
 from __future__ import annotations
@@ -46,6 +48,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "scenarios" / "bluerov2_alpha5_intervention.toml"
 LOW = 10  # steps of the shorter run: its fixed costs (imports, the build, the first run) cancel in the difference
+#: The caches ``--cache`` simulates by default (valgrind's size,associativity,line): this machine's L1 instruction and
+#: data caches and its 2 MiB L2 as the last level (its L3 is shared with other machines' work)
+CACHES = ("65536,8,64", "49152,12,64", "2097152,16,64")
 
 #: (substring of a shared object's file name, component), the first match wins; JIT code has no object ("???")
 COMPONENTS = (
@@ -100,37 +105,63 @@ else:
 """
 
 
-def counted_run(kind: str, count: int, folder: Path) -> Counter:
+#: The cache misses ``--cache`` reports: (label, callgrind's events summed), of a run's totals.
+MISSES = (("L1 instruction misses", ("I1mr",)), ("L1 data misses", ("D1mr", "D1mw")),
+          ("last-level misses", ("ILmr", "DLmr", "DLmw")))
+
+
+def counted_run(kind: str, count: int, folder: Path, caches: tuple[str, str, str] | None = None) -> Counter:
     """Instructions by shared object of one child process under callgrind: ``count`` steps, pin.aba calls or
-    replays of the step's floor (``kind`` "step", "aba", "floor", "crossing" or "pinocchio")."""
+    replays of the step's floor (``kind`` "step", "aba", "floor", "crossing" or "pinocchio"); with ``caches`` (I1,
+    D1, LL as valgrind's size,associativity,line) also the run's cache misses, under the keys of :data:`MISSES`."""
     out = folder / f"{kind}_{count}.callgrind"
     environment = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "PYTHONHASHSEED": "0"}
-    subprocess.run(["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", sys.executable, "-c", CHILD, kind,
-                    str(count), str(SCENARIO), str(ROOT / "benchmarks")], cwd=ROOT, env=environment, check=True,
-                   capture_output=True)
+    simulation = [] if caches is None else ["--cache-sim=yes", *(f"--{level}={size}" for level, size in
+                                                                 zip(("I1", "D1", "LL"), caches))]
+    subprocess.run(["valgrind", "--tool=callgrind", *simulation, f"--callgrind-out-file={out}", sys.executable, "-c",
+                    CHILD, kind, str(count), str(SCENARIO), str(ROOT / "benchmarks")], cwd=ROOT, env=environment,
+                   check=True, capture_output=True)
     listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", str(out)], check=True,
                              capture_output=True, text=True).stdout
     by_object: Counter = Counter()
+    events: list[str] = []
     for line in listing.splitlines():
+        if line.startswith("Events shown:"):
+            events = line.split(":", 1)[1].split()
         found = re.match(r"\s*([\d,]+)\s+(?:\([^)]*\)\s+)?\S.*\[(.*)\]\s*$", line)
         if found and "PROGRAM TOTALS" not in line:
             by_object[found.group(2).rsplit("/", 1)[-1]] += int(found.group(1).replace(",", ""))
+        elif "PROGRAM TOTALS" in line and caches is not None:  # every event's total, "." for none
+            totals = dict(zip(events, (int(value.replace(",", "")) if value != "." else 0 for value in
+                                       re.findall(r"([\d,]+|\.)(?:\s+\([^)]*\))?", line.split("PROGRAM")[0]))))
+            for label, names in MISSES:
+                by_object[label] = sum(totals.get(name, 0) for name in names)
     return by_object
 
 
 def by_component(by_object: Counter) -> Counter:
-    """Instructions by component (:data:`COMPONENTS`; "other" for an object none names)."""
+    """Instructions by component (:data:`COMPONENTS`; "other" for an object none names); cache misses kept."""
     components: Counter = Counter()
+    missed = {label for label, _ in MISSES}
     for name, count in by_object.items():
-        components[next((label for key, label in COMPONENTS if key in name), "other")] += count
+        components[name if name in missed else next((label for key, label in COMPONENTS if key in name),
+                                                    "other")] += count
     return components
 
 
-def per_call(kind: str, low: int, high: int, folder: Path) -> Counter:
-    """Instructions by component of one step or one aba: the difference of two runs over their count."""
+def per_call(kind: str, low: int, high: int, folder: Path, caches: tuple[str, str, str] | None = None) -> Counter:
+    """Instructions by component of one step or one aba (and cache misses with ``caches``): the difference of two
+    runs over their count."""
     with ThreadPoolExecutor(2) as pool:  # the two runs in parallel (instructions do not depend on the load)
-        short, long = pool.map(lambda count: by_component(counted_run(kind, count, folder)), (low, high))
+        short, long = pool.map(lambda count: by_component(counted_run(kind, count, folder, caches)), (low, high))
     return Counter({name: (long[name] - short[name]) / (high - low) for name in long | short})
+
+
+def split_misses(counts: Counter) -> tuple[Counter, dict[str, float]]:
+    """(the instructions by component, the cache misses by label) of :func:`per_call`'s counts."""
+    missed = {label for label, _ in MISSES}
+    return (Counter({name: value for name, value in counts.items() if name not in missed}),
+            {label: counts[label] for label, _ in MISSES if label in counts})
 
 
 def main() -> None:
@@ -139,7 +170,11 @@ def main() -> None:
     parser.add_argument("--abas", type=int, default=20000, help="pin.aba calls counted")
     parser.add_argument("--replays", type=int, default=200, help="replays of the step's floor counted")
     parser.add_argument("--no-floor", action="store_true", help="leave the floor's rows out")
+    parser.add_argument("--cache", action="store_true", help="simulate the caches and report their misses too")
+    parser.add_argument("--caches", nargs=3, metavar=("I1", "D1", "LL"), default=CACHES,
+                        help="the simulated caches as valgrind's size,associativity,line (default: %(default)s)")
     options = parser.parse_args()
+    caches = tuple(options.caches) if options.cache else None
     if shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None:
         sys.exit("step_instructions: valgrind is not installed (Debian: apt-get install valgrind)")
     print(f"checkout {ROOT}: {options.steps} steps of {SCENARIO.name} and {options.abas} pin.aba under callgrind",
@@ -147,10 +182,16 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="uvms_step_instructions_") as name:
         folder = Path(name)
         counted_run("step", 1, folder)  # valgrind's kernels into numba's cache (compiled here after a change)
-        step = per_call("step", LOW, LOW + options.steps, folder)
-        aba = sum(per_call("aba", 0, options.abas, folder).values())
-        floor = {} if options.no_floor else {kind: sum(per_call(kind, 0, options.replays, folder).values())
-                                              for kind in ("floor", "crossing", "pinocchio")}
+        step, step_misses = split_misses(per_call("step", LOW, LOW + options.steps, folder, caches))
+        aba_counts, aba_misses = split_misses(per_call("aba", 0, options.abas, folder, caches))
+        aba = sum(aba_counts.values())
+        floor, floor_misses = {}, {}
+        if not options.no_floor:
+            for kind in ("floor", "crossing", "pinocchio"):
+                counts, misses = split_misses(per_call(kind, 0, options.replays, folder,
+                                                       caches if kind == "floor" else None))
+                floor[kind] = sum(counts.values())
+                floor_misses.update(misses)
     total = sum(step.values())
     print(f"| per step | instructions | x pin.aba ({aba / 1e3:.1f} k instructions) | share |")
     print("|---|---|---|---|")
@@ -172,6 +213,20 @@ def main() -> None:
                   aba, total))
         print(row("the step's Python between its calls (the step less its floor)", total - floor["floor"], aba,
                   total))
+    if caches is not None:
+        print(f"\n| simulated caches (I1 {caches[0]}, D1 {caches[1]}, LL {caches[2]}) | a step | per 1,000 "
+              f"instructions | one pin.aba | per 1,000 instructions |{' the floor |' if floor_misses else ''}")
+        print(f"|---|---|---|---|---|{'---|' if floor_misses else ''}")
+        for label, _ in MISSES:
+            floor_cell = f" {misses(floor_misses[label])} |" if floor_misses else ""
+            print(f"| {label} | {misses(step_misses[label])} | {1e3 * max(step_misses[label], 0.0) / total:.1f} | "
+                  f"{misses(aba_misses[label])} | {1e3 * max(aba_misses[label], 0.0) / aba:.1f} |{floor_cell}")
+
+
+def misses(count: float) -> str:
+    """A count of misses per step or per aba: "< 1" where the two runs' difference is below one (its noise can make
+    it negative)."""
+    return f"{count:,.1f}" if count >= 1.0 else "< 1"
 
 
 def row(label: str, count: float, aba: float, total: float, bold: bool = False) -> str:
