@@ -188,10 +188,10 @@ def main() -> None:
         floor, floor_misses = {}, {}
         if not options.no_floor:
             for kind in ("floor", "crossing", "pinocchio"):
-                counts, misses = split_misses(per_call(kind, 0, options.replays, folder,
+                counts, missed = split_misses(per_call(kind, 0, options.replays, folder,
                                                        caches if kind == "floor" else None))
                 floor[kind] = sum(counts.values())
-                floor_misses.update(misses)
+                floor_misses.update(missed)
     total = sum(step.values())
     print(f"| per step | instructions | x pin.aba ({aba / 1e3:.1f} k instructions) | share |")
     print("|---|---|---|---|")
@@ -214,19 +214,22 @@ def main() -> None:
         print(row("the step's Python between its calls (the step less its floor)", total - floor["floor"], aba,
                   total))
     if caches is not None:
-        print(f"\n| simulated caches (I1 {caches[0]}, D1 {caches[1]}, LL {caches[2]}) | a step | per 1,000 "
-              f"instructions | one pin.aba | per 1,000 instructions |{' the floor |' if floor_misses else ''}")
-        print(f"|---|---|---|---|---|{'---|' if floor_misses else ''}")
+        runs = [("a step", step_misses, total), ("one pin.aba", aba_misses, aba)]
+        if floor_misses:
+            runs.append(("the step's floor", floor_misses, floor["floor"]))
+        print(f"\n| simulated caches (I1 {caches[0]}, D1 {caches[1]}, LL {caches[2]}) |"
+              + "".join(f" {name} | per 1,000 instructions |" for name, _, _ in runs))
+        print("|---|" + "---|---|" * len(runs))
         for label, _ in MISSES:
-            floor_cell = f" {misses(floor_misses[label])} |" if floor_misses else ""
-            print(f"| {label} | {misses(step_misses[label])} | {1e3 * max(step_misses[label], 0.0) / total:.1f} | "
-                  f"{misses(aba_misses[label])} | {1e3 * max(aba_misses[label], 0.0) / aba:.1f} |{floor_cell}")
+            cells = (f" {misses(counts[label])} | {1e3 * max(counts[label], 0.0) / executed:.1f} |"
+                     for _, counts, executed in runs)
+            print(f"| {label} |" + "".join(cells))
 
 
 def misses(count: float) -> str:
     """A count of misses per step or per aba: "< 1" where the two runs' difference is below one (its noise can make
     it negative)."""
-    return f"{count:,.1f}" if count >= 1.0 else "< 1"
+    return "< 1" if count < 1.0 else f"{count:,.1f}" if count < 100.0 else f"{count:,.0f}"
 
 
 def row(label: str, count: float, aba: float, total: float, bold: bool = False) -> str:
