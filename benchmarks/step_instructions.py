@@ -108,6 +108,7 @@ else:
 #: The cache misses ``--cache`` reports: (label, callgrind's events summed), of a run's totals.
 MISSES = (("L1 instruction misses", ("I1mr",)), ("L1 data misses", ("D1mr", "D1mw")),
           ("last-level misses", ("ILmr", "DLmr", "DLmw")))
+MISSED = frozenset(label for label, _ in MISSES)  # the labels, kept apart from the instructions' components
 
 
 def counted_run(kind: str, count: int, folder: Path, caches: tuple[str, str, str] | None = None) -> Counter:
@@ -142,9 +143,8 @@ def counted_run(kind: str, count: int, folder: Path, caches: tuple[str, str, str
 def by_component(by_object: Counter) -> Counter:
     """Instructions by component (:data:`COMPONENTS`; "other" for an object none names); cache misses kept."""
     components: Counter = Counter()
-    missed = {label for label, _ in MISSES}
     for name, count in by_object.items():
-        components[name if name in missed else next((label for key, label in COMPONENTS if key in name),
+        components[name if name in MISSED else next((label for key, label in COMPONENTS if key in name),
                                                     "other")] += count
     return components
 
@@ -159,8 +159,7 @@ def per_call(kind: str, low: int, high: int, folder: Path, caches: tuple[str, st
 
 def split_misses(counts: Counter) -> tuple[Counter, dict[str, float]]:
     """(the instructions by component, the cache misses by label) of :func:`per_call`'s counts."""
-    missed = {label for label, _ in MISSES}
-    return (Counter({name: value for name, value in counts.items() if name not in missed}),
+    return (Counter({name: value for name, value in counts.items() if name not in MISSED}),
             {label: counts[label] for label, _ in MISSES if label in counts})
 
 
