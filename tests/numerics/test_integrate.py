@@ -117,9 +117,9 @@ def test_numpy_solve_is_numpy_linalg_solve_and_refuses_a_singular_system():
 
 
 def test_the_compiled_rk4_arithmetic_gives_numpys_numbers_bit_for_bit(rng):
-    """With a vector state the stages' arguments and the weighted sums are compiled
-    (uvms.numerics._kernels.runge_kutta): the step equals the same step written as numpy expressions, bit for bit,
-    and passes each stage its own arrays."""
+    """With a vector state the stages' arguments, their tangent solves and the weighted sums are compiled
+    (uvms.numerics._kernels.runge_kutta, SciPy's dgesv inside): the step equals the same step written as numpy
+    expressions and solve_square, bit for bit, and passes each stage its own arrays."""
     robot = uvms.load("bluerov2_alpha5")
     model = robot.model
     matrix = rng.normal(size=(19, 11 + 19))  # a rate that mixes q and x nonlinearly

@@ -127,26 +127,34 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
         k3q = stage(half * k2q, x, t + half)[0]
         k4q = stage(dt * k3q, x, t + dt)[0]
         return pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q)), x
-    # the stages' arguments (h k_q, x + h k_x) and the weighted sums in compiled calls: numpy's numbers, about twenty
-    # numpy calls fewer
+    # the stages' arguments (h k_q, x + h k_x), each stage's tangent solve and the weighted sums in compiled calls
+    # after Pinocchio's: numpy's and LAPACK's numbers, about twenty numpy calls and three LAPACK calls fewer
     stage_inputs_into = _STAGE_INPUTS.function or _STAGE_INPUTS.load()
-    weighted_sum_into = _WEIGHTED_SUM.function or _WEIGHTED_SUM.load()
+    tangent_stage_into = _TANGENT_STAGE.function or _TANGENT_STAGE.load()
     nv, m = len(k1q), len(x)
-    k = [(k1q, k1x)]
-    for h, time_ in ((half, t + half), (half, t + half), (dt, t + dt)):
-        xi, x_stage = np.empty(nv), np.empty(m)  # new at every stage: a stage's rate may keep views of them
-        stage_inputs_into(h, k[-1][0], x, k[-1][1], xi, x_stage)
-        k.append(stage(xi, x_stage, time_))
+    xi, x_stage = np.empty(nv), np.empty(m)  # new at every stage: a stage's rate may keep views of them
+    stage_inputs_into(half, k1q, x, k1x, xi, x_stage)
+    k_q, k_x = [k1q], [k1x]
+    for time_, next_h in ((t + half, half), (t + half, dt)):  # stages 2 and 3, each giving the next one's arguments
+        velocity, x_rate = rate(time_, pin.integrate(model, q, xi), x_stage)
+        jacobian, q_rate = pin.dIntegrate(model, q, xi, ARG1), np.empty(nv)
+        xi, x_stage = np.empty(nv), np.empty(m)
+        check_tangent_solve(tangent_stage_into(jacobian, velocity, next_h, x, x_rate, q_rate, xi, x_stage), nv)
+        k_q.append(q_rate)
+        k_x.append(x_rate)
+    velocity, x_rate = rate(t + dt, pin.integrate(model, q, xi), x_stage)
     tangent, x_next = np.empty(nv), np.empty(m)
-    weighted_sum_into(dt / 6.0, k[0][0], k[1][0], k[2][0], k[3][0], None, tangent)
-    weighted_sum_into(dt / 6.0, k[0][1], k[1][1], k[2][1], k[3][1], x, x_next)
+    check_tangent_solve((_TANGENT_SUMS.function or _TANGENT_SUMS.load())(
+        pin.dIntegrate(model, q, xi, ARG1), velocity, dt / 6.0, *k_q, *k_x, x_rate, x, np.empty(nv), tangent, x_next),
+        nv)
     return pin.integrate(model, q, tangent), x_next
 
 
 #: The compiled arithmetic of a step with a vector state (:mod:`uvms.numerics._kernels.runge_kutta`), imported at the
 #: first such step: a kinematic run never loads numba for it.
 _STAGE_INPUTS = Kernel("runge_kutta", "stage_inputs_into")
-_WEIGHTED_SUM = Kernel("runge_kutta", "weighted_sum_into")
+_TANGENT_STAGE = Kernel("runge_kutta", "tangent_stage_into")
+_TANGENT_SUMS = Kernel("runge_kutta", "tangent_sums_into")
 
 
 def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
@@ -157,9 +165,14 @@ def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         NumericalError: A is singular (LAPACK info > 0).
     """
     _, _, solution, info = lapack().dgesv(matrix, rhs)
-    if info != 0:
-        raise NumericalError(f"singular {matrix.shape[0]}x{matrix.shape[0]} system (LAPACK dgesv info {info})")
+    check_tangent_solve(info, matrix.shape[0])
     return solution
+
+
+def check_tangent_solve(info: int, size: int) -> None:
+    """Raise NumericalError when LAPACK's dgesv of a (size, size) system gave ``info`` != 0 (a singular system)."""
+    if info != 0:
+        raise NumericalError(f"singular {size}x{size} system (LAPACK dgesv info {info})")
 
 
 #: The step of each scheme.

@@ -4,13 +4,12 @@ Every evaluation of :class:`uvms.dynamics.plant.plant.Plant` runs ``crba`` (M's 
 gravity) and, where the links or a wrench read the kinematics, ``forwardKinematics`` (the bias accelerations Jdot v)
 and ``computeJointJacobians``; one kernel of :mod:`uvms.numerics._kernels.plant_stage` reads them in place (data.J,
 the joints' placements and bias accelerations as views: :class:`~uvms.dynamics.plant.data_views.JointArrays`) with the
-plant's constants, and the vehicle's block is solved after it with numpy's LAPACK
-(:func:`~uvms.numerics.lapack.numpy_solve`: numpy's numbers).
+plant's constants, the vehicle's block solved inside it with numpy's LAPACK (:mod:`uvms.numerics._kernels.solve`:
+numpy's numbers).
 
 What an integrator's stage calls is a closure over the plant's arrays and Pinocchio's functions, bound once
-(:meth:`CompiledPass.actuated_stage`): a stage is Pinocchio, the kernel and the solve with a few Python calls around
-them (as methods reading the same attributes at every call, a stage of the BlueROV2 + Alpha 5 took about 3 us more
-of its ~20).
+(:meth:`CompiledPass.actuated_stage`): a stage is Pinocchio and the kernel with a few Python calls around them (as
+methods reading the same attributes at every call, a stage of the BlueROV2 + Alpha 5 took about 3 us more of its ~20).
 """
 
 from __future__ import annotations
@@ -20,7 +19,7 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from ...numerics.lapack import numpy_solve
+from ...errors import NumericalError
 from .added_mass import StackedLinks
 from .data_views import JointArrays
 from .system import PlantDynamics
@@ -52,30 +51,36 @@ class CompiledPass:
                                                    motor_time_constant)
         nv = model.nv
         self.scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
-        # the vehicle's block Mbar_bb (C-ordered) and right-hand side, solved after the compiled call
-        self.block, self.rhs, self.no_wrench = np.empty((nb, nb)), np.empty(nb), np.zeros(0)
+        self.no_wrench = np.zeros(0)
         self.inputs = _inputs(model, data, dynamics_data, joint_arrays, ints, floats, bool(stacked.count))
 
     def accelerations_into(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
                            out: np.ndarray | None, mass: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
         """v' (nv,) into ``out`` when given (else a new array), Mbar into ``mass``, nbar into ``bias_forces``
-        (:func:`uvms.numerics._kernels.plant_stage.accelerations_into`, then the vehicle's a_b)."""
+        (:func:`uvms.numerics._kernels.plant_stage.accelerations_into`).
+
+        Raises:
+            NumericalError: the vehicle's block is singular or its acceleration not finite.
+        """
         acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
-        self.kernels.accelerations_into(*self.inputs(q, v, body_wrench is not None), v, command,
-                                        self.no_wrench if body_wrench is None else body_wrench, mass, bias_forces,
-                                        acceleration, self.block, self.rhs)
-        np.negative(numpy_solve(self.block, self.rhs), acceleration[:self.nb])
+        if not self.kernels.accelerations_into(*self.inputs(q, v, body_wrench is not None), v, command,
+                                               self.no_wrench if body_wrench is None else body_wrench, mass,
+                                               bias_forces, acceleration):
+            raise singular_block(self.nb)
         return acceleration
 
     def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
                            matrix: np.ndarray, time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray,
                            mass: np.ndarray, bias_forces: np.ndarray, rates: np.ndarray) -> None:
         """[v'; f'] into ``rates`` at (q, x = [v; f; ...]) (the fins' part left), B f + ``extra`` into ``wrench``,
-        Mbar and nbar into ``mass`` and ``bias_forces`` (:func:`uvms.numerics._kernels.plant_stage.actuated_rate_into`,
-        then the vehicle's a_b)."""
-        self.kernels.actuated_rate_into(*self.inputs(q, x[:self.nv], True), x, arm, thrust_command, matrix,
-                                        time_constants, extra, wrench, mass, bias_forces, rates, self.block, self.rhs)
-        np.negative(numpy_solve(self.block, self.rhs), rates[:self.nb])
+        Mbar and nbar into ``mass`` and ``bias_forces`` (:func:`uvms.numerics._kernels.plant_stage.actuated_rate_into`).
+
+        Raises:
+            NumericalError: as :meth:`accelerations_into`.
+        """
+        if not self.kernels.actuated_rate_into(*self.inputs(q, x[:self.nv], True), x, arm, thrust_command, matrix,
+                                               time_constants, extra, wrench, mass, bias_forces, rates):
+            raise singular_block(self.nb)
 
     def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
                        time_constants: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
@@ -84,13 +89,13 @@ class CompiledPass:
         nbar in the pass's own buffers)."""
         kernel, inputs, no_wrench, (mass, bias_forces) = (self.kernels.actuated_rate_into, self.inputs, self.no_wrench,
                                                          self.scratch)
-        block, rhs, nb, nv, empty, negative = self.block, self.rhs, self.nb, self.nv, np.empty, np.negative
+        nb, nv, empty = self.nb, self.nv, np.empty
 
         def stage(q: np.ndarray, x: np.ndarray) -> np.ndarray:
             rates = empty(len(x))
-            kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, empty(6), mass,
-                   bias_forces, rates, block, rhs)
-            negative(numpy_solve(block, rhs), rates[:nb])
+            if not kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, empty(6),
+                          mass, bias_forces, rates):
+                raise singular_block(nb)
             return rates
 
         return stage
@@ -119,6 +124,11 @@ class CompiledPass:
         torque = np.empty(len(acceleration) - self.nb)
         self.kernels.motor_torques_into(mass, acceleration, bias_forces, self.nb, torque)
         return PlantDynamics(acceleration, torque, mass)
+
+
+def singular_block(nb: int) -> NumericalError:
+    """The error of a plant whose vehicle block Mbar_bb (nb, nb) could not be solved (numpy_solve's words)."""
+    return NumericalError(f"singular or overflowing {nb}x{nb} system")
 
 
 def _inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arrays: JointArrays, ints: np.ndarray,

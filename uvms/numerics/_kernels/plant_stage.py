@@ -7,11 +7,11 @@ motor torques, the thrusters' wrench, lag and saturation, the state's finiteness
 :class:`~uvms.dynamics.plant.compiled.CompiledPass`): after Pinocchio's algorithms one call here forms Mbar
 and nbar (:func:`uvms.numerics._kernels.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle
 (the base frame's LOCAL Jacobian formed from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m)
-/ tau and the vehicle's right-hand side Mbar_bm a_m + nbar_b; only the 6 x 6 (3 x 3 planar) solve stays with numpy's
-LAPACK (numba's solve calls SciPy's, whose numbers differ). As numpy calls this tail was about fifteen calls of
-0.3-1 us each. :func:`vehicle_terms_wrench_into` is a floating vehicle's inverse dynamics (the controller's observer
-and feedforward) in the same way: the terms, then the vehicle rows' wrench. :func:`actuation_rows` derives a run's
-body wrench and powers from its stored rows after the loop.
+/ tau, the vehicle's right-hand side Mbar_bm a_m + nbar_b and its 6 x 6 (3 x 3 planar) solve, with numpy's LAPACK
+(:mod:`.solve`: numba's own solve calls SciPy's, whose numbers differ). As numpy calls this tail was about fifteen
+calls of 0.3-1 us each. :func:`vehicle_terms_wrench_into` is a floating vehicle's inverse dynamics (the controller's
+observer and feedforward) in the same way: the terms, then the vehicle rows' wrench. :func:`actuation_rows` derives a
+run's body wrench and powers from its stored rows after the loop.
 
 Every number is the one the numpy expressions it replaces gave, bit for bit: elementwise arithmetic in their order
 (numba contracts nothing without ``fastmath``), products through ``np.dot`` on arrays in the layout numpy held them
@@ -29,6 +29,7 @@ from numba import njit
 
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
 from .pose import inverse_action_into
+from .solve import solve_into
 from .vehicle import vehicle_wrench_into
 
 __all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
@@ -99,16 +100,19 @@ def vehicle_terms_wrench_into(upper: np.ndarray, h: np.ndarray, jacobian: np.nda
 def accelerations_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
                        accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
                        command: np.ndarray, wrench: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray,
-                       acceleration: np.ndarray, block: np.ndarray, rhs: np.ndarray) -> None:
-    """:func:`terms_into`, then the motors' accelerations into ``acceleration[nb:]``, the vehicle's block Mbar_bb
-    into ``block`` and its right-hand side into ``rhs``: the base acceleration is then -solve(block, rhs).
+                       acceleration: np.ndarray) -> bool:
+    """:func:`terms_into`, then v' (nv,) into ``acceleration``: the motors' a_m, then the vehicle's a_b =
+    -solve(Mbar_bb, rhs) with numpy's LAPACK (:func:`.solve.solve_into`).
 
     a_m = (u - qd_m) / tau (numpy's ``np.subtract(u, v[nb:]); /= tau``), rhs = Mbar_bm a_m + nbar_b (``mass[:nb,
     nb:] @ a_m; += nbar[:nb]``).
 
     Args:
         upper ... wrench, mass, bias_forces: as :func:`terms_into`; command: u (n_arm,) [rad/s or m/s].
-        acceleration: v' (nv,), its arm part written; block: (nb, nb) C-ordered, rhs: (nb,) written.
+        acceleration: v' (nv,) written.
+
+    Returns:
+        False when the vehicle's block is singular or a_b not finite (``acceleration`` is then not the rate).
     """
     terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, wrench, mass, bias_forces)
     hydro_ints, hydro_floats = _hydro_sizes(ints)
@@ -118,14 +122,17 @@ def accelerations_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
     for i in range(nv - nb):
         arm[i] = (command[i] - v[nb + i]) / tau
         acceleration[nb + i] = arm[i]
+    rhs = np.zeros(nb)  # numpy's product over no column: zeros
     if nv > nb:
         _product_into(np.ascontiguousarray(mass[:nb, nb:]), arm, rhs)
-    else:  # numpy's product over no column: zeros
-        rhs[:] = 0.0
     for i in range(nb):
         rhs[i] += bias_forces[i]
-        for k in range(nb):
-            block[i, k] = mass[i, k]
+    base = np.empty(nb)
+    if not solve_into(mass[:nb, :nb], rhs, base):
+        return False
+    for i in range(nb):
+        acceleration[i] = -base[i]
+    return True
 
 
 @njit(cache=True)
@@ -133,7 +140,7 @@ def actuated_rate_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
                        accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, x: np.ndarray,
                        command: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
                        time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray, mass: np.ndarray,
-                       bias_forces: np.ndarray, rate: np.ndarray, block: np.ndarray, rhs: np.ndarray) -> None:
+                       bias_forces: np.ndarray, rate: np.ndarray) -> bool:
     """An actuated plant's rate at its state x = [v (nv,), f (n,), ...] but the base acceleration: the thrusters'
     wrench and lag (:func:`thrusters_into`), plus ``extra`` (the fins' wrench, or size 0), then
     :func:`accelerations_into` under that wrench.
@@ -141,16 +148,19 @@ def actuated_rate_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
     Args:
         upper ... floats: as :func:`terms_into`; x: the state's vector part; command: u (n_arm,);
         thrust_command: sat(f_cmd) (n,) [N]; matrix: B (6, n); time_constants: (n,) [s]; extra: (6,) or (0,).
-        wrench: (6,) written: B f (+ extra); mass, bias_forces: Mbar, nbar written; rate: (len(x),), its v' arm part
-            and f' written (v'_b: -solve(block, rhs) after the call; the rest: the caller's); block, rhs: written.
+        wrench: (6,) written: B f (+ extra); mass, bias_forces: Mbar, nbar written; rate: (len(x),), its v' and f'
+            written (the rest: the caller's).
+
+    Returns:
+        False as :func:`accelerations_into`.
     """
     nv, n = h.shape[0], h.shape[0] + matrix.shape[1]
     thrusters_into(matrix, x[nv:n], thrust_command, time_constants, wrench, rate[nv:n])
     if extra.size:
         for i in range(6):
             wrench[i] += extra[i]
-    accelerations_into(upper, h, jacobian, placements, accelerations, ints, floats, x[:nv], command, wrench, mass,
-                       bias_forces, rate[:nv], block, rhs)
+    return accelerations_into(upper, h, jacobian, placements, accelerations, ints, floats, x[:nv], command, wrench,
+                              mass, bias_forces, rate[:nv])
 
 
 @njit(cache=True)
