@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import uvms
+from uvms.control import OpenLoop
 from uvms.dynamics.hydro.hydrodynamics import hydrodynamics_of
 from uvms.dynamics.plant.actuated import ActuatedPlant
 from uvms.dynamics.plant.command import Command
@@ -106,3 +107,27 @@ def test_a_state_is_refused_only_when_an_entry_is_not_finite():
             (q_bad if where == "q" else x_bad)[3] = bad
             with pytest.raises(UVMSError, match=r"non-finite at t = 0\.1 s; reduce dt \(now 0\.01 s\)"):
                 check_finite_state(0.1, q_bad, x_bad, 0.01)
+
+
+@pytest.mark.parametrize("fins", [False, True])
+def test_a_command_that_is_not_finite_is_refused_with_or_without_fins(fins):
+    """The controller's arm rates, thrusts and fin angles are checked before the plant applies them (the fins' only
+    where the vehicle has fins): a NaN anywhere is refused, naming what was expected."""
+    if fins:
+        with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
+            robot = uvms.load(TORPEDO)
+        actuated = ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot)))
+    else:
+        actuated = ActuatedPlant.of(Plant(shipped("bluerov2_alpha5")))
+    plant, n, m = actuated.plant, actuated.n, actuated.m
+    q0 = plant.robot.neutral()
+    good = {"arm": np.zeros(plant.n_arm), "thrust": np.ones(n), "fins": np.zeros(m) if m else None}
+    system = actuated.system(OpenLoop(**good), dt=0.01)
+    q, x = system.initial_state(q0, None)
+    assert np.isfinite(system.sample(0.0, q, x).rate[1]).all()
+    bad = [("thrust", np.full(n, np.nan))] + ([("fins", np.full(m, np.nan))] if m else [])
+    for name, value in bad:
+        system = actuated.system(OpenLoop(**{**good, name: value}), dt=0.01)
+        q, x = system.initial_state(q0, None)
+        with pytest.raises(UVMSError, match=f"{n} finite thrusts"):
+            system.sample(0.0, q, x)

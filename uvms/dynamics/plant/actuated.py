@@ -305,7 +305,7 @@ class ActuatedPlantSystem:
         else:  # at rest (none: one empty array)
             fins = self.thrusters.fins.held if self.m else self._no_fins
         if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
-                or not (check_finite(arm, thrust) and check_finite(fins, fins)):
+                or not (check_finite(arm, thrust) and (not self.m or check_finite(fins, fins))):
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")

@@ -13,8 +13,9 @@ solution and joint-limit motion), :mod:`.pose` (pose errors, the pose DLS step),
 bells), :mod:`.boxes` (position and velocity boxes, saturation scaling), :mod:`.distance` (the distance Jacobian
 of collision pairs), :mod:`.hydro` (the plant's hydrodynamic terms, every link in one pass), :mod:`.plant_stage`
 (a plant evaluation's terms, accelerations, the thrusters' wrench and lag, and the actuation series after the
-loop), :mod:`.runge_kutta` (an RK4 step's vector arithmetic), :mod:`.allocation` (the thrust allocation's
-pseudo-inverse step), :mod:`.vehicle` (the vehicle loops' vector arithmetic).
+loop), :mod:`.runge_kutta` (an RK4 step's vector arithmetic and tangent solves), :mod:`.solve` (a square solve with
+numpy's or SciPy's own LAPACK, their numbers), :mod:`.allocation` (the thrust allocation's pseudo-inverse step),
+:mod:`.vehicle` (the vehicle loops' vector arithmetic).
 
 Import a kernel from its module; this package imports no numba, so ``import uvms`` never loads it. Code that
 must not load numba before it computes (``import uvms``, a kinematic run) names a kernel by a :class:`Kernel`,

@@ -7,7 +7,8 @@ numpy's in the last bits (moved far enough by a long closed-loop run to change a
 kernels here call the ``dgesv`` each Python path called: numpy's address is read from numpy's linear-algebra extension
 at import (the dynamic linker resolves it in the LAPACK numpy loaded), SciPy's from its ``cython_lapack``, and each is
 given to LLVM under a name of its own (:data:`NUMPY_SYMBOL`, :data:`SCIPY_SYMBOL`), which the compiled code calls: the
-on-disk cache keeps the names, not addresses, so a cached kernel links to this process's libraries.
+on-disk cache keeps the names, not addresses, so a cached kernel links to this process's libraries (and a name is never
+changed without clearing the cache: a kernel cached with a name no longer registered would call nothing).
 
 Where numpy's LAPACK does not export a ``dgesv`` by a known name (a numpy built against Accelerate or MKL under other
 names), SciPy's stands for it: the same equations, equal to rounding. Either LAPACK takes 32- or 64-bit integers: every
