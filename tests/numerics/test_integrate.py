@@ -6,21 +6,27 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from scipy.linalg import lapack
 
 import uvms
 from uvms.errors import NumericalError
-from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator, rk4_step, solve_square, stage_times
+from uvms.numerics.integrate import INTEGRATORS, STEPS, check_integrator, check_tangent_solve, rk4_step, stage_times
 from uvms.trajectory import CirclePath, PathTrajectory, RecentSamples, TrapezoidLaw
 
 from conftest import FIXED_ARM
 
 
-def test_the_square_solve_of_the_rk4_stages_is_numpy_solve_and_refuses_a_singular_system(rng):
-    for size in (3, 6, 12):
-        matrix, rhs = rng.normal(size=(size, size)) + 3 * np.eye(size), rng.normal(size=size)
-        assert np.array_equal(solve_square(matrix, rhs), np.linalg.solve(matrix, rhs))
-    with pytest.raises(NumericalError, match="singular 2x2"):
-        solve_square(np.ones((2, 2)), np.ones(2))
+def scipy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """x with A x = b by scipy.linalg.lapack.dgesv: the stages' tangent solve before it was compiled (its numbers)."""
+    _, _, solution, info = lapack.dgesv(matrix, rhs)
+    assert info == 0
+    return solution
+
+
+def test_a_singular_stage_tangent_is_refused():
+    with pytest.raises(NumericalError, match=r"singular 2x2 system \(LAPACK dgesv info 2\)"):
+        check_tangent_solve(2, 2)
+    check_tangent_solve(0, 2)
 
 
 def misses(dt: float, steps: int) -> int:
@@ -117,9 +123,10 @@ def test_numpy_solve_is_numpy_linalg_solve_and_refuses_a_singular_system():
 
 
 def test_the_compiled_rk4_arithmetic_gives_numpys_numbers_bit_for_bit(rng):
-    """With a vector state the stages' arguments, their tangent solves and the weighted sums are compiled
+    """The stages' arguments, their tangent solves and the weighted sums are compiled
     (uvms.numerics._kernels.runge_kutta, SciPy's dgesv inside): the step equals the same step written as numpy
-    expressions and solve_square, bit for bit, and passes each stage its own arrays."""
+    expressions and SciPy's dgesv, bit for bit, with a vector state and with none (a kinematic run), and passes each
+    stage its own arrays."""
     robot = uvms.load("bluerov2_alpha5")
     model = robot.model
     matrix = rng.normal(size=(19, 11 + 19))  # a rate that mixes q and x nonlinearly
@@ -128,12 +135,12 @@ def test_the_compiled_rk4_arithmetic_gives_numpys_numbers_bit_for_bit(rng):
         z = np.tanh(matrix @ np.concatenate([pin.difference(model, robot.neutral(), q), x]) + t)
         return z[:11] * 3.0, z * 7.0
 
-    def numpy_step(q, x, dt, first):  # the step as numpy expressions (what rk4_step computed before its kernels)
+    def numpy_step(q, x, dt, first, rate=rate):  # the step as numpy expressions (rk4_step before its kernels)
         half = 0.5 * dt
 
         def stage(xi, x_stage, time_):
             velocity, x_rate = rate(time_, pin.integrate(model, q, xi), x_stage)
-            return solve_square(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), x_rate
+            return scipy_solve(pin.dIntegrate(model, q, xi, pin.ArgumentPosition.ARG1), velocity), x_rate
 
         k1q, k1x = first
         k2q, k2x = stage(half * k1q, x + half * k1x, half)
@@ -153,3 +160,13 @@ def test_the_compiled_rk4_arithmetic_gives_numpys_numbers_bit_for_bit(rng):
         np.testing.assert_array_equal(got[1], expected[1])
         assert not np.array_equal(got[1], x)
     assert len({id(x_) for x_ in seen}) == len(seen) == 9  # a new array at every stage
+
+    def kinematic(t, q, x):  # a kinematic run's rate: q's velocity alone, an empty vector part
+        return rate(t, q, np.zeros(19))[0], np.zeros(0)
+
+    for _ in range(3):  # the same kernels with an empty x: the numbers of the numpy step
+        q, dt = pin.integrate(model, robot.neutral(), rng.normal(size=11)), rng.uniform(0.001, 0.05)
+        first = kinematic(0.0, q, np.zeros(0))
+        expected = numpy_step(q, np.zeros(0), dt, first, kinematic)
+        got = rk4_step(model, kinematic, 0.0, q, np.zeros(0), dt, first)
+        assert got[0].tobytes() == expected[0].tobytes() and got[1].shape == (0,)

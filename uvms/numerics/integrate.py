@@ -29,7 +29,6 @@ import pinocchio as pin
 
 from ..errors import NumericalError, StepCountError, UVMSError
 from ._kernels import Kernel
-from .lapack import lapack
 
 #: The argument dIntegrate differentiates: the tangent vector (read once, not at every stage).
 ARG1 = pin.ArgumentPosition.ARG1
@@ -115,20 +114,10 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
         (q+ (nq,), x+ (m,)) at t + dt.
     """
     half = 0.5 * dt
-
-    def stage(xi: np.ndarray, x_stage: np.ndarray, time_: float) -> tuple[np.ndarray, np.ndarray]:
-        velocity, x_rate = rate(time_, pin.integrate(model, q, xi), x_stage)
-        # xi' = dexp^-1(w): the tangent-space rate that moves the stage configuration with velocity w
-        return solve_square(pin.dIntegrate(model, q, xi, ARG1), velocity), x_rate
-
     k1q, k1x = first
-    if not x.size:  # a kinematic run has no vector state: its sums over empty arrays would cost about 5 us a step
-        k2q = stage(half * k1q, x, t + half)[0]
-        k3q = stage(half * k2q, x, t + half)[0]
-        k4q = stage(dt * k3q, x, t + dt)[0]
-        return pin.integrate(model, q, dt / 6.0 * (k1q + 2.0 * k2q + 2.0 * k3q + k4q)), x
-    # the stages' arguments (h k_q, x + h k_x), each stage's tangent solve and the weighted sums in compiled calls
-    # after Pinocchio's: numpy's and LAPACK's numbers, about twenty numpy calls and three LAPACK calls fewer
+    # the stages' arguments (h k_q, x + h k_x), each stage's tangent solve xi' = dexp^-1 w (SciPy's dgesv) and the
+    # weighted sums in compiled calls after Pinocchio's: numpy's and LAPACK's numbers, about twenty numpy calls and
+    # three LAPACK calls fewer (a kinematic run's x is empty: its loops over x run no iteration)
     stage_inputs_into = _STAGE_INPUTS.function or _STAGE_INPUTS.load()
     tangent_stage_into = _TANGENT_STAGE.function or _TANGENT_STAGE.load()
     nv, m = len(k1q), len(x)
@@ -150,27 +139,16 @@ def rk4_step(model: pin.Model, rate: Rate, t: float, q: np.ndarray, x: np.ndarra
     return pin.integrate(model, q, tangent), x_next
 
 
-#: The compiled arithmetic of a step with a vector state (:mod:`uvms.numerics._kernels.runge_kutta`), imported at the
-#: first such step: a kinematic run never loads numba for it.
+#: The compiled arithmetic of a step (:mod:`uvms.numerics._kernels.runge_kutta`), imported at the first RK4 step: numba
+#: loads there (a kinematic run's solver has loaded it already), not with this module.
 _STAGE_INPUTS = Kernel("runge_kutta", "stage_inputs_into")
 _TANGENT_STAGE = Kernel("runge_kutta", "tangent_stage_into")
 _TANGENT_SUMS = Kernel("runge_kutta", "tangent_sums_into")
 
 
-def solve_square(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """x (n,) with A x = b for a square A (n, n): LAPACK's dgesv, which numpy's ``linalg.solve`` calls with
-    several times the overhead on these small systems (the same numbers).
-
-    Raises:
-        NumericalError: A is singular (LAPACK info > 0).
-    """
-    _, _, solution, info = lapack().dgesv(matrix, rhs)
-    check_tangent_solve(info, matrix.shape[0])
-    return solution
-
-
 def check_tangent_solve(info: int, size: int) -> None:
-    """Raise NumericalError when LAPACK's dgesv of a (size, size) system gave ``info`` != 0 (a singular system)."""
+    """Raise NumericalError when LAPACK's dgesv of a stage's (size, size) tangent system gave ``info`` != 0 (dIntegrate
+    singular)."""
     if info != 0:
         raise NumericalError(f"singular {size}x{size} system (LAPACK dgesv info {info})")
 

@@ -1,14 +1,14 @@
-"""The vector arithmetic of an RK4 step (:func:`uvms.numerics.integrate.rk4_step`) of a state with a vector part.
+"""The vector arithmetic of an RK4 step (:func:`uvms.numerics.integrate.rk4_step`).
 
 A step of the actuated plant combines its stage rates in about twenty numpy operations on vectors of 11-20 numbers,
 each dominated by its dispatch, and solves each stage's tangent rate xi' = dexp^-1 w; here a stage's tangent solve
 and the next stage's arguments (or, after the last stage, the weighted sums) are one compiled call after Pinocchio's
-``dIntegrate``. The solve is SciPy's dgesv, as :func:`uvms.numerics.integrate.solve_square` calls it
-(:mod:`.solve`). Each entry is computed with the operations
-of the numpy expressions they replace, in their order (no fused multiply-add: numba contracts nothing without
-``fastmath``), so the numbers are the same bit for bit.
+``dIntegrate``. The solve is SciPy's dgesv (:mod:`.solve`), the numbers of ``scipy.linalg.lapack.dgesv`` that the
+stages solved with before. Each entry is computed with the operations of the numpy expressions they replace, in their
+order (no fused multiply-add: numba contracts nothing without ``fastmath``), so the numbers are the same bit for bit.
+A kinematic run's state has no vector part: its loops over x run no iteration.
 
-The module imports numba, so it is loaded where a plant is first integrated; its kernels compile at their first call
+The module imports numba, so it is loaded at a run's first RK4 step; its kernels compile at their first call
 and are cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
 """
 

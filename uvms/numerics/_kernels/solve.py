@@ -1,6 +1,6 @@
 """A square solve inside a compiled kernel with the LAPACK the Python code it replaces calls, bit for bit: numpy's
 (``numpy.linalg.solve``'s numbers: a plant's vehicle block) or SciPy's (``scipy.linalg.lapack.dgesv``'s: an RK4 stage's
-tangent, :func:`uvms.numerics.integrate.solve_square`).
+tangent, :func:`uvms.numerics.integrate.rk4_step`).
 
 numba's ``np.linalg.solve`` calls SciPy's LAPACK, another OpenBLAS build than numpy's, and its numbers differ from
 numpy's in the last bits (moved far enough by a long closed-loop run to change amundsen2018's metrics beyond 1e-9). The
