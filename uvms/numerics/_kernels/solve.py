@@ -57,9 +57,10 @@ def scipy_dgesv_address() -> int:
     from scipy.linalg import cython_lapack
 
     capsule = cython_lapack.__pyx_capi__["dgesv"]
-    get_name, get_pointer = ctypes.pythonapi.PyCapsule_GetName, ctypes.pythonapi.PyCapsule_GetPointer
-    get_name.restype, get_name.argtypes = ctypes.c_char_p, [ctypes.py_object]
-    get_pointer.restype, get_pointer.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_char_p]
+    # prototypes of our own (setting restype on ctypes.pythonapi's shared functions would change them for everyone)
+    get_name = ctypes.PYFUNCTYPE(ctypes.c_char_p, ctypes.py_object)(("PyCapsule_GetName", ctypes.pythonapi))
+    get_pointer = ctypes.PYFUNCTYPE(ctypes.c_void_p, ctypes.py_object, ctypes.c_char_p)(("PyCapsule_GetPointer",
+                                                                                        ctypes.pythonapi))
     return get_pointer(capsule, get_name(capsule))
 
 
