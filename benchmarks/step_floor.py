@@ -1,7 +1,7 @@
 """The compiled floor of the intervention step (issue 46): what a step costs with no Python between its calls.
 
 One step of ``scenarios/bluerov2_alpha5_intervention.toml`` (its 500th: the run warm, the arm moving) is recorded:
-every numba kernel, every Pinocchio function and every LAPACK call it makes, each with a copy of its arguments.
+every numba kernel, every Pinocchio function and every numpy LAPACK call it makes, each with a copy of its arguments.
 They are then replayed back to back, in the step's order, from a list: the same compiled arithmetic on the same
 inputs, each call's own boundary crossing (numba's dispatch, Boost.Python's conversions) kept, the controller's and
 the integrator's Python between them gone. The replay's time, as a ratio to one ``pin.aba`` on the same model
@@ -69,7 +69,6 @@ class Recorder:
 
         for name in ("_solve_vector", "_solve_matrix"):  # numpy's LAPACK gufuncs behind numpy_solve
             setattr(lapack, name, self._wrapped(f"numpy:{name}", getattr(lapack, name), signature="dd->d"))
-        lapack._module = _Lapack(lapack.lapack(), self)
 
     def _wrapped(self, name: str, function: Callable, **fixed) -> Callable:
         def wrapper(*args, **keywords):
@@ -77,16 +76,6 @@ class Recorder:
             return function(*args, **keywords)
 
         return wrapper
-
-
-class _Lapack:
-    """scipy.linalg.lapack with each function's calls kept by the recorder."""
-
-    def __init__(self, module, recorder: Recorder) -> None:
-        self._module, self._recorder = module, recorder
-
-    def __getattr__(self, name: str) -> Callable:
-        return self._recorder._wrapped(f"lapack:{name}", getattr(self._module, name))
 
 
 def record_step(step: int) -> tuple[list[Call], pin.Model, Callable]:

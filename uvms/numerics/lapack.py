@@ -1,30 +1,13 @@
-"""LAPACK through ``scipy.linalg.lapack``, loaded on first use.
-
-Importing ``scipy.linalg`` is about a third of ``import uvms``; the commands and notebooks that never solve
-(``uvms info``, ``uvms view``, loading a model) need none of it. The solvers' inner loops call
-``lapack().dgesdd(...)`` and pay a function call, not an import.
-"""
+"""numpy's LAPACK solve without ``numpy.linalg.solve``'s wrapper, for the small systems of inner loops that run in
+Python (a compiled kernel calls the same ``dgesv`` itself: :mod:`uvms.numerics._kernels.solve`)."""
 
 from __future__ import annotations
 
 import math
-from types import ModuleType
 
 import numpy as np
 
 from ..errors import NumericalError
-
-_module: ModuleType | None = None
-
-
-def lapack() -> ModuleType:
-    """The ``scipy.linalg.lapack`` module (imported at the first call)."""
-    global _module
-    if _module is None:
-        from scipy.linalg import lapack as module
-
-        _module = module
-    return _module
 
 
 def numpy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
