@@ -47,17 +47,21 @@ def test_of_gives_the_fins_when_asked():
     assert ActuatedPlant.of(plant, fins=False).m == 0 and ActuatedPlant.of(plant, fins=False).n == 1
 
 
+def torpedo_or_bluerov(fins: bool) -> ActuatedPlant:
+    """The torpedo AUV's actuated plant with its four fins, or the BlueROV2 + Alpha 5's (thrusters only)."""
+    if fins:
+        with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
+            robot = uvms.load(TORPEDO)
+        return ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot)))
+    return ActuatedPlant.of(Plant(shipped("bluerov2_alpha5")))
+
+
 @pytest.mark.parametrize("fins", [False, True])
 def test_the_state_rate_is_written_in_place_with_the_numbers_of_its_parts(fins, rng):
     """The actuated rate [v', f', delta'] (written part by part into one array) and the sample's wrench are those of
     the plant's dynamics, the thrusters' lag and the fins' computed on their own, bit for bit; an integrator's stage
     (no motor torques) gives the same rate."""
-    if fins:
-        with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
-            robot = uvms.load(TORPEDO)
-        actuated = ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot)))
-    else:
-        actuated = ActuatedPlant.of(Plant(shipped("bluerov2_alpha5")))
+    actuated = torpedo_or_bluerov(fins)
     plant, system = actuated.plant, actuated.system(None, dt=0.01)
     assert (actuated.m > 0) == fins
     q = plant.robot.neutral()
@@ -113,12 +117,7 @@ def test_a_state_is_refused_only_when_an_entry_is_not_finite():
 def test_a_command_that_is_not_finite_is_refused_with_or_without_fins(fins):
     """The controller's arm rates, thrusts and fin angles are checked before the plant applies them (the fins' only
     where the vehicle has fins): a NaN anywhere is refused, naming what was expected."""
-    if fins:
-        with pytest.warns(PointMassWarning), pytest.warns(BaseGuessWarning):
-            robot = uvms.load(TORPEDO)
-        actuated = ActuatedPlant.of(Plant(robot, hydrodynamics_of(robot)))
-    else:
-        actuated = ActuatedPlant.of(Plant(shipped("bluerov2_alpha5")))
+    actuated = torpedo_or_bluerov(fins)
     plant, n, m = actuated.plant, actuated.n, actuated.m
     q0 = plant.robot.neutral()
     good = {"arm": np.zeros(plant.n_arm), "thrust": np.ones(n), "fins": np.zeros(m) if m else None}
