@@ -56,6 +56,17 @@ def test_the_kernels_call_numpys_own_dgesv_where_numpy_exports_it():
     assert llvm.address_of_symbol(SCIPY_SYMBOL) == scipy_dgesv_address()
 
 
+def test_without_numpys_dgesv_the_address_is_none_and_scipys_stands_for_it(monkeypatch):
+    import ctypes
+
+    def unopenable(path):
+        raise OSError(f"cannot open {path}")
+
+    monkeypatch.setattr(ctypes, "CDLL", unopenable)
+    assert numpy_dgesv_address() is None
+    assert scipy_dgesv_address() > 0
+
+
 def test_a_singular_or_non_finite_system_is_refused():
     out = np.empty(3)
     assert not solve_into(np.ones((3, 3)), np.ones(3), out)  # LAPACK's info > 0

@@ -43,7 +43,10 @@ def numpy_dgesv_address() -> int | None:
     :data:`NUMPY_NAMES`."""
     from numpy.linalg import _umath_linalg
 
-    library = ctypes.CDLL(_umath_linalg.__file__)  # dlsym through it searches the libraries it was linked with
+    try:
+        library = ctypes.CDLL(_umath_linalg.__file__)  # dlsym through it searches the libraries it was linked with
+    except OSError:  # a platform whose extensions ctypes cannot open: SciPy's stands for it
+        return None
     for name in NUMPY_NAMES:
         try:
             return ctypes.cast(getattr(library, name), ctypes.c_void_p).value
