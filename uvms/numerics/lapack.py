@@ -24,8 +24,14 @@ def numpy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         solution = _solve_matrix(matrix, rhs, signature="dd->d")
         finite = bool(np.isfinite(solution).all())
     if not finite:
-        raise NumericalError(f"singular or overflowing {matrix.shape[0]}x{matrix.shape[0]} system")
+        raise singular_system(matrix.shape[0])
     return solution
+
+
+def singular_system(size: int) -> NumericalError:
+    """The error of a (size, size) system numpy's solve could not solve (singular, or a solution not finite), from
+    Python or from a compiled kernel (:func:`uvms.numerics._kernels.solve.solve_into`)."""
+    return NumericalError(f"singular or overflowing {size}x{size} system")
 
 
 try:  # numpy's gufuncs behind linalg.solve (numpy 1.x and 2.x): one for a vector b, one for a matrix B

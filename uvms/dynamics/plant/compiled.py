@@ -19,7 +19,7 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from ...errors import NumericalError
+from ...numerics.lapack import singular_system
 from .added_mass import StackedLinks
 from .data_views import JointArrays
 from .system import PlantDynamics
@@ -66,7 +66,7 @@ class CompiledPass:
         if not self.kernels.accelerations_into(*self.inputs(q, v, body_wrench is not None), v, command,
                                                self.no_wrench if body_wrench is None else body_wrench, mass,
                                                bias_forces, acceleration):
-            raise singular_block(self.nb)
+            raise singular_system(self.nb)
         return acceleration
 
     def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
@@ -80,7 +80,7 @@ class CompiledPass:
         """
         if not self.kernels.actuated_rate_into(*self.inputs(q, x[:self.nv], True), x, arm, thrust_command, matrix,
                                                time_constants, extra, wrench, mass, bias_forces, rates):
-            raise singular_block(self.nb)
+            raise singular_system(self.nb)
 
     def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
                        time_constants: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
@@ -95,7 +95,7 @@ class CompiledPass:
             rates = empty(len(x))
             if not kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, empty(6),
                           mass, bias_forces, rates):
-                raise singular_block(nb)
+                raise singular_system(nb)
             return rates
 
         return stage
@@ -124,11 +124,6 @@ class CompiledPass:
         torque = np.empty(len(acceleration) - self.nb)
         self.kernels.motor_torques_into(mass, acceleration, bias_forces, self.nb, torque)
         return PlantDynamics(acceleration, torque, mass)
-
-
-def singular_block(nb: int) -> NumericalError:
-    """The error of a plant whose vehicle block Mbar_bb (nb, nb) could not be solved (numpy_solve's words)."""
-    return NumericalError(f"singular or overflowing {nb}x{nb} system")
 
 
 def _inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arrays: JointArrays, ints: np.ndarray,
