@@ -19,6 +19,7 @@ from uvms.numerics._kernels.vehicle import (
     observer_inputs_into,
     pose_reference_into,
     station_errors,
+    vehicle_objective_into,
     vehicle_wrench_into,
     velocity_law_into,
 )
@@ -247,3 +248,31 @@ def test_a_planar_vehicles_rows_take_a_base_frame_rate_as_its_joint_rate():
     wrench = vehicle_inverse_dynamics(plant, q, v, rate, arm, base_frame=True)
     assert same(wrench, vehicle_inverse_dynamics(plant, q, v, joint, arm))
     assert wrench[2] == wrench[3] == wrench[4] == 0.0 and abs(wrench[5]) > 1.0
+
+
+def test_the_vehicle_objective_is_pinocchios_and_numpys(rng):
+    """ActuatedKinematics' pose objective before the kernel: the base frame's pose oMi * joint_M_base (Pinocchio's
+    product), the pose controller's law (bounded by max_speed or not), np.clip to the thrusters' bounds (bounds met
+    exactly and signed zeros included) and joint_M_base.act(Motion(nu)) (Pinocchio's)."""
+    clipped_hits = 0
+    for trial, placement, rotation, translation in placements(rng, 3000):
+        joint, target = pin.SE3.Random(), pin.SE3.Random()
+        joint.translation, target.translation = signed_numbers(rng, 3), signed_numbers(rng, 3)
+        if trial % 5 == 0:
+            target = joint * placement  # at the station: zeros
+        gains, max_speed = np.abs(signed_numbers(rng, 6)), np.abs(signed_numbers(rng, 6))
+        bounded, clip = trial % 3 == 0, trial % 4 != 0
+        old = pose_velocity_reference(joint * placement, target, gains, max_speed if bounded else None)
+        lower, upper = np.sort(np.stack([signed_numbers(rng, 6), signed_numbers(rng, 6)]), axis=0)
+        lower[trial % 6] = old[trial % 6]  # a bound met exactly
+        upper[trial % 6] = max(upper[trial % 6], old[trial % 6])
+        if clip:
+            clipped = np.clip(old, lower, upper)
+            clipped_hits += int(np.any(clipped != old))
+            old = clipped
+        nu, joint_rates = np.empty(6), np.empty(6)
+        vehicle_objective_into(joint.rotation, joint.translation, rotation, translation, target.rotation,
+                               target.translation, gains, max_speed if bounded else gains, bounded, lower, upper,
+                               clip, nu, joint_rates)
+        assert same(nu, old) and same(joint_rates, placement.act(pin.Motion(old)).vector)
+    assert clipped_hits > 1000

@@ -62,6 +62,10 @@ from .settings import ActuatedSettings, gain_vector
 from .tightening import Tightening
 from .vehicle import VehiclePoseController, VehicleVelocityController
 
+#: The vehicle's pose objective in one compiled call (:func:`uvms.numerics._kernels.vehicle.vehicle_objective_into`,
+#: numba loaded at the first step).
+_VEHICLE_OBJECTIVE = Kernel("vehicle", "vehicle_objective_into")
+
 
 class GivenColumns(Task):
     """A task whose first columns' velocity is given: its terms with the feedforward less what they give,
@@ -127,6 +131,8 @@ class ActuatedKinematics:
         self.gain = float(gain_vector(gain, "gain", 1)[0])
         self.damping = damping if isinstance(damping, VariableDamping) else float(damping)
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
+        self._placement = (self.base_placement.rotation.copy(), self.base_placement.translation.copy())
+        self._unbounded = (np.empty(6), np.empty(6))  # the clip's bounds when none are given (not read)
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
         tightened = [objective for level in levels for objective in level if objective.collision]
@@ -183,12 +189,23 @@ class ActuatedKinematics:
 
     def vehicle_objective(self, q: np.ndarray, bounds: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """nu_pose (6,) [m/s, rad/s] in the base frame, within ``bounds`` (lower, upper) (6,) when given."""
-        return self._vehicle_objective(self.base_pose(q), bounds)
+        joint = self.robot.base_pose(q)  # the vehicle joint's placement
+        return self._vehicle_objective(joint.rotation, joint.translation, bounds)[0]
 
-    def _vehicle_objective(self, pose: pin.SE3, bounds: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray:
-        """nu_pose (6,) of the base frame at ``pose`` (world_M_base), within ``bounds`` when given."""
-        nu = self.pose.reference(pose, self.vehicle_target)
-        return nu if bounds is None else np.clip(nu, *bounds)
+    def _vehicle_objective(self, joint_rotation: np.ndarray, joint_translation: np.ndarray,
+                           bounds: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray]:
+        """(nu_pose (6,) of the base frame of the vehicle joint placed at (R (3, 3), p (3,)), within ``bounds`` when
+        given; that twist in the vehicle joint's axes (6,)): the pose controller's law
+        (:func:`~uvms.control.vehicle.pose_velocity_reference`), ``np.clip`` and ``base_placement.act`` in one
+        compiled call (:func:`uvms.numerics._kernels.vehicle.vehicle_objective_into`: their numbers)."""
+        nu, joint_rates = np.empty(6), np.empty(6)  # new: a row keeps nu_pose
+        pose, target = self.pose, self.vehicle_target
+        lower, upper = self._unbounded if bounds is None else bounds
+        (_VEHICLE_OBJECTIVE.function or _VEHICLE_OBJECTIVE.load())(
+            joint_rotation, joint_translation, *self._placement, target.rotation, target.translation, pose.gains,
+            pose.gains if pose.max_speed is None else pose.max_speed, pose.max_speed is not None, lower, upper,
+            bounds is not None, nu, joint_rates)
+        return nu, joint_rates
 
     def _solve(self, configuration: Configuration, vehicle: np.ndarray, reference: bool) -> tuple[np.ndarray, object]:
         """v (nv,) with the vehicle's velocity (joint axes) given: above the task (reference) or on top."""
@@ -226,9 +243,10 @@ class ActuatedKinematics:
         SolverResult or None} at (t, q); ``bounds``: the vehicle velocities the thrusters can give (base frame)."""
         self.robot.check_configuration(q)  # the step's q, checked once (the configuration takes it unchecked)
         configuration = self._at(t, q)
-        # the base frame's pose from the step's kinematics (the vehicle joint's placement: base_pose's numbers)
-        nu_pose = self._vehicle_objective(configuration.joint_pose(1) * self.base_placement, bounds)
-        vehicle = self.base_placement.act(pin.Motion(nu_pose)).vector  # base frame -> vehicle joint axes
+        # the base frame's pose from the step's kinematics (the vehicle joint's placement: base_pose's numbers); the
+        # vehicle's velocity in the joint's axes
+        _, translation, rotation = configuration.joint_arrays(1)
+        nu_pose, vehicle = self._vehicle_objective(rotation, translation, bounds)
         if self.tightening is not None:  # the bounds moved for this step's solves, until :meth:`asked`
             self.tightening.measure(t, configuration)
         self._rows.clear()  # this step's rows, with this step's bounds

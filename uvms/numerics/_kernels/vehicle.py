@@ -23,7 +23,8 @@ from numba import njit
 from .pose import action_into, compose_into, inverse_action_into, log3_into
 
 __all__ = ["achieved_ratio_into", "arm_command_into", "base_reference_into", "disturbance_update_into",
-           "observer_inputs_into", "pose_reference_into", "station_errors", "vehicle_wrench_into", "velocity_law_into"]
+           "observer_inputs_into", "pose_reference_into", "station_errors", "vehicle_objective_into",
+           "vehicle_wrench_into", "velocity_law_into"]
 
 
 @njit(cache=True)
@@ -183,6 +184,35 @@ def pose_reference_into(rotation: np.ndarray, translation: np.ndarray, target_ro
             low, high, value = -max_speed[i], max_speed[i], out[i]
             value = value if value > low or value != value else low  # np.maximum
             out[i] = value if value < high or value != value else high  # np.minimum
+
+
+@njit(cache=True)
+def vehicle_objective_into(joint_rotation: np.ndarray, joint_translation: np.ndarray, placement_rotation: np.ndarray,
+                           placement_translation: np.ndarray, target_rotation: np.ndarray,
+                           target_translation: np.ndarray, gains: np.ndarray, max_speed: np.ndarray, bounded: bool,
+                           lower: np.ndarray, upper: np.ndarray, clip: bool, nu: np.ndarray,
+                           joint_rates: np.ndarray) -> None:
+    """The vehicle's pose objective of :class:`uvms.control.station.ActuatedKinematics` in one call: the base frame's
+    pose oMi * joint_M_base (Pinocchio's SE3 product, :func:`compose_into`), nu_pose towards the station
+    (:func:`pose_reference_into`) into ``nu``, with ``clip`` bounded to [lower, upper] (``np.clip``'s numbers: max
+    then min, a NaN kept, an entry equal to a bound giving the bound), and that twist in the vehicle joint's axes
+    (Pinocchio's ``joint_M_base.act(Motion(nu))``, :func:`action_into`) into ``joint_rates``.
+
+    Args:
+        joint_rotation, joint_translation: the vehicle joint's placement oMi (3, 3), (3,); placement_rotation,
+        placement_translation: joint_M_base; target_rotation, target_translation: the station (world_M_base);
+        gains, max_speed, bounded: as :func:`pose_reference_into`; lower, upper: (6,) [m/s, rad/s] base frame (read
+        when ``clip``); nu, joint_rates: (6,) written.
+    """
+    rotation, translation = np.empty((3, 3)).T, np.empty(3)  # Pinocchio's rotations are column-major (BLAS's layout)
+    compose_into(joint_rotation, joint_translation, placement_rotation, placement_translation, rotation, translation)
+    pose_reference_into(rotation, translation, target_rotation, target_translation, gains, max_speed, bounded, nu)
+    if clip:
+        for i in range(6):
+            value = nu[i]
+            low = value if np.isnan(value) or value > lower[i] else lower[i]
+            nu[i] = low if np.isnan(low) or low < upper[i] else upper[i]
+    action_into(placement_rotation, placement_translation, nu[:3], nu[3:], joint_rates)
 
 
 @njit(cache=True)
