@@ -320,9 +320,10 @@ def test_activity_is_read_from_the_objectives_rows_without_forming_the_levels(rn
 
 
 def test_a_second_hierarchy_copies_the_objectives_rows_of_the_first_run_by_run(rng):
-    """The coordination's arm hierarchy at the reference's q copies the objectives' rows the reference's evaluation
-    wrote, the three consecutive objectives as one run of rows (not evaluated, not copied one by one), its own
-    vehicle level and task evaluated; its stacks are those of an evaluation of its own."""
+    """The coordination's arm hierarchy at the reference's q copies the rows the reference's evaluation wrote: the
+    three consecutive objectives and the task (the same scalar gain: its command is the reference's numbers) as one
+    run of rows (not evaluated, not copied one by one), its own vehicle level evaluated; its stacks are those of an
+    evaluation of its own. With another gain the task is evaluated with it."""
     from uvms.solvers import SetBasedSolver
     from uvms.solvers.item_rows import ItemRows
     from uvms.tasks.objectives import PlaneClearance
@@ -340,15 +341,22 @@ def test_a_second_hierarchy_copies_the_objectives_rows_of_the_first_run_by_run(r
     reference.velocity(state, shared=shared)
     assert shared.source[0] is reference.plan
     calls = []
-    for objective in objectives:
-        original = objective.rows_into
-        objective.rows_into = lambda *a, original=original: calls.append(1) or original(*a)
+    for item, method in [*((objective, "rows_into") for objective in objectives), (task, "terms")]:
+        original = getattr(item, method)
+        setattr(item, method, lambda *a, original=original: calls.append(1) or original(*a))
     copied = arm.plan.evaluate(state, shared)
     assert not calls  # read from the reference's stacks
     alone = arm.plan.evaluate(Configuration(robot, q))
     runs, taken, evaluated = arm.plan._gathering(reference.plan)
-    rows = sum(objective.dim for objective in objectives)
-    assert runs == [(slice(6, 6 + rows), slice(0, rows))] and len(taken) == 3 and len(evaluated) == 2
+    rows = sum(objective.dim for objective in objectives) + task.dim
+    assert runs == [(slice(6, 6 + rows), slice(0, rows))] and len(taken) == 4 and len(evaluated) == 1
+    other_gain = SetBasedSolver(robot, [[above], *objectives, task], dt=0.05, gain=2.0)
+    runs, taken, evaluated = other_gain.plan._gathering(reference.plan)
+    assert runs == [(slice(6, 6 + rows - task.dim), slice(0, rows - task.dim))] and len(evaluated) == 2
+    with_gain = other_gain.plan.evaluate(state, shared)
+    assert calls  # the task evaluated, its command with K = 2
+    _, error, feedforward = task.terms(state)
+    np.testing.assert_array_equal(with_gain.references[-task.dim:], feedforward + 2.0 * error)
     for name in ("jacobians", "references", "activations"):
         np.testing.assert_allclose(getattr(copied, name), getattr(alone, name), rtol=1e-15, atol=1e-300)
     assert [rows.name for rows in copied.objective_rows()] == [objective.name for objective in objectives]

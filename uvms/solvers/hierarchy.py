@@ -187,6 +187,15 @@ class PlannedLevel:
     ones: np.ndarray  # (k,) the equality rows' activations
 
 
+def _block_key(block: tuple) -> object:
+    """What makes a block's rows another plan's at the same state: an objective's id; for a level's equality tasks
+    their ids and a scalar gain K (a gain prepared per plan: None, never shared)."""
+    _, item, key, command, _ = block
+    if command is None:
+        return id(item)
+    return (key, command) if command.__class__ is float else None
+
+
 class HierarchyPlan:
     """The levels of a hierarchy split and checked once; :meth:`evaluate` stacks their rows at a configuration.
 
@@ -251,18 +260,19 @@ class HierarchyPlan:
         self._gatherings: dict[HierarchyPlan, tuple[list, list, list]] = {}  # per source plan, made once
 
     def _gathering(self, source: HierarchyPlan) -> tuple[list[tuple[slice, slice]], list[tuple[int, int]], list]:
-        """How an evaluation reads the objectives ``source``'s evaluation wrote (once per source plan): runs of rows
-        (this plan's rows, the source's) copied at once, (block, source block) whose rows those are, and the blocks
-        evaluated here (the tasks, whose command is this plan's, and objectives the source does not hold)."""
+        """How an evaluation reads the rows ``source``'s evaluation wrote (once per source plan): runs of rows (this
+        plan's rows, the source's) copied at once, (block, source block) whose rows those are, and the blocks
+        evaluated here: objectives the source does not hold, and equality tasks unless the source stacks the same
+        tasks with the same scalar gain (their rows and command xdot_d + K e are then the source's numbers)."""
         found = self._gatherings.get(source)
         if found is None:
-            where: dict[int, int] = {}  # id of an objective -> its first block in the source
+            where: dict[object, int] = {}  # an objective's id, or a task block's (ids, K) -> its first source block
             for index, block in enumerate(source._blocks):
-                if block[3] is None:
-                    where.setdefault(id(block[1]), index)
+                where.setdefault(_block_key(block), index)
             runs, taken, blocks = [], [], []
             for index, block in enumerate(self._blocks):
-                origin = where.get(id(block[1])) if block[3] is None else None
+                key = _block_key(block)
+                origin = None if key is None else where.get(key)
                 if origin is None:
                     blocks.append((index, *block[1:]))
                     continue
@@ -289,7 +299,7 @@ class HierarchyPlan:
         values = [None] * len(self._blocks)  # per block: the tasks' error, or the objective's rows
         runs, taken, blocks = self._all
         source = None if items is None else items.source
-        if source is not None and source[0] is not self:  # objectives another hierarchy wrote: copied run by run
+        if source is not None and source[0] is not self:  # rows another hierarchy wrote: copied run by run
             runs, taken, blocks = self._gathering(source[0])
             source_jacobians, source_references, source_activations = source[1]
             for target, origin in runs:
