@@ -154,3 +154,24 @@ def test_the_thrust_saturation_is_numpys_clip(rng):
         actuated.lower, actuated.upper = (lower, upper) if trial % 2 else (np.full(8, -0.0), np.full(8, 0.0))
         command = np.where(rng.random(8) < 0.5, rng.choice(special, 8), rng.normal(size=8) * 60.0)
         assert actuated.saturate(command).tobytes() == np.clip(command, actuated.lower, actuated.upper).tobytes()
+
+
+def test_a_steps_command_is_checked_and_saturated_as_numpys_clip(rng):
+    """finite_clipped_into (an actuated step's command checked and its thrust saturated in one call): np.clip's bytes
+    for finite commands (at and beyond the bounds, signed zeros), False (nothing claimed) for a non-finite arm rate or
+    thrust."""
+    from uvms.numerics._kernels.plant_stage import finite_clipped_into
+
+    actuated = ActuatedPlant.of(plant_of("bluerov2_alpha5"))
+    lower, upper = actuated.lower, actuated.upper
+    special = np.array([0.0, -0.0, *lower[:2], *upper[:2], 1e300, -1e300])
+    for trial in range(300):
+        arm = rng.normal(size=5)
+        command = np.where(rng.random(8) < 0.5, rng.choice(special, 8), rng.normal(size=8) * 60.0)
+        saturated = np.full(8, 7.0)
+        if trial % 3 == 0:
+            (arm if trial % 2 else command)[trial % 5] = rng.choice([np.nan, np.inf, -np.inf])
+            assert not finite_clipped_into(arm, command, lower, upper, saturated)
+            continue
+        assert finite_clipped_into(arm, command, lower, upper, saturated)
+        assert saturated.tobytes() == np.clip(command, lower, upper).tobytes()

@@ -117,8 +117,11 @@ class ActuatedPlant:
         return ActuatedPlantSystem(self, controller)
 
 
-#: The thrust saturation (:func:`uvms.numerics._kernels.plant_stage.clipped`, numba loaded where a plant is integrated).
+#: The thrust saturation (:func:`uvms.numerics._kernels.plant_stage.clipped`, numba loaded where a plant is integrated)
+#: and a step's command checked and saturated in one call
+#: (:func:`~uvms.numerics._kernels.plant_stage.finite_clipped_into`).
 _CLIPPED = Kernel("plant_stage", "clipped")
+_FINITE_CLIPPED = Kernel("plant_stage", "finite_clipped_into")
 
 
 # ------------------------------------------------------------------ model terms used by controllers and records
@@ -286,8 +289,9 @@ class ActuatedPlantSystem:
         v, thrusts, angles = self._split(x)
         return State(q, v, thrusts, angles)
 
-    def _command(self, t: float, q: np.ndarray, x: np.ndarray) -> Command:
-        """The controller's Command at (t, q, x), its arm, thrust and fins filled (zero when not sent), checked.
+    def _command(self, t: float, q: np.ndarray, x: np.ndarray) -> tuple[Command, np.ndarray]:
+        """The controller's Command at (t, q, x), its arm, thrust and fins filled (zero when not sent), checked, and
+        its thrust command saturated (n,) [N] (``ActuatedPlant.saturate``'s numbers, in the check's compiled call).
 
         Raises:
             UVMSError: a field the plant cannot apply, or commands of the wrong size or non-finite.
@@ -304,12 +308,15 @@ class ActuatedPlantSystem:
             fins = np.asarray(command.fins, dtype=float)
         else:  # at rest (none: one empty array)
             fins = self.thrusters.fins.held if self.m else self._no_fins
-        if arm.shape != (self.plant.n_arm,) or thrust.shape != (self.thrusters.n,) or fins.shape != (self.m,) \
-                or not (check_finite(arm, thrust) and (not self.m or check_finite(fins, fins))):
+        actuated, saturated = self.thrusters, np.empty(self.thrusters.n)
+        if arm.shape != (self.plant.n_arm,) or thrust.shape != (actuated.n,) or fins.shape != (self.m,) \
+                or not ((_FINITE_CLIPPED.function or _FINITE_CLIPPED.load())(arm, thrust, actuated.lower,
+                                                                           actuated.upper, saturated)
+                        and (not self.m or check_finite(fins, fins))):
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")
-        return Command(arm=arm, thrust=thrust, fins=fins, info={} if command.info is None else command.info)
+        return Command(arm=arm, thrust=thrust, fins=fins, info={} if command.info is None else command.info), saturated
 
     def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
               fin_command: np.ndarray, torques: bool = True) -> tuple[PlantDynamics | None,
@@ -334,8 +341,7 @@ class ActuatedPlantSystem:
 
     def sample(self, t: float, q: np.ndarray, x: np.ndarray) -> ActuatedSample:
         """The controller's command at the step's start and the rate it gives."""
-        command = self._command(t, q, x)
-        saturated = self.thrusters.saturate(command.thrust)
+        command, saturated = self._command(t, q, x)
         fins = self.thrusters.fins.saturate(command.fins) if self.m else command.fins  # (none: clipped, the same)
         dynamics, rate, wrench = self._rate(q, x, command.arm, saturated, fins)
         return ActuatedSample(rate, command, saturated, dynamics, fins, wrench)

@@ -82,6 +82,23 @@ class CompiledPass:
                                                time_constants, extra, wrench, mass, bias_forces, rates):
             raise singular_system(self.nb)
 
+    def actuated_dynamics_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
+                               matrix: np.ndarray, time_constants: np.ndarray, extra: np.ndarray,
+                               wrench: np.ndarray, rates: np.ndarray) -> PlantDynamics:
+        """:meth:`actuated_rate_into` and the motor torques of its v' in one compiled call
+        (:func:`uvms.numerics._kernels.plant_stage.actuated_dynamics_into`): the PlantDynamics (v' a view of
+        ``rates``, Mbar and the torques new arrays).
+
+        Raises:
+            NumericalError: as :meth:`accelerations_into`.
+        """
+        nv = self.nv
+        mass, bias_forces, torque = np.empty((nv, nv)), np.empty(nv), np.empty(nv - self.nb)
+        if not self.kernels.actuated_dynamics_into(*self.inputs(q, x[:nv], True), x, arm, thrust_command, matrix,
+                                                   time_constants, extra, wrench, mass, bias_forces, rates, torque):
+            raise singular_system(self.nb)
+        return PlantDynamics(rates[:nv], torque, mass)
+
     def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
                        time_constants: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         """(q, x) -> [v'; f'] (len(x),) (a new array) of :meth:`actuated_rate_into` without fins, the commands

@@ -269,12 +269,12 @@ class Plant(ConservedQuantities):
         (B (6, n), tau (n,)) and their lag f' = (f_cmd - f) / tau
         (:meth:`~uvms.dynamics.plant.compiled.CompiledPass.actuated_rate_into`); the PlantDynamics with ``torques``,
         else None (an integrator's stage: Mbar and nbar in the pass's own buffers)."""
-        compiled, nv = self._compiled(), self.model.nv
-        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else compiled.scratch  # returned: new
-        compiled.actuated_rate_into(q, x, arm, thrust_command, *thrusters,
-                                    compiled.no_wrench if fin_wrench is None else fin_wrench, wrench, mass, bias_forces,
-                                    rates)
-        return compiled.dynamics(rates[:nv], mass, bias_forces) if torques else None
+        compiled = self._compiled()
+        extra = compiled.no_wrench if fin_wrench is None else fin_wrench
+        if torques:  # the motor torques in the same compiled call
+            return compiled.actuated_dynamics_into(q, x, arm, thrust_command, *thrusters, extra, wrench, rates)
+        compiled.actuated_rate_into(q, x, arm, thrust_command, *thrusters, extra, wrench, *compiled.scratch, rates)
+        return None
 
     def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray,
                        thrusters: tuple[np.ndarray, np.ndarray]) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:

@@ -32,8 +32,9 @@ from .pose import inverse_action_into
 from .solve import solve_into
 from .vehicle import vehicle_wrench_into
 
-__all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
-           "motor_torques_into", "plant_constants", "terms_into", "thrusters_into", "vehicle_terms_wrench_into"]
+__all__ = ["accelerations_into", "actuated_dynamics_into", "actuated_rate_into", "actuation_rows", "all_finite",
+           "clipped", "finite_clipped_into", "motor_torques_into", "plant_constants", "terms_into", "thrusters_into",
+           "vehicle_terms_wrench_into"]
 
 
 @njit(cache=True)
@@ -164,6 +165,26 @@ def actuated_rate_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
 
 
 @njit(cache=True)
+def actuated_dynamics_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
+                           accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, x: np.ndarray,
+                           command: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
+                           time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray, mass: np.ndarray,
+                           bias_forces: np.ndarray, rate: np.ndarray, torque: np.ndarray) -> bool:
+    """:func:`actuated_rate_into`, then the motor torques of its v' (:func:`motor_torques_into`) into ``torque``
+    (n_arm,): the rate and the dynamics a step's record keeps in one call.
+
+    Returns:
+        False as :func:`actuated_rate_into` (``torque`` then not written).
+    """
+    if not actuated_rate_into(upper, h, jacobian, placements, accelerations, ints, floats, x, command,
+                              thrust_command, matrix, time_constants, extra, wrench, mass, bias_forces, rate):
+        return False
+    hydro_ints, _ = _hydro_sizes(ints)
+    motor_torques_into(mass, rate[:h.shape[0]], bias_forces, ints[hydro_ints], torque)
+    return True
+
+
+@njit(cache=True)
 def motor_torques_into(mass: np.ndarray, acceleration: np.ndarray, bias_forces: np.ndarray, nb: int,
                        torque: np.ndarray) -> None:
     """tau_m (n_arm,) [N m or N] = (Mbar_mb a_b + Mbar_mm a_m) + nbar_m into ``torque``, summed in this order
@@ -211,11 +232,29 @@ def clipped(values: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndar
     """``np.clip(values, lower, upper)`` (n,): numpy's max-then-min per entry, its comparisons (a NaN kept; an entry
     equal to a bound, a signed zero among them, gives the bound), the same bits."""
     out = np.empty(values.shape[0])
+    _clip_into(values, lower, upper, out)
+    return out
+
+
+@njit(cache=True)
+def _clip_into(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, out: np.ndarray) -> None:
+    """:func:`clipped` into ``out`` (n,)."""
     for i in range(values.shape[0]):
         value = values[i]
         low = value if np.isnan(value) or value > lower[i] else lower[i]
         out[i] = low if np.isnan(low) or low < upper[i] else upper[i]
-    return out
+
+
+@njit(cache=True)
+def finite_clipped_into(arm: np.ndarray, thrust: np.ndarray, lower: np.ndarray, upper: np.ndarray,
+                        saturated: np.ndarray) -> bool:
+    """Whether the arm's and the thrusters' commands (n_arm,), (n,) are finite (:func:`all_finite`); if so the
+    thrust command clipped to [lower, upper] (n,) [N] (:func:`clipped`'s numbers) into ``saturated`` (n,): an actuated
+    plant's command checked and saturated in one call."""
+    if not all_finite(arm, thrust):
+        return False
+    _clip_into(thrust, lower, upper, saturated)
+    return True
 
 
 @njit(cache=True)
