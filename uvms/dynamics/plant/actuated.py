@@ -117,9 +117,8 @@ class ActuatedPlant:
         return ActuatedPlantSystem(self, controller)
 
 
-#: The thrust saturation (:func:`uvms.numerics._kernels.plant_stage.clipped`, numba loaded where a plant is integrated)
-#: and a step's command checked and saturated in one call
-#: (:func:`~uvms.numerics._kernels.plant_stage.finite_clipped_into`).
+#: The thrust saturation (:func:`uvms.numerics._kernels.plant_stage.clipped`) and a step's command checked and
+#: saturated in one call (its module's ``finite_clipped_into``); numba loaded where a plant is integrated.
 _CLIPPED = Kernel("plant_stage", "clipped")
 _FINITE_CLIPPED = Kernel("plant_stage", "finite_clipped_into")
 
