@@ -268,7 +268,9 @@ class HierarchyPlan:
         if found is None:
             where: dict[object, int] = {}  # an objective's id, or a task block's (ids, K) -> its first source block
             for index, block in enumerate(source._blocks):
-                where.setdefault(_block_key(block), index)
+                key = _block_key(block)
+                if key is not None:
+                    where.setdefault(key, index)
             runs, taken, blocks = [], [], []
             for index, block in enumerate(self._blocks):
                 key = _block_key(block)
