@@ -27,8 +27,9 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from ..errors import NumericalError, StepCountError, UVMSError
+from ..errors import StepCountError, UVMSError
 from ._kernels import Kernel
+from .lapack import singular_system
 
 #: The argument dIntegrate differentiates: the tangent vector (read once, not at every stage).
 ARG1 = pin.ArgumentPosition.ARG1
@@ -150,7 +151,7 @@ def check_tangent_solve(info: int, size: int) -> None:
     """Raise NumericalError when LAPACK's dgesv of a stage's (size, size) tangent system gave ``info`` != 0 (dIntegrate
     singular)."""
     if info != 0:
-        raise NumericalError(f"singular {size}x{size} system (LAPACK dgesv info {info})")
+        raise singular_system(size, info)
 
 
 #: The step of each scheme.

@@ -28,9 +28,12 @@ def numpy_solve(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
     return solution
 
 
-def singular_system(size: int) -> NumericalError:
-    """The error of a (size, size) system numpy's solve could not solve (singular, or a solution not finite), from
-    Python or from a compiled kernel (:func:`uvms.numerics._kernels.solve.solve_into`)."""
+def singular_system(size: int, info: int | None = None) -> NumericalError:
+    """The error of a (size, size) system a solve could not solve, from Python or from a compiled kernel
+    (:mod:`uvms.numerics._kernels.solve`): numpy's (singular, or a solution not finite), or with LAPACK's ``info`` > 0
+    a dgesv whose U_ii is exactly zero."""
+    if info is not None:
+        return NumericalError(f"singular {size}x{size} system (LAPACK dgesv info {info})")
     return NumericalError(f"singular or overflowing {size}x{size} system")
 
 
