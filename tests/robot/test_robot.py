@@ -83,3 +83,23 @@ def test_configuration_takes_the_arm_as_a_table_of_joints_the_others_at_zero():
         robot.configuration(arm={"elbow": 0.1})
     with pytest.raises(uvms.errors.ConfigurationError, match="arm joint values must be a vector of 3 numbers"):
         robot.configuration(arm={names[1]: "up"})
+
+
+@pytest.mark.parametrize("name", ["hoang2011", "xiang2019", "bluerov2_alpha5"])
+def test_base_values_of_rows_are_base_pose_and_matrix_to_rpy_row_by_row(name, rng):
+    """``base_values_rows`` (a run's vehicle series) gives each row the numbers of ``base_pose`` and Pinocchio's
+    ``matrixToRpy`` bit for bit, planar and floating, at any angle; a fixed base gives (N, 0)."""
+    import pinocchio as pin
+
+    robot = uvms.load(name)
+    rows = np.array([robot.configuration(base=rng.uniform(-4.0, 4.0, robot.n_vehicle), arm=np.zeros(robot.n_arm))
+                     for _ in range(200)])
+    values = robot.base_values_rows(rows)
+    for q, row in zip(rows, values):
+        pose = robot.base_pose(q)
+        rpy = pin.rpy.matrixToRpy(pose.rotation)
+        expected = [*pose.translation[:2], rpy[2]] if robot.base_type == "planar" else [*pose.translation, *rpy]
+        assert np.array_equal(row, expected)
+        assert np.array_equal(robot.base_values(q), row)
+    fixed = uvms.load(uvms.model.example_robot_urdf("ur5"), base="fixed")
+    assert fixed.base_values_rows(np.tile(fixed.neutral(), (3, 1))).shape == (3, 0)

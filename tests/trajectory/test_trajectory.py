@@ -288,3 +288,23 @@ def test_a_trajectory_tables_targets_are_its_samples_arrays_with_their_rpy_in_a_
                 # a pose's layout (what a compiled step was built for), writeable: a row of the table's own arrays
                 assert rotation.flags.f_contiguous and translation.flags.c_contiguous and twist.flags.writeable
                 assert not np.shares_memory(translation, samples.translations)
+
+
+def test_a_pose_function_gives_the_trajectorys_poses_bit_for_bit():
+    """``pose_function`` (a run's desired pose, for its task series) is ``trajectory(t).pose``, from a table's target
+    arrays where the source has them, at tabled and untabled times, and of a trajectory without ``target``."""
+    from uvms.trajectory import RecentSamples, TrajectoryTable
+    from uvms.trajectory.table import pose_function
+
+    circle = PathTrajectory(CirclePath([0.0, 2.0, 0.0], [0.0, -2.0, 0.0]), LAWS[0], orientation=[0.3, -0.2, 1.0])
+    se3 = SE3Trajectory([0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.5, 0.3, -0.2, 1.0], LAWS[2])  # without `at`
+    times = [k * 0.02 for k in range(200)]
+    for trajectory in (circle, se3):
+        for source in (trajectory, TrajectoryTable(trajectory, times), RecentSamples(TrajectoryTable(trajectory, times))):
+            pose = pose_function(source)
+            for t in (times[0], times[77], times[-1], 0.0123):
+                assert np.array_equal(pose(t).homogeneous, trajectory(t).pose.homogeneous)
+    tabled = pose_function(TrajectoryTable(circle, times))(times[5])
+    tabled.translation = np.zeros(3)  # a pose of its own: the table's row is not written
+    assert np.array_equal(pose_function(TrajectoryTable(circle, times))(times[5]).translation,
+                          circle(times[5]).pose.translation)

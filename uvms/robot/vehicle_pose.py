@@ -64,11 +64,29 @@ class VehicleAccessors:
 
         The inverse of ``configuration(base=...)``; angles in [-pi, pi]. ``check=False`` skips the check of q.
         """
+        if check:
+            q = self.check_configuration(q)
+        return self.base_values_rows(np.asarray(q)[np.newaxis])[0]
+
+    def base_values_rows(self, q_rows: np.ndarray) -> np.ndarray:
+        """:meth:`base_values` of each row of q (N, nq), checked by the caller (a run's rows): (N, n_vehicle), (N, 0)
+        if fixed. The numbers of :meth:`base_pose` and ``matrixToRpy`` row by row, with Pinocchio's functions and
+        the vehicle joint's placement looked up once (a run of 9,500 rows: ~12 us a row as one call each)."""
+        count = len(q_rows)
         if self.base_type == "fixed":
-            return np.zeros(0)
-        pose = self.base_pose(q, check)
-        rpy = pin.rpy.matrixToRpy(pose.rotation)
-        return np.array([*pose.translation[:2], rpy[2]] if self.base_type == "planar" else [*pose.translation, *rpy])
+            return np.zeros((count, 0))
+        placement, to_rpy = self.model.jointPlacements[1], pin.rpy.matrixToRpy
+        if self.base_type == "floating":
+            rows, to_pose = np.empty((count, 6)), pin.XYZQUATToSE3
+            for row, q in enumerate(q_rows):
+                pose = placement * to_pose(q[:7])
+                rows[row, :3], rows[row, 3:] = pose.translation, to_rpy(pose.rotation)
+            return rows
+        rows, se3, rotation_z, arctan2 = np.empty((count, 3)), pin.SE3, pin.rpy.rpyToMatrix, np.arctan2
+        for row, q in enumerate(q_rows):
+            pose = placement * se3(rotation_z(0.0, 0.0, arctan2(q[3], q[2])), np.array([q[0], q[1], 0.0]))
+            rows[row, :2], rows[row, 2] = pose.translation[:2], to_rpy(pose.rotation)[2]
+        return rows
 
     # ------------------------------------------------------ Fossen accessors
 

@@ -19,6 +19,7 @@ from ..robot.robot import Robot
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
 from ..tasks.frame import FrameTask
+from ..trajectory.table import pose_function
 from .inequalities import ObjectiveRecorder, ScenarioInequalities
 from .spec import ScenarioSpec, SimulationSpec
 
@@ -73,7 +74,7 @@ def simulate_actuation(actuation: Actuation, task: FrameTask, trajectory, q0: np
     recorders = [] if actuation.inequalities is None else [ActuatedObjectives(actuation.plant.robot,
                                                                                   actuation.inequalities, kinematic)]
     return simulate(actuation.actuated, actuation.controller, q0, duration, float(simulation.dt),
-                    integrator=simulation.integrator, task=task, desired=lambda t: trajectory(t).pose,
+                    integrator=simulation.integrator, task=task, desired=pose_function(trajectory),
                     progress=progress, recorders=recorders)
 
 

@@ -19,6 +19,7 @@ from ..io import outputs
 from ..robot.limits import Limit
 from ..sim.loop import simulate
 from ..sim.result import SimulationResult
+from ..trajectory.table import pose_function
 from .actuated import actuated_metrics, simulate_actuation
 from .build import build
 from .controllers import Setup
@@ -258,9 +259,10 @@ def execute(spec: ScenarioSpec, setup: Setup, folder: Path, progress: bool | Non
                                       desired=None if setup.task is None else lambda t: controller.reference(t).pose,
                                       progress=progress, recorders=recorders)
     else:
-        desired = setup.samples or setup.trajectory  # the controller's samples: the row's time is already there
+        # the controller's samples: the row's time is already there
+        desired = pose_function(setup.samples or setup.trajectory)
         result = simulate(setup.robot, setup.controller, setup.q0, setup.duration, simulation_section.dt,
-                          task=setup.task, desired=lambda t: desired(t).pose,
+                          task=setup.task, desired=desired,
                           integrator=simulation_section.integrator, progress=progress, recorders=recorders)
     metrics = compute_metrics(result, setup, time.perf_counter() - started)
     metrics["scenario"] = spec.scenario.name

@@ -17,7 +17,6 @@ import pinocchio as pin
 from ..control.base import Controller
 from ..dynamics.plant.command import State, refuse_fields
 from ..errors import ConfigurationError, StepCountError, UVMSError
-from ..robot.configuration import configurations
 from ..robot.conventions import wrap_angles
 from ..robot.robot import Robot
 from ..tasks.frame import FrameTask, matrixToRpy
@@ -115,8 +114,9 @@ class TaskSeries:
     the loop from the stored rows (t, q) in one pass (the loop stores the states only; a row's end effector and
     target are functions of its t and q, never of the controller's state).
 
-    The frame's pose comes from one Configuration of its own moved along the rows (never the robot's data); the
-    errors are those of :meth:`~uvms.tasks.frame.FrameTask.full_error_between`, entry by entry.
+    The frame's pose comes from Pinocchio's forward kinematics in a Data of its own moved along the rows (never the
+    robot's data; the placements a Configuration computes, bit for bit); the errors are those of
+    :meth:`~uvms.tasks.frame.FrameTask.full_error_between`, entry by entry.
 
     Args:
         robot: the model; task: the end-effector task (its frame, axes and orientation error).
@@ -138,8 +138,11 @@ class TaskSeries:
         pose_rpy, target_rpy = np.empty((count, 3)), np.empty((count, 3))
         errors = np.empty((count, 6))
         log = task.orientation == "log"
-        for row, (time_, state) in enumerate(zip(t.tolist(), configurations(self.robot, q, check=False))):
-            pose, target = state.pose(frame_id), desired(time_)
+        model = self.robot.model
+        data, forward, place = model.createData(), pin.forwardKinematics, pin.updateFramePlacement
+        for row, (time_, configuration) in enumerate(zip(t.tolist(), q)):
+            forward(model, data, configuration)
+            pose, target = place(model, data, frame_id), desired(time_)
             rotation, target_rotation = pose.rotation, target.rotation
             positions[row], targets[row] = pose.translation, target.translation
             pose_rpy[row], target_rpy[row] = matrixToRpy(rotation), matrixToRpy(target_rotation)

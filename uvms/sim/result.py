@@ -96,9 +96,8 @@ class SimulationResult:
         """
         robot = self.robot
         robot.check_configurations(self.q)
-        rows = np.zeros((len(self.q), 0))
+        rows = robot.base_values_rows(self.q)
         if robot.base_type != "fixed":
-            rows = np.array([robot.base_values(q, check=False) for q in self.q])
             angles = slice(2, 3) if robot.base_type == "planar" else slice(3, 6)
             rows[:, angles] = np.unwrap(rows[:, angles], axis=0)
         object.__setattr__(self, "_vehicle", rows)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 import numpy as np
+import pinocchio as pin
 
 from .cartesian import PoseSample
 
@@ -26,6 +27,22 @@ def twists_at(trajectory: Callable[[float], PoseSample], times: np.ndarray) -> n
     if at is not None:
         return at(np.asarray(times, dtype=float)).twists
     return np.array([trajectory(float(t)).twist for t in times]).reshape(-1, 6)
+
+
+def pose_function(trajectory: Callable[[float], PoseSample]) -> Callable[[float], pin.SE3]:
+    """t [s] -> the trajectory's pose (``pin.SE3``, world): made from its ``target`` arrays where it has them (a
+    table's row: no sample built, ~2 us instead of ~9 for a run's task series), else its sample's pose; the same
+    numbers either way."""
+    target = getattr(trajectory, "target", None)
+    if target is None:
+        return lambda t: trajectory(t).pose
+    se3 = pin.SE3
+
+    def pose(t: float) -> pin.SE3:
+        translation, rotation, _, _ = target(t)
+        return se3(rotation, translation)
+
+    return pose
 
 
 class TrajectoryTable:
