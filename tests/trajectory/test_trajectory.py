@@ -300,7 +300,8 @@ def test_a_pose_function_gives_the_trajectorys_poses_bit_for_bit():
     se3 = SE3Trajectory([0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [1.0, 2.0, 0.5, 0.3, -0.2, 1.0], LAWS[2])  # without `at`
     times = [k * 0.02 for k in range(200)]
     for trajectory in (circle, se3):
-        for source in (trajectory, TrajectoryTable(trajectory, times), RecentSamples(TrajectoryTable(trajectory, times))):
+        table = TrajectoryTable(trajectory, times)
+        for source in (trajectory, table, RecentSamples(table)):
             pose = pose_function(source)
             for t in (times[0], times[77], times[-1], 0.0123):
                 assert np.array_equal(pose(t).homogeneous, trajectory(t).pose.homogeneous)
