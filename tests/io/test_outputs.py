@@ -22,6 +22,31 @@ from conftest import SCENARIOS
 SCENARIO = SCENARIOS / "santos2006_task_priority.toml"
 
 
+def test_an_npz_is_numpys_deflated_archive_of_the_arrays_bit_for_bit(tmp_path, rng):
+    """``write_npz``: ``np.load`` gives every array back bit for bit (dtype, shape, order), each member deflated (at
+    :data:`outputs.NPZ_LEVEL`, smaller than the stored arrays); an array of objects is refused, never pickled."""
+    import zipfile
+
+    arrays = {"t": np.linspace(0.0, 1.0, 501), "q": rng.normal(size=(501, 7)), "flags": np.arange(501) % 3 == 0,
+              "counts": np.arange(12, dtype=np.int64).reshape(3, 4), "empty": np.zeros((0, 6)),
+              "columns": np.asfortranarray(rng.normal(size=(40, 3))), "names": np.array(["x", "yaw"])}
+    arrays["q"][::7, 2] = 0.25  # a series with repeats, as a run's are
+    path = tmp_path / "run.npz"
+    outputs.write_npz(path, **arrays)
+    with np.load(path) as loaded:
+        assert loaded.files == list(arrays)
+        for name, value in arrays.items():
+            assert loaded[name].dtype == value.dtype and loaded[name].shape == value.shape
+            assert loaded[name].tobytes() == value.tobytes(), name
+    with zipfile.ZipFile(path) as archive:
+        assert {info.compress_type for info in archive.infolist()} == {zipfile.ZIP_DEFLATED}
+        assert sum(info.compress_size for info in archive.infolist()) < sum(info.file_size for info in
+                                                                            archive.infolist())
+    with pytest.raises(ValueError, match="pickle"):
+        outputs.write_npz(tmp_path / "objects.npz", rows=np.array([{"a": 1}, None], dtype=object))
+    assert not (tmp_path / "objects.npz").exists()
+
+
 def test_atomic_write_replaces_whole_files_with_usual_permissions(tmp_path):
     path = tmp_path / "metrics.json"
     outputs.write_json(path, {"a": 1})

@@ -25,6 +25,7 @@ import shutil
 import stat
 import sys
 import tempfile
+import zipfile
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from pathlib import Path
 
@@ -38,6 +39,9 @@ LOCK_SUFFIX = ".uvms-lock"
 TEMPORARY_MARK = ".uvms-tmp-"
 #: The manifest of a run folder, written last by :func:`run_folder`: every path the run wrote (folders end in "/").
 MANIFEST = ".uvms-run.json"
+#: zlib's level for ``.npz`` files: a run's doubles deflate to ~57 % of their size at level 1 as at the default 6, in ~2/3 of the
+#: time (hoang2011_w1's trajectory.npz: 1.47 MB in 73 ms against 1.45 MB in 105-113 ms)
+NPZ_LEVEL = 1
 #: The files by which a folder of an uvms older than the manifest is recognised (to say so when refusing it).
 LEGACY_MARKERS = ("metrics.json", "sweep.csv")
 DISK_FULL = (errno.ENOSPC, errno.EDQUOT)  # a full disk or an exhausted quota
@@ -89,9 +93,13 @@ def write_json(path: str | os.PathLike, data: dict, before_replace: Callable[[],
 
 
 def write_npz(path: str | os.PathLike, **arrays: np.ndarray) -> None:
-    """Write a compressed ``.npz`` atomically."""
-    with atomic_path(path) as temporary, open(temporary, "wb") as handle:
-        np.savez_compressed(handle, **arrays)
+    """Write a compressed ``.npz`` atomically (``np.load`` reads it as ``np.savez_compressed``'s): each array an
+    ``.npy`` member deflated at level :data:`NPZ_LEVEL`, no pickled objects."""
+    with atomic_path(path) as temporary, zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED,
+                                                         compresslevel=NPZ_LEVEL) as archive:
+        for name, value in arrays.items():
+            with archive.open(f"{name}.npy", "w", force_zip64=True) as member:
+                np.lib.format.write_array(member, np.asanyarray(value), allow_pickle=False)
 
 
 def save_figure(figure, path: str | os.PathLike, dpi: int = 110) -> None:
