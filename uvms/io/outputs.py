@@ -93,8 +93,8 @@ def write_json(path: str | os.PathLike, data: dict, before_replace: Callable[[],
 
 def write_npz(path: str | os.PathLike, **arrays: np.ndarray) -> None:
     """Write a compressed ``.npz`` atomically, read as ``np.savez_compressed``'s: no pickled objects."""
-    with atomic_path(path) as temporary, zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED, True,
-                                                         NPZ_LEVEL) as archive:
+    with atomic_path(path) as temporary, zipfile.ZipFile(temporary, "w", zipfile.ZIP_DEFLATED,
+                                                         compresslevel=NPZ_LEVEL) as archive:
         for name, value in arrays.items():
             with archive.open(f"{name}.npy", "w", force_zip64=True) as member:
                 np.lib.format.write_array(member, np.asanyarray(value), allow_pickle=False)
