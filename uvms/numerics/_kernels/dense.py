@@ -146,3 +146,14 @@ def dls_solve_into(jacobian: np.ndarray, rhs: np.ndarray, damping_squared: float
             value += jacobian[row, col] * solution[row]
         out[col] = value
     return True
+
+
+@njit(cache=True)
+def clip_into(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, out: np.ndarray) -> None:
+    """``np.clip(values, lower, upper)`` (n,) into ``out`` (``values`` itself allowed): numpy's max-then-min per
+    entry, its comparisons (a NaN kept; an entry equal to a bound, a signed zero among them, gives the bound), the
+    same bits."""
+    for i in range(values.shape[0]):
+        value = values[i]
+        low = value if np.isnan(value) or value > lower[i] else lower[i]
+        out[i] = low if np.isnan(low) or low < upper[i] else upper[i]

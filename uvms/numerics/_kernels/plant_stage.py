@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .dense import clip_into
 from .hydro import frame_jacobian_into, frame_jacobian_program, pack_constants, plant_terms_into
 from .pose import inverse_action_into
 from .solve import solve_into
@@ -232,17 +233,8 @@ def clipped(values: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndar
     """``np.clip(values, lower, upper)`` (n,): numpy's max-then-min per entry, its comparisons (a NaN kept; an entry
     equal to a bound, a signed zero among them, gives the bound), the same bits."""
     out = np.empty(values.shape[0])
-    _clip_into(values, lower, upper, out)
+    clip_into(values, lower, upper, out)
     return out
-
-
-@njit(cache=True)
-def _clip_into(values: np.ndarray, lower: np.ndarray, upper: np.ndarray, out: np.ndarray) -> None:
-    """:func:`clipped` into ``out`` (n,)."""
-    for i in range(values.shape[0]):
-        value = values[i]
-        low = value if np.isnan(value) or value > lower[i] else lower[i]
-        out[i] = low if np.isnan(low) or low < upper[i] else upper[i]
 
 
 @njit(cache=True)
@@ -253,7 +245,7 @@ def finite_clipped_into(arm: np.ndarray, thrust: np.ndarray, lower: np.ndarray, 
     plant's command checked and saturated in one call."""
     if not all_finite(arm, thrust):
         return False
-    _clip_into(thrust, lower, upper, saturated)
+    clip_into(thrust, lower, upper, saturated)
     return True
 
 

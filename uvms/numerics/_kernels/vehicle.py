@@ -20,6 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .dense import clip_into
 from .pose import action_into, compose_into, inverse_action_into, log3_into
 
 __all__ = ["achieved_ratio_into", "arm_command_into", "base_reference_into", "disturbance_update_into",
@@ -208,10 +209,7 @@ def vehicle_objective_into(joint_rotation: np.ndarray, joint_translation: np.nda
     compose_into(joint_rotation, joint_translation, placement_rotation, placement_translation, rotation, translation)
     pose_reference_into(rotation, translation, target_rotation, target_translation, gains, max_speed, bounded, nu)
     if clip:
-        for i in range(6):
-            value = nu[i]
-            low = value if np.isnan(value) or value > lower[i] else lower[i]
-            nu[i] = low if np.isnan(low) or low < upper[i] else upper[i]
+        clip_into(nu, lower, upper, nu)
     action_into(placement_rotation, placement_translation, nu[:3], nu[3:], joint_rates)
 
 
