@@ -6,7 +6,8 @@ Rows:
   re-solve, the vehicle loops, the allocation, 4 RK4 stages of the hydrodynamic plant, the record): the scenario
   built once, its 1,000-step loop run in this process, per step as a ratio to one ``pin.aba`` (and ``pin.crba``)
   on the same model timed beside each loop (median over the rounds);
-* the same step's compiled calls alone, replayed back to back (``step_floor.py``): the step with no Python;
+* the same step's compiled calls alone, replayed back to back (``step_floor.py``): the step with no Python; and the
+  thin step: each of them through one Python function that makes one array (the least Python between them);
 * ``uvms run bluerov2_alpha5_intervention`` and ``uvms run hoang2011_w1`` with figures off, fresh processes, wall;
 * ``uvms study bluerov2_alpha5_intervention --jobs 2`` (``--trials`` trials): trials per second.
 
@@ -75,16 +76,22 @@ def step_rows(rounds: int) -> list[tuple[str, str]]:
             (f"... its loop ({steps} steps)", f"{steps * np.median(per_step):.2f} s")]
 
 
-def floor_row(rounds: int) -> tuple[str, str]:
+def floor_rows(rounds: int) -> list[tuple[str, str]]:
     """The same step's compiled calls alone, replayed back to back (``step_floor.py``, in a process of its own: it
-    wraps numba's and Pinocchio's calls): the step with all of its Python taken away, its numerics bit for bit."""
+    wraps numba's and Pinocchio's calls): the step with all of its Python taken away, its numerics bit for bit; and
+    the thin step, each of those calls made through one Python function that makes one array (an older
+    ``step_floor.py`` has no thin row)."""
     output = subprocess.run([sys.executable, str(ROOT / "benchmarks" / "step_floor.py"), "--json", "--rounds",
                              str(rounds)], cwd=ROOT, capture_output=True, check=True, text=True).stdout
     times = json.loads(output.splitlines()[-1])
-    ratios = [step / aba for step, aba in zip(times["step"], times["aba"])]
-    return ("... its compiled calls alone, replayed (`step_floor.py`)",
-            f"{1e3 * np.median(times['step']):.3f} ms = **{np.median(ratios):.0f}x aba** "
-            f"({', '.join(f'{r:.0f}' for r in ratios)})")
+    rows = []
+    for key, label in (("step", "... its compiled calls alone, replayed (`step_floor.py`)"),
+                       ("thin", "... those calls through one Python function each (the thin step)")):
+        if key in times:
+            ratios = [step / aba for step, aba in zip(times[key], times["aba"])]
+            rows.append((label, f"{1e3 * np.median(times[key]):.3f} ms = **{np.median(ratios):.0f}x aba** "
+                                f"({', '.join(f'{r:.0f}' for r in ratios)})"))
+    return rows
 
 
 def run_wall(scenario: str, repeat: int) -> tuple[str, str]:
@@ -126,7 +133,7 @@ def main() -> None:
     options = parser.parse_args()
     rows = step_rows(options.rounds)
     if (ROOT / "benchmarks" / "step_floor.py").exists():  # an older checkout may not have it
-        rows.append(floor_row(options.rounds))
+        rows += floor_rows(options.rounds)
     rows += [run_wall("bluerov2_alpha5_intervention", options.runs), run_wall("hoang2011_w1", options.runs)]
     if not options.no_study:
         rows.append(study_row(options.trials, options.jobs))

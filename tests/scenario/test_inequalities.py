@@ -190,13 +190,13 @@ def test_the_recorder_takes_the_solvers_activity_and_measures_the_rest_itself():
                                                              enforced=True))
     rate = (np.zeros(robot.nv),)
     alone = recorder(0.0, q, None, SimpleNamespace(rate=rate, info=None))
-    assert alone["objective_active"].tolist() == [True, False]  # the tilt is past its 0.1 rad, the floor 4 m away
+    assert alone["objective_active"] == [True, False]  # the tilt is past its 0.1 rad, the floor 4 m away
     assert alone["objective_value"] == pytest.approx([0.15, 4.0], abs=1e-9)
     solver = SimpleNamespace(activity={floor.name: True, tilt.name: False})  # what a solver reported
     told = recorder(0.0, q, None, SimpleNamespace(rate=rate, info=solver))
-    assert told["objective_active"].tolist() == [False, True]
-    assert told["objective_value"].tolist() == alone["objective_value"].tolist()
-    assert told["objective_activation"].tolist() == alone["objective_activation"].tolist() == [1.0, 0.0]
+    assert told["objective_active"] == [False, True]
+    assert told["objective_value"] == alone["objective_value"]
+    assert told["objective_activation"] == alone["objective_activation"] == [1.0, 0.0]
 
 
 def test_the_recorders_speed_ratio_is_the_fastest_joint_over_its_limit_and_zero_without_limits():
@@ -216,6 +216,6 @@ def test_the_recorders_speed_ratio_is_the_fastest_joint_over_its_limit_and_zero_
                                                             ["vehicle_attitude", "joint_velocity"], enforced=False))
     row = limited.row(q, v)
     assert row["speed_ratio"] == pytest.approx(1.8, rel=1e-12)
-    assert row["objective_active"].tolist() == [True] and row["objective_activation"].tolist() == [1.0]
+    assert row["objective_active"] == [True] and row["objective_activation"] == [1.0]  # floats: the loop stacks them
     unlimited = ObjectiveRecorder(robot, ScenarioInequalities([[tilt]], ["vehicle_attitude"], enforced=False))
     assert unlimited.row(q, v)["speed_ratio"] == 0.0

@@ -41,6 +41,8 @@ from .spec import InequalitySpec
 #: the activation keeps it inside up to the step's discretization (a tilt limit can be passed by a fraction
 #: of a degree between two solver calls), which is a result, not rounding.
 VIOLATION_SLACK = 1e-6
+#: A row's pairs without a collision objective (read, never written: the loop stacks the rows' into (N, 0)).
+NO_PAIRS = np.zeros(0, dtype=int)
 
 
 @dataclass
@@ -136,7 +138,7 @@ class ObjectiveRecorder:
         """
         reported = reported or {}
         state = None  # moved to q only when an objective is evaluated here
-        values, activations, active, pairs = [], [], [], []
+        values, activations, active, pairs = [], [], [], []  # Python floats and bools: made arrays by the loop
         for objective in self.objectives:
             if rows is not None:
                 evaluated = rows.objective(objective)
@@ -153,17 +155,15 @@ class ObjectiveRecorder:
                 else:
                     value = objective.value(state)
                 activation = objective.activation(value)
-            values.append(value)
-            activations.append(activation)
+            values += value.tolist()
+            levels = activation.tolist()
+            activations += levels
             is_active = reported.get(objective.name)
             # an activation is in [0, 1]: its largest > 0 is (activation > 0).any(), without numpy's dispatch
-            active.append(max(activation.tolist(), default=0.0) > 0.0 if is_active is None else is_active)
+            active.append(max(levels, default=0.0) > 0.0 if is_active is None else is_active)
         ratio = float((np.abs(v[self._limited]) / self._limits).max(initial=0.0)) if self._limited.size else 0.0
-        return {"objective_value": np.concatenate(values) if values else np.zeros(0),
-                "objective_activation": np.concatenate(activations) if activations else np.zeros(0),
-                "objective_active": np.array(active, dtype=bool),
-                "objective_pair": np.concatenate(pairs).astype(int) if pairs else np.zeros(0, dtype=int),
-                "speed_ratio": ratio}
+        return {"objective_value": values, "objective_activation": activations, "objective_active": active,
+                "objective_pair": np.concatenate(pairs).astype(int) if pairs else NO_PAIRS, "speed_ratio": ratio}
 
     def _at(self, q: np.ndarray) -> Configuration:
         """The recorder's kinematic state moved to q (one, its pin.Data made once)."""
