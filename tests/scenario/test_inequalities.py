@@ -203,6 +203,7 @@ def test_the_recorders_speed_ratio_is_the_fastest_joint_over_its_limit_and_zero_
     """ObjectiveRecorder.row: speed_ratio = max_i |v_i| / max_i over the limited velocities (the vehicle's free),
     0 without a speed limit; an objective is active when an activation of its rows is > 0."""
     from uvms.scenario.inequalities import ObjectiveRecorder, ScenarioInequalities
+    from uvms.sim.loop import gathered
     from uvms.tasks.objectives import JointVelocityLimits, VehicleAttitude
 
     from conftest import shipped
@@ -219,3 +220,13 @@ def test_the_recorders_speed_ratio_is_the_fastest_joint_over_its_limit_and_zero_
     assert row["objective_active"] == [True] and row["objective_activation"] == [1.0]  # floats: the loop stacks them
     unlimited = ObjectiveRecorder(robot, ScenarioInequalities([[tilt]], ["vehicle_attitude"], enforced=False))
     assert unlimited.row(q, v)["speed_ratio"] == 0.0
+    # only a speed limit: no objective with rows, the loop's series still (N, 0) of float, bool and int
+    speeds = ObjectiveRecorder(robot, ScenarioInequalities([[JointVelocityLimits(robot, max=0.5)]], ["joint_velocity"],
+                                                           enforced=False))
+    series = gathered([speeds.row(q, v), speeds.row(q, v)])
+    assert series["speed_ratio"].tolist() == pytest.approx([1.8, 1.8], rel=1e-12)
+    assert [(series[name].shape, series[name].dtype.kind) for name in
+            ("objective_value", "objective_activation", "objective_active", "objective_pair")] == \
+        [((2, 0), "f"), ((2, 0), "f"), ((2, 0), "b"), ((2, 0), "i")]
+    rows = gathered([limited.row(q, v), limited.row(q, v)])  # with the tilt: its floats and bools stacked
+    assert rows["objective_active"].dtype == bool and rows["objective_activation"].tolist() == [[1.0], [1.0]]

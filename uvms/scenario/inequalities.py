@@ -41,8 +41,8 @@ from .spec import InequalitySpec
 #: the activation keeps it inside up to the step's discretization (a tilt limit can be passed by a fraction
 #: of a degree between two solver calls), which is a result, not rounding.
 VIOLATION_SLACK = 1e-6
-#: A row's pairs without a collision objective (read, never written: the loop stacks the rows' into (N, 0)).
-NO_PAIRS = np.zeros(0, dtype=int)
+#: A row's empty series (read, never written: the loop stacks the rows' into (N, 0) of these types).
+NO_PAIRS, NO_VALUES, NO_ACTIVE = np.zeros(0, dtype=int), np.zeros(0), np.zeros(0, dtype=bool)
 
 
 @dataclass
@@ -135,7 +135,15 @@ class ObjectiveRecorder:
                 (:meth:`uvms.control.station.ActuatedKinematics.objective_rows`,
                 :meth:`uvms.control.tracking.TrackingController.objective_rows`): their values, activations and
                 a collision objective's pairs read, not evaluated again (the same numbers).
+
+        Returns:
+            "objective_value" and "objective_activation" (k,) as Python floats, "objective_active" (n_objectives,)
+            as bools (the loop stacks the rows into float64 and bool arrays), "objective_pair" (pairs,) int,
+            "speed_ratio"; without an objective with rows, empty arrays of those types.
         """
+        if not self.objectives:  # only speed limits: empty series of the arrays' types
+            return {"objective_value": NO_VALUES, "objective_activation": NO_VALUES, "objective_active": NO_ACTIVE,
+                    "objective_pair": NO_PAIRS, "speed_ratio": self._speed_ratio(v)}
         reported = reported or {}
         state = None  # moved to q only when an objective is evaluated here
         values, activations, active, pairs = [], [], [], []  # Python floats and bools: made arrays by the loop
@@ -161,9 +169,13 @@ class ObjectiveRecorder:
             is_active = reported.get(objective.name)
             # an activation is in [0, 1]: its largest > 0 is (activation > 0).any(), without numpy's dispatch
             active.append(max(levels, default=0.0) > 0.0 if is_active is None else is_active)
-        ratio = float((np.abs(v[self._limited]) / self._limits).max(initial=0.0)) if self._limited.size else 0.0
         return {"objective_value": values, "objective_activation": activations, "objective_active": active,
-                "objective_pair": np.concatenate(pairs).astype(int) if pairs else NO_PAIRS, "speed_ratio": ratio}
+                "objective_pair": np.concatenate(pairs).astype(int) if pairs else NO_PAIRS,
+                "speed_ratio": self._speed_ratio(v)}
+
+    def _speed_ratio(self, v: np.ndarray) -> float:
+        """max_i |v_i| / limit_i over the limited velocities of v (nv,) (0 without a limit)."""
+        return float((np.abs(v[self._limited]) / self._limits).max(initial=0.0)) if self._limited.size else 0.0
 
     def _at(self, q: np.ndarray) -> Configuration:
         """The recorder's kinematic state moved to q (one, its pin.Data made once)."""
