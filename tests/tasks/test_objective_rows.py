@@ -4,8 +4,10 @@ formulas as they were written before (per objective, per level, stacked after)."
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import uvms
@@ -129,3 +131,51 @@ def test_hierarchy_stacks_hold_each_levels_rows_and_stay_with_their_result(robot
     assert_same(levels[2].task_command, expected[3][1]) and assert_same(levels[2].jacobian[3:], expected[4][0])
     assert [rows.name for rows in levels[1].objectives] == [attitude.name, clearance.name]
     assert levels[0].task_error is None and levels[3].task_error.shape == (3,)
+
+
+def test_objectives_read_their_frame_from_the_joint_kinematics_in_pinocchios_numbers(robot):
+    """FrameReader: a frame's z axis and the tilt's and the clearances' rows formed from the joint kinematics (the
+    joint's placement and data.J, what the step computes once) are, bit for bit, those of Pinocchio's frame pose and
+    frame Jacobian (the path of a model with mimic joints), for frames placed in their joint with an offset (the jaws'
+    end effector) and with a rotation (the arm's base)."""
+    import copy
+
+    from uvms.tasks.objectives.frames import FrameReader
+
+    rotated = [frame.name for frame in robot.model.frames
+               if frame.parentJoint > 0 and not np.allclose(frame.placement.rotation, np.eye(3))]
+    assert "alpha_base_link" in rotated
+    objectives = [VehicleAttitude(robot, 0.0873, band=0.035),
+                  PlaneClearance(robot, "vehicle", [0, 0, -5.55], [0.1, 0.0, 1.0], min=0.5, band=0.1),
+                  PlaneClearance(robot, "ee", [0.2, 0.1, -5.5], [0.3, -0.2, 1.0], min=0.1, band=0.5),
+                  PlaneClearance(robot, "alpha_base_link", [0.0, 0.3, -5.2], [0.0, -1.0, 0.2], min=0.0, band=0.6)]
+    framed = []  # the same objectives reading Pinocchio's frame pose and Jacobian
+    for objective in objectives:
+        other = copy.copy(objective)
+        other._frame = copy.copy(objective._frame)
+        other._frame.joint, other._frame.columns = None, np.arange(robot.nv, dtype=np.int64)
+        framed.append(other)
+    # a frame placed with a general rotation (the shipped ones turn about one axis: their z columns sum exactly)
+    model = pin.Model(robot.model)
+    tilted_frame = model.addFrame(pin.Frame("tilted", 5, pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.7, 1.1),
+                                                                  np.array([0.1, -0.05, 0.2])), pin.FrameType.OP_FRAME))
+    general = FrameReader(SimpleNamespace(model=model, mimic_joint_names=[], nv=model.nv), tilted_frame)
+    data = model.createData()
+    readers = [FrameReader(robot, robot.frame_id(name)) for name in ("alpha_base_link", "ee", rotated[-1])]
+    rng = np.random.default_rng(146)
+    active = 0
+    for trial in range(300):
+        q = tilted(robot, rng, 0.0 if trial == 0 else 40.0)
+        for objective, other in zip(objectives, framed):
+            rows, expected = objective.rows(Configuration(robot, q)), other.rows(Configuration(robot, q))
+            for name in ("value", "jacobian", "activation", "reference"):
+                assert getattr(rows, name).tobytes() == getattr(expected, name).tobytes(), (objective.name, name)
+            active += bool(rows.activation[0] > 0.0)
+        state = Configuration(robot, q)
+        for reader in readers:
+            assert reader.joint is not None
+            assert reader.z_axis(state) == tuple(state.pose(reader.frame_id).rotation[:, 2].tolist())
+        pin.forwardKinematics(model, data, q)
+        placed = pin.updateFramePlacement(model, data, tilted_frame)
+        assert general.z_axis(state) == tuple(placed.rotation[:, 2].tolist())
+    assert active > 100  # rows inside and outside the bands were compared

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["action_into", "compose_into", "frame_rows_into", "inverse_action_into", "log3_into", "matrix_to_rpy",
-           "pose_error_norm", "rotation_to_target", "row_product"]
+__all__ = ["action_into", "compose_into", "frame_rows_into", "inverse_action_into", "linear_at_point", "log3_into",
+           "matrix_to_rpy", "pose_error_norm", "rotation_to_target", "row_product"]
 
 EPSILON = np.finfo(np.float64).eps
 #: Pinocchio's TaylorSeriesExpansion<double>::precision<2>(): eps^(1/3), where log3 switches to its expansions.
@@ -194,17 +194,26 @@ def frame_rows_into(joint_jacobians: np.ndarray, joint_translation: np.ndarray, 
         error[index] = full[row]
         for col in columns:
             wx, wy, wz = joint_jacobians[3, col], joint_jacobians[4, col], joint_jacobians[5, col]
-            if row == 0:
-                jacobian[index, col] = joint_jacobians[0, col] - (py * wz - pz * wy)
-            elif row == 1:
-                jacobian[index, col] = joint_jacobians[1, col] - (pz * wx - px * wz)
-            elif row == 2:
-                jacobian[index, col] = joint_jacobians[2, col] - (px * wy - py * wx)
+            if row < 3:
+                jacobian[index, col] = linear_at_point(joint_jacobians, col, row, px, py, pz)
             elif euler:
                 rate = rates[row - 3]
                 jacobian[index, col] = (rate[0] * wx + rate[1] * wy) + rate[2] * wz
             else:
                 jacobian[index, col] = joint_jacobians[row, col]
+
+
+@njit(cache=True)
+def linear_at_point(joint_jacobians: np.ndarray, col: int, row: int, px: float, py: float, pz: float) -> float:
+    """Linear row ``row`` (0, 1 or 2) of column ``col`` of the world Jacobian (Pinocchio's ``data.J`` (6, nv)) moved
+    to the point p = (px, py, pz) [m]: (v - p x w)[row], what ``getFrameJacobian`` (LOCAL_WORLD_ALIGNED) writes for a
+    frame at p (its numbers: the cross product's two products, then the differences)."""
+    wx, wy, wz = joint_jacobians[3, col], joint_jacobians[4, col], joint_jacobians[5, col]
+    if row == 0:
+        return joint_jacobians[0, col] - (py * wz - pz * wy)
+    if row == 1:
+        return joint_jacobians[1, col] - (pz * wx - px * wz)
+    return joint_jacobians[2, col] - (px * wy - py * wx)
 
 
 @njit(cache=True)

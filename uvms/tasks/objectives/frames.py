@@ -10,6 +10,7 @@ from ...errors import FrameNotFound, ObjectiveError
 from ...numerics._kernels import Kernel
 from ...numerics.validate import finite_array
 from ...robot.configuration import Configuration
+from ...robot.kinematics import support_columns
 from ...robot.robot import Robot
 from .base import Inequality, InequalityRows, finite_number, vehicle_frame_id
 
@@ -21,6 +22,48 @@ LEVEL_TILT = 1e-9
 #: where an objective is first evaluated).
 _TILT_ROWS = Kernel("objectives", "tilt_rows_into")
 _CLEARANCE_ROWS = Kernel("objectives", "clearance_rows_into")
+
+
+class FrameReader:
+    """How an objective reads its frame at a configuration: from the joint kinematics the configuration computed once
+    for everything that reads it (its joint's placement and every joint's world Jacobian, Pinocchio's ``data.J``) and
+    the frame's placement in its joint, in Pinocchio's arithmetic; on a model with mimic joints (whose columns are
+    not their joints' own) from Pinocchio's frame pose and Jacobian. The same numbers either way.
+
+    Args:
+        robot: the model; frame_id: the frame.
+    """
+
+    def __init__(self, robot: Robot, frame_id: int) -> None:
+        frame = robot.model.frames[frame_id]
+        self.frame_id = frame_id
+        self.joint = None if robot.mimic_joint_names else int(frame.parentJoint)
+        self.placement = np.ascontiguousarray(frame.placement.homogeneous)  # (4, 4)
+        self.columns = (np.arange(robot.nv, dtype=np.int64) if self.joint is None
+                        else support_columns(robot.model, self.joint))  # (m,) the columns that move the frame
+        self._axis = frame.placement.rotation[:, 2].tolist()  # the frame's z axis in its joint
+
+    def z_axis(self, state: Configuration) -> tuple[float, float, float]:
+        """The frame's z axis in world axes: column 2 of R_joint R_placement, each entry summed as Pinocchio's SE3
+        product sums it (:func:`~uvms.numerics._kernels.pose.row_product`: rows 0 and 1 as (a + b) + c, row 2 as
+        a + (b + c))."""
+        if self.joint is None:
+            return tuple(state.pose(self.frame_id).rotation[:, 2].tolist())
+        rotation = state.joint_arrays(self.joint)[2].tolist()
+        a, b, c = self._axis
+        return ((rotation[0][0] * a + rotation[0][1] * b) + rotation[0][2] * c,
+                (rotation[1][0] * a + rotation[1][1] * b) + rotation[1][2] * c,
+                rotation[2][0] * a + (rotation[2][1] * b + rotation[2][2] * c))
+
+    def arrays(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
+        """(R (3, 3), t (3,), placement (4, 4), Jacobians (6, nv), columns, at the joint) as the objectives' kernels
+        read them: the joint's placement and the joints' world Jacobian (at the joint: True), or the frame's pose and
+        its own world-aligned Jacobian (False)."""
+        if self.joint is None:
+            pose = state.pose(self.frame_id)
+            return pose.rotation, pose.translation, self.placement, state.jacobian(self.frame_id), self.columns, False
+        jacobians, translation, rotation = state.joint_arrays(self.joint)
+        return rotation, translation, self.placement, jacobians, self.columns, True
 
 
 class VehicleAttitude(Inequality):
@@ -54,6 +97,7 @@ class VehicleAttitude(Inequality):
             raise ObjectiveError(f"{name}: needs a floating base, {robot.name} has a {robot.base_type} one "
                                  f"(a planar vehicle cannot tilt)")
         self.frame_id = vehicle_frame_id(robot, name)
+        self._frame = FrameReader(robot, self.frame_id)
         max_tilt = finite_number(max_tilt, f"{name}: max_tilt", positive=True)
         if max_tilt > np.pi / 2:
             raise ObjectiveError(f"{name}: max_tilt must be in (0, pi/2] [rad], got {max_tilt!r}")
@@ -86,10 +130,11 @@ class VehicleAttitude(Inequality):
                    reference: np.ndarray) -> np.ndarray:
         """The tilt (1,) [rad]; its row d tilt / dt (nv,), activation and reference (1,) written
         (:func:`~uvms.numerics._kernels.objectives.tilt_rows_into`)."""
-        x, y, z = state.pose(self.frame_id).rotation[:, 2].tolist()  # the body z axis in world axes
+        frame = self._frame
+        x, y, z = frame.z_axis(state)  # the body z axis in world axes
         tilt = np.array([np.arccos(min(max(z, -1.0), 1.0))])  # _tilt's numbers, from the floats read once
         kernel = _TILT_ROWS.function or _TILT_ROWS.load()
-        kernel(x, y, tilt, state.jacobian(self.frame_id), LEVEL_TILT, self._bounds, self.gain, self._step, row,
+        kernel(x, y, tilt, *frame.arrays(state)[3:5], LEVEL_TILT, self._bounds, self.gain, self._step, row,
                activation, reference)
         return tilt
 
@@ -129,6 +174,7 @@ class PlaneClearance(Inequality):
             self.frame_id = robot.frame_id(frame)
         else:
             raise FrameNotFound(str(frame), ["vehicle", *robot.frame_names], first=["vehicle"])
+        self._frame = FrameReader(robot, self.frame_id)
         self.point = finite_array(point, f"{self.name}: point", (3,), error=ObjectiveError, unit=" [m]")
         normal = finite_array(normal, f"{self.name}: normal", (3,), error=ObjectiveError)
         length = np.linalg.norm(normal)
@@ -162,10 +208,9 @@ class PlaneClearance(Inequality):
                         reference: np.ndarray) -> None:
         """n . (p - p0) into ``value`` (1,), n^T J_p into ``row`` (nv,), the activation and reference (1,)
         (:func:`~uvms.numerics._kernels.objectives.clearance_rows_into`)."""
-        frame_id = self.frame_id
         kernel = _CLEARANCE_ROWS.function or _CLEARANCE_ROWS.load()
-        kernel(self.normal, state.pose(frame_id).translation, self.point, state.jacobian(frame_id), self._bounds,
-               self.gain, self._step, value, row, activation, reference)
+        kernel(self.normal, *self._frame.arrays(state), self.point, self._bounds, self.gain, self._step, value, row,
+               activation, reference)
 
 
 class FrameBox(Inequality):
