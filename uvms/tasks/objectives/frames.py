@@ -109,7 +109,7 @@ class VehicleAttitude(Inequality):
 
     def value(self, state: Configuration) -> np.ndarray:
         """The tilt (1,) [rad] alone (a recorder reads it at every row: no Jacobian)."""
-        return _tilt(state.pose(self.frame_id).rotation[:, 2])
+        return _tilt(self._frame.z_axis(state)[2])
 
     def jacobian(self, state: Configuration) -> np.ndarray:
         return self.value_jacobian(state)[1]
@@ -132,16 +132,17 @@ class VehicleAttitude(Inequality):
         (:func:`~uvms.numerics._kernels.objectives.tilt_rows_into`)."""
         frame = self._frame
         x, y, z = frame.z_axis(state)  # the body z axis in world axes
-        tilt = np.array([np.arccos(min(max(z, -1.0), 1.0))])  # _tilt's numbers, from the floats read once
+        tilt = _tilt(z)
         kernel = _TILT_ROWS.function or _TILT_ROWS.load()
         kernel(x, y, tilt, *frame.arrays(state)[3:5], LEVEL_TILT, self._bounds, self.gain, self._step, row,
                activation, reference)
         return tilt
 
 
-def _tilt(z_axis: np.ndarray) -> np.ndarray:
-    """The angle (1,) [rad] between a body z axis (3,) in world axes and the world's z."""
-    return np.array([np.arccos(min(max(float(z_axis[2]), -1.0), 1.0))])
+def _tilt(z: float) -> np.ndarray:
+    """The angle (1,) [rad] between a body z axis in world axes and the world's z, from the axis' world z [-]
+    (numpy's arccos: its numbers)."""
+    return np.array([np.arccos(min(max(z, -1.0), 1.0))])
 
 
 class PlaneClearance(Inequality):
