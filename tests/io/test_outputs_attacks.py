@@ -28,7 +28,10 @@ from uvms.scenario.studies.sweep import SweepError, SweepResult, sweep
 from conftest import NO_FIGURES, ROOT, one_line, raising, signal_a_running_sweep, uvms_command, wait_for
 
 SANTOS = ROOT / "scenarios" / "santos2006_task_priority.toml"  # 100 Euler steps
-HOANG = ROOT / "scenarios" / "hoang2011_w1.toml"  # 9,500 RK4 steps: several seconds
+HOANG = ROOT / "scenarios" / "hoang2011_w1.toml"  # 9,500 RK4 steps: under a second of loop on a quiet machine
+#: hoang2011_w1 at a fifth of its step: 47,500 RK4 steps, a run that lasts seconds after its folder appears (a
+#: signal test's window; the signal ends it long before)
+LONG_RUN = ("--set", "simulation.dt=0.004")
 
 
 def uvms_run_folder(folder: Path, **files: str) -> None:
@@ -281,8 +284,8 @@ def test_sighup_stops_a_run_and_keeps_the_previous_one(tmp_path):
     folder = tmp_path / "run"
     uvms_run_folder(folder, **{"metrics.json": '{"run": 1}'})
     before = contents(folder)
-    child = subprocess.Popen(uvms_command("run", str(HOANG), "--out", str(folder), "--quiet"), stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, text=True)
+    child = subprocess.Popen(uvms_command("run", str(HOANG), "--out", str(folder), "--quiet", *LONG_RUN),
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         wait_for(lambda: list(tmp_path.glob(f".run{outputs.TEMPORARY_MARK}*")), process=child)  # the run under way
         time.sleep(0.5)
