@@ -55,6 +55,13 @@ class FrameReader:
                 (rotation[1][0] * a + rotation[1][1] * b) + rotation[1][2] * c,
                 rotation[2][0] * a + (rotation[2][1] * b + rotation[2][2] * c))
 
+    def jacobians(self, state: Configuration) -> tuple[np.ndarray, np.ndarray]:
+        """(Jacobians (6, nv), columns) as the objectives' kernels read the frame's rows: the joints' world Jacobian and
+        the frame's support, or the frame's own world-aligned Jacobian and every column."""
+        if self.joint is None:
+            return state.jacobian(self.frame_id), self.columns
+        return state.joint_arrays(self.joint)[0], self.columns
+
     def arrays(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, bool]:
         """(R (3, 3), t (3,), placement (4, 4), Jacobians (6, nv), columns, at the joint) as the objectives' kernels
         read them: the joint's placement and the joints' world Jacobian (at the joint: True), or the frame's pose and
@@ -134,8 +141,8 @@ class VehicleAttitude(Inequality):
         x, y, z = frame.z_axis(state)  # the body z axis in world axes
         tilt = _tilt(z)
         kernel = _TILT_ROWS.function or _TILT_ROWS.load()
-        kernel(x, y, tilt, *frame.arrays(state)[3:5], LEVEL_TILT, self._bounds, self.gain, self._step, row,
-               activation, reference)
+        kernel(x, y, tilt, *frame.jacobians(state), LEVEL_TILT, self._bounds, self.gain, self._step, row, activation,
+               reference)
         return tilt
 
 
