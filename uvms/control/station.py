@@ -133,6 +133,7 @@ class ActuatedKinematics:
         self.base_placement = pin.SE3.Identity() if base_placement is None else base_placement.copy()
         self._placement = (self.base_placement.rotation.copy(), self.base_placement.translation.copy())
         self._unbounded = (np.empty(6), np.empty(6))  # the clip's bounds when none are given (not read)
+        self._joint_rates = np.empty(6)  # nu_pose in the vehicle joint's axes: read by the step's solves alone
         self._vehicle_reference, self._vehicle_measured = VehicleTask.at_rest(robot), VehicleTask.at_rest(robot)
         levels = [list(level) for level in inequalities]
         tightened = [objective for level in levels for objective in level if objective.collision]
@@ -195,10 +196,10 @@ class ActuatedKinematics:
     def _vehicle_objective(self, joint_rotation: np.ndarray, joint_translation: np.ndarray,
                            bounds: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, np.ndarray]:
         """(nu_pose (6,) of the base frame of the vehicle joint placed at (R (3, 3), p (3,)), within ``bounds`` when
-        given; that twist in the vehicle joint's axes (6,)): the pose controller's law
+        given; that twist in the vehicle joint's axes (6,), this object's buffer until the next call): the pose law
         (:func:`~uvms.control.vehicle.pose_velocity_reference`), ``np.clip`` and ``base_placement.act`` in one
         compiled call (:func:`uvms.numerics._kernels.vehicle.vehicle_objective_into`: their numbers)."""
-        nu, joint_rates = np.empty(6), np.empty(6)  # new: a row keeps nu_pose
+        nu, joint_rates = np.empty(6), self._joint_rates  # nu new: a row keeps nu_pose
         pose, target = self.pose, self.vehicle_target
         lower, upper = self._unbounded if bounds is None else bounds
         (_VEHICLE_OBJECTIVE.function or _VEHICLE_OBJECTIVE.load())(

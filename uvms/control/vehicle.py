@@ -263,10 +263,10 @@ class VehicleVelocityController:
                        fins: np.ndarray | None = None) -> np.ndarray:
         """The wrench (6,) [N, N m] base frame the actuators give at the measured thrusts (n,) [N] and fin angles (m,)
         [rad] (B f, plus the fins' lift and drag at the measured velocity through the water the model knows)."""
-        allocator = self.allocator
+        allocator = self.allocator  # ndarray.dot: the BLAS call of ``@``, its numbers, without the ufunc's dispatch
         if not isinstance(allocator, FinAllocator):
-            return allocator.matrix @ thrusts
-        wrench = allocator.thrusters.matrix @ thrusts
+            return allocator.matrix.dot(thrusts)
+        wrench = allocator.thrusters.matrix.dot(thrusts)
         if fins is not None and len(allocator.fins):
             wrench = wrench + allocator.fins.wrench(base_twist(self.model, v), water_in_base(self.model, q), fins)
         return wrench

@@ -30,6 +30,8 @@ from .structure import (
 )
 from .vehicle_pose import VehicleAccessors
 
+#: The dtype of the float vectors the checks pass as they are (numpy's float64 is one object).
+FLOAT64 = np.dtype(np.float64)
 #: Default task axes by base type (the facts live in `uvms.robot.bases`).
 DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
 
@@ -222,15 +224,17 @@ class Robot(VehicleAccessors):
         return array
 
     def _check_vector(self, vector: np.ndarray, size: int, what: str, check_manifold: bool = False) -> np.ndarray:
-        if (type(vector) is np.ndarray and vector.dtype == np.float64 and vector.shape == (size,)
-                and all(map(math.isfinite, vector.tolist()))):
-            array = vector  # the common case: a float vector of the size, read once as Python floats
+        # the common case, a float vector of the size, is read once as Python floats; anything else is converted
+        common = type(vector) is np.ndarray and vector.dtype is FLOAT64 and vector.shape == (size,)
+        values = vector.tolist() if common else None
+        if values is not None and all(map(math.isfinite, values)):
+            array = vector
         else:
             array = finite_array(vector, what, (size,), error=ConfigurationError)
+            values = array.tolist()
         if check_manifold:
             for joint_name, part in self._unit_slices:
-                values = array[part]
-                norm = math.sqrt(values.dot(values))  # numpy's norm of a vector, in the same operations
+                norm = math.hypot(*values[part])  # a threshold on the floats read (no numpy call per part)
                 if abs(norm - 1.0) > 1e-6:
                     self._refuse_rotation_part(what, joint_name, norm)
         return array

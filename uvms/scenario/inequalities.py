@@ -167,8 +167,8 @@ class ObjectiveRecorder:
             levels = activation.tolist()
             activations += levels
             is_active = reported.get(objective.name)
-            # an activation is in [0, 1]: its largest > 0 is (activation > 0).any(), without numpy's dispatch
-            active.append(max(levels, default=0.0) > 0.0 if is_active is None else is_active)
+            # an activation is in [0, 1]: one non-zero is (activation > 0).any(), without numpy's dispatch
+            active.append(any(levels) if is_active is None else is_active)
         return {"objective_value": values, "objective_activation": activations, "objective_active": active,
                 "objective_pair": np.concatenate(pairs).astype(int) if pairs else NO_PAIRS,
                 "speed_ratio": self._speed_ratio(v)}

@@ -101,10 +101,6 @@ class ActuatedPlant:
         :func:`uvms.numerics._kernels.plant_stage.clipped`)."""
         return (_CLIPPED.function or _CLIPPED.load())(np.asarray(command, dtype=float), self.lower, self.upper)
 
-    def wrench(self, thrusts: np.ndarray) -> np.ndarray:
-        """B f (6,) [N, N m], FLU at the base frame origin."""
-        return self.matrix @ thrusts
-
     def system(self, controller: Controller, *, dt: float, control_dt: float = 0.0) -> ActuatedPlantSystem:
         """This plant under ``controller`` (``command(state, t) -> Command``), asked once per step of dt [s].
 
@@ -270,6 +266,8 @@ class ActuatedPlantSystem:
         self._rows_kernel = actuation_rows
         self._lag = (self.thrusters.matrix, self.thrusters.time_constants)  # B (6, n), tau (n,): the stage's thrusters
         self._no_fins = np.zeros(0)
+        self._held = [np.zeros(self.plant.n_arm), np.zeros(actuated.n)]  # the step's [u, sat(f_cmd)], held
+        self._stage: Callable | None = None  # the stage reading them, made at the first step (numba loads there)
 
     def initial_state(self, q0: np.ndarray, v0: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """(q0, [v0, thrusts0, fin angles at rest]) checked (v0 None: rest; thrusts0 the ActuatedPlant's).
@@ -303,10 +301,8 @@ class ActuatedPlantSystem:
                 refuse_fields(command, TAKEN, "an actuated plant (joint velocity servos, thrusters, fins)", t)
         arm = np.zeros(self.plant.n_arm) if command.arm is None else np.asarray(command.arm, dtype=float)
         thrust = np.zeros(self.thrusters.n) if command.thrust is None else np.asarray(command.thrust, dtype=float)
-        if command.fins is not None:
-            fins = np.asarray(command.fins, dtype=float)
-        else:  # at rest (none: one empty array)
-            fins = self.thrusters.fins.held if self.m else self._no_fins
+        rest = self.thrusters.fins.held if self.m else self._no_fins  # fins not commanded (none: one empty array)
+        fins = rest if command.fins is None else np.asarray(command.fins, dtype=float)
         actuated, saturated = self.thrusters, np.empty(self.thrusters.n)
         if arm.shape != (self.plant.n_arm,) or thrust.shape != (actuated.n,) or fins.shape != (self.m,) \
                 or not ((_FINITE_CLIPPED.function or _FINITE_CLIPPED.load())(arm, thrust, actuated.lower,
@@ -315,6 +311,8 @@ class ActuatedPlantSystem:
             raise UVMSError(f"the controller must return {self.plant.n_arm} finite joint velocities, "
                             f"{self.thrusters.n} finite thrusts [N] and {self.m} fin angles [rad], got {arm!r}, "
                             f"{thrust!r} and {fins!r} at t = {t:.6g} s")
+        if arm is command.arm and thrust is command.thrust and fins is command.fins and command.info is not None:
+            return command, saturated  # as it came: its fields the checked arrays
         return Command(arm=arm, thrust=thrust, fins=fins, info={} if command.info is None else command.info), saturated
 
     def _rate(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
@@ -346,13 +344,16 @@ class ActuatedPlantSystem:
         return ActuatedSample(rate, command, saturated, dynamics, fins, wrench)
 
     def stage_rate(self, sample: ActuatedSample) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
-        """(t, q, x) -> (v, [v', f']) with the step's commands held; without fins the plant's prepared stage
-        (:meth:`uvms.dynamics.plant.plant.Plant.actuated_stage`: the same numbers, its arguments bound once)."""
+        """(t, q, x) -> (v, [v', f']) with the step's commands held (until the next call); without fins the plant's
+        stage made once, pointed at them (:meth:`uvms.dynamics.plant.plant.Plant.actuated_stage`: the same numbers)."""
         arm, thrust_command, fin_command = sample.command.arm, sample.thrust_command, sample.fin_command
         if self.m:  # the fins' wrench and rate at each stage
             return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command, False)[1]
-        stage, nv = self.plant.actuated_stage(arm, thrust_command, self._lag), self.nv
-        return lambda t, q, x: (x[:nv], stage(q, x))
+        self._held[0], self._held[1] = arm, thrust_command
+        if self._stage is None:
+            stage, nv = self.plant.actuated_stage(self._held, self._lag), self.nv
+            self._stage = lambda t, q, x: (x[:nv], stage(q, x))
+        return self._stage
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:
         """The plant series of a row (v, command, torques; energies, momentum and the damping power come from the

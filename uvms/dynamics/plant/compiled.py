@@ -99,17 +99,19 @@ class CompiledPass:
             raise singular_system(self.nb)
         return PlantDynamics(rates[:nv], torque, mass)
 
-    def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
+    def actuated_stage(self, held: list[np.ndarray], matrix: np.ndarray,
                        time_constants: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """(q, x) -> [v'; f'] (len(x),) (a new array) of :meth:`actuated_rate_into` without fins, the commands
-        u (n_arm,) and sat(f_cmd) (n,) [N] held and B (6, n), tau (n,) [s] bound: an integrator's stage (Mbar and
-        nbar in the pass's own buffers)."""
+        """(q, x) -> [v'; f'] (len(x),) (a new array) of :meth:`actuated_rate_into` without fins, with B (6, n) and
+        tau (n,) [s] bound and the commands read from ``held`` = [u (n_arm,), sat(f_cmd) (n,) [N]] at each call (the
+        caller's list, which it points at each step's commands): an integrator's stage, made once per system (Mbar
+        and nbar in the pass's own buffers)."""
         kernel, inputs, no_wrench, (mass, bias_forces) = (self.kernels.actuated_rate_into, self.inputs, self.no_wrench,
                                                          self.scratch)
         nb, nv, empty = self.nb, self.nv, np.empty
 
         def stage(q: np.ndarray, x: np.ndarray) -> np.ndarray:
             rates = empty(len(x))
+            arm, thrust_command = held
             if not kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, empty(6),
                           mass, bias_forces, rates):
                 raise singular_system(nb)

@@ -276,12 +276,13 @@ class Plant(ConservedQuantities):
         compiled.actuated_rate_into(q, x, arm, thrust_command, *thrusters, extra, wrench, *compiled.scratch, rates)
         return None
 
-    def actuated_stage(self, arm: np.ndarray, thrust_command: np.ndarray,
+    def actuated_stage(self, held: list[np.ndarray],
                        thrusters: tuple[np.ndarray, np.ndarray]) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
         """(q, x) -> [v'; f'] (a new array) of :meth:`actuated_rate_into` without fins or torques, the same numbers,
-        with the step's commands held and the thrusters' (B, tau) bound once: an integrator's stage
+        the commands read from ``held`` = [u (n_arm,), sat(f_cmd) (n,) [N]] (the caller points it at each step's
+        commands) and the thrusters' (B, tau) bound once: an integrator's stage
         (:meth:`~uvms.dynamics.plant.compiled.CompiledPass.actuated_stage`)."""
-        return self._compiled().actuated_stage(arm, thrust_command, *thrusters)
+        return self._compiled().actuated_stage(held, *thrusters)
 
     def _mass_and_bias(self, q: np.ndarray, v: np.ndarray,
                        body_wrench: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
