@@ -178,7 +178,7 @@ class CoordinatedControl:
     Args:
         robot: a floating-base Robot (the controller's kinematics).
         velocity: the vehicle velocity controller (its model and allocation).
-        kinematic: the kinematic layer (an ActuatedKinematics: ``reference``, ``arm_rates``, ``error_series``).
+        kinematic: the kinematic layer (an ActuatedKinematics: ``reference``, ``coordinated``, ``error_series``).
         dt: control period [s] (the simulation step).
         coordination: re-solve the arm with the measured vehicle velocity.
         saturation_feedback: bound the vehicle's part of the reference by what the allocation achieved.
@@ -255,8 +255,11 @@ class CoordinatedControl:
         if self.saturation_feedback and (self.ratio < 1.0).any():
             nu = base_twist(model, v)
             bounds = self.vehicle_bounds(nu, self.kinematic.vehicle_objective(q))
-        reference, _ = self.kinematic.reference(t, q, bounds)
-        arm = self.kinematic.arm_rates(t, q, v[:nb]) if self.coordination else reference[nb:]
+        if self.coordination:  # the arm solved again with the measured vehicle velocity, at the same configuration
+            reference, arm = self.kinematic.coordinated(t, q, v[:nb], bounds)
+        else:
+            reference, _ = self.kinematic.reference(t, q, bounds)
+            arm = reference[nb:]
         self.kinematic.step_done()
         # the rates clipped to the arm's speed limits, the servos' lag inverted over the step
         # (:func:`~uvms.dynamics.plant.actuated.lag_command`) and the acceleration the servo the model knows gives

@@ -221,10 +221,12 @@ class ActuatedKinematics:
             level = self._vehicle_reference if reference else self._vehicle_measured
             level.velocity_values[:] = vehicle
             solver = self.reference_solver if reference else self.arm_solver
-            # both solves share the objectives and the task (not the vehicle levels): evaluated once per step
-            result = (solver.velocity(configuration, shared=self._rows) if getattr(solver, "shares_rows", False)
-                      else solver.velocity(configuration))
-            v = result.v
+            # both solves share the objectives and the task (not the vehicle levels): evaluated once per step; the
+            # arm's solve gives v alone (no diagnostics: nothing reads them)
+            solve = solver.velocity if reference else solver.stage_velocity
+            shares = getattr(solver, "shares_rows", False)
+            answer = solve(configuration, shared=self._rows) if shares else solve(configuration)
+            result, v = (answer, answer.v) if reference else (None, answer)
         if reference and self.vehicle_given:
             v = v.copy()
             v[:nb] += self._vehicle_share(configuration, v)
@@ -242,6 +244,21 @@ class ActuatedKinematics:
                   bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]:
         """v_ref (nv,) (vehicle part in the vehicle joint's axes) and {"nu_pose": (6,) base frame, "solver": the
         SolverResult or None} at (t, q); ``bounds``: the vehicle velocities the thrusters can give (base frame)."""
+        v, result, nu_pose = self._reference(t, q, bounds)
+        return v, {"nu_pose": nu_pose, "solver": result}
+
+    def coordinated(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray,
+                    bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(v_ref (nv,), the arm rates (n_arm,)): :meth:`reference` at (t, q), then :meth:`arm_rates` with the vehicle
+        velocity (n_vehicle,) (joint axes) held, at the configuration the reference moved to q (a coordinated step's
+        two solves; the same numbers as the two calls)."""
+        v, _, _ = self._reference(t, q, bounds)
+        arm, _ = self._solve(self._configuration, vehicle_velocity, reference=False)
+        return v, arm[self.robot.n_vehicle:]
+
+    def _reference(self, t: float, q: np.ndarray,
+                   bounds: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, object, np.ndarray]:
+        """(v_ref (nv,), the SolverResult or None, nu_pose (6,)) of :meth:`reference`."""
         self.robot.check_configuration(q)  # the step's q, checked once (the configuration takes it unchecked)
         configuration = self._at(t, q)
         # the base frame's pose from the step's kinematics (the vehicle joint's placement: base_pose's numbers); the
@@ -254,7 +271,7 @@ class ActuatedKinematics:
         v, result = self._solve(configuration, vehicle, reference=True)
         if self.tightening is not None:  # what the reference, which keeps the objectives, predicts for the next step
             self.tightening.predict(t, v)
-        return v, {"nu_pose": nu_pose, "solver": result}
+        return v, result, nu_pose
 
     def step_done(self) -> None:
         """The step's solves are done: the objectives' nominal bounds back (recorders read them). Rows evaluated

@@ -85,10 +85,11 @@ class Solver(ABC):
             SolverInputError: not a Configuration of this solver's robot.
         """
 
-    def stage_velocity(self, configuration: Configuration) -> np.ndarray:
+    def stage_velocity(self, configuration: Configuration, shared: Any = None) -> np.ndarray:
         """v (nv,) of :meth:`velocity` alone, the same numbers, without its diagnostics: what an integrator's stage
-        reads (a solver with a cheaper way to v alone overrides it)."""
-        return self.velocity(configuration).v
+        reads (a solver with a cheaper way to v alone overrides it); ``shared``: as :meth:`velocity` takes it, for a
+        solver that :attr:`shares_rows`."""
+        return (self.velocity(configuration) if shared is None else self.velocity(configuration, shared=shared)).v
 
     def step(self, configuration: Configuration, dt: float) -> SolverResult:
         """Solve at ``configuration``, then move it along v for dt [s] (explicit Euler on the manifold, in place).

@@ -220,6 +220,21 @@ class SetBasedSolver(Solver):
         """The set-based velocity at ``configuration`` and its diagnostics (sigma_min, the residuals and the
         objectives' statuses computed when read); ``sigma_min`` that of the last level holding equality tasks;
         ``shared``: the items' rows already evaluated at ``configuration`` (:meth:`HierarchyPlan.evaluate`)."""
+        v, hierarchy, sigmas, used, scales, ratio = self._solve(configuration, shared)
+        return SolverResult(v, lambda: last_task_sigma(hierarchy, sigmas), used, lambda: solved_rows(hierarchy),
+                            free_floating=self.free_floating, scales=scales,
+                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio,
+                            objectives=hierarchy.objective_rows)
+
+    def stage_velocity(self, configuration: Configuration, shared: ItemRows | None = None) -> np.ndarray:
+        """v (nv,) of :meth:`velocity` alone, the same numbers, without its diagnostics (an integrator's stage, a
+        coordinated step's second solve)."""
+        return self._solve(configuration, shared)[0]
+
+    def _solve(self, configuration: Configuration,
+               shared: ItemRows | None) -> tuple[np.ndarray, Hierarchy, np.ndarray, float, tuple[float, ...], float]:
+        """(v (nv,), the hierarchy, the levels' sigma_min (L,), the largest damping, the levels' scales, the speed
+        ratio of the solved columns) at ``configuration``."""
         state = self._checked(configuration)
         plan = self.plan
         hierarchy = plan.evaluate(state, shared)
@@ -229,11 +244,7 @@ class SetBasedSolver(Solver):
         else:
             contributions, sigmas, used = self.icat.solve(hierarchy, plan.offsets, plan.equality)
             solved, scales, ratio = saturate(hierarchy, contributions, state.q, self._box_constants)
-        v = hierarchy.velocity(solved)
-        return SolverResult(v, lambda: last_task_sigma(hierarchy, sigmas), used, lambda: solved_rows(hierarchy),
-                            free_floating=self.free_floating, scales=scales,
-                            speed_ratio=speed_ratio(v, self.maximum) if self.free_floating else ratio,
-                            objectives=hierarchy.objective_rows)
+        return hierarchy.velocity(solved), hierarchy, sigmas, used, scales, ratio
 
 
 def saturate(hierarchy: Hierarchy, contributions: np.ndarray, q: np.ndarray,
