@@ -89,6 +89,7 @@ class ICAT:
         from ..numerics._kernels.icat import icat_into, icat_saturated_into
 
         self._icat_into, self._icat_saturated_into = icat_into, icat_saturated_into
+        self._scratch = np.empty((0, size)), np.empty(0)  # solve_saturated's buffers, sized at its first call
 
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
@@ -142,8 +143,9 @@ class ICAT:
             NumericalError: an inverse did not converge (a non-finite level).
         """
         count = equality.size
-        contributions, sigmas = np.empty((count, self.size)), np.empty(count)
-        total, scales = np.empty(self.size), np.empty(count)
+        if self._scratch[1].size != count:  # the levels' contributions and scales: written, read here alone
+            self._scratch = np.empty((count, self.size)), np.empty(count)
+        (contributions, scales), sigmas, total = self._scratch, np.empty(count), np.empty(self.size)
         jacobians = hierarchy.solved
         converged, largest, ratio = self._icat_saturated_into(jacobians, hierarchy.references, hierarchy.activations,
                                                               offsets, equality, *self._kernel_constants, q, *box,

@@ -66,6 +66,9 @@ class VehicleTask(Task):
         # the imposed velocities' rows (k, nv), constant: a task of velocities alone reads no pose
         self._velocity_rows = np.zeros((len(self.velocity_indices), robot.nv))
         self._velocity_rows[np.arange(len(self.velocity_indices)), self.velocity_indices] = 1.0
+        self._velocity_rows.flags.writeable = False  # handed out as they are (as a joint task's rows)
+        self._no_error = np.zeros(self.dim)  # a task of velocities alone: read-only, handed out
+        self._no_error.flags.writeable = False
 
     @classmethod
     def at_rest(cls, robot: Robot) -> VehicleTask:
@@ -106,9 +109,10 @@ class VehicleTask(Task):
 
     def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(jacobian (k, nv), error (k,), feedforward (k,)); velocities alone (no heading, no depth): the constant
-        rows, no error and the imposed velocities, without reading the vehicle's pose."""
+        rows and zero error (read-only arrays of the task) and the imposed velocities, without reading the vehicle's
+        pose."""
         if self.heading is None and self.depth is None:
-            return self._velocity_rows.copy(), np.zeros(self.dim), self.velocity_values.copy()
+            return self._velocity_rows, self._no_error, self.velocity_values.copy()
         return self.jacobian(state), self.error(state), self.feedforward(state)
 
     def feedforward(self, state: Configuration) -> np.ndarray:  # noqa: ARG002 - constant

@@ -107,12 +107,12 @@ class CompiledPass:
         and nbar in the pass's own buffers)."""
         kernel, inputs, no_wrench, (mass, bias_forces) = (self.kernels.actuated_rate_into, self.inputs, self.no_wrench,
                                                          self.scratch)
-        nb, nv, empty = self.nb, self.nv, np.empty
+        nb, nv, empty, wrench = self.nb, self.nv, np.empty, np.empty(6)  # the wrench: written, not read
 
         def stage(q: np.ndarray, x: np.ndarray) -> np.ndarray:
             rates = empty(len(x))
             arm, thrust_command = held
-            if not kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, empty(6),
+            if not kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, wrench,
                           mass, bias_forces, rates):
                 raise singular_system(nb)
             return rates
