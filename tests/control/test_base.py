@@ -68,7 +68,7 @@ def test_clik_on_the_actuated_chain_is_the_solver_with_the_vehicle_as_fixed_colu
     former = arm_rates_for_task(jacobian, error + feedforward, nu, 6, damping=0.01)
     assert np.linalg.norm(former) > 1e-3
     np.testing.assert_allclose(arm, former, rtol=1e-12, atol=1e-15)
-    v, result = kinematics._solve(kinematics._configuration, nu, reference=False)
+    v, result = kinematics._solve(kinematics._configuration, nu, reference=False, diagnostics=True)
     assert np.array_equal(v[:6], nu) and isinstance(result.sigma_min, float)
     assert kinematics.reference_solver is kinematics.arm_solver and kinematics.reference_solver.free_floating
 
@@ -87,7 +87,7 @@ def test_the_chain_reads_the_capability_from_the_class_not_the_class_itself(blue
     for cls in (PrioritySolver, StackingPriority):
         kinematics, q = chain_kinematics(blue, SolverFactory(cls, blue, {"damping": 0.01, "priority": "classic"}))
         kinematics.arm_rates(0.7, q, nu)
-        parts[cls] = kinematics._solve(kinematics._configuration, nu, reference=False)[0]
+        parts[cls] = kinematics._solve(kinematics._configuration, nu, reference=False, diagnostics=False)[0]
     assert np.array_equal(parts[StackingPriority][:6], nu)
     assert 0.0 < np.abs(parts[PrioritySolver][:6] - nu).max() <= 1e-2 * np.linalg.norm(nu)
 

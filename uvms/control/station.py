@@ -17,9 +17,9 @@ Per control step (period dt), from the measured (q, v):
 A solver that does not hold its levels by priority (:attr:`~uvms.solvers.base.Solver.holds_priorities` False:
 CLIK stacks them and trades them off) is given the vehicle's velocity nu as fixed columns instead: built free
 floating on a vehicle held still (momentum rows [I | 0], so its generalized Jacobian is the arm's columns J_a),
-on the task whose feedforward is less what the vehicle gives (:class:`GivenColumns`), it solves the arm alone,
-qd_arm = J_a^# (K e + xdot_d - J_v nu) for CLIK, and the vehicle's part is nu. Where the vehicle's velocity is
-given to the task (fixed columns, or a solver that puts the pose objective above the task), the vehicle's
+on the task whose feedforward is less what the vehicle gives (:class:`~uvms.tasks.task.GivenColumns`), it solves the
+arm alone, qd_arm = J_a^# (K e + xdot_d - J_v nu) for CLIK, and the vehicle's part is nu. Where the vehicle's velocity
+is given to the task (fixed columns, or a solver that puts the pose objective above the task), the vehicle's
 reference then adds the part of the task the arm cannot give: of r = K e + xdot_d - J v, the part r_v outside
 the range of the arm's columns, nu_ref = nu_pose + J_v^# r_v, translation first
 (:func:`uvms.control.coordination.vehicle_rates_for_task`). An able arm leaves none; a vehicle without an arm
@@ -53,7 +53,7 @@ from ..solvers.item_rows import ItemRows
 from ..solvers.stack import stacked_terms
 from ..tasks.frame import FrameTask
 from ..tasks.objectives import JointVelocityLimits
-from ..tasks.task import Task
+from ..tasks.task import GivenColumns
 from ..tasks.vehicle import VehicleTask
 from ..trajectory import VelocityRamps
 from .coordination import CoordinatedControl, vehicle_rates_for_task
@@ -65,31 +65,6 @@ from .vehicle import VehiclePoseController, VehicleVelocityController
 #: The vehicle's pose objective in one compiled call (:func:`uvms.numerics._kernels.vehicle.vehicle_objective_into`,
 #: numba loaded at the first step).
 _VEHICLE_OBJECTIVE = Kernel("vehicle", "vehicle_objective_into")
-
-
-class GivenColumns(Task):
-    """A task whose first columns' velocity is given: its terms with the feedforward less what they give,
-    xdot_d - J[:, :n] nu (the task the arm is left with when the vehicle's velocity nu is fixed).
-
-    Args:
-        task: the task; count: the given columns n (the vehicle's).
-
-    Attributes:
-        velocity: nu (n,) the given columns' velocity, set before each solve.
-    """
-
-    def __init__(self, task: Task, count: int) -> None:
-        self.task, self.dim, self.velocity = task, task.dim, np.zeros(count)
-
-    def error(self, state: Configuration) -> np.ndarray:
-        return self.task.error(state)
-
-    def jacobian(self, state: Configuration) -> np.ndarray:
-        return self.task.jacobian(state)
-
-    def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        jacobian, error, feedforward = self.task.terms(state)
-        return jacobian, error, feedforward - jacobian[:, :self.velocity.size] @ self.velocity
 
 
 class ActuatedKinematics:
@@ -208,25 +183,27 @@ class ActuatedKinematics:
             bounds is not None, nu, joint_rates)
         return nu, joint_rates
 
-    def _solve(self, configuration: Configuration, vehicle: np.ndarray, reference: bool) -> tuple[np.ndarray, object]:
-        """v (nv,) with the vehicle's velocity (joint axes) given: above the task (reference) or on top."""
+    def _solve(self, configuration: Configuration, vehicle: np.ndarray, reference: bool,
+               diagnostics: bool) -> tuple[np.ndarray, object]:
+        """(v (nv,), the SolverResult or None) with the vehicle's velocity (joint axes) given: above the task
+        (reference) or on top; without ``diagnostics`` the solver gives v alone (the same numbers)."""
         nb = self.robot.n_vehicle
         if not self.task_reference.moving:
             return np.concatenate([vehicle, np.zeros(self.robot.n_arm)]), None
         if self._given is not None:  # fixed columns: the arm solved with the vehicle's velocity given
             self._given.velocity[:] = vehicle
-            result = self.reference_solver.velocity(configuration)
-            v = np.concatenate([vehicle, result.v[nb:]])
+            solver = self.reference_solver
+            result = solver.velocity(configuration) if diagnostics else None
+            v = np.concatenate([vehicle, (solver.stage_velocity(configuration) if result is None else result.v)[nb:]])
         else:
             level = self._vehicle_reference if reference else self._vehicle_measured
             level.velocity_values[:] = vehicle
             solver = self.reference_solver if reference else self.arm_solver
-            # both solves share the objectives and the task (not the vehicle levels): evaluated once per step; the
-            # arm's solve gives v alone (no diagnostics: nothing reads them)
-            solve = solver.velocity if reference else solver.stage_velocity
+            # both solves share the objectives and the task (not the vehicle levels): evaluated once per step
+            solve = solver.velocity if diagnostics else solver.stage_velocity
             shares = getattr(solver, "shares_rows", False)
             answer = solve(configuration, shared=self._rows) if shares else solve(configuration)
-            result, v = (answer, answer.v) if reference else (None, answer)
+            result, v = (answer, answer.v) if diagnostics else (None, answer)
         if reference and self.vehicle_given:
             v = v.copy()
             v[:nb] += self._vehicle_share(configuration, v)
@@ -244,7 +221,7 @@ class ActuatedKinematics:
                   bounds: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, dict]:
         """v_ref (nv,) (vehicle part in the vehicle joint's axes) and {"nu_pose": (6,) base frame, "solver": the
         SolverResult or None} at (t, q); ``bounds``: the vehicle velocities the thrusters can give (base frame)."""
-        v, result, nu_pose = self._reference(t, q, bounds)
+        v, result, nu_pose = self._reference(t, q, bounds, diagnostics=True)
         return v, {"nu_pose": nu_pose, "solver": result}
 
     def coordinated(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray,
@@ -252,13 +229,13 @@ class ActuatedKinematics:
         """(v_ref (nv,), the arm rates (n_arm,)): :meth:`reference` at (t, q), then :meth:`arm_rates` with the vehicle
         velocity (n_vehicle,) (joint axes) held, at the configuration the reference moved to q (a coordinated step's
         two solves; the same numbers as the two calls)."""
-        v, _, _ = self._reference(t, q, bounds)
-        arm, _ = self._solve(self._configuration, vehicle_velocity, reference=False)
+        v, _, _ = self._reference(t, q, bounds, diagnostics=False)
+        arm, _ = self._solve(self._configuration, vehicle_velocity, reference=False, diagnostics=False)
         return v, arm[self.robot.n_vehicle:]
 
-    def _reference(self, t: float, q: np.ndarray,
-                   bounds: tuple[np.ndarray, np.ndarray] | None) -> tuple[np.ndarray, object, np.ndarray]:
-        """(v_ref (nv,), the SolverResult or None, nu_pose (6,)) of :meth:`reference`."""
+    def _reference(self, t: float, q: np.ndarray, bounds: tuple[np.ndarray, np.ndarray] | None,
+                   diagnostics: bool) -> tuple[np.ndarray, object, np.ndarray]:
+        """(v_ref (nv,), the SolverResult (None without ``diagnostics``: v alone solved), nu_pose (6,))."""
         self.robot.check_configuration(q)  # the step's q, checked once (the configuration takes it unchecked)
         configuration = self._at(t, q)
         # the base frame's pose from the step's kinematics (the vehicle joint's placement: base_pose's numbers); the
@@ -268,7 +245,7 @@ class ActuatedKinematics:
         if self.tightening is not None:  # the bounds moved for this step's solves, until :meth:`asked`
             self.tightening.measure(t, configuration)
         self._rows.clear()  # this step's rows, with this step's bounds
-        v, result = self._solve(configuration, vehicle, reference=True)
+        v, result = self._solve(configuration, vehicle, reference=True, diagnostics=diagnostics)
         if self.tightening is not None:  # what the reference, which keeps the objectives, predicts for the next step
             self.tightening.predict(t, v)
         return v, result, nu_pose
@@ -292,7 +269,7 @@ class ActuatedKinematics:
 
     def arm_rates(self, t: float, q: np.ndarray, vehicle_velocity: np.ndarray) -> np.ndarray:
         """The arm rates (n_arm,) of the same solver with the vehicle velocity (n_vehicle,) (joint axes) held."""
-        v, _ = self._solve(self._at(t, q), vehicle_velocity, reference=False)
+        v, _ = self._solve(self._at(t, q), vehicle_velocity, reference=False, diagnostics=False)
         return v[self.robot.n_vehicle:]
 
     def error_series(self, t: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:

@@ -1,4 +1,4 @@
-"""The Task interface."""
+"""The Task interface, and a task with some of its columns' velocity given (:class:`GivenColumns`)."""
 
 from __future__ import annotations
 
@@ -48,3 +48,28 @@ def as_task_list(tasks: Task | Sequence[Task]) -> list[Task]:
     if not task_list or not all(isinstance(task, Task) for task in task_list):
         raise SolverInputError(f"expected a Task or a sequence of Tasks, got {tasks!r}")
     return task_list
+
+
+class GivenColumns(Task):
+    """A task whose first columns' velocity is given: its terms with the feedforward less what they give,
+    xdot_d - J[:, :n] nu (the task the arm is left with when the vehicle's velocity nu is fixed).
+
+    Args:
+        task: the task; count: the given columns n (the vehicle's).
+
+    Attributes:
+        velocity: nu (n,) the given columns' velocity, set before each solve.
+    """
+
+    def __init__(self, task: Task, count: int) -> None:
+        self.task, self.dim, self.velocity = task, task.dim, np.zeros(count)
+
+    def error(self, state: Configuration) -> np.ndarray:
+        return self.task.error(state)
+
+    def jacobian(self, state: Configuration) -> np.ndarray:
+        return self.task.jacobian(state)
+
+    def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        jacobian, error, feedforward = self.task.terms(state)
+        return jacobian, error, feedforward - jacobian[:, :self.velocity.size] @ self.velocity

@@ -364,7 +364,8 @@ class ActuatedPlantSystem:
             fin_wrench = self.thrusters.fin_wrench(q, v, angles)
             row.update(fin_angles=angles.copy(), fin_command=sample.fin_command, fin_wrench=fin_wrench,
                        fin_power=float(fin_wrench @ base_twist(self.plant, v)))
-        row.update(thrusts=thrusts.copy(), thrust_command=sample.thrust_command, **sample.command.info)
+        row["thrusts"], row["thrust_command"] = thrusts.copy(), sample.thrust_command
+        row.update(sample.command.info)
         return row
 
     def check(self, t: float, q: np.ndarray, x: np.ndarray, dt: float) -> None:
