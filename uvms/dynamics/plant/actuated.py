@@ -225,9 +225,9 @@ def damping_power(plant: Plant, q: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ the system of the one loop
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class ActuatedSample:
-    """The plant at the start of a step: the held commands and the dynamics they give.
+    """The plant at the start of a step: the held commands and the dynamics they give (plain slots, never changed).
 
     Attributes:
         rate: (v (nv,), [v' (nv,), f' (n,), delta' (m,)]); command: the controller's Command, checked (arm,
@@ -283,8 +283,7 @@ class ActuatedPlantSystem:
 
     def _state(self, q: np.ndarray, x: np.ndarray) -> State:
         """What the controller measures: (q, v, thrusts, fin angles)."""
-        v, thrusts, angles = self._split(x)
-        return State(q, v, thrusts, angles)
+        return State(q, *self._split(x))
 
     def _command(self, t: float, q: np.ndarray, x: np.ndarray) -> tuple[Command, np.ndarray]:
         """The controller's Command at (t, q, x), its arm, thrust and fins filled (zero when not sent), checked, and
@@ -351,8 +350,7 @@ class ActuatedPlantSystem:
             return lambda t, q, x: self._rate(q, x, arm, thrust_command, fin_command, False)[1]
         self._held[0], self._held[1] = arm, thrust_command
         if self._stage is None:
-            stage, nv = self.plant.actuated_stage(self._held, self._lag), self.nv
-            self._stage = lambda t, q, x: (x[:nv], stage(q, x))
+            self._stage = self.plant.actuated_stage(self._held, self._lag)
         return self._stage
 
     def record(self, t: float, q: np.ndarray, x: np.ndarray, sample: ActuatedSample) -> dict:

@@ -100,22 +100,23 @@ class CompiledPass:
         return PlantDynamics(rates[:nv], torque, mass)
 
     def actuated_stage(self, held: list[np.ndarray], matrix: np.ndarray,
-                       time_constants: np.ndarray) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """(q, x) -> [v'; f'] (len(x),) (a new array) of :meth:`actuated_rate_into` without fins, with B (6, n) and
-        tau (n,) [s] bound and the commands read from ``held`` = [u (n_arm,), sat(f_cmd) (n,) [N]] at each call (the
-        caller's list, which it points at each step's commands): an integrator's stage, made once per system (Mbar
-        and nbar in the pass's own buffers)."""
+                       time_constants: np.ndarray) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
+        """(t, q, x) -> (v, [v'; f']) (v the view x[:nv], the rates a new array (len(x),)) of
+        :meth:`actuated_rate_into` without fins, with B (6, n) and tau (n,) [s] bound and the commands read from
+        ``held`` = [u (n_arm,), sat(f_cmd) (n,) [N]] at each call (the caller's list, which it points at each step's
+        commands): an integrator's stage (:data:`uvms.numerics.integrate.Rate`), made once per system (Mbar and
+        nbar in the pass's own buffers)."""
         kernel, inputs, no_wrench, (mass, bias_forces) = (self.kernels.actuated_rate_into, self.inputs, self.no_wrench,
                                                          self.scratch)
         nb, nv, empty, wrench = self.nb, self.nv, np.empty, np.empty(6)  # the wrench: written, not read
 
-        def stage(q: np.ndarray, x: np.ndarray) -> np.ndarray:
-            rates = empty(len(x))
+        def stage(_t: float, q: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # held commands: t unread
+            rates, v = empty(len(x)), x[:nv]
             arm, thrust_command = held
-            if not kernel(*inputs(q, x[:nv], True), x, arm, thrust_command, matrix, time_constants, no_wrench, wrench,
-                          mass, bias_forces, rates):
+            if not kernel(*inputs(q, v, True), x, arm, thrust_command, matrix, time_constants, no_wrench, wrench, mass,
+                          bias_forces, rates):
                 raise singular_system(nb)
-            return rates
+            return v, rates
 
         return stage
 

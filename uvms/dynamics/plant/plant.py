@@ -277,10 +277,10 @@ class Plant(ConservedQuantities):
         return None
 
     def actuated_stage(self, held: list[np.ndarray],
-                       thrusters: tuple[np.ndarray, np.ndarray]) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-        """(q, x) -> [v'; f'] (a new array) of :meth:`actuated_rate_into` without fins or torques, the same numbers,
-        the commands read from ``held`` = [u (n_arm,), sat(f_cmd) (n,) [N]] (the caller points it at each step's
-        commands) and the thrusters' (B, tau) bound once: an integrator's stage
+                       thrusters: tuple[np.ndarray, np.ndarray]) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
+        """(t, q, x) -> (v, [v'; f']) (a new array) of :meth:`actuated_rate_into` without fins or torques, the same
+        numbers, the commands read from ``held`` = [u (n_arm,), sat(f_cmd) (n,) [N]] (the caller points it at each
+        step's commands) and the thrusters' (B, tau) bound once: an integrator's stage
         (:meth:`~uvms.dynamics.plant.compiled.CompiledPass.actuated_stage`)."""
         return self._compiled().actuated_stage(held, *thrusters)
 

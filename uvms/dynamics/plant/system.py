@@ -23,9 +23,10 @@ TAKEN = ("arm",)
 StageRate = Callable[[float, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class PlantDynamics:
-    """What the plant computes at one (q, v, u): accelerations and the motor torques that produce them.
+    """What the plant computes at one (q, v, u): accelerations and the motor torques that produce them (built at
+    every evaluation: plain attribute writes; read it, it is never changed after it is built).
 
     Attributes:
         acceleration: v' (nv,) [m/s^2, rad/s^2] (vehicle body twist rate, local; joint accelerations).
@@ -56,9 +57,10 @@ class Plant(Protocol):
     def momentum(self, q: np.ndarray, v: np.ndarray) -> np.ndarray: ...
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class PlantSample:
-    """The plant at the start of a step: the command applied from it and the dynamics it gives.
+    """The plant at the start of a step: the command applied from it and the dynamics it gives (built at every step:
+    plain attribute writes, never changed after).
 
     Attributes:
         rate: (v (nv,), v' (nv,)): the state's derivative at (q, v), the integrator's first stage.
