@@ -144,7 +144,6 @@ class ObjectiveRecorder:
         if not self.objectives:  # only speed limits: empty series of the arrays' types
             return {"objective_value": NO_VALUES, "objective_activation": NO_VALUES, "objective_active": NO_ACTIVE,
                     "objective_pair": NO_PAIRS, "speed_ratio": self._speed_ratio(v)}
-        reported = reported or {}
         state = None  # moved to q only when an objective is evaluated here
         values, activations, active, pairs = [], [], [], []  # Python floats and bools: made arrays by the loop
         for objective in self.objectives:
@@ -166,7 +165,7 @@ class ObjectiveRecorder:
             values += value.tolist()
             levels = activation.tolist()
             activations += levels
-            is_active = reported.get(objective.name)
+            is_active = None if reported is None else reported.get(objective.name)
             # an activation is in [0, 1]: one non-zero is (activation > 0).any(), without numpy's dispatch
             active.append(any(levels) if is_active is None else is_active)
         return {"objective_value": values, "objective_activation": activations, "objective_active": active,
