@@ -156,3 +156,37 @@ def test_the_coordination_re_solve_evaluates_the_objectives_and_the_task_once_pe
         alone = kinematic.arm_solver.velocity(kinematic._at(t, q)).v[6:]  # without the reference's rows
         assert np.array_equal(shared, alone)
         counts.update(dict.fromkeys(counts, step + 1))
+
+
+def test_a_coordinated_step_is_the_reference_then_the_arm_rates_bit_for_bit():
+    """``ActuatedKinematics.coordinated`` (the step's two solves at one configuration, v alone) gives the numbers of
+    ``reference`` then ``arm_rates`` on a twin chain, whose reference keeps its SolverResult; and the set-based
+    solver's ``stage_velocity`` with the shared rows gives ``velocity(...).v`` bit for bit."""
+    from pathlib import Path
+
+    from uvms.dynamics.plant.command import State
+    from uvms.scenario.build import build
+    from uvms.scenario.schema import read_scenario
+    from uvms.solvers.result import SolverResult
+
+    scenario = Path(__file__).resolve().parents[2] / "scenarios" / "bluerov2_alpha5_intervention.toml"
+    spec = read_scenario(scenario, ["outputs.figures=false"])
+    chains = [build(spec) for _ in range(2)]
+    one, two = (setup.actuation.controller.kinematic for setup in chains)
+    setup, rng = chains[0], np.random.default_rng(11)
+    nv = setup.robot.nv
+    for chain in chains:
+        chain.actuation.controller.reset(State(setup.q0, np.zeros(nv), np.zeros(8), np.zeros(0)), 0.0)
+    for step in range(4):
+        t = 0.5 + 0.01 * step
+        q = pin.integrate(setup.robot.model, setup.q0, 0.05 * rng.normal(size=nv))
+        measured = 0.05 * rng.normal(size=6)
+        reference, arm = one.coordinated(t, q, measured)
+        twin_reference, info = two.reference(t, q)
+        assert isinstance(info["solver"], SolverResult)
+        assert np.array_equal(reference, twin_reference) and np.array_equal(reference, info["solver"].v)
+        assert np.array_equal(arm, two.arm_rates(t, q, measured))
+        assert np.linalg.norm(arm) > 1e-3  # the arm moves: the comparison is not one of zeros
+        solver, state = two.arm_solver, two._configuration
+        assert np.array_equal(solver.stage_velocity(state, shared=two._rows),
+                              solver.velocity(state, shared=two._rows).v)
