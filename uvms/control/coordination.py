@@ -252,7 +252,7 @@ class CoordinatedControl:
                 self.velocity.applied_wrench(q, v, state.thrusts, state.fins)
             self.velocity.observe(q, v, applied, self.dt)
         bounds = None
-        if self.saturation_feedback and (self.ratio < 1.0).any():
+        if self.saturation_feedback and self.ratio is not FULL_RATIO and (self.ratio < 1.0).any():
             nu = base_twist(model, v)
             bounds = self.vehicle_bounds(nu, self.kinematic.vehicle_objective(q))
         if self.coordination:  # the arm solved again with the measured vehicle velocity, at the same configuration

@@ -239,6 +239,7 @@ class HierarchyPlan:
         starts = self.offsets.tolist()
         self._count, self._starts, self._spans = starts[-1], starts[:-1], list(itertools.pairwise(starts))
         self._activations = np.zeros(self._count)  # (M,) the equality tasks' rows weigh 1
+        self._nv = robot.nv  # the stacks' columns (the robot's property is a call)
         # the rows' blocks, level after level: (level, tasks, their key in an ItemRows, command, rows) for a level's
         # equality tasks (command: the scalar K, or prepared_gain's function), (level, objective, None, None, rows)
         # for each objective
@@ -296,7 +297,7 @@ class HierarchyPlan:
         rows at its offset (no per-level stack, no second concatenation)."""
         items = shared.at(state) if shared is not None else None
         count = self._count
-        jacobians, references = np.empty((count, self.robot.nv)), np.empty(count)
+        jacobians, references = np.empty((count, self._nv)), np.empty(count)
         activations = self._activations.copy()  # the equality rows' 1 in place, the objectives' written
         values = [None] * len(self._blocks)  # per block: the tasks' error, or the objective's rows
         runs, taken, blocks = self._all

@@ -152,6 +152,7 @@ def _inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arr
     when links or a wrench read them (``kinematics``)."""
     crba, rnea, forward, jacobians = pin.crba, pin.rnea, pin.forwardKinematics, pin.computeJointJacobians
     zero, read, joint_jacobians = np.zeros(model.nv), joint_arrays.read, data.J  # data.J: a view, never reallocated
+    views = read() if joint_arrays.viewed else None  # views of data.oMi, data.a: read as they are, no call
 
     def inputs(q: np.ndarray, v: np.ndarray, kinematics: bool) -> tuple:
         upper = crba(model, dynamics_data, q)
@@ -159,7 +160,7 @@ def _inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arr
         if kinematics or links:
             forward(model, data, q, v, zero)  # data.a = the bias accelerations Jdot v
             jacobians(model, data)
-        placements, accelerations = read()  # views of data.oMi, data.a: no copy
+        placements, accelerations = read() if views is None else views  # (buffers filled where not viewed)
         return upper, h, joint_jacobians, placements, accelerations, ints, floats
 
     return inputs
