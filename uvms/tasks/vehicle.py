@@ -66,9 +66,9 @@ class VehicleTask(Task):
         # the imposed velocities' rows (k, nv), constant: a task of velocities alone reads no pose
         self._velocity_rows = np.zeros((len(self.velocity_indices), robot.nv))
         self._velocity_rows[np.arange(len(self.velocity_indices)), self.velocity_indices] = 1.0
-        self._velocity_rows.flags.writeable = False  # handed out as they are (as a joint task's rows)
-        self._no_error = np.zeros(self.dim)  # a task of velocities alone: read-only, handed out
-        self._no_error.flags.writeable = False
+        # a task of velocities alone hands out these rows and its zero error as they are (as a joint task its rows;
+        # writable: a read-only array is another type to the kernels that read it)
+        self._no_error = np.zeros(self.dim)
 
     @classmethod
     def at_rest(cls, robot: Robot) -> VehicleTask:
@@ -109,8 +109,8 @@ class VehicleTask(Task):
 
     def terms(self, state: Configuration) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(jacobian (k, nv), error (k,), feedforward (k,)); velocities alone (no heading, no depth): the constant
-        rows and zero error (read-only arrays of the task) and the imposed velocities, without reading the vehicle's
-        pose."""
+        rows and zero error (the task's own arrays: never to be written) and the imposed velocities, without reading
+        the vehicle's pose."""
         if self.heading is None and self.depth is None:
             return self._velocity_rows, self._no_error, self.velocity_values.copy()
         return self.jacobian(state), self.error(state), self.feedforward(state)
