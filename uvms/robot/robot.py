@@ -30,8 +30,7 @@ from .structure import (
 )
 from .vehicle_pose import VehicleAccessors
 
-#: The dtype of the float vectors the checks pass as they are (numpy's float64 is one object).
-FLOAT64 = np.dtype(np.float64)
+FLOAT64 = np.dtype(np.float64)  #: the float vectors' dtype the checks pass as they are (numpy's float64: one object)
 #: Default task axes by base type (the facts live in `uvms.robot.bases`).
 DEFAULT_AXES = {name: base.task_axes for name, base in BASE_TYPES.items()}
 
@@ -227,17 +226,14 @@ class Robot(VehicleAccessors):
         # the common case, a float vector of the size, is read once as Python floats; anything else is converted
         common = type(vector) is np.ndarray and vector.dtype is FLOAT64 and vector.shape == (size,)
         values = vector.tolist() if common else None
-        if values is not None and all(map(math.isfinite, values)):
-            array = vector
-        else:
-            array = finite_array(vector, what, (size,), error=ConfigurationError)
-            values = array.tolist()
-        if check_manifold:
-            for joint_name, part in self._unit_slices:
-                norm = math.hypot(*values[part])  # a threshold on the floats read (no numpy call per part)
-                if abs(norm - 1.0) > 1e-6:
-                    self._refuse_rotation_part(what, joint_name, norm)
-        return array
+        if values is None or not all(map(math.isfinite, values)):
+            vector = finite_array(vector, what, (size,), error=ConfigurationError)  # (raises where not finite)
+            values = vector.tolist()
+        for joint_name, part in self._unit_slices if check_manifold else ():
+            norm = math.hypot(*values[part])  # a threshold on the floats read (no numpy call per part)
+            if abs(norm - 1.0) > 1e-6:
+                self._refuse_rotation_part(what, joint_name, norm)
+        return vector
 
     @staticmethod
     def _refuse_rotation_part(what: str, joint_name: str, norm: float) -> None:
