@@ -12,8 +12,9 @@ from ..numerics._kernels import Kernel
 from ..numerics.validate import finite_array
 from ..robot.configuration import Configuration
 from ..robot.conventions import pose_from_xyzrpy, wrap_angles
-from ..robot.kinematics import axis_rows, support_columns
+from ..robot.kinematics import axis_rows
 from ..robot.robot import Robot, check_robot
+from .objectives.frames import FrameReader
 from .task import Task
 
 ORIENTATION_ERRORS = ("log", "euler")
@@ -73,12 +74,8 @@ class FrameTask(Task):
         # position rows, or Euler orientation rows, and no mimic joint: terms() forms them from the joint kinematics
         # in one compiled call (getFrameJacobian's, the frame placement's, matrixToRpy's and
         # computeRpyJacobianInverse's numbers); a log orientation row keeps Pinocchio's log3
-        self._compiled_rows = (not np.any(self.rows >= 3) or orientation == "euler") and not robot.mimic_joint_names
-        if self._compiled_rows:
-            frame_data = robot.model.frames[self.frame_id]
-            self._joint = int(frame_data.parentJoint)
-            self._placement = np.ascontiguousarray(frame_data.placement.homogeneous)  # (4, 4)
-            self._columns = support_columns(robot.model, self._joint)
+        self._frame = FrameReader(robot, self.frame_id)  # its joint, placement in it and support (the objectives')
+        self._compiled_rows = (not np.any(self.rows >= 3) or orientation == "euler") and self._frame.joint is not None
         if target is not None:
             self.set_target(target)
 
@@ -207,7 +204,8 @@ class FrameTask(Task):
         if self._compiled_rows:  # (:func:`~uvms.numerics._kernels.pose.frame_rows_into`)
             jacobian, error = np.empty((self.dim, state.model.nv)), np.empty(self.dim)
             kernel = _FRAME_ROWS.function or _FRAME_ROWS.load()
-            kernel(*state.joint_arrays(self._joint), self._placement, self._columns, self.rows, translation, rotation,
+            frame = self._frame
+            kernel(*state.joint_arrays(frame.joint), frame.placement, frame.columns, self.rows, translation, rotation,
                    target_rpy if self._euler_rows else _NO_RPY, jacobian, error)
             return jacobian, error, feedforward.copy()
         pose = state.pose(self.frame_id)

@@ -25,9 +25,9 @@ _CLEARANCE_ROWS = Kernel("objectives", "clearance_rows_into")
 
 
 class FrameReader:
-    """How an objective reads its frame at a configuration: from the joint kinematics the configuration computed once
-    for everything that reads it (its joint's placement and every joint's world Jacobian, Pinocchio's ``data.J``) and
-    the frame's placement in its joint, in Pinocchio's arithmetic; on a model with mimic joints (whose columns are
+    """How a task or objective reads its frame at a configuration: from the joint kinematics the configuration
+    computed once for all its readers (its joint's placement and every joint's world Jacobian, Pinocchio's ``data.J``)
+    and the frame's placement in its joint, in Pinocchio's arithmetic; on a model with mimic joints (whose columns are
     not their joints' own) from Pinocchio's frame pose and Jacobian. The same numbers either way.
 
     Args:
