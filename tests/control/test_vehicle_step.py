@@ -125,3 +125,34 @@ def test_the_compiled_loops_refuse_what_they_cannot_read(setup):
         underived.control(q, v, np.zeros(6), 0.01)
     underived.reset(q)
     assert underived.control(q, v, np.zeros(6), 0.01).wrench.shape == (6,)
+
+
+def test_the_feedforward_from_the_observers_terms_is_the_one_evaluated_alone(setup):
+    """The model's terms observe returns (evaluated with the observer's, at the same q) give the feedforward and the
+    control output the model evaluated at control time gives, bit for bit, with and without the arm's motion fed
+    forward; the first call evaluates nothing (None)."""
+    velocity = setup.actuation.controller.velocity
+    measured = states(setup, 4, seed=11)
+    rng = np.random.default_rng(4)
+    original = velocity.arm_feedforward
+    try:
+        for arm_feedforward in (True, False):
+            velocity.arm_feedforward = arm_feedforward
+            velocity.reset(measured[0].q)
+            assert velocity.observe(measured[0].q, measured[0].v, np.zeros(6), 0.01) is None
+            for state in measured[1:]:
+                terms = velocity.observe(state.q, state.v, rng.normal(size=6), 0.01)
+                rate, arm = rng.normal(size=6), rng.normal(size=setup.robot.n_arm)
+                alone = velocity.feedforward(state.q, state.v, rate, arm)
+                assert np.array_equal(velocity.feedforward(state.q, state.v, rate, arm, terms), alone)
+                reference, kept = 0.1 * rng.normal(size=6), (velocity.integral, velocity._short, velocity._falls_short)
+                outputs = []
+                for given in (None, terms):  # the same step twice, the loop's state as it was before it
+                    velocity.integral, velocity._short, velocity._falls_short = kept
+                    control = velocity.control(state.q, state.v, reference, 0.01, reference_rate=rate,
+                                               arm_acceleration=arm, terms=given)
+                    outputs.append((control.feedforward, control.wrench, control.allocation.thrusts, velocity.integral))
+                for evaluated, read in zip(*outputs):
+                    assert np.array_equal(evaluated, read)
+    finally:
+        velocity.arm_feedforward = original

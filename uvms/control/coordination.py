@@ -247,10 +247,11 @@ class CoordinatedControl:
         loop's integral."""
         q, v = state.q, state.v
         (nb, n_arm), model = self._sizes, self.velocity.model
+        terms = None  # the model at the measured state, evaluated with the observer's (the feedforward reads it)
         if self.velocity.disturbance_time_constant > 0.0:  # the last step's mismatch, from what the actuators gave
             applied = self._achieved if state.thrusts is None else \
                 self.velocity.applied_wrench(q, v, state.thrusts, state.fins)
-            self.velocity.observe(q, v, applied, self.dt)
+            terms = self.velocity.observe(q, v, applied, self.dt)
         bounds = None
         if self.saturation_feedback and self.ratio is not FULL_RATIO and (self.ratio < 1.0).any():
             nu = base_twist(model, v)
@@ -276,7 +277,7 @@ class CoordinatedControl:
         rate = self._rate if filtered else None
         self._last_reference = nu_ref
         control = self.velocity.control(q, v, nu_ref, self.dt, reference_rate=rate,
-                                        arm_acceleration=self._arm_acceleration)
+                                        arm_acceleration=self._arm_acceleration, terms=terms)
         allocation = control.allocation
         self._achieved = allocation.achieved_wrench  # the observer's stand-in for a state without thrusts
         self.ratio = FULL_RATIO if allocation.attainable else achieved_ratio(control.wrench,

@@ -195,16 +195,18 @@ class VehicleVelocityController:
         self.disturbance_time_constant = float(gain_vector(settings.disturbance_time_constant,
                                                            "disturbance_time_constant [s]", 1)[0])
         # the loops' vector arithmetic, compiled (numpy's numbers; numba: loaded with the controller)
-        from ..numerics._kernels.vehicle import disturbance_update_into, observer_inputs_into, velocity_law_into
+        from ..numerics._kernels import vehicle as kernels
 
-        self._observer_inputs, self._disturbance_update = observer_inputs_into, disturbance_update_into
-        self._velocity_law = velocity_law_into
+        self._observer_inputs, self._disturbance_update = kernels.observer_inputs_into, kernels.disturbance_update_into
+        self._velocity_law, self._vehicle_wrench = kernels.velocity_law_into, kernels.vehicle_wrench_into
         placement = model.base_placement  # joint_M_base, read by the compiled law as arrays
         self._placement = (placement.rotation.copy(), placement.translation.copy())
         self._gain = LagFactor()  # the observer's gain of (dt, T)
         # buffers read within one call only (what a record keeps is a new array at every step)
         self._acceleration, self._mean = np.empty(model.model.nv), np.empty(model.model.nv)  # the observer's inputs
         self._needed, self._nu = np.empty(6), np.empty(6)  # the model's wrench for them; nu of the last control
+        nv = model.model.nv  # Mbar and nbar at the feedforward's velocity: what :meth:`observe` returns, until its next
+        self._terms = np.empty((nv, nv)), np.empty(nv)
         self._rest = np.zeros(6)  # nu_ref' when none is given (read only)
         self.reset()
 
@@ -221,8 +223,12 @@ class VehicleVelocityController:
         self._short = np.zeros(6)  # the last allocation's residual where it fell short (asked - achieved) [N, N m]
         self._falls_short = False  # any entry of _short is not zero
 
-    def observe(self, q: np.ndarray, v: np.ndarray, applied: np.ndarray, dt: float) -> np.ndarray:
-        """Update d_hat (6,) [N, N m] from the step since the last call and return it.
+    def observe(self, q: np.ndarray, v: np.ndarray, applied: np.ndarray,
+                dt: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """Update d_hat (6,) [N, N m] (:attr:`disturbance`) from the step since the last call; return the model's
+        terms at the measured state for :meth:`control` (``terms``): Mbar (nv, nv) at q and nbar (nv,) at the
+        feedforward's velocity, evaluated with the observer's (M and the Jacobians once), this object's buffers until
+        the next call; None when nothing was evaluated (the first call, no observer).
 
         d = tau_needed - (applied_last + applied) / 2 with tau_needed the model's wrench
         (:func:`~uvms.dynamics.plant.actuated.vehicle_inverse_dynamics`, the arm's measured motion included) for the
@@ -243,17 +249,18 @@ class VehicleVelocityController:
                                    f"({len(last[0]) if last else len(v)}), got {applied.shape} and {v.shape}")
         self._last = (v.copy(), applied.copy())
         if last is None or self.disturbance_time_constant <= 0.0:
-            return self.disturbance
+            return None
         v0, applied0 = last
         acceleration, mean = self._acceleration, self._mean
         self._observer_inputs(v, v0, dt, acceleration, mean)
         needed = vehicle_inverse_dynamics(self.model, q, mean, acceleration[:6], acceleration[6:], out=self._needed,
-                                          placement=self._placement)
+                                          placement=self._placement, second=(self._feedforward_velocity(v),
+                                                                             *self._terms))
         disturbance = np.empty(6)  # a new array at every step (a row keeps the last one)
         self._disturbance_update(needed, applied0, self._last[1], self.disturbance, self._observer_gain(dt),
                                  self._short, self._falls_short, disturbance)
         self.disturbance = disturbance
-        return disturbance
+        return self._terms
 
     def _observer_gain(self, dt: float) -> float:
         """1 - exp(-dt / T) of the step dt [s] (the first-order filter's :class:`LagFactor`)."""
@@ -271,26 +278,37 @@ class VehicleVelocityController:
             wrench = wrench + allocator.fins.wrench(base_twist(self.model, v), water_in_base(self.model, q), fins)
         return wrench
 
-    def feedforward(self, q: np.ndarray, v: np.ndarray, reference_rate: np.ndarray,
-                    arm_acceleration: np.ndarray) -> np.ndarray:
+    def feedforward(self, q: np.ndarray, v: np.ndarray, reference_rate: np.ndarray, arm_acceleration: np.ndarray,
+                    terms: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """tau_model (6,) [N, N m]: the model's wrench for the vehicle rate ``reference_rate`` (6,), body FLU (mapped
-        to the vehicle joint's axes in the compiled rows)."""
+        to the vehicle joint's axes in the compiled rows); ``terms``: what :meth:`observe` returned at this (q, v)
+        (None: the model evaluated here; the same numbers)."""
         model = self.model
         if not self.arm_feedforward:
-            v = np.concatenate([v[:6], np.zeros(model.n_arm)])
             arm_acceleration = np.zeros(model.n_arm)
-        return vehicle_inverse_dynamics(model, q, v, reference_rate, arm_acceleration, base_frame=True,
-                                        placement=self._placement)
+        if terms is None:
+            return vehicle_inverse_dynamics(model, q, self._feedforward_velocity(v), reference_rate, arm_acceleration,
+                                            base_frame=True, placement=self._placement)
+        wrench = np.empty(6)
+        self._vehicle_wrench(*terms, reference_rate, arm_acceleration, *self._placement, True, wrench)
+        return wrench
+
+    def _feedforward_velocity(self, v: np.ndarray) -> np.ndarray:
+        """The velocity (nv,) the feedforward's model is evaluated at: v, or the vehicle's alone (the arm at rest)
+        without ``arm_feedforward``."""
+        return v if self.arm_feedforward else np.concatenate([v[:6], np.zeros(self.model.n_arm)])
 
     def control(self, q: np.ndarray, v: np.ndarray, reference: np.ndarray, dt: float, *,
-                reference_rate: np.ndarray | None = None, arm_acceleration: np.ndarray | None = None) -> VehicleControl:
+                reference_rate: np.ndarray | None = None, arm_acceleration: np.ndarray | None = None,
+                terms: tuple[np.ndarray, np.ndarray] | None = None) -> VehicleControl:
         """The wrench and thrusts for one control period ``dt`` [s]; advances the integral. The disturbance
         estimate d_hat is the last :meth:`observe`'s (zero without the observer).
 
         Args:
             q: (nq,); v: (nv,) measured; reference: nu_ref (6,) body FLU [m/s, rad/s].
             reference_rate: nu_ref' (6,) (None: 0); arm_acceleration: (n_arm,) the arm's commanded
-                acceleration (None: 0), used with ``arm_feedforward``.
+                acceleration (None: 0), used with ``arm_feedforward``; terms: :meth:`observe`'s at this (q, v)
+                (None: the model evaluated here).
         """
         reference = np.asarray(reference, dtype=float)
         if reference.shape != (6,) or v.shape[0] < 6 or self.kp is None or self.ki is None:
@@ -299,7 +317,7 @@ class VehicleVelocityController:
                                    f"not given)")
         rate = self._rest if reference_rate is None else reference_rate
         arm = np.zeros(self.model.n_arm) if arm_acceleration is None else arm_acceleration
-        feedforward = self.feedforward(q, v, rate, arm)
+        feedforward = self.feedforward(q, v, rate, arm, terms)
         # nu (base_twist's numbers), the velocity error, the wrench and the integral after the step in one compiled
         # call; what the step returns and a row keeps is new (nu is read by the allocation alone)
         nu, error, wrench, integral = self._nu, np.empty(6), np.empty(6), np.empty(6)

@@ -18,9 +18,8 @@ The controller (:class:`uvms.control.base.Controller`) is digital: asked ``comma
 once per step at the step's start, its Command's ``arm``, ``thrust`` and ``fins`` held over the integrator's
 stages, as a vehicle computer at 1/dt does; its state (integrators) advances per call.
 
-Power terms for the energy balance (no current): d(kinetic + potential)/dt = thrust power (B f . nu_base,
-the sum of each thruster's f_i (B_i . nu)) + fin power (w_fins . nu_base, the drag's: <= 0 at rest angles)
-+ motor power (tau_m . qd_m) + damping power (sum over links of the damping wrench . nu_l, <= 0).
+Energy balance (no current): d(kinetic + potential)/dt = thrust power (B f . nu_base = sum_i f_i (B_i . nu)) + fin
+power (w_fins . nu_base, <= 0 at rest angles) + motor power (tau_m . qd_m) + damping power (sum_l f_D,l . nu_l <= 0).
 """
 
 from __future__ import annotations
@@ -85,8 +84,7 @@ class ActuatedPlant:
         ``fins``, its fins (:func:`uvms.dynamics.thrusters.fins.fins_of`), at rest at t = 0.
 
         Raises:
-            ModelCheckError: a thruster on an arm link. UVMSError: a model without thrusters (the message says where
-                they go).
+            ModelCheckError: a thruster on an arm link. UVMSError: no thrusters (the message says where they go).
         """
         return cls(plant, thrusters_of(plant.robot), fins=fins_of(plant.robot) if fins else None)
 
@@ -113,8 +111,7 @@ class ActuatedPlant:
         return ActuatedPlantSystem(self, controller)
 
 
-#: The thrust saturation (:func:`uvms.numerics._kernels.plant_stage.clipped`) and a step's command checked and
-#: saturated in one call (its module's ``finite_clipped_into``); numba loaded where a plant is integrated.
+#: The thrust saturation and a step's command checked and saturated in one call (numba loaded where used).
 _CLIPPED = Kernel("plant_stage", "clipped")
 _FINITE_CLIPPED = Kernel("plant_stage", "finite_clipped_into")
 
@@ -136,7 +133,8 @@ def water_in_base(plant: Plant, q: np.ndarray) -> np.ndarray:
 
 def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
                              arm_acceleration: np.ndarray, *, base_frame: bool = False, out: np.ndarray | None = None,
-                             placement: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                             placement: tuple[np.ndarray, np.ndarray] | None = None,
+                             second: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The body wrench (6,) [N, N m] at the base frame that gives the vehicle ``base_acceleration``.
 
     The vehicle rows of the plant's own equations of motion (rigid-body + added-mass inertia, Coriolis,
@@ -151,14 +149,19 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
             (body FLU at its origin: mapped to the joint's axes as ``base_placement.act(pin.Motion(...))``);
         arm_acceleration: (n_arm,); out: (6,) written and returned (None: a new array).
         placement: the plant's joint_M_base as arrays (R (3, 3), p (3,)) a caller keeps (None: read from the plant).
+        second: (v2 (nv,), Mbar (nv, nv), nbar (nv,)) of a floating vehicle: Mbar at q and nbar at v2 written there
+            too, in the same compiled call (crba and the Jacobians once; joint rates: ``base_frame`` False).
     """
     nb = plant.nb
     wrench = np.empty(6) if out is None else out
     if nb == 6:  # Pinocchio's calls, then the plant's terms and these expressions' numbers in one compiled call
         if placement is None:
             placement = plant._base_placement.rotation, plant._base_placement.translation
-        plant._compiled().vehicle_wrench_into(q, v, np.asarray(base_acceleration, dtype=float),
-                                              np.asarray(arm_acceleration, dtype=float), placement, base_frame, wrench)
+        base, arm = np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float)
+        if second is None:
+            plant._compiled().vehicle_wrench_into(q, v, base, arm, placement, base_frame, wrench)
+        else:
+            plant._compiled().observer_terms_into(q, v, base, arm, placement, wrench, *second)
         return wrench
     mass, bias = plant._mass_and_bias(q, v)
     placement = plant._base_placement
@@ -175,14 +178,11 @@ def lag_command(rate: np.ndarray, wanted: np.ndarray, dt: float, time_constant: 
     """The command u held over one step dt [s] that brings a first-order lag x' = (u - x) / tau from ``rate`` x to
     ``wanted`` at the step's end: u = x + (wanted - x) / (1 - exp(-dt / tau)) (the lag inverted over the step).
 
-    The arm's servos (:meth:`uvms.dynamics.plant.plant.Plant.dynamics`: qdd = (u - qd) / tau) reach the solver's
-    joint rates one step after they were asked instead of tau later; between the two rates x moves monotonically,
-    so a wanted rate within the speed limits is never passed. Each entry of ``wanted`` is reached exactly when the
-    command is held over the step (the digital controller of :class:`ActuatedPlantSystem`).
+    The arm's servos (qdd = (u - qd) / tau, :meth:`~uvms.dynamics.plant.plant.Plant.dynamics`) reach the rates asked
+    one step later, not tau later, moving monotonically between the two (a rate within the limits is never passed).
 
     Args:
-        rate: x (n,) now; wanted: (n,) at the step's end; dt: the step [s] > 0; time_constant: tau (n,) or a
-            number [s] > 0.
+        rate: x (n,) now; wanted: (n,) at the step's end; dt: the step [s] > 0; time_constant: tau (n,) or [s] > 0.
     """
     return rate + (wanted - rate) / lag_factor(dt, time_constant)
 

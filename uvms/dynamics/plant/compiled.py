@@ -53,6 +53,7 @@ class CompiledPass:
         self.scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
         self.no_wrench = np.zeros(0)
         self.inputs = _inputs(model, data, dynamics_data, joint_arrays, ints, floats, bool(stacked.count))
+        self.second_inputs = _second_inputs(model, data, dynamics_data, joint_arrays, bool(stacked.count))
 
     def accelerations_into(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
                            out: np.ndarray | None, mass: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
@@ -138,6 +139,20 @@ class CompiledPass:
         self.kernels.vehicle_terms_wrench_into(*self.inputs(q, v, False), v, *self.scratch, base_acceleration,
                                                arm_acceleration, *placement, base_frame, out)
 
+    def observer_terms_into(self, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
+                            arm_acceleration: np.ndarray, placement: tuple[np.ndarray, np.ndarray], out: np.ndarray,
+                            second_v: np.ndarray, mass: np.ndarray, second_bias_forces: np.ndarray) -> None:
+        """:meth:`vehicle_wrench_into` at (q, v) (the vehicle joint's rates) and, at the same q, Mbar into ``mass``
+        (nv, nv) and nbar at ``second_v`` (nv,) into ``second_bias_forces`` (nv,): crba and the joint Jacobians once
+        for both velocities (:func:`uvms.numerics._kernels.plant_stage.observer_terms_into`; each number the one an
+        evaluation at that velocity alone gives)."""
+        upper, h, jacobian, placements, accelerations, ints, floats = self.inputs(q, v, False)
+        accelerations = accelerations.copy()  # the second velocity's kinematics write the same Data
+        second_h, second_accelerations = self.second_inputs(q, second_v)
+        self.kernels.observer_terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass,
+                                         self.scratch[1], base_acceleration, arm_acceleration, *placement, out,
+                                         second_h, second_accelerations, second_v, second_bias_forces)
+
     def dynamics(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
         """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m
         (:func:`uvms.numerics._kernels.plant_stage.motor_torques_into`)."""
@@ -164,3 +179,18 @@ def _inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arr
         return upper, h, joint_jacobians, placements, accelerations, ints, floats
 
     return inputs
+
+
+def _second_inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arrays: JointArrays,
+                   links: bool) -> Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """(q, v) -> (h (nv,), the joints' bias accelerations (njoints, 6)) at a second velocity after an evaluation at q
+    (:data:`Inputs`): rnea, and the kinematics where links read them (their placements and data.J unchanged)."""
+    rnea, forward, zero, read = pin.rnea, pin.forwardKinematics, np.zeros(model.nv), joint_arrays.read
+
+    def second(q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        h = rnea(model, dynamics_data, q, v, zero)
+        if links:
+            forward(model, data, q, v, zero)
+        return h, read()[1]
+
+    return second

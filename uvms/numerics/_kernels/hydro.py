@@ -32,7 +32,7 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
                      quadratic: np.ndarray, buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray,
                      with_added_mass: bool,
                      with_damping: bool, with_current: bool, with_buoyancy: bool, mass: np.ndarray,
-                     bias_forces: np.ndarray) -> None:
+                     bias_forces: np.ndarray, with_mass: bool) -> None:
     """Add the links' added mass to ``mass`` and subtract their wrenches' generalized forces from ``bias_forces``.
 
     Args:
@@ -45,6 +45,8 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
         center_of_buoyancy: (L, 3) [m] link frame; current: (3,) world [m/s].
         with_added_mass, with_damping, with_current, with_buoyancy: which terms are on.
         mass: Mbar (nv, nv), updated in place; bias_forces: nbar (nv,), updated in place.
+        with_mass: False: ``mass`` left as it is (nbar alone, each entry's operations unchanged: a second velocity at
+            the same configuration, whose Mbar is the first's).
     """
     count, _, nv = jacobians.shape
     nu = np.empty(6)
@@ -105,28 +107,29 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
             # Mbar += J^T (M_A J) over the columns J moves (its zero columns add nothing); each sum in its order
             # (from 0.0, k or i ascending; a zero entry of J adds a signed zero: the sum is unchanged), written out
             # with the column's entries in registers: independent sums the processor overlaps
-            moved = 0
-            for column in range(nv):
-                for row in range(6):
-                    if jacobian[row, column] != 0.0:
-                        columns[moved] = column
-                        moved += 1
-                        break
-            for j in range(moved):
-                column = columns[j]
-                j0, j1, j2 = jacobian[0, column], jacobian[1, column], jacobian[2, column]
-                j3, j4, j5 = jacobian[3, column], jacobian[4, column], jacobian[5, column]
-                for i in range(6):
-                    product[j, i] = (((((0.0 + inertia[i, 0] * j0) + inertia[i, 1] * j1) + inertia[i, 2] * j2)
-                                      + inertia[i, 3] * j3) + inertia[i, 4] * j4) + inertia[i, 5] * j5
-            for i_row in range(moved):
-                row = columns[i_row]
-                j0, j1, j2 = jacobian[0, row], jacobian[1, row], jacobian[2, row]
-                j3, j4, j5 = jacobian[3, row], jacobian[4, row], jacobian[5, row]
+            if with_mass:
+                moved = 0
+                for column in range(nv):
+                    for row in range(6):
+                        if jacobian[row, column] != 0.0:
+                            columns[moved] = column
+                            moved += 1
+                            break
                 for j in range(moved):
-                    mass[row, columns[j]] += (((((0.0 + j0 * product[j, 0]) + j1 * product[j, 1])
-                                                + j2 * product[j, 2]) + j3 * product[j, 3]) + j4 * product[j, 4]) \
-                        + j5 * product[j, 5]
+                    column = columns[j]
+                    j0, j1, j2 = jacobian[0, column], jacobian[1, column], jacobian[2, column]
+                    j3, j4, j5 = jacobian[3, column], jacobian[4, column], jacobian[5, column]
+                    for i in range(6):
+                        product[j, i] = (((((0.0 + inertia[i, 0] * j0) + inertia[i, 1] * j1) + inertia[i, 2] * j2)
+                                          + inertia[i, 3] * j3) + inertia[i, 4] * j4) + inertia[i, 5] * j5
+                for i_row in range(moved):
+                    row = columns[i_row]
+                    j0, j1, j2 = jacobian[0, row], jacobian[1, row], jacobian[2, row]
+                    j3, j4, j5 = jacobian[3, row], jacobian[4, row], jacobian[5, row]
+                    for j in range(moved):
+                        mass[row, columns[j]] += (((((0.0 + j0 * product[j, 0]) + j1 * product[j, 1])
+                                                    + j2 * product[j, 2]) + j3 * product[j, 3]) + j4 * product[j, 4]) \
+                            + j5 * product[j, 5]
         if with_damping:
             surge = relative[0]
             for row in range(6):
@@ -255,7 +258,7 @@ def pack_constants(slots: np.ndarray, programs: np.ndarray, starts: np.ndarray, 
 @njit(cache=True)
 def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
                      accelerations: np.ndarray, v: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray,
-                     ints: np.ndarray, floats: np.ndarray) -> None:
+                     ints: np.ndarray, floats: np.ndarray, with_mass: bool) -> None:
     """Mbar and nbar of the plant in one call: the links' LOCAL Jacobians from Pinocchio's world Jacobian
     (:func:`frame_jacobian_into`), then :func:`hydro_terms_into` on Pinocchio's M (its upper triangle, as crba
     fills it) and h.
@@ -268,12 +271,14 @@ def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, pla
             data).
         v: (nv,); mass: Mbar (nv, nv) out; bias_forces: nbar (nv,) out.
         ints, floats: the plant's constants (:func:`pack_constants`).
+        with_mass: False: nbar alone, ``mass`` and ``upper`` not read (:func:`hydro_terms_into`).
     """
     nv = h.shape[0]
     for row in range(nv):
         bias_forces[row] = h[row]
-        for column in range(nv):
-            mass[row, column] = upper[row, column] if column >= row else upper[column, row]
+        if with_mass:
+            for column in range(nv):
+                mass[row, column] = upper[row, column] if column >= row else upper[column, row]
     count, steps = ints[0], ints[1]
     if count == 0:
         return
@@ -308,4 +313,4 @@ def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, pla
             joint_bias[link] = accelerations[slot]
     hydro_terms_into(jacobians, v, joint_bias, rotations, motion_to_link, added_mass, linear, forward, quadratic,
                      buoyancy, center_of_buoyancy, current, with_added_mass, flags[1] != 0, flags[2] != 0,
-                     flags[3] != 0, mass, bias_forces)
+                     flags[3] != 0, mass, bias_forces, with_mass)

@@ -2,24 +2,20 @@
 per-step numbers: a body wrench's generalized force, the motors' accelerations, the vehicle's right-hand side, the
 motor torques, the thrusters' wrench, lag and saturation, the state's finiteness, the rows' powers.
 
-:meth:`uvms.dynamics.plant.plant.Plant.stage_acceleration` and
-:meth:`uvms.dynamics.plant.actuated.ActuatedPlantSystem._rate` (through the plant's
-:class:`~uvms.dynamics.plant.compiled.CompiledPass`): after Pinocchio's algorithms one call here forms Mbar
-and nbar (:func:`uvms.numerics._kernels.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle
-(the base frame's LOCAL Jacobian formed from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m)
-/ tau, the vehicle's right-hand side Mbar_bm a_m + nbar_b and its 6 x 6 (3 x 3 planar) solve, with numpy's LAPACK
-(:mod:`.solve`: numba's own solve calls SciPy's, whose numbers differ). As numpy calls this tail was about fifteen
-calls of 0.3-1 us each. :func:`vehicle_terms_wrench_into` is a floating vehicle's inverse dynamics (the controller's
-observer and feedforward) in the same way: the terms, then the vehicle rows' wrench. :func:`actuation_rows` derives a
-run's body wrench and powers from its stored rows after the loop.
+:meth:`uvms.dynamics.plant.plant.Plant.stage_acceleration`, ``ActuatedPlantSystem._rate`` (the plant's
+:class:`~uvms.dynamics.plant.compiled.CompiledPass`): after Pinocchio's algorithms one call forms Mbar and nbar
+(:func:`.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle (the base frame's LOCAL Jacobian
+from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m) / tau, the vehicle's right-hand side
+Mbar_bm a_m + nbar_b and its 6 x 6 (3 x 3 planar) solve with numpy's LAPACK (:mod:`.solve`; numba's own solve calls
+SciPy's, whose numbers differ). :func:`vehicle_terms_wrench_into`: a floating vehicle's inverse dynamics
+(:func:`observer_terms_into`: and nbar at a second velocity); :func:`actuation_rows`: a run's wrench and powers.
 
 Every number is the one the numpy expressions it replaces gave, bit for bit: elementwise arithmetic in their order
 (numba contracts nothing without ``fastmath``), products through ``np.dot`` on arrays in the layout numpy held them
 (C- or column-major), which calls the BLAS routine numpy's ``@`` calls (a product with a single output entry as numpy
 computes it: a dot product), numpy's pairwise sums and clip written out.
 
-The module imports numba, so it is loaded where a plant is first evaluated; its kernels compile at their first call
-and are cached on disk (``cache=True``, see :mod:`uvms.numerics._kernels`).
+Loaded (numba) where a plant is first evaluated; compiled at the first call, cached (:mod:`uvms.numerics._kernels`).
 """
 
 from __future__ import annotations
@@ -34,8 +30,8 @@ from .solve import solve_into
 from .vehicle import vehicle_wrench_into
 
 __all__ = ["accelerations_into", "actuated_dynamics_into", "actuated_rate_into", "actuation_rows", "all_finite",
-           "clipped", "finite_clipped_into", "motor_torques_into", "plant_constants", "terms_into", "thrusters_into",
-           "vehicle_terms_wrench_into"]
+           "clipped", "finite_clipped_into", "motor_torques_into", "observer_terms_into", "plant_constants",
+           "terms_into", "thrusters_into", "vehicle_terms_wrench_into"]
 
 
 @njit(cache=True)
@@ -62,7 +58,7 @@ def terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placement
     """
     hydro_ints, hydro_floats = _hydro_sizes(ints)
     plant_terms_into(upper, h, jacobian, placements, accelerations, v, mass, bias_forces, ints[:hydro_ints],
-                     floats[:hydro_floats])
+                     floats[:hydro_floats], True)
     if wrench.size:
         stage_ints, stage_floats = ints[hydro_ints:], floats[hydro_floats:]
         steps, slot = stage_ints[1], stage_ints[2]
@@ -96,6 +92,23 @@ def vehicle_terms_wrench_into(upper: np.ndarray, h: np.ndarray, jacobian: np.nda
     """
     terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, np.zeros(0), mass, bias_forces)
     vehicle_wrench_into(mass, bias_forces, base_acceleration, arm_acceleration, rotation, translation, base_frame, out)
+
+
+@njit(cache=True)
+def observer_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
+                        accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
+                        mass: np.ndarray, bias_forces: np.ndarray, base_acceleration: np.ndarray,
+                        arm_acceleration: np.ndarray, rotation: np.ndarray, translation: np.ndarray, out: np.ndarray,
+                        second_h: np.ndarray, second_accelerations: np.ndarray, second_v: np.ndarray,
+                        second_bias_forces: np.ndarray) -> None:
+    """:func:`vehicle_terms_wrench_into` (the vehicle joint's rates), then nbar at a second velocity at the same q
+    into ``second_bias_forces`` (from rnea's ``second_h`` and the joints' ``second_accelerations`` there; M and the
+    links' Jacobians are the first's): the controller's observer and its feedforward's terms at one configuration."""
+    vehicle_terms_wrench_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass, bias_forces,
+                              base_acceleration, arm_acceleration, rotation, translation, False, out)
+    hydro_ints, hydro_floats = _hydro_sizes(ints)
+    plant_terms_into(upper, second_h, jacobian, placements, second_accelerations, second_v, mass, second_bias_forces,
+                     ints[:hydro_ints], floats[:hydro_floats], False)
 
 
 @njit(cache=True)
