@@ -31,6 +31,7 @@ from ..errors import ScenarioError, UVMSError
 from ..robot.configuration import Configuration
 from ..robot.robot import Robot
 from ..solvers import SOLVERS
+from ..solvers.hierarchy import speed_ratio
 from ..solvers.item_rows import ItemRows
 from ..solvers.saturation import speed_maximum
 from ..tasks.objectives import Inequality, Objective, VelocityLimit, inequalities_from_table
@@ -116,8 +117,6 @@ class ObjectiveRecorder:
                  evaluated: Callable[[np.ndarray], ItemRows | None] | None = None) -> None:
         self.robot, self.objectives, self.evaluated = robot, inequalities.objectives, evaluated
         self.maximum = speed_maximum(robot.nv, inequalities.speed_limits)  # (nv,) [m/s, rad/s], inf: none
-        self._limited = np.flatnonzero(np.isfinite(self.maximum))  # the velocities with a limit, and their limits
-        self._limits = self.maximum[self._limited]
         self._state: Configuration | None = None
 
     def __call__(self, t: float, q: np.ndarray, x: np.ndarray, sample: object) -> dict:
@@ -143,7 +142,7 @@ class ObjectiveRecorder:
         """
         if not self.objectives:  # only speed limits: empty series of the arrays' types
             return {"objective_value": NO_VALUES, "objective_activation": NO_VALUES, "objective_active": NO_ACTIVE,
-                    "objective_pair": NO_PAIRS, "speed_ratio": self._speed_ratio(v)}
+                    "objective_pair": NO_PAIRS, "speed_ratio": speed_ratio(v, self.maximum)}
         state = None  # moved to q only when an objective is evaluated here
         values, activations, active, pairs = [], [], [], []  # Python floats and bools: made arrays by the loop
         for objective in self.objectives:
@@ -170,11 +169,7 @@ class ObjectiveRecorder:
             active.append(any(levels) if is_active is None else is_active)
         return {"objective_value": values, "objective_activation": activations, "objective_active": active,
                 "objective_pair": np.concatenate(pairs).astype(int) if pairs else NO_PAIRS,
-                "speed_ratio": self._speed_ratio(v)}
-
-    def _speed_ratio(self, v: np.ndarray) -> float:
-        """max_i |v_i| / limit_i over the limited velocities of v (nv,) (0 without a limit)."""
-        return float((np.abs(v[self._limited]) / self._limits).max(initial=0.0)) if self._limited.size else 0.0
+                "speed_ratio": speed_ratio(v, self.maximum)}
 
     def _at(self, q: np.ndarray) -> Configuration:
         """The recorder's kinematic state moved to q (one, its pin.Data made once)."""

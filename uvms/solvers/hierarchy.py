@@ -356,9 +356,11 @@ def solved_rows(hierarchy: Hierarchy) -> tuple[SolvedRows, ...]:
 def speed_ratio(v: np.ndarray, maximum: np.ndarray) -> float:
     """max_i |v_i| / max_i over the finite speed limits (0 without any;
     :func:`~uvms.numerics._kernels.boxes.speed_ratio_of`)."""
-    from ..numerics._kernels.boxes import speed_ratio_of  # numba: loaded at the first solve, not by ``import uvms``
+    return float((_SPEED_RATIO.function or _SPEED_RATIO.load())(v, maximum))
 
-    return float(speed_ratio_of(v, maximum))
+
+#: numba loaded at the first call, not by ``import uvms``.
+_SPEED_RATIO = Kernel("boxes", "speed_ratio_of")
 
 
 def last_task_sigma(hierarchy: Hierarchy, sigmas: Sequence[float]) -> float:
