@@ -203,10 +203,10 @@ class VehicleVelocityController:
         self._placement = (placement.rotation.copy(), placement.translation.copy())
         self._gain = LagFactor()  # the observer's gain of (dt, T)
         # buffers read within one call only (what a record keeps is a new array at every step)
-        self._acceleration, self._mean = np.empty(model.model.nv), np.empty(model.model.nv)  # the observer's inputs
+        nv = model.model.nv
+        self._acceleration, self._mean = np.empty(nv), np.empty(nv)  # the observer's inputs
         self._needed, self._nu = np.empty(6), np.empty(6)  # the model's wrench for them; nu of the last control
-        nv = model.model.nv  # Mbar and nbar at the feedforward's velocity: what :meth:`observe` returns, until its next
-        self._terms = np.empty((nv, nv)), np.empty(nv)
+        self._terms = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar at the feedforward's velocity (:meth:`observe`)
         self._rest = np.zeros(6)  # nu_ref' when none is given (read only)
         self.reset()
 

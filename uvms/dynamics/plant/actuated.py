@@ -150,7 +150,7 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
         arm_acceleration: (n_arm,); out: (6,) written and returned (None: a new array).
         placement: the plant's joint_M_base as arrays (R (3, 3), p (3,)) a caller keeps (None: read from the plant).
         second: (v2 (nv,), Mbar (nv, nv), nbar (nv,)) of a floating vehicle: Mbar at q and nbar at v2 written there
-            too, in the same compiled call (crba and the Jacobians once; joint rates: ``base_frame`` False).
+            too, in the same compiled call (crba and the Jacobians once).
     """
     nb = plant.nb
     wrench = np.empty(6) if out is None else out
@@ -161,7 +161,7 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
         if second is None:
             plant._compiled().vehicle_wrench_into(q, v, base, arm, placement, base_frame, wrench)
         else:
-            plant._compiled().observer_terms_into(q, v, base, arm, placement, wrench, *second)
+            plant._compiled().observer_terms_into(q, v, base, arm, placement, base_frame, wrench, *second)
         return wrench
     mass, bias = plant._mass_and_bias(q, v)
     placement = plant._base_placement

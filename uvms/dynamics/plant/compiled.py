@@ -140,18 +140,20 @@ class CompiledPass:
                                                arm_acceleration, *placement, base_frame, out)
 
     def observer_terms_into(self, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
-                            arm_acceleration: np.ndarray, placement: tuple[np.ndarray, np.ndarray], out: np.ndarray,
-                            second_v: np.ndarray, mass: np.ndarray, second_bias_forces: np.ndarray) -> None:
-        """:meth:`vehicle_wrench_into` at (q, v) (the vehicle joint's rates) and, at the same q, Mbar into ``mass``
-        (nv, nv) and nbar at ``second_v`` (nv,) into ``second_bias_forces`` (nv,): crba and the joint Jacobians once
-        for both velocities (:func:`uvms.numerics._kernels.plant_stage.observer_terms_into`; each number the one an
-        evaluation at that velocity alone gives)."""
+                            arm_acceleration: np.ndarray, placement: tuple[np.ndarray, np.ndarray], base_frame: bool,
+                            out: np.ndarray, second_v: np.ndarray, mass: np.ndarray,
+                            second_bias_forces: np.ndarray) -> None:
+        """:meth:`vehicle_wrench_into` at (q, v) and, at the same q, Mbar into ``mass`` (nv, nv) and nbar at
+        ``second_v`` (nv,) into ``second_bias_forces`` (nv,): crba and the joint Jacobians once for both velocities
+        (:func:`uvms.numerics._kernels.plant_stage.observer_terms_into`; each number the one an evaluation at that
+        velocity alone gives)."""
         upper, h, jacobian, placements, accelerations, ints, floats = self.inputs(q, v, False)
         accelerations = accelerations.copy()  # the second velocity's kinematics write the same Data
         second_h, second_accelerations = self.second_inputs(q, second_v)
         self.kernels.observer_terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass,
-                                         self.scratch[1], base_acceleration, arm_acceleration, *placement, out,
-                                         second_h, second_accelerations, second_v, second_bias_forces)
+                                         self.scratch[1], base_acceleration, arm_acceleration, *placement,
+                                         base_frame, out, second_h, second_accelerations, second_v,
+                                         second_bias_forces)
 
     def dynamics(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
         """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m

@@ -98,14 +98,14 @@ def vehicle_terms_wrench_into(upper: np.ndarray, h: np.ndarray, jacobian: np.nda
 def observer_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
                         accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
                         mass: np.ndarray, bias_forces: np.ndarray, base_acceleration: np.ndarray,
-                        arm_acceleration: np.ndarray, rotation: np.ndarray, translation: np.ndarray, out: np.ndarray,
-                        second_h: np.ndarray, second_accelerations: np.ndarray, second_v: np.ndarray,
-                        second_bias_forces: np.ndarray) -> None:
-    """:func:`vehicle_terms_wrench_into` (the vehicle joint's rates), then nbar at a second velocity at the same q
-    into ``second_bias_forces`` (from rnea's ``second_h`` and the joints' ``second_accelerations`` there; M and the
-    links' Jacobians are the first's): the controller's observer and its feedforward's terms at one configuration."""
+                        arm_acceleration: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
+                        base_frame: bool, out: np.ndarray, second_h: np.ndarray, second_accelerations: np.ndarray,
+                        second_v: np.ndarray, second_bias_forces: np.ndarray) -> None:
+    """:func:`vehicle_terms_wrench_into`, then nbar at a second velocity at the same q into ``second_bias_forces``
+    (from rnea's ``second_h`` and the joints' ``second_accelerations`` there; M and the links' Jacobians are the
+    first's): the controller's observer and its feedforward's terms at one configuration."""
     vehicle_terms_wrench_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass, bias_forces,
-                              base_acceleration, arm_acceleration, rotation, translation, False, out)
+                              base_acceleration, arm_acceleration, rotation, translation, base_frame, out)
     hydro_ints, hydro_floats = _hydro_sizes(ints)
     plant_terms_into(upper, second_h, jacobian, placements, second_accelerations, second_v, mass, second_bias_forces,
                      ints[:hydro_ints], floats[:hydro_floats], False)
