@@ -53,10 +53,11 @@ def test_the_vehicle_wrench_in_one_call_is_the_terms_then_the_wrench_kernel(rng)
 
 
 def test_the_observers_call_gives_each_velocitys_numbers_as_evaluated_alone(rng):
-    """CompiledPass.observer_terms_into (crba and the Jacobians once, rnea and the kinematics at both velocities):
-    the wrench at (q, v) is vehicle_wrench_into's, Mbar and the nbar at the second velocity those of ``terms`` there,
-    bit for bit, for a joint's or a base frame's rate, with a current (the links' relative velocity) and without
-    links' motion (the arm at rest); a wrong second velocity (the first's) would give the first's nbar: it differs."""
+    """CompiledPass.vehicle_wrench_into with a second velocity (crba and the Jacobians once, rnea and the kinematics
+    at both velocities, one kernel): the wrench at (q, v) is the one without it, Mbar and the nbar at the second
+    velocity those of ``terms`` there, bit for bit, for a joint's or a base frame's rate, with a current (the links'
+    relative velocity) and without links' motion (the arm at rest); a wrong second velocity (the first's) would give
+    the first's nbar: it differs."""
     plant = Plant(shipped("bluerov2_alpha5"), gravity=True, current=[0.2, -0.1, 0.05])
     compiled = plant._compiled()
     placement = (plant.base_placement.rotation.copy(), plant.base_placement.translation.copy())
@@ -70,7 +71,7 @@ def test_the_observers_call_gives_each_velocitys_numbers_as_evaluated_alone(rng)
         compiled.vehicle_wrench_into(q, v, base, arm, placement, base_frame, expected)
         mass, bias = compiled.terms(q, second, None)
         wrench, got_mass, got_bias = np.full(6, np.nan), np.full((nv, nv), np.nan), np.full(nv, np.nan)
-        compiled.observer_terms_into(q, v, base, arm, placement, base_frame, wrench, second, got_mass, got_bias)
+        compiled.vehicle_wrench_into(q, v, base, arm, placement, base_frame, wrench, (second, got_mass, got_bias))
         assert np.array_equal(wrench, expected)
         assert np.array_equal(got_mass, mass) and np.array_equal(got_bias, bias)
         assert not np.array_equal(got_bias, compiled.terms(q, v, None)[1])

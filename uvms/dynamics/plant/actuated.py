@@ -158,10 +158,7 @@ def vehicle_inverse_dynamics(plant: Plant, q: np.ndarray, v: np.ndarray, base_ac
         if placement is None:
             placement = plant._base_placement.rotation, plant._base_placement.translation
         base, arm = np.asarray(base_acceleration, dtype=float), np.asarray(arm_acceleration, dtype=float)
-        if second is None:
-            plant._compiled().vehicle_wrench_into(q, v, base, arm, placement, base_frame, wrench)
-        else:
-            plant._compiled().observer_terms_into(q, v, base, arm, placement, base_frame, wrench, *second)
+        plant._compiled().vehicle_wrench_into(q, v, base, arm, placement, base_frame, wrench, second)
         return wrench
     mass, bias = plant._mass_and_bias(q, v)
     placement = plant._base_placement

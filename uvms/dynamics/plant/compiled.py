@@ -51,7 +51,8 @@ class CompiledPass:
                                                    motor_time_constant)
         nv = model.nv
         self.scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
-        self.no_wrench = np.zeros(0)
+        self.no_wrench, self.no_joint_rows = np.zeros(0), np.zeros((0, 6))
+        self.no_joint_rows.flags.writeable = joint_arrays.read()[1].flags.writeable  # (typed as the Data's rows)
         self.inputs = _inputs(model, data, dynamics_data, joint_arrays, ints, floats, bool(stacked.count))
         self.second_inputs = _second_inputs(model, data, dynamics_data, joint_arrays, bool(stacked.count))
 
@@ -72,33 +73,22 @@ class CompiledPass:
 
     def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
                            matrix: np.ndarray, time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray,
-                           mass: np.ndarray, bias_forces: np.ndarray, rates: np.ndarray) -> None:
-        """[v'; f'] into ``rates`` at (q, x = [v; f; ...]) (the fins' part left), B f + ``extra`` into ``wrench``,
-        Mbar and nbar into ``mass`` and ``bias_forces`` (:func:`uvms.numerics._kernels.plant_stage.actuated_rate_into`).
-
-        Raises:
-            NumericalError: as :meth:`accelerations_into`.
-        """
-        if not self.kernels.actuated_rate_into(*self.inputs(q, x[:self.nv], True), x, arm, thrust_command, matrix,
-                                               time_constants, extra, wrench, mass, bias_forces, rates):
-            raise singular_system(self.nb)
-
-    def actuated_dynamics_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
-                               matrix: np.ndarray, time_constants: np.ndarray, extra: np.ndarray,
-                               wrench: np.ndarray, rates: np.ndarray) -> PlantDynamics:
-        """:meth:`actuated_rate_into` and the motor torques of its v' in one compiled call
-        (:func:`uvms.numerics._kernels.plant_stage.actuated_dynamics_into`): the PlantDynamics (v' a view of
-        ``rates``, Mbar and the torques new arrays).
+                           rates: np.ndarray, torques: bool) -> PlantDynamics | None:
+        """[v'; f'] into ``rates`` at (q, x = [v; f; ...]) (the fins' part left), B f + ``extra`` into ``wrench``
+        (:func:`uvms.numerics._kernels.plant_stage.actuated_rate_into`); with ``torques`` the motor torques of its v'
+        in the same call and the PlantDynamics (v' a view of ``rates``, Mbar and the torques new arrays), else None
+        (Mbar and nbar in the pass's own buffers).
 
         Raises:
             NumericalError: as :meth:`accelerations_into`.
         """
         nv = self.nv
-        mass, bias_forces, torque = np.empty((nv, nv)), np.empty(nv), np.empty(nv - self.nb)
-        if not self.kernels.actuated_dynamics_into(*self.inputs(q, x[:nv], True), x, arm, thrust_command, matrix,
-                                                   time_constants, extra, wrench, mass, bias_forces, rates, torque):
+        mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else self.scratch
+        torque = np.empty(nv - self.nb) if torques else self.no_wrench
+        if not self.kernels.actuated_rate_into(*self.inputs(q, x[:nv], True), x, arm, thrust_command, matrix,
+                                               time_constants, extra, wrench, mass, bias_forces, rates, torque):
             raise singular_system(self.nb)
-        return PlantDynamics(rates[:nv], torque, mass)
+        return PlantDynamics(rates[:nv], torque, mass) if torques else None
 
     def actuated_stage(self, held: list[np.ndarray], matrix: np.ndarray,
                        time_constants: np.ndarray) -> Callable[[float, np.ndarray, np.ndarray], tuple]:
@@ -115,7 +105,7 @@ class CompiledPass:
             rates, v = empty(len(x)), x[:nv]
             arm, thrust_command = held
             if not kernel(*inputs(q, v, True), x, arm, thrust_command, matrix, time_constants, no_wrench, wrench, mass,
-                          bias_forces, rates):
+                          bias_forces, rates, no_wrench):  # (no torques)
                 raise singular_system(nb)
             return v, rates
 
@@ -131,29 +121,31 @@ class CompiledPass:
 
     def vehicle_wrench_into(self, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
                             arm_acceleration: np.ndarray, placement: tuple[np.ndarray, np.ndarray], base_frame: bool,
-                            out: np.ndarray) -> None:
-        """A floating vehicle's inverse dynamics at (q, v) into ``out`` (6,): Mbar and nbar (in the pass's own
-        buffers), then the vehicle rows' body wrench at the base frame, in one compiled call after Pinocchio's
-        (:func:`uvms.numerics._kernels.plant_stage.vehicle_terms_wrench_into`; ``placement``: joint_M_base as
-        (R, p))."""
-        self.kernels.vehicle_terms_wrench_into(*self.inputs(q, v, False), v, *self.scratch, base_acceleration,
-                                               arm_acceleration, *placement, base_frame, out)
+                            out: np.ndarray,
+                            second: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> None:
+        """A floating vehicle's inverse dynamics at (q, v) into ``out`` (6,): Mbar and nbar, then the vehicle rows'
+        body wrench at the base frame, in one compiled call after Pinocchio's
+        (:func:`uvms.numerics._kernels.plant_stage.vehicle_terms_wrench_into`; ``placement``: joint_M_base as (R, p)).
 
-    def observer_terms_into(self, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
-                            arm_acceleration: np.ndarray, placement: tuple[np.ndarray, np.ndarray], base_frame: bool,
-                            out: np.ndarray, second_v: np.ndarray, mass: np.ndarray,
-                            second_bias_forces: np.ndarray) -> None:
-        """:meth:`vehicle_wrench_into` at (q, v) and, at the same q, Mbar into ``mass`` (nv, nv) and nbar at
-        ``second_v`` (nv,) into ``second_bias_forces`` (nv,): crba and the joint Jacobians once for both velocities
-        (:func:`uvms.numerics._kernels.plant_stage.observer_terms_into`; each number the one an evaluation at that
-        velocity alone gives)."""
+        Args:
+            second: None (Mbar and nbar in the pass's own buffers), or (v2 (nv,), Mbar (nv, nv), nbar2 (nv,)): Mbar
+                at q and nbar at v2 written there, crba and the joint Jacobians once for both velocities (each number
+                the one an evaluation at that velocity alone gives).
+        """
+        mass, bias_forces = self.scratch
+        second_h = second_v = second_bias_forces = self.no_wrench
+        second_accelerations = self.no_joint_rows
+        if second is not None:  # first: the first velocity's kinematics then write the same Data
+            second_v, mass, second_bias_forces = second
+            second_h, rows = self.second_inputs(q, second_v)
+            second_accelerations = rows.copy()
+            # typed as the first's rows (read-only views of the Data): the kernel holds one copy of the links' pass
+            second_accelerations.flags.writeable = rows.flags.writeable
         upper, h, jacobian, placements, accelerations, ints, floats = self.inputs(q, v, False)
-        accelerations = accelerations.copy()  # the second velocity's kinematics write the same Data
-        second_h, second_accelerations = self.second_inputs(q, second_v)
-        self.kernels.observer_terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass,
-                                         self.scratch[1], base_acceleration, arm_acceleration, *placement,
-                                         base_frame, out, second_h, second_accelerations, second_v,
-                                         second_bias_forces)
+        self.kernels.vehicle_terms_wrench_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass,
+                                               bias_forces, base_acceleration, arm_acceleration, *placement,
+                                               base_frame, out, second_h, second_accelerations, second_v,
+                                               second_bias_forces)
 
     def dynamics(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
         """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m

@@ -271,10 +271,7 @@ class Plant(ConservedQuantities):
         else None (an integrator's stage: Mbar and nbar in the pass's own buffers)."""
         compiled = self._compiled()
         extra = compiled.no_wrench if fin_wrench is None else fin_wrench
-        if torques:  # the motor torques in the same compiled call
-            return compiled.actuated_dynamics_into(q, x, arm, thrust_command, *thrusters, extra, wrench, rates)
-        compiled.actuated_rate_into(q, x, arm, thrust_command, *thrusters, extra, wrench, *compiled.scratch, rates)
-        return None
+        return compiled.actuated_rate_into(q, x, arm, thrust_command, *thrusters, extra, wrench, rates, torques)
 
     def actuated_stage(self, held: list[np.ndarray],
                        thrusters: tuple[np.ndarray, np.ndarray]) -> Callable[[float, np.ndarray, np.ndarray], tuple]:

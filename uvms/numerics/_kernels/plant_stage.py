@@ -7,8 +7,10 @@ motor torques, the thrusters' wrench, lag and saturation, the state's finiteness
 (:func:`.hydro.plant_terms_into`), subtracts J_base^T w of a wrench w on the vehicle (the base frame's LOCAL Jacobian
 from data.J as ``pin.getFrameJacobian`` forms it), the motors' a_m = (u - qd_m) / tau, the vehicle's right-hand side
 Mbar_bm a_m + nbar_b and its 6 x 6 (3 x 3 planar) solve with numpy's LAPACK (:mod:`.solve`; numba's own solve calls
-SciPy's, whose numbers differ). :func:`vehicle_terms_wrench_into`: a floating vehicle's inverse dynamics
-(:func:`observer_terms_into`: and nbar at a second velocity); :func:`actuation_rows`: a run's wrench and powers.
+SciPy's, whose numbers differ). :func:`vehicle_terms_wrench_into`: a floating vehicle's inverse dynamics (and nbar
+at a second velocity); :func:`actuation_rows`: a run's wrench and powers. One kernel serves each kind of call (the
+stages' rate and the sample's dynamics, the inverse dynamics with or without a second velocity): every kernel loaded
+from the cache costs a run ~1 ms per 20 kB of its code, and these carry the plant's whole pass.
 
 Every number is the one the numpy expressions it replaces gave, bit for bit: elementwise arithmetic in their order
 (numba contracts nothing without ``fastmath``), products through ``np.dot`` on arrays in the layout numpy held them
@@ -29,9 +31,9 @@ from .pose import inverse_action_into
 from .solve import solve_into
 from .vehicle import vehicle_wrench_into
 
-__all__ = ["accelerations_into", "actuated_dynamics_into", "actuated_rate_into", "actuation_rows", "all_finite",
-           "clipped", "finite_clipped_into", "motor_torques_into", "observer_terms_into", "plant_constants",
-           "terms_into", "thrusters_into", "vehicle_terms_wrench_into"]
+__all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
+           "finite_clipped_into", "motor_torques_into", "plant_constants", "terms_into", "thrusters_into",
+           "vehicle_terms_wrench_into"]
 
 
 @njit(cache=True)
@@ -82,9 +84,13 @@ def vehicle_terms_wrench_into(upper: np.ndarray, h: np.ndarray, jacobian: np.nda
                               accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
                               mass: np.ndarray, bias_forces: np.ndarray, base_acceleration: np.ndarray,
                               arm_acceleration: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
-                              base_frame: bool, out: np.ndarray) -> None:
+                              base_frame: bool, out: np.ndarray, second_h: np.ndarray, second_accelerations: np.ndarray,
+                              second_v: np.ndarray, second_bias_forces: np.ndarray) -> None:
     """:func:`terms_into` (no wrench on the vehicle), then the vehicle rows' body wrench at the base frame
-    (:func:`.vehicle.vehicle_wrench_into`) into ``out`` (6,): a floating vehicle's inverse dynamics in one call.
+    (:func:`.vehicle.vehicle_wrench_into`) into ``out`` (6,): a floating vehicle's inverse dynamics in one call; with
+    a second velocity ``second_v`` (nv,; size 0: none), nbar there at the same q into ``second_bias_forces`` (from
+    rnea's ``second_h`` and the joints' ``second_accelerations`` at it; M and the links' Jacobians are the first's):
+    the controller's observer and its feedforward's terms at one configuration.
 
     Args:
         upper ... v, mass, bias_forces: as :func:`terms_into`; base_acceleration ... out: as
@@ -92,23 +98,10 @@ def vehicle_terms_wrench_into(upper: np.ndarray, h: np.ndarray, jacobian: np.nda
     """
     terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, np.zeros(0), mass, bias_forces)
     vehicle_wrench_into(mass, bias_forces, base_acceleration, arm_acceleration, rotation, translation, base_frame, out)
-
-
-@njit(cache=True)
-def observer_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
-                        accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
-                        mass: np.ndarray, bias_forces: np.ndarray, base_acceleration: np.ndarray,
-                        arm_acceleration: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
-                        base_frame: bool, out: np.ndarray, second_h: np.ndarray, second_accelerations: np.ndarray,
-                        second_v: np.ndarray, second_bias_forces: np.ndarray) -> None:
-    """:func:`vehicle_terms_wrench_into`, then nbar at a second velocity at the same q into ``second_bias_forces``
-    (from rnea's ``second_h`` and the joints' ``second_accelerations`` there; M and the links' Jacobians are the
-    first's): the controller's observer and its feedforward's terms at one configuration."""
-    vehicle_terms_wrench_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass, bias_forces,
-                              base_acceleration, arm_acceleration, rotation, translation, base_frame, out)
-    hydro_ints, hydro_floats = _hydro_sizes(ints)
-    plant_terms_into(upper, second_h, jacobian, placements, second_accelerations, second_v, mass, second_bias_forces,
-                     ints[:hydro_ints], floats[:hydro_floats], False)
+    if second_v.size:
+        hydro_ints, hydro_floats = _hydro_sizes(ints)
+        plant_terms_into(upper, second_h, jacobian, placements, second_accelerations, second_v, mass,
+                         second_bias_forces, ints[:hydro_ints], floats[:hydro_floats], False)
 
 
 @njit(cache=True)
@@ -155,46 +148,32 @@ def actuated_rate_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
                        accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, x: np.ndarray,
                        command: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
                        time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray, mass: np.ndarray,
-                       bias_forces: np.ndarray, rate: np.ndarray) -> bool:
+                       bias_forces: np.ndarray, rate: np.ndarray, torque: np.ndarray) -> bool:
     """An actuated plant's rate at its state x = [v (nv,), f (n,), ...] but the base acceleration: the thrusters'
     wrench and lag (:func:`thrusters_into`), plus ``extra`` (the fins' wrench, or size 0), then
-    :func:`accelerations_into` under that wrench.
+    :func:`accelerations_into` under that wrench, then, when ``torque`` has entries, the motor torques of its v'
+    (:func:`motor_torques_into`): a stage's rate, or the rate and the dynamics a step's record keeps, in one call.
 
     Args:
         upper ... floats: as :func:`terms_into`; x: the state's vector part; command: u (n_arm,);
         thrust_command: sat(f_cmd) (n,) [N]; matrix: B (6, n); time_constants: (n,) [s]; extra: (6,) or (0,).
         wrench: (6,) written: B f (+ extra); mass, bias_forces: Mbar, nbar written; rate: (len(x),), its v' and f'
-            written (the rest: the caller's).
+            written (the rest: the caller's); torque: (n_arm,) written, or (0,) (none asked).
 
     Returns:
-        False as :func:`accelerations_into`.
+        False as :func:`accelerations_into` (``torque`` then not written).
     """
     nv, n = h.shape[0], h.shape[0] + matrix.shape[1]
     thrusters_into(matrix, x[nv:n], thrust_command, time_constants, wrench, rate[nv:n])
     if extra.size:
         for i in range(6):
             wrench[i] += extra[i]
-    return accelerations_into(upper, h, jacobian, placements, accelerations, ints, floats, x[:nv], command, wrench,
-                              mass, bias_forces, rate[:nv])
-
-
-@njit(cache=True)
-def actuated_dynamics_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
-                           accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, x: np.ndarray,
-                           command: np.ndarray, thrust_command: np.ndarray, matrix: np.ndarray,
-                           time_constants: np.ndarray, extra: np.ndarray, wrench: np.ndarray, mass: np.ndarray,
-                           bias_forces: np.ndarray, rate: np.ndarray, torque: np.ndarray) -> bool:
-    """:func:`actuated_rate_into`, then the motor torques of its v' (:func:`motor_torques_into`) into ``torque``
-    (n_arm,): the rate and the dynamics a step's record keeps in one call.
-
-    Returns:
-        False as :func:`actuated_rate_into` (``torque`` then not written).
-    """
-    if not actuated_rate_into(upper, h, jacobian, placements, accelerations, ints, floats, x, command,
-                              thrust_command, matrix, time_constants, extra, wrench, mass, bias_forces, rate):
+    if not accelerations_into(upper, h, jacobian, placements, accelerations, ints, floats, x[:nv], command, wrench,
+                              mass, bias_forces, rate[:nv]):
         return False
-    hydro_ints, _ = _hydro_sizes(ints)
-    motor_torques_into(mass, rate[:h.shape[0]], bias_forces, ints[hydro_ints], torque)
+    if torque.size:
+        hydro_ints, _ = _hydro_sizes(ints)
+        motor_torques_into(mass, rate[:nv], bias_forces, ints[hydro_ints], torque)
     return True
 
 
