@@ -57,8 +57,10 @@ class CompiledPass:
         self.second_inputs = _second_inputs(model, data, dynamics_data, joint_arrays, bool(stacked.count))
 
     def accelerations_into(self, q: np.ndarray, v: np.ndarray, command: np.ndarray, body_wrench: np.ndarray | None,
-                           out: np.ndarray | None, mass: np.ndarray, bias_forces: np.ndarray) -> np.ndarray:
-        """v' (nv,) into ``out`` when given (else a new array), Mbar into ``mass``, nbar into ``bias_forces``
+                           out: np.ndarray | None, mass: np.ndarray, bias_forces: np.ndarray,
+                           torque: np.ndarray) -> np.ndarray:
+        """v' (nv,) into ``out`` when given (else a new array), Mbar into ``mass``, nbar into ``bias_forces``, the motor
+        torques of v' into ``torque`` (n_arm,; size 0: none asked)
         (:func:`uvms.numerics._kernels.plant_stage.accelerations_into`).
 
         Raises:
@@ -67,7 +69,7 @@ class CompiledPass:
         acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
         if not self.kernels.accelerations_into(*self.inputs(q, v, body_wrench is not None), v, command,
                                                self.no_wrench if body_wrench is None else body_wrench, mass,
-                                               bias_forces, acceleration):
+                                               bias_forces, acceleration, torque):
             raise singular_system(self.nb)
         return acceleration
 
@@ -146,13 +148,6 @@ class CompiledPass:
                                                bias_forces, base_acceleration, arm_acceleration, *placement,
                                                base_frame, out, second_h, second_accelerations, second_v,
                                                second_bias_forces)
-
-    def dynamics(self, acceleration: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray) -> PlantDynamics:
-        """The PlantDynamics of v' (nv,), Mbar and nbar: the motor torques (M_mb a_b + M_mm a_m) + nbar_m
-        (:func:`uvms.numerics._kernels.plant_stage.motor_torques_into`)."""
-        torque = np.empty(len(acceleration) - self.nb)
-        self.kernels.motor_torques_into(mass, acceleration, bias_forces, self.nb, torque)
-        return PlantDynamics(acceleration, torque, mass)
 
 
 def _inputs(model: pin.Model, data: pin.Data, dynamics_data: pin.Data, joint_arrays: JointArrays, ints: np.ndarray,

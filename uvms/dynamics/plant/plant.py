@@ -249,17 +249,17 @@ class Plant(ConservedQuantities):
                  out: np.ndarray | None = None) -> PlantDynamics:
         """:meth:`evaluate` unchecked, for inner loops whose inputs are checked; ``body_wrench`` (6,) [N, N m]: a wrench
         on the vehicle, FLU at :attr:`base_frame` (the thrusters'); ``out`` (nv,): where v' goes (None: a new array)."""
-        compiled, nv = self._compiled(), self.model.nv
-        mass, bias_forces = np.empty((nv, nv)), np.empty(nv)  # returned: new arrays
-        return compiled.dynamics(compiled.accelerations_into(q, v, command, body_wrench, out, mass, bias_forces), mass,
-                                 bias_forces)
+        nv = self.model.nv
+        mass, bias_forces, torque = np.empty((nv, nv)), np.empty(nv), np.empty(nv - self.nb)  # returned: new arrays
+        acceleration = self._compiled().accelerations_into(q, v, command, body_wrench, out, mass, bias_forces, torque)
+        return PlantDynamics(acceleration, torque, mass)
 
     def stage_acceleration(self, q: np.ndarray, v: np.ndarray, command: np.ndarray,
                            body_wrench: np.ndarray | None = None, out: np.ndarray | None = None) -> np.ndarray:
         """v' (nv,) of :meth:`dynamics` alone (the same numbers), without the motor torques: an integrator's stage
         (Mbar and nbar in the pass's own buffers, overwritten at every call)."""
         compiled = self._compiled()
-        return compiled.accelerations_into(q, v, command, body_wrench, out, *compiled.scratch)
+        return compiled.accelerations_into(q, v, command, body_wrench, out, *compiled.scratch, compiled.no_wrench)
 
     def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
                            thrusters: tuple[np.ndarray, np.ndarray], fin_wrench: np.ndarray | None,

@@ -108,19 +108,21 @@ def vehicle_terms_wrench_into(upper: np.ndarray, h: np.ndarray, jacobian: np.nda
 def accelerations_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
                        accelerations: np.ndarray, ints: np.ndarray, floats: np.ndarray, v: np.ndarray,
                        command: np.ndarray, wrench: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray,
-                       acceleration: np.ndarray) -> bool:
+                       acceleration: np.ndarray, torque: np.ndarray) -> bool:
     """:func:`terms_into`, then v' (nv,) into ``acceleration``: the motors' a_m, then the vehicle's a_b =
-    -solve(Mbar_bb, rhs) with numpy's LAPACK (:func:`.solve.solve_into`).
+    -solve(Mbar_bb, rhs) with numpy's LAPACK (:func:`.solve.solve_into`); then, when ``torque`` has entries, the motor
+    torques of v' (:func:`motor_torques_into`): an integrator's stage, or the dynamics a step's record keeps.
 
     a_m = (u - qd_m) / tau (numpy's ``np.subtract(u, v[nb:]); /= tau``), rhs = Mbar_bm a_m + nbar_b (``mass[:nb,
     nb:] @ a_m; += nbar[:nb]``).
 
     Args:
         upper ... wrench, mass, bias_forces: as :func:`terms_into`; command: u (n_arm,) [rad/s or m/s].
-        acceleration: v' (nv,) written.
+        acceleration: v' (nv,) written; torque: (n_arm,) written, or (0,) (none asked).
 
     Returns:
-        False when the vehicle's block is singular or a_b not finite (``acceleration`` is then not the rate).
+        False when the vehicle's block is singular or a_b not finite (``acceleration`` is then not the rate,
+        ``torque`` not written).
     """
     terms_into(upper, h, jacobian, placements, accelerations, ints, floats, v, wrench, mass, bias_forces)
     hydro_ints, hydro_floats = _hydro_sizes(ints)
@@ -140,6 +142,8 @@ def accelerations_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
         return False
     for i in range(nb):
         acceleration[i] = -base[i]
+    if torque.size:
+        motor_torques_into(mass, acceleration, bias_forces, nb, torque)
     return True
 
 
@@ -168,13 +172,8 @@ def actuated_rate_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
     if extra.size:
         for i in range(6):
             wrench[i] += extra[i]
-    if not accelerations_into(upper, h, jacobian, placements, accelerations, ints, floats, x[:nv], command, wrench,
-                              mass, bias_forces, rate[:nv]):
-        return False
-    if torque.size:
-        hydro_ints, _ = _hydro_sizes(ints)
-        motor_torques_into(mass, rate[:nv], bias_forces, ints[hydro_ints], torque)
-    return True
+    return accelerations_into(upper, h, jacobian, placements, accelerations, ints, floats, x[:nv], command, wrench,
+                              mass, bias_forces, rate[:nv], torque)
 
 
 @njit(cache=True)
