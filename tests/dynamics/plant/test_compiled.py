@@ -75,3 +75,40 @@ def test_the_observers_call_gives_each_velocitys_numbers_as_evaluated_alone(rng)
         assert np.array_equal(wrench, expected)
         assert np.array_equal(got_mass, mass) and np.array_equal(got_bias, bias)
         assert not np.array_equal(got_bias, compiled.terms(q, v, None)[1])
+
+
+def test_each_shared_kernel_is_called_with_one_set_of_argument_types(rng):
+    """The kinds of call that share a kernel pass it arguments of the same types, so that a run compiles and loads
+    one specialization of it: an actuated plant's stage (no torques) and its step's sample (the torques) to
+    actuated_rate_into, a passive stage and the plant's dynamics to accelerations_into, the vehicle's inverse
+    dynamics with and without a second velocity to vehicle_terms_wrench_into (a second velocity's joints' rows copied
+    writable, or typed apart from the Data's read-only views, would make a second one)."""
+    import numba
+
+    from uvms.dynamics.plant.actuated import ActuatedPlant, vehicle_inverse_dynamics
+
+    actuated = ActuatedPlant.of(Plant(shipped("bluerov2_alpha5"), gravity=True, current=[0.1, 0.0, -0.05]))
+    plant, nv = actuated.plant, actuated.model.nv
+    compiled = plant._compiled()
+    kernels, typed = compiled.kernels, {}
+
+    class Recording:  # the kernels' module: each call's argument types kept by kernel, then the call
+        def __getattr__(self, name):
+            def call(*args):
+                typed.setdefault(name, set()).add(tuple(numba.typeof(argument) for argument in args))
+                return getattr(kernels, name)(*args)
+            return call
+
+    compiled.kernels = Recording()
+    system = actuated.system(None, dt=0.01)
+    q, x = system.initial_state(plant.robot.random_configuration(rng), rng.normal(size=nv))
+    sample = system.sample(0.0, q, x)
+    system.stage_rate(sample)(0.0, q, x)
+    v, arm = x[:nv], rng.normal(size=plant.n_arm)
+    plant.dynamics(q, v, arm)
+    plant.stage_acceleration(q, v, arm)
+    base = rng.normal(size=6)
+    vehicle_inverse_dynamics(plant, q, v, base, arm)
+    vehicle_inverse_dynamics(plant, q, v, base, arm, second=(rng.normal(size=nv), np.empty((nv, nv)), np.empty(nv)))
+    assert sorted(typed) == ["accelerations_into", "actuated_rate_into", "vehicle_terms_wrench_into"]
+    assert {name: len(types) for name, types in typed.items()} == dict.fromkeys(typed, 1)
