@@ -137,11 +137,11 @@ class CompiledPass:
         mass, bias_forces = self.scratch
         second_h = second_v = second_bias_forces = self.no_wrench
         second_accelerations = self.no_joint_rows
-        if second is not None:  # first: the first velocity's kinematics then write the same Data
+        if second is not None:  # evaluated first: the first velocity's kinematics then overwrite the same Data
             second_v, mass, second_bias_forces = second
             second_h, rows = self.second_inputs(q, second_v)
             second_accelerations = rows.copy()
-            # typed as the first's rows (read-only views of the Data): the kernel holds one copy of the links' pass
+            # typed as the first's rows (the Data's read-only views): one specialization of the kernel for both calls
             second_accelerations.flags.writeable = rows.flags.writeable
         upper, h, jacobian, placements, accelerations, ints, floats = self.inputs(q, v, False)
         self.kernels.vehicle_terms_wrench_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass,
