@@ -51,8 +51,9 @@ class CompiledPass:
                                                    motor_time_constant)
         nv = model.nv
         self.scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
-        self.no_wrench, self.no_joint_rows = np.zeros(0), np.zeros((0, 6))
-        self.no_joint_rows.flags.writeable = joint_arrays.read()[1].flags.writeable  # (typed as the Data's rows)
+        # none of a (n,) or a (k, 6) argument: no wrench, no torques, no second velocity
+        self.empty, self.empty_rows = np.zeros(0), np.zeros((0, 6))
+        self.empty_rows.flags.writeable = joint_arrays.read()[1].flags.writeable  # (typed as the Data's rows)
         self.inputs = _inputs(model, data, dynamics_data, joint_arrays, ints, floats, bool(stacked.count))
         self.second_inputs = _second_inputs(model, data, dynamics_data, joint_arrays, bool(stacked.count))
 
@@ -68,7 +69,7 @@ class CompiledPass:
         """
         acceleration = np.empty(len(v)) if out is None else out  # [base; arm], filled in place
         if not self.kernels.accelerations_into(*self.inputs(q, v, body_wrench is not None), v, command,
-                                               self.no_wrench if body_wrench is None else body_wrench, mass,
+                                               self.empty if body_wrench is None else body_wrench, mass,
                                                bias_forces, acceleration, torque):
             raise singular_system(self.nb)
         return acceleration
@@ -86,7 +87,7 @@ class CompiledPass:
         """
         nv = self.nv
         mass, bias_forces = (np.empty((nv, nv)), np.empty(nv)) if torques else self.scratch
-        torque = np.empty(nv - self.nb) if torques else self.no_wrench
+        torque = np.empty(nv - self.nb) if torques else self.empty
         if not self.kernels.actuated_rate_into(*self.inputs(q, x[:nv], True), x, arm, thrust_command, matrix,
                                                time_constants, extra, wrench, mass, bias_forces, rates, torque):
             raise singular_system(self.nb)
@@ -99,15 +100,15 @@ class CompiledPass:
         ``held`` = [u (n_arm,), sat(f_cmd) (n,) [N]] at each call (the caller's list, which it points at each step's
         commands): an integrator's stage (:data:`uvms.numerics.integrate.Rate`), made once per system (Mbar and
         nbar in the pass's own buffers)."""
-        kernel, inputs, no_wrench, (mass, bias_forces) = (self.kernels.actuated_rate_into, self.inputs, self.no_wrench,
-                                                         self.scratch)
+        kernel, inputs, none, (mass, bias_forces) = (self.kernels.actuated_rate_into, self.inputs, self.empty,
+                                                     self.scratch)
         nb, nv, empty, wrench = self.nb, self.nv, np.empty, np.empty(6)  # the wrench: written, not read
 
         def stage(_t: float, q: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # held commands: t unread
             rates, v = empty(len(x)), x[:nv]
             arm, thrust_command = held
-            if not kernel(*inputs(q, v, True), x, arm, thrust_command, matrix, time_constants, no_wrench, wrench, mass,
-                          bias_forces, rates, no_wrench):  # (no torques)
+            if not kernel(*inputs(q, v, True), x, arm, thrust_command, matrix, time_constants, none, wrench, mass,
+                          bias_forces, rates, none):  # (no fins' wrench, no torques)
                 raise singular_system(nb)
             return v, rates
 
@@ -118,7 +119,7 @@ class CompiledPass:
         nv = len(v)
         mass, bias_forces = np.empty((nv, nv)), np.empty(nv)
         self.kernels.terms_into(*self.inputs(q, v, body_wrench is not None), v,
-                                self.no_wrench if body_wrench is None else body_wrench, mass, bias_forces)
+                                self.empty if body_wrench is None else body_wrench, mass, bias_forces)
         return mass, bias_forces
 
     def vehicle_wrench_into(self, q: np.ndarray, v: np.ndarray, base_acceleration: np.ndarray,
@@ -135,8 +136,8 @@ class CompiledPass:
                 the one an evaluation at that velocity alone gives).
         """
         mass, bias_forces = self.scratch
-        second_h = second_v = second_bias_forces = self.no_wrench
-        second_accelerations = self.no_joint_rows
+        second_h = second_v = second_bias_forces = self.empty
+        second_accelerations = self.empty_rows
         if second is not None:  # evaluated first: the first velocity's kinematics then overwrite the same Data
             second_v, mass, second_bias_forces = second
             second_h, rows = self.second_inputs(q, second_v)

@@ -259,7 +259,7 @@ class Plant(ConservedQuantities):
         """v' (nv,) of :meth:`dynamics` alone (the same numbers), without the motor torques: an integrator's stage
         (Mbar and nbar in the pass's own buffers, overwritten at every call)."""
         compiled = self._compiled()
-        return compiled.accelerations_into(q, v, command, body_wrench, out, *compiled.scratch, compiled.no_wrench)
+        return compiled.accelerations_into(q, v, command, body_wrench, out, *compiled.scratch, compiled.empty)
 
     def actuated_rate_into(self, q: np.ndarray, x: np.ndarray, arm: np.ndarray, thrust_command: np.ndarray,
                            thrusters: tuple[np.ndarray, np.ndarray], fin_wrench: np.ndarray | None,
@@ -270,7 +270,7 @@ class Plant(ConservedQuantities):
         (:meth:`~uvms.dynamics.plant.compiled.CompiledPass.actuated_rate_into`); the PlantDynamics with ``torques``,
         else None (an integrator's stage: Mbar and nbar in the pass's own buffers)."""
         compiled = self._compiled()
-        extra = compiled.no_wrench if fin_wrench is None else fin_wrench
+        extra = compiled.empty if fin_wrench is None else fin_wrench
         return compiled.actuated_rate_into(q, x, arm, thrust_command, *thrusters, extra, wrench, rates, torques)
 
     def actuated_stage(self, held: list[np.ndarray],
