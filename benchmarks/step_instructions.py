@@ -122,31 +122,50 @@ def counted_run(kind: str, count: int, folder: Path, caches: tuple[str, str, str
     subprocess.run(["valgrind", "--tool=callgrind", *simulation, f"--callgrind-out-file={out}", sys.executable, "-c",
                     CHILD, kind, str(count), str(SCENARIO), str(ROOT / "benchmarks")], cwd=ROOT, env=environment,
                    check=True, capture_output=True)
-    listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", str(out)], check=True,
-                             capture_output=True, text=True).stdout
+    listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", "--show-percs=no", str(out)],
+                             check=True, capture_output=True, text=True).stdout
     by_object: Counter = Counter()
     events: list[str] = []
     for line in listing.splitlines():
         if line.startswith("Events shown:"):
             events = line.split(":", 1)[1].split()
-        found = re.match(r"\s*([\d,]+)\s+(?:\([^)]*\)\s+)?\S.*\[(.*)\]\s*$", line)
-        if found and "PROGRAM TOTALS" not in line:
-            by_object[found.group(2).rsplit("/", 1)[-1]] += int(found.group(1).replace(",", ""))
-        elif "PROGRAM TOTALS" in line and caches is not None:  # every event's total, "." for none
-            totals = dict(zip(events, (int(value.replace(",", "")) if value != "." else 0 for value in
-                                       re.findall(r"([\d,]+|\.)(?:\s+\([^)]*\))?", line.split("PROGRAM")[0]))))
+        found = re.match(r"\s*((?:(?:[\d,]+|\.)\s+)+)(\S.*)$", line)
+        if not found or not events:
+            continue
+        values = dict(zip(events, (int(value.replace(",", "")) if value != "." else 0
+                                   for value in found.group(1).split())))
+        if "PROGRAM TOTALS" in found.group(2):
+            totals = values
+            continue
+        where = re.search(r"\[(.*)\]\s*$", found.group(2))
+        if where is None:
+            continue
+        name = where.group(1).rsplit("/", 1)[-1]
+        by_object[name] += values.get("Ir", 0)
+        if caches is not None:  # each miss where it happened: (label, object)
             for label, names in MISSES:
-                by_object[label] = sum(totals.get(name, 0) for name in names)
+                by_object[(label, name)] += sum(values.get(event, 0) for event in names)
+    if caches is not None:  # the run's totals, every object's included
+        for label, names in MISSES:
+            by_object[label] = sum(totals.get(event, 0) for event in names)
     return by_object
 
 
 def by_component(by_object: Counter) -> Counter:
-    """Instructions by component (:data:`COMPONENTS`; "other" for an object none names); cache misses kept."""
+    """Instructions by component (:data:`COMPONENTS`; "other" for an object none names); the cache misses' totals
+    kept, their (label, object) counts summed by (label, component)."""
     components: Counter = Counter()
     for name, count in by_object.items():
-        components[name if name in MISSED else next((label for key, label in COMPONENTS if key in name),
-                                                    "other")] += count
+        if isinstance(name, tuple):
+            components[name[0], component_of(name[1])] += count
+        else:
+            components[name if name in MISSED else component_of(name)] += count
     return components
+
+
+def component_of(name: str) -> str:
+    """The component (:data:`COMPONENTS`) of a shared object's file name; "other" for one none names."""
+    return next((label for key, label in COMPONENTS if key in name), "other")
 
 
 def per_call(kind: str, low: int, high: int, folder: Path, caches: tuple[str, str, str] | None = None) -> Counter:
@@ -157,10 +176,12 @@ def per_call(kind: str, low: int, high: int, folder: Path, caches: tuple[str, st
     return Counter({name: (long[name] - short[name]) / (high - low) for name in long | short})
 
 
-def split_misses(counts: Counter) -> tuple[Counter, dict[str, float]]:
-    """(the instructions by component, the cache misses by label) of :func:`per_call`'s counts."""
-    return (Counter({name: value for name, value in counts.items() if name not in MISSED}),
-            {label: counts[label] for label, _ in MISSES if label in counts})
+def split_misses(counts: Counter) -> tuple[Counter, dict]:
+    """(the instructions by component, the cache misses by label and by (label, component)) of :func:`per_call`'s
+    counts."""
+    return (Counter({name: value for name, value in counts.items() if not isinstance(name, tuple)
+                     and name not in MISSED}),
+            {name: value for name, value in counts.items() if isinstance(name, tuple) or name in MISSED})
 
 
 def main() -> None:
@@ -223,6 +244,12 @@ def main() -> None:
             cells = (f" {misses(counts[label])} | {1e3 * max(counts[label], 0.0) / executed:.1f} |"
                      for _, counts, executed in runs)
             print(f"| {label} |" + "".join(cells))
+        print(f"\n| a step's misses by where they happened | {' | '.join(label for label, _ in MISSES)} |")
+        print("|---|" + "---|" * len(MISSES))
+        for component in sorted({name[1] for name in step_misses if isinstance(name, tuple)},
+                                key=lambda part: -step_misses.get((MISSES[0][0], part), 0.0)):
+            print(f"| {component} |" + "".join(f" {misses(step_misses.get((label, component), 0.0))} |"
+                                               for label, _ in MISSES))
 
 
 def misses(count: float) -> str:
