@@ -122,7 +122,8 @@ def counted_run(kind: str, count: int, folder: Path, caches: tuple[str, str, str
     subprocess.run(["valgrind", "--tool=callgrind", *simulation, f"--callgrind-out-file={out}", sys.executable, "-c",
                     CHILD, kind, str(count), str(SCENARIO), str(ROOT / "benchmarks")], cwd=ROOT, env=environment,
                    check=True, capture_output=True)
-    listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", "--show-percs=no", str(out)],
+    listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", "--show-percs=no", "--auto=no",
+                              str(out)],
                              check=True, capture_output=True, text=True).stdout
     by_object: Counter = Counter()
     events: list[str] = []
