@@ -18,11 +18,13 @@ is counted the same way, and taken apart: numba's crossing of its kernel calls (
 arguments, :func:`step_floor.noop_calls`), Pinocchio's and LAPACK's calls with their bindings, and the kernels' own
 work (the rest); the step less its floor is the Python between the calls.
 
-A ratio in instructions is not one in time: a step runs its instructions at about half the rate aba runs
-its own, so its time ratio (``bench_actuated.py``) is about twice its instruction ratio. ``--cache`` says why: with
+A ratio in instructions is not one in time: a step runs its instructions at a lower rate than aba runs its own, so
+its time ratio (``bench_actuated.py``) is above its instruction ratio (98x against 116-135x on 2026-12-07; about
+twice as much when the step had more Python). ``--cache`` says why: with
 callgrind's cache simulation (a 64 KiB L1 instruction cache, 48 KiB L1 data, a 2 MiB L2 as the last level: this
-machine's, ``--caches`` to model another) it adds each run's misses per step and per aba: a step's code does not
-fit the L1 instruction cache, aba's does.
+machine's, ``--caches`` to model another) it adds each run's misses per step and per aba, and a step's misses by
+the component they happened in (the instruction table's): a step's code does not fit the L1 instruction cache, aba's
+does.
 
 The numba cache is keyed by the CPU numba sees, and valgrind's is another: after a kernel's source changes (or on a
 first run) valgrind's kernels are compiled again, which the two counted runs would each do, in unequal counts.
@@ -127,6 +129,7 @@ def counted_run(kind: str, count: int, folder: Path, caches: tuple[str, str, str
                              check=True, capture_output=True, text=True).stdout
     by_object: Counter = Counter()
     events: list[str] = []
+    totals: dict[str, int] = {}  # the PROGRAM TOTALS row's events
     for line in listing.splitlines():
         if line.startswith("Events shown:"):
             events = line.split(":", 1)[1].split()
