@@ -4,11 +4,14 @@ Wall-clock ratios on this machine move by 30-60 % within an hour (shared cores);
 not. Under valgrind's callgrind, one process runs the intervention (``scenarios/bluerov2_alpha5_intervention.toml``,
 built once, its kernels loaded by a short first run) for ``LOW`` steps and another for ``LOW + --steps`` steps; their
 difference over ``--steps`` is one step (its share of the run's after-loop series included). Two more processes
-count ``pin.aba`` on the same model the same way. Each count is split by the shared object its instructions ran in:
+count ``pin.aba`` on the same model the same way. Each count is read from callgrind's file (:func:`object_costs`:
+code inlined from headers included) and split by the shared object its instructions ran in:
 
-* compiled work: numba's kernels (JIT code, no object), BLAS and LAPACK, Pinocchio's library, coal;
+* compiled work: numba's kernels (JIT code, no object), BLAS and LAPACK, Pinocchio's algorithms (in its library, or
+  compiled into its Python module as aba is), coal;
 * calling it from Python: the interpreter, numpy's C API (arrays made and indexed, ufuncs on small vectors), the C
-  library (malloc, free, memcpy), numba's dispatch and runtime, Pinocchio's bindings (Boost.Python, eigenpy).
+  library (malloc, free, memcpy), numba's dispatch and runtime, Pinocchio's bindings (boost::python, eigenpy and
+  pinocchio::python's wrappers).
 
 OpenBLAS runs on one thread here (``OPENBLAS_NUM_THREADS=1``): its idle workers spin, and callgrind would count the
 spinning.
@@ -38,7 +41,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -55,11 +57,18 @@ LOW = 10  # steps of the shorter run: its fixed costs (imports, the build, the f
 CACHES = ("65536,8,64", "49152,12,64", "2097152,16,64")
 
 #: (substring of a shared object's file name, component), the first match wins; JIT code has no object ("???")
+#: Pinocchio's algorithms are compiled into its Python module as well as into its library (pin.aba's work runs in the
+#: module): there a function of the binding layers (boost::python's calls, eigenpy's conversions, pinocchio::python's
+#: wrappers) counts as the bindings, any other (an algorithm, Eigen's code) as Pinocchio's algorithms, under this
+#: prefix of its object's name.
+BINDING_LAYERS = ("boost::python", "eigenpy", "pinocchio::python")
+ALGORITHMS = "pinocchio's algorithms in "
 COMPONENTS = (
+    (ALGORITHMS, "Pinocchio's algorithms"),
     ("???", "numba's kernels (JIT code)"),
     ("openblas", "BLAS and LAPACK"), ("_flapack", "BLAS and LAPACK"), ("_fblas", "BLAS and LAPACK"),
     ("cython_blas", "BLAS and LAPACK"), ("cython_lapack", "BLAS and LAPACK"),
-    ("libpinocchio", "Pinocchio's library"), ("libcoal", "coal"),
+    ("libpinocchio", "Pinocchio's algorithms"), ("libcoal", "coal"),
     ("libpython", "the interpreter"), ("_multiarray_umath", "numpy's C API"), ("_umath_linalg", "numpy's C API"),
     ("libc.so", "the C library (malloc, free, memcpy)"), ("libm.so", "the C library (malloc, free, memcpy)"),
     ("_dispatcher", "numba's dispatch and runtime"), ("_nrt_python", "numba's dispatch and runtime"),
@@ -67,7 +76,7 @@ COMPONENTS = (
     ("pinocchio_pywrap", "Pinocchio's bindings"), ("boost_python", "Pinocchio's bindings"),
     ("eigenpy", "Pinocchio's bindings"),
 )
-COMPILED = ("numba's kernels (JIT code)", "BLAS and LAPACK", "Pinocchio's library", "coal")
+COMPILED = ("numba's kernels (JIT code)", "BLAS and LAPACK", "Pinocchio's algorithms", "coal")
 
 CHILD = """
 import sys
@@ -124,35 +133,78 @@ def counted_run(kind: str, count: int, folder: Path, caches: tuple[str, str, str
     subprocess.run(["valgrind", "--tool=callgrind", *simulation, f"--callgrind-out-file={out}", sys.executable, "-c",
                     CHILD, kind, str(count), str(SCENARIO), str(ROOT / "benchmarks")], cwd=ROOT, env=environment,
                    check=True, capture_output=True)
-    listing = subprocess.run(["callgrind_annotate", "--threshold=100", "--inclusive=no", "--show-percs=no", "--auto=no",
-                              str(out)],
-                             check=True, capture_output=True, text=True).stdout
+    _, costs = object_costs(out)
     by_object: Counter = Counter()
-    events: list[str] = []
-    totals: dict[str, int] = {}  # the PROGRAM TOTALS row's events
-    for line in listing.splitlines():
-        if line.startswith("Events shown:"):
-            events = line.split(":", 1)[1].split()
-        found = re.match(r"\s*((?:(?:[\d,]+|\.)\s+)+)(\S.*)$", line)
-        if not found or not events:
-            continue
-        values = dict(zip(events, (int(value.replace(",", "")) if value != "." else 0
-                                   for value in found.group(1).split())))
-        if "PROGRAM TOTALS" in found.group(2):
-            totals = values
-            continue
-        where = re.search(r"\[(.*)\]\s*$", found.group(2))
-        if where is None:
-            continue
-        name = where.group(1).rsplit("/", 1)[-1]
+    for name, values in costs.items():
+        name = file_name(name)
         by_object[name] += values.get("Ir", 0)
-        if caches is not None:  # each miss where it happened: (label, object)
+        if caches is not None:  # each miss where it happened: (label, object), and the run's totals
             for label, names in MISSES:
-                by_object[(label, name)] += sum(values.get(event, 0) for event in names)
-    if caches is not None:  # the run's totals, every object's included
-        for label, names in MISSES:
-            by_object[label] = sum(totals.get(event, 0) for event in names)
+                missed = sum(values.get(event, 0) for event in names)
+                by_object[(label, name)] += missed
+                by_object[label] += missed
     return by_object
+
+
+def object_costs(path: Path) -> tuple[list[str], dict[str, dict[str, int]]]:
+    """(the events, each shared object's own cost by event) of a callgrind output file, read as its format defines:
+    every cost line is counted in the object of the function it is in (``ob=``), code inlined from a header (``fi=``,
+    ``fe=``) included (callgrind_annotate lists such code without its object); the cost line after ``calls=`` is a
+    call's inclusive cost and is left out. JIT code has no object (``???``); Pinocchio's algorithms in its Python
+    module are counted under :data:`ALGORITHMS` + the module's name."""
+    events: list[str] = []
+    positions = 1
+    objects: dict[str, str] = {}  # a compressed id "(n)" -> its name, objects and functions apart
+    functions: dict[str, str] = {}
+    current, function = "???", ""
+    after_call = False
+    costs: dict[str, list[int]] = {}
+    with open(path) as lines:
+        for line in lines:
+            head = line[:1]
+            if head.isdigit() or head in "+-*":
+                if after_call:  # the call's inclusive cost: the callee's own lines count it
+                    after_call = False
+                    continue
+                where = current
+                if "pinocchio_pywrap" in current and not any(layer in function for layer in BINDING_LAYERS):
+                    where = ALGORITHMS + current
+                row = costs.setdefault(where, [0] * len(events))
+                for index, value in enumerate(line.split()[positions:]):
+                    row[index] += int(value)
+            elif line.startswith(("ob=", "cob=")):
+                name = compressed_name(line, objects)
+                if line.startswith("ob="):
+                    current = name
+            elif line.startswith(("fn=", "cfn=")):
+                name = compressed_name(line, functions)
+                if line.startswith("fn="):
+                    function = name
+            elif line.startswith("calls="):
+                after_call = True
+            elif line.startswith("events:"):
+                events = line.split()[1:]
+            elif line.startswith("positions:"):
+                positions = len(line.split()) - 1
+    return events, {name: dict(zip(events, row)) for name, row in costs.items()}
+
+
+def file_name(name: str) -> str:
+    """An object's file name without its folder, :data:`ALGORITHMS`' prefix kept."""
+    prefix = ALGORITHMS if name.startswith(ALGORITHMS) else ""
+    return prefix + name[len(prefix):].rsplit("/", 1)[-1]
+
+
+def compressed_name(line: str, names: dict[str, str]) -> str:
+    """The name a callgrind ``key=(id) name`` or ``key=(id)`` line gives (the id's first line defines it, ``names``
+    keeps it); a line without an id gives its name as it is."""
+    value = line.split("=", 1)[1].strip()
+    if not value.startswith("("):
+        return value
+    key, _, name = value.partition(" ")
+    if name:
+        names[key] = name
+    return names.get(key, "???")
 
 
 def by_component(by_object: Counter) -> Counter:
@@ -199,7 +251,7 @@ def main() -> None:
                         help="the simulated caches as valgrind's size,associativity,line (default: %(default)s)")
     options = parser.parse_args()
     caches = tuple(options.caches) if options.cache else None
-    if shutil.which("valgrind") is None or shutil.which("callgrind_annotate") is None:
+    if shutil.which("valgrind") is None:
         sys.exit("step_instructions: valgrind is not installed (Debian: apt-get install valgrind)")
     print(f"checkout {ROOT}: {options.steps} steps of {SCENARIO.name} and {options.abas} pin.aba under callgrind",
           flush=True)
