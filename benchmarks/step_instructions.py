@@ -22,7 +22,7 @@ arguments, :func:`step_floor.noop_calls`), Pinocchio's and LAPACK's calls with t
 work (the rest); the step less its floor is the Python between the calls.
 
 A ratio in instructions is not one in time: a step runs its instructions at a lower rate than aba runs its own, so
-its time ratio (``bench_actuated.py``) is above its instruction ratio (98x against 116-135x on 2026-12-07; about
+its time ratio (``bench_actuated.py``) is above its instruction ratio (100x against 116-135x on 2026-12-07; about
 twice as much when the step had more Python). ``--cache`` says why: with
 callgrind's cache simulation (a 64 KiB L1 instruction cache, 48 KiB L1 data, a 2 MiB L2 as the last level: this
 machine's, ``--caches`` to model another) it adds each run's misses per step and per aba, and a step's misses by
@@ -56,13 +56,13 @@ LOW = 10  # steps of the shorter run: its fixed costs (imports, the build, the f
 #: data caches and its 2 MiB L2 as the last level (its L3 is shared with other machines' work)
 CACHES = ("65536,8,64", "49152,12,64", "2097152,16,64")
 
-#: (substring of a shared object's file name, component), the first match wins; JIT code has no object ("???")
 #: Pinocchio's algorithms are compiled into its Python module as well as into its library (pin.aba's work runs in the
 #: module): there a function of the binding layers (boost::python's calls, eigenpy's conversions, pinocchio::python's
 #: wrappers) counts as the bindings, any other (an algorithm, Eigen's code) as Pinocchio's algorithms, under this
 #: prefix of its object's name.
 BINDING_LAYERS = ("boost::python", "eigenpy", "pinocchio::python")
 ALGORITHMS = "pinocchio's algorithms in "
+#: (substring of a shared object's file name, component), the first match wins; JIT code has no object ("???")
 COMPONENTS = (
     (ALGORITHMS, "Pinocchio's algorithms"),
     ("???", "numba's kernels (JIT code)"),
