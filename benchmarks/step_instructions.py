@@ -157,6 +157,7 @@ def object_costs(path: Path) -> tuple[list[str], dict[str, dict[str, int]]]:
     objects: dict[str, str] = {}  # a compressed id "(n)" -> its name, objects and functions apart
     functions: dict[str, str] = {}
     current, function = "???", ""
+    where = current  # the name the current function's lines count under, set where the object or function changes
     after_call = False
     costs: dict[str, list[int]] = {}
     with open(path) as lines:
@@ -166,20 +167,17 @@ def object_costs(path: Path) -> tuple[list[str], dict[str, dict[str, int]]]:
                 if after_call:  # the call's inclusive cost: the callee's own lines count it
                     after_call = False
                     continue
-                where = current
-                if "pinocchio_pywrap" in current and not any(layer in function for layer in BINDING_LAYERS):
-                    where = ALGORITHMS + current
                 row = costs.setdefault(where, [0] * len(events))
                 for index, value in enumerate(line.split()[positions:]):
                     row[index] += int(value)
-            elif line.startswith(("ob=", "cob=")):
-                name = compressed_name(line, objects)
+            elif line.startswith(("ob=", "cob=", "fn=", "cfn=")):
+                name = compressed_name(line, objects if "ob=" in line[:4] else functions)
                 if line.startswith("ob="):
                     current = name
-            elif line.startswith(("fn=", "cfn=")):
-                name = compressed_name(line, functions)
-                if line.startswith("fn="):
+                elif line.startswith("fn="):
                     function = name
+                in_module = "pinocchio_pywrap" in current and not any(layer in function for layer in BINDING_LAYERS)
+                where = ALGORITHMS + current if in_module else current
             elif line.startswith("calls="):
                 after_call = True
             elif line.startswith("events:"):
