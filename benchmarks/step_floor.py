@@ -26,6 +26,7 @@ numba of this environment.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import time
 import timeit
@@ -44,6 +45,9 @@ ROOT = Path(uvms.__file__).resolve().parent.parent  # the checkout imported (PYT
 SCENARIO = ROOT / "scenarios" / "bluerov2_alpha5_intervention.toml"
 
 Call = tuple[str, Callable, tuple]  # (kind:name, the original callable, copies of its arguments)
+#: numba's own call of a kernel (the C type's), which :meth:`Recorder.install` leaves in place: the replays and the
+#: no-op kernels call through it, not through the recorder's wrapper
+NUMBA_CALL = _dispatcher.Dispatcher.__call__
 
 
 class Recorder:
@@ -71,14 +75,13 @@ class Recorder:
 
     def install(self) -> None:
         """Wrap the three kinds of compiled call (before uvms binds any of them)."""
-        call = _dispatcher.Dispatcher.__call__
         recorder = self
 
         def numba_call(kernel, *args, **keywords):
             name = f"numba:{kernel.py_func.__name__}"
-            recorder.keep(name, lambda *a, _k=kernel: call(_k, *a), args)
+            recorder.keep(name, functools.partial(NUMBA_CALL, kernel), args)
             recorder.mark(name)
-            result = call(kernel, *args, **keywords)
+            result = NUMBA_CALL(kernel, *args, **keywords)
             recorder.done(name)
             return result
 
@@ -192,20 +195,23 @@ def replay_times(calls: list[Call], model: pin.Model, aba: Callable,
 
 def noop_calls(calls: list[Call]) -> list[tuple[Callable, tuple]]:
     """The step's numba calls as no-op kernels of as many arguments, each with its call's own arguments (numba's
-    dispatch and unboxing, no arithmetic), compiled here (called once each)."""
-    from numba import njit
+    dispatch and unboxing, no arithmetic), compiled here (called once each): one no-op per signature of arguments,
+    so that each has one specialization as the step's kernels have, each called through numba's own call (not the
+    recorder's Python wrapper, which :meth:`Recorder.install` put on every dispatcher of this process)."""
+    from numba import njit, typeof
 
-    noops: dict[int, Callable] = {}
+    noops: dict[tuple, Callable] = {}
     replayed = []
     for name, _, args in calls:
         if name.startswith("numba:"):
-            if len(args) not in noops:
+            signature = tuple(map(typeof, args))
+            if signature not in noops:
                 names = ", ".join(f"a{index}" for index in range(len(args)))
                 namespace: dict = {}
                 exec(f"def noop({names}):\n    return 0\n", namespace)  # the script's own source, no input
-                noops[len(args)] = njit(cache=False)(namespace["noop"])
-            noops[len(args)](*args)
-            replayed.append((noops[len(args)], args))
+                noops[signature] = functools.partial(NUMBA_CALL, njit(cache=False)(namespace["noop"]))
+                noops[signature](*args)
+            replayed.append((noops[signature], args))
     return replayed
 
 
