@@ -73,6 +73,35 @@ def test_a_set_based_solver_reused_over_configurations_and_targets_equals_fresh_
     assert scaled > 0 or "dt" not in options
 
 
+@pytest.mark.parametrize("options", [dict(gain=2.0, dt=0.05), dict(gain=2.0, damping=0.05, eta=0.5, dt=0.05)])
+def test_a_stage_velocity_reads_the_plan_s_own_stacks_and_gives_a_result_s_velocity_bit_for_bit(rng, options):
+    """stage_velocity solves from the plan's own stacks (HierarchyPlan.stage_stacks, written over at each call, a
+    view per block made once): the stacks evaluate makes and the v of velocity(...) at every configuration in
+    turn, the objectives active at some and the box binding at some."""
+    from uvms.solvers import SetBasedSolver
+
+    robot = uvms.load("bluerov2_alpha5")
+    q, target = alpha5_start(robot, rng)
+    levels = alpha5_levels(robot, target)
+    solver = SetBasedSolver(robot, levels, **options)
+    active = scaled = 0
+    for _ in range(25):
+        q, target = alpha5_start(robot, rng)
+        levels[-1].set_target(target)
+        state = Configuration(robot, q)
+        staged = solver.stage_velocity(state)
+        stacks = solver.plan.stage_stacks(state)  # the same buffers, written again at the same state
+        assert stacks[0] is solver.plan.stage_stacks(state)[0]
+        hierarchy = solver.plan.evaluate(state)
+        for own, made in zip(stacks, (hierarchy.jacobians, hierarchy.references, hierarchy.activations)):
+            assert np.array_equal(own, made) and own is not made
+        result = solver.velocity(state)
+        assert np.array_equal(staged, result.v)
+        active += bool(result.active)
+        scaled += min(result.scales) < 1.0
+    assert active > 0 and scaled > 0
+
+
 def test_a_set_based_solver_refuses_bad_options_when_built():
     from uvms.solvers.set_based import SetBasedSolver
 

@@ -259,6 +259,7 @@ class HierarchyPlan:
         # what an evaluation reads: (runs copied, blocks taken, blocks evaluated), all evaluated without a source
         self._all = ([], [], [(index, *block[1:]) for index, block in enumerate(self._blocks)])
         self._gatherings: dict[HierarchyPlan, tuple[list, list, list]] = {}  # per source plan, made once
+        self._stage: tuple | None = None  # :meth:`stage_stacks`' buffers and each block's views, made at its first call
 
     def _gathering(self, source: HierarchyPlan) -> tuple[list[tuple[slice, slice]], list[tuple[int, int]], list]:
         """How an evaluation reads the rows ``source``'s evaluation wrote (once per source plan): runs of rows (this
@@ -295,11 +296,42 @@ class HierarchyPlan:
 
         The stacks are new at each evaluation (a result's diagnostics keep views of them); each level writes its
         rows at its offset (no per-level stack, no second concatenation)."""
-        items = shared.at(state) if shared is not None else None
         count = self._count
-        jacobians, references = np.empty((count, self._nv)), np.empty(count)
-        activations = self._activations.copy()  # the equality rows' 1 in place, the objectives' written
-        values = [None] * len(self._blocks)  # per block: the tasks' error, or the objective's rows
+        stacks = np.empty((count, self._nv)), np.empty(count), self._activations.copy()  # the equality rows' 1
+        values = self._fill(state, shared, stacks, None)
+        jacobians, references, activations = stacks
+        vehicle_map, solved = None, jacobians
+        if self.free_floating:
+            solved = (np.concatenate([state.generalized(jacobians[start:end]) for start, end in self._spans])
+                      if self.levels else np.zeros((0, self.size)))
+            a_base, a_arm = state.centroidal_split()
+            vehicle_map = -solve_base_block(a_base, a_arm)  # (n_vehicle, n_arm)
+        return Hierarchy(state, self, (jacobians, solved, references, activations), values, vehicle_map)
+
+    def stage_stacks(self, state: Configuration,
+                     shared: ItemRows | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The stacks (jacobians (M, nv), references (M,), activations (M,)) of :meth:`evaluate` at ``state``, the
+        same numbers, in this plan's own buffers: valid until its next call, as are the objectives' rows ``shared``
+        keeps from it (views of them). What a solve that returns v alone reads (an integrator's stage, a
+        coordinated step's solves): no Hierarchy, no new stacks, each block's rows a view made once."""
+        if self._stage is None:
+            count = self._count
+            stacks = np.empty((count, self._nv)), np.empty(count), np.empty(count)
+            self._stage = stacks, [(stacks[0][rows], stacks[2][rows], stacks[1][rows]) for *_, rows in self._blocks]
+        stacks, views = self._stage
+        stacks[2][:] = self._activations  # the equality rows' 1; the objectives write theirs
+        self._fill(state, shared, stacks, views)
+        return stacks
+
+    def _fill(self, state: Configuration, shared: ItemRows | None, stacks: tuple[np.ndarray, np.ndarray, np.ndarray],
+              views: list | None) -> list:
+        """Every block's rows at ``state`` written into ``stacks`` (jacobians, references, activations; the
+        activations holding the equality rows' 1), through ``views`` (per block: its rows of the jacobians,
+        activations and references) when given; the blocks' values (per block: the tasks' error, or the objective's
+        rows)."""
+        items = shared.at(state) if shared is not None else None
+        jacobians, references, activations = stacks
+        values = [None] * len(self._blocks)
         runs, taken, blocks = self._all
         source = None if items is None else items.source
         if source is not None and source[0] is not self:  # rows another hierarchy wrote: copied run by run
@@ -315,28 +347,23 @@ class HierarchyPlan:
         first = items is not None and items.empty
         command_into = _COMMAND_INTO.function or _COMMAND_INTO.load()
         for index, item, key, command, rows in blocks:  # one loop over the plan's blocks, level after level
+            jacobian, activation, reference = (views[index] if views is not None else
+                                               (jacobians[rows], activations[rows], references[rows]))
             if command is not None:  # a level's equality tasks: their rows and command xdot_d + K e
                 task_jacobian, task_error, feedforward = (stacked_terms(state, item) if items is None
                                                           else items.tasks(item, key))
-                jacobians[rows] = task_jacobian
+                jacobian[:] = task_jacobian
                 if command.__class__ is float:  # a scalar K
-                    command_into(task_error, feedforward, command, references[rows])
+                    command_into(task_error, feedforward, command, reference)
                 else:
-                    references[rows] = command(task_error, feedforward)
+                    reference[:] = command(task_error, feedforward)
                 values[index] = task_error
             else:  # an objective's rows written in place (read where another hierarchy evaluated them)
-                values[index] = (item.rows_into(state, jacobians[rows], activations[rows], references[rows])
-                                 if items is None else
-                                 items.objective_into(item, jacobians[rows], activations[rows], references[rows]))
+                values[index] = (item.rows_into(state, jacobian, activation, reference) if items is None else
+                                 items.objective_into(item, jacobian, activation, reference))
         if first:  # every objective evaluated here: the next hierarchy at this state copies them from these stacks
-            items.source = (self, (jacobians, references, activations), values)
-        vehicle_map, solved = None, jacobians
-        if self.free_floating:
-            solved = (np.concatenate([state.generalized(jacobians[start:end]) for start, end in self._spans])
-                      if self.levels else np.zeros((0, self.size)))
-            a_base, a_arm = state.centroidal_split()
-            vehicle_map = -solve_base_block(a_base, a_arm)  # (n_vehicle, n_arm)
-        return Hierarchy(state, self, (jacobians, solved, references, activations), values, vehicle_map)
+            items.source = (self, stacks, values)
+        return values
 
     def state(self, q: np.ndarray | Configuration, check: bool = True) -> Configuration:
         """The kinematic state at q (a state given is used as it is)."""

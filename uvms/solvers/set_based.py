@@ -132,27 +132,29 @@ class ICAT:
             converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
         return contributions, sigmas, largest
 
-    def solve_saturated(self, hierarchy: Hierarchy, offsets: np.ndarray, equality: np.ndarray, q: np.ndarray,
-                        box: tuple) -> tuple[np.ndarray, np.ndarray, float, tuple[float, ...], float]:
+    def solve_saturated(self, stacks: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: np.ndarray,
+                        equality: np.ndarray, q: np.ndarray, box: tuple,
+                        sigmas: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray, float]:
         """:meth:`solve`, then the levels' sum inside the velocity box at q, in one compiled call
-        (:func:`~uvms.numerics._kernels.icat.icat_saturated_into`; ``box``: its arguments from q_index to the
-        tolerance): the solved columns (n,), the sigma_min (L,), the largest damping used, the scales and the
-        speed ratio of the sum. For a hierarchy with levels whose solved columns are v (not free floating).
+        (:func:`~uvms.numerics._kernels.icat.icat_saturated_into`; ``stacks``: the solved columns (M, n), the
+        references (M,) and the activations (M,); ``box``: its arguments from q_index to the tolerance): the solved
+        columns (n,), the sigma_min (L,) (into ``sigmas`` when given, else a new array), the largest damping used,
+        the scales (L,) (this object's buffer: read before the next call) and the speed ratio of the sum. For a
+        hierarchy with levels whose solved columns are v (not free floating).
 
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
         count = equality.size
-        if self._scratch[1].size != count:  # the levels' contributions and scales: written, read here alone
+        if self._scratch[1].size != count:  # the levels' contributions and scales: written, read by the caller alone
             self._scratch = np.empty((count, self.size)), np.empty(count)
-        (contributions, scales), sigmas, total = self._scratch, np.empty(count), np.empty(self.size)
-        jacobians = hierarchy.solved
-        converged, largest, ratio = self._icat_saturated_into(jacobians, hierarchy.references, hierarchy.activations,
-                                                              offsets, equality, *self._kernel_constants, q, *box,
-                                                              contributions, sigmas, total, scales)
+        (contributions, scales), total = self._scratch, np.empty(self.size)
+        sigmas = np.empty(count) if sigmas is None else sigmas
+        converged, largest, ratio = self._icat_saturated_into(*stacks, offsets, equality, *self._kernel_constants, q,
+                                                              *box, contributions, sigmas, total, scales)
         if not converged:
-            converged_or_refused(converged, jacobians.shape, 0.0, 0.0)
-        return total, sigmas, largest, tuple(scales.tolist()), ratio
+            converged_or_refused(converged, stacks[0].shape, 0.0, 0.0)
+        return total, sigmas, largest, scales, ratio
 
 
 # ------------------------------------------------------------------------------- the solver
@@ -217,6 +219,7 @@ class SetBasedSolver(Solver):
                                self.maximum, not free_floating, TOLERANCE)
         self._box = (rows.q_index, rows.v_index, rows.low, rows.high, self.dt or 1.0, self.fraction, self.maximum,
                      TOLERANCE)  # the same box, as the fused call takes it (ICAT.solve_saturated)
+        self._sigmas = np.empty(len(self.plan.levels))  # a stage's levels' sigma_min: written, never read
 
     def velocity(self, configuration: Configuration, shared: ItemRows | None = None) -> SolverResult:
         """The set-based velocity at ``configuration`` and its diagnostics (sigma_min, the residuals and the
@@ -230,8 +233,14 @@ class SetBasedSolver(Solver):
 
     def stage_velocity(self, configuration: Configuration, shared: ItemRows | None = None) -> np.ndarray:
         """v (nv,) of :meth:`velocity` alone, the same numbers, without its diagnostics (an integrator's stage, a
-        coordinated step's second solve)."""
-        return self._solve(configuration, shared)[0]
+        coordinated step's second solve): the plan's own stacks (:meth:`HierarchyPlan.stage_stacks`), no Hierarchy
+        built."""
+        plan = self.plan
+        if not plan.levels or self.free_floating:
+            return self._solve(configuration, shared)[0]
+        state = self._checked(configuration)
+        return self.icat.solve_saturated(plan.stage_stacks(state, shared), plan.offsets, plan.equality, state.q,
+                                         self._box, self._sigmas)[0]
 
     def _solve(self, configuration: Configuration,
                shared: ItemRows | None) -> tuple[np.ndarray, Hierarchy, np.ndarray, float, tuple[float, ...], float]:
@@ -241,8 +250,10 @@ class SetBasedSolver(Solver):
         plan = self.plan
         hierarchy = plan.evaluate(state, shared)
         if plan.levels and not self.free_floating:  # the recursion and the box in one compiled call
-            solved, sigmas, used, scales, ratio = self.icat.solve_saturated(hierarchy, plan.offsets, plan.equality,
-                                                                            state.q, self._box)
+            solved, sigmas, used, scales, ratio = self.icat.solve_saturated(
+                (hierarchy.solved, hierarchy.references, hierarchy.activations), plan.offsets, plan.equality, state.q,
+                self._box)
+            scales = tuple(scales.tolist())
         else:
             contributions, sigmas, used = self.icat.solve(hierarchy, plan.offsets, plan.equality)
             solved, scales, ratio = saturate(hierarchy, contributions, state.q, self._box_constants)
