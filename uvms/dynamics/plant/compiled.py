@@ -53,7 +53,14 @@ class CompiledPass:
         self.scratch = np.empty((nv, nv)), np.empty(nv)  # Mbar, nbar of an integrator's stage (not returned)
         # none of a (n,) or a (k, 6) argument: no wrench, no torques, no second velocity
         self.empty, self.empty_rows = np.zeros(0), np.zeros((0, 6))
-        self.empty_rows.flags.writeable = joint_arrays.read()[1].flags.writeable  # (typed as the Data's rows)
+        rows = joint_arrays.read()[1]  # the joints' bias accelerations as the kernels read them (njoints, 6)
+        self.empty_rows.flags.writeable = rows.flags.writeable  # (typed as the Data's rows)
+        # the second velocity's rows, copied before the first velocity's calls overwrite the Data: a buffer, and the
+        # view of it the kernel reads, typed as the Data's rows (read-only where they are views: one specialization)
+        buffer = np.empty_like(rows, order="C")
+        typed = buffer.view()
+        typed.flags.writeable = rows.flags.writeable
+        self._second_rows = buffer, typed
         self.inputs = _inputs(model, data, dynamics_data, joint_arrays, ints, floats, bool(stacked.count))
         self.second_inputs = _second_inputs(model, data, dynamics_data, joint_arrays, bool(stacked.count))
 
@@ -141,9 +148,8 @@ class CompiledPass:
         if second is not None:  # evaluated first: the first velocity's kinematics then overwrite the same Data
             second_v, mass, second_bias_forces = second
             second_h, rows = self.second_inputs(q, second_v)
-            second_accelerations = rows.copy()
-            # typed as the first's rows (the Data's read-only views): one specialization of the kernel for both calls
-            second_accelerations.flags.writeable = rows.flags.writeable
+            buffer, second_accelerations = self._second_rows  # (a view typed as the first's rows)
+            buffer[...] = rows
         upper, h, jacobian, placements, accelerations, ints, floats = self.inputs(q, v, False)
         self.kernels.vehicle_terms_wrench_into(upper, h, jacobian, placements, accelerations, ints, floats, v, mass,
                                                bias_forces, base_acceleration, arm_acceleration, *placement,
