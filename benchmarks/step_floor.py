@@ -63,7 +63,7 @@ class Recorder:
 
     def keep(self, name: str, function: Callable, args: tuple) -> None:
         if self.on and not self.timing:
-            self.calls.append((name, function, tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args)))
+            self.calls.append((name, function, tuple(map(_typed_copy, args))))
 
     def mark(self, name: str) -> None:
         """While timing: the gap since the last call ends at a call (or the step's start) called ``name``."""
@@ -104,6 +104,16 @@ class Recorder:
             return result
 
         return wrapper
+
+
+def _typed_copy(argument: object) -> object:
+    """An array argument's copy typed as the array (its memory order and its read-only flag: a kernel replayed with it
+    runs the specialization the step ran, none compiled for the copy); anything else as it is."""
+    if not isinstance(argument, np.ndarray):
+        return argument
+    copy = argument.copy(order="K")
+    copy.flags.writeable = argument.flags.writeable
+    return copy
 
 
 def run_counted(recorder: Recorder, first: int, last: int) -> pin.Model:
