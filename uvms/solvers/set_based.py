@@ -89,7 +89,9 @@ class ICAT:
         from ..numerics._kernels.icat import icat_into, icat_saturated_into
 
         self._icat_into, self._icat_saturated_into = icat_into, icat_saturated_into
-        self._scratch = np.empty((0, size)), np.empty(0)  # solve_saturated's buffers, sized at its first call
+        # solve_saturated's buffers (the levels' contributions, scales and, for v alone, sigma_min), sized at its first
+        # call
+        self._scratch = np.empty((0, size)), np.empty(0), np.empty(0)
 
     def level_inverse(self, jacobian: np.ndarray, root: np.ndarray, power: np.ndarray, projector: np.ndarray | None,
                       damping: float | VariableDamping) -> tuple[np.ndarray, float, float]:
@@ -134,22 +136,22 @@ class ICAT:
 
     def solve_saturated(self, stacks: tuple[np.ndarray, np.ndarray, np.ndarray], offsets: np.ndarray,
                         equality: np.ndarray, q: np.ndarray, box: tuple,
-                        sigmas: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray, float]:
+                        new_sigmas: bool = True) -> tuple[np.ndarray, np.ndarray, float, np.ndarray, float]:
         """:meth:`solve`, then the levels' sum inside the velocity box at q, in one compiled call
         (:func:`~uvms.numerics._kernels.icat.icat_saturated_into`; ``stacks``: the solved columns (M, n), the
         references (M,) and the activations (M,); ``box``: its arguments from q_index to the tolerance): the solved
-        columns (n,), the sigma_min (L,) (into ``sigmas`` when given, else a new array), the largest damping used,
-        the scales (L,) (this object's buffer: read before the next call) and the speed ratio of the sum. For a
-        hierarchy with levels whose solved columns are v (not free floating).
+        columns (n,), the sigma_min (L,) (a new array with ``new_sigmas``, else this object's buffer), the largest
+        damping used, the scales (L,) (this object's buffer: read before the next call) and the speed ratio of the
+        sum. For a hierarchy with levels whose solved columns are v (not free floating).
 
         Raises:
             NumericalError: an inverse did not converge (a non-finite level).
         """
         count = equality.size
-        if self._scratch[1].size != count:  # the levels' contributions and scales: written, read by the caller alone
-            self._scratch = np.empty((count, self.size)), np.empty(count)
-        (contributions, scales), total = self._scratch, np.empty(self.size)
-        sigmas = np.empty(count) if sigmas is None else sigmas
+        if self._scratch[1].size != count:
+            self._scratch = np.empty((count, self.size)), np.empty(count), np.empty(count)
+        contributions, scales, kept_sigmas = self._scratch
+        total, sigmas = np.empty(self.size), np.empty(count) if new_sigmas else kept_sigmas
         converged, largest, ratio = self._icat_saturated_into(*stacks, offsets, equality, *self._kernel_constants, q,
                                                               *box, contributions, sigmas, total, scales)
         if not converged:
@@ -219,7 +221,6 @@ class SetBasedSolver(Solver):
                                self.maximum, not free_floating, TOLERANCE)
         self._box = (rows.q_index, rows.v_index, rows.low, rows.high, self.dt or 1.0, self.fraction, self.maximum,
                      TOLERANCE)  # the same box, as the fused call takes it (ICAT.solve_saturated)
-        self._sigmas = np.empty(len(self.plan.levels))  # a stage's levels' sigma_min: written, never read
 
     def velocity(self, configuration: Configuration, shared: ItemRows | None = None) -> SolverResult:
         """The set-based velocity at ``configuration`` and its diagnostics (sigma_min, the residuals and the
@@ -240,7 +241,7 @@ class SetBasedSolver(Solver):
             return self._solve(configuration, shared)[0]
         state = self._checked(configuration)
         return self.icat.solve_saturated(plan.stage_stacks(state, shared), plan.offsets, plan.equality, state.q,
-                                         self._box, self._sigmas)[0]
+                                         self._box, new_sigmas=False)[0]
 
     def _solve(self, configuration: Configuration,
                shared: ItemRows | None) -> tuple[np.ndarray, Hierarchy, np.ndarray, float, tuple[float, ...], float]:
