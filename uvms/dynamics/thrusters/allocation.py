@@ -14,8 +14,8 @@ Three steps, the cheap one first:
 With one group of all six axes (the default) the achieved wrench is the bounded least-squares optimum
 B f* with f* = argmin |W (B f - tau)| s.t. bounds.
 
-The rank of B is judged with a tolerance that matches the physics (:data:`RANK_TOLERANCE`, relative to the largest
-singular value), not numpy's rounding-level one: a wrench direction that a layout gives only through rounding (a
+The rank of B is judged with a tolerance that matches the physics (:data:`.reach.RANK_TOLERANCE`, relative to the
+largest singular value), not numpy's rounding-level one: a wrench direction that a layout gives only through rounding (a
 roll moment from vertical thrusters placed 1e-10 m off the centre line) is not reachable, and every stage works on B
 truncated to its reachable directions. Otherwise a pair of nearly dependent thrusters is driven to opposite limits
 to produce a newton of it, and no least-norm step runs (the matrix looks square and full rank).
@@ -35,34 +35,10 @@ from ...numerics._kernels import Kernel
 from ...numerics.inverses import pinv
 from ...robot.conventions import AXIS_NAMES
 from ...robot.kinematics import axis_rows
+from .reach import rank, reachable_directions
 
 #: Slack [N] on the bounds and the wrench when deciding that the pseudo-inverse solution is good enough.
 TOLERANCE = 1e-9
-#: A singular value of B below this fraction of the largest is a direction the thrusters cannot produce: a wrench of
-#: 1e-6 N (or N m) per newton of thrust is far below any thruster's resolution, and far above rounding (1e-16).
-RANK_TOLERANCE = 1e-6
-#: A singular value below this fraction of the largest is rounding: the direction is exactly unreachable (a symmetric
-#: fin cross's null pattern gives 4e-17), and no thrusters are named as fighting for it.
-ROUNDING = 1e-12
-
-
-@dataclass(frozen=True)
-class UnreachableDirection:
-    """A body-wrench direction the thrusters cannot produce (a singular direction of B below the rank tolerance).
-
-    Attributes:
-        wrench: (6,) unit vector in wrench space [fx, fy, fz, mx, my, mz] (N and N m mixed, as B's rows).
-        axis: the name of its largest component (``uvms.robot.conventions.AXIS_NAMES``: x, y, z forces; roll, pitch,
-            yaw moments).
-        thrusters: indices of the thrusters that would have to fight each other to produce it (the large entries of
-            the matching right singular vector); empty when no combination produces it at all.
-        ratio: its singular value over the largest (0 when exactly unreachable).
-    """
-
-    wrench: np.ndarray
-    axis: str
-    thrusters: tuple[int, ...]
-    ratio: float
 
 
 @dataclass(slots=True)
@@ -120,7 +96,7 @@ class ThrustAllocator:
         self.tolerance = float(tolerance)
         # the bounds B^+ tau may touch within the slack (the attainable case's test, prepared once)
         self._inside = (self.lower - self.tolerance, self.upper + self.tolerance)
-        self.reachable, self.unreachable = _reachable(self.matrix)  # B on its reachable directions (6, n)
+        self.reachable, self.unreachable = reachable_directions(self.matrix)  # B on its reachable directions (6, n)
         self.inverse = pinv(self.reachable)  # (n, 6), computed once: the attainable case is one product
         self._rows = sorted(row for group in self.groups for row in group)
         self._all_rows = len(self._rows) == 6
@@ -260,7 +236,7 @@ class ThrustAllocator:
                 stages.append(Stage(group, weights, a, a.T @ a, -a.T, Equalities.of(self.reachable[kept], self)))
             kept += list(group)
         rows = self.reachable[self._rows]
-        least_norm = None if self.n <= _rank(rows) else Equalities.of(rows, self)
+        least_norm = None if self.n <= rank(rows) else Equalities.of(rows, self)
         self._bounded = BoundedProblem(tuple(stages), least_norm, np.eye(self.n), np.zeros(self.n),
                                        not bool(np.any(self.lower >= self.upper)))
         return self._bounded
@@ -307,30 +283,6 @@ def _priority_groups(priorities: Sequence[Sequence[str]] | None) -> list[list[in
     if not groups or any(not group for group in groups):
         raise SolverInputError("priorities must be non-empty groups of wrench axes, highest first")
     return groups
-
-
-def _rank(matrix: np.ndarray) -> int:
-    """The rank of ``matrix`` judged at :data:`RANK_TOLERANCE` of its largest singular value."""
-    singular = np.linalg.svd(matrix, compute_uv=False)
-    return int(np.sum(singular > RANK_TOLERANCE * singular[0])) if singular.size and singular[0] > 0 else 0
-
-
-def _reachable(matrix: np.ndarray) -> tuple[np.ndarray, tuple[UnreachableDirection, ...]]:
-    """B (6, n) truncated to the singular directions above :data:`RANK_TOLERANCE`, and the directions left out."""
-    u, singular, vt = np.linalg.svd(matrix)  # u (6, 6), vt (n, n); singular (min(6, n),), descending
-    largest = singular[0] if singular.size else 0.0
-    kept = int(np.sum(singular > RANK_TOLERANCE * largest)) if largest > 0 else 0
-    # nothing dropped: B itself (the same numbers as B, not U S V^T's rounding of them)
-    reachable = matrix if kept == min(matrix.shape) else (u[:, :kept] * singular[:kept]) @ vt[:kept]
-    unreachable = []
-    for index in range(kept, 6):
-        direction = u[:, index] * np.sign(u[np.argmax(np.abs(u[:, index])), index])  # its largest entry positive
-        ratio = float(singular[index] / largest) if index < singular.size and largest > 0 else 0.0
-        ratio = ratio if ratio > ROUNDING else 0.0  # a rounding-level value: exactly unreachable, no pair to name
-        fighting = np.abs(vt[index]) if index < singular.size and ratio > 0 else np.zeros(matrix.shape[1])
-        unreachable.append(UnreachableDirection(direction, AXIS_NAMES[int(np.argmax(np.abs(direction)))],
-                                                tuple(int(i) for i in np.flatnonzero(fighting > 0.3)), ratio))
-    return reachable, tuple(unreachable)
 
 
 @dataclass(frozen=True)
