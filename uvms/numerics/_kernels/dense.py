@@ -17,7 +17,7 @@ __all__ = ["apply", "cholesky_solve_in_place", "copy_into", "dls_solve_into", "p
            "subtract_in_place"]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def product(left: np.ndarray, right: np.ndarray) -> np.ndarray:
     """left @ right (m, n) of (m, k) and (k, n) in loops (numba's BLAS binding takes a second to compile)."""
     rows, inner = left.shape
@@ -30,7 +30,7 @@ def product(left: np.ndarray, right: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def apply(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
     """matrix @ vector (m,) of (m, k) and (k,) in loops."""
     out = np.zeros(matrix.shape[0])
@@ -42,7 +42,7 @@ def apply(matrix: np.ndarray, vector: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def scale_matrix(matrix: np.ndarray, scale: np.ndarray, rows: bool) -> np.ndarray:
     """diag(scale) matrix (``rows``: row i times scale[i]) or matrix diag(scale) (column j times scale[j]),
     (m, n), a new array."""
@@ -53,7 +53,7 @@ def scale_matrix(matrix: np.ndarray, scale: np.ndarray, rows: bool) -> np.ndarra
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def copy_into(target: np.ndarray, source: np.ndarray) -> None:
     """target[:, :] = source (m, n) in loops (numba's broadcasting slice assignment takes seconds to compile)."""
     for row in range(source.shape[0]):
@@ -61,7 +61,7 @@ def copy_into(target: np.ndarray, source: np.ndarray) -> None:
             target[row, col] = source[row, col]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def subtract_in_place(matrix: np.ndarray, other: np.ndarray) -> None:
     """matrix -= other, both (m, n)."""
     for row in range(matrix.shape[0]):

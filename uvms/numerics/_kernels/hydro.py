@@ -26,7 +26,7 @@ def _cross(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> 
     return a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarray, rotations: np.ndarray,
                      motion_to_link: np.ndarray, added_mass: np.ndarray, linear: np.ndarray, forward: np.ndarray,
                      quadratic: np.ndarray, buoyancy: np.ndarray, center_of_buoyancy: np.ndarray, current: np.ndarray,
@@ -153,7 +153,7 @@ def hydro_terms_into(jacobians: np.ndarray, v: np.ndarray, joint_bias: np.ndarra
             bias_forces[column] -= total
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def frame_jacobian_into(jacobian: np.ndarray, placement: np.ndarray, rotation: np.ndarray, translation: np.ndarray,
                         program: np.ndarray, out: np.ndarray, frame_rotation: np.ndarray) -> None:
     """A frame's LOCAL Jacobian (6, nv) into ``out`` from Pinocchio's world Jacobian: ``pin.getFrameJacobian``'s
@@ -255,7 +255,7 @@ def pack_constants(slots: np.ndarray, programs: np.ndarray, starts: np.ndarray, 
     return ints, floats
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plant_terms_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, placements: np.ndarray,
                      accelerations: np.ndarray, v: np.ndarray, mass: np.ndarray, bias_forces: np.ndarray,
                      ints: np.ndarray, floats: np.ndarray, with_mass: bool) -> None:

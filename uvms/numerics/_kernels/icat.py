@@ -21,7 +21,7 @@ from .weighted import weighted_inverse_into, weighted_norm
 __all__ = ["eta_rows", "icat_into", "icat_saturated_into", "level_inverse_into"]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def eta_rows(scaled_unprojected: np.ndarray, projector: np.ndarray, root_eta: float) -> np.ndarray:
     """The eta rows eta^1/2 D (I - Q) (n, n) of a level: the directions the levels above hold (Q their projector
     (n, n)), each coordinate weighed by D = diag(|column j of A^1/2 J|), how much it moves the level's rows
@@ -38,7 +38,7 @@ def eta_rows(scaled_unprojected: np.ndarray, projector: np.ndarray, root_eta: fl
     return rows
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def level_inverse_into(scaled: np.ndarray, power: np.ndarray, penalty: np.ndarray, inverse_sqrt: np.ndarray,
                        transform: np.ndarray, damping: float, epsilon: float, lambda_max: float, rcond: float,
                        floor: float, out: np.ndarray) -> tuple[bool, float, float]:
@@ -90,7 +90,7 @@ def level_inverse_into(scaled: np.ndarray, power: np.ndarray, penalty: np.ndarra
     return converged, sigma_min, used
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def icat_into(jacobians: np.ndarray, references: np.ndarray, activations: np.ndarray, offsets: np.ndarray,
               equality: np.ndarray, inverse_sqrt: np.ndarray, transform: np.ndarray, damping: float, epsilon: float,
               lambda_max: float, rcond: float, eta: float, contributions: np.ndarray,

@@ -36,7 +36,7 @@ __all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_fi
            "vehicle_terms_wrench_into"]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _product_into(matrix: np.ndarray, vector: np.ndarray, out: np.ndarray) -> None:
     """out = matrix @ vector (matrix (r, c) C- or F-contiguous, as numpy held it) as numpy's ``@`` gives it:
     BLAS's gemv on that layout, or its dot product for a single row (what numpy calls there)."""
@@ -176,7 +176,7 @@ def actuated_rate_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
                               mass, bias_forces, rate[:nv], torque)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def motor_torques_into(mass: np.ndarray, acceleration: np.ndarray, bias_forces: np.ndarray, nb: int,
                        torque: np.ndarray) -> None:
     """tau_m (n_arm,) [N m or N] = (Mbar_mb a_b + Mbar_mm a_m) + nbar_m into ``torque``, summed in this order
@@ -192,7 +192,7 @@ def motor_torques_into(mass: np.ndarray, acceleration: np.ndarray, bias_forces: 
         torque[i] += bias_forces[nb + i]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def thrusters_into(matrix: np.ndarray, thrusts: np.ndarray, command: np.ndarray, time_constants: np.ndarray,
                    wrench: np.ndarray, rate: np.ndarray) -> None:
     """The thrusters' wrench B f (6,) [N, N m] into ``wrench`` (numpy's ``B @ f``) and their lag's rate
