@@ -32,12 +32,12 @@ from .solve import solve_into
 from .vehicle import vehicle_wrench_into
 
 __all__ = ["accelerations_into", "actuated_rate_into", "actuation_rows", "all_finite", "clipped",
-           "finite_clipped_into", "motor_torques_into", "plant_constants", "terms_into", "thrusters_into",
-           "vehicle_terms_wrench_into"]
+           "finite_clipped_into", "motor_torques_into", "numpy_product_into", "plant_constants", "terms_into",
+           "thrusters_into", "vehicle_terms_wrench_into"]
 
 
 @njit(cache=True, inline="always")
-def _product_into(matrix: np.ndarray, vector: np.ndarray, out: np.ndarray) -> None:
+def numpy_product_into(matrix: np.ndarray, vector: np.ndarray, out: np.ndarray) -> None:
     """out = matrix @ vector (matrix (r, c) C- or F-contiguous, as numpy held it) as numpy's ``@`` gives it:
     BLAS's gemv on that layout, or its dot product for a single row (what numpy calls there)."""
     if matrix.shape[0] == 1:
@@ -134,7 +134,7 @@ def accelerations_into(upper: np.ndarray, h: np.ndarray, jacobian: np.ndarray, p
         acceleration[nb + i] = arm[i]
     rhs = np.zeros(nb)  # numpy's product over no column: zeros
     if nv > nb:
-        _product_into(np.ascontiguousarray(mass[:nb, nb:]), arm, rhs)
+        numpy_product_into(np.ascontiguousarray(mass[:nb, nb:]), arm, rhs)
     for i in range(nb):
         rhs[i] += bias_forces[i]
     base = np.empty(nb)
@@ -184,9 +184,9 @@ def motor_torques_into(mass: np.ndarray, acceleration: np.ndarray, bias_forces: 
     nv = acceleration.shape[0]
     if nv == nb:
         return
-    _product_into(np.ascontiguousarray(mass[nb:, :nb]), acceleration[:nb].copy(), torque)
+    numpy_product_into(np.ascontiguousarray(mass[nb:, :nb]), acceleration[:nb].copy(), torque)
     arm = np.empty(nv - nb)
-    _product_into(np.ascontiguousarray(mass[nb:, nb:]), acceleration[nb:].copy(), arm)
+    numpy_product_into(np.ascontiguousarray(mass[nb:, nb:]), acceleration[nb:].copy(), arm)
     for i in range(nv - nb):
         torque[i] += arm[i]
         torque[i] += bias_forces[nb + i]
@@ -202,7 +202,7 @@ def thrusters_into(matrix: np.ndarray, thrusts: np.ndarray, command: np.ndarray,
         matrix: B (6, n) C- or F-contiguous; thrusts: f (n,) [N]; command: sat(f_cmd) (n,) [N];
         time_constants: (n,) [s].
     """
-    _product_into(matrix, thrusts, wrench)
+    numpy_product_into(matrix, thrusts, wrench)
     for i in range(thrusts.shape[0]):
         rate[i] = (command[i] - thrusts[i]) / time_constants[i]
 
@@ -330,11 +330,11 @@ def actuation_rows(matrix: np.ndarray, thrusts: np.ndarray, v: np.ndarray, joint
     speeds, powers, magnitudes = np.empty(count), np.empty(count), np.empty(count)
     for k in range(rows):
         thrust[:] = thrusts[k]
-        _product_into(matrix, thrust, pushed)  # numpy's B @ f
+        numpy_product_into(matrix, thrust, pushed)  # numpy's B @ f
         for i in range(6):
             wrench[k, i] = pushed[i] + (fins[k, i] if fins.shape[0] else 0.0)
         _base_twist_into(v[k], nb, rotation, translation, twist)
-        _product_into(matrix.T, twist, speeds)  # numpy's B.T @ nu
+        numpy_product_into(matrix.T, twist, speeds)  # numpy's B.T @ nu
         for i in range(count):
             powers[i] = thrust[i] * speeds[i]
             magnitudes[i] = abs(powers[i])
