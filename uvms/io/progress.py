@@ -18,7 +18,7 @@ from typing import Any, TypeVar
 __all__ = ["COMPILE_NOTICE", "compile_notice", "progress_bar", "tqdm"]  # noqa: F822 (tqdm: the module's __getattr__)
 
 #: What a first solve slower than :data:`COMPILE_NOTICE_AFTER` says: numba compiles the kernels at their first call.
-COMPILE_NOTICE = ("uvms: note: compiling the solvers' kernels for this machine (numba: about 10-30 s, once after an "
+COMPILE_NOTICE = ("uvms: note: compiling the solvers' kernels for this machine (numba: about 10-45 s, once after an "
                   "install or an upgrade; later runs load them from its cache)")
 COMPILE_NOTICE_AFTER = 2.0  # [s]
 #: (columns, lines) of a terminal that reports no size.
